@@ -1,0 +1,99 @@
+"""Tree kinematics batched over samples: body displacements, twists, accelerations and
+the Jacobian lines ``L_j^i`` of the paper (eq. "jacobian line").
+
+Spatial assignment (paper, Sec. "Spatial assignment of tetrahedral points"): every body's
+tetrahedral points coincide with the world frame at q = 0, so a body's state is its
+displacement ``g_i (4, 4)`` from its pose at q = 0 (world frame), its spatial twist
+``V_i = (omega, v)`` and acceleration ``dV_i`` (world frame, no gravity).
+
+Product of exponentials: ``g_i = g_parent exp(S_1 q_1) ... exp(S_k q_k)`` with ``S`` the
+joint lines at q = 0 (:attr:`Robot.screws`). The current line of coordinate ``k`` is
+``L_k = Ad(g_parent exp(S_1 q_1) .. exp(S_{k-1} q_{k-1})) S_k``; ``V_i = V_p + sum L_k dq_k``;
+``dV_i = dV_p + sum ad(V_{k}) L_k dq_k + L_k ddq_k``. The floating (F) root uses
+quasi-velocities: ``L_k = e_k`` and ``V = dq`` (the paper's Go2 section).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import BaseparamsError
+from ..model.robot import Robot
+from ..pga import adjoint, commutator, se3_exp
+
+
+@dataclass(frozen=True)
+class TreeState:
+    """Kinematic state of all bodies for ``S`` samples.
+
+    ``g (S, n, 4, 4)`` displacements from q = 0; ``V, dV (S, n, 6)`` spatial twists and
+    accelerations (world frame, gravity not included); ``lines (S, dof, 6)`` current joint
+    lines; ``support (dof, n)`` which coordinates move which bodies.
+    """
+
+    g: np.ndarray
+    V: np.ndarray
+    dV: np.ndarray
+    lines: np.ndarray
+    support: np.ndarray
+
+    def jacobian_lines(self) -> np.ndarray:
+        """Dense Jacobian lines ``L[s, j, i] (S, dof, n, 6)`` (zero where j does not move i)."""
+        return self.lines[:, :, None, :] * self.support[None, :, :, None]
+
+
+def _as_samples(x, dof: int, label: str) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    if x.ndim == 1:
+        x = x[None]
+    if x.ndim != 2 or x.shape[1] != dof:
+        raise BaseparamsError(f"{label} must have shape (S, {dof}) or ({dof},), got {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise BaseparamsError(f"{label} contains NaN or inf")
+    return x
+
+
+def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
+    """Batched tree kinematics. ``q, dq, ddq``: ``(S, dof)`` (or ``(dof,)``); ``dq, ddq``
+    default to zero. Loops over bodies, vectorised over samples."""
+    dof = robot.dof
+    q = _as_samples(q, dof, "q")
+    s = q.shape[0]
+    dq = np.zeros_like(q) if dq is None else _as_samples(dq, dof, "dq")
+    ddq = np.zeros_like(q) if ddq is None else _as_samples(ddq, dof, "ddq")
+    if dq.shape[0] != s or ddq.shape[0] != s:
+        raise BaseparamsError(f"q, dq, ddq must have the same number of samples, got {s}, "
+                              f"{dq.shape[0]}, {ddq.shape[0]}")
+    n = robot.n
+    screws = robot.screws
+    qi = robot.q_index
+    nd = robot.ndofs
+    g = np.empty((s, n, 4, 4))
+    v = np.empty((s, n, 6))
+    a = np.empty((s, n, 6))
+    lines = np.empty((s, dof, 6))
+    eye = np.broadcast_to(np.eye(4), (s, 4, 4))
+    zero6 = np.zeros((s, 6))
+    for i in range(n):
+        p = robot.parent[i]
+        gp, vp, ap = (eye, zero6, zero6) if p < 0 else (g[:, p], v[:, p], a[:, p])
+        j0, k = qi[i], nd[i]
+        sl = slice(j0, j0 + k)
+        if robot.jtype[i] == "F":
+            lines[:, sl] = np.broadcast_to(np.eye(6), (s, 6, 6))
+            u, du = dq[:, sl], ddq[:, sl]
+            g[:, i] = se3_exp(q[:, sl])
+            v[:, i] = vp + u
+            a[:, i] = ap + du
+            continue
+        h, vh, ah = gp, vp, ap
+        for jj in range(j0, j0 + k):
+            line = adjoint(h, np.broadcast_to(screws[jj], (s, 6)))
+            lines[:, jj] = line
+            vh = vh + line * dq[:, jj:jj + 1]
+            ah = ah + commutator(line, vh) * dq[:, jj:jj + 1] + line * ddq[:, jj:jj + 1]
+            h = h @ se3_exp(screws[jj] * q[:, jj:jj + 1])
+        g[:, i], v[:, i], a[:, i] = h, vh, ah
+    return TreeState(g, v, a, lines, robot.support)

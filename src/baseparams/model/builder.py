@@ -1,0 +1,170 @@
+"""A builder API for robots, in the spirit of URDF: links attached by joints.
+
+Example::
+
+    from baseparams.model import RobotBuilder, Inertia, pose
+
+    b = RobotBuilder("two-link", gravity=(0, 0, -9.81))
+    b.add_link("upper", joint="R", origin=pose(xyz=(0, 0, 0.3)), axis=(0, 1, 0),
+               inertia=Inertia(2.0, com=(0, 0, 0.2), inertia=(0.01, 0.01, 0.002)))
+    b.add_link("lower", parent="upper", joint="R", origin=pose(xyz=(0, 0, 0.4)),
+               axis=(0, 1, 0), inertia=Inertia(1.0, com=(0, 0, 0.2)))
+    robot = b.build()
+
+``origin`` is the joint frame's pose in the parent link's frame at q = 0 (URDF ``<origin>``);
+the link frame is the joint frame. Axes are normalised. A ``"fixed"`` joint adds no body:
+its inertia is merged into the parent and its name can be used as a parent later.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ModelError
+from .inertia import Inertia, transform
+from .robot import JOINT_TYPES, LoopJoint, Robot
+
+_ALIASES = {"revolute": "R", "continuous": "R", "prismatic": "P", "universal": "U",
+            "spherical": "S", "ball": "S", "floating": "F", "free": "F", "r": "R", "p": "P",
+            "u": "U", "s": "S", "f": "F"}
+
+
+def pose(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """4x4 pose from a translation and URDF roll-pitch-yaw (``Rz(y) Ry(p) Rx(r)``)."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    t = np.eye(4)
+    t[:3, :3] = [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                 [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                 [-sp, cp * sr, cp * cr]]
+    t[:3, 3] = np.asarray(xyz, dtype=float)
+    return t
+
+
+def quat_pose(xyz=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
+    """4x4 pose from a translation and a (not necessarily unit) quaternion ``w x y z``."""
+    from ..pga.core import _quat_to_rot
+
+    q = np.asarray(quat, dtype=float)
+    nq = np.linalg.norm(q)
+    if nq < 1e-12:
+        raise ModelError(f"zero quaternion {q.tolist()}")
+    t = np.eye(4)
+    t[:3, :3] = _quat_to_rot(q / nq)
+    t[:3, 3] = np.asarray(xyz, dtype=float)
+    return t
+
+
+def joint_type(name: str) -> str:
+    """Normalise a joint type name (``revolute`` -> ``R``, ...); ``fixed`` stays ``fixed``."""
+    if name in JOINT_TYPES or name == "fixed":
+        return name
+    return _ALIASES.get(str(name).lower(), str(name))
+
+
+class RobotBuilder:
+    """Collects links and joints, then :meth:`build` validates and returns a :class:`Robot`."""
+
+    def __init__(self, name: str, gravity=(0.0, 0.0, -9.81)):
+        self.name = name
+        self.gravity = np.asarray(gravity, dtype=float)
+        self._names: list[str] = []
+        self._jnames: list[str] = []
+        self._types: list[str] = []
+        self._parents: list[int] = []
+        self._m0: list[np.ndarray] = []
+        self._axes: list[np.ndarray] = []
+        self._n: list[np.ndarray] = []
+        self._frames: dict[str, tuple[int, np.ndarray]] = {"world": (-1, np.eye(4))}
+        self._loops: list[tuple] = []
+
+    def _frame(self, name: str | None) -> tuple[int, np.ndarray]:
+        key = "world" if name is None else name
+        if key not in self._frames:
+            raise ModelError(f"robot {self.name!r}: unknown parent link {key!r} (add it before its children)")
+        return self._frames[key]
+
+    def add_link(self, name: str, parent: str | None = None, joint: str = "R", origin=None,
+                 axis=(0.0, 0.0, 1.0), axis2=None, inertia: Inertia | None = None,
+                 joint_name: str | None = None) -> RobotBuilder:
+        """Attach link ``name`` to ``parent`` (default: the fixed base) by a joint.
+
+        ``joint``: ``R P U S F fixed`` or URDF/MJCF names (``revolute``, ``ball``, ...).
+        ``axis`` (and ``axis2`` for U) in the joint frame; ``inertia`` in the link frame.
+        """
+        jt = joint_type(joint)
+        jname = joint_name or f"{name}_joint"
+        what = f"robot {self.name!r}, link {name!r} (joint {jname!r})"
+        if name in self._frames:
+            raise ModelError(f"{what}: duplicate link name {name!r}")
+        if jt not in JOINT_TYPES and jt != "fixed":
+            raise ModelError(f"{what}: unknown joint type {joint!r}; expected one of "
+                             f"{JOINT_TYPES + ('fixed',)} or a URDF/MJCF name")
+        pidx, pframe = self._frame(parent)
+        origin = np.eye(4) if origin is None else np.asarray(origin, dtype=float)
+        if origin.shape != (4, 4) or not np.all(np.isfinite(origin)):
+            raise ModelError(f"{what}: origin must be a finite 4x4 pose")
+        pm0 = np.eye(4) if pidx < 0 else self._m0[pidx]
+        frame_in_body = pframe @ origin  # joint frame in the parent body's frame
+        m0 = pm0 @ frame_in_body
+        n_link = np.zeros((4, 4)) if inertia is None else np.asarray(inertia.pseudo())
+        if jt == "fixed":
+            if pidx >= 0:
+                self._n[pidx] = self._n[pidx] + transform(n_link, frame_in_body)
+            # a link welded to the world is static: it only names a frame
+            self._frames[name] = (pidx, frame_in_body)
+            return self
+        axes = self._axes_for(jt, axis, axis2, what)
+        self._names.append(name)
+        self._jnames.append(jname)
+        self._types.append(jt)
+        self._parents.append(pidx)
+        self._m0.append(m0)
+        self._axes.append(axes)
+        self._n.append(n_link)
+        self._frames[name] = (len(self._names) - 1, np.eye(4))
+        return self
+
+    @staticmethod
+    def _axes_for(jt: str, axis, axis2, what: str) -> np.ndarray:
+        if jt in ("S", "F"):
+            return np.eye(3) if jt == "S" else np.zeros((0, 3))
+        a = np.asarray(axis, dtype=float).reshape(-1)
+        if a.shape != (3,) or not np.all(np.isfinite(a)):
+            raise ModelError(f"{what}: axis must be 3 finite numbers, got {axis!r}")
+        if np.linalg.norm(a) < 1e-12:
+            raise ModelError(f"{what}: zero joint axis")
+        a = a / np.linalg.norm(a)
+        if jt != "U":
+            return a[None]
+        if axis2 is None:
+            raise ModelError(f"{what}: a universal joint needs axis2")
+        b = np.asarray(axis2, dtype=float).reshape(-1)
+        if b.shape != (3,) or np.linalg.norm(b) < 1e-12:
+            raise ModelError(f"{what}: axis2 must be a nonzero 3-vector")
+        b = b / np.linalg.norm(b)
+        return np.stack([a, b])
+
+    def add_loop(self, name: str, type: str, parent: str, child: str, origin=None, axis=(0, 0, 1.0),
+                 axis2=None) -> RobotBuilder:
+        """Record a loop (cut) joint between two links; ``origin`` in the parent link's frame."""
+        jt = joint_type(type)
+        self._loops.append((name, jt, parent, child, origin, axis, axis2))
+        return self
+
+    def build(self) -> Robot:
+        """Validate and return the :class:`Robot` (raises :class:`ModelError`)."""
+        if not self._names:
+            raise ModelError(f"robot {self.name!r}: no moving links")
+        loops = []
+        for name, jt, parent, child, origin, axis, axis2 in self._loops:
+            what = f"robot {self.name!r}, loop joint {name!r}"
+            pidx, pframe = self._frame(parent)
+            cidx, _ = self._frame(child)
+            pm0 = np.eye(4) if pidx < 0 else self._m0[pidx]
+            m = pm0 @ pframe @ (np.eye(4) if origin is None else np.asarray(origin, dtype=float))
+            axes = self._axes_for(jt, axis, axis2, what) if jt in JOINT_TYPES else np.zeros((0, 3))
+            loops.append(LoopJoint(name, jt, pidx, cidx, m, axes))
+        return Robot(self.name, tuple(self._names), tuple(self._jnames), tuple(self._types),
+                     np.array(self._parents, dtype=int), np.array(self._m0), tuple(self._axes),
+                     np.array(self._n), self.gravity, tuple(loops))

@@ -1,0 +1,176 @@
+"""Inertial parameters: the pseudo-inertia ``N`` and the parameter orderings users bring.
+
+The library's own convention (``"paper"``) is the paper's hat operator applied to the
+pseudo-inertia ``N = [[Sigma, h], [h^T, m]]`` (second moments ``Sigma``, first moments ``h``,
+mass ``m``):
+
+    paper: [N11 N12 N13 N22 N23 N33 N14 N24 N34 N44]
+         = [MXX MXY MXZ MYY MYZ MZZ MX MY MZ M]
+
+expressed in some frame (the spatial frame at the reference configuration for the
+regressor; the body frame for link-frame conventions). The other conventions use the
+rotational inertia tensor ``J`` about the frame origin (tensor entries, so ``Ixy`` is
+``-int x y dm``), related by ``Sigma = tr(J)/2 * 1 - J``:
+
+=========  ====================================================
+khalil     XX XY XZ YY YZ ZZ MX MY MZ M   (SYMORO)
+pinocchio  m mcx mcy mcz Ixx Ixy Iyy Ixz Iyz Izz
+idyntree   m mcx mcy mcz Ixx Ixy Ixz Iyy Iyz Izz
+rpna       m mcx mcy mcz Ixx Iyy Izz Iyz Ixz Ixy
+=========  ====================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+CONVENTIONS = ("paper", "khalil", "pinocchio", "idyntree", "rpna")
+
+#: Paper order of the ten entries of a symmetric 4x4 matrix (row, column), eq. "hat".
+HAT_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2), (0, 3), (1, 3), (2, 3), (3, 3))
+PAPER_NAMES = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
+KHALIL_NAMES = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
+
+_ROWS = np.array([r for r, _ in HAT_INDEX])
+_COLS = np.array([c for _, c in HAT_INDEX])
+
+
+def hat(n: np.ndarray) -> np.ndarray:
+    """Paper's hat: symmetric ``(*, 4, 4)`` -> ``(*, 10)`` (entries, not doubled)."""
+    return np.asarray(n)[..., _ROWS, _COLS]
+
+
+def unhat(p: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`hat`: ``(*, 10)`` -> symmetric ``(*, 4, 4)``."""
+    p = np.asarray(p, dtype=float)
+    out = np.zeros(p.shape[:-1] + (4, 4))
+    out[..., _ROWS, _COLS] = p
+    out[..., _COLS, _ROWS] = p
+    return out
+
+
+def sym(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a b^T + b a^T`` for 4-vectors ``(*, 4)`` -> ``(*, 4, 4)``."""
+    ab = np.einsum("...i,...j->...ij", a, b)
+    return ab + np.swapaxes(ab, -1, -2)
+
+
+def pseudo_inertia(mass: float, com: np.ndarray, inertia_com: np.ndarray) -> np.ndarray:
+    """Pseudo-inertia ``(4, 4)`` from mass, centre of mass ``(3,)`` and the rotational
+    inertia ``(3, 3)`` about the centre of mass, all in the same frame."""
+    com = np.asarray(com, dtype=float)
+    j_com = np.asarray(inertia_com, dtype=float)
+    j_o = j_com + mass * (np.dot(com, com) * np.eye(3) - np.outer(com, com))
+    return pseudo_from_origin(mass, mass * com, j_o)
+
+
+def pseudo_from_origin(mass: float, h: np.ndarray, j_origin: np.ndarray) -> np.ndarray:
+    """Pseudo-inertia from mass, first moment ``h = m c`` and inertia about the origin."""
+    n = np.zeros(np.shape(mass) + (4, 4))
+    n[..., :3, :3] = 0.5 * np.trace(j_origin, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - j_origin
+    n[..., :3, 3] = h
+    n[..., 3, :3] = h
+    n[..., 3, 3] = mass
+    return n
+
+
+def split(n: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(m, h, J_origin)`` from pseudo-inertias ``(*, 4, 4)``."""
+    sigma = n[..., :3, :3]
+    j = np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - sigma
+    return n[..., 3, 3], n[..., :3, 3], j
+
+
+def transform(n: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Express pseudo-inertias in another frame: ``T N T^T`` (``t`` maps old to new coords)."""
+    return t @ n @ np.swapaxes(t, -1, -2)
+
+
+def to_convention(n: np.ndarray, convention: str) -> np.ndarray:
+    """Parameter vectors ``(*, 10)`` in ``convention`` from pseudo-inertias ``(*, 4, 4)``.
+
+    The frame is the one ``n`` is expressed in (no change of frame here).
+    """
+    n = np.asarray(n, dtype=float)
+    if convention == "paper":
+        return hat(n)
+    m, h, j = split(n)
+    ixx, iyy, izz = j[..., 0, 0], j[..., 1, 1], j[..., 2, 2]
+    ixy, ixz, iyz = j[..., 0, 1], j[..., 0, 2], j[..., 1, 2]
+    hx, hy, hz = h[..., 0], h[..., 1], h[..., 2]
+    cols = {
+        "khalil": (ixx, ixy, ixz, iyy, iyz, izz, hx, hy, hz, m),
+        "pinocchio": (m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz),
+        "idyntree": (m, hx, hy, hz, ixx, ixy, ixz, iyy, iyz, izz),
+        "rpna": (m, hx, hy, hz, ixx, iyy, izz, iyz, ixz, ixy),
+    }
+    if convention not in cols:
+        raise ValueError(f"unknown parameter convention {convention!r}; expected one of {CONVENTIONS}")
+    return np.stack(cols[convention], axis=-1)
+
+
+def from_convention(p: np.ndarray, convention: str) -> np.ndarray:
+    """Pseudo-inertias ``(*, 4, 4)`` from parameter vectors ``(*, 10)`` in ``convention``."""
+    p = np.asarray(p, dtype=float)
+    if p.shape[-1] != 10:
+        raise ValueError(f"parameter vectors must have 10 entries per body, got shape {p.shape}")
+    if convention == "paper":
+        return unhat(p)
+    order = {
+        "khalil": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz", "hx", "hy", "hz", "m"),
+        "pinocchio": ("m", "hx", "hy", "hz", "ixx", "ixy", "iyy", "ixz", "iyz", "izz"),
+        "idyntree": ("m", "hx", "hy", "hz", "ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+        "rpna": ("m", "hx", "hy", "hz", "ixx", "iyy", "izz", "iyz", "ixz", "ixy"),
+    }
+    if convention not in order:
+        raise ValueError(f"unknown parameter convention {convention!r}; expected one of {CONVENTIONS}")
+    v = {k: p[..., i] for i, k in enumerate(order[convention])}
+    j = np.empty(p.shape[:-1] + (3, 3))
+    j[..., 0, 0], j[..., 1, 1], j[..., 2, 2] = v["ixx"], v["iyy"], v["izz"]
+    j[..., 0, 1] = j[..., 1, 0] = v["ixy"]
+    j[..., 0, 2] = j[..., 2, 0] = v["ixz"]
+    j[..., 1, 2] = j[..., 2, 1] = v["iyz"]
+    h = np.stack([v["hx"], v["hy"], v["hz"]], axis=-1)
+    return pseudo_from_origin(v["m"], h, j)
+
+
+def convert(p: np.ndarray, src: str, dst: str) -> np.ndarray:
+    """Convert parameter vectors ``(*, 10)`` between conventions (same frame)."""
+    return to_convention(from_convention(p, src), dst)
+
+
+@dataclass(frozen=True)
+class Inertia:
+    """Rigid-body inertia: ``mass`` [kg], ``com`` [m] and ``inertia`` [kg m^2] about the
+    centre of mass, all expressed in ``frame`` (a 4x4 pose relative to the body frame;
+    identity = the body/joint frame, as in URDF ``<inertial>``)."""
+
+    mass: float
+    com: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    inertia: tuple[tuple[float, float, float], ...] | tuple[float, ...] = ((0, 0, 0), (0, 0, 0), (0, 0, 0))
+    frame: np.ndarray | None = None
+
+    def inertia_matrix(self) -> np.ndarray:
+        i = np.asarray(self.inertia, dtype=float)
+        if i.shape == (3, 3):
+            return i
+        if i.shape == (3,):
+            return np.diag(i)
+        if i.shape == (6,):  # ixx iyy izz ixy ixz iyz (URDF attribute order)
+            ixx, iyy, izz, ixy, ixz, iyz = i
+            return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        raise ValueError(f"inertia must be 3x3, (ixx, iyy, izz) or (ixx, iyy, izz, ixy, ixz, iyz); got shape {i.shape}")
+
+    def pseudo(self) -> np.ndarray:
+        """Pseudo-inertia ``(4, 4)`` in the body frame."""
+        n = pseudo_inertia(float(self.mass), np.asarray(self.com, dtype=float), self.inertia_matrix())
+        if self.frame is not None:
+            n = transform(n, np.asarray(self.frame, dtype=float))
+        return n
+
+
+def is_physically_consistent(n: np.ndarray, tol: float = 0.0) -> np.ndarray:
+    """True where the pseudo-inertia is positive semidefinite (Wensing et al. 2018)."""
+    return np.linalg.eigvalsh(np.asarray(n)).min(axis=-1) >= -tol

@@ -1,0 +1,266 @@
+"""The robot model: what the paper's Table "rbt" holds, validated.
+
+Indices are 0-based; the fixed base (world) is ``-1``. Bodies are in depth-first
+(topological) order: ``parent[i] < i``. Every body's frame is its joint frame (URDF
+convention); ``M0[i]`` is its world pose at the reference configuration ``q = 0``.
+
+Joint types and their coordinates (each joint's axes are given in its own frame):
+
+==== ===== =================================================================
+type dofs  motion of the child relative to the parent, in the joint frame
+==== ===== =================================================================
+R    1     rotation about ``axes[0]`` through the frame origin
+P    1     translation along ``axes[0]``
+U    2     ``Rot(axes[0], q1) Rot(axes[1], q2)`` (axes perpendicular)
+S    3     ``Rot(x, q1) Rot(y, q2) Rot(z, q3)`` about the origin (XYZ Euler angles)
+F    6     floating; only at the root: configuration ``exp(q^)`` with ``q`` a twist
+           (omega, v) in world coordinates; velocities and accelerations are the
+           body's spatial twist and its derivative (quasi-velocities, as the paper's Go2)
+==== ===== =================================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ModelError
+from ..pga import adjoint
+from . import inertia as _inertia
+
+JOINT_TYPES = ("R", "P", "U", "S", "F")
+LOOP_TYPES = ("R", "P", "U", "S", "fixed")
+NDOF = {"R": 1, "P": 1, "U": 2, "S": 3, "F": 6, "fixed": 0}
+
+
+@dataclass(frozen=True)
+class LoopJoint:
+    """A cut joint closing a loop (kinematics in a later release): type, the two bodies
+    (``parent < child``), the joint frame's world pose ``M`` at q = 0 and its axes."""
+
+    name: str
+    type: str
+    parent: int
+    child: int
+    M: np.ndarray
+    axes: np.ndarray
+
+
+def _check_frame(t: np.ndarray, what: str) -> np.ndarray:
+    t = np.asarray(t, dtype=float)
+    if t.shape != (4, 4):
+        raise ModelError(f"{what}: frame must be a 4x4 homogeneous matrix, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise ModelError(f"{what}: frame contains NaN or inf")
+    r = t[:3, :3]
+    if (np.abs(r.T @ r - np.eye(3)).max() > 1e-8 or abs(np.linalg.det(r) - 1) > 1e-8
+            or np.abs(t[3] - [0, 0, 0, 1]).max() > 1e-12):
+        raise ModelError(f"{what}: frame is not rigid (rotation not orthonormal with det +1, "
+                         f"or last row not [0 0 0 1])")
+    return t
+
+
+def _check_axes(axes: np.ndarray, jtype: str, what: str) -> np.ndarray:
+    axes = np.asarray(axes, dtype=float).reshape(-1, 3) if np.size(axes) else np.zeros((0, 3))
+    want = {"R": 1, "P": 1, "U": 2, "S": 0, "F": 0, "fixed": 0}[jtype]
+    if jtype == "S" and axes.shape[0] == 0:
+        axes = np.eye(3)
+    if jtype == "S" and not np.allclose(axes, np.eye(3)):
+        raise ModelError(f"{what}: a spherical joint's axes are x, y, z of its frame (rotate the frame instead)")
+    if jtype not in ("S",) and axes.shape[0] != want:
+        raise ModelError(f"{what}: joint type {jtype} needs {want} axis/axes, got {axes.shape[0]}")
+    if not np.all(np.isfinite(axes)):
+        raise ModelError(f"{what}: axis contains NaN or inf")
+    norms = np.linalg.norm(axes, axis=1)
+    if np.any(norms < 1e-12):
+        raise ModelError(f"{what}: zero joint axis")
+    if np.any(np.abs(norms - 1) > 1e-9):
+        raise ModelError(f"{what}: joint axis {axes[np.argmax(np.abs(norms - 1))].tolist()} is not a unit vector")
+    if jtype == "U" and abs(axes[0] @ axes[1]) > 1e-9:
+        raise ModelError(f"{what}: the two axes of a universal joint must be perpendicular")
+    return axes
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A validated tree robot (plus loop joints recorded for later use).
+
+    Arrays (``n`` bodies):
+
+    * ``names (n,)``, ``joint_names (n,)``, ``jtype (n,)`` in ``R P U S F``;
+    * ``parent (n,)`` int, ``-1`` = fixed base, ``parent[i] < i``;
+    * ``M0 (n, 4, 4)`` world pose of each joint/body frame at q = 0;
+    * ``axes``: per body ``(k, 3)`` joint axes in the joint frame;
+    * ``N_body (n, 4, 4)`` pseudo-inertias in the body frame;
+    * ``gravity (3,)`` [m/s^2] in the world frame.
+    """
+
+    name: str
+    names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    jtype: tuple[str, ...]
+    parent: np.ndarray
+    M0: np.ndarray
+    axes: tuple[np.ndarray, ...]
+    N_body: np.ndarray
+    gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
+    loops: tuple[LoopJoint, ...] = ()
+    q_limits: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.names)
+        what = f"robot {self.name!r}"
+        if n == 0:
+            raise ModelError(f"{what}: no bodies")
+        for arr, label in ((self.joint_names, "joint_names"), (self.jtype, "jtype"), (self.axes, "axes")):
+            if len(arr) != n:
+                raise ModelError(f"{what}: {label} has {len(arr)} entries for {n} bodies")
+        if len(set(self.names)) != n:
+            dup = [x for x in self.names if self.names.count(x) > 1][0]
+            raise ModelError(f"{what}: duplicate body name {dup!r}")
+        parent = np.asarray(self.parent, dtype=int)
+        if parent.shape != (n,):
+            raise ModelError(f"{what}: parent must have shape ({n},), got {parent.shape}")
+        m0 = np.asarray(self.M0, dtype=float)
+        if m0.shape != (n, 4, 4):
+            raise ModelError(f"{what}: M0 must have shape ({n}, 4, 4), got {m0.shape}")
+        nb = np.asarray(self.N_body, dtype=float)
+        if nb.shape != (n, 4, 4):
+            raise ModelError(f"{what}: N_body must have shape ({n}, 4, 4), got {nb.shape}")
+        axes = []
+        for i in range(n):
+            jw = f"{what}, body {self.names[i]!r} (joint {self.joint_names[i]!r})"
+            if self.jtype[i] not in JOINT_TYPES:
+                raise ModelError(f"{jw}: unknown joint type {self.jtype[i]!r}; expected one of {JOINT_TYPES}")
+            if not (-1 <= parent[i] < i):
+                raise ModelError(f"{jw}: parent index {parent[i]} must come before the child "
+                                 f"(depth-first order, -1 = fixed base)")
+            if self.jtype[i] == "F" and parent[i] != -1:
+                raise ModelError(f"{jw}: a floating (F) joint must connect the fixed base (parent -1)")
+            _check_frame(m0[i], jw)
+            axes.append(_check_axes(self.axes[i], self.jtype[i], jw))
+            if not np.all(np.isfinite(nb[i])) or np.abs(nb[i] - nb[i].T).max() > 1e-9 * (1 + np.abs(nb[i]).max()):
+                raise ModelError(f"{jw}: inertia must be a finite symmetric pseudo-inertia")
+            if nb[i, 3, 3] < 0:
+                raise ModelError(f"{jw}: negative mass {nb[i, 3, 3]}")
+        g = np.asarray(self.gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ModelError(f"{what}: gravity must be 3 finite numbers, got {self.gravity!r}")
+        for lj in self.loops:
+            lw = f"{what}, loop joint {lj.name!r}"
+            if lj.type not in LOOP_TYPES:
+                raise ModelError(f"{lw}: unknown loop joint type {lj.type!r}; expected one of {LOOP_TYPES}")
+            if not (-1 <= lj.parent < lj.child < n):
+                raise ModelError(f"{lw}: needs parent index < child index < {n}, got {lj.parent}, {lj.child}")
+            _check_frame(lj.M, lw)
+        object.__setattr__(self, "parent", parent)
+        object.__setattr__(self, "M0", m0)
+        object.__setattr__(self, "N_body", nb)
+        object.__setattr__(self, "axes", tuple(axes))
+        object.__setattr__(self, "gravity", g)
+
+    # ---------------------------------------------------------------- derived data
+    @property
+    def n(self) -> int:
+        """Number of moving bodies."""
+        return len(self.names)
+
+    @property
+    def floating(self) -> bool:
+        return "F" in self.jtype
+
+    @property
+    def ndofs(self) -> np.ndarray:
+        """Dofs per joint ``(n,)``."""
+        return np.array([NDOF[t] for t in self.jtype])
+
+    @property
+    def dof(self) -> int:
+        return int(self.ndofs.sum())
+
+    @property
+    def q_index(self) -> np.ndarray:
+        """First coordinate of each joint in ``q`` ``(n,)``."""
+        return np.concatenate([[0], np.cumsum(self.ndofs)[:-1]]).astype(int)
+
+    @property
+    def dof_body(self) -> np.ndarray:
+        """Body moved by each coordinate ``(dof,)``."""
+        return np.repeat(np.arange(self.n), self.ndofs)
+
+    @property
+    def local_screws(self) -> np.ndarray:
+        """Unit twists ``(dof, 6)`` of every coordinate in its own joint frame."""
+        out = []
+        for i, t in enumerate(self.jtype):
+            if t in ("R", "U", "S"):
+                out += [np.r_[a, 0, 0, 0] for a in self.axes[i]]
+            elif t == "P":
+                out.append(np.r_[0, 0, 0, self.axes[i][0]])
+            elif t == "F":
+                out += list(np.eye(6))
+        return np.array(out, dtype=float).reshape(-1, 6)
+
+    @property
+    def screws(self) -> np.ndarray:
+        """Joint lines ``L0 (dof, 6)``: unit twists in world coordinates at q = 0.
+
+        For F, the world basis ``e23 e31 e12 e01 e02 e03`` (the root frame is ignored).
+        """
+        body = self.dof_body
+        s = adjoint(self.M0[body], self.local_screws)
+        f = np.array([self.jtype[b] == "F" for b in body])
+        s[f] = self.local_screws[f]
+        return s
+
+    @property
+    def support(self) -> np.ndarray:
+        """``(dof, n)`` bool: coordinate ``j`` moves body ``i`` (``j`` on ``i``'s path)."""
+        anc = np.zeros((self.n, self.n), dtype=bool)
+        for i in range(self.n):
+            anc[i, i] = True
+            p = self.parent[i]
+            if p >= 0:
+                anc[:, i] |= anc[:, p]
+        return anc[self.dof_body]
+
+    @property
+    def N0(self) -> np.ndarray:
+        """Spatial pseudo-inertias ``(n, 4, 4)``: world frame at q = 0 (the paper's ``N``)."""
+        return _inertia.transform(self.N_body, self.M0)
+
+    def parameters(self, convention: str = "paper") -> np.ndarray:
+        """The robot's inertial parameters ``(10 n,)``.
+
+        ``"paper"``: spatial pseudo-inertia at q = 0 (what the TP regressor multiplies);
+        any other convention: link (body) frame, e.g. ``"khalil"`` or ``"pinocchio"``.
+        """
+        n = self.N0 if convention == "paper" else self.N_body
+        return _inertia.to_convention(n, convention).reshape(-1)
+
+    def with_gravity(self, gravity: np.ndarray) -> Robot:
+        """The same robot under another gravity vector ``(3,)`` [m/s^2], world frame."""
+        from dataclasses import replace
+
+        return replace(self, gravity=np.asarray(gravity, dtype=float))
+
+    def with_parameters(self, params: np.ndarray, convention: str = "paper") -> Robot:
+        """The same robot with other inertial parameters ``(10 n,)`` (see :meth:`parameters`)."""
+        from dataclasses import replace
+
+        p = np.asarray(params, dtype=float).reshape(self.n, 10)
+        n = _inertia.from_convention(p, convention)
+        if convention == "paper":
+            from ..pga import inverse_transform
+
+            n = _inertia.transform(n, inverse_transform(self.M0))
+        return replace(self, N_body=n)
+
+    def describe(self) -> str:
+        """One line per body: index, name, joint type, parent."""
+        lines = [f"{self.name}: {self.n} bodies, {self.dof} dofs, gravity {self.gravity.tolist()} m/s^2"]
+        for i in range(self.n):
+            p = "world" if self.parent[i] < 0 else self.names[self.parent[i]]
+            lines.append(f"  {i:3d} {self.names[i]:<24s} {self.jtype[i]}  parent {p}")
+        return "\n".join(lines)

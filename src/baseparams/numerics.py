@@ -1,0 +1,96 @@
+"""The numerical method (the paper's baseline and our judge): random states, the stacked
+TP regressor and a rank decision by SVD with a stated tolerance and singular-value gap."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import BaseparamsError
+from .model.robot import Robot
+from .regressor import regressor
+
+#: which generalized forces are measured
+ROWS = ("all", "joints", "base")
+
+
+def sample_states(robot: Robot, samples: int, rng: np.random.Generator, low: float = 0.0,
+                  high: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``q, dq, ddq (S, dof)`` uniform in ``(low, high)`` as in the paper's validation."""
+    shape = (samples, robot.dof)
+    return rng.uniform(low, high, shape), rng.uniform(low, high, shape), rng.uniform(low, high, shape)
+
+
+def row_mask(robot: Robot, rows: str) -> np.ndarray:
+    """Boolean ``(dof,)``: which generalized forces are measured.
+
+    ``all``; ``joints`` (every coordinate but the floating base's 6); ``base`` (only the
+    floating base's wrench)."""
+    if rows not in ROWS:
+        raise BaseparamsError(f"unknown measured rows {rows!r}; expected one of {ROWS}")
+    is_base = np.array([robot.jtype[b] == "F" for b in robot.dof_body])
+    if rows == "all":
+        return np.ones(robot.dof, dtype=bool)
+    if not is_base.any():
+        if rows == "base":
+            raise BaseparamsError(f"robot {robot.name!r} has no floating base: no base-wrench rows")
+        return np.ones(robot.dof, dtype=bool)
+    return ~is_base if rows == "joints" else is_base
+
+
+@dataclass(frozen=True)
+class NumericalResult:
+    """Rank decision on the stacked regressor ``W (S * rows, 10 n)``.
+
+    ``singular_values`` (descending), ``tol`` the absolute threshold used (``rtol * s_max``),
+    ``gap = s[rank-1] / s[rank]`` (inf when full rank or rank 0), ``null_basis (10n, k)`` and
+    ``range_basis (10n, rank)`` orthonormal, paper convention.
+    """
+
+    rank: int
+    nullity: int
+    singular_values: np.ndarray
+    rtol: float
+    tol: float
+    gap: float
+    null_basis: np.ndarray
+    range_basis: np.ndarray
+    samples: int
+    seconds: float
+    min_gap: float
+
+    @property
+    def decided(self) -> bool:
+        """True when the gap at the rank decision is at least ``min_gap``."""
+        return self.gap >= self.min_gap
+
+
+def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, samples: int = 0,
+                  seconds: float = 0.0) -> NumericalResult:
+    """SVD rank of ``w`` with relative tolerance ``rtol``; reports the gap."""
+    _, s, vt = np.linalg.svd(w, full_matrices=True)
+    ncol = w.shape[1]
+    sv = np.zeros(ncol)
+    sv[: len(s)] = s
+    tol = rtol * (sv[0] if sv[0] > 0 else 1.0)
+    rank = int(np.sum(sv > tol))
+    if 0 < rank < ncol:
+        gap = sv[rank - 1] / max(sv[rank], np.finfo(float).tiny)
+    else:
+        gap = np.inf
+    return NumericalResult(rank, ncol - rank, sv, rtol, tol, float(gap), vt[rank:].T, vt[:rank].T,
+                           samples, seconds, min_gap)
+
+
+def numerical_nullspace(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
+                        rtol: float = 1e-9, min_gap: float = 1e4) -> NumericalResult:
+    """The numerical method: ``samples`` random states in (0, 1), stacked regressor, SVD."""
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    q, dq, ddq = sample_states(robot, samples, rng)
+    y = regressor(robot, q, dq, ddq)[:, row_mask(robot, rows)]
+    w = y.reshape(-1, y.shape[-1])
+    res = rank_decision(w, rtol, min_gap, samples)
+    return NumericalResult(**{**res.__dict__, "seconds": time.perf_counter() - t0})

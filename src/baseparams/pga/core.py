@@ -1,0 +1,309 @@
+"""A small batched PGA kernel for G(3,0,1) in the paper's coordinates.
+
+Layouts (any number of leading batch axes ``*``):
+
+* point ``(*, 4)``: ``[x, y, z, w]`` = x e032 + y e013 + z e021 + w e123; ``w = 1`` is a
+  Euclidean point, ``w = 0`` an infinite point (a direction).
+* line / twist / wrench ``(*, 6)``: ``[e23, e31, e12, e01, e02, e03]``. A line through
+  ``p`` with direction ``d`` is ``(d, p x d)``; a spatial twist is ``(omega, v)`` with ``v``
+  the velocity of the point at the world origin; a wrench is ``(f, n)`` with ``n`` the moment
+  about the world origin.
+* motor ``(*, 8)``: ``[1, e23, e31, e12, e01, e02, e03, e0123]``.
+
+Conventions (checked against :mod:`baseparams.pga.algebra` in the tests):
+
+* a motor acts by the paper's sandwich ``X = ~M X0 M`` (eq. "position");
+* ``M = exp(B)`` with ``B = theta/2 * S`` is the screw displacement ``exp(theta * S^)``
+  for a unit twist ``S``: rotation angle and translation are **twice** the bivector;
+* ``matrix(a * b) = matrix(b) @ matrix(a)``: ``a * b`` applies ``a`` first, then ``b``
+  (both in the world frame).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import algebra as _alg
+
+# ----------------------------------------------------------------------------------------
+# points and lines
+
+def point(xyz: np.ndarray) -> np.ndarray:
+    """Euclidean point ``(*, 4)`` from coordinates ``(*, 3)``."""
+    xyz = np.asarray(xyz, dtype=float)
+    return np.concatenate([xyz, np.ones(xyz.shape[:-1] + (1,))], axis=-1)
+
+
+def direction(xyz: np.ndarray) -> np.ndarray:
+    """Infinite point ``(*, 4)`` (a direction) from ``(*, 3)``."""
+    xyz = np.asarray(xyz, dtype=float)
+    return np.concatenate([xyz, np.zeros(xyz.shape[:-1] + (1,))], axis=-1)
+
+
+def join(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The line ``P v Q`` through two points ``(*, 4)`` -> ``(*, 6)``.
+
+    ``[w1 p2 - w2 p1, p1 x p2]`` (the paper's vee product of two points).
+    """
+    p = np.asarray(p, dtype=float)
+    q = np.asarray(q, dtype=float)
+    d = p[..., 3:4] * q[..., :3] - q[..., 3:4] * p[..., :3]
+    m = np.cross(p[..., :3], q[..., :3])
+    return np.concatenate([d, m], axis=-1)
+
+
+def line_through(p: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Line ``(*, 6)`` through Euclidean point ``p (*, 3)`` with direction ``d (*, 3)``."""
+    return join(point(p), direction(d))
+
+
+def wedge(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Outer product of two bivectors ``(*, 6)`` -> pseudoscalar coefficient ``(*)``.
+
+    For a wrench ``w`` and a twist ``V``, ``w ^ V`` is the power (eq. "duality").
+    """
+    return np.sum(a[..., :3] * b[..., 3:] + a[..., 3:] * b[..., :3], axis=-1)
+
+
+def swap(l: np.ndarray) -> np.ndarray:
+    """``[m, d]`` from ``[d, m]``: ``wedge(a, b) == a . swap(b)``."""
+    return np.concatenate([l[..., 3:], l[..., :3]], axis=-1)
+
+
+def commutator(x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The paper's cross product ``X x V = (XV - VX)/2`` for ``V`` a bivector ``(*, 6)``.
+
+    * ``x`` a line ``(*, 6)``: returns the line's velocity ``ad_V X``;
+    * ``x`` a point ``(*, 4)``: returns the point's velocity ``omega x p + w v`` as an
+      infinite point ``(*, 4)`` (eq. "vel").
+    """
+    x = np.asarray(x, dtype=float)
+    v = np.asarray(v, dtype=float)
+    w, u = v[..., :3], v[..., 3:]
+    if x.shape[-1] == 6:
+        d, m = x[..., :3], x[..., 3:]
+        return np.concatenate([np.cross(w, d), np.cross(w, m) + np.cross(u, d)], axis=-1)
+    if x.shape[-1] == 4:
+        vel = np.cross(w, x[..., :3]) + x[..., 3:4] * u
+        return np.concatenate([vel, np.zeros(vel.shape[:-1] + (1,))], axis=-1)
+    raise ValueError(f"commutator: expected a line (*, 6) or a point (*, 4), got {x.shape}")
+
+
+# ----------------------------------------------------------------------------------------
+# motors
+
+def _even_table() -> np.ndarray:
+    idx = [(_alg.blade(n)) for n in _alg.MOTOR_BLADES]
+    t = np.zeros((8, 8, 8))
+    for a, (sa, ia) in enumerate(idx):
+        for b, (sb, ib) in enumerate(idx):
+            s, ic = _alg._blade_product(ia, ib)
+            for c, (sc, icc) in enumerate(idx):
+                if icc == ic:
+                    t[a, b, c] = sa * sb * s * sc
+    return t
+
+
+_EVEN = _even_table()
+_EVEN_NZ = np.nonzero(_EVEN)
+_REV = np.array([1, -1, -1, -1, -1, -1, -1, 1.0])
+
+
+def motor_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Geometric product of two even elements ``(*, 8)``: ``a`` first, then ``b``."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    i, j, k = _EVEN_NZ
+    terms = a[..., i] * b[..., j] * _EVEN[i, j, k]
+    out = np.zeros(np.broadcast_shapes(a.shape, b.shape))
+    for kk in range(8):
+        out[..., kk] = terms[..., k == kk].sum(axis=-1)
+    return out
+
+
+def reverse(m: np.ndarray) -> np.ndarray:
+    """Reverse ``~M`` of an even element ``(*, 8)``."""
+    return np.asarray(m, dtype=float) * _REV
+
+
+def identity_motor(shape: tuple[int, ...] = ()) -> np.ndarray:
+    m = np.zeros(shape + (8,))
+    m[..., 0] = 1.0
+    return m
+
+
+def _quat_to_rot(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r = np.empty(q.shape[:-1] + (3, 3))
+    r[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    r[..., 0, 1] = 2 * (x * y - z * w)
+    r[..., 0, 2] = 2 * (x * z + y * w)
+    r[..., 1, 0] = 2 * (x * y + z * w)
+    r[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    r[..., 1, 2] = 2 * (y * z - x * w)
+    r[..., 2, 0] = 2 * (x * z - y * w)
+    r[..., 2, 1] = 2 * (y * z + x * w)
+    r[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return r
+
+
+def rot_to_quat(r: np.ndarray) -> np.ndarray:
+    """Unit quaternion ``(*, 4)`` [w, x, y, z] from rotation matrices ``(*, 3, 3)``."""
+    r = np.asarray(r, dtype=float)
+    tr = np.trace(r, axis1=-2, axis2=-1)
+    # candidates from each diagonal pivot; pick the best-conditioned per element
+    q = np.empty(r.shape[:-2] + (4, 4))
+    q[..., 0, :] = np.stack([1 + tr, r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0],
+                             r[..., 1, 0] - r[..., 0, 1]], -1)
+    q[..., 1, :] = np.stack([r[..., 2, 1] - r[..., 1, 2], 1 + 2 * r[..., 0, 0] - tr,
+                             r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0]], -1)
+    q[..., 2, :] = np.stack([r[..., 0, 2] - r[..., 2, 0], r[..., 0, 1] + r[..., 1, 0],
+                             1 + 2 * r[..., 1, 1] - tr, r[..., 1, 2] + r[..., 2, 1]], -1)
+    q[..., 3, :] = np.stack([r[..., 1, 0] - r[..., 0, 1], r[..., 0, 2] + r[..., 2, 0],
+                             r[..., 1, 2] + r[..., 2, 1], 1 + 2 * r[..., 2, 2] - tr], -1)
+    piv = np.stack([1 + tr, 1 + 2 * r[..., 0, 0] - tr, 1 + 2 * r[..., 1, 1] - tr,
+                    1 + 2 * r[..., 2, 2] - tr], -1)
+    best = np.argmax(piv, axis=-1)
+    out = np.take_along_axis(q, best[..., None, None], axis=-2)[..., 0, :]
+    out = out / np.linalg.norm(out, axis=-1, keepdims=True)
+    return out * np.where(out[..., :1] < 0, -1.0, 1.0)
+
+
+def matrix_to_motor(t: np.ndarray) -> np.ndarray:
+    """Motor ``(*, 8)`` from homogeneous matrices ``(*, 4, 4)`` (rigid, det +1)."""
+    t = np.asarray(t, dtype=float)
+    q = rot_to_quat(t[..., :3, :3])
+    rot = np.zeros(t.shape[:-2] + (8,))
+    rot[..., :4] = q
+    tr = identity_motor(t.shape[:-2])
+    tr[..., 4:7] = 0.5 * t[..., :3, 3]
+    return motor_product(rot, tr)
+
+
+def motor_to_matrix(m: np.ndarray) -> np.ndarray:
+    """Homogeneous matrix ``(*, 4, 4)`` of a unit motor ``(*, 8)`` (``X = T @ X0``)."""
+    m = np.asarray(m, dtype=float)
+    rot = np.zeros_like(m)
+    rot[..., :4] = m[..., :4]
+    tr = motor_product(reverse(rot), m)
+    t = np.zeros(m.shape[:-1] + (4, 4))
+    t[..., :3, :3] = _quat_to_rot(m[..., :4])
+    t[..., :3, 3] = 2.0 * tr[..., 4:7]
+    t[..., 3, 3] = 1.0
+    return t
+
+
+def motor_exp(b: np.ndarray) -> np.ndarray:
+    """``exp(B)`` of a bivector ``(*, 6)`` -> motor ``(*, 8)`` (displacement ``exp(2B^)``)."""
+    return matrix_to_motor(se3_exp(2.0 * np.asarray(b, dtype=float)))
+
+
+def motor_log(m: np.ndarray) -> np.ndarray:
+    """Bivector ``B (*, 6)`` with ``exp(B) == M`` (rotation angle of ``M`` in ``[0, pi]``)."""
+    return 0.5 * se3_log(motor_to_matrix(m))
+
+
+def sandwich(m: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``~M X M``: move a point ``(*, 4)`` or a line ``(*, 6)`` by the motor ``(*, 8)``."""
+    t = motor_to_matrix(m)
+    x = np.asarray(x, dtype=float)
+    if x.shape[-1] == 4:
+        return np.einsum("...ij,...j->...i", t, x)
+    if x.shape[-1] == 6:
+        return adjoint(t, x)
+    raise ValueError(f"sandwich: expected a point (*, 4) or a line (*, 6), got {x.shape}")
+
+
+# ----------------------------------------------------------------------------------------
+# the same rigid motions as 4x4 matrices (what the kinematics hot path uses)
+
+def hat(xi: np.ndarray) -> np.ndarray:
+    """se(3) matrix ``(*, 4, 4)`` of a twist ``(*, 6)`` = (omega, v)."""
+    xi = np.asarray(xi, dtype=float)
+    out = np.zeros(xi.shape[:-1] + (4, 4))
+    w = xi[..., :3]
+    out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -w[..., 1], w[..., 0]
+    out[..., :3, 3] = xi[..., 3:]
+    return out
+
+
+def _skew(w: np.ndarray) -> np.ndarray:
+    out = np.zeros(w.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -w[..., 1], w[..., 0]
+    return out
+
+
+def se3_exp(xi: np.ndarray) -> np.ndarray:
+    """Matrix exponential ``exp(xi^) (*, 4, 4)`` of twists ``(*, 6)`` (closed form)."""
+    xi = np.asarray(xi, dtype=float)
+    w, v = xi[..., :3], xi[..., 3:]
+    th = np.linalg.norm(w, axis=-1)[..., None, None]
+    small = th < 1e-6
+    ths = np.where(small, 1.0, th)
+    th2 = th * th
+    a = np.where(small, 1 - th2 / 6 + th2 * th2 / 120, np.sin(ths) / ths)
+    b = np.where(small, 0.5 - th2 / 24 + th2 * th2 / 720, (1 - np.cos(ths)) / ths**2)
+    c = np.where(small, 1.0 / 6 - th2 / 120 + th2 * th2 / 5040, (ths - np.sin(ths)) / ths**3)
+    k = _skew(w)
+    k2 = k @ k
+    eye = np.eye(3)
+    out = np.zeros(xi.shape[:-1] + (4, 4))
+    out[..., :3, :3] = eye + a * k + b * k2
+    out[..., :3, 3] = np.einsum("...ij,...j->...i", eye + b * k + c * k2, v)
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def se3_log(t: np.ndarray) -> np.ndarray:
+    """Twist ``(*, 6)`` with ``se3_exp(twist) == t`` for rotation angles in ``[0, pi)``."""
+    t = np.asarray(t, dtype=float)
+    r = t[..., :3, :3]
+    cos = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0)
+    th = np.arccos(cos)
+    vee = np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0],
+                    r[..., 1, 0] - r[..., 0, 1]], -1)
+    small = th < 1e-6
+    s = np.where(small, 1.0, np.sin(np.where(small, 1.0, th)))
+    fac = np.where(small, 0.5 + th**2 / 12, th / (2 * s))
+    w = vee * fac[..., None]
+    near_pi = th > np.pi - 1e-4
+    if np.any(near_pi):
+        # axis from the symmetric part: (R + R^T)/2 - cos(th) I = (1 - cos(th)) a a^T
+        rs = r[near_pi]
+        b = (rs + np.swapaxes(rs, -1, -2)) / 2 - np.eye(3) * np.cos(th[near_pi])[..., None, None]
+        col = np.argmax(np.linalg.norm(b, axis=-2), axis=-1)
+        ax = np.take_along_axis(b, col[:, None, None], axis=-1)[..., 0]
+        ax = ax / np.linalg.norm(ax, axis=-1, keepdims=True)
+        ax = ax * np.where(np.sum(ax * vee[near_pi], -1, keepdims=True) < 0, -1.0, 1.0)
+        w[near_pi] = ax * th[near_pi][:, None]
+    k = _skew(w)
+    th_ = th[..., None, None]
+    small_ = th_ < 1e-6
+    ths = np.where(small_, 1.0, th_)
+    coef = np.where(small_, 1.0 / 12, (1 - ths * np.sin(ths) / (2 * (1 - np.cos(ths)))) / ths**2)
+    vinv = np.eye(3) - 0.5 * k + coef * (k @ k)
+    v = np.einsum("...ij,...j->...i", vinv, t[..., :3, 3])
+    return np.concatenate([w, v], axis=-1)
+
+
+def adjoint(t: np.ndarray, l: np.ndarray) -> np.ndarray:
+    """Move a line / twist ``(*, 6)`` by the rigid displacement ``t (*, 4, 4)``: ``Ad_T L``."""
+    r = t[..., :3, :3]
+    p = t[..., :3, 3]
+    d = np.einsum("...ij,...j->...i", r, l[..., :3])
+    m = np.einsum("...ij,...j->...i", r, l[..., 3:]) + np.cross(p, d)
+    return np.concatenate([d, m], axis=-1)
+
+
+def inverse_transform(t: np.ndarray) -> np.ndarray:
+    """Inverse of rigid homogeneous matrices ``(*, 4, 4)``."""
+    out = np.zeros_like(t)
+    rt = np.swapaxes(t[..., :3, :3], -1, -2)
+    out[..., :3, :3] = rt
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", rt, t[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out

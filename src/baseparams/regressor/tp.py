@@ -1,0 +1,94 @@
+"""The tetrahedral-point (TP) regressor (the paper's Algorithm DR).
+
+Coefficient (eq. "basic coeff"): ``R[j, i, m, n] = L_j^i ^ (E_m^i v ddE_n^i)`` with the
+tetrahedral points ``E^i = g_i [x y z O]`` of body ``i`` (spatial assignment: the world
+frame at q = 0) and their accelerations including gravity as an extra acceleration of
+Euclidean points, ``ddE_n = (dV^ + V^ V^) E_n - w_n (gravity, 0)``.
+
+Matrix form: ``Y[:, j, 10 i + k] = bar(R)[j, i, k]`` in the paper's hat/bar order, so that
+``tau = Y @ pi`` with ``pi`` the spatial pseudo-inertia parameters at q = 0
+(``Robot.parameters("paper")``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kinematics.tree import TreeState, forward_kinematics
+from ..model.inertia import HAT_INDEX
+from ..model.robot import Robot
+from ..pga import hat, join, swap
+
+_M = np.array([m for m, _ in HAT_INDEX])
+_N = np.array([n for _, n in HAT_INDEX])
+_OFF = (_M != _N)[:, None]
+
+
+def point_accelerations(robot: Robot, state: TreeState) -> tuple[np.ndarray, np.ndarray]:
+    """Tetrahedral points ``E (S, n, 4, 4)`` (columns x, y, z, O) and their accelerations
+    ``ddE (S, n, 4, 4)`` including the gravity term (columns; last row zero)."""
+    e = state.g
+    vh = hat(state.V)
+    acc = (hat(state.dV) + vh @ vh) @ e
+    acc[..., :3, 3] -= robot.gravity
+    return e, acc
+
+
+def bar_lines(e: np.ndarray, acc: np.ndarray) -> np.ndarray:
+    """The ten lines ``bar(E_m v ddE_n)`` per body ``(S, n, 10, 6)`` (paper's bar order)."""
+    pts = np.swapaxes(e, -1, -2)  # (S, n, 4 points, 4 coords)
+    accs = np.swapaxes(acc, -1, -2)
+    x_mn = join(pts[..., _M, :], accs[..., _N, :])
+    x_nm = join(pts[..., _N, :], accs[..., _M, :])
+    return x_mn + np.where(_OFF, x_nm, 0.0)
+
+
+def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = None,
+              chunk: int = 2048) -> np.ndarray:
+    """TP regressor in matrix form ``Y (S, dof, 10 n)``, columns in the paper's order
+    (spatial pseudo-inertia at q = 0), gravity included.
+
+    ``q, dq, ddq``: ``(S, dof)``. Computed in chunks of ``chunk`` samples to bound memory.
+    """
+    if state is None:
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        s = q.shape[0]
+        dq = np.zeros_like(q) if dq is None else np.atleast_2d(np.asarray(dq, dtype=float))
+        ddq = np.zeros_like(q) if ddq is None else np.atleast_2d(np.asarray(ddq, dtype=float))
+        if s > chunk:
+            return np.concatenate([regressor(robot, q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk],
+                                             chunk=chunk) for k in range(0, s, chunk)])
+        state = forward_kinematics(robot, q, dq, ddq)
+    e, acc = point_accelerations(robot, state)
+    xbar = swap(bar_lines(e, acc))  # (S, n, 10, 6): wedge(L, X) = L . swap(X)
+    s, n = xbar.shape[:2]
+    y = np.matmul(state.lines, xbar.reshape(s, n * 10, 6).transpose(0, 2, 1))  # (S, dof, 10n)
+    y = y.reshape(s, -1, n, 10)
+    y *= state.support[None, :, :, None]
+    return y.reshape(s, -1, n * 10)
+
+
+def regressor_tensor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
+    """TP regressor in tensor form ``R (S, dof, n, 4, 4)`` (eq. "basic coeff"), computed
+    coefficient by coefficient as ``L_j^i ^ (E_m^i v ddE_n^i)``."""
+    from ..pga import wedge
+
+    state = forward_kinematics(robot, q, dq, ddq)
+    e, acc = point_accelerations(robot, state)
+    pts = np.swapaxes(e, -1, -2)
+    accs = np.swapaxes(acc, -1, -2)
+    lines4 = join(pts[:, :, :, None, :], accs[:, :, None, :, :])  # (S, n, 4, 4, 6)
+    jl = state.jacobian_lines()  # (S, dof, n, 6)
+    return wedge(jl[:, :, :, None, None, :], lines4[:, None])
+
+
+def bar(r: np.ndarray) -> np.ndarray:
+    """The paper's bar operator: ``(*, 4, 4)`` -> ``(*, 10)`` (off-diagonal pairs summed)."""
+    out = r[..., _M, _N]
+    return out + np.where(_OFF[:, 0], r[..., _N, _M], 0.0)
+
+
+def generalized_forces(robot: Robot, q, dq, ddq, params=None) -> np.ndarray:
+    """``tau = Y pi`` ``(S, dof)``; ``params`` default to the robot's own (paper convention)."""
+    pi = robot.parameters("paper") if params is None else np.asarray(params, dtype=float)
+    return regressor(robot, q, dq, ddq) @ pi

@@ -1,0 +1,124 @@
+"""Independent references for the tests.
+
+``rnea``: recursive Newton-Euler in body-local frames with 6x6 spatial transforms
+(Featherstone's formulation, (omega, v) ordering), written apart from the TP code: it
+uses only the model's raw data (frames, axes, parents, inertias) and scipy's ``expm``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import expm
+
+
+def skew(w):
+    return np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+
+
+def Ad(t):
+    """6x6 motion transform of pose t: child-frame twist -> parent-frame twist."""
+    r, p = t[:3, :3], t[:3, 3]
+    x = np.zeros((6, 6))
+    x[:3, :3] = r
+    x[3:, 3:] = r
+    x[3:, :3] = skew(p) @ r
+    return x
+
+
+def crm(v):
+    out = np.zeros((6, 6))
+    out[:3, :3] = skew(v[:3])
+    out[3:, 3:] = skew(v[:3])
+    out[3:, :3] = skew(v[3:])
+    return out
+
+
+def crf(v):
+    return -crm(v).T
+
+
+def spatial_inertia(n):
+    """6x6 spatial inertia about the frame origin from a pseudo-inertia N (same frame)."""
+    sigma, h, m = n[:3, :3], n[:3, 3], n[3, 3]
+    j = np.trace(sigma) * np.eye(3) - sigma
+    out = np.zeros((6, 6))
+    out[:3, :3] = j
+    out[:3, 3:] = skew(h)
+    out[3:, :3] = -skew(h)
+    out[3:, 3:] = m * np.eye(3)
+    return out
+
+
+def _sub_joints(robot, i):
+    """Local unit twists of the 1-dof sub-joints of joint i (S: x, y, z)."""
+    t = robot.jtype[i]
+    if t in ("R", "U", "S"):
+        return [np.r_[a, 0, 0, 0] for a in robot.axes[i]]
+    if t == "P":
+        return [np.r_[0, 0, 0, robot.axes[i][0]]]
+    raise AssertionError
+
+
+def rnea(robot, q, dq, ddq):
+    """Generalized forces (dof,) for one state; F root quasi-velocities in world coords."""
+    n = robot.n
+    grav = np.r_[0, 0, 0, -np.asarray(robot.gravity)]  # spatial acceleration of the world
+    qi = robot.q_index
+    pose, vel, acc, frc = [None] * n, [None] * n, [None] * n, [None] * n
+    sub = [None] * n  # per body: list of (X_child<-prev (6x6), s_local)
+    for i in range(n):
+        p = robot.parent[i]
+        j0 = qi[i]
+        if robot.jtype[i] == "F":
+            u, du = dq[j0:j0 + 6], ddq[j0:j0 + 6]
+            tw = q[j0:j0 + 6]
+            xi = np.zeros((4, 4))
+            xi[:3, :3] = skew(tw[:3])
+            xi[:3, 3] = tw[3:]
+            t = expm(xi) @ robot.M0[i]
+            xinv = Ad(np.linalg.inv(t))
+            pose[i] = t
+            vel[i] = xinv @ u
+            acc[i] = xinv @ (du + grav)
+            sub[i] = xinv
+            continue
+        tp = np.eye(4) if p < 0 else pose[p]
+        mp = np.eye(4) if p < 0 else robot.M0[p]
+        vp = np.zeros(6) if p < 0 else vel[p]
+        ap = grav.copy() if p < 0 else acc[p]
+        # parent frame -> joint frame (fixed), expressed with the parent's local frame
+        t = tp @ np.linalg.inv(mp) @ robot.M0[i]
+        x = Ad(np.linalg.inv(np.linalg.inv(mp) @ robot.M0[i]))
+        v, a = x @ vp, x @ ap
+        chain = []
+        for k, s in enumerate(_sub_joints(robot, i)):
+            xi = np.zeros((4, 4))
+            xi[:3, :3] = skew(s[:3])
+            xi[:3, 3] = s[3:]
+            tj = expm(xi * q[j0 + k])
+            xj = Ad(np.linalg.inv(tj))
+            v = xj @ v + s * dq[j0 + k]
+            a = xj @ a + s * ddq[j0 + k] + crm(v) @ s * dq[j0 + k]
+            t = t @ tj
+            chain.append((xj, s))
+        pose[i], vel[i], acc[i], sub[i] = t, v, a, (x, chain)
+    tau = np.zeros(robot.dof)
+    for i in range(n):
+        inert = spatial_inertia(robot.N_body[i])
+        frc[i] = inert @ acc[i] + crf(vel[i]) @ inert @ vel[i]
+    for i in reversed(range(n)):
+        f = frc[i]
+        p = robot.parent[i]
+        j0 = qi[i]
+        if robot.jtype[i] == "F":
+            tau[j0:j0 + 6] = sub[i].T @ f
+            continue
+        x, chain = sub[i]
+        for k in reversed(range(len(chain))):
+            xj, s = chain[k]
+            tau[j0 + k] = s @ f
+            f = xj.T @ f
+        f = x.T @ f
+        if p >= 0:
+            frc[p] = frc[p] + f
+    return tau

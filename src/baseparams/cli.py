@@ -56,7 +56,8 @@ def cmd_analyze(args) -> int:
 
     robot = _robot(args)
     result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
-                     progress=None if args.json else sys.stderr)
+                     rows=args.rows, convention=args.convention,
+                     progress=sys.stderr if args.verbose else None)
     text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
     if args.output:
         with open(args.output, "w") as fh:
@@ -89,6 +90,12 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("analyze", help="base parameters of a robot (certified)")
     model_args(s)
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
+    s.add_argument("--rows", choices=("all", "joints", "base"), default="all",
+                   help="measured generalized forces: all (default), joint torques only, or the "
+                        "floating base's wrench only")
+    s.add_argument("--convention", choices=("khalil", "paper", "pinocchio", "idyntree", "rpna"),
+                   default="khalil", help="convention of the regrouped expressions (default khalil)")
+    s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.set_defaults(func=cmd_analyze)
 
@@ -108,6 +115,9 @@ def main(argv: list[str] | None = None) -> int:
     except BaseparamsError as exc:
         print(f"baseparams: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # e.g. piped into head
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print("baseparams: interrupted", file=sys.stderr)
         return 130

@@ -84,13 +84,19 @@ def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, sampl
                            samples, seconds, min_gap)
 
 
-def numerical_nullspace(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
-                        rtol: float = 1e-9, min_gap: float = 1e4) -> NumericalResult:
-    """The numerical method: ``samples`` random states in (0, 1), stacked regressor, SVD."""
-    t0 = time.perf_counter()
+def stacked_regressor(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all") -> np.ndarray:
+    """``W (samples * measured rows, 10 n)``: the TP regressor on random states, stacked."""
     rng = np.random.default_rng(seed)
     q, dq, ddq = sample_states(robot, samples, rng)
     y = regressor(robot, q, dq, ddq)[:, row_mask(robot, rows)]
-    w = y.reshape(-1, y.shape[-1])
+    return y.reshape(-1, y.shape[-1])
+
+
+def numerical_nullspace(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
+                        rtol: float = 1e-9, min_gap: float = 1e4, w: np.ndarray | None = None) -> NumericalResult:
+    """The numerical method: ``samples`` random states in (0, 1), stacked regressor, SVD."""
+    t0 = time.perf_counter()
+    if w is None:
+        w = stacked_regressor(robot, samples, seed, rows)
     res = rank_decision(w, rtol, min_gap, samples)
     return NumericalResult(**{**res.__dict__, "seconds": time.perf_counter() - t0})

@@ -257,6 +257,41 @@ class Robot:
             n = _inertia.transform(n, inverse_transform(self.M0))
         return replace(self, N_body=n)
 
+    def in_world(self, t: np.ndarray) -> Robot:
+        """The same robot seen from another world frame: ``M0 -> t M0``, gravity rotated.
+
+        ``t (4, 4)``: pose of the old world frame in the new one. Body-frame inertias and
+        joint axes (in joint frames) are unchanged, so every physical quantity is the same.
+        """
+        from dataclasses import replace
+
+        t = _check_frame(t, f"robot {self.name!r}: world transform")
+        loops = tuple(replace(lj, M=t @ lj.M) for lj in self.loops)
+        return replace(self, M0=t @ self.M0, gravity=t[:3, :3] @ self.gravity, loops=loops)
+
+    def at(self, q0: np.ndarray) -> Robot:
+        """The same robot re-referenced at configuration ``q0 (dof,)``: its new q = 0 is the old
+        ``q0`` (exactly ``q_new = q - q0`` for R, P and U joints). Not for S joints, whose
+        Euler axes are tied to the joint frame."""
+        from dataclasses import replace
+
+        from ..kinematics.tree import forward_kinematics
+
+        if "S" in self.jtype:
+            raise ModelError(f"robot {self.name!r}: re-referencing at q0 is not supported with S joints")
+        q0 = np.asarray(q0, dtype=float)
+        g = forward_kinematics(self, q0).g[0]
+        axes = list(self.axes)
+        qi = self.q_index
+        for i, t in enumerate(self.jtype):
+            if t == "U":  # the first axis is carried by the parent: express it in the new frame
+                a1, a2 = self.axes[i]
+                c, s = np.cos(q0[qi[i] + 1]), np.sin(q0[qi[i] + 1])
+                k = np.array([[0, -a2[2], a2[1]], [a2[2], 0, -a2[0]], [-a2[1], a2[0], 0]])
+                rot = np.eye(3) + s * k + (1 - c) * (k @ k)  # Rot(a2, q2)
+                axes[i] = np.stack([rot.T @ a1, a2])
+        return replace(self, M0=g @ self.M0, axes=tuple(axes))
+
     def describe(self) -> str:
         """One line per body: index, name, joint type, parent."""
         lines = [f"{self.name}: {self.n} bodies, {self.dof} dofs, gravity {self.gravity.tolist()} m/s^2"]

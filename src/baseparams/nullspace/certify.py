@@ -77,6 +77,11 @@ def certify(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
         return Certificate(res, num, bd, r_d, 0, residual, worst, "failed",
                            f"{len(bad)} DRNG column(s) are not in the numerical nullspace (worst relative "
                            f"residual {worst:.2e}): {where}", time.perf_counter() - t0)
+    if num.rank >= w.shape[0] or w.shape[0] < ncols:
+        return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
+                           f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
+                           f"parameters (rank {num.rank}); use more samples (--samples)",
+                           time.perf_counter() - t0)
     if not num.decided:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
                            f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
@@ -90,6 +95,14 @@ def certify(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
         return Certificate(res, num, bd, r_d, 0, residual, worst, "failed",
                            f"rank(B) {r_d} + rank(W) {num.rank} > {ncols}: DRNG columns and the numerical "
                            f"rank disagree ({gap_txt}); try more samples", time.perf_counter() - t0)
+    # completion needs saturated numerics: more samples must not raise the rank
+    w2x = np.concatenate([w, stacked_regressor(robot, samples, seed + 7919, rows)])
+    num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w2x)
+    if num2.rank != num.rank or not num2.decided:
+        return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
+                           f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
+                           f"{num2.rank} with twice as many); use more samples (--samples)",
+                           time.perf_counter() - t0)
     # completion: directions of the numerical nullspace outside span(B_drng)
     nb = num.null_basis
     rest = nb - bd @ (bd.T @ nb) if r_d else nb

@@ -1,0 +1,311 @@
+#!/usr/bin/env python3
+"""Benchmarks for baseparams (standalone script; not collected by pytest).
+
+Usage::
+
+    PYTHONPATH=src python3 benchmarks/run.py            # human-readable table
+    PYTHONPATH=src python3 benchmarks/run.py --json     # exactly one JSON object on stdout
+    PYTHONPATH=src python3 benchmarks/run.py --quick    # smaller sizes, fewer repeats (< 60 s)
+    PYTHONPATH=src python3 benchmarks/run.py --only drng_scaling
+
+Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING):
+
+* ``regressor``     TP regressor vs a Python loop over ``pin.computeJointTorqueRegressor``
+                    (Puma560, Go2; S = 1, 100, 10000 samples) and its tracemalloc peak.
+* ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
+* ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
+
+Every timing is the median over ``repeats`` runs of ``time.perf_counter`` after one
+untimed warm-up call; the number of repeats is reported next to every timing (the
+``<figure>_repeats`` entries of the JSON). Progress goes to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import signal
+import statistics
+import sys
+import time
+import tracemalloc
+from collections.abc import Callable
+from pathlib import Path
+
+# Allow running from a checkout without installing (``python benchmarks/run.py``).
+_SRC = Path(__file__).resolve().parent.parent / "src"
+if _SRC.is_dir() and str(_SRC) not in sys.path:
+    sys.path.insert(0, str(_SRC))
+
+import numpy as np  # noqa: E402
+
+ROBOTS = ("puma560", "go2")
+#: per-N wall-clock budget (s) for the DRNG scaling group (build + timing)
+SCALING_BUDGET_S = 60.0
+
+
+def log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+# ----------------------------------------------------------------------------- helpers
+class Timeout(Exception):
+    pass
+
+
+class time_limit:
+    """Raise :class:`Timeout` after ``seconds`` (SIGALRM; a no-op where unavailable).
+
+    Python code is interrupted between bytecodes; a single long C call finishes first."""
+
+    def __init__(self, seconds: float):
+        self.seconds = seconds
+        self.ok = hasattr(signal, "SIGALRM") and hasattr(signal, "setitimer")
+
+    def _raise(self, signum, frame):
+        raise Timeout(f"exceeded {self.seconds:.0f} s")
+
+    def __enter__(self):
+        if self.ok:
+            self.old = signal.signal(signal.SIGALRM, self._raise)
+            signal.setitimer(signal.ITIMER_REAL, self.seconds)
+        return self
+
+    def __exit__(self, *exc):
+        if self.ok:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, self.old)
+        return False
+
+
+def measure(fn: Callable[[], object], repeats: int, warmup: int = 1) -> tuple[float, int]:
+    """Median seconds of ``fn()`` over ``repeats`` timed calls (after ``warmup`` calls)."""
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), repeats
+
+
+def peak_mb(fn: Callable[[], object]) -> float:
+    """Peak traced memory (MB, 1e6 bytes) of one call of ``fn`` (tracemalloc; numpy
+    registers its data buffers with tracemalloc)."""
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        fn()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return peak / 1e6
+
+
+def machine_info() -> dict:
+    info = {
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "cpu_count": os.cpu_count(),
+    }
+    try:
+        import scipy
+        info["scipy"] = scipy.__version__
+    except ImportError:  # pragma: no cover
+        pass
+    try:
+        import pinocchio
+        info["pinocchio"] = pinocchio.__version__
+    except ImportError:
+        info["pinocchio"] = None
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    info["cpu_model"] = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return info
+
+
+def _robot(name: str):
+    from baseparams.robots import go2, puma560
+    return {"puma560": puma560, "go2": go2}[name]()
+
+
+# ----------------------------------------------------------------------------- groups
+def bench_regressor(out: dict, quick: bool) -> None:
+    from baseparams.regressor import regressor
+    try:
+        import pinocchio as pin
+
+        from baseparams.io.pinocchio import state_to_pinocchio, to_pinocchio
+    except ImportError:
+        pin = None
+        log("  pinocchio not installed: skipping the Pinocchio side")
+
+    sizes = (1, 100, 10000)
+    reps = {1: 51, 100: 21, 10000: 5} if not quick else {1: 21, 100: 7, 10000: 3}
+    for name in ROBOTS:
+        robot = _robot(name)
+        model = data = None
+        if pin is not None:
+            model = to_pinocchio(robot)
+            data = model.createData()
+        for s in sizes:
+            rng = np.random.default_rng(s)
+            q, dq, ddq = (rng.uniform(0.0, 1.0, (s, robot.dof)) for _ in range(3))
+            key = f"{name}_S{s}"
+            log(f"  regressor {key}: ours ...")
+            t_ours, r_ours = measure(lambda: regressor(robot, q, dq, ddq), reps[s])
+            out[f"regressor_ours_{key}_s"] = t_ours
+            out[f"regressor_ours_{key}_s_repeats"] = r_ours
+            out[f"regressor_peak_mb_{key}"] = peak_mb(lambda: regressor(robot, q, dq, ddq))
+            if pin is None:
+                continue
+            states = [state_to_pinocchio(robot, q[k], dq[k], ddq[k]) for k in range(s)]  # not timed
+
+            def pin_loop():
+                for qp, vp, ap in states:
+                    pin.computeJointTorqueRegressor(model, data, qp, vp, ap)
+
+            log(f"  regressor {key}: pinocchio ...")
+            t_pin, r_pin = measure(pin_loop, reps[s])
+            out[f"regressor_pin_{key}_s"] = t_pin
+            out[f"regressor_pin_{key}_s_repeats"] = r_pin
+            out[f"regressor_vs_pinocchio_{key}"] = t_pin / t_ours
+
+
+def bench_drng_vs_numerical(out: dict, quick: bool) -> None:
+    from baseparams.nullspace import drng
+    from baseparams.nullspace.certify import certify
+    from baseparams.numerics import numerical_nullspace
+
+    r_fast, r_slow = (51, 11) if not quick else (11, 5)
+    for name in ROBOTS:
+        robot = _robot(name)
+        log(f"  drng {name} ...")
+        t_d, n_d = measure(lambda: drng(robot), r_fast)
+        log(f"  numerical {name} (100 samples) ...")
+        t_n, n_n = measure(lambda: numerical_nullspace(robot, samples=100, seed=0), r_slow)
+        log(f"  certify {name} ...")
+        t_c, n_c = measure(lambda: certify(robot), r_slow)
+        out[f"drng_{name}_ms"] = 1e3 * t_d
+        out[f"drng_{name}_ms_repeats"] = n_d
+        out[f"numerical_{name}_ms"] = 1e3 * t_n
+        out[f"numerical_{name}_ms_repeats"] = n_n
+        out[f"drng_speedup_{name}"] = t_n / t_d
+        out[f"certify_{name}_ms"] = 1e3 * t_c
+        out[f"certify_{name}_ms_repeats"] = n_c
+
+
+def bench_drng_scaling(out: dict, quick: bool) -> None:
+    from baseparams.nullspace import drng
+    from baseparams.robots import random_robot
+
+    sizes = (10, 100, 1000) if quick else (10, 100, 1000, 10000)
+    reps = {10: 21, 100: 11, 1000: 5, 10000: 5} if not quick else {10: 7, 100: 5, 1000: 5}
+    for kind, branching in (("chain", 0.0), ("tree", 0.5)):
+        last_total = None  # seconds (build + timing) of the previous N, to extrapolate
+        for n in sizes:
+            key = f"drng_{kind}_N{n}"
+            if last_total is not None and last_total * (n / prev_n) * 1.2 > SCALING_BUDGET_S:
+                log(f"  {key}: SKIPPED (extrapolated {last_total * n / prev_n:.0f} s from N={prev_n} "
+                    f"exceeds the {SCALING_BUDGET_S:.0f} s budget)")
+                out[f"{key}_ms"] = out[f"{key}_us_per_body"] = None
+                continue
+            log(f"  {key}: building ...")
+            t0 = time.perf_counter()
+            try:
+                with time_limit(SCALING_BUDGET_S):
+                    robot = random_robot(np.random.default_rng(n), n, joint_types="RP", branching=branching)
+                    t_build = time.perf_counter() - t0
+                    log(f"  {key}: built in {t_build:.2f} s; timing drng ...")
+                    t, r = measure(lambda: drng(robot), reps[n])
+            except Timeout as e:
+                log(f"  {key}: SKIPPED (build + timing {e}; budget {SCALING_BUDGET_S:.0f} s per N)")
+                out[f"{key}_ms"] = out[f"{key}_us_per_body"] = None
+                last_total, prev_n = time.perf_counter() - t0, n
+                continue
+            last_total, prev_n = time.perf_counter() - t0, n
+            out[f"{key}_ms"] = 1e3 * t
+            out[f"{key}_ms_repeats"] = r
+            out[f"{key}_us_per_body"] = 1e6 * t / n
+    done = [n for n in sizes if out.get(f"drng_chain_N{n}_us_per_body") is not None]
+    if 100 in done and max(done) > 100:
+        out["drng_chain_linearity"] = out[f"drng_chain_N{max(done)}_us_per_body"] / out["drng_chain_N100_us_per_body"]
+        out["drng_chain_linearity_N"] = max(done)
+    else:
+        out["drng_chain_linearity"] = None
+
+
+GROUPS: dict[str, Callable[[dict, bool], None]] = {
+    "regressor": bench_regressor,
+    "drng_vs_numerical": bench_drng_vs_numerical,
+    "drng_scaling": bench_drng_scaling,
+}
+
+
+# ----------------------------------------------------------------------------- output
+def _fmt(v) -> str:
+    if v is None:
+        return "skipped"
+    if isinstance(v, int):
+        return str(v)
+    if v == 0 or 1e-3 <= abs(v) < 1e5:
+        return f"{v:.4g}"
+    return f"{v:.3e}"
+
+
+def print_table(out: dict) -> None:
+    m = out["machine"]
+    print(f"machine: {m['platform']}, {m.get('cpu_model', m['processor'])}, {m['cpu_count']} CPUs, "
+          f"Python {m['python']}, numpy {m['numpy']}, pinocchio {m.get('pinocchio')}")
+    print("(medians over the given number of repeats; noisy on a small shared machine)\n")
+    names = [k for k in out if k != "machine" and not k.endswith("_repeats") and k != "total_seconds"]
+    width = max(len(k) for k in names) if names else 10
+    print(f"{'figure':<{width}}  {'value':>12}  repeats")
+    print("-" * (width + 24))
+    for k in names:
+        r = out.get(f"{k}_repeats", "")
+        print(f"{k:<{width}}  {_fmt(out[k]):>12}  {r}")
+    print(f"\ntotal benchmark time: {out['total_seconds']:.1f} s")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--json", action="store_true", help="print exactly one JSON object to stdout")
+    ap.add_argument("--quick", action="store_true", help="smaller sizes and fewer repeats (< 60 s)")
+    ap.add_argument("--only", metavar="SUBSTRING", default=None,
+                    help=f"run only the groups whose name contains SUBSTRING ({', '.join(GROUPS)})")
+    args = ap.parse_args(argv)
+
+    groups = [g for g in GROUPS if args.only is None or args.only in g]
+    if not groups:
+        ap.error(f"--only {args.only!r} matches no group; groups: {', '.join(GROUPS)}")
+    out: dict = {"machine": machine_info()}
+    t_all = time.perf_counter()
+    for g in groups:
+        log(f"[{g}]")
+        t0 = time.perf_counter()
+        GROUPS[g](out, args.quick)
+        log(f"[{g}] done in {time.perf_counter() - t0:.1f} s")
+    out["total_seconds"] = time.perf_counter() - t_all
+    out["quick"] = args.quick
+    if args.json:
+        json.dump(out, sys.stdout, indent=1)
+        sys.stdout.write("\n")
+    else:
+        out.pop("quick")
+        print_table(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,72 @@
+"""The command line: help, robots, analyze (human and JSON), one-line errors."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from baseparams.cli import main
+
+
+def run(args, capsys):
+    code = main(args)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_help_lists_commands(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--help"])
+    assert e.value.code == 0
+    out = capsys.readouterr().out
+    assert "analyze" in out and "robots" in out
+
+
+def test_robots(capsys):
+    code, out, _ = run(["robots"], capsys)
+    assert code == 0 and "puma560" in out and "go2" in out
+
+
+def test_analyze_json_schema(capsys):
+    code, out, _ = run(["analyze", "puma560", "--json"], capsys)
+    assert code == 0
+    d = json.loads(out)
+    for key in ("model", "n_bodies", "n_params", "gravity", "floating", "nullity", "n_base", "drng",
+                "numerical", "certified", "completed", "residual", "base_parameters"):
+        assert key in d
+    assert d["nullity"] == 24 and d["n_base"] == 36 and d["certified"] is True
+    assert d["drng"]["rank"] == 24 and d["numerical"]["samples"] == 100 and d["numerical"]["sv_gap"] > 1e8
+    assert len(d["base_parameters"]) == 36 and {"name", "expression"} <= set(d["base_parameters"][0])
+
+
+def test_analyze_zero_gravity_completes(capsys):
+    code, out, _ = run(["analyze", "puma560", "--gravity", "0", "0", "0", "--json"], capsys)
+    d = json.loads(out)
+    assert d["nullity"] == 26 and d["completed"] == 2 and d["status"] == "completed"
+    assert d["gravity"] == [0.0, 0.0, 0.0]
+
+
+def test_analyze_human_report_and_output_file(tmp_path, capsys):
+    f = tmp_path / "r.txt"
+    code, out, _ = run(["analyze", "go2", "--output", str(f)], capsys)
+    assert code == 0
+    text = f.read_text()
+    assert "94 base parameters" in text and "CERTIFIED" in text and "shared points" in text
+
+
+def test_no_verify(capsys):
+    code, out, _ = run(["analyze", "puma560", "--no-verify", "--json"], capsys)
+    d = json.loads(out)
+    assert d["certified"] is False and d["status"] == "unverified" and d["nullity"] == 24
+
+
+def test_errors_are_one_line(capsys):
+    code, out, err = run(["analyze", "no-such-robot"], capsys)
+    assert code == 2
+    assert err.strip().count("\n") == 0 and "unknown robot 'no-such-robot'" in err
+    r = subprocess.run([sys.executable, "-m", "baseparams.cli", "analyze", "go2", "--rows", "base",
+                        "--samples", "0"], capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    code, out, err = run(["analyze", "puma560", "--rows", "base"], capsys)
+    assert code == 2 and "no floating base" in err and "Traceback" not in err

@@ -76,12 +76,18 @@ def _outer(a: np.ndarray) -> np.ndarray:
     return hat10(np.einsum("...i,...j->...ij", a, a))
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of ``(m, 3)`` arrays (cheaper than ``np.cross`` for small m)."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
+
 def _perp_basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit directions ``(m, 3)`` completing unit ``d (m, 3)`` to an orthonormal frame."""
     helper = np.where(np.abs(d[:, :1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
-    x = np.cross(d, helper)
+    x = _cross(d, np.broadcast_to(helper, d.shape))
     x /= np.linalg.norm(x, axis=1, keepdims=True)
-    y = np.cross(d, x)
+    y = _cross(d, x)
     return x, y
 
 
@@ -96,30 +102,32 @@ def _pt(v: np.ndarray) -> np.ndarray:
 def planar_rotations(robot: Robot, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """PRI with E5 fixed: ``is_pr (n,)`` bool and ``d_pr (n, 3)`` (zero for pure translation)."""
     n = robot.n
-    is_pr = np.zeros(n, dtype=bool)
-    d_pr = np.zeros((n, 3))
-    axes_w = _world_axes(robot)
-    for i in range(n):  # O(n) scalar recursion (cheap; no arrays per body)
-        t = robot.jtype[i]
-        if t not in ("R", "P"):
+    is_pr = [False] * n
+    d_pr = [(0.0, 0.0, 0.0)] * n
+    axes_w = _world_axes(robot).tolist()
+    par = robot.parent.tolist()
+    tol2 = tol * tol
+    for i, t in enumerate(robot.jtype):  # O(n) scalar recursion in plain Python floats
+        if t != "R" and t != "P":
             continue
-        ld = axes_w[i] if t == "R" else np.zeros(3)
-        p = robot.parent[i]
+        ld = axes_w[i] if t == "R" else (0.0, 0.0, 0.0)
+        p = par[i]
         if p < 0:
-            is_pr[i], d_pr[i] = True, ld
-        elif is_pr[p] and np.linalg.norm(np.cross(ld, d_pr[p])) <= tol:
-            is_pr[i] = True
-            d_pr[i] = d_pr[p] if np.linalg.norm(d_pr[p]) > tol else ld
-    return is_pr, d_pr
+            is_pr[i], d_pr[i] = True, tuple(ld)
+        elif is_pr[p]:
+            a, b = ld, d_pr[p]
+            cx, cy, cz = a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+            if cx * cx + cy * cy + cz * cz <= tol2:
+                is_pr[i] = True
+                d_pr[i] = b if (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]) > tol2 else tuple(ld)
+    return np.array(is_pr, dtype=bool), np.array(d_pr, dtype=float).reshape(n, 3)
 
 
 def _world_axes(robot: Robot) -> np.ndarray:
     """First joint axis of every body in world coordinates at q = 0 ``(n, 3)`` (zero if none)."""
-    out = np.zeros((robot.n, 3))
-    for i, a in enumerate(robot.axes):
-        if len(a) and robot.jtype[i] in ("R", "P", "U"):
-            out[i] = robot.M0[i, :3, :3] @ a[0]
-    return out
+    first = np.array([a[0] if (len(a) and t in ("R", "P", "U")) else (0.0, 0.0, 0.0)
+                      for a, t in zip(robot.axes, robot.jtype)], dtype=float).reshape(-1, 3)
+    return np.einsum("nij,nj->ni", robot.M0[:, :3, :3], first)
 
 
 def _cols(h, child, parent, principle, labels) -> Columns:
@@ -176,7 +184,7 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         x, y = (_dir(v) for v in _perp_basis(axw[sel]))
         h = np.stack([_sym(z, x), _sym(z, y)], axis=1)
         parts.append(_cols(h, sel, np.full(len(sel), -1), 1, ["z x", "z y"]))
-        along = g_zero | (np.linalg.norm(np.cross(axw[sel], g), axis=1) <= tol * max(1.0, np.linalg.norm(g)))
+        along = g_zero | (np.linalg.norm(_cross(axw[sel], np.broadcast_to(g, axw[sel].shape)), axis=1) <= tol * max(1.0, np.linalg.norm(g)))
         if along.any():
             s2 = sel[along]
             h = np.stack([_sym(o[along], x[along]), _sym(o[along], y[along])], axis=1)
@@ -199,7 +207,7 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     if len(sel):
         o, d = _pt(org[sel]), _dir(d_pr[sel])
         parts.append(_cols(_sym(d, o)[:, None], sel, np.full(len(sel), -1), 2, ["d_pr O"]))
-        slide = np.linalg.norm(np.cross(axw[sel], d_pr[sel]), axis=1) <= tol
+        slide = np.linalg.norm(_cross(axw[sel], d_pr[sel]), axis=1) <= tol
         if slide.any():
             s2 = sel[slide]
             x, y = (_dir(v) for v in _perp_basis(d_pr[s2]))

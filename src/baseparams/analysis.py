@@ -12,7 +12,9 @@ nullity                certified nullspace dimension (DRNG's rank when --no-veri
 n_base                 number of base parameters = n_params - nullity
 drng                   {columns, rank, seconds, by_principle{shared points, fixed points,
                        planar rotations}}  (rank, never the column count, is the nullity)
-numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds} or null
+numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
+                       requested, kept, and for loops not_converged, branch_jumps,
+                       ill_conditioned, max_loop_residual}} or null
 certified              true when the numerics confirm the (completed) nullspace
 status, message        certified | completed | undecided | failed | unverified, and why
 completed              directions added from the numerical nullspace (marked numerical)
@@ -63,7 +65,7 @@ class Analysis:
             nm = c.numerical
             num = {"nullity": nm.nullity, "rank": nm.rank, "samples": nm.samples,
                    "sv_gap": None if not np.isfinite(nm.gap) else nm.gap, "tolerance": nm.tol,
-                   "rtol": nm.rtol, "seconds": nm.seconds}
+                   "rtol": nm.rtol, "seconds": nm.seconds, "sampling": c.sampling}
         return {
             "model": r.name, "n_bodies": r.n, "n_params": 10 * r.n, "gravity": r.gravity.tolist(),
             "floating": r.floating, "rows": self.rows, "nullity": self.nullity,
@@ -83,7 +85,7 @@ class Analysis:
         }
 
 
-def analyze(robot: Robot, samples: int = 100, seed: int = 0, verify: bool = True, rows: str = "all",
+def analyze(robot: Robot, samples: int | None = None, seed: int = 0, verify: bool = True, rows: str = "all",
             convention: str = "khalil", progress: TextIO | None = None) -> Analysis:
     """DRNG -> (certify, complete) -> regroup. ``progress``: a stream for progress lines."""
     t0 = time.perf_counter()
@@ -97,7 +99,7 @@ def analyze(robot: Robot, samples: int = 100, seed: int = 0, verify: bool = True
     by = res.by_principle()
     cert = None
     if verify:
-        say(f"certifying with {samples} random samples (seed {seed}, rows: {rows})")
+        say(f"certifying with {samples or 'the default number of'} random samples (seed {seed}, rows: {rows})")
         cert = certify(robot, samples, seed, rows, result=res)
         basis = cert.basis
     else:
@@ -112,7 +114,8 @@ def analyze(robot: Robot, samples: int = 100, seed: int = 0, verify: bool = True
 def format_report(a: Analysis) -> str:
     """Human-readable report."""
     r, c, j = a.robot, a.certificate, a.to_json()
-    out = [f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs, "
+    loops = f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else ""
+    out = [f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
            f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}",
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
@@ -125,6 +128,12 @@ def format_report(a: Analysis) -> str:
         out.append(f"  {'numerical':<18s} {c.completed:4d}  (completed from the numerical nullspace)")
         out.append(f"numerical method: {nm.samples} samples, rank {nm.rank}, nullity {nm.nullity}, "
                    f"tolerance {nm.tol:.3g}, singular-value gap {nm.gap:.3g}, {nm.seconds * 1e3:.1f} ms")
+        if r.has_loops and c.sampling:
+            sm = c.sampling
+            out.append(f"  loop sampling: {sm['kept']} of {sm['requested']} actuated samples kept "
+                       f"({sm['not_converged']} outside the workspace, {sm['branch_jumps']} left the assembly "
+                       f"mode, {sm['ill_conditioned']} with cond(J_p) >= 30); max loop residual "
+                       f"{sm['max_loop_residual']:.1e}")
         out.append(f"certification: {c.status.upper()} - {c.message}")
         out.append(f"  residual ||W B||/||W|| = {c.residual:.2e}, worst column {c.max_column_residual:.2e}")
     out.append("")

@@ -37,6 +37,7 @@ def cmd_regressor(args) -> int:
 
     robot = _robot(args)
     rng = np.random.default_rng(args.seed)
+    args.samples = args.samples or 100
     q, dq, ddq = sample_states(robot, args.samples, rng)
     t0 = time.perf_counter()
     y = regressor(robot, q, dq, ddq)
@@ -83,7 +84,9 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("model", help="built-in robot name (see 'baseparams robots')")
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
-        s.add_argument("--samples", type=int, default=100, help="random samples for the numerical method")
+        s.add_argument("--samples", type=int, default=None,
+                       help="random samples for the numerical method (default: 100 for trees, "
+                            "5000 actuated samples for closed loops, as the paper)")
         s.add_argument("--seed", type=int, default=0, help="random seed")
         s.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -108,7 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if getattr(args, "samples", 1) is not None and getattr(args, "samples", 1) < 1:
+    if getattr(args, "samples", None) is not None and args.samples < 1:
         parser.error("--samples must be at least 1")
     try:
         return args.func(args)

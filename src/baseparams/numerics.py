@@ -70,7 +70,8 @@ class NumericalResult:
 def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, samples: int = 0,
                   seconds: float = 0.0) -> NumericalResult:
     """SVD rank of ``w`` with relative tolerance ``rtol``; reports the gap."""
-    _, s, vt = np.linalg.svd(w, full_matrices=True)
+    # economy SVD when tall (U of a 15000-row W would be 1.8 GB); full V either way
+    _, s, vt = np.linalg.svd(w, full_matrices=w.shape[0] < w.shape[1])
     ncol = w.shape[1]
     sv = np.zeros(ncol)
     sv[: len(s)] = s
@@ -84,19 +85,67 @@ def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, sampl
                            samples, seconds, min_gap)
 
 
-def stacked_regressor(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all") -> np.ndarray:
-    """``W (samples * measured rows, 10 n)``: the TP regressor on random states, stacked."""
+#: default number of random samples: the paper's 100 for trees, 5000 actuated samples for loops
+DEFAULT_SAMPLES_TREE = 100
+DEFAULT_SAMPLES_LOOPS = 5000
+#: default sampling half-width of actuated coordinates around q = 0 when a loop robot has no box
+DEFAULT_HALF_WIDTH = 0.3
+
+
+def default_samples(robot: Robot) -> int:
+    return DEFAULT_SAMPLES_LOOPS if robot.has_loops else DEFAULT_SAMPLES_TREE
+
+
+def closed_samples(robot: Robot, samples: int, rng: np.random.Generator):
+    """Loop-closed random states: actuated q in the robot's box, dq_a, ddq_a in (0, 1)."""
+    from .kinematics.loops import close_loops
+
+    na = len(robot.actuated)
+    box = robot.q_box if robot.q_box is not None else np.tile([-DEFAULT_HALF_WIDTH, DEFAULT_HALF_WIDTH], (na, 1))
+    qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
+    return close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)))
+
+
+def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
+                      info: dict | None = None) -> np.ndarray:
+    """``W (kept samples * measured rows, 10 n)``: the TP regressor on random states, stacked.
+
+    Trees: states uniform in (0, 1) (the paper). Closed loops: actuated samples in the robot's
+    box, solved exactly (:func:`baseparams.kinematics.loops.close_loops`); discarded samples
+    are counted in ``info`` (a dict filled in place) when given."""
+    from .regressor import closed_regressor
+
+    samples = default_samples(robot) if samples is None else samples
     rng = np.random.default_rng(seed)
+    if robot.has_loops:
+        if rows != "all":
+            raise BaseparamsError(f"robot {robot.name!r}: measured rows {rows!r} are not defined with loops; "
+                                  f"the generalized forces are the actuated ones")
+        cs = closed_samples(robot, samples, rng)
+        if info is not None:
+            info.update(requested=cs.requested, kept=cs.kept, not_converged=cs.not_converged,
+                        branch_jumps=cs.branch_jumps, ill_conditioned=cs.ill_conditioned,
+                        max_loop_residual=cs.max_residual)
+        if cs.kept == 0:
+            raise BaseparamsError(f"robot {robot.name!r}: none of {samples} samples closed the loops "
+                                  f"({cs.not_converged} outside the workspace, {cs.branch_jumps} branch jumps, "
+                                  f"{cs.ill_conditioned} ill-conditioned); check q_box")
+        y = closed_regressor(robot, cs)
+        return y.reshape(-1, y.shape[-1])
     q, dq, ddq = sample_states(robot, samples, rng)
     y = regressor(robot, q, dq, ddq)[:, row_mask(robot, rows)]
+    if info is not None:
+        info.update(requested=samples, kept=samples)
     return y.reshape(-1, y.shape[-1])
 
 
-def numerical_nullspace(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
-                        rtol: float = 1e-9, min_gap: float = 1e4, w: np.ndarray | None = None) -> NumericalResult:
-    """The numerical method: ``samples`` random states in (0, 1), stacked regressor, SVD."""
+def numerical_nullspace(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
+                        rtol: float = 1e-9, min_gap: float = 1e4, w: np.ndarray | None = None,
+                        info: dict | None = None) -> NumericalResult:
+    """The numerical method: random states (see :func:`stacked_regressor`), stacked regressor, SVD."""
     t0 = time.perf_counter()
+    samples = default_samples(robot) if samples is None else samples
     if w is None:
-        w = stacked_regressor(robot, samples, seed, rows)
+        w = stacked_regressor(robot, samples, seed, rows, info)
     res = rank_decision(w, rtol, min_gap, samples)
     return NumericalResult(**{**res.__dict__, "seconds": time.perf_counter() - t0})

@@ -77,6 +77,8 @@ class RobotBuilder:
         self._n: list[np.ndarray] = []
         self._frames: dict[str, tuple[int, np.ndarray]] = {"world": (-1, np.eye(4))}
         self._loops: list[tuple] = []
+        self._actuated: list[bool | None] = []
+        self.q_box = None
 
     def _frame(self, name: str | None) -> tuple[int, np.ndarray]:
         key = "world" if name is None else name
@@ -86,7 +88,7 @@ class RobotBuilder:
 
     def add_link(self, name: str, parent: str | None = None, joint: str = "R", origin=None,
                  axis=(0.0, 0.0, 1.0), axis2=None, inertia: Inertia | None = None,
-                 joint_name: str | None = None) -> RobotBuilder:
+                 joint_name: str | None = None, actuated: bool | None = None) -> RobotBuilder:
         """Attach link ``name`` to ``parent`` (default: the fixed base) by a joint.
 
         ``joint``: ``R P U S F fixed`` or URDF/MJCF names (``revolute``, ``ball``, ...).
@@ -115,6 +117,7 @@ class RobotBuilder:
             self._frames[name] = (pidx, frame_in_body)
             return self
         axes = self._axes_for(jt, axis, axis2, what)
+        self._actuated.append(actuated)
         self._names.append(name)
         self._jnames.append(jname)
         self._types.append(jt)
@@ -165,6 +168,16 @@ class RobotBuilder:
             m = pm0 @ pframe @ (np.eye(4) if origin is None else np.asarray(origin, dtype=float))
             axes = self._axes_for(jt, axis, axis2, what) if jt in JOINT_TYPES else np.zeros((0, 3))
             loops.append(LoopJoint(name, jt, pidx, cidx, m, axes))
+        independent = None
+        if any(a is not None for a in self._actuated):
+            from .robot import NDOF
+
+            independent, k = [], 0
+            for t, a in zip(self._types, self._actuated):
+                if a:
+                    independent += list(range(k, k + NDOF[t]))
+                k += NDOF[t]
         return Robot(self.name, tuple(self._names), tuple(self._jnames), tuple(self._types),
                      np.array(self._parents, dtype=int), np.array(self._m0), tuple(self._axes),
-                     np.array(self._n), self.gravity, tuple(loops))
+                     np.array(self._n), self.gravity, tuple(loops),
+                     None if independent is None else tuple(independent), self.q_box)

@@ -106,7 +106,8 @@ class Robot:
     N_body: np.ndarray
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     loops: tuple[LoopJoint, ...] = ()
-    q_limits: np.ndarray | None = None
+    independent: tuple[int, ...] | None = None
+    q_box: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.names)
@@ -154,6 +155,21 @@ class Robot:
             if not (-1 <= lj.parent < lj.child < n):
                 raise ModelError(f"{lw}: needs parent index < child index < {n}, got {lj.parent}, {lj.child}")
             _check_frame(lj.M, lw)
+        dof = int(sum(NDOF[t] for t in self.jtype))
+        if self.independent is not None:
+            ind = tuple(int(k) for k in self.independent)
+            if len(set(ind)) != len(ind) or any(not (0 <= k < dof) for k in ind) or not ind:
+                raise ModelError(f"{what}: independent coordinates {ind} must be distinct indices in [0, {dof})")
+            object.__setattr__(self, "independent", tuple(sorted(ind)))
+        elif self.loops:
+            raise ModelError(f"{what}: a robot with loop joints must say which coordinates are "
+                             f"independent (actuated)")
+        if self.q_box is not None:
+            box = np.asarray(self.q_box, dtype=float)
+            na = len(self.independent) if self.independent is not None else dof
+            if box.shape != (na, 2) or not np.all(box[:, 0] < box[:, 1]):
+                raise ModelError(f"{what}: q_box must be ({na}, 2) with low < high, got {box.shape}")
+            object.__setattr__(self, "q_box", box)
         object.__setattr__(self, "parent", parent)
         object.__setattr__(self, "M0", m0)
         object.__setattr__(self, "N_body", nb)
@@ -178,6 +194,17 @@ class Robot:
     @property
     def dof(self) -> int:
         return int(self.ndofs.sum())
+
+    @property
+    def actuated(self) -> np.ndarray:
+        """Indices of the independent (actuated) coordinates ``(na,)``; all of q for a tree."""
+        if self.independent is None:
+            return np.arange(self.dof)
+        return np.array(self.independent, dtype=int)
+
+    @property
+    def has_loops(self) -> bool:
+        return len(self.loops) > 0
 
     @property
     def q_index(self) -> np.ndarray:

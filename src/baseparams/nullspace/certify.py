@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.robot import Robot
-from ..numerics import NumericalResult, numerical_nullspace, stacked_regressor
+from ..numerics import NumericalResult, default_samples, numerical_nullspace, stacked_regressor
 from .drng import DRNGResult, drng
 
 
@@ -39,6 +39,7 @@ class Certificate:
     status: str
     message: str
     seconds: float
+    sampling: dict | None = None
 
     @property
     def certified(self) -> bool:
@@ -49,13 +50,15 @@ class Certificate:
         return self.basis.shape[1]
 
 
-def certify(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
+def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
             result: DRNGResult | None = None, rtol: float = 1e-9, min_gap: float = 1e4,
             residual_tol: float = 1e-8) -> Certificate:
     """Certify (and if needed complete) DRNG's nullspace with ``samples`` random states."""
     t0 = time.perf_counter()
     res = drng(robot) if result is None else result
-    w = stacked_regressor(robot, samples, seed, rows)
+    samples = default_samples(robot) if samples is None else samples
+    sampling: dict = {}
+    w = stacked_regressor(robot, samples, seed, rows, sampling)
     num = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w)
     bd = res.orthonormal()
     r_d = bd.shape[1]
@@ -76,25 +79,25 @@ def certify(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
         where = "; ".join(res.provenance(int(k)) for k in bad[:3])
         return Certificate(res, num, bd, r_d, 0, residual, worst, "failed",
                            f"{len(bad)} DRNG column(s) are not in the numerical nullspace (worst relative "
-                           f"residual {worst:.2e}): {where}", time.perf_counter() - t0)
+                           f"residual {worst:.2e}): {where}", time.perf_counter() - t0, sampling)
     if num.rank >= w.shape[0] or w.shape[0] < ncols:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
                            f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
                            f"parameters (rank {num.rank}); use more samples (--samples)",
-                           time.perf_counter() - t0)
+                           time.perf_counter() - t0, sampling)
     if not num.decided:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
                            f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
                            f"samples (--samples), another seed, or fix rounded angles in the model",
-                           time.perf_counter() - t0)
+                           time.perf_counter() - t0, sampling)
     if r_d + num.rank == ncols:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "certified",
                            f"DRNG is complete: rank(B) {r_d} + rank(W) {num.rank} = {ncols}; {gap_txt}",
-                           time.perf_counter() - t0)
+                           time.perf_counter() - t0, sampling)
     if r_d + num.rank > ncols:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "failed",
                            f"rank(B) {r_d} + rank(W) {num.rank} > {ncols}: DRNG columns and the numerical "
-                           f"rank disagree ({gap_txt}); try more samples", time.perf_counter() - t0)
+                           f"rank disagree ({gap_txt}); try more samples", time.perf_counter() - t0, sampling)
     # completion needs saturated numerics: more samples must not raise the rank
     w2x = np.concatenate([w, stacked_regressor(robot, samples, seed + 7919, rows)])
     num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w2x)
@@ -102,7 +105,7 @@ def certify(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
         return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
                            f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
                            f"{num2.rank} with twice as many); use more samples (--samples)",
-                           time.perf_counter() - t0)
+                           time.perf_counter() - t0, sampling)
     # completion: directions of the numerical nullspace outside span(B_drng)
     nb = num.null_basis
     rest = nb - bd @ (bd.T @ nb) if r_d else nb
@@ -113,4 +116,4 @@ def certify(robot: Robot, samples: int = 100, seed: int = 0, rows: str = "all",
     return Certificate(res, num, basis, r_d, missing, residual, worst, "completed",
                        f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
                        f"the numerical nullspace (distance of the added directions to DRNG's span: "
-                       f"{s[missing - 1]:.3g} of 1); {gap_txt}", time.perf_counter() - t0)
+                       f"{s[missing - 1]:.3g} of 1); {gap_txt}", time.perf_counter() - t0, sampling)

@@ -213,6 +213,36 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
             x, y = (_dir(v) for v in _perp_basis(d_pr[s2]))
             h = np.stack([_sym(o[slide], x), _sym(o[slide], y)], axis=1)
             parts.append(_cols(h, s2, par[s2], 2, ["O x (transfer)", "O y (transfer)"]))
+    parts.append(loop_columns(robot))
+    return Columns.concat(parts)
+
+
+def loop_columns(robot: Robot) -> Columns:
+    """Principle 1 for loop joints (E4 fixed: loop ``l`` is joint ``n + l``, its own block).
+
+    Shared points from the loop frame at q = 0: R ``{O, z}``, P ``{x, y, z}``, U/S ``{O}``,
+    fixed ``{O, x, y, z}``; successor block ``+``, predecessor block ``-`` (none for the world)."""
+    parts = []
+    e = np.eye(4)
+    for k, lj in enumerate(robot.loops):
+        o = np.r_[lj.M[:3, 3], 1.0]
+        r = lj.M[:3, :3]
+        if lj.type == "R":
+            pts, names = [o, np.r_[r @ lj.axes[0], 0.0]], ["O", "z"]
+        elif lj.type == "P":
+            pts, names = [e[0], e[1], e[2]], ["x", "y", "z"]
+        elif lj.type in ("U", "S"):
+            pts, names = [o], ["O"]
+        else:  # fixed: every point is shared
+            pts, names = [o, e[0], e[1], e[2]], ["O", "x", "y", "z"]
+        hs, labels = [], []
+        for a in range(len(pts)):
+            for b in range(a, len(pts)):
+                hs.append(_outer(pts[a][None])[0] if a == b else _sym(pts[a][None], pts[b][None])[0])
+                labels.append(f"{names[a]} {names[b]} (loop)")
+        m = len(hs)
+        parts.append(Columns(np.array(hs), np.full(m, lj.child), np.full(m, lj.parent), np.zeros(m, dtype=int),
+                             np.full(m, robot.n + k), np.array(labels, dtype=object)))
     return Columns.concat(parts)
 
 
@@ -235,8 +265,10 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
 
     Each column lives on blocks ``{child, parent}`` with ``parent < child``. Per body, the
     rank of its diagonal block (child parts plus vectors pushed up from its children)
-    counts; combinations vanishing there are pushed to the parent. All diagonal blocks are
-    checked at once (batched SVD); only rank-deficient ones need the sequential push-up.
+    counts; combinations vanishing there are pushed to lower blocks. All diagonal blocks are
+    checked at once (batched SVD); only when one is rank-deficient does the general
+    block-by-block elimination (:func:`_elimination_rank`) run. Loop columns (blocks
+    ``{successor, predecessor}``, predecessor < successor) fit the same scheme.
     """
     k = len(cols)
     if k == 0:
@@ -252,49 +284,44 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
     scale = np.linalg.norm(blocks, axis=(1, 2))
     sv = np.linalg.svd(blocks, compute_uv=False)  # (n, min(10, mmax))
     ranks = np.sum(sv > rtol * np.maximum(scale, 1e-300)[:, None], axis=1)
-    deficient = np.flatnonzero(ranks < counts)
-    if len(deficient) == 0:
+    if np.all(ranks == counts):
         return int(ranks.sum())
-    # sequential push-up for the deficient paths (rare: geometric coincidences)
-    by_body: dict[int, np.ndarray] = {}
-    for b in np.unique(child):
-        by_body[int(b)] = order[starts[b]:starts[b] + counts[b]]
-    pushed: dict[int, list[np.ndarray]] = {}
-    total = int(ranks.sum())
-    todo = sorted(set(int(b) for b in deficient), reverse=True)
-    done: set[int] = set()
-    while todo:
-        b = todo.pop(0)
-        if b in done:
+    return _elimination_rank(cols, n, rtol)
+
+
+def _elimination_rank(cols: Columns, n: int, rtol: float) -> int:
+    """General exact rank: eliminate block by block from the last body to the first.
+
+    Vectors are sparse over bodies; at body b, the parts on block b of every vector whose
+    highest block is b are ranked, and combinations vanishing there move down to their next
+    highest block."""
+    pending: dict[int, list[dict[int, np.ndarray]]] = {}
+    for k in range(len(cols)):
+        v = {int(cols.child[k]): cols.h[k]}
+        if cols.parent[k] >= 0:
+            v[int(cols.parent[k])] = v.get(int(cols.parent[k]), 0) - cols.h[k]
+        pending.setdefault(max(v), []).append(v)
+    total = 0
+    scale = max(float(np.abs(cols.h).max()), 1e-300)
+    for b in range(n - 1, -1, -1):
+        vecs = pending.pop(b, [])
+        if not vecs:
             continue
-        done.add(b)
-        idx = by_body.get(b, np.zeros(0, dtype=int))
-        own = cols.h[idx].T  # (10, m)
-        extra = np.array(pushed.get(b, [])).reshape(-1, 10).T
-        mat = np.concatenate([own, extra], axis=1)
-        total -= int(ranks[b]) if b in deficient or b in pushed else 0
-        u, s, vt = np.linalg.svd(mat, full_matrices=True)
-        sc = max(np.linalg.norm(mat), 1e-300)
-        r = int(np.sum(s > rtol * sc))
+        mat = np.stack([v[b] for v in vecs], axis=1)  # (10, m)
+        _, sv, vt = np.linalg.svd(mat, full_matrices=True)
+        r = int(np.sum(sv > rtol * scale))
         total += r
-        null = vt[r:].T  # combos with zero block-b part
-        if null.shape[1]:
-            m_own = own.shape[1]
-            has_p = cols.parent[idx] >= 0
-            if has_p.any():
-                par = int(cols.parent[idx][has_p][0])
-                up = -(own[:, has_p] @ null[:m_own][has_p])  # (10, #null) on the parent block
-                up = up[:, np.linalg.norm(up, axis=0) > rtol * sc]
-                if up.shape[1]:
-                    pushed.setdefault(par, []).extend(list(up.T))
-                    if par not in done:
-                        todo.append(par)
-                        todo.sort(reverse=True)
-                    else:  # already processed: process again with the new vectors
-                        done.discard(par)
-                        todo.append(par)
-                        todo.sort(reverse=True)
-        ranks[b] = r
+        for c in vt[r:]:
+            new: dict[int, np.ndarray] = {}
+            for coef, v in zip(c, vecs):
+                if coef == 0:
+                    continue
+                for blk, h in v.items():
+                    if blk != b:
+                        new[blk] = new.get(blk, 0) + coef * h
+            new = {blk: h for blk, h in new.items() if np.linalg.norm(h) > rtol * scale}
+            if new:
+                pending.setdefault(max(new), []).append(new)
     return total
 
 
@@ -345,8 +372,13 @@ class DRNGResult:
         names = self.robot.names
         body = names[c.child[k]]
         par = "" if c.parent[k] < 0 else f" / {names[c.parent[k]]}"
-        return (f"{PRINCIPLES[c.principle[k]]}: joint {self.robot.joint_names[c.joint[k]]!r} "
-                f"({self.robot.jtype[c.joint[k]]}), bodies {body}{par}, points {c.label[k]}")
+        j = int(c.joint[k])
+        if j >= self.robot.n:
+            lj = self.robot.loops[j - self.robot.n]
+            joint = f"loop joint {lj.name!r} ({lj.type})"
+        else:
+            joint = f"joint {self.robot.joint_names[j]!r} ({self.robot.jtype[j]})"
+        return f"{PRINCIPLES[c.principle[k]]}: {joint}, bodies {body}{par}, points {c.label[k]}"
 
 
 def drng(robot: Robot, tol: float = 1e-9) -> DRNGResult:

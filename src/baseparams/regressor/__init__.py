@@ -1,5 +1,5 @@
 """The tetrahedral-point (TP) regressor, tensor and matrix forms."""
 
-from .tp import bar, generalized_forces, regressor, regressor_tensor
+from .tp import bar, closed_regressor, generalized_forces, regressor, regressor_tensor
 
-__all__ = ["bar", "generalized_forces", "regressor", "regressor_tensor"]
+__all__ = ["bar", "closed_regressor", "generalized_forces", "regressor", "regressor_tensor"]

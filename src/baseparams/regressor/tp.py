@@ -92,3 +92,17 @@ def generalized_forces(robot: Robot, q, dq, ddq, params=None) -> np.ndarray:
     """``tau = Y pi`` ``(S, dof)``; ``params`` default to the robot's own (paper convention)."""
     pi = robot.parameters("paper") if params is None else np.asarray(params, dtype=float)
     return regressor(robot, q, dq, ddq) @ pi
+
+
+def closed_regressor(robot: Robot, closed) -> np.ndarray:
+    """TP regressor of a closed-loop robot w.r.t. its actuated coordinates ``(S, na, 10 n)``.
+
+    ``closed``: :class:`baseparams.kinematics.loops.ClosedStates`. The Jacobian lines include
+    ``dq_k/dq_a`` (paper eq. "jacobian line"): ``L~_a^i = sum_k L_k^i G[k, a]``.
+    """
+    state = forward_kinematics(robot, closed.q, closed.dq, closed.ddq)
+    e, acc = point_accelerations(robot, state)
+    xbar = swap(bar_lines(e, acc))  # (S, n, 10, 6)
+    lines = np.einsum("skc,ki,ska->saic", state.lines, state.support.astype(float), closed.G)
+    s, n = xbar.shape[:2]
+    return np.einsum("saic,sikc->saik", lines, xbar).reshape(s, -1, n * 10)

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from ..errors import BaseparamsError
 from ..model import Robot
 from .go2 import go2
+from .loops import four_bar, parallelogram, pkm_2prs_1psr, pkm_2rru_1rrs
 from .puma560 import puma560
 from .random import random_robot
 
@@ -14,6 +15,12 @@ from .random import random_robot
 BUILTINS: dict[str, tuple[Callable[..., Robot], str]] = {
     "puma560": (puma560, "Puma560 arm, 6R, standard DH (Corke), fixed base"),
     "go2": (go2, "Unitree Go2 quadruped, floating base + 4 x RRR legs (Menagerie MJCF)"),
+    "pkm-2rru-1rrs": (pkm_2rru_1rrs, "2RRU-1RRS parallel kinematic machine (after Xu et al. 2023), 3 DOF"),
+    "pkm-2prs-1psr": (pkm_2prs_1psr, "2PRS-1PSR parallel kinematic machine (after Shi et al. 2023), 3 DOF"),
+    "pkm-2prs-1psr-symmetric": (lambda gravity=(0.0, 0.0, -9.81): pkm_2prs_1psr(True, gravity),
+                                "2PRS-1PSR with the symmetric 120-degree layout"),
+    "four-bar": (four_bar, "planar four-bar linkage, crank actuated"),
+    "parallelogram": (parallelogram, "planar parallelogram four-bar (a known gap of the principles)"),
 }
 
 
@@ -26,4 +33,5 @@ def get(name: str, gravity=None) -> Robot:
     return factory() if gravity is None else factory(gravity=gravity)
 
 
-__all__ = ["BUILTINS", "get", "go2", "puma560", "random_robot"]
+__all__ = ["BUILTINS", "four_bar", "get", "go2", "parallelogram", "pkm_2prs_1psr", "pkm_2rru_1rrs", "puma560",
+           "random_robot"]

@@ -1,0 +1,244 @@
+"""Closed-loop kinematics: loop-closure constraints, Newton from the actuated coordinates,
+passive velocities and accelerations from the exact analytic ``Jdot qdot`` terms.
+
+Each loop joint (cut joint) between a predecessor body ``p`` and a successor body ``c`` is a
+list of elementary constraints on points/directions given in world coordinates at q = 0
+(where the two frames coincide):
+
+* ``point x``: ``g_c x - g_p x = 0`` (3 rows; a direction when ``x[3] = 0``);
+* ``dot (u, w)``: ``(g_p u) . (g_c w) = 0`` (1 row; ``u`` carried by p, ``w`` by c);
+* ``proj (n, x)``: ``(g_p n) . (g_c x - g_p x) = 0`` (1 row).
+
+S: point; R: point + axis direction; U: point + dot(axis, axis2); P: three directions + two
+projections normal to the axis; fixed: point + three directions. Rows may be redundant
+(e.g. a direction gives 3 rows for 2 constraints): every solve is rank-revealing (pseudo-inverse).
+
+With ``r(q)`` the residuals, ``K = dr/dq`` (built from the Jacobian lines) and the bias
+``b = d^2 r/dt^2`` at zero ``ddq`` (exact point accelerations), the passive coordinates obey
+``K_p dq_p = -K_a dq_a`` and ``K_p ddq_p = -(K_a ddq_a + b)``. No finite differences.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import BaseparamsError
+from ..model.robot import Robot
+from ..pga import hat
+from .tree import forward_kinematics
+
+
+@dataclass(frozen=True)
+class Elementary:
+    kind: str  # point | dot | proj
+    pred: int
+    succ: int
+    a: np.ndarray  # point/direction (4,) or the predecessor's vector
+    b: np.ndarray | None = None  # successor's vector (dot) or the point (proj)
+    loop: int = 0
+
+
+def _perp(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    h = np.array([1.0, 0, 0]) if abs(d[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = np.cross(d, h)
+    x /= np.linalg.norm(x)
+    return x, np.cross(d, x)
+
+
+def elementary_constraints(robot: Robot) -> list[Elementary]:
+    """The elementary constraints of every loop joint (see module doc)."""
+    out: list[Elementary] = []
+    for k, lj in enumerate(robot.loops):
+        o = np.r_[lj.M[:3, 3], 1.0]
+        r = lj.M[:3, :3]
+        dirs = [np.r_[r[:, m], 0.0] for m in range(3)]
+        p, c = lj.parent, lj.child
+        if lj.type in ("S", "R", "U", "fixed"):
+            out.append(Elementary("point", p, c, o, loop=k))
+        if lj.type == "R":
+            out.append(Elementary("point", p, c, np.r_[r @ lj.axes[0], 0.0], loop=k))
+        elif lj.type == "U":
+            out.append(Elementary("dot", p, c, np.r_[r @ lj.axes[0], 0.0], np.r_[r @ lj.axes[1], 0.0], loop=k))
+        elif lj.type in ("P", "fixed"):
+            out += [Elementary("point", p, c, d, loop=k) for d in dirs]
+            if lj.type == "P":
+                a = r @ lj.axes[0]
+                for n in _perp(a):
+                    out.append(Elementary("proj", p, c, np.r_[n, 0.0], o, loop=k))
+    return out
+
+
+@dataclass(frozen=True)
+class ConstraintEval:
+    """``r (S, m)`` residuals, ``K (S, m, dof)`` Jacobian, ``b (S, m)`` bias (needs dq)."""
+
+    r: np.ndarray
+    K: np.ndarray
+    b: np.ndarray | None
+
+
+def _body_data(state, body: int, s: int, dof: int):
+    if body < 0:
+        eye = np.broadcast_to(np.eye(4), (s, 4, 4))
+        z6 = np.zeros((s, 6))
+        return eye, z6, z6, np.zeros((s, dof, 6))
+    lines = state.lines * state.support[None, :, body, None]
+    return state.g[:, body], state.V[:, body], state.dV[:, body], lines
+
+
+def _moving(state, body, x, s, dof, need_bias):
+    """Current vector X, its per-dof velocities (S, dof, 4), its velocity and bias acceleration."""
+    g, v, dv, lines = _body_data(state, body, s, dof)
+    xw = np.einsum("sij,j->si", g, x)
+    # velocity of X under each line: omega x X + w v  (commutator with the line)
+    om, lv = lines[..., :3], lines[..., 3:]
+    vel = np.cross(om, xw[:, None, :3]) + x[3] * lv  # (S, dof, 3)
+    vel = np.concatenate([vel, np.zeros(vel.shape[:-1] + (1,))], axis=-1)
+    if not need_bias:
+        return xw, vel, None, None
+    vh = hat(v)
+    xdot = np.einsum("sij,sj->si", vh, xw)
+    acc = np.einsum("sij,sj->si", hat(dv) + vh @ vh, xw)
+    return xw, vel, xdot, acc
+
+
+def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
+             constraints: list[Elementary] | None = None) -> ConstraintEval:
+    """Residuals, Jacobian and (when ``dq`` is given) the bias of the loop constraints."""
+    cons = elementary_constraints(robot) if constraints is None else constraints
+    s, dof = q.shape
+    need = dq is not None
+    state = forward_kinematics(robot, q, dq if need else None, None)
+    rs, ks, bs = [], [], []
+    for e in cons:
+        if e.kind == "point":
+            xc, vc, dc, ac = _moving(state, e.succ, e.a, s, dof, need)
+            xp, vp, dp, ap = _moving(state, e.pred, e.a, s, dof, need)
+            rs.append((xc - xp)[:, :3])
+            ks.append(np.swapaxes(vc - vp, 1, 2)[:, :3])
+            if need:
+                bs.append((ac - ap)[:, :3])
+        elif e.kind == "dot":
+            u, vu, du, au = _moving(state, e.pred, e.a, s, dof, need)
+            w, vw, dw, aw = _moving(state, e.succ, e.b, s, dof, need)
+            rs.append(np.sum(u * w, -1)[:, None])
+            ks.append((np.einsum("sjc,sc->sj", vu, w) + np.einsum("sc,sjc->sj", u, vw))[:, None])
+            if need:
+                bs.append((np.sum(au * w, -1) + 2 * np.sum(du * dw, -1) + np.sum(u * aw, -1))[:, None])
+        elif e.kind == "proj":
+            n_, vn, dn, an = _moving(state, e.pred, e.a, s, dof, need)
+            xc, vc, dc, ac = _moving(state, e.succ, e.b, s, dof, need)
+            xp, vp, dp, ap = _moving(state, e.pred, e.b, s, dof, need)
+            d = xc - xp
+            rs.append(np.sum(n_ * d, -1)[:, None])
+            ks.append((np.einsum("sjc,sc->sj", vn, d) + np.einsum("sc,sjc->sj", n_, vc - vp))[:, None])
+            if need:
+                bs.append((np.sum(an * d, -1) + 2 * np.sum(dn * (dc - dp), -1)
+                           + np.sum(n_ * (ac - ap), -1))[:, None])
+    if not rs:
+        return ConstraintEval(np.zeros((s, 0)), np.zeros((s, 0, dof)), np.zeros((s, 0)) if need else None)
+    return ConstraintEval(np.concatenate(rs, 1), np.concatenate(ks, 1), np.concatenate(bs, 1) if need else None)
+
+
+def _pinv(k: np.ndarray, rcond: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+    """Batched pseudo-inverse and singular values of ``k (S, m, n)``."""
+    u, s, vt = np.linalg.svd(k, full_matrices=False)
+    cut = rcond * s[..., :1]
+    sinv = np.where(s > cut, 1.0 / np.where(s > cut, s, 1.0), 0.0)
+    return np.einsum("sji,sj,skj->sik", vt, sinv, u), s
+
+
+def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Batched least-squares step ``k x ~ r`` by regularised normal equations (Newton only;
+    redundant rows are fine, a rank-deficient ``k`` gets a tiny Tikhonov term)."""
+    ktk = np.einsum("smi,smj->sij", k, k)
+    eps = 1e-12 * np.trace(ktk, axis1=1, axis2=2)[:, None, None] + 1e-300
+    return np.linalg.solve(ktk + eps * np.eye(k.shape[2]), np.einsum("smi,sm->si", k, r)[..., None])[..., 0]
+
+
+@dataclass(frozen=True)
+class ClosedStates:
+    """Loop-closed samples. ``q, dq, ddq (S, dof)`` full tree coordinates; ``G (S, dof, na)``
+    = dq/dq_a; ``cond (S,)`` condition number of ``K_p``; counts of discarded samples."""
+
+    q: np.ndarray
+    dq: np.ndarray
+    ddq: np.ndarray
+    G: np.ndarray
+    cond: np.ndarray
+    requested: int
+    not_converged: int
+    branch_jumps: int
+    ill_conditioned: int
+    max_residual: float
+
+    @property
+    def kept(self) -> int:
+        return self.q.shape[0]
+
+
+def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddqa: np.ndarray | None = None,
+                steps: int = 4, tol: float = 1e-11, max_iter: int = 10, cond_max: float = 30.0,
+                max_step: float = 0.5) -> ClosedStates:
+    """Solve the loops for actuated samples ``qa (S, na)`` (coordinates ``robot.actuated``).
+
+    Continuation from q = 0 (the reference assembly) in ``steps`` steps with Newton on the
+    passive coordinates keeps every sample on the reference assembly mode; a sample whose
+    passive coordinates jump by more than ``max_step`` in one step is discarded as a branch
+    jump, one that does not converge to ``tol`` is discarded as outside the workspace, and one
+    with ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
+    """
+    act = np.asarray(robot.actuated, dtype=int)
+    pas = np.setdiff1d(np.arange(robot.dof), act)
+    qa = np.atleast_2d(np.asarray(qa, dtype=float))
+    s = qa.shape[0]
+    if qa.shape[1] != len(act):
+        raise BaseparamsError(f"robot {robot.name!r}: expected {len(act)} actuated coordinates, got {qa.shape[1]}")
+    dqa = np.zeros_like(qa) if dqa is None else np.atleast_2d(np.asarray(dqa, dtype=float))
+    ddqa = np.zeros_like(qa) if ddqa is None else np.atleast_2d(np.asarray(ddqa, dtype=float))
+    cons = elementary_constraints(robot)
+    q = np.zeros((s, robot.dof))
+    failed = np.zeros(s, dtype=bool)
+    jumped = np.zeros(s, dtype=bool)
+    for t in np.linspace(0, 1, steps + 1)[1:]:
+        live = np.flatnonzero(~failed & ~jumped)
+        q[live[:, None], act] = t * qa[live]
+        start = q[live][:, pas]
+        idx, sub = live, q[live]
+        for _ in range(max_iter):  # Newton on the samples still iterating (idx shrinks)
+            ev = evaluate(robot, sub, constraints=cons)
+            err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(len(idx))
+            done = err < tol
+            q[idx[done]] = sub[done]
+            idx, sub = idx[~done], sub[~done]
+            if not len(idx):
+                break
+            step = -_lstsq(ev.K[~done][:, :, pas], ev.r[~done])
+            sub[:, pas] += np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
+        failed[idx] = True  # no convergence within max_iter: outside the workspace
+        q[idx] = sub
+        moved = np.abs(q[live][:, pas] - start).max(axis=1, initial=0.0)
+        jumped[live[(moved > max_step) & ~failed[live]]] = True
+    ev = evaluate(robot, q, constraints=cons)
+    err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(s)
+    converged = (err < max(tol * 100, 1e-9)) & ~failed
+    kp_inv, sv = _pinv(ev.K[:, :, pas])
+    npas = len(pas)
+    smin = sv[:, npas - 1] if sv.shape[1] >= npas and npas else np.ones(s)
+    cond = np.where(smin > 0, sv[:, 0] / np.where(smin > 0, smin, 1.0), np.inf) if npas else np.ones(s)
+    good_cond = cond < cond_max
+    keep = converged & ~jumped & good_cond
+    g = np.zeros((s, robot.dof, len(act)))
+    g[:, act, np.arange(len(act))] = 1.0
+    g[:, pas] = -kp_inv @ ev.K[:, :, act]
+    dq = np.einsum("sij,sj->si", g, dqa)
+    ev2 = evaluate(robot, q, dq, constraints=cons)
+    ddq = np.zeros_like(q)
+    ddq[:, act] = ddqa
+    ddq[:, pas] = -np.einsum("sij,sj->si", kp_inv, np.einsum("sij,sj->si", ev2.K[:, :, act], ddqa) + ev2.b)
+    return ClosedStates(q[keep], dq[keep], ddq[keep], g[keep], cond[keep], s,
+                        int((~converged).sum()), int((converged & jumped).sum()),
+                        int((converged & ~jumped & ~good_cond).sum()),
+                        float(err[keep].max()) if keep.any() else float("nan"))

@@ -7,7 +7,7 @@ Usage::
     PYTHONPATH=src python3 benchmarks/run.py --json     # exactly one JSON object on stdout
     PYTHONPATH=src python3 benchmarks/run.py --quick    # smaller sizes, fewer repeats (< 60 s)
     PYTHONPATH=src python3 benchmarks/run.py --only drng_scaling
-    PYTHONPATH=src python3 benchmarks/run.py --blas-threads 1   # single-threaded OpenBLAS
+    PYTHONPATH=src python3 benchmarks/run.py --blas-threads 0   # leave BLAS threading alone
 
 Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING):
 
@@ -19,6 +19,10 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 Every timing is the median over ``repeats`` runs of ``time.perf_counter`` after one
 untimed warm-up call; the number of repeats is reported next to every timing (the
 ``<figure>_repeats`` entries of the JSON). Progress goes to stderr.
+
+BLAS runs single-threaded by default (``--blas-threads``, see benchmarks/README.md): with
+OpenBLAS's default threads the numerical method's SVD was often 30-100x slower on this
+noisy 2-vCPU machine, and no faster when the machine was quiet.
 """
 
 from __future__ import annotations
@@ -297,14 +301,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", metavar="SUBSTRING", default=None,
                     help=f"run only the groups whose name contains SUBSTRING ({', '.join(GROUPS)})")
     ap.add_argument("--blas-threads", type=int, metavar="N", default=None,
-                    help="set OPENBLAS/OMP/MKL_NUM_THREADS=N before numpy is imported "
-                         "(default: leave the environment as it is)")
+                    help="BLAS threads, set (OPENBLAS/OMP/MKL_NUM_THREADS) before numpy is imported. "
+                         "Default: 1, unless OPENBLAS_NUM_THREADS is already set in the environment; "
+                         "0: leave the environment alone (OpenBLAS then uses all cores)")
     args = ap.parse_args(argv)
-    if args.blas_threads is not None:
+    blas = args.blas_threads
+    if blas is None and "OPENBLAS_NUM_THREADS" not in os.environ:
+        # Multi-threaded OpenBLAS on this 2-vCPU shared VM sometimes runs the numerical method's
+        # SVD 30-100x slower (0.7-2.4 s instead of 5-25 ms); one thread is as fast when quiet.
+        blas = 1
+    if blas:
         if "numpy" in sys.modules:
             log("warning: numpy already imported; --blas-threads may have no effect")
         for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-            os.environ[var] = str(args.blas_threads)
+            os.environ[var] = str(blas)
     global np
     import numpy
     np = numpy

@@ -180,7 +180,7 @@ class ClosedStates:
 
 
 def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddqa: np.ndarray | None = None,
-                steps: int = 4, tol: float = 1e-11, max_iter: int = 10, cond_max: float = 30.0,
+                steps: int = 4, tol: float = 1e-11, max_iter: int = 15, cond_max: float = 30.0,
                 max_step: float = 0.5) -> ClosedStates:
     """Solve the loops for actuated samples ``qa (S, na)`` (coordinates ``robot.actuated``).
 
@@ -207,16 +207,34 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
         q[live[:, None], act] = t * qa[live]
         start = q[live][:, pas]
         idx, sub = live, q[live]
-        for _ in range(max_iter):  # Newton on the samples still iterating (idx shrinks)
+        # damped Newton on the samples still iterating (idx shrinks): a step that does not
+        # reduce the residual is halved and retried from the previous iterate
+        prev_sub, prev_err, prev_step = sub.copy(), np.full(len(idx), np.inf), np.zeros((len(idx), len(pas)))
+        lam = np.ones(len(idx))
+        for _ in range(max_iter):
             ev = evaluate(robot, sub, constraints=cons)
             err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(len(idx))
             done = err < tol
             q[idx[done]] = sub[done]
-            idx, sub = idx[~done], sub[~done]
+            worse = ~done & (err > prev_err)
+            keep = ~done
+            idx, sub, err, worse = idx[keep], sub[keep], err[keep], worse[keep]
+            prev_sub, prev_err, prev_step, lam = prev_sub[keep], prev_err[keep], prev_step[keep], lam[keep]
             if not len(idx):
                 break
-            step = -_lstsq(ev.K[~done][:, :, pas], ev.r[~done])
-            sub[:, pas] += np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
+            k_keep = ev.K[keep][:, :, pas]
+            r_keep = ev.r[keep]
+            step = -_lstsq(k_keep, r_keep)
+            step = np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
+            # rejected samples: back to the previous iterate with half the previous step
+            lam = np.where(worse, lam * 0.5, np.minimum(1.0, lam * 2.0))
+            base = np.where(worse[:, None], prev_sub[:, pas], sub[:, pas])
+            use = np.where(worse[:, None], prev_step, step)
+            prev_sub = np.where(worse[:, None], prev_sub, sub)
+            prev_err = np.where(worse, prev_err, err)
+            prev_step = use
+            sub = sub.copy()
+            sub[:, pas] = base + lam[:, None] * use
         failed[idx] = True  # no convergence within max_iter: outside the workspace
         q[idx] = sub
         moved = np.abs(q[live][:, pas] - start).max(axis=1, initial=0.0)

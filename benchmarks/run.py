@@ -15,6 +15,7 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
                     (Puma560, Go2; S = 1, 100, 10000 samples) and its tracemalloc peak.
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
+* ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
 
 Every timing is the median over ``repeats`` runs of ``time.perf_counter`` after one
 untimed warm-up call; the number of repeats is reported next to every timing (the
@@ -261,10 +262,37 @@ def bench_drng_scaling(out: dict, quick: bool) -> None:
         out["drng_chain_linearity"] = None
 
 
+def bench_loops(out: dict, quick: bool) -> None:
+    """Closed loops: DRNG on both PKMs vs the paper's 5000-sample numerical validation."""
+    from baseparams.nullspace import drng
+    from baseparams.numerics import numerical_nullspace
+    from baseparams.robots import get
+
+    samples = 1000 if quick else 5000
+    for name in ("pkm-2rru-1rrs", "pkm-2prs-1psr"):
+        robot = get(name)
+        key = name.replace("-", "_")
+        log(f"  drng {name} ...")
+        t_d, n_d = measure(lambda: drng(robot), 51 if not quick else 11)
+        log(f"  validation {name} ({samples} actuated samples) ...")
+        info: dict = {}
+        t_v, n_v = measure(lambda: numerical_nullspace(robot, samples=samples, seed=0, info=info), 5 if not quick else 2)
+        res = numerical_nullspace(robot, samples=samples, seed=0)
+        out[f"drng_{key}_ms"] = 1e3 * t_d
+        out[f"drng_{key}_ms_repeats"] = n_d
+        out[f"validation_{key}_s"] = t_v
+        out[f"validation_{key}_s_repeats"] = n_v
+        out[f"validation_{key}_kept"] = info.get("kept")
+        out[f"validation_{key}_nullity"] = res.nullity
+        out[f"validation_{key}_sv_gap"] = res.gap
+        out[f"validation_vs_drng_{key}"] = t_v / t_d
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "regressor": bench_regressor,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
+    "loops": bench_loops,
 }
 
 

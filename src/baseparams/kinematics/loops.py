@@ -27,6 +27,7 @@ import numpy as np
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..pga import hat
+from ..pga.core import cross3
 from .tree import forward_kinematics
 
 
@@ -94,7 +95,7 @@ def _moving(state, body, x, s, dof, need_bias):
     xw = np.einsum("sij,j->si", g, x)
     # velocity of X under each line: omega x X + w v  (commutator with the line)
     om, lv = lines[..., :3], lines[..., 3:]
-    vel = np.cross(om, xw[:, None, :3]) + x[3] * lv  # (S, dof, 3)
+    vel = cross3(om, xw[:, None, :3]) + x[3] * lv  # (S, dof, 3)
     vel = np.concatenate([vel, np.zeros(vel.shape[:-1] + (1,))], axis=-1)
     if not need_bias:
         return xw, vel, None, None

@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..pga import adjoint, commutator, se3_exp
+from ..pga.core import screw_exp
 
 
 @dataclass(frozen=True)
@@ -94,6 +95,6 @@ def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
             lines[:, jj] = line
             vh = vh + line * dq[:, jj:jj + 1]
             ah = ah + commutator(line, vh) * dq[:, jj:jj + 1] + line * ddq[:, jj:jj + 1]
-            h = h @ se3_exp(screws[jj] * q[:, jj:jj + 1])
+            h = h @ screw_exp(screws[jj], q[:, jj])
         g[:, i], v[:, i], a[:, i] = h, vh, ah
     return TreeState(g, v, a, lines, robot.support)

@@ -33,6 +33,7 @@ import scipy.sparse as sp
 
 from ..model.inertia import hat as hat10
 from ..model.robot import Robot
+from ..pga.core import cross3
 
 PRINCIPLES = ("shared points", "fixed points", "planar rotations", "numerical")
 
@@ -76,18 +77,12 @@ def _outer(a: np.ndarray) -> np.ndarray:
     return hat10(np.einsum("...i,...j->...ij", a, a))
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of ``(m, 3)`` arrays (cheaper than ``np.cross`` for small m)."""
-    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
-
-
 def _perp_basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit directions ``(m, 3)`` completing unit ``d (m, 3)`` to an orthonormal frame."""
     helper = np.where(np.abs(d[:, :1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
-    x = _cross(d, np.broadcast_to(helper, d.shape))
+    x = cross3(d, np.broadcast_to(helper, d.shape))
     x /= np.linalg.norm(x, axis=1, keepdims=True)
-    y = _cross(d, x)
+    y = cross3(d, x)
     return x, y
 
 
@@ -184,7 +179,7 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         x, y = (_dir(v) for v in _perp_basis(axw[sel]))
         h = np.stack([_sym(z, x), _sym(z, y)], axis=1)
         parts.append(_cols(h, sel, np.full(len(sel), -1), 1, ["z x", "z y"]))
-        along = g_zero | (np.linalg.norm(_cross(axw[sel], np.broadcast_to(g, axw[sel].shape)), axis=1) <= tol * max(1.0, np.linalg.norm(g)))
+        along = g_zero | (np.linalg.norm(cross3(axw[sel], np.broadcast_to(g, axw[sel].shape)), axis=1) <= tol * max(1.0, np.linalg.norm(g)))
         if along.any():
             s2 = sel[along]
             h = np.stack([_sym(o[along], x[along]), _sym(o[along], y[along])], axis=1)
@@ -207,7 +202,7 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     if len(sel):
         o, d = _pt(org[sel]), _dir(d_pr[sel])
         parts.append(_cols(_sym(d, o)[:, None], sel, np.full(len(sel), -1), 2, ["d_pr O"]))
-        slide = np.linalg.norm(_cross(axw[sel], d_pr[sel]), axis=1) <= tol
+        slide = np.linalg.norm(cross3(axw[sel], d_pr[sel]), axis=1) <= tol
         if slide.any():
             s2 = sel[slide]
             x, y = (_dir(v) for v in _perp_basis(d_pr[s2]))

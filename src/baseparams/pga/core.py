@@ -28,6 +28,13 @@ from . import algebra as _alg
 # ----------------------------------------------------------------------------------------
 # points and lines
 
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis (broadcasting); cheaper than ``np.cross``."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def point(xyz: np.ndarray) -> np.ndarray:
     """Euclidean point ``(*, 4)`` from coordinates ``(*, 3)``."""
     xyz = np.asarray(xyz, dtype=float)
@@ -48,7 +55,7 @@ def join(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
     d = p[..., 3:4] * q[..., :3] - q[..., 3:4] * p[..., :3]
-    m = np.cross(p[..., :3], q[..., :3])
+    m = cross3(p[..., :3], q[..., :3])
     return np.concatenate([d, m], axis=-1)
 
 
@@ -82,9 +89,9 @@ def commutator(x: np.ndarray, v: np.ndarray) -> np.ndarray:
     w, u = v[..., :3], v[..., 3:]
     if x.shape[-1] == 6:
         d, m = x[..., :3], x[..., 3:]
-        return np.concatenate([np.cross(w, d), np.cross(w, m) + np.cross(u, d)], axis=-1)
+        return np.concatenate([cross3(w, d), cross3(w, m) + cross3(u, d)], axis=-1)
     if x.shape[-1] == 4:
-        vel = np.cross(w, x[..., :3]) + x[..., 3:4] * u
+        vel = cross3(w, x[..., :3]) + x[..., 3:4] * u
         return np.concatenate([vel, np.zeros(vel.shape[:-1] + (1,))], axis=-1)
     raise ValueError(f"commutator: expected a line (*, 6) or a point (*, 4), got {x.shape}")
 
@@ -258,6 +265,26 @@ def se3_exp(xi: np.ndarray) -> np.ndarray:
     return out
 
 
+def screw_exp(screw: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """``exp(screw^ theta) (S, 4, 4)`` for one unit screw ``(6,)`` (rotation: |omega| = 1;
+    translation: omega = 0, |v| = 1) and angles/displacements ``theta (S,)``: closed form."""
+    w, v = screw[:3], screw[3:]
+    theta = np.asarray(theta, dtype=float)
+    out = np.zeros(theta.shape + (4, 4))
+    out[..., 3, 3] = 1.0
+    if not np.any(w):
+        out[..., 0, 0] = out[..., 1, 1] = out[..., 2, 2] = 1.0
+        out[..., :3, 3] = theta[..., None] * v
+        return out
+    k = _skew(w)
+    k2 = k @ k
+    s, c = np.sin(theta)[..., None, None], (1 - np.cos(theta))[..., None, None]
+    out[..., :3, :3] = np.eye(3) + s * k + c * k2
+    t = theta[..., None, None]
+    out[..., :3, 3] = (t * np.eye(3) + c * k + (t - s) * k2) @ v
+    return out
+
+
 def se3_log(t: np.ndarray) -> np.ndarray:
     """Twist ``(*, 6)`` with ``se3_exp(twist) == t`` for rotation angles in ``[0, pi)``."""
     t = np.asarray(t, dtype=float)
@@ -295,7 +322,7 @@ def adjoint(t: np.ndarray, l: np.ndarray) -> np.ndarray:
     r = t[..., :3, :3]
     p = t[..., :3, 3]
     d = np.einsum("...ij,...j->...i", r, l[..., :3])
-    m = np.einsum("...ij,...j->...i", r, l[..., 3:]) + np.cross(p, d)
+    m = np.einsum("...ij,...j->...i", r, l[..., 3:]) + cross3(p, d)
     return np.concatenate([d, m], axis=-1)
 
 

@@ -70,3 +70,16 @@ def test_errors_are_one_line(capsys):
     assert r.returncode == 2 and "Traceback" not in r.stderr
     code, out, err = run(["analyze", "puma560", "--rows", "base"], capsys)
     assert code == 2 and "no floating base" in err and "Traceback" not in err
+
+
+def test_analyze_loop_model_json(capsys):
+    code, out, _ = run(["analyze", "four-bar", "--samples", "500", "--json"], capsys)
+    assert code == 0
+    d = json.loads(out)
+    assert d["nullity"] == 22 and d["n_base"] == 8 and d["certified"] is True
+    assert d["numerical"]["sampling"]["kept"] > 400
+
+
+def test_loop_model_rejects_rows(capsys):
+    code, out, err = run(["analyze", "four-bar", "--rows", "joints"], capsys)
+    assert code == 2 and "rows" in err and "Traceback" not in err

@@ -136,3 +136,51 @@ def test_symmetric_2prs_certified_equals_numerical():
     robot = pkm_2prs_1psr(symmetric=True)
     c = certify(robot, samples=3000, seed=1)
     assert c.certified and c.nullity == numerical_nullspace(robot, 3000, 1).nullity
+
+
+def _slider_crank():
+    """Crank (R) - coupler (R) - slider (R on the coupler), the slider cut from the world by a
+    P loop joint along x: a loop whose predecessor is the fixed base."""
+    from baseparams.model import Inertia, RobotBuilder, pose
+
+    b = RobotBuilder("slider-crank", gravity=(0, -9.81, 0))
+    b.add_link("crank", joint="R", axis=(0, 0, 1), inertia=Inertia(1.0, (0.1, 0.02, 0), (0.01, 0.02, 0.03)),
+               actuated=True)
+    b.add_link("coupler", parent="crank", joint="R", origin=pose((0.2, 0.15, 0)), axis=(0, 0, 1),
+               inertia=Inertia(0.8, (0.3, -0.05, 0.01), (0.01, 0.03, 0.04)), actuated=False)
+    b.add_link("slider", parent="coupler", joint="R", origin=pose((0.5, -0.15, 0)), axis=(0, 0, 1),
+               inertia=Inertia(0.5, (0.02, 0.01, 0.0), (0.002, 0.003, 0.004)), actuated=False)
+    b.add_loop("rail", "P", parent=None, child="slider", origin=pose((0.7, 0.0, 0)), axis=(1, 0, 0))
+    b.q_box = np.array([[-0.4, 0.4]])
+    return b.build()
+
+
+def _welded_pair():
+    """Two links on coaxial R joints welded together by a fixed loop joint (they move as one)."""
+    from baseparams.model import Inertia, RobotBuilder, pose
+
+    b = RobotBuilder("welded", gravity=(0, -9.81, 0))
+    b.add_link("a", joint="R", origin=pose((0.1, 0, 0)), axis=(0, 0, 1),
+               inertia=Inertia(1.0, (0.3, 0.1, 0.05), (0.01, 0.02, 0.03)), actuated=True)
+    b.add_link("b", joint="R", origin=pose((0.1, 0, 0)), axis=(0, 0, 1),
+               inertia=Inertia(0.7, (0.2, -0.1, 0.02), (0.02, 0.01, 0.03)), actuated=False)
+    b.add_link("c", parent="b", joint="R", origin=pose((0.4, 0, 0)), axis=(0, 1, 0),
+               inertia=Inertia(0.5, (0.1, 0.0, 0.1), (0.01, 0.01, 0.01)), actuated=True)
+    b.add_loop("weld", "fixed", parent="a", child="b")
+    b.q_box = np.array([[-0.5, 0.5], [-0.5, 0.5]])
+    return b.build()
+
+
+@pytest.mark.parametrize("make", [_slider_crank, _welded_pair])
+def test_p_and_fixed_loop_joints(make):
+    robot = make()
+    cs = closed_samples(robot, 300, np.random.default_rng(6))
+    assert cs.kept > 200
+    ev = evaluate(robot, cs.q, cs.dq)
+    assert np.abs(ev.r).max() < 1e-9 and np.abs(np.einsum("smj,sj->sm", ev.K, cs.ddq) + ev.b).max() < 1e-8
+    tau = closed_regressor(robot, cs) @ robot.parameters("paper")
+    ref = np.array([cs.G[k].T @ rnea(robot, cs.q[k], cs.dq[k], cs.ddq[k]) for k in range(cs.kept)])
+    assert np.abs(tau - ref).max() <= 1e-9 * np.abs(ref).max()
+    c = certify(robot, samples=1000, seed=0)
+    assert c.certified and c.max_column_residual < 1e-10
+    assert c.nullity == numerical_nullspace(robot, 1000, 3).nullity

@@ -64,7 +64,7 @@ def test_no_verify(capsys):
 def test_errors_are_one_line(capsys):
     code, out, err = run(["analyze", "no-such-robot"], capsys)
     assert code == 2
-    assert err.strip().count("\n") == 0 and "unknown robot 'no-such-robot'" in err
+    assert err.strip().count("\n") == 0 and "no-such-robot: no such file, and not a built-in robot" in err
     r = subprocess.run([sys.executable, "-m", "baseparams.cli", "analyze", "go2", "--rows", "base",
                         "--samples", "0"], capture_output=True, text=True)
     assert r.returncode == 2 and "Traceback" not in r.stderr

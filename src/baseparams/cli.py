@@ -17,9 +17,13 @@ from .errors import BaseparamsError
 
 
 def _robot(args) -> "Robot":  # noqa: F821
-    from .robots import get
+    from .io.load import load_model
 
-    return get(args.model, gravity=args.gravity)
+    robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
+                              allow_infeasible=getattr(args, "allow_infeasible_inertia", False))
+    for note in notes:
+        print(f"baseparams: note: {note}", file=sys.stderr)
+    return robot
 
 
 def cmd_robots(args) -> int:
@@ -81,7 +85,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_robots)
 
     def model_args(s):
-        s.add_argument("model", help="built-in robot name (see 'baseparams robots')")
+        s.add_argument("model", help="built-in robot name (see 'baseparams robots') or a robot file: "
+                                     "URDF / URDF+ (.urdf) or MJCF (.xml)")
+        s.add_argument("--floating", action="store_true",
+                       help="attach the file's root link to the world by a floating (free) joint")
+        s.add_argument("--allow-infeasible-inertia", action="store_true",
+                       help="accept physically infeasible inertias in files (warning instead of error)")
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
         s.add_argument("--samples", type=int, default=None,

@@ -5,9 +5,11 @@ Each loop joint (cut joint) between a predecessor body ``p`` and a successor bod
 list of elementary constraints on points/directions given in world coordinates at q = 0
 (where the two frames coincide):
 
-* ``point x``: ``g_c x - g_p x = 0`` (3 rows; a direction when ``x[3] = 0``);
+* ``point (x, x')``: ``g_c x' - g_p x = 0`` (3 rows; a direction when ``x[3] = 0``);
 * ``dot (u, w)``: ``(g_p u) . (g_c w) = 0`` (1 row; ``u`` carried by p, ``w`` by c);
-* ``proj (n, x)``: ``(g_p n) . (g_c x - g_p x) = 0`` (1 row).
+* ``proj (n, x, x')``: ``(g_p n) . (g_c x' - g_p x) = 0`` (1 row).
+
+(``x' = x`` when the file is assembled at q = 0; otherwise ``x'`` is the successor's copy.)
 
 S: point; R: point + axis direction; U: point + dot(axis, axis2); P: three directions + two
 projections normal to the axis; fixed: point + three directions. Rows may be redundant
@@ -24,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import BaseparamsError
+from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
 from ..pga import hat
 from ..pga.core import cross3
@@ -36,8 +38,9 @@ class Elementary:
     kind: str  # point | dot | proj
     pred: int
     succ: int
-    a: np.ndarray  # point/direction (4,) or the predecessor's vector
-    b: np.ndarray | None = None  # successor's vector (dot) or the point (proj)
+    a: np.ndarray  # the predecessor's point/direction (4,)
+    b: np.ndarray | None = None  # point, dot: the successor's vector; proj: the predecessor's point
+    c: np.ndarray | None = None  # proj: the successor's point
     loop: int = 0
 
 
@@ -52,22 +55,22 @@ def elementary_constraints(robot: Robot) -> list[Elementary]:
     """The elementary constraints of every loop joint (see module doc)."""
     out: list[Elementary] = []
     for k, lj in enumerate(robot.loops):
-        o = np.r_[lj.M[:3, 3], 1.0]
-        r = lj.M[:3, :3]
-        dirs = [np.r_[r[:, m], 0.0] for m in range(3)]
+        mc = lj.M if lj.M_child is None else lj.M_child  # the successor's copy of the frame
+        o, oc = np.r_[lj.M[:3, 3], 1.0], np.r_[mc[:3, 3], 1.0]
+        r, rc = lj.M[:3, :3], mc[:3, :3]
         p, c = lj.parent, lj.child
         if lj.type in ("S", "R", "U", "fixed"):
-            out.append(Elementary("point", p, c, o, loop=k))
+            out.append(Elementary("point", p, c, o, oc, loop=k))
         if lj.type == "R":
-            out.append(Elementary("point", p, c, np.r_[r @ lj.axes[0], 0.0], loop=k))
+            out.append(Elementary("point", p, c, np.r_[r @ lj.axes[0], 0.0], np.r_[rc @ lj.axes[0], 0.0], loop=k))
         elif lj.type == "U":
-            out.append(Elementary("dot", p, c, np.r_[r @ lj.axes[0], 0.0], np.r_[r @ lj.axes[1], 0.0], loop=k))
+            out.append(Elementary("dot", p, c, np.r_[r @ lj.axes[0], 0.0], np.r_[rc @ lj.axes[1], 0.0], loop=k))
         elif lj.type in ("P", "fixed"):
-            out += [Elementary("point", p, c, d, loop=k) for d in dirs]
+            out += [Elementary("point", p, c, np.r_[r[:, m], 0.0], np.r_[rc[:, m], 0.0], loop=k) for m in range(3)]
             if lj.type == "P":
                 a = r @ lj.axes[0]
                 for n in _perp(a):
-                    out.append(Elementary("proj", p, c, np.r_[n, 0.0], o, loop=k))
+                    out.append(Elementary("proj", p, c, np.r_[n, 0.0], o, oc, loop=k))
     return out
 
 
@@ -113,9 +116,16 @@ def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
     need = dq is not None
     state = forward_kinematics(robot, q, dq if need else None, None)
     rs, ks, bs = [], [], []
+    for c in robot.couplings:  # linear: q[succ] - ratio q[pred] = 0
+        rs.append((q[:, c.succ] - c.ratio * q[:, c.pred])[:, None])
+        k = np.zeros((s, 1, dof))
+        k[:, 0, c.succ], k[:, 0, c.pred] = 1.0, -c.ratio
+        ks.append(k)
+        if need:
+            bs.append(np.zeros((s, 1)))
     for e in cons:
         if e.kind == "point":
-            xc, vc, dc, ac = _moving(state, e.succ, e.a, s, dof, need)
+            xc, vc, dc, ac = _moving(state, e.succ, e.b, s, dof, need)
             xp, vp, dp, ap = _moving(state, e.pred, e.a, s, dof, need)
             rs.append((xc - xp)[:, :3])
             ks.append(np.swapaxes(vc - vp, 1, 2)[:, :3])
@@ -130,7 +140,7 @@ def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
                 bs.append((np.sum(au * w, -1) + 2 * np.sum(du * dw, -1) + np.sum(u * aw, -1))[:, None])
         elif e.kind == "proj":
             n_, vn, dn, an = _moving(state, e.pred, e.a, s, dof, need)
-            xc, vc, dc, ac = _moving(state, e.succ, e.b, s, dof, need)
+            xc, vc, dc, ac = _moving(state, e.succ, e.c, s, dof, need)
             xp, vp, dp, ap = _moving(state, e.pred, e.b, s, dof, need)
             d = xc - xp
             rs.append(np.sum(n_ * d, -1)[:, None])
@@ -182,13 +192,13 @@ class ClosedStates:
 
 def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddqa: np.ndarray | None = None,
                 steps: int = 4, tol: float = 1e-11, max_iter: int = 15, cond_max: float = 30.0,
-                max_step: float = 0.5) -> ClosedStates:
+                max_step: float = 0.5, q_start: np.ndarray | None = None) -> ClosedStates:
     """Solve the loops for actuated samples ``qa (S, na)`` (coordinates ``robot.actuated``).
 
-    Continuation from q = 0 (the reference assembly) in ``steps`` steps with Newton on the
-    passive coordinates keeps every sample on the reference assembly mode; a sample whose
-    passive coordinates jump by more than ``max_step`` in one step is discarded as a branch
-    jump, one that does not converge to ``tol`` is discarded as outside the workspace, and one
+    Continuation from q = 0 (the reference assembly) in ``steps`` steps -- a tangent
+    predictor, then damped Newton on the passive coordinates -- keeps every sample on the
+    reference assembly mode; a sample whose corrected passive coordinates land more than
+    ``max_step`` away from the prediction is discarded as a branch jump, one that does not converge to ``tol`` is discarded as outside the workspace, and one
     with ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
     """
     act = np.asarray(robot.actuated, dtype=int)
@@ -201,11 +211,21 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     ddqa = np.zeros_like(qa) if ddqa is None else np.atleast_2d(np.asarray(ddqa, dtype=float))
     cons = elementary_constraints(robot)
     q = np.zeros((s, robot.dof))
+    if q_start is not None:  # initial guess of the passive coordinates (assembly search)
+        q[:, pas] = np.asarray(q_start, dtype=float)[pas]
     failed = np.zeros(s, dtype=bool)
     jumped = np.zeros(s, dtype=bool)
     for t in np.linspace(0, 1, steps + 1)[1:]:
         live = np.flatnonzero(~failed & ~jumped)
+        if not len(live):
+            break
+        # predictor: follow the tangent of the solution curve, dq_p = -K_p^+ K_a dq_a
+        ev = evaluate(robot, q[live], constraints=cons)
+        dqa_step = t * qa[live] - q[live][:, act]
+        rhs = np.einsum("smj,sj->sm", ev.K[:, :, act], dqa_step)
+        pred = q[live][:, pas] - _lstsq(ev.K[:, :, pas], rhs) if len(pas) else q[live][:, pas]
         q[live[:, None], act] = t * qa[live]
+        q[live[:, None], pas] = np.where(np.isfinite(pred), pred, q[live][:, pas])
         start = q[live][:, pas]
         idx, sub = live, q[live]
         # damped Newton on the samples still iterating (idx shrinks): a step that does not
@@ -261,3 +281,47 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
                         int((~converged).sum()), int((converged & jumped).sum()),
                         int((converged & ~jumped & ~good_cond).sum()),
                         float(err[keep].max()) if keep.any() else float("nan"))
+
+
+def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[Robot, np.ndarray, str]:
+    """A regular, assembled reference configuration for a loop robot.
+
+    If the loop frames coincide at q = 0 and ``K_p`` is regular there, the robot is returned
+    unchanged. Otherwise the loops are closed by Newton from q = 0 with the actuated
+    coordinates at 0 (or, when q = 0 is a singular configuration, at small offsets), and the
+    robot is re-referenced there (its new q = 0; ``q_box`` shifted). Returns the robot, the
+    reference in the old coordinates, and a note for the user ('' when nothing was done)."""
+    from dataclasses import replace
+
+    if not robot.has_loops:
+        return robot, np.zeros(robot.dof), ""
+    act = robot.actuated
+    pas = np.setdiff1d(np.arange(robot.dof), act)
+    ev = evaluate(robot, np.zeros((1, robot.dof)))
+    res0 = float(np.abs(ev.r).max()) if ev.r.size else 0.0
+    sv = np.linalg.svd(ev.K[0][:, pas], compute_uv=False) if len(pas) else np.ones(1)
+    cond0 = sv[0] / sv[len(pas) - 1] if len(pas) and sv[len(pas) - 1] > 0 else (np.inf if len(pas) else 1.0)
+    if res0 < tol and cond0 < cond_max:
+        return robot, np.zeros(robot.dof), ""
+    why = (f"the loop frames do not coincide at q = 0 (residual {res0:.3g})" if res0 >= tol
+           else f"q = 0 is a singular configuration of the loops (cond(J_p) = {cond0:.3g})")
+    rng = np.random.default_rng(0)
+    starts = [np.zeros(robot.dof)] + [rng.uniform(-1.0, 1.0, robot.dof) for _ in range(20)]
+    tries = [(off, st) for off in (0.0, 0.1, -0.1, 0.2, -0.2) for st in starts if not (off == 0.0 and res0 < tol)]
+    for offset, start in tries:
+        qa = np.full((1, len(act)), offset)
+        cs = close_loops(robot, qa, steps=10, cond_max=cond_max, max_step=np.inf, max_iter=50, q_start=start)
+        if cs.kept:
+            qref = cs.q[0]
+            new = robot.at(qref) if "S" not in robot.jtype else None
+            if new is None:
+                raise ModelError(f"robot {robot.name!r}: {why}; re-referencing with S joints is not supported")
+            box = None if robot.q_box is None else robot.q_box - qref[act][:, None]
+            new = replace(new, q_box=box)
+            note = (f"{why}; assembled and re-referenced at actuated coordinates {np.round(qref[act], 4).tolist()} "
+                    f"(passive {np.round(qref[pas], 4).tolist()}): q = 0 now means this configuration")
+            return new, qref, note
+    raise ModelError(f"robot {robot.name!r}: {why}, and no regular assembled configuration was found near it; "
+                      f"check the loop frames and the independent joints")
+
+

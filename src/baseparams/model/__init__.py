@@ -2,7 +2,7 @@
 
 from .builder import RobotBuilder, joint_type, pose, quat_pose
 from .inertia import CONVENTIONS, Inertia
-from .robot import JOINT_TYPES, LoopJoint, Robot
+from .robot import JOINT_TYPES, Coupling, LoopJoint, Robot
 
-__all__ = ["CONVENTIONS", "Inertia", "JOINT_TYPES", "LoopJoint", "Robot", "RobotBuilder",
+__all__ = ["CONVENTIONS", "Coupling", "Inertia", "JOINT_TYPES", "LoopJoint", "Robot", "RobotBuilder",
            "joint_type", "pose", "quat_pose"]

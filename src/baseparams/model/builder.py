@@ -148,11 +148,14 @@ class RobotBuilder:
         b = b / np.linalg.norm(b)
         return np.stack([a, b])
 
-    def add_loop(self, name: str, type: str, parent: str, child: str, origin=None, axis=(0, 0, 1.0),
-                 axis2=None) -> RobotBuilder:
-        """Record a loop (cut) joint between two links; ``origin`` in the parent link's frame."""
+    def add_loop(self, name: str, type: str, parent: str | None, child: str, origin=None, axis=(0, 0, 1.0),
+                 axis2=None, child_origin=None) -> RobotBuilder:
+        """Record a loop (cut) joint between two links (``parent`` None: the world).
+
+        ``origin``: the loop frame in the parent link's frame; ``child_origin`` (optional): the
+        same frame in the child link's frame, checked to coincide at q = 0."""
         jt = joint_type(type)
-        self._loops.append((name, jt, parent, child, origin, axis, axis2))
+        self._loops.append((name, jt, parent, child, origin, axis, axis2, child_origin))
         return self
 
     def build(self) -> Robot:
@@ -160,14 +163,24 @@ class RobotBuilder:
         if not self._names:
             raise ModelError(f"robot {self.name!r}: no moving links")
         loops = []
-        for name, jt, parent, child, origin, axis, axis2 in self._loops:
+        for name, jt, parent, child, origin, axis, axis2, child_origin in self._loops:
             what = f"robot {self.name!r}, loop joint {name!r}"
             pidx, pframe = self._frame(parent)
-            cidx, _ = self._frame(child)
+            cidx, cframe = self._frame(child)
+            if cidx < 0:
+                raise ModelError(f"{what}: the successor {child!r} must be a moving link")
+            if not pidx < cidx:
+                raise ModelError(f"{what}: the predecessor {parent!r} must come before the successor "
+                                 f"{child!r} in the tree order (swap them)")
             pm0 = np.eye(4) if pidx < 0 else self._m0[pidx]
             m = pm0 @ pframe @ (np.eye(4) if origin is None else np.asarray(origin, dtype=float))
+            m_child = None
+            if child_origin is not None:
+                mc = self._m0[cidx] @ cframe @ np.asarray(child_origin, dtype=float)
+                if np.abs(mc - m).max() > 1e-9:
+                    m_child = mc  # not assembled at q = 0: kinematics.loops.assemble() solves it
             axes = self._axes_for(jt, axis, axis2, what) if jt in JOINT_TYPES else np.zeros((0, 3))
-            loops.append(LoopJoint(name, jt, pidx, cidx, m, axes))
+            loops.append(LoopJoint(name, jt, pidx, cidx, m, axes, m_child))
         independent = None
         if any(a is not None for a in self._actuated):
             from .robot import NDOF

@@ -35,9 +35,22 @@ NDOF = {"R": 1, "P": 1, "U": 2, "S": 3, "F": 6, "fixed": 0}
 
 
 @dataclass(frozen=True)
+class Coupling:
+    """A gear-like coupling between two 1-dof coordinates: ``q[succ] = ratio * q[pred]``
+    (URDF+ ``<coupling>``, MJCF ``<equality><joint polycoef="0 ratio">``)."""
+
+    name: str
+    pred: int
+    succ: int
+    ratio: float
+
+
+@dataclass(frozen=True)
 class LoopJoint:
-    """A cut joint closing a loop (kinematics in a later release): type, the two bodies
-    (``parent < child``), the joint frame's world pose ``M`` at q = 0 and its axes."""
+    """A cut joint closing a loop: type, the two bodies (``parent < child``; parent -1 = the
+    world), the joint frame's world pose ``M`` at q = 0 carried by the predecessor, its axes
+    (joint frame), and ``M_child``: the successor's copy of the frame at q = 0 when it does not
+    coincide with ``M`` (an unassembled file; see :func:`baseparams.kinematics.loops.assemble`)."""
 
     name: str
     type: str
@@ -45,6 +58,7 @@ class LoopJoint:
     child: int
     M: np.ndarray
     axes: np.ndarray
+    M_child: np.ndarray | None = None
 
 
 def _check_frame(t: np.ndarray, what: str) -> np.ndarray:
@@ -108,6 +122,7 @@ class Robot:
     loops: tuple[LoopJoint, ...] = ()
     independent: tuple[int, ...] | None = None
     q_box: np.ndarray | None = None
+    couplings: tuple[Coupling, ...] = ()
 
     def __post_init__(self) -> None:
         n = len(self.names)
@@ -161,7 +176,11 @@ class Robot:
             if len(set(ind)) != len(ind) or any(not (0 <= k < dof) for k in ind) or not ind:
                 raise ModelError(f"{what}: independent coordinates {ind} must be distinct indices in [0, {dof})")
             object.__setattr__(self, "independent", tuple(sorted(ind)))
-        elif self.loops:
+        for c in self.couplings:
+            if not (0 <= c.pred < dof and 0 <= c.succ < dof and c.pred != c.succ) or not np.isfinite(c.ratio):
+                raise ModelError(f"{what}, coupling {c.name!r}: needs two distinct coordinates in [0, {dof}) "
+                                 f"and a finite ratio")
+        if self.independent is None and (self.loops or self.couplings):
             raise ModelError(f"{what}: a robot with loop joints must say which coordinates are "
                              f"independent (actuated)")
         if self.q_box is not None:
@@ -204,7 +223,8 @@ class Robot:
 
     @property
     def has_loops(self) -> bool:
-        return len(self.loops) > 0
+        """True when loop joints or couplings constrain the tree coordinates."""
+        return len(self.loops) > 0 or len(self.couplings) > 0
 
     @property
     def q_index(self) -> np.ndarray:
@@ -317,7 +337,9 @@ class Robot:
                 k = np.array([[0, -a2[2], a2[1]], [a2[2], 0, -a2[0]], [-a2[1], a2[0], 0]])
                 rot = np.eye(3) + s * k + (1 - c) * (k @ k)  # Rot(a2, q2)
                 axes[i] = np.stack([rot.T @ a1, a2])
-        return replace(self, M0=g @ self.M0, axes=tuple(axes))
+        loops = tuple(replace(lj, M=(np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M, M_child=None)
+                      for lj in self.loops)
+        return replace(self, M0=g @ self.M0, axes=tuple(axes), loops=loops)
 
     def describe(self) -> str:
         """One line per body: index, name, joint type, parent."""

@@ -1,0 +1,338 @@
+"""URDF and URDF+ reader -> :class:`Robot`, and writing parameters back into a URDF.
+
+Supported: ``revolute``/``continuous`` (R), ``prismatic`` (P), ``fixed`` (merged into the
+parent body, inertias combined exactly), ``floating`` (F, root only), and, as in Drake and
+``../shared/CONVENTIONS.md``, ``spherical``/``ball`` (S) and ``universal`` (U, ``<axis>``
+then ``<axis2>``). ``floating=True`` attaches the root link to the world by an F joint.
+
+URDF+ (Chignoli et al. 2024): ``<loop name type>`` with ``<predecessor link>``/``<successor
+link>`` (each with an ``<origin>`` in its link's frame; the two frames must coincide at
+q = 0) and ``<axis>``; ``<coupling>`` (``q_successor = ratio * q_predecessor`` for the joints
+of the two links); ``independent="false"`` on joints marks passive coordinates. The
+``sucessor`` spelling and ``name=`` instead of ``link=`` are accepted with a warning.
+Plain-URDF tools drop loops silently; this reader never does.
+
+Not supported (clear errors): ``planar`` joints, ``<mimic>``, loops of unknown type.
+Every error is one line naming the file, the element and the problem.
+"""
+
+from __future__ import annotations
+
+import warnings
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ModelError
+from ..model.builder import RobotBuilder, pose
+from ..model.inertia import Inertia
+from ..model.robot import Coupling, Robot
+
+_TYPES = {"revolute": "R", "continuous": "R", "prismatic": "P", "fixed": "fixed", "floating": "F",
+          "spherical": "S", "ball": "S", "universal": "U"}
+_LOOP_TYPES = {"revolute": "R", "continuous": "R", "prismatic": "P", "fixed": "fixed",
+               "spherical": "S", "ball": "S", "universal": "U"}
+
+
+class URDFWarning(UserWarning):
+    """A tolerated irregularity in a URDF+ file (e.g. the ``sucessor`` spelling)."""
+
+
+def _floats(text: str | None, n: int, what: str, default) -> np.ndarray:
+    if text is None:
+        return np.asarray(default, dtype=float)
+    try:
+        v = np.array([float(x) for x in text.split()])
+    except ValueError:
+        raise ModelError(f"{what}: expected {n} numbers, got {text!r}") from None
+    if v.shape != (n,) or not np.all(np.isfinite(v)):
+        raise ModelError(f"{what}: expected {n} finite numbers, got {text!r}")
+    return v
+
+
+def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
+    if elem is None:
+        return np.eye(4)
+    return pose(_floats(elem.get("xyz"), 3, f"{what} <origin xyz>", (0, 0, 0)),
+                _floats(elem.get("rpy"), 3, f"{what} <origin rpy>", (0, 0, 0)))
+
+
+class InertiaWarning(UserWarning):
+    """A physically infeasible inertia accepted on request (``allow_infeasible``)."""
+
+
+def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float = 1e-6,
+                  allow_infeasible: bool = False) -> None:
+    """Physical feasibility: mass >= 0, principal moments >= 0 and the triangle inequality.
+
+    With ``allow_infeasible`` a violation of the last two is a warning (the base-parameter
+    structure does not depend on the inertia values); a negative mass is always an error."""
+    if mass < 0:
+        raise ModelError(f"{what}: negative mass {mass}")
+    try:
+        _check_moments(inertia_com, what, rtol)
+    except ModelError as exc:
+        if not allow_infeasible:
+            raise ModelError(f"{exc} (use --allow-infeasible-inertia to analyse the geometry anyway)") from None
+        warnings.warn(str(exc), InertiaWarning, stacklevel=3)
+
+
+def _check_moments(inertia_com: np.ndarray, what: str, rtol: float) -> None:
+    j = inertia_com
+    if np.abs(j - j.T).max() > 1e-12 * (1 + np.abs(j).max()):
+        raise ModelError(f"{what}: inertia matrix is not symmetric")
+    lam = np.linalg.eigvalsh(j)
+    tol = rtol * max(float(np.abs(lam).max()), 1e-300) + 1e-12
+    if lam.min() < -tol:
+        raise ModelError(f"{what}: inertia not physically feasible (negative principal moment {lam.min():.3g})")
+    a, b, c = lam
+    if a + b < c - tol:
+        raise ModelError(f"{what}: inertia not physically feasible (principal moments {a:.3g}, {b:.3g}, "
+                         f"{c:.3g} violate the triangle inequality)")
+
+
+def _inertial(link: ET.Element, what: str, allow_infeasible: bool = False) -> Inertia | None:
+    inl = link.find("inertial")
+    if inl is None:
+        return None
+    m = inl.find("mass")
+    mass = float(_floats(m.get("value") if m is not None else None, 1, f"{what} <mass value>", (0.0,))[0])
+    it = inl.find("inertia")
+    if it is None:
+        j = np.zeros((3, 3))
+    else:
+        v = {}
+        for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+            v[k] = float(_floats(it.get(k), 1, f"{what} <inertia {k}>", (0.0,))[0])
+        j = np.array([[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]], [v["ixz"], v["iyz"], v["izz"]]])
+    check_inertia(mass, j, what, allow_infeasible=allow_infeasible)
+    frame = _origin(inl.find("origin"), f"{what} <inertial>")
+    return Inertia(mass, com=(0.0, 0.0, 0.0), inertia=j, frame=frame)
+
+
+def _link_ref(elem: ET.Element, what: str, path: Path) -> str:
+    name = elem.get("link")
+    if name is None and elem.get("name") is not None:
+        warnings.warn(f"{path}: {what}: 'name=' used instead of 'link='; accepted", URDFWarning, stacklevel=4)
+        name = elem.get("name")
+    if not name:
+        raise ModelError(f"{path}: {what}: missing link attribute")
+    return name
+
+
+def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81),
+              name: str | None = None, allow_infeasible: bool = False) -> Robot:
+    """Read a URDF / URDF+ file into a :class:`Robot` (see the module doc)."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        raise ModelError(f"{path}: malformed XML ({exc})") from None
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    if root.tag != "robot":
+        raise ModelError(f"{path}: root element is <{root.tag}>, expected <robot>")
+    links: dict[str, ET.Element] = {}
+    for ln in root.findall("link"):
+        lname = ln.get("name")
+        if not lname:
+            raise ModelError(f"{path}: a <link> has no name")
+        if lname in links:
+            raise ModelError(f"{path}: duplicate link {lname!r}")
+        links[lname] = ln
+    if not links:
+        raise ModelError(f"{path}: no <link> elements")
+    joints: dict[str, ET.Element] = {}
+    parent_of: dict[str, str] = {}
+    children: dict[str, list[ET.Element]] = {k: [] for k in links}
+    for jt in root.findall("joint"):
+        jname = jt.get("name")
+        what = f"{path}: <joint name={jname!r}>"
+        if not jname:
+            raise ModelError(f"{path}: a <joint> has no name")
+        if jname in joints:
+            raise ModelError(f"{path}: duplicate joint {jname!r}")
+        joints[jname] = jt
+        p, c = jt.find("parent"), jt.find("child")
+        if p is None or c is None or not p.get("link") or not c.get("link"):
+            raise ModelError(f"{what}: needs <parent link> and <child link>")
+        pl, cl = p.get("link"), c.get("link")
+        for ref in (pl, cl):
+            if ref not in links:
+                raise ModelError(f"{what}: unknown link {ref!r}")
+        if cl in parent_of:
+            raise ModelError(f"{what}: link {cl!r} already has parent joint {parent_of[cl]!r} "
+                             f"(a second parent or a cycle: close loops with <loop>)")
+        parent_of[cl] = jname
+        children[pl].append(jt)
+        if jt.find("mimic") is not None:
+            raise ModelError(f"{what}: <mimic> joints are not supported yet "
+                             f"(mimics {jt.find('mimic').get('joint')!r})")
+        t = jt.get("type")
+        if t not in _TYPES:
+            hint = " (planar joints are not supported)" if t == "planar" else ""
+            raise ModelError(f"{what}: unknown or unsupported joint type {t!r}{hint}")
+    roots = [k for k in links if k not in parent_of]
+    if len(roots) != 1:
+        if not roots:
+            raise ModelError(f"{path}: no root link: the joints form a cycle")
+        raise ModelError(f"{path}: several root links {roots[:5]}: the tree is not connected")
+    b = RobotBuilder(name or root.get("name") or path.stem, gravity=gravity)
+    flags: dict[str, bool] = {}
+    base = roots[0]
+    top = base
+    if floating and any(j.get("type") == "floating" for j in children[base]):
+        floating = False  # the file has its own floating joint at the root
+    if floating:
+        b.add_link(base, joint="F", inertia=_inertial(links[base], f"{path}: <link name={base!r}>", allow_infeasible),
+                   joint_name="root_joint")
+        flags[base] = True
+    else:
+        b.add_link(base, joint="fixed")  # the root link is the fixed base (a frame)
+    seen = {base}
+    limits: list[tuple[float, float]] = []
+    stack = [(top, c) for c in reversed(children[top])]
+    while stack:
+        plink, jt = stack.pop()
+        jname = jt.get("name")
+        what = f"{path}: <joint name={jname!r}>"
+        cl = jt.find("child").get("link")
+        if cl in seen:
+            raise ModelError(f"{what}: link {cl!r} reached twice (cycle)")
+        seen.add(cl)
+        t = _TYPES[jt.get("type")]
+        if t == "F" and (plink != base or floating):
+            raise ModelError(f"{what}: a floating joint is only supported at the root")
+        axis_el = jt.find("axis")
+        axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0))
+        axis2_el = jt.find("axis2")
+        axis2 = _floats(axis2_el.get("xyz") if axis2_el is not None else None, 3, f"{what} <axis2 xyz>",
+                        (0, 1, 0)) if t == "U" else None
+        if t in ("R", "P", "U") and np.linalg.norm(axis) < 1e-12:
+            raise ModelError(f"{what}: zero joint axis")
+        if t == "U" and axis2_el is None:
+            raise ModelError(f"{what}: a universal joint needs <axis2>")
+        indep = jt.get("independent", "true").strip().lower()
+        if indep not in ("true", "false", "1", "0"):
+            raise ModelError(f"{what}: independent must be true or false, got {indep!r}")
+        lim = jt.find("limit")
+        if t in ("R", "P") and indep in ("true", "1"):
+            lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
+            hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]
+            limits.append((lo, hi))
+        parent_name = None if (plink == base and not floating) else plink
+        b.add_link(cl, parent=parent_name if parent_name is not None else base, joint=t,
+                   origin=_origin(jt.find("origin"), what), axis=axis, axis2=axis2,
+                   inertia=_inertial(links[cl], f"{path}: <link name={cl!r}>", allow_infeasible), joint_name=jname,
+                   actuated=None if t == "fixed" else indep in ("true", "1"))
+        stack.extend((cl, c) for c in reversed(children[cl]))
+    # loops and couplings (URDF+)
+    loop_elems = root.findall("loop")
+    couplings = []
+    for lp in loop_elems:
+        lname = lp.get("name", "?")
+        what = f"{path}: <loop name={lname!r}>"
+        t = lp.get("type")
+        if t not in _LOOP_TYPES:
+            raise ModelError(f"{what}: unknown or unsupported loop type {t!r}")
+        pred = lp.find("predecessor")
+        succ = lp.find("successor")
+        if succ is None and lp.find("sucessor") is not None:
+            warnings.warn(f"{path}: {what.split(': ', 1)[1]}: 'sucessor' spelling accepted", URDFWarning, stacklevel=2)
+            succ = lp.find("sucessor")
+        if pred is None or succ is None:
+            raise ModelError(f"{what}: needs <predecessor> and <successor>")
+        pl, sl = _link_ref(pred, f"{what} <predecessor>", path), _link_ref(succ, f"{what} <successor>", path)
+        for ref in (pl, sl):
+            if ref not in links:
+                raise ModelError(f"{what}: unknown link {ref!r}")
+        axis_el = lp.find("axis")
+        axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0))
+        axis2_el = lp.find("axis2")
+        axis2 = _floats(axis2_el.get("xyz") if axis2_el is not None else None, 3, f"{what} <axis2 xyz>", (0, 1, 0))
+        b.add_loop(lname, _LOOP_TYPES[t], parent=pl, child=sl, origin=_origin(pred.find("origin"), what),
+                   axis=axis, axis2=axis2 if _LOOP_TYPES[t] == "U" else None,
+                   child_origin=_origin(succ.find("origin"), what))
+    for cp in root.findall("coupling"):
+        cname = cp.get("name", "?")
+        what = f"{path}: <coupling name={cname!r}>"
+        pred, succ = cp.find("predecessor"), cp.find("successor")
+        if succ is None and cp.find("sucessor") is not None:
+            warnings.warn(f"{path}: <coupling name={cname!r}>: 'sucessor' spelling accepted", URDFWarning, stacklevel=2)
+            succ = cp.find("sucessor")
+        if pred is None or succ is None:
+            raise ModelError(f"{what}: needs <predecessor> and <successor>")
+        ratio_el = cp.find("ratio")
+        ratio = float(_floats(ratio_el.get("value") if ratio_el is not None else None, 1, f"{what} <ratio value>",
+                              (1.0,))[0])
+        couplings.append((cname, _link_ref(pred, f"{what} <predecessor>", path),
+                          _link_ref(succ, f"{what} <successor>", path), ratio))
+    if loop_elems or couplings:
+        # the independent joints' limits as a sampling box around q = 0, capped at +-1
+        # (rad or m) so that continuation stays on one assembly mode
+        if len(limits) == sum(1 for a in b._actuated if a):
+            b.q_box = np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3]
+                                for lo, hi in limits])
+    robot = b.build()
+    if couplings:
+        robot = _with_couplings(robot, couplings, path)
+    return robot
+
+
+def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:
+    from dataclasses import replace
+
+    out = []
+    qi = robot.q_index
+    for cname, pl, sl, ratio in couplings:
+        what = f"{path}: <coupling name={cname!r}>"
+        idx = []
+        for ln in (pl, sl):
+            if ln not in robot.names:
+                raise ModelError(f"{what}: link {ln!r} has no joint of its own (fixed or the base)")
+            i = robot.names.index(ln)
+            if robot.ndofs[i] != 1:
+                raise ModelError(f"{what}: link {ln!r} must hang from a 1-dof joint")
+            idx.append(int(qi[i]))
+        out.append(Coupling(cname, idx[0], idx[1], ratio))
+    return replace(robot, couplings=tuple(out))
+
+
+def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str = "khalil") -> None:
+    """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` replaced by ``params``
+    (``(10 n,)`` in ``convention``; link-frame conventions are in each body's joint frame, as
+    read). Links merged by fixed joints get zero inertia (their share is in the body's values)."""
+    from ..model import inertia as I
+    from ..pga import inverse_transform
+
+    source, dest = Path(source), Path(dest)
+    tree = ET.parse(source)
+    root = tree.getroot()
+    p = np.asarray(params, dtype=float).reshape(robot.n, 10)
+    n_body = I.from_convention(p, convention)
+    if convention == "paper":
+        n_body = I.transform(n_body, inverse_transform(robot.M0))
+    links = {ln.get("name"): ln for ln in root.findall("link")}
+    for ln_name, ln in links.items():
+        if ln_name in robot.names:
+            i = robot.names.index(ln_name)
+            m, h, j_o = I.split(n_body[i])
+            c = h / m if m > 0 else np.zeros(3)
+            j_c = j_o - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+            _set_inertial(ln, m, c, j_c)
+        elif ln.find("inertial") is not None:
+            _set_inertial(ln, 0.0, np.zeros(3), np.zeros((3, 3)))
+    tree.write(dest, encoding="unicode", xml_declaration=True)
+
+
+def _set_inertial(link: ET.Element, m: float, c: np.ndarray, j: np.ndarray) -> None:
+    inl = link.find("inertial")
+    if inl is None:
+        inl = ET.SubElement(link, "inertial")
+    for child in list(inl):
+        inl.remove(child)
+    ET.SubElement(inl, "origin", xyz=" ".join(f"{v:.17g}" for v in c), rpy="0 0 0")
+    ET.SubElement(inl, "mass", value=f"{m:.17g}")
+    ET.SubElement(inl, "inertia", ixx=f"{j[0, 0]:.17g}", ixy=f"{j[0, 1]:.17g}", ixz=f"{j[0, 2]:.17g}",
+                  iyy=f"{j[1, 1]:.17g}", iyz=f"{j[1, 2]:.17g}", izz=f"{j[2, 2]:.17g}")

@@ -12,7 +12,8 @@ of the two links); ``independent="false"`` on joints marks passive coordinates. 
 ``sucessor`` spelling and ``name=`` instead of ``link=`` are accepted with a warning.
 Plain-URDF tools drop loops silently; this reader never does.
 
-Not supported (clear errors): ``planar`` joints, ``<mimic>``, loops of unknown type.
+``<mimic multiplier offset>`` becomes a coupling (the follower is passive).
+Not supported (clear errors): ``planar`` joints, loops of unknown type.
 Every error is one line naming the file, the element and the problem.
 """
 
@@ -144,6 +145,7 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     if not links:
         raise ModelError(f"{path}: no <link> elements")
     joints: dict[str, ET.Element] = {}
+    mimics: dict[str, tuple[str, float, float]] = {}
     parent_of: dict[str, str] = {}
     children: dict[str, list[ET.Element]] = {k: [] for k in links}
     for jt in root.findall("joint"):
@@ -166,13 +168,23 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
                              f"(a second parent or a cycle: close loops with <loop>)")
         parent_of[cl] = jname
         children[pl].append(jt)
-        if jt.find("mimic") is not None:
-            raise ModelError(f"{what}: <mimic> joints are not supported yet "
-                             f"(mimics {jt.find('mimic').get('joint')!r})")
+        mim = jt.find("mimic")
+        if mim is not None:
+            leader = mim.get("joint")
+            if not leader:
+                raise ModelError(f"{what}: <mimic> needs a joint attribute")
+            mult = float(_floats(mim.get("multiplier"), 1, f"{what} <mimic multiplier>", (1.0,))[0])
+            off = float(_floats(mim.get("offset"), 1, f"{what} <mimic offset>", (0.0,))[0])
+            mimics[jname] = (leader, mult, off)
         t = jt.get("type")
         if t not in _TYPES:
             hint = " (planar joints are not supported)" if t == "planar" else ""
             raise ModelError(f"{what}: unknown or unsupported joint type {t!r}{hint}")
+    for jname, (leader, _, _) in list(mimics.items()):
+        if leader in joints and "fixed" in (joints[jname].get("type"), joints[leader].get("type")):
+            warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (a fixed joint cannot mimic or be "
+                          f"mimicked)", URDFWarning, stacklevel=2)
+            del mimics[jname]
     roots = [k for k in links if k not in parent_of]
     if len(roots) != 1:
         if not roots:
@@ -188,10 +200,11 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         b.add_link(base, joint="F", inertia=_inertial(links[base], f"{path}: <link name={base!r}>", allow_infeasible),
                    joint_name="root_joint")
         flags[base] = True
+        limits_root = [(-np.inf, np.inf)] * 6
     else:
         b.add_link(base, joint="fixed")  # the root link is the fixed base (a frame)
     seen = {base}
-    limits: list[tuple[float, float]] = []
+    limits: list[tuple[float, float]] = list(limits_root) if floating else []
     stack = [(top, c) for c in reversed(children[top])]
     while stack:
         plink, jt = stack.pop()
@@ -213,14 +226,17 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
             raise ModelError(f"{what}: zero joint axis")
         if t == "U" and axis2_el is None:
             raise ModelError(f"{what}: a universal joint needs <axis2>")
-        indep = jt.get("independent", "true").strip().lower()
+        indep = jt.get("independent", "false" if jname in mimics else "true").strip().lower()
         if indep not in ("true", "false", "1", "0"):
             raise ModelError(f"{what}: independent must be true or false, got {indep!r}")
         lim = jt.find("limit")
-        if t in ("R", "P") and indep in ("true", "1"):
-            lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
-            hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]
-            limits.append((lo, hi))
+        if t != "fixed" and indep in ("true", "1") and not (t == "R" and jname in mimics):
+            if t in ("R", "P"):
+                lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
+                hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]
+                limits.append((lo, hi))
+            else:
+                limits += [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6}[t]
         parent_name = None if (plink == base and not floating) else plink
         b.add_link(cl, parent=parent_name if parent_name is not None else base, joint=t,
                    origin=_origin(jt.find("origin"), what), axis=axis, axis2=axis2,
@@ -267,13 +283,18 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         ratio = float(_floats(ratio_el.get("value") if ratio_el is not None else None, 1, f"{what} <ratio value>",
                               (1.0,))[0])
         couplings.append((cname, _link_ref(pred, f"{what} <predecessor>", path),
-                          _link_ref(succ, f"{what} <successor>", path), ratio))
+                          _link_ref(succ, f"{what} <successor>", path), ratio, 0.0))
+    for jname, (leader, mult, off) in mimics.items():
+        what = f"{path}: <joint name={jname!r}> <mimic>"
+        if leader not in joints:
+            raise ModelError(f"{what}: unknown joint {leader!r}")
+        couplings.append((f"mimic:{jname}", joints[leader].find("child").get("link"),
+                          joints[jname].find("child").get("link"), mult, off))
     if loop_elems or couplings:
         # the independent joints' limits as a sampling box around q = 0, capped at +-1
         # (rad or m) so that continuation stays on one assembly mode
-        if len(limits) == sum(1 for a in b._actuated if a):
-            b.q_box = np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3]
-                                for lo, hi in limits])
+        b.q_box = np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3]
+                            for lo, hi in limits])
     robot = b.build()
     if couplings:
         robot = _with_couplings(robot, couplings, path)
@@ -285,7 +306,7 @@ def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:
 
     out = []
     qi = robot.q_index
-    for cname, pl, sl, ratio in couplings:
+    for cname, pl, sl, ratio, offset in couplings:
         what = f"{path}: <coupling name={cname!r}>"
         idx = []
         for ln in (pl, sl):
@@ -295,7 +316,7 @@ def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:
             if robot.ndofs[i] != 1:
                 raise ModelError(f"{what}: link {ln!r} must hang from a 1-dof joint")
             idx.append(int(qi[i]))
-        out.append(Coupling(cname, idx[0], idx[1], ratio))
+        out.append(Coupling(cname, idx[0], idx[1], ratio, offset))
     return replace(robot, couplings=tuple(out))
 
 

@@ -116,8 +116,8 @@ def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
     need = dq is not None
     state = forward_kinematics(robot, q, dq if need else None, None)
     rs, ks, bs = [], [], []
-    for c in robot.couplings:  # linear: q[succ] - ratio q[pred] = 0
-        rs.append((q[:, c.succ] - c.ratio * q[:, c.pred])[:, None])
+    for c in robot.couplings:  # linear: q[succ] - ratio q[pred] - offset = 0
+        rs.append((q[:, c.succ] - c.ratio * q[:, c.pred] - c.offset)[:, None])
         k = np.zeros((s, 1, dof))
         k[:, 0, c.succ], k[:, 0, c.pred] = 1.0, -c.ratio
         ks.append(k)
@@ -300,7 +300,12 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     ev = evaluate(robot, np.zeros((1, robot.dof)))
     res0 = float(np.abs(ev.r).max()) if ev.r.size else 0.0
     sv = np.linalg.svd(ev.K[0][:, pas], compute_uv=False) if len(pas) else np.ones(1)
-    cond0 = sv[0] / sv[len(pas) - 1] if len(pas) and sv[len(pas) - 1] > 0 else (np.inf if len(pas) else 1.0)
+    if not len(pas):
+        cond0 = 1.0
+    elif len(sv) < len(pas) or sv[len(pas) - 1] <= 0:
+        cond0 = np.inf  # fewer independent constraints than passive coordinates
+    else:
+        cond0 = sv[0] / sv[len(pas) - 1]
     if res0 < tol and cond0 < cond_max:
         return robot, np.zeros(robot.dof), ""
     why = (f"the loop frames do not coincide at q = 0 (residual {res0:.3g})" if res0 >= tol

@@ -75,13 +75,14 @@ class RobotBuilder:
         self._m0: list[np.ndarray] = []
         self._axes: list[np.ndarray] = []
         self._n: list[np.ndarray] = []
-        self._frames: dict[str, tuple[int, np.ndarray]] = {"world": (-1, np.eye(4))}
+        self._frames: dict[str | None, tuple[int, np.ndarray]] = {None: (-1, np.eye(4))}
         self._loops: list[tuple] = []
         self._actuated: list[bool | None] = []
         self.q_box = None
 
     def _frame(self, name: str | None) -> tuple[int, np.ndarray]:
-        key = "world" if name is None else name
+        # "world" names the fixed base unless a link of that name was added (URDF often has one)
+        key = None if (name is None or (name == "world" and "world" not in self._frames)) else name
         if key not in self._frames:
             raise ModelError(f"robot {self.name!r}: unknown parent link {key!r} (add it before its children)")
         return self._frames[key]
@@ -187,7 +188,7 @@ class RobotBuilder:
 
             independent, k = [], 0
             for t, a in zip(self._types, self._actuated):
-                if a:
+                if a is None or a:  # unspecified = independent (URDF+ default)
                     independent += list(range(k, k + NDOF[t]))
                 k += NDOF[t]
         return Robot(self.name, tuple(self._names), tuple(self._jnames), tuple(self._types),

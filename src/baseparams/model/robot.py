@@ -36,13 +36,14 @@ NDOF = {"R": 1, "P": 1, "U": 2, "S": 3, "F": 6, "fixed": 0}
 
 @dataclass(frozen=True)
 class Coupling:
-    """A gear-like coupling between two 1-dof coordinates: ``q[succ] = ratio * q[pred]``
-    (URDF+ ``<coupling>``, MJCF ``<equality><joint polycoef="0 ratio">``)."""
+    """A linear coupling of two 1-dof coordinates: ``q[succ] = ratio * q[pred] + offset``
+    (URDF+ ``<coupling>``, URDF ``<mimic multiplier offset>``, MJCF ``<equality><joint>``)."""
 
     name: str
     pred: int
     succ: int
     ratio: float
+    offset: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -339,7 +340,8 @@ class Robot:
                 axes[i] = np.stack([rot.T @ a1, a2])
         loops = tuple(replace(lj, M=(np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M, M_child=None)
                       for lj in self.loops)
-        return replace(self, M0=g @ self.M0, axes=tuple(axes), loops=loops)
+        couplings = tuple(replace(c, offset=c.offset + c.ratio * q0[c.pred] - q0[c.succ]) for c in self.couplings)
+        return replace(self, M0=g @ self.M0, axes=tuple(axes), loops=loops, couplings=couplings)
 
     def describe(self) -> str:
         """One line per body: index, name, joint type, parent."""

@@ -1,0 +1,54 @@
+"""Real robot files: every example-robot-data URDF that Pinocchio loads agrees with Pinocchio,
+and the shared URDF+ / MJCF models load, analyse and certify."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from erd import is_floating, pinocchio_model, pinocchio_nullity, urdf_files
+
+from baseparams.io.load import load_model
+from baseparams.nullspace.certify import certify
+
+FILES = urdf_files()
+
+#: files Pinocchio loads by ignoring a defect that we report instead (never a silent answer)
+EXPECTED_ERRORS = {
+    "alex_psyonic_hands.urdf": "<mimic>: unknown joint 'index_q1'",  # mimics a joint that does not exist
+}
+
+
+def test_example_robot_data_is_installed():
+    assert len(FILES) >= 60, "pip install example-robot-data (a test dependency)"
+
+
+@pytest.mark.parametrize("path", FILES, ids=[f.name for f in FILES])
+def test_certified_nullity_equals_pinocchio(path):
+    floating = is_floating(path)
+    model = pinocchio_model(path, floating)
+    if model is None:  # a file Pinocchio itself rejects (ur3.urdf has no robot name): nothing to compare
+        from baseparams.errors import ModelError
+
+        with pytest.raises(ModelError):
+            load_model(str(path), floating=floating, allow_infeasible=True)
+        return
+    if model.njoints == 1:  # a single static body: no parameters in Pinocchio, no moving link here
+        from baseparams.errors import ModelError
+
+        with pytest.raises(ModelError, match="no moving links"):
+            load_model(str(path), floating=floating, allow_infeasible=True)
+        return
+    if path.name in EXPECTED_ERRORS:
+        from baseparams.errors import ModelError
+
+        with pytest.raises(ModelError, match=EXPECTED_ERRORS[path.name]):
+            load_model(str(path), floating=floating, allow_infeasible=True)
+        return
+    robot, _ = load_model(str(path), floating=floating, allow_infeasible=True)
+    assert robot.n == model.njoints - 1
+    cert = certify(robot, seed=1)
+    assert cert.certified, cert.message
+    samples = max(60, int(np.ceil(3 * 10 * robot.n / max(1, len(robot.actuated)))))
+    nullity, gap = pinocchio_nullity(model, path, samples)
+    assert gap > 1e4
+    assert cert.nullity == nullity

@@ -16,6 +16,7 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
+* ``files``         every example-robot-data URDF: certified, DRNG complete?; talos_full_v2 times.
 
 Every timing is the median over ``repeats`` runs of ``time.perf_counter`` after one
 untimed warm-up call; the number of repeats is reported next to every timing (the
@@ -288,7 +289,58 @@ def bench_loops(out: dict, quick: bool) -> None:
         out[f"validation_vs_drng_{key}"] = t_v / t_d
 
 
+def bench_files(out: dict, quick: bool) -> None:
+    """Real files: every example-robot-data URDF (test dependency): how often DRNG alone is
+    complete, and loading / DRNG / certification times on talos_full_v2 (45 joints)."""
+    import warnings
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from erd import is_floating, urdf_files  # the same file list and root joints as the tests
+
+    from baseparams.io.load import load_model
+    from baseparams.nullspace import drng
+    from baseparams.nullspace.certify import certify
+
+    files = urdf_files()
+    if quick:
+        files = files[::4]
+    complete = certified = total = 0
+    incomplete = []
+    for f in files:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                robot, _ = load_model(str(f), floating=is_floating(f), allow_infeasible=True)
+        except Exception as exc:  # noqa: BLE001 - counted, reported
+            log(f"  {f.name}: not loaded ({str(exc)[-80:]})")
+            continue
+        c = certify(robot, seed=1)
+        total += 1
+        certified += c.certified
+        if c.certified and c.completed == 0:
+            complete += 1
+        else:
+            incomplete.append(f"{f.name} (+{c.completed})")
+    out["files_analysed"] = total
+    out["files_certified"] = certified
+    out["files_drng_complete"] = complete
+    out["files_drng_incomplete"] = ", ".join(incomplete)
+    talos = [f for f in urdf_files() if f.name == "talos_full_v2.urdf"]
+    if talos:
+        path = str(talos[0])
+        t_load, n_load = measure(lambda: load_model(path, floating=True, allow_infeasible=True), 5)
+        robot, _ = load_model(path, floating=True, allow_infeasible=True)
+        t_d, n_d = measure(lambda: drng(robot), 21)
+        t_c, n_c = measure(lambda: certify(robot, seed=1), 3)
+        out["talos_full_v2_bodies"] = robot.n
+        out["talos_full_v2_load_ms"] = 1e3 * t_load
+        out["talos_full_v2_drng_ms"] = 1e3 * t_d
+        out["talos_full_v2_certify_ms"] = 1e3 * t_c
+        out["talos_full_v2_drng_ms_repeats"] = n_d
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
+    "files": bench_files,
     "regressor": bench_regressor,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
@@ -300,7 +352,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
 def _fmt(v) -> str:
     if v is None:
         return "skipped"
-    if isinstance(v, int):
+    if isinstance(v, (int, str)):
         return str(v)
     if v == 0 or 1e-3 <= abs(v) < 1e5:
         return f"{v:.4g}"

@@ -103,14 +103,34 @@ def default_samples(robot: Robot) -> int:
     return max(200, int(np.ceil(40 * robot.n / len(robot.actuated))))
 
 
-def closed_samples(robot: Robot, samples: int, rng: np.random.Generator):
-    """Loop-closed random states: actuated q in the robot's box, dq_a, ddq_a in (0, 1)."""
+#: samples with cond(J_p) above this are discarded (the paper's 30) ...
+COND_MAX = 30.0
+#: ... or above this multiple of the reference configuration's, when that is larger
+COND_FACTOR = 3.0
+
+
+def reference_cond(robot: Robot) -> float:
+    """cond(J_p) at the reference configuration q = 0."""
+    from .kinematics.loops import close_loops
+
+    cs = close_loops(robot, np.zeros((1, len(robot.actuated))), cond_max=np.inf)
+    return float(cs.cond[0]) if cs.kept else np.inf
+
+
+def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_max: float | None = None):
+    """Loop-closed random states: actuated q in the robot's box, dq_a, ddq_a in (0, 1).
+
+    ``cond_max`` default: 30 (the paper), or 3x cond(J_p) at the reference when that is larger
+    (coordinates mixing metres and radians with millimetre lever arms, e.g. Cassie's rods)."""
     from .kinematics.loops import close_loops
 
     na = len(robot.actuated)
     box = robot.q_box if robot.q_box is not None else np.tile([-DEFAULT_HALF_WIDTH, DEFAULT_HALF_WIDTH], (na, 1))
+    if cond_max is None:
+        cond_max = max(COND_MAX, COND_FACTOR * reference_cond(robot))
     qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
-    return close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)))
+    return close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
+                       cond_max=cond_max)
 
 
 def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
@@ -130,7 +150,7 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
                                   f"the generalized forces are the actuated ones")
         cs = closed_samples(robot, samples, rng)
         if info is not None:
-            info.update(requested=cs.requested, kept=cs.kept, not_converged=cs.not_converged,
+            info.update(requested=cs.requested, kept=cs.kept, cond_max=cs.cond_max, not_converged=cs.not_converged,
                         branch_jumps=cs.branch_jumps, ill_conditioned=cs.ill_conditioned,
                         max_loop_residual=cs.max_residual)
         if cs.kept == 0:

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.builder import RobotBuilder, pose
-from ..model.inertia import Inertia
+from ..model.inertia import Inertia, check_inertia
 from ..model.robot import Coupling, Robot
 
 _TYPES = {"revolute": "R", "continuous": "R", "prismatic": "P", "fixed": "fixed", "floating": "F",
@@ -57,40 +57,6 @@ def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
         return np.eye(4)
     return pose(_floats(elem.get("xyz"), 3, f"{what} <origin xyz>", (0, 0, 0)),
                 _floats(elem.get("rpy"), 3, f"{what} <origin rpy>", (0, 0, 0)))
-
-
-class InertiaWarning(UserWarning):
-    """A physically infeasible inertia accepted on request (``allow_infeasible``)."""
-
-
-def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float = 1e-6,
-                  allow_infeasible: bool = False) -> None:
-    """Physical feasibility: mass >= 0, principal moments >= 0 and the triangle inequality.
-
-    With ``allow_infeasible`` a violation of the last two is a warning (the base-parameter
-    structure does not depend on the inertia values); a negative mass is always an error."""
-    if mass < 0:
-        raise ModelError(f"{what}: negative mass {mass}")
-    try:
-        _check_moments(inertia_com, what, rtol)
-    except ModelError as exc:
-        if not allow_infeasible:
-            raise ModelError(f"{exc} (use --allow-infeasible-inertia to analyse the geometry anyway)") from None
-        warnings.warn(str(exc), InertiaWarning, stacklevel=3)
-
-
-def _check_moments(inertia_com: np.ndarray, what: str, rtol: float) -> None:
-    j = inertia_com
-    if np.abs(j - j.T).max() > 1e-12 * (1 + np.abs(j).max()):
-        raise ModelError(f"{what}: inertia matrix is not symmetric")
-    lam = np.linalg.eigvalsh(j)
-    tol = rtol * max(float(np.abs(lam).max()), 1e-300) + 1e-12
-    if lam.min() < -tol:
-        raise ModelError(f"{what}: inertia not physically feasible (negative principal moment {lam.min():.3g})")
-    a, b, c = lam
-    if a + b < c - tol:
-        raise ModelError(f"{what}: inertia not physically feasible (principal moments {a:.3g}, {b:.3g}, "
-                         f"{c:.3g} violate the triangle inequality)")
 
 
 def _inertial(link: ET.Element, what: str, allow_infeasible: bool = False) -> Inertia | None:

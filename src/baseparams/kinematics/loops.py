@@ -184,6 +184,7 @@ class ClosedStates:
     branch_jumps: int
     ill_conditioned: int
     max_residual: float
+    cond_max: float = 30.0
 
     @property
     def kept(self) -> int:
@@ -280,7 +281,7 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     return ClosedStates(q[keep], dq[keep], ddq[keep], g[keep], cond[keep], s,
                         int((~converged).sum()), int((converged & jumped).sum()),
                         int((converged & ~jumped & ~good_cond).sum()),
-                        float(err[keep].max()) if keep.any() else float("nan"))
+                        float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
 
 
 def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[Robot, np.ndarray, str]:
@@ -330,3 +331,27 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
                       f"check the loop frames and the independent joints")
 
 
+
+
+def choose_independent(robot: Robot, prefer_independent: set[int] | None = None, rtol: float = 1e-9) -> Robot:
+    """The same robot with independent coordinates chosen from the loop constraints at q = 0.
+
+    For files that do not say which coordinates are independent (MJCF): the passive set is a
+    maximal set of coordinates whose constraint-Jacobian columns are independent, picked
+    greedily, coordinates in ``prefer_independent`` (e.g. actuated joints) last."""
+    from dataclasses import replace
+
+    from scipy.linalg import qr
+
+    ev = evaluate(replace(robot, independent=tuple(range(robot.dof))), np.zeros((1, robot.dof)))
+    k = ev.K[0]
+    prefer = prefer_independent or set()
+    # column-pivoted QR picks well-conditioned passive columns; preferred-independent
+    # coordinates are down-weighted so that they are picked only when needed
+    weight = np.array([1e-3 if j in prefer else 1.0 for j in range(robot.dof)])
+    _, r, piv = qr(k * weight, pivoting=True, mode="economic")
+    diag = np.abs(np.diag(r))
+    rank = int(np.sum(diag > rtol * max(diag.max(initial=0.0), 1e-300)))
+    passive = set(int(j) for j in piv[:rank])
+    independent = tuple(j for j in range(robot.dof) if j not in passive)
+    return replace(robot, independent=independent, q_box=None)

@@ -24,7 +24,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import warnings
+
 import numpy as np
+
+from ..errors import ModelError
 
 CONVENTIONS = ("paper", "khalil", "pinocchio", "idyntree", "rpna")
 
@@ -174,3 +178,37 @@ class Inertia:
 def is_physically_consistent(n: np.ndarray, tol: float = 0.0) -> np.ndarray:
     """True where the pseudo-inertia is positive semidefinite (Wensing et al. 2018)."""
     return np.linalg.eigvalsh(np.asarray(n)).min(axis=-1) >= -tol
+
+
+class InertiaWarning(UserWarning):
+    """A physically infeasible inertia accepted on request (``allow_infeasible``)."""
+
+
+def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float = 1e-6,
+                  allow_infeasible: bool = False) -> None:
+    """Physical feasibility: mass >= 0, principal moments >= 0 and the triangle inequality.
+
+    With ``allow_infeasible`` a violation of the last two is a warning (the base-parameter
+    structure does not depend on the inertia values); a negative mass is always an error."""
+    if mass < 0:
+        raise ModelError(f"{what}: negative mass {mass}")
+    try:
+        _check_moments(inertia_com, what, rtol)
+    except ModelError as exc:
+        if not allow_infeasible:
+            raise ModelError(f"{exc} (use --allow-infeasible-inertia to analyse the geometry anyway)") from None
+        warnings.warn(str(exc), InertiaWarning, stacklevel=3)
+
+
+def _check_moments(inertia_com: np.ndarray, what: str, rtol: float) -> None:
+    j = inertia_com
+    if np.abs(j - j.T).max() > 1e-12 * (1 + np.abs(j).max()):
+        raise ModelError(f"{what}: inertia matrix is not symmetric")
+    lam = np.linalg.eigvalsh(j)
+    tol = rtol * max(float(np.abs(lam).max()), 1e-300) + 1e-12
+    if lam.min() < -tol:
+        raise ModelError(f"{what}: inertia not physically feasible (negative principal moment {lam.min():.3g})")
+    a, b, c = lam
+    if a + b < c - tol:
+        raise ModelError(f"{what}: inertia not physically feasible (principal moments {a:.3g}, {b:.3g}, "
+                         f"{c:.3g} violate the triangle inequality)")

@@ -105,7 +105,7 @@ def default_samples(robot: Robot) -> int:
 
 #: samples with cond(J_p) above this are discarded (the paper's 30) ...
 COND_MAX = 30.0
-#: ... or above this multiple of the reference configuration's, when that is larger
+#: ... or, when the reference configuration itself is above it, this multiple of its cond
 COND_FACTOR = 3.0
 
 
@@ -120,14 +120,16 @@ def reference_cond(robot: Robot) -> float:
 def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_max: float | None = None):
     """Loop-closed random states: actuated q in the robot's box, dq_a, ddq_a in (0, 1).
 
-    ``cond_max`` default: 30 (the paper), or 3x cond(J_p) at the reference when that is larger
-    (coordinates mixing metres and radians with millimetre lever arms, e.g. Cassie's rods)."""
+    ``cond_max`` default: 30 (the paper); when cond(J_p) at the reference is already above 30
+    (coordinates mixing metres and radians with millimetre lever arms, e.g. Cassie's rods),
+    3x the reference's."""
     from .kinematics.loops import close_loops
 
     na = len(robot.actuated)
     box = robot.q_box if robot.q_box is not None else np.tile([-DEFAULT_HALF_WIDTH, DEFAULT_HALF_WIDTH], (na, 1))
     if cond_max is None:
-        cond_max = max(COND_MAX, COND_FACTOR * reference_cond(robot))
+        ref = reference_cond(robot)
+        cond_max = COND_MAX if ref < COND_MAX else COND_FACTOR * ref
     qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
     return close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
                        cond_max=cond_max)

@@ -81,10 +81,10 @@ def _inertial(link: ET.Element, what: str, allow_infeasible: bool = False) -> In
 def _link_ref(elem: ET.Element, what: str, path: Path) -> str:
     name = elem.get("link")
     if name is None and elem.get("name") is not None:
-        warnings.warn(f"{path}: {what}: 'name=' used instead of 'link='; accepted", URDFWarning, stacklevel=4)
+        warnings.warn(f"{what}: 'name=' used instead of 'link='; accepted", URDFWarning, stacklevel=4)
         name = elem.get("name")
     if not name:
-        raise ModelError(f"{path}: {what}: missing link attribute")
+        raise ModelError(f"{what}: missing link attribute")
     return name
 
 
@@ -209,6 +209,10 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
                    inertia=_inertial(links[cl], f"{path}: <link name={cl!r}>", allow_infeasible), joint_name=jname,
                    actuated=None if t == "fixed" else indep in ("true", "1"))
         stack.extend((cl, c) for c in reversed(children[cl]))
+    unreached = [k for k in links if k not in seen]
+    if unreached:
+        raise ModelError(f"{path}: links {unreached[:5]} are not connected to the root link {base!r} "
+                         f"(a cycle of joints? close loops with <loop>)")
     # loops and couplings (URDF+)
     loop_elems = root.findall("loop")
     couplings = []

@@ -313,7 +313,9 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
            else f"q = 0 is a singular configuration of the loops (cond(J_p) = {cond0:.3g})")
     rng = np.random.default_rng(0)
     starts = [np.zeros(robot.dof)] + [rng.uniform(-1.0, 1.0, robot.dof) for _ in range(20)]
-    tries = [(off, st) for off in (0.0, 0.1, -0.1, 0.2, -0.2) for st in starts if not (off == 0.0 and res0 < tol)]
+    singular = res0 < tol  # assembled but singular: move away from the singular point
+    offsets = (0.3, -0.3, 0.2, -0.2, 0.1, -0.1) if singular else (0.0, 0.1, -0.1, 0.2, -0.2)
+    tries = [(off, st) for off in offsets for st in starts]
     for offset, start in tries:
         qa = np.full((1, len(act)), offset)
         cs = close_loops(robot, qa, steps=10, cond_max=cond_max, max_step=np.inf, max_iter=50, q_start=start)
@@ -323,6 +325,10 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
             if new is None:
                 raise ModelError(f"robot {robot.name!r}: {why}; re-referencing with S joints is not supported")
             box = None if robot.q_box is None else robot.q_box - qref[act][:, None]
+            if singular:  # sample on this side of the singular configuration only
+                half = np.full((len(act), 2), [-abs(offset) / 2, abs(offset) / 2])
+                box = half if box is None else np.column_stack([np.maximum(box[:, 0], half[:, 0]),
+                                                               np.minimum(box[:, 1], half[:, 1])])
             new = replace(new, q_box=box)
             note = (f"{why}; assembled and re-referenced at actuated coordinates {np.round(qref[act], 4).tolist()} "
                     f"(passive {np.round(qref[pas], 4).tolist()}): q = 0 now means this configuration")

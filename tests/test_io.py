@@ -1,0 +1,225 @@
+"""Robot files: the shared models, error messages on bad input, parser fuzzing, export."""
+
+from __future__ import annotations
+
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from baseparams.errors import BaseparamsError, ModelError
+from baseparams.io.load import load_model
+from baseparams.io.mjcf import load_mjcf
+from baseparams.io.urdf import URDFWarning, load_urdf, write_urdf
+from baseparams.nullspace.certify import certify
+from baseparams.numerics import stacked_regressor
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "models"
+if not SHARED.is_dir():  # CI clones main beside ../shared; a checkout elsewhere may not have it
+    SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "models"
+
+SHARED_FILES = [
+    # a parallelogram on its parallelogram branch, gravity along the axes: one base parameter
+    ("urdfplus/four_bar.urdf", False, 29),
+    ("urdfplus/six_bar.urdf", False, 40),
+    ("urdfplus/planar_leg_linkage.urdf", False, 36),  # also a parallelogram linkage
+    ("urdfplus/mini_cheetah.urdf", False, 72),
+    ("mjcf/unitree_go2/go2.xml", False, 36),
+    ("mjcf/universal_robots_ur5e/ur5e.xml", False, None),
+    ("mjcf/kuka_iiwa_14/iiwa14.xml", False, None),
+    ("mjcf/agility_cassie/cassie.xml", False, 70),
+]
+
+
+@pytest.mark.parametrize("rel, floating, nullity", SHARED_FILES, ids=[r for r, _, _ in SHARED_FILES])
+def test_shared_models_load_analyse_certify(rel, floating, nullity):
+    path = SHARED / rel
+    assert path.exists(), f"../shared/models/{rel} is missing"
+    robot, notes = load_model(str(path), floating=floating, allow_infeasible=True)
+    c = certify(robot, seed=0)
+    assert c.certified, c.message
+    assert c.max_column_residual < 1e-9
+    if nullity is not None:
+        assert c.nullity == nullity
+
+
+def test_go2_file_equals_builtin():
+    from baseparams.robots import go2
+
+    robot, _ = load_model(str(SHARED / "mjcf/unitree_go2/go2.xml"))
+    assert np.allclose(robot.parameters(), go2().parameters())
+    assert np.allclose(robot.M0, go2().M0)
+
+
+def test_loops_are_never_dropped():
+    robot = load_urdf(SHARED / "urdfplus/four_bar.urdf")
+    assert len(robot.loops) == 1 and robot.loops[0].type == "R"
+    cassie = load_mjcf(SHARED / "mjcf/agility_cassie/cassie.xml")
+    assert len(cassie.loops) == 4 and all(lj.type == "S" for lj in cassie.loops)
+
+
+def test_infeasible_inertia_is_an_error_by_default():
+    with pytest.raises(ModelError, match=r"planar_leg_linkage.urdf: <link name='thigh'>: inertia not physically "
+                                         r"feasible .* triangle inequality"):
+        load_urdf(SHARED / "urdfplus/planar_leg_linkage.urdf")
+
+
+# ------------------------------------------------------------------------------ bad input
+GOOD = """<?xml version="1.0"?>
+<robot name="two">
+  <link name="base"/>
+  <link name="a"><inertial><origin xyz="0.1 0 0" rpy="0 0 0"/><mass value="1.0"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.025"/></inertial></link>
+  <link name="b"><inertial><origin xyz="0 0.2 0"/><mass value="0.5"/>
+    <inertia ixx="0.01" ixy="0.001" ixz="0" iyy="0.01" iyz="0" izz="0.015"/></inertial></link>
+  <link name="tool"><inertial><mass value="0.2"/>
+    <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
+    <origin xyz="0 0 0.3" rpy="0.1 0.2 0.3"/></joint>
+  <joint name="j2" type="prismatic"><parent link="a"/><child link="b"/><axis xyz="1 0 0"/>
+    <origin xyz="0.5 0 0"/></joint>
+  <joint name="j3" type="fixed"><parent link="b"/><child link="tool"/><origin xyz="0 0 0.1"/></joint>
+</robot>
+"""
+
+BAD = [
+    (GOOD.replace("</robot>", ""), r"malformed XML"),
+    (GOOD.replace('<child link="b"/>', '<child link="nope"/>'), r"<joint name='j2'>: unknown link 'nope'"),
+    (GOOD.replace('<link name="tool">', '<link name="a">'), r"duplicate link 'a'"),
+    (GOOD.replace('<parent link="base"/><child link="a"/>', '<parent link="b"/><child link="a"/>'),
+     r"not connected to the root link|no root link|reached twice"),
+    (GOOD.replace('type="prismatic"', 'type="helical"'), r"<joint name='j2'>: unknown or unsupported joint type 'helical'"),
+    (GOOD.replace('type="prismatic"', 'type="planar"'), r"planar joints are not supported"),
+    (GOOD.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'), r"<link name='b'>: negative mass -0.5"),
+    (GOOD.replace('izz="0.025"', 'izz="0.5"'), r"<link name='a'>: inertia not physically feasible"),
+    (GOOD.replace('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>'), r"<joint name='j2'>: zero joint axis"),
+    (GOOD.replace('<axis xyz="1 0 0"/>', '<axis xyz="1 0"/>'), r"<joint name='j2'> <axis xyz>: expected 3"),
+    (GOOD.replace('xyz="0.5 0 0"', 'xyz="0.5 nan 0"'), r"<joint name='j2'> <origin xyz>: expected 3 finite"),
+    (GOOD.replace("</robot>", '<loop name="l" type="revolute"><predecessor link="a"/><successor link="ghost"/>'
+                              '</loop></robot>'), r"<loop name='l'>: unknown link 'ghost'"),
+    (GOOD.replace("</robot>", '<loop name="l" type="screw"><predecessor link="a"/><successor link="b"/>'
+                              '</loop></robot>'), r"<loop name='l'>: unknown or unsupported loop type 'screw'"),
+    (GOOD.replace('<joint name="j3" type="fixed">', '<joint name="j3" type="fixed"><mimic joint="zz"/>'),
+     r"<mimic>: unknown joint 'zz'"),
+    ("<mujoco/>", r"root element is <mujoco>, expected <robot>"),
+]
+
+
+@pytest.mark.parametrize("text, message", BAD)
+def test_bad_urdf_gives_one_clear_line(tmp_path, text, message):
+    f = tmp_path / "robot.urdf"
+    f.write_text(text)
+    with pytest.raises(ModelError) as exc:
+        load_urdf(f)
+    msg = str(exc.value)
+    assert "\n" not in msg and str(f) in msg
+    assert re.search(message, msg), msg
+
+
+def test_cli_reports_bad_file_in_one_line(tmp_path, capsys):
+    from baseparams.cli import main
+
+    f = tmp_path / "robot.urdf"
+    f.write_text(GOOD.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'))
+    assert main(["analyze", str(f)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "negative mass" in err and str(f) in err
+    assert main(["analyze", str(tmp_path / "missing.urdf")]) == 2
+    assert "no such file" in capsys.readouterr().err
+
+
+def test_fixed_joint_merge_matches_two_body_model(tmp_path):
+    f = tmp_path / "robot.urdf"
+    f.write_text(GOOD)
+    robot = load_urdf(f)
+    assert robot.n == 2 and robot.names == ("a", "b")
+    # the tool's inertia is merged into b: total mass and first moment about b's frame
+    assert np.isclose(robot.N_body[1][3, 3], 0.7)
+    assert np.allclose(robot.N_body[1][:3, 3], 0.5 * np.array([0, 0.2, 0]) + 0.2 * np.array([0, 0, 0.1]))
+
+
+def test_urdfplus_tolerated_spellings_warn(tmp_path):
+    f = tmp_path / "robot.urdf"
+    f.write_text((SHARED / "urdfplus/four_bar.urdf").read_text()
+                 .replace("<successor link", "<sucessor name").replace("</successor>", "</sucessor>"))
+    with pytest.warns(URDFWarning, match="sucessor"):
+        robot = load_urdf(f)
+    assert len(robot.loops) == 1
+
+
+def test_mjcf_errors(tmp_path):
+    f = tmp_path / "m.xml"
+    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><joint type="hinge"/>'
+                 '<inertial mass="1" diaginertia="1 1 1"/></body></worldbody></mujoco>')
+    with pytest.raises(ModelError, match=r"<body name='a'>: 2 joints in one body"):
+        load_mjcf(f)
+    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><inertial mass="1" '
+                 'diaginertia="1 1 1"/></body></worldbody><equality><tendon tendon1="t"/></equality></mujoco>')
+    with pytest.raises(ModelError, match="tendon equalities are not supported"):
+        load_mjcf(f)
+    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><inertial mass="1" '
+                 'diaginertia="1 1 1"/></body></worldbody><equality><connect body1="a" body2="zz" anchor="0 0 0"/>'
+                 '</equality></mujoco>')
+    with pytest.raises(ModelError, match="unknown body 'zz'"):
+        load_mjcf(f)
+
+
+# ------------------------------------------------------------------------------ fuzzing
+def _regressor_signature(robot):
+    return stacked_regressor(robot, samples=3, seed=0) @ robot.parameters("paper")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.integers(0, len(GOOD) - 1), st.integers(1, 8), st.sampled_from(["", "x", "-", "<", ">", '"', "9", " ", "/"]))
+def test_fuzzed_urdf_never_tracebacks(tmp_path, pos, width, insert):
+    f = tmp_path / "fuzz.urdf"
+    f.write_text(GOOD[:pos] + insert + GOOD[pos + width:])
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            robot = load_urdf(f)
+    except BaseparamsError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert robot.n >= 1 and np.all(np.isfinite(robot.parameters()))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.permutations(range(4)), st.booleans(), st.booleans())
+def test_semantics_preserving_edits_give_the_same_model(tmp_path, order, comments, spaces):
+    """Reordered links, comments and whitespace must not change the model (never silently)."""
+    ref = tmp_path / "ref.urdf"
+    ref.write_text(GOOD)
+    base = load_urdf(ref)
+    lines = GOOD.split("\n")
+    links = [lines[2], "\n".join(lines[3:5]), "\n".join(lines[5:7]), "\n".join(lines[7:9])]
+    text = "\n".join(lines[:2] + [links[k] for k in order] + lines[9:])
+    if comments:
+        text = text.replace("<joint ", "<!-- a comment --><joint ")
+    if spaces:
+        text = text.replace('xyz="', 'xyz="  ').replace("><", ">\n   <")
+    f = tmp_path / "edit.urdf"
+    f.write_text(text)
+    robot = load_urdf(f)
+    assert robot.names == base.names
+    assert np.allclose(_regressor_signature(robot), _regressor_signature(base))
+
+
+def test_write_urdf_round_trip(tmp_path):
+    src = tmp_path / "robot.urdf"
+    src.write_text(GOOD)
+    robot = load_urdf(src)
+    rng = np.random.default_rng(0)
+    from baseparams.robots.random import random_inertia
+
+    new = np.concatenate([__import__("baseparams").model.inertia.to_convention(random_inertia(rng).pseudo(), "khalil")
+                          for _ in range(robot.n)])
+    out = tmp_path / "identified.urdf"
+    write_urdf(src, out, robot, new, "khalil")
+    again = load_urdf(out)
+    assert np.allclose(again.parameters("khalil"), new)
+    assert np.allclose(again.M0, robot.M0)

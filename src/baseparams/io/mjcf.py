@@ -220,26 +220,10 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
         elif top.tag == "site" and top.get("name"):
             sites[top.get("name")] = ("world", comp.pose(top.attrib, f"{path}: <site>"))
     couplings = _equalities(root, path, b, link_world, body_world, sites, joint_coord)
-    if b._loops and not couplings:
-        from ..kinematics.loops import choose_independent
-
-        robot = b.build()
-        motors = {a.get("joint") for a in root.iter() if a.get("joint") and a.tag in
-                  ("motor", "position", "velocity", "general", "intvelocity", "damper")}
-        qi = robot.q_index
-        prefer = {int(qi[robot.joint_names.index(j)]) + d for j in motors if j in robot.joint_names
-                  for d in range(int(robot.ndofs[robot.joint_names.index(j)]))}
-        prefer |= set(range(int(robot.ndofs[0]))) if robot.jtype[0] == "F" else set()
-        return choose_independent(robot, prefer)
-    robot = b.build() if not couplings else None
+    robot = b.build()
     if couplings:
         from dataclasses import replace
 
-        for c in couplings:  # a coupled follower is passive
-            for k, a in enumerate(b._names):
-                if a == c[2]:
-                    b._actuated[k] = False
-        robot = b.build()
         qi = robot.q_index
         out = []
         for cname, lead, follow, ratio, offset in couplings:
@@ -248,6 +232,16 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
                 raise ModelError(f"{path}: <equality><joint name={cname!r}>: only 1-dof joints can be coupled")
             out.append(Coupling(cname, int(qi[i]), int(qi[k]), ratio, offset))
         robot = replace(robot, couplings=tuple(out))
+    if robot.has_loops:  # MJCF does not say which coordinates are independent: choose them
+        from ..kinematics.loops import choose_independent
+
+        motors = {a.get("joint") for a in root.iter() if a.get("joint") and a.tag in
+                  ("motor", "position", "velocity", "general", "intvelocity", "damper")}
+        qi = robot.q_index
+        prefer = {int(qi[robot.joint_names.index(j)]) + d for j in motors if j in robot.joint_names
+                  for d in range(int(robot.ndofs[robot.joint_names.index(j)]))}
+        prefer |= set(range(int(robot.ndofs[0]))) if robot.jtype[0] == "F" else set()
+        robot = choose_independent(robot, prefer)
     return robot
 
 

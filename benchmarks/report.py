@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Write benchmarks/README.md from a JSON produced by ``benchmarks/run.py --json``.
+
+Usage: ``python benchmarks/run.py --json > /tmp/b.json && python benchmarks/report.py /tmp/b.json``
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+
+def main(argv: list[str]) -> int:
+    d = json.loads(Path(argv[1]).read_text())
+    m = d["machine"]
+    g = lambda k, fmt="{:.3g}": ("n/a" if d.get(k) is None else fmt.format(d[k]))  # noqa: E731
+    rows_reg = "".join(
+        f"| {r} | {S} | {g(f'regressor_ours_{r}_S{S}_s', '{:.3g}')} s | {g(f'regressor_pin_{r}_S{S}_s', '{:.3g}')} s "
+        f"| {g(f'regressor_vs_pinocchio_{r}_S{S}')} | {g(f'regressor_peak_mb_{r}_S{S}')} MB |\n"
+        for r in ("puma560", "go2") for S in (1, 100, 10000))
+    rows_scal = "".join(
+        f"| {N} | {g(f'drng_chain_N{N}_ms')} ms | {g(f'drng_chain_N{N}_us_per_body')} us | {g(f'drng_tree_N{N}_ms')} ms "
+        f"| {g(f'drng_tree_N{N}_us_per_body')} us |\n" for N in (10, 100, 1000, 10000))
+    text = f"""# Benchmarks
+
+`benchmarks/run.py` is a standalone script (pytest does not collect it):
+
+```
+PYTHONPATH=src python3 benchmarks/run.py [--json] [--quick] [--only SUBSTRING] [--blas-threads N]
+python benchmarks/report.py RESULT.json     # rewrites this README from a --json result
+```
+
+Default: a table on stdout; `--json`: exactly one JSON object (named figures,
+`<figure>_repeats`, `machine`); progress on stderr; `--quick` < 60 s; `--only` selects groups
+(`regressor`, `drng_vs_numerical`, `drng_scaling`, `loops`, `files`). Every timing is the
+**median** of `time.perf_counter` over the stated repeats after one warm-up call. BLAS is
+pinned to one thread by default (`--blas-threads 0` leaves it alone): with OpenBLAS's two
+threads the numerical method's SVD was 10-140x slower in 4 of 7 runs on this noisy 2-core VM,
+and no faster when it was quiet.
+
+Groups:
+1. **regressor**: `regressor(robot, q, dq, ddq)` vs a Python loop over
+   `pin.computeJointTorqueRegressor` on the same samples (states converted before timing),
+   Puma560 and Go2, S = 1, 100, 10 000; tracemalloc peak of our call.
+2. **drng_vs_numerical**: `drng(robot)` vs `numerical_nullspace(robot, samples=100)` (the
+   paper's numerical method), and `certify(robot)` separately.
+3. **drng_scaling**: `drng` on random RP chains (`branching=0`) and trees (`branching=0.5`)
+   of N = 10 ... 10 000 bodies (build time excluded).
+4. **loops**: `drng` on the two PKMs vs the paper's numerical validation (5 000 actuated
+   samples in the model's box, exact loop closure, `cond(J_p) < 30` filter, stacked regressor,
+   SVD).
+5. **files**: every URDF of `example-robot-data` (the test dependency; free flyer for mobile
+   and legged robots): certified? DRNG alone complete? And `talos_full_v2` load / DRNG / certify.
+
+## Machine
+{m['platform']}, {m.get('cpu_model', '?')}, **2 cores**, Python {m['python']}, numpy {m['numpy']},
+scipy {m['scipy']}, Pinocchio {m.get('pinocchio')}, BLAS threads {m['blas_threads']}, commit {m.get('git_commit')}.
+Shared and noisy: single figures moved by 10-100 % between runs; read medians as typical.
+
+## Results (full run, `--json`, {g('total_seconds', '{:.0f}')} s)
+
+### 1. TP regressor vs Pinocchio
+| robot | S | ours | Pinocchio loop | ratio pin/ours | our peak memory |
+|---|---:|---:|---:|---:|---:|
+{rows_reg}
+### 2. DRNG vs the numerical method (100 samples)
+| robot | DRNG | numerical | speedup | certify | paper (MATLAB) |
+|---|---:|---:|---:|---:|---|
+| Puma560 | {g('drng_puma560_ms')} ms | {g('numerical_puma560_ms')} ms | {g('drng_speedup_puma560')}x | {g('certify_puma560_ms')} ms | 0.67 ms vs 74 ms |
+| Go2 | {g('drng_go2_ms')} ms | {g('numerical_go2_ms')} ms | {g('drng_speedup_go2')}x | {g('certify_go2_ms')} ms | 1.52 ms vs 144 ms |
+
+### 3. DRNG scaling
+| N | chain | per body | tree | per body |
+|---:|---:|---:|---:|---:|
+{rows_scal}
+`drng_chain_linearity` (us per body at N = 10 000 / at N = 100) = {g('drng_chain_linearity', '{:.2f}')}: a
+fixed ~0.8 ms per call is spread over more bodies; the cost per body is flat from 1 000 on.
+
+### 4. Closed loops: DRNG vs the 5 000-sample numerical validation
+| PKM | DRNG | validation | kept samples | nullity | singular-value gap | validation / DRNG | paper |
+|---|---:|---:|---:|---:|---:|---:|---|
+| 2RRU-1RRS | {g('drng_pkm_2rru_1rrs_ms')} ms | {g('validation_pkm_2rru_1rrs_s')} s | {g('validation_pkm_2rru_1rrs_kept', '{}')} | {g('validation_pkm_2rru_1rrs_nullity', '{}')} | {g('validation_pkm_2rru_1rrs_sv_gap', '{:.2g}')} | {g('validation_vs_drng_pkm_2rru_1rrs', '{:.0f}')}x | 1.81 ms vs 46 s (831 kept) |
+| 2PRS-1PSR | {g('drng_pkm_2prs_1psr_ms')} ms | {g('validation_pkm_2prs_1psr_s')} s | {g('validation_pkm_2prs_1psr_kept', '{}')} | {g('validation_pkm_2prs_1psr_nullity', '{}')} | {g('validation_pkm_2prs_1psr_sv_gap', '{:.2g}')} | {g('validation_vs_drng_pkm_2prs_1psr', '{:.0f}')}x | 2.26 ms vs 42 s |
+
+The 2RRU-1RRS keeps ~11 % of its box (the paper kept 17 %): most samples are outside the
+workspace of the reference assembly mode or too close to a singularity.
+
+### 5. Real files (example-robot-data)
+{g('files_analysed', '{}')} URDFs analysed, {g('files_certified', '{}')} certified; **DRNG alone was complete on
+{g('files_drng_complete', '{}')} of {g('files_analysed', '{}')}**. Where it was not, every missing direction comes from
+`<mimic>` couplings (grippers and hands moving in lockstep), completed numerically:
+{d.get('files_drng_incomplete') or 'none'}.
+
+`talos_full_v2` ({g('talos_full_v2_bodies', '{}')} bodies after merging fixed links, free flyer, 12 mimic couplings):
+loading {g('talos_full_v2_load_ms')} ms, **DRNG {g('talos_full_v2_drng_ms')} ms**, certification {g('talos_full_v2_certify_ms', '{:.0f}')} ms.
+
+## Targets
+| target | measured | status |
+|---|---|---|
+| regressor ratio >= 1 at S = 10 000, Puma560 | {g('regressor_vs_pinocchio_puma560_S10000', '{:.2f}')} | **missed** |
+| regressor ratio >= 1 at S = 10 000, Go2 | {g('regressor_vs_pinocchio_go2_S10000', '{:.2f}')} | **missed** |
+| DRNG >= 100x faster than the numerical method, Puma560 | {g('drng_speedup_puma560', '{:.1f}')}x | **missed** |
+| DRNG linear in N, <= 20 us per body at N = 10 000 | {g('drng_chain_N10000_us_per_body', '{:.1f}')} us (chain), {g('drng_tree_N10000_us_per_body', '{:.1f}')} us (tree) | met |
+| PKM validation <= 2 s | {g('validation_pkm_2rru_1rrs_s', '{:.2f}')} s, {g('validation_pkm_2prs_1psr_s', '{:.2f}')} s | met |
+| DRNG >= 1000x faster than the validation | {g('validation_vs_drng_pkm_2rru_1rrs', '{:.0f}')}x, {g('validation_vs_drng_pkm_2prs_1psr', '{:.0f}')}x | noisy: 760x-1370x seen across runs |
+| DRNG on talos_full_v2 well under 10 ms | {g('talos_full_v2_drng_ms')} ms | met |
+
+### What limits the missed targets
+* **Regressor vs Pinocchio.** Pinocchio's C++ recursion costs 3.4 us (Puma560) and 7 us (Go2)
+  per sample; ours is ~14 us and ~35 us per sample at S = 10 000, all numpy. After replacing
+  `np.cross` by component products, building the ten bar lines from the 16 products
+  `e_m x a_n`, and computing each coordinate's row only over the bodies it moves (the floating
+  base's rows are copies of the bar lines), the time splits roughly into the kinematics
+  recursion (~40 %: per-body 4x4 products over all samples), the bar lines (~25 %) and the row
+  contraction (~25 %): memory-bound array passes that Pinocchio does in registers. Matching it
+  needs compiled code (numba or C), which the core avoids for now. At S = 1 it is interpreter
+  overhead (~2.5 ms vs 3.4 us).
+* **DRNG vs the numerical method on Puma560.** Our numerical baseline is ~15x faster than the
+  paper's (4-6 ms vs 74 ms: a vectorised regressor and an economy SVD), and DRNG's ~0.7 ms is
+  the overhead of ~250 small numpy calls (one batch per joint type and principle); against the
+  paper's 74 ms it would be ~100x. A plain-Python path for small robots might reach 0.1-0.2 ms,
+  still short of 100x.
+"""
+    out = Path(__file__).resolve().parent / "README.md"
+    out.write_text(text)
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
 import warnings
 from pathlib import Path
 
@@ -18,9 +20,27 @@ from baseparams.io.urdf import URDFWarning, load_urdf, write_urdf
 from baseparams.nullspace.certify import certify
 from baseparams.numerics import stacked_regressor
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "models"
-if not SHARED.is_dir():  # CI clones main beside ../shared; a checkout elsewhere may not have it
-    SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "models"
+def _shared_models() -> Path:
+    """``../shared/models`` beside the checkout; for a clone made elsewhere, ``$BASEPARAMS_SHARED``
+    or the folder beside the clone's origin (``git clone /work/main /tmp/fresh`` finds
+    ``/work/shared``)."""
+    repo = Path(__file__).resolve().parents[1]
+    candidates = [Path(os.environ["BASEPARAMS_SHARED"])] if os.environ.get("BASEPARAMS_SHARED") else []
+    candidates.append(repo.parent / "shared")
+    try:
+        origin = subprocess.run(["git", "-C", str(repo), "remote", "get-url", "origin"],
+                                capture_output=True, text=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        origin = ""
+    if origin and Path(origin).is_dir():
+        candidates.append(Path(origin).resolve().parent / "shared")
+    for c in candidates:
+        if (c / "models").is_dir():
+            return c / "models"
+    return candidates[0] / "models"
+
+
+SHARED = _shared_models()
 
 SHARED_FILES = [
     # a parallelogram on its parallelogram branch, gravity along the axes: one base parameter

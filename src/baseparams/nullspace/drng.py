@@ -35,16 +35,23 @@ from ..model.inertia import hat as hat10
 from ..model.robot import Robot
 from ..pga.core import cross3
 
-PRINCIPLES = ("shared points", "fixed points", "planar rotations", "numerical")
+PAPER = ("shared points", "fixed points", "planar rotations")
+#: provenance of a column: the paper's principles, the extended rules (:mod:`.rules`), numerics
+PRINCIPLES = PAPER + ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "numerical")
+
+
+FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp")
 
 
 @dataclass(frozen=True)
 class Columns:
     """A set of nullspace columns in compact form (``k`` columns).
 
-    ``h (k, 10)``: the child block; ``child (k,)`` body; ``parent (k,)`` body whose block
-    gets ``-h`` (``-1``: none); ``principle (k,)`` index into :data:`PRINCIPLES`;
-    ``joint (k,)`` the joint (= child body) the column comes from; ``label (k,)`` which points.
+    ``h (k, 10)``: the block on body ``child (k,)`` (the column's highest body); ``parent (k,)``
+    the other body (``-1``: none) whose block is ``hp (k, 10)`` (default ``-h``: the principles'
+    "``+h`` on the child, ``-h`` on the parent"); ``principle (k,)`` index into
+    :data:`PRINCIPLES`; ``joint (k,)`` the joint the column comes from (``n + l`` for loop joint
+    ``l``; a body for the extended rules); ``label (k,)`` which points or vectors.
     """
 
     h: np.ndarray
@@ -53,15 +60,26 @@ class Columns:
     principle: np.ndarray
     joint: np.ndarray
     label: np.ndarray
+    hp: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.hp is None:
+            object.__setattr__(self, "hp", -np.asarray(self.h))
+
+    @staticmethod
+    def empty() -> Columns:
+        z = np.zeros(0, dtype=int)
+        return Columns(np.zeros((0, 10)), z, z, z, z, np.zeros(0, dtype=object))
 
     @staticmethod
     def concat(parts: list[Columns]) -> Columns:
         parts = [p for p in parts if len(p.child)]
         if not parts:
-            z = np.zeros(0, dtype=int)
-            return Columns(np.zeros((0, 10)), z, z, z, z, np.zeros(0, dtype=object))
-        return Columns(*(np.concatenate([getattr(p, f) for p in parts]) for f in
-                         ("h", "child", "parent", "principle", "joint", "label")))
+            return Columns.empty()
+        return Columns(*(np.concatenate([getattr(p, f) for p in parts]) for f in FIELDS))
+
+    def subset(self, keep: np.ndarray) -> Columns:
+        return Columns(*(getattr(self, f)[keep] for f in FIELDS))
 
     def __len__(self) -> int:
         return len(self.child)
@@ -247,10 +265,10 @@ def to_sparse(cols: Columns, n: int) -> sp.csc_matrix:
     rows_c = (10 * cols.child[:, None] + np.arange(10)).ravel()
     cidx = np.repeat(np.arange(k), 10)
     vals_c = cols.h.ravel()
-    hp = cols.parent >= 0
-    rows_p = (10 * cols.parent[hp][:, None] + np.arange(10)).ravel()
-    cidx_p = np.repeat(np.flatnonzero(hp), 10)
-    vals_p = -cols.h[hp].ravel()
+    has_p = cols.parent >= 0
+    rows_p = (10 * cols.parent[has_p][:, None] + np.arange(10)).ravel()
+    cidx_p = np.repeat(np.flatnonzero(has_p), 10)
+    vals_p = cols.hp[has_p].ravel()
     b = sp.coo_matrix((np.r_[vals_c, vals_p], (np.r_[rows_c, rows_p], np.r_[cidx, cidx_p])), shape=(10 * n, k))
     return b.tocsc()
 
@@ -294,7 +312,7 @@ def _elimination_rank(cols: Columns, n: int, rtol: float) -> int:
     for k in range(len(cols)):
         v = {int(cols.child[k]): cols.h[k]}
         if cols.parent[k] >= 0:
-            v[int(cols.parent[k])] = v.get(int(cols.parent[k]), 0) - cols.h[k]
+            v[int(cols.parent[k])] = v.get(int(cols.parent[k]), 0) + cols.hp[k]
         pending.setdefault(max(v), []).append(v)
     total = 0
     scale = max(float(np.abs(cols.h).max()), 1e-300)
@@ -328,6 +346,7 @@ class DRNGResult:
     columns: Columns
     rank: int
     seconds: float
+    extended: bool = True
 
     @property
     def n_columns(self) -> int:
@@ -350,16 +369,21 @@ class DRNGResult:
         return u[:, : int(np.sum(s > rtol * s[0]))]
 
     def by_principle(self) -> dict[str, int]:
-        """Rank contributed by each principle, taken in order (1, then 2, then 3)."""
+        """Rank contributed by each source, taken in order: the paper's principles 1, 2, 3, then
+        the extended rules R-A, R-B, R-L1 (those run)."""
         out, prev = {}, 0
-        for k, name in enumerate(PRINCIPLES[:3]):
+        names = PRINCIPLES[:-1] if self.extended else PAPER
+        for k, name in enumerate(names):
             keep = self.columns.principle <= k
-            sub = Columns(*(getattr(self.columns, f)[keep] for f in
-                            ("h", "child", "parent", "principle", "joint", "label")))
-            r = block_rank(sub, self.robot.n)
+            r = prev if not np.any(self.columns.principle == k) else block_rank(self.columns.subset(keep), self.robot.n)
             out[name] = r - prev
             prev = r
         return out
+
+    @property
+    def paper_rank(self) -> int:
+        """Rank of the paper's principles alone."""
+        return sum(v for k, v in self.by_principle().items() if k in PAPER)
 
     def provenance(self, k: int) -> str:
         """Human-readable origin of column ``k``."""
@@ -373,12 +397,21 @@ class DRNGResult:
             joint = f"loop joint {lj.name!r} ({lj.type})"
         else:
             joint = f"joint {self.robot.joint_names[j]!r} ({self.robot.jtype[j]})"
+        if c.principle[k] >= len(PAPER):
+            return f"{PRINCIPLES[c.principle[k]]}: bodies {body}{par}, {c.label[k]}"
         return f"{PRINCIPLES[c.principle[k]]}: {joint}, bodies {body}{par}, points {c.label[k]}"
 
 
-def drng(robot: Robot, tol: float = 1e-9) -> DRNGResult:
-    """Run DRNG (corrected) on a tree robot: columns, provenance and exact rank."""
+def drng(robot: Robot, tol: float = 1e-9, extended: bool = True) -> DRNGResult:
+    """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
+
+    ``extended``: add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1);
+    ``False`` gives the paper's three principles alone."""
     t0 = time.perf_counter()
     cols = drng_columns(robot, tol)
+    if extended:
+        from .rules import rule_columns
+
+        cols = Columns.concat([cols, rule_columns(robot, tol)])
     rank = block_rank(cols, robot.n)
-    return DRNGResult(robot, cols, rank, time.perf_counter() - t0)
+    return DRNGResult(robot, cols, rank, time.perf_counter() - t0, extended)

@@ -1,0 +1,257 @@
+"""Extended principles: the rules that close the paper's gaps (``../shared/EXTENDED_PRINCIPLES.md``).
+
+One mechanism: a change ``dN`` of pseudo-inertias is in the regressor nullspace iff its kinetic
+term ``T = 1/2 tr(dg dN dg^T)`` vanishes on every motion and its potential
+``V = -gbar^T g(q) dN e4`` is constant. With the exact motion spans of
+:mod:`.subspaces` both conditions are linear at q = 0:
+
+- **R-A fixed vectors** (every body): ``sym(f, v)`` for ``f`` fixed and any ``v``;
+- **R-B sliding points**: ``sym(a, b)`` for ``a`` sliding along ``d`` and ``b`` level in ``d``;
+- **R-L1 parallelograms** (loops): a 4-cycle of parallel R joints whose joint points form a
+  parallelogram at q = 0: opposite links keep their relative orientation on that assembly mode;
+
+each followed by the gravity filter: keep the combinations whose ``dN e4`` is level in gravity
+(the potential never changes). Columns are in the paper's convention (spatial pseudo-inertia at
+q = 0, ``hat`` order) and carry their provenance; they are redundant with each other and with the
+paper's principles, so :func:`..drng.block_rank` decides the rank.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.inertia import hat as hat10
+from ..model.inertia import unhat
+from ..model.robot import Robot
+from .drng import Columns, _world_axes
+from .subspaces import MotionSpans, _rowspace, motion_spans, nullspace
+
+RULES = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms")
+RA, RB, RL1 = 3, 4, 5  # principle indices (after the paper's three)
+
+
+def _syms(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """All ``sym(a_k, b_l) = a b^T + b a^T`` ``(ka * kb, 4, 4)``."""
+    ab = np.einsum("ki,lj->klij", a, b).reshape(-1, 4, 4)
+    return ab + np.swapaxes(ab, -1, -2)
+
+
+def _gravity_filter(ms: MotionSpans, i: int, syms: np.ndarray) -> np.ndarray:
+    """The combinations of ``syms (m, 4, 4)`` whose potential is constant ``(r, 4, 4)``."""
+    g = ms.robot.gravity
+    if len(syms) == 0 or np.linalg.norm(g) <= ms.tol:
+        return syms
+    c = ms.level_constraint(i, g / np.linalg.norm(g))  # (k, 4): g^T X
+    coef = nullspace(c @ syms[:, :, 3].T, ms.tol)  # (r, m)
+    return np.einsum("rm,mab->rab", coef, syms)
+
+
+def _independent(syms: np.ndarray, tol: float) -> np.ndarray:
+    """An orthonormal basis ``(r, 10)`` of the parameter vectors ``hat(syms)``."""
+    if len(syms) == 0:
+        return np.zeros((0, 10))
+    return _rowspace(hat10(syms), tol)
+
+
+def _describe(v: np.ndarray) -> str:
+    v = np.where(np.abs(v) < 1e-12, 0.0, v)
+    if abs(v[3]) > 1e-9:
+        p = v[:3] / v[3]
+        return "point (" + ", ".join(f"{x:.4g}" for x in p) + ")"
+    d = v[:3] / np.linalg.norm(v[:3])
+    return "direction (" + ", ".join(f"{x:.4g}" for x in d) + ")"
+
+
+def _single(h: np.ndarray, body: int, rule: int, label: str) -> Columns:
+    m = len(h)
+    return Columns(h, np.full(m, body), np.full(m, -1), np.full(m, rule), np.full(m, body),
+                   np.full(m, label, dtype=object))
+
+
+def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
+    """R-A: ``sym(f, v)`` on every body ``i`` with ``f`` fixed (``∩ ker S_j`` on its path), gravity
+    filtered. Closes gravity zero (Puma560's axis-1/axis-2 intersection: +2), translation stages
+    (every direction fixed) and a U joint at the base with its first axis along gravity."""
+    ms = motion_spans(robot) if ms is None else ms
+    e4 = np.eye(4)
+    parts = []
+    for i in range(robot.n):
+        if ms.span[i] is None:
+            continue
+        f = ms.fixed(i)
+        if len(f) == 0:
+            continue
+        h = _independent(_gravity_filter(ms, i, _syms(f, e4)), ms.tol)
+        if len(h):
+            label = "sym(f, v), f fixed: " + "; ".join(_describe(v) for v in _readable(f))
+            parts.append(_single(h, i, RA, label))
+    return Columns.concat(parts)
+
+
+def _readable(basis: np.ndarray) -> np.ndarray:
+    """A basis of the same span with points first (one point, then directions), for labels."""
+    if len(basis) == 0:
+        return basis
+    w = basis[:, 3]
+    if np.abs(w).max() < 1e-9:
+        return basis
+    k = int(np.argmax(np.abs(w)))
+    p = basis[k] / basis[k, 3]
+    rest = basis - np.outer(basis[:, 3], p)
+    dirs = _rowspace(rest, 1e-9)
+    return np.concatenate([p[None], dirs]) if len(dirs) else p[None]
+
+
+def _unique(dirs: list[np.ndarray], tol: float = 1e-9) -> list[np.ndarray]:
+    out: list[np.ndarray] = []
+    for d in dirs:
+        if all(np.linalg.norm(np.cross(d, e)) > tol for e in out):
+            out.append(d)
+    return out
+
+
+def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
+    """R-B: ``sym(a, b)`` with ``a`` sliding along ``d`` and ``b`` level in ``d`` (velocity of ``a``
+    always along ``d``, of ``b`` always ``⟂ d``), gravity filtered. Candidate lines ``d``: the
+    joint directions on the body's path (kept while they still slide something), gravity, x, y, z.
+    Closes a fixed axis beyond the base (a lift followed by coaxial R joints along gravity: +2)."""
+    ms = motion_spans(robot) if ms is None else ms
+    g = robot.gravity
+    base = [np.eye(3)[k] for k in range(3)]
+    if np.linalg.norm(g) > ms.tol:
+        base.append(g / np.linalg.norm(g))
+    s = robot.screws
+    own = np.where(np.linalg.norm(s[:, :3], axis=1, keepdims=True) > 1e-12, s[:, :3], s[:, 3:])
+    qi, nd = robot.q_index, robot.ndofs
+    live: list[list[np.ndarray]] = []
+    parts = []
+    for i in range(robot.n):
+        p = robot.parent[i]
+        if ms.span[i] is None:
+            live.append([])
+            continue
+        mine = [own[j] / np.linalg.norm(own[j]) for j in range(qi[i], qi[i] + nd[i]) if np.linalg.norm(own[j]) > 1e-12]
+        cands = _unique(base + (live[p] if p >= 0 else []) + mine)
+        nfix = len(ms.fixed(i))
+        keep = []
+        for d in cands:
+            a = ms.sliding(i, d)
+            if len(a) <= nfix:
+                continue
+            keep.append(d)
+            b = ms.level(i, d)
+            h = _independent(_gravity_filter(ms, i, _syms(a, b)), ms.tol)
+            if len(h):
+                label = (f"sym(a, b), a sliding along ({', '.join(f'{x:.4g}' for x in d)}): "
+                         + "; ".join(_describe(v) for v in _readable(a)))
+                parts.append(_single(h, i, RB, label))
+        live.append(keep)
+    return Columns.concat(parts)
+
+
+# ------------------------------------------------------------------------------ loops: R-L1
+def _path_to(robot: Robot, b: int, stop: int) -> list[int]:
+    out = []
+    while b != stop:
+        out.append(b)
+        b = int(robot.parent[b])
+    return out
+
+
+def _ancestors(robot: Robot, b: int) -> list[int]:
+    out = [b]
+    while b >= 0:
+        b = int(robot.parent[b])
+        out.append(b)
+    return out
+
+
+def parallelograms(robot: Robot, tol: float = 1e-7) -> list[dict]:
+    """Loop 4-cycles of parallel R joints whose joint points form a parallelogram at q = 0.
+
+    Returns, per parallelogram, ``links [L0, L1, L2, L3]`` (``L0`` the cycle's root, ``-1`` for
+    the fixed base), ``points (4, 3)`` with ``points[j]`` the joint between ``L_j`` and
+    ``L_{j+1}``, the common ``axis (3,)`` and ``loop`` (the loop joint's name). The assembly mode
+    is the parallelogram one (``P1 - P0 = P2 - P3``: crank and rocker stay parallel); a flattened
+    (collinear) reference, where both modes meet, is not accepted."""
+    out = []
+    axw = _world_axes(robot)
+    org = robot.M0[:, :3, 3]
+    for lj in robot.loops:
+        if lj.type != "R":
+            continue
+        anc_c, anc_p = _ancestors(robot, lj.child), _ancestors(robot, lj.parent)
+        lca = next(a for a in anc_c if a in anc_p)
+        down = _path_to(robot, lj.child, lca)[::-1]  # from below the root to the successor
+        up = _path_to(robot, lj.parent, lca)  # from the predecessor up to below the root
+        if len(down) + len(up) != 3 or any(robot.jtype[b] != "R" for b in down + up):
+            continue
+        links = [lca] + down + up
+        # joint between L_j and L_{j+1}: tree joints going down, the loop joint, tree joints going up
+        joints = [(org[b], axw[b]) for b in down]
+        joints.append((lj.M[:3, 3], lj.M[:3, :3] @ lj.axes[0]))
+        joints += [(org[b], axw[b]) for b in up]
+        axis = joints[0][1] / np.linalg.norm(joints[0][1])
+        if any(np.linalg.norm(np.cross(axis, a)) > tol for _, a in joints):
+            continue
+        pts = np.array([p - axis * (axis @ p) for p, _ in joints])  # projected to the plane ⟂ axis
+        side1, side2 = pts[1] - pts[0], pts[2] - pts[1]
+        scale = max(np.linalg.norm(side1), np.linalg.norm(side2), 1e-300)
+        if np.linalg.norm(side1 - (pts[2] - pts[3])) > tol * scale:
+            continue
+        if min(np.linalg.norm(side1), np.linalg.norm(side2)) < tol * scale or \
+                np.linalg.norm(np.cross(side1, side2)) < 1e-6 * scale**2:
+            continue  # degenerate or flattened: the assembly mode is not decided at q = 0
+        out.append({"links": links, "points": np.array([p for p, _ in joints]), "axis": axis, "loop": lj.name})
+    return out
+
+
+def _pair(h_a: np.ndarray, a: int, h_b: np.ndarray, b: int, label: str) -> Columns:
+    """Columns ``+h_a`` on body ``a``, ``+h_b`` on body ``b`` (``b`` may be ``-1``: dropped)."""
+    m = len(h_a)
+    if b < 0 or a > b:
+        hi, lo, hh, hl = a, b, h_a, h_b
+    else:
+        hi, lo, hh, hl = b, a, h_b, h_a
+    return Columns(hh, np.full(m, hi), np.full(m, lo), np.full(m, RL1), np.full(m, hi),
+                   np.full(m, label, dtype=object), hl if lo >= 0 else np.zeros_like(hh))
+
+
+def parallelogram_columns(robot: Robot) -> Columns:
+    """R-L1: for each parallelogram (:func:`parallelograms`), links ``L0, L2`` (and ``L1, L3``)
+    keep their relative orientation. With the fixed base as ``L0``: ``sym(f, v)`` on the coupler
+    ``L2`` for every direction ``f`` (it only translates), and every parameter of the rocker
+    ``L3`` transfers to the crank ``L1`` (``+dN`` on ``L3``, ``-T^-1 dN T^-T`` on ``L1``, ``T`` the
+    translation by ``P3 - P0``: ``g_3 = T g_1 T^-1``). With a moving ``L0``: the direction
+    transfers ``sym(f_a, f_b)`` between opposite links."""
+    e = np.eye(4)
+    dirs = _syms(e[:3], e[:3])
+    dir_basis = _rowspace(hat10(dirs), 1e-12)  # the 6 direction-direction parameters
+    parts = []
+    for par in parallelograms(robot):
+        l0, l1, l2, l3 = par["links"]
+        p = par["points"]
+        name = par["loop"]
+        if l0 < 0:
+            h = _independent(_syms(e[:3], e), 1e-12)  # sym(direction, anything): 9
+            label = f"parallelogram (loop {name!r}): the coupler only translates, sym(f, v) for every direction f"
+            parts.append(_single(h, l2, RL1, label))
+            t = np.eye(4)
+            t[:3, 3] = p[3] - p[0]
+            ti = np.linalg.inv(t)
+            dn = unhat(np.eye(10))
+            moved = hat10(ti @ dn @ ti.T)
+            label = f"parallelogram (loop {name!r}): rocker parameters transfer to the crank"
+            parts.append(_pair(hat10(dn), l3, -moved, l1, label))
+        else:
+            for a, b in ((l2, l0), (l3, l1)):
+                label = f"parallelogram (loop {name!r}): direction transfer between opposite links"
+                parts.append(_pair(dir_basis, a, -dir_basis, b, label))
+    return Columns.concat(parts)
+
+
+def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+    """All extended-rule columns (R-A, R-B, R-L1) for ``robot``."""
+    ms = motion_spans(robot, tol)
+    return Columns.concat([fixed_vector_columns(robot, ms), sliding_columns(robot, ms),
+                           parallelogram_columns(robot)])

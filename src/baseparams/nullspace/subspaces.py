@@ -1,0 +1,120 @@
+"""Exact q0 subspaces of every body's motion, from the joint screws, base-first (no sampling).
+
+Body ``i`` moves by the 4x4 displacement ``g_i(q) = exp(S_1 q_1) ... exp(S_k q_k)`` (product of
+exponentials of the world joint screws at q = 0 on its path, ``../shared/EXTENDED_PRINCIPLES.md``).
+Everything here derives from the *motion span*
+
+    M_i = span{ (g_i(q) - I)[:3, :] : q }  (a subspace of the 3x4 matrices, dimension <= 12),
+
+built exactly by the Krylov recursion ``M <- span{M, M S, M S^2} + span{S, S^2}`` over the
+path's single-dof screws (``S^3 = -S`` for a unit rotation, ``S^2 = 0`` for a translation, so
+three powers close it; multi-dof joints are their screws in sequence). A homogeneous 4-vector
+``v`` of the body (point: ``v4 = 1``, direction: ``v4 = 0``, spatial assignment = world frame at
+q = 0) then has
+
+- *fixed* ``v``: ``X v = 0`` for all ``X`` in ``M_i`` (never moves);
+- *level* in ``e``: ``e . X v = 0`` (its ``e``-coordinate never changes: velocity always ``⟂ e``;
+  with ``e = gravity`` its potential never changes);
+- *sliding* along ``d``: ``X v ∥ d`` (velocity always along ``d``).
+
+The displacement span of a covector ``u = (e, 0)`` of the guide is ``{e^T X}``; its level space is
+the right nullspace. Cost: O(1) per body, O(N) in all; a body whose span is all 12 dimensions
+(most bodies two generic joints from the base) saturates its whole subtree, which is skipped.
+For loop robots the spans are those of the open tree: a superset of the closed motion, so every
+vector found fixed, level or sliding is so on the closed robot too (safe, maybe incomplete).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.robot import Robot
+from ..pga.core import hat
+
+SATURATED = 12
+
+
+def _rowspace(a: np.ndarray, tol: float) -> np.ndarray:
+    """Orthonormal basis ``(r, m)`` of the row space of ``a (k, m)``."""
+    if a.shape[0] == 0:
+        return a
+    _, s, vt = np.linalg.svd(a, full_matrices=False)
+    return vt[: int(np.sum(s > tol))]
+
+
+def nullspace(a: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """Orthonormal basis ``(r, m)`` (as rows) of the right nullspace of ``a (k, m)``."""
+    m = a.shape[1]
+    if a.shape[0] == 0:
+        return np.eye(m)
+    _, s, vt = np.linalg.svd(a, full_matrices=True)
+    return vt[int(np.sum(s > tol)):]
+
+
+@dataclass(frozen=True)
+class MotionSpans:
+    """``span[i] (k_i, 3, 4)``: orthonormal basis of body ``i``'s motion span ``M_i`` (Frobenius
+    inner product), world frame at q = 0; ``None`` when saturated (``k_i = 12``: nothing of the
+    body is fixed, level or sliding)."""
+
+    robot: Robot
+    span: tuple[np.ndarray | None, ...]
+    tol: float
+
+    def dim(self, i: int) -> int:
+        s = self.span[i]
+        return SATURATED if s is None else s.shape[0]
+
+    def fixed(self, i: int) -> np.ndarray:
+        """Fixed vectors of body ``i`` ``(f, 4)``: ``∩_j ker S_j`` over its path."""
+        s = self.span[i]
+        if s is None:
+            return np.zeros((0, 4))
+        return nullspace(s.reshape(-1, 4), self.tol)
+
+    def level(self, i: int, e: np.ndarray) -> np.ndarray:
+        """Level space ``H_i((e, 0))`` ``(h, 4)``: vectors whose ``e``-coordinate never changes."""
+        s = self.span[i]
+        if s is None:
+            return np.zeros((0, 4))
+        return nullspace(np.einsum("a,kab->kb", np.asarray(e, float), s), self.tol)
+
+    def level_constraint(self, i: int, e: np.ndarray) -> np.ndarray:
+        """Rows ``(k, 4)`` whose right nullspace is :meth:`level` (``e^T X`` for ``X`` in ``M_i``)."""
+        s = self.span[i]
+        if s is None:
+            return np.eye(4)
+        return np.einsum("a,kab->kb", np.asarray(e, float), s)
+
+    def sliding(self, i: int, d: np.ndarray) -> np.ndarray:
+        """Sliding space ``A_i(d)`` ``(a, 4)``: vectors whose velocity is always along unit ``d``."""
+        s = self.span[i]
+        if s is None:
+            return np.zeros((0, 4))
+        p = np.eye(3) - np.outer(d, d)
+        return nullspace(np.einsum("ab,kbc->kac", p, s).reshape(-1, 4), self.tol)
+
+
+def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
+    """Every body's motion span, base-first (parents come before children in ``robot``)."""
+    screws = hat(robot.screws)  # (dof, 4, 4) world twists at q = 0
+    qi, nd = robot.q_index, robot.ndofs
+    spans: list[np.ndarray | None] = []
+    par = robot.parent.tolist()
+    for i in range(robot.n):
+        p = par[i]
+        if p >= 0 and spans[p] is None:
+            spans.append(None)
+            continue
+        cur = np.zeros((0, 3, 4)) if p < 0 else spans[p]
+        for j in range(qi[i], qi[i] + nd[i]):
+            s = screws[j]
+            s2 = s @ s
+            stack = np.concatenate([cur, cur @ s, cur @ s2, s[None, :3], s2[None, :3]])
+            cur = _rowspace(stack.reshape(len(stack), 12), tol).reshape(-1, 3, 4)
+            if len(cur) == SATURATED:
+                break
+        spans.append(None if len(cur) == SATURATED else cur)
+    return MotionSpans(robot, tuple(spans), tol)

@@ -41,10 +41,20 @@ def test_analyze_json_schema(capsys):
 
 
 def test_analyze_zero_gravity_completes(capsys):
-    code, out, _ = run(["analyze", "puma560", "--gravity", "0", "0", "0", "--json"], capsys)
+    """Gravity zero: the paper's principles miss 2 directions (numerical completion) and R-A
+    (the intersection of axes 1 and 2 never moves) finds them geometrically."""
+    code, out, _ = run(["analyze", "puma560", "--gravity", "0", "0", "0", "--json", "--paper-only"], capsys)
     d = json.loads(out)
     assert d["nullity"] == 26 and d["completed"] == 2 and d["status"] == "completed"
-    assert d["gravity"] == [0.0, 0.0, 0.0]
+    assert d["gravity"] == [0.0, 0.0, 0.0] and d["drng"]["complete"] is False
+    code, out, _ = run(["analyze", "puma560", "--gravity", "0", "0", "0", "--json"], capsys)
+    d = json.loads(out)
+    assert d["nullity"] == 26 and d["completed"] == 0 and d["status"] == "certified"
+    assert d["drng"]["complete"] is True and d["drng"]["extended"] is True
+    assert d["drng"]["by_rule"] == {"shared points": 18, "fixed points": 4, "planar rotations": 2,
+                                    "R-A fixed vectors": 2, "R-B sliding points": 0,
+                                    "R-L1 parallelograms": 0, "numerical": 0}
+    assert d["drng"]["by_principle"] == {"shared points": 18, "fixed points": 4, "planar rotations": 2}
 
 
 def test_analyze_human_report_and_output_file(tmp_path, capsys):

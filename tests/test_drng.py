@@ -14,18 +14,26 @@ GRAVITIES = {"z": (0, 0, -9.81), "x": (-9.81, 0, 0), "zero": (0, 0, 0)}
 
 @pytest.mark.parametrize("gravity, drng_rank, nullity", [("z", 24, 24), ("x", 22, 22), ("zero", 24, 26)])
 def test_puma560_acceptance(gravity, drng_rank, nullity):
+    """The paper's principles alone (``extended=False``) and with the extended rules, which
+    complete the zero-gravity case geometrically."""
     robot = puma560(gravity=GRAVITIES[gravity])
-    c = certify(robot, samples=100, seed=0)
+    c = certify(robot, samples=100, seed=0, result=drng(robot, extended=False))
     assert c.drng.rank == drng_rank
     assert c.nullity == nullity and c.certified
     assert c.completed == nullity - drng_rank
     assert c.status == ("certified" if nullity == drng_rank else "completed")
     assert c.residual < 1e-12 and c.numerical.gap > 1e8
+    ext = certify(robot, samples=100, seed=0)
+    assert ext.status == "certified" and ext.nullity == nullity and ext.completed == 0
+    assert ext.max_column_residual < 1e-12
 
 
 def test_puma560_principles_and_provenance():
-    res = drng(puma560())
+    res = drng(puma560(), extended=False)
     assert res.by_principle() == {"shared points": 18, "fixed points": 4, "planar rotations": 2}
+    ext = drng(puma560())
+    assert ext.by_principle() == {"shared points": 18, "fixed points": 4, "planar rotations": 2,
+                                  "R-A fixed vectors": 0, "R-B sliding points": 0, "R-L1 parallelograms": 0}
     text = res.provenance(0)
     assert "shared points" in text and "joint1" in text
 

@@ -118,17 +118,21 @@ def test_out_of_workspace_samples_are_discarded_and_counted():
 @pytest.mark.parametrize("make, drng_rank, nullity", [
     (four_bar, 22, 22), (parallelogram, 22, 27), (pkm_2rru_1rrs, 45, 45), (pkm_2prs_1psr, 47, 47)])
 def test_loop_acceptance(make, drng_rank, nullity):
+    """``drng_rank``: the paper's principles alone; with the extended rules (R-L1 for the
+    parallelogram) every loop robot is complete geometrically."""
     robot = make()
-    res = drng(robot)
+    res = drng(robot, extended=False)
     assert res.rank == drng_rank
-    c = certify(robot, samples=5000, seed=0)
+    c = certify(robot, samples=5000, seed=0, result=res)
     assert c.certified and c.nullity == nullity and c.completed == nullity - drng_rank
     assert c.numerical.gap >= 1e6  # a clear gap, as the issue asks
     assert c.max_column_residual < 1e-10
+    ext = certify(robot, samples=5000, seed=0)
+    assert ext.status == "certified" and ext.nullity == nullity and ext.max_column_residual < 1e-10
 
 
 def test_four_bar_loop_columns_depend_on_planar_ones():
-    res = drng(four_bar())
+    res = drng(four_bar(), extended=False)
     assert res.n_columns == 24 and res.rank == 22  # report rank, never the column count
 
 

@@ -10,8 +10,12 @@ floating               true for a floating (F) root
 rows                   measured generalized forces: all | joints | base
 nullity                certified nullspace dimension (DRNG's rank when --no-verify)
 n_base                 number of base parameters = n_params - nullity
-drng                   {columns, rank, seconds, by_principle{shared points, fixed points,
-                       planar rotations}}  (rank, never the column count, is the nullity)
+drng                   {columns, rank, seconds, extended, by_principle{shared points, fixed
+                       points, planar rotations}, by_rule{shared points, fixed points, planar
+                       rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
+                       numerical}, complete}: rank added by each source in that order (the
+                       paper's principles, the extended rules, numerical completion); complete:
+                       the geometric span equals the certified nullspace (null if unverified)
 numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
                        requested, kept, and for loops not_converged, branch_jumps,
                        ill_conditioned, max_loop_residual}} or null
@@ -37,6 +41,7 @@ import numpy as np
 from .base import BaseParameters, base_parameters
 from .model.robot import Robot
 from .nullspace import PRINCIPLES, drng
+from .nullspace.drng import PAPER
 from .nullspace.certify import Certificate, certify
 
 
@@ -53,6 +58,7 @@ class Analysis:
     base: BaseParameters
     base_paper: BaseParameters
     seconds: float
+    extended: bool = True
 
     @property
     def nullity(self) -> int:
@@ -71,7 +77,10 @@ class Analysis:
             "floating": r.floating, "rows": self.rows, "nullity": self.nullity,
             "n_base": 10 * r.n - self.nullity,
             "drng": {"columns": self.drng_columns, "rank": self.drng_rank, "seconds": self.drng_seconds,
-                     "by_principle": self.by_principle},
+                     "extended": self.extended,
+                     "by_principle": {k: v for k, v in self.by_principle.items() if k in PAPER},
+                     "by_rule": {**self.by_principle, "numerical": 0 if c is None else c.completed},
+                     "complete": None if c is None else bool(c.status == "certified")},
             "numerical": num,
             "certified": bool(c is not None and c.certified),
             "status": "unverified" if c is None else c.status,
@@ -86,8 +95,9 @@ class Analysis:
 
 
 def analyze(robot: Robot, samples: int | None = None, seed: int = 0, verify: bool = True, rows: str = "all",
-            convention: str = "khalil", progress: TextIO | None = None) -> Analysis:
-    """DRNG -> (certify, complete) -> regroup. ``progress``: a stream for progress lines."""
+            convention: str = "khalil", progress: TextIO | None = None, extended: bool = True) -> Analysis:
+    """DRNG -> (certify, complete) -> regroup. ``progress``: a stream for progress lines;
+    ``extended``: the extended rules as well as the paper's principles."""
     t0 = time.perf_counter()
 
     def say(msg: str) -> None:
@@ -95,7 +105,7 @@ def analyze(robot: Robot, samples: int | None = None, seed: int = 0, verify: boo
             print(f"[baseparams] {msg}", file=progress, flush=True)
 
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
-    res = drng(robot)
+    res = drng(robot, extended=extended)
     by = res.by_principle()
     cert = None
     if verify:
@@ -108,7 +118,7 @@ def analyze(robot: Robot, samples: int | None = None, seed: int = 0, verify: boo
     base = base_parameters(robot, basis, convention)
     base_paper = base_parameters(robot, basis, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
-                    time.perf_counter() - t0)
+                    time.perf_counter() - t0, extended)
 
 
 def format_report(a: Analysis) -> str:
@@ -119,13 +129,16 @@ def format_report(a: Analysis) -> str:
            f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}",
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
-    for name in PRINCIPLES[:3]:
-        out.append(f"  {name:<18s} {a.by_principle.get(name, 0):4d}")
+    for name in PRINCIPLES[:-1]:
+        if name in a.by_principle:
+            kind = "paper" if name in PAPER else "extended rule"
+            out.append(f"  {name:<22s} {a.by_principle[name]:4d}  ({kind})")
     if c is None:
         out.append("certification: skipped (--no-verify); the nullity above is DRNG's rank, unverified")
     else:
         nm = c.numerical
-        out.append(f"  {'numerical':<18s} {c.completed:4d}  (completed from the numerical nullspace)")
+        out.append(f"  {'numerical':<22s} {c.completed:4d}  (completed from the numerical nullspace)")
+        out.append("  geometric span complete: " + ("yes" if c.status == "certified" else "no"))
         out.append(f"numerical method: {nm.samples} samples, rank {nm.rank}, nullity {nm.nullity}, "
                    f"tolerance {nm.tol:.3g}, singular-value gap {nm.gap:.3g}, {nm.seconds * 1e3:.1f} ms")
         if r.has_loops and c.sampling:

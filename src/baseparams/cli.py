@@ -61,7 +61,7 @@ def cmd_analyze(args) -> int:
 
     robot = _robot(args)
     result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
-                     rows=args.rows, convention=args.convention,
+                     extended=not args.paper_only, rows=args.rows, convention=args.convention,
                      progress=sys.stderr if args.verbose else None)
     text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
     if args.output:
@@ -102,6 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("analyze", help="base parameters of a robot (certified)")
     model_args(s)
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
+    s.add_argument("--paper-only", action="store_true",
+                   help="the paper's three principles only (no extended rules R-A, R-B, R-L1)")
     s.add_argument("--rows", choices=("all", "joints", "base"), default="all",
                    help="measured generalized forces: all (default), joint torques only, or the "
                         "floating base's wrench only")

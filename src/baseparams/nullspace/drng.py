@@ -40,7 +40,7 @@ PAPER = ("shared points", "fixed points", "planar rotations")
 PRINCIPLES = PAPER + ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "numerical")
 
 
-FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp")
+FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp", "extra", "he")
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,8 @@ class Columns:
     the other body (``-1``: none) whose block is ``hp (k, 10)`` (default ``-h``: the principles'
     "``+h`` on the child, ``-h`` on the parent"); ``principle (k,)`` index into
     :data:`PRINCIPLES`; ``joint (k,)`` the joint the column comes from (``n + l`` for loop joint
-    ``l``; a body for the extended rules); ``label (k,)`` which points or vectors.
+    ``l``; a body for the extended rules); ``label (k,)`` which points or vectors; ``extra (k,)``
+    an optional third body (``-1``: none, lower than ``child``) with block ``he (k, 10)``.
     """
 
     h: np.ndarray
@@ -61,10 +62,16 @@ class Columns:
     joint: np.ndarray
     label: np.ndarray
     hp: np.ndarray | None = None
+    extra: np.ndarray | None = None
+    he: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.hp is None:
             object.__setattr__(self, "hp", -np.asarray(self.h))
+        if self.extra is None:
+            object.__setattr__(self, "extra", -np.ones(len(self.child), dtype=int))
+        if self.he is None:
+            object.__setattr__(self, "he", np.zeros_like(np.asarray(self.h)))
 
     @staticmethod
     def empty() -> Columns:
@@ -269,6 +276,11 @@ def to_sparse(cols: Columns, n: int) -> sp.csc_matrix:
     rows_p = (10 * cols.parent[has_p][:, None] + np.arange(10)).ravel()
     cidx_p = np.repeat(np.flatnonzero(has_p), 10)
     vals_p = cols.hp[has_p].ravel()
+    has_e = cols.extra >= 0
+    if has_e.any():
+        rows_p = np.r_[rows_p, (10 * cols.extra[has_e][:, None] + np.arange(10)).ravel()]
+        cidx_p = np.r_[cidx_p, np.repeat(np.flatnonzero(has_e), 10)]
+        vals_p = np.r_[vals_p, cols.he[has_e].ravel()]
     b = sp.coo_matrix((np.r_[vals_c, vals_p], (np.r_[rows_c, rows_p], np.r_[cidx, cidx_p])), shape=(10 * n, k))
     return b.tocsc()
 
@@ -313,6 +325,8 @@ def _elimination_rank(cols: Columns, n: int, rtol: float) -> int:
         v = {int(cols.child[k]): cols.h[k]}
         if cols.parent[k] >= 0:
             v[int(cols.parent[k])] = v.get(int(cols.parent[k]), 0) + cols.hp[k]
+        if cols.extra[k] >= 0:
+            v[int(cols.extra[k])] = v.get(int(cols.extra[k]), 0) + cols.he[k]
         pending.setdefault(max(v), []).append(v)
     total = 0
     scale = max(float(np.abs(cols.h).max()), 1e-300)

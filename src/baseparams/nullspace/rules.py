@@ -23,6 +23,7 @@ import numpy as np
 from ..model.inertia import hat as hat10
 from ..model.inertia import unhat
 from ..model.robot import Robot
+from ..pga.core import hat
 from .drng import Columns, _world_axes
 from .subspaces import MotionSpans, _rowspace, motion_spans, nullspace
 
@@ -244,14 +245,74 @@ def parallelogram_columns(robot: Robot) -> Columns:
             label = f"parallelogram (loop {name!r}): rocker parameters transfer to the crank"
             parts.append(_pair(hat10(dn), l3, -moved, l1, label))
         else:
-            for a, b in ((l2, l0), (l3, l1)):
-                label = f"parallelogram (loop {name!r}): direction transfer between opposite links"
-                parts.append(_pair(dir_basis, a, -dir_basis, b, label))
+            label = f"parallelogram (loop {name!r}): direction transfer between the coupler and the root link"
+            parts.append(_pair(dir_basis, l2, -dir_basis, l0, label))
+            parts.append(_moving_root_transfer(p, par["axis"], l0, l1, l3, name))
+    return Columns.concat(parts)
+
+
+def _moving_root_transfer(p: np.ndarray, axis: np.ndarray, l0: int, l1: int, l3: int, name: str) -> Columns:
+    """Rocker-to-crank transfer when the root link ``L0`` moves (``g_3 = g_0 T h_1 T^-1``).
+
+    With ``dN' = T^-1 dN T^-T`` and ``w = dN' e4`` shared by ``L0`` and ``L1`` (on the axis of
+    their joint, so ``dg_1 w = dg_0 w``), the Lagrangian of ``dN`` on ``L3`` equals that of ``dN'``
+    on ``L1`` plus ``sym(w, t) + m' t t^T`` on ``L0`` (``t = (P3 - P0, 0)``, ``m' = dN'_44``): a
+    three-body column. Derivation: ``g_0 T h_1 = g_1 + g_0 tau`` with ``tau = T - I``."""
+    t = np.eye(4)
+    t[:3, 3] = p[3] - p[0]
+    tbar = np.r_[p[3] - p[0], 0.0]
+    shared = np.array([np.r_[p[0], 1.0], np.r_[axis, 0.0]])  # points and direction of joint L0-L1
+    basis = unhat(np.eye(10))  # (10, 4, 4)
+    comp = np.eye(4) - shared.T @ np.linalg.pinv(shared.T)  # projector off the shared space
+    coef = nullspace(np.einsum("ab,kb->ka", comp, basis[:, :, 3]).T, 1e-12)
+    dnp = np.einsum("rk,kab->rab", coef, basis)  # dN' with dN' e4 shared
+    dn = t @ dnp @ t.T
+    w = dnp[:, :, 3]
+    root = np.einsum("ka,b->kab", w, tbar)
+    root = root + np.swapaxes(root, -1, -2) + dnp[:, 3, 3, None, None] * np.outer(tbar, tbar)
+    m = len(dnp)
+    hi, lo = max(l1, l3), min(l1, l3)
+    h_hi, h_lo = (hat10(dn), -hat10(dnp)) if l3 > l1 else (-hat10(dnp), hat10(dn))
+    label = f"parallelogram (loop {name!r}): rocker parameters transfer to the crank, root link compensates"
+    return Columns(h_hi, np.full(m, hi), np.full(m, lo), np.full(m, RL1), np.full(m, hi),
+                   np.full(m, label, dtype=object), h_lo, np.full(m, l0), -hat10(root))
+
+
+def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+    """R-A across loop joints: vectors shared by a loop joint's two bodies (``g_c v = g_p v``).
+
+    Besides the joint's own points (principle 1: R ``{O, z}``, U/S ``{O}``, P directions), every
+    vector fixed by all joint screws between the loop's root link and either body is shared (both
+    bodies move it as the root does); e.g. a spherical loop joint closing a planar linkage also
+    shares the plane's normal direction. ``sym(a, b)`` of shared vectors: ``+`` on the successor,
+    ``-`` on the predecessor."""
+    screws = hat(robot.screws)
+    qi, nd = robot.q_index, robot.ndofs
+    e = np.eye(4)
+    parts = []
+    for k, lj in enumerate(robot.loops):
+        anc_c, anc_p = _ancestors(robot, lj.child), _ancestors(robot, lj.parent)
+        lca = next(a for a in anc_c if a in anc_p)
+        bodies = _path_to(robot, lj.child, lca) + _path_to(robot, lj.parent, lca)
+        js = [j for b in bodies for j in range(qi[b], qi[b] + nd[b])]
+        fix = nullspace(screws[js].reshape(-1, 4), tol) if js else e
+        o = np.r_[lj.M[:3, 3], 1.0]
+        own = {"R": [o, np.r_[lj.M[:3, :3] @ lj.axes[0], 0.0]] if lj.type == "R" else [],
+               "P": [e[0], e[1], e[2]], "U": [o], "S": [o], "F": [o, e[0], e[1], e[2]]}.get(lj.type, [o])
+        if len(fix) == 0:
+            continue
+        shared = _rowspace(np.concatenate([np.array(own).reshape(-1, 4), fix]), tol)
+        h = _independent(_syms(shared, shared), tol)
+        label = (f"shared across loop joint {lj.name!r} ({lj.type}), fixed relative to the loop's root: "
+                 + "; ".join(_describe(v) for v in _readable(shared)))
+        m = len(h)
+        parts.append(Columns(h, np.full(m, lj.child), np.full(m, lj.parent), np.full(m, RA),
+                             np.full(m, robot.n + k), np.full(m, label, dtype=object)))
     return Columns.concat(parts)
 
 
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     """All extended-rule columns (R-A, R-B, R-L1) for ``robot``."""
     ms = motion_spans(robot, tol)
-    return Columns.concat([fixed_vector_columns(robot, ms), sliding_columns(robot, ms),
-                           parallelogram_columns(robot)])
+    return Columns.concat([fixed_vector_columns(robot, ms), loop_shared_columns(robot, tol),
+                           sliding_columns(robot, ms), parallelogram_columns(robot)])

@@ -22,6 +22,7 @@ F    6     floating; only at the root: configuration ``exp(q^)`` with ``q`` a tw
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -237,29 +238,33 @@ class Robot:
         """Body moved by each coordinate ``(dof,)``."""
         return np.repeat(np.arange(self.n), self.ndofs)
 
-    @property
+    @cached_property
     def local_screws(self) -> np.ndarray:
-        """Unit twists ``(dof, 6)`` of every coordinate in its own joint frame."""
-        out = []
+        """Unit twists ``(dof, 6)`` of every coordinate in its own joint frame (cached)."""
+        out = np.zeros((self.dof, 6))
+        k = 0
         for i, t in enumerate(self.jtype):
-            if t in ("R", "U", "S"):
-                out += [np.r_[a, 0, 0, 0] for a in self.axes[i]]
-            elif t == "P":
-                out.append(np.r_[0, 0, 0, self.axes[i][0]])
+            nd = NDOF[t]
+            if t == "P":
+                out[k, 3:] = self.axes[i][0]
             elif t == "F":
-                out += list(np.eye(6))
-        return np.array(out, dtype=float).reshape(-1, 6)
+                out[k:k + 6] = np.eye(6)
+            elif nd:
+                out[k:k + nd, :3] = self.axes[i]
+            k += nd
+        out.flags.writeable = False
+        return out
 
-    @property
+    @cached_property
     def screws(self) -> np.ndarray:
-        """Joint lines ``L0 (dof, 6)``: unit twists in world coordinates at q = 0.
-
-        For F, the world basis ``e23 e31 e12 e01 e02 e03`` (the root frame is ignored).
+        """Joint lines ``L0 (dof, 6)``: unit twists in world coordinates at q = 0 (cached; do not
+        modify). For F, the world basis ``e23 e31 e12 e01 e02 e03`` (the root frame is ignored).
         """
         body = self.dof_body
         s = adjoint(self.M0[body], self.local_screws)
-        f = np.array([self.jtype[b] == "F" for b in body])
+        f = np.array([self.jtype[b] == "F" for b in body], dtype=bool)
         s[f] = self.local_screws[f]
+        s.flags.writeable = False
         return s
 
     @property

@@ -311,29 +311,38 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
     ranks = np.sum(sv > rtol * np.maximum(scale, 1e-300)[:, None], axis=1)
     if np.all(ranks == counts):
         return int(ranks.sum())
-    return _elimination_rank(cols, n, rtol)
+    return _elimination_rank(cols, n, rtol, ranks, counts, order, starts)
 
 
-def _elimination_rank(cols: Columns, n: int, rtol: float) -> int:
-    """General exact rank: eliminate block by block from the last body to the first.
+def _column_dict(cols: Columns, k: int) -> dict[int, np.ndarray]:
+    v = {int(cols.child[k]): cols.h[k]}
+    for body, h in ((cols.parent[k], cols.hp[k]), (cols.extra[k], cols.he[k])):
+        if body >= 0:
+            v[int(body)] = v.get(int(body), 0) + h
+    return v
 
-    Vectors are sparse over bodies; at body b, the parts on block b of every vector whose
-    highest block is b are ranked, and combinations vanishing there move down to their next
-    highest block."""
-    pending: dict[int, list[dict[int, np.ndarray]]] = {}
-    for k in range(len(cols)):
-        v = {int(cols.child[k]): cols.h[k]}
-        if cols.parent[k] >= 0:
-            v[int(cols.parent[k])] = v.get(int(cols.parent[k]), 0) + cols.hp[k]
-        if cols.extra[k] >= 0:
-            v[int(cols.extra[k])] = v.get(int(cols.extra[k]), 0) + cols.he[k]
-        pending.setdefault(max(v), []).append(v)
-    total = 0
+
+def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, counts: np.ndarray,
+                      order: np.ndarray, starts: np.ndarray) -> int:
+    """Exact rank when some diagonal blocks are rank-deficient: eliminate block by block from
+    the highest body down, visiting only the deficient bodies and those that receive vectors.
+
+    Vectors are sparse over bodies; at body b, the parts on block b of every vector whose highest
+    block is b are ranked, and combinations vanishing there move down to their next highest
+    block. A body with a full-rank diagonal block that receives nothing keeps its batched rank."""
+    import heapq
+
     scale = max(float(np.abs(cols.h).max()), 1e-300)
-    for b in range(n - 1, -1, -1):
-        vecs = pending.pop(b, [])
-        if not vecs:
-            continue
+    total = int(ranks.sum())
+    pending: dict[int, list[dict[int, np.ndarray]]] = {}
+    heap = [-int(b) for b in np.flatnonzero(ranks < counts)]
+    heapq.heapify(heap)
+    queued = set(-b for b in heap)
+    while heap:
+        b = -heapq.heappop(heap)
+        own = order[starts[b]: starts[b] + counts[b]]
+        vecs = [_column_dict(cols, int(k)) for k in own] + pending.pop(b, [])
+        total -= int(ranks[b])
         mat = np.stack([v[b] for v in vecs], axis=1)  # (10, m)
         _, sv, vt = np.linalg.svd(mat, full_matrices=True)
         r = int(np.sum(sv > rtol * scale))
@@ -348,7 +357,11 @@ def _elimination_rank(cols: Columns, n: int, rtol: float) -> int:
                         new[blk] = new.get(blk, 0) + coef * h
             new = {blk: h for blk, h in new.items() if np.linalg.norm(h) > rtol * scale}
             if new:
-                pending.setdefault(max(new), []).append(new)
+                top = max(new)
+                pending.setdefault(top, []).append(new)
+                if top not in queued:
+                    queued.add(top)
+                    heapq.heappush(heap, -top)
     return total
 
 

@@ -103,12 +103,10 @@ def _readable(basis: np.ndarray) -> np.ndarray:
     return np.concatenate([p[None], dirs]) if len(dirs) else p[None]
 
 
-def _unique(dirs: list[np.ndarray], tol: float = 1e-9) -> list[np.ndarray]:
-    out: list[np.ndarray] = []
-    for d in dirs:
-        if all(np.linalg.norm(np.cross(d, e)) > tol for e in out):
-            out.append(d)
-    return out
+def _unique(dirs: np.ndarray, tol: float = 1e-12) -> np.ndarray:
+    """Unit directions ``(c, 3)`` without repeats (parallel or antiparallel), first kept."""
+    g = np.abs(dirs @ dirs.T)
+    return dirs[~np.triu(g > 1 - tol, 1).any(axis=0)]
 
 
 def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
@@ -118,35 +116,41 @@ def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     Closes a fixed axis beyond the base (a lift followed by coaxial R joints along gravity: +2)."""
     ms = motion_spans(robot) if ms is None else ms
     g = robot.gravity
-    base = [np.eye(3)[k] for k in range(3)]
+    base = np.eye(3)
     if np.linalg.norm(g) > ms.tol:
-        base.append(g / np.linalg.norm(g))
+        base = np.concatenate([base, g[None] / np.linalg.norm(g)])
     s = robot.screws
     own = np.where(np.linalg.norm(s[:, :3], axis=1, keepdims=True) > 1e-12, s[:, :3], s[:, 3:])
+    nown = np.linalg.norm(own, axis=1)
     qi, nd = robot.q_index, robot.ndofs
-    live: list[list[np.ndarray]] = []
+    live: list[np.ndarray] = []
     parts = []
+    empty = np.zeros((0, 3))
     for i in range(robot.n):
         p = robot.parent[i]
-        if ms.span[i] is None:
-            live.append([])
+        span = ms.span[i]
+        if span is None:
+            live.append(empty)
             continue
-        mine = [own[j] / np.linalg.norm(own[j]) for j in range(qi[i], qi[i] + nd[i]) if np.linalg.norm(own[j]) > 1e-12]
-        cands = _unique(base + (live[p] if p >= 0 else []) + mine)
+        js = np.arange(qi[i], qi[i] + nd[i])
+        js = js[nown[js] > 1e-12]
+        cands = _unique(np.concatenate([base, live[p] if p >= 0 else empty, own[js] / nown[js, None]]))
         nfix = len(ms.fixed(i))
-        keep = []
-        for d in cands:
-            a = ms.sliding(i, d)
-            if len(a) <= nfix:
-                continue
-            keep.append(d)
+        # sliding spaces for all candidates at once: nullspace of (I - d d^T) X, X in M_i
+        proj = np.eye(3) - np.einsum("ca,cb->cab", cands, cands)
+        mats = np.einsum("cab,kbd->ckad", proj, span).reshape(len(cands), -1, 4)
+        _, sv, vt = np.linalg.svd(mats, full_matrices=True)
+        ranks = np.sum(sv > ms.tol, axis=1)
+        keep = np.flatnonzero(4 - ranks > nfix)
+        live.append(cands[keep])
+        for c in keep:
+            d, a = cands[c], vt[c, ranks[c]:]
             b = ms.level(i, d)
             h = _independent(_gravity_filter(ms, i, _syms(a, b)), ms.tol)
             if len(h):
                 label = (f"sym(a, b), a sliding along ({', '.join(f'{x:.4g}' for x in d)}): "
                          + "; ".join(_describe(v) for v in _readable(a)))
                 parts.append(_single(h, i, RB, label))
-        live.append(keep)
     return Columns.concat(parts)
 
 

@@ -62,6 +62,7 @@ class MotionSpans:
     robot: Robot
     span: tuple[np.ndarray | None, ...]
     tol: float
+    fix: tuple[np.ndarray, ...] = ()
 
     def dim(self, i: int) -> int:
         s = self.span[i]
@@ -69,10 +70,7 @@ class MotionSpans:
 
     def fixed(self, i: int) -> np.ndarray:
         """Fixed vectors of body ``i`` ``(f, 4)``: ``∩_j ker S_j`` over its path."""
-        s = self.span[i]
-        if s is None:
-            return np.zeros((0, 4))
-        return nullspace(s.reshape(-1, 4), self.tol)
+        return self.fix[i]
 
     def level(self, i: int, e: np.ndarray) -> np.ndarray:
         """Level space ``H_i((e, 0))`` ``(h, 4)``: vectors whose ``e``-coordinate never changes."""
@@ -117,4 +115,6 @@ def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
             if len(cur) == SATURATED:
                 break
         spans.append(None if len(cur) == SATURATED else cur)
-    return MotionSpans(robot, tuple(spans), tol)
+    none = np.zeros((0, 4))
+    fix = tuple(none if sp is None else nullspace(sp.reshape(-1, 4), tol) for sp in spans)
+    return MotionSpans(robot, tuple(spans), tol, fix)

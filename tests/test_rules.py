@@ -1,0 +1,201 @@
+"""Extended principles (``nullspace/subspaces.py``, ``nullspace/rules.py``): each rule as a unit,
+checked against the numerical nullspace (the independent judge), on robots built to need it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from baseparams.kinematics.tree import forward_kinematics
+from baseparams.model import RobotBuilder, pose
+from baseparams.nullspace import drng
+from baseparams.nullspace.certify import certify
+from baseparams.nullspace.drng import PRINCIPLES
+from baseparams.nullspace.rules import (RA, RB, RL1, fixed_vector_columns, loop_shared_columns,
+                                        parallelogram_columns, parallelograms, sliding_columns)
+from baseparams.nullspace.subspaces import motion_spans
+from baseparams.numerics import numerical_nullspace, stacked_regressor
+from baseparams.robots import parallelogram, random_robot
+from baseparams.robots.random import random_inertia
+
+
+def _in_nullspace(robot, cols, samples=300, seed=3):
+    """Relative residual of every column (unit norm) against a stacked regressor."""
+    from baseparams.nullspace.drng import to_sparse
+
+    w = stacked_regressor(robot, samples, seed)
+    b = to_sparse(cols, robot.n).toarray()
+    b /= np.linalg.norm(b, axis=0)
+    return np.linalg.norm(w @ b, axis=0) / np.linalg.norm(w, 2)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_motion_spans_equal_sampled_displacements(seed):
+    """M_i = span{g_i(q) - I} exactly: every sampled displacement lies in it and spans it."""
+    rng = np.random.default_rng(seed)
+    robot = random_robot(rng, 5, joint_types="RPUS" if seed % 2 else "RP", floating=seed % 4 == 3)
+    ms = motion_spans(robot)
+    q = rng.normal(size=(150, robot.dof))
+    g = forward_kinematics(robot, q).g
+    for i in range(robot.n):
+        x = (g[:, i] - np.eye(4))[:, :3, :].reshape(150, 12)
+        assert np.linalg.matrix_rank(x, 1e-8) == ms.dim(i)
+        if ms.span[i] is not None:
+            b = ms.span[i].reshape(-1, 12)
+            assert np.abs(x - x @ b.T @ b).max() < 1e-9
+            f = ms.fixed(i)  # fixed vectors never move
+            assert len(f) == 0 or np.abs(np.einsum("sab,fb->sfa", g[:, i] - np.eye(4), f)).max() < 1e-9
+
+
+def _stage(gravity=(0, 0, -9.81)):
+    """Three P joints (a translation stage) carrying an R joint."""
+    b = RobotBuilder("stage", gravity=gravity)
+    rng = np.random.default_rng(0)
+    b.add_link("x", joint="P", origin=pose((0, 0, 0.1)), axis=(1, 0, 0), inertia=random_inertia(rng))
+    b.add_link("y", parent="x", joint="P", origin=pose((0.2, 0, 0)), axis=(0, 1, 0), inertia=random_inertia(rng))
+    b.add_link("z", parent="y", joint="P", origin=pose((0, 0.3, 0)), axis=(0, 0, 1), inertia=random_inertia(rng))
+    b.add_link("tool", parent="z", joint="R", origin=pose((0.1, 0.1, 0)), axis=(0, 1, 0), inertia=random_inertia(rng))
+    return b.build()
+
+
+def test_ra_translation_stage_fixes_every_direction():
+    robot = _stage()
+    cols = fixed_vector_columns(robot)
+    assert set(cols.principle) == {RA}
+    assert np.max(_in_nullspace(robot, cols)) < 1e-10
+    # every direction of a translating body is fixed: its 9 non-mass parameters are null
+    assert max(np.sum(cols.child == i) for i in range(3)) >= 9
+    paper, ext = drng(robot, extended=False), drng(robot)
+    c = certify(robot, samples=200, result=ext)
+    assert c.status == "certified" and ext.rank == c.nullity > paper.rank
+    assert ext.by_principle()["R-A fixed vectors"] == ext.rank - paper.rank
+
+
+def test_ra_zero_gravity_puma_and_u_joint_along_gravity():
+    from baseparams.robots import puma560
+
+    robot = puma560(gravity=(0, 0, 0))
+    assert drng(robot).by_principle()["R-A fixed vectors"] == 2
+    b = RobotBuilder("u-base")
+    rng = np.random.default_rng(1)
+    b.add_link("u", joint="U", origin=pose((0, 0, 0.2)), axis=(0, 0, 1), axis2=(1, 0, 0), inertia=random_inertia(rng))
+    b.add_link("arm", parent="u", joint="R", origin=pose((0.3, 0.1, 0)), axis=(0, 1, 0), inertia=random_inertia(rng))
+    u = b.build()
+    paper, ext = drng(u, extended=False), drng(u)
+    c = certify(u, samples=200, result=ext)
+    assert c.status == "certified" and ext.rank == paper.rank + 1
+    assert ext.by_principle()["R-A fixed vectors"] == 1
+
+
+def test_rb_lift_with_coaxial_rotations():
+    """A P lift along gravity followed by two coaxial R joints: the axis points slide along z (+2)."""
+    rng = np.random.default_rng(2)
+    b = RobotBuilder("lift")
+    b.add_link("lift", joint="P", origin=pose((0.1, 0.2, 0)), axis=(0, 0, 1), inertia=random_inertia(rng))
+    b.add_link("turn", parent="lift", joint="R", origin=pose((0, 0, 0.3)), axis=(0, 0, 1), inertia=random_inertia(rng))
+    b.add_link("turn2", parent="turn", joint="R", origin=pose((0, 0, 0.2)), axis=(0, 0, 1), inertia=random_inertia(rng))
+    b.add_link("arm", parent="turn2", joint="R", origin=pose((0.4, 0, 0)), axis=(1, 0, 0), inertia=random_inertia(rng))
+    robot = b.build()
+    cols = sliding_columns(robot)
+    assert len(cols) and set(cols.principle) == {RB}
+    assert np.max(_in_nullspace(robot, cols)) < 1e-10
+    ext = drng(robot)
+    by = ext.by_principle()
+    assert by["R-B sliding points"] >= 2  # +2 per turning body
+    c = certify(robot, samples=200, result=ext)
+    assert c.status == "certified" and c.completed == 0
+    paper = certify(robot, samples=200, result=drng(robot, extended=False))
+    assert paper.completed == by["R-A fixed vectors"] + by["R-B sliding points"] > 0
+    assert "sliding along (0, 0, 1)" in ext.provenance(int(np.flatnonzero(ext.columns.principle == RB)[0]))
+
+
+def test_rl1_parallelogram_with_fixed_base_completes():
+    robot = parallelogram()
+    (par,) = parallelograms(robot)
+    assert par["links"][0] == -1 and np.allclose(np.abs(par["axis"]), (0, 0, 1))
+    cols = parallelogram_columns(robot)
+    assert np.max(_in_nullspace(robot, cols)) < 1e-10
+    ext = drng(robot)
+    assert ext.rank == 27 and ext.by_principle()["R-L1 parallelograms"] == 5
+
+
+def _four_bar(c, name="crossed", thigh=False):
+    """Planar four-bar with ground pivots A = (0,0), D = (1,0), crank tip B = (0.3, 0.5), loop at
+    ``c``; ``thigh``: the whole linkage hangs from a moving R link (a moving root)."""
+    rng = np.random.default_rng(4)
+    b = RobotBuilder(name, gravity=(0, -9.81, 0))
+    root = None
+    off = np.zeros(3)
+    if thigh:
+        b.add_link("thigh", joint="R", origin=pose((0, 0, 0)), axis=(0, 0, 1), inertia=random_inertia(rng))
+        root, off = "thigh", np.array([0.2, -0.4, 0])
+    a, bb, d = off, off + np.array([0.3, 0.5, 0]), off + np.array([1.0, 0, 0])
+    b.add_link("crank", parent=root, joint="R", origin=pose(a), axis=(0, 0, 1), inertia=random_inertia(rng))
+    b.add_link("coupler", parent="crank", joint="R", origin=pose(bb - a), axis=(0, 0, 1),
+               inertia=random_inertia(rng), actuated=False)
+    b.add_link("rocker", parent=root, joint="R", origin=pose(d), axis=(0, 0, 1), inertia=random_inertia(rng),
+               actuated=False)
+    b.add_loop("closure", "R", parent="coupler", child="rocker", origin=pose(c - bb), axis=(0, 0, 1))
+    b.q_box = np.array([[-0.3, 0.3]] * (2 if thigh else 1))
+    return b.build()
+
+
+def test_rl1_assembly_mode_is_checked():
+    """Same link lengths, crossed (anti-parallelogram) assembly: no parallelogram, no R-L1 column."""
+    b_, d_ = np.array([0.3, 0.5]), np.array([1.0, 0.0])
+    # the other intersection of |C - B| = |D - A| = 1 and |C - D| = |B - A|
+    r0, r1 = 1.0, np.linalg.norm(b_)
+    dd = np.linalg.norm(d_ - b_)
+    a = (r0**2 - r1**2 + dd**2) / (2 * dd)
+    h = np.sqrt(r0**2 - a**2)
+    mid = b_ + a * (d_ - b_) / dd
+    perp = np.array([-(d_ - b_)[1], (d_ - b_)[0]]) / dd
+    sols = [mid + h * perp, mid - h * perp]
+    crossed = next(s for s in sols if np.linalg.norm(s - (b_ + d_)) > 1e-6)
+    robot = _four_bar(np.r_[crossed, 0.0])
+    assert parallelograms(robot) == [] and len(parallelogram_columns(robot)) == 0
+    straight = _four_bar(np.array([1.3, 0.5, 0]), "straight")
+    assert len(parallelograms(straight)) == 1
+
+
+def test_rl1_moving_root_transfers_are_null():
+    """A parallelogram carried by a moving link: three-body transfer columns (rocker, crank, root)."""
+    robot = _four_bar(np.array([1.3, 0.5, 0]) + np.array([0.2, -0.4, 0]), "on-thigh", thigh=True)
+    (par,) = parallelograms(robot)
+    assert par["links"][0] == 0
+    cols = parallelogram_columns(robot)
+    assert np.any(cols.extra >= 0)
+    assert np.max(_in_nullspace(robot, cols)) < 1e-10
+    c = certify(robot, samples=3000)
+    assert c.certified and c.max_column_residual < 1e-10
+
+
+def test_loop_shared_vectors_of_a_spherical_closure():
+    """A planar four-bar closed by a spherical joint, carried by a hip turning about another axis
+    (so no planar-rotation principle applies): the S joint also shares the plane's normal."""
+    rng = np.random.default_rng(6)
+    b = RobotBuilder("s-closed", gravity=(0, -9.81, 0))
+    b.add_link("hip", joint="R", origin=pose((0, 0, 0)), axis=(1, 0, 0), inertia=random_inertia(rng))
+    b.add_link("crank", parent="hip", joint="R", origin=pose((0.1, 0, 0)), axis=(0, 0, 1),
+               inertia=random_inertia(rng))
+    b.add_link("coupler", parent="crank", joint="R", origin=pose((0.3, 0.5, 0)), axis=(0, 0, 1),
+               inertia=random_inertia(rng), actuated=False)
+    b.add_link("rocker", parent="hip", joint="R", origin=pose((1.1, 0, 0)), axis=(0, 0, 1),
+               inertia=random_inertia(rng), actuated=False)
+    b.add_loop("closure", "S", parent="coupler", child="rocker", origin=pose((0.95, 0.15, 0)))
+    b.q_box = np.array([[-0.3, 0.3]] * 2)
+    robot = b.build()
+    cols = loop_shared_columns(robot)
+    assert len(cols) and np.max(_in_nullspace(robot, cols)) < 1e-10
+    paper, ext = drng(robot, extended=False), drng(robot)
+    c = certify(robot, samples=3000, result=ext)
+    # +1 from the shared normal; the four-bar on a moving link keeps one 4-body direction that
+    # no rule finds (the open problem of EXTENDED_PRINCIPLES.md), completed numerically
+    assert c.certified and ext.rank == paper.rank + 1 and c.completed == 1
+    k = int(np.flatnonzero(ext.columns.joint >= robot.n)[-1])
+    assert "shared across loop joint 'closure'" in ext.provenance(k)
+
+
+def test_every_source_is_named():
+    assert PRINCIPLES[RA] == "R-A fixed vectors" and PRINCIPLES[RB] == "R-B sliding points"
+    assert PRINCIPLES[RL1] == "R-L1 parallelograms" and PRINCIPLES[-1] == "numerical"

@@ -22,6 +22,11 @@ def main(argv: list[str]) -> int:
     rows_scal = "".join(
         f"| {N} | {g(f'drng_chain_N{N}_ms')} ms | {g(f'drng_chain_N{N}_us_per_body')} us | {g(f'drng_tree_N{N}_ms')} ms "
         f"| {g(f'drng_tree_N{N}_us_per_body')} us |\n" for N in (10, 100, 1000, 10000))
+    rows_ext = "".join(
+        f"| {N} | {g(f'drng_chain_N{N}_ms')} ms | {g(f'drng_chain_N{N}_extended_ms')} ms "
+        f"| {g(f'drng_chain_N{N}_extended_ratio', '{:.1f}')}x | {g(f'drng_tree_N{N}_ms')} ms "
+        f"| {g(f'drng_tree_N{N}_extended_ms')} ms | {g(f'drng_tree_N{N}_extended_ratio', '{:.1f}')}x |\n"
+        for N in (10, 100, 1000, 10000))
     text = f"""# Benchmarks
 
 `benchmarks/run.py` is a standalone script (pytest does not collect it):

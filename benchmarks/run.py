@@ -208,13 +208,15 @@ def bench_drng_vs_numerical(out: dict, quick: bool) -> None:
     for name in ROBOTS:
         robot = _robot(name)
         log(f"  drng {name} ...")
-        t_d, n_d = measure(lambda: drng(robot), r_fast)
+        t_d, n_d = measure(lambda: drng(robot, extended=False), r_fast)
+        t_e, _ = measure(lambda: drng(robot), r_fast)
         log(f"  numerical {name} (100 samples) ...")
         t_n, n_n = measure(lambda: numerical_nullspace(robot, samples=100, seed=0), r_slow)
         log(f"  certify {name} ...")
         t_c, n_c = measure(lambda: certify(robot), r_slow)
         out[f"drng_{name}_ms"] = 1e3 * t_d
         out[f"drng_{name}_ms_repeats"] = n_d
+        out[f"drng_extended_{name}_ms"] = 1e3 * t_e
         out[f"numerical_{name}_ms"] = 1e3 * t_n
         out[f"numerical_{name}_ms_repeats"] = n_n
         out[f"drng_speedup_{name}"] = t_n / t_d
@@ -245,7 +247,8 @@ def bench_drng_scaling(out: dict, quick: bool) -> None:
                     robot = random_robot(np.random.default_rng(n), n, joint_types="RP", branching=branching)
                     t_build = time.perf_counter() - t0
                     log(f"  {key}: built in {t_build:.2f} s; timing drng ...")
-                    t, r = measure(lambda: drng(robot), reps[n])
+                    t, r = measure(lambda: drng(robot, extended=False), reps[n])
+                    te, _ = measure(lambda: drng(robot), reps[n])
             except Timeout as e:
                 log(f"  {key}: SKIPPED (build + timing {e}; budget {SCALING_BUDGET_S:.0f} s per N)")
                 out[f"{key}_ms"] = out[f"{key}_us_per_body"] = None
@@ -255,6 +258,8 @@ def bench_drng_scaling(out: dict, quick: bool) -> None:
             out[f"{key}_ms"] = 1e3 * t
             out[f"{key}_ms_repeats"] = r
             out[f"{key}_us_per_body"] = 1e6 * t / n
+            out[f"{key}_extended_ms"] = 1e3 * te
+            out[f"{key}_extended_ratio"] = te / t
     done = [n for n in sizes if out.get(f"drng_chain_N{n}_us_per_body") is not None]
     if 100 in done and max(done) > 100:
         out["drng_chain_linearity"] = out[f"drng_chain_N{max(done)}_us_per_body"] / out["drng_chain_N100_us_per_body"]

@@ -1,4 +1,4 @@
-"""Built-in robots: ``get("puma560")``, ``get("go2")``, and ``random_robot`` for tests."""
+"""Built-in robots: ``get("puma560")``, ``get("go2")``, and ``random_robot`` / ``special_robot`` for tests."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from ..model import Robot
 from .go2 import go2
 from .loops import four_bar, parallelogram, pkm_2prs_1psr, pkm_2rru_1rrs
 from .puma560 import puma560
-from .random import random_robot
+from .random import random_robot, special_robot
 
 #: name -> (factory(gravity=...), one-line description)
 BUILTINS: dict[str, tuple[Callable[..., Robot], str]] = {
@@ -34,4 +34,4 @@ def get(name: str, gravity=None) -> Robot:
 
 
 __all__ = ["BUILTINS", "four_bar", "get", "go2", "parallelogram", "pkm_2prs_1psr", "pkm_2rru_1rrs", "puma560",
-           "random_robot"]
+           "random_robot", "special_robot"]

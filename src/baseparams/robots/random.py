@@ -58,3 +58,220 @@ def random_robot(rng: np.random.Generator, n: int = 6, joint_types: str = "RPUS"
         b.add_link(f"b{i}", parent=parent, joint=jt, origin=random_pose(rng), axis=axis,
                    axis2=perp / np.linalg.norm(perp), inertia=random_inertia(rng))
     return b.build()
+
+
+# --- special geometry on purpose ------------------------------------------------------------
+
+#: the 24 proper rotations with entries in {0, +1, -1} (exact signed permutations)
+_SIGNED_PERMS = tuple(
+    m for m in (np.array([[s[r] if c == p[r] else 0.0 for c in range(3)] for r in range(3)])
+                for p in ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
+                for s in ((1, 1, 1), (1, 1, -1), (1, -1, 1), (1, -1, -1),
+                          (-1, 1, 1), (-1, 1, -1), (-1, -1, 1), (-1, -1, -1)))
+    if np.linalg.det(m) > 0)
+
+_JOINTS = ("R", "P", "U", "S")
+_JOINT_W = (0.55, 0.25, 0.1, 0.1)
+_AXIS_MODES = ("parallel", "perpendicular", "coaxial", "intersecting", "world", "gravity", "generic")
+_AXIS_W = (0.18, 0.15, 0.12, 0.12, 0.18, 0.08, 0.17)
+_ORIGIN_MODES = ("zero", "along", "world", "random")
+_ORIGIN_W = (0.25, 0.25, 0.2, 0.3)
+
+
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+def _random_unit(rng: np.random.Generator) -> np.ndarray:
+    return _unit(rng.normal(size=3))
+
+
+def _world_axis(rng: np.random.Generator, z_bias: float = 1 / 3) -> np.ndarray:
+    """``+-e_x``, ``+-e_y`` or ``+-e_z`` exactly (``e_z`` with probability ``z_bias``)."""
+    k = 2 if rng.random() < z_bias else int(rng.integers(0, 2))
+    e = np.zeros(3)
+    e[k] = 1.0 if rng.random() < 0.5 else -1.0
+    return e
+
+
+def _perpendicular(a: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A unit direction perpendicular to unit ``a``: another world axis (exact) when ``a`` is one."""
+    nz = np.flatnonzero(a != 0.0)
+    if len(nz) == 1:
+        k = int(rng.choice([j for j in range(3) if j != nz[0]]))
+        e = np.zeros(3)
+        e[k] = 1.0 if rng.random() < 0.5 else -1.0
+        return e
+    for _ in range(10):
+        c = np.cross(a, rng.normal(size=3))
+        if np.linalg.norm(c) > 1e-3:
+            return _unit(c)
+    return _unit(np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0]))
+
+
+def _special(rng: np.random.Generator, n: int | None = None,
+             gravity: str | None = None) -> tuple[Robot, list[str]]:
+    """:func:`special_robot` plus one note per body (joint type, parent, the relations drawn)."""
+    n = int(rng.integers(2, 8)) if n is None else int(n)
+    gcase = str(rng.choice(["axis", "generic", "zero"])) if gravity is None else gravity
+    if gcase == "axis":
+        g = np.array([0.0, 0.0, -9.81])
+    elif gcase == "generic":
+        g = _random_unit(rng) * 9.81
+    elif gcase == "zero":
+        g = np.zeros(3)
+    else:
+        raise ValueError(f"gravity must be 'axis', 'generic', 'zero' or None, got {gravity!r}")
+    g_dir = _unit(g) if gcase != "zero" else np.array([0.0, 0.0, 1.0])
+    z_bias = 0.7 if gcase == "axis" else 1 / 3
+
+    b = RobotBuilder(f"special{n}-{gcase}", gravity=tuple(g))
+    frames: list[np.ndarray] = []  # world pose of each body at q = 0 (as the builder composes it)
+    lines: list[list[tuple[np.ndarray, np.ndarray]]] = []  # candidate "parent axis" lines per body
+    notes: list[str] = []
+    base_lines = [(np.array([0.0, 0.0, 1.0]), np.zeros(3))]
+    if gcase == "generic":
+        base_lines.append((g_dir, np.zeros(3)))
+    plan: list[tuple[str, str | None, str | None]] = []  # forced (joint, axis mode, origin mode), chained
+    kind = ""
+
+    for i in range(n):
+        # ---- parent and joint type ----------------------------------------------------------
+        floating = i == 0 and rng.random() < 0.1
+        chained = bool(plan)
+        if i == 0:
+            parent = -1
+        elif chained or rng.random() >= 0.3:
+            parent = i - 1
+        else:
+            parent = int(rng.integers(0, i))
+        if floating:
+            jt, amode, omode = "F", None, None
+        else:
+            if not plan and rng.random() < 0.22:
+                left = n - i
+                u = rng.random()
+                if u < 0.45 and left >= 2:  # translation stage: 2 or 3 perpendicular (or parallel) P
+                    k = int(min(left, rng.integers(2, 4)))
+                    modes = ["world" if rng.random() < 0.6 else "generic"]
+                    modes += ["perpendicular" if rng.random() < 0.8 else "parallel" for _ in range(k - 1)]
+                    plan = [("P", m, str(rng.choice(["zero", "world", "along"]))) for m in modes]
+                    if left > k and rng.random() < 0.4:  # ... then a rotation about the last slide line
+                        plan.append(("R", "coaxial", "along"))
+                    kind = "stage"
+                elif u < 0.8 and left >= 2:  # lift then rotation about the same line
+                    first = "world" if rng.random() < 0.5 else str(rng.choice(_AXIS_MODES, p=_AXIS_W))
+                    plan = [("P", first, None), ("R", "coaxial", str(rng.choice(["zero", "along"])))]
+                    kind = "lift+R"
+                elif left >= 2:  # rotation then coaxial slide (cylindrical pair)
+                    plan = [("R", None, None), ("P", "coaxial", "zero")]
+                    kind = "R+P"
+            if plan:
+                jt, amode, omode = plan.pop(0)
+                chained = True
+            else:
+                jt, amode, omode = str(rng.choice(_JOINTS, p=_JOINT_W)), None, None
+            amode = amode or str(rng.choice(_AXIS_MODES, p=_AXIS_W))
+            omode = omode or str(rng.choice(_ORIGIN_MODES, p=_ORIGIN_W))
+        pframe = np.eye(4) if parent < 0 else frames[parent]
+        plines = base_lines if parent < 0 else lines[parent]
+        a_p, o_p = plines[int(rng.integers(0, len(plines)))]
+        p_p = pframe[:3, 3]
+
+        # ---- joint point: an offset from the parent's frame origin, in world -----------------
+        if floating:
+            offset = rng.normal(scale=0.5, size=3) if rng.random() < 0.5 else np.zeros(3)
+        elif amode == "coaxial":
+            # on the parent's axis line: from the line's point along the axis
+            offset = (o_p - p_p) + (0.0 if omode == "zero" else rng.uniform(-0.6, 0.6)) * a_p
+            omode = "on-line"
+        elif omode == "zero":
+            offset = np.zeros(3)
+        elif omode == "along":
+            offset = (o_p - p_p) + rng.uniform(-0.6, 0.6) * a_p
+        elif omode == "world":
+            offset = rng.uniform(-0.6, 0.6) * _world_axis(rng, z_bias)
+        else:
+            offset = rng.normal(scale=0.4, size=3)
+        point = p_p + offset
+
+        # ---- joint axis in world ------------------------------------------------------------
+        a_w = None
+        if not floating and jt != "S":
+            if amode in ("parallel", "coaxial"):
+                a_w = a_p if rng.random() < 0.7 else -a_p
+            elif amode == "perpendicular":
+                a_w = _perpendicular(a_p, rng)
+            elif amode == "intersecting":
+                on_line = o_p + rng.uniform(-0.6, 0.6) * a_p  # a point of the parent's axis line
+                d = on_line - point
+                if np.linalg.norm(d) > 1e-3 and np.linalg.norm(np.cross(d, a_p)) > 1e-3 * np.linalg.norm(d):
+                    a_w = _unit(d)
+                else:  # the joint point is on the line already: any non-parallel direction
+                    a_w = _perpendicular(a_p, rng) if rng.random() < 0.5 else _random_unit(rng)
+            elif amode == "world":
+                a_w = _world_axis(rng, z_bias)
+            elif amode == "gravity":
+                a_w = g_dir if rng.random() < 0.7 else -g_dir
+            else:
+                a_w = _random_unit(rng)
+
+        # ---- joint frame rotation in world, then the parent-relative origin ------------------
+        u = rng.random()
+        if floating:
+            rot = random_rotation(rng) if u < 0.5 else _SIGNED_PERMS[int(rng.integers(0, 24))]
+        elif u < 0.35:
+            rot = np.eye(3)
+        elif u < 0.7:
+            rot = _SIGNED_PERMS[int(rng.integers(0, 24))]
+        else:
+            rot = random_rotation(rng)
+        rp = pframe[:3, :3]
+        origin = np.eye(4)
+        origin[:3, :3] = rp.T @ rot
+        origin[:3, 3] = rp.T @ offset
+        frame = pframe @ origin  # exactly as RobotBuilder.add_link composes M0
+        r_i = frame[:3, :3]
+
+        axis, axis2, mylines = (0.0, 0.0, 1.0), None, []
+        if a_w is not None:
+            axis = r_i.T @ a_w
+            mylines.append((a_w, frame[:3, 3]))
+            if jt == "U":
+                if amode == "perpendicular" or (rng.random() < 0.5 and np.linalg.norm(np.cross(a_w, a_p)) > 1e-3):
+                    a2 = _unit(np.cross(a_w, a_p)) if np.linalg.norm(np.cross(a_w, a_p)) > 1e-3 \
+                        else _perpendicular(a_w, rng)
+                else:
+                    a2 = _perpendicular(a_w, rng)
+                a2 = a2 - (a2 @ a_w) * a_w
+                a2 = _unit(a2)
+                axis2 = r_i.T @ a2
+                mylines.append((a2, frame[:3, 3]))
+        else:  # S / F: the frame's axes
+            mylines += [(r_i[:, k].copy(), frame[:3, 3]) for k in range(3)]
+        b.add_link(f"b{i}", parent=None if parent < 0 else f"b{parent}", joint=jt, origin=origin,
+                   axis=axis, axis2=axis2, inertia=random_inertia(rng))
+        frames.append(frame)
+        lines.append(mylines)
+        rel = "" if floating or jt == "S" else f" axis={amode}"
+        notes.append(f"{jt}<-{'w' if parent < 0 else parent}{rel} origin={omode or 'pose'}"
+                     + (f" [{kind}]" if chained else ""))
+    return b.build(), notes
+
+
+def special_robot(rng: np.random.Generator, n: int | None = None, gravity: str | None = None) -> Robot:
+    """A random tree of ``n`` bodies (default 2..7) with special geometry drawn on purpose.
+
+    Joints are mostly R and P (weights R 0.55, P 0.25, U 0.1, S 0.1; a floating root with
+    probability 0.1); a body hangs from the previous one or (probability 0.3) an earlier one.
+    Each joint axis, in world at q = 0, is parallel, perpendicular, coaxial with or
+    intersecting one of its parent's axes, along a world axis, along gravity, or generic; the
+    joint point coincides with the parent's, lies on its axis line, is offset along a world
+    axis, or is generic. Translation stages (2-3 chained P), a lift followed by a coaxial R,
+    and an R followed by a coaxial P are drawn as such. Exact values (signed permutation
+    frames, ``+-1`` axes) make the relations hold to rounding. ``gravity``: ``"axis"``
+    (``-9.81 z``, axes biased to ``z``), ``"generic"`` (a random direction), ``"zero"``;
+    ``None`` draws one uniformly. Deterministic given ``rng``.
+    """
+    return _special(rng, n, gravity)[0]

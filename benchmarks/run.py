@@ -344,8 +344,31 @@ def bench_files(out: dict, quick: bool) -> None:
         out["talos_full_v2_drng_ms_repeats"] = n_d
 
 
+def bench_special(out: dict, quick: bool) -> None:
+    """Extended principles on random special-geometry robots: completeness and emitted-column
+    residuals (the same generator as tests/test_special.py, more seeds)."""
+    from baseparams.nullspace.survey import summarize, survey_case
+    from baseparams.robots import special_robot
+
+    count = 100 if quick else 1000
+    log(f"  surveying {count} special robots ...")
+    t0 = time.perf_counter()
+    cases = [survey_case(special_robot(np.random.default_rng(seed))) for seed in range(count)]
+    s = summarize(cases)
+    out["special_seconds"] = time.perf_counter() - t0
+    for k, v in s.items():
+        out[f"special_{k}"] = v
+    rules: dict[str, int] = {}
+    for c in cases:
+        for k, v in c.by_rule.items():
+            if v and k.startswith("R-"):
+                rules[k] = rules.get(k, 0) + 1
+    out["special_robots_using_rule"] = rules
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "files": bench_files,
+    "special": bench_special,
     "regressor": bench_regressor,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,

@@ -199,3 +199,17 @@ def test_loop_shared_vectors_of_a_spherical_closure():
 def test_every_source_is_named():
     assert PRINCIPLES[RA] == "R-A fixed vectors" and PRINCIPLES[RB] == "R-B sliding points"
     assert PRINCIPLES[RL1] == "R-L1 parallelograms" and PRINCIPLES[-1] == "numerical"
+
+
+@pytest.mark.parametrize("seed", range(25))
+def test_block_rank_equals_dense_rank_with_rules(seed):
+    """The fast rank (pure-column folding + elimination) equals the dense rank."""
+    from baseparams.nullspace import block_rank
+    from baseparams.nullspace.drng import to_sparse
+    from baseparams.robots import special_robot
+
+    robot = special_robot(np.random.default_rng(1000 + seed))
+    cols = drng(robot).columns
+    dense = to_sparse(cols, robot.n).toarray()
+    dense /= np.maximum(np.linalg.norm(dense, axis=0), 1e-300)
+    assert block_rank(cols, robot.n) == np.linalg.matrix_rank(dense, tol=1e-9)

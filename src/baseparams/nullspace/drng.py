@@ -295,6 +295,7 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
     block-by-block elimination (:func:`_elimination_rank`) run. Loop columns (blocks
     ``{successor, predecessor}``, predecessor < successor) fit the same scheme.
     """
+    cols = _reduce_pure(cols, rtol)
     k = len(cols)
     if k == 0:
         return 0
@@ -312,6 +313,77 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
     if np.all(ranks == counts):
         return int(ranks.sum())
     return _elimination_rank(cols, n, rtol, ranks, counts, order, starts)
+
+
+def _reduce_pure(cols: Columns, rtol: float) -> Columns:
+    """A column set of the same span, cheaper to rank (elementary column operations only).
+
+    From the highest body down: the single-body ("pure") columns of body ``b`` become an
+    orthonormal basis ``Q`` of their span; the two-block columns ``(h on b, hp on p)`` sharing a
+    parent ``p`` are rotated by the right singular vectors of their child parts off ``Q``, and
+    each combination whose child part lies in ``span Q`` is replaced by its parent part alone, a
+    new pure column of ``p``. Without this a translation chain's redundant pure columns cascade
+    through the elimination (quadratic in the depth)."""
+    import heapq
+
+    pure_mask = (cols.parent < 0) & (cols.extra < 0)
+    if not pure_mask.any():
+        return cols
+    scale = max(float(np.abs(cols.h).max()), 1e-300)
+    pure: dict[int, list[np.ndarray]] = {}
+    for k in np.flatnonzero(pure_mask):
+        pure.setdefault(int(cols.child[k]), []).append(cols.h[k])
+    two = np.flatnonzero(~pure_mask & (cols.extra < 0))
+    order = two[np.argsort(cols.child[two], kind="stable")]
+    bodies, first = np.unique(cols.child[order], return_index=True)
+    span_of = {int(bb): (int(i), int(j)) for bb, i, j in zip(bodies, first, np.r_[first[1:], len(order)])}
+    touched = np.zeros(len(cols), dtype=bool)
+    heap = [-bb for bb in pure]
+    heapq.heapify(heap)
+    out_h: list[np.ndarray] = []
+    out_b: list[int] = []
+    new_two: list[tuple[np.ndarray, int, int, np.ndarray]] = []  # (h, child, parent, hp)
+    while heap:
+        bb = -heapq.heappop(heap)
+        if bb not in pure:
+            continue
+        u, sv, _ = np.linalg.svd(np.array(pure.pop(bb)).T, full_matrices=False)
+        basis = u[:, sv > rtol * scale]  # (10, r)
+        out_h.append(basis.T)
+        out_b += [bb] * basis.shape[1]
+        if bb not in span_of or basis.shape[1] == 0:
+            continue
+        idx = order[span_of[bb][0]: span_of[bb][1]]
+        for p in np.unique(cols.parent[idx]):
+            grp = idx[cols.parent[idx] == p]
+            h, hp = cols.h[grp], cols.hp[grp]
+            res = h - (h @ basis) @ basis.T
+            _, rs, vt = np.linalg.svd(res.T, full_matrices=True)  # vt (k, k)
+            r = int(np.sum(rs > rtol * scale))
+            if r == len(grp):
+                continue
+            touched[grp] = True
+            hn, hpn = vt @ h, vt @ hp
+            for j in range(r):
+                new_two.append((hn[j], bb, int(p), hpn[j]))
+            p = int(p)
+            if p not in pure:
+                heapq.heappush(heap, -p)
+            pure.setdefault(p, []).extend(hpn[r:])
+    keep = ~pure_mask & ~touched
+    parts = [cols.subset(keep)]
+    m = len(out_b)
+    z = np.zeros(m, dtype=int)
+    if m:
+        parts.append(Columns(np.concatenate(out_h), np.array(out_b, dtype=int), z - 1, z, z,
+                             np.full(m, "", dtype=object)))
+    if new_two:
+        k = len(new_two)
+        z = np.zeros(k, dtype=int)
+        parts.append(Columns(np.array([t[0] for t in new_two]), np.array([t[1] for t in new_two]),
+                             np.array([t[2] for t in new_two]), z, z, np.full(k, "", dtype=object),
+                             np.array([t[3] for t in new_two])))
+    return Columns.concat(parts)
 
 
 def _column_dict(cols: Columns, k: int) -> dict[int, np.ndarray]:

@@ -25,7 +25,7 @@ from ..model.inertia import unhat
 from ..model.robot import Robot
 from ..pga.core import hat
 from .drng import Columns, _world_axes
-from .subspaces import MotionSpans, _rowspace, motion_spans, nullspace
+from .subspaces import SATURATED, MotionSpans, _rowspace, motion_spans, nullspace
 
 RULES = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms")
 RA, RB, RL1 = 3, 4, 5  # principle indices (after the paper's three)
@@ -72,20 +72,38 @@ def _single(h: np.ndarray, body: int, rule: int, label: str) -> Columns:
 def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     """R-A: ``sym(f, v)`` on every body ``i`` with ``f`` fixed (``∩ ker S_j`` on its path), gravity
     filtered. Closes gravity zero (Puma560's axis-1/axis-2 intersection: +2), translation stages
-    (every direction fixed) and a U joint at the base with its first axis along gravity."""
+    (every direction fixed) and a U joint at the base with its first axis along gravity.
+    Batched over bodies: fixed vectors padded to 4 rows, one SVD per step for all bodies."""
     ms = motion_spans(robot) if ms is None else ms
-    e4 = np.eye(4)
+    tol = ms.tol
+    bodies = [i for i in range(robot.n) if ms.span[i] is not None and len(ms.fixed(i))]
+    if not bodies:
+        return Columns.empty()
+    m = len(bodies)
+    f = np.zeros((m, 4, 4))
+    for k, i in enumerate(bodies):
+        fi = ms.fixed(i)
+        f[k, : len(fi)] = fi
+    ab = np.einsum("mfi,vj->mfvij", f, np.eye(4)).reshape(m, 16, 4, 4)
+    syms = ab + np.swapaxes(ab, -1, -2)  # (m, 16, 4, 4): sym(f_a, e_b), zero for padding
+    g = robot.gravity
+    if np.linalg.norm(g) > tol:
+        c = np.zeros((m, SATURATED, 4))  # rows g^T X over the span, padded
+        for k, i in enumerate(bodies):
+            c[k, : ms.dim(i)] = ms.level_constraint(i, g / np.linalg.norm(g))
+        a = np.einsum("mra,mka->mrk", c, syms[..., :, 3])  # (m, 12, 16)
+        _, sv, vt = np.linalg.svd(a, full_matrices=True)  # vt (m, 16, 16)
+        rk = np.sum(sv > tol, axis=1)
+        coef = vt * (np.arange(16)[None, :, None] >= rk[:, None, None])  # nullspace rows only
+        syms = np.einsum("mck,mkab->mcab", coef, syms)
+    hats = hat10(syms)  # (m, 16, 10)
+    _, sv, vt = np.linalg.svd(hats, full_matrices=False)  # vt (m, 10, 10)
+    rk = np.sum(sv > tol, axis=1)
     parts = []
-    for i in range(robot.n):
-        if ms.span[i] is None:
-            continue
-        f = ms.fixed(i)
-        if len(f) == 0:
-            continue
-        h = _independent(_gravity_filter(ms, i, _syms(f, e4)), ms.tol)
-        if len(h):
-            label = "sym(f, v), f fixed: " + "; ".join(_describe(v) for v in _readable(f))
-            parts.append(_single(h, i, RA, label))
+    for k, i in enumerate(bodies):
+        if rk[k]:
+            label = "sym(f, v), f fixed: " + "; ".join(_describe(v) for v in ms.fixed(i))
+            parts.append(_single(vt[k, : rk[k]], i, RA, label))
     return Columns.concat(parts)
 
 
@@ -103,54 +121,59 @@ def _readable(basis: np.ndarray) -> np.ndarray:
     return np.concatenate([p[None], dirs]) if len(dirs) else p[None]
 
 
-def _unique(dirs: np.ndarray, tol: float = 1e-12) -> np.ndarray:
-    """Unit directions ``(c, 3)`` without repeats (parallel or antiparallel), first kept."""
-    g = np.abs(dirs @ dirs.T)
-    return dirs[~np.triu(g > 1 - tol, 1).any(axis=0)]
+def slide_directions(robot: Robot, tol: float = 1e-9) -> np.ndarray:
+    """The only line a non-fixed point of each body can slide along ``(n, 3)`` (zero: none).
+
+    A point's velocity gets ``p_j(q)`` from every P joint ``j`` on the path and a rotating part
+    from the R joints; free rotations alone never move a point along a straight line, so a
+    sliding point needs a P joint, and all P directions on the path must be that line. Bodies
+    with no P joint on their path, or two non-parallel ones, get zero (R-B has nothing to add
+    there beyond R-A's fixed vectors)."""
+    s = robot.screws
+    pdir = s[robot.q_index, 3:] / np.maximum(np.linalg.norm(s[robot.q_index, 3:], axis=1, keepdims=True), 1e-300)
+    pd = pdir.tolist()
+    par = robot.parent.tolist()
+    out: list[tuple[float, float, float] | None] = []  # None: conflict
+    zero = (0.0, 0.0, 0.0)
+    tol2 = tol * tol
+    for i, t in enumerate(robot.jtype):
+        p = par[i]
+        d = out[p] if p >= 0 else zero
+        if d is not None and t == "P":
+            v = pd[i]
+            if d == zero:
+                d = tuple(v)
+            else:
+                cx, cy, cz = d[1] * v[2] - d[2] * v[1], d[2] * v[0] - d[0] * v[2], d[0] * v[1] - d[1] * v[0]
+                if cx * cx + cy * cy + cz * cz > tol2:
+                    d = None
+        elif t == "F":
+            d = None
+        out.append(d)
+    return np.array([zero if d is None else d for d in out], dtype=float).reshape(robot.n, 3)
 
 
 def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     """R-B: ``sym(a, b)`` with ``a`` sliding along ``d`` and ``b`` level in ``d`` (velocity of ``a``
-    always along ``d``, of ``b`` always ``⟂ d``), gravity filtered. Candidate lines ``d``: the
-    joint directions on the body's path (kept while they still slide something), gravity, x, y, z.
-    Closes a fixed axis beyond the base (a lift followed by coaxial R joints along gravity: +2)."""
+    always along ``d``, of ``b`` always ``⟂ d``), gravity filtered; ``d`` from
+    :func:`slide_directions`. Closes a fixed axis beyond the base (a lift followed by coaxial R
+    joints along gravity: +2 per turning body)."""
     ms = motion_spans(robot) if ms is None else ms
-    g = robot.gravity
-    base = np.eye(3)
-    if np.linalg.norm(g) > ms.tol:
-        base = np.concatenate([base, g[None] / np.linalg.norm(g)])
-    s = robot.screws
-    own = np.where(np.linalg.norm(s[:, :3], axis=1, keepdims=True) > 1e-12, s[:, :3], s[:, 3:])
-    nown = np.linalg.norm(own, axis=1)
-    qi, nd = robot.q_index, robot.ndofs
-    live: list[np.ndarray] = []
+    dirs = slide_directions(robot, ms.tol)
     parts = []
-    empty = np.zeros((0, 3))
-    for i in range(robot.n):
-        p = robot.parent[i]
-        span = ms.span[i]
-        if span is None:
-            live.append(empty)
+    for i in np.flatnonzero(np.any(dirs, axis=1)):
+        if ms.span[i] is None:
             continue
-        js = np.arange(qi[i], qi[i] + nd[i])
-        js = js[nown[js] > 1e-12]
-        cands = _unique(np.concatenate([base, live[p] if p >= 0 else empty, own[js] / nown[js, None]]))
-        nfix = len(ms.fixed(i))
-        # sliding spaces for all candidates at once: nullspace of (I - d d^T) X, X in M_i
-        proj = np.eye(3) - np.einsum("ca,cb->cab", cands, cands)
-        mats = np.einsum("cab,kbd->ckad", proj, span).reshape(len(cands), -1, 4)
-        _, sv, vt = np.linalg.svd(mats, full_matrices=True)
-        ranks = np.sum(sv > ms.tol, axis=1)
-        keep = np.flatnonzero(4 - ranks > nfix)
-        live.append(cands[keep])
-        for c in keep:
-            d, a = cands[c], vt[c, ranks[c]:]
-            b = ms.level(i, d)
-            h = _independent(_gravity_filter(ms, i, _syms(a, b)), ms.tol)
-            if len(h):
-                label = (f"sym(a, b), a sliding along ({', '.join(f'{x:.4g}' for x in d)}): "
-                         + "; ".join(_describe(v) for v in _readable(a)))
-                parts.append(_single(h, i, RB, label))
+        d = dirs[i]
+        a = ms.sliding(i, d)
+        if len(a) <= len(ms.fixed(i)):
+            continue
+        b = ms.level(i, d)
+        h = _independent(_gravity_filter(ms, i, _syms(a, b)), ms.tol)
+        if len(h):
+            label = (f"sym(a, b), a sliding along ({', '.join(f'{x:.4g}' for x in d)}), "
+                     f"{len(a)}-dimensional")
+            parts.append(_single(h, int(i), RB, label))
     return Columns.concat(parts)
 
 

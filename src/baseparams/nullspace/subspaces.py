@@ -96,25 +96,56 @@ class MotionSpans:
 
 
 def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
-    """Every body's motion span, base-first (parents come before children in ``robot``)."""
+    """Every body's motion span, base-first, batched over the bodies of each depth.
+
+    Spans are padded ``(12, 12)`` row bases (zero rows beyond the dimension); one batched SVD
+    per depth and joint coordinate slot. Bodies below a saturated one are saturated."""
+    n = robot.n
     screws = hat(robot.screws)  # (dof, 4, 4) world twists at q = 0
     qi, nd = robot.q_index, robot.ndofs
-    spans: list[np.ndarray | None] = []
-    par = robot.parent.tolist()
-    for i in range(robot.n):
-        p = par[i]
-        if p >= 0 and spans[p] is None:
-            spans.append(None)
-            continue
-        cur = np.zeros((0, 3, 4)) if p < 0 else spans[p]
-        for j in range(qi[i], qi[i] + nd[i]):
-            s = screws[j]
-            s2 = s @ s
-            stack = np.concatenate([cur, cur @ s, cur @ s2, s[None, :3], s2[None, :3]])
-            cur = _rowspace(stack.reshape(len(stack), 12), tol).reshape(-1, 3, 4)
-            if len(cur) == SATURATED:
-                break
-        spans.append(None if len(cur) == SATURATED else cur)
-    none = np.zeros((0, 4))
-    fix = tuple(none if sp is None else nullspace(sp.reshape(-1, 4), tol) for sp in spans)
-    return MotionSpans(robot, tuple(spans), tol, fix)
+    par = robot.parent
+    depth = np.zeros(n, dtype=int)
+    pl = par.tolist()
+    for i in range(n):
+        depth[i] = depth[pl[i]] + 1 if pl[i] >= 0 else 0
+    basis = np.zeros((n, SATURATED, SATURATED))
+    dim = np.zeros(n, dtype=int)
+    sat = np.zeros(n, dtype=bool)
+    rows = np.arange(SATURATED)
+    by_depth = np.argsort(depth, kind="stable")
+    bounds = np.searchsorted(depth[by_depth], np.arange(depth.max() + 2))
+    for lvl in range(depth.max() + 1):
+        lev = by_depth[bounds[lvl]: bounds[lvl + 1]]
+        if lvl > 0:
+            dead = sat[par[lev]]
+            sat[lev[dead]] = True
+            lev = lev[~dead]
+        if len(lev) == 0:  # every body of this depth saturated: so is everything deeper
+            sat[by_depth[bounds[lvl + 1]:]] = True
+            break
+        cur = basis[par[lev]] if lvl > 0 else np.zeros((len(lev), SATURATED, SATURATED))
+        r = dim[par[lev]] if lvl > 0 else np.zeros(len(lev), dtype=int)
+        for t in range(int(nd[lev].max())):
+            act = np.flatnonzero(nd[lev] > t)
+            sc = screws[qi[lev[act]] + t]
+            s2 = sc @ sc
+            b = cur[act].reshape(-1, SATURATED, 3, 4)
+            new = np.concatenate([b, b @ sc[:, None], b @ s2[:, None], sc[:, None, :3], s2[:, None, :3]],
+                                 axis=1).reshape(len(act), -1, SATURATED)
+            _, sv, vt = np.linalg.svd(new, full_matrices=False)
+            ra = np.sum(sv > tol, axis=1)
+            cur[act] = vt * (rows[None, :, None] < ra[:, None, None])
+            r[act] = ra
+        basis[lev], dim[lev] = cur, r
+        sat[lev] = r >= SATURATED
+    live = np.flatnonzero(~sat)
+    spans: list[np.ndarray | None] = [None] * n
+    fix: list[np.ndarray] = [np.zeros((0, 4))] * n
+    if len(live):
+        m = basis[live].reshape(len(live), -1, 4)  # every X of the span, stacked: (m, 36, 4)
+        _, sv, vt = np.linalg.svd(m, full_matrices=True)
+        rk = np.sum(sv > tol, axis=1)
+        for k, i in enumerate(live.tolist()):
+            spans[i] = basis[i, : dim[i]].reshape(-1, 3, 4)
+            fix[i] = vt[k, rk[k]:]
+    return MotionSpans(robot, tuple(spans), tol, tuple(fix))

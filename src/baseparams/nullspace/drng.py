@@ -330,9 +330,18 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
     if not pure_mask.any():
         return cols
     scale = max(float(np.abs(cols.h).max()), 1e-300)
-    pure: dict[int, list[np.ndarray]] = {}
-    for k in np.flatnonzero(pure_mask):
-        pure.setdefault(int(cols.child[k]), []).append(cols.h[k])
+    fresh: set[int] = set()  # bodies whose pure list is still the batched orthonormal basis
+    # the pure span of every body at once (batched SVD over padded blocks)
+    pk = np.flatnonzero(pure_mask)
+    pk = pk[np.argsort(cols.child[pk], kind="stable")]
+    pb, pc = np.unique(cols.child[pk], return_counts=True)
+    slot = np.arange(len(pk)) - np.repeat(np.r_[0, np.cumsum(pc)[:-1]], pc)
+    blocks = np.zeros((len(pb), 10, pc.max()))
+    blocks[np.repeat(np.arange(len(pb)), pc), :, slot] = cols.h[pk]
+    u, sv, _ = np.linalg.svd(blocks, full_matrices=False)
+    pure: dict[int, list[np.ndarray]] = {int(bb): list((u[k][:, sv[k] > rtol * scale]).T)
+                                         for k, bb in enumerate(pb)}
+    fresh.update(pure)
     two = np.flatnonzero(~pure_mask & (cols.extra < 0))
     order = two[np.argsort(cols.child[two], kind="stable")]
     bodies, first = np.unique(cols.child[order], return_index=True)
@@ -347,8 +356,12 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
         bb = -heapq.heappop(heap)
         if bb not in pure:
             continue
-        u, sv, _ = np.linalg.svd(np.array(pure.pop(bb)).T, full_matrices=False)
-        basis = u[:, sv > rtol * scale]  # (10, r)
+        vecs = np.array(pure.pop(bb)).reshape(-1, 10).T
+        if bb in fresh:
+            basis = vecs  # already orthonormal
+        else:
+            u, sv, _ = np.linalg.svd(vecs, full_matrices=False)
+            basis = u[:, sv > rtol * scale]  # (10, r)
         out_h.append(basis.T)
         out_b += [bb] * basis.shape[1]
         if bb not in span_of or basis.shape[1] == 0:
@@ -370,6 +383,7 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
             if p not in pure:
                 heapq.heappush(heap, -p)
             pure.setdefault(p, []).extend(hpn[r:])
+            fresh.discard(p)
     keep = ~pure_mask & ~touched
     parts = [cols.subset(keep)]
     m = len(out_b)

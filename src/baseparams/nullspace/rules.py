@@ -55,12 +55,13 @@ def _independent(syms: np.ndarray, tol: float) -> np.ndarray:
 
 
 def _describe(v: np.ndarray) -> str:
-    v = np.where(np.abs(v) < 1e-12, 0.0, v)
-    if abs(v[3]) > 1e-9:
-        p = v[:3] / v[3]
-        return "point (" + ", ".join(f"{x:.4g}" for x in p) + ")"
-    d = v[:3] / np.linalg.norm(v[:3])
-    return "direction (" + ", ".join(f"{x:.4g}" for x in d) + ")"
+    x, y, z, w = (float(c) for c in v)
+    if abs(w) > 1e-9:
+        a, b, c = (round(t / w, 12) + 0.0 for t in (x, y, z))
+        return f"point ({a:.4g}, {b:.4g}, {c:.4g})"
+    n = (x * x + y * y + z * z) ** 0.5
+    a, b, c = (round(t / n, 12) + 0.0 for t in (x, y, z))
+    return f"direction ({a:.4g}, {b:.4g}, {c:.4g})"
 
 
 def _single(h: np.ndarray, body: int, rule: int, label: str) -> Columns:
@@ -84,13 +85,12 @@ def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns
     for k, i in enumerate(bodies):
         fi = ms.fixed(i)
         f[k, : len(fi)] = fi
+    bodies_a = np.array(bodies)
     ab = np.einsum("mfi,vj->mfvij", f, np.eye(4)).reshape(m, 16, 4, 4)
     syms = ab + np.swapaxes(ab, -1, -2)  # (m, 16, 4, 4): sym(f_a, e_b), zero for padding
     g = robot.gravity
     if np.linalg.norm(g) > tol:
-        c = np.zeros((m, SATURATED, 4))  # rows g^T X over the span, padded
-        for k, i in enumerate(bodies):
-            c[k, : ms.dim(i)] = ms.level_constraint(i, g / np.linalg.norm(g))
+        c = np.einsum("a,mkab->mkb", g / np.linalg.norm(g), ms.padded[bodies_a])  # rows g^T X, padded
         a = np.einsum("mra,mka->mrk", c, syms[..., :, 3])  # (m, 12, 16)
         _, sv, vt = np.linalg.svd(a, full_matrices=True)  # vt (m, 16, 16)
         rk = np.sum(sv > tol, axis=1)

@@ -63,6 +63,7 @@ class MotionSpans:
     span: tuple[np.ndarray | None, ...]
     tol: float
     fix: tuple[np.ndarray, ...] = ()
+    padded: np.ndarray | None = None  # (n, 12, 3, 4): span bases padded with zero rows
 
     def dim(self, i: int) -> int:
         s = self.span[i]
@@ -148,4 +149,4 @@ def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
         for k, i in enumerate(live.tolist()):
             spans[i] = basis[i, : dim[i]].reshape(-1, 3, 4)
             fix[i] = vt[k, rk[k]:]
-    return MotionSpans(robot, tuple(spans), tol, tuple(fix))
+    return MotionSpans(robot, tuple(spans), tol, tuple(fix), basis.reshape(n, SATURATED, 3, 4))

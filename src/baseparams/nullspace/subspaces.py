@@ -130,12 +130,15 @@ def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
             act = np.flatnonzero(nd[lev] > t)
             sc = screws[qi[lev[act]] + t]
             s2 = sc @ sc
-            b = cur[act].reshape(-1, SATURATED, 3, 4)
+            rmax = int(r[act].max())  # rows beyond every body's dimension are zero: drop them
+            b = cur[act, :rmax].reshape(len(act), rmax, 3, 4)
             new = np.concatenate([b, b @ sc[:, None], b @ s2[:, None], sc[:, None, :3], s2[:, None, :3]],
                                  axis=1).reshape(len(act), -1, SATURATED)
-            _, sv, vt = np.linalg.svd(new, full_matrices=False)
+            _, sv, vt = np.linalg.svd(new, full_matrices=False)  # vt (m, min(rows, 12), 12)
             ra = np.sum(sv > tol, axis=1)
-            cur[act] = vt * (rows[None, :, None] < ra[:, None, None])
+            k = vt.shape[1]
+            cur[act] = 0.0
+            cur[act, :k] = vt * (rows[None, :k, None] < ra[:, None, None])
             r[act] = ra
         basis[lev], dim[lev] = cur, r
         sat[lev] = r >= SATURATED

@@ -5,12 +5,16 @@ term ``T = 1/2 tr(dg dN dg^T)`` vanishes on every motion and its potential
 ``V = -gbar^T g(q) dN e4`` is constant. With the exact motion spans of
 :mod:`.subspaces` both conditions are linear at q = 0:
 
-- **R-A fixed vectors** (every body): ``sym(f, v)`` for ``f`` fixed and any ``v``;
-- **R-B sliding points**: ``sym(a, b)`` for ``a`` sliding along ``d`` and ``b`` level in ``d``;
+- **R-A fixed vectors** (every body): ``sym(f, v)`` for ``f`` fixed and any ``v``; across a loop
+  joint, ``sym`` of the vectors both bodies move alike (``+`` successor, ``-`` predecessor);
+- **R-B sliding points**: ``sym(a, b)`` for ``a`` sliding along ``d`` and ``b`` level in ``d``,
+  ``d`` the one line a point can slide along (the P directions of the path, all parallel);
 - **R-L1 parallelograms** (loops): a 4-cycle of parallel R joints whose joint points form a
-  parallelogram at q = 0: opposite links keep their relative orientation on that assembly mode;
+  parallelogram at q = 0: opposite links keep their relative orientation on that assembly mode
+  (fixed root: coupler translations and rocker-to-crank transfers; moving root: direction
+  transfers and a three-body rocker-to-crank transfer compensated on the root);
 
-each followed by the gravity filter: keep the combinations whose ``dN e4`` is level in gravity
+R-A and R-B are followed by the gravity filter: keep the combinations whose ``dN e4`` is level in gravity
 (the potential never changes). Columns are in the paper's convention (spatial pseudo-inertia at
 q = 0, ``hat`` order) and carry their provenance; they are redundant with each other and with the
 paper's principles, so :func:`..drng.block_rank` decides the rank.
@@ -25,7 +29,7 @@ from ..model.inertia import unhat
 from ..model.robot import Robot
 from ..pga.core import hat
 from .drng import Columns, _world_axes
-from .subspaces import SATURATED, MotionSpans, _rowspace, motion_spans, nullspace
+from .subspaces import MotionSpans, _rowspace, motion_spans, nullspace
 
 RULES = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms")
 RA, RB, RL1 = 3, 4, 5  # principle indices (after the paper's three)
@@ -35,16 +39,6 @@ def _syms(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """All ``sym(a_k, b_l) = a b^T + b a^T`` ``(ka * kb, 4, 4)``."""
     ab = np.einsum("ki,lj->klij", a, b).reshape(-1, 4, 4)
     return ab + np.swapaxes(ab, -1, -2)
-
-
-def _gravity_filter(ms: MotionSpans, i: int, syms: np.ndarray) -> np.ndarray:
-    """The combinations of ``syms (m, 4, 4)`` whose potential is constant ``(r, 4, 4)``."""
-    g = ms.robot.gravity
-    if len(syms) == 0 or np.linalg.norm(g) <= ms.tol:
-        return syms
-    c = ms.level_constraint(i, g / np.linalg.norm(g))  # (k, 4): g^T X
-    coef = nullspace(c @ syms[:, :, 3].T, ms.tol)  # (r, m)
-    return np.einsum("rm,mab->rab", coef, syms)
 
 
 def _independent(syms: np.ndarray, tol: float) -> np.ndarray:
@@ -70,40 +64,44 @@ def _single(h: np.ndarray, body: int, rule: int, label: str) -> Columns:
                    np.full(m, label, dtype=object))
 
 
+def _sym_columns(ms: MotionSpans, bodies: np.ndarray, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
+    """For each body ``bodies[k]``: an orthonormal basis ``(r_k, 10)`` of the combinations of
+    ``sym(a_k[i], b_k[j])`` whose potential is constant (gravity filter). ``a, b (m, 4, 4)``:
+    vectors as rows, padded with zero rows. Batched: three SVD calls for all bodies."""
+    m = len(bodies)
+    ab = np.einsum("mfi,mvj->mfvij", a, b).reshape(m, 16, 4, 4)
+    syms = ab + np.swapaxes(ab, -1, -2)  # zero for padding
+    g = ms.robot.gravity
+    if np.linalg.norm(g) > ms.tol:
+        c = np.einsum("a,mkab->mkb", g / np.linalg.norm(g), ms.padded[bodies])  # rows g^T X, padded
+        _, sv, vt = np.linalg.svd(np.einsum("mra,mka->mrk", c, syms[..., :, 3]), full_matrices=True)
+        rk = np.sum(sv > ms.tol, axis=1)
+        coef = vt * (np.arange(16)[None, :, None] >= rk[:, None, None])  # nullspace rows only
+        syms = np.einsum("mck,mkab->mcab", coef, syms)
+    _, sv, vt = np.linalg.svd(hat10(syms), full_matrices=False)  # (m, 10, 10)
+    rk = np.sum(sv > ms.tol, axis=1)
+    return [vt[k, : rk[k]] for k in range(m)]
+
+
+def _padded(vectors: list[np.ndarray]) -> np.ndarray:
+    out = np.zeros((len(vectors), 4, 4))
+    for k, v in enumerate(vectors):
+        out[k, : len(v)] = v
+    return out
+
+
 def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     """R-A: ``sym(f, v)`` on every body ``i`` with ``f`` fixed (``∩ ker S_j`` on its path), gravity
     filtered. Closes gravity zero (Puma560's axis-1/axis-2 intersection: +2), translation stages
     (every direction fixed) and a U joint at the base with its first axis along gravity.
-    Batched over bodies: fixed vectors padded to 4 rows, one SVD per step for all bodies."""
+    Batched over bodies."""
     ms = motion_spans(robot) if ms is None else ms
-    tol = ms.tol
-    bodies = [i for i in range(robot.n) if ms.span[i] is not None and len(ms.fixed(i))]
-    if not bodies:
+    bodies = np.array([i for i in range(robot.n) if ms.span[i] is not None and len(ms.fixed(i))], dtype=int)
+    if not len(bodies):
         return Columns.empty()
-    m = len(bodies)
-    f = np.zeros((m, 4, 4))
-    for k, i in enumerate(bodies):
-        fi = ms.fixed(i)
-        f[k, : len(fi)] = fi
-    bodies_a = np.array(bodies)
-    ab = np.einsum("mfi,vj->mfvij", f, np.eye(4)).reshape(m, 16, 4, 4)
-    syms = ab + np.swapaxes(ab, -1, -2)  # (m, 16, 4, 4): sym(f_a, e_b), zero for padding
-    g = robot.gravity
-    if np.linalg.norm(g) > tol:
-        c = np.einsum("a,mkab->mkb", g / np.linalg.norm(g), ms.padded[bodies_a])  # rows g^T X, padded
-        a = np.einsum("mra,mka->mrk", c, syms[..., :, 3])  # (m, 12, 16)
-        _, sv, vt = np.linalg.svd(a, full_matrices=True)  # vt (m, 16, 16)
-        rk = np.sum(sv > tol, axis=1)
-        coef = vt * (np.arange(16)[None, :, None] >= rk[:, None, None])  # nullspace rows only
-        syms = np.einsum("mck,mkab->mcab", coef, syms)
-    hats = hat10(syms)  # (m, 16, 10)
-    _, sv, vt = np.linalg.svd(hats, full_matrices=False)  # vt (m, 10, 10)
-    rk = np.sum(sv > tol, axis=1)
-    parts = []
-    for k, i in enumerate(bodies):
-        if rk[k]:
-            label = "sym(f, v), f fixed: " + "; ".join(_describe(v) for v in ms.fixed(i))
-            parts.append(_single(vt[k, : rk[k]], i, RA, label))
+    hs = _sym_columns(ms, bodies, _padded([ms.fixed(i) for i in bodies]), np.broadcast_to(np.eye(4), (len(bodies), 4, 4)))
+    parts = [_single(h, int(i), RA, "sym(f, v), f fixed: " + "; ".join(_describe(v) for v in ms.fixed(i)))
+             for i, h in zip(bodies, hs) if len(h)]
     return Columns.concat(parts)
 
 
@@ -157,23 +155,29 @@ def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     """R-B: ``sym(a, b)`` with ``a`` sliding along ``d`` and ``b`` level in ``d`` (velocity of ``a``
     always along ``d``, of ``b`` always ``⟂ d``), gravity filtered; ``d`` from
     :func:`slide_directions`. Closes a fixed axis beyond the base (a lift followed by coaxial R
-    joints along gravity: +2 per turning body)."""
+    joints along gravity: +2 per turning body). Batched over bodies."""
     ms = motion_spans(robot) if ms is None else ms
     dirs = slide_directions(robot, ms.tol)
-    parts = []
-    for i in np.flatnonzero(np.any(dirs, axis=1)):
-        if ms.span[i] is None:
-            continue
-        d = dirs[i]
-        a = ms.sliding(i, d)
-        if len(a) <= len(ms.fixed(i)):
-            continue
-        b = ms.level(i, d)
-        h = _independent(_gravity_filter(ms, i, _syms(a, b)), ms.tol)
-        if len(h):
-            label = (f"sym(a, b), a sliding along ({', '.join(f'{x:.4g}' for x in d)}), "
-                     f"{len(a)}-dimensional")
-            parts.append(_single(h, int(i), RB, label))
+    bodies = np.array([i for i in np.flatnonzero(np.any(dirs, axis=1)) if ms.span[i] is not None], dtype=int)
+    if not len(bodies):
+        return Columns.empty()
+    d = dirs[bodies]
+    x = ms.padded[bodies]  # (m, 12, 3, 4)
+    proj = np.eye(3) - np.einsum("ma,mb->mab", d, d)
+    _, sv, vt = np.linalg.svd(np.einsum("mab,mkbc->mkac", proj, x).reshape(len(bodies), -1, 4))
+    ra = np.sum(sv > ms.tol, axis=1)
+    nfix = np.array([len(ms.fixed(i)) for i in bodies])
+    keep = 4 - ra > nfix  # something slides that is not fixed
+    if not keep.any():
+        return Columns.empty()
+    bodies, d, vt, ra, x = bodies[keep], d[keep], vt[keep], ra[keep], x[keep]
+    a = vt * (np.arange(4)[None, :, None] >= ra[:, None, None])  # sliding space rows (padded)
+    _, lsv, lvt = np.linalg.svd(np.einsum("ma,mkab->mkb", d, x))
+    rl = np.sum(lsv > ms.tol, axis=1)
+    b = lvt * (np.arange(4)[None, :, None] >= rl[:, None, None])  # level space rows (padded)
+    hs = _sym_columns(ms, bodies, a, b)
+    parts = [_single(h, int(i), RB, f"sym(a, b), a sliding along ({', '.join(f'{c + 0:.4g}' for c in dd)}), "
+                     f"{4 - r}-dimensional") for i, h, dd, r in zip(bodies, hs, d, ra) if len(h)]
     return Columns.concat(parts)
 
 

@@ -11,11 +11,12 @@ from baseparams.model import RobotBuilder, pose
 from baseparams.nullspace import drng
 from baseparams.nullspace.certify import certify
 from baseparams.nullspace.drng import PRINCIPLES
-from baseparams.nullspace.rules import (RA, RB, RL1, fixed_vector_columns, loop_shared_columns,
-                                        parallelogram_columns, parallelograms, sliding_columns)
+from baseparams.nullspace.rules import (RA, RB, RL1, RL2, fixed_vector_columns, level_chain_columns,
+                                        loop_level_spaces, loop_shared_columns, parallelogram_columns,
+                                        parallelograms, sliding_columns)
 from baseparams.nullspace.subspaces import motion_spans
-from baseparams.numerics import numerical_nullspace, stacked_regressor
-from baseparams.robots import parallelogram, random_robot
+from baseparams.numerics import closed_samples, numerical_nullspace, stacked_regressor
+from baseparams.robots import four_bar, parallelogram, pkm_2prs_1psr, pkm_2rru_1rrs, random_robot
 from baseparams.robots.random import random_inertia
 
 
@@ -198,7 +199,8 @@ def test_loop_shared_vectors_of_a_spherical_closure():
 
 def test_every_source_is_named():
     assert PRINCIPLES[RA] == "R-A fixed vectors" and PRINCIPLES[RB] == "R-B sliding points"
-    assert PRINCIPLES[RL1] == "R-L1 parallelograms" and PRINCIPLES[-1] == "numerical"
+    assert PRINCIPLES[RL1] == "R-L1 parallelograms" and PRINCIPLES[RL2] == "R-L2 level chains"
+    assert PRINCIPLES[-1] == "numerical"
 
 
 @pytest.mark.parametrize("seed", range(25))
@@ -213,3 +215,106 @@ def test_block_rank_equals_dense_rank_with_rules(seed):
     dense = to_sparse(cols, robot.n).toarray()
     dense /= np.maximum(np.linalg.norm(dense, axis=0), 1e-300)
     assert block_rank(cols, robot.n) == np.linalg.matrix_rank(dense, tol=1e-9)
+
+
+# ------------------------------------------------------------------------------ R-L2
+def _split_psr_pkm():
+    """The mirror-symmetric 2PRS-1PSR with limb c's link split in two by an R joint along the
+    platform's R axis (P S R R; 4 DOF, the extra R actuated): its level chain crosses three
+    bodies (link c, link c2, platform), none but the ends holding a level point."""
+    from baseparams.model import Inertia
+    from baseparams.robots.loops import _frame, _inertia, _rel
+
+    z = np.array([0, 0, 1.0])
+    bl = RobotBuilder("split-psr", gravity=(0, 0, -9.81))
+    world = {}
+    for k, (name, th) in enumerate((("a", 0.0), ("b", np.pi), ("c", np.pi / 2))):
+        r = np.array([np.cos(th), np.sin(th), 0.0])
+        u = np.cross(z, r)
+        b_pt, c_pt = 0.25 * r + 0.10 * z, 0.12 * r + 0.45 * z
+        fs = _frame(b_pt, z)
+        bl.add_link(f"slider{name}", joint="P", origin=fs, axis=(0, 0, 1), inertia=_inertia(2 * k, 0.1), actuated=True)
+        if name != "c":
+            fr = _frame(b_pt, u)
+            bl.add_link(f"link{name}", parent=f"slider{name}", joint="R", origin=_rel(fs, fr), axis=(0, 0, 1),
+                        inertia=_inertia(2 * k + 1, 0.4), actuated=False)
+        else:
+            fr0 = pose(b_pt)
+            bl.add_link("linkc", parent="sliderc", joint="S", origin=_rel(fs, fr0), inertia=_inertia(5, 0.2),
+                        actuated=False)
+            fr = _frame(0.5 * (b_pt + c_pt) + np.array([0, 0.03, 0]), u)
+            bl.add_link("linkc2", parent="linkc", joint="R", origin=_rel(fr0, fr), axis=(0, 0, 1),
+                        inertia=_inertia(9, 0.2), actuated=True)
+        world[name] = (fr, c_pt, u)
+        if name == "a":
+            fpl = pose(c_pt)
+            bl.add_link("platform", parent="linka", joint="S", origin=_rel(fr, fpl),
+                        inertia=Inertia(2.5, com=(0.01, -0.02, 0.03), inertia=(0.02, 0.025, 0.04)), actuated=False)
+            world["platform"] = fpl
+    fpl = world["platform"]
+    bl.add_loop("S_b", "S", parent="platform", child="linkb", origin=_rel(fpl, pose(world["b"][1])))
+    _, c_c, u_c = world["c"]
+    bl.add_loop("R_c", "R", parent="platform", child="linkc2", origin=_rel(fpl, _frame(c_c, u_c)), axis=(0, 0, 1))
+    bl.q_box = np.tile([-0.05, 0.05], (4, 1))
+    return bl.build()
+
+
+LEVEL_ROBOTS = [lambda: pkm_2prs_1psr(True), pkm_2prs_1psr, pkm_2rru_1rrs, four_bar, parallelogram, _split_psr_pkm]
+
+
+@pytest.mark.parametrize("make", LEVEL_ROBOTS)
+def test_loop_level_spaces_are_level_on_the_closed_robot(make):
+    """Soundness of the propagation: every vector found level in e keeps its e-coordinate on
+    sampled closed configurations (e over the joint axes and gravity)."""
+    from baseparams.nullspace.drng import _world_axes
+
+    robot = make()
+    cs = closed_samples(robot, 120, np.random.default_rng(5))
+    g = forward_kinematics(robot, cs.q).g  # (s, n, 4, 4)
+    axes = [a for a in _world_axes(robot) if np.linalg.norm(a) > 0] + [np.array(robot.gravity)]
+    found = 0
+    for e in axes:
+        e = e / np.linalg.norm(e)
+        for i, h in enumerate(loop_level_spaces(robot, e)):
+            if len(h):
+                moved = np.einsum("a,sab,kb->sk", e, g[:, i, :3, :] - np.eye(4)[:3], h)
+                assert np.abs(moved).max() < 1e-9, (robot.names[i], e)
+                found += len(h)
+    assert found > 0
+
+
+def test_rl2_symmetric_2prs_completes():
+    """Mirror-symmetric 2PRS-1PSR (PAPER_NOTES gap 6): nullity 48, the paper's principles give 47,
+    R-L2 the platform's level R axis (two-body chain link c - platform)."""
+    robot = pkm_2prs_1psr(symmetric=True)
+    cols = level_chain_columns(robot)
+    assert len(cols) and np.max(_in_nullspace(robot, cols)) < 1e-10
+    paper, ext = drng(robot, extended=False), drng(robot)
+    c = certify(robot, samples=3000, seed=1, result=ext)
+    assert c.certified and c.nullity == 48 and c.completed == 0
+    assert paper.rank == 47 and ext.by_principle()["R-L2 level chains"] == 1
+    two = [k for k in range(len(ext.columns)) if ext.columns.principle[k] == RL2 and ext.columns.parent[k] >= 0]
+    assert any(ext.provenance(k).startswith("R-L2 level chains: bodies linkc / platform") for k in two)
+    # tilting nothing but the layout (the generic 2PRS-1PSR): R-L2 stays safe and adds nothing
+    generic = pkm_2prs_1psr()
+    assert np.max(_in_nullspace(generic, level_chain_columns(generic))) < 1e-10
+    assert drng(generic).rank == drng(generic, extended=False).rank == 47
+
+
+def test_rl2_three_body_chain():
+    robot = _split_psr_pkm()
+    ext = drng(robot)
+    triples = ext.columns.subset((ext.columns.principle == RL2) & (ext.columns.extra >= 0))
+    assert len(triples) >= 1 and np.max(_in_nullspace(robot, triples)) < 1e-10
+    c = certify(robot, samples=3000, seed=1, result=ext)
+    assert c.certified and c.completed == 0 and c.nullity == 51
+    without = drng(robot).columns
+    without = without.subset(~((without.principle == RL2) & (without.extra >= 0)))
+    from baseparams.nullspace import block_rank
+
+    assert block_rank(without, robot.n) == ext.rank - 1  # the triple is what closes it
+
+
+def test_rl2_needs_loops():
+    robot = random_robot(np.random.default_rng(0), 6)
+    assert len(level_chain_columns(robot)) == 0

@@ -37,7 +37,8 @@ from ..pga.core import cross3
 
 PAPER = ("shared points", "fixed points", "planar rotations")
 #: provenance of a column: the paper's principles, the extended rules (:mod:`.rules`), numerics
-PRINCIPLES = PAPER + ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "numerical")
+PRINCIPLES = PAPER + ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
+                      "numerical")
 
 
 FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp", "extra", "he")
@@ -483,7 +484,7 @@ class DRNGResult:
 
     def by_principle(self) -> dict[str, int]:
         """Rank contributed by each source, taken in order: the paper's principles 1, 2, 3, then
-        the extended rules R-A, R-B, R-L1 (those run)."""
+        the extended rules R-A, R-B, R-L1, R-L2 (those run)."""
         out, prev = {}, 0
         names = PRINCIPLES[:-1] if self.extended else PAPER
         for k, name in enumerate(names):
@@ -518,7 +519,7 @@ class DRNGResult:
 def drng(robot: Robot, tol: float = 1e-9, extended: bool = True) -> DRNGResult:
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
-    ``extended``: add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1);
+    ``extended``: add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2);
     ``False`` gives the paper's three principles alone."""
     t0 = time.perf_counter()
     cols = drng_columns(robot, tol)

@@ -13,6 +13,10 @@ term ``T = 1/2 tr(dg dN dg^T)`` vanishes on every motion and its potential
   parallelogram at q = 0: opposite links keep their relative orientation on that assembly mode
   (fixed root: coupler translations and rocker-to-crank transfers; moving root: direction
   transfers and a three-body rocker-to-crank transfer compensated on the root);
+- **R-L2 level chains** (loops): a direction ``x`` that stays ``⟂ e`` (level in ``e``, loop-aware)
+  and is shared along a chain of bodies (R or P joints along ``x``) from a point ``A`` to a point
+  ``B`` whose ``e``-coordinates never change: ``Σ_j sym(x, x × r_j)`` over the chain is null
+  (``r_j`` the chain's segment in body ``j``; the symmetric 2PRS-1PSR: +1);
 
 R-A and R-B are followed by the gravity filter: keep the combinations whose ``dN e4`` is level in gravity
 (the potential never changes). Columns are in the paper's convention (spatial pseudo-inertia at
@@ -31,8 +35,8 @@ from ..pga.core import hat
 from .drng import Columns, _world_axes
 from .subspaces import MotionSpans, _rowspace, motion_spans, nullspace
 
-RULES = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms")
-RA, RB, RL1 = 3, 4, 5  # principle indices (after the paper's three)
+RULES = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains")
+RA, RB, RL1, RL2 = 3, 4, 5, 6  # principle indices (after the paper's three)
 
 
 def _syms(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -238,14 +242,14 @@ def parallelograms(robot: Robot, tol: float = 1e-7) -> list[dict]:
     return out
 
 
-def _pair(h_a: np.ndarray, a: int, h_b: np.ndarray, b: int, label: str) -> Columns:
+def _pair(h_a: np.ndarray, a: int, h_b: np.ndarray, b: int, label: str, rule: int = RL1) -> Columns:
     """Columns ``+h_a`` on body ``a``, ``+h_b`` on body ``b`` (``b`` may be ``-1``: dropped)."""
     m = len(h_a)
     if b < 0 or a > b:
         hi, lo, hh, hl = a, b, h_a, h_b
     else:
         hi, lo, hh, hl = b, a, h_b, h_a
-    return Columns(hh, np.full(m, hi), np.full(m, lo), np.full(m, RL1), np.full(m, hi),
+    return Columns(hh, np.full(m, hi), np.full(m, lo), np.full(m, rule), np.full(m, hi),
                    np.full(m, label, dtype=object), hl if lo >= 0 else np.zeros_like(hh))
 
 
@@ -342,8 +346,164 @@ def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     return Columns.concat(parts)
 
 
+# ------------------------------------------------------------------------------ loops: R-L2
+def _intersect(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
+    """Orthonormal basis ``(r, 4)`` of ``span(a) ∩ span(b)``; ``a, b`` orthonormal rows."""
+    if len(a) == 0 or len(b) == 0:
+        return np.zeros((0, 4))
+    off_b = a - (a @ b.T) @ b  # each row of a, minus its part in span(b)
+    alpha = nullspace(off_b.T, tol)  # combinations of a's rows that lie in span(b)
+    return _rowspace(alpha @ a, tol) if len(alpha) else np.zeros((0, 4))
+
+
+def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndarray, np.ndarray]]:
+    """Every tree and loop joint as ``(a, b, type, origin (3,), axis (3,), shared (s, 4))``:
+    ``a`` the predecessor (``-1``: the base), ``shared`` an orthonormal basis of the vectors both
+    bodies move alike (R: axis point and direction; U, S: the centre; P: every direction; a
+    fixed loop joint: everything; a free joint: nothing)."""
+    e = np.eye(4)
+    axw = _world_axes(robot)
+    out = []
+    spec = [(int(robot.parent[i]), i, robot.jtype[i], robot.M0[i, :3, 3], axw[i]) for i in range(robot.n)]
+    spec += [(lj.parent, lj.child, lj.type, lj.M[:3, 3], lj.M[:3, :3] @ lj.axes[0] if len(lj.axes) else np.zeros(3))
+             for lj in robot.loops]
+    for a, b, t, o, ax in spec:
+        pt = np.r_[o, 1.0]
+        shared = {"R": np.array([pt, np.r_[ax, 0.0]]), "P": e[:3], "U": pt[None], "S": pt[None],
+                  "fixed": e}.get(t, np.zeros((0, 4)))
+        out.append((a, b, t, np.asarray(o, float), np.asarray(ax, float), _rowspace(shared, 1e-12)))
+    return out
+
+
+def loop_level_spaces(robot: Robot, e: np.ndarray, ms: MotionSpans | None = None,
+                      joints: list | None = None) -> list[np.ndarray]:
+    """Loop-aware level spaces ``H_i((e, 0))`` ``(h_i, 4)`` per body: the open tree's (exact for
+    the tree, a subset for the closed robot), enlarged to a fixpoint by propagation across every
+    tree and loop joint: a vector both bodies move alike that keeps its ``e``-coordinate in one
+    body keeps it in the other (``../shared/EXTENDED_PRINCIPLES.md``, R-L2). Safe: everything
+    returned is level on the closed robot."""
+    ms = motion_spans(robot) if ms is None else ms
+    joints = _joint_shares(robot) if joints is None else joints
+    h = [ms.level(i, e) for i in range(robot.n)]
+    full = np.eye(4)
+    changed = True
+    while changed:
+        changed = False
+        for a, b, _, _, _, shared in joints:
+            for src, dst in ((a, b), (b, a)):
+                if dst < 0 or len(h[dst]) == 4:
+                    continue
+                common = _intersect(full if src < 0 else h[src], shared, ms.tol)
+                if len(common) == 0:
+                    continue
+                new = _rowspace(np.concatenate([h[dst], common]), ms.tol)
+                if len(new) > len(h[dst]):
+                    h[dst], changed = new, True
+    return h
+
+
+def _cross4(x: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``(x × d, 0)`` for 4-vectors (their direction parts)."""
+    return np.r_[np.cross(x[:3], d[:3]), 0.0]
+
+
+def _sym4(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.outer(a, b) + np.outer(b, a)
+
+
+def _level_point(h: np.ndarray) -> np.ndarray | None:
+    """A point ``(4,)`` (``w = 1``) of the level space, or ``None`` if it holds directions only."""
+    if len(h) == 0 or np.abs(h[:, 3]).max() < 1e-9:
+        return None
+    k = int(np.argmax(np.abs(h[:, 3])))
+    return h[k] / h[k, 3]
+
+
+def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float = 1e-9) -> Columns:
+    """R-L2, level chains (loop robots). For a fixed direction ``e`` and a direction ``x`` that
+    stays ``⟂ e`` (level, :func:`loop_level_spaces`), shared by a chain of bodies joined by R or P
+    joints along ``x`` from a level point ``A`` to a level point ``B``:
+
+        Σ_j sym(x, x × r_j) on body j,   r_j = J_j - J_{j-1},  J_0 = A, J_m = B, J_j on joint j,
+
+    is null. Proof: its kinetic term is ``ẋ · d/dt(x × (B - A)) = (B - A)˙ · (ẋ × x)``, and
+    ``ẋ × x ∥ e`` (``x`` turns in the plane ``⟂ e``) while ``e · (B - A)`` is constant; direction
+    pairs have no potential. Single bodies (``A, B`` on one body: any level direction ``d``
+    gives ``sym(x, x × d)``), pairs and triples are emitted; ``e`` runs over the joint axes and
+    gravity. Loop robots only: on trees the level spaces are exact and the rule adds nothing
+    beyond R-A and R-B (the special-robot survey)."""
+    if not robot.loops:
+        return Columns.empty()
+    ms = motion_spans(robot, tol) if ms is None else ms
+    joints = _joint_shares(robot)
+    cands: list[np.ndarray] = []
+    g = np.asarray(robot.gravity, float)
+    for v in [ax for *_, ax, _ in joints] + [g]:
+        nv = np.linalg.norm(v)
+        if nv > tol and all(np.linalg.norm(np.cross(v / nv, c)) > 1e-9 for c in cands):
+            cands.append(v / nv)
+    parts: list[Columns] = []
+    e4 = np.eye(4)
+    for e in cands:
+        h = loop_level_spaces(robot, e, ms, joints)
+        ee = np.r_[e, 0.0]
+        xs, pts = [], []
+        for i in range(robot.n):
+            dirs = _intersect(h[i], e4[:3], tol) if len(h[i]) else np.zeros((0, 4))
+            x = _intersect(dirs, nullspace(ee[None], tol), tol) if len(dirs) else dirs
+            xs.append(x)
+            pts.append(_level_point(h[i]))
+            if len(x) == 0 or len(dirs) < 2:
+                continue
+            mats = []  # single body: sym(x, x × d), polarised over a 2-D family of x
+            for d in dirs:
+                for k, xa in enumerate(x):
+                    for xb in x[k:]:
+                        mats.append(_sym4(xa, _cross4(xb, d)) + _sym4(xb, _cross4(xa, d)))
+            hh = _independent(np.array(mats), tol)
+            if len(hh):
+                xl = f"x {_describe(x[0])}" if len(x) == 1 else f"x any direction ⟂ {_describe(ee)}"
+                parts.append(_single(hh, i, RL2, f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), "
+                                     f"{xl}, d level"))
+        # chains: bodies joined by R or P joints along a level x ⟂ e
+        edges: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
+        for a, b, t, o, ax, _ in joints:
+            if a < 0 or t not in ("R", "P") or abs(ax @ e) > 1e-9 * np.linalg.norm(ax):
+                continue
+            x = np.r_[ax / np.linalg.norm(ax), 0.0]
+            if len(xs[a]) == 0 or np.linalg.norm(x - (x @ xs[a].T) @ xs[a]) > 1e-7:
+                continue
+            jp = np.r_[o, 1.0]
+            edges.setdefault(a, []).append((b, x, jp))
+            edges.setdefault(b, []).append((a, x, jp))
+
+        def seg(x, p, q):  # sym(x, x × (q - p))
+            return hat10(_sym4(x, _cross4(x, q - p)))[None]
+
+        for a, nbrs in edges.items():
+            for b, x, jp in nbrs:
+                if a < b and pts[a] is not None and pts[b] is not None:
+                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[a])} "
+                             f"to {_describe(pts[b])} across the joint at {_describe(jp)}")
+                    parts.append(_pair(seg(x, pts[a], jp), a, seg(x, jp, pts[b]), b, label, RL2))
+            if pts[a] is not None:
+                continue
+            for k, (b, x, j1) in enumerate(nbrs):  # a in the middle of a triple b - a - c
+                for c, x2, j2 in nbrs[k + 1:]:
+                    if pts[b] is None or pts[c] is None or np.linalg.norm(x[:3] - np.sign(x @ x2) * x2[:3]) > 1e-7:
+                        continue
+                    body = sorted([(b, seg(x, pts[b], j1)), (a, seg(x, j1, j2)), (c, seg(x, j2, pts[c]))])
+                    (lo, hl), (mid, hm), (hi, hh) = body
+                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[b])} "
+                             f"to {_describe(pts[c])} through {robot.names[a]!r}")
+                    parts.append(Columns(hh, np.array([hi]), np.array([mid]), np.array([RL2]), np.array([hi]),
+                                         np.array([label], dtype=object), hm, np.array([lo]), hl))
+    return Columns.concat(parts)
+
+
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """All extended-rule columns (R-A, R-B, R-L1) for ``robot``."""
+    """All extended-rule columns (R-A, R-B, R-L1, R-L2) for ``robot``."""
     ms = motion_spans(robot, tol)
     return Columns.concat([fixed_vector_columns(robot, ms), loop_shared_columns(robot, tol),
-                           sliding_columns(robot, ms), parallelogram_columns(robot)])
+                           sliding_columns(robot, ms), parallelogram_columns(robot),
+                           level_chain_columns(robot, ms, tol)])

@@ -18,7 +18,7 @@ BUILTINS: dict[str, tuple[Callable[..., Robot], str]] = {
     "pkm-2rru-1rrs": (pkm_2rru_1rrs, "2RRU-1RRS parallel kinematic machine (after Xu et al. 2023), 3 DOF"),
     "pkm-2prs-1psr": (pkm_2prs_1psr, "2PRS-1PSR parallel kinematic machine (after Shi et al. 2023), 3 DOF"),
     "pkm-2prs-1psr-symmetric": (lambda gravity=(0.0, 0.0, -9.81): pkm_2prs_1psr(True, gravity),
-                                "2PRS-1PSR with the symmetric 120-degree layout"),
+                                "2PRS-1PSR, mirror-symmetric: PRS limbs opposite (nullity 48)"),
     "four-bar": (four_bar, "planar four-bar linkage, crank actuated"),
     "parallelogram": (parallelogram, "planar parallelogram four-bar (a known gap of the principles)"),
 }

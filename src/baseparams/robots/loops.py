@@ -24,7 +24,10 @@ and an R joint on the platform (axis tangent). Each limb exerts one constraint f
 (horizontal, along its R axis): 3 DOF. Actuated: the three sliders, sampled in +-0.05 m.
 Tree: slider a - link a - platform (S); slider b - link b; slider c - link c (S); loops: S
 (platform, link b), R (platform, link c). 7 bodies, 70 parameters. ``symmetric=True`` gives
-the 120-degree layout with equal dimensions (a known special case of the principles).
+the mirror-symmetric layout with equal dimensions: the two PRS limbs opposite each other (base
+angles 0 and 180 deg, their R axes parallel) and the PSR limb at 90 deg. Both sphere centres
+then keep their y coordinate, the platform's R axis stays level, and the nullity is 48, not 47
+(``../shared/PAPER_NOTES.md`` gap 6; closed by rule R-L2, level chains).
 """
 
 from __future__ import annotations
@@ -131,10 +134,10 @@ def pkm_2rru_1rrs(gravity=(0.0, 0.0, -9.81)) -> Robot:
 
 
 def pkm_2prs_1psr(symmetric: bool = False, gravity=(0.0, 0.0, -9.81)) -> Robot:
-    """The 2PRS-1PSR PKM (see module doc); ``symmetric`` for the equal 120-degree layout."""
+    """The 2PRS-1PSR PKM (see module doc); ``symmetric`` for the mirror-symmetric layout."""
     z = np.array([0, 0, 1.0])
     if symmetric:
-        limbs = {n: (np.deg2rad(th), 0.25, 0.12) for n, th in (("a", 90), ("b", 210), ("c", 330))}
+        limbs = {n: (np.deg2rad(th), 0.25, 0.12) for n, th in (("a", 0), ("b", 180), ("c", 90))}
     else:
         limbs = {"a": (np.deg2rad(90), 0.250, 0.120), "b": (np.deg2rad(213), 0.262, 0.114),
                  "c": (np.deg2rad(328), 0.243, 0.127)}

@@ -268,6 +268,9 @@ def bench_drng_scaling(out: dict, quick: bool) -> None:
         out["drng_chain_linearity"] = None
 
 
+LOOP_BUILTINS = ("four-bar", "parallelogram", "pkm-2rru-1rrs", "pkm-2prs-1psr", "pkm-2prs-1psr-symmetric")
+
+
 def bench_loops(out: dict, quick: bool) -> None:
     """Closed loops: DRNG on both PKMs vs the paper's 5000-sample numerical validation."""
     from baseparams.nullspace import drng
@@ -292,6 +295,19 @@ def bench_loops(out: dict, quick: bool) -> None:
         out[f"validation_{key}_nullity"] = res.nullity
         out[f"validation_{key}_sv_gap"] = res.gap
         out[f"validation_vs_drng_{key}"] = t_v / t_d
+    from baseparams.nullspace.certify import certify
+
+    for name in LOOP_BUILTINS:  # completeness of the geometric span on every built-in loop robot
+        robot = get(name)
+        key = name.replace("-", "_")
+        log(f"  completeness {name} ...")
+        c = certify(robot, samples=3000, seed=1)
+        out[f"loops_{key}_paper_rank"] = drng(robot, extended=False).rank
+        out[f"loops_{key}_extended_rank"] = c.drng_rank
+        out[f"loops_{key}_by_rule"] = {k: v for k, v in c.drng.by_principle().items() if v}
+        out[f"loops_{key}_nullity"] = c.nullity
+        out[f"loops_{key}_completed"] = c.completed
+        out[f"loops_{key}_status"] = c.status
 
 
 def bench_files(out: dict, quick: bool) -> None:

@@ -375,31 +375,9 @@ def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndar
     return out
 
 
-def loop_level_spaces(robot: Robot, e: np.ndarray, ms: MotionSpans | None = None,
-                      joints: list | None = None) -> list[np.ndarray]:
-    """Loop-aware level spaces ``H_i((e, 0))`` ``(h_i, 4)`` per body: the open tree's (exact for
-    the tree, a subset for the closed robot), enlarged to a fixpoint by propagation across every
-    tree and loop joint: a vector both bodies move alike that keeps its ``e``-coordinate in one
-    body keeps it in the other (``../shared/EXTENDED_PRINCIPLES.md``, R-L2). Safe: everything
-    returned is level on the closed robot."""
-    ms = motion_spans(robot) if ms is None else ms
-    joints = _joint_shares(robot) if joints is None else joints
-    h = [ms.level(i, e) for i in range(robot.n)]
-    full = np.eye(4)
-    changed = True
-    while changed:
-        changed = False
-        for a, b, _, _, _, shared in joints:
-            for src, dst in ((a, b), (b, a)):
-                if dst < 0 or len(h[dst]) == 4:
-                    continue
-                common = _intersect(full if src < 0 else h[src], shared, ms.tol)
-                if len(common) == 0:
-                    continue
-                new = _rowspace(np.concatenate([h[dst], common]), ms.tol)
-                if len(new) > len(h[dst]):
-                    h[dst], changed = new, True
-    return h
+_EPS = np.zeros((3, 3, 3))  # Levi-Civita: (a × b)_i = _EPS[i, j, k] a_j b_k
+_EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
+_EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
 
 
 def _cross4(x: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -411,12 +389,79 @@ def _sym4(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.outer(a, b) + np.outer(b, a)
 
 
-def _level_point(h: np.ndarray) -> np.ndarray | None:
-    """A point ``(4,)`` (``w = 1``) of the level space, or ``None`` if it holds directions only."""
-    if len(h) == 0 or np.abs(h[:, 3]).max() < 1e-9:
-        return None
-    k = int(np.argmax(np.abs(h[:, 3])))
-    return h[k] / h[k, 3]
+def _null_rows(k: np.ndarray, tol: float) -> np.ndarray:
+    """Right nullspace of every ``k (..., r, 4)`` as orthonormal rows padded with zero rows
+    ``(..., 4, 4)``; one batched SVD."""
+    _, sv, vt = np.linalg.svd(k, full_matrices=True)
+    full = np.zeros(k.shape[:-2] + (4,))
+    full[..., : sv.shape[-1]] = sv
+    return vt * (full <= tol)[..., None]
+
+
+def _span_rows(z: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Row space of every ``z (..., R >= 4, 4)``: orthonormal rows padded with zero rows
+    ``(..., 4, 4)`` and the rank ``(...)``."""
+    _, sv, vt = np.linalg.svd(z, full_matrices=False)
+    keep = sv > tol
+    return vt * keep[..., None], keep.sum(-1)
+
+
+def _level_spaces(robot: Robot, es: np.ndarray, ms: MotionSpans, joints: list) -> np.ndarray:
+    """Loop-aware level spaces for every candidate ``es (C, 3)`` and body at once:
+    ``(C, n, 4, 4)`` orthonormal rows padded with zero rows (see :func:`loop_level_spaces`)."""
+    n, tol = robot.n, ms.tol
+    live = np.array([s is not None for s in ms.span])
+    h = _null_rows(np.einsum("ca,nkab->cnkb", es, ms.padded), tol) * live[None, :, None, None]
+    edges = [(a, b, sh) for a, b, *_, sh in joints if len(sh)] + [(b, a, sh) for a, b, *_, sh in joints if len(sh)]
+    edges = [(a if a >= 0 else n, b, sh) for a, b, sh in edges if b >= 0]
+    if not edges:
+        return h
+    src = np.array([a for a, _, _ in edges])
+    dst = np.array([b for _, b, _ in edges])
+    s_pad = np.zeros((len(edges), 4, 4))
+    for k, (_, _, sh) in enumerate(edges):
+        s_pad[k, : len(sh)] = sh
+    slot = np.zeros(len(edges), dtype=int)  # which incoming edge of its destination
+    seen: dict[int, int] = {}
+    for k, b in enumerate(dst.tolist()):
+        slot[k] = seen.get(b, 0)
+        seen[b] = slot[k] + 1
+    rank = np.sum(np.linalg.norm(h, axis=-1) > 0.5, axis=-1)
+    eye = np.eye(4)
+    for _ in range(n + 2):
+        hx = np.concatenate([h, np.broadcast_to(eye, (len(es), 1, 4, 4))], axis=1)[:, src]  # (C, E, 4, 4)
+        off = eye - np.swapaxes(hx, -1, -2) @ hx  # projector off each source's level space
+        alpha = _null_rows(off @ np.swapaxes(s_pad, -1, -2), tol)  # shared combinations that are level
+        common = alpha @ s_pad
+        z = np.zeros((len(es), n, 1 + max(seen.values()), 4, 4))
+        z[:, :, 0] = h
+        z[:, dst, 1 + slot] = common
+        h_new, r_new = _span_rows(z.reshape(len(es), n, -1, 4), tol)
+        if not np.any(r_new > rank):
+            break
+        h, rank = h_new, r_new
+    return h
+
+
+def loop_level_spaces(robot: Robot, e: np.ndarray, ms: MotionSpans | None = None) -> list[np.ndarray]:
+    """Loop-aware level spaces ``H_i((e, 0))`` ``(h_i, 4)`` per body: the open tree's (exact for
+    the tree, a subset for the closed robot), enlarged to a fixpoint by propagation across every
+    tree and loop joint: a vector both bodies move alike that keeps its ``e``-coordinate in one
+    body keeps it in the other (``../shared/EXTENDED_PRINCIPLES.md``, R-L2). Safe: everything
+    returned is level on the closed robot."""
+    ms = motion_spans(robot) if ms is None else ms
+    h = _level_spaces(robot, np.asarray(e, float)[None], ms, _joint_shares(robot))[0]
+    return [hi[np.linalg.norm(hi, axis=1) > 0.5] for hi in h]
+
+
+def _candidates(robot: Robot, joints: list, tol: float) -> np.ndarray:
+    """Unit directions ``e (C, 3)``: every joint axis and gravity, parallel ones once."""
+    v = np.array([ax for *_, ax, _ in joints] + [np.asarray(robot.gravity, float)]).reshape(-1, 3)
+    nv = np.linalg.norm(v, axis=1)
+    u = v[nv > tol] / nv[nv > tol, None]
+    par = np.abs(u @ u.T) > 1.0 - 1e-14  # parallel or anti-parallel
+    first = np.argmax(par, axis=1)  # the first of each parallel class
+    return u[first == np.arange(len(u))]
 
 
 def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float = 1e-9) -> Columns:
@@ -430,76 +475,89 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     ``ẋ × x ∥ e`` (``x`` turns in the plane ``⟂ e``) while ``e · (B - A)`` is constant; direction
     pairs have no potential. Single bodies (``A, B`` on one body: any level direction ``d``
     gives ``sym(x, x × d)``), pairs and triples are emitted; ``e`` runs over the joint axes and
-    gravity. Loop robots only: on trees the level spaces are exact and the rule adds nothing
-    beyond R-A and R-B (the special-robot survey)."""
+    gravity, all candidates batched. Loop robots only: on trees the level spaces are exact and
+    the rule adds nothing beyond R-A and R-B (the special-robot survey)."""
     if not robot.loops:
         return Columns.empty()
     ms = motion_spans(robot, tol) if ms is None else ms
     joints = _joint_shares(robot)
-    cands: list[np.ndarray] = []
-    g = np.asarray(robot.gravity, float)
-    for v in [ax for *_, ax, _ in joints] + [g]:
-        nv = np.linalg.norm(v)
-        if nv > tol and all(np.linalg.norm(np.cross(v / nv, c)) > 1e-9 for c in cands):
-            cands.append(v / nv)
+    es = _candidates(robot, joints, tol)
+    h = _level_spaces(robot, es, ms, joints)  # (C, n, 4, 4)
+    c_n = h.shape[:2]
+    pad = np.einsum("cnk,kl->cnkl", (np.linalg.norm(h, axis=-1) < 0.5).astype(float), np.eye(4))
+    h3 = h[..., 3][:, :, None, :]
+    dirs = _null_rows(np.concatenate([h3, pad], axis=2), tol) @ h  # level directions (w = 0)
+    he = np.einsum("cnka,ca->cnk", h[..., :3], es)[:, :, None, :]
+    xs = _null_rows(np.concatenate([h3, he, pad], axis=2), tol) @ h  # level directions ⟂ e
+    nd = np.sum(np.linalg.norm(dirs, axis=-1) > 0.5, axis=-1)
+    nx = np.sum(np.linalg.norm(xs, axis=-1) > 0.5, axis=-1)
+    kw = np.argmax(np.abs(h[..., 3]), axis=-1)
+    wrow = np.take_along_axis(h, kw[..., None, None], axis=2)[:, :, 0]  # (C, n, 4)
+    has_pt = np.abs(wrow[..., 3]) > 1e-9
+    pts = np.where(has_pt[..., None], wrow / np.where(has_pt, wrow[..., 3], 1.0)[..., None], 0.0)
     parts: list[Columns] = []
-    e4 = np.eye(4)
-    for e in cands:
-        h = loop_level_spaces(robot, e, ms, joints)
-        ee = np.r_[e, 0.0]
-        xs, pts = [], []
-        for i in range(robot.n):
-            dirs = _intersect(h[i], e4[:3], tol) if len(h[i]) else np.zeros((0, 4))
-            x = _intersect(dirs, nullspace(ee[None], tol), tol) if len(dirs) else dirs
-            xs.append(x)
-            pts.append(_level_point(h[i]))
-            if len(x) == 0 or len(dirs) < 2:
-                continue
-            mats = []  # single body: sym(x, x × d), polarised over a 2-D family of x
-            for d in dirs:
-                for k, xa in enumerate(x):
-                    for xb in x[k:]:
-                        mats.append(_sym4(xa, _cross4(xb, d)) + _sym4(xb, _cross4(xa, d)))
-            hh = _independent(np.array(mats), tol)
-            if len(hh):
-                xl = f"x {_describe(x[0])}" if len(x) == 1 else f"x any direction ⟂ {_describe(ee)}"
-                parts.append(_single(hh, i, RL2, f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), "
-                                     f"{xl}, d level"))
-        # chains: bodies joined by R or P joints along a level x ⟂ e
+    # single bodies: sym(x_a, x_b × d) + sym(x_b, x_a × d) for level x's ⟂ e and level d's
+    ci, bi = np.nonzero((nx >= 1) & (nd >= 2))
+    if len(ci):
+        x, d = xs[ci, bi], dirs[ci, bi]
+        xd = np.zeros((len(ci), 4, 4, 4))
+        xd[..., :3] = np.einsum("ijk,maj,mdk->madi", _EPS, x[..., :3], d[..., :3])  # x_a × d
+        m = np.einsum("mai,mbdj->mabdij", x, xd)
+        m = m + np.swapaxes(m, -1, -2)
+        m = (m + np.swapaxes(m, 1, 2)).reshape(len(ci), -1, 4, 4)
+        _, sv, vt = np.linalg.svd(hat10(m), full_matrices=False)
+        rk = np.sum(sv > tol, axis=1)
+        ks = np.flatnonzero(rk)
+        labels = []
+        for k in ks:
+            ee = np.r_[es[ci[k]], 0.0]
+            xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}" if nx[ci[k], bi[k]] == 1 else f"x any direction ⟂ {_describe(ee)}"
+            labels.append(f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), {xl}, d level")
+        sel = (np.arange(10)[None, :] < rk[ks, None])  # (K, 10): the rows of each basis
+        body = np.repeat(bi[ks], rk[ks])
+        m = len(body)
+        parts.append(Columns(vt[ks][sel], body, np.full(m, -1), np.full(m, RL2), body.copy(),
+                             np.repeat(np.array(labels, dtype=object), rk[ks])))
+    # chains: bodies joined by R or P joints along a level x ⟂ e
+    links = [(a, b, o, ax / np.linalg.norm(ax)) for a, b, t, o, ax, _ in joints
+             if a >= 0 and t in ("R", "P") and np.linalg.norm(ax) > tol]
+
+    def seg(x, p, q):  # sym(x, x × (q - p))
+        return hat10(_sym4(x, _cross4(x, q - p)))[None]
+
+    for c in range(c_n[0]):
+        ee = np.r_[es[c], 0.0]
         edges: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
-        for a, b, t, o, ax, _ in joints:
-            if a < 0 or t not in ("R", "P") or abs(ax @ e) > 1e-9 * np.linalg.norm(ax):
+        for a, b, o, ax in links:
+            if abs(ax @ es[c]) > 1e-9 or nx[c, a] == 0:
                 continue
-            x = np.r_[ax / np.linalg.norm(ax), 0.0]
-            if len(xs[a]) == 0 or np.linalg.norm(x - (x @ xs[a].T) @ xs[a]) > 1e-7:
+            x = np.r_[ax, 0.0]
+            xa = xs[c, a]
+            if np.linalg.norm(x - (x @ xa.T) @ xa) > 1e-7:
                 continue
             jp = np.r_[o, 1.0]
             edges.setdefault(a, []).append((b, x, jp))
             edges.setdefault(b, []).append((a, x, jp))
-
-        def seg(x, p, q):  # sym(x, x × (q - p))
-            return hat10(_sym4(x, _cross4(x, q - p)))[None]
-
         for a, nbrs in edges.items():
             for b, x, jp in nbrs:
-                if a < b and pts[a] is not None and pts[b] is not None:
-                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[a])} "
-                             f"to {_describe(pts[b])} across the joint at {_describe(jp)}")
-                    parts.append(_pair(seg(x, pts[a], jp), a, seg(x, jp, pts[b]), b, label, RL2))
-            if pts[a] is not None:
+                if a < b and has_pt[c, a] and has_pt[c, b]:
+                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[c, a])} "
+                             f"to {_describe(pts[c, b])} across the joint at {_describe(jp)}")
+                    parts.append(_pair(seg(x, pts[c, a], jp), a, seg(x, jp, pts[c, b]), b, label, RL2))
+            if has_pt[c, a]:
                 continue
-            for k, (b, x, j1) in enumerate(nbrs):  # a in the middle of a triple b - a - c
-                for c, x2, j2 in nbrs[k + 1:]:
-                    if pts[b] is None or pts[c] is None or np.linalg.norm(x[:3] - np.sign(x @ x2) * x2[:3]) > 1e-7:
+            for k, (b, x, j1) in enumerate(nbrs):  # a in the middle of a triple b - a - c2
+                for c2, x2, j2 in nbrs[k + 1:]:
+                    if not (has_pt[c, b] and has_pt[c, c2]) or abs(abs(x @ x2) - 1.0) > 1e-9:
                         continue
-                    body = sorted([(b, seg(x, pts[b], j1)), (a, seg(x, j1, j2)), (c, seg(x, j2, pts[c]))])
+                    body = sorted([(b, seg(x, pts[c, b], j1)), (a, seg(x, j1, j2)), (c2, seg(x, j2, pts[c, c2]))],
+                                  key=lambda t: t[0])
                     (lo, hl), (mid, hm), (hi, hh) = body
-                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[b])} "
-                             f"to {_describe(pts[c])} through {robot.names[a]!r}")
+                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[c, b])} "
+                             f"to {_describe(pts[c, c2])} through {robot.names[a]!r}")
                     parts.append(Columns(hh, np.array([hi]), np.array([mid]), np.array([RL2]), np.array([hi]),
                                          np.array([label], dtype=object), hm, np.array([lo]), hl))
     return Columns.concat(parts)
-
 
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     """All extended-rule columns (R-A, R-B, R-L1, R-L2) for ``robot``."""

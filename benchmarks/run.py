@@ -99,6 +99,19 @@ def measure(fn: Callable[[], object], repeats: int, warmup: int = 1) -> tuple[fl
     return statistics.median(times), repeats
 
 
+def measure_pair(fa: Callable[[], object], fb: Callable[[], object], repeats: int) -> tuple[float, float, int]:
+    """Median seconds of ``fa()`` and of ``fb()``, timed alternately (a, b, a, b, ...) so that a
+    noisy machine affects both alike; for ratios of a variant against its baseline."""
+    fa(), fb()
+    ta, tb = [], []
+    for _ in range(repeats):
+        for fn, acc in ((fa, ta), (fb, tb)):
+            t0 = time.perf_counter()
+            fn()
+            acc.append(time.perf_counter() - t0)
+    return statistics.median(ta), statistics.median(tb), repeats
+
+
 def peak_mb(fn: Callable[[], object]) -> float:
     """Peak traced memory (MB, 1e6 bytes) of one call of ``fn`` (tracemalloc; numpy
     registers its data buffers with tracemalloc)."""
@@ -208,8 +221,7 @@ def bench_drng_vs_numerical(out: dict, quick: bool) -> None:
     for name in ROBOTS:
         robot = _robot(name)
         log(f"  drng {name} ...")
-        t_d, n_d = measure(lambda: drng(robot, extended=False), r_fast)
-        t_e, _ = measure(lambda: drng(robot), r_fast)
+        t_d, t_e, n_d = measure_pair(lambda: drng(robot, extended=False), lambda: drng(robot), r_fast)
         log(f"  numerical {name} (100 samples) ...")
         t_n, n_n = measure(lambda: numerical_nullspace(robot, samples=100, seed=0), r_slow)
         log(f"  certify {name} ...")
@@ -247,8 +259,7 @@ def bench_drng_scaling(out: dict, quick: bool) -> None:
                     robot = random_robot(np.random.default_rng(n), n, joint_types="RP", branching=branching)
                     t_build = time.perf_counter() - t0
                     log(f"  {key}: built in {t_build:.2f} s; timing drng ...")
-                    t, r = measure(lambda: drng(robot, extended=False), reps[n])
-                    te, _ = measure(lambda: drng(robot), reps[n])
+                    t, te, r = measure_pair(lambda: drng(robot, extended=False), lambda: drng(robot), reps[n])
             except Timeout as e:
                 log(f"  {key}: SKIPPED (build + timing {e}; budget {SCALING_BUDGET_S:.0f} s per N)")
                 out[f"{key}_ms"] = out[f"{key}_us_per_body"] = None
@@ -284,8 +295,7 @@ def bench_loops(out: dict, quick: bool) -> None:
         robot = get(name)
         key = name.replace("-", "_")
         log(f"  drng {name} ...")
-        t_d, n_d = measure(lambda: drng(robot, extended=False), 51 if not quick else 11)
-        t_e, _ = measure(lambda: drng(robot), 51 if not quick else 11)
+        t_d, t_e, n_d = measure_pair(lambda: drng(robot, extended=False), lambda: drng(robot), 51 if not quick else 11)
         log(f"  validation {name} ({samples} actuated samples) ...")
         info: dict = {}
         t_v, n_v = measure(lambda: numerical_nullspace(robot, samples=samples, seed=0, info=info), 5 if not quick else 2)

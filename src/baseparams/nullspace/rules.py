@@ -62,10 +62,44 @@ def _describe(v: np.ndarray) -> str:
     return f"direction ({a:.4g}, {b:.4g}, {c:.4g})"
 
 
+class _Label:
+    """A provenance label formatted on demand: labels are built for every column and read
+    rarely (``DRNGResult.provenance``), so the formatting is deferred."""
+
+    __slots__ = ("fn", "args")
+
+    def __init__(self, fn, *args) -> None:
+        self.fn, self.args = fn, args
+
+    def __str__(self) -> str:
+        return self.fn(*self.args)
+
+    __repr__ = __str__
+
+
+def _fixed_label(f: np.ndarray) -> str:
+    return "sym(f, v), f fixed: " + "; ".join(_describe(v) for v in f)
+
+
+def _sliding_label(d: np.ndarray, dim: int) -> str:
+    return f"sym(a, b), a sliding along ({', '.join(f'{c + 0:.4g}' for c in d)}), {dim}-dimensional"
+
+
 def _single(h: np.ndarray, body: int, rule: int, label: str) -> Columns:
     m = len(h)
     return Columns(h, np.full(m, body), np.full(m, -1), np.full(m, rule), np.full(m, body),
                    np.full(m, label, dtype=object))
+
+
+def _singles(hs: list[np.ndarray], bodies, rule: int, labels: list[str]) -> Columns:
+    """One-body columns for many bodies at once: basis ``hs[k] (r_k, 10)`` on ``bodies[k]``."""
+    counts = np.array([len(h) for h in hs], dtype=int)
+    if counts.sum() == 0:
+        return Columns.empty()
+    body = np.repeat(np.asarray(bodies, dtype=int), counts)
+    m = len(body)
+    return Columns(np.concatenate(hs), body, np.full(m, -1), np.full(m, rule), body.copy(),
+                   np.repeat(np.array(labels, dtype=object), counts))
 
 
 def _sym_columns(ms: MotionSpans, bodies: np.ndarray, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
@@ -104,9 +138,8 @@ def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns
     if not len(bodies):
         return Columns.empty()
     hs = _sym_columns(ms, bodies, _padded([ms.fixed(i) for i in bodies]), np.broadcast_to(np.eye(4), (len(bodies), 4, 4)))
-    parts = [_single(h, int(i), RA, "sym(f, v), f fixed: " + "; ".join(_describe(v) for v in ms.fixed(i)))
-             for i, h in zip(bodies, hs) if len(h)]
-    return Columns.concat(parts)
+    labels = [_Label(_fixed_label, ms.fixed(i)) for i in bodies]
+    return _singles(hs, bodies, RA, labels)
 
 
 def _readable(basis: np.ndarray) -> np.ndarray:
@@ -180,9 +213,8 @@ def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     rl = np.sum(lsv > ms.tol, axis=1)
     b = lvt * (np.arange(4)[None, :, None] >= rl[:, None, None])  # level space rows (padded)
     hs = _sym_columns(ms, bodies, a, b)
-    parts = [_single(h, int(i), RB, f"sym(a, b), a sliding along ({', '.join(f'{c + 0:.4g}' for c in dd)}), "
-                     f"{4 - r}-dimensional") for i, h, dd, r in zip(bodies, hs, d, ra) if len(h)]
-    return Columns.concat(parts)
+    labels = [_Label(_sliding_label, dd, 4 - r) for dd, r in zip(d, ra)]
+    return _singles(hs, bodies, RB, labels)
 
 
 # ------------------------------------------------------------------------------ loops: R-L1
@@ -513,11 +545,7 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
             ee = np.r_[es[ci[k]], 0.0]
             xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}" if nx[ci[k], bi[k]] == 1 else f"x any direction ⟂ {_describe(ee)}"
             labels.append(f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), {xl}, d level")
-        sel = (np.arange(10)[None, :] < rk[ks, None])  # (K, 10): the rows of each basis
-        body = np.repeat(bi[ks], rk[ks])
-        m = len(body)
-        parts.append(Columns(vt[ks][sel], body, np.full(m, -1), np.full(m, RL2), body.copy(),
-                             np.repeat(np.array(labels, dtype=object), rk[ks])))
+        parts.append(_singles([vt[k, : rk[k]] for k in ks], bi[ks], RL2, labels))
     # chains: bodies joined by R or P joints along a level x ⟂ e
     links = [(a, b, o, ax / np.linalg.norm(ax)) for a, b, t, o, ax, _ in joints
              if a >= 0 and t in ("R", "P") and np.linalg.norm(ax) > tol]

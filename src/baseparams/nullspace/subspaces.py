@@ -131,15 +131,16 @@ def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
             sc = screws[qi[lev[act]] + t]
             s2 = sc @ sc
             rmax = int(r[act].max())  # rows beyond every body's dimension are zero: drop them
-            b = cur[act, :rmax].reshape(len(act), rmax, 3, 4)
-            new = np.concatenate([b, b @ sc[:, None], b @ s2[:, None], sc[:, None, :3], s2[:, None, :3]],
-                                 axis=1).reshape(len(act), -1, SATURATED)
-            _, sv, vt = np.linalg.svd(new, full_matrices=False)  # vt (m, min(rows, 12), 12)
-            ra = np.sum(sv > tol, axis=1)
-            k = vt.shape[1]
-            cur[act] = 0.0
-            cur[act, :k] = vt * (rows[None, :k, None] < ra[:, None, None])
-            r[act] = ra
+            known = cur[act, :rmax]  # (m, rmax, 12) orthonormal rows, zero-padded
+            b = known.reshape(len(act), rmax, 3, 4)
+            cand = np.concatenate([b @ sc[:, None], b @ s2[:, None], sc[:, None, :3], s2[:, None, :3]],
+                                  axis=1).reshape(len(act), -1, SATURATED)
+            cand = cand - (cand @ np.swapaxes(known, 1, 2)) @ known  # only what is new
+            _, sv, vt = np.linalg.svd(cand, full_matrices=False)  # vt (m, min(rows, 12), 12)
+            add = np.sum(sv > tol, axis=1)
+            mi, ji = np.nonzero(rows[None, : vt.shape[1]] < add[:, None])
+            cur[act[mi], r[act[mi]] + ji] = vt[mi, ji]  # appended after each body's current rows
+            r[act] = r[act] + add
         basis[lev], dim[lev] = cur, r
         sat[lev] = r >= SATURATED
     live = np.flatnonzero(~sat)

@@ -27,6 +27,12 @@ def main(argv: list[str]) -> int:
         f"| {g(f'drng_chain_N{N}_extended_ratio', '{:.1f}')}x | {g(f'drng_tree_N{N}_ms')} ms "
         f"| {g(f'drng_tree_N{N}_extended_ms')} ms | {g(f'drng_tree_N{N}_extended_ratio', '{:.1f}')}x |\n"
         for N in (10, 100, 1000, 10000))
+    ratios = [d.get(f"drng_{k}_N{n}_extended_ratio") for k in ("chain", "tree") for n in (10, 100, 1000, 10000)]
+    ratios = [r for r in ratios if r is not None]
+    ext_status = ("no data" if not ratios else
+                  f"met in this run (largest {max(ratios):.2f}x); tight at N = 10 and 100, where a fixed ~1 ms "
+                  "of rule overhead meets a ~0.5-1.5 ms baseline" if max(ratios) <= 3.0 else
+                  f"**missed** in this run (largest {max(ratios):.2f}x, at small N: fixed rule overhead)")
     rows_loops = "".join(
         f"| `{name}` | {g(f'loops_{k}_paper_rank', '{}')} | {g(f'loops_{k}_extended_rank', '{}')} "
         f"| {g(f'loops_{k}_nullity', '{}')} | {g(f'loops_{k}_completed', '{}')} | {d.get(f'loops_{k}_by_rule')} |\n"
@@ -151,7 +157,7 @@ cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-bo
 | PKM validation <= 2 s | {g('validation_pkm_2rru_1rrs_s', '{:.2f}')} s, {g('validation_pkm_2prs_1psr_s', '{:.2f}')} s | met |
 | DRNG >= 1000x faster than the validation (paper's principles, as the paper times it) | {g('validation_vs_drng_pkm_2rru_1rrs', '{:.0f}')}x, {g('validation_vs_drng_pkm_2prs_1psr', '{:.0f}')}x | noisy: 760x-1370x seen across runs; with the extended rules {g('validation_vs_drng_extended_pkm_2rru_1rrs', '{:.0f}')}x, {g('validation_vs_drng_extended_pkm_2prs_1psr', '{:.0f}')}x |
 | DRNG on talos_full_v2 well under 10 ms | {g('talos_full_v2_drng_ms')} ms | met |
-| extended DRNG within 3x of the paper's principles, N = 10 ... 10 000 | chain {g('drng_chain_N10_extended_ratio', '{:.1f}')}x ... {g('drng_chain_N10000_extended_ratio', '{:.1f}')}x, tree {g('drng_tree_N10_extended_ratio', '{:.1f}')}x ... {g('drng_tree_N10000_extended_ratio', '{:.1f}')}x | see section 6 |
+| extended DRNG within 3x of the paper's principles, N = 10 ... 10 000 | chain {g('drng_chain_N10_extended_ratio', '{:.1f}')}x ... {g('drng_chain_N10000_extended_ratio', '{:.1f}')}x, tree {g('drng_tree_N10_extended_ratio', '{:.1f}')}x ... {g('drng_tree_N10000_extended_ratio', '{:.1f}')}x | {ext_status} |
 | geometric span complete on >= 99 % of special robots | {g('special_extended_complete', '{}')} / {g('special_robots', '{}')} | met |
 
 ### What limits the missed targets

@@ -31,8 +31,8 @@ import numpy as np
 from ..model.inertia import hat as hat10
 from ..model.inertia import unhat
 from ..model.robot import Robot
-from ..pga.core import hat
-from .drng import Columns, _world_axes
+from ..pga.core import cross3, hat
+from .drng import Columns, _sym, _world_axes
 from .subspaces import MotionSpans, _rowspace, motion_spans, nullspace
 
 RULES = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains")
@@ -83,12 +83,6 @@ def _fixed_label(f: np.ndarray) -> str:
 
 def _sliding_label(d: np.ndarray, dim: int) -> str:
     return f"sym(a, b), a sliding along ({', '.join(f'{c + 0:.4g}' for c in d)}), {dim}-dimensional"
-
-
-def _single(h: np.ndarray, body: int, rule: int, label: str) -> Columns:
-    m = len(h)
-    return Columns(h, np.full(m, body), np.full(m, -1), np.full(m, rule), np.full(m, body),
-                   np.full(m, label, dtype=object))
 
 
 def _singles(hs: list[np.ndarray], bodies, rule: int, labels: list[str]) -> Columns:
@@ -303,7 +297,7 @@ def parallelogram_columns(robot: Robot) -> Columns:
         if l0 < 0:
             h = _independent(_syms(e[:3], e), 1e-12)  # sym(direction, anything): 9
             label = f"parallelogram (loop {name!r}): the coupler only translates, sym(f, v) for every direction f"
-            parts.append(_single(h, l2, RL1, label))
+            parts.append(_singles([h], [l2], RL1, [label]))
             t = np.eye(4)
             t[:3, 3] = p[3] - p[0]
             ti = np.linalg.inv(t)
@@ -363,12 +357,10 @@ def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         bodies = _path_to(robot, lj.child, lca) + _path_to(robot, lj.parent, lca)
         js = [j for b in bodies for j in range(qi[b], qi[b] + nd[b])]
         fix = nullspace(screws[js].reshape(-1, 4), tol) if js else e
-        o = np.r_[lj.M[:3, 3], 1.0]
-        own = {"R": [o, np.r_[lj.M[:3, :3] @ lj.axes[0], 0.0]] if lj.type == "R" else [],
-               "P": [e[0], e[1], e[2]], "U": [o], "S": [o], "F": [o, e[0], e[1], e[2]]}.get(lj.type, [o])
+        own = _shared_vectors(lj.type, lj.M[:3, 3], _loop_axis(lj))
         if len(fix) == 0:
             continue
-        shared = _rowspace(np.concatenate([np.array(own).reshape(-1, 4), fix]), tol)
+        shared = _rowspace(np.concatenate([own, fix]), tol)
         h = _independent(_syms(shared, shared), tol)
         label = (f"shared across loop joint {lj.name!r} ({lj.type}), fixed relative to the loop's root: "
                  + "; ".join(_describe(v) for v in _readable(shared)))
@@ -379,13 +371,19 @@ def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
 
 
 # ------------------------------------------------------------------------------ loops: R-L2
-def _intersect(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
-    """Orthonormal basis ``(r, 4)`` of ``span(a) ∩ span(b)``; ``a, b`` orthonormal rows."""
-    if len(a) == 0 or len(b) == 0:
-        return np.zeros((0, 4))
-    off_b = a - (a @ b.T) @ b  # each row of a, minus its part in span(b)
-    alpha = nullspace(off_b.T, tol)  # combinations of a's rows that lie in span(b)
-    return _rowspace(alpha @ a, tol) if len(alpha) else np.zeros((0, 4))
+def _loop_axis(lj) -> np.ndarray:
+    """A loop joint's first axis in world coordinates at q = 0 ``(3,)`` (zero if it has none)."""
+    return lj.M[:3, :3] @ lj.axes[0] if len(lj.axes) else np.zeros(3)
+
+
+def _shared_vectors(jtype: str, origin: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Vectors ``(s, 4)`` a joint's two bodies move alike (principle 1): R its axis point and
+    direction; U, S the centre; P every direction; a fixed loop joint everything; a free joint
+    nothing."""
+    pt = np.r_[origin, 1.0]
+    e = np.eye(4)
+    return {"R": np.array([pt, np.r_[axis, 0.0]]), "P": e[:3], "U": pt[None], "S": pt[None],
+            "fixed": e}.get(jtype, np.zeros((0, 4)))
 
 
 def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndarray, np.ndarray]]:
@@ -393,32 +391,21 @@ def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndar
     ``a`` the predecessor (``-1``: the base), ``shared`` an orthonormal basis of the vectors both
     bodies move alike (R: axis point and direction; U, S: the centre; P: every direction; a
     fixed loop joint: everything; a free joint: nothing)."""
-    e = np.eye(4)
     axw = _world_axes(robot)
     out = []
     spec = [(int(robot.parent[i]), i, robot.jtype[i], robot.M0[i, :3, 3], axw[i]) for i in range(robot.n)]
-    spec += [(lj.parent, lj.child, lj.type, lj.M[:3, 3], lj.M[:3, :3] @ lj.axes[0] if len(lj.axes) else np.zeros(3))
+    spec += [(lj.parent, lj.child, lj.type, lj.M[:3, 3], _loop_axis(lj))
              for lj in robot.loops]
     for a, b, t, o, ax in spec:
-        pt = np.r_[o, 1.0]
-        shared = {"R": np.array([pt, np.r_[ax, 0.0]]), "P": e[:3], "U": pt[None], "S": pt[None],
-                  "fixed": e}.get(t, np.zeros((0, 4)))
-        out.append((a, b, t, np.asarray(o, float), np.asarray(ax, float), _rowspace(shared, 1e-12)))
+        out.append((a, b, t, np.asarray(o, float), np.asarray(ax, float), _rowspace(_shared_vectors(t, o, ax), 1e-12)))
     return out
 
 
-_EPS = np.zeros((3, 3, 3))  # Levi-Civita: (a × b)_i = _EPS[i, j, k] a_j b_k
-_EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
-_EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
-
-
 def _cross4(x: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``(x × d, 0)`` for 4-vectors (their direction parts)."""
-    return np.r_[np.cross(x[:3], d[:3]), 0.0]
-
-
-def _sym4(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.outer(a, b) + np.outer(b, a)
+    """``(x × d, 0)`` for 4-vectors ``(..., 4)`` (their direction parts), broadcasting."""
+    out = np.zeros(np.broadcast_shapes(x.shape, d.shape))
+    out[..., :3] = cross3(x[..., :3], d[..., :3])
+    return out
 
 
 def _null_rows(k: np.ndarray, tol: float) -> np.ndarray:
@@ -515,7 +502,6 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     joints = _joint_shares(robot)
     es = _candidates(robot, joints, tol)
     h = _level_spaces(robot, es, ms, joints)  # (C, n, 4, 4)
-    c_n = h.shape[:2]
     pad = np.einsum("cnk,kl->cnkl", (np.linalg.norm(h, axis=-1) < 0.5).astype(float), np.eye(4))
     h3 = h[..., 3][:, :, None, :]
     dirs = _null_rows(np.concatenate([h3, pad], axis=2), tol) @ h  # level directions (w = 0)
@@ -532,8 +518,7 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     ci, bi = np.nonzero((nx >= 1) & (nd >= 2))
     if len(ci):
         x, d = xs[ci, bi], dirs[ci, bi]
-        xd = np.zeros((len(ci), 4, 4, 4))
-        xd[..., :3] = np.einsum("ijk,maj,mdk->madi", _EPS, x[..., :3], d[..., :3])  # x_a × d
+        xd = _cross4(x[:, :, None], d[:, None])  # (m, 4, 4, 4): x_a × d
         m = np.einsum("mai,mbdj->mabdij", x, xd)
         m = m + np.swapaxes(m, -1, -2)
         m = (m + np.swapaxes(m, 1, 2)).reshape(len(ci), -1, 4, 4)
@@ -551,9 +536,9 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
              if a >= 0 and t in ("R", "P") and np.linalg.norm(ax) > tol]
 
     def seg(x, p, q):  # sym(x, x × (q - p))
-        return hat10(_sym4(x, _cross4(x, q - p)))[None]
+        return _sym(x, _cross4(x, q - p))[None]
 
-    for c in range(c_n[0]):
+    for c in range(len(es)):
         ee = np.r_[es[c], 0.0]
         edges: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
         for a, b, o, ax in links:

@@ -346,7 +346,7 @@ def bench_files(out: dict, quick: bool) -> None:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                robot, _ = load_model(str(f), floating=is_floating(f), allow_infeasible=True)
+                robot, _ = load_model(str(f), floating=is_floating(f), strict_inertia=False)
         except Exception as exc:  # noqa: BLE001 - counted, reported
             log(f"  {f.name}: not loaded ({str(exc)[-80:]})")
             continue
@@ -364,8 +364,8 @@ def bench_files(out: dict, quick: bool) -> None:
     talos = [f for f in urdf_files() if f.name == "talos_full_v2.urdf"]
     if talos:
         path = str(talos[0])
-        t_load, n_load = measure(lambda: load_model(path, floating=True, allow_infeasible=True), 5)
-        robot, _ = load_model(path, floating=True, allow_infeasible=True)
+        t_load, n_load = measure(lambda: load_model(path, floating=True, strict_inertia=False), 5)
+        robot, _ = load_model(path, floating=True, strict_inertia=False)
         t_d, n_d = measure(lambda: drng(robot), 21)
         t_c, n_c = measure(lambda: certify(robot, seed=1), 3)
         out["talos_full_v2_bodies"] = robot.n

@@ -30,21 +30,21 @@ def test_certified_nullity_equals_pinocchio(path):
         from baseparams.errors import ModelError
 
         with pytest.raises(ModelError):
-            load_model(str(path), floating=floating, allow_infeasible=True)
+            load_model(str(path), floating=floating, strict_inertia=False)
         return
     if model.njoints == 1:  # a single static body: no parameters in Pinocchio, no moving link here
         from baseparams.errors import ModelError
 
         with pytest.raises(ModelError, match="no moving links"):
-            load_model(str(path), floating=floating, allow_infeasible=True)
+            load_model(str(path), floating=floating, strict_inertia=False)
         return
     if path.name in EXPECTED_ERRORS:
         from baseparams.errors import ModelError
 
         with pytest.raises(ModelError, match=EXPECTED_ERRORS[path.name]):
-            load_model(str(path), floating=floating, allow_infeasible=True)
+            load_model(str(path), floating=floating, strict_inertia=False)
         return
-    robot, _ = load_model(str(path), floating=floating, allow_infeasible=True)
+    robot, _ = load_model(str(path), floating=floating, strict_inertia=False)
     assert robot.n == model.njoints - 1
     cert = certify(robot, seed=1)
     assert cert.certified, cert.message

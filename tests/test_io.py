@@ -61,7 +61,7 @@ SHARED_FILES = [  # (file, floating, certified nullity, directions left to numer
 def test_shared_models_load_analyse_certify(rel, floating, nullity, completed):
     path = SHARED / rel
     assert path.exists(), f"../shared/models/{rel} is missing"
-    robot, notes = load_model(str(path), floating=floating, allow_infeasible=True)
+    robot, notes = load_model(str(path), floating=floating, strict_inertia=False)
     c = certify(robot, seed=0)
     assert c.certified, c.message
     assert c.max_column_residual < 1e-9
@@ -85,10 +85,35 @@ def test_loops_are_never_dropped():
     assert len(cassie.loops) == 4 and all(lj.type == "S" for lj in cassie.loops)
 
 
-def test_infeasible_inertia_is_an_error_by_default():
-    with pytest.raises(ModelError, match=r"planar_leg_linkage.urdf: <link name='thigh'>: inertia not physically "
-                                         r"feasible .* triangle inequality"):
-        load_urdf(SHARED / "urdfplus/planar_leg_linkage.urdf")
+def test_infeasible_inertia_is_a_note_by_default_and_an_error_when_strict():
+    from baseparams.model.inertia import InertiaWarning
+
+    msg = r"planar_leg_linkage.urdf: <link name='thigh'>: inertia not physically feasible .* triangle inequality"
+    with pytest.warns(InertiaWarning, match=msg):
+        robot = load_urdf(SHARED / "urdfplus/planar_leg_linkage.urdf")
+    assert "thigh" in robot.names
+    with pytest.raises(ModelError, match=msg + r".*strict"):
+        load_urdf(SHARED / "urdfplus/planar_leg_linkage.urdf", strict_inertia=True)
+    # the CLI: one note per offending link by default, exit 0; --strict-inertia refuses
+    from baseparams.cli import main
+
+    assert main(["analyze", str(SHARED / "urdfplus/planar_leg_linkage.urdf"), "--no-verify"]) == 0
+    assert main(["analyze", str(SHARED / "urdfplus/planar_leg_linkage.urdf"), "--strict-inertia"]) == 2
+
+
+def test_world_fixed_links_never_block(tmp_path):
+    """A link welded to the world (the fixed root, a 1 microgram antenna on it) is never checked,
+    even with strict checking: its inertia cannot matter."""
+    bad = '<inertial><mass value="1e-9"/><inertia ixx="-1" ixy="0" ixz="0" iyy="0" iyz="0" izz="5"/></inertial>'
+    text = GOOD.replace('<link name="base"/>', f'<link name="base">{bad}</link><link name="antenna">{bad}</link>'
+                        ).replace("</robot>", '<joint name="ja" type="fixed"><parent link="base"/>'
+                                  '<child link="antenna"/></joint></robot>')
+    f = tmp_path / "r.urdf"
+    f.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        robot = load_urdf(f, strict_inertia=True)
+    assert robot.names == ("a", "b")
 
 
 # ------------------------------------------------------------------------------ bad input
@@ -117,7 +142,7 @@ BAD = [
      r"not connected to the root link|no root link|reached twice"),
     (GOOD.replace('type="prismatic"', 'type="helical"'), r"<joint name='j2'>: unknown or unsupported joint type 'helical'"),
     (GOOD.replace('type="prismatic"', 'type="planar"'), r"planar joints are not supported"),
-    (GOOD.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'), r"<link name='b'>: negative mass -0.5"),
+    (GOOD.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'), r"<link name='b'>: .*negative mass -0.5"),
     (GOOD.replace('izz="0.025"', 'izz="0.5"'), r"<link name='a'>: inertia not physically feasible"),
     (GOOD.replace('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>'), r"<joint name='j2'>: zero joint axis"),
     (GOOD.replace('<axis xyz="1 0 0"/>', '<axis xyz="1 0"/>'), r"<joint name='j2'> <axis xyz>: expected 3"),
@@ -137,7 +162,7 @@ def test_bad_urdf_gives_one_clear_line(tmp_path, text, message):
     f = tmp_path / "robot.urdf"
     f.write_text(text)
     with pytest.raises(ModelError) as exc:
-        load_urdf(f)
+        load_urdf(f, strict_inertia=True)  # strict: inertia problems are errors too
     msg = str(exc.value)
     assert "\n" not in msg and str(f) in msg
     assert re.search(message, msg), msg
@@ -148,9 +173,12 @@ def test_cli_reports_bad_file_in_one_line(tmp_path, capsys):
 
     f = tmp_path / "robot.urdf"
     f.write_text(GOOD.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'))
-    assert main(["analyze", str(f)]) == 2
+    assert main(["analyze", str(f), "--strict-inertia"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "negative mass" in err and str(f) in err
+    assert main(["analyze", str(f), "--no-verify"]) == 0  # by default: a note, and the analysis goes on
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("baseparams: note:") and "negative mass" in err
     assert main(["analyze", str(tmp_path / "missing.urdf")]) == 2
     assert "no such file" in capsys.readouterr().err
 

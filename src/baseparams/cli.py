@@ -20,7 +20,7 @@ def _robot(args) -> "Robot":  # noqa: F821
     from .io.load import load_model
 
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
-                              allow_infeasible=getattr(args, "allow_infeasible_inertia", False))
+                              strict_inertia=getattr(args, "strict_inertia", False))
     for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
     return robot
@@ -89,8 +89,11 @@ def build_parser() -> argparse.ArgumentParser:
                                      "URDF / URDF+ (.urdf) or MJCF (.xml)")
         s.add_argument("--floating", action="store_true",
                        help="attach the file's root link to the world by a floating (free) joint")
-        s.add_argument("--allow-infeasible-inertia", action="store_true",
-                       help="accept physically infeasible inertias in files (warning instead of error)")
+        s.add_argument("--strict-inertia", action="store_true",
+                       help="refuse files with physically infeasible inertias of moving links (by "
+                            "default they are noted and the analysis goes on: the base-parameter "
+                            "structure does not depend on the values)")
+        s.add_argument("--allow-infeasible-inertia", action="store_true", help=argparse.SUPPRESS)
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
         s.add_argument("--samples", type=int, default=None,

@@ -9,11 +9,12 @@ from ..errors import BaseparamsError
 from ..model.robot import Robot
 
 
-def load_model(model: str, floating: bool = False, gravity=None, allow_infeasible: bool = False
+def load_model(model: str, floating: bool = False, gravity=None, strict_inertia: bool = False
                ) -> tuple[Robot, list[str]]:
     """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xml``/``.mjcf``).
 
-    Gravity defaults to ``(0, 0, -9.81)`` for files. Loop robots whose file is not assembled
+    Gravity defaults to ``(0, 0, -9.81)`` for files. Physically infeasible inertias are notes
+    (one per link), or errors with ``strict_inertia``. Loop robots whose file is not assembled
     (or singular) at q = 0 are assembled and re-referenced; the notes say so, along with any
     warning raised while reading."""
     from ..kinematics.loops import assemble
@@ -33,11 +34,11 @@ def load_model(model: str, floating: bool = False, gravity=None, allow_infeasibl
         if suffix == ".urdf":
             from .urdf import load_urdf
 
-            robot = load_urdf(p, floating=floating, gravity=g, allow_infeasible=allow_infeasible)
+            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia)
         elif suffix in (".xml", ".mjcf"):
             from .mjcf import load_mjcf
 
-            robot = load_mjcf(p, gravity=g, floating=floating, allow_infeasible=allow_infeasible)
+            robot = load_mjcf(p, gravity=g, floating=floating, strict_inertia=strict_inertia)
         else:
             raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xml or .mjcf")
     notes = [str(w.message) for w in caught]

@@ -120,7 +120,7 @@ class _Compiler:
 
 
 def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating: bool = False,
-              allow_infeasible: bool = False) -> Robot:
+              strict_inertia: bool = False) -> Robot:
     """Read an MJCF file into a :class:`Robot` (see the module doc). ``gravity``: default
     from ``<option gravity>`` (MuJoCo's default ``0 0 -9.81``). ``floating``: a top-level body
     without a joint gets a floating (F) joint."""
@@ -175,7 +175,7 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
                 j = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
             else:
                 j = np.diag(_floats(ia.get("diaginertia"), 3, f"{what} <inertial diaginertia>"))
-            check_inertia(mass, j, f"{what} <inertial>", allow_infeasible=allow_infeasible)
+            check_inertia(mass, j, f"{what} <inertial>", strict=strict_inertia)
             inertia = (mass, comp.pose(ia, f"{what} <inertial>"), j)
         if not joints:
             jt, t_joint, axis = ("F" if (top and floating) else "fixed"), np.eye(4), (0, 0, 1)

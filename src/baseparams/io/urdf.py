@@ -59,7 +59,9 @@ def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
                 _floats(elem.get("rpy"), 3, f"{what} <origin rpy>", (0, 0, 0)))
 
 
-def _inertial(link: ET.Element, what: str, allow_infeasible: bool = False) -> Inertia | None:
+def _inertial(link: ET.Element, what: str, check: bool = True, strict: bool = False) -> Inertia | None:
+    """The link's ``<inertial>`` (None if absent); ``check``: warn (``strict``: raise) when it
+    is physically infeasible. Links fixed to the world are read unchecked: they never move."""
     inl = link.find("inertial")
     if inl is None:
         return None
@@ -73,7 +75,8 @@ def _inertial(link: ET.Element, what: str, allow_infeasible: bool = False) -> In
         for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
             v[k] = float(_floats(it.get(k), 1, f"{what} <inertia {k}>", (0.0,))[0])
         j = np.array([[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]], [v["ixz"], v["iyz"], v["izz"]]])
-    check_inertia(mass, j, what, allow_infeasible=allow_infeasible)
+    if check:
+        check_inertia(mass, j, what, strict=strict)
     frame = _origin(inl.find("origin"), f"{what} <inertial>")
     return Inertia(mass, com=(0.0, 0.0, 0.0), inertia=j, frame=frame)
 
@@ -89,8 +92,11 @@ def _link_ref(elem: ET.Element, what: str, path: Path) -> str:
 
 
 def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81),
-              name: str | None = None, allow_infeasible: bool = False) -> Robot:
-    """Read a URDF / URDF+ file into a :class:`Robot` (see the module doc)."""
+              name: str | None = None, strict_inertia: bool = False) -> Robot:
+    """Read a URDF / URDF+ file into a :class:`Robot` (see the module doc).
+
+    Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
+    errors with ``strict_inertia``; links fixed to the world are never checked."""
     path = Path(path)
     try:
         root = ET.parse(path).getroot()
@@ -163,12 +169,14 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     if floating and any(j.get("type") == "floating" for j in children[base]):
         floating = False  # the file has its own floating joint at the root
     if floating:
-        b.add_link(base, joint="F", inertia=_inertial(links[base], f"{path}: <link name={base!r}>", allow_infeasible),
+        b.add_link(base, joint="F", inertia=_inertial(links[base], f"{path}: <link name={base!r}>",
+                                                     strict=strict_inertia),
                    joint_name="root_joint")
         flags[base] = True
         limits_root = [(-np.inf, np.inf)] * 6
     else:
         b.add_link(base, joint="fixed")  # the root link is the fixed base (a frame)
+    world_fixed = set() if floating else {base}  # links welded to the world: their inertia never matters
     seen = {base}
     limits: list[tuple[float, float]] = list(limits_root) if floating else []
     stack = [(top, c) for c in reversed(children[top])]
@@ -204,9 +212,12 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
             else:
                 limits += [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6}[t]
         parent_name = None if (plink == base and not floating) else plink
+        if t == "fixed" and plink in world_fixed:
+            world_fixed.add(cl)
         b.add_link(cl, parent=parent_name if parent_name is not None else base, joint=t,
                    origin=_origin(jt.find("origin"), what), axis=axis, axis2=axis2,
-                   inertia=_inertial(links[cl], f"{path}: <link name={cl!r}>", allow_infeasible), joint_name=jname,
+                   inertia=_inertial(links[cl], f"{path}: <link name={cl!r}>", check=cl not in world_fixed,
+                                     strict=strict_inertia), joint_name=jname,
                    actuated=None if t == "fixed" else indep in ("true", "1"))
         stack.extend((cl, c) for c in reversed(children[cl]))
     unreached = [k for k in links if k not in seen]

@@ -181,23 +181,28 @@ def is_physically_consistent(n: np.ndarray, tol: float = 0.0) -> np.ndarray:
 
 
 class InertiaWarning(UserWarning):
-    """A physically infeasible inertia accepted on request (``allow_infeasible``)."""
+    """A physically infeasible inertia in a file, accepted (the default outside ``strict``)."""
 
 
 def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float = 1e-6,
-                  allow_infeasible: bool = False) -> None:
+                  strict: bool = False) -> bool:
     """Physical feasibility: mass >= 0, principal moments >= 0 and the triangle inequality.
 
-    With ``allow_infeasible`` a violation of the last two is a warning (the base-parameter
-    structure does not depend on the inertia values); a negative mass is always an error."""
-    if mass < 0:
-        raise ModelError(f"{what}: negative mass {mass}")
+    Returns True when feasible. A violation is an :class:`InertiaWarning` (one line naming
+    ``what``): the base-parameter structure does not depend on the inertia values, so the
+    analysis goes on. With ``strict`` it is a :class:`ModelError` instead (identification,
+    where a prior must be feasible, or ``--strict-inertia``)."""
     try:
-        _check_moments(inertia_com, what, rtol)
+        if mass < 0:
+            raise ModelError(f"{what}: inertia not physically feasible (negative mass {mass:.3g})")
+        _check_moments(np.asarray(inertia_com, dtype=float), what, rtol)
     except ModelError as exc:
-        if not allow_infeasible:
-            raise ModelError(f"{exc} (use --allow-infeasible-inertia to analyse the geometry anyway)") from None
-        warnings.warn(str(exc), InertiaWarning, stacklevel=3)
+        if strict:
+            raise ModelError(f"{exc} (strict inertia checking)") from None
+        warnings.warn(f"{exc}; the base-parameter structure does not depend on it", InertiaWarning,
+                      stacklevel=3)
+        return False
+    return True
 
 
 def _check_moments(inertia_com: np.ndarray, what: str, rtol: float) -> None:

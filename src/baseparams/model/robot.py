@@ -160,8 +160,6 @@ class Robot:
             axes.append(_check_axes(self.axes[i], self.jtype[i], jw))
             if not np.all(np.isfinite(nb[i])) or np.abs(nb[i] - nb[i].T).max() > 1e-9 * (1 + np.abs(nb[i]).max()):
                 raise ModelError(f"{jw}: inertia must be a finite symmetric pseudo-inertia")
-            if nb[i, 3, 3] < 0:
-                raise ModelError(f"{jw}: negative mass {nb[i, 3, 3]}")
         g = np.asarray(self.gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ModelError(f"{what}: gravity must be 3 finite numbers, got {self.gravity!r}")

@@ -7,3 +7,8 @@ class BaseparamsError(Exception):
 
 class ModelError(BaseparamsError, ValueError):
     """An invalid robot model (names the robot, body or joint and the problem)."""
+
+
+class NoMovingBodiesError(ModelError):
+    """A model whose links are all welded to the world: it has no inertial parameter that any
+    measurement could see (the CLI reports this as an empty, trivially certified result)."""

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, NoMovingBodiesError
 from .inertia import Inertia, transform
 from .robot import JOINT_TYPES, LoopJoint, Robot
 
@@ -162,7 +162,7 @@ class RobotBuilder:
     def build(self) -> Robot:
         """Validate and return the :class:`Robot` (raises :class:`ModelError`)."""
         if not self._names:
-            raise ModelError(f"robot {self.name!r}: no moving links")
+            raise NoMovingBodiesError(f"robot {self.name!r}: no moving links")
         loops = []
         for name, jt, parent, child, origin, axis, axis2, child_origin in self._loops:
             what = f"robot {self.name!r}, loop joint {name!r}"

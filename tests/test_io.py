@@ -74,7 +74,7 @@ def test_go2_file_equals_builtin():
     from baseparams.robots import go2
 
     robot, _ = load_model(str(SHARED / "mjcf/unitree_go2/go2.xml"))
-    assert np.allclose(robot.parameters(), go2().parameters())
+    assert np.allclose(robot.parameters("paper"), go2().parameters("paper"))
     assert np.allclose(robot.M0, go2().M0)
 
 
@@ -236,7 +236,7 @@ def test_fuzzed_urdf_never_tracebacks(tmp_path, pos, width, insert):
     except BaseparamsError as exc:
         assert "\n" not in str(exc)
         return
-    assert robot.n >= 1 and np.all(np.isfinite(robot.parameters()))
+    assert robot.n >= 1 and np.all(np.isfinite(robot.parameters("paper")))
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -349,4 +349,4 @@ def test_fuzzed_mjcf_never_tracebacks(tmp_path, pos, width, insert):
     except BaseparamsError as exc:
         assert "\n" not in str(exc)
         return
-    assert robot.n >= 1 and np.all(np.isfinite(robot.parameters()))
+    assert robot.n >= 1 and np.all(np.isfinite(robot.parameters("paper")))

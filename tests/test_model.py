@@ -75,8 +75,8 @@ def test_fixed_joint_merges_inertia_exactly(rng):
         q = r.uniform(-1, 1, (5, 2))
         dq, ddq = r.uniform(-1, 1, (2, 5, 2))
         ins = lambda x: np.insert(x, 1, 0.0, axis=1)  # noqa: E731
-        t_merged = regressor(merged, q, dq, ddq) @ merged.parameters()
-        t_full = regressor(full, ins(q), ins(dq), ins(ddq)) @ full.parameters()
+        t_merged = regressor(merged, q, dq, ddq) @ merged.parameters("paper")
+        t_full = regressor(full, ins(q), ins(dq), ins(ddq)) @ full.parameters("paper")
         assert np.allclose(t_merged, np.delete(t_full, 1, axis=1), rtol=1e-10, atol=1e-10)
 
 

@@ -41,7 +41,8 @@ import numpy as np
 from .base import BaseParameters, base_parameters
 from .model.robot import Robot
 from .nullspace import PRINCIPLES, drng
-from .nullspace.drng import PAPER
+from .model import inertia as _inertia
+from .nullspace.drng import PAPER, UNMEASURED
 from .nullspace.certify import Certificate, certify
 
 
@@ -105,7 +106,7 @@ def analyze(robot: Robot, samples: int | None = None, seed: int = 0, verify: boo
             print(f"[baseparams] {msg}", file=progress, flush=True)
 
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
-    res = drng(robot, extended=extended)
+    res = drng(robot, extended=extended, rows=rows)
     by = res.by_principle()
     cert = None
     if verify:
@@ -131,10 +132,14 @@ def format_report(a: Analysis) -> str:
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
     for name in PRINCIPLES[:-1]:
         if name in a.by_principle:
-            kind = "paper" if name in PAPER else "extended rule"
+            kind = ("paper" if name in PAPER else "measured rows: joint torques only" if name == UNMEASURED
+                    else "extended rule")
             out.append(f"  {name:<22s} {a.by_principle[name]:4d}  ({kind})")
     if c is None:
         out.append("certification: skipped (--no-verify); the nullity above is DRNG's rank, unverified")
+        if a.rows == "base" and r.floating:
+            out.append("  measured rows: the base wrench alone sees every direction the full dynamics see "
+                       "(Ayusawa et al. 2014); unverified here")
     else:
         nm = c.numerical
         out.append(f"  {'numerical':<22s} {c.completed:4d}  (completed from the numerical nullspace)")
@@ -150,13 +155,13 @@ def format_report(a: Analysis) -> str:
         out.append(f"certification: {c.status.upper()} - {c.message}")
         out.append(f"  residual ||W B||/||W|| = {c.residual:.2e}, worst column {c.max_column_residual:.2e}")
     out.append("")
-    out.append(f"base parameters ({a.base.convention} convention: link-frame XX XY XZ YY YZ ZZ MX MY MZ M):")
+    out.append(f"base parameters ({_inertia.describe(a.base.convention)}):")
     for e in a.base.expressions():
         out.append(f"  {e['name']} = {e['expression']}")
     if len(a.base.unidentifiable):
         out.append("unidentifiable standard parameters: " + ", ".join(j["unidentifiable"]))
     out.append("")
-    out.append("the same in the paper's spatial convention (pseudo-inertia entries, world frame at q = 0):")
+    out.append(f"the same in the paper's convention ({_inertia.describe('paper')}):")
     for e in a.base_paper.expressions():
         out.append(f"  {e['name']} = {e['expression']}")
     out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")

@@ -1,6 +1,9 @@
 """Command-line front end: ``baseparams robots``, ``baseparams analyze MODEL``, ...
 
-Errors in the user's input are printed as one line (``baseparams: error: ...``), exit 2.
+Exit codes (scripts rely on them): 0 the result is certified (or completed, or unverified on
+request with ``--no-verify``); 2 bad input, printed as one line (``baseparams: error: ...``);
+3 certification UNDECIDED (the numerics could not decide the rank: the message says what would
+help); 4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -9,11 +12,18 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from . import __version__
-from .errors import BaseparamsError
+from .errors import BaseparamsError, NoMovingBodiesError
+from .model.inertia import CONVENTIONS
+
+#: exit codes (see the module doc)
+EXIT_OK, EXIT_INPUT, EXIT_UNDECIDED, EXIT_FAILED, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
+_STATUS_EXIT = {"certified": EXIT_OK, "completed": EXIT_OK, "unverified": EXIT_OK,
+                "undecided": EXIT_UNDECIDED, "failed": EXIT_FAILED}
 
 
 def _robot(args) -> "Robot":  # noqa: F821
@@ -35,43 +45,90 @@ def cmd_robots(args) -> int:
     return 0
 
 
-def cmd_regressor(args) -> int:
-    from .numerics import sample_states
-    from .regressor import regressor
+def _no_moving_bodies(args, exc: NoMovingBodiesError) -> int:
+    """A model whose links are all welded to the world: an empty, trivially certified result."""
+    name = Path(args.model).stem
+    msg = (f"{exc}: every link is welded to the world, so no measurement sees any inertial parameter "
+           f"(0 standard, 0 base parameters){'' if getattr(args, 'floating', False) else '; --floating attaches the root link by a free joint'}")
+    if args.json:
+        _emit(args, json.dumps({"model": name, "n_bodies": 0, "n_params": 0, "nullity": 0, "n_base": 0,
+                                "certified": True, "status": "certified", "message": msg,
+                                "base_parameters": [], "unidentifiable": []}, indent=2))
+    else:
+        _emit(args, f"{name}: {msg}")
+    return EXIT_OK
 
-    robot = _robot(args)
+
+def _emit(args, text: str) -> None:
+    out = getattr(args, "output", None)
+    if not out:
+        print(text)
+        return
+    try:
+        with open(out, "w") as fh:
+            fh.write(text + "\n")
+    except OSError as exc:
+        raise BaseparamsError(f"--output {out}: cannot write ({exc.strerror or exc})") from None
+    if not args.json:
+        print(f"report written to {out}")
+
+
+def cmd_regressor(args) -> int:
+    """The TP regressor on random states; for a robot with loops, the closed-loop regressor with
+    respect to its independent (actuated) coordinates on loop-closed samples."""
+    from .numerics import closed_samples, sample_states
+    from .regressor import closed_regressor, regressor
+
+    try:
+        robot = _robot(args)
+    except NoMovingBodiesError as exc:
+        return _no_moving_bodies(args, exc)
     rng = np.random.default_rng(args.seed)
     args.samples = args.samples or 100
-    q, dq, ddq = sample_states(robot, args.samples, rng)
     t0 = time.perf_counter()
-    y = regressor(robot, q, dq, ddq)
+    extra = ""
+    if robot.has_loops:
+        cs = closed_samples(robot, args.samples, rng)
+        if cs.kept == 0:
+            raise BaseparamsError(f"robot {robot.name!r}: none of {args.samples} samples closed the loops; check "
+                                  f"the independent joints' limits")
+        y = closed_regressor(robot, cs)
+        kept = cs.kept
+        extra = (f"; loops closed: {kept} of {args.samples} samples kept ({cs.not_converged} outside the "
+                 f"workspace, {cs.branch_jumps} left the assembly mode, {cs.ill_conditioned} ill-conditioned)")
+        rows = f"{len(robot.actuated)} actuated coordinates"
+    else:
+        q, dq, ddq = sample_states(robot, args.samples, rng)
+        y = regressor(robot, q, dq, ddq)
+        kept = args.samples
+        rows = f"{robot.dof} dofs"
     dt = time.perf_counter() - t0
-    out = {"model": robot.name, "samples": args.samples, "shape": list(y.shape),
-           "seconds": dt, "convention": "paper (spatial pseudo-inertia at q = 0)"}
+    out = {"model": robot.name, "samples": args.samples, "kept": kept, "shape": list(y.shape),
+           "closed_loops": robot.has_loops, "seconds": dt, "convention": "paper (spatial pseudo-inertia at q = 0)"}
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"{robot.name}: TP regressor {y.shape} (samples, dofs, 10 x bodies) in {dt * 1e3:.2f} ms; "
-              f"columns: paper convention (spatial pseudo-inertia at q = 0)")
-    return 0
+        print(f"{robot.name}: TP regressor {y.shape} (samples, {rows}, 10 x bodies) in {dt * 1e3:.2f} ms; "
+              f"columns: paper convention (spatial pseudo-inertia at q = 0){extra}")
+    return EXIT_OK
 
 
 def cmd_analyze(args) -> int:
     from .analysis import analyze, format_report
 
-    robot = _robot(args)
+    try:
+        robot = _robot(args)
+    except NoMovingBodiesError as exc:
+        return _no_moving_bodies(args, exc)
     result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
                      extended=not args.paper_only, rows=args.rows, convention=args.convention,
                      progress=sys.stderr if args.verbose else None)
     text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
-    if args.output:
-        with open(args.output, "w") as fh:
-            fh.write(text + "\n")
-        if not args.json:
-            print(f"report written to {args.output}")
-    else:
-        print(text)
-    return 0
+    _emit(args, text)
+    status = "unverified" if result.certificate is None else result.certificate.status
+    if status in ("undecided", "failed"):
+        print(f"baseparams: certification {status.upper()}: {result.certificate.message}", file=sys.stderr)
+    return _STATUS_EXIT[status]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -110,7 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--rows", choices=("all", "joints", "base"), default="all",
                    help="measured generalized forces: all (default), joint torques only, or the "
                         "floating base's wrench only")
-    s.add_argument("--convention", choices=("khalil", "paper", "pinocchio", "idyntree", "rpna"),
+    s.add_argument("--convention", choices=CONVENTIONS,
                    default="khalil", help="convention of the regrouped expressions (default khalil)")
     s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
@@ -127,17 +184,24 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if getattr(args, "samples", None) is not None and args.samples < 1:
         parser.error("--samples must be at least 1")
+    if getattr(args, "seed", 0) < 0:
+        parser.error("--seed must be a non-negative integer")
+    out = getattr(args, "output", None)
+    if out and not Path(out).resolve().parent.is_dir():
+        print(f"baseparams: error: --output {out}: the folder {Path(out).resolve().parent} does not exist",
+              file=sys.stderr)
+        return EXIT_INPUT
     try:
         return args.func(args)
     except BaseparamsError as exc:
         print(f"baseparams: error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_INPUT
     except BrokenPipeError:  # e.g. piped into head
         sys.stderr.close()
         return 0
     except KeyboardInterrupt:
         print("baseparams: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

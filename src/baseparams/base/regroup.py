@@ -17,16 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import BaseparamsError
 from ..model import inertia as _inertia
 from ..model.robot import Robot
 
-_NAMES = {
-    "paper": _inertia.PAPER_NAMES,
-    "khalil": _inertia.KHALIL_NAMES,
-    "pinocchio": ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz"),
-    "idyntree": ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"),
-    "rpna": ("m", "mcx", "mcy", "mcz", "Ixx", "Iyy", "Izz", "Iyz", "Ixz", "Ixy"),
-}
+_NAMES = _inertia.NAMES
 
 
 def parameter_names(robot: Robot, convention: str = "khalil") -> list[str]:
@@ -105,13 +100,32 @@ class BaseParameters:
             out.append({"name": bname, "expression": " ".join(terms)})
         return out
 
-    def to_base(self, pi: np.ndarray) -> np.ndarray:
-        """Base parameters ``beta (nb,)`` from a full vector ``pi (10 n,)`` in this convention."""
-        return self.E @ np.asarray(pi, dtype=float)
+    def _check(self, convention: str) -> None:
+        _inertia.check_convention(convention)
+        if convention != self.convention:
+            raise BaseparamsError(
+                f"parameter vector in the {convention!r} convention given to base parameters regrouped in the "
+                f"{self.convention!r} convention; regroup in {convention!r} (base_parameters(..., {convention!r}), "
+                f"--convention {convention}) or convert the vector first")
+
+    def to_base(self, pi: np.ndarray, convention: str) -> np.ndarray:
+        """Base parameters ``beta (nb,)`` from a full vector ``pi (10 n,)``.
+
+        ``convention`` (required) names ``pi``'s convention; it must be this object's
+        :attr:`convention` (a mismatch is an error, never a number)."""
+        self._check(convention)
+        pi = np.asarray(pi, dtype=float)
+        if pi.shape != (self.E.shape[1],):
+            raise BaseparamsError(f"expected a parameter vector of shape ({self.E.shape[1]},), got {pi.shape}")
+        return self.E @ pi
 
     def from_base(self, beta: np.ndarray) -> np.ndarray:
-        """The minimum-norm full vector (this convention) with these base parameters."""
-        return np.linalg.pinv(self.E) @ np.asarray(beta, dtype=float)
+        """The minimum-norm full vector ``(10 n,)`` with these base parameters, in this object's
+        :attr:`convention`."""
+        beta = np.asarray(beta, dtype=float)
+        if beta.shape != (self.E.shape[0],):
+            raise BaseparamsError(f"expected {self.E.shape[0]} base parameters, got shape {beta.shape}")
+        return np.linalg.pinv(self.E) @ beta
 
 
 def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> np.ndarray:

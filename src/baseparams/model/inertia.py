@@ -37,6 +37,38 @@ HAT_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2), (0, 3), (1, 3), (2,
 PAPER_NAMES = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
 KHALIL_NAMES = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
 
+#: each convention's parameter names, in its order (one table: names and reports derive from it)
+NAMES = {
+    "paper": PAPER_NAMES,
+    "khalil": KHALIL_NAMES,
+    "pinocchio": ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz"),
+    "idyntree": ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"),
+    "rpna": ("m", "mcx", "mcy", "mcz", "Ixx", "Iyy", "Izz", "Iyz", "Ixz", "Ixy"),
+}
+
+#: the frame each convention's parameters are expressed in
+FRAMES = {
+    "paper": "spatial pseudo-inertia entries, world frame at q = 0",
+    "khalil": "link frame (each body's joint frame), inertia about its origin",
+    "pinocchio": "link frame (each body's joint frame), inertia about its origin",
+    "idyntree": "link frame (each body's joint frame), inertia about its origin",
+    "rpna": "link frame (each body's joint frame), inertia about its origin",
+}
+
+
+def describe(convention: str) -> str:
+    """One line: the convention's name, frame and per-body parameter order."""
+    return f"{convention} convention: {FRAMES[convention]}; per body {' '.join(NAMES[convention])}"
+
+
+
+def check_convention(convention: str) -> str:
+    """``convention`` if it is one of :data:`CONVENTIONS`, else a :class:`ModelError` naming them."""
+    if convention not in CONVENTIONS:
+        raise ModelError(f"unknown parameter convention {convention!r}; expected one of {', '.join(CONVENTIONS)}")
+    return convention
+
+
 _ROWS = np.array([r for r, _ in HAT_INDEX])
 _COLS = np.array([c for _, c in HAT_INDEX])
 

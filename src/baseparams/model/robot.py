@@ -281,12 +281,15 @@ class Robot:
         """Spatial pseudo-inertias ``(n, 4, 4)``: world frame at q = 0 (the paper's ``N``)."""
         return _inertia.transform(self.N_body, self.M0)
 
-    def parameters(self, convention: str = "paper") -> np.ndarray:
-        """The robot's inertial parameters ``(10 n,)``.
+    def parameters(self, convention: str) -> np.ndarray:
+        """The robot's inertial parameters ``(10 n,)`` in ``convention`` (required: a parameter
+        vector always says its convention; see :data:`baseparams.model.inertia.CONVENTIONS`).
 
-        ``"paper"``: spatial pseudo-inertia at q = 0 (what the TP regressor multiplies);
-        any other convention: link (body) frame, e.g. ``"khalil"`` or ``"pinocchio"``.
+        ``"paper"``: spatial pseudo-inertia entries in the world frame at q = 0 (what the TP
+        regressor multiplies); every other convention: link (body/joint) frame, e.g.
+        ``"khalil"`` (``XX XY XZ YY YZ ZZ MX MY MZ M``) or ``"pinocchio"``.
         """
+        _inertia.check_convention(convention)
         n = self.N0 if convention == "paper" else self.N_body
         return _inertia.to_convention(n, convention).reshape(-1)
 
@@ -296,12 +299,16 @@ class Robot:
 
         return replace(self, gravity=np.asarray(gravity, dtype=float))
 
-    def with_parameters(self, params: np.ndarray, convention: str = "paper") -> Robot:
-        """The same robot with other inertial parameters ``(10 n,)`` (see :meth:`parameters`)."""
+    def with_parameters(self, params: np.ndarray, convention: str) -> Robot:
+        """The same robot with other inertial parameters ``(10 n,)`` in ``convention`` (required;
+        see :meth:`parameters`)."""
         from dataclasses import replace
 
-        p = np.asarray(params, dtype=float).reshape(self.n, 10)
-        n = _inertia.from_convention(p, convention)
+        _inertia.check_convention(convention)
+        p = np.asarray(params, dtype=float)
+        if p.size != 10 * self.n:
+            raise ModelError(f"robot {self.name!r}: expected {10 * self.n} parameters (10 per body), got {p.size}")
+        n = _inertia.from_convention(p.reshape(self.n, 10), convention)
         if convention == "paper":
             from ..pga import inverse_transform
 

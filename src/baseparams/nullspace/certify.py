@@ -55,7 +55,7 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
             residual_tol: float = 1e-8) -> Certificate:
     """Certify (and if needed complete) DRNG's nullspace with ``samples`` random states."""
     t0 = time.perf_counter()
-    res = drng(robot) if result is None else result
+    res = drng(robot, rows=rows) if result is None else result
     samples = default_samples(robot) if samples is None else samples
     sampling: dict = {}
     w = stacked_regressor(robot, samples, seed, rows, sampling)

@@ -31,14 +31,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..model.inertia import PAPER_NAMES
 from ..model.inertia import hat as hat10
 from ..model.robot import Robot
 from ..pga.core import cross3
 
 PAPER = ("shared points", "fixed points", "planar rotations")
 #: provenance of a column: the paper's principles, the extended rules (:mod:`.rules`), numerics
-PRINCIPLES = PAPER + ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-                      "numerical")
+EXTENDED = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains")
+#: columns that come from which generalized forces are measured, not from geometry
+UNMEASURED = "unmeasured root"
+PRINCIPLES = PAPER + EXTENDED + (UNMEASURED, "numerical")
 
 
 FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp", "extra", "he")
@@ -484,10 +487,14 @@ class DRNGResult:
 
     def by_principle(self) -> dict[str, int]:
         """Rank contributed by each source, taken in order: the paper's principles 1, 2, 3, then
-        the extended rules R-A, R-B, R-L1, R-L2 (those run)."""
+        the extended rules R-A, R-B, R-L1, R-L2 (those run), then the unmeasured root's own
+        parameters (joint-torque rows only)."""
         out, prev = {}, 0
-        names = PRINCIPLES[:-1] if self.extended else PAPER
-        for k, name in enumerate(names):
+        names = PAPER + (EXTENDED if self.extended else ())
+        if np.any(self.columns.principle == PRINCIPLES.index(UNMEASURED)):
+            names = names + (UNMEASURED,)
+        for name in names:
+            k = PRINCIPLES.index(name)
             keep = self.columns.principle <= k
             r = prev if not np.any(self.columns.principle == k) else block_rank(self.columns.subset(keep), self.robot.n)
             out[name] = r - prev
@@ -511,21 +518,46 @@ class DRNGResult:
             joint = f"loop joint {lj.name!r} ({lj.type})"
         else:
             joint = f"joint {self.robot.joint_names[j]!r} ({self.robot.jtype[j]})"
+        if c.principle[k] == PRINCIPLES.index(UNMEASURED):
+            return f"{UNMEASURED}: body {body}, {c.label[k]} (no measured row sees the floating root's own parameters)"
         if c.principle[k] >= len(PAPER):
             return f"{PRINCIPLES[c.principle[k]]}: bodies {body}{par}, {c.label[k]}"
         return f"{PRINCIPLES[c.principle[k]]}: {joint}, bodies {body}{par}, points {c.label[k]}"
 
 
-def drng(robot: Robot, tol: float = 1e-9, extended: bool = True) -> DRNGResult:
+def unmeasured_columns(robot: Robot, rows: str) -> Columns:
+    """Columns that the measured rows add: with joint torques alone (``rows="joints"``) on a
+    floating robot, no row sees the floating root's own ten parameters (joint ``j``'s torque is
+    its line against the wrenches of the bodies it carries, and no joint carries the root), so
+    each is a nullspace direction on its own. With the base wrench alone (``"base"``) nothing is
+    added: it sees every direction the full dynamics see (Ayusawa et al. 2014, the paper's
+    remark; certification checks it)."""
+    from ..numerics import row_mask
+
+    mask = row_mask(robot, rows)
+    roots = [i for i in range(robot.n) if robot.jtype[i] == "F"]
+    if rows != "joints" or not roots or mask.all():
+        return Columns.empty()
+    k = 10 * len(roots)
+    child = np.repeat(np.array(roots, dtype=int), 10)
+    z = np.zeros(k, dtype=int)
+    labels = np.array(list(PAPER_NAMES) * len(roots), dtype=object)
+    return Columns(np.tile(np.eye(10), (len(roots), 1)), child, z - 1, np.full(k, PRINCIPLES.index(UNMEASURED)),
+                   child.copy(), labels, hp=np.zeros((k, 10)))
+
+
+def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "all") -> DRNGResult:
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
     ``extended``: add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2);
-    ``False`` gives the paper's three principles alone."""
+    ``False`` gives the paper's three principles alone. ``rows``: the measured generalized
+    forces (``all``, ``joints``, ``base``; see :func:`unmeasured_columns`)."""
     t0 = time.perf_counter()
     cols = drng_columns(robot, tol)
     if extended:
         from .rules import rule_columns
 
         cols = Columns.concat([cols, rule_columns(robot, tol)])
+    cols = Columns.concat([cols, unmeasured_columns(robot, rows)])
     rank = block_rank(cols, robot.n)
     return DRNGResult(robot, cols, rank, time.perf_counter() - t0, extended)

@@ -45,17 +45,85 @@ def paper_from(robot: Robot, convention: str) -> np.ndarray:
     return t
 
 
-def clean(x: np.ndarray, atol: float = 1e-9) -> np.ndarray:
-    """Remove rounding noise: zero below ``atol``; snap to 10 significant digits."""
-    x = np.where(np.abs(x) < atol, 0.0, x)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mag = np.where(x == 0, 0, np.floor(np.log10(np.abs(np.where(x == 0, 1, x)))))
-    scale = 10.0 ** (9 - mag)
-    return np.round(x * scale) / scale
+#: length exponent ``u`` of each parameter, per convention: second moments / inertia entries 2,
+#: first moments 1, mass 0. ``K[i, d]`` has units ``L^(u_i - u_d)`` (the mass units cancel).
+LENGTH_POWER = {
+    "paper": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
+    "khalil": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
+    "pinocchio": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
+    "idyntree": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
+    "rpna": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
+}
+#: a dimensionless coefficient ``K[i, d] L^(u_d - u_i)`` at most this, relative to the largest of
+#: its row (and at least to the 1 of ``pi_I``), is rounding noise: zero
+ZERO_TOL = 1e-9
+#: the tolerances grow to this many times ``eps * cond(L^-u T^-1)``: the rounding of a nullspace
+#: basis orthonormal in SI units (absolute, ``~eps``) as the dimensionless coordinates see it
+NOISE_FACTOR = 1e3
+#: coefficients snap to the shortest decimal within this relative distance
+SNAP_RTOL = 1e-13
+
+
+def length_scale(robot: Robot) -> float:
+    """The robot's typical length ``L`` [m]: the median nonzero distance between adjacent frame
+    origins at q = 0 (each body's joint origin from its parent's, a fixed root's from the world
+    origin, each loop frame from both of its bodies' origins). A degree-1 homogeneous function of
+    the geometry (scaling lengths by ``s`` scales it by ``s``) that ignores where a floating base
+    happens to stand; 1 when every distance is zero."""
+    p = robot.M0[:, :3, 3]
+    d = []
+    for i, par in enumerate(robot.parent):
+        if par >= 0:
+            d.append(np.linalg.norm(p[i] - p[par]))
+        elif robot.jtype[i] != "F":
+            d.append(np.linalg.norm(p[i]))
+    for lj in robot.loops:
+        o = np.asarray(lj.M)[:3, 3]
+        d.append(np.linalg.norm(o - (p[lj.parent] if lj.parent >= 0 else 0.0)))
+        d.append(np.linalg.norm(o - p[lj.child]))
+        if lj.M_child is not None:
+            d.append(np.linalg.norm(np.asarray(lj.M_child)[:3, 3] - p[lj.child]))
+    d = np.array(d, dtype=float)
+    d = d[np.isfinite(d)]
+    if not len(d) or d.max() <= 0:
+        return 1.0
+    d = d[d > 1e-12 * d.max()]
+    return float(np.median(d))
+
+
+def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
+    """Snap every entry to the shortest decimal (1 to 17 significant digits) within ``rtol``
+    relative of it, e.g. ``0.18645124000000003 -> 0.18645124``, ``0.9999999999999998 -> 1``;
+    no entry moves by more than ``rtol`` relative. Zeros stay zero; removing rounding noise
+    (a relative matter) is the caller's job."""
+    x = np.array(x, dtype=float)
+    flat = x.reshape(-1)
+    nz = np.flatnonzero(np.isfinite(flat) & (flat != 0))
+    if not len(nz):
+        return x
+    v = flat[nz]
+    a = np.abs(v)
+    digits = np.full(len(v), 17)
+    with np.errstate(all="ignore"):
+        mag = np.floor(np.log10(a))
+        mant = v / 10.0 ** mag  # in [1, 10) up to rounding; only decides the digits
+        for p in range(1, 17):
+            todo = (digits == 17) & np.isfinite(mant)
+            if not todo.any():
+                break
+            ok = np.abs(np.round(mant[todo], p - 1) - mant[todo]) <= rtol * np.abs(mant[todo])
+            digits[np.flatnonzero(todo)[ok]] = p
+    snapped = np.array([float(f"{c:.{k - 1}e}") for c, k in zip(v.tolist(), digits.tolist())])
+    bad = np.abs(snapped - v) > rtol * a  # the decimal string decides; never lose more than rtol
+    snapped[bad] = v[bad]
+    flat[nz] = snapped
+    return x
 
 
 def _fmt(c: float) -> str:
-    return f"{c:.10g}"
+    """The shortest string that reads back as exactly ``c`` (``repr``), ``2`` for ``2.0``."""
+    s = repr(float(c))
+    return s[:-2] if s.endswith(".0") else s
 
 
 @dataclass(frozen=True)
@@ -129,13 +197,20 @@ class BaseParameters:
 
 
 def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> np.ndarray:
-    """Greedy rows of ``b (m, k)`` (in ``order``) spanning R^k: ``b[D]`` invertible."""
+    """Greedy rows of ``b (m, k)`` (in ``order``) spanning R^k: ``b[D]`` invertible.
+
+    A row is taken when its component outside the span of the rows taken so far is above
+    ``rtol`` times the largest row norm: with ``b`` an orthonormal basis (of dimensionless
+    coordinates) the choice depends on its column space only, not on the basis chosen in it."""
     k = b.shape[1]
     basis = np.zeros((0, k))
     chosen = []
-    scale = max(np.abs(b).max(), 1e-300)
+    scale = max(float(np.linalg.norm(b, axis=1).max()), 1e-300) if len(b) else 1.0
     for r in order:
-        v = b[r] - basis.T @ (basis @ b[r]) if len(basis) else b[r].copy()
+        v = b[r].copy()
+        for _ in range(2):  # Gram-Schmidt twice: orthogonal to working precision
+            if len(basis):
+                v -= basis.T @ (basis @ v)
         nv = np.linalg.norm(v)
         if nv > rtol * scale:
             basis = np.vstack([basis, v / nv])
@@ -146,23 +221,50 @@ def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> n
 
 
 def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str = "khalil") -> BaseParameters:
-    """Regroup given an orthonormal nullspace basis ``(10 n, k)`` in the paper convention."""
+    """Regroup given an orthonormal nullspace basis ``(10 n, k)`` in the paper convention.
+
+    Decisions are made on dimensionless coordinates: with ``L`` the robot's
+    :func:`length_scale` and ``u`` the length exponent of each parameter (:data:`LENGTH_POWER`),
+    the nullspace rows are scaled by ``L^-u`` and orthonormalised before the dependent set is
+    chosen, and a coefficient is zero when ``|K[i, d]| L^(u_d - u_i)`` is below
+    :data:`ZERO_TOL` (relative to its row's largest, and to 1). Scaling every length of the
+    robot by ``s`` (and masses by anything) thus gives the same names and structure, with
+    ``K[i, d]`` scaled by ``s^(u_i - u_d)``. Coefficients are then snapped (:func:`clean`).
+
+    The basis given is orthonormal in SI units, so its rounding (``~eps``, absolute) is
+    ``~eps cond(L^-u T^-1)`` in the dimensionless coordinates: ``~1e-8`` for a robot drawn in
+    millimetres. The tolerances grow with it (:data:`NOISE_FACTOR`), and so does the error of
+    ``K``: such a basis cannot tell more."""
     n10 = 10 * robot.n
     t = paper_from(robot, convention)
     tinv = np.linalg.inv(t)
     b = tinv @ null_basis  # nullspace in convention coordinates
     k = b.shape[1]
+    power = np.tile(LENGTH_POWER[convention], robot.n)
+    ell = length_scale(robot)
+    # dimensionless nullspace rows, orthonormalised: the same subspace for every scaling
+    scale = ell ** -power.astype(float)
+    q, _ = np.linalg.qr(scale[:, None] * b) if k else (np.zeros((n10, 0)), None)
+    # the input's absolute rounding, amplified by the map to dimensionless coordinates
+    sv = np.linalg.svd((scale[:, None] * tinv).reshape(robot.n, 10, robot.n, 10)[
+        np.arange(robot.n), :, np.arange(robot.n), :], compute_uv=False)
+    noise = NOISE_FACTOR * np.finfo(float).eps * sv.max() / max(sv.min(), 1e-300)
     # candidate order: last body first; within a body M, MZ, MY, MX, then second moments backwards
     within = {"paper": [9, 8, 7, 6, 5, 4, 3, 2, 1, 0], "khalil": [9, 8, 7, 6, 5, 4, 3, 2, 1, 0],
               "pinocchio": [0, 3, 2, 1, 9, 8, 6, 7, 5, 4], "idyntree": [0, 3, 2, 1, 9, 8, 7, 6, 5, 4],
               "rpna": [0, 3, 2, 1, 6, 7, 5, 4, 8, 9]}[convention]
     order = np.array([10 * i + w for i in reversed(range(robot.n)) for w in within])
-    dep = _choose_dependent(b, order) if k else np.zeros(0, dtype=int)
+    dep = _choose_dependent(q, order, max(1e-8, noise)) if k else np.zeros(0, dtype=int)
     if len(dep) < k:
         raise RuntimeError("nullspace basis is rank-deficient; orthonormalise it first")
     ind = np.setdiff1d(np.arange(n10), dep)
-    kmat = -b[ind] @ np.linalg.inv(b[dep]) if k else np.zeros((len(ind), 0))
-    kmat = clean(kmat)
+    if k:
+        kdim = -np.linalg.solve(q[dep].T, q[ind].T).T  # dimensionless K
+        row = np.maximum(1.0, np.abs(kdim).max(axis=1, keepdims=True))
+        kdim[np.abs(kdim) <= max(ZERO_TOL, noise) * row] = 0.0
+        kmat = clean(kdim * ell ** (power[ind][:, None] - power[dep][None, :]).astype(float))
+    else:
+        kmat = np.zeros((len(ind), 0))
     e = np.zeros((len(ind), n10))
     e[np.arange(len(ind)), ind] = 1.0
     e[:, dep] = kmat
@@ -172,8 +274,8 @@ def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str = "kha
         base_basis = u[:, k:]
     else:
         base_basis = np.eye(n10)
-    # a standard parameter is unidentifiable iff its unit vector lies in the nullspace
-    q, _ = np.linalg.qr(b) if k else (np.zeros((n10, 0)), None)
+    # a standard parameter is unidentifiable iff its unit vector lies in the nullspace (rows of
+    # the orthonormal dimensionless basis of norm 1; a diagonal scaling keeps unit vectors)
     unid = np.flatnonzero(np.abs(np.einsum("ij,ij->i", q, q) - 1) < 1e-9) if k else np.zeros(0, dtype=int)
     return BaseParameters(convention, parameter_names(robot, convention), ind, dep, kmat, e, unid,
                           base_basis, t)

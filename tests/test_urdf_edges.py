@@ -1,0 +1,183 @@
+"""URDF edge cases: loop joints in either orientation, tolerant XML, exact ``write_urdf``."""
+
+from __future__ import annotations
+
+import itertools
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from baseparams.base.regroup import base_parameters
+from baseparams.errors import ModelError
+from baseparams.io.load import load_model
+from baseparams.io.urdf import load_urdf
+from baseparams.model import RobotBuilder
+from baseparams.nullspace.certify import certify
+from baseparams.robots import get
+
+URDFPLUS = Path("/work/shared/models/urdfplus")
+LOOP_FILES = sorted(p for p in URDFPLUS.glob("*.urdf") if "<loop" in p.read_text()) if URDFPLUS.is_dir() else []
+
+
+# ------------------------------------------------------------------ A: loop joint orientation
+def _same_answer(r1, r2, samples: int = 1500, seed: int = 3, c1=None):
+    """The same certified nullity, the same nullspace and the same regrouped base parameters
+    (``c1``: ``r1``'s certificate, when already computed)."""
+    c1 = certify(r1, samples=samples, seed=seed) if c1 is None else c1
+    c2 = certify(r2, samples=samples, seed=seed)
+    assert c1.certified, c1.message
+    assert c2.certified, c2.message
+    assert (c1.nullity, c1.status, c1.completed) == (c2.nullity, c2.status, c2.completed)
+    b1, b2 = c1.basis, c2.basis
+    assert np.abs(b1 - b2 @ (b2.T @ b1)).max() < 1e-7
+    assert np.abs(b2 - b1 @ (b1.T @ b2)).max() < 1e-7
+    p1, p2 = base_parameters(r1, b1, "khalil"), base_parameters(r2, b2, "khalil")
+    assert np.array_equal(p1.independent, p2.independent)
+    assert np.allclose(p1.K, p2.K, atol=1e-7)
+    return c1
+
+
+def _swapping_add_loop(swap: set[str], give_both: bool):
+    """A replacement for ``RobotBuilder.add_loop`` writing the named loops the other way round
+    (successor first); ``give_both``: also pass the (coinciding) successor-side frame."""
+    orig = RobotBuilder.add_loop
+
+    def add_loop(self, name, type, parent, child, origin=None, axis=(0, 0, 1.0), axis2=None, child_origin=None):
+        pidx, pframe = self._frame(parent)
+        cidx, cframe = self._frame(child)
+        pm0 = np.eye(4) if pidx < 0 else self._m0[pidx]
+        cm0 = np.eye(4) if cidx < 0 else self._m0[cidx]
+        m = pm0 @ pframe @ (np.eye(4) if origin is None else origin)
+        mc = m if child_origin is None else cm0 @ cframe @ child_origin
+        if name not in swap:
+            co = np.linalg.solve(cm0 @ cframe, mc) if give_both else child_origin
+            return orig(self, name, type, parent, child, origin, axis, axis2, co)
+        new_origin = np.linalg.solve(cm0 @ cframe, mc)  # the successor's frame, now the predecessor's
+        new_child_origin = np.linalg.solve(pm0 @ pframe, m) if (give_both or child_origin is not None) else None
+        if type.upper() == "U":
+            axis, axis2 = axis2, axis
+        return orig(self, name, type, child, parent, new_origin, axis, axis2, new_child_origin)
+
+    return add_loop
+
+
+BUILTIN_LOOPS = {"four-bar": ["closure"], "parallelogram": ["closure"],
+                 "pkm-2rru-1rrs": ["U_b", "S_c"], "pkm-2prs-1psr": ["S_b", "R_c"]}
+
+
+@pytest.mark.parametrize("name", sorted(BUILTIN_LOOPS))
+def test_builtin_loop_robots_in_either_orientation(name, monkeypatch):
+    ref = get(name)
+    loops = BUILTIN_LOOPS[name]
+    assert [lj.name for lj in ref.loops] == loops
+    rng = np.random.default_rng(sum(map(ord, name)))
+    subsets = [set(s) for k in range(1, len(loops) + 1) for s in itertools.combinations(loops, k)]
+    c_ref = certify(ref, samples=1500, seed=3)
+    for swap in subsets:
+        monkeypatch.setattr(RobotBuilder, "add_loop", _swapping_add_loop(swap, bool(rng.integers(2))))
+        robot = get(name)
+        monkeypatch.undo()
+        assert [lj.name for lj in robot.loops] == loops  # the names survive
+        for a, b in zip(ref.loops, robot.loops):
+            assert (a.parent, a.child, a.type) == (b.parent, b.child, b.type)
+        _same_answer(ref, robot, c1=c_ref)
+
+
+def _swap_in_file(text: str, names: set[str]) -> str:
+    """The URDF+ text with the named loops' ``<predecessor>``/``<successor>`` exchanged (and a
+    universal loop's ``<axis>``/``<axis2>``, which belong to those sides)."""
+
+    def one(m: re.Match) -> str:
+        block = m.group(0)
+        if m.group(1) not in names:
+            return block
+        block = re.sub(r"<(/?)(predecessor|successor)\b", lambda t: f"<{t.group(1)}@{t.group(2)}", block)
+        block = block.replace("@predecessor", "successor").replace("@successor", "predecessor")
+        if 'type="universal"' in block:
+            block = re.sub(r"<axis(2?)\b", lambda t: "<axis" + ("" if t.group(1) else "2"), block)
+        return block
+
+    return re.sub(r'<loop\s+name="([^"]+)".*?</loop>', one, text, flags=re.S)
+
+
+@pytest.mark.parametrize("path", LOOP_FILES, ids=[p.name for p in LOOP_FILES])
+def test_urdfplus_loops_in_either_orientation(path, tmp_path):
+    text = path.read_text()
+    names = re.findall(r'<loop\s+name="([^"]+)"', text)
+    assert names
+    ref, _ = load_model(str(path))
+    c_ref = certify(ref, samples=1500, seed=3)
+    for k in range(1, len(names) + 1):
+        for swap in itertools.combinations(names, k):
+            swapped = _swap_in_file(text, set(swap))
+            assert swapped != text
+            f = tmp_path / path.name
+            f.write_text(swapped)
+            robot, _ = load_model(str(f))
+            assert [lj.name for lj in robot.loops] == names
+            _same_answer(ref, robot, c1=c_ref)
+
+
+def _serial_four_bar(world_is: str) -> RobotBuilder:
+    """A four-bar as a serial chain closed to the world by a loop R joint at D = (1, 0, 0)."""
+    from baseparams.model import Inertia, pose
+
+    b = RobotBuilder("chain", gravity=(0, -9.81, 0))
+    b.add_link("crank", joint="R", inertia=Inertia(1.0, com=(0.1, 0.2, 0), inertia=(0.01, 0.02, 0.03)), actuated=True)
+    b.add_link("coupler", parent="crank", joint="R", origin=pose((0.3, 0.5, 0)),
+               inertia=Inertia(1.2, com=(0.4, 0.1, 0), inertia=(0.01, 0.03, 0.04)), actuated=False)
+    b.add_link("rocker", parent="coupler", joint="R", origin=pose((0.95, 0.15, 0)),
+               inertia=Inertia(0.8, com=(-0.1, -0.3, 0), inertia=(0.02, 0.01, 0.03)), actuated=False)
+    d_in_rocker = pose((-0.25, -0.65, 0))
+    if world_is == "predecessor":
+        b.add_loop("ground", "R", parent=None, child="rocker", origin=pose((1.0, 0, 0)), axis=(0, 0, 1))
+    else:
+        b.add_loop("ground", "R", parent="rocker", child="world", origin=d_in_rocker, axis=(0, 0, 1),
+                   child_origin=pose((1.0, 0, 0)))
+    b.q_box = np.array([[-0.3, 0.3]])
+    return b
+
+
+def test_loop_joint_with_the_world_as_successor():
+    r1, r2 = _serial_four_bar("predecessor").build(), _serial_four_bar("successor").build()
+    assert (r2.loops[0].parent, r2.loops[0].child, r2.loops[0].name) == (-1, 2, "ground")
+    assert np.allclose(r1.loops[0].M, r2.loops[0].M) and r2.loops[0].M_child is None
+    c = _same_answer(r1, r2)
+    assert c.nullity == 22  # the four-bar's
+
+
+def test_loop_joint_orientation_unassembled_frames_swap_exactly():
+    """Unassembled (the two frames differ at q = 0): the predecessor's frame becomes M and
+    the successor's M_child, whichever side the file names first; U axes follow their sides."""
+    from baseparams.model import pose
+
+    def build(swap: bool):
+        b = RobotBuilder("u")
+        b.add_link("a", joint="R", axis=(0, 0, 1), actuated=True)
+        b.add_link("b", joint="R", origin=pose((1, 0, 0)), axis=(0, 1, 0), actuated=False)
+        fa, fb = pose((0.5, 0, 0), rpy=(0.1, 0, 0)), pose((-0.4, 0.02, 0), rpy=(0, 0.2, 0))
+        if swap:
+            b.add_loop("u1", "U", parent="b", child="a", origin=fb, axis=(0, 1, 0), axis2=(1, 0, 0), child_origin=fa)
+        else:
+            b.add_loop("u1", "U", parent="a", child="b", origin=fa, axis=(1, 0, 0), axis2=(0, 1, 0), child_origin=fb)
+        return b.build().loops[0]
+
+    l1, l2 = build(False), build(True)
+    assert (l1.parent, l1.child) == (l2.parent, l2.child) == (0, 1)
+    assert np.allclose(l1.M, l2.M) and np.allclose(l1.M_child, l2.M_child)
+    assert np.allclose(l1.axes, l2.axes) and np.allclose(l1.axes, [[1, 0, 0], [0, 1, 0]])
+
+
+def test_loop_joint_between_a_body_and_itself_or_the_world_and_itself_is_refused():
+    b = RobotBuilder("x")
+    b.add_link("a", joint="R", actuated=True)
+    b.add_link("w", parent=None, joint="fixed")
+    b.add_loop("self", "S", parent="a", child="a")
+    with pytest.raises(ModelError, match="'self'.*same body"):
+        b.build()
+    b._loops.clear()
+    b.add_loop("ground", "S", parent="w", child="world")
+    with pytest.raises(ModelError, match="'ground'.*same body.*world"):
+        b.build()

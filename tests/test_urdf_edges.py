@@ -181,3 +181,61 @@ def test_loop_joint_between_a_body_and_itself_or_the_world_and_itself_is_refused
     b.add_loop("ground", "S", parent="w", child="world")
     with pytest.raises(ModelError, match="'ground'.*same body.*world"):
         b.build()
+
+
+# ------------------------------------------------------------------ B: tolerant XML
+SMALL = """<?xml version="1.0"?>
+<robot name="small">
+  <link name="base"/>
+  <link name="a"><inertial><origin xyz="0.1 0 0" rpy="0 0 0"/><mass value="1.0"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.025"/></inertial></link>
+  <link name="b"><inertial><origin xyz="0 0.2 0"/><mass value="0.5"/>
+    <inertia ixx="0.01" ixy="0.001" ixz="0" iyy="0.01" iyz="0" izz="0.015"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
+    <origin xyz="0 0 0.3" rpy="0.1 0.2 0.3"/></joint>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/><axis xyz="1 0 0"/>
+    <origin xyz="0.5 0 0"/></joint>
+</robot>
+"""
+
+TOLERATED = {
+    "blank lines before <?xml": b"\n\n  \r\n" + SMALL.encode(),
+    "trailing NUL bytes": SMALL.encode() + b"\x00" * 7,
+    "trailing whitespace and NULs": SMALL.encode() + b"\n\n \x00\x00\n\x00",
+    "UTF-8 BOM": b"\xef\xbb\xbf" + SMALL.encode(),
+    "BOM, blank lines and NULs": b"\xef\xbb\xbf\n\n" + SMALL.encode() + b"\x00\n",
+}
+
+
+@pytest.mark.parametrize("label", sorted(TOLERATED))
+def test_tolerated_xml_loads_like_the_clean_file(label, tmp_path):
+    clean, odd = tmp_path / "clean.urdf", tmp_path / "odd.urdf"
+    clean.write_text(SMALL)
+    odd.write_bytes(TOLERATED[label])
+    r1, r2 = load_urdf(clean), load_urdf(odd)
+    assert r1.names == r2.names and np.array_equal(r1.N_body, r2.N_body) and np.array_equal(r1.M0, r2.M0)
+
+
+MALFORMED = [
+    ('xyz="0.5 0 0"', 'xyz="0.07, 0 0"', r"<joint name='j2'> <origin xyz>: expected 3 numbers, got '0.07, 0 0'$"),
+    ('xyz="0.5 0 0"', 'xyz="$(optenv OFFSET 0.5) 0 0"',
+     r"<joint name='j2'> <origin xyz>: .*unexpanded xacro/roslaunch substitution; run xacro first"),
+    ('<mass value="0.5"/>', '<mass value="$(find pkg)"/>',
+     r"<link name='b'> <mass value>: .*unexpanded xacro/roslaunch substitution; run xacro first"),
+    ('<mass value="0.5"/>', '<mass value="${m_b}"/>', r"<link name='b'> <mass value>: .*run xacro first"),
+    ('rpy="0.1 0.2 0.3"', 'rpy="0.1 0.2 0.3 0.4"', r"<joint name='j1'> <origin rpy>: expected 3 finite numbers"),
+    ("</robot>\n", "</robot>\n<extra/>\n", r"malformed XML \(junk after document element: line 15"),  # lines of the file
+]
+
+
+@pytest.mark.parametrize("old, new, message", MALFORMED, ids=[m[1][:24] for m in MALFORMED])
+def test_malformed_values_are_one_line_errors(old, new, message, tmp_path):
+    f = tmp_path / "robot.urdf"
+    text = SMALL.replace(old, new, 1)
+    assert text != SMALL
+    f.write_bytes(b"\n\n" + text.encode() if "extra" in new else text.encode())
+    with pytest.raises(ModelError) as exc:
+        load_urdf(f)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(str(f))
+    assert re.search(message, msg), msg

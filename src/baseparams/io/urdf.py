@@ -43,13 +43,36 @@ class URDFWarning(UserWarning):
 def _floats(text: str | None, n: int, what: str, default) -> np.ndarray:
     if text is None:
         return np.asarray(default, dtype=float)
+    hint = ("; unexpanded xacro/roslaunch substitution; run xacro first"
+            if "$(" in text or "${" in text else "")
     try:
         v = np.array([float(x) for x in text.split()])
     except ValueError:
-        raise ModelError(f"{what}: expected {n} numbers, got {text!r}") from None
+        raise ModelError(f"{what}: expected {n} numbers, got {text!r}{hint}") from None
     if v.shape != (n,) or not np.all(np.isfinite(v)):
         raise ModelError(f"{what}: expected {n} finite numbers, got {text!r}")
     return v
+
+
+def _parse(path: Path) -> ET.Element:
+    """The file's root element, tolerating what urdfdom, Pinocchio and pybullet tolerate: a
+    UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after the
+    root element. Anything else malformed is a one-line error naming the file."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    body = data.lstrip(b" \t\r\n")
+    skipped = data[:len(data) - len(body)].count(b"\n")  # for line numbers in messages
+    body = body.rstrip(b" \t\r\n\x00")
+    try:
+        return ET.fromstring(body)
+    except ET.ParseError as exc:
+        line, col = getattr(exc, "position", (0, 0))
+        msg = str(exc).split(":", 1)[0] if ": line" in str(exc) else str(exc)
+        raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
 
 
 def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
@@ -98,12 +121,7 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
     errors with ``strict_inertia``; links fixed to the world are never checked."""
     path = Path(path)
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as exc:
-        raise ModelError(f"{path}: malformed XML ({exc})") from None
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    root = _parse(path)
     if root.tag != "robot":
         raise ModelError(f"{path}: root element is <{root.tag}>, expected <robot>")
     links: dict[str, ET.Element] = {}

@@ -239,3 +239,124 @@ def test_malformed_values_are_one_line_errors(old, new, message, tmp_path):
     msg = str(exc.value)
     assert "\n" not in msg and msg.startswith(str(f))
     assert re.search(message, msg), msg
+
+
+# ------------------------------------------------------------------ C: write_urdf is exact
+def _erd(name: str) -> Path:
+    from erd import urdf_files
+
+    found = [f for f in urdf_files() if f.name == name]
+    if not found:
+        pytest.skip("example-robot-data is not installed")
+    return found[0]
+
+
+def _random_params(robot, convention: str, seed: int) -> np.ndarray:
+    from baseparams.model.inertia import to_convention
+    from baseparams.robots.random import random_inertia
+
+    rng = np.random.default_rng(seed)
+    return robot.with_parameters(np.concatenate([to_convention(random_inertia(rng).pseudo(), "khalil")
+                                                 for _ in range(robot.n)]), "khalil").parameters(convention)
+
+
+@pytest.mark.parametrize("convention, floating", [("khalil", False), ("paper", False), ("pinocchio", True)])
+def test_write_urdf_round_trip_on_a_real_file(convention, floating, tmp_path):
+    from baseparams.io.urdf import write_urdf
+
+    src = _erd("kinova.urdf")
+    robot = load_urdf(src, floating=floating)
+    for seed in range(3):
+        p = _random_params(robot, convention, seed)
+        out = tmp_path / f"out{seed}.urdf"
+        write_urdf(src, out, robot, p, convention)
+        again = load_urdf(out, floating=floating, strict_inertia=True)
+        assert again.names == robot.names and np.allclose(again.M0, robot.M0, atol=1e-15)
+        scale = np.abs(robot.with_parameters(p, convention).N_body).max(axis=(1, 2))[:, None, None]
+        assert np.all(np.abs(again.N_body - robot.with_parameters(p, convention).N_body) <= 1e-9 * scale)
+        assert np.allclose(again.parameters(convention), p, rtol=1e-9, atol=1e-12)
+
+
+def test_write_urdf_keeps_world_fixed_links_and_zeroes_merged_ones(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    from baseparams.io.urdf import write_urdf
+
+    src = _erd("kinova.urdf")
+    robot = load_urdf(src)
+    out = tmp_path / "out.urdf"
+    write_urdf(src, out, robot, _random_params(robot, "khalil", 7), "khalil")
+    before, after = ET.parse(src).getroot(), ET.parse(out).getroot()
+    parent = {j.find("child").get("link"): (j.find("parent").get("link"), j.get("type")) for j in before.findall("joint")}
+    root = next(ln.get("name") for ln in before.findall("link") if ln.get("name") not in parent)
+
+    def welded(k):
+        while k in parent and parent[k][1] == "fixed":
+            k = parent[k][0]
+        return k == root
+
+    def inertial(r, name):
+        el = r.find(f"link[@name='{name}']/inertial")
+        return None if el is None else [(c.tag, dict(c.attrib)) for c in el]
+
+    kept = [ln.get("name") for ln in before.findall("link") if welded(ln.get("name"))]
+    assert root in kept and len(kept) >= 2 and inertial(before, root) is not None
+    for name in kept:  # attribute strings unchanged
+        assert inertial(after, name) == inertial(before, name), name
+    merged = [ln.get("name") for ln in before.findall("link")
+              if ln.get("name") not in robot.names and not welded(ln.get("name"))
+              and inertial(before, ln.get("name")) is not None]
+    assert merged
+    for name in merged:
+        assert float(after.find(f"link[@name='{name}']/inertial/mass").get("value")) == 0.0
+
+
+def _small_robot(tmp_path):
+    src = tmp_path / "small.urdf"
+    src.write_text(SMALL)
+    return src, load_urdf(src)
+
+
+@pytest.mark.parametrize("mass, h, problem", [
+    (0.0, (0.1, 0, 0), r"mass 0 with a nonzero first moment"),
+    (-0.5, (0, 0.2, 0), r"mass -0.5 with a nonzero first moment"),
+    (1e-14, (0.3, 0.1, 0), r"centre of mass 3.16e\+13 m from the link frame.*not representable"),
+])
+def test_write_urdf_refuses_a_body_it_cannot_write(mass, h, problem, tmp_path):
+    from baseparams.io.urdf import write_urdf
+    from baseparams.model.inertia import pseudo_from_origin, to_convention
+
+    src, robot = _small_robot(tmp_path)
+    n = robot.N_body.copy()
+    n[1] = pseudo_from_origin(mass, np.array(h, float), np.diag([0.02, 0.03, 0.04]))
+    out = tmp_path / "out.urdf"
+    with pytest.raises(ModelError) as exc:
+        write_urdf(src, out, robot, to_convention(n, "khalil").ravel(), "khalil")
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"{out}: <link name='b'>: ")
+    assert re.search(problem, msg), msg
+    assert not out.exists()  # nothing written
+
+
+def test_write_urdf_writes_representable_degenerate_bodies(tmp_path):
+    """Zero mass and zero first moment, or a negative mass at the origin: exact, written."""
+    from baseparams.io.urdf import write_urdf
+    from baseparams.model.inertia import pseudo_from_origin, to_convention
+
+    src, robot = _small_robot(tmp_path)
+    n = robot.N_body.copy()
+    n[0] = pseudo_from_origin(0.0, np.zeros(3), np.diag([0.02, 0.03, 0.04]))
+    n[1] = pseudo_from_origin(-0.5, np.zeros(3), np.zeros((3, 3)))
+    out = tmp_path / "out.urdf"
+    write_urdf(src, out, robot, to_convention(n, "khalil").ravel(), "khalil")
+    with pytest.warns(UserWarning, match="negative mass"):
+        again = load_urdf(out)
+    assert np.array_equal(again.N_body, n)
+
+
+def test_write_urdf_needs_a_convention(tmp_path):
+    from baseparams.io.urdf import write_urdf
+
+    src, robot = _small_robot(tmp_path)
+    with pytest.raises(TypeError):
+        write_urdf(src, tmp_path / "out.urdf", robot, robot.parameters("khalil"))  # noqa: the point

@@ -319,33 +319,86 @@ def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:
     return replace(robot, couplings=tuple(out))
 
 
-def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str = "khalil") -> None:
-    """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` replaced by ``params``
-    (``(10 n,)`` in ``convention``; link-frame conventions are in each body's joint frame, as
-    read). Links merged by fixed joints get zero inertia (their share is in the body's values)."""
+def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str) -> None:
+    """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` set to ``params``
+    (``(10 n,)`` in ``convention``, which must be given: link-frame conventions are in each
+    body's joint frame, as read; ``paper`` in the world frame at q = 0).
+
+    Exactly the requested bodies or nothing: each body's ``<inertial>`` (mass, centre of mass,
+    inertia about it) is re-read as :func:`load_urdf` reads it and must give the requested
+    pseudo-inertia to ~1e-9 of the body's scale; a body a URDF ``<inertial>`` cannot represent
+    (mass <= 0 with a nonzero first moment, a mass so small that the centre of mass lands
+    absurdly far away) raises :class:`ModelError` naming the file and the link, and nothing is
+    written. Links merged into a moving body by fixed joints get zero inertia (their share is
+    in the body's values); links welded to the world (the fixed root and links fixed to it)
+    are not part of any body and keep their ``<inertial>`` untouched."""
     from ..model import inertia as I
     from ..pga import inverse_transform
 
     source, dest = Path(source), Path(dest)
-    tree = ET.parse(source)
-    root = tree.getroot()
-    p = np.asarray(params, dtype=float).reshape(robot.n, 10)
-    n_body = I.from_convention(p, convention)
+    root = _parse(source)
+    p = np.asarray(params, dtype=float)
+    if p.size != 10 * robot.n:
+        raise ModelError(f"{dest}: expected {10 * robot.n} parameters (10 per body of {robot.name!r}), got {p.size}")
+    n_body = I.from_convention(p.reshape(robot.n, 10), convention)
     if convention == "paper":
         n_body = I.transform(n_body, inverse_transform(robot.M0))
     links = {ln.get("name"): ln for ln in root.findall("link")}
-    for ln_name, ln in links.items():
-        if ln_name in robot.names:
-            i = robot.names.index(ln_name)
-            m, h, j_o = I.split(n_body[i])
-            c = h / m if m > 0 else np.zeros(3)
-            j_c = j_o - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
-            _set_inertial(ln, m, c, j_c)
-        elif ln.find("inertial") is not None:
-            _set_inertial(ln, 0.0, np.zeros(3), np.zeros((3, 3)))
-    tree.write(dest, encoding="unicode", xml_declaration=True)
+    parent_link = {}
+    for jt in root.findall("joint"):
+        c, pl = jt.find("child"), jt.find("parent")
+        if c is not None and pl is not None:
+            parent_link[c.get("link")] = (pl.get("link"), jt.get("type"))
+    missing = [b for b in robot.names if b not in links]
+    if missing:
+        raise ModelError(f"{dest}: bodies {missing[:5]} of robot {robot.name!r} are not links of {source}")
+    bodies = set(robot.names)
+    merged = []  # links whose inertia is part of a moving body
+    for ln_name in links:
+        k = ln_name
+        while k not in bodies and k in parent_link and parent_link[k][1] == "fixed":
+            k = parent_link[k][0]
+        if ln_name not in bodies and k in bodies:
+            merged.append(ln_name)
+    new = {}
+    for i, name in enumerate(robot.names):
+        new[name] = _exact_inertial(n_body[i], f"{dest}: <link name={name!r}>")
+    for name, vals in new.items():
+        _set_inertial(links[name], *vals)
+    for name in merged:
+        if links[name].find("inertial") is not None:
+            _set_inertial(links[name], 0.0, np.zeros(3), np.zeros((3, 3)))
+    ET.ElementTree(root).write(dest, encoding="unicode", xml_declaration=True)
 
 
+def _exact_inertial(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(mass, com, inertia about the com)`` for a URDF ``<inertial>`` that re-reads as the
+    pseudo-inertia ``n`` (round trip through the reader), or a :class:`ModelError`."""
+    from ..model import inertia as I
+
+    m, h, j_o = I.split(n)
+    m = float(m)
+    scale = float(np.abs(n).max())
+    if not np.all(np.isfinite(n)):
+        raise ModelError(f"{what}: cannot write a pseudo-inertia with NaN or inf")
+    if m > 0:
+        c = h / m
+        j_c = j_o - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+    else:
+        c, j_c = np.zeros(3), j_o
+    hn = float(np.linalg.norm(h))
+    if m <= 0 and hn > 1e-9 * max(scale, np.finfo(float).tiny):
+        raise ModelError(f"{what}: mass {m:.6g} with a nonzero first moment (|m c| = {hn:.3g}) has no URDF "
+                         f"<inertial>: the centre of mass of a body with mass <= 0 is undefined")
+    el = ET.Element("link")
+    _set_inertial(el, m, c, j_c)
+    back = _inertial(el, what, check=False).pseudo()
+    err = float(np.abs(back - n).max()) if np.all(np.isfinite(back)) else np.inf
+    if not err <= 1e-9 * scale:
+        raise ModelError(f"{what}: mass {m:.6g} with first moment |m c| = {hn:.3g} puts the centre of mass "
+                         f"{np.linalg.norm(c):.3g} m from the link frame; a URDF <inertial> re-reads it with "
+                         f"relative error {err / max(scale, np.finfo(float).tiny):.2g} (> 1e-9): not representable")
+    return m, c, j_c
 def _set_inertial(link: ET.Element, m: float, c: np.ndarray, j: np.ndarray) -> None:
     inl = link.find("inertial")
     if inl is None:

@@ -360,3 +360,33 @@ def test_write_urdf_needs_a_convention(tmp_path):
     src, robot = _small_robot(tmp_path)
     with pytest.raises(TypeError):
         write_urdf(src, tmp_path / "out.urdf", robot, robot.parameters("khalil"))  # noqa: the point
+
+
+# ------------------------------------------------------------------ D: what every other tool loads
+def test_mimic_of_an_unknown_joint_is_ignored_with_one_warning_naming_it(tmp_path):
+    from baseparams.io.urdf import URDFWarning
+
+    f = tmp_path / "m.urdf"
+    f.write_text(SMALL.replace('<origin xyz="0.5 0 0"/></joint>',
+                               '<origin xyz="0.5 0 0"/><mimic joint="ghost" multiplier="2"/></joint>'))
+    with pytest.warns(URDFWarning) as rec:
+        robot = load_urdf(f)
+    msgs = [str(w.message) for w in rec if issubclass(w.category, URDFWarning)]
+    assert len(msgs) == 1 and "\n" not in msgs[0]
+    assert msgs[0].startswith(f"{f}: <joint name='j2'> <mimic>: ignored (unknown joint 'ghost')")
+    assert robot.couplings == () and robot.dof == 2 and not robot.has_loops
+
+
+def test_a_file_without_a_robot_name_is_named_after_the_file(tmp_path):
+    from baseparams.errors import NoMovingBodiesError
+
+    f = tmp_path / "unnamed_arm.urdf"
+    f.write_text(SMALL.replace('<robot name="small">', "<robot>"))
+    assert load_urdf(f).name == "unnamed_arm"
+    f.write_text('<?xml version="1.0"?>\n<robot xmlns:xacro="http://wiki.ros.org/xacro">\n</robot>\n')  # ur3.urdf
+    with pytest.raises(NoMovingBodiesError, match=r"unnamed_arm.urdf: no <link> elements"):
+        load_urdf(f)
+    f.write_text('<robot><link name="base"/><link name="plate"/><joint name="w" type="fixed">'
+                 '<parent link="base"/><child link="plate"/></joint></robot>')
+    with pytest.raises(NoMovingBodiesError, match=r"unnamed_arm.urdf: robot 'unnamed_arm': no moving links"):
+        load_urdf(f)

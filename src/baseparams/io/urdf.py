@@ -12,7 +12,8 @@ of the two links); ``independent="false"`` on joints marks passive coordinates. 
 ``sucessor`` spelling and ``name=`` instead of ``link=`` are accepted with a warning.
 Plain-URDF tools drop loops silently; this reader never does.
 
-``<mimic multiplier offset>`` becomes a coupling (the follower is passive).
+``<mimic multiplier offset>`` becomes a coupling (the follower is passive); a ``<mimic>`` of a
+joint that does not exist is ignored with a warning, as urdfdom and Pinocchio do.
 Not supported (clear errors): ``planar`` joints, loops of unknown type.
 Every error is one line naming the file, the element and the problem.
 """
@@ -25,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, NoMovingBodiesError
 from ..model.builder import RobotBuilder, pose
 from ..model.inertia import Inertia, check_inertia
 from ..model.robot import Coupling, Robot
@@ -132,8 +133,8 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         if lname in links:
             raise ModelError(f"{path}: duplicate link {lname!r}")
         links[lname] = ln
-    if not links:
-        raise ModelError(f"{path}: no <link> elements")
+    if not links:  # urdfdom refuses it; here it is a robot with nothing to identify
+        raise NoMovingBodiesError(f"{path}: no <link> elements: no moving links")
     joints: dict[str, ET.Element] = {}
     mimics: dict[str, tuple[str, float, float]] = {}
     parent_of: dict[str, str] = {}
@@ -171,7 +172,11 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
             hint = " (planar joints are not supported)" if t == "planar" else ""
             raise ModelError(f"{what}: unknown or unsupported joint type {t!r}{hint}")
     for jname, (leader, _, _) in list(mimics.items()):
-        if leader in joints and "fixed" in (joints[jname].get("type"), joints[leader].get("type")):
+        if leader not in joints:  # urdfdom and Pinocchio ignore it: say so, once
+            warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (unknown joint {leader!r}); "
+                          f"{jname!r} moves freely", URDFWarning, stacklevel=2)
+            del mimics[jname]
+        elif "fixed" in (joints[jname].get("type"), joints[leader].get("type")):
             warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (a fixed joint cannot mimic or be "
                           f"mimicked)", URDFWarning, stacklevel=2)
             del mimics[jname]
@@ -284,9 +289,6 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         couplings.append((cname, _link_ref(pred, f"{what} <predecessor>", path),
                           _link_ref(succ, f"{what} <successor>", path), ratio, 0.0))
     for jname, (leader, mult, off) in mimics.items():
-        what = f"{path}: <joint name={jname!r}> <mimic>"
-        if leader not in joints:
-            raise ModelError(f"{what}: unknown joint {leader!r}")
         couplings.append((f"mimic:{jname}", joints[leader].find("child").get("link"),
                           joints[jname].find("child").get("link"), mult, off))
     if loop_elems or couplings:
@@ -294,7 +296,10 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         # (rad or m) so that continuation stays on one assembly mode
         b.q_box = np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3]
                             for lo, hi in limits])
-    robot = b.build()
+    try:
+        robot = b.build()
+    except NoMovingBodiesError as exc:
+        raise NoMovingBodiesError(f"{path}: {exc}") from None
     if couplings:
         robot = _with_couplings(robot, couplings, path)
     return robot

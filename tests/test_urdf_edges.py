@@ -390,3 +390,30 @@ def test_a_file_without_a_robot_name_is_named_after_the_file(tmp_path):
                  '<parent link="base"/><child link="plate"/></joint></robot>')
     with pytest.raises(NoMovingBodiesError, match=r"unnamed_arm.urdf: robot 'unnamed_arm': no moving links"):
         load_urdf(f)
+
+
+def _erd_files():
+    from erd import urdf_files
+
+    return urdf_files()
+
+
+#: example-robot-data files with nothing to identify at a fixed base (all links welded to the world)
+NO_MOVING = {"ur3.urdf": "no <link> elements", "quadrotor_base.urdf": "no moving links",
+             "iris_simple.urdf": "no moving links"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", _erd_files(), ids=[f.name for f in _erd_files()])
+def test_every_erd_urdf_loads_and_certifies_with_default_flags(path):
+    """Default flags: fixed base, no --floating, inertia problems are notes."""
+    from baseparams.errors import NoMovingBodiesError
+
+    if path.name in NO_MOVING:
+        with pytest.raises(NoMovingBodiesError, match=NO_MOVING[path.name]):
+            load_model(str(path))
+        return
+    robot, _ = load_model(str(path))
+    assert "F" not in robot.jtype  # a fixed base
+    cert = certify(robot, seed=1)
+    assert cert.certified, cert.message

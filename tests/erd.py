@@ -54,7 +54,7 @@ def pinocchio_nullity(model, path: Path, samples: int, seed: int = 0, rtol: floa
     mimic = []
     for jt in root.findall("joint"):
         m = jt.find("mimic")
-        if m is None or not model.existJointName(jt.get("name")):
+        if m is None or not model.existJointName(jt.get("name")) or not model.existJointName(m.get("joint")):
             continue
         f = model.joints[model.getJointId(jt.get("name"))]
         lead = model.joints[model.getJointId(m.get("joint"))]

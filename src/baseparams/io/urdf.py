@@ -12,7 +12,8 @@ of the two links); ``independent="false"`` on joints marks passive coordinates. 
 ``sucessor`` spelling and ``name=`` instead of ``link=`` are accepted with a warning.
 Plain-URDF tools drop loops silently; this reader never does.
 
-``<mimic multiplier offset>`` becomes a coupling (the follower is passive).
+``<mimic multiplier offset>`` becomes a coupling (the follower is passive); a ``<mimic>`` of a
+joint that does not exist is ignored with a warning, as urdfdom and Pinocchio do.
 Not supported (clear errors): ``planar`` joints, loops of unknown type.
 Every error is one line naming the file, the element and the problem.
 """
@@ -25,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, NoMovingBodiesError
 from ..model.builder import RobotBuilder, pose
 from ..model.inertia import Inertia, check_inertia
 from ..model.robot import Coupling, Robot
@@ -43,13 +44,36 @@ class URDFWarning(UserWarning):
 def _floats(text: str | None, n: int, what: str, default) -> np.ndarray:
     if text is None:
         return np.asarray(default, dtype=float)
+    hint = ("; unexpanded xacro/roslaunch substitution; run xacro first"
+            if "$(" in text or "${" in text else "")
     try:
         v = np.array([float(x) for x in text.split()])
     except ValueError:
-        raise ModelError(f"{what}: expected {n} numbers, got {text!r}") from None
+        raise ModelError(f"{what}: expected {n} numbers, got {text!r}{hint}") from None
     if v.shape != (n,) or not np.all(np.isfinite(v)):
         raise ModelError(f"{what}: expected {n} finite numbers, got {text!r}")
     return v
+
+
+def _parse(path: Path) -> ET.Element:
+    """The file's root element, tolerating what urdfdom, Pinocchio and pybullet tolerate: a
+    UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after the
+    root element. Anything else malformed is a one-line error naming the file."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    body = data.lstrip(b" \t\r\n")
+    skipped = data[:len(data) - len(body)].count(b"\n")  # for line numbers in messages
+    body = body.rstrip(b" \t\r\n\x00")
+    try:
+        return ET.fromstring(body)
+    except ET.ParseError as exc:
+        line, col = getattr(exc, "position", (0, 0))
+        msg = str(exc).split(":", 1)[0] if ": line" in str(exc) else str(exc)
+        raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
 
 
 def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
@@ -98,12 +122,7 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
     errors with ``strict_inertia``; links fixed to the world are never checked."""
     path = Path(path)
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as exc:
-        raise ModelError(f"{path}: malformed XML ({exc})") from None
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    root = _parse(path)
     if root.tag != "robot":
         raise ModelError(f"{path}: root element is <{root.tag}>, expected <robot>")
     links: dict[str, ET.Element] = {}
@@ -114,8 +133,8 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         if lname in links:
             raise ModelError(f"{path}: duplicate link {lname!r}")
         links[lname] = ln
-    if not links:
-        raise ModelError(f"{path}: no <link> elements")
+    if not links:  # urdfdom refuses it; here it is a robot with nothing to identify
+        raise NoMovingBodiesError(f"{path}: no <link> elements: no moving links")
     joints: dict[str, ET.Element] = {}
     mimics: dict[str, tuple[str, float, float]] = {}
     parent_of: dict[str, str] = {}
@@ -153,7 +172,11 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
             hint = " (planar joints are not supported)" if t == "planar" else ""
             raise ModelError(f"{what}: unknown or unsupported joint type {t!r}{hint}")
     for jname, (leader, _, _) in list(mimics.items()):
-        if leader in joints and "fixed" in (joints[jname].get("type"), joints[leader].get("type")):
+        if leader not in joints:  # urdfdom and Pinocchio ignore it: say so, once
+            warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (unknown joint {leader!r}); "
+                          f"{jname!r} moves freely", URDFWarning, stacklevel=2)
+            del mimics[jname]
+        elif "fixed" in (joints[jname].get("type"), joints[leader].get("type")):
             warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (a fixed joint cannot mimic or be "
                           f"mimicked)", URDFWarning, stacklevel=2)
             del mimics[jname]
@@ -266,9 +289,6 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         couplings.append((cname, _link_ref(pred, f"{what} <predecessor>", path),
                           _link_ref(succ, f"{what} <successor>", path), ratio, 0.0))
     for jname, (leader, mult, off) in mimics.items():
-        what = f"{path}: <joint name={jname!r}> <mimic>"
-        if leader not in joints:
-            raise ModelError(f"{what}: unknown joint {leader!r}")
         couplings.append((f"mimic:{jname}", joints[leader].find("child").get("link"),
                           joints[jname].find("child").get("link"), mult, off))
     if loop_elems or couplings:
@@ -276,7 +296,10 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         # (rad or m) so that continuation stays on one assembly mode
         b.q_box = np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3]
                             for lo, hi in limits])
-    robot = b.build()
+    try:
+        robot = b.build()
+    except NoMovingBodiesError as exc:
+        raise NoMovingBodiesError(f"{path}: {exc}") from None
     if couplings:
         robot = _with_couplings(robot, couplings, path)
     return robot
@@ -301,33 +324,86 @@ def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:
     return replace(robot, couplings=tuple(out))
 
 
-def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str = "khalil") -> None:
-    """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` replaced by ``params``
-    (``(10 n,)`` in ``convention``; link-frame conventions are in each body's joint frame, as
-    read). Links merged by fixed joints get zero inertia (their share is in the body's values)."""
+def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str) -> None:
+    """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` set to ``params``
+    (``(10 n,)`` in ``convention``, which must be given: link-frame conventions are in each
+    body's joint frame, as read; ``paper`` in the world frame at q = 0).
+
+    Exactly the requested bodies or nothing: each body's ``<inertial>`` (mass, centre of mass,
+    inertia about it) is re-read as :func:`load_urdf` reads it and must give the requested
+    pseudo-inertia to ~1e-9 of the body's scale; a body a URDF ``<inertial>`` cannot represent
+    (mass <= 0 with a nonzero first moment, a mass so small that the centre of mass lands
+    absurdly far away) raises :class:`ModelError` naming the file and the link, and nothing is
+    written. Links merged into a moving body by fixed joints get zero inertia (their share is
+    in the body's values); links welded to the world (the fixed root and links fixed to it)
+    are not part of any body and keep their ``<inertial>`` untouched."""
     from ..model import inertia as I
     from ..pga import inverse_transform
 
     source, dest = Path(source), Path(dest)
-    tree = ET.parse(source)
-    root = tree.getroot()
-    p = np.asarray(params, dtype=float).reshape(robot.n, 10)
-    n_body = I.from_convention(p, convention)
+    root = _parse(source)
+    p = np.asarray(params, dtype=float)
+    if p.size != 10 * robot.n:
+        raise ModelError(f"{dest}: expected {10 * robot.n} parameters (10 per body of {robot.name!r}), got {p.size}")
+    n_body = I.from_convention(p.reshape(robot.n, 10), convention)
     if convention == "paper":
         n_body = I.transform(n_body, inverse_transform(robot.M0))
     links = {ln.get("name"): ln for ln in root.findall("link")}
-    for ln_name, ln in links.items():
-        if ln_name in robot.names:
-            i = robot.names.index(ln_name)
-            m, h, j_o = I.split(n_body[i])
-            c = h / m if m > 0 else np.zeros(3)
-            j_c = j_o - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
-            _set_inertial(ln, m, c, j_c)
-        elif ln.find("inertial") is not None:
-            _set_inertial(ln, 0.0, np.zeros(3), np.zeros((3, 3)))
-    tree.write(dest, encoding="unicode", xml_declaration=True)
+    parent_link = {}
+    for jt in root.findall("joint"):
+        c, pl = jt.find("child"), jt.find("parent")
+        if c is not None and pl is not None:
+            parent_link[c.get("link")] = (pl.get("link"), jt.get("type"))
+    missing = [b for b in robot.names if b not in links]
+    if missing:
+        raise ModelError(f"{dest}: bodies {missing[:5]} of robot {robot.name!r} are not links of {source}")
+    bodies = set(robot.names)
+    merged = []  # links whose inertia is part of a moving body
+    for ln_name in links:
+        k = ln_name
+        while k not in bodies and k in parent_link and parent_link[k][1] == "fixed":
+            k = parent_link[k][0]
+        if ln_name not in bodies and k in bodies:
+            merged.append(ln_name)
+    new = {}
+    for i, name in enumerate(robot.names):
+        new[name] = _exact_inertial(n_body[i], f"{dest}: <link name={name!r}>")
+    for name, vals in new.items():
+        _set_inertial(links[name], *vals)
+    for name in merged:
+        if links[name].find("inertial") is not None:
+            _set_inertial(links[name], 0.0, np.zeros(3), np.zeros((3, 3)))
+    ET.ElementTree(root).write(dest, encoding="unicode", xml_declaration=True)
 
 
+def _exact_inertial(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(mass, com, inertia about the com)`` for a URDF ``<inertial>`` that re-reads as the
+    pseudo-inertia ``n`` (round trip through the reader), or a :class:`ModelError`."""
+    from ..model import inertia as I
+
+    m, h, j_o = I.split(n)
+    m = float(m)
+    scale = float(np.abs(n).max())
+    if not np.all(np.isfinite(n)):
+        raise ModelError(f"{what}: cannot write a pseudo-inertia with NaN or inf")
+    if m > 0:
+        c = h / m
+        j_c = j_o - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+    else:
+        c, j_c = np.zeros(3), j_o
+    hn = float(np.linalg.norm(h))
+    if m <= 0 and hn > 1e-9 * max(scale, np.finfo(float).tiny):
+        raise ModelError(f"{what}: mass {m:.6g} with a nonzero first moment (|m c| = {hn:.3g}) has no URDF "
+                         f"<inertial>: the centre of mass of a body with mass <= 0 is undefined")
+    el = ET.Element("link")
+    _set_inertial(el, m, c, j_c)
+    back = _inertial(el, what, check=False).pseudo()
+    err = float(np.abs(back - n).max()) if np.all(np.isfinite(back)) else np.inf
+    if not err <= 1e-9 * scale:
+        raise ModelError(f"{what}: mass {m:.6g} with first moment |m c| = {hn:.3g} puts the centre of mass "
+                         f"{np.linalg.norm(c):.3g} m from the link frame; a URDF <inertial> re-reads it with "
+                         f"relative error {err / max(scale, np.finfo(float).tiny):.2g} (> 1e-9): not representable")
+    return m, c, j_c
 def _set_inertial(link: ET.Element, m: float, c: np.ndarray, j: np.ndarray) -> None:
     inl = link.find("inertial")
     if inl is None:

@@ -154,7 +154,11 @@ class RobotBuilder:
         """Record a loop (cut) joint between two links (``parent`` None: the world).
 
         ``origin``: the loop frame in the parent link's frame; ``child_origin`` (optional): the
-        same frame in the child link's frame, checked to coincide at q = 0."""
+        same frame in the child link's frame (when the two do not coincide at q = 0 the robot
+        is not assembled there: see :func:`baseparams.kinematics.loops.assemble`). The two
+        links may come in either tree order (URDF+ allows it; either may be the world): the
+        built :class:`LoopJoint` has ``parent < child``, with the frames (and a U joint's two
+        axes: ``axis`` carried by ``parent``, ``axis2`` by ``child``) swapped when needed."""
         jt = joint_type(type)
         self._loops.append((name, jt, parent, child, origin, axis, axis2, child_origin))
         return self
@@ -168,19 +172,25 @@ class RobotBuilder:
             what = f"robot {self.name!r}, loop joint {name!r}"
             pidx, pframe = self._frame(parent)
             cidx, cframe = self._frame(child)
-            if cidx < 0:
-                raise ModelError(f"{what}: the successor {child!r} must be a moving link")
-            if not pidx < cidx:
-                raise ModelError(f"{what}: the predecessor {parent!r} must come before the successor "
-                                 f"{child!r} in the tree order (swap them)")
+            if pidx == cidx:
+                raise ModelError(f"{what}: the predecessor {parent!r} and the successor {child!r} are the same "
+                                 f"body" + (" (the world)" if pidx < 0 else ""))
             pm0 = np.eye(4) if pidx < 0 else self._m0[pidx]
+            cm0 = np.eye(4) if cidx < 0 else self._m0[cidx]
             m = pm0 @ pframe @ (np.eye(4) if origin is None else np.asarray(origin, dtype=float))
-            m_child = None
-            if child_origin is not None:
-                mc = self._m0[cidx] @ cframe @ np.asarray(child_origin, dtype=float)
-                if np.abs(mc - m).max() > 1e-9:
-                    m_child = mc  # not assembled at q = 0: kinematics.loops.assemble() solves it
+            # the successor's copy of the frame (the predecessor's when the file gives none)
+            mc = m if child_origin is None else cm0 @ cframe @ np.asarray(child_origin, dtype=float)
             axes = self._axes_for(jt, axis, axis2, what) if jt in JOINT_TYPES else np.zeros((0, 3))
+            if pidx > cidx:
+                # written in the other orientation (URDF+ allows it): swap the roles. The
+                # frames swap; a U joint's first axis is carried by the predecessor and its
+                # second by the successor, so its axes swap too; R/P axes are the same line in
+                # both frames, S and fixed have none to swap. The constraints are the same.
+                pidx, cidx, m, mc = cidx, pidx, mc, m
+                if jt == "U":
+                    axes = axes[::-1].copy()
+            # not assembled at q = 0: kinematics.loops.assemble() solves it
+            m_child = mc if np.abs(mc - m).max() > 1e-9 else None
             loops.append(LoopJoint(name, jt, pidx, cidx, m, axes, m_child))
         independent = None
         if any(a is not None for a in self._actuated):

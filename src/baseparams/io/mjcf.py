@@ -220,6 +220,10 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
     nb = model.nbody
     if gravity is None:
         gravity = np.array(model.opt.gravity, dtype=float)
+        if model.opt.disableflags & int(mj.mjtDisableBit.mjDSBL_GRAVITY) and np.any(gravity):
+            warnings.warn(f"{path}: gravity is disabled (<flag gravity=\"disable\">): analysed with zero gravity",
+                          MJCFWarning, stacklevel=3)
+            gravity = np.zeros(3)
     mname = model.names.split(b"\0", 1)[0].decode()
     b = RobotBuilder(name or (mname if mname and mname != "MuJoCo Model" else path.stem), gravity=gravity)
     bnames = ["world"] + [_name(model, "body", i, f"body{i}") for i in range(1, nb)]

@@ -50,12 +50,14 @@ def spatial_inertia(n):
 
 
 def _sub_joints(robot, i):
-    """Local unit twists of the 1-dof sub-joints of joint i (S: x, y, z)."""
+    """Local unit twists of the 1-dof sub-joints of joint i (S: x, y, z; C: its twists)."""
     t = robot.jtype[i]
     if t in ("R", "U", "S"):
         return [np.r_[a, 0, 0, 0] for a in robot.axes[i]]
     if t == "P":
         return [np.r_[0, 0, 0, robot.axes[i][0]]]
+    if t == "C":  # raw (omega, v) twists of the joint frame, applied in order
+        return [np.asarray(a, dtype=float) for a in robot.axes[i]]
     raise AssertionError
 
 

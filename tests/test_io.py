@@ -201,19 +201,18 @@ def test_urdfplus_tolerated_spellings_warn(tmp_path):
 
 
 def test_mjcf_errors(tmp_path):
+    """What MuJoCo rejects is one line naming the file (MuJoCo's message); an unsupported
+    equality is one line naming it."""
     f = tmp_path / "m.xml"
-    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><joint type="hinge"/>'
-                 '<inertial mass="1" diaginertia="1 1 1"/></body></worldbody></mujoco>')
-    with pytest.raises(ModelError, match=r"<body name='a'>: 2 joints in one body"):
-        load_mjcf(f)
-    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><inertial mass="1" '
+    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><inertial pos="0 0 0" mass="1" '
                  'diaginertia="1 1 1"/></body></worldbody><equality><tendon tendon1="t"/></equality></mujoco>')
-    with pytest.raises(ModelError, match="tendon equalities are not supported"):
+    with pytest.raises(ModelError, match=r"m\.xml: .*'t'") as exc:
         load_mjcf(f)
-    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><inertial mass="1" '
+    assert "\n" not in str(exc.value)
+    f.write_text('<mujoco><worldbody><body name="a"><joint type="hinge"/><inertial pos="0 0 0" mass="1" '
                  'diaginertia="1 1 1"/></body></worldbody><equality><connect body1="a" body2="zz" anchor="0 0 0"/>'
                  '</equality></mujoco>')
-    with pytest.raises(ModelError, match="unknown body 'zz'"):
+    with pytest.raises(ModelError, match="zz"):
         load_mjcf(f)
 
 

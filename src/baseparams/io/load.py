@@ -13,7 +13,7 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
                ) -> tuple[Robot, list[str]]:
     """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xml``/``.mjcf``).
 
-    Gravity defaults to ``(0, 0, -9.81)`` for files. Physically infeasible inertias are notes
+    Gravity defaults to ``(0, 0, -9.81)`` for URDF files and to the model's own for MJCF. Physically infeasible inertias are notes
     (one per link), or errors with ``strict_inertia``. Loop robots whose file is not assembled
     (or singular) at q = 0 are assembled and re-referenced; the notes say so, along with any
     warning raised while reading."""
@@ -38,7 +38,7 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
         elif suffix in (".xml", ".mjcf"):
             from .mjcf import load_mjcf
 
-            robot = load_mjcf(p, gravity=g, floating=floating, strict_inertia=strict_inertia)
+            robot = load_mjcf(p, gravity=gravity, floating=floating, strict_inertia=strict_inertia)
         else:
             raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xml or .mjcf")
     notes = [str(w.message) for w in caught]

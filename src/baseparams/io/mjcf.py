@@ -1,20 +1,36 @@
-"""MJCF (MuJoCo XML) reader: kinematic tree, inertials and closed loops -> :class:`Robot`.
+"""MJCF (MuJoCo XML) reader, through MuJoCo itself: the file is parsed and compiled by the
+``mujoco`` package (``MjSpec.from_file`` then ``compile``), and the robot is read off the
+compiled ``MjModel`` and its kinematics at ``qpos0`` (our q = 0). Whatever MuJoCo accepts
+(``<include>``, default classes, ``<frame>``, unnamed bodies, several joints per body, ...) is
+read as MuJoCo reads it; what it rejects is one line ``path: <MuJoCo's message>``.
 
-Supported: nested ``<body>`` with ``pos`` and any orientation (``quat``, ``euler`` with the
-compiler's ``angle``/``eulerseq``, ``axisangle``, ``xyaxes``, ``zaxis``); ``<inertial>``
-(``diaginertia`` or ``fullinertia``); one ``<joint>`` per body (``hinge`` R, ``slide`` P,
-``ball`` S, ``free`` F) or ``<freejoint/>``; default classes with inheritance and
-``childclass``; bodies without a joint are welded to their parent (inertia merged). Closed
-loops from ``<equality>``: ``connect`` (body or site form) -> spherical loop joint, ``weld`` ->
-fixed loop joint, ``joint`` with a linear ``polycoef`` -> a coupling. The reference
-configuration q = 0 is the XML pose (MuJoCo's qpos0, i.e. hinge ``ref`` angles).
-Meshes are never read. Not supported (clear errors): several joints in one body, tendon
-equalities, nonlinear joint couplings.
+Mapping:
+
+* bodies with joints are moving links; a body without joints is welded to its parent (its
+  inertia merged), or static when on the world (``floating``: a top-level body without a joint
+  gets a floating joint). Unnamed bodies are ``body<id>``, unnamed joints ``<body>_joint<k>``;
+* one hinge R, one slide P, one ball S, free F; two hinges through one point with perpendicular
+  axes U; any other set of hinges and slides in one body is one compound joint C (its screws in
+  MuJoCo's order, a product of exponentials in the body frame). The link frame is the body
+  frame moved to the first joint's anchor (as Pinocchio loads MJCF inertias);
+* inertias: ``body_mass, body_ipos, body_iquat, body_inertia``; ``dof_armature`` ->
+  :attr:`Robot.armature` (free joints reordered to our ``(omega, v)``);
+* equalities: ``connect`` (body or site form) -> spherical loop joint, ``weld`` -> fixed loop
+  joint (``relpose``/``torquescale`` ignored, with a note when not the default), ``joint`` with
+  a linear ``polycoef`` and fixed-tendon equalities that couple two 1-dof joints linearly ->
+  couplings; inactive equalities are skipped with a note. Actuated joints are preferred as the
+  independent coordinates of closed loops.
+
+Missing mesh (texture, height field, skin) files: those assets and the geoms using them are
+stripped and the model compiled again; a moving body whose inertia came from a stripped geom is
+named in a note (its values are placeholders; the base-parameter structure does not depend on
+them). ``mujoco`` is imported only here, when an MJCF file is read.
 """
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -22,287 +38,366 @@ import numpy as np
 from ..errors import ModelError
 from ..model.builder import RobotBuilder, quat_pose
 from ..model.inertia import Inertia, check_inertia
-from ..model.robot import Coupling, Robot
-
-_JOINTS = {"hinge": "R", "slide": "P", "ball": "S", "free": "F"}
+from ..model.robot import Coupling, Robot, compound_screw
 
 
-def _floats(s: str | None, n: int, what: str, default=None) -> np.ndarray:
-    if s is None:
-        if default is None:
-            raise ModelError(f"{what}: missing attribute")
-        return np.asarray(default, dtype=float)
+class MJCFWarning(UserWarning):
+    """Something in an MJCF file read with a caveat (stripped assets, ignored weld options...)."""
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return text.splitlines()[0].strip()
+
+
+def _import_mujoco():
     try:
-        v = np.array([float(x) for x in s.split()])
-    except ValueError:
-        raise ModelError(f"{what}: expected {n} numbers, got {s!r}") from None
-    if v.shape != (n,) or not np.all(np.isfinite(v)):
-        raise ModelError(f"{what}: expected {n} finite numbers, got {s!r}")
-    return v
+        import mujoco
+    except ImportError as exc:  # pragma: no cover - a core dependency
+        raise ModelError(f"reading MJCF needs the 'mujoco' package ({exc})") from None
+    return mujoco
 
 
-class _Defaults:
-    def __init__(self, root: ET.Element | None):
-        self.classes: dict[str, dict[str, dict[str, str]]] = {"main": {}}
-        if root is not None:
-            self._walk(root, "main", {})
-
-    def _walk(self, node: ET.Element, name: str, inherited: dict[str, dict[str, str]]) -> None:
-        own = {k: dict(v) for k, v in inherited.items()}
-        for child in node:
-            if child.tag != "default":
-                own.setdefault(child.tag, {}).update(child.attrib)
-        self.classes[name] = own
-        for child in node:
-            if child.tag == "default":
-                self._walk(child, child.get("class", "main"), own)
-
-    def attrs(self, elem: ET.Element, active_class: str, path: str) -> dict[str, str]:
-        cls = elem.get("class", active_class)
-        if cls not in self.classes:
-            raise ModelError(f"{path}: unknown default class {cls!r}")
-        out = dict(self.classes[cls].get(elem.tag, {}))
-        out.update(elem.attrib)
-        return out
+_ASSET_ERROR = re.compile(r"(opening file|could not open|resource not found|file not found|no such file|"
+                          r"error reading|cannot read|decoder|png|stl|obj|msh)", re.IGNORECASE)
 
 
-def _axis_rot(axis: np.ndarray, angle: float) -> np.ndarray:
-    a = axis / np.linalg.norm(axis)
-    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+def _resolve(base: Path, subdir: str, file: str) -> bool:
+    f = Path(file)
+    if f.is_absolute():
+        return f.exists()
+    return any(p.exists() for p in (base / subdir / f, base / f, base / subdir / f.name))
 
 
-class _Compiler:
-    def __init__(self, root: ET.Element):
-        comp = root.find("compiler")
-        self.radian = comp is not None and comp.get("angle", "degree") == "radian"
-        self.eulerseq = comp.get("eulerseq", "xyz") if comp is not None else "xyz"
+def _strip_assets(mj, spec, base: Path, everything: bool) -> dict[str, str]:
+    """Delete file-backed meshes, textures, height fields and skins whose file is missing (all of
+    them with ``everything``) and the geoms using them; returns ``{body name: geom kind}`` for the
+    bodies that lost a geom."""
+    meshdir = spec.compiler.meshdir or spec.meshdir or ""
+    texdir = spec.compiler.texturedir or spec.texturedir or ""
+    gone_mesh, gone_hf, gone_tex = set(), set(), set()
+    for mesh in list(spec.meshes):
+        if mesh.file and (everything or not _resolve(base, meshdir, mesh.file)):
+            gone_mesh.add(mesh.name)
+            spec.delete(mesh)
+    for hf in list(spec.hfields):
+        if hf.file and (everything or not _resolve(base, "", hf.file)):
+            gone_hf.add(hf.name)
+            spec.delete(hf)
+    for tex in list(spec.textures):
+        files = [tex.file] + [f for f in getattr(tex, "cubefiles", []) if f]
+        if any(files) and (everything or not all(_resolve(base, texdir, f) for f in files if f)):
+            gone_tex.add(tex.name)
+            spec.delete(tex)
+    for skin in list(spec.skins):
+        if skin.file and (everything or not _resolve(base, meshdir, skin.file)):
+            spec.delete(skin)
+    for mat in spec.materials:
+        tex = list(mat.textures)
+        if any(t in gone_tex for t in tex):
+            mat.textures = ["" if t in gone_tex else t for t in tex]
+    lost: dict[str, str] = {}
+    for geom in list(spec.geoms):
+        if (geom.type == mj.mjtGeom.mjGEOM_MESH and geom.meshname in gone_mesh) or \
+                (geom.type == mj.mjtGeom.mjGEOM_HFIELD and geom.hfieldname in gone_hf):
+            lost[geom.parent.name] = "mesh" if geom.type == mj.mjtGeom.mjGEOM_MESH else "height field"
+            spec.delete(geom)
+    return lost
 
-    def angle(self, v: float) -> float:
-        return v if self.radian else np.deg2rad(v)
 
-    def pose(self, attrs: dict[str, str], what: str) -> np.ndarray:
-        t = quat_pose(_floats(attrs.get("pos"), 3, f"{what} pos", (0, 0, 0)),
-                      _floats(attrs.get("quat"), 4, f"{what} quat", (1, 0, 0, 0)))
-        given = [k for k in ("quat", "euler", "axisangle", "xyaxes", "zaxis") if k in attrs]
-        if len(given) > 1:
-            raise ModelError(f"{what}: several orientations given ({', '.join(given)})")
-        if "axisangle" in attrs:
-            v = _floats(attrs["axisangle"], 4, f"{what} axisangle")
-            if np.linalg.norm(v[:3]) < 1e-12:
-                raise ModelError(f"{what}: zero axis in axisangle")
-            t[:3, :3] = _axis_rot(v[:3], self.angle(v[3]))
-        elif "euler" in attrs:
-            v = _floats(attrs["euler"], 3, f"{what} euler")
-            r = np.eye(3)
-            for ax, ang in zip(self.eulerseq, v):
-                e = np.eye(3)["xyz".index(ax.lower())]
-                rot = _axis_rot(e, self.angle(ang))
-                r = r @ rot if ax.islower() else rot @ r  # lowercase: axes move with the frame
-            t[:3, :3] = r
-        elif "xyaxes" in attrs:
-            v = _floats(attrs["xyaxes"], 6, f"{what} xyaxes")
-            x = v[:3] / np.linalg.norm(v[:3])
-            y = v[3:] - (v[3:] @ x) * x
-            if np.linalg.norm(y) < 1e-12:
-                raise ModelError(f"{what}: xyaxes are parallel")
-            y /= np.linalg.norm(y)
-            t[:3, :3] = np.column_stack([x, y, np.cross(x, y)])
-        elif "zaxis" in attrs:
-            z = _floats(attrs["zaxis"], 3, f"{what} zaxis")
-            z = z / np.linalg.norm(z)
-            c = np.cross([0, 0, 1.0], z)
-            if np.linalg.norm(c) < 1e-12:
-                t[:3, :3] = np.eye(3) if z[2] > 0 else np.diag([1.0, -1, -1])
-            else:
-                t[:3, :3] = _axis_rot(c, np.arctan2(np.linalg.norm(c), z[2]))
-        return t
+def _compile(mj, path: Path):
+    """``(model, notes)``: parse and compile, stripping missing asset files if needed."""
+    try:
+        spec = mj.MjSpec.from_file(str(path))
+    except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others
+        raise ModelError(f"{path}: {_first_line(exc)}") from None
+    try:
+        return spec.compile(), [], set()
+    except Exception as exc:  # noqa: BLE001
+        first = exc
+    if not _ASSET_ERROR.search(str(first)):
+        raise ModelError(f"{path}: {_first_line(first)}")
+    base = path.parent
+    spec = mj.MjSpec.from_file(str(path))
+    lost = _strip_assets(mj, spec, base, everything=False)
+    try:
+        model = spec.compile()
+    except Exception:  # noqa: BLE001 - the missing file was not found by our resolution: strip all
+        spec = mj.MjSpec.from_file(str(path))
+        lost = _strip_assets(mj, spec, base, everything=True)
+        model = None
+    notes: list[str] = []
+    placeholders: list[str] = []
+    for _ in range(len(spec.bodies) + 1):
+        if model is not None:
+            break
+        try:
+            model = spec.compile()
+        except Exception as exc:  # noqa: BLE001
+            msg = str(exc)
+            hit = re.search(r"mass and inertia of moving bodies.*?Element name '([^']*)'", msg, re.DOTALL)
+            body = spec.body(hit.group(1)) if hit and hit.group(1) else None
+            if body is None or body.name not in lost or body.explicitinertial:
+                raise ModelError(f"{path}: {_first_line(exc)} (after stripping missing asset files: "
+                                 f"{_first_line(first)})") from None
+            body.explicitinertial = True  # this body only: its inertia came from stripped geoms
+            body.mass, body.ipos, body.iquat, body.inertia = 1e-3, [0, 0, 0], [1, 0, 0, 0], [1e-6] * 3
+            placeholders.append(body.name)
+    fromgeom = spec.compiler.inertiafromgeom
+    always = fromgeom == mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE
+    never = fromgeom == mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    affected = sorted(b for b in lost if not never and (always or not spec.body(b).explicitinertial
+                                                        or b in placeholders))
+    notes.append(f"{path}: missing asset files ({_first_line(first)}): stripped them and the geoms using them")
+    for b in affected:
+        what = "a placeholder inertia (mass 1e-3)" if b in placeholders else "the remaining geoms"
+        notes.append(f"{path}: body {b!r}: its inertia came from stripped geoms; {what} used instead "
+                     f"(placeholder values; the base-parameter structure does not depend on them)")
+    return model, notes, set(affected)
+
+
+def _pose(pos, rot) -> np.ndarray:
+    t = np.eye(4)
+    t[:3, :3] = np.asarray(rot, dtype=float).reshape(3, 3)
+    t[:3, 3] = pos
+    return t
 
 
 def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating: bool = False,
               strict_inertia: bool = False) -> Robot:
-    """Read an MJCF file into a :class:`Robot` (see the module doc). ``gravity``: default
-    from ``<option gravity>`` (MuJoCo's default ``0 0 -9.81``). ``floating``: a top-level body
-    without a joint gets a floating (F) joint."""
+    """Read an MJCF file into a :class:`Robot` (see the module doc). ``gravity``: default the
+    model's ``opt.gravity``. ``floating``: a top-level body without a joint gets a floating (F)
+    joint. ``strict_inertia``: physically infeasible inertias of moving bodies are errors
+    (warnings otherwise)."""
     path = Path(path)
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as exc:
-        raise ModelError(f"{path}: malformed XML ({exc})") from None
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    if root.tag != "mujoco":
-        raise ModelError(f"{path}: root element is <{root.tag}>, expected <mujoco>")
-    if root.find("include") is not None:
-        raise ModelError(f"{path}: <include> is not supported; pass the expanded model")
+    if not path.is_file():
+        raise ModelError(f"{path}: no such file")
+    mj = _import_mujoco()
+    out = _compile(mj, path)
+    model, notes = out[0], out[1]
+    for note in notes:
+        warnings.warn(note, MJCFWarning, stacklevel=2)
+    data = mj.MjData(model)
+    data.qpos[:] = model.qpos0
+    mj.mj_kinematics(model, data)
+    return _robot(mj, model, data, path, name, gravity, floating, strict_inertia)
+
+
+def _name(model, kind, i: int, fallback: str) -> str:
+    return model.names[getattr(model, f"name_{kind}adr")[i]:].split(b"\0", 1)[0].decode() or fallback
+
+
+def _joint_kind(mj, model, data, joints: list[int], bname: str, what: str):
+    """``(type, axes, anchor (3,) world)`` of a body's joints (MuJoCo order)."""
+    jt = model.jnt_type
+    rot = data.xmat[model.jnt_bodyid[joints[0]]].reshape(3, 3)
+    anchor = data.xanchor[joints[0]].copy()
+    types = [int(jt[j]) for j in joints]
+    free, ball = int(mj.mjtJoint.mjJNT_FREE), int(mj.mjtJoint.mjJNT_BALL)
+    slide, hinge = int(mj.mjtJoint.mjJNT_SLIDE), int(mj.mjtJoint.mjJNT_HINGE)
+    axes = [rot.T @ data.xaxis[j] for j in joints]
+    axes = [a / np.linalg.norm(a) for a in axes]
+    if len(joints) == 1:
+        t = types[0]
+        if t == free:
+            return "F", None, anchor
+        if t == ball:
+            return "S", None, anchor
+        return ("R" if t == hinge else "P"), axes[0], anchor
+    if free in types or ball in types:
+        raise ModelError(f"{what}: a {'free' if free in types else 'ball'} joint together with other joints "
+                         f"in one body is not supported")
+    pts = [rot.T @ (data.xanchor[j] - anchor) for j in joints]
+    if (len(joints) == 2 and types == [hinge, hinge] and np.linalg.norm(pts[1]) < 1e-12
+            and abs(axes[0] @ axes[1]) < 1e-12):
+        return "U", np.stack(axes), anchor
+    rows = [compound_screw(a, slide=True) if t == slide else compound_screw(a, point=p)
+            for t, a, p in zip(types, axes, pts)]
+    return "C", np.array(rows), anchor
+
+
+def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_inertia: bool) -> Robot:
+    nb = model.nbody
     if gravity is None:
-        opt = root.find("option")
-        gravity = _floats(opt.get("gravity") if opt is not None else None, 3, f"{path}: <option gravity>",
-                          (0, 0, -9.81))
-    comp = _Compiler(root)
-    defaults = _Defaults(root.find("default"))
-    world = root.find("worldbody")
-    if world is None:
-        raise ModelError(f"{path}: no <worldbody>")
-    b = RobotBuilder(name or root.get("model", path.stem), gravity=gravity)
-    link_world: dict[str, np.ndarray] = {}  # world pose (q = 0) of each body's builder frame
-    body_world: dict[str, np.ndarray] = {}  # world pose (q = 0) of each MJCF body frame
-    sites: dict[str, tuple[str, np.ndarray]] = {}  # site -> (body, world pose)
-    joint_coord: dict[str, str] = {}  # joint name -> body (for couplings)
-    independent_flags: list[bool] = []
-
-    def visit(body: ET.Element, parent: str | None, active: str, world_parent: np.ndarray, top: bool) -> None:
-        bname = body.get("name")
-        what = f"{path}: <body name={bname!r}>"
-        if not bname:
-            raise ModelError(f"{path}: a <body> has no name")
-        if bname in body_world:
-            raise ModelError(f"{what}: duplicate body name")
-        active = body.get("childclass", active)
-        t_rel = comp.pose(body.attrib, what)
-        w_body = world_parent @ t_rel
-        body_world[bname] = w_body
-        joints = [j for j in body if j.tag in ("joint", "freejoint")]
-        if len(joints) > 1:
-            raise ModelError(f"{what}: {len(joints)} joints in one body are not supported yet")
-        inertia = None
-        inl = body.find("inertial")
-        if inl is not None:
-            ia = inl.attrib
-            mass = float(_floats(ia.get("mass"), 1, f"{what} <inertial mass>")[0])
-            if "fullinertia" in ia:
-                ixx, iyy, izz, ixy, ixz, iyz = _floats(ia["fullinertia"], 6, f"{what} fullinertia")
-                j = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-            else:
-                j = np.diag(_floats(ia.get("diaginertia"), 3, f"{what} <inertial diaginertia>"))
-            check_inertia(mass, j, f"{what} <inertial>", strict=strict_inertia)
-            inertia = (mass, comp.pose(ia, f"{what} <inertial>"), j)
+        gravity = np.array(model.opt.gravity, dtype=float)
+        if model.opt.disableflags & int(mj.mjtDisableBit.mjDSBL_GRAVITY) and np.any(gravity):
+            warnings.warn(f"{path}: gravity is disabled (<flag gravity=\"disable\">): analysed with zero gravity",
+                          MJCFWarning, stacklevel=3)
+            gravity = np.zeros(3)
+    mname = model.names.split(b"\0", 1)[0].decode()
+    b = RobotBuilder(name or (mname if mname and mname != "MuJoCo Model" else path.stem), gravity=gravity)
+    bnames = ["world"] + [_name(model, "body", i, f"body{i}") for i in range(1, nb)]
+    link_of: list[str | None] = [None] * nb  # the moving link carrying each body (None: the world)
+    t_link: dict[str | None, np.ndarray] = {None: np.eye(4)}  # world pose of each link frame at q = 0
+    dof_map: dict[int, int] = {}  # MuJoCo dof -> our coordinate
+    armature: list[float] = []
+    joint_names: dict[int, str] = {}
+    for i in range(1, nb):
+        bname = bnames[i]
+        what = f"{path}: body {bname!r}"
+        p = int(model.body_parentid[i])
+        plink = link_of[p]
+        t_body = _pose(data.xpos[i], data.xmat[i])
+        t_in = t_body @ quat_pose(model.body_ipos[i], model.body_iquat[i])
+        mass, diag = float(model.body_mass[i]), np.array(model.body_inertia[i], dtype=float)
+        j0, nj = int(model.body_jntadr[i]), int(model.body_jntnum[i])
+        joints = list(range(j0, j0 + nj)) if nj > 0 else []
+        for k, j in enumerate(joints):
+            joint_names[j] = _name(model, "jnt", j, f"{bname}_joint{k}")
         if not joints:
-            jt, t_joint, axis = ("F" if (top and floating) else "fixed"), np.eye(4), (0, 0, 1)
+            if floating and p == 0:
+                jt, axis, t_l = "F", None, t_body
+            else:
+                b.add_link(bname, parent=plink, joint="fixed", origin=np.linalg.inv(t_link[plink]) @ t_body,
+                           inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_body) @ t_in))
+                link_of[i] = plink
+                continue
         else:
-            ja = defaults.attrs(joints[0], active, what)
-            jt = "F" if joints[0].tag == "freejoint" else _JOINTS.get(ja.get("type", "hinge"))
-            if jt is None:
-                raise ModelError(f"{what}: unknown joint type {ja.get('type')!r}")
-            if jt == "F" and not top:
+            jt, axis, anchor = _joint_kind(mj, model, data, joints, bname, what)
+            t_l = _pose(anchor, data.xmat[i])
+            if jt == "F" and p != 0:
                 raise ModelError(f"{what}: a free joint is only supported on a top-level body")
-            t_joint = np.eye(4)
-            t_joint[:3, 3] = _floats(ja.get("pos"), 3, f"{what} joint pos", (0, 0, 0))
-            axis = _floats(ja.get("axis"), 3, f"{what} joint axis", (0, 0, 1))
-            if jt in ("R", "P") and np.linalg.norm(axis) < 1e-12:
-                raise ModelError(f"{what}: zero joint axis")
-            if joints[0].get("name"):
-                joint_coord[joints[0].get("name")] = bname
-        inv_joint = np.linalg.inv(t_joint)
-        inert = None
-        if inertia is not None:
-            mass, t_in, j = inertia
-            inert = Inertia(mass, com=(0, 0, 0), inertia=j, frame=inv_joint @ t_in)
-        jname = (joints[0].get("name") or f"{bname}_joint") if joints else f"{bname}_joint"
-        parent_link = link_world.get(parent, np.eye(4)) if parent is not None else np.eye(4)
-        origin = np.linalg.inv(parent_link) @ w_body @ t_joint
-        b.add_link(bname, parent=parent, joint=jt, origin=origin, axis=axis, inertia=inert, joint_name=jname,
-                   actuated=None if jt == "fixed" else True)
-        if jt != "fixed":
-            independent_flags.append(True)
-        link_world[bname] = w_body @ t_joint
-        for child in body:
-            if child.tag == "site" and child.get("name"):
-                sa = defaults.attrs(child, active, f"{what} <site>")
-                sites[child.get("name")] = (bname, w_body @ comp.pose(sa, f"{what} <site name={child.get('name')!r}>"))
-        for child in body:
-            if child.tag == "body":
-                visit(child, bname, active, w_body, False)
-
-    for top in world:
-        if top.tag == "body":
-            visit(top, None, "main", np.eye(4), True)
-        elif top.tag == "site" and top.get("name"):
-            sites[top.get("name")] = ("world", comp.pose(top.attrib, f"{path}: <site>"))
-    couplings = _equalities(root, path, b, link_world, body_world, sites, joint_coord)
+        check_inertia(mass, np.diag(diag), f"{what}: inertia", strict=strict_inertia)
+        jname = joint_names[joints[0]] if len(joints) == 1 else (
+            "+".join(joint_names[j] for j in joints) if joints else f"{bname}_joint")
+        arm = np.zeros(6) if not joints else np.concatenate(
+            [model.dof_armature[model.jnt_dofadr[j]: model.jnt_dofadr[j] + (6 if model.jnt_type[j] == 0 else
+                                                                             3 if model.jnt_type[j] == 1 else 1)]
+             for j in joints])
+        first = len(armature)
+        if jt == "F" and joints:
+            arm = np.r_[arm[3:], arm[:3]]  # MuJoCo free dofs (v, omega) -> ours (omega, v)
+            d0 = int(model.jnt_dofadr[joints[0]])
+            dof_map.update({d0 + k: first + (k + 3) % 6 for k in range(6)})
+        else:
+            d0 = int(model.jnt_dofadr[joints[0]]) if joints else -1
+            for k in range(len(arm) if joints else 0):
+                dof_map[d0 + k] = first + k
+        armature.extend(arm.tolist())
+        b.add_link(bname, parent=plink, joint=jt, origin=np.linalg.inv(t_link[plink]) @ t_l,
+                   axis=(0, 0, 1) if axis is None else (axis if jt != "U" else axis[0]),
+                   axis2=None if jt != "U" else axis[1], inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_l) @ t_in),
+                   joint_name=jname, actuated=True)  # all independent until loops choose
+        link_of[i] = bname
+        t_link[bname] = t_l
+    couplings = _equalities(mj, model, data, path, b, bnames, link_of, t_link, joint_names, dof_map)
     robot = b.build()
-    if couplings:
-        from dataclasses import replace
+    from dataclasses import replace
 
-        qi = robot.q_index
-        out = []
-        for cname, lead, follow, ratio, offset in couplings:
-            i, k = robot.names.index(lead), robot.names.index(follow)
-            if robot.ndofs[i] != 1 or robot.ndofs[k] != 1:
-                raise ModelError(f"{path}: <equality><joint name={cname!r}>: only 1-dof joints can be coupled")
-            out.append(Coupling(cname, int(qi[i]), int(qi[k]), ratio, offset))
-        robot = replace(robot, couplings=tuple(out))
-    if robot.has_loops:  # MJCF does not say which coordinates are independent: choose them
+    robot = replace(robot, armature=np.array(armature))
+    if couplings:
+        robot = replace(robot, couplings=tuple(couplings))
+    if robot.has_loops:  # MJCF does not say which coordinates are independent: prefer actuated joints
         from ..kinematics.loops import choose_independent
 
-        motors = {a.get("joint") for a in root.iter() if a.get("joint") and a.tag in
-                  ("motor", "position", "velocity", "general", "intvelocity", "damper")}
-        qi = robot.q_index
-        prefer = {int(qi[robot.joint_names.index(j)]) + d for j in motors if j in robot.joint_names
-                  for d in range(int(robot.ndofs[robot.joint_names.index(j)]))}
-        prefer |= set(range(int(robot.ndofs[0]))) if robot.jtype[0] == "F" else set()
+        prefer = set()
+        for a in range(model.nu):
+            if int(model.actuator_trntype[a]) in (int(mj.mjtTrn.mjTRN_JOINT), int(mj.mjtTrn.mjTRN_JOINTINPARENT)):
+                j = int(model.actuator_trnid[a, 0])
+                nd = 6 if model.jnt_type[j] == 0 else 3 if model.jnt_type[j] == 1 else 1
+                prefer |= {dof_map[int(model.jnt_dofadr[j]) + k] for k in range(nd) if int(model.jnt_dofadr[j]) + k in dof_map}
+        prefer |= set(range(6)) if robot.jtype[0] == "F" else set()
         robot = choose_independent(robot, prefer)
     return robot
 
 
-def _equalities(root, path, b: RobotBuilder, link_world, body_world, sites, joint_coord) -> list:
-    """Add loop joints for connect/weld; return couplings for joint equalities."""
-    couplings = []
-    eq = root.find("equality")
-    if eq is None:
-        return couplings
-    for k, e in enumerate(eq):
-        if e.get("active", "true") == "false":
+def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link, joint_names, dof_map) -> list:
+    """Add loop joints for connect/weld; return the couplings (joint and fixed-tendon equalities)."""
+    couplings: list[Coupling] = []
+    eq = mj.mjtEq
+    site = int(mj.mjtObj.mjOBJ_SITE)
+    for e in range(model.neq):
+        et = int(model.eq_type[e])
+        kind = {int(eq.mjEQ_CONNECT): "connect", int(eq.mjEQ_WELD): "weld", int(eq.mjEQ_JOINT): "joint",
+                int(eq.mjEQ_TENDON): "tendon"}.get(et, f"type {et}")
+        ename = _name(model, "eq", e, f"{kind}{e}")
+        what = f"{path}: <equality><{kind} name={ename!r}>"
+        if not model.eq_active0[e]:
+            warnings.warn(f"{what}: inactive (active=false): skipped", MJCFWarning, stacklevel=3)
             continue
-        ename = e.get("name") or f"{e.tag}{k}"
-        what = f"{path}: <equality><{e.tag} name={ename!r}>"
-        if e.tag in ("connect", "weld"):
-            if e.get("site1") is not None or e.get("site2") is not None:
-                s1, s2 = e.get("site1"), e.get("site2")
-                for s in (s1, s2):
-                    if s not in sites:
-                        raise ModelError(f"{what}: unknown site {s!r}")
-                (b1, w1), (b2, w2) = sites[s1], sites[s2]
+        o1, o2 = int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
+        d = np.array(model.eq_data[e], dtype=float)
+        if kind in ("connect", "weld"):
+            if int(model.eq_objtype[e]) == site:
+                b1, b2 = int(model.site_bodyid[o1]), int(model.site_bodyid[o2])
+                w1, w2 = (_pose(data.site_xpos[s], data.site_xmat[s]) for s in (o1, o2))
+                if kind == "connect":
+                    w1[:3, :3] = w2[:3, :3] = np.eye(3)
             else:
-                b1, b2 = e.get("body1"), e.get("body2", "world")
-                for bb in (b1, b2):
-                    if bb != "world" and bb not in body_world:
-                        raise ModelError(f"{what}: unknown body {bb!r}")
-                wb1 = body_world.get(b1, np.eye(4))
-                if e.tag == "connect":
-                    anchor = _floats(e.get("anchor"), 3, f"{what} anchor")
-                    w1 = wb1.copy()
-                    w1[:3, 3] = wb1[:3, :3] @ anchor + wb1[:3, 3]
-                    w1[:3, :3] = np.eye(3)
+                b1, b2 = o1, o2
+                if kind == "connect":
+                    w1, w2 = np.eye(4), np.eye(4)
+                    w1[:3, 3] = data.xpos[b1] + data.xmat[b1].reshape(3, 3) @ d[0:3]
+                    w2[:3, 3] = data.xpos[b2] + data.xmat[b2].reshape(3, 3) @ d[3:6]
                 else:
-                    w1 = wb1 @ quat_pose(*np.split(_floats(e.get("relpose"), 7, f"{what} relpose",
-                                                           (0, 0, 0, 1, 0, 0, 0)), [3])) \
-                        if e.get("relpose") else wb1
-                w2 = w1  # MuJoCo fixes the body2 side from the qpos0 pose
-            i1 = b._frames[b1][0] if b1 != "world" else -1
-            i2 = b._frames[b2][0] if b2 != "world" else -1
-            if i1 == i2:
-                raise ModelError(f"{what}: both sides are on the same body")
-            (pb, pw), (cb, cw) = ((b1, w1), (b2, w2)) if i1 < i2 else ((b2, w2), (b1, w1))
-            pl = link_world.get(pb, np.eye(4)) if pb != "world" else np.eye(4)
-            cl = link_world[cb]
-            w_frame = pw if e.tag == "weld" else np.r_[np.c_[np.eye(3), pw[:3, 3]], [[0, 0, 0, 1]]]
-            c_frame = cw if e.tag == "weld" else np.r_[np.c_[np.eye(3), cw[:3, 3]], [[0, 0, 0, 1]]]
-            b.add_loop(ename, "S" if e.tag == "connect" else "fixed", parent=None if pb == "world" else pb,
-                       child=cb, origin=np.linalg.inv(pl) @ w_frame, child_origin=np.linalg.inv(cl) @ c_frame)
-        elif e.tag == "joint":
-            j1, j2 = e.get("joint1"), e.get("joint2")
-            if j2 is None:
+                    t1, t2 = _pose(data.xpos[b1], data.xmat[b1]), _pose(data.xpos[b2], data.xmat[b2])
+                    rel = np.linalg.inv(t1) @ t2  # relpose: body2 in body1 at qpos0 (MuJoCo's default)
+                    given = quat_pose(d[3:6], d[6:10]) if np.linalg.norm(d[6:10]) > 1e-12 else rel
+                    if np.abs(given - rel).max() > 1e-6:
+                        warnings.warn(f"{what}: relpose differs from the qpos0 pose: ignored (the weld is read "
+                                      f"as a fixed loop joint at the file's pose)", MJCFWarning, stacklevel=3)
+                    w1 = w2 = t2
+            if kind == "weld" and abs(d[10] - 1.0) > 1e-12:
+                warnings.warn(f"{what}: torquescale {d[10]:g} ignored (a weld is a fixed loop joint)",
+                              MJCFWarning, stacklevel=3)
+            l1, l2 = link_of[b1], link_of[b2]
+            if l1 == l2:
+                warnings.warn(f"{what}: both sides are on one rigid body: no constraint, skipped",
+                              MJCFWarning, stacklevel=3)
+                continue
+            i1 = -1 if l1 is None else b._names.index(l1)
+            i2 = -1 if l2 is None else b._names.index(l2)
+            (pl, pw), (cl, cw) = ((l1, w1), (l2, w2)) if i1 < i2 else ((l2, w2), (l1, w1))
+            b.add_loop(ename, "S" if kind == "connect" else "fixed", parent=pl, child=cl,
+                       origin=np.linalg.inv(t_link[pl]) @ pw, child_origin=np.linalg.inv(t_link[cl]) @ cw)
+        elif kind == "joint":
+            if o2 < 0:
                 raise ModelError(f"{what}: a joint locked by an equality is not supported (no joint2)")
-            for j in (j1, j2):
-                if j not in joint_coord:
-                    raise ModelError(f"{what}: unknown joint {j!r}")
-            coef = _floats(e.get("polycoef"), 5, f"{what} polycoef", (0, 1, 0, 0, 0))
-            if np.any(coef[2:] != 0):
-                raise ModelError(f"{what}: nonlinear polycoef {coef.tolist()} is not supported")
-            couplings.append((ename, joint_coord[j2], joint_coord[j1], float(coef[1]), float(coef[0])))
-        elif e.tag == "tendon":
-            raise ModelError(f"{what}: tendon equalities are not supported")
+            _check_poly(d, what)
+            c1, c2 = _coord(model, o1, dof_map, what), _coord(model, o2, dof_map, what)
+            couplings.append(Coupling(ename, c2, c1, float(d[1]), float(d[0])))
+        elif kind == "tendon":
+            couplings.append(_tendon_coupling(mj, model, o1, o2, d, dof_map, ename, what))
         else:
-            raise ModelError(f"{what}: unknown equality type")
+            raise ModelError(f"{what}: this equality type is not supported")
     return couplings
+
+
+def _check_poly(d: np.ndarray, what: str) -> None:
+    if np.any(d[2:5] != 0):
+        raise ModelError(f"{what}: nonlinear polycoef {d[:5].tolist()} is not supported")
+
+
+def _coord(model, j: int, dof_map, what: str) -> int:
+    if int(model.jnt_type[j]) not in (2, 3):
+        raise ModelError(f"{what}: only hinge and slide joints can be coupled")
+    return dof_map[int(model.jnt_dofadr[j])]
+
+
+def _tendon_joints(mj, model, t: int, what: str) -> list[tuple[int, float]]:
+    adr, num = int(model.tendon_adr[t]), int(model.tendon_num[t])
+    out = []
+    for w in range(adr, adr + num):
+        if int(model.wrap_type[w]) != int(mj.mjtWrap.mjWRAP_JOINT):
+            raise ModelError(f"{what}: only fixed tendons (linear joint combinations) are supported")
+        out.append((int(model.wrap_objid[w]), float(model.wrap_prm[w])))
+    return out
+
+
+def _tendon_coupling(mj, model, t1: int, t2: int, d: np.ndarray, dof_map, ename: str, what: str) -> Coupling:
+    """``L1 - L1(qpos0) = a0 + a1 (L2 - L2(qpos0))`` with ``L = sum c_j q_j``, as one coupling
+    of two 1-dof joints."""
+    _check_poly(d, what)
+    a = _tendon_joints(mj, model, t1, what)
+    if t2 < 0:  # c1 q1 + c2 q2 = a0
+        if len(a) == 2 and a[0][1] != 0 and a[1][1] != 0:
+            (j1, c1), (j2, c2) = a
+            return Coupling(ename, _coord(model, j1, dof_map, what), _coord(model, j2, dof_map, what),
+                            -c1 / c2, float(d[0]) / c2)
+    else:  # c1 q1 = a0 + a1 c2 q2
+        b = _tendon_joints(mj, model, t2, what)
+        if len(a) == 1 and len(b) == 1 and a[0][1] != 0 and b[0][1] * d[1] != 0:
+            (j1, c1), (j2, c2) = a[0], b[0]
+            return Coupling(ename, _coord(model, j2, dof_map, what), _coord(model, j1, dof_map, what),
+                            float(d[1]) * c2 / c1, float(d[0]) / c1)
+    raise ModelError(f"{what}: only tendon equalities that couple two 1-dof joints linearly are supported")

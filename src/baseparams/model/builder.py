@@ -14,6 +14,17 @@ Example::
 ``origin`` is the joint frame's pose in the parent link's frame at q = 0 (URDF ``<origin>``);
 the link frame is the joint frame. Axes are normalised. A ``"fixed"`` joint adds no body:
 its inertia is merged into the parent and its name can be used as a parent later.
+
+A compound joint (``joint="C"``, an MJCF body with several joints) takes ``axis`` as ``(k, 6)``
+unit twists ``(omega, v)`` in the joint frame, applied in order (product of exponentials); build
+each with :func:`baseparams.model.robot.compound_screw`::
+
+    b.add_link("torso", joint="C", axis=[compound_screw((1, 0, 0), slide=True),
+                                         compound_screw((0, 0, 1), slide=True),
+                                         compound_screw((0, 1, 0), point=(0, 0, 0.1))])
+
+``armature`` (optional, one number per coordinate of the joint): rotor inertia, carried in
+:attr:`Robot.armature`, not used by the analysis.
 """
 
 from __future__ import annotations
@@ -22,11 +33,11 @@ import numpy as np
 
 from ..errors import ModelError, NoMovingBodiesError
 from .inertia import Inertia, transform
-from .robot import JOINT_TYPES, LoopJoint, Robot
+from .robot import JOINT_TYPES, LoopJoint, Robot, joint_ndof
 
 _ALIASES = {"revolute": "R", "continuous": "R", "prismatic": "P", "universal": "U",
             "spherical": "S", "ball": "S", "floating": "F", "free": "F", "r": "R", "p": "P",
-            "u": "U", "s": "S", "f": "F"}
+            "u": "U", "s": "S", "f": "F", "c": "C", "compound": "C"}
 
 
 def pose(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -78,6 +89,7 @@ class RobotBuilder:
         self._frames: dict[str | None, tuple[int, np.ndarray]] = {None: (-1, np.eye(4))}
         self._loops: list[tuple] = []
         self._actuated: list[bool | None] = []
+        self._armature: list[np.ndarray | None] = []
         self.q_box = None
 
     def _frame(self, name: str | None) -> tuple[int, np.ndarray]:
@@ -89,11 +101,12 @@ class RobotBuilder:
 
     def add_link(self, name: str, parent: str | None = None, joint: str = "R", origin=None,
                  axis=(0.0, 0.0, 1.0), axis2=None, inertia: Inertia | None = None,
-                 joint_name: str | None = None, actuated: bool | None = None) -> RobotBuilder:
+                 joint_name: str | None = None, actuated: bool | None = None, armature=None) -> RobotBuilder:
         """Attach link ``name`` to ``parent`` (default: the fixed base) by a joint.
 
         ``joint``: ``R P U S F fixed`` or URDF/MJCF names (``revolute``, ``ball``, ...).
-        ``axis`` (and ``axis2`` for U) in the joint frame; ``inertia`` in the link frame.
+        ``axis`` (and ``axis2`` for U) in the joint frame, C: ``(k, 6)`` twists (module doc);
+        ``inertia`` in the link frame; ``armature``: rotor inertia per coordinate (default 0).
         """
         jt = joint_type(joint)
         jname = joint_name or f"{name}_joint"
@@ -119,6 +132,11 @@ class RobotBuilder:
             return self
         axes = self._axes_for(jt, axis, axis2, what)
         self._actuated.append(actuated)
+        if armature is not None:
+            armature = np.asarray(armature, dtype=float).reshape(-1)
+            if len(armature) != joint_ndof(jt, axes):
+                raise ModelError(f"{what}: armature needs {joint_ndof(jt, axes)} numbers, got {len(armature)}")
+        self._armature.append(armature)
         self._names.append(name)
         self._jnames.append(jname)
         self._types.append(jt)
@@ -133,6 +151,11 @@ class RobotBuilder:
     def _axes_for(jt: str, axis, axis2, what: str) -> np.ndarray:
         if jt in ("S", "F"):
             return np.eye(3) if jt == "S" else np.zeros((0, 3))
+        if jt == "C":
+            c = np.asarray(axis, dtype=float)
+            if c.ndim != 2 or c.shape[1] != 6 or not len(c) or not np.all(np.isfinite(c)):
+                raise ModelError(f"{what}: a compound (C) joint needs axis as (k, 6) finite twists, got {axis!r}")
+            return c
         a = np.asarray(axis, dtype=float).reshape(-1)
         if a.shape != (3,) or not np.all(np.isfinite(a)):
             raise ModelError(f"{what}: axis must be 3 finite numbers, got {axis!r}")
@@ -194,14 +217,17 @@ class RobotBuilder:
             loops.append(LoopJoint(name, jt, pidx, cidx, m, axes, m_child))
         independent = None
         if any(a is not None for a in self._actuated):
-            from .robot import NDOF
-
             independent, k = [], 0
-            for t, a in zip(self._types, self._actuated):
+            for t, a, ax in zip(self._types, self._actuated, self._axes):
+                nd = joint_ndof(t, ax)
                 if a is None or a:  # unspecified = independent (URDF+ default)
-                    independent += list(range(k, k + NDOF[t]))
-                k += NDOF[t]
+                    independent += list(range(k, k + nd))
+                k += nd
+        armature = None
+        if any(a is not None for a in self._armature):
+            armature = np.concatenate([np.zeros(joint_ndof(t, ax)) if a is None else a
+                                       for t, ax, a in zip(self._types, self._axes, self._armature)])
         return Robot(self.name, tuple(self._names), tuple(self._jnames), tuple(self._types),
                      np.array(self._parents, dtype=int), np.array(self._m0), tuple(self._axes),
                      np.array(self._n), self.gravity, tuple(loops),
-                     None if independent is None else tuple(independent), self.q_box)
+                     None if independent is None else tuple(independent), self.q_box, armature=armature)

@@ -16,7 +16,15 @@ S    3     ``Rot(x, q1) Rot(y, q2) Rot(z, q3)`` about the origin (XYZ Euler angl
 F    6     floating; only at the root: configuration ``exp(q^)`` with ``q`` a twist
            (omega, v) in world coordinates; velocities and accelerations are the
            body's spatial twist and its derivative (quasi-velocities, as the paper's Go2)
+C    k     compound: ``exp(xi_1 q_1) ... exp(xi_k q_k)`` with ``axes (k, 6)`` unit twists
+           ``xi = (omega, v)`` in the joint frame (basis ``e23 e31 e12 e01 e02 e03``): a
+           rotation about a line (``|omega| = 1``, ``v = c x omega`` for a point ``c`` on it,
+           i.e. ``pga.adjoint`` of the translation to ``c`` applied to ``(omega, 0)``) or a
+           translation (``omega = 0``, ``|v| = 1``). MJCF bodies with several joints.
 ==== ===== =================================================================
+
+``armature (dof,)``: rotor inertia per coordinate (MJCF ``armature``), a prior for
+identification; the link base-parameter analysis does not use it.
 """
 
 from __future__ import annotations
@@ -30,9 +38,27 @@ from ..errors import ModelError
 from ..pga import adjoint
 from . import inertia as _inertia
 
-JOINT_TYPES = ("R", "P", "U", "S", "F")
+JOINT_TYPES = ("R", "P", "U", "S", "F", "C")
 LOOP_TYPES = ("R", "P", "U", "S", "fixed")
-NDOF = {"R": 1, "P": 1, "U": 2, "S": 3, "F": 6, "fixed": 0}
+NDOF = {"R": 1, "P": 1, "U": 2, "S": 3, "F": 6, "fixed": 0}  # C: len(axes), see joint_ndof
+
+
+def joint_ndof(jtype: str, axes: np.ndarray) -> int:
+    """Dofs of one joint: :data:`NDOF`, or the number of elementary screws of a C joint."""
+    return len(axes) if jtype == "C" else NDOF[jtype]
+
+
+def compound_screw(axis, point=None, slide: bool = False) -> np.ndarray:
+    """One elementary screw ``(6,)`` of a C joint, joint frame: a rotation about unit ``axis``
+    through ``point`` (default the origin), or a translation along it (``slide``)."""
+    a = np.asarray(axis, dtype=float).reshape(3)
+    a = a / np.linalg.norm(a)
+    if slide:
+        return np.r_[np.zeros(3), a]
+    t = np.eye(4)
+    if point is not None:
+        t[:3, 3] = np.asarray(point, dtype=float).reshape(3)
+    return adjoint(t, np.r_[a, np.zeros(3)])
 
 
 @dataclass(frozen=True)
@@ -77,7 +103,27 @@ def _check_frame(t: np.ndarray, what: str) -> np.ndarray:
     return t
 
 
+def _check_compound(axes: np.ndarray, what: str) -> np.ndarray:
+    axes = np.asarray(axes, dtype=float)
+    if axes.ndim != 2 or axes.shape[1] != 6 or axes.shape[0] == 0:
+        raise ModelError(f"{what}: a compound (C) joint needs (k, 6) unit twists (omega, v), got shape {axes.shape}")
+    if not np.all(np.isfinite(axes)):
+        raise ModelError(f"{what}: axis contains NaN or inf")
+    for row in axes:
+        w, v = np.linalg.norm(row[:3]), np.linalg.norm(row[3:])
+        if w > 1e-12:
+            if abs(w - 1) > 1e-9 or abs(row[:3] @ row[3:]) > 1e-9:
+                raise ModelError(f"{what}: compound twist {row.tolist()} is not a unit rotation "
+                                 f"(|omega| = 1, omega . v = 0)")
+        elif abs(v - 1) > 1e-9:
+            raise ModelError(f"{what}: compound twist {row.tolist()} is neither a unit rotation nor a unit "
+                             f"translation (omega = 0, |v| = 1)")
+    return axes
+
+
 def _check_axes(axes: np.ndarray, jtype: str, what: str) -> np.ndarray:
+    if jtype == "C":
+        return _check_compound(axes, what)
     axes = np.asarray(axes, dtype=float).reshape(-1, 3) if np.size(axes) else np.zeros((0, 3))
     want = {"R": 1, "P": 1, "U": 2, "S": 0, "F": 0, "fixed": 0}[jtype]
     if jtype == "S" and axes.shape[0] == 0:
@@ -107,9 +153,10 @@ class Robot:
     * ``names (n,)``, ``joint_names (n,)``, ``jtype (n,)`` in ``R P U S F``;
     * ``parent (n,)`` int, ``-1`` = fixed base, ``parent[i] < i``;
     * ``M0 (n, 4, 4)`` world pose of each joint/body frame at q = 0;
-    * ``axes``: per body ``(k, 3)`` joint axes in the joint frame;
+    * ``axes``: per body ``(k, 3)`` joint axes in the joint frame (C: ``(k, 6)`` twists);
     * ``N_body (n, 4, 4)`` pseudo-inertias in the body frame;
-    * ``gravity (3,)`` [m/s^2] in the world frame.
+    * ``gravity (3,)`` [m/s^2] in the world frame;
+    * ``armature (dof,)`` rotor inertia per coordinate (default zeros; not used by the analysis).
     """
 
     name: str
@@ -125,6 +172,7 @@ class Robot:
     independent: tuple[int, ...] | None = None
     q_box: np.ndarray | None = None
     couplings: tuple[Coupling, ...] = ()
+    armature: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.names)
@@ -170,7 +218,11 @@ class Robot:
             if not (-1 <= lj.parent < lj.child < n):
                 raise ModelError(f"{lw}: needs parent index < child index < {n}, got {lj.parent}, {lj.child}")
             _check_frame(lj.M, lw)
-        dof = int(sum(NDOF[t] for t in self.jtype))
+        dof = int(sum(joint_ndof(t, a) for t, a in zip(self.jtype, axes)))
+        arm = np.zeros(dof) if self.armature is None else np.asarray(self.armature, dtype=float)
+        if arm.shape != (dof,) or not np.all(np.isfinite(arm)):
+            raise ModelError(f"{what}: armature must be ({dof},) finite numbers, got shape {arm.shape}")
+        object.__setattr__(self, "armature", arm)
         if self.independent is not None:
             ind = tuple(int(k) for k in self.independent)
             if len(set(ind)) != len(ind) or any(not (0 <= k < dof) for k in ind) or not ind:
@@ -208,7 +260,7 @@ class Robot:
     @property
     def ndofs(self) -> np.ndarray:
         """Dofs per joint ``(n,)``."""
-        return np.array([NDOF[t] for t in self.jtype])
+        return np.array([joint_ndof(t, a) for t, a in zip(self.jtype, self.axes)], dtype=int)
 
     @property
     def dof(self) -> int:
@@ -242,9 +294,11 @@ class Robot:
         out = np.zeros((self.dof, 6))
         k = 0
         for i, t in enumerate(self.jtype):
-            nd = NDOF[t]
+            nd = joint_ndof(t, self.axes[i])
             if t == "P":
                 out[k, 3:] = self.axes[i][0]
+            elif t == "C":
+                out[k:k + nd] = self.axes[i]
             elif t == "F":
                 out[k:k + 6] = np.eye(6)
             elif nd:
@@ -329,7 +383,7 @@ class Robot:
 
     def at(self, q0: np.ndarray) -> Robot:
         """The same robot re-referenced at configuration ``q0 (dof,)``: its new q = 0 is the old
-        ``q0`` (exactly ``q_new = q - q0`` for R, P and U joints). Not for S joints, whose
+        ``q0`` (exactly ``q_new = q - q0`` for R, P, U and C joints). Not for S joints, whose
         Euler axes are tied to the joint frame."""
         from dataclasses import replace
 
@@ -348,6 +402,17 @@ class Robot:
                 k = np.array([[0, -a2[2], a2[1]], [a2[2], 0, -a2[0]], [-a2[1], a2[0], 0]])
                 rot = np.eye(3) + s * k + (1 - c) * (k @ k)  # Rot(a2, q2)
                 axes[i] = np.stack([rot.T @ a1, a2])
+            elif t == "C":  # screw k is carried by screws 1..k-1: undo the later ones
+                from ..pga import inverse_transform
+                from ..pga.core import screw_exp
+
+                xs = self.axes[i]
+                new = xs.copy()
+                later = np.eye(4)  # exp(xi_{k+1} q_{k+1}) ... exp(xi_m q_m), joint frame
+                for kk in range(len(xs) - 1, -1, -1):
+                    new[kk] = adjoint(inverse_transform(later), xs[kk])
+                    later = screw_exp(xs[kk], np.array(q0[qi[i] + kk])) @ later
+                axes[i] = new
         loops = tuple(replace(lj, M=(np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M, M_child=None)
                       for lj in self.loops)
         couplings = tuple(replace(c, offset=c.offset + c.ratio * q0[c.pred] - q0[c.succ]) for c in self.couplings)

@@ -10,7 +10,9 @@ Principles (with ``O`` a joint point, ``z`` an axis direction, ``x, y`` directio
 perpendicular to it, ``sym(a, b) = a b^T + b a^T``):
 
 1. shared points (eq. "null space"): R ``{O, z}``, P ``{x, y, z}``, U/S ``{O}``; all
-   products of pairs; **parent block negative** (E1 fixed).
+   products of pairs; **parent block negative** (E1 fixed). A compound joint (C): a basis of
+   the vectors every one of its screws leaves fixed (:func:`compound_shared`); nothing else of
+   the paper's principles is emitted for C (numerical completion covers the rest).
 2. fixed points, joints on the fixed base: S/U ``sym(O, x|y|z)`` **only when G = 0** (E2
    fixed); P ``sym(O, x|y|z)``; R ``sym(z, x|y)``, plus ``sym(O, x|y)`` when gravity is zero
    or along the axis.
@@ -154,6 +156,33 @@ def _world_axes(robot: Robot) -> np.ndarray:
     return np.einsum("nij,nj->ni", robot.M0[:, :3, :3], first)
 
 
+def compound_shared(robot: Robot, i: int, tol: float = 1e-9) -> np.ndarray:
+    """Vectors ``(r, 4)`` (orthonormal rows) that every screw of body ``i``'s joint leaves fixed:
+    the common kernel of its world screws ``hat(S_k)`` on homogeneous 4-vectors (points and
+    directions both bodies move alike, whatever the joint's coordinates)."""
+    from ..pga.core import hat
+    from .subspaces import nullspace
+
+    k0, nd = int(robot.q_index[i]), int(robot.ndofs[i])
+    return nullspace(hat(robot.screws[k0:k0 + nd]).reshape(-1, 4), tol)
+
+
+def _compound_columns(robot: Robot, tol: float) -> Columns:
+    parts = []
+    for i in np.flatnonzero(np.array(robot.jtype) == "C"):
+        v = compound_shared(robot, int(i), tol)
+        hs, labels = [], []
+        for a in range(len(v)):
+            for b in range(a, len(v)):
+                hs.append(_outer(v[a][None])[0] if a == b else _sym(v[a][None], v[b][None])[0])
+                labels.append(f"v{a} v{b} (common kernel)")
+        if hs:
+            m = len(hs)
+            parts.append(Columns(np.array(hs), np.full(m, i), np.full(m, robot.parent[i]), np.zeros(m, dtype=int),
+                                 np.full(m, i), np.array(labels, dtype=object)))
+    return Columns.concat(parts)
+
+
 def _cols(h, child, parent, principle, labels) -> Columns:
     """Assemble columns: ``h (m, c, 10)`` for m joints x c kinds -> flat."""
     m, c = h.shape[:2]
@@ -188,6 +217,7 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     us = np.flatnonzero((jt == "U") | (jt == "S"))
     if len(us):
         parts.append(_cols(_outer(_pt(org[us]))[:, None], us, par[us], 0, ["O O"]))
+    parts.append(_compound_columns(robot, tol))
 
     # --- Principle 2: fixed points (joints on the fixed base) ----------------------------
     base = par < 0

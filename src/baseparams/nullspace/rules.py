@@ -168,14 +168,19 @@ def slide_directions(robot: Robot, tol: float = 1e-9) -> np.ndarray:
     for i, t in enumerate(robot.jtype):
         p = par[i]
         d = out[p] if p >= 0 else zero
-        if d is not None and t == "P":
-            v = pd[i]
-            if d == zero:
-                d = tuple(v)
-            else:
-                cx, cy, cz = d[1] * v[2] - d[2] * v[1], d[2] * v[0] - d[0] * v[2], d[0] * v[1] - d[1] * v[0]
-                if cx * cx + cy * cy + cz * cz > tol2:
-                    d = None
+        if d is not None and t in ("P", "C"):
+            k0 = int(robot.q_index[i])
+            rows = [pd[i]] if t == "P" else [tuple(s[k0 + k, 3:]) for k in range(int(robot.ndofs[i]))
+                                             if not np.any(s[k0 + k, :3])]  # a C joint's slides
+            for v in rows:
+                if d is None:
+                    break
+                if d == zero:
+                    d = tuple(v)
+                else:
+                    cx, cy, cz = d[1] * v[2] - d[2] * v[1], d[2] * v[0] - d[0] * v[2], d[0] * v[1] - d[1] * v[0]
+                    if cx * cx + cy * cy + cz * cz > tol2:
+                        d = None
         elif t == "F":
             d = None
         out.append(d)
@@ -396,8 +401,14 @@ def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndar
     spec = [(int(robot.parent[i]), i, robot.jtype[i], robot.M0[i, :3, 3], axw[i]) for i in range(robot.n)]
     spec += [(lj.parent, lj.child, lj.type, lj.M[:3, 3], _loop_axis(lj))
              for lj in robot.loops]
-    for a, b, t, o, ax in spec:
-        out.append((a, b, t, np.asarray(o, float), np.asarray(ax, float), _rowspace(_shared_vectors(t, o, ax), 1e-12)))
+    for k, (a, b, t, o, ax) in enumerate(spec):
+        if k < robot.n and t == "C":
+            from .drng import compound_shared
+
+            sh = compound_shared(robot, k)
+        else:
+            sh = _rowspace(_shared_vectors(t, o, ax), 1e-12)
+        out.append((a, b, t, np.asarray(o, float), np.asarray(ax, float), sh))
     return out
 
 

@@ -41,7 +41,9 @@ def random_robot(rng: np.random.Generator, n: int = 6, joint_types: str = "RPUS"
     """A random tree of ``n`` bodies with joints drawn from ``joint_types``.
 
     ``floating``: the first body is a floating (F) root. ``branching``: probability that a
-    body hangs from a random earlier body rather than the previous one.
+    body hangs from a random earlier body rather than the previous one. ``C``: a compound joint
+    of 2 to 4 elementary screws (hinges through random points, slides; sometimes two hinges
+    through one point, or parallel slides), as MJCF bodies with several joints.
     """
     b = RobotBuilder(name or f"random{n}", gravity=gravity)
     for i in range(n):
@@ -55,9 +57,32 @@ def random_robot(rng: np.random.Generator, n: int = 6, joint_types: str = "RPUS"
         axis = rng.normal(size=3)
         axis /= np.linalg.norm(axis)
         perp = np.cross(axis, rng.normal(size=3))
+        if jt == "C":
+            axis = random_compound(rng)
         b.add_link(f"b{i}", parent=parent, joint=jt, origin=random_pose(rng), axis=axis,
                    axis2=perp / np.linalg.norm(perp), inertia=random_inertia(rng))
     return b.build()
+
+
+def random_compound(rng: np.random.Generator, k: int | None = None) -> np.ndarray:
+    """Twists ``(k, 6)`` of a random compound (C) joint in its frame: hinges (through the origin,
+    a shared point or a random point) and slides, sometimes parallel or repeated."""
+    from ..model.robot import compound_screw
+
+    k = int(rng.integers(2, 5)) if k is None else k
+    point = rng.normal(scale=0.2, size=3) if rng.random() < 0.5 else np.zeros(3)
+    rows = []
+    for _ in range(k):
+        kind = rng.choice(["hinge", "hinge_shared", "slide", "world"])
+        a = rng.normal(size=3)
+        if kind == "world":
+            a = np.eye(3)[rng.integers(0, 3)]
+        if kind == "slide" or (kind == "world" and rng.random() < 0.5):
+            rows.append(compound_screw(a, slide=True))
+        else:
+            pt = point if kind != "hinge" else rng.normal(scale=0.2, size=3)
+            rows.append(compound_screw(a, point=pt))
+    return np.array(rows)
 
 
 # --- special geometry on purpose ------------------------------------------------------------

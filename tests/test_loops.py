@@ -188,3 +188,21 @@ def test_p_and_fixed_loop_joints(make):
     c = certify(robot, samples=1000, seed=0)
     assert c.certified and c.max_column_residual < 1e-10
     assert c.nullity == numerical_nullspace(robot, 1000, 3).nullity
+
+
+def test_re_referencing_keeps_every_loop_constraint():
+    """``Robot.at(q0)`` moves both copies of each loop frame with their own body: the closed
+    configurations of the re-referenced robot, shifted back by q0, close the original loops.
+    (Before, the successor's copy was dropped, turning a U loop's second axis, carried by the
+    successor, into a different constraint whenever the U angles at q0 are not zero.)"""
+    robot = pkm_2rru_1rrs()
+    na = len(robot.actuated)
+    ref = close_loops(robot, np.full((1, na), 0.2))
+    assert ref.kept == 1
+    q0 = ref.q[0]
+    new = robot.at(q0)
+    assert any(lj.type == "U" and lj.M_child is not None for lj in new.loops)  # the U angles at q0 are not 0
+    assert np.abs(evaluate(new, np.zeros((1, robot.dof))).r).max() < 1e-10
+    cs = close_loops(new, np.random.default_rng(3).uniform(-0.1, 0.1, (20, na)), cond_max=1e6)
+    assert cs.kept >= 10
+    assert np.abs(evaluate(robot, cs.q + q0).r).max() < 1e-9

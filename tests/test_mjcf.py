@@ -156,9 +156,16 @@ def test_equalities(tmp_path):
     robot = load_mjcf(f)
     (c,) = robot.couplings
     assert (c.pred, c.succ, c.ratio) == (0, 2, 0.5)  # q_b = q_a / 2
+    # a tendon tying three joints (dm_control's quadruped: pitch + knee + ankle = 0) is one coupling
     f = _write(tmp_path, base.replace("EQ", '<tendon name="t3c" tendon1="t3"/>'))
-    with pytest.raises(ModelError, match=r"<equality><tendon name='t3c'>: only tendon equalities that couple two"):
-        load_mjcf(f)
+    robot = load_mjcf(f)
+    (c,) = robot.couplings
+    k = np.zeros(robot.dof)
+    k[c.succ] = 1.0
+    for j, r in c.terms():
+        k[j] -= r
+    np.testing.assert_allclose(k / k[0], [1.0, 1.0, 1.0])  # ja, ja2, jb: q_a + q_a2 + q_b = 0
+    assert len(c.more) == 1 and c.offset == 0.0
     f = _write(tmp_path, base.replace("EQ", '<connect name="off" body1="a2" body2="b" anchor="0 0 0" active="false"/>'))
     with pytest.warns(MJCFWarning, match="inactive"):
         assert not load_mjcf(f).loops
@@ -195,8 +202,6 @@ CORPUS = _corpus()
 #: files that are not complete models or that we refuse, with the reason
 EXPECTED = {
     "lqr.xml": (NoMovingBodiesError, "no moving links"),  # a template: dm_control adds the bodies in Python
-    # q_pitch + q_knee + q_ankle = 0 per leg: a three-joint coupling (couplings are of two joints)
-    "quadruped.xml": (ModelError, "only tendon equalities that couple two 1-dof joints linearly"),
 }
 SLOW = {"dog.xml", "stacker.xml", "manipulator.xml", "humanoid_CMU.xml"}
 

@@ -385,19 +385,25 @@ def _tendon_joints(mj, model, t: int, what: str) -> list[tuple[int, float]]:
 
 
 def _tendon_coupling(mj, model, t1: int, t2: int, d: np.ndarray, dof_map, ename: str, what: str) -> Coupling:
-    """``L1 - L1(qpos0) = a0 + a1 (L2 - L2(qpos0))`` with ``L = sum c_j q_j``, as one coupling
-    of two 1-dof joints."""
+    """``L1 - L1(qpos0) = a0 + a1 (L2 - L2(qpos0))`` with fixed tendons ``L = sum c_j q_j``: one
+    linear coupling of the 1-dof joints involved (any number of them, e.g. dm_control's
+    quadruped ties pitch, knee and ankle). The coordinate with the largest coefficient is solved
+    for: ``q_s = sum(-c_j / c_s q_j) + a0 / c_s``."""
     _check_poly(d, what)
-    a = _tendon_joints(mj, model, t1, what)
-    if t2 < 0:  # c1 q1 + c2 q2 = a0
-        if len(a) == 2 and a[0][1] != 0 and a[1][1] != 0:
-            (j1, c1), (j2, c2) = a
-            return Coupling(ename, _coord(model, j1, dof_map, what), _coord(model, j2, dof_map, what),
-                            -c1 / c2, float(d[0]) / c2)
-    else:  # c1 q1 = a0 + a1 c2 q2
-        b = _tendon_joints(mj, model, t2, what)
-        if len(a) == 1 and len(b) == 1 and a[0][1] != 0 and b[0][1] * d[1] != 0:
-            (j1, c1), (j2, c2) = a[0], b[0]
-            return Coupling(ename, _coord(model, j2, dof_map, what), _coord(model, j1, dof_map, what),
-                            float(d[1]) * c2 / c1, float(d[0]) / c1)
-    raise ModelError(f"{what}: only tendon equalities that couple two 1-dof joints linearly are supported")
+    coef: dict[int, float] = {}
+    for j, c in _tendon_joints(mj, model, t1, what):
+        k = _coord(model, j, dof_map, what)
+        coef[k] = coef.get(k, 0.0) + c
+    if t2 >= 0:
+        for j, c in _tendon_joints(mj, model, t2, what):
+            k = _coord(model, j, dof_map, what)
+            coef[k] = coef.get(k, 0.0) - float(d[1]) * c
+    scale = max((abs(c) for c in coef.values()), default=0.0)
+    coef = {k: c for k, c in coef.items() if abs(c) > 1e-12 * scale}
+    if len(coef) < 2:
+        raise ModelError(f"{what}: the tendon equality constrains fewer than two joints (a locked joint is not "
+                         f"supported)")
+    succ = max(sorted(coef), key=lambda k: abs(coef[k]))
+    rest = [(k, -c / coef[succ]) for k, c in sorted(coef.items()) if k != succ]
+    (pred, ratio), more = rest[0], tuple(rest[1:])
+    return Coupling(ename, pred, succ, ratio, float(d[0]) / coef[succ], more)

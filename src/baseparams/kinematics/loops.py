@@ -116,10 +116,12 @@ def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
     need = dq is not None
     state = forward_kinematics(robot, q, dq if need else None, None)
     rs, ks, bs = [], [], []
-    for c in robot.couplings:  # linear: q[succ] - ratio q[pred] - offset = 0
-        rs.append((q[:, c.succ] - c.ratio * q[:, c.pred] - c.offset)[:, None])
+    for c in robot.couplings:  # linear: q[succ] - sum ratio q[pred] - offset = 0
         k = np.zeros((s, 1, dof))
-        k[:, 0, c.succ], k[:, 0, c.pred] = 1.0, -c.ratio
+        k[:, 0, c.succ] = 1.0
+        for j, r in c.terms():
+            k[:, 0, j] -= r
+        rs.append(q @ k[0, 0][:, None] - c.offset)
         ks.append(k)
         if need:
             bs.append(np.zeros((s, 1)))

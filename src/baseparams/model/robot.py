@@ -63,14 +63,21 @@ def compound_screw(axis, point=None, slide: bool = False) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Coupling:
-    """A linear coupling of two 1-dof coordinates: ``q[succ] = ratio * q[pred] + offset``
-    (URDF+ ``<coupling>``, URDF ``<mimic multiplier offset>``, MJCF ``<equality><joint>``)."""
+    """A linear coupling of 1-dof coordinates:
+    ``q[succ] = ratio * q[pred] + sum(r * q[k] for k, r in more) + offset``
+    (URDF+ ``<coupling>``, URDF ``<mimic multiplier offset>``, MJCF ``<equality><joint>`` and
+    fixed-tendon equalities; ``more``: further coordinates, e.g. a tendon tying three joints)."""
 
     name: str
     pred: int
     succ: int
     ratio: float
     offset: float = 0.0
+    more: tuple[tuple[int, float], ...] = ()
+
+    def terms(self) -> list[tuple[int, float]]:
+        """``[(coordinate, ratio)]`` of every coordinate on the right-hand side."""
+        return [(self.pred, self.ratio), *self.more]
 
 
 @dataclass(frozen=True)
@@ -229,9 +236,11 @@ class Robot:
                 raise ModelError(f"{what}: independent coordinates {ind} must be distinct indices in [0, {dof})")
             object.__setattr__(self, "independent", tuple(sorted(ind)))
         for c in self.couplings:
-            if not (0 <= c.pred < dof and 0 <= c.succ < dof and c.pred != c.succ) or not np.isfinite(c.ratio):
-                raise ModelError(f"{what}, coupling {c.name!r}: needs two distinct coordinates in [0, {dof}) "
-                                 f"and a finite ratio")
+            idx = [c.succ] + [k for k, _ in c.terms()]
+            if (len(set(idx)) != len(idx) or not all(0 <= k < dof for k in idx)
+                    or not all(np.isfinite(r) for _, r in c.terms()) or not np.isfinite(c.offset)):
+                raise ModelError(f"{what}, coupling {c.name!r}: needs distinct coordinates in [0, {dof}) "
+                                 f"and finite ratios")
         if self.independent is None and (self.loops or self.couplings):
             raise ModelError(f"{what}: a robot with loop joints must say which coordinates are "
                              f"independent (actuated)")
@@ -413,9 +422,14 @@ class Robot:
                     new[kk] = adjoint(inverse_transform(later), xs[kk])
                     later = screw_exp(xs[kk], np.array(q0[qi[i] + kk])) @ later
                 axes[i] = new
-        loops = tuple(replace(lj, M=(np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M, M_child=None)
-                      for lj in self.loops)
-        couplings = tuple(replace(c, offset=c.offset + c.ratio * q0[c.pred] - q0[c.succ]) for c in self.couplings)
+        loops = []
+        for lj in self.loops:  # both copies of the frame move with their own body
+            m = (np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M
+            mc = g[lj.child] @ (lj.M if lj.M_child is None else lj.M_child)
+            loops.append(replace(lj, M=m, M_child=None if np.abs(mc - m).max() <= 1e-12 else mc))
+        loops = tuple(loops)
+        couplings = tuple(replace(c, offset=c.offset + sum(r * q0[k] for k, r in c.terms()) - q0[c.succ])
+                          for c in self.couplings)
         return replace(self, M0=g @ self.M0, axes=tuple(axes), loops=loops, couplings=couplings)
 
     def describe(self) -> str:

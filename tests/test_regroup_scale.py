@@ -121,7 +121,7 @@ def test_ur5_at_other_scales_keeps_its_base_parameters(s):
         assert np.array_equal(b2.K != 0, want != 0), conv  # the same terms in every expression
         p1 = r1.parameters(conv)
         u = np.tile(LENGTH_POWER[conv], r1.n)[b1.independent].astype(float)
-        beta1, beta2 = b1.to_base(p1) * s ** u, b2.to_base(r2.parameters(conv))
+        beta1, beta2 = b1.to_base(p1, conv) * s ** u, b2.to_base(r2.parameters(conv), conv)
         size = (np.abs(b1.E) @ np.abs(p1)) * s ** u  # the magnitude of the terms summed
         ok = size > 0
         assert np.all(beta2[~ok] == 0)

@@ -19,6 +19,8 @@ import numpy as np
 
 from ..errors import BaseparamsError
 from ..model import inertia as _inertia
+from ..model.inertia import LENGTH_POWER
+from ..model.scale import length_scale
 from ..model.robot import Robot
 
 _NAMES = _inertia.NAMES
@@ -45,15 +47,6 @@ def paper_from(robot: Robot, convention: str) -> np.ndarray:
     return t
 
 
-#: length exponent ``u`` of each parameter, per convention: second moments / inertia entries 2,
-#: first moments 1, mass 0. ``K[i, d]`` has units ``L^(u_i - u_d)`` (the mass units cancel).
-LENGTH_POWER = {
-    "paper": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
-    "khalil": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
-    "pinocchio": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
-    "idyntree": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
-    "rpna": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
-}
 #: a dimensionless coefficient ``K[i, d] L^(u_d - u_i)`` at most this, relative to the largest of
 #: its row (and at least to the 1 of ``pi_I``), is rounding noise: zero
 ZERO_TOL = 1e-9
@@ -62,33 +55,6 @@ ZERO_TOL = 1e-9
 NOISE_FACTOR = 1e3
 #: coefficients snap to the shortest decimal within this relative distance
 SNAP_RTOL = 1e-13
-
-
-def length_scale(robot: Robot) -> float:
-    """The robot's typical length ``L`` [m]: the median nonzero distance between adjacent frame
-    origins at q = 0 (each body's joint origin from its parent's, a fixed root's from the world
-    origin, each loop frame from both of its bodies' origins). A degree-1 homogeneous function of
-    the geometry (scaling lengths by ``s`` scales it by ``s``) that ignores where a floating base
-    happens to stand; 1 when every distance is zero."""
-    p = robot.M0[:, :3, 3]
-    d = []
-    for i, par in enumerate(robot.parent):
-        if par >= 0:
-            d.append(np.linalg.norm(p[i] - p[par]))
-        elif robot.jtype[i] != "F":
-            d.append(np.linalg.norm(p[i]))
-    for lj in robot.loops:
-        o = np.asarray(lj.M)[:3, 3]
-        d.append(np.linalg.norm(o - (p[lj.parent] if lj.parent >= 0 else 0.0)))
-        d.append(np.linalg.norm(o - p[lj.child]))
-        if lj.M_child is not None:
-            d.append(np.linalg.norm(np.asarray(lj.M_child)[:3, 3] - p[lj.child]))
-    d = np.array(d, dtype=float)
-    d = d[np.isfinite(d)]
-    if not len(d) or d.max() <= 0:
-        return 1.0
-    d = d[d > 1e-12 * d.max()]
-    return float(np.median(d))
 
 
 def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:

@@ -46,6 +46,16 @@ NAMES = {
     "rpna": ("m", "mcx", "mcy", "mcz", "Ixx", "Iyy", "Izz", "Iyz", "Ixz", "Ixy"),
 }
 
+#: length exponent ``u`` of each parameter, per convention: second moments / inertia entries 2,
+#: first moments 1, mass 0. ``K[i, d]`` has units ``L^(u_i - u_d)`` (the mass units cancel).
+LENGTH_POWER = {
+    "paper": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
+    "khalil": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
+    "pinocchio": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
+    "idyntree": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
+    "rpna": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
+}
+
 #: the frame each convention's parameters are expressed in
 FRAMES = {
     "paper": "spatial pseudo-inertia entries, world frame at q = 0",

@@ -137,7 +137,9 @@ def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
                                   axis=1).reshape(len(act), -1, SATURATED)
             cand = cand - (cand @ np.swapaxes(known, 1, 2)) @ known  # only what is new
             _, sv, vt = np.linalg.svd(cand, full_matrices=False)  # vt (m, min(rows, 12), 12)
-            add = np.sum(sv > tol, axis=1)
+            # rounding noise can look new at extreme length scales: never more rows than the space
+            # holds (a full span is saturated, which only withholds columns, never adds wrong ones)
+            add = np.minimum(np.sum(sv > tol, axis=1), SATURATED - r[act])
             mi, ji = np.nonzero(rows[None, : vt.shape[1]] < add[:, None])
             cur[act[mi], r[act[mi]] + ji] = vt[mi, ji]  # appended after each body's current rows
             r[act] = r[act] + add

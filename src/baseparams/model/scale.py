@@ -1,0 +1,47 @@
+"""The robot's own length scale, for decisions that must not depend on the unit of length.
+
+Scaling every length of a robot by ``s`` (and masses by ``mu``) scales each inertial parameter by
+``mu s^u`` with ``u`` its length exponent (:data:`baseparams.model.inertia.LENGTH_POWER`): rank
+decisions and regrouping are made on dimensionless parameters ``pi / L^u`` so that the structure
+found does not depend on whether the file is written in metres or millimetres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .inertia import LENGTH_POWER
+from .robot import Robot
+
+
+def length_scale(robot: Robot) -> float:
+    """The robot's typical length ``L`` [m]: the median nonzero distance between adjacent frame
+    origins at q = 0 (each body's joint origin from its parent's, a fixed root's from the world
+    origin, each loop frame from both of its bodies' origins). A degree-1 homogeneous function of
+    the geometry (scaling lengths by ``s`` scales it by ``s``) that ignores where a floating base
+    happens to stand; 1 when every distance is zero."""
+    p = robot.M0[:, :3, 3]
+    d = []
+    for i, par in enumerate(robot.parent):
+        if par >= 0:
+            d.append(np.linalg.norm(p[i] - p[par]))
+        elif robot.jtype[i] != "F":
+            d.append(np.linalg.norm(p[i]))
+    for lj in robot.loops:
+        o = np.asarray(lj.M)[:3, 3]
+        d.append(np.linalg.norm(o - (p[lj.parent] if lj.parent >= 0 else 0.0)))
+        d.append(np.linalg.norm(o - p[lj.child]))
+        if lj.M_child is not None:
+            d.append(np.linalg.norm(np.asarray(lj.M_child)[:3, 3] - p[lj.child]))
+    d = np.array(d, dtype=float)
+    d = d[np.isfinite(d)]
+    if not len(d) or d.max() <= 0:
+        return 1.0
+    d = d[d > 1e-12 * d.max()]
+    return float(np.median(d))
+
+
+def parameter_scale(robot: Robot, convention: str = "paper") -> np.ndarray:
+    """``L^u (10 n,)``: each parameter's unit scale, ``L`` = :func:`length_scale`, ``u`` its length
+    exponent in ``convention``; dimensionless parameters are ``pi / parameter_scale``."""
+    return length_scale(robot) ** np.tile(LENGTH_POWER[convention], robot.n).astype(float)

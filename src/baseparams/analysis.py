@@ -116,7 +116,8 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
         raise BaseparamsError(
             f"robot {robot.name!r}: {q.shape[0] - cs.kept} of {q.shape[0]} actuated states do not close the loops "
             f"({cs.not_converged} outside the workspace, {cs.branch_jumps} leave the reference assembly mode); "
-            f"pick states nearer q = 0 (baseparams.numerics.closed_samples draws valid ones)")
+            f"pick states nearer the reference q = 0 (baseparams.numerics.closed_samples draws valid "
+            f"ones: its .q[:, robot.actuated])")
     return closed_regressor(robot, cs)
 
 

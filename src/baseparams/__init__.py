@@ -49,8 +49,21 @@ from .analysis import Analysis, analyze, regressor
 from .errors import BaseparamsError, ModelError
 from .model import CONVENTIONS, Inertia, Robot, RobotBuilder, pose
 
-__all__ = ["Analysis", "BaseparamsError", "CONVENTIONS", "Inertia", "ModelError", "ModelWarning", "Robot",
-           "RobotBuilder", "__version__", "analyze", "load", "pose", "regressor"]
+__all__ = [
+    "CONVENTIONS",
+    "Analysis",
+    "BaseparamsError",
+    "Inertia",
+    "ModelError",
+    "ModelWarning",
+    "Robot",
+    "RobotBuilder",
+    "__version__",
+    "analyze",
+    "load",
+    "pose",
+    "regressor",
+]
 
 _SUBMODULES = ("analysis", "base", "cli", "errors", "io", "kinematics", "model", "nullspace", "numerics", "pga",
                "robots")

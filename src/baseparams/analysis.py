@@ -1,5 +1,9 @@
 """The main job: DRNG, certification/completion, base parameters, and their report.
 
+:func:`analyze` returns an :class:`Analysis` (``baseparams.analyze``); :func:`regressor` is
+``baseparams.regressor`` (the TP regressor, loops closed for robots with loops);
+:func:`format_report` is the CLI's text report and ``Analysis.to_json`` its ``--json``.
+
 JSON schema (``baseparams analyze MODEL --json``), one object:
 
 =====================  ===================================================================
@@ -208,28 +212,59 @@ class Analysis:
         return self.base.expressions()
 
     def to_base(self, params, convention: str) -> np.ndarray:
-        """Base parameters ``beta (n_base,)`` of a standard vector ``params (10 n,)``.
+        """Base parameters of a standard parameter vector.
 
-        ``convention`` (required) names the convention of ``params``; it must be
-        :attr:`convention` (a mismatch raises :class:`BaseparamsError`, never a number).
-        E.g. ``a.to_base(robot.parameters(a.convention), a.convention)``."""
+        Parameters
+        ----------
+        params : array_like, shape ``(10 n,)``
+            Standard parameters, ten per body in ``convention``'s order
+            (``robot.parameters(convention)`` gives the robot's own).
+        convention : str
+            The convention of ``params`` (required): it must be :attr:`convention`; a
+            mismatch raises :class:`BaseparamsError`, never a number.
+
+        Returns
+        -------
+        beta : ndarray, shape ``(n_base,)``
+            ``beta = pi_I + K pi_D``, named by :attr:`base_names`.
+        """
         return self.base.to_base(params, convention)
 
     def from_base(self, beta) -> np.ndarray:
-        """The minimum-norm standard vector ``(10 n,)`` in :attr:`convention` whose base
-        parameters are ``beta (n_base,)``: ``to_base(from_base(b), convention) == b``."""
+        """A standard parameter vector with the given base parameters.
+
+        Parameters
+        ----------
+        beta : array_like, shape ``(n_base,)``
+
+        Returns
+        -------
+        params : ndarray, shape ``(10 n,)``
+            The minimum-norm vector in :attr:`convention` with
+            ``to_base(params, convention) == beta``: any other differs by a nullspace
+            direction, invisible to every measurement.
+        """
         return self.base.from_base(beta)
 
     def base_regressor(self, q, dq=None, ddq=None) -> np.ndarray:
-        """The regressor of the base parameters, ``(S, rows, n_base)``.
+        """The regressor of the base parameters.
 
-        ``base_regressor(q, dq, ddq) @ to_base(pi, convention)`` equals
-        ``regressor(robot, q, dq, ddq)[:, measured] @ paper`` for every standard vector ``pi``
-        (``paper`` its conversion), i.e. the measured generalized forces: the columns of the
-        full regressor (in :attr:`convention`) of the independent parameters. States as
-        :func:`regressor`: ``(S, dof)``, or for a robot with loops ``(S, actuated)`` with the
-        loops closed. ``rows`` = the measured rows (:attr:`rows`: all, the joints' or the
-        floating base's)."""
+        Parameters
+        ----------
+        q, dq, ddq : array_like, shape ``(S, m)``
+            States as for :func:`regressor`: ``m = robot.dof`` for a tree; for a robot with
+            loops the actuated coordinates (``m = len(robot.actuated)``), loops closed from
+            the reference assembly.
+
+        Returns
+        -------
+        Yb : ndarray, shape ``(S, rows, n_base)``
+            The measured rows (:attr:`rows`: all, the joints' or the floating base's) of the
+            full regressor in :attr:`convention`, independent columns: for every standard
+            vector ``pi`` in :attr:`convention` (``pi_paper`` the same in ``paper``),
+            ``Yb @ to_base(pi, convention)`` equals ``regressor(robot, q, dq, ddq) @ pi_paper``
+            on those rows.
+        """
         from .numerics import row_mask
 
         y = regressor(self.robot, q, dq, ddq)
@@ -351,8 +386,8 @@ def format_report(a: Analysis) -> str:
 
     r, c, j = a.robot, a.certificate, a.to_json()
     loops = f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else ""
-    out = [f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
-           f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}",
+    out = [(f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
+            f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
     for name in PRINCIPLES[:-1]:

@@ -1,5 +1,9 @@
 """The main job: DRNG, certification/completion, base parameters, and their report.
 
+:func:`analyze` returns an :class:`Analysis` (``baseparams.analyze``); :func:`regressor` is
+``baseparams.regressor`` (the TP regressor, loops closed for robots with loops);
+:func:`format_report` is the CLI's text report and ``Analysis.to_json`` its ``--json``.
+
 JSON schema (``baseparams analyze MODEL --json``), one object:
 
 =====================  ===================================================================
@@ -32,22 +36,128 @@ unidentifiable         standard parameters that no base parameter sees
 
 from __future__ import annotations
 
+import importlib
 import time
 from dataclasses import dataclass
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
 import numpy as np
 
-from .base import BaseParameters, base_parameters
+from .errors import BaseparamsError
 from .model.robot import Robot
-from .nullspace import PRINCIPLES, drng
-from .model import inertia as _inertia
-from .nullspace.drng import PAPER, UNMEASURED
-from .nullspace.certify import Certificate, certify
+
+if TYPE_CHECKING:  # the heavy modules (DRNG imports scipy.sparse) load when analyze() runs
+    from .base import BaseParameters
+    from .nullspace.certify import Certificate
+
+#: what ``Analysis.status`` can be (``unverified``: ``verify=False``)
+STATUSES = ("certified", "completed", "undecided", "failed", "unverified")
+
+#: the pipeline's steps, imported when first used (DRNG imports scipy.sparse): ``import
+#: baseparams`` stays light; they remain attributes of this module (tests patch them here)
+_LAZY = {"drng": "baseparams.nullspace", "certify": "baseparams.nullspace.certify",
+         "base_parameters": "baseparams.base"}
 
 
-@dataclass(frozen=True)
+def _step(name: str):
+    if name not in globals():
+        globals()[name] = getattr(importlib.import_module(_LAZY[name]), name)
+    return globals()[name]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return _step(name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
+    """The TP regressor: ``tau = regressor(robot, q, dq, ddq) @ robot.parameters("paper")``.
+
+    Parameters
+    ----------
+    robot : Robot
+    q, dq, ddq : array_like, shape ``(S, m)`` or ``(m,)``
+        Joint positions, velocities and accelerations of ``S`` states (``dq``, ``ddq``
+        default to zero). ``m`` is ``robot.dof`` for a tree (a floating root's six
+        coordinates first: its quasi-velocities are the base's spatial twist). For a robot
+        with loops, ``m = len(robot.actuated)``: the states are the **actuated**
+        coordinates, the loops are closed from the reference assembly (q = 0) and the rows
+        are the actuated generalized forces.
+
+    Returns
+    -------
+    Y : ndarray, shape ``(S, m, 10 n)``
+        Gravity (``robot.gravity``) included; columns in the ``paper`` convention (spatial
+        pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
+        q = 0).
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes, or (loops) a state that does not close its loops on the reference
+        assembly mode. The spanning tree's regressor (loops cut, tree coordinates) is
+        ``baseparams.regressor.tp.regressor``.
+    """
+    from .regressor.tp import regressor as tree_regressor
+
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    dq = np.zeros_like(q) if dq is None else np.atleast_2d(np.asarray(dq, dtype=float))
+    ddq = np.zeros_like(q) if ddq is None else np.atleast_2d(np.asarray(ddq, dtype=float))
+    m = len(robot.actuated) if robot.has_loops else robot.dof
+    what = "actuated coordinates (the robot has loops)" if robot.has_loops else "coordinates"
+    for name, x in (("q", q), ("dq", dq), ("ddq", ddq)):
+        if x.ndim != 2 or x.shape[1] != m or x.shape[0] != q.shape[0]:
+            raise BaseparamsError(f"robot {robot.name!r}: {name} must have shape ({q.shape[0]}, {m}) ({m} {what}); "
+                                  f"got {x.shape}")
+    if not robot.has_loops:
+        return tree_regressor(robot, q, dq, ddq)
+    from .kinematics.loops import close_loops
+    from .regressor.tp import closed_regressor
+
+    cs = close_loops(robot, q, dq, ddq, cond_max=np.inf)
+    if cs.kept != q.shape[0]:
+        raise BaseparamsError(
+            f"robot {robot.name!r}: {q.shape[0] - cs.kept} of {q.shape[0]} actuated states do not close the loops "
+            f"({cs.not_converged} outside the workspace, {cs.branch_jumps} leave the reference assembly mode); "
+            f"pick states nearer the reference q = 0 (baseparams.numerics.closed_samples draws valid "
+            f"ones: its .q[:, robot.actuated])")
+    return closed_regressor(robot, cs)
+
+
+@dataclass(frozen=True, eq=False)
 class Analysis:
+    """The base-parameter analysis of one robot, as returned by :func:`analyze`.
+
+    The nullspace ``N`` of the TP regressor (the inertial-parameter directions no
+    measurement sees) found by DRNG with provenance, certified (and, where no rule finds a
+    direction, completed) by the numerical method, and regrouped into base parameters
+    ``beta = pi_I + K pi_D`` in :attr:`convention` (Khalil's rules for serial chains).
+
+    Attributes
+    ----------
+    robot : Robot
+        The analysed robot (``n`` moving bodies, ``10 n`` standard parameters).
+    rows : str
+        Measured generalized forces: ``all``, ``joints`` or ``base``.
+    certificate : Certificate or None
+        The numerical check (``None`` with ``verify=False``).
+    basis : ndarray, shape ``(10 n, nullity)``
+        Orthonormal nullspace basis in the ``paper`` convention, DRNG's span first, then the
+        numerically completed directions.
+    base, base_paper : BaseParameters
+        The regrouping in :attr:`convention` and in ``paper``.
+    by_principle : dict
+        Rank added by each principle / extended rule.
+    drng_seconds, seconds : float
+        DRNG's and the whole analysis' wall time.
+
+    Notes
+    -----
+    Not equal-comparable (``==`` is identity): compare ``nullity``, ``expressions()`` or
+    ``to_json()`` instead. ``to_json()`` follows the schema in this module's docstring.
+    """
+
     robot: Robot
     rows: str
     drng_seconds: float
@@ -63,9 +173,113 @@ class Analysis:
 
     @property
     def nullity(self) -> int:
+        """Dimension of the (certified) nullspace; DRNG's rank when unverified."""
         return self.basis.shape[1]
 
+    @property
+    def n_base(self) -> int:
+        """Number of base parameters, ``10 n - nullity``."""
+        return 10 * self.robot.n - self.nullity
+
+    @property
+    def status(self) -> str:
+        """``certified``, ``completed``, ``undecided``, ``failed`` or ``unverified``."""
+        return "unverified" if self.certificate is None else self.certificate.status
+
+    @property
+    def certified(self) -> bool:
+        """True when the numerics confirm the (completed) nullspace."""
+        return self.certificate is not None and self.certificate.certified
+
+    @property
+    def convention(self) -> str:
+        """Parameter convention of :meth:`expressions`, :meth:`to_base` and :meth:`from_base`."""
+        return self.base.convention
+
+    @property
+    def names(self) -> list[str]:
+        """The ``10 n`` standard parameter names (``body.PARAM``) in :attr:`convention`."""
+        return list(self.base.names)
+
+    @property
+    def base_names(self) -> list[str]:
+        """The ``n_base`` base parameter names (suffix ``R``: it absorbs others)."""
+        return self.base.base_names()
+
+    def expressions(self) -> list[dict[str, str]]:
+        """``[{"name", "expression"}]``: each base parameter as a combination of standard
+        parameters in :attr:`convention`, e.g. ``link1.ZZR = link1.ZZ + link2.YY + ...``."""
+        return self.base.expressions()
+
+    def to_base(self, params, convention: str) -> np.ndarray:
+        """Base parameters of a standard parameter vector.
+
+        Parameters
+        ----------
+        params : array_like, shape ``(10 n,)``
+            Standard parameters, ten per body in ``convention``'s order
+            (``robot.parameters(convention)`` gives the robot's own).
+        convention : str
+            The convention of ``params`` (required): it must be :attr:`convention`; a
+            mismatch raises :class:`BaseparamsError`, never a number.
+
+        Returns
+        -------
+        beta : ndarray, shape ``(n_base,)``
+            ``beta = pi_I + K pi_D``, named by :attr:`base_names`.
+        """
+        return self.base.to_base(params, convention)
+
+    def from_base(self, beta) -> np.ndarray:
+        """A standard parameter vector with the given base parameters.
+
+        Parameters
+        ----------
+        beta : array_like, shape ``(n_base,)``
+
+        Returns
+        -------
+        params : ndarray, shape ``(10 n,)``
+            The minimum-norm vector in :attr:`convention` with
+            ``to_base(params, convention) == beta``: any other differs by a nullspace
+            direction, invisible to every measurement.
+        """
+        return self.base.from_base(beta)
+
+    def base_regressor(self, q, dq=None, ddq=None) -> np.ndarray:
+        """The regressor of the base parameters.
+
+        Parameters
+        ----------
+        q, dq, ddq : array_like, shape ``(S, m)``
+            States as for :func:`regressor`: ``m = robot.dof`` for a tree; for a robot with
+            loops the actuated coordinates (``m = len(robot.actuated)``), loops closed from
+            the reference assembly.
+
+        Returns
+        -------
+        Yb : ndarray, shape ``(S, rows, n_base)``
+            The measured rows (:attr:`rows`: all, the joints' or the floating base's) of the
+            full regressor in :attr:`convention`, independent columns: for every standard
+            vector ``pi`` in :attr:`convention` (``pi_paper`` the same in ``paper``),
+            ``Yb @ to_base(pi, convention)`` equals ``regressor(robot, q, dq, ddq) @ pi_paper``
+            on those rows.
+        """
+        from .numerics import row_mask
+
+        y = regressor(self.robot, q, dq, ddq)
+        if not self.robot.has_loops:
+            y = y[:, row_mask(self.robot, self.rows)]
+        return (y @ self.base.T)[:, :, self.base.independent]
+
+    def __repr__(self) -> str:
+        return (f"<Analysis {self.robot.name}: nullity {self.nullity}, {self.n_base} base parameters "
+                f"({self.convention}), {self.status}>")
+
     def to_json(self) -> dict:
+        """The result as one JSON-able dict (the schema in this module's docstring)."""
+        from .nullspace.drng import PAPER
+
         r, c = self.robot, self.certificate
         num = None
         if c is not None:
@@ -76,15 +290,15 @@ class Analysis:
         return {
             "model": r.name, "n_bodies": r.n, "n_params": 10 * r.n, "gravity": r.gravity.tolist(),
             "floating": r.floating, "rows": self.rows, "nullity": self.nullity,
-            "n_base": 10 * r.n - self.nullity,
+            "n_base": self.n_base,
             "drng": {"columns": self.drng_columns, "rank": self.drng_rank, "seconds": self.drng_seconds,
                      "extended": self.extended,
                      "by_principle": {k: v for k, v in self.by_principle.items() if k in PAPER},
                      "by_rule": {**self.by_principle, "numerical": 0 if c is None else c.completed},
                      "complete": None if c is None else bool(c.status == "certified")},
             "numerical": num,
-            "certified": bool(c is not None and c.certified),
-            "status": "unverified" if c is None else c.status,
+            "certified": self.certified,
+            "status": self.status,
             "message": "not verified (--no-verify)" if c is None else c.message,
             "completed": 0 if c is None else c.completed,
             "residual": None if c is None else c.residual,
@@ -95,10 +309,53 @@ class Analysis:
         }
 
 
-def analyze(robot: Robot, samples: int | None = None, seed: int = 0, verify: bool = True, rows: str = "all",
-            convention: str = "khalil", progress: TextIO | None = None, extended: bool = True) -> Analysis:
-    """DRNG -> (certify, complete) -> regroup. ``progress``: a stream for progress lines;
-    ``extended``: the extended rules as well as the paper's principles."""
+def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: bool = True, rows: str = "all",
+            convention: str = "khalil", extended: bool = True, progress: TextIO | None = None) -> Analysis:
+    """Base parameters of ``robot``: DRNG, then certification (and completion), then regrouping.
+
+    Parameters
+    ----------
+    robot : Robot
+        E.g. from :func:`baseparams.load` or :class:`baseparams.RobotBuilder`.
+    samples : int, optional
+        Random states for the numerical certification (default: 100 for trees, 5000
+        actuated samples for closed loops, as the paper).
+    seed : int
+        Seed of those states: the result is deterministic.
+    verify : bool
+        Certify with the numerical method; ``False`` keeps DRNG's span unverified (status
+        ``unverified``).
+    rows : {"all", "joints", "base"}
+        Measured generalized forces: all, the joint torques only, or a floating base's wrench
+        only (robots with loops: ``all``, the actuated forces).
+    convention : {"khalil", "paper", "pinocchio", "idyntree", "rpna"}
+        Convention of the regrouped expressions and of ``to_base`` / ``from_base``
+        (``baseparams.CONVENTIONS``; ``paper``: world frame at q = 0, the others link frames).
+    extended : bool
+        The extended geometric rules as well as the paper's three principles.
+    progress : file-like, optional
+        A stream for progress lines (e.g. ``sys.stderr``).
+
+    Returns
+    -------
+    Analysis
+        ``.nullity``, ``.n_base``, ``.status``, ``.expressions()``, ``.basis``, the maps
+        ``to_base`` / ``from_base`` / ``base_regressor`` and ``.to_json()``. An ``undecided``
+        or ``failed`` certification is a status, not an exception.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad input (unknown convention or rows, ``rows="base"`` without a floating base, loops
+        that no sample closes).
+    """
+    from .model.inertia import check_convention
+
+    drng, certify, base_parameters = _step("drng"), _step("certify"), _step("base_parameters")
+    if not isinstance(robot, Robot):
+        raise BaseparamsError(f"analyze() takes a Robot (baseparams.load({robot!r}) makes one), "
+                              f"not {type(robot).__name__}")
+    check_convention(convention)
     t0 = time.perf_counter()
 
     def say(msg: str) -> None:
@@ -123,11 +380,14 @@ def analyze(robot: Robot, samples: int | None = None, seed: int = 0, verify: boo
 
 
 def format_report(a: Analysis) -> str:
-    """Human-readable report."""
+    """Human-readable report (what ``baseparams analyze MODEL`` prints)."""
+    from .model import inertia as _inertia
+    from .nullspace.drng import PAPER, PRINCIPLES, UNMEASURED
+
     r, c, j = a.robot, a.certificate, a.to_json()
     loops = f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else ""
-    out = [f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
-           f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}",
+    out = [(f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
+            f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
     for name in PRINCIPLES[:-1]:

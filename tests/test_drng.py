@@ -181,7 +181,7 @@ def test_block_rank_handles_dependent_blocks():
     # body 1: two columns with identical child parts but different parents' parts -> rank 2
     cols = Columns(np.stack([h[0], h[0], h[1]]), np.array([1, 1, 2]), np.array([0, -1, 1]),
                    np.zeros(3, dtype=int), np.array([1, 1, 2]), np.array(["a", "b", "c"], dtype=object))
-    from baseparams.nullspace.drng import to_sparse
+    from baseparams.nullspace.columns import to_sparse
 
     dense = to_sparse(cols, 3).toarray()
     assert block_rank(cols, 3) == np.linalg.matrix_rank(dense) == 3

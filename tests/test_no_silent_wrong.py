@@ -107,7 +107,7 @@ def test_undecided_certification_exits_3(capsys):
 def test_failed_certification_exits_4(monkeypatch, capsys):
     """A column outside the nullspace (injected) must make the command fail, not exit 0."""
     import baseparams.analysis as A
-    from baseparams.nullspace.drng import Columns, DRNGResult, block_rank
+    from baseparams.nullspace import Columns, DRNGResult, block_rank
 
     real = A.drng
 

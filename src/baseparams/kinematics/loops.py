@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
 from ..pga import hat
-from ..pga.core import cross3
+from ..pga.linalg import cross3, perp_basis
 from .tree import forward_kinematics
 
 
@@ -42,13 +42,6 @@ class Elementary:
     b: np.ndarray | None = None  # point, dot: the successor's vector; proj: the predecessor's point
     c: np.ndarray | None = None  # proj: the successor's point
     loop: int = 0
-
-
-def _perp(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    h = np.array([1.0, 0, 0]) if abs(d[0]) < 0.9 else np.array([0, 1.0, 0])
-    x = np.cross(d, h)
-    x /= np.linalg.norm(x)
-    return x, np.cross(d, x)
 
 
 def elementary_constraints(robot: Robot) -> list[Elementary]:
@@ -69,7 +62,7 @@ def elementary_constraints(robot: Robot) -> list[Elementary]:
             out += [Elementary("point", p, c, np.r_[r[:, m], 0.0], np.r_[rc[:, m], 0.0], loop=k) for m in range(3)]
             if lj.type == "P":
                 a = r @ lj.axes[0]
-                for n in _perp(a):
+                for n in (v[0] for v in perp_basis(np.asarray(a, dtype=float)[None])):
                     out.append(Elementary("proj", p, c, np.r_[n, 0.0], o, oc, loop=k))
     return out
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ModelError, NoMovingBodiesError
+from ..pga.core import quat_to_rot
 from .inertia import Inertia, transform
 from .robot import JOINT_TYPES, LoopJoint, Robot, joint_ndof
 
@@ -54,14 +55,12 @@ def pose(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 def quat_pose(xyz=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
     """4x4 pose from a translation and a (not necessarily unit) quaternion ``w x y z``."""
-    from ..pga.core import _quat_to_rot
-
     q = np.asarray(quat, dtype=float)
     nq = np.linalg.norm(q)
     if nq < 1e-12:
         raise ModelError(f"zero quaternion {q.tolist()}")
     t = np.eye(4)
-    t[:3, :3] = _quat_to_rot(q / nq)
+    t[:3, :3] = quat_to_rot(q / nq)
     t[:3, 3] = np.asarray(xyz, dtype=float)
     return t
 

@@ -87,12 +87,6 @@ def unhat(p: np.ndarray) -> np.ndarray:
     return out
 
 
-def sym(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a b^T + b a^T`` for 4-vectors ``(*, 4)`` -> ``(*, 4, 4)``."""
-    ab = np.einsum("...i,...j->...ij", a, b)
-    return ab + np.swapaxes(ab, -1, -2)
-
-
 def pseudo_inertia(mass: float, com: np.ndarray, inertia_com: np.ndarray) -> np.ndarray:
     """Pseudo-inertia ``(4, 4)`` from mass, centre of mass ``(3,)`` and the rotational
     inertia ``(3, 3)`` about the centre of mass, all in the same frame."""

@@ -32,25 +32,9 @@ import numpy as np
 
 from ..model.robot import Robot
 from ..pga.core import hat
+from ..pga.linalg import nullspace
 
 SATURATED = 12
-
-
-def _rowspace(a: np.ndarray, tol: float) -> np.ndarray:
-    """Orthonormal basis ``(r, m)`` of the row space of ``a (k, m)``."""
-    if a.shape[0] == 0:
-        return a
-    _, s, vt = np.linalg.svd(a, full_matrices=False)
-    return vt[: int(np.sum(s > tol))]
-
-
-def nullspace(a: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """Orthonormal basis ``(r, m)`` (as rows) of the right nullspace of ``a (k, m)``."""
-    m = a.shape[1]
-    if a.shape[0] == 0:
-        return np.eye(m)
-    _, s, vt = np.linalg.svd(a, full_matrices=True)
-    return vt[int(np.sum(s > tol)):]
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ import pytest
 from oracles import rnea
 
 from baseparams.errors import ModelError
+from baseparams.kinematics import re_reference
 from baseparams.model import Inertia, RobotBuilder
 from baseparams.model.robot import compound_screw
 from baseparams.nullspace.certify import certify
@@ -74,7 +75,7 @@ def test_compound_at_re_references_exactly():
     rng = np.random.default_rng(7)
     robot = random_robot(rng, 4, joint_types="C")
     q0 = rng.uniform(-1, 1, robot.dof)
-    moved = robot.at(q0)
+    moved = re_reference(robot, q0)
     q = rng.uniform(-1, 1, robot.dof)
     g_old = forward_kinematics(robot, q).g[0] @ robot.M0
     g_new = forward_kinematics(moved, q - q0).g[0] @ moved.M0

@@ -30,7 +30,7 @@ from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
 from ..pga import hat
 from ..pga.linalg import cross3, perp_basis
-from .tree import forward_kinematics
+from .tree import forward_kinematics, re_reference
 
 
 @dataclass(frozen=True)
@@ -316,7 +316,7 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
         cs = close_loops(robot, qa, steps=10, cond_max=cond_max, max_step=np.inf, max_iter=50, q_start=start)
         if cs.kept:
             qref = cs.q[0]
-            new = robot.at(qref) if "S" not in robot.jtype else None
+            new = re_reference(robot, qref) if "S" not in robot.jtype else None
             if new is None:
                 raise ModelError(f"robot {robot.name!r}: {why}; re-referencing with S joints is not supported")
             box = None if robot.q_box is None else robot.q_box - qref[act][:, None]

@@ -333,7 +333,7 @@ def bench_files(out: dict, quick: bool) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
     from erd import is_floating, urdf_files  # the same file list and root joints as the tests
 
-    from baseparams.io.load import load_model
+    from baseparams.load import load_model
     from baseparams.nullspace import drng
     from baseparams.nullspace.certify import certify
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from erd import is_floating, pinocchio_model, pinocchio_nullity, urdf_files
 
-from baseparams.io.load import load_model
+from baseparams.load import load_model
 from baseparams.nullspace.certify import certify
 
 FILES = urdf_files()

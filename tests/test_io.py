@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from baseparams.errors import BaseparamsError, ModelError
-from baseparams.io.load import load_model
+from baseparams.load import load_model
 from baseparams.io.mjcf import load_mjcf
 from baseparams.io.urdf import URDFWarning, load_urdf, write_urdf
 from baseparams.nullspace.certify import certify

@@ -13,7 +13,7 @@ import pytest
 from mujoco_oracle import mujoco_rank
 
 from baseparams.errors import ModelError, NoMovingBodiesError
-from baseparams.io.load import load_model
+from baseparams.load import load_model
 from baseparams.io.mjcf import MJCFWarning, load_mjcf
 from baseparams.kinematics import forward_kinematics
 from baseparams.nullspace.certify import certify

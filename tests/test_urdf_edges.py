@@ -11,7 +11,7 @@ import pytest
 
 from baseparams.base.regroup import base_parameters
 from baseparams.errors import ModelError
-from baseparams.io.load import load_model
+from baseparams.load import load_model
 from baseparams.io.urdf import load_urdf
 from baseparams.model import RobotBuilder
 from baseparams.nullspace.certify import certify

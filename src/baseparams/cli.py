@@ -27,7 +27,7 @@ _STATUS_EXIT = {"certified": EXIT_OK, "completed": EXIT_OK, "unverified": EXIT_O
 
 
 def _robot(args) -> "Robot":  # noqa: F821
-    from .io.load import load_model
+    from .load import load_model
 
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
                               strict_inertia=getattr(args, "strict_inertia", False))

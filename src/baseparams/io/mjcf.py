@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from ..kinematics.loops import choose_independent
 from ..model.builder import RobotBuilder, quat_pose
 from ..model.inertia import Inertia, check_inertia
 from ..model.robot import Coupling, Robot, compound_screw
@@ -288,8 +289,6 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
     if couplings:
         robot = replace(robot, couplings=tuple(couplings))
     if robot.has_loops:  # MJCF does not say which coordinates are independent: prefer actuated joints
-        from ..kinematics.loops import choose_independent
-
         prefer = set()
         for a in range(model.nu):
             if int(model.actuator_trntype[a]) in (int(mj.mjtTrn.mjTRN_JOINT), int(mj.mjtTrn.mjTRN_JOINTINPARENT)):
@@ -345,8 +344,8 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
                 warnings.warn(f"{what}: both sides are on one rigid body: no constraint, skipped",
                               MJCFWarning, stacklevel=3)
                 continue
-            i1 = -1 if l1 is None else b._names.index(l1)
-            i2 = -1 if l2 is None else b._names.index(l2)
+            i1 = -1 if l1 is None else b.body_index(l1)
+            i2 = -1 if l2 is None else b.body_index(l2)
             (pl, pw), (cl, cw) = ((l1, w1), (l2, w2)) if i1 < i2 else ((l2, w2), (l1, w1))
             b.add_loop(ename, "S" if kind == "connect" else "fixed", parent=pl, child=cl,
                        origin=np.linalg.inv(t_link[pl]) @ pw, child_origin=np.linalg.inv(t_link[cl]) @ cw)

@@ -33,7 +33,7 @@ from ..pga.linalg import cross3, perp_basis
 from .tree import forward_kinematics, re_reference
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Elementary:
     kind: str  # point | dot | proj
     pred: int
@@ -67,7 +67,7 @@ def elementary_constraints(robot: Robot) -> list[Elementary]:
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ConstraintEval:
     """``r (S, m)`` residuals, ``K (S, m, dof)`` Jacobian, ``b (S, m)`` bias (needs dq)."""
 
@@ -164,7 +164,7 @@ def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.linalg.solve(ktk + eps * np.eye(k.shape[2]), np.einsum("smi,sm->si", k, r)[..., None])[..., 0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ClosedStates:
     """Loop-closed samples. ``q, dq, ddq (S, dof)`` full tree coordinates; ``G (S, dof, na)``
     = dq/dq_a; ``cond (S,)`` condition number of ``K_p``; counts of discarded samples."""

@@ -26,7 +26,7 @@ from ..pga.core import screw_exp
 from ..pga.linalg import skew
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TreeState:
     """Kinematic state of all bodies for ``S`` samples.
 

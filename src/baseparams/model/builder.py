@@ -98,6 +98,12 @@ class RobotBuilder:
             raise ModelError(f"robot {self.name!r}: unknown parent link {key!r} (add it before its children)")
         return self._frames[key]
 
+    def body_index(self, name: str) -> int:
+        """Index of the link ``name`` added so far (its body index in the built robot)."""
+        if name not in self._names:
+            raise ModelError(f"robot {self.name!r}: no link {name!r}")
+        return self._names.index(name)
+
     def add_link(self, name: str, parent: str | None = None, joint: str = "R", origin=None,
                  axis=(0.0, 0.0, 1.0), axis2=None, inertia: Inertia | None = None,
                  joint_name: str | None = None, actuated: bool | None = None, armature=None) -> RobotBuilder:

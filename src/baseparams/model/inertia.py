@@ -171,7 +171,7 @@ def convert(p: np.ndarray, src: str, dst: str) -> np.ndarray:
     return to_convention(from_convention(p, src), dst)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Inertia:
     """Rigid-body inertia: ``mass`` [kg], ``com`` [m] and ``inertia`` [kg m^2] about the
     centre of mass, all expressed in ``frame`` (a 4x4 pose relative to the body frame;
@@ -217,7 +217,7 @@ def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float =
     Returns True when feasible. A violation is an :class:`InertiaWarning` (one line naming
     ``what``): the base-parameter structure does not depend on the inertia values, so the
     analysis goes on. With ``strict`` it is a :class:`ModelError` instead (identification,
-    where a prior must be feasible, or ``--strict-inertia``)."""
+    where a prior must be feasible, or ``strict_inertia`` in the readers)."""
     try:
         if mass < 0:
             raise ModelError(f"{what}: inertia not physically feasible (negative mass {mass:.3g})")

@@ -29,7 +29,7 @@ identification; the link base-parameter analysis does not use it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -80,7 +80,7 @@ class Coupling:
         return [(self.pred, self.ratio), *self.more]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LoopJoint:
     """A cut joint closing a loop: type, the two bodies (``parent < child``; parent -1 = the
     world), the joint frame's world pose ``M`` at q = 0 carried by the predecessor, its axes
@@ -151,7 +151,7 @@ def _check_axes(axes: np.ndarray, jtype: str, what: str) -> np.ndarray:
     return axes
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Robot:
     """A validated tree robot (plus loop joints recorded for later use).
 
@@ -356,17 +356,9 @@ class Robot:
         n = self.N0 if convention == "paper" else self.N_body
         return _inertia.to_convention(n, convention).reshape(-1)
 
-    def with_gravity(self, gravity: np.ndarray) -> Robot:
-        """The same robot under another gravity vector ``(3,)`` [m/s^2], world frame."""
-        from dataclasses import replace
-
-        return replace(self, gravity=np.asarray(gravity, dtype=float))
-
     def with_parameters(self, params: np.ndarray, convention: str) -> Robot:
         """The same robot with other inertial parameters ``(10 n,)`` in ``convention`` (required;
         see :meth:`parameters`)."""
-        from dataclasses import replace
-
         _inertia.check_convention(convention)
         p = np.asarray(params, dtype=float)
         if p.size != 10 * self.n:
@@ -384,8 +376,6 @@ class Robot:
         ``t (4, 4)``: pose of the old world frame in the new one. Body-frame inertias and
         joint axes (in joint frames) are unchanged, so every physical quantity is the same.
         """
-        from dataclasses import replace
-
         t = _check_frame(t, f"robot {self.name!r}: world transform")
         loops = tuple(replace(lj, M=t @ lj.M) for lj in self.loops)
         return replace(self, M0=t @ self.M0, gravity=t[:3, :3] @ self.gravity, loops=loops)

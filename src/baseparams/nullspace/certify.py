@@ -19,7 +19,7 @@ from ..numerics import NumericalResult, default_samples, numerical_nullspace, st
 from .drng import DRNGResult, drng
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Certificate:
     """Outcome of checking DRNG against the numerical method.
 
@@ -83,12 +83,12 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     if num.rank >= w.shape[0] or w.shape[0] < ncols:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
                            f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
-                           f"parameters (rank {num.rank}); use more samples (--samples)",
+                           f"parameters (rank {num.rank}); use more samples",
                            time.perf_counter() - t0, sampling)
     if not num.decided:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
                            f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
-                           f"samples (--samples), another seed, or fix rounded angles in the model",
+                           f"samples, another seed, or fix rounded angles in the model",
                            time.perf_counter() - t0, sampling)
     if r_d + num.rank == ncols:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "certified",
@@ -104,7 +104,7 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     if num2.rank != num.rank or not num2.decided:
         return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
                            f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
-                           f"{num2.rank} with twice as many); use more samples (--samples)",
+                           f"{num2.rank} with twice as many); use more samples",
                            time.perf_counter() - t0, sampling)
     # completion: directions of the numerical nullspace outside span(B_drng)
     nb = num.null_basis

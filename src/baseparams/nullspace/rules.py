@@ -21,7 +21,7 @@ term ``T = 1/2 tr(dg dN dg^T)`` vanishes on every motion and its potential
 R-A and R-B are followed by the gravity filter: keep the combinations whose ``dN e4`` is level in gravity
 (the potential never changes). Columns are in the paper's convention (spatial pseudo-inertia at
 q = 0, ``hat`` order) and carry their provenance; they are redundant with each other and with the
-paper's principles, so :func:`..drng.block_rank` decides the rank.
+paper's principles, so :func:`.rank.block_rank` decides the rank.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from ..model.robot import Robot
 from ..pga.core import hat
 from ..pga.linalg import cross3, null_rows, nullspace, rowspace, span_rows, sym
 from .columns import Columns, sym_params
-from .principles import world_axes
+from .principles import compound_shared, world_axes
 from .subspaces import MotionSpans, motion_spans
 
 RA, RB, RL1, RL2 = 3, 4, 5, 6  # principle indices (after the paper's three)
@@ -397,8 +397,6 @@ def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndar
              for lj in robot.loops]
     for k, (a, b, t, o, ax) in enumerate(spec):
         if k < robot.n and t == "C":
-            from .drng import compound_shared
-
             sh = compound_shared(robot, k)
         else:
             sh = rowspace(_shared_vectors(t, o, ax), 1e-12)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from oracles import rnea
 
 from baseparams.errors import ModelError
 from baseparams.kinematics import re_reference
@@ -15,6 +14,8 @@ from baseparams.nullspace.drng import drng
 from baseparams.numerics import numerical_nullspace, stacked_regressor
 from baseparams.regressor import regressor
 from baseparams.robots.random import random_robot
+
+from oracles import rnea
 
 CASES = [(seed, types, fl) for seed in range(6) for types, fl in [("C", False), ("RC", False), ("CPU", True)]]
 

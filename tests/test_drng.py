@@ -56,7 +56,6 @@ def test_go2_acceptance_and_measured_rows():
 def _generic_cases():
     out = []
     for seed in range(24):
-        rng = np.random.default_rng(1000 + seed)
         types = ["R", "P", "RP", "RPUS", "U", "S"][seed % 6]
         floating = seed % 4 == 3
         gravity = list(GRAVITIES.values())[seed % 3]

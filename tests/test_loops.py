@@ -2,15 +2,16 @@
 
 import numpy as np
 import pytest
-from oracles import Ad, rnea, spatial_inertia
 
 from baseparams.kinematics import forward_kinematics, re_reference
 from baseparams.kinematics.loops import close_loops, evaluate
 from baseparams.nullspace import drng
 from baseparams.nullspace.certify import certify
-from baseparams.numerics import reference_cond, closed_samples, numerical_nullspace
+from baseparams.numerics import closed_samples, numerical_nullspace, reference_cond
 from baseparams.regressor import closed_regressor, regressor
 from baseparams.robots import four_bar, parallelogram, pkm_2prs_1psr, pkm_2rru_1rrs
+
+from oracles import Ad, rnea, spatial_inertia
 
 LOOP_ROBOTS = [four_bar, parallelogram, pkm_2rru_1rrs, pkm_2prs_1psr, lambda: pkm_2prs_1psr(True)]
 

@@ -144,7 +144,7 @@ def test_array_holding_objects_compare_by_identity():
     from baseparams.robots import puma560
 
     robot = puma560()
-    assert robot == robot and not (robot != robot)
+    assert robot == robot and not robot != robot  # noqa: SIM202 (both operators)
     assert replace(robot) != robot
     assert robot in [robot] and len({robot, robot}) == 1
     res = drng(robot)

@@ -19,7 +19,7 @@ from baseparams.model import inertia as I
 from baseparams.nullspace import drng
 from baseparams.nullspace.certify import certify
 from baseparams.numerics import stacked_regressor
-from baseparams.robots import get, go2, puma560, random_robot
+from baseparams.robots import get, puma560, random_robot
 
 
 def run(args, capsys):

@@ -8,14 +8,23 @@ import pytest
 
 from baseparams.kinematics.tree import forward_kinematics
 from baseparams.model import RobotBuilder, pose
-from baseparams.nullspace import drng
+from baseparams.nullspace import PRINCIPLES, drng
 from baseparams.nullspace.certify import certify
-from baseparams.nullspace import PRINCIPLES
-from baseparams.nullspace.rules import (RA, RB, RL1, RL2, fixed_vector_columns, level_chain_columns,
-                                        loop_level_spaces, loop_shared_columns, parallelogram_columns,
-                                        parallelograms, sliding_columns)
+from baseparams.nullspace.rules import (
+    RA,
+    RB,
+    RL1,
+    RL2,
+    fixed_vector_columns,
+    level_chain_columns,
+    loop_level_spaces,
+    loop_shared_columns,
+    parallelogram_columns,
+    parallelograms,
+    sliding_columns,
+)
 from baseparams.nullspace.subspaces import motion_spans
-from baseparams.numerics import closed_samples, numerical_nullspace, stacked_regressor
+from baseparams.numerics import closed_samples, stacked_regressor
 from baseparams.robots import four_bar, parallelogram, pkm_2prs_1psr, pkm_2rru_1rrs, random_robot
 from baseparams.robots.random import random_inertia
 

@@ -26,7 +26,7 @@ _STATUS_EXIT = {"certified": EXIT_OK, "completed": EXIT_OK, "unverified": EXIT_O
                 "undecided": EXIT_UNDECIDED, "failed": EXIT_FAILED}
 
 
-def _robot(args) -> "Robot":  # noqa: F821
+def _robot(args) -> Robot:  # noqa: F821
     from .load import load_model
 
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,

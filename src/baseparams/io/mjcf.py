@@ -277,7 +277,8 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
         armature.extend(arm.tolist())
         b.add_link(bname, parent=plink, joint=jt, origin=np.linalg.inv(t_link[plink]) @ t_l,
                    axis=(0, 0, 1) if axis is None else (axis if jt != "U" else axis[0]),
-                   axis2=None if jt != "U" else axis[1], inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_l) @ t_in),
+                   axis2=None if jt != "U" else axis[1],
+                   inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_l) @ t_in),
                    joint_name=jname, actuated=True)  # all independent until loops choose
         link_of[i] = bname
         t_link[bname] = t_l
@@ -294,7 +295,8 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
             if int(model.actuator_trntype[a]) in (int(mj.mjtTrn.mjTRN_JOINT), int(mj.mjtTrn.mjTRN_JOINTINPARENT)):
                 j = int(model.actuator_trnid[a, 0])
                 nd = 6 if model.jnt_type[j] == 0 else 3 if model.jnt_type[j] == 1 else 1
-                prefer |= {dof_map[int(model.jnt_dofadr[j]) + k] for k in range(nd) if int(model.jnt_dofadr[j]) + k in dof_map}
+                adr = int(model.jnt_dofadr[j])
+                prefer |= {dof_map[adr + k] for k in range(nd) if adr + k in dof_map}
         prefer |= set(range(6)) if robot.jtype[0] == "F" else set()
         robot = choose_independent(robot, prefer)
     return robot

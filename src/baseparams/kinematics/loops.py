@@ -194,8 +194,9 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     Continuation from q = 0 (the reference assembly) in ``steps`` steps -- a tangent
     predictor, then damped Newton on the passive coordinates -- keeps every sample on the
     reference assembly mode; a sample whose corrected passive coordinates land more than
-    ``max_step`` away from the prediction is discarded as a branch jump, one that does not converge to ``tol`` is discarded as outside the workspace, and one
-    with ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
+    ``max_step`` away from the prediction is discarded as a branch jump, one that does not
+    converge to ``tol`` is discarded as outside the workspace, and one with
+    ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
     """
     act = np.asarray(robot.actuated, dtype=int)
     pas = np.setdiff1d(np.arange(robot.dof), act)

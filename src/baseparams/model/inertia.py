@@ -22,9 +22,8 @@ rpna       m mcx mcy mcz Ixx Iyy Izz Iyz Ixz Ixy
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 

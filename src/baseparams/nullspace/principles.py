@@ -126,8 +126,8 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     p = np.flatnonzero(jt == "P")
     if len(p):
         pairs = [(a, b) for a in range(3) for b in range(a, 3)]
-        h = np.stack([np.broadcast_to(outer_params(_dir(e[a])) if a == b else sym_params(_dir(e[a]), _dir(e[b])), (len(p), 10))
-                      for a, b in pairs], axis=1)
+        blocks = [outer_params(_dir(e[a])) if a == b else sym_params(_dir(e[a]), _dir(e[b])) for a, b in pairs]
+        h = np.stack([np.broadcast_to(blk, (len(p), 10)) for blk in blocks], axis=1)
         parts.append(_cols(h, p, par[p], 0, [f"{'xyz'[a]} {'xyz'[b]}" for a, b in pairs]))
     us = np.flatnonzero((jt == "U") | (jt == "S"))
     if len(us):
@@ -136,7 +136,6 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
 
     # --- Principle 2: fixed points (joints on the fixed base) ----------------------------
     base = par < 0
-    none = -np.ones(0, dtype=int)
     sel = np.flatnonzero(base & ((jt == "U") | (jt == "S")))
     if len(sel) and g_zero:  # E2: only when the fixed point has zero acceleration
         o = _pt(org[sel])
@@ -153,7 +152,8 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         x, y = (_dir(v) for v in perp_basis(axw[sel]))
         h = np.stack([sym_params(z, x), sym_params(z, y)], axis=1)
         parts.append(_cols(h, sel, np.full(len(sel), -1), 1, ["z x", "z y"]))
-        along = g_zero | (np.linalg.norm(cross3(axw[sel], np.broadcast_to(g, axw[sel].shape)), axis=1) <= tol * max(1.0, np.linalg.norm(g)))
+        across = np.linalg.norm(cross3(axw[sel], np.broadcast_to(g, axw[sel].shape)), axis=1)
+        along = g_zero | (across <= tol * max(1.0, np.linalg.norm(g)))
         if along.any():
             s2 = sel[along]
             h = np.stack([sym_params(o[along], x[along]), sym_params(o[along], y[along])], axis=1)

@@ -125,7 +125,8 @@ def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns
     bodies = np.array([i for i in range(robot.n) if ms.span[i] is not None and len(ms.fixed(i))], dtype=int)
     if not len(bodies):
         return Columns.empty()
-    hs = _sym_columns(ms, bodies, _padded([ms.fixed(i) for i in bodies]), np.broadcast_to(np.eye(4), (len(bodies), 4, 4)))
+    anything = np.broadcast_to(np.eye(4), (len(bodies), 4, 4))
+    hs = _sym_columns(ms, bodies, _padded([ms.fixed(i) for i in bodies]), anything)
     labels = [_Label(_fixed_label, ms.fixed(i)) for i in bodies]
     return _singles(hs, bodies, RA, labels)
 
@@ -514,7 +515,10 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
         labels = []
         for k in ks:
             ee = np.r_[es[ci[k]], 0.0]
-            xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}" if nx[ci[k], bi[k]] == 1 else f"x any direction ⟂ {_describe(ee)}"
+            if nx[ci[k], bi[k]] == 1:
+                xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}"
+            else:
+                xl = f"x any direction ⟂ {_describe(ee)}"
             labels.append(f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), {xl}, d level")
         parts.append(_singles([vt[k, : rk[k]] for k in ks], bi[ks], RL2, labels))
     # chains: bodies joined by R or P joints along a level x ⟂ e

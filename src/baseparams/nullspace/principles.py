@@ -107,17 +107,24 @@ def _cols(h, child, parent, principle, labels) -> Columns:
 
 
 def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """All DRNG columns (corrected), vectorised over joints of each type."""
-    jt = np.array(robot.jtype)
-    par = robot.parent
-    org = robot.M0[:, :3, 3]
-    axw = world_axes(robot)
-    g = robot.gravity
-    g_zero = np.linalg.norm(g) <= tol
+    """All DRNG columns (corrected), vectorised over joints of each type: the paper's
+    principles 1, 2 and 3, then principle 1 across the loop joints, in that order."""
+    return Columns.concat([shared_point_columns(robot, tol), fixed_point_columns(robot, tol),
+                           planar_rotation_columns(robot, tol), loop_columns(robot)])
+
+
+def _joint_data(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Joint types ``(n,)``, parents ``(n,)``, joint origins ``(n, 3)`` and first world axes
+    ``(n, 3)``, all at q = 0."""
+    return np.array(robot.jtype), robot.parent, robot.M0[:, :3, 3], world_axes(robot)
+
+
+def shared_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+    """Principle 1, shared points of every tree joint: R ``{O, z}``, P ``{x, y, z}``, U/S
+    ``{O}``, compound joints their common kernel; parent block negative (E1 fixed)."""
+    jt, par, org, axw = _joint_data(robot)
     e = np.eye(3)
     parts: list[Columns] = []
-
-    # --- Principle 1: shared points ------------------------------------------------------
     r = np.flatnonzero(jt == "R")
     if len(r):
         o, z = _pt(org[r]), _dir(axw[r])
@@ -133,8 +140,18 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     if len(us):
         parts.append(_cols(outer_params(_pt(org[us]))[:, None], us, par[us], 0, ["O O"]))
     parts.append(_compound_columns(robot, tol))
+    return Columns.concat(parts)
 
-    # --- Principle 2: fixed points (joints on the fixed base) ----------------------------
+
+def fixed_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+    """Principle 2, fixed points of the joints on the fixed base: S/U ``sym(O, x|y|z)`` only
+    when gravity is zero (E2 fixed), P ``sym(O, x|y|z)``, R ``sym(z, x|y)`` plus ``sym(O, x|y)``
+    when gravity is zero or along the axis."""
+    jt, par, org, axw = _joint_data(robot)
+    g = robot.gravity
+    g_zero = np.linalg.norm(g) <= tol
+    e = np.eye(3)
+    parts: list[Columns] = []
     base = par < 0
     sel = np.flatnonzero(base & ((jt == "U") | (jt == "S")))
     if len(sel) and g_zero:  # E2: only when the fixed point has zero acceleration
@@ -158,8 +175,16 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
             s2 = sel[along]
             h = np.stack([sym_params(o[along], x[along]), sym_params(o[along], y[along])], axis=1)
             parts.append(_cols(h, s2, np.full(len(s2), -1), 1, ["O x", "O y"]))
+    return Columns.concat(parts)
 
-    # --- Principle 3: planar rotations ----------------------------------------------------
+
+def planar_rotation_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+    """Principle 3, planar rotations (E5 fixed, see :func:`planar_rotations`): R ``xx^T - yy^T``,
+    ``sym(x, y)`` and, off the base, ``sym(z, x|y)``; P off the base ``sym(d_pr, O)`` and, when it
+    slides along ``d_pr``, the transfers ``sym(O, x|y)`` to the parent."""
+    jt, par, org, axw = _joint_data(robot)
+    base = par < 0
+    parts: list[Columns] = []
     is_pr, d_pr = planar_rotations(robot, tol)
     has_d = np.linalg.norm(d_pr, axis=1) > tol
     sel = np.flatnonzero(is_pr & (jt == "R"))
@@ -182,7 +207,6 @@ def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
             x, y = (_dir(v) for v in perp_basis(d_pr[s2]))
             h = np.stack([sym_params(o[slide], x), sym_params(o[slide], y)], axis=1)
             parts.append(_cols(h, s2, par[s2], 2, ["O x (transfer)", "O y (transfer)"]))
-    parts.append(loop_columns(robot))
     return Columns.concat(parts)
 
 

@@ -414,6 +414,8 @@ def _fmt(v) -> str:
         return "skipped"
     if isinstance(v, (int, str)):
         return str(v)
+    if isinstance(v, (dict, list, tuple)):  # e.g. the loops group's per-robot sampling counts
+        return str(v)
     if v == 0 or 1e-3 <= abs(v) < 1e5:
         return f"{v:.4g}"
     return f"{v:.3e}"

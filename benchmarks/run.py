@@ -243,7 +243,7 @@ def bench_drng_scaling(out: dict, quick: bool) -> None:
     sizes = (10, 100, 1000) if quick else (10, 100, 1000, 10000)
     reps = {10: 21, 100: 11, 1000: 5, 10000: 5} if not quick else {10: 7, 100: 5, 1000: 5}
     for kind, branching in (("chain", 0.0), ("tree", 0.5)):
-        last_total = None  # seconds (build + timing) of the previous N, to extrapolate
+        last_total, prev_n = None, 1  # seconds (build + timing) of the previous N, to extrapolate
         for n in sizes:
             key = f"drng_{kind}_N{n}"
             # hopeless by linear extrapolation from the previous N: skip without trying
@@ -298,7 +298,8 @@ def bench_loops(out: dict, quick: bool) -> None:
         t_d, t_e, n_d = measure_pair(lambda: drng(robot, extended=False), lambda: drng(robot), 51 if not quick else 11)
         log(f"  validation {name} ({samples} actuated samples) ...")
         info: dict = {}
-        t_v, n_v = measure(lambda: numerical_nullspace(robot, samples=samples, seed=0, info=info), 5 if not quick else 2)
+        t_v, n_v = measure(lambda: numerical_nullspace(robot, samples=samples, seed=0, info=info),
+                           5 if not quick else 2)
         res = numerical_nullspace(robot, samples=samples, seed=0)
         out[f"drng_{key}_ms"] = 1e3 * t_d
         out[f"drng_{key}_ms_repeats"] = n_d
@@ -331,11 +332,11 @@ def bench_files(out: dict, quick: bool) -> None:
     import warnings
 
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-    from erd import is_floating, urdf_files  # the same file list and root joints as the tests
-
-    from baseparams.io.load import load_model
+    from baseparams.load import load_model
     from baseparams.nullspace import drng
     from baseparams.nullspace.certify import certify
+
+    from erd import is_floating, urdf_files  # the same file list and root joints as the tests
 
     files = urdf_files()
     if quick:
@@ -412,6 +413,8 @@ def _fmt(v) -> str:
     if v is None:
         return "skipped"
     if isinstance(v, (int, str)):
+        return str(v)
+    if isinstance(v, (dict, list, tuple)):  # e.g. the loops group's per-robot sampling counts
         return str(v)
     if v == 0 or 1e-3 <= abs(v) < 1e5:
         return f"{v:.4g}"

@@ -5,7 +5,8 @@ pseudo-inertia of a unit point mass at ``p`` is ``[p;1][p;1]^T``; 10 generic poi
 symmetric 4x4) are set on that body alone (all other bodies massless); with armature, damping,
 stiffness, friction loss, gravity compensation, fluid forces, contacts and limits off,
 ``mj_inverse`` at random states gives the regressor columns (MuJoCo's compile-time shortcuts
-that assume the file's inertias, ``body_sameframe``/``body_simple``/``dof_simplenum``, are off). Models with equality constraints
+that assume the file's inertias, ``body_sameframe``/``body_simple``/``dof_simplenum``, are off).
+Models with equality constraints
 whose Jacobian is constant (joint and fixed-tendon couplings): states on the constraint manifold
 (Newton on MuJoCo's own ``efc_J``/``efc_pos``), velocities and accelerations in the nullspace of
 ``efc_J``, and the rows projected onto that nullspace (the constraint-consistent motions).

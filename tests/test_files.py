@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from erd import is_floating, pinocchio_model, pinocchio_nullity, urdf_files
 
-from baseparams.io.load import load_model
+from baseparams.load import load_model
 from baseparams.nullspace.certify import certify
+
+from erd import is_floating, pinocchio_model, pinocchio_nullity, urdf_files
 
 FILES = urdf_files()
 

@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-import os
 import re
-import subprocess
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,33 +11,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from baseparams.errors import BaseparamsError, ModelError
-from baseparams.io.load import load_model
 from baseparams.io.mjcf import load_mjcf
 from baseparams.io.urdf import URDFWarning, load_urdf, write_urdf
+from baseparams.load import load_model
 from baseparams.nullspace.certify import certify
 from baseparams.numerics import stacked_regressor
 
-def _shared_models() -> Path:
-    """``../shared/models`` beside the checkout; for a clone made elsewhere, ``$BASEPARAMS_SHARED``
-    or the folder beside the clone's origin (``git clone /work/main /tmp/fresh`` finds
-    ``/work/shared``)."""
-    repo = Path(__file__).resolve().parents[1]
-    candidates = [Path(os.environ["BASEPARAMS_SHARED"])] if os.environ.get("BASEPARAMS_SHARED") else []
-    candidates.append(repo.parent / "shared")
-    try:
-        origin = subprocess.run(["git", "-C", str(repo), "remote", "get-url", "origin"],
-                                capture_output=True, text=True, timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        origin = ""
-    if origin and Path(origin).is_dir():
-        candidates.append(Path(origin).resolve().parent / "shared")
-    for c in candidates:
-        if (c / "models").is_dir():
-            return c / "models"
-    return candidates[0] / "models"
-
-
-SHARED = _shared_models()
+from paths import SHARED
 
 SHARED_FILES = [  # (file, floating, certified nullity, directions left to numerical completion)
     # a parallelogram on its parallelogram branch, gravity along the axes: one base parameter
@@ -140,7 +117,8 @@ BAD = [
     (GOOD.replace('<link name="tool">', '<link name="a">'), r"duplicate link 'a'"),
     (GOOD.replace('<parent link="base"/><child link="a"/>', '<parent link="b"/><child link="a"/>'),
      r"not connected to the root link|no root link|reached twice"),
-    (GOOD.replace('type="prismatic"', 'type="helical"'), r"<joint name='j2'>: unknown or unsupported joint type 'helical'"),
+    (GOOD.replace('type="prismatic"', 'type="helical"'),
+     r"<joint name='j2'>: unknown or unsupported joint type 'helical'"),
     (GOOD.replace('type="prismatic"', 'type="planar"'), r"planar joints are not supported"),
     (GOOD.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'), r"<link name='b'>: .*negative mass -0.5"),
     (GOOD.replace('izz="0.025"', 'izz="0.5"'), r"<link name='a'>: inertia not physically feasible"),

@@ -2,15 +2,16 @@
 
 import numpy as np
 import pytest
-from oracles import Ad, rnea, spatial_inertia
 
-from baseparams.kinematics import forward_kinematics
+from baseparams.kinematics import forward_kinematics, re_reference
 from baseparams.kinematics.loops import close_loops, evaluate
 from baseparams.nullspace import drng
 from baseparams.nullspace.certify import certify
-from baseparams.numerics import reference_cond, closed_samples, numerical_nullspace
+from baseparams.numerics import closed_samples, numerical_nullspace, reference_cond
 from baseparams.regressor import closed_regressor, regressor
 from baseparams.robots import four_bar, parallelogram, pkm_2prs_1psr, pkm_2rru_1rrs
+
+from oracles import Ad, rnea, spatial_inertia
 
 LOOP_ROBOTS = [four_bar, parallelogram, pkm_2rru_1rrs, pkm_2prs_1psr, lambda: pkm_2prs_1psr(True)]
 
@@ -191,7 +192,7 @@ def test_p_and_fixed_loop_joints(make):
 
 
 def test_re_referencing_keeps_every_loop_constraint():
-    """``Robot.at(q0)`` moves both copies of each loop frame with their own body: the closed
+    """``re_reference(robot, q0)`` moves both copies of each loop frame with their own body: the closed
     configurations of the re-referenced robot, shifted back by q0, close the original loops.
     (Before, the successor's copy was dropped, turning a U loop's second axis, carried by the
     successor, into a different constraint whenever the U angles at q0 are not zero.)"""
@@ -200,7 +201,7 @@ def test_re_referencing_keeps_every_loop_constraint():
     ref = close_loops(robot, np.full((1, na), 0.2))
     assert ref.kept == 1
     q0 = ref.q[0]
-    new = robot.at(q0)
+    new = re_reference(robot, q0)
     assert any(lj.type == "U" and lj.M_child is not None for lj in new.loops)  # the U angles at q0 are not 0
     assert np.abs(evaluate(new, np.zeros((1, robot.dof))).r).max() < 1e-10
     cs = close_loops(new, np.random.default_rng(3).uniform(-0.1, 0.1, (20, na)), cond_max=1e6)

@@ -10,13 +10,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from mujoco_oracle import mujoco_rank
 
 from baseparams.errors import ModelError, NoMovingBodiesError
-from baseparams.io.load import load_model
 from baseparams.io.mjcf import MJCFWarning, load_mjcf
 from baseparams.kinematics import forward_kinematics
+from baseparams.load import load_model
 from baseparams.nullspace.certify import certify
+
+from mujoco_oracle import mujoco_rank
 
 
 def _mj(path):
@@ -150,7 +151,8 @@ def test_equalities(tmp_path):
       <body name="a"><joint name="ja"/>{INERT}<body name="a2" pos="0.2 0 0"><joint name="ja2"/>{INERT}</body></body>
       <body name="b" pos="1 0 0"><joint name="jb"/>{INERT}</body></worldbody>
       <tendon><fixed name="t"><joint joint="ja" coef="1"/><joint joint="jb" coef="-2"/></fixed>
-        <fixed name="t3"><joint joint="ja" coef="1"/><joint joint="jb" coef="1"/><joint joint="ja2" coef="1"/></fixed></tendon>
+        <fixed name="t3"><joint joint="ja" coef="1"/><joint joint="jb" coef="1"/>
+          <joint joint="ja2" coef="1"/></fixed></tendon>
       <equality>EQ</equality></mujoco>"""
     f = _write(tmp_path, base.replace("EQ", '<tendon name="tc" tendon1="t"/>'))
     robot = load_mjcf(f)

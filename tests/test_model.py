@@ -133,3 +133,20 @@ def test_puma560_structure():
     s = r.screws
     assert np.allclose(np.cross(s[1, :3], s[2, :3]), 0)
     assert abs(s[0, :3] @ s[1, :3]) < 1e-12
+
+
+def test_array_holding_objects_compare_by_identity():
+    """Dataclasses that hold arrays use identity equality: ``==`` never raises (numpy's
+    elementwise comparison has no truth value) and a copy is a different object."""
+    from dataclasses import replace
+
+    from baseparams.nullspace import drng
+    from baseparams.robots import puma560
+
+    robot = puma560()
+    assert robot == robot and not robot != robot  # noqa: SIM202 (both operators)
+    assert replace(robot) != robot
+    assert robot in [robot] and len({robot, robot}) == 1
+    res = drng(robot)
+    assert res == res and res.columns == res.columns and res != drng(robot)
+    assert robot.loops == ()

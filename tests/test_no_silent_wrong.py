@@ -19,7 +19,7 @@ from baseparams.model import inertia as I
 from baseparams.nullspace import drng
 from baseparams.nullspace.certify import certify
 from baseparams.numerics import stacked_regressor
-from baseparams.robots import get, go2, puma560, random_robot
+from baseparams.robots import get, puma560, random_robot
 
 
 def run(args, capsys):
@@ -107,7 +107,7 @@ def test_undecided_certification_exits_3(capsys):
 def test_failed_certification_exits_4(monkeypatch, capsys):
     """A column outside the nullspace (injected) must make the command fail, not exit 0."""
     import baseparams.analysis as A
-    from baseparams.nullspace.drng import Columns, DRNGResult, block_rank
+    from baseparams.nullspace import Columns, DRNGResult, block_rank
 
     real = A.drng
 

@@ -2,12 +2,13 @@
 
 import numpy as np
 import pytest
-from oracles import rnea
 
 from baseparams.kinematics import forward_kinematics
 from baseparams.numerics import numerical_nullspace
 from baseparams.regressor import bar, regressor, regressor_tensor
 from baseparams.robots import go2, puma560, random_robot
+
+from oracles import rnea
 
 CASES = [(seed, jt, fl) for seed in range(4) for jt, fl in
          [("R", False), ("P", False), ("U", False), ("S", False), ("RPUS", False), ("RPUS", True), ("R", True)]]

@@ -2,7 +2,6 @@
 digits: scaling a robot's lengths (and masses) keeps the structure and scales every coefficient
 ``K[i, d]`` by ``s^(u_i - u_d)``; printed expressions rebuild the torques to 1e-12."""
 
-import re
 from dataclasses import replace
 
 import numpy as np

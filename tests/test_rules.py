@@ -8,21 +8,30 @@ import pytest
 
 from baseparams.kinematics.tree import forward_kinematics
 from baseparams.model import RobotBuilder, pose
-from baseparams.nullspace import drng
+from baseparams.nullspace import PRINCIPLES, drng
 from baseparams.nullspace.certify import certify
-from baseparams.nullspace.drng import PRINCIPLES
-from baseparams.nullspace.rules import (RA, RB, RL1, RL2, fixed_vector_columns, level_chain_columns,
-                                        loop_level_spaces, loop_shared_columns, parallelogram_columns,
-                                        parallelograms, sliding_columns)
+from baseparams.nullspace.rules import (
+    RA,
+    RB,
+    RL1,
+    RL2,
+    fixed_vector_columns,
+    level_chain_columns,
+    loop_level_spaces,
+    loop_shared_columns,
+    parallelogram_columns,
+    parallelograms,
+    sliding_columns,
+)
 from baseparams.nullspace.subspaces import motion_spans
-from baseparams.numerics import closed_samples, numerical_nullspace, stacked_regressor
+from baseparams.numerics import closed_samples, stacked_regressor
 from baseparams.robots import four_bar, parallelogram, pkm_2prs_1psr, pkm_2rru_1rrs, random_robot
 from baseparams.robots.random import random_inertia
 
 
 def _in_nullspace(robot, cols, samples=300, seed=3):
     """Relative residual of every column (unit norm) against a stacked regressor."""
-    from baseparams.nullspace.drng import to_sparse
+    from baseparams.nullspace.columns import to_sparse
 
     w = stacked_regressor(robot, samples, seed)
     b = to_sparse(cols, robot.n).toarray()
@@ -207,7 +216,7 @@ def test_every_source_is_named():
 def test_block_rank_equals_dense_rank_with_rules(seed):
     """The fast rank (pure-column folding + elimination) equals the dense rank."""
     from baseparams.nullspace import block_rank
-    from baseparams.nullspace.drng import to_sparse
+    from baseparams.nullspace.columns import to_sparse
     from baseparams.robots import special_robot
 
     robot = special_robot(np.random.default_rng(1000 + seed))
@@ -266,12 +275,12 @@ LEVEL_ROBOTS = [lambda: pkm_2prs_1psr(True), pkm_2prs_1psr, pkm_2rru_1rrs, four_
 def test_loop_level_spaces_are_level_on_the_closed_robot(make):
     """Soundness of the propagation: every vector found level in e keeps its e-coordinate on
     sampled closed configurations (e over the joint axes and gravity)."""
-    from baseparams.nullspace.drng import _world_axes
+    from baseparams.nullspace.principles import world_axes
 
     robot = make()
     cs = closed_samples(robot, 120, np.random.default_rng(5))
     g = forward_kinematics(robot, cs.q).g  # (s, n, 4, 4)
-    axes = [a for a in _world_axes(robot) if np.linalg.norm(a) > 0] + [np.array(robot.gravity)]
+    axes = [a for a in world_axes(robot) if np.linalg.norm(a) > 0] + [np.array(robot.gravity)]
     found = 0
     for e in axes:
         e = e / np.linalg.norm(e)

@@ -11,13 +11,15 @@ import pytest
 
 from baseparams.base.regroup import base_parameters
 from baseparams.errors import ModelError
-from baseparams.io.load import load_model
 from baseparams.io.urdf import load_urdf
+from baseparams.load import load_model
 from baseparams.model import RobotBuilder
 from baseparams.nullspace.certify import certify
 from baseparams.robots import get
 
-URDFPLUS = Path("/work/shared/models/urdfplus")
+from paths import SHARED
+
+URDFPLUS = SHARED / "urdfplus"
 LOOP_FILES = sorted(p for p in URDFPLUS.glob("*.urdf") if "<loop" in p.read_text()) if URDFPLUS.is_dir() else []
 
 
@@ -224,7 +226,8 @@ MALFORMED = [
      r"<link name='b'> <mass value>: .*unexpanded xacro/roslaunch substitution; run xacro first"),
     ('<mass value="0.5"/>', '<mass value="${m_b}"/>', r"<link name='b'> <mass value>: .*run xacro first"),
     ('rpy="0.1 0.2 0.3"', 'rpy="0.1 0.2 0.3 0.4"', r"<joint name='j1'> <origin rpy>: expected 3 finite numbers"),
-    ("</robot>\n", "</robot>\n<extra/>\n", r"malformed XML \(junk after document element: line 15"),  # lines of the file
+    # lines of the file
+    ("</robot>\n", "</robot>\n<extra/>\n", r"malformed XML \(junk after document element: line 15"),
 ]
 
 
@@ -287,7 +290,8 @@ def test_write_urdf_keeps_world_fixed_links_and_zeroes_merged_ones(tmp_path):
     out = tmp_path / "out.urdf"
     write_urdf(src, out, robot, _random_params(robot, "khalil", 7), "khalil")
     before, after = ET.parse(src).getroot(), ET.parse(out).getroot()
-    parent = {j.find("child").get("link"): (j.find("parent").get("link"), j.get("type")) for j in before.findall("joint")}
+    parent = {j.find("child").get("link"): (j.find("parent").get("link"), j.get("type"))
+              for j in before.findall("joint")}
     root = next(ln.get("name") for ln in before.findall("link") if ln.get("name") not in parent)
 
     def welded(k):
@@ -359,7 +363,7 @@ def test_write_urdf_needs_a_convention(tmp_path):
 
     src, robot = _small_robot(tmp_path)
     with pytest.raises(TypeError):
-        write_urdf(src, tmp_path / "out.urdf", robot, robot.parameters("khalil"))  # noqa: the point
+        write_urdf(src, tmp_path / "out.urdf", robot, robot.parameters("khalil"))  # the point
 
 
 # ------------------------------------------------------------------ D: what every other tool loads

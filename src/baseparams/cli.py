@@ -26,8 +26,8 @@ _STATUS_EXIT = {"certified": EXIT_OK, "completed": EXIT_OK, "unverified": EXIT_O
                 "undecided": EXIT_UNDECIDED, "failed": EXIT_FAILED}
 
 
-def _robot(args) -> "Robot":  # noqa: F821
-    from .io.load import load_model
+def _robot(args) -> Robot:  # noqa: F821
+    from .load import load_model
 
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
                               strict_inertia=getattr(args, "strict_inertia", False))

@@ -40,7 +40,7 @@ def row_mask(robot: Robot, rows: str) -> np.ndarray:
     return ~is_base if rows == "joints" else is_base
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class NumericalResult:
     """Rank decision on the stacked regressor ``W (S * rows, 10 n)``.
 

@@ -92,7 +92,7 @@ def _fmt(c: float) -> str:
     return s[:-2] if s.endswith(".0") else s
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BaseParameters:
     """The base-parameter structure of a robot in one convention.
 
@@ -139,8 +139,8 @@ class BaseParameters:
         if convention != self.convention:
             raise BaseparamsError(
                 f"parameter vector in the {convention!r} convention given to base parameters regrouped in the "
-                f"{self.convention!r} convention; regroup in {convention!r} (base_parameters(..., {convention!r}), "
-                f"--convention {convention}) or convert the vector first")
+                f"{self.convention!r} convention; regroup in {convention!r} (base_parameters(..., {convention!r})) "
+                f"or convert the vector first")
 
     def to_base(self, pi: np.ndarray, convention: str) -> np.ndarray:
         """Base parameters ``beta (nb,)`` from a full vector ``pi (10 n,)``.

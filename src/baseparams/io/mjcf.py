@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from ..kinematics.loops import choose_independent
 from ..model.builder import RobotBuilder, quat_pose
 from ..model.inertia import Inertia, check_inertia
 from ..model.robot import Coupling, Robot, compound_screw
@@ -276,7 +277,8 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
         armature.extend(arm.tolist())
         b.add_link(bname, parent=plink, joint=jt, origin=np.linalg.inv(t_link[plink]) @ t_l,
                    axis=(0, 0, 1) if axis is None else (axis if jt != "U" else axis[0]),
-                   axis2=None if jt != "U" else axis[1], inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_l) @ t_in),
+                   axis2=None if jt != "U" else axis[1],
+                   inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_l) @ t_in),
                    joint_name=jname, actuated=True)  # all independent until loops choose
         link_of[i] = bname
         t_link[bname] = t_l
@@ -288,14 +290,13 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
     if couplings:
         robot = replace(robot, couplings=tuple(couplings))
     if robot.has_loops:  # MJCF does not say which coordinates are independent: prefer actuated joints
-        from ..kinematics.loops import choose_independent
-
         prefer = set()
         for a in range(model.nu):
             if int(model.actuator_trntype[a]) in (int(mj.mjtTrn.mjTRN_JOINT), int(mj.mjtTrn.mjTRN_JOINTINPARENT)):
                 j = int(model.actuator_trnid[a, 0])
                 nd = 6 if model.jnt_type[j] == 0 else 3 if model.jnt_type[j] == 1 else 1
-                prefer |= {dof_map[int(model.jnt_dofadr[j]) + k] for k in range(nd) if int(model.jnt_dofadr[j]) + k in dof_map}
+                adr = int(model.jnt_dofadr[j])
+                prefer |= {dof_map[adr + k] for k in range(nd) if adr + k in dof_map}
         prefer |= set(range(6)) if robot.jtype[0] == "F" else set()
         robot = choose_independent(robot, prefer)
     return robot
@@ -345,8 +346,8 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
                 warnings.warn(f"{what}: both sides are on one rigid body: no constraint, skipped",
                               MJCFWarning, stacklevel=3)
                 continue
-            i1 = -1 if l1 is None else b._names.index(l1)
-            i2 = -1 if l2 is None else b._names.index(l2)
+            i1 = -1 if l1 is None else b.body_index(l1)
+            i2 = -1 if l2 is None else b.body_index(l2)
             (pl, pw), (cl, cw) = ((l1, w1), (l2, w2)) if i1 < i2 else ((l2, w2), (l1, w1))
             b.add_loop(ename, "S" if kind == "connect" else "fixed", parent=pl, child=cl,
                        origin=np.linalg.inv(t_link[pl]) @ pw, child_origin=np.linalg.inv(t_link[cl]) @ cw)

@@ -29,11 +29,11 @@ import numpy as np
 from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
 from ..pga import hat
-from ..pga.core import cross3
-from .tree import forward_kinematics
+from ..pga.linalg import cross3, perp_basis
+from .tree import forward_kinematics, re_reference
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Elementary:
     kind: str  # point | dot | proj
     pred: int
@@ -42,13 +42,6 @@ class Elementary:
     b: np.ndarray | None = None  # point, dot: the successor's vector; proj: the predecessor's point
     c: np.ndarray | None = None  # proj: the successor's point
     loop: int = 0
-
-
-def _perp(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    h = np.array([1.0, 0, 0]) if abs(d[0]) < 0.9 else np.array([0, 1.0, 0])
-    x = np.cross(d, h)
-    x /= np.linalg.norm(x)
-    return x, np.cross(d, x)
 
 
 def elementary_constraints(robot: Robot) -> list[Elementary]:
@@ -69,12 +62,12 @@ def elementary_constraints(robot: Robot) -> list[Elementary]:
             out += [Elementary("point", p, c, np.r_[r[:, m], 0.0], np.r_[rc[:, m], 0.0], loop=k) for m in range(3)]
             if lj.type == "P":
                 a = r @ lj.axes[0]
-                for n in _perp(a):
+                for n in (v[0] for v in perp_basis(np.asarray(a, dtype=float)[None])):
                     out.append(Elementary("proj", p, c, np.r_[n, 0.0], o, oc, loop=k))
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ConstraintEval:
     """``r (S, m)`` residuals, ``K (S, m, dof)`` Jacobian, ``b (S, m)`` bias (needs dq)."""
 
@@ -171,7 +164,7 @@ def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.linalg.solve(ktk + eps * np.eye(k.shape[2]), np.einsum("smi,sm->si", k, r)[..., None])[..., 0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ClosedStates:
     """Loop-closed samples. ``q, dq, ddq (S, dof)`` full tree coordinates; ``G (S, dof, na)``
     = dq/dq_a; ``cond (S,)`` condition number of ``K_p``; counts of discarded samples."""
@@ -201,8 +194,9 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     Continuation from q = 0 (the reference assembly) in ``steps`` steps -- a tangent
     predictor, then damped Newton on the passive coordinates -- keeps every sample on the
     reference assembly mode; a sample whose corrected passive coordinates land more than
-    ``max_step`` away from the prediction is discarded as a branch jump, one that does not converge to ``tol`` is discarded as outside the workspace, and one
-    with ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
+    ``max_step`` away from the prediction is discarded as a branch jump, one that does not
+    converge to ``tol`` is discarded as outside the workspace, and one with
+    ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
     """
     act = np.asarray(robot.actuated, dtype=int)
     pas = np.setdiff1d(np.arange(robot.dof), act)
@@ -216,6 +210,28 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     q = np.zeros((s, robot.dof))
     if q_start is not None:  # initial guess of the passive coordinates (assembly search)
         q[:, pas] = np.asarray(q_start, dtype=float)[pas]
+    failed, jumped = _continuation(robot, q, qa, act, pas, cons, steps, tol, max_iter, max_step)
+    ev = evaluate(robot, q, constraints=cons)
+    err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(s)
+    converged = (err < max(tol * 100, 1e-9)) & ~failed
+    kp_inv, sv = _pinv(ev.K[:, :, pas])
+    npas = len(pas)
+    smin = sv[:, npas - 1] if sv.shape[1] >= npas and npas else np.ones(s)
+    cond = np.where(smin > 0, sv[:, 0] / np.where(smin > 0, smin, 1.0), np.inf) if npas else np.ones(s)
+    good_cond = cond < cond_max
+    keep = converged & ~jumped & good_cond
+    g, dq, ddq = _closed_rates(robot, q, ev.K, kp_inv, act, pas, dqa, ddqa, cons)
+    return ClosedStates(q[keep], dq[keep], ddq[keep], g[keep], cond[keep], s,
+                        int((~converged).sum()), int((converged & jumped).sum()),
+                        int((converged & ~jumped & ~good_cond).sum()),
+                        float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
+
+
+def _continuation(robot: Robot, q: np.ndarray, qa: np.ndarray, act: np.ndarray, pas: np.ndarray, cons: list,
+                  steps: int, tol: float, max_iter: int, max_step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Move ``q (S, dof)`` in place from its start to the actuated targets ``qa`` in ``steps``
+    predictor-corrector steps; ``(failed, jumped)`` flags ``(S,)``: no convergence, branch jump."""
+    s = q.shape[0]
     failed = np.zeros(s, dtype=bool)
     jumped = np.zeros(s, dtype=bool)
     for t in np.linspace(0, 1, steps + 1)[1:]:
@@ -230,60 +246,63 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
         q[live[:, None], act] = t * qa[live]
         q[live[:, None], pas] = np.where(np.isfinite(pred), pred, q[live][:, pas])
         start = q[live][:, pas]
-        idx, sub = live, q[live]
-        # damped Newton on the samples still iterating (idx shrinks): a step that does not
-        # reduce the residual is halved and retried from the previous iterate
-        prev_sub, prev_err, prev_step = sub.copy(), np.full(len(idx), np.inf), np.zeros((len(idx), len(pas)))
-        lam = np.ones(len(idx))
-        for _ in range(max_iter):
-            ev = evaluate(robot, sub, constraints=cons)
-            err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(len(idx))
-            done = err < tol
-            q[idx[done]] = sub[done]
-            worse = ~done & (err > prev_err)
-            keep = ~done
-            idx, sub, err, worse = idx[keep], sub[keep], err[keep], worse[keep]
-            prev_sub, prev_err, prev_step, lam = prev_sub[keep], prev_err[keep], prev_step[keep], lam[keep]
-            if not len(idx):
-                break
-            k_keep = ev.K[keep][:, :, pas]
-            r_keep = ev.r[keep]
-            step = -_lstsq(k_keep, r_keep)
-            step = np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
-            # rejected samples: back to the previous iterate with half the previous step
-            lam = np.where(worse, lam * 0.5, np.minimum(1.0, lam * 2.0))
-            base = np.where(worse[:, None], prev_sub[:, pas], sub[:, pas])
-            use = np.where(worse[:, None], prev_step, step)
-            prev_sub = np.where(worse[:, None], prev_sub, sub)
-            prev_err = np.where(worse, prev_err, err)
-            prev_step = use
-            sub = sub.copy()
-            sub[:, pas] = base + lam[:, None] * use
-        failed[idx] = True  # no convergence within max_iter: outside the workspace
-        q[idx] = sub
+        failed[_damped_newton(robot, q, live, pas, cons, tol, max_iter)] = True
         moved = np.abs(q[live][:, pas] - start).max(axis=1, initial=0.0)
         jumped[live[(moved > max_step) & ~failed[live]]] = True
-    ev = evaluate(robot, q, constraints=cons)
-    err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(s)
-    converged = (err < max(tol * 100, 1e-9)) & ~failed
-    kp_inv, sv = _pinv(ev.K[:, :, pas])
-    npas = len(pas)
-    smin = sv[:, npas - 1] if sv.shape[1] >= npas and npas else np.ones(s)
-    cond = np.where(smin > 0, sv[:, 0] / np.where(smin > 0, smin, 1.0), np.inf) if npas else np.ones(s)
-    good_cond = cond < cond_max
-    keep = converged & ~jumped & good_cond
-    g = np.zeros((s, robot.dof, len(act)))
+    return failed, jumped
+
+
+def _damped_newton(robot: Robot, q: np.ndarray, live: np.ndarray, pas: np.ndarray, cons: list, tol: float,
+                   max_iter: int) -> np.ndarray:
+    """Correct the passive coordinates of samples ``live`` of ``q`` in place; the samples that
+    did not converge within ``max_iter`` (outside the workspace) are returned.
+
+    Damped Newton on the samples still iterating (``idx`` shrinks): a step that does not reduce
+    the residual is halved and retried from the previous iterate."""
+    idx, sub = live, q[live]
+    prev_sub, prev_err, prev_step = sub.copy(), np.full(len(idx), np.inf), np.zeros((len(idx), len(pas)))
+    lam = np.ones(len(idx))
+    for _ in range(max_iter):
+        ev = evaluate(robot, sub, constraints=cons)
+        err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(len(idx))
+        done = err < tol
+        q[idx[done]] = sub[done]
+        worse = ~done & (err > prev_err)
+        keep = ~done
+        idx, sub, err, worse = idx[keep], sub[keep], err[keep], worse[keep]
+        prev_sub, prev_err, prev_step, lam = prev_sub[keep], prev_err[keep], prev_step[keep], lam[keep]
+        if not len(idx):
+            break
+        k_keep = ev.K[keep][:, :, pas]
+        r_keep = ev.r[keep]
+        step = -_lstsq(k_keep, r_keep)
+        step = np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
+        # rejected samples: back to the previous iterate with half the previous step
+        lam = np.where(worse, lam * 0.5, np.minimum(1.0, lam * 2.0))
+        base = np.where(worse[:, None], prev_sub[:, pas], sub[:, pas])
+        use = np.where(worse[:, None], prev_step, step)
+        prev_sub = np.where(worse[:, None], prev_sub, sub)
+        prev_err = np.where(worse, prev_err, err)
+        prev_step = use
+        sub = sub.copy()
+        sub[:, pas] = base + lam[:, None] * use
+    q[idx] = sub
+    return idx
+
+
+def _closed_rates(robot: Robot, q: np.ndarray, k: np.ndarray, kp_inv: np.ndarray, act: np.ndarray, pas: np.ndarray,
+                  dqa: np.ndarray, ddqa: np.ndarray, cons: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact closed-loop rates at ``q``: ``G (S, dof, na)`` with ``dq = G dqa``, ``dq`` and ``ddq``
+    (``K (S, m, dof)`` the constraint Jacobian, ``kp_inv`` the pseudo-inverse of its passive part)."""
+    g = np.zeros((q.shape[0], robot.dof, len(act)))
     g[:, act, np.arange(len(act))] = 1.0
-    g[:, pas] = -kp_inv @ ev.K[:, :, act]
+    g[:, pas] = -kp_inv @ k[:, :, act]
     dq = np.einsum("sij,sj->si", g, dqa)
     ev2 = evaluate(robot, q, dq, constraints=cons)
     ddq = np.zeros_like(q)
     ddq[:, act] = ddqa
     ddq[:, pas] = -np.einsum("sij,sj->si", kp_inv, np.einsum("sij,sj->si", ev2.K[:, :, act], ddqa) + ev2.b)
-    return ClosedStates(q[keep], dq[keep], ddq[keep], g[keep], cond[keep], s,
-                        int((~converged).sum()), int((converged & jumped).sum()),
-                        int((converged & ~jumped & ~good_cond).sum()),
-                        float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
+    return g, dq, ddq
 
 
 def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[Robot, np.ndarray, str]:
@@ -323,7 +342,7 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
         cs = close_loops(robot, qa, steps=10, cond_max=cond_max, max_step=np.inf, max_iter=50, q_start=start)
         if cs.kept:
             qref = cs.q[0]
-            new = robot.at(qref) if "S" not in robot.jtype else None
+            new = re_reference(robot, qref) if "S" not in robot.jtype else None
             if new is None:
                 raise ModelError(f"robot {robot.name!r}: {why}; re-referencing with S joints is not supported")
             box = None if robot.q_box is None else robot.q_box - qref[act][:, None]

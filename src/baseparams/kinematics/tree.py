@@ -15,17 +15,18 @@ quasi-velocities: ``L_k = e_k`` and ``V = dq`` (the paper's Go2 section).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import BaseparamsError
+from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
-from ..pga import adjoint, commutator, se3_exp
+from ..pga import adjoint, commutator, inverse_transform, se3_exp
 from ..pga.core import screw_exp
+from ..pga.linalg import skew
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TreeState:
     """Kinematic state of all bodies for ``S`` samples.
 
@@ -98,3 +99,42 @@ def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
             h = h @ screw_exp(screws[jj], q[:, jj])
         g[:, i], v[:, i], a[:, i] = h, vh, ah
     return TreeState(g, v, a, lines, robot.support)
+
+
+def re_reference(robot: Robot, q0: np.ndarray) -> Robot:
+    """The same robot re-referenced at configuration ``q0 (dof,)``: its new q = 0 is the old
+    ``q0`` (exactly ``q_new = q - q0`` for R, P, U and C joints). Not for S joints, whose
+    Euler axes are tied to the joint frame."""
+    if "S" in robot.jtype:
+        raise ModelError(f"robot {robot.name!r}: re-referencing at q0 is not supported with S joints")
+    q0 = np.asarray(q0, dtype=float)
+    g = forward_kinematics(robot, q0).g[0]
+    axes = list(robot.axes)
+    qi = robot.q_index
+    for i, t in enumerate(robot.jtype):
+        if t == "U":  # the first axis is carried by the parent: express it in the new frame
+            a1, a2 = robot.axes[i]
+            c, s = np.cos(q0[qi[i] + 1]), np.sin(q0[qi[i] + 1])
+            k = skew(a2)
+            rot = np.eye(3) + s * k + (1 - c) * (k @ k)  # Rot(a2, q2)
+            axes[i] = np.stack([rot.T @ a1, a2])
+        elif t == "C":  # screw k is carried by screws 1..k-1: undo the later ones
+            axes[i] = _re_reference_compound(robot.axes[i], q0[qi[i]: qi[i] + len(robot.axes[i])])
+    loops = []
+    for lj in robot.loops:  # both copies of the frame move with their own body
+        m = (np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M
+        mc = g[lj.child] @ (lj.M if lj.M_child is None else lj.M_child)
+        loops.append(replace(lj, M=m, M_child=None if np.abs(mc - m).max() <= 1e-12 else mc))
+    couplings = tuple(replace(c, offset=c.offset + sum(r * q0[k] for k, r in c.terms()) - q0[c.succ])
+                      for c in robot.couplings)
+    return replace(robot, M0=g @ robot.M0, axes=tuple(axes), loops=tuple(loops), couplings=couplings)
+
+
+def _re_reference_compound(xs: np.ndarray, q0: np.ndarray) -> np.ndarray:
+    """Screws ``xs (k, 6)`` of a compound joint seen from its configuration ``q0 (k,)``."""
+    new = xs.copy()
+    later = np.eye(4)  # exp(xi_{k+1} q_{k+1}) ... exp(xi_m q_m), joint frame
+    for kk in range(len(xs) - 1, -1, -1):
+        new[kk] = adjoint(inverse_transform(later), xs[kk])
+        later = screw_exp(xs[kk], np.array(q0[kk])) @ later
+    return new

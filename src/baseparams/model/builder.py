@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ModelError, NoMovingBodiesError
+from ..pga.core import quat_to_rot
 from .inertia import Inertia, transform
 from .robot import JOINT_TYPES, LoopJoint, Robot, joint_ndof
 
@@ -54,14 +55,12 @@ def pose(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 def quat_pose(xyz=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
     """4x4 pose from a translation and a (not necessarily unit) quaternion ``w x y z``."""
-    from ..pga.core import _quat_to_rot
-
     q = np.asarray(quat, dtype=float)
     nq = np.linalg.norm(q)
     if nq < 1e-12:
         raise ModelError(f"zero quaternion {q.tolist()}")
     t = np.eye(4)
-    t[:3, :3] = _quat_to_rot(q / nq)
+    t[:3, :3] = quat_to_rot(q / nq)
     t[:3, 3] = np.asarray(xyz, dtype=float)
     return t
 
@@ -98,6 +97,12 @@ class RobotBuilder:
         if key not in self._frames:
             raise ModelError(f"robot {self.name!r}: unknown parent link {key!r} (add it before its children)")
         return self._frames[key]
+
+    def body_index(self, name: str) -> int:
+        """Index of the link ``name`` added so far (its body index in the built robot)."""
+        if name not in self._names:
+            raise ModelError(f"robot {self.name!r}: no link {name!r}")
+        return self._names.index(name)
 
     def add_link(self, name: str, parent: str | None = None, joint: str = "R", origin=None,
                  axis=(0.0, 0.0, 1.0), axis2=None, inertia: Inertia | None = None,

@@ -22,9 +22,8 @@ rpna       m mcx mcy mcz Ixx Iyy Izz Iyz Ixz Ixy
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -95,12 +94,6 @@ def unhat(p: np.ndarray) -> np.ndarray:
     out[..., _ROWS, _COLS] = p
     out[..., _COLS, _ROWS] = p
     return out
-
-
-def sym(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a b^T + b a^T`` for 4-vectors ``(*, 4)`` -> ``(*, 4, 4)``."""
-    ab = np.einsum("...i,...j->...ij", a, b)
-    return ab + np.swapaxes(ab, -1, -2)
 
 
 def pseudo_inertia(mass: float, com: np.ndarray, inertia_com: np.ndarray) -> np.ndarray:
@@ -187,7 +180,7 @@ def convert(p: np.ndarray, src: str, dst: str) -> np.ndarray:
     return to_convention(from_convention(p, src), dst)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Inertia:
     """Rigid-body inertia: ``mass`` [kg], ``com`` [m] and ``inertia`` [kg m^2] about the
     centre of mass, all expressed in ``frame`` (a 4x4 pose relative to the body frame;
@@ -233,7 +226,7 @@ def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float =
     Returns True when feasible. A violation is an :class:`InertiaWarning` (one line naming
     ``what``): the base-parameter structure does not depend on the inertia values, so the
     analysis goes on. With ``strict`` it is a :class:`ModelError` instead (identification,
-    where a prior must be feasible, or ``--strict-inertia``)."""
+    where a prior must be feasible, or ``strict_inertia`` in the readers)."""
     try:
         if mass < 0:
             raise ModelError(f"{what}: inertia not physically feasible (negative mass {mass:.3g})")

@@ -29,7 +29,7 @@ identification; the link base-parameter analysis does not use it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -80,7 +80,7 @@ class Coupling:
         return [(self.pred, self.ratio), *self.more]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LoopJoint:
     """A cut joint closing a loop: type, the two bodies (``parent < child``; parent -1 = the
     world), the joint frame's world pose ``M`` at q = 0 carried by the predecessor, its axes
@@ -151,7 +151,7 @@ def _check_axes(axes: np.ndarray, jtype: str, what: str) -> np.ndarray:
     return axes
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Robot:
     """A validated tree robot (plus loop joints recorded for later use).
 
@@ -356,17 +356,9 @@ class Robot:
         n = self.N0 if convention == "paper" else self.N_body
         return _inertia.to_convention(n, convention).reshape(-1)
 
-    def with_gravity(self, gravity: np.ndarray) -> Robot:
-        """The same robot under another gravity vector ``(3,)`` [m/s^2], world frame."""
-        from dataclasses import replace
-
-        return replace(self, gravity=np.asarray(gravity, dtype=float))
-
     def with_parameters(self, params: np.ndarray, convention: str) -> Robot:
         """The same robot with other inertial parameters ``(10 n,)`` in ``convention`` (required;
         see :meth:`parameters`)."""
-        from dataclasses import replace
-
         _inertia.check_convention(convention)
         p = np.asarray(params, dtype=float)
         if p.size != 10 * self.n:
@@ -384,53 +376,9 @@ class Robot:
         ``t (4, 4)``: pose of the old world frame in the new one. Body-frame inertias and
         joint axes (in joint frames) are unchanged, so every physical quantity is the same.
         """
-        from dataclasses import replace
-
         t = _check_frame(t, f"robot {self.name!r}: world transform")
         loops = tuple(replace(lj, M=t @ lj.M) for lj in self.loops)
         return replace(self, M0=t @ self.M0, gravity=t[:3, :3] @ self.gravity, loops=loops)
-
-    def at(self, q0: np.ndarray) -> Robot:
-        """The same robot re-referenced at configuration ``q0 (dof,)``: its new q = 0 is the old
-        ``q0`` (exactly ``q_new = q - q0`` for R, P, U and C joints). Not for S joints, whose
-        Euler axes are tied to the joint frame."""
-        from dataclasses import replace
-
-        from ..kinematics.tree import forward_kinematics
-
-        if "S" in self.jtype:
-            raise ModelError(f"robot {self.name!r}: re-referencing at q0 is not supported with S joints")
-        q0 = np.asarray(q0, dtype=float)
-        g = forward_kinematics(self, q0).g[0]
-        axes = list(self.axes)
-        qi = self.q_index
-        for i, t in enumerate(self.jtype):
-            if t == "U":  # the first axis is carried by the parent: express it in the new frame
-                a1, a2 = self.axes[i]
-                c, s = np.cos(q0[qi[i] + 1]), np.sin(q0[qi[i] + 1])
-                k = np.array([[0, -a2[2], a2[1]], [a2[2], 0, -a2[0]], [-a2[1], a2[0], 0]])
-                rot = np.eye(3) + s * k + (1 - c) * (k @ k)  # Rot(a2, q2)
-                axes[i] = np.stack([rot.T @ a1, a2])
-            elif t == "C":  # screw k is carried by screws 1..k-1: undo the later ones
-                from ..pga import inverse_transform
-                from ..pga.core import screw_exp
-
-                xs = self.axes[i]
-                new = xs.copy()
-                later = np.eye(4)  # exp(xi_{k+1} q_{k+1}) ... exp(xi_m q_m), joint frame
-                for kk in range(len(xs) - 1, -1, -1):
-                    new[kk] = adjoint(inverse_transform(later), xs[kk])
-                    later = screw_exp(xs[kk], np.array(q0[qi[i] + kk])) @ later
-                axes[i] = new
-        loops = []
-        for lj in self.loops:  # both copies of the frame move with their own body
-            m = (np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M
-            mc = g[lj.child] @ (lj.M if lj.M_child is None else lj.M_child)
-            loops.append(replace(lj, M=m, M_child=None if np.abs(mc - m).max() <= 1e-12 else mc))
-        loops = tuple(loops)
-        couplings = tuple(replace(c, offset=c.offset + sum(r * q0[k] for k, r in c.terms()) - q0[c.succ])
-                          for c in self.couplings)
-        return replace(self, M0=g @ self.M0, axes=tuple(axes), loops=loops, couplings=couplings)
 
     def describe(self) -> str:
         """One line per body: index, name, joint type, parent."""

@@ -1,5 +1,8 @@
 """The regressor nullspace: DRNG (corrected) and its numerical certification/completion."""
 
-from .drng import PRINCIPLES, Columns, DRNGResult, block_rank, drng, drng_columns, planar_rotations
+from .columns import PRINCIPLES, Columns
+from .drng import DRNGResult, drng
+from .principles import drng_columns, planar_rotations
+from .rank import block_rank
 
 __all__ = ["PRINCIPLES", "Columns", "DRNGResult", "block_rank", "drng", "drng_columns", "planar_rotations"]

@@ -19,7 +19,7 @@ from ..numerics import NumericalResult, default_samples, numerical_nullspace, st
 from .drng import DRNGResult, drng
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Certificate:
     """Outcome of checking DRNG against the numerical method.
 
@@ -53,7 +53,12 @@ class Certificate:
 def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
             result: DRNGResult | None = None, rtol: float = 1e-9, min_gap: float = 1e4,
             residual_tol: float = 1e-8) -> Certificate:
-    """Certify (and if needed complete) DRNG's nullspace with ``samples`` random states."""
+    """Certify (and if needed complete) DRNG's nullspace with ``samples`` random states.
+
+    Steps: the stacked regressor ``W`` and its numerical nullspace; every DRNG column checked
+    against ``W`` (:func:`_column_residuals`); the ranks compared (:func:`_verdict`); where DRNG
+    misses directions and more samples do not raise the rank, the basis is completed
+    (:func:`_complete`)."""
     t0 = time.perf_counter()
     res = drng(robot, rows=rows) if result is None else result
     samples = default_samples(robot) if samples is None else samples
@@ -63,57 +68,73 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     bd = res.orthonormal()
     r_d = bd.shape[1]
     wn = np.linalg.norm(w)
-    w2 = num.singular_values[0] if num.singular_values[0] > 0 else 1.0
     residual = float(np.linalg.norm(w @ bd) / wn) if r_d and wn > 0 else 0.0
-    raw = res.dense()
-    if raw.shape[1]:
-        raw = raw / np.linalg.norm(raw, axis=0)
-        col_res = np.linalg.norm(w @ raw, axis=0) / w2
-        worst = float(col_res.max())
-    else:
-        col_res, worst = np.zeros(0), 0.0
-    ncols = 10 * robot.n
-    gap_txt = f"tolerance {num.tol:.3g} (rtol {rtol:g}), singular-value gap {num.gap:.3g}"
-    if worst > residual_tol:
-        bad = np.argsort(col_res)[::-1][: int(np.sum(col_res > residual_tol))]
-        where = "; ".join(res.provenance(int(k)) for k in bad[:3])
-        return Certificate(res, num, bd, r_d, 0, residual, worst, "failed",
-                           f"{len(bad)} DRNG column(s) are not in the numerical nullspace (worst relative "
-                           f"residual {worst:.2e}): {where}", time.perf_counter() - t0, sampling)
-    if num.rank >= w.shape[0] or w.shape[0] < ncols:
-        return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
-                           f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
-                           f"parameters (rank {num.rank}); use more samples (--samples)",
+    col_res, worst = _column_residuals(res, w, num)
+
+    def done(status: str, message: str, basis: np.ndarray = bd, completed: int = 0) -> Certificate:
+        return Certificate(res, num, basis, r_d, completed, residual, worst, status, message,
                            time.perf_counter() - t0, sampling)
-    if not num.decided:
-        return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
-                           f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
-                           f"samples (--samples), another seed, or fix rounded angles in the model",
-                           time.perf_counter() - t0, sampling)
-    if r_d + num.rank == ncols:
-        return Certificate(res, num, bd, r_d, 0, residual, worst, "certified",
-                           f"DRNG is complete: rank(B) {r_d} + rank(W) {num.rank} = {ncols}; {gap_txt}",
-                           time.perf_counter() - t0, sampling)
-    if r_d + num.rank > ncols:
-        return Certificate(res, num, bd, r_d, 0, residual, worst, "failed",
-                           f"rank(B) {r_d} + rank(W) {num.rank} > {ncols}: DRNG columns and the numerical "
-                           f"rank disagree ({gap_txt}); try more samples", time.perf_counter() - t0, sampling)
+
+    verdict = _verdict(res, num, w, r_d, col_res, worst, rtol, min_gap, residual_tol)
+    if verdict is not None:
+        return done(*verdict)
     # completion needs saturated numerics: more samples must not raise the rank
     w2x = np.concatenate([w, stacked_regressor(robot, samples, seed + 7919, rows)])
     num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w2x)
     if num2.rank != num.rank or not num2.decided:
-        return Certificate(res, num, bd, r_d, 0, residual, worst, "undecided",
-                           f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
-                           f"{num2.rank} with twice as many); use more samples (--samples)",
-                           time.perf_counter() - t0, sampling)
-    # completion: directions of the numerical nullspace outside span(B_drng)
+        return done("undecided", f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
+                                 f"{num2.rank} with twice as many); use more samples")
+    basis, missing, distance = _complete(bd, num)
+    return done("completed", f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
+                             f"the numerical nullspace (distance of the added directions to DRNG's span: "
+                             f"{distance:.3g} of 1); {_gap_text(num, rtol)}", basis, missing)
+
+
+def _gap_text(num: NumericalResult, rtol: float) -> str:
+    return f"tolerance {num.tol:.3g} (rtol {rtol:g}), singular-value gap {num.gap:.3g}"
+
+
+def _column_residuals(res: DRNGResult, w: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, float]:
+    """``||W b|| / ||W||_2`` of every DRNG column ``b`` (unit norm) ``(k,)`` and the worst."""
+    raw = res.dense()
+    if not raw.shape[1]:
+        return np.zeros(0), 0.0
+    w2 = num.singular_values[0] if num.singular_values[0] > 0 else 1.0
+    raw = raw / np.linalg.norm(raw, axis=0)
+    col_res = np.linalg.norm(w @ raw, axis=0) / w2
+    return col_res, float(col_res.max())
+
+
+def _verdict(res: DRNGResult, num: NumericalResult, w: np.ndarray, r_d: int, col_res: np.ndarray, worst: float,
+             rtol: float, min_gap: float, residual_tol: float) -> tuple[str, str] | None:
+    """``(status, message)`` when the check decides without completion, else ``None``."""
+    ncols = 10 * res.robot.n
+    gap_txt = _gap_text(num, rtol)
+    if worst > residual_tol:
+        bad = np.argsort(col_res)[::-1][: int(np.sum(col_res > residual_tol))]
+        where = "; ".join(res.provenance(int(k)) for k in bad[:3])
+        return "failed", (f"{len(bad)} DRNG column(s) are not in the numerical nullspace (worst relative "
+                          f"residual {worst:.2e}): {where}")
+    if num.rank >= w.shape[0] or w.shape[0] < ncols:
+        return "undecided", (f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
+                             f"parameters (rank {num.rank}); use more samples")
+    if not num.decided:
+        return "undecided", (f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
+                             f"samples, another seed, or fix rounded angles in the model")
+    if r_d + num.rank == ncols:
+        return "certified", f"DRNG is complete: rank(B) {r_d} + rank(W) {num.rank} = {ncols}; {gap_txt}"
+    if r_d + num.rank > ncols:
+        return "failed", (f"rank(B) {r_d} + rank(W) {num.rank} > {ncols}: DRNG columns and the numerical "
+                          f"rank disagree ({gap_txt}); try more samples")
+    return None
+
+
+def _complete(bd: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, int, float]:
+    """DRNG's orthonormal basis ``bd (10 n, r)`` completed by the directions of the numerical
+    nullspace outside its span: ``(basis, number added, distance of the last added to span(bd))``."""
+    r_d = bd.shape[1]
     nb = num.null_basis
     rest = nb - bd @ (bd.T @ nb) if r_d else nb
     u, s, _ = np.linalg.svd(rest, full_matrices=False)
     missing = num.nullity - r_d
-    extra = u[:, :missing]
-    basis = np.concatenate([bd, extra], axis=1)
-    return Certificate(res, num, basis, r_d, missing, residual, worst, "completed",
-                       f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
-                       f"the numerical nullspace (distance of the added directions to DRNG's span: "
-                       f"{s[missing - 1]:.3g} of 1); {gap_txt}", time.perf_counter() - t0, sampling)
+    return np.concatenate([bd, u[:, :missing]], axis=1), missing, float(s[missing - 1])

@@ -21,7 +21,7 @@ term ``T = 1/2 tr(dg dN dg^T)`` vanishes on every motion and its potential
 R-A and R-B are followed by the gravity filter: keep the combinations whose ``dN e4`` is level in gravity
 (the potential never changes). Columns are in the paper's convention (spatial pseudo-inertia at
 q = 0, ``hat`` order) and carry their provenance; they are redundant with each other and with the
-paper's principles, so :func:`..drng.block_rank` decides the rank.
+paper's principles, so :func:`.rank.block_rank` decides the rank.
 """
 
 from __future__ import annotations
@@ -31,25 +31,20 @@ import numpy as np
 from ..model.inertia import hat as hat10
 from ..model.inertia import unhat
 from ..model.robot import Robot
-from ..pga.core import cross3, hat
-from .drng import Columns, _sym, _world_axes
-from .subspaces import MotionSpans, _rowspace, motion_spans, nullspace
+from ..pga.core import hat
+from ..pga.linalg import cross3, null_rows, nullspace, rowspace, span_rows, sym
+from .columns import Columns, sym_params
+from .principles import compound_shared, world_axes
+from .subspaces import MotionSpans, motion_spans
 
-RULES = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains")
 RA, RB, RL1, RL2 = 3, 4, 5, 6  # principle indices (after the paper's three)
-
-
-def _syms(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """All ``sym(a_k, b_l) = a b^T + b a^T`` ``(ka * kb, 4, 4)``."""
-    ab = np.einsum("ki,lj->klij", a, b).reshape(-1, 4, 4)
-    return ab + np.swapaxes(ab, -1, -2)
 
 
 def _independent(syms: np.ndarray, tol: float) -> np.ndarray:
     """An orthonormal basis ``(r, 10)`` of the parameter vectors ``hat(syms)``."""
     if len(syms) == 0:
         return np.zeros((0, 10))
-    return _rowspace(hat10(syms), tol)
+    return rowspace(hat10(syms), tol)
 
 
 def _describe(v: np.ndarray) -> str:
@@ -101,8 +96,7 @@ def _sym_columns(ms: MotionSpans, bodies: np.ndarray, a: np.ndarray, b: np.ndarr
     ``sym(a_k[i], b_k[j])`` whose potential is constant (gravity filter). ``a, b (m, 4, 4)``:
     vectors as rows, padded with zero rows. Batched: three SVD calls for all bodies."""
     m = len(bodies)
-    ab = np.einsum("mfi,mvj->mfvij", a, b).reshape(m, 16, 4, 4)
-    syms = ab + np.swapaxes(ab, -1, -2)  # zero for padding
+    syms = sym(a[:, :, None], b[:, None, :]).reshape(m, 16, 4, 4)  # zero for padding
     g = ms.robot.gravity
     if np.linalg.norm(g) > ms.tol:
         c = np.einsum("a,mkab->mkb", g / np.linalg.norm(g), ms.padded[bodies])  # rows g^T X, padded
@@ -131,7 +125,8 @@ def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns
     bodies = np.array([i for i in range(robot.n) if ms.span[i] is not None and len(ms.fixed(i))], dtype=int)
     if not len(bodies):
         return Columns.empty()
-    hs = _sym_columns(ms, bodies, _padded([ms.fixed(i) for i in bodies]), np.broadcast_to(np.eye(4), (len(bodies), 4, 4)))
+    anything = np.broadcast_to(np.eye(4), (len(bodies), 4, 4))
+    hs = _sym_columns(ms, bodies, _padded([ms.fixed(i) for i in bodies]), anything)
     labels = [_Label(_fixed_label, ms.fixed(i)) for i in bodies]
     return _singles(hs, bodies, RA, labels)
 
@@ -146,7 +141,7 @@ def _readable(basis: np.ndarray) -> np.ndarray:
     k = int(np.argmax(np.abs(w)))
     p = basis[k] / basis[k, 3]
     rest = basis - np.outer(basis[:, 3], p)
-    dirs = _rowspace(rest, 1e-9)
+    dirs = rowspace(rest, 1e-9)
     return np.concatenate([p[None], dirs]) if len(dirs) else p[None]
 
 
@@ -242,7 +237,7 @@ def parallelograms(robot: Robot, tol: float = 1e-7) -> list[dict]:
     is the parallelogram one (``P1 - P0 = P2 - P3``: crank and rocker stay parallel); a flattened
     (collinear) reference, where both modes meet, is not accepted."""
     out = []
-    axw = _world_axes(robot)
+    axw = world_axes(robot)
     org = robot.M0[:, :3, 3]
     for lj in robot.loops:
         if lj.type != "R":
@@ -292,15 +287,15 @@ def parallelogram_columns(robot: Robot) -> Columns:
     translation by ``P3 - P0``: ``g_3 = T g_1 T^-1``). With a moving ``L0``: the direction
     transfers ``sym(f_a, f_b)`` between opposite links."""
     e = np.eye(4)
-    dirs = _syms(e[:3], e[:3])
-    dir_basis = _rowspace(hat10(dirs), 1e-12)  # the 6 direction-direction parameters
+    dirs = sym(e[:3, None], e[None, :3]).reshape(-1, 4, 4)
+    dir_basis = rowspace(hat10(dirs), 1e-12)  # the 6 direction-direction parameters
     parts = []
     for par in parallelograms(robot):
         l0, l1, l2, l3 = par["links"]
         p = par["points"]
         name = par["loop"]
         if l0 < 0:
-            h = _independent(_syms(e[:3], e), 1e-12)  # sym(direction, anything): 9
+            h = _independent(sym(e[:3, None], e[None]).reshape(-1, 4, 4), 1e-12)  # sym(direction, anything): 9
             label = f"parallelogram (loop {name!r}): the coupler only translates, sym(f, v) for every direction f"
             parts.append(_singles([h], [l2], RL1, [label]))
             t = np.eye(4)
@@ -365,8 +360,8 @@ def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         own = _shared_vectors(lj.type, lj.M[:3, 3], _loop_axis(lj))
         if len(fix) == 0:
             continue
-        shared = _rowspace(np.concatenate([own, fix]), tol)
-        h = _independent(_syms(shared, shared), tol)
+        shared = rowspace(np.concatenate([own, fix]), tol)
+        h = _independent(sym(shared[:, None], shared[None]).reshape(-1, 4, 4), tol)
         label = (f"shared across loop joint {lj.name!r} ({lj.type}), fixed relative to the loop's root: "
                  + "; ".join(_describe(v) for v in _readable(shared)))
         m = len(h)
@@ -396,18 +391,16 @@ def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndar
     ``a`` the predecessor (``-1``: the base), ``shared`` an orthonormal basis of the vectors both
     bodies move alike (R: axis point and direction; U, S: the centre; P: every direction; a
     fixed loop joint: everything; a free joint: nothing)."""
-    axw = _world_axes(robot)
+    axw = world_axes(robot)
     out = []
     spec = [(int(robot.parent[i]), i, robot.jtype[i], robot.M0[i, :3, 3], axw[i]) for i in range(robot.n)]
     spec += [(lj.parent, lj.child, lj.type, lj.M[:3, 3], _loop_axis(lj))
              for lj in robot.loops]
     for k, (a, b, t, o, ax) in enumerate(spec):
         if k < robot.n and t == "C":
-            from .drng import compound_shared
-
             sh = compound_shared(robot, k)
         else:
-            sh = _rowspace(_shared_vectors(t, o, ax), 1e-12)
+            sh = rowspace(_shared_vectors(t, o, ax), 1e-12)
         out.append((a, b, t, np.asarray(o, float), np.asarray(ax, float), sh))
     return out
 
@@ -419,29 +412,12 @@ def _cross4(x: np.ndarray, d: np.ndarray) -> np.ndarray:
     return out
 
 
-def _null_rows(k: np.ndarray, tol: float) -> np.ndarray:
-    """Right nullspace of every ``k (..., r, 4)`` as orthonormal rows padded with zero rows
-    ``(..., 4, 4)``; one batched SVD."""
-    _, sv, vt = np.linalg.svd(k, full_matrices=True)
-    full = np.zeros(k.shape[:-2] + (4,))
-    full[..., : sv.shape[-1]] = sv
-    return vt * (full <= tol)[..., None]
-
-
-def _span_rows(z: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Row space of every ``z (..., R >= 4, 4)``: orthonormal rows padded with zero rows
-    ``(..., 4, 4)`` and the rank ``(...)``."""
-    _, sv, vt = np.linalg.svd(z, full_matrices=False)
-    keep = sv > tol
-    return vt * keep[..., None], keep.sum(-1)
-
-
 def _level_spaces(robot: Robot, es: np.ndarray, ms: MotionSpans, joints: list) -> np.ndarray:
     """Loop-aware level spaces for every candidate ``es (C, 3)`` and body at once:
     ``(C, n, 4, 4)`` orthonormal rows padded with zero rows (see :func:`loop_level_spaces`)."""
     n, tol = robot.n, ms.tol
     live = np.array([s is not None for s in ms.span])
-    h = _null_rows(np.einsum("ca,nkab->cnkb", es, ms.padded), tol) * live[None, :, None, None]
+    h = null_rows(np.einsum("ca,nkab->cnkb", es, ms.padded), tol) * live[None, :, None, None]
     edges = [(a, b, sh) for a, b, *_, sh in joints if len(sh)] + [(b, a, sh) for a, b, *_, sh in joints if len(sh)]
     edges = [(a if a >= 0 else n, b, sh) for a, b, sh in edges if b >= 0]
     if not edges:
@@ -461,12 +437,12 @@ def _level_spaces(robot: Robot, es: np.ndarray, ms: MotionSpans, joints: list) -
     for _ in range(n + 2):
         hx = np.concatenate([h, np.broadcast_to(eye, (len(es), 1, 4, 4))], axis=1)[:, src]  # (C, E, 4, 4)
         off = eye - np.swapaxes(hx, -1, -2) @ hx  # projector off each source's level space
-        alpha = _null_rows(off @ np.swapaxes(s_pad, -1, -2), tol)  # shared combinations that are level
+        alpha = null_rows(off @ np.swapaxes(s_pad, -1, -2), tol)  # shared combinations that are level
         common = alpha @ s_pad
         z = np.zeros((len(es), n, 1 + max(seen.values()), 4, 4))
         z[:, :, 0] = h
         z[:, dst, 1 + slot] = common
-        h_new, r_new = _span_rows(z.reshape(len(es), n, -1, 4), tol)
+        h_new, r_new = span_rows(z.reshape(len(es), n, -1, 4), tol)
         if not np.any(r_new > rank):
             break
         h, rank = h_new, r_new
@@ -515,9 +491,9 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     h = _level_spaces(robot, es, ms, joints)  # (C, n, 4, 4)
     pad = np.einsum("cnk,kl->cnkl", (np.linalg.norm(h, axis=-1) < 0.5).astype(float), np.eye(4))
     h3 = h[..., 3][:, :, None, :]
-    dirs = _null_rows(np.concatenate([h3, pad], axis=2), tol) @ h  # level directions (w = 0)
+    dirs = null_rows(np.concatenate([h3, pad], axis=2), tol) @ h  # level directions (w = 0)
     he = np.einsum("cnka,ca->cnk", h[..., :3], es)[:, :, None, :]
-    xs = _null_rows(np.concatenate([h3, he, pad], axis=2), tol) @ h  # level directions ⟂ e
+    xs = null_rows(np.concatenate([h3, he, pad], axis=2), tol) @ h  # level directions ⟂ e
     nd = np.sum(np.linalg.norm(dirs, axis=-1) > 0.5, axis=-1)
     nx = np.sum(np.linalg.norm(xs, axis=-1) > 0.5, axis=-1)
     kw = np.argmax(np.abs(h[..., 3]), axis=-1)
@@ -539,7 +515,10 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
         labels = []
         for k in ks:
             ee = np.r_[es[ci[k]], 0.0]
-            xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}" if nx[ci[k], bi[k]] == 1 else f"x any direction ⟂ {_describe(ee)}"
+            if nx[ci[k], bi[k]] == 1:
+                xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}"
+            else:
+                xl = f"x any direction ⟂ {_describe(ee)}"
             labels.append(f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), {xl}, d level")
         parts.append(_singles([vt[k, : rk[k]] for k in ks], bi[ks], RL2, labels))
     # chains: bodies joined by R or P joints along a level x ⟂ e
@@ -547,7 +526,7 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
              if a >= 0 and t in ("R", "P") and np.linalg.norm(ax) > tol]
 
     def seg(x, p, q):  # sym(x, x × (q - p))
-        return _sym(x, _cross4(x, q - p))[None]
+        return sym_params(x, _cross4(x, q - p))[None]
 
     for c in range(len(es)):
         ee = np.r_[es[c], 0.0]

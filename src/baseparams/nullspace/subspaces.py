@@ -36,24 +36,7 @@ from ..pga.core import hat
 SATURATED = 12
 
 
-def _rowspace(a: np.ndarray, tol: float) -> np.ndarray:
-    """Orthonormal basis ``(r, m)`` of the row space of ``a (k, m)``."""
-    if a.shape[0] == 0:
-        return a
-    _, s, vt = np.linalg.svd(a, full_matrices=False)
-    return vt[: int(np.sum(s > tol))]
-
-
-def nullspace(a: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """Orthonormal basis ``(r, m)`` (as rows) of the right nullspace of ``a (k, m)``."""
-    m = a.shape[1]
-    if a.shape[0] == 0:
-        return np.eye(m)
-    _, s, vt = np.linalg.svd(a, full_matrices=True)
-    return vt[int(np.sum(s > tol)):]
-
-
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class MotionSpans:
     """``span[i] (k_i, 3, 4)``: orthonormal basis of body ``i``'s motion span ``M_i`` (Frobenius
     inner product), world frame at q = 0; ``None`` when saturated (``k_i = 12``: nothing of the
@@ -72,28 +55,6 @@ class MotionSpans:
     def fixed(self, i: int) -> np.ndarray:
         """Fixed vectors of body ``i`` ``(f, 4)``: ``∩_j ker S_j`` over its path."""
         return self.fix[i]
-
-    def level(self, i: int, e: np.ndarray) -> np.ndarray:
-        """Level space ``H_i((e, 0))`` ``(h, 4)``: vectors whose ``e``-coordinate never changes."""
-        s = self.span[i]
-        if s is None:
-            return np.zeros((0, 4))
-        return nullspace(np.einsum("a,kab->kb", np.asarray(e, float), s), self.tol)
-
-    def level_constraint(self, i: int, e: np.ndarray) -> np.ndarray:
-        """Rows ``(k, 4)`` whose right nullspace is :meth:`level` (``e^T X`` for ``X`` in ``M_i``)."""
-        s = self.span[i]
-        if s is None:
-            return np.eye(4)
-        return np.einsum("a,kab->kb", np.asarray(e, float), s)
-
-    def sliding(self, i: int, d: np.ndarray) -> np.ndarray:
-        """Sliding space ``A_i(d)`` ``(a, 4)``: vectors whose velocity is always along unit ``d``."""
-        s = self.span[i]
-        if s is None:
-            return np.zeros((0, 4))
-        p = np.eye(3) - np.outer(d, d)
-        return nullspace(np.einsum("ab,kbc->kac", p, s).reshape(-1, 4), self.tol)
 
 
 def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:

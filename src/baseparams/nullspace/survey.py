@@ -13,7 +13,7 @@ from .certify import certify
 from .drng import drng
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SurveyCase:
     """One robot: ``nullity`` (certified), ranks of the paper's principles and of the extended
     DRNG, the worst relative residual of an emitted column, and the certification status."""

@@ -16,7 +16,7 @@ import numpy as np
 _METRIC = (0.0, 1.0, 1.0, 1.0)
 
 
-def _blade_product(a: int, b: int) -> tuple[float, int]:
+def blade_product(a: int, b: int) -> tuple[float, int]:
     """Sign and bitmask of the product of basis blades ``a`` and ``b``."""
     # count swaps needed to bring b's factors past a's (canonical reordering)
     sign = 1.0
@@ -39,7 +39,7 @@ def _build_tables() -> tuple[np.ndarray, np.ndarray]:
     wedge = np.zeros((16, 16, 16))
     for a in range(16):
         for b in range(16):
-            s, c = _blade_product(a, b)
+            s, c = blade_product(a, b)
             gp[a, b, c] = s
             if a & b == 0:
                 # outer product: same reordering sign, no metric involved
@@ -64,7 +64,7 @@ def blade(name: str) -> tuple[float, int]:
     digits = [int(c) for c in name.lstrip("e")]
     sign, idx = 1.0, 0
     for d in digits:
-        s, idx2 = _blade_product(idx, 1 << d)
+        s, idx2 = blade_product(idx, 1 << d)
         if idx & (1 << d):
             raise ValueError(f"repeated factor in {name}")
         sign *= s

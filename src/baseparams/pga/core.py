@@ -24,16 +24,10 @@ from __future__ import annotations
 import numpy as np
 
 from . import algebra as _alg
+from .linalg import cross3, skew
 
 # ----------------------------------------------------------------------------------------
 # points and lines
-
-def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product over the last axis (broadcasting); cheaper than ``np.cross``."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
 
 def point(xyz: np.ndarray) -> np.ndarray:
     """Euclidean point ``(*, 4)`` from coordinates ``(*, 3)``."""
@@ -104,7 +98,7 @@ def _even_table() -> np.ndarray:
     t = np.zeros((8, 8, 8))
     for a, (sa, ia) in enumerate(idx):
         for b, (sb, ib) in enumerate(idx):
-            s, ic = _alg._blade_product(ia, ib)
+            s, ic = _alg.blade_product(ia, ib)
             for c, (sc, icc) in enumerate(idx):
                 if icc == ic:
                     t[a, b, c] = sa * sb * s * sc
@@ -139,7 +133,8 @@ def identity_motor(shape: tuple[int, ...] = ()) -> np.ndarray:
     return m
 
 
-def _quat_to_rot(q: np.ndarray) -> np.ndarray:
+def quat_to_rot(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(*, 3, 3)`` from unit quaternions ``(*, 4)`` [w, x, y, z]."""
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     r = np.empty(q.shape[:-1] + (3, 3))
     r[..., 0, 0] = 1 - 2 * (y * y + z * z)
@@ -194,7 +189,7 @@ def motor_to_matrix(m: np.ndarray) -> np.ndarray:
     rot[..., :4] = m[..., :4]
     tr = motor_product(reverse(rot), m)
     t = np.zeros(m.shape[:-1] + (4, 4))
-    t[..., :3, :3] = _quat_to_rot(m[..., :4])
+    t[..., :3, :3] = quat_to_rot(m[..., :4])
     t[..., :3, 3] = 2.0 * tr[..., 4:7]
     t[..., 3, 3] = 1.0
     return t
@@ -236,14 +231,6 @@ def hat(xi: np.ndarray) -> np.ndarray:
     return out
 
 
-def _skew(w: np.ndarray) -> np.ndarray:
-    out = np.zeros(w.shape[:-1] + (3, 3))
-    out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -w[..., 1], w[..., 0]
-    return out
-
-
 def se3_exp(xi: np.ndarray) -> np.ndarray:
     """Matrix exponential ``exp(xi^) (*, 4, 4)`` of twists ``(*, 6)`` (closed form)."""
     xi = np.asarray(xi, dtype=float)
@@ -255,7 +242,7 @@ def se3_exp(xi: np.ndarray) -> np.ndarray:
     a = np.where(small, 1 - th2 / 6 + th2 * th2 / 120, np.sin(ths) / ths)
     b = np.where(small, 0.5 - th2 / 24 + th2 * th2 / 720, (1 - np.cos(ths)) / ths**2)
     c = np.where(small, 1.0 / 6 - th2 / 120 + th2 * th2 / 5040, (ths - np.sin(ths)) / ths**3)
-    k = _skew(w)
+    k = skew(w)
     k2 = k @ k
     eye = np.eye(3)
     out = np.zeros(xi.shape[:-1] + (4, 4))
@@ -276,7 +263,7 @@ def screw_exp(screw: np.ndarray, theta: np.ndarray) -> np.ndarray:
         out[..., 0, 0] = out[..., 1, 1] = out[..., 2, 2] = 1.0
         out[..., :3, 3] = theta[..., None] * v
         return out
-    k = _skew(w)
+    k = skew(w)
     k2 = k @ k
     s, c = np.sin(theta)[..., None, None], (1 - np.cos(theta))[..., None, None]
     out[..., :3, :3] = np.eye(3) + s * k + c * k2
@@ -307,7 +294,7 @@ def se3_log(t: np.ndarray) -> np.ndarray:
         ax = ax / np.linalg.norm(ax, axis=-1, keepdims=True)
         ax = ax * np.where(np.sum(ax * vee[near_pi], -1, keepdims=True) < 0, -1.0, 1.0)
         w[near_pi] = ax * th[near_pi][:, None]
-    k = _skew(w)
+    k = skew(w)
     th_ = th[..., None, None]
     small_ = th_ < 1e-6
     ths = np.where(small_, 1.0, th_)

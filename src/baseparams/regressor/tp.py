@@ -18,7 +18,7 @@ from ..kinematics.tree import TreeState, forward_kinematics
 from ..model.inertia import HAT_INDEX
 from ..model.robot import Robot
 from ..pga import hat, join, swap
-from ..pga.core import cross3
+from ..pga.linalg import cross3
 
 _M = np.array([m for m, _ in HAT_INDEX])
 _N = np.array([n for _, n in HAT_INDEX])

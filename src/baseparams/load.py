@@ -1,0 +1,30 @@
+"""One entry point for a model given by name: a built-in robot or a robot file.
+
+It sits above both :mod:`.io` (the file readers) and :mod:`.robots` (the built-ins, some of
+which are read from bundled files), so neither of those imports the other's way back.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .errors import BaseparamsError
+from .io.load import load_file
+from .model.robot import Robot
+from .robots import BUILTINS, get
+
+
+def load_model(model: str, floating: bool = False, gravity=None, strict_inertia: bool = False
+               ) -> tuple[Robot, list[str]]:
+    """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xml``/``.mjcf``).
+
+    Files are read by :func:`.io.load.load_file` (gravity, inertia checks and loop assembly are
+    described there); ``floating`` applies to files only."""
+    p = Path(model)
+    if model.lower() in BUILTINS and not p.exists():
+        if floating:
+            raise BaseparamsError("a floating base applies to robot files, not to built-in robots")
+        return get(model, gravity=gravity), []
+    if not p.exists():
+        raise BaseparamsError(f"{model}: no such file, and not a built-in robot (see 'baseparams robots')")
+    return load_file(p, floating=floating, gravity=gravity, strict_inertia=strict_inertia)

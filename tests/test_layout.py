@@ -1,0 +1,169 @@
+"""The package's import structure: no cycles, no private names across modules, layering.
+
+Every module under ``src/baseparams`` is parsed with :mod:`ast`; imports anywhere in a module
+(module level and inside functions) are edges of the graph of ``baseparams.*`` modules.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PKG = SRC / "baseparams"
+
+#: layer of each top-level part: a module may import only from its own part or lower layers
+LAYERS = {
+    "errors": 0, "pga": 0,
+    "model": 1,
+    "kinematics": 2,
+    "regressor": 3,
+    "numerics": 4,
+    "nullspace": 5,
+    "base": 6,
+    "io": 7,
+    "robots": 8,
+    "load": 9, "analysis": 9,
+    "cli": 10,
+    "__main__": 11, "__init__": 11,
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(PKG.rglob("*.py"))}
+
+
+def _is_package(name: str) -> bool:
+    return MODULES.get(name) is not None and MODULES[name].name == "__init__.py"
+
+
+def _imports(name: str) -> list[tuple[str, str | None, bool]]:
+    """``(target module, imported name or None, at module level)`` for every import of ours."""
+    tree = ast.parse(MODULES[name].read_text())
+    base = name if _is_package(name) else name.rpartition(".")[0]
+    top = {id(n) for n in tree.body}
+    out = []
+    for node in ast.walk(tree):
+        level = id(node) in top
+        if isinstance(node, ast.Import):
+            out += [(a.name, None, level) for a in node.names if a.name.split(".")[0] == "baseparams"]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                pkg = base.split(".")
+                pkg = pkg[: len(pkg) - (node.level - 1)]
+                mod = ".".join(pkg + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            if mod.split(".")[0] != "baseparams":
+                continue
+            for a in node.names:
+                if mod == "baseparams" and a.name.startswith("__"):
+                    continue  # package metadata (``__version__``), not code: no edge to the package
+                sub = f"{mod}.{a.name}"
+                out.append((sub, None, level) if sub in MODULES else (mod, a.name, level))
+    return out
+
+
+def _graph(module_level_only: bool) -> dict[str, set[str]]:
+    return {m: {t for t, _, lvl in _imports(m) if t in MODULES and t != m and (lvl or not module_level_only)}
+            for m in MODULES}
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(m: str) -> list[str] | None:
+        state[m] = 1
+        stack.append(m)
+        for t in sorted(graph[m]):
+            if state.get(t) == 1:
+                return stack[stack.index(t):] + [t]
+            if t not in state and (c := visit(t)):
+                return c
+        stack.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(graph):
+        if m not in state and (c := visit(m)):
+            return c
+    return None
+
+
+def _part(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
+def test_every_module_is_found():
+    assert {"baseparams.pga.core", "baseparams.nullspace.drng", "baseparams.io.urdf"} <= set(MODULES)
+
+
+@pytest.mark.parametrize("module_level_only", [True, False], ids=["module-level", "with-function-imports"])
+def test_no_import_cycles(module_level_only):
+    assert _cycle(_graph(module_level_only)) is None
+
+
+def test_no_cycles_between_parts():
+    parts: dict[str, set[str]] = {}
+    for m, targets in _graph(False).items():
+        parts.setdefault(_part(m), set()).update(_part(t) for t in targets if _part(t) != _part(m))
+    assert _cycle(parts) is None
+
+
+def test_no_private_names_across_modules():
+    bad = [f"{m} imports {t}.{n}" for m in MODULES for t, n, _ in _imports(m)
+           if t != m and n is not None and n.startswith("_") and not n.startswith("__")]
+    bad += [f"{m} imports module {t}" for m in MODULES for t, _, _ in _imports(m)
+            if t != m and t.rpartition(".")[2].startswith("_") and t.rpartition(".")[2] != "__init__"]
+    assert not bad
+
+
+def test_no_private_attributes_of_other_modules():
+    """``alias._name`` where ``alias`` is a module of ours imported as a name."""
+    bad = []
+    for m, path in MODULES.items():
+        tree = ast.parse(path.read_text())
+        aliases = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                aliases |= {a.asname or a.name for a in node.names}
+        mods = {a for a in aliases}
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in mods
+                    and node.attr.startswith("_") and not node.attr.startswith("__")):
+                bad.append(f"{m}: {node.value.id}.{node.attr}")
+    assert not bad
+
+
+def test_layering():
+    """pga and errors import nothing of ours; each part imports only its own or lower layers."""
+    bad = []
+    for m, targets in _graph(False).items():
+        for t in targets:
+            a, b = _part(m), _part(t)
+            if a != b and LAYERS[b] >= LAYERS[a]:
+                bad.append(f"{m} -> {t}")
+    assert not bad
+    assert set(LAYERS) >= {_part(m) for m in MODULES}
+
+
+@pytest.mark.parametrize("part, allowed", [
+    ("pga", set()),
+    ("errors", set()),
+    ("model", {"pga", "errors"}),
+    ("kinematics", {"pga", "errors", "model"}),
+    ("regressor", {"pga", "errors", "model", "kinematics"}),
+])
+def test_inner_parts_import_only_inner_parts(part, allowed):
+    used = {_part(t) for m, ts in _graph(False).items() if _part(m) == part for t in ts} - {part}
+    assert used <= allowed

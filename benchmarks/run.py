@@ -332,7 +332,7 @@ def bench_files(out: dict, quick: bool) -> None:
     import warnings
 
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-    from baseparams.load import load_model
+    from baseparams.loading import load_model
     from baseparams.nullspace import drng
     from baseparams.nullspace.certify import certify
 

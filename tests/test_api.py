@@ -51,7 +51,7 @@ def test_public_names_importable():
     assert set(baseparams.__all__) == PUBLIC
     ns = {}
     exec("from baseparams import *", ns)  # noqa: S102
-    assert PUBLIC <= set(ns)
+    assert set(ns) >= PUBLIC
     assert callable(baseparams.regressor) and callable(baseparams.load) and callable(baseparams.analyze)
     assert baseparams.CONVENTIONS == ("paper", "khalil", "pinocchio", "idyntree", "rpna")
     assert issubclass(baseparams.ModelError, baseparams.BaseparamsError)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from baseparams.load import load_model
+from baseparams.loading import load_model
 from baseparams.nullspace.certify import certify
 
 from erd import is_floating, pinocchio_model, pinocchio_nullity, urdf_files

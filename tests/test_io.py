@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from baseparams.errors import BaseparamsError, ModelError
 from baseparams.io.mjcf import load_mjcf
 from baseparams.io.urdf import URDFWarning, load_urdf, write_urdf
-from baseparams.load import load_model
+from baseparams.loading import load_model
 from baseparams.nullspace.certify import certify
 from baseparams.numerics import stacked_regressor
 

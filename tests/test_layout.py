@@ -25,7 +25,7 @@ LAYERS = {
     "base": 6,
     "io": 7,
     "robots": 8,
-    "load": 9, "analysis": 9,
+    "loading": 9, "analysis": 9,
     "cli": 10,
     "__main__": 11, "__init__": 11,
 }
@@ -167,3 +167,19 @@ def test_layering():
 def test_inner_parts_import_only_inner_parts(part, allowed):
     used = {_part(t) for m, ts in _graph(False).items() if _part(m) == part for t in ts} - {part}
     assert used <= allowed
+
+
+def test_no_submodule_shadows_a_public_name():
+    """Importing a submodule binds it as an attribute of its package: a module named like a
+    front-door function (``baseparams.load``) would replace the function once imported. Only
+    ``regressor`` is both, and ``__init__`` imports the subpackage before binding the function."""
+    import importlib
+
+    import baseparams
+
+    public = set(baseparams.__all__)
+    subs = {name.split(".")[1] for name in MODULES if name.count(".") >= 1}
+    assert subs & public <= {"regressor"}
+    for name in sorted(MODULES):
+        importlib.import_module(name)
+    assert callable(baseparams.load) and callable(baseparams.regressor) and callable(baseparams.analyze)

@@ -14,7 +14,7 @@ import pytest
 from baseparams.errors import ModelError, NoMovingBodiesError
 from baseparams.io.mjcf import MJCFWarning, load_mjcf
 from baseparams.kinematics import forward_kinematics
-from baseparams.load import load_model
+from baseparams.loading import load_model
 from baseparams.nullspace.certify import certify
 
 from mujoco_oracle import mujoco_rank

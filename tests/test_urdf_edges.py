@@ -12,7 +12,7 @@ import pytest
 from baseparams.base.regroup import base_parameters
 from baseparams.errors import ModelError
 from baseparams.io.urdf import load_urdf
-from baseparams.load import load_model
+from baseparams.loading import load_model
 from baseparams.model import RobotBuilder
 from baseparams.nullspace.certify import certify
 from baseparams.robots import get

@@ -119,7 +119,7 @@ def load(model: str | os.PathLike, floating: bool = False, gravity=None, strict_
     >>> robot.n, robot.dof
     (6, 6)
     """
-    from .io.load import load_model
+    from .loading import load_model
 
     robot, notes = load_model(os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia)
     for note in notes:

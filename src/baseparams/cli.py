@@ -27,7 +27,7 @@ _STATUS_EXIT = {"certified": EXIT_OK, "completed": EXIT_OK, "unverified": EXIT_O
 
 
 def _robot(args) -> Robot:  # noqa: F821
-    from .load import load_model
+    from .loading import load_model
 
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
                               strict_inertia=getattr(args, "strict_inertia", False))
@@ -48,8 +48,9 @@ def cmd_robots(args) -> int:
 def _no_moving_bodies(args, exc: NoMovingBodiesError) -> int:
     """A model whose links are all welded to the world: an empty, trivially certified result."""
     name = Path(args.model).stem
+    hint = "" if getattr(args, "floating", False) else "; --floating attaches the root link by a free joint"
     msg = (f"{exc}: every link is welded to the world, so no measurement sees any inertial parameter "
-           f"(0 standard, 0 base parameters){'' if getattr(args, 'floating', False) else '; --floating attaches the root link by a free joint'}")
+           f"(0 standard, 0 base parameters){hint}")
     if args.json:
         _emit(args, json.dumps({"model": name, "n_bodies": 0, "n_params": 0, "nullity": 0, "n_base": 0,
                                 "certified": True, "status": "certified", "message": msg,

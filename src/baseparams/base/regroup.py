@@ -20,8 +20,8 @@ import numpy as np
 from ..errors import BaseparamsError
 from ..model import inertia as _inertia
 from ..model.inertia import LENGTH_POWER
-from ..model.scale import length_scale
 from ..model.robot import Robot
+from ..model.scale import length_scale
 
 _NAMES = _inertia.NAMES
 

@@ -90,21 +90,24 @@ def test_scaling_lengths_and_masses_scales_coefficients(case):
     make, samples = CASES[case]
     robot = make()
     rng = np.random.default_rng(len(case))
-    base = {conv: base_parameters(robot, certify(robot, samples, seed=0).basis, conv) for conv in ("khalil", "paper")}
+    base = {conv: base_parameters(robot, certify(robot, samples, seed=0).span, conv) for conv in ("khalil", "paper")}
     for s, mu in ((rng.uniform(0.02, 0.2), rng.uniform(0.1, 10)), (rng.uniform(5, 50), rng.uniform(0.1, 10))):
         r2 = scaled(robot, s, mu)
         assert np.isclose(length_scale(r2), s * length_scale(robot), rtol=1e-12)
         c2 = certify(r2, samples, seed=0)
         assert c2.nullity == base["khalil"].K.shape[1]
         for conv, b1 in base.items():
-            b2 = base_parameters(r2, c2.basis, conv)
+            b2 = base_parameters(r2, c2.span, conv)
             assert b2.base_names() == b1.base_names()
             assert np.array_equal(b2.dependent, b1.dependent)
             assert np.array_equal(b2.unidentifiable, b1.unidentifiable)
             want = b1.K * s ** exponents(b1, robot.n)
             assert np.array_equal(b2.K != 0, want != 0), (case, conv, s)
             nz = want != 0
-            assert np.allclose(b2.K[nz], want[nz], rtol=1e-10, atol=0), (case, conv, s)
+            # the paper convention of a random tree regroups with coefficients ~2e4 that cancel ~1e3-fold:
+            # its nullspace (decided on dimensionless parameters) carries ~3e-10 there
+            rtol = 1e-9 if (conv == "paper" and case.startswith("random")) else 1e-10
+            assert np.allclose(b2.K[nz], want[nz], rtol=rtol, atol=0), (case, conv, s)
 
 
 @pytest.mark.parametrize("s", [1e-3, 1e3])
@@ -114,7 +117,7 @@ def test_ur5_at_other_scales_keeps_its_base_parameters(s):
     r1, r2 = ur5(), ur5(s)
     c1, c2 = certify(r1, seed=0), certify(r2, seed=0)
     for conv, tol in (("khalil", 1e-10), ("pinocchio", 1e-10), ("paper", 1e-8)):
-        b1, b2 = base_parameters(r1, c1.basis, conv), base_parameters(r2, c2.basis, conv)
+        b1, b2 = base_parameters(r1, c1.span, conv), base_parameters(r2, c2.span, conv)
         assert b2.base_names() == b1.base_names()
         want = b1.K * s ** exponents(b1, r1.n)
         assert np.array_equal(b2.K != 0, want != 0), conv  # the same terms in every expression
@@ -141,7 +144,7 @@ def test_printed_expressions_rebuild_torques(case):
     w = stacked_regressor(robot, 20 if not robot.has_loops else 60, seed=5)
     tau = w @ robot.parameters("paper")
     for conv in ("khalil", "pinocchio", "paper"):
-        bp = base_parameters(robot, c.basis, conv)
+        bp = base_parameters(robot, c.span, conv)
         e = parse(bp, bp.expressions())
         assert np.array_equal(e, bp.E)  # what is printed is what is computed, exactly
         pi = robot.parameters(conv)
@@ -174,3 +177,20 @@ def test_length_scale():
     assert np.isclose(length_scale(scaled(r, 1e-3)), 1e-3 * length_scale(r), rtol=1e-14)
     fb = loop_robot()
     assert np.isclose(length_scale(scaled(fb, 7.0)), 7.0 * length_scale(fb), rtol=1e-14)
+
+
+@pytest.mark.parametrize("s", [1e-3, 1e3, 1e6])
+def test_certification_does_not_depend_on_the_unit_of_length(s):
+    """Ranks are decided on dimensionless parameters: a UR5 drawn in millimetres or kilometres
+    has the same certified nullspace as in metres (before, at 1e6 the numerical rank lost the
+    mass columns and 17 spurious directions were 'completed': nullity 41 instead of 24)."""
+    ref = certify(ur5(), seed=0)
+    c = certify(ur5(s), seed=0)
+    assert c.status == "certified" and c.nullity == ref.nullity == 24
+    assert np.allclose(c.basis.T @ c.basis, np.eye(24), atol=1e-12)
+
+
+def test_tiny_robots_are_never_certified_wrong():
+    """At 1e-6 m gravity dominates every other column: the rank may be undecided, never wrong."""
+    c = certify(ur5(1e-6), seed=0)
+    assert c.status == "undecided" or (c.certified and c.nullity == 24)

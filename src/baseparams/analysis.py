@@ -369,12 +369,12 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     if verify:
         say(f"certifying with {samples or 'the default number of'} random samples (seed {seed}, rows: {rows})")
         cert = certify(robot, samples, seed, rows, result=res)
-        basis = cert.basis
+        basis, span = cert.basis, cert.span
     else:
-        basis = res.orthonormal()
+        basis = span = res.orthonormal()
     say("regrouping base parameters")
-    base = base_parameters(robot, basis, convention)
-    base_paper = base_parameters(robot, basis, "paper")
+    base = base_parameters(robot, span, convention)
+    base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended)
 

@@ -187,7 +187,8 @@ def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> n
 
 
 def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str = "khalil") -> BaseParameters:
-    """Regroup given an orthonormal nullspace basis ``(10 n, k)`` in the paper convention.
+    """Regroup given a nullspace basis ``(10 n, k)`` in the paper convention (orthonormal, or
+    any basis of full column rank such as :attr:`Certificate.span`, which is more precise).
 
     Decisions are made on dimensionless coordinates: with ``L`` the robot's
     :func:`length_scale` and ``u`` the length exponent of each parameter (:data:`LENGTH_POWER`),

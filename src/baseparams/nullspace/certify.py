@@ -15,7 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.robot import Robot
+from ..model.scale import parameter_scale
 from ..numerics import NumericalResult, default_samples, numerical_nullspace, stacked_regressor
+from ..pga.linalg import column_basis
 from .drng import DRNGResult, drng
 
 
@@ -23,10 +25,15 @@ from .drng import DRNGResult, drng
 class Certificate:
     """Outcome of checking DRNG against the numerical method.
 
-    ``basis (10 n, nullity)``: orthonormal nullspace basis, DRNG's span first, then the
-    ``completed`` numerical directions. ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal
+    ``basis (10 n, nullity)``: orthonormal nullspace basis (paper convention, SI units), DRNG's
+    span first, then the ``completed`` numerical directions. The checks are made on dimensionless
+    parameters ``pi / L^u`` (:func:`baseparams.model.scale.parameter_scale`), with ``W`` the
+    stacked regressor of those: ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal
     ``B_drng``); ``max_column_residual``: the worst single DRNG column (unit norm), relative to
-    ``||W||_2``. ``status``: ``certified``, ``completed``, ``undecided`` or ``failed``.
+    ``||W||_2``. ``span (10 n, nullity)``: the same nullspace, SI units, each entry exact to
+    its own scale (columns not orthonormal): what regrouping should be given, since an
+    SI-orthonormal basis carries only absolute precision in its small (millimetre-scale) entries.
+    ``status``: ``certified``, ``completed``, ``undecided`` or ``failed``.
     """
 
     drng: DRNGResult
@@ -40,6 +47,7 @@ class Certificate:
     message: str
     seconds: float
     sampling: dict | None = None
+    span: np.ndarray | None = None
 
     @property
     def certified(self) -> bool:
@@ -63,23 +71,31 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     res = drng(robot, rows=rows) if result is None else result
     samples = default_samples(robot) if samples is None else samples
     sampling: dict = {}
-    w = stacked_regressor(robot, samples, seed, rows, sampling)
+    # everything is decided on dimensionless parameters pi / L^u (model.scale): the regressor's
+    # columns then have comparable sizes whatever the unit of length, so a robot drawn in
+    # millimetres or kilometres gets the same ranks as in metres
+    d = parameter_scale(robot)
+    w = stacked_regressor(robot, samples, seed, rows, sampling) * d
     num = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w)
-    bd = res.orthonormal()
+    raw = res.dense() / d[:, None]
+    bd = column_basis(raw)
     r_d = bd.shape[1]
     wn = np.linalg.norm(w)
     residual = float(np.linalg.norm(w @ bd) / wn) if r_d and wn > 0 else 0.0
-    col_res, worst = _column_residuals(res, w, num)
+    col_res, worst = _column_residuals(raw, w, num)
 
     def done(status: str, message: str, basis: np.ndarray = bd, completed: int = 0) -> Certificate:
+        # back to SI parameters (the paper convention), orthonormal, DRNG's span first
+        span = d[:, None] * basis
+        basis = np.linalg.qr(span)[0] if basis.shape[1] else np.zeros((len(d), 0))
         return Certificate(res, num, basis, r_d, completed, residual, worst, status, message,
-                           time.perf_counter() - t0, sampling)
+                           time.perf_counter() - t0, sampling, span)
 
     verdict = _verdict(res, num, w, r_d, col_res, worst, rtol, min_gap, residual_tol)
     if verdict is not None:
         return done(*verdict)
     # completion needs saturated numerics: more samples must not raise the rank
-    w2x = np.concatenate([w, stacked_regressor(robot, samples, seed + 7919, rows)])
+    w2x = np.concatenate([w, stacked_regressor(robot, samples, seed + 7919, rows) * d])
     num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w2x)
     if num2.rank != num.rank or not num2.decided:
         return done("undecided", f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
@@ -94,9 +110,8 @@ def _gap_text(num: NumericalResult, rtol: float) -> str:
     return f"tolerance {num.tol:.3g} (rtol {rtol:g}), singular-value gap {num.gap:.3g}"
 
 
-def _column_residuals(res: DRNGResult, w: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, float]:
-    """``||W b|| / ||W||_2`` of every DRNG column ``b`` (unit norm) ``(k,)`` and the worst."""
-    raw = res.dense()
+def _column_residuals(raw: np.ndarray, w: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, float]:
+    """``||W b|| / ||W||_2`` of every DRNG column ``b`` of ``raw`` (normalised) ``(k,)`` and the worst."""
     if not raw.shape[1]:
         return np.zeros(0), 0.0
     w2 = num.singular_values[0] if num.singular_values[0] > 0 else 1.0

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 
 from ..model.inertia import PAPER_NAMES
 from ..model.robot import Robot
+from ..model.scale import parameter_scale
 from ..numerics import row_mask
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_sparse
@@ -61,7 +62,10 @@ class DRNGResult:
         for name in names:
             k = PRINCIPLES.index(name)
             keep = self.columns.principle <= k
-            r = prev if not np.any(self.columns.principle == k) else block_rank(self.columns.subset(keep), self.robot.n)
+            if np.any(self.columns.principle == k):
+                r = dimensionless_rank(self.columns.subset(keep), self.robot)
+            else:
+                r = prev
             out[name] = r - prev
             prev = r
         return out
@@ -88,6 +92,17 @@ class DRNGResult:
         if c.principle[k] >= len(PAPER):
             return f"{PRINCIPLES[c.principle[k]]}: bodies {body}{par}, {c.label[k]}"
         return f"{PRINCIPLES[c.principle[k]]}: {joint}, bodies {body}{par}, points {c.label[k]}"
+
+
+def dimensionless_rank(cols: Columns, robot: Robot) -> int:
+    """Exact rank (:func:`.rank.block_rank`) of the columns as dimensionless parameters
+    ``pi / L^u`` (:mod:`baseparams.model.scale`): a per-entry scaling of every body block, the
+    same for all bodies, so the block structure is kept and the decision does not depend on the
+    unit of length."""
+    from dataclasses import replace
+
+    inv = 1.0 / parameter_scale(robot)[:10]
+    return block_rank(replace(cols, h=cols.h * inv, hp=cols.hp * inv, he=cols.he * inv), robot.n)
 
 
 def unmeasured_columns(robot: Robot, rows: str) -> Columns:
@@ -120,5 +135,5 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     if extended:
         cols = Columns.concat([cols, rule_columns(robot, tol)])
     cols = Columns.concat([cols, unmeasured_columns(robot, rows)])
-    rank = block_rank(cols, robot.n)
+    rank = dimensionless_rank(cols, robot)
     return DRNGResult(robot, cols, rank, time.perf_counter() - t0, extended)

@@ -26,14 +26,16 @@ class Certificate:
     """Outcome of checking DRNG against the numerical method.
 
     ``basis (10 n, nullity)``: orthonormal nullspace basis (paper convention, SI units), DRNG's
-    span first, then the ``completed`` numerical directions. The checks are made on dimensionless
-    parameters ``pi / L^u`` (:func:`baseparams.model.scale.parameter_scale`), with ``W`` the
-    stacked regressor of those: ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal
+    span first, then the ``completed`` numerical directions. ``span (10 n, nullity)``: the same
+    nullspace, SI units, each entry exact to its own scale (columns not orthonormal): what
+    regrouping should be given, since an SI-orthonormal basis carries only absolute precision
+    in its small (millimetre-scale) entries.
+
+    The checks are made on scaled parameters ``pi / d`` (dimensionless ``pi / L^u``, see
+    :func:`baseparams.model.scale.parameter_scale`, then each regressor column equilibrated),
+    with ``W`` their stacked regressor: ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal
     ``B_drng``); ``max_column_residual``: the worst single DRNG column (unit norm), relative to
-    ``||W||_2``. ``span (10 n, nullity)``: the same nullspace, SI units, each entry exact to
-    its own scale (columns not orthonormal): what regrouping should be given, since an
-    SI-orthonormal basis carries only absolute precision in its small (millimetre-scale) entries.
-    ``status``: ``certified``, ``completed``, ``undecided`` or ``failed``.
+    ``||W||_2``. ``status``: ``certified``, ``completed``, ``undecided`` or ``failed``.
     """
 
     drng: DRNGResult
@@ -71,11 +73,11 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     res = drng(robot, rows=rows) if result is None else result
     samples = default_samples(robot) if samples is None else samples
     sampling: dict = {}
-    # everything is decided on dimensionless parameters pi / L^u (model.scale): the regressor's
-    # columns then have comparable sizes whatever the unit of length, so a robot drawn in
-    # millimetres or kilometres gets the same ranks as in metres
-    d = parameter_scale(robot)
-    w = stacked_regressor(robot, samples, seed, rows, sampling) * d
+    # ranks are decided on scaled parameters pi / d: first dimensionless (pi / L^u, model.scale:
+    # a robot drawn in millimetres or kilometres gets the ranks it has in metres), then every
+    # column of W equilibrated to unit norm (invariant to any rescaling of the parameters);
+    # identically vanishing columns (rounding noise) are set to zero, not amplified
+    d, w = _scaled_regressor(robot, stacked_regressor(robot, samples, seed, rows, sampling))
     num = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w)
     raw = res.dense() / d[:, None]
     bd = column_basis(raw)
@@ -104,6 +106,21 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     return done("completed", f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
                              f"the numerical nullspace (distance of the added directions to DRNG's span: "
                              f"{distance:.3g} of 1); {_gap_text(num, rtol)}", basis, missing)
+
+
+def _scaled_regressor(robot: Robot, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(d (10 n,), W diag(d))``: the regressor of the scaled parameters ``pi / d``, with
+    ``d = L^u / ||column||``. A column below ``1e-13`` of the largest vanishes identically (its
+    entries are rounding noise, ~1e-16): it is set to exactly zero rather than amplified."""
+    d = parameter_scale(robot)
+    w = w * d
+    cn = np.linalg.norm(w, axis=0)
+    if cn.max(initial=0.0) > 0:
+        live = cn > 1e-13 * cn.max()
+        e = np.where(live, 1.0 / np.where(live, cn, 1.0), 1.0)
+        d, w = d * e, w * e
+        w[:, ~live] = 0.0
+    return d, w
 
 
 def _gap_text(num: NumericalResult, rtol: float) -> str:

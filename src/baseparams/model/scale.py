@@ -45,3 +45,18 @@ def parameter_scale(robot: Robot, convention: str = "paper") -> np.ndarray:
     """``L^u (10 n,)``: each parameter's unit scale, ``L`` = :func:`length_scale`, ``u`` its length
     exponent in ``convention``; dimensionless parameters are ``pi / parameter_scale``."""
     return length_scale(robot) ** np.tile(LENGTH_POWER[convention], robot.n).astype(float)
+
+
+#: typical lengths [m] for which the numerical rank decisions are validated as they are (every
+#: example-robot-data, MuJoCo Menagerie, gymnasium and dm_control model lies inside)
+METRE_BAND = (0.05, 20.0)
+
+
+def decision_scale(robot: Robot, convention: str = "paper") -> np.ndarray:
+    """``(L / L_c)^u (10 n,)`` with ``L_c`` the robot's length scale clipped into
+    :data:`METRE_BAND`: ones for a robot of ordinary size, and for a robot drawn in other units
+    (millimetres, micrometres, kilometres) the factors that bring its parameters to an
+    ordinary-sized equivalent, ``pi / decision_scale``. Rank decisions are made on those."""
+    ell = length_scale(robot)
+    lo, hi = METRE_BAND
+    return (ell / min(max(ell, lo), hi)) ** np.tile(LENGTH_POWER[convention], robot.n).astype(float)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.robot import Robot
-from ..model.scale import parameter_scale
+from ..model.scale import decision_scale
 from ..numerics import NumericalResult, default_samples, numerical_nullspace, stacked_regressor
 from ..pga.linalg import column_basis
 from .drng import DRNGResult, drng
@@ -31,11 +31,11 @@ class Certificate:
     regrouping should be given, since an SI-orthonormal basis carries only absolute precision
     in its small (millimetre-scale) entries.
 
-    The checks are made on scaled parameters ``pi / d`` (dimensionless ``pi / L^u``, see
-    :func:`baseparams.model.scale.parameter_scale`, then each regressor column equilibrated),
-    with ``W`` their stacked regressor: ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal
-    ``B_drng``); ``max_column_residual``: the worst single DRNG column (unit norm), relative to
-    ``||W||_2``. ``status``: ``certified``, ``completed``, ``undecided`` or ``failed``.
+    The checks are made on parameters ``pi / d`` (``d``: ones for a robot of ordinary size,
+    :func:`baseparams.model.scale.decision_scale`), with ``W`` their stacked regressor:
+    ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal ``B_drng``); ``max_column_residual``:
+    the worst single DRNG column (unit norm), relative to ``||W||_2``. ``status``:
+    ``certified``, ``completed``, ``undecided`` or ``failed``.
     """
 
     drng: DRNGResult
@@ -73,11 +73,10 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     res = drng(robot, rows=rows) if result is None else result
     samples = default_samples(robot) if samples is None else samples
     sampling: dict = {}
-    # ranks are decided on scaled parameters pi / d: first dimensionless (pi / L^u, model.scale:
-    # a robot drawn in millimetres or kilometres gets the ranks it has in metres), then every
-    # column of W equilibrated to unit norm (invariant to any rescaling of the parameters);
-    # identically vanishing columns (rounding noise) are set to zero, not amplified
-    d, w = _scaled_regressor(robot, stacked_regressor(robot, samples, seed, rows, sampling))
+    # ranks are decided on pi / d (model.scale.decision_scale): d = 1 for a robot of ordinary
+    # size; a robot drawn in millimetres or kilometres is brought to an ordinary-sized equivalent
+    d = decision_scale(robot)
+    w = stacked_regressor(robot, samples, seed, rows, sampling) * d
     num = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w)
     raw = res.dense() / d[:, None]
     bd = column_basis(raw)
@@ -106,21 +105,6 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     return done("completed", f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
                              f"the numerical nullspace (distance of the added directions to DRNG's span: "
                              f"{distance:.3g} of 1); {_gap_text(num, rtol)}", basis, missing)
-
-
-def _scaled_regressor(robot: Robot, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(d (10 n,), W diag(d))``: the regressor of the scaled parameters ``pi / d``, with
-    ``d = L^u / ||column||``. A column below ``1e-13`` of the largest vanishes identically (its
-    entries are rounding noise, ~1e-16): it is set to exactly zero rather than amplified."""
-    d = parameter_scale(robot)
-    w = w * d
-    cn = np.linalg.norm(w, axis=0)
-    if cn.max(initial=0.0) > 0:
-        live = cn > 1e-13 * cn.max()
-        e = np.where(live, 1.0 / np.where(live, cn, 1.0), 1.0)
-        d, w = d * e, w * e
-        w[:, ~live] = 0.0
-    return d, w
 
 
 def _gap_text(num: NumericalResult, rtol: float) -> str:

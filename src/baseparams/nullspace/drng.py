@@ -15,7 +15,7 @@ import scipy.sparse as sp
 
 from ..model.inertia import PAPER_NAMES
 from ..model.robot import Robot
-from ..model.scale import parameter_scale
+from ..model.scale import decision_scale
 from ..numerics import row_mask
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_sparse
@@ -95,13 +95,13 @@ class DRNGResult:
 
 
 def dimensionless_rank(cols: Columns, robot: Robot) -> int:
-    """Exact rank (:func:`.rank.block_rank`) of the columns as dimensionless parameters
-    ``pi / L^u`` (:mod:`baseparams.model.scale`): a per-entry scaling of every body block, the
-    same for all bodies, so the block structure is kept and the decision does not depend on the
-    unit of length."""
+    """Exact rank (:func:`.rank.block_rank`) of the columns for parameters ``pi / d``
+    (:func:`baseparams.model.scale.decision_scale`: ones for a robot of ordinary size): a
+    per-entry scaling of every body block, the same for all bodies, so the block structure is
+    kept and the decision does not depend on the unit of length."""
     from dataclasses import replace
 
-    inv = 1.0 / parameter_scale(robot)[:10]
+    inv = 1.0 / decision_scale(robot)[:10]
     return block_rank(replace(cols, h=cols.h * inv, hp=cols.hp * inv, he=cols.he * inv), robot.n)
 
 

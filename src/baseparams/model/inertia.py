@@ -54,8 +54,8 @@ _BACK = ("m", "hz", "hy", "hx", "izz", "iyz", "iyy", "ixz", "ixy", "ixx")
 class ConventionSpec:
     """One parameter convention, the one table everything derives from: ``fields`` (what each
     of a body's ten parameters is, in the convention's order; :data:`PARAMETER_FIELDS`),
-    ``names`` (as printed), ``frame`` (what they are expressed in) and ``regroup`` (fields in the order the
-    regrouping tries them as dependent, within a body). The converters
+    ``names`` (as printed), ``frame`` (what they are expressed in) and ``regroup`` (fields in
+    the order the regrouping tries them as dependent, within a body). The converters
     (:func:`to_convention`, :func:`from_convention`), :data:`NAMES`, :data:`FRAMES`,
     :data:`LENGTH_POWER` and the CLI's ``--convention`` choices come from :data:`SPECS`."""
 

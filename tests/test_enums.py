@@ -25,6 +25,7 @@ def test_values_are_todays_strings():
     assert [str(t) for t in JointType] == ["R", "P", "U", "S", "F", "C", "fixed"]
     assert Status.CERTIFIED == "certified" and f"{Rows.JOINTS}" == "joints"
     assert json.dumps({"status": Status.FAILED}) == '{"status": "failed"}'
+    assert repr(Status.CERTIFIED) == "'certified'" and repr((Rows.ALL, Convention.PAPER)) == "('all', 'paper')"
 
 
 def test_public_tuples_are_plain_strings():

@@ -4,9 +4,9 @@ statuses, joint types and the provenance of DRNG columns.
 The string-valued ones are :class:`enum.StrEnum`: a member *is* its string (``Status.CERTIFIED
 == "certified"``, ``f"{Rows.ALL}" == "all"``, ``json.dumps`` writes ``"certified"``), so every
 comparison with the plain strings users pass, every report and every JSON document reads as
-before. The tables of each choice (:data:`baseparams.model.inertia.SPECS` for conventions,
-:data:`baseparams.model.robot.NDOF` for joints) live with the code that uses them and are keyed
-by these members.
+before (and their ``repr`` is the string's). The tables of each choice
+(:data:`baseparams.model.inertia.SPECS` for conventions, :data:`baseparams.model.robot.NDOF` for
+joints) live with the code that uses them and are keyed by these members.
 """
 
 from __future__ import annotations
@@ -16,7 +16,15 @@ from enum import IntEnum, StrEnum
 __all__ = ["Convention", "JointType", "Rows", "Source", "Status", "values"]
 
 
-class Convention(StrEnum):
+class _Choice(StrEnum):
+    """A string choice whose ``repr`` is its string's (``'certified'``): tuples, doctests and
+    error messages that show ``repr`` read exactly as with the plain strings."""
+
+    def __repr__(self) -> str:
+        return repr(self.value)
+
+
+class Convention(_Choice):
     """A per-body ordering (and frame) of the ten inertial parameters
     (:data:`baseparams.model.inertia.SPECS`)."""
 
@@ -27,7 +35,7 @@ class Convention(StrEnum):
     RPNA = "rpna"
 
 
-class Rows(StrEnum):
+class Rows(_Choice):
     """Which generalized forces are measured (:func:`baseparams.numerics.row_mask`)."""
 
     ALL = "all"
@@ -35,7 +43,7 @@ class Rows(StrEnum):
     BASE = "base"  # only the floating base's wrench
 
 
-class Status(StrEnum):
+class Status(_Choice):
     """Outcome of certification (:class:`baseparams.nullspace.certify.Certificate`);
     ``unverified``: an analysis run without it."""
 
@@ -51,7 +59,7 @@ class Status(StrEnum):
         return self in (Status.CERTIFIED, Status.COMPLETED)
 
 
-class JointType(StrEnum):
+class JointType(_Choice):
     """Joint types. One enum for tree and loop (cut) joints: ``R P U S F C`` are the tree joints
     a body hangs on (:data:`baseparams.model.robot.JOINT_TYPES`); ``fixed`` is no body's joint
     (the builder and the readers merge a fixed link into its parent) but is a cut joint closing

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from baseparams.enums import Status
 from baseparams.errors import ModelError, NoMovingBodiesError
 from baseparams.io.mjcf import MJCFWarning, load_mjcf
 from baseparams.kinematics import forward_kinematics
@@ -225,7 +226,8 @@ def test_corpus_certified_and_rank_equals_mujoco(path):
         warnings.simplefilter("ignore")
         robot, _ = load_model(str(path))
     c = certify(robot, seed=0)
-    assert c.certified and c.status in ("certified", "completed"), c.message
+    assert c.certified and c.status in (Status.CERTIFIED, Status.COMPLETED), c.message
+    assert c.status is (Status.CERTIFIED if c.completed == 0 else Status.COMPLETED)
     rank, gap = mujoco_rank(path)
     assert gap > 1e6  # a clear rank decision (relative tolerance 1e-9)
     assert 10 * robot.n - c.nullity == rank

@@ -23,7 +23,9 @@ Robot, RobotBuilder, Inertia, pose
 CONVENTIONS
     Parameter conventions: ``paper`` (spatial pseudo-inertia entries in the world frame at
     q = 0, what the regressor multiplies), ``khalil``, ``pinocchio``, ``idyntree``, ``rpna``
-    (link frames; ``baseparams.model.inertia``).
+    (link frames; ``baseparams.model.inertia``). The named choices (conventions, measured
+    rows, statuses, joint types, DRNG provenance) are the enums of ``baseparams.enums``, equal
+    to their strings.
 BaseparamsError, ModelError
     Errors on bad input (``ModelError``: an invalid model).
 
@@ -65,8 +67,8 @@ __all__ = [
     "regressor",
 ]
 
-_SUBMODULES = ("analysis", "base", "cli", "errors", "io", "kinematics", "model", "nullspace", "numerics", "pga",
-               "robots")
+_SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "io", "kinematics", "model", "nullspace", "numerics",
+               "pga", "robots")
 
 
 class ModelWarning(UserWarning):

@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import numpy as np
 
+from .enums import Source, Status, values
 from .errors import BaseparamsError
 from .model.robot import Robot
 
@@ -51,7 +52,7 @@ if TYPE_CHECKING:  # the heavy modules (DRNG imports scipy.sparse) load when ana
     from .nullspace.certify import Certificate
 
 #: what ``Analysis.status`` can be (``unverified``: ``verify=False``)
-STATUSES = ("certified", "completed", "undecided", "failed", "unverified")
+STATUSES = values(Status)
 
 #: the pipeline's steps, imported when first used (DRNG imports scipy.sparse): ``import
 #: baseparams`` stays light; they remain attributes of this module (tests patch them here)
@@ -182,9 +183,10 @@ class Analysis:
         return 10 * self.robot.n - self.nullity
 
     @property
-    def status(self) -> str:
-        """``certified``, ``completed``, ``undecided``, ``failed`` or ``unverified``."""
-        return "unverified" if self.certificate is None else self.certificate.status
+    def status(self) -> Status:
+        """``certified``, ``completed``, ``undecided``, ``failed`` or ``unverified`` (a
+        :class:`~baseparams.enums.Status`, equal to those strings)."""
+        return Status.UNVERIFIED if self.certificate is None else self.certificate.status
 
     @property
     def certified(self) -> bool:
@@ -294,8 +296,8 @@ class Analysis:
             "drng": {"columns": self.drng_columns, "rank": self.drng_rank, "seconds": self.drng_seconds,
                      "extended": self.extended,
                      "by_principle": {k: v for k, v in self.by_principle.items() if k in PAPER},
-                     "by_rule": {**self.by_principle, "numerical": 0 if c is None else c.completed},
-                     "complete": None if c is None else bool(c.status == "certified")},
+                     "by_rule": {**self.by_principle, Source.NUMERICAL.label: 0 if c is None else c.completed},
+                     "complete": None if c is None else bool(c.status == Status.CERTIFIED)},
             "numerical": num,
             "certified": self.certified,
             "status": self.status,
@@ -382,7 +384,6 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
 def format_report(a: Analysis) -> str:
     """Human-readable report (what ``baseparams analyze MODEL`` prints)."""
     from .model import inertia as _inertia
-    from .nullspace.drng import PAPER, PRINCIPLES, UNMEASURED
 
     r, c, j = a.robot, a.certificate, a.to_json()
     loops = f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else ""
@@ -390,11 +391,11 @@ def format_report(a: Analysis) -> str:
             f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
-    for name in PRINCIPLES[:-1]:
-        if name in a.by_principle:
-            kind = ("paper" if name in PAPER else "measured rows: joint torques only" if name == UNMEASURED
+    for src in Source:
+        if src is not Source.NUMERICAL and src.label in a.by_principle:
+            kind = ("paper" if src.is_paper else "measured rows: joint torques only" if src is Source.UNMEASURED
                     else "extended rule")
-            out.append(f"  {name:<22s} {a.by_principle[name]:4d}  ({kind})")
+            out.append(f"  {src.label:<22s} {a.by_principle[src.label]:4d}  ({kind})")
     if c is None:
         out.append("certification: skipped (--no-verify); the nullity above is DRNG's rank, unverified")
         if a.rows == "base" and r.floating:
@@ -402,8 +403,8 @@ def format_report(a: Analysis) -> str:
                        "(Ayusawa et al. 2014); unverified here")
     else:
         nm = c.numerical
-        out.append(f"  {'numerical':<22s} {c.completed:4d}  (completed from the numerical nullspace)")
-        out.append("  geometric span complete: " + ("yes" if c.status == "certified" else "no"))
+        out.append(f"  {Source.NUMERICAL.label:<22s} {c.completed:4d}  (completed from the numerical nullspace)")
+        out.append("  geometric span complete: " + ("yes" if c.status == Status.CERTIFIED else "no"))
         out.append(f"numerical method: {nm.samples} samples, rank {nm.rank}, nullity {nm.nullity}, "
                    f"tolerance {nm.tol:.3g}, singular-value gap {nm.gap:.3g}, {nm.seconds * 1e3:.1f} ms")
         if r.has_loops and c.sampling:

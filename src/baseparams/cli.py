@@ -17,13 +17,13 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .enums import Convention, Rows, Status, values
 from .errors import BaseparamsError, NoMovingBodiesError
-from .model.inertia import CONVENTIONS
 
 #: exit codes (see the module doc)
 EXIT_OK, EXIT_INPUT, EXIT_UNDECIDED, EXIT_FAILED, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
-_STATUS_EXIT = {"certified": EXIT_OK, "completed": EXIT_OK, "unverified": EXIT_OK,
-                "undecided": EXIT_UNDECIDED, "failed": EXIT_FAILED}
+_STATUS_EXIT = {Status.CERTIFIED: EXIT_OK, Status.COMPLETED: EXIT_OK, Status.UNVERIFIED: EXIT_OK,
+                Status.UNDECIDED: EXIT_UNDECIDED, Status.FAILED: EXIT_FAILED}
 
 
 def _robot(args) -> Robot:  # noqa: F821
@@ -53,7 +53,7 @@ def _no_moving_bodies(args, exc: NoMovingBodiesError) -> int:
            f"(0 standard, 0 base parameters){hint}")
     if args.json:
         _emit(args, json.dumps({"model": name, "n_bodies": 0, "n_params": 0, "nullity": 0, "n_base": 0,
-                                "certified": True, "status": "certified", "message": msg,
+                                "certified": True, "status": Status.CERTIFIED, "message": msg,
                                 "base_parameters": [], "unidentifiable": []}, indent=2))
     else:
         _emit(args, f"{name}: {msg}")
@@ -126,8 +126,8 @@ def cmd_analyze(args) -> int:
                      progress=sys.stderr if args.verbose else None)
     text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
     _emit(args, text)
-    status = "unverified" if result.certificate is None else result.certificate.status
-    if status in ("undecided", "failed"):
+    status = result.status
+    if status in (Status.UNDECIDED, Status.FAILED):
         print(f"baseparams: certification {status.upper()}: {result.certificate.message}", file=sys.stderr)
     return _STATUS_EXIT[status]
 
@@ -165,11 +165,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
     s.add_argument("--paper-only", action="store_true",
                    help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2)")
-    s.add_argument("--rows", choices=("all", "joints", "base"), default="all",
+    s.add_argument("--rows", choices=values(Rows), default=str(Rows.ALL),
                    help="measured generalized forces: all (default), joint torques only, or the "
                         "floating base's wrench only")
-    s.add_argument("--convention", choices=CONVENTIONS,
-                   default="khalil", help="convention of the regrouped expressions (default khalil)")
+    s.add_argument("--convention", choices=values(Convention),
+                   default=str(Convention.KHALIL), help="convention of the regrouped expressions (default khalil)")
     s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.set_defaults(func=cmd_analyze)

@@ -8,12 +8,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .enums import Rows, values
 from .errors import BaseparamsError
 from .model.robot import Robot
 from .regressor import regressor
 
-#: which generalized forces are measured
-ROWS = ("all", "joints", "base")
+#: which generalized forces are measured (:class:`~baseparams.enums.Rows`)
+ROWS = values(Rows)
 
 
 def sample_states(robot: Robot, samples: int, rng: np.random.Generator, low: float = 0.0,

@@ -216,10 +216,9 @@ def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str = "kha
     sv = np.linalg.svd((scale[:, None] * tinv).reshape(robot.n, 10, robot.n, 10)[
         np.arange(robot.n), :, np.arange(robot.n), :], compute_uv=False)
     noise = NOISE_FACTOR * np.finfo(float).eps * sv.max() / max(sv.min(), 1e-300)
-    # candidate order: last body first; within a body M, MZ, MY, MX, then second moments backwards
-    within = {"paper": [9, 8, 7, 6, 5, 4, 3, 2, 1, 0], "khalil": [9, 8, 7, 6, 5, 4, 3, 2, 1, 0],
-              "pinocchio": [0, 3, 2, 1, 9, 8, 6, 7, 5, 4], "idyntree": [0, 3, 2, 1, 9, 8, 7, 6, 5, 4],
-              "rpna": [0, 3, 2, 1, 6, 7, 5, 4, 8, 9]}[convention]
+    # candidate order: last body first; within a body the convention's regrouping order (M, MZ,
+    # MY, MX, then second moments backwards: inertia.SPECS)
+    within = _inertia.SPECS[convention].regroup_order
     order = np.array([10 * i + w for i in reversed(range(robot.n)) for w in within])
     dep = _choose_dependent(q, order, max(1e-8, noise)) if k else np.zeros(0, dtype=int)
     if len(dep) < k:

@@ -31,11 +31,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..enums import JointType, values
 from ..errors import ModelError, NoMovingBodiesError
 from ..pga.core import quat_to_rot
 from .inertia import Inertia, transform
 from .robot import JOINT_TYPES, LoopJoint, Robot, joint_ndof
 
+#: every joint type a link may be added with: a body's (:data:`JOINT_TYPES`) and ``fixed``
+ALL_TYPES = values(JointType)
 _ALIASES = {"revolute": "R", "continuous": "R", "prismatic": "P", "universal": "U",
             "spherical": "S", "ball": "S", "floating": "F", "free": "F", "r": "R", "p": "P",
             "u": "U", "s": "S", "f": "F", "c": "C", "compound": "C"}
@@ -67,7 +70,7 @@ def quat_pose(xyz=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
 
 def joint_type(name: str) -> str:
     """Normalise a joint type name (``revolute`` -> ``R``, ...); ``fixed`` stays ``fixed``."""
-    if name in JOINT_TYPES or name == "fixed":
+    if name in ALL_TYPES:
         return name
     return _ALIASES.get(str(name).lower(), str(name))
 
@@ -118,9 +121,9 @@ class RobotBuilder:
         what = f"robot {self.name!r}, link {name!r} (joint {jname!r})"
         if name in self._frames:
             raise ModelError(f"{what}: duplicate link name {name!r}")
-        if jt not in JOINT_TYPES and jt != "fixed":
+        if jt not in ALL_TYPES:
             raise ModelError(f"{what}: unknown joint type {joint!r}; expected one of "
-                             f"{JOINT_TYPES + ('fixed',)} or a URDF/MJCF name")
+                             f"{ALL_TYPES} or a URDF/MJCF name")
         pidx, pframe = self._frame(parent)
         origin = np.eye(4) if origin is None else np.asarray(origin, dtype=float)
         if origin.shape != (4, 4) or not np.all(np.isfinite(origin)):

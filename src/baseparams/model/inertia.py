@@ -27,42 +27,89 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..enums import Convention, values
 from ..errors import ModelError
-
-CONVENTIONS = ("paper", "khalil", "pinocchio", "idyntree", "rpna")
 
 #: Paper order of the ten entries of a symmetric 4x4 matrix (row, column), eq. "hat".
 HAT_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2), (0, 3), (1, 3), (2, 3), (3, 3))
-PAPER_NAMES = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
-KHALIL_NAMES = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
 
-#: each convention's parameter names, in its order (one table: names and reports derive from it)
-NAMES = {
-    "paper": PAPER_NAMES,
-    "khalil": KHALIL_NAMES,
-    "pinocchio": ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz"),
-    "idyntree": ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"),
-    "rpna": ("m", "mcx", "mcy", "mcz", "Ixx", "Iyy", "Izz", "Iyz", "Ixz", "Ixy"),
-}
+#: what a parameter is, by field: mass ``m``, first moments ``hx hy hz`` (``m c``), entries
+#: ``ixx ixy ...`` of the rotational inertia about the frame's origin (link-frame conventions)
+#: or ``sxx sxy ...`` of the second moments ``Sigma`` (the paper's pseudo-inertia)
+PARAMETER_FIELDS = ("m", "hx", "hy", "hz", "ixx", "ixy", "ixz", "iyy", "iyz", "izz",
+                    "sxx", "sxy", "sxz", "syy", "syz", "szz")
+#: names in the SYMORO style (khalil, and the paper's pseudo-inertia entries ``MXX`` written ``XX``)
+_SYMORO = {"m": "M", "hx": "MX", "hy": "MY", "hz": "MZ",
+           **{f"{k}{ab}": ab.upper() for k in "is" for ab in ("xx", "xy", "xz", "yy", "yz", "zz")}}
+#: names in the ``m mcx ... Ixx`` style (pinocchio, iDynTree, RPNA)
+_MC = {"m": "m", "hx": "mcx", "hy": "mcy", "hz": "mcz",
+       **{f"i{ab}": f"I{ab}" for ab in ("xx", "xy", "xz", "yy", "yz", "zz")}}
+_LINK = "link frame (each body's joint frame), inertia about its origin"
+#: the regrouping's within-body candidate order (:func:`baseparams.base.regroup.regroup`):
+#: mass, first moments z y x, then the second moments backwards
+_BACK = ("m", "hz", "hy", "hx", "izz", "iyz", "iyy", "ixz", "ixy", "ixx")
+
+
+@dataclass(frozen=True)
+class ConventionSpec:
+    """One parameter convention, the one table everything derives from: ``fields`` (what each
+    of a body's ten parameters is, in the convention's order; :data:`PARAMETER_FIELDS`),
+    ``names`` (as printed), ``frame`` (what they are expressed in) and ``regroup`` (fields in
+    the order the regrouping tries them as dependent, within a body). The converters
+    (:func:`to_convention`, :func:`from_convention`), :data:`NAMES`, :data:`FRAMES`,
+    :data:`LENGTH_POWER` and the CLI's ``--convention`` choices come from :data:`SPECS`."""
+
+    convention: Convention
+    fields: tuple[str, ...]
+    names: tuple[str, ...]
+    frame: str
+    regroup: tuple[str, ...]
+
+    @property
+    def length_power(self) -> np.ndarray:
+        """Length exponent ``u`` of each parameter: mass 0, first moments 1, second moments 2."""
+        return np.array([0 if f == "m" else 1 if f[0] == "h" else 2 for f in self.fields])
+
+    @property
+    def regroup_order(self) -> tuple[int, ...]:
+        """:attr:`regroup` as indices into the convention's order."""
+        return tuple(self.fields.index(f) for f in self.regroup)
+
+
+def _spec(convention: Convention, fields: str, names: dict[str, str], frame: str = _LINK,
+          regroup: tuple[str, ...] = _BACK) -> ConventionSpec:
+    f = tuple(fields.split())
+    return ConventionSpec(convention, f, tuple(names[k] for k in f), frame, regroup)
+
+
+#: every convention's table (:class:`ConventionSpec`), keyed by :class:`~baseparams.enums.Convention`
+SPECS = {c.convention: c for c in (
+    _spec(Convention.PAPER, "sxx sxy sxz syy syz szz hx hy hz m", _SYMORO,
+          "spatial pseudo-inertia entries, world frame at q = 0",
+          ("m", "hz", "hy", "hx", "szz", "syz", "syy", "sxz", "sxy", "sxx")),
+    _spec(Convention.KHALIL, "ixx ixy ixz iyy iyz izz hx hy hz m", _SYMORO),
+    _spec(Convention.PINOCCHIO, "m hx hy hz ixx ixy iyy ixz iyz izz", _MC),
+    _spec(Convention.IDYNTREE, "m hx hy hz ixx ixy ixz iyy iyz izz", _MC),
+    # RPNA tries ixx before the products of inertia (its historical order)
+    _spec(Convention.RPNA, "m hx hy hz ixx iyy izz iyz ixz ixy", _MC,
+          regroup=("m", "hz", "hy", "hx", "izz", "iyz", "iyy", "ixx", "ixz", "ixy")),
+)}
+assert tuple(SPECS) == tuple(Convention)
+
+#: the conventions' names (plain strings; ``baseparams.CONVENTIONS``)
+CONVENTIONS = values(Convention)
+PAPER_NAMES = SPECS[Convention.PAPER].names
+KHALIL_NAMES = SPECS[Convention.KHALIL].names
+
+#: each convention's parameter names, in its order (names and reports derive from it)
+NAMES = {c: s.names for c, s in SPECS.items()}
 
 #: length exponent ``u`` of each parameter, per convention: second moments / inertia entries 2,
 #: first moments 1, mass 0. ``K[i, d]`` has units ``L^(u_i - u_d)`` (the mass units cancel).
-LENGTH_POWER = {
-    "paper": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
-    "khalil": np.array([2, 2, 2, 2, 2, 2, 1, 1, 1, 0]),
-    "pinocchio": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
-    "idyntree": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
-    "rpna": np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2]),
-}
+LENGTH_POWER = {c: s.length_power for c, s in SPECS.items()}
 
 #: the frame each convention's parameters are expressed in
-FRAMES = {
-    "paper": "spatial pseudo-inertia entries, world frame at q = 0",
-    "khalil": "link frame (each body's joint frame), inertia about its origin",
-    "pinocchio": "link frame (each body's joint frame), inertia about its origin",
-    "idyntree": "link frame (each body's joint frame), inertia about its origin",
-    "rpna": "link frame (each body's joint frame), inertia about its origin",
-}
+FRAMES = {c: s.frame for c, s in SPECS.items()}
 
 
 def describe(convention: str) -> str:
@@ -70,12 +117,18 @@ def describe(convention: str) -> str:
     return f"{convention} convention: {FRAMES[convention]}; per body {' '.join(NAMES[convention])}"
 
 
-
-def check_convention(convention: str) -> str:
-    """``convention`` if it is one of :data:`CONVENTIONS`, else a :class:`ModelError` naming them."""
+def check_convention(convention: str) -> Convention:
+    """``convention`` as a :class:`~baseparams.enums.Convention` if it is one of
+    :data:`CONVENTIONS`, else a :class:`ModelError` naming them."""
     if convention not in CONVENTIONS:
         raise ModelError(f"unknown parameter convention {convention!r}; expected one of {', '.join(CONVENTIONS)}")
-    return convention
+    return Convention(convention)
+
+
+def _lookup(convention: str) -> ConventionSpec:
+    if convention not in SPECS:
+        raise ValueError(f"unknown parameter convention {convention!r}; expected one of {CONVENTIONS}")
+    return SPECS[convention]
 
 
 _ROWS = np.array([r for r, _ in HAT_INDEX])
@@ -135,19 +188,11 @@ def to_convention(n: np.ndarray, convention: str) -> np.ndarray:
     n = np.asarray(n, dtype=float)
     if convention == "paper":
         return hat(n)
+    fields = _lookup(convention).fields
     m, h, j = split(n)
-    ixx, iyy, izz = j[..., 0, 0], j[..., 1, 1], j[..., 2, 2]
-    ixy, ixz, iyz = j[..., 0, 1], j[..., 0, 2], j[..., 1, 2]
-    hx, hy, hz = h[..., 0], h[..., 1], h[..., 2]
-    cols = {
-        "khalil": (ixx, ixy, ixz, iyy, iyz, izz, hx, hy, hz, m),
-        "pinocchio": (m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz),
-        "idyntree": (m, hx, hy, hz, ixx, ixy, ixz, iyy, iyz, izz),
-        "rpna": (m, hx, hy, hz, ixx, iyy, izz, iyz, ixz, ixy),
-    }
-    if convention not in cols:
-        raise ValueError(f"unknown parameter convention {convention!r}; expected one of {CONVENTIONS}")
-    return np.stack(cols[convention], axis=-1)
+    v = {"m": m, "hx": h[..., 0], "hy": h[..., 1], "hz": h[..., 2]}
+    v.update({f"i{'xyz'[r]}{'xyz'[c]}": j[..., r, c] for r in range(3) for c in range(r, 3)})
+    return np.stack([v[f] for f in fields], axis=-1)
 
 
 def from_convention(p: np.ndarray, convention: str) -> np.ndarray:
@@ -157,15 +202,7 @@ def from_convention(p: np.ndarray, convention: str) -> np.ndarray:
         raise ValueError(f"parameter vectors must have 10 entries per body, got shape {p.shape}")
     if convention == "paper":
         return unhat(p)
-    order = {
-        "khalil": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz", "hx", "hy", "hz", "m"),
-        "pinocchio": ("m", "hx", "hy", "hz", "ixx", "ixy", "iyy", "ixz", "iyz", "izz"),
-        "idyntree": ("m", "hx", "hy", "hz", "ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
-        "rpna": ("m", "hx", "hy", "hz", "ixx", "iyy", "izz", "iyz", "ixz", "ixy"),
-    }
-    if convention not in order:
-        raise ValueError(f"unknown parameter convention {convention!r}; expected one of {CONVENTIONS}")
-    v = {k: p[..., i] for i, k in enumerate(order[convention])}
+    v = {k: p[..., i] for i, k in enumerate(_lookup(convention).fields)}
     j = np.empty(p.shape[:-1] + (3, 3))
     j[..., 0, 0], j[..., 1, 1], j[..., 2, 2] = v["ixx"], v["iyy"], v["izz"]
     j[..., 0, 1] = j[..., 1, 0] = v["ixy"]

@@ -34,13 +34,16 @@ from functools import cached_property
 
 import numpy as np
 
+from ..enums import JointType, values
 from ..errors import ModelError
 from ..pga import adjoint
 from . import inertia as _inertia
 
-JOINT_TYPES = ("R", "P", "U", "S", "F", "C")
-LOOP_TYPES = ("R", "P", "U", "S", "fixed")
-NDOF = {"R": 1, "P": 1, "U": 2, "S": 3, "F": 6, "fixed": 0}  # C: len(axes), see joint_ndof
+#: a body's joint types, and a loop (cut) joint's (plain strings; :class:`~baseparams.enums.JointType`)
+JOINT_TYPES = values(t for t in JointType if t is not JointType.FIXED)
+LOOP_TYPES = values((JointType.R, JointType.P, JointType.U, JointType.S, JointType.FIXED))
+NDOF = {JointType.R: 1, JointType.P: 1, JointType.U: 2, JointType.S: 3, JointType.F: 6,
+        JointType.FIXED: 0}  # C: len(axes), see joint_ndof
 
 
 def joint_ndof(jtype: str, axes: np.ndarray) -> int:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..enums import Status
 from ..model.robot import Robot
 from ..model.scale import decision_scale
 from ..numerics import NumericalResult, default_samples, numerical_nullspace, stacked_regressor
@@ -35,7 +36,8 @@ class Certificate:
     :func:`baseparams.model.scale.decision_scale`), with ``W`` their stacked regressor:
     ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal ``B_drng``); ``max_column_residual``:
     the worst single DRNG column (unit norm), relative to ``||W||_2``. ``status``:
-    ``certified``, ``completed``, ``undecided`` or ``failed``.
+    ``certified``, ``completed``, ``undecided`` or ``failed`` (a
+    :class:`~baseparams.enums.Status`; a string given is converted, an unknown one refused).
     """
 
     drng: DRNGResult
@@ -45,15 +47,18 @@ class Certificate:
     completed: int
     residual: float
     max_column_residual: float
-    status: str
+    status: Status
     message: str
     seconds: float
     sampling: dict | None = None
     span: np.ndarray | None = None
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "status", Status(self.status))
+
     @property
     def certified(self) -> bool:
-        return self.status in ("certified", "completed")
+        return self.status.ok
 
     @property
     def nullity(self) -> int:
@@ -85,7 +90,7 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     residual = float(np.linalg.norm(w @ bd) / wn) if r_d and wn > 0 else 0.0
     col_res, worst = _column_residuals(raw, w, num)
 
-    def done(status: str, message: str, basis: np.ndarray = bd, completed: int = 0) -> Certificate:
+    def done(status: Status, message: str, basis: np.ndarray = bd, completed: int = 0) -> Certificate:
         # back to SI parameters (the paper convention), orthonormal, DRNG's span first
         span = d[:, None] * basis
         basis = np.linalg.qr(span)[0] if basis.shape[1] else np.zeros((len(d), 0))
@@ -99,10 +104,10 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     w2x = np.concatenate([w, stacked_regressor(robot, samples, seed + 7919, rows) * d])
     num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w2x)
     if num2.rank != num.rank or not num2.decided:
-        return done("undecided", f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
+        return done(Status.UNDECIDED, f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
                                  f"{num2.rank} with twice as many); use more samples")
     basis, missing, distance = _complete(bd, num)
-    return done("completed", f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
+    return done(Status.COMPLETED, f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
                              f"the numerical nullspace (distance of the added directions to DRNG's span: "
                              f"{distance:.3g} of 1); {_gap_text(num, rtol)}", basis, missing)
 
@@ -122,25 +127,25 @@ def _column_residuals(raw: np.ndarray, w: np.ndarray, num: NumericalResult) -> t
 
 
 def _verdict(res: DRNGResult, num: NumericalResult, w: np.ndarray, r_d: int, col_res: np.ndarray, worst: float,
-             rtol: float, min_gap: float, residual_tol: float) -> tuple[str, str] | None:
+             rtol: float, min_gap: float, residual_tol: float) -> tuple[Status, str] | None:
     """``(status, message)`` when the check decides without completion, else ``None``."""
     ncols = 10 * res.robot.n
     gap_txt = _gap_text(num, rtol)
     if worst > residual_tol:
         bad = np.argsort(col_res)[::-1][: int(np.sum(col_res > residual_tol))]
         where = "; ".join(res.provenance(int(k)) for k in bad[:3])
-        return "failed", (f"{len(bad)} DRNG column(s) are not in the numerical nullspace (worst relative "
+        return Status.FAILED, (f"{len(bad)} DRNG column(s) are not in the numerical nullspace (worst relative "
                           f"residual {worst:.2e}): {where}")
     if num.rank >= w.shape[0] or w.shape[0] < ncols:
-        return "undecided", (f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
+        return Status.UNDECIDED, (f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
                              f"parameters (rank {num.rank}); use more samples")
     if not num.decided:
-        return "undecided", (f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
+        return Status.UNDECIDED, (f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
                              f"samples, another seed, or fix rounded angles in the model")
     if r_d + num.rank == ncols:
-        return "certified", f"DRNG is complete: rank(B) {r_d} + rank(W) {num.rank} = {ncols}; {gap_txt}"
+        return Status.CERTIFIED, f"DRNG is complete: rank(B) {r_d} + rank(W) {num.rank} = {ncols}; {gap_txt}"
     if r_d + num.rank > ncols:
-        return "failed", (f"rank(B) {r_d} + rank(W) {num.rank} > {ncols}: DRNG columns and the numerical "
+        return Status.FAILED, (f"rank(B) {r_d} + rank(W) {num.rank} > {ncols}: DRNG columns and the numerical "
                           f"rank disagree ({gap_txt}); try more samples")
     return None
 

@@ -12,15 +12,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..enums import Source
 from ..model.inertia import hat as hat10
 from ..pga.linalg import outer, sym
 
-PAPER = ("shared points", "fixed points", "planar rotations")
-#: provenance of a column: the paper's principles, the extended rules (:mod:`.rules`), numerics
-EXTENDED = ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains")
+#: provenance of a column (:class:`~baseparams.enums.Source`, whose labels these are): the
+#: paper's principles, the extended rules (:mod:`.rules`), unmeasured roots, numerics
+PAPER = tuple(s.label for s in Source if s.is_paper)
+EXTENDED = tuple(s.label for s in Source if s.is_extended)
 #: columns that come from which generalized forces are measured, not from geometry
-UNMEASURED = "unmeasured root"
-PRINCIPLES = PAPER + EXTENDED + (UNMEASURED, "numerical")
+UNMEASURED = Source.UNMEASURED.label
+PRINCIPLES = tuple(s.label for s in Source)
 
 
 def sym_params(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -44,10 +46,11 @@ class Columns:
 
     ``h (k, 10)``: the block on body ``child (k,)`` (the column's highest body); ``parent (k,)``
     the other body (``-1``: none) whose block is ``hp (k, 10)`` (default ``-h``: the principles'
-    "``+h`` on the child, ``-h`` on the parent"); ``principle (k,)`` index into
-    :data:`PRINCIPLES`; ``joint (k,)`` the joint the column comes from (``n + l`` for loop joint
-    ``l``; a body for the extended rules); ``label (k,)`` which points or vectors; ``extra (k,)``
-    an optional third body (``-1``: none, lower than ``child``) with block ``he (k, 10)``.
+    "``+h`` on the child, ``-h`` on the parent"); ``principle (k,)`` a
+    :class:`~baseparams.enums.Source` (index into :data:`PRINCIPLES`); ``joint (k,)`` the joint
+    the column comes from (``n + l`` for loop joint ``l``; a body for the extended rules);
+    ``label (k,)`` which points or vectors; ``extra (k,)`` an optional third body (``-1``: none,
+    lower than ``child``) with block ``he (k, 10)``.
     """
 
     h: np.ndarray

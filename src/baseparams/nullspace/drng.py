@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..enums import Source
 from ..model.inertia import PAPER_NAMES
 from ..model.robot import Robot
 from ..model.scale import decision_scale
@@ -56,17 +57,16 @@ class DRNGResult:
         the extended rules R-A, R-B, R-L1, R-L2 (those run), then the unmeasured root's own
         parameters (joint-torque rows only)."""
         out, prev = {}, 0
-        names = PAPER + (EXTENDED if self.extended else ())
-        if np.any(self.columns.principle == PRINCIPLES.index(UNMEASURED)):
-            names = names + (UNMEASURED,)
-        for name in names:
-            k = PRINCIPLES.index(name)
-            keep = self.columns.principle <= k
-            if np.any(self.columns.principle == k):
+        sources = [s for s in Source if s.is_paper or (self.extended and s.is_extended)]
+        if np.any(self.columns.principle == Source.UNMEASURED):
+            sources.append(Source.UNMEASURED)
+        for s in sources:
+            keep = self.columns.principle <= s
+            if np.any(self.columns.principle == s):
                 r = dimensionless_rank(self.columns.subset(keep), self.robot)
             else:
                 r = prev
-            out[name] = r - prev
+            out[s.label] = r - prev
             prev = r
         return out
 
@@ -87,11 +87,12 @@ class DRNGResult:
             joint = f"loop joint {lj.name!r} ({lj.type})"
         else:
             joint = f"joint {self.robot.joint_names[j]!r} ({self.robot.jtype[j]})"
-        if c.principle[k] == PRINCIPLES.index(UNMEASURED):
-            return f"{UNMEASURED}: body {body}, {c.label[k]} (no measured row sees the floating root's own parameters)"
-        if c.principle[k] >= len(PAPER):
-            return f"{PRINCIPLES[c.principle[k]]}: bodies {body}{par}, {c.label[k]}"
-        return f"{PRINCIPLES[c.principle[k]]}: {joint}, bodies {body}{par}, points {c.label[k]}"
+        src = Source(int(c.principle[k]))
+        if src is Source.UNMEASURED:
+            return f"{src.label}: body {body}, {c.label[k]} (no measured row sees the floating root's own parameters)"
+        if not src.is_paper:
+            return f"{src.label}: bodies {body}{par}, {c.label[k]}"
+        return f"{src.label}: {joint}, bodies {body}{par}, points {c.label[k]}"
 
 
 def dimensionless_rank(cols: Columns, robot: Robot) -> int:
@@ -120,7 +121,7 @@ def unmeasured_columns(robot: Robot, rows: str) -> Columns:
     child = np.repeat(np.array(roots, dtype=int), 10)
     z = np.zeros(k, dtype=int)
     labels = np.array(list(PAPER_NAMES) * len(roots), dtype=object)
-    return Columns(np.tile(np.eye(10), (len(roots), 1)), child, z - 1, np.full(k, PRINCIPLES.index(UNMEASURED)),
+    return Columns(np.tile(np.eye(10), (len(roots), 1)), child, z - 1, np.full(k, Source.UNMEASURED),
                    child.copy(), labels, hp=np.zeros((k, 10)))
 
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..enums import Source
 from ..model.robot import Robot
 from ..pga.core import hat
 from ..pga.linalg import cross3, nullspace, perp_basis
@@ -93,8 +94,8 @@ def _compound_columns(robot: Robot, tol: float) -> Columns:
                 labels.append(f"v{a} v{b} (common kernel)")
         if hs:
             m = len(hs)
-            parts.append(Columns(np.array(hs), np.full(m, i), np.full(m, robot.parent[i]), np.zeros(m, dtype=int),
-                                 np.full(m, i), np.array(labels, dtype=object)))
+            parts.append(Columns(np.array(hs), np.full(m, i), np.full(m, robot.parent[i]),
+                                 np.full(m, Source.SHARED_POINTS), np.full(m, i), np.array(labels, dtype=object)))
     return Columns.concat(parts)
 
 
@@ -129,16 +130,16 @@ def shared_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     if len(r):
         o, z = _pt(org[r]), _dir(axw[r])
         h = np.stack([outer_params(o), sym_params(o, z), outer_params(z)], axis=1)
-        parts.append(_cols(h, r, par[r], 0, ["O O", "O z", "z z"]))
+        parts.append(_cols(h, r, par[r], Source.SHARED_POINTS, ["O O", "O z", "z z"]))
     p = np.flatnonzero(jt == "P")
     if len(p):
         pairs = [(a, b) for a in range(3) for b in range(a, 3)]
         blocks = [outer_params(_dir(e[a])) if a == b else sym_params(_dir(e[a]), _dir(e[b])) for a, b in pairs]
         h = np.stack([np.broadcast_to(blk, (len(p), 10)) for blk in blocks], axis=1)
-        parts.append(_cols(h, p, par[p], 0, [f"{'xyz'[a]} {'xyz'[b]}" for a, b in pairs]))
+        parts.append(_cols(h, p, par[p], Source.SHARED_POINTS, [f"{'xyz'[a]} {'xyz'[b]}" for a, b in pairs]))
     us = np.flatnonzero((jt == "U") | (jt == "S"))
     if len(us):
-        parts.append(_cols(outer_params(_pt(org[us]))[:, None], us, par[us], 0, ["O O"]))
+        parts.append(_cols(outer_params(_pt(org[us]))[:, None], us, par[us], Source.SHARED_POINTS, ["O O"]))
     parts.append(_compound_columns(robot, tol))
     return Columns.concat(parts)
 
@@ -157,24 +158,24 @@ def fixed_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     if len(sel) and g_zero:  # E2: only when the fixed point has zero acceleration
         o = _pt(org[sel])
         h = np.stack([sym_params(o, np.broadcast_to(_dir(e[k]), o.shape)) for k in range(3)], axis=1)
-        parts.append(_cols(h, sel, np.full(len(sel), -1), 1, ["O x", "O y", "O z"]))
+        parts.append(_cols(h, sel, np.full(len(sel), -1), Source.FIXED_POINTS, ["O x", "O y", "O z"]))
     sel = np.flatnonzero(base & (jt == "P"))
     if len(sel):
         o = _pt(org[sel])
         h = np.stack([sym_params(o, np.broadcast_to(_dir(e[k]), o.shape)) for k in range(3)], axis=1)
-        parts.append(_cols(h, sel, np.full(len(sel), -1), 1, ["O x", "O y", "O z"]))
+        parts.append(_cols(h, sel, np.full(len(sel), -1), Source.FIXED_POINTS, ["O x", "O y", "O z"]))
     sel = np.flatnonzero(base & (jt == "R"))
     if len(sel):
         o, z = _pt(org[sel]), _dir(axw[sel])
         x, y = (_dir(v) for v in perp_basis(axw[sel]))
         h = np.stack([sym_params(z, x), sym_params(z, y)], axis=1)
-        parts.append(_cols(h, sel, np.full(len(sel), -1), 1, ["z x", "z y"]))
+        parts.append(_cols(h, sel, np.full(len(sel), -1), Source.FIXED_POINTS, ["z x", "z y"]))
         across = np.linalg.norm(cross3(axw[sel], np.broadcast_to(g, axw[sel].shape)), axis=1)
         along = g_zero | (across <= tol * max(1.0, np.linalg.norm(g)))
         if along.any():
             s2 = sel[along]
             h = np.stack([sym_params(o[along], x[along]), sym_params(o[along], y[along])], axis=1)
-            parts.append(_cols(h, s2, np.full(len(s2), -1), 1, ["O x", "O y"]))
+            parts.append(_cols(h, s2, np.full(len(s2), -1), Source.FIXED_POINTS, ["O x", "O y"]))
     return Columns.concat(parts)
 
 
@@ -192,21 +193,21 @@ def planar_rotation_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         z = _dir(d_pr[sel])
         x, y = (_dir(v) for v in perp_basis(d_pr[sel]))
         h = np.stack([outer_params(x) - outer_params(y), sym_params(x, y)], axis=1)
-        parts.append(_cols(h, sel, np.full(len(sel), -1), 2, ["x x - y y", "x y"]))
+        parts.append(_cols(h, sel, np.full(len(sel), -1), Source.PLANAR_ROTATIONS, ["x x - y y", "x y"]))
         off = ~base[sel]
         if off.any():
             h = np.stack([sym_params(z[off], x[off]), sym_params(z[off], y[off])], axis=1)
-            parts.append(_cols(h, sel[off], np.full(off.sum(), -1), 2, ["z x", "z y"]))
+            parts.append(_cols(h, sel[off], np.full(off.sum(), -1), Source.PLANAR_ROTATIONS, ["z x", "z y"]))
     sel = np.flatnonzero(is_pr & (jt == "P") & ~base & has_d)
     if len(sel):
         o, d = _pt(org[sel]), _dir(d_pr[sel])
-        parts.append(_cols(sym_params(d, o)[:, None], sel, np.full(len(sel), -1), 2, ["d_pr O"]))
+        parts.append(_cols(sym_params(d, o)[:, None], sel, np.full(len(sel), -1), Source.PLANAR_ROTATIONS, ["d_pr O"]))
         slide = np.linalg.norm(cross3(axw[sel], d_pr[sel]), axis=1) <= tol
         if slide.any():
             s2 = sel[slide]
             x, y = (_dir(v) for v in perp_basis(d_pr[s2]))
             h = np.stack([sym_params(o[slide], x), sym_params(o[slide], y)], axis=1)
-            parts.append(_cols(h, s2, par[s2], 2, ["O x (transfer)", "O y (transfer)"]))
+            parts.append(_cols(h, s2, par[s2], Source.PLANAR_ROTATIONS, ["O x (transfer)", "O y (transfer)"]))
     return Columns.concat(parts)
 
 
@@ -234,6 +235,6 @@ def loop_columns(robot: Robot) -> Columns:
                 hs.append(outer_params(pts[a][None])[0] if a == b else sym_params(pts[a][None], pts[b][None])[0])
                 labels.append(f"{names[a]} {names[b]} (loop)")
         m = len(hs)
-        parts.append(Columns(np.array(hs), np.full(m, lj.child), np.full(m, lj.parent), np.zeros(m, dtype=int),
-                             np.full(m, robot.n + k), np.array(labels, dtype=object)))
+        parts.append(Columns(np.array(hs), np.full(m, lj.child), np.full(m, lj.parent),
+                             np.full(m, Source.SHARED_POINTS), np.full(m, robot.n + k), np.array(labels, dtype=object)))
     return Columns.concat(parts)

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..enums import Source
 from ..model.inertia import hat as hat10
 from ..model.inertia import unhat
 from ..model.robot import Robot
@@ -37,7 +38,7 @@ from .columns import Columns, sym_params
 from .principles import compound_shared, world_axes
 from .subspaces import MotionSpans, motion_spans
 
-RA, RB, RL1, RL2 = 3, 4, 5, 6  # principle indices (after the paper's three)
+RA, RB, RL1, RL2 = Source.R_A, Source.R_B, Source.R_L1, Source.R_L2  # provenance of the rules' columns
 
 
 def _independent(syms: np.ndarray, tol: float) -> np.ndarray:

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..enums import Status
 from ..model.robot import Robot
 from .certify import certify
 from .drng import drng
@@ -25,15 +26,15 @@ class SurveyCase:
     extended_rank: int
     by_rule: dict
     max_column_residual: float
-    status: str
+    status: Status
 
     @property
     def paper_complete(self) -> bool:
-        return self.status in ("certified", "completed") and self.paper_rank == self.nullity
+        return Status(self.status).ok and self.paper_rank == self.nullity
 
     @property
     def complete(self) -> bool:
-        return self.status == "certified" and self.extended_rank == self.nullity
+        return self.status == Status.CERTIFIED and self.extended_rank == self.nullity
 
 
 def describe(robot: Robot) -> str:
@@ -59,11 +60,11 @@ def summarize(cases: list[SurveyCase]) -> dict:
     n = len(cases)
     return {
         "robots": n,
-        "certified": sum(c.status in ("certified", "completed") for c in cases),
+        "certified": sum(Status(c.status).ok for c in cases),
         "paper_complete": sum(c.paper_complete for c in cases),
         "extended_complete": sum(c.complete for c in cases),
         "max_column_residual": max((c.max_column_residual for c in cases), default=0.0),
-        "failed": [f"{c.name}: {c.status}" for c in cases if c.status not in ("certified", "completed")],
+        "failed": [f"{c.name}: {c.status}" for c in cases if not Status(c.status).ok],
         "incomplete": [f"{c.name} ({c.description}): extended rank {c.extended_rank} of nullity {c.nullity}"
-                       for c in cases if not c.complete and c.status in ("certified", "completed")],
+                       for c in cases if not c.complete and Status(c.status).ok],
     }

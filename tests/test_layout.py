@@ -184,3 +184,36 @@ def test_no_submodule_shadows_a_public_name():
     for name in sorted(MODULES):
         importlib.import_module(name)
     assert callable(baseparams.load) and callable(baseparams.regressor) and callable(baseparams.analyze)
+
+
+#: the longest a function may be (lines from ``def`` to its last line, decorators excluded)
+MAX_FUNCTION_LINES = 60
+
+
+def _long_functions(modules: dict[str, Path] = MODULES) -> list[str]:
+    """``module:line name (lines)`` for every function over :data:`MAX_FUNCTION_LINES` lines
+    whose docstring has no line starting with ``Long:`` (the reason it is not split)."""
+    out = []
+    for name, path in modules.items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            length = node.end_lineno - node.lineno + 1
+            doc = ast.get_docstring(node) or ""
+            if length > MAX_FUNCTION_LINES and not any(ln.strip().startswith("Long:") for ln in doc.splitlines()):
+                out.append(f"{name}:{node.lineno} {node.name} ({length} lines)")
+    return out
+
+
+def test_functions_are_short():
+    """Every function is at most 60 lines, split into named steps, unless its docstring says
+    why not on a line starting with ``Long:``."""
+    assert _long_functions() == []
+
+
+def test_function_length_check_sees_long_functions(tmp_path):
+    """The check itself: a long function is reported, and a ``Long:`` reason silences it."""
+    body = "\n".join(f"    x{k} = {k}" for k in range(MAX_FUNCTION_LINES))
+    (tmp_path / "long.py").write_text(f'def f():\n    """Doc."""\n{body}\n\n\n'
+                                      f'def g():\n    """Doc.\n\n    Long: a reason.\n    """\n{body}\n')
+    assert _long_functions({"long": tmp_path / "long.py"}) == ["long:1 f (62 lines)"]

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import re
 import warnings
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -217,89 +218,119 @@ def _joint_kind(mj, model, data, joints: list[int], bname: str, what: str):
     return "C", np.array(rows), anchor
 
 
+@dataclass
+class _Walk:
+    """Bookkeeping of the walk over MuJoCo's bodies, shared with :func:`_equalities`."""
+
+    link_of: list[str | None]  # the moving link carrying each body (None: the world)
+    t_link: dict[str | None, np.ndarray] = field(default_factory=lambda: {None: np.eye(4)})  # link frames at q = 0
+    dof_map: dict[int, int] = field(default_factory=dict)  # MuJoCo dof -> our coordinate
+    armature: list[float] = field(default_factory=list)
+    joint_names: dict[int, str] = field(default_factory=dict)
+
+
 def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_inertia: bool) -> Robot:
-    nb = model.nbody
+    gravity = _gravity(mj, model, path, gravity)
+    mname = model.names.split(b"\0", 1)[0].decode()
+    b = RobotBuilder(name or (mname if mname and mname != "MuJoCo Model" else path.stem), gravity=gravity)
+    bnames = ["world"] + [_name(model, "body", i, f"body{i}") for i in range(1, model.nbody)]
+    w = _Walk(link_of=[None] * model.nbody)
+    for i in range(1, model.nbody):
+        _add_body(mj, model, data, path, b, w, i, bnames[i], floating, strict_inertia)
+    couplings = _equalities(mj, model, data, path, b, bnames, w.link_of, w.t_link, w.joint_names, w.dof_map)
+    robot = b.build()
+    robot = replace(robot, armature=np.array(w.armature))
+    if couplings:
+        robot = replace(robot, couplings=tuple(couplings))
+    if robot.has_loops:  # MJCF does not say which coordinates are independent: prefer actuated joints
+        robot = choose_independent(robot, _preferred_coordinates(mj, model, robot, w.dof_map))
+    return robot
+
+
+def _gravity(mj, model, path: Path, gravity) -> np.ndarray:
+    """``gravity`` if given, else the model's (zero, with a note, when the model disables it)."""
     if gravity is None:
         gravity = np.array(model.opt.gravity, dtype=float)
         if model.opt.disableflags & int(mj.mjtDisableBit.mjDSBL_GRAVITY) and np.any(gravity):
             warnings.warn(f"{path}: gravity is disabled (<flag gravity=\"disable\">): analysed with zero gravity",
-                          MJCFWarning, stacklevel=3)
+                          MJCFWarning, stacklevel=4)
             gravity = np.zeros(3)
-    mname = model.names.split(b"\0", 1)[0].decode()
-    b = RobotBuilder(name or (mname if mname and mname != "MuJoCo Model" else path.stem), gravity=gravity)
-    bnames = ["world"] + [_name(model, "body", i, f"body{i}") for i in range(1, nb)]
-    link_of: list[str | None] = [None] * nb  # the moving link carrying each body (None: the world)
-    t_link: dict[str | None, np.ndarray] = {None: np.eye(4)}  # world pose of each link frame at q = 0
-    dof_map: dict[int, int] = {}  # MuJoCo dof -> our coordinate
-    armature: list[float] = []
-    joint_names: dict[int, str] = {}
-    for i in range(1, nb):
-        bname = bnames[i]
-        what = f"{path}: body {bname!r}"
-        p = int(model.body_parentid[i])
-        plink = link_of[p]
-        t_body = _pose(data.xpos[i], data.xmat[i])
-        t_in = t_body @ quat_pose(model.body_ipos[i], model.body_iquat[i])
-        mass, diag = float(model.body_mass[i]), np.array(model.body_inertia[i], dtype=float)
-        j0, nj = int(model.body_jntadr[i]), int(model.body_jntnum[i])
-        joints = list(range(j0, j0 + nj)) if nj > 0 else []
-        for k, j in enumerate(joints):
-            joint_names[j] = _name(model, "jnt", j, f"{bname}_joint{k}")
-        if not joints:
-            if floating and p == 0:
-                jt, axis, t_l = "F", None, t_body
-            else:
-                b.add_link(bname, parent=plink, joint="fixed", origin=np.linalg.inv(t_link[plink]) @ t_body,
-                           inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_body) @ t_in))
-                link_of[i] = plink
-                continue
-        else:
-            jt, axis, anchor = _joint_kind(mj, model, data, joints, bname, what)
-            t_l = _pose(anchor, data.xmat[i])
-            if jt == "F" and p != 0:
-                raise ModelError(f"{what}: a free joint is only supported on a top-level body")
-        check_inertia(mass, np.diag(diag), f"{what}: inertia", strict=strict_inertia)
-        jname = joint_names[joints[0]] if len(joints) == 1 else (
-            "+".join(joint_names[j] for j in joints) if joints else f"{bname}_joint")
-        arm = np.zeros(6) if not joints else np.concatenate(
-            [model.dof_armature[model.jnt_dofadr[j]: model.jnt_dofadr[j] + (6 if model.jnt_type[j] == 0 else
-                                                                             3 if model.jnt_type[j] == 1 else 1)]
-             for j in joints])
-        first = len(armature)
-        if jt == "F" and joints:
-            arm = np.r_[arm[3:], arm[:3]]  # MuJoCo free dofs (v, omega) -> ours (omega, v)
-            d0 = int(model.jnt_dofadr[joints[0]])
-            dof_map.update({d0 + k: first + (k + 3) % 6 for k in range(6)})
-        else:
-            d0 = int(model.jnt_dofadr[joints[0]]) if joints else -1
-            for k in range(len(arm) if joints else 0):
-                dof_map[d0 + k] = first + k
-        armature.extend(arm.tolist())
-        b.add_link(bname, parent=plink, joint=jt, origin=np.linalg.inv(t_link[plink]) @ t_l,
-                   axis=(0, 0, 1) if axis is None else (axis if jt != "U" else axis[0]),
-                   axis2=None if jt != "U" else axis[1],
-                   inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_l) @ t_in),
-                   joint_name=jname, actuated=True)  # all independent until loops choose
-        link_of[i] = bname
-        t_link[bname] = t_l
-    couplings = _equalities(mj, model, data, path, b, bnames, link_of, t_link, joint_names, dof_map)
-    robot = b.build()
-    from dataclasses import replace
+    return gravity
 
-    robot = replace(robot, armature=np.array(armature))
-    if couplings:
-        robot = replace(robot, couplings=tuple(couplings))
-    if robot.has_loops:  # MJCF does not say which coordinates are independent: prefer actuated joints
-        prefer = set()
-        for a in range(model.nu):
-            if int(model.actuator_trntype[a]) in (int(mj.mjtTrn.mjTRN_JOINT), int(mj.mjtTrn.mjTRN_JOINTINPARENT)):
-                j = int(model.actuator_trnid[a, 0])
-                nd = 6 if model.jnt_type[j] == 0 else 3 if model.jnt_type[j] == 1 else 1
-                adr = int(model.jnt_dofadr[j])
-                prefer |= {dof_map[adr + k] for k in range(nd) if adr + k in dof_map}
-        prefer |= set(range(6)) if robot.jtype[0] == "F" else set()
-        robot = choose_independent(robot, prefer)
-    return robot
+
+def _add_body(mj, model, data, path: Path, b: RobotBuilder, w: _Walk, i: int, bname: str, floating: bool,
+              strict_inertia: bool) -> None:
+    """Add MuJoCo body ``i``: merged into its parent when it has no joint (floating instead when
+    ``floating`` and top-level), else a moving link with its joint, armature and dofs mapped."""
+    what = f"{path}: body {bname!r}"
+    p = int(model.body_parentid[i])
+    plink = w.link_of[p]
+    t_body = _pose(data.xpos[i], data.xmat[i])
+    t_in = t_body @ quat_pose(model.body_ipos[i], model.body_iquat[i])
+    mass, diag = float(model.body_mass[i]), np.array(model.body_inertia[i], dtype=float)
+    j0, nj = int(model.body_jntadr[i]), int(model.body_jntnum[i])
+    joints = list(range(j0, j0 + nj)) if nj > 0 else []
+    for k, j in enumerate(joints):
+        w.joint_names[j] = _name(model, "jnt", j, f"{bname}_joint{k}")
+    if not joints:
+        if floating and p == 0:
+            jt, axis, t_l = "F", None, t_body
+        else:
+            b.add_link(bname, parent=plink, joint="fixed", origin=np.linalg.inv(w.t_link[plink]) @ t_body,
+                       inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_body) @ t_in))
+            w.link_of[i] = plink
+            return
+    else:
+        jt, axis, anchor = _joint_kind(mj, model, data, joints, bname, what)
+        t_l = _pose(anchor, data.xmat[i])
+        if jt == "F" and p != 0:
+            raise ModelError(f"{what}: a free joint is only supported on a top-level body")
+    check_inertia(mass, np.diag(diag), f"{what}: inertia", strict=strict_inertia)
+    jname = w.joint_names[joints[0]] if len(joints) == 1 else (
+        "+".join(w.joint_names[j] for j in joints) if joints else f"{bname}_joint")
+    _map_dofs(model, w, jt, joints)
+    b.add_link(bname, parent=plink, joint=jt, origin=np.linalg.inv(w.t_link[plink]) @ t_l,
+               axis=(0, 0, 1) if axis is None else (axis if jt != "U" else axis[0]),
+               axis2=None if jt != "U" else axis[1],
+               inertia=Inertia(mass, inertia=diag, frame=np.linalg.inv(t_l) @ t_in),
+               joint_name=jname, actuated=True)  # all independent until loops choose
+    w.link_of[i] = bname
+    w.t_link[bname] = t_l
+
+
+def _joint_ndof(model, j: int) -> int:
+    """Dofs of MuJoCo joint ``j``: free 6, ball 3, hinge and slide 1."""
+    return 6 if model.jnt_type[j] == 0 else 3 if model.jnt_type[j] == 1 else 1
+
+
+def _map_dofs(model, w: _Walk, jt: str, joints: list[int]) -> None:
+    """Append the armature of a new link's joint (``jt``, MuJoCo ``joints``; none: a floating
+    joint of ours, zero armature) and map its MuJoCo dofs to our coordinates."""
+    arm = np.zeros(6) if not joints else np.concatenate(
+        [model.dof_armature[model.jnt_dofadr[j]: model.jnt_dofadr[j] + _joint_ndof(model, j)] for j in joints])
+    first = len(w.armature)
+    if jt == "F" and joints:
+        arm = np.r_[arm[3:], arm[:3]]  # MuJoCo free dofs (v, omega) -> ours (omega, v)
+        d0 = int(model.jnt_dofadr[joints[0]])
+        w.dof_map.update({d0 + k: first + (k + 3) % 6 for k in range(6)})
+    else:
+        d0 = int(model.jnt_dofadr[joints[0]]) if joints else -1
+        for k in range(len(arm) if joints else 0):
+            w.dof_map[d0 + k] = first + k
+    w.armature.extend(arm.tolist())
+
+
+def _preferred_coordinates(mj, model, robot: Robot, dof_map: dict[int, int]) -> set[int]:
+    """Our coordinates of the joints driven by actuators (and the floating base's)."""
+    prefer = set()
+    for a in range(model.nu):
+        if int(model.actuator_trntype[a]) in (int(mj.mjtTrn.mjTRN_JOINT), int(mj.mjtTrn.mjTRN_JOINTINPARENT)):
+            j = int(model.actuator_trnid[a, 0])
+            nd = _joint_ndof(model, j)
+            adr = int(model.jnt_dofadr[j])
+            prefer |= {dof_map[adr + k] for k in range(nd) if adr + k in dof_map}
+    prefer |= set(range(6)) if robot.jtype[0] == "F" else set()
+    return prefer
 
 
 def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link, joint_names, dof_map) -> list:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -105,14 +106,24 @@ def _inertial(link: ET.Element, what: str, check: bool = True, strict: bool = Fa
     return Inertia(mass, com=(0.0, 0.0, 0.0), inertia=j, frame=frame)
 
 
-def _link_ref(elem: ET.Element, what: str, path: Path) -> str:
+def _link_ref(elem: ET.Element, what: str, path: Path, stacklevel: int = 4) -> str:
     name = elem.get("link")
     if name is None and elem.get("name") is not None:
-        warnings.warn(f"{what}: 'name=' used instead of 'link='; accepted", URDFWarning, stacklevel=4)
+        warnings.warn(f"{what}: 'name=' used instead of 'link='; accepted", URDFWarning, stacklevel=stacklevel)
         name = elem.get("name")
     if not name:
         raise ModelError(f"{what}: missing link attribute")
     return name
+
+
+class _Index(NamedTuple):
+    """The file's links and joints, indexed: what the depth-first build walks."""
+
+    links: dict[str, ET.Element]
+    joints: dict[str, ET.Element]
+    parent_of: dict[str, str]  # child link -> name of its parent joint
+    children: dict[str, list[ET.Element]]  # link -> joints hanging from it, in file order
+    mimics: dict[str, tuple[str, float, float]]  # follower joint -> (leader, multiplier, offset)
 
 
 def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81),
@@ -125,6 +136,30 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     root = _parse(path)
     if root.tag != "robot":
         raise ModelError(f"{path}: root element is <{root.tag}>, expected <robot>")
+    links = _index_links(root, path)
+    ix = _index_joints(root, links, path)
+    _drop_ignored_mimics(ix, path)
+    base = _root_link(ix, path)
+    b = RobotBuilder(name or root.get("name") or path.stem, gravity=gravity)
+    if floating and any(j.get("type") == "floating" for j in ix.children[base]):
+        floating = False  # the file has its own floating joint at the root
+    limits = _add_root(b, ix, base, floating, path, strict_inertia)
+    _add_tree(b, ix, base, floating, limits, path, strict_inertia)
+    has_loops = _add_loops(b, root, links, path)
+    couplings = _read_couplings(root, path) + _mimic_couplings(ix)
+    if has_loops or couplings:
+        b.q_box = _sampling_box(limits)
+    try:
+        robot = b.build()
+    except NoMovingBodiesError as exc:
+        raise NoMovingBodiesError(f"{path}: {exc}") from None
+    if couplings:
+        robot = _with_couplings(robot, couplings, path)
+    return robot
+
+
+def _index_links(root: ET.Element, path: Path) -> dict[str, ET.Element]:
+    """The ``<link>`` elements by name: each named, no duplicates, at least one."""
     links: dict[str, ET.Element] = {}
     for ln in root.findall("link"):
         lname = ln.get("name")
@@ -135,74 +170,103 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         links[lname] = ln
     if not links:  # urdfdom refuses it; here it is a robot with nothing to identify
         raise NoMovingBodiesError(f"{path}: no <link> elements: no moving links")
-    joints: dict[str, ET.Element] = {}
-    mimics: dict[str, tuple[str, float, float]] = {}
-    parent_of: dict[str, str] = {}
-    children: dict[str, list[ET.Element]] = {k: [] for k in links}
+    return links
+
+
+def _index_joints(root: ET.Element, links: dict[str, ET.Element], path: Path) -> _Index:
+    """Every ``<joint>`` checked (name, parent and child links, one parent per link, mimic,
+    type) and indexed."""
+    ix = _Index(links, {}, {}, {k: [] for k in links}, {})
     for jt in root.findall("joint"):
         jname = jt.get("name")
         what = f"{path}: <joint name={jname!r}>"
         if not jname:
             raise ModelError(f"{path}: a <joint> has no name")
-        if jname in joints:
+        if jname in ix.joints:
             raise ModelError(f"{path}: duplicate joint {jname!r}")
-        joints[jname] = jt
-        p, c = jt.find("parent"), jt.find("child")
-        if p is None or c is None or not p.get("link") or not c.get("link"):
-            raise ModelError(f"{what}: needs <parent link> and <child link>")
-        pl, cl = p.get("link"), c.get("link")
-        for ref in (pl, cl):
-            if ref not in links:
-                raise ModelError(f"{what}: unknown link {ref!r}")
-        if cl in parent_of:
-            raise ModelError(f"{what}: link {cl!r} already has parent joint {parent_of[cl]!r} "
+        ix.joints[jname] = jt
+        pl, cl = _joint_links(jt, links, what)
+        if cl in ix.parent_of:
+            raise ModelError(f"{what}: link {cl!r} already has parent joint {ix.parent_of[cl]!r} "
                              f"(a second parent or a cycle: close loops with <loop>)")
-        parent_of[cl] = jname
-        children[pl].append(jt)
+        ix.parent_of[cl] = jname
+        ix.children[pl].append(jt)
         mim = jt.find("mimic")
         if mim is not None:
-            leader = mim.get("joint")
-            if not leader:
-                raise ModelError(f"{what}: <mimic> needs a joint attribute")
-            mult = float(_floats(mim.get("multiplier"), 1, f"{what} <mimic multiplier>", (1.0,))[0])
-            off = float(_floats(mim.get("offset"), 1, f"{what} <mimic offset>", (0.0,))[0])
-            mimics[jname] = (leader, mult, off)
+            ix.mimics[jname] = _mimic(mim, what)
         t = jt.get("type")
         if t not in _TYPES:
             hint = " (planar joints are not supported)" if t == "planar" else ""
             raise ModelError(f"{what}: unknown or unsupported joint type {t!r}{hint}")
-    for jname, (leader, _, _) in list(mimics.items()):
-        if leader not in joints:  # urdfdom and Pinocchio ignore it: say so, once
+    return ix
+
+
+def _joint_links(jt: ET.Element, links: dict[str, ET.Element], what: str) -> tuple[str, str]:
+    """``(parent link, child link)`` of a joint, both existing links."""
+    p, c = jt.find("parent"), jt.find("child")
+    if p is None or c is None or not p.get("link") or not c.get("link"):
+        raise ModelError(f"{what}: needs <parent link> and <child link>")
+    pl, cl = p.get("link"), c.get("link")
+    for ref in (pl, cl):
+        if ref not in links:
+            raise ModelError(f"{what}: unknown link {ref!r}")
+    return pl, cl
+
+
+def _mimic(mim: ET.Element, what: str) -> tuple[str, float, float]:
+    """``(leader joint, multiplier, offset)`` of a ``<mimic>``."""
+    leader = mim.get("joint")
+    if not leader:
+        raise ModelError(f"{what}: <mimic> needs a joint attribute")
+    mult = float(_floats(mim.get("multiplier"), 1, f"{what} <mimic multiplier>", (1.0,))[0])
+    off = float(_floats(mim.get("offset"), 1, f"{what} <mimic offset>", (0.0,))[0])
+    return leader, mult, off
+
+
+def _drop_ignored_mimics(ix: _Index, path: Path) -> None:
+    """Drop, with a warning each, the mimics of unknown joints (as urdfdom and Pinocchio do) and
+    those involving a fixed joint."""
+    for jname, (leader, _, _) in list(ix.mimics.items()):
+        if leader not in ix.joints:  # urdfdom and Pinocchio ignore it: say so, once
             warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (unknown joint {leader!r}); "
-                          f"{jname!r} moves freely", URDFWarning, stacklevel=2)
-            del mimics[jname]
-        elif "fixed" in (joints[jname].get("type"), joints[leader].get("type")):
+                          f"{jname!r} moves freely", URDFWarning, stacklevel=3)
+            del ix.mimics[jname]
+        elif "fixed" in (ix.joints[jname].get("type"), ix.joints[leader].get("type")):
             warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (a fixed joint cannot mimic or be "
-                          f"mimicked)", URDFWarning, stacklevel=2)
-            del mimics[jname]
-    roots = [k for k in links if k not in parent_of]
+                          f"mimicked)", URDFWarning, stacklevel=3)
+            del ix.mimics[jname]
+
+
+def _root_link(ix: _Index, path: Path) -> str:
+    """The one link without a parent joint."""
+    roots = [k for k in ix.links if k not in ix.parent_of]
     if len(roots) != 1:
         if not roots:
             raise ModelError(f"{path}: no root link: the joints form a cycle")
         raise ModelError(f"{path}: several root links {roots[:5]}: the tree is not connected")
-    b = RobotBuilder(name or root.get("name") or path.stem, gravity=gravity)
-    flags: dict[str, bool] = {}
-    base = roots[0]
-    top = base
-    if floating and any(j.get("type") == "floating" for j in children[base]):
-        floating = False  # the file has its own floating joint at the root
+    return roots[0]
+
+
+def _add_root(b: RobotBuilder, ix: _Index, base: str, floating: bool, path: Path,
+              strict_inertia: bool) -> list[tuple[float, float]]:
+    """Add the root link, floating (an F joint ``root_joint``) or as the fixed base; the joint
+    limits so far (six unbounded ones when floating)."""
     if floating:
-        b.add_link(base, joint="F", inertia=_inertial(links[base], f"{path}: <link name={base!r}>",
+        b.add_link(base, joint="F", inertia=_inertial(ix.links[base], f"{path}: <link name={base!r}>",
                                                      strict=strict_inertia),
                    joint_name="root_joint")
-        flags[base] = True
-        limits_root = [(-np.inf, np.inf)] * 6
-    else:
-        b.add_link(base, joint="fixed")  # the root link is the fixed base (a frame)
+        return [(-np.inf, np.inf)] * 6
+    b.add_link(base, joint="fixed")  # the root link is the fixed base (a frame)
+    return []
+
+
+def _add_tree(b: RobotBuilder, ix: _Index, base: str, floating: bool, limits: list[tuple[float, float]],
+              path: Path, strict_inertia: bool) -> None:
+    """Add every joint and its child link, depth first from ``base`` in file order; append the
+    independent joints' limits to ``limits``. Every link must be reached, once."""
     world_fixed = set() if floating else {base}  # links welded to the world: their inertia never matters
     seen = {base}
-    limits: list[tuple[float, float]] = list(limits_root) if floating else []
-    stack = [(top, c) for c in reversed(children[top])]
+    stack = [(base, c) for c in reversed(ix.children[base])]
     while stack:
         plink, jt = stack.pop()
         jname = jt.get("name")
@@ -214,56 +278,81 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         t = _TYPES[jt.get("type")]
         if t == "F" and (plink != base or floating):
             raise ModelError(f"{what}: a floating joint is only supported at the root")
-        axis_el = jt.find("axis")
-        axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0))
-        axis2_el = jt.find("axis2")
-        axis2 = _floats(axis2_el.get("xyz") if axis2_el is not None else None, 3, f"{what} <axis2 xyz>",
-                        (0, 1, 0)) if t == "U" else None
-        if t in ("R", "P", "U") and np.linalg.norm(axis) < 1e-12:
-            raise ModelError(f"{what}: zero joint axis")
-        if t == "U" and axis2_el is None:
-            raise ModelError(f"{what}: a universal joint needs <axis2>")
-        indep = jt.get("independent", "false" if jname in mimics else "true").strip().lower()
-        if indep not in ("true", "false", "1", "0"):
-            raise ModelError(f"{what}: independent must be true or false, got {indep!r}")
-        lim = jt.find("limit")
-        if t != "fixed" and indep in ("true", "1") and not (t == "R" and jname in mimics):
-            if t in ("R", "P"):
-                lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
-                hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]
-                limits.append((lo, hi))
-            else:
-                limits += [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6}[t]
+        axis, axis2 = _joint_axes(jt, t, what)
+        indep = _independent(jt, jname in ix.mimics, what)
+        if t != "fixed" and indep in ("true", "1") and not (t == "R" and jname in ix.mimics):
+            limits += _joint_limits(jt, t, what)
         parent_name = None if (plink == base and not floating) else plink
         if t == "fixed" and plink in world_fixed:
             world_fixed.add(cl)
         b.add_link(cl, parent=parent_name if parent_name is not None else base, joint=t,
                    origin=_origin(jt.find("origin"), what), axis=axis, axis2=axis2,
-                   inertia=_inertial(links[cl], f"{path}: <link name={cl!r}>", check=cl not in world_fixed,
+                   inertia=_inertial(ix.links[cl], f"{path}: <link name={cl!r}>", check=cl not in world_fixed,
                                      strict=strict_inertia), joint_name=jname,
                    actuated=None if t == "fixed" else indep in ("true", "1"))
-        stack.extend((cl, c) for c in reversed(children[cl]))
-    unreached = [k for k in links if k not in seen]
+        stack.extend((cl, c) for c in reversed(ix.children[cl]))
+    unreached = [k for k in ix.links if k not in seen]
     if unreached:
         raise ModelError(f"{path}: links {unreached[:5]} are not connected to the root link {base!r} "
                          f"(a cycle of joints? close loops with <loop>)")
-    # loops and couplings (URDF+)
+
+
+def _joint_axes(jt: ET.Element, t: str, what: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """``(axis, axis2)`` of a joint of type ``t`` (``axis2`` only for U, which needs it)."""
+    axis_el = jt.find("axis")
+    axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0))
+    axis2_el = jt.find("axis2")
+    axis2 = _floats(axis2_el.get("xyz") if axis2_el is not None else None, 3, f"{what} <axis2 xyz>",
+                    (0, 1, 0)) if t == "U" else None
+    if t in ("R", "P", "U") and np.linalg.norm(axis) < 1e-12:
+        raise ModelError(f"{what}: zero joint axis")
+    if t == "U" and axis2_el is None:
+        raise ModelError(f"{what}: a universal joint needs <axis2>")
+    return axis, axis2
+
+
+def _independent(jt: ET.Element, mimicking: bool, what: str) -> str:
+    """The joint's ``independent`` attribute, normalised (default false for a mimicking joint)."""
+    indep = jt.get("independent", "false" if mimicking else "true").strip().lower()
+    if indep not in ("true", "false", "1", "0"):
+        raise ModelError(f"{what}: independent must be true or false, got {indep!r}")
+    return indep
+
+
+def _joint_limits(jt: ET.Element, t: str, what: str) -> list[tuple[float, float]]:
+    """The limits of an independent joint's coordinates (unbounded but for R and P)."""
+    if t not in ("R", "P"):
+        return [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6}[t]
+    lim = jt.find("limit")
+    lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
+    hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]
+    return [(lo, hi)]
+
+
+def _pred_succ(elem: ET.Element, what: str, tag: str, path: Path) -> tuple[ET.Element, ET.Element]:
+    """The ``<predecessor>`` and ``<successor>`` of a ``<loop>`` or ``<coupling>`` (``sucessor``
+    accepted with a warning); ``tag`` is the element as the warning names it."""
+    pred, succ = elem.find("predecessor"), elem.find("successor")
+    if succ is None and elem.find("sucessor") is not None:
+        warnings.warn(f"{path}: {tag}: 'sucessor' spelling accepted", URDFWarning, stacklevel=4)
+        succ = elem.find("sucessor")
+    if pred is None or succ is None:
+        raise ModelError(f"{what}: needs <predecessor> and <successor>")
+    return pred, succ
+
+
+def _add_loops(b: RobotBuilder, root: ET.Element, links: dict[str, ET.Element], path: Path) -> bool:
+    """Add the URDF+ ``<loop>`` closures; whether there are any."""
     loop_elems = root.findall("loop")
-    couplings = []
     for lp in loop_elems:
         lname = lp.get("name", "?")
         what = f"{path}: <loop name={lname!r}>"
         t = lp.get("type")
         if t not in _LOOP_TYPES:
             raise ModelError(f"{what}: unknown or unsupported loop type {t!r}")
-        pred = lp.find("predecessor")
-        succ = lp.find("successor")
-        if succ is None and lp.find("sucessor") is not None:
-            warnings.warn(f"{path}: {what.split(': ', 1)[1]}: 'sucessor' spelling accepted", URDFWarning, stacklevel=2)
-            succ = lp.find("sucessor")
-        if pred is None or succ is None:
-            raise ModelError(f"{what}: needs <predecessor> and <successor>")
-        pl, sl = _link_ref(pred, f"{what} <predecessor>", path), _link_ref(succ, f"{what} <successor>", path)
+        pred, succ = _pred_succ(lp, what, what.split(": ", 1)[1], path)
+        pl = _link_ref(pred, f"{what} <predecessor>", path, stacklevel=5)
+        sl = _link_ref(succ, f"{what} <successor>", path, stacklevel=5)
         for ref in (pl, sl):
             if ref not in links:
                 raise ModelError(f"{what}: unknown link {ref!r}")
@@ -274,35 +363,35 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         b.add_loop(lname, _LOOP_TYPES[t], parent=pl, child=sl, origin=_origin(pred.find("origin"), what),
                    axis=axis, axis2=axis2 if _LOOP_TYPES[t] == "U" else None,
                    child_origin=_origin(succ.find("origin"), what))
+    return bool(loop_elems)
+
+
+def _read_couplings(root: ET.Element, path: Path) -> list[tuple[str, str, str, float, float]]:
+    """The URDF+ ``<coupling>`` elements as ``(name, predecessor link, successor link, ratio, 0)``."""
+    couplings = []
     for cp in root.findall("coupling"):
         cname = cp.get("name", "?")
         what = f"{path}: <coupling name={cname!r}>"
-        pred, succ = cp.find("predecessor"), cp.find("successor")
-        if succ is None and cp.find("sucessor") is not None:
-            warnings.warn(f"{path}: <coupling name={cname!r}>: 'sucessor' spelling accepted", URDFWarning, stacklevel=2)
-            succ = cp.find("sucessor")
-        if pred is None or succ is None:
-            raise ModelError(f"{what}: needs <predecessor> and <successor>")
+        pred, succ = _pred_succ(cp, what, f"<coupling name={cname!r}>", path)
         ratio_el = cp.find("ratio")
         ratio = float(_floats(ratio_el.get("value") if ratio_el is not None else None, 1, f"{what} <ratio value>",
                               (1.0,))[0])
-        couplings.append((cname, _link_ref(pred, f"{what} <predecessor>", path),
-                          _link_ref(succ, f"{what} <successor>", path), ratio, 0.0))
-    for jname, (leader, mult, off) in mimics.items():
-        couplings.append((f"mimic:{jname}", joints[leader].find("child").get("link"),
-                          joints[jname].find("child").get("link"), mult, off))
-    if loop_elems or couplings:
-        # the independent joints' limits as a sampling box around q = 0, capped at +-1
-        # (rad or m) so that continuation stays on one assembly mode
-        b.q_box = np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3]
-                            for lo, hi in limits])
-    try:
-        robot = b.build()
-    except NoMovingBodiesError as exc:
-        raise NoMovingBodiesError(f"{path}: {exc}") from None
-    if couplings:
-        robot = _with_couplings(robot, couplings, path)
-    return robot
+        couplings.append((cname, _link_ref(pred, f"{what} <predecessor>", path, stacklevel=5),
+                          _link_ref(succ, f"{what} <successor>", path, stacklevel=5), ratio, 0.0))
+    return couplings
+
+
+def _mimic_couplings(ix: _Index) -> list[tuple[str, str, str, float, float]]:
+    """The kept mimics as couplings ``(mimic:follower, leader's link, follower's link, mult, off)``."""
+    return [(f"mimic:{jname}", ix.joints[leader].find("child").get("link"),
+             ix.joints[jname].find("child").get("link"), mult, off)
+            for jname, (leader, mult, off) in ix.mimics.items()]
+
+
+def _sampling_box(limits: list[tuple[float, float]]) -> np.ndarray:
+    """The independent joints' limits as a sampling box around q = 0, capped at +-1 (rad or m)
+    so that continuation stays on one assembly mode."""
+    return np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3] for lo, hi in limits])
 
 
 def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:

@@ -185,8 +185,30 @@ class Robot:
     armature: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        n = len(self.names)
+        """Validate every field (one-line :class:`ModelError` naming the robot and the part) and
+        store the arrays normalised."""
         what = f"robot {self.name!r}"
+        parent, m0, nb = self._check_shapes(what)
+        axes = self._check_bodies(what, parent, m0, nb)
+        g = np.asarray(self.gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ModelError(f"{what}: gravity must be 3 finite numbers, got {self.gravity!r}")
+        self._check_loops(what)
+        dof = int(sum(joint_ndof(t, a) for t, a in zip(self.jtype, axes)))
+        self._check_armature(what, dof)
+        self._check_independent(what, dof)
+        self._check_couplings(what, dof)
+        self._check_q_box(what, dof)
+        object.__setattr__(self, "parent", parent)
+        object.__setattr__(self, "M0", m0)
+        object.__setattr__(self, "N_body", nb)
+        object.__setattr__(self, "axes", tuple(axes))
+        object.__setattr__(self, "gravity", g)
+
+    def _check_shapes(self, what: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """At least one body, per-body fields of one length, unique names; ``(parent, M0,
+        N_body)`` as arrays of the right shapes."""
+        n = len(self.names)
         if n == 0:
             raise ModelError(f"{what}: no bodies")
         for arr, label in ((self.joint_names, "joint_names"), (self.jtype, "jtype"), (self.axes, "axes")):
@@ -204,8 +226,12 @@ class Robot:
         nb = np.asarray(self.N_body, dtype=float)
         if nb.shape != (n, 4, 4):
             raise ModelError(f"{what}: N_body must have shape ({n}, 4, 4), got {nb.shape}")
+        return parent, m0, nb
+
+    def _check_bodies(self, what: str, parent: np.ndarray, m0: np.ndarray, nb: np.ndarray) -> list[np.ndarray]:
+        """Each body's joint type, parent index, frame, axes and pseudo-inertia; the checked axes."""
         axes = []
-        for i in range(n):
+        for i in range(len(self.names)):
             jw = f"{what}, body {self.names[i]!r} (joint {self.joint_names[i]!r})"
             if self.jtype[i] not in JOINT_TYPES:
                 raise ModelError(f"{jw}: unknown joint type {self.jtype[i]!r}; expected one of {JOINT_TYPES}")
@@ -218,9 +244,11 @@ class Robot:
             axes.append(_check_axes(self.axes[i], self.jtype[i], jw))
             if not np.all(np.isfinite(nb[i])) or np.abs(nb[i] - nb[i].T).max() > 1e-9 * (1 + np.abs(nb[i]).max()):
                 raise ModelError(f"{jw}: inertia must be a finite symmetric pseudo-inertia")
-        g = np.asarray(self.gravity, dtype=float)
-        if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ModelError(f"{what}: gravity must be 3 finite numbers, got {self.gravity!r}")
+        return axes
+
+    def _check_loops(self, what: str) -> None:
+        """Each loop joint's type, body indices and frame."""
+        n = len(self.names)
         for lj in self.loops:
             lw = f"{what}, loop joint {lj.name!r}"
             if lj.type not in LOOP_TYPES:
@@ -228,16 +256,24 @@ class Robot:
             if not (-1 <= lj.parent < lj.child < n):
                 raise ModelError(f"{lw}: needs parent index < child index < {n}, got {lj.parent}, {lj.child}")
             _check_frame(lj.M, lw)
-        dof = int(sum(joint_ndof(t, a) for t, a in zip(self.jtype, axes)))
+
+    def _check_armature(self, what: str, dof: int) -> None:
+        """``armature``: ``(dof,)`` finite numbers, zeros when not given."""
         arm = np.zeros(dof) if self.armature is None else np.asarray(self.armature, dtype=float)
         if arm.shape != (dof,) or not np.all(np.isfinite(arm)):
             raise ModelError(f"{what}: armature must be ({dof},) finite numbers, got shape {arm.shape}")
         object.__setattr__(self, "armature", arm)
+
+    def _check_independent(self, what: str, dof: int) -> None:
+        """``independent``: distinct coordinates, stored sorted."""
         if self.independent is not None:
             ind = tuple(int(k) for k in self.independent)
             if len(set(ind)) != len(ind) or any(not (0 <= k < dof) for k in ind) or not ind:
                 raise ModelError(f"{what}: independent coordinates {ind} must be distinct indices in [0, {dof})")
             object.__setattr__(self, "independent", tuple(sorted(ind)))
+
+    def _check_couplings(self, what: str, dof: int) -> None:
+        """Each coupling's coordinates and ratios; loops or couplings need ``independent``."""
         for c in self.couplings:
             idx = [c.succ] + [k for k, _ in c.terms()]
             if (len(set(idx)) != len(idx) or not all(0 <= k < dof for k in idx)
@@ -247,17 +283,15 @@ class Robot:
         if self.independent is None and (self.loops or self.couplings):
             raise ModelError(f"{what}: a robot with loop joints must say which coordinates are "
                              f"independent (actuated)")
+
+    def _check_q_box(self, what: str, dof: int) -> None:
+        """``q_box``: ``(independent coordinates, 2)`` with low < high."""
         if self.q_box is not None:
             box = np.asarray(self.q_box, dtype=float)
             na = len(self.independent) if self.independent is not None else dof
             if box.shape != (na, 2) or not np.all(box[:, 0] < box[:, 1]):
                 raise ModelError(f"{what}: q_box must be ({na}, 2) with low < high, got {box.shape}")
             object.__setattr__(self, "q_box", box)
-        object.__setattr__(self, "parent", parent)
-        object.__setattr__(self, "M0", m0)
-        object.__setattr__(self, "N_body", nb)
-        object.__setattr__(self, "axes", tuple(axes))
-        object.__setattr__(self, "gravity", g)
 
     # ---------------------------------------------------------------- derived data
     @property

@@ -51,23 +51,10 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
     pure_mask = (cols.parent < 0) & (cols.extra < 0)
     if not pure_mask.any():
         return cols
-    scale = max(float(np.abs(cols.h).max()), 1e-300)
-    fresh: set[int] = set()  # bodies whose pure list is still the batched orthonormal basis
-    # the pure span of every body at once (batched SVD over padded blocks)
-    pk = np.flatnonzero(pure_mask)
-    pk = pk[np.argsort(cols.child[pk], kind="stable")]
-    pb, pc = np.unique(cols.child[pk], return_counts=True)
-    slot = np.arange(len(pk)) - np.repeat(np.r_[0, np.cumsum(pc)[:-1]], pc)
-    blocks = np.zeros((len(pb), 10, pc.max()))
-    blocks[np.repeat(np.arange(len(pb)), pc), :, slot] = cols.h[pk]
-    u, sv, _ = np.linalg.svd(blocks, full_matrices=False)
-    pure: dict[int, list[np.ndarray]] = {int(bb): list((u[k][:, sv[k] > rtol * scale]).T)
-                                         for k, bb in enumerate(pb)}
-    fresh.update(pure)
-    two = np.flatnonzero(~pure_mask & (cols.extra < 0))
-    order = two[np.argsort(cols.child[two], kind="stable")]
-    bodies, first = np.unique(cols.child[order], return_index=True)
-    span_of = {int(bb): (int(i), int(j)) for bb, i, j in zip(bodies, first, np.r_[first[1:], len(order)])}
+    tol = rtol * max(float(np.abs(cols.h).max()), 1e-300)
+    pure = _pure_bases(cols, pure_mask, tol)
+    fresh = set(pure)  # bodies whose pure list is still the batched orthonormal basis
+    order, span_of = _two_block_groups(cols, pure_mask)
     touched = np.zeros(len(cols), dtype=bool)
     heap = [-bb for bb in pure]
     heapq.heapify(heap)
@@ -78,12 +65,7 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
         bb = -heapq.heappop(heap)
         if bb not in pure:
             continue
-        vecs = np.array(pure.pop(bb)).reshape(-1, 10).T
-        if bb in fresh:
-            basis = vecs  # already orthonormal
-        else:
-            u, sv, _ = np.linalg.svd(vecs, full_matrices=False)
-            basis = u[:, sv > rtol * scale]  # (10, r)
+        basis = _orthonormal(pure.pop(bb), bb in fresh, tol)
         out_h.append(basis.T)
         out_b += [bb] * basis.shape[1]
         if bb not in span_of or basis.shape[1] == 0:
@@ -91,22 +73,69 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
         idx = order[span_of[bb][0]: span_of[bb][1]]
         for p in np.unique(cols.parent[idx]):
             grp = idx[cols.parent[idx] == p]
-            h, hp = cols.h[grp], cols.hp[grp]
-            res = h - (h @ basis) @ basis.T
-            _, rs, vt = np.linalg.svd(res.T, full_matrices=True)  # vt (k, k)
-            r = int(np.sum(rs > rtol * scale))
-            if r == len(grp):
+            split = _split_off_span(cols, grp, basis, tol)
+            if split is None:
                 continue
             touched[grp] = True
-            hn, hpn = vt @ h, vt @ hp
-            for j in range(r):
-                new_two.append((hn[j], bb, int(p), hpn[j]))
+            hn, hpn, hp_pure = split
+            new_two += [(hn[j], bb, int(p), hpn[j]) for j in range(len(hn))]
             p = int(p)
             if p not in pure:
                 heapq.heappush(heap, -p)
-            pure.setdefault(p, []).extend(hpn[r:])
+            pure.setdefault(p, []).extend(hp_pure)
             fresh.discard(p)
-    keep = ~pure_mask & ~touched
+    return _reduced_columns(cols, ~pure_mask & ~touched, out_h, out_b, new_two)
+
+
+def _pure_bases(cols: Columns, pure_mask: np.ndarray, tol: float) -> dict[int, list[np.ndarray]]:
+    """Body -> orthonormal basis (a list of 10-vectors) of the span of its pure columns, for
+    every body with some, at once (batched SVD over padded blocks)."""
+    pk = np.flatnonzero(pure_mask)
+    pk = pk[np.argsort(cols.child[pk], kind="stable")]
+    pb, pc = np.unique(cols.child[pk], return_counts=True)
+    slot = np.arange(len(pk)) - np.repeat(np.r_[0, np.cumsum(pc)[:-1]], pc)
+    blocks = np.zeros((len(pb), 10, pc.max()))
+    blocks[np.repeat(np.arange(len(pb)), pc), :, slot] = cols.h[pk]
+    u, sv, _ = np.linalg.svd(blocks, full_matrices=False)
+    return {int(bb): list((u[k][:, sv[k] > tol]).T) for k, bb in enumerate(pb)}
+
+
+def _two_block_groups(cols: Columns, pure_mask: np.ndarray) -> tuple[np.ndarray, dict[int, tuple[int, int]]]:
+    """The two-block columns sorted by child body, and body -> its ``[start, stop)`` in them."""
+    two = np.flatnonzero(~pure_mask & (cols.extra < 0))
+    order = two[np.argsort(cols.child[two], kind="stable")]
+    bodies, first = np.unique(cols.child[order], return_index=True)
+    span_of = {int(bb): (int(i), int(j)) for bb, i, j in zip(bodies, first, np.r_[first[1:], len(order)])}
+    return order, span_of
+
+
+def _orthonormal(vectors: list[np.ndarray], fresh: bool, tol: float) -> np.ndarray:
+    """``(10, r)`` orthonormal basis of the span of ``vectors`` (as is when ``fresh``: already one)."""
+    vecs = np.array(vectors).reshape(-1, 10).T
+    if fresh:
+        return vecs
+    u, sv, _ = np.linalg.svd(vecs, full_matrices=False)
+    return u[:, sv > tol]
+
+
+def _split_off_span(cols: Columns, grp: np.ndarray, basis: np.ndarray, tol: float):
+    """Rotate the two-block columns ``grp`` (one child, one parent) by the right singular vectors
+    of their child parts off ``span basis``: None when none of their combinations has its child
+    part in the span, else ``(child parts, parent parts)`` of the ``r`` combinations kept as
+    two-block columns, and the parent parts of the others (new pure columns of the parent)."""
+    h, hp = cols.h[grp], cols.hp[grp]
+    res = h - (h @ basis) @ basis.T
+    _, rs, vt = np.linalg.svd(res.T, full_matrices=True)  # vt (k, k)
+    r = int(np.sum(rs > tol))
+    if r == len(grp):
+        return None
+    hn, hpn = vt @ h, vt @ hp
+    return hn[:r], hpn[:r], hpn[r:]
+
+
+def _reduced_columns(cols: Columns, keep: np.ndarray, out_h: list[np.ndarray], out_b: list[int],
+                     new_two: list[tuple[np.ndarray, int, int, np.ndarray]]) -> Columns:
+    """The kept columns, then the pure bases ``out_h`` of bodies ``out_b``, then ``new_two``."""
     parts = [cols.subset(keep)]
     m = len(out_b)
     z = np.zeros(m, dtype=int)

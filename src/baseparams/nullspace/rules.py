@@ -26,6 +26,8 @@ paper's principles, so :func:`.rank.block_rank` decides the rank.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..enums import Source
@@ -471,6 +473,18 @@ def _candidates(robot: Robot, joints: list, tol: float) -> np.ndarray:
     return u[first == np.arange(len(u))]
 
 
+class _Level(NamedTuple):
+    """Per candidate ``e`` and body: the level directions (all, and those ``⟂ e``), their counts,
+    and a level point when there is one."""
+
+    dirs: np.ndarray  # (C, n, 4, 4) level directions (w = 0), padded with zero rows
+    xs: np.ndarray  # (C, n, 4, 4) level directions ⟂ e
+    nd: np.ndarray  # (C, n) how many dirs
+    nx: np.ndarray  # (C, n) how many xs
+    pts: np.ndarray  # (C, n, 4) a level point (zero where none)
+    has_pt: np.ndarray  # (C, n)
+
+
 def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float = 1e-9) -> Columns:
     """R-L2, level chains (loop robots). For a fixed direction ``e`` and a direction ``x`` that
     stays ``⟂ e`` (level, :func:`loop_level_spaces`), shared by a chain of bodies joined by R or P
@@ -489,7 +503,22 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     ms = motion_spans(robot, tol) if ms is None else ms
     joints = _joint_shares(robot)
     es = _candidates(robot, joints, tol)
-    h = _level_spaces(robot, es, ms, joints)  # (C, n, 4, 4)
+    lv = _level_parts(_level_spaces(robot, es, ms, joints), es, tol)
+    parts: list[Columns] = []
+    singles = _level_single_columns(es, lv, tol)
+    if singles is not None:
+        parts.append(singles)
+    # chains: bodies joined by R or P joints along a level x ⟂ e
+    links = [(a, b, o, ax / np.linalg.norm(ax)) for a, b, t, o, ax, _ in joints
+             if a >= 0 and t in ("R", "P") and np.linalg.norm(ax) > tol]
+    for c in range(len(es)):
+        parts += _level_chains(robot, np.r_[es[c], 0.0], _level_edges(links, es[c], lv.nx[c], lv.xs[c]),
+                               lv.pts[c], lv.has_pt[c])
+    return Columns.concat(parts)
+
+
+def _level_parts(h: np.ndarray, es: np.ndarray, tol: float) -> _Level:
+    """Split the level spaces ``h (C, n, 4, 4)`` into level directions and points."""
     pad = np.einsum("cnk,kl->cnkl", (np.linalg.norm(h, axis=-1) < 0.5).astype(float), np.eye(4))
     h3 = h[..., 3][:, :, None, :]
     dirs = null_rows(np.concatenate([h3, pad], axis=2), tol) @ h  # level directions (w = 0)
@@ -501,67 +530,82 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     wrow = np.take_along_axis(h, kw[..., None, None], axis=2)[:, :, 0]  # (C, n, 4)
     has_pt = np.abs(wrow[..., 3]) > 1e-9
     pts = np.where(has_pt[..., None], wrow / np.where(has_pt, wrow[..., 3], 1.0)[..., None], 0.0)
+    return _Level(dirs, xs, nd, nx, pts, has_pt)
+
+
+def _level_single_columns(es: np.ndarray, lv: _Level, tol: float) -> Columns | None:
+    """Single bodies: ``sym(x_a, x_b × d) + sym(x_b, x_a × d)`` for level x's ⟂ e and level d's
+    (None when no body has both)."""
+    ci, bi = np.nonzero((lv.nx >= 1) & (lv.nd >= 2))
+    if not len(ci):
+        return None
+    x, d = lv.xs[ci, bi], lv.dirs[ci, bi]
+    xd = _cross4(x[:, :, None], d[:, None])  # (m, 4, 4, 4): x_a × d
+    m = np.einsum("mai,mbdj->mabdij", x, xd)
+    m = m + np.swapaxes(m, -1, -2)
+    m = (m + np.swapaxes(m, 1, 2)).reshape(len(ci), -1, 4, 4)
+    _, sv, vt = np.linalg.svd(hat10(m), full_matrices=False)
+    rk = np.sum(sv > tol, axis=1)
+    ks = np.flatnonzero(rk)
+    labels = []
+    for k in ks:
+        ee = np.r_[es[ci[k]], 0.0]
+        if lv.nx[ci[k], bi[k]] == 1:
+            xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}"
+        else:
+            xl = f"x any direction ⟂ {_describe(ee)}"
+        labels.append(f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), {xl}, d level")
+    return _singles([vt[k, : rk[k]] for k in ks], bi[ks], RL2, labels)
+
+
+def _level_edges(links: list, e: np.ndarray, nx: np.ndarray,
+                 xs: np.ndarray) -> dict[int, list[tuple[int, np.ndarray, np.ndarray]]]:
+    """Body -> ``(neighbour, x, joint point)`` for the R/P ``links`` whose axis ``x`` is ⟂ ``e``
+    and level in the predecessor (both directions of each joint)."""
+    edges: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
+    for a, b, o, ax in links:
+        if abs(ax @ e) > 1e-9 or nx[a] == 0:
+            continue
+        x = np.r_[ax, 0.0]
+        xa = xs[a]
+        if np.linalg.norm(x - (x @ xa.T) @ xa) > 1e-7:
+            continue
+        jp = np.r_[o, 1.0]
+        edges.setdefault(a, []).append((b, x, jp))
+        edges.setdefault(b, []).append((a, x, jp))
+    return edges
+
+
+def _seg(x, p, q):
+    """``sym(x, x × (q - p))`` as one column ``(1, 10)``."""
+    return sym_params(x, _cross4(x, q - p))[None]
+
+
+def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, has_pt: np.ndarray) -> list[Columns]:
+    """The pairs ``a - b`` (both with a level point) and triples ``b - a - c2`` (``a`` without one,
+    the two joints parallel) of one candidate ``ee`` along its level ``edges``."""
     parts: list[Columns] = []
-    # single bodies: sym(x_a, x_b × d) + sym(x_b, x_a × d) for level x's ⟂ e and level d's
-    ci, bi = np.nonzero((nx >= 1) & (nd >= 2))
-    if len(ci):
-        x, d = xs[ci, bi], dirs[ci, bi]
-        xd = _cross4(x[:, :, None], d[:, None])  # (m, 4, 4, 4): x_a × d
-        m = np.einsum("mai,mbdj->mabdij", x, xd)
-        m = m + np.swapaxes(m, -1, -2)
-        m = (m + np.swapaxes(m, 1, 2)).reshape(len(ci), -1, 4, 4)
-        _, sv, vt = np.linalg.svd(hat10(m), full_matrices=False)
-        rk = np.sum(sv > tol, axis=1)
-        ks = np.flatnonzero(rk)
-        labels = []
-        for k in ks:
-            ee = np.r_[es[ci[k]], 0.0]
-            if nx[ci[k], bi[k]] == 1:
-                xl = f"x {_describe(x[k, np.argmax(np.linalg.norm(x[k], axis=1))])}"
-            else:
-                xl = f"x any direction ⟂ {_describe(ee)}"
-            labels.append(f"level chain ⟂ {_describe(ee)} in one body: sym(x, x × d), {xl}, d level")
-        parts.append(_singles([vt[k, : rk[k]] for k in ks], bi[ks], RL2, labels))
-    # chains: bodies joined by R or P joints along a level x ⟂ e
-    links = [(a, b, o, ax / np.linalg.norm(ax)) for a, b, t, o, ax, _ in joints
-             if a >= 0 and t in ("R", "P") and np.linalg.norm(ax) > tol]
+    for a, nbrs in edges.items():
+        for b, x, jp in nbrs:
+            if a < b and has_pt[a] and has_pt[b]:
+                label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[a])} "
+                         f"to {_describe(pts[b])} across the joint at {_describe(jp)}")
+                parts.append(_pair(_seg(x, pts[a], jp), a, _seg(x, jp, pts[b]), b, label, RL2))
+        if has_pt[a]:
+            continue
+        for k, (b, x, j1) in enumerate(nbrs):  # a in the middle of a triple b - a - c2
+            for c2, x2, j2 in nbrs[k + 1:]:
+                if not (has_pt[b] and has_pt[c2]) or abs(abs(x @ x2) - 1.0) > 1e-9:
+                    continue
+                body = sorted([(b, _seg(x, pts[b], j1)), (a, _seg(x, j1, j2)), (c2, _seg(x, j2, pts[c2]))],
+                              key=lambda t: t[0])
+                (lo, hl), (mid, hm), (hi, hh) = body
+                label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[b])} "
+                         f"to {_describe(pts[c2])} through {robot.names[a]!r}")
+                parts.append(Columns(hh, np.array([hi]), np.array([mid]), np.array([RL2]), np.array([hi]),
+                                     np.array([label], dtype=object), hm, np.array([lo]), hl))
+    return parts
 
-    def seg(x, p, q):  # sym(x, x × (q - p))
-        return sym_params(x, _cross4(x, q - p))[None]
-
-    for c in range(len(es)):
-        ee = np.r_[es[c], 0.0]
-        edges: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
-        for a, b, o, ax in links:
-            if abs(ax @ es[c]) > 1e-9 or nx[c, a] == 0:
-                continue
-            x = np.r_[ax, 0.0]
-            xa = xs[c, a]
-            if np.linalg.norm(x - (x @ xa.T) @ xa) > 1e-7:
-                continue
-            jp = np.r_[o, 1.0]
-            edges.setdefault(a, []).append((b, x, jp))
-            edges.setdefault(b, []).append((a, x, jp))
-        for a, nbrs in edges.items():
-            for b, x, jp in nbrs:
-                if a < b and has_pt[c, a] and has_pt[c, b]:
-                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[c, a])} "
-                             f"to {_describe(pts[c, b])} across the joint at {_describe(jp)}")
-                    parts.append(_pair(seg(x, pts[c, a], jp), a, seg(x, jp, pts[c, b]), b, label, RL2))
-            if has_pt[c, a]:
-                continue
-            for k, (b, x, j1) in enumerate(nbrs):  # a in the middle of a triple b - a - c2
-                for c2, x2, j2 in nbrs[k + 1:]:
-                    if not (has_pt[c, b] and has_pt[c, c2]) or abs(abs(x @ x2) - 1.0) > 1e-9:
-                        continue
-                    body = sorted([(b, seg(x, pts[c, b], j1)), (a, seg(x, j1, j2)), (c2, seg(x, j2, pts[c, c2]))],
-                                  key=lambda t: t[0])
-                    (lo, hl), (mid, hm), (hi, hh) = body
-                    label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[c, b])} "
-                             f"to {_describe(pts[c, c2])} through {robot.names[a]!r}")
-                    parts.append(Columns(hh, np.array([hi]), np.array([mid]), np.array([RL2]), np.array([hi]),
-                                         np.array([label], dtype=object), hm, np.array([lo]), hl))
-    return Columns.concat(parts)
 
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     """All extended-rule columns (R-A, R-B, R-L1, R-L2) for ``robot``."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 
 from ..model import Inertia, Robot, RobotBuilder
@@ -135,10 +137,38 @@ def _perpendicular(a: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return _unit(np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0]))
 
 
+@dataclass
+class _Draw:
+    """What :func:`_special` has drawn so far, body after body."""
+
+    base_lines: list[tuple[np.ndarray, np.ndarray]]  # candidate "parent axis" lines of the base
+    frames: list[np.ndarray] = field(default_factory=list)  # world pose of each body at q = 0
+    lines: list[list[tuple[np.ndarray, np.ndarray]]] = field(default_factory=list)  # axis lines per body
+    notes: list[str] = field(default_factory=list)
+    plan: list[tuple[str, str | None, str | None]] = field(default_factory=list)  # forced, chained joints
+    kind: str = ""  # what the current plan is
+
+
 def _special(rng: np.random.Generator, n: int | None = None,
              gravity: str | None = None) -> tuple[Robot, list[str]]:
-    """:func:`special_robot` plus one note per body (joint type, parent, the relations drawn)."""
+    """:func:`special_robot` plus one note per body (joint type, parent, the relations drawn).
+
+    The draws happen in a fixed order (the robots are reproducible from the seed): gravity,
+    then per body its parent and joint, the parent's line, the joint point, axis, frame."""
     n = int(rng.integers(2, 8)) if n is None else int(n)
+    gcase, g, g_dir = _special_gravity(rng, gravity)
+    z_bias = 0.7 if gcase == "axis" else 1 / 3
+    b = RobotBuilder(f"special{n}-{gcase}", gravity=tuple(g))
+    st = _Draw(base_lines=[(np.array([0.0, 0.0, 1.0]), np.zeros(3))])
+    if gcase == "generic":
+        st.base_lines.append((g_dir, np.zeros(3)))
+    for i in range(n):
+        _special_body(rng, b, st, i, n, g_dir, z_bias)
+    return b.build(), st.notes
+
+
+def _special_gravity(rng: np.random.Generator, gravity: str | None) -> tuple[str, np.ndarray, np.ndarray]:
+    """``(case, gravity, its direction)`` (``+z`` for zero gravity), ``case`` drawn when None."""
     gcase = str(rng.choice(["axis", "generic", "zero"])) if gravity is None else gravity
     if gcase == "axis":
         g = np.array([0.0, 0.0, -9.81])
@@ -149,140 +179,160 @@ def _special(rng: np.random.Generator, n: int | None = None,
     else:
         raise ValueError(f"gravity must be 'axis', 'generic', 'zero' or None, got {gravity!r}")
     g_dir = _unit(g) if gcase != "zero" else np.array([0.0, 0.0, 1.0])
-    z_bias = 0.7 if gcase == "axis" else 1 / 3
+    return gcase, g, g_dir
 
-    b = RobotBuilder(f"special{n}-{gcase}", gravity=tuple(g))
-    frames: list[np.ndarray] = []  # world pose of each body at q = 0 (as the builder composes it)
-    lines: list[list[tuple[np.ndarray, np.ndarray]]] = []  # candidate "parent axis" lines per body
-    notes: list[str] = []
-    base_lines = [(np.array([0.0, 0.0, 1.0]), np.zeros(3))]
-    if gcase == "generic":
-        base_lines.append((g_dir, np.zeros(3)))
-    plan: list[tuple[str, str | None, str | None]] = []  # forced (joint, axis mode, origin mode), chained
-    kind = ""
 
-    for i in range(n):
-        # ---- parent and joint type ----------------------------------------------------------
-        floating = i == 0 and rng.random() < 0.1
-        chained = bool(plan)
-        if i == 0:
-            parent = -1
-        elif chained or rng.random() >= 0.3:
-            parent = i - 1
+def _special_body(rng: np.random.Generator, b: RobotBuilder, st: _Draw, i: int, n: int,
+                  g_dir: np.ndarray, z_bias: float) -> None:
+    """Draw body ``i`` (its parent, joint, point, axes and frame), add it to ``b``, note it."""
+    floating, chained, parent, jt, amode, omode = _special_joint(rng, st, i, n)
+    pframe = np.eye(4) if parent < 0 else st.frames[parent]
+    plines = st.base_lines if parent < 0 else st.lines[parent]
+    a_p, o_p = plines[int(rng.integers(0, len(plines)))]
+    p_p = pframe[:3, 3]
+    offset, omode = _special_offset(rng, floating, amode, omode, a_p, o_p, p_p, z_bias)
+    a_w = None
+    if not floating and jt != "S":
+        a_w = _special_axis(rng, amode, a_p, o_p, p_p + offset, g_dir, z_bias)
+    rot = _special_rotation(rng, floating)
+    rp = pframe[:3, :3]
+    origin = np.eye(4)
+    origin[:3, :3] = rp.T @ rot
+    origin[:3, 3] = rp.T @ offset
+    frame = pframe @ origin  # exactly as RobotBuilder.add_link composes M0
+    axis, axis2, mylines = _special_axes_in_frame(rng, jt, amode, a_w, a_p, frame)
+    b.add_link(f"b{i}", parent=None if parent < 0 else f"b{parent}", joint=jt, origin=origin,
+               axis=axis, axis2=axis2, inertia=random_inertia(rng))
+    st.frames.append(frame)
+    st.lines.append(mylines)
+    rel = "" if floating or jt == "S" else f" axis={amode}"
+    st.notes.append(f"{jt}<-{'w' if parent < 0 else parent}{rel} origin={omode or 'pose'}"
+                    + (f" [{st.kind}]" if chained else ""))
+
+
+def _special_joint(rng: np.random.Generator, st: _Draw, i: int, n: int):
+    """``(floating, chained, parent, joint type, axis mode, origin mode)`` of body ``i``: the
+    next joint of the current plan, maybe a new plan, or a free draw."""
+    floating = i == 0 and rng.random() < 0.1
+    chained = bool(st.plan)
+    if i == 0:
+        parent = -1
+    elif chained or rng.random() >= 0.3:
+        parent = i - 1
+    else:
+        parent = int(rng.integers(0, i))
+    if floating:
+        return floating, chained, parent, "F", None, None
+    if not st.plan and rng.random() < 0.22:
+        _special_plan(rng, st, n - i)
+    if st.plan:
+        jt, amode, omode = st.plan.pop(0)
+        chained = True
+    else:
+        jt, amode, omode = str(rng.choice(_JOINTS, p=_JOINT_W)), None, None
+    amode = amode or str(rng.choice(_AXIS_MODES, p=_AXIS_W))
+    omode = omode or str(rng.choice(_ORIGIN_MODES, p=_ORIGIN_W))
+    return floating, chained, parent, jt, amode, omode
+
+
+def _special_plan(rng: np.random.Generator, st: _Draw, left: int) -> None:
+    """Draw a plan of chained joints (with ``left`` bodies to go): a translation stage, a lift
+    then a coaxial R, or an R then a coaxial P; none when fewer than two bodies are left."""
+    u = rng.random()
+    if u < 0.45 and left >= 2:  # translation stage: 2 or 3 perpendicular (or parallel) P
+        k = int(min(left, rng.integers(2, 4)))
+        modes = ["world" if rng.random() < 0.6 else "generic"]
+        modes += ["perpendicular" if rng.random() < 0.8 else "parallel" for _ in range(k - 1)]
+        st.plan = [("P", m, str(rng.choice(["zero", "world", "along"]))) for m in modes]
+        if left > k and rng.random() < 0.4:  # ... then a rotation about the last slide line
+            st.plan.append(("R", "coaxial", "along"))
+        st.kind = "stage"
+    elif u < 0.8 and left >= 2:  # lift then rotation about the same line
+        first = "world" if rng.random() < 0.5 else str(rng.choice(_AXIS_MODES, p=_AXIS_W))
+        st.plan = [("P", first, None), ("R", "coaxial", str(rng.choice(["zero", "along"])))]
+        st.kind = "lift+R"
+    elif left >= 2:  # rotation then coaxial slide (cylindrical pair)
+        st.plan = [("R", None, None), ("P", "coaxial", "zero")]
+        st.kind = "R+P"
+
+
+def _special_offset(rng: np.random.Generator, floating: bool, amode, omode, a_p: np.ndarray, o_p: np.ndarray,
+                    p_p: np.ndarray, z_bias: float) -> tuple[np.ndarray, str | None]:
+    """The joint point as an offset (in world) from the parent's frame origin ``p_p``, and the
+    origin mode (``on-line`` for a coaxial joint)."""
+    if floating:
+        offset = rng.normal(scale=0.5, size=3) if rng.random() < 0.5 else np.zeros(3)
+    elif amode == "coaxial":
+        # on the parent's axis line: from the line's point along the axis
+        offset = (o_p - p_p) + (0.0 if omode == "zero" else rng.uniform(-0.6, 0.6)) * a_p
+        omode = "on-line"
+    elif omode == "zero":
+        offset = np.zeros(3)
+    elif omode == "along":
+        offset = (o_p - p_p) + rng.uniform(-0.6, 0.6) * a_p
+    elif omode == "world":
+        offset = rng.uniform(-0.6, 0.6) * _world_axis(rng, z_bias)
+    else:
+        offset = rng.normal(scale=0.4, size=3)
+    return offset, omode
+
+
+def _special_axis(rng: np.random.Generator, amode: str, a_p: np.ndarray, o_p: np.ndarray, point: np.ndarray,
+                  g_dir: np.ndarray, z_bias: float) -> np.ndarray:
+    """The joint axis in world, related to the parent's line ``(a_p, o_p)`` as ``amode`` says."""
+    if amode in ("parallel", "coaxial"):
+        return a_p if rng.random() < 0.7 else -a_p
+    if amode == "perpendicular":
+        return _perpendicular(a_p, rng)
+    if amode == "intersecting":
+        on_line = o_p + rng.uniform(-0.6, 0.6) * a_p  # a point of the parent's axis line
+        d = on_line - point
+        if np.linalg.norm(d) > 1e-3 and np.linalg.norm(np.cross(d, a_p)) > 1e-3 * np.linalg.norm(d):
+            return _unit(d)
+        # the joint point is on the line already: any non-parallel direction
+        return _perpendicular(a_p, rng) if rng.random() < 0.5 else _random_unit(rng)
+    if amode == "world":
+        return _world_axis(rng, z_bias)
+    if amode == "gravity":
+        return g_dir if rng.random() < 0.7 else -g_dir
+    return _random_unit(rng)
+
+
+def _special_rotation(rng: np.random.Generator, floating: bool) -> np.ndarray:
+    """The joint frame's rotation in world: identity, a signed permutation or random."""
+    u = rng.random()
+    if floating:
+        return random_rotation(rng) if u < 0.5 else _SIGNED_PERMS[int(rng.integers(0, 24))]
+    if u < 0.35:
+        return np.eye(3)
+    if u < 0.7:
+        return _SIGNED_PERMS[int(rng.integers(0, 24))]
+    return random_rotation(rng)
+
+
+def _special_axes_in_frame(rng: np.random.Generator, jt: str, amode, a_w: np.ndarray | None, a_p: np.ndarray,
+                           frame: np.ndarray):
+    """``(axis, axis2, lines)``: the joint axes in the joint ``frame`` (U: a second axis
+    perpendicular to the first, often to the parent's line too) and the body's axis lines in
+    world (S / F: the frame's axes)."""
+    r_i = frame[:3, :3]
+    axis, axis2, mylines = (0.0, 0.0, 1.0), None, []
+    if a_w is None:  # S / F: the frame's axes
+        mylines += [(r_i[:, k].copy(), frame[:3, 3]) for k in range(3)]
+        return axis, axis2, mylines
+    axis = r_i.T @ a_w
+    mylines.append((a_w, frame[:3, 3]))
+    if jt == "U":
+        if amode == "perpendicular" or (rng.random() < 0.5 and np.linalg.norm(np.cross(a_w, a_p)) > 1e-3):
+            a2 = _unit(np.cross(a_w, a_p)) if np.linalg.norm(np.cross(a_w, a_p)) > 1e-3 \
+                else _perpendicular(a_w, rng)
         else:
-            parent = int(rng.integers(0, i))
-        if floating:
-            jt, amode, omode = "F", None, None
-        else:
-            if not plan and rng.random() < 0.22:
-                left = n - i
-                u = rng.random()
-                if u < 0.45 and left >= 2:  # translation stage: 2 or 3 perpendicular (or parallel) P
-                    k = int(min(left, rng.integers(2, 4)))
-                    modes = ["world" if rng.random() < 0.6 else "generic"]
-                    modes += ["perpendicular" if rng.random() < 0.8 else "parallel" for _ in range(k - 1)]
-                    plan = [("P", m, str(rng.choice(["zero", "world", "along"]))) for m in modes]
-                    if left > k and rng.random() < 0.4:  # ... then a rotation about the last slide line
-                        plan.append(("R", "coaxial", "along"))
-                    kind = "stage"
-                elif u < 0.8 and left >= 2:  # lift then rotation about the same line
-                    first = "world" if rng.random() < 0.5 else str(rng.choice(_AXIS_MODES, p=_AXIS_W))
-                    plan = [("P", first, None), ("R", "coaxial", str(rng.choice(["zero", "along"])))]
-                    kind = "lift+R"
-                elif left >= 2:  # rotation then coaxial slide (cylindrical pair)
-                    plan = [("R", None, None), ("P", "coaxial", "zero")]
-                    kind = "R+P"
-            if plan:
-                jt, amode, omode = plan.pop(0)
-                chained = True
-            else:
-                jt, amode, omode = str(rng.choice(_JOINTS, p=_JOINT_W)), None, None
-            amode = amode or str(rng.choice(_AXIS_MODES, p=_AXIS_W))
-            omode = omode or str(rng.choice(_ORIGIN_MODES, p=_ORIGIN_W))
-        pframe = np.eye(4) if parent < 0 else frames[parent]
-        plines = base_lines if parent < 0 else lines[parent]
-        a_p, o_p = plines[int(rng.integers(0, len(plines)))]
-        p_p = pframe[:3, 3]
-
-        # ---- joint point: an offset from the parent's frame origin, in world -----------------
-        if floating:
-            offset = rng.normal(scale=0.5, size=3) if rng.random() < 0.5 else np.zeros(3)
-        elif amode == "coaxial":
-            # on the parent's axis line: from the line's point along the axis
-            offset = (o_p - p_p) + (0.0 if omode == "zero" else rng.uniform(-0.6, 0.6)) * a_p
-            omode = "on-line"
-        elif omode == "zero":
-            offset = np.zeros(3)
-        elif omode == "along":
-            offset = (o_p - p_p) + rng.uniform(-0.6, 0.6) * a_p
-        elif omode == "world":
-            offset = rng.uniform(-0.6, 0.6) * _world_axis(rng, z_bias)
-        else:
-            offset = rng.normal(scale=0.4, size=3)
-        point = p_p + offset
-
-        # ---- joint axis in world ------------------------------------------------------------
-        a_w = None
-        if not floating and jt != "S":
-            if amode in ("parallel", "coaxial"):
-                a_w = a_p if rng.random() < 0.7 else -a_p
-            elif amode == "perpendicular":
-                a_w = _perpendicular(a_p, rng)
-            elif amode == "intersecting":
-                on_line = o_p + rng.uniform(-0.6, 0.6) * a_p  # a point of the parent's axis line
-                d = on_line - point
-                if np.linalg.norm(d) > 1e-3 and np.linalg.norm(np.cross(d, a_p)) > 1e-3 * np.linalg.norm(d):
-                    a_w = _unit(d)
-                else:  # the joint point is on the line already: any non-parallel direction
-                    a_w = _perpendicular(a_p, rng) if rng.random() < 0.5 else _random_unit(rng)
-            elif amode == "world":
-                a_w = _world_axis(rng, z_bias)
-            elif amode == "gravity":
-                a_w = g_dir if rng.random() < 0.7 else -g_dir
-            else:
-                a_w = _random_unit(rng)
-
-        # ---- joint frame rotation in world, then the parent-relative origin ------------------
-        u = rng.random()
-        if floating:
-            rot = random_rotation(rng) if u < 0.5 else _SIGNED_PERMS[int(rng.integers(0, 24))]
-        elif u < 0.35:
-            rot = np.eye(3)
-        elif u < 0.7:
-            rot = _SIGNED_PERMS[int(rng.integers(0, 24))]
-        else:
-            rot = random_rotation(rng)
-        rp = pframe[:3, :3]
-        origin = np.eye(4)
-        origin[:3, :3] = rp.T @ rot
-        origin[:3, 3] = rp.T @ offset
-        frame = pframe @ origin  # exactly as RobotBuilder.add_link composes M0
-        r_i = frame[:3, :3]
-
-        axis, axis2, mylines = (0.0, 0.0, 1.0), None, []
-        if a_w is not None:
-            axis = r_i.T @ a_w
-            mylines.append((a_w, frame[:3, 3]))
-            if jt == "U":
-                if amode == "perpendicular" or (rng.random() < 0.5 and np.linalg.norm(np.cross(a_w, a_p)) > 1e-3):
-                    a2 = _unit(np.cross(a_w, a_p)) if np.linalg.norm(np.cross(a_w, a_p)) > 1e-3 \
-                        else _perpendicular(a_w, rng)
-                else:
-                    a2 = _perpendicular(a_w, rng)
-                a2 = a2 - (a2 @ a_w) * a_w
-                a2 = _unit(a2)
-                axis2 = r_i.T @ a2
-                mylines.append((a2, frame[:3, 3]))
-        else:  # S / F: the frame's axes
-            mylines += [(r_i[:, k].copy(), frame[:3, 3]) for k in range(3)]
-        b.add_link(f"b{i}", parent=None if parent < 0 else f"b{parent}", joint=jt, origin=origin,
-                   axis=axis, axis2=axis2, inertia=random_inertia(rng))
-        frames.append(frame)
-        lines.append(mylines)
-        rel = "" if floating or jt == "S" else f" axis={amode}"
-        notes.append(f"{jt}<-{'w' if parent < 0 else parent}{rel} origin={omode or 'pose'}"
-                     + (f" [{kind}]" if chained else ""))
-    return b.build(), notes
+            a2 = _perpendicular(a_w, rng)
+        a2 = a2 - (a2 @ a_w) * a_w
+        a2 = _unit(a2)
+        axis2 = r_i.T @ a2
+        mylines.append((a2, frame[:3, 3]))
+    return axis, axis2, mylines
 
 
 def special_robot(rng: np.random.Generator, n: int | None = None, gravity: str | None = None) -> Robot:

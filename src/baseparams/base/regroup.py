@@ -26,7 +26,7 @@ from ..model.scale import length_scale
 _NAMES = _inertia.NAMES
 
 
-def parameter_names(robot: Robot, convention: str = "khalil") -> list[str]:
+def parameter_names(robot: Robot, convention: str) -> list[str]:
     """``body.PARAM`` for every parameter, e.g. ``link2.ZZ``; ``paper`` names are the spatial
     pseudo-inertia entries ``MXX...M`` written ``XX...M`` (at q = 0, world frame)."""
     return [f"{b}.{p}" for b in robot.names for p in _NAMES[convention]]
@@ -186,7 +186,7 @@ def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> n
     return np.array(chosen, dtype=int)
 
 
-def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str = "khalil") -> BaseParameters:
+def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str) -> BaseParameters:
     """Regroup given a nullspace basis ``(10 n, k)`` in the paper convention (orthonormal, or
     any basis of full column rank such as :attr:`Certificate.span`, which is more precise).
 

@@ -41,7 +41,7 @@ def length_scale(robot: Robot) -> float:
     return float(np.median(d))
 
 
-def parameter_scale(robot: Robot, convention: str = "paper") -> np.ndarray:
+def parameter_scale(robot: Robot, convention: str) -> np.ndarray:
     """``L^u (10 n,)``: each parameter's unit scale, ``L`` = :func:`length_scale`, ``u`` its length
     exponent in ``convention``; dimensionless parameters are ``pi / parameter_scale``."""
     return length_scale(robot) ** np.tile(LENGTH_POWER[convention], robot.n).astype(float)
@@ -52,7 +52,7 @@ def parameter_scale(robot: Robot, convention: str = "paper") -> np.ndarray:
 METRE_BAND = (0.05, 20.0)
 
 
-def decision_scale(robot: Robot, convention: str = "paper") -> np.ndarray:
+def decision_scale(robot: Robot, convention: str) -> np.ndarray:
     """``(L / L_c)^u (10 n,)`` with ``L_c`` the robot's length scale clipped into
     :data:`METRE_BAND`: ones for a robot of ordinary size, and for a robot drawn in other units
     (millimetres, micrometres, kilometres) the factors that bring its parameters to an

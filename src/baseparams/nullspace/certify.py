@@ -80,7 +80,7 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     sampling: dict = {}
     # ranks are decided on pi / d (model.scale.decision_scale): d = 1 for a robot of ordinary
     # size; a robot drawn in millimetres or kilometres is brought to an ordinary-sized equivalent
-    d = decision_scale(robot)
+    d = decision_scale(robot, "paper")
     w = stacked_regressor(robot, samples, seed, rows, sampling) * d
     num = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w)
     raw = res.dense() / d[:, None]

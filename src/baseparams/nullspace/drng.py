@@ -102,7 +102,7 @@ def dimensionless_rank(cols: Columns, robot: Robot) -> int:
     kept and the decision does not depend on the unit of length."""
     from dataclasses import replace
 
-    inv = 1.0 / decision_scale(robot)[:10]
+    inv = 1.0 / decision_scale(robot, "paper")[:10]
     return block_rank(replace(cols, h=cols.h * inv, hp=cols.hp * inv, he=cols.he * inv), robot.n)
 
 

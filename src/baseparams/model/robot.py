@@ -303,10 +303,12 @@ class Robot:
     def floating(self) -> bool:
         return "F" in self.jtype
 
-    @property
+    @cached_property
     def ndofs(self) -> np.ndarray:
-        """Dofs per joint ``(n,)``."""
-        return np.array([joint_ndof(t, a) for t, a in zip(self.jtype, self.axes)], dtype=int)
+        """Dofs per joint ``(n,)`` (cached, read-only)."""
+        out = np.array([joint_ndof(t, a) for t, a in zip(self.jtype, self.axes)], dtype=int)
+        out.flags.writeable = False
+        return out
 
     @property
     def dof(self) -> int:

@@ -8,12 +8,15 @@ found does not depend on whether the file is written in metres or millimetres.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from .inertia import LENGTH_POWER
 from .robot import Robot
 
 
+@lru_cache(maxsize=16)  # robots compare by identity and are immutable
 def length_scale(robot: Robot) -> float:
     """The robot's typical length ``L`` [m]: the median nonzero distance between adjacent frame
     origins at q = 0 (each body's joint origin from its parent's, a fixed root's from the world
@@ -21,19 +24,16 @@ def length_scale(robot: Robot) -> float:
     the geometry (scaling lengths by ``s`` scales it by ``s``) that ignores where a floating base
     happens to stand; 1 when every distance is zero."""
     p = robot.M0[:, :3, 3]
-    d = []
-    for i, par in enumerate(robot.parent):
-        if par >= 0:
-            d.append(np.linalg.norm(p[i] - p[par]))
-        elif robot.jtype[i] != "F":
-            d.append(np.linalg.norm(p[i]))
+    par = np.asarray(robot.parent)
+    tree = par >= 0
+    root = ~tree & (np.array(robot.jtype) != "F")
+    d = [np.linalg.norm(p[tree] - p[par[tree]], axis=1), np.linalg.norm(p[root], axis=1)]
     for lj in robot.loops:
         o = np.asarray(lj.M)[:3, 3]
-        d.append(np.linalg.norm(o - (p[lj.parent] if lj.parent >= 0 else 0.0)))
-        d.append(np.linalg.norm(o - p[lj.child]))
+        d.append([np.linalg.norm(o - (p[lj.parent] if lj.parent >= 0 else 0.0)), np.linalg.norm(o - p[lj.child])])
         if lj.M_child is not None:
-            d.append(np.linalg.norm(np.asarray(lj.M_child)[:3, 3] - p[lj.child]))
-    d = np.array(d, dtype=float)
+            d.append([np.linalg.norm(np.asarray(lj.M_child)[:3, 3] - p[lj.child])])
+    d = np.concatenate([np.asarray(x, dtype=float).ravel() for x in d])
     d = d[np.isfinite(d)]
     if not len(d) or d.max() <= 0:
         return 1.0

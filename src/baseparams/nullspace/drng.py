@@ -16,7 +16,7 @@ import scipy.sparse as sp
 from ..enums import Source
 from ..model.inertia import PAPER_NAMES
 from ..model.robot import Robot
-from ..model.scale import decision_scale
+from ..model.scale import METRE_BAND, decision_scale, length_scale
 from ..numerics import row_mask
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_sparse
@@ -102,6 +102,9 @@ def dimensionless_rank(cols: Columns, robot: Robot) -> int:
     kept and the decision does not depend on the unit of length."""
     from dataclasses import replace
 
+    lo, hi = METRE_BAND
+    if lo <= length_scale(robot) <= hi:  # a robot of ordinary size: as it is
+        return block_rank(cols, robot.n)
     inv = 1.0 / decision_scale(robot, "paper")[:10]
     return block_rank(replace(cols, h=cols.h * inv, hp=cols.hp * inv, he=cols.he * inv), robot.n)
 
@@ -113,6 +116,8 @@ def unmeasured_columns(robot: Robot, rows: str) -> Columns:
     each is a nullspace direction on its own. With the base wrench alone (``"base"``) nothing is
     added: it sees every direction the full dynamics see (Ayusawa et al. 2014, the paper's
     remark; certification checks it)."""
+    if rows == "all":
+        return Columns.empty()
     mask = row_mask(robot, rows)
     roots = [i for i in range(robot.n) if robot.jtype[i] == "F"]
     if rows != "joints" or not roots or mask.all():
@@ -135,6 +140,8 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     cols = drng_columns(robot, tol)
     if extended:
         cols = Columns.concat([cols, rule_columns(robot, tol)])
-    cols = Columns.concat([cols, unmeasured_columns(robot, rows)])
+    extra = unmeasured_columns(robot, rows)
+    if len(extra):
+        cols = Columns.concat([cols, extra])
     rank = dimensionless_rank(cols, robot)
     return DRNGResult(robot, cols, rank, time.perf_counter() - t0, extended)

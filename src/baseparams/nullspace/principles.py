@@ -27,6 +27,8 @@ No stale block is re-appended (E3). Everything is vectorised over joints.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..enums import Source
@@ -68,11 +70,15 @@ def planar_rotations(robot: Robot, tol: float = 1e-9) -> tuple[np.ndarray, np.nd
     return np.array(is_pr, dtype=bool), np.array(d_pr, dtype=float).reshape(n, 3)
 
 
+@lru_cache(maxsize=16)  # robots compare by identity and are immutable
 def world_axes(robot: Robot) -> np.ndarray:
-    """First joint axis of every body in world coordinates at q = 0 ``(n, 3)`` (zero if none)."""
+    """First joint axis of every body in world coordinates at q = 0 ``(n, 3)`` (zero if none;
+    read-only, cached per robot)."""
     first = np.array([a[0] if (len(a) and t in ("R", "P", "U")) else (0.0, 0.0, 0.0)
                       for a, t in zip(robot.axes, robot.jtype)], dtype=float).reshape(-1, 3)
-    return np.einsum("nij,nj->ni", robot.M0[:, :3, :3], first)
+    out = np.einsum("nij,nj->ni", robot.M0[:, :3, :3], first)
+    out.flags.writeable = False
+    return out
 
 
 def compound_shared(robot: Robot, i: int, tol: float = 1e-9) -> np.ndarray:

@@ -78,6 +78,7 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
     Parameters
     ----------
     robot : Robot
+        The robot (``n`` moving bodies).
     q, dq, ddq : array_like, shape ``(S, m)`` or ``(m,)``
         Joint positions, velocities and accelerations of ``S`` states (``dq``, ``ddq``
         default to zero). ``m`` is ``robot.dof`` for a tree (a floating root's six
@@ -238,6 +239,7 @@ class Analysis:
         Parameters
         ----------
         beta : array_like, shape ``(n_base,)``
+            Base parameters, named by :attr:`base_names`.
 
         Returns
         -------
@@ -384,7 +386,18 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
 
 
 def format_report(a: Analysis) -> str:
-    """Human-readable report (what ``baseparams analyze MODEL`` prints)."""
+    """Human-readable report (what ``baseparams analyze MODEL`` prints).
+
+    Parameters
+    ----------
+    a : Analysis
+        The result of :func:`analyze`.
+
+    Returns
+    -------
+    str
+        The text report: base parameters in ``a.convention`` and in ``paper`` (world frame at q = 0).
+    """
     from .model import inertia as _inertia
 
     r, c, j = a.robot, a.certificate, a.to_json()

@@ -1,9 +1,10 @@
 """The robot's own length scale, for decisions that must not depend on the unit of length.
 
 Scaling every length of a robot by ``s`` (and masses by ``mu``) scales each inertial parameter by
-``mu s^u`` with ``u`` its length exponent (:data:`baseparams.model.inertia.LENGTH_POWER`): rank
-decisions and regrouping are made on dimensionless parameters ``pi / L^u`` so that the structure
-found does not depend on whether the file is written in metres or millimetres.
+``mu s^u`` with ``u`` its length exponent (:data:`baseparams.model.inertia.LENGTH_POWER`).
+Regrouping decides on dimensionless parameters ``pi / L^u``; rank decisions on parameters brought
+to an ordinary size (:func:`decision_scale`), so that the structure found does not depend on
+whether the file is written in metres or millimetres.
 """
 
 from __future__ import annotations
@@ -41,15 +42,15 @@ def length_scale(robot: Robot) -> float:
     return float(np.median(d))
 
 
-def parameter_scale(robot: Robot, convention: str) -> np.ndarray:
-    """``L^u (10 n,)``: each parameter's unit scale, ``L`` = :func:`length_scale`, ``u`` its length
-    exponent in ``convention``; dimensionless parameters are ``pi / parameter_scale``."""
-    return length_scale(robot) ** np.tile(LENGTH_POWER[convention], robot.n).astype(float)
-
-
 #: typical lengths [m] for which the numerical rank decisions are validated as they are (every
 #: example-robot-data, MuJoCo Menagerie, gymnasium and dm_control model lies inside)
 METRE_BAND = (0.05, 20.0)
+
+
+def ordinary_size(robot: Robot) -> bool:
+    """True when the robot's :func:`length_scale` lies in :data:`METRE_BAND`."""
+    lo, hi = METRE_BAND
+    return lo <= length_scale(robot) <= hi
 
 
 def decision_scale(robot: Robot, convention: str) -> np.ndarray:

@@ -16,7 +16,7 @@ import scipy.sparse as sp
 from ..enums import Source
 from ..model.inertia import PAPER_NAMES
 from ..model.robot import Robot
-from ..model.scale import METRE_BAND, decision_scale, length_scale
+from ..model.scale import decision_scale, ordinary_size
 from ..numerics import row_mask
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_sparse
@@ -63,7 +63,7 @@ class DRNGResult:
         for s in sources:
             keep = self.columns.principle <= s
             if np.any(self.columns.principle == s):
-                r = dimensionless_rank(self.columns.subset(keep), self.robot)
+                r = scaled_rank(self.columns.subset(keep), self.robot)
             else:
                 r = prev
             out[s.label] = r - prev
@@ -95,15 +95,14 @@ class DRNGResult:
         return f"{src.label}: {joint}, bodies {body}{par}, points {c.label[k]}"
 
 
-def dimensionless_rank(cols: Columns, robot: Robot) -> int:
+def scaled_rank(cols: Columns, robot: Robot) -> int:
     """Exact rank (:func:`.rank.block_rank`) of the columns for parameters ``pi / d``
     (:func:`baseparams.model.scale.decision_scale`: ones for a robot of ordinary size): a
     per-entry scaling of every body block, the same for all bodies, so the block structure is
     kept and the decision does not depend on the unit of length."""
     from dataclasses import replace
 
-    lo, hi = METRE_BAND
-    if lo <= length_scale(robot) <= hi:  # a robot of ordinary size: as it is
+    if ordinary_size(robot):  # d = 1: the columns as they are
         return block_rank(cols, robot.n)
     inv = 1.0 / decision_scale(robot, "paper")[:10]
     return block_rank(replace(cols, h=cols.h * inv, hp=cols.hp * inv, he=cols.he * inv), robot.n)
@@ -143,5 +142,5 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     extra = unmeasured_columns(robot, rows)
     if len(extra):
         cols = Columns.concat([cols, extra])
-    rank = dimensionless_rank(cols, robot)
+    rank = scaled_rank(cols, robot)
     return DRNGResult(robot, cols, rank, time.perf_counter() - t0, extended)

@@ -75,7 +75,8 @@ class ModelWarning(UserWarning):
     """A note about a loaded model that does not stop the analysis: a physically infeasible
     inertia (the base-parameter structure does not depend on the values), a loop robot
     assembled or re-referenced because the file's q = 0 is not assembled (or is singular), or
-    a warning of the file's reader."""
+    a warning of the file's reader.
+    """
 
 
 def load(model: str | os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False) -> Robot:

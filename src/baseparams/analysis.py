@@ -186,7 +186,8 @@ class Analysis:
     @property
     def status(self) -> Status:
         """``certified``, ``completed``, ``undecided``, ``failed`` or ``unverified`` (a
-        :class:`~baseparams.enums.Status`, equal to those strings)."""
+        :class:`~baseparams.enums.Status`, equal to those strings).
+        """
         return Status.UNVERIFIED if self.certificate is None else self.certificate.status
 
     @property
@@ -211,7 +212,8 @@ class Analysis:
 
     def expressions(self) -> list[dict[str, str]]:
         """``[{"name", "expression"}]``: each base parameter as a combination of standard
-        parameters in :attr:`convention`, e.g. ``link1.ZZR = link1.ZZ + link2.YY + ...``."""
+        parameters in :attr:`convention`, e.g. ``link1.ZZR = link1.ZZ + link2.YY + ...``.
+        """
         return self.base.expressions()
 
     def to_base(self, params, convention: str) -> np.ndarray:

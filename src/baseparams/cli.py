@@ -76,7 +76,8 @@ def _emit(args, text: str) -> None:
 
 def cmd_regressor(args) -> int:
     """The TP regressor on random states; for a robot with loops, the closed-loop regressor with
-    respect to its independent (actuated) coordinates on loop-closed samples."""
+    respect to its independent (actuated) coordinates on loop-closed samples.
+    """
     from .numerics import closed_samples, sample_states
     from .regressor import closed_regressor, regressor
 

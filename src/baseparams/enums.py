@@ -18,7 +18,8 @@ __all__ = ["Convention", "JointType", "Rows", "Source", "Status", "values"]
 
 class _Choice(StrEnum):
     """A string choice whose ``repr`` is its string's (``'certified'``): tuples, doctests and
-    error messages that show ``repr`` read exactly as with the plain strings."""
+    error messages that show ``repr`` read exactly as with the plain strings.
+    """
 
     def __repr__(self) -> str:
         return repr(self.value)
@@ -26,7 +27,8 @@ class _Choice(StrEnum):
 
 class Convention(_Choice):
     """A per-body ordering (and frame) of the ten inertial parameters
-    (:data:`baseparams.model.inertia.SPECS`)."""
+    (:data:`baseparams.model.inertia.SPECS`).
+    """
 
     PAPER = "paper"
     KHALIL = "khalil"
@@ -45,7 +47,8 @@ class Rows(_Choice):
 
 class Status(_Choice):
     """Outcome of certification (:class:`baseparams.nullspace.certify.Certificate`);
-    ``unverified``: an analysis run without it."""
+    ``unverified``: an analysis run without it.
+    """
 
     CERTIFIED = "certified"
     COMPLETED = "completed"
@@ -63,7 +66,8 @@ class JointType(_Choice):
     """Joint types. One enum for tree and loop (cut) joints: ``R P U S F C`` are the tree joints
     a body hangs on (:data:`baseparams.model.robot.JOINT_TYPES`); ``fixed`` is no body's joint
     (the builder and the readers merge a fixed link into its parent) but is a cut joint closing
-    a loop rigidly (:data:`baseparams.model.robot.LOOP_TYPES`: ``R P U S fixed``)."""
+    a loop rigidly (:data:`baseparams.model.robot.LOOP_TYPES`: ``R P U S fixed``).
+    """
 
     R = "R"  # revolute
     P = "P"  # prismatic
@@ -80,7 +84,8 @@ class Source(IntEnum):
 
     Integer-valued (columns store them in integer arrays); the order is the order in which
     :meth:`baseparams.nullspace.drng.DRNGResult.by_principle` takes them, and :attr:`label` is
-    the name printed in reports and used as the JSON ``by_rule`` key."""
+    the name printed in reports and used as the JSON ``by_rule`` key.
+    """
 
     SHARED_POINTS = 0
     FIXED_POINTS = 1
@@ -114,5 +119,6 @@ _LABELS = ("shared points", "fixed points", "planar rotations",
 
 def values(members) -> tuple[str, ...]:
     """The members' plain strings, in order (tables, error messages and CLI choices print
-    ``('all', 'joints', 'base')``, not the members' reprs)."""
+    ``('all', 'joints', 'base')``, not the members' reprs).
+    """
     return tuple(str(m) for m in members)

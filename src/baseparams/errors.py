@@ -11,4 +11,5 @@ class ModelError(BaseparamsError, ValueError):
 
 class NoMovingBodiesError(ModelError):
     """A model whose links are all welded to the world: it has no inertial parameter that any
-    measurement could see (the CLI reports this as an empty, trivially certified result)."""
+    measurement could see (the CLI reports this as an empty, trivially certified result).
+    """

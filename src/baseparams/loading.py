@@ -19,7 +19,8 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
     """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xml``/``.mjcf``).
 
     Files are read by :func:`.io.load.load_file` (gravity, inertia checks and loop assembly are
-    described there); ``floating`` applies to files only."""
+    described there); ``floating`` applies to files only.
+    """
     p = Path(model)
     if model.lower() in BUILTINS and not p.exists():
         if floating:

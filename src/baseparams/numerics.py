@@ -1,5 +1,6 @@
 """The numerical method (the paper's baseline and our judge): random states, the stacked
-TP regressor and a rank decision by SVD with a stated tolerance and singular-value gap."""
+TP regressor and a rank decision by SVD with a stated tolerance and singular-value gap.
+"""
 
 from __future__ import annotations
 
@@ -28,7 +29,8 @@ def row_mask(robot: Robot, rows: str) -> np.ndarray:
     """Boolean ``(dof,)``: which generalized forces are measured.
 
     ``all``; ``joints`` (every coordinate but the floating base's 6); ``base`` (only the
-    floating base's wrench)."""
+    floating base's wrench).
+    """
     if rows not in ROWS:
         raise BaseparamsError(f"unknown measured rows {rows!r}; expected one of {ROWS}")
     is_base = np.array([robot.jtype[b] == "F" for b in robot.dof_body])
@@ -96,7 +98,8 @@ DEFAULT_HALF_WIDTH = 0.3
 def default_samples(robot: Robot) -> int:
     """100 random states for trees (the paper); for loops the paper's 5 000 actuated samples
     on small mechanisms, and enough for a stacked regressor with ~4x more rows than parameters
-    on large ones (e.g. humanoids whose only loops are mimic couplings)."""
+    on large ones (e.g. humanoids whose only loops are mimic couplings).
+    """
     if not robot.has_loops:
         return DEFAULT_SAMPLES_TREE
     if robot.n <= 12:
@@ -123,7 +126,8 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
 
     ``cond_max`` default: 30 (the paper); when cond(J_p) at the reference is already above 30
     (coordinates mixing metres and radians with millimetre lever arms, e.g. Cassie's rods),
-    3x the reference's."""
+    3x the reference's.
+    """
     from .kinematics.loops import close_loops
 
     na = len(robot.actuated)
@@ -142,7 +146,8 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
 
     Trees: states uniform in (0, 1) (the paper). Closed loops: actuated samples in the robot's
     box, solved exactly (:func:`baseparams.kinematics.loops.close_loops`); discarded samples
-    are counted in ``info`` (a dict filled in place) when given."""
+    are counted in ``info`` (a dict filled in place) when given.
+    """
     from .regressor import closed_regressor
 
     samples = default_samples(robot) if samples is None else samples

@@ -28,14 +28,16 @@ _NAMES = _inertia.NAMES
 
 def parameter_names(robot: Robot, convention: str) -> list[str]:
     """``body.PARAM`` for every parameter, e.g. ``link2.ZZ``; ``paper`` names are the spatial
-    pseudo-inertia entries ``MXX...M`` written ``XX...M`` (at q = 0, world frame)."""
+    pseudo-inertia entries ``MXX...M`` written ``XX...M`` (at q = 0, world frame).
+    """
     return [f"{b}.{p}" for b in robot.names for p in _NAMES[convention]]
 
 
 def paper_from(robot: Robot, convention: str) -> np.ndarray:
     """Block-diagonal ``T (10 n, 10 n)``: paper parameters = ``T @`` convention parameters.
 
-    Conventions other than ``paper`` are link-frame (the body frame), mapped by ``M0``."""
+    Conventions other than ``paper`` are link-frame (the body frame), mapped by ``M0``.
+    """
     n = robot.n
     t = np.zeros((10 * n, 10 * n))
     if convention == "paper":
@@ -61,7 +63,8 @@ def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
     """Snap every entry to the shortest decimal (1 to 17 significant digits) within ``rtol``
     relative of it, e.g. ``0.18645124000000003 -> 0.18645124``, ``0.9999999999999998 -> 1``;
     no entry moves by more than ``rtol`` relative. Zeros stay zero; removing rounding noise
-    (a relative matter) is the caller's job."""
+    (a relative matter) is the caller's job.
+    """
     x = np.array(x, dtype=float)
     flat = x.reshape(-1)
     nz = np.flatnonzero(np.isfinite(flat) & (flat != 0))
@@ -146,7 +149,8 @@ class BaseParameters:
         """Base parameters ``beta (nb,)`` from a full vector ``pi (10 n,)``.
 
         ``convention`` (required) names ``pi``'s convention; it must be this object's
-        :attr:`convention` (a mismatch is an error, never a number)."""
+        :attr:`convention` (a mismatch is an error, never a number).
+        """
         self._check(convention)
         pi = np.asarray(pi, dtype=float)
         if pi.shape != (self.E.shape[1],):
@@ -155,7 +159,8 @@ class BaseParameters:
 
     def from_base(self, beta: np.ndarray) -> np.ndarray:
         """The minimum-norm full vector ``(10 n,)`` with these base parameters, in this object's
-        :attr:`convention`."""
+        :attr:`convention`.
+        """
         beta = np.asarray(beta, dtype=float)
         if beta.shape != (self.E.shape[0],):
             raise BaseparamsError(f"expected {self.E.shape[0]} base parameters, got shape {beta.shape}")
@@ -167,7 +172,8 @@ def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> n
 
     A row is taken when its component outside the span of the rows taken so far is above
     ``rtol`` times the largest row norm: with ``b`` an orthonormal basis (of dimensionless
-    coordinates) the choice depends on its column space only, not on the basis chosen in it."""
+    coordinates) the choice depends on its column space only, not on the basis chosen in it.
+    """
     k = b.shape[1]
     basis = np.zeros((0, k))
     chosen = []
@@ -201,7 +207,8 @@ def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str) -> Ba
     The basis given is orthonormal in SI units, so its rounding (``~eps``, absolute) is
     ``~eps cond(L^-u T^-1)`` in the dimensionless coordinates: ``~1e-8`` for a robot drawn in
     millimetres. The tolerances grow with it (:data:`NOISE_FACTOR`), and so does the error of
-    ``K``: such a basis cannot tell more."""
+    ``K``: such a basis cannot tell more.
+    """
     n10 = 10 * robot.n
     t = paper_from(robot, convention)
     tinv = np.linalg.inv(t)

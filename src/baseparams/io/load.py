@@ -19,7 +19,8 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     Gravity defaults to ``(0, 0, -9.81)`` for URDF files and to the model's own for MJCF. Physically
     infeasible inertias are notes (one per link), or errors with ``strict_inertia``. Loop robots whose
     file is not assembled (or singular) at q = 0 are assembled and re-referenced; the notes say so,
-    along with any warning raised while reading."""
+    along with any warning raised while reading.
+    """
     p = Path(path)
     if not p.exists():
         raise BaseparamsError(f"{p}: no such file")

@@ -74,7 +74,8 @@ def _resolve(base: Path, subdir: str, file: str) -> bool:
 def _strip_assets(mj, spec, base: Path, everything: bool) -> dict[str, str]:
     """Delete file-backed meshes, textures, height fields and skins whose file is missing (all of
     them with ``everything``) and the geoms using them; returns ``{body name: geom kind}`` for the
-    bodies that lost a geom."""
+    bodies that lost a geom.
+    """
     meshdir = spec.compiler.meshdir or spec.meshdir or ""
     texdir = spec.compiler.texturedir or spec.texturedir or ""
     gone_mesh, gone_hf, gone_tex = set(), set(), set()
@@ -170,7 +171,8 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
     """Read an MJCF file into a :class:`Robot` (see the module doc). ``gravity``: default the
     model's ``opt.gravity``. ``floating``: a top-level body without a joint gets a floating (F)
     joint. ``strict_inertia``: physically infeasible inertias of moving bodies are errors
-    (warnings otherwise)."""
+    (warnings otherwise).
+    """
     path = Path(path)
     if not path.is_file():
         raise ModelError(f"{path}: no such file")
@@ -261,7 +263,8 @@ def _gravity(mj, model, path: Path, gravity) -> np.ndarray:
 def _add_body(mj, model, data, path: Path, b: RobotBuilder, w: _Walk, i: int, bname: str, floating: bool,
               strict_inertia: bool) -> None:
     """Add MuJoCo body ``i``: merged into its parent when it has no joint (floating instead when
-    ``floating`` and top-level), else a moving link with its joint, armature and dofs mapped."""
+    ``floating`` and top-level), else a moving link with its joint, armature and dofs mapped.
+    """
     what = f"{path}: body {bname!r}"
     p = int(model.body_parentid[i])
     plink = w.link_of[p]
@@ -305,7 +308,8 @@ def _joint_ndof(model, j: int) -> int:
 
 def _map_dofs(model, w: _Walk, jt: str, joints: list[int]) -> None:
     """Append the armature of a new link's joint (``jt``, MuJoCo ``joints``; none: a floating
-    joint of ours, zero armature) and map its MuJoCo dofs to our coordinates."""
+    joint of ours, zero armature) and map its MuJoCo dofs to our coordinates.
+    """
     arm = np.zeros(6) if not joints else np.concatenate(
         [model.dof_armature[model.jnt_dofadr[j]: model.jnt_dofadr[j] + _joint_ndof(model, j)] for j in joints])
     first = len(w.armature)
@@ -420,7 +424,8 @@ def _tendon_coupling(mj, model, t1: int, t2: int, d: np.ndarray, dof_map, ename:
     """``L1 - L1(qpos0) = a0 + a1 (L2 - L2(qpos0))`` with fixed tendons ``L = sum c_j q_j``: one
     linear coupling of the 1-dof joints involved (any number of them, e.g. dm_control's
     quadruped ties pitch, knee and ankle). The coordinate with the largest coefficient is solved
-    for: ``q_s = sum(-c_j / c_s q_j) + a0 / c_s``."""
+    for: ``q_s = sum(-c_j / c_s q_j) + a0 / c_s``.
+    """
     _check_poly(d, what)
     coef: dict[int, float] = {}
     for j, c in _tendon_joints(mj, model, t1, what):

@@ -59,7 +59,8 @@ def _floats(text: str | None, n: int, what: str, default) -> np.ndarray:
 def _parse(path: Path) -> ET.Element:
     """The file's root element, tolerating what urdfdom, Pinocchio and pybullet tolerate: a
     UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after the
-    root element. Anything else malformed is a one-line error naming the file."""
+    root element. Anything else malformed is a one-line error naming the file.
+    """
     try:
         data = path.read_bytes()
     except OSError as exc:
@@ -86,7 +87,8 @@ def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
 
 def _inertial(link: ET.Element, what: str, check: bool = True, strict: bool = False) -> Inertia | None:
     """The link's ``<inertial>`` (None if absent); ``check``: warn (``strict``: raise) when it
-    is physically infeasible. Links fixed to the world are read unchecked: they never move."""
+    is physically infeasible. Links fixed to the world are read unchecked: they never move.
+    """
     inl = link.find("inertial")
     if inl is None:
         return None
@@ -131,7 +133,8 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     """Read a URDF / URDF+ file into a :class:`Robot` (see the module doc).
 
     Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
-    errors with ``strict_inertia``; links fixed to the world are never checked."""
+    errors with ``strict_inertia``; links fixed to the world are never checked.
+    """
     path = Path(path)
     root = _parse(path)
     if root.tag != "robot":
@@ -175,7 +178,8 @@ def _index_links(root: ET.Element, path: Path) -> dict[str, ET.Element]:
 
 def _index_joints(root: ET.Element, links: dict[str, ET.Element], path: Path) -> _Index:
     """Every ``<joint>`` checked (name, parent and child links, one parent per link, mimic,
-    type) and indexed."""
+    type) and indexed.
+    """
     ix = _Index(links, {}, {}, {k: [] for k in links}, {})
     for jt in root.findall("joint"):
         jname = jt.get("name")
@@ -225,7 +229,8 @@ def _mimic(mim: ET.Element, what: str) -> tuple[str, float, float]:
 
 def _drop_ignored_mimics(ix: _Index, path: Path) -> None:
     """Drop, with a warning each, the mimics of unknown joints (as urdfdom and Pinocchio do) and
-    those involving a fixed joint."""
+    those involving a fixed joint.
+    """
     for jname, (leader, _, _) in list(ix.mimics.items()):
         if leader not in ix.joints:  # urdfdom and Pinocchio ignore it: say so, once
             warnings.warn(f"{path}: <joint name={jname!r}> <mimic>: ignored (unknown joint {leader!r}); "
@@ -250,7 +255,8 @@ def _root_link(ix: _Index, path: Path) -> str:
 def _add_root(b: RobotBuilder, ix: _Index, base: str, floating: bool, path: Path,
               strict_inertia: bool) -> list[tuple[float, float]]:
     """Add the root link, floating (an F joint ``root_joint``) or as the fixed base; the joint
-    limits so far (six unbounded ones when floating)."""
+    limits so far (six unbounded ones when floating).
+    """
     if floating:
         b.add_link(base, joint="F", inertia=_inertial(ix.links[base], f"{path}: <link name={base!r}>",
                                                      strict=strict_inertia),
@@ -263,7 +269,8 @@ def _add_root(b: RobotBuilder, ix: _Index, base: str, floating: bool, path: Path
 def _add_tree(b: RobotBuilder, ix: _Index, base: str, floating: bool, limits: list[tuple[float, float]],
               path: Path, strict_inertia: bool) -> None:
     """Add every joint and its child link, depth first from ``base`` in file order; append the
-    independent joints' limits to ``limits``. Every link must be reached, once."""
+    independent joints' limits to ``limits``. Every link must be reached, once.
+    """
     world_fixed = set() if floating else {base}  # links welded to the world: their inertia never matters
     seen = {base}
     stack = [(base, c) for c in reversed(ix.children[base])]
@@ -331,7 +338,8 @@ def _joint_limits(jt: ET.Element, t: str, what: str) -> list[tuple[float, float]
 
 def _pred_succ(elem: ET.Element, what: str, tag: str, path: Path) -> tuple[ET.Element, ET.Element]:
     """The ``<predecessor>`` and ``<successor>`` of a ``<loop>`` or ``<coupling>`` (``sucessor``
-    accepted with a warning); ``tag`` is the element as the warning names it."""
+    accepted with a warning); ``tag`` is the element as the warning names it.
+    """
     pred, succ = elem.find("predecessor"), elem.find("successor")
     if succ is None and elem.find("sucessor") is not None:
         warnings.warn(f"{path}: {tag}: 'sucessor' spelling accepted", URDFWarning, stacklevel=4)
@@ -390,7 +398,8 @@ def _mimic_couplings(ix: _Index) -> list[tuple[str, str, str, float, float]]:
 
 def _sampling_box(limits: list[tuple[float, float]]) -> np.ndarray:
     """The independent joints' limits as a sampling box around q = 0, capped at +-1 (rad or m)
-    so that continuation stays on one assembly mode."""
+    so that continuation stays on one assembly mode.
+    """
     return np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3] for lo, hi in limits])
 
 
@@ -425,7 +434,8 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     absurdly far away) raises :class:`ModelError` naming the file and the link, and nothing is
     written. Links merged into a moving body by fixed joints get zero inertia (their share is
     in the body's values); links welded to the world (the fixed root and links fixed to it)
-    are not part of any body and keep their ``<inertial>`` untouched."""
+    are not part of any body and keep their ``<inertial>`` untouched.
+    """
     from ..model import inertia as I
     from ..pga import inverse_transform
 
@@ -467,7 +477,8 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
 
 def _exact_inertial(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.ndarray]:
     """``(mass, com, inertia about the com)`` for a URDF ``<inertial>`` that re-reads as the
-    pseudo-inertia ``n`` (round trip through the reader), or a :class:`ModelError`."""
+    pseudo-inertia ``n`` (round trip through the reader), or a :class:`ModelError`.
+    """
     from ..model import inertia as I
 
     m, h, j_o = I.split(n)

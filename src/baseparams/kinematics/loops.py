@@ -158,7 +158,8 @@ def _pinv(k: np.ndarray, rcond: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
 
 def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Batched least-squares step ``k x ~ r`` by regularised normal equations (Newton only;
-    redundant rows are fine, a rank-deficient ``k`` gets a tiny Tikhonov term)."""
+    redundant rows are fine, a rank-deficient ``k`` gets a tiny Tikhonov term).
+    """
     ktk = np.einsum("smi,smj->sij", k, k)
     eps = 1e-12 * np.trace(ktk, axis1=1, axis2=2)[:, None, None] + 1e-300
     return np.linalg.solve(ktk + eps * np.eye(k.shape[2]), np.einsum("smi,sm->si", k, r)[..., None])[..., 0]
@@ -167,7 +168,8 @@ def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class ClosedStates:
     """Loop-closed samples. ``q, dq, ddq (S, dof)`` full tree coordinates; ``G (S, dof, na)``
-    = dq/dq_a; ``cond (S,)`` condition number of ``K_p``; counts of discarded samples."""
+    = dq/dq_a; ``cond (S,)`` condition number of ``K_p``; counts of discarded samples.
+    """
 
     q: np.ndarray
     dq: np.ndarray
@@ -230,7 +232,8 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
 def _continuation(robot: Robot, q: np.ndarray, qa: np.ndarray, act: np.ndarray, pas: np.ndarray, cons: list,
                   steps: int, tol: float, max_iter: int, max_step: float) -> tuple[np.ndarray, np.ndarray]:
     """Move ``q (S, dof)`` in place from its start to the actuated targets ``qa`` in ``steps``
-    predictor-corrector steps; ``(failed, jumped)`` flags ``(S,)``: no convergence, branch jump."""
+    predictor-corrector steps; ``(failed, jumped)`` flags ``(S,)``: no convergence, branch jump.
+    """
     s = q.shape[0]
     failed = np.zeros(s, dtype=bool)
     jumped = np.zeros(s, dtype=bool)
@@ -258,7 +261,8 @@ def _damped_newton(robot: Robot, q: np.ndarray, live: np.ndarray, pas: np.ndarra
     did not converge within ``max_iter`` (outside the workspace) are returned.
 
     Damped Newton on the samples still iterating (``idx`` shrinks): a step that does not reduce
-    the residual is halved and retried from the previous iterate."""
+    the residual is halved and retried from the previous iterate.
+    """
     idx, sub = live, q[live]
     prev_sub, prev_err, prev_step = sub.copy(), np.full(len(idx), np.inf), np.zeros((len(idx), len(pas)))
     lam = np.ones(len(idx))
@@ -293,7 +297,8 @@ def _damped_newton(robot: Robot, q: np.ndarray, live: np.ndarray, pas: np.ndarra
 def _closed_rates(robot: Robot, q: np.ndarray, k: np.ndarray, kp_inv: np.ndarray, act: np.ndarray, pas: np.ndarray,
                   dqa: np.ndarray, ddqa: np.ndarray, cons: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact closed-loop rates at ``q``: ``G (S, dof, na)`` with ``dq = G dqa``, ``dq`` and ``ddq``
-    (``K (S, m, dof)`` the constraint Jacobian, ``kp_inv`` the pseudo-inverse of its passive part)."""
+    (``K (S, m, dof)`` the constraint Jacobian, ``kp_inv`` the pseudo-inverse of its passive part).
+    """
     g = np.zeros((q.shape[0], robot.dof, len(act)))
     g[:, act, np.arange(len(act))] = 1.0
     g[:, pas] = -kp_inv @ k[:, :, act]
@@ -312,7 +317,8 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     unchanged. Otherwise the loops are closed by Newton from q = 0 with the actuated
     coordinates at 0 (or, when q = 0 is a singular configuration, at small offsets), and the
     robot is re-referenced there (its new q = 0; ``q_box`` shifted). Returns the robot, the
-    reference in the old coordinates, and a note for the user ('' when nothing was done)."""
+    reference in the old coordinates, and a note for the user ('' when nothing was done).
+    """
     from dataclasses import replace
 
     if not robot.has_loops:
@@ -365,7 +371,8 @@ def choose_independent(robot: Robot, prefer_independent: set[int] | None = None,
 
     For files that do not say which coordinates are independent (MJCF): the passive set is a
     maximal set of coordinates whose constraint-Jacobian columns are independent, picked
-    greedily, coordinates in ``prefer_independent`` (e.g. actuated joints) last."""
+    greedily, coordinates in ``prefer_independent`` (e.g. actuated joints) last.
+    """
     from dataclasses import replace
 
     from scipy.linalg import qr

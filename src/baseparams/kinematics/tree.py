@@ -59,7 +59,8 @@ def _as_samples(x, dof: int, label: str) -> np.ndarray:
 
 def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
     """Batched tree kinematics. ``q, dq, ddq``: ``(S, dof)`` (or ``(dof,)``); ``dq, ddq``
-    default to zero. Loops over bodies, vectorised over samples."""
+    default to zero. Loops over bodies, vectorised over samples.
+    """
     dof = robot.dof
     q = _as_samples(q, dof, "q")
     s = q.shape[0]
@@ -104,7 +105,8 @@ def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
 def re_reference(robot: Robot, q0: np.ndarray) -> Robot:
     """The same robot re-referenced at configuration ``q0 (dof,)``: its new q = 0 is the old
     ``q0`` (exactly ``q_new = q - q0`` for R, P, U and C joints). Not for S joints, whose
-    Euler axes are tied to the joint frame."""
+    Euler axes are tied to the joint frame.
+    """
     if "S" in robot.jtype:
         raise ModelError(f"robot {robot.name!r}: re-referencing at q0 is not supported with S joints")
     q0 = np.asarray(q0, dtype=float)

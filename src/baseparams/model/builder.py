@@ -189,7 +189,8 @@ class RobotBuilder:
         is not assembled there: see :func:`baseparams.kinematics.loops.assemble`). The two
         links may come in either tree order (URDF+ allows it; either may be the world): the
         built :class:`LoopJoint` has ``parent < child``, with the frames (and a U joint's two
-        axes: ``axis`` carried by ``parent``, ``axis2`` by ``child``) swapped when needed."""
+        axes: ``axis`` carried by ``parent``, ``axis2`` by ``child``) swapped when needed.
+        """
         jt = joint_type(type)
         self._loops.append((name, jt, parent, child, origin, axis, axis2, child_origin))
         return self

@@ -57,7 +57,8 @@ class ConventionSpec:
     ``names`` (as printed), ``frame`` (what they are expressed in) and ``regroup`` (fields in
     the order the regrouping tries them as dependent, within a body). The converters
     (:func:`to_convention`, :func:`from_convention`), :data:`NAMES`, :data:`FRAMES`,
-    :data:`LENGTH_POWER` and the CLI's ``--convention`` choices come from :data:`SPECS`."""
+    :data:`LENGTH_POWER` and the CLI's ``--convention`` choices come from :data:`SPECS`.
+    """
 
     convention: Convention
     fields: tuple[str, ...]
@@ -119,7 +120,8 @@ def describe(convention: str) -> str:
 
 def check_convention(convention: str) -> Convention:
     """``convention`` as a :class:`~baseparams.enums.Convention` if it is one of
-    :data:`CONVENTIONS`, else a :class:`ModelError` naming them."""
+    :data:`CONVENTIONS`, else a :class:`ModelError` naming them.
+    """
     if convention not in CONVENTIONS:
         raise ModelError(f"unknown parameter convention {convention!r}; expected one of {', '.join(CONVENTIONS)}")
     return Convention(convention)
@@ -151,7 +153,8 @@ def unhat(p: np.ndarray) -> np.ndarray:
 
 def pseudo_inertia(mass: float, com: np.ndarray, inertia_com: np.ndarray) -> np.ndarray:
     """Pseudo-inertia ``(4, 4)`` from mass, centre of mass ``(3,)`` and the rotational
-    inertia ``(3, 3)`` about the centre of mass, all in the same frame."""
+    inertia ``(3, 3)`` about the centre of mass, all in the same frame.
+    """
     com = np.asarray(com, dtype=float)
     j_com = np.asarray(inertia_com, dtype=float)
     j_o = j_com + mass * (np.dot(com, com) * np.eye(3) - np.outer(com, com))
@@ -221,7 +224,8 @@ def convert(p: np.ndarray, src: str, dst: str) -> np.ndarray:
 class Inertia:
     """Rigid-body inertia: ``mass`` [kg], ``com`` [m] and ``inertia`` [kg m^2] about the
     centre of mass, all expressed in ``frame`` (a 4x4 pose relative to the body frame;
-    identity = the body/joint frame, as in URDF ``<inertial>``)."""
+    identity = the body/joint frame, as in URDF ``<inertial>``).
+    """
 
     mass: float
     com: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -263,7 +267,8 @@ def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float =
     Returns True when feasible. A violation is an :class:`InertiaWarning` (one line naming
     ``what``): the base-parameter structure does not depend on the inertia values, so the
     analysis goes on. With ``strict`` it is a :class:`ModelError` instead (identification,
-    where a prior must be feasible, or ``strict_inertia`` in the readers)."""
+    where a prior must be feasible, or ``strict_inertia`` in the readers).
+    """
     try:
         if mass < 0:
             raise ModelError(f"{what}: inertia not physically feasible (negative mass {mass:.3g})")

@@ -53,7 +53,8 @@ def joint_ndof(jtype: str, axes: np.ndarray) -> int:
 
 def compound_screw(axis, point=None, slide: bool = False) -> np.ndarray:
     """One elementary screw ``(6,)`` of a C joint, joint frame: a rotation about unit ``axis``
-    through ``point`` (default the origin), or a translation along it (``slide``)."""
+    through ``point`` (default the origin), or a translation along it (``slide``).
+    """
     a = np.asarray(axis, dtype=float).reshape(3)
     a = a / np.linalg.norm(a)
     if slide:
@@ -69,7 +70,8 @@ class Coupling:
     """A linear coupling of 1-dof coordinates:
     ``q[succ] = ratio * q[pred] + sum(r * q[k] for k, r in more) + offset``
     (URDF+ ``<coupling>``, URDF ``<mimic multiplier offset>``, MJCF ``<equality><joint>`` and
-    fixed-tendon equalities; ``more``: further coordinates, e.g. a tendon tying three joints)."""
+    fixed-tendon equalities; ``more``: further coordinates, e.g. a tendon tying three joints).
+    """
 
     name: str
     pred: int
@@ -88,7 +90,8 @@ class LoopJoint:
     """A cut joint closing a loop: type, the two bodies (``parent < child``; parent -1 = the
     world), the joint frame's world pose ``M`` at q = 0 carried by the predecessor, its axes
     (joint frame), and ``M_child``: the successor's copy of the frame at q = 0 when it does not
-    coincide with ``M`` (an unassembled file; see :func:`baseparams.kinematics.loops.assemble`)."""
+    coincide with ``M`` (an unassembled file; see :func:`baseparams.kinematics.loops.assemble`).
+    """
 
     name: str
     type: str
@@ -186,7 +189,8 @@ class Robot:
 
     def __post_init__(self) -> None:
         """Validate every field (one-line :class:`ModelError` naming the robot and the part) and
-        store the arrays normalised."""
+        store the arrays normalised.
+        """
         what = f"robot {self.name!r}"
         parent, m0, nb = self._check_shapes(what)
         axes = self._check_bodies(what, parent, m0, nb)
@@ -207,7 +211,8 @@ class Robot:
 
     def _check_shapes(self, what: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """At least one body, per-body fields of one length, unique names; ``(parent, M0,
-        N_body)`` as arrays of the right shapes."""
+        N_body)`` as arrays of the right shapes.
+        """
         n = len(self.names)
         if n == 0:
             raise ModelError(f"{what}: no bodies")
@@ -397,7 +402,8 @@ class Robot:
 
     def with_parameters(self, params: np.ndarray, convention: str) -> Robot:
         """The same robot with other inertial parameters ``(10 n,)`` in ``convention`` (required;
-        see :meth:`parameters`)."""
+        see :meth:`parameters`).
+        """
         _inertia.check_convention(convention)
         p = np.asarray(params, dtype=float)
         if p.size != 10 * self.n:

@@ -23,7 +23,8 @@ def length_scale(robot: Robot) -> float:
     origins at q = 0 (each body's joint origin from its parent's, a fixed root's from the world
     origin, each loop frame from both of its bodies' origins). A degree-1 homogeneous function of
     the geometry (scaling lengths by ``s`` scales it by ``s``) that ignores where a floating base
-    happens to stand; 1 when every distance is zero."""
+    happens to stand; 1 when every distance is zero.
+    """
     p = robot.M0[:, :3, 3]
     par = np.asarray(robot.parent)
     tree = par >= 0
@@ -57,7 +58,8 @@ def decision_scale(robot: Robot, convention: str) -> np.ndarray:
     """``(L / L_c)^u (10 n,)`` with ``L_c`` the robot's length scale clipped into
     :data:`METRE_BAND`: ones for a robot of ordinary size, and for a robot drawn in other units
     (millimetres, micrometres, kilometres) the factors that bring its parameters to an
-    ordinary-sized equivalent, ``pi / decision_scale``. Rank decisions are made on those."""
+    ordinary-sized equivalent, ``pi / decision_scale``. Rank decisions are made on those.
+    """
     ell = length_scale(robot)
     lo, hi = METRE_BAND
     return (ell / min(max(ell, lo), hi)) ** np.tile(LENGTH_POWER[convention], robot.n).astype(float)

@@ -73,7 +73,8 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     Steps: the stacked regressor ``W`` and its numerical nullspace; every DRNG column checked
     against ``W`` (:func:`_column_residuals`); the ranks compared (:func:`_verdict`); where DRNG
     misses directions and more samples do not raise the rank, the basis is completed
-    (:func:`_complete`)."""
+    (:func:`_complete`).
+    """
     t0 = time.perf_counter()
     res = drng(robot, rows=rows) if result is None else result
     samples = default_samples(robot) if samples is None else samples
@@ -152,7 +153,8 @@ def _verdict(res: DRNGResult, num: NumericalResult, w: np.ndarray, r_d: int, col
 
 def _complete(bd: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, int, float]:
     """DRNG's orthonormal basis ``bd (10 n, r)`` completed by the directions of the numerical
-    nullspace outside its span: ``(basis, number added, distance of the last added to span(bd))``."""
+    nullspace outside its span: ``(basis, number added, distance of the last added to span(bd))``.
+    """
     r_d = bd.shape[1]
     nb = num.null_basis
     rest = nb - bd @ (bd.T @ nb) if r_d else nb

@@ -28,7 +28,8 @@ PRINCIPLES = tuple(s.label for s in Source)
 def sym_params(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Parameter block ``hat(a b^T + b a^T)`` of 4-vectors: ``(*, 4), (*, 4) -> (*, 10)``.
 
-    For ``a == b`` this is ``hat(2 a a^T)``: use :func:`outer_params`."""
+    For ``a == b`` this is ``hat(2 a a^T)``: use :func:`outer_params`.
+    """
     return hat10(sym(a, b))
 
 

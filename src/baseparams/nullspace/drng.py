@@ -55,7 +55,8 @@ class DRNGResult:
     def by_principle(self) -> dict[str, int]:
         """Rank contributed by each source, taken in order: the paper's principles 1, 2, 3, then
         the extended rules R-A, R-B, R-L1, R-L2 (those run), then the unmeasured root's own
-        parameters (joint-torque rows only)."""
+        parameters (joint-torque rows only).
+        """
         out, prev = {}, 0
         sources = [s for s in Source if s.is_paper or (self.extended and s.is_extended)]
         if np.any(self.columns.principle == Source.UNMEASURED):
@@ -99,7 +100,8 @@ def scaled_rank(cols: Columns, robot: Robot) -> int:
     """Exact rank (:func:`.rank.block_rank`) of the columns for parameters ``pi / d``
     (:func:`baseparams.model.scale.decision_scale`: ones for a robot of ordinary size): a
     per-entry scaling of every body block, the same for all bodies, so the block structure is
-    kept and the decision does not depend on the unit of length."""
+    kept and the decision does not depend on the unit of length.
+    """
     from dataclasses import replace
 
     if ordinary_size(robot):  # d = 1: the columns as they are
@@ -114,7 +116,8 @@ def unmeasured_columns(robot: Robot, rows: str) -> Columns:
     its line against the wrenches of the bodies it carries, and no joint carries the root), so
     each is a nullspace direction on its own. With the base wrench alone (``"base"``) nothing is
     added: it sees every direction the full dynamics see (Ayusawa et al. 2014, the paper's
-    remark; certification checks it)."""
+    remark; certification checks it).
+    """
     if rows == "all":
         return Columns.empty()
     mask = row_mask(robot, rows)
@@ -134,7 +137,8 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
 
     ``extended``: add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2);
     ``False`` gives the paper's three principles alone. ``rows``: the measured generalized
-    forces (``all``, ``joints``, ``base``; see :func:`unmeasured_columns`)."""
+    forces (``all``, ``joints``, ``base``; see :func:`unmeasured_columns`).
+    """
     t0 = time.perf_counter()
     cols = drng_columns(robot, tol)
     if extended:

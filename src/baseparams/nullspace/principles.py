@@ -73,7 +73,8 @@ def planar_rotations(robot: Robot, tol: float = 1e-9) -> tuple[np.ndarray, np.nd
 @lru_cache(maxsize=16)  # robots compare by identity and are immutable
 def world_axes(robot: Robot) -> np.ndarray:
     """First joint axis of every body in world coordinates at q = 0 ``(n, 3)`` (zero if none;
-    read-only, cached per robot)."""
+    read-only, cached per robot).
+    """
     first = np.array([a[0] if (len(a) and t in ("R", "P", "U")) else (0.0, 0.0, 0.0)
                       for a, t in zip(robot.axes, robot.jtype)], dtype=float).reshape(-1, 3)
     out = np.einsum("nij,nj->ni", robot.M0[:, :3, :3], first)
@@ -84,7 +85,8 @@ def world_axes(robot: Robot) -> np.ndarray:
 def compound_shared(robot: Robot, i: int, tol: float = 1e-9) -> np.ndarray:
     """Vectors ``(r, 4)`` (orthonormal rows) that every screw of body ``i``'s joint leaves fixed:
     the common kernel of its world screws ``hat(S_k)`` on homogeneous 4-vectors (points and
-    directions both bodies move alike, whatever the joint's coordinates)."""
+    directions both bodies move alike, whatever the joint's coordinates).
+    """
     k0, nd = int(robot.q_index[i]), int(robot.ndofs[i])
     return nullspace(hat(robot.screws[k0:k0 + nd]).reshape(-1, 4), tol)
 
@@ -115,20 +117,23 @@ def _cols(h, child, parent, principle, labels) -> Columns:
 
 def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     """All DRNG columns (corrected), vectorised over joints of each type: the paper's
-    principles 1, 2 and 3, then principle 1 across the loop joints, in that order."""
+    principles 1, 2 and 3, then principle 1 across the loop joints, in that order.
+    """
     return Columns.concat([shared_point_columns(robot, tol), fixed_point_columns(robot, tol),
                            planar_rotation_columns(robot, tol), loop_columns(robot)])
 
 
 def _joint_data(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Joint types ``(n,)``, parents ``(n,)``, joint origins ``(n, 3)`` and first world axes
-    ``(n, 3)``, all at q = 0."""
+    ``(n, 3)``, all at q = 0.
+    """
     return np.array(robot.jtype), robot.parent, robot.M0[:, :3, 3], world_axes(robot)
 
 
 def shared_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     """Principle 1, shared points of every tree joint: R ``{O, z}``, P ``{x, y, z}``, U/S
-    ``{O}``, compound joints their common kernel; parent block negative (E1 fixed)."""
+    ``{O}``, compound joints their common kernel; parent block negative (E1 fixed).
+    """
     jt, par, org, axw = _joint_data(robot)
     e = np.eye(3)
     parts: list[Columns] = []
@@ -153,7 +158,8 @@ def shared_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
 def fixed_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     """Principle 2, fixed points of the joints on the fixed base: S/U ``sym(O, x|y|z)`` only
     when gravity is zero (E2 fixed), P ``sym(O, x|y|z)``, R ``sym(z, x|y)`` plus ``sym(O, x|y)``
-    when gravity is zero or along the axis."""
+    when gravity is zero or along the axis.
+    """
     jt, par, org, axw = _joint_data(robot)
     g = robot.gravity
     g_zero = np.linalg.norm(g) <= tol
@@ -188,7 +194,8 @@ def fixed_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
 def planar_rotation_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     """Principle 3, planar rotations (E5 fixed, see :func:`planar_rotations`): R ``xx^T - yy^T``,
     ``sym(x, y)`` and, off the base, ``sym(z, x|y)``; P off the base ``sym(d_pr, O)`` and, when it
-    slides along ``d_pr``, the transfers ``sym(O, x|y)`` to the parent."""
+    slides along ``d_pr``, the transfers ``sym(O, x|y)`` to the parent.
+    """
     jt, par, org, axw = _joint_data(robot)
     base = par < 0
     parts: list[Columns] = []
@@ -221,7 +228,8 @@ def loop_columns(robot: Robot) -> Columns:
     """Principle 1 for loop joints (E4 fixed: loop ``l`` is joint ``n + l``, its own block).
 
     Shared points from the loop frame at q = 0: R ``{O, z}``, P ``{x, y, z}``, U/S ``{O}``,
-    fixed ``{O, x, y, z}``; successor block ``+``, predecessor block ``-`` (none for the world)."""
+    fixed ``{O, x, y, z}``; successor block ``+``, predecessor block ``-`` (none for the world).
+    """
     parts = []
     e = np.eye(4)
     for k, lj in enumerate(robot.loops):

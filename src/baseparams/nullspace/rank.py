@@ -47,7 +47,8 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
     parent ``p`` are rotated by the right singular vectors of their child parts off ``Q``, and
     each combination whose child part lies in ``span Q`` is replaced by its parent part alone, a
     new pure column of ``p``. Without this a translation chain's redundant pure columns cascade
-    through the elimination (quadratic in the depth)."""
+    through the elimination (quadratic in the depth).
+    """
     pure_mask = (cols.parent < 0) & (cols.extra < 0)
     if not pure_mask.any():
         return cols
@@ -89,7 +90,8 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
 
 def _pure_bases(cols: Columns, pure_mask: np.ndarray, tol: float) -> dict[int, list[np.ndarray]]:
     """Body -> orthonormal basis (a list of 10-vectors) of the span of its pure columns, for
-    every body with some, at once (batched SVD over padded blocks)."""
+    every body with some, at once (batched SVD over padded blocks).
+    """
     pk = np.flatnonzero(pure_mask)
     pk = pk[np.argsort(cols.child[pk], kind="stable")]
     pb, pc = np.unique(cols.child[pk], return_counts=True)
@@ -122,7 +124,8 @@ def _split_off_span(cols: Columns, grp: np.ndarray, basis: np.ndarray, tol: floa
     """Rotate the two-block columns ``grp`` (one child, one parent) by the right singular vectors
     of their child parts off ``span basis``: None when none of their combinations has its child
     part in the span, else ``(child parts, parent parts)`` of the ``r`` combinations kept as
-    two-block columns, and the parent parts of the others (new pure columns of the parent)."""
+    two-block columns, and the parent parts of the others (new pure columns of the parent).
+    """
     h, hp = cols.h[grp], cols.hp[grp]
     res = h - (h @ basis) @ basis.T
     _, rs, vt = np.linalg.svd(res.T, full_matrices=True)  # vt (k, k)
@@ -166,7 +169,8 @@ def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, cou
 
     Vectors are sparse over bodies; at body b, the parts on block b of every vector whose highest
     block is b are ranked, and combinations vanishing there move down to their next highest
-    block. A body with a full-rank diagonal block that receives nothing keeps its batched rank."""
+    block. A body with a full-rank diagonal block that receives nothing keeps its batched rank.
+    """
     scale = max(float(np.abs(cols.h).max()), 1e-300)
     total = int(ranks.sum())
     pending: dict[int, list[dict[int, np.ndarray]]] = {}

@@ -62,7 +62,8 @@ def _describe(v: np.ndarray) -> str:
 
 class _Label:
     """A provenance label formatted on demand: labels are built for every column and read
-    rarely (``DRNGResult.provenance``), so the formatting is deferred."""
+    rarely (``DRNGResult.provenance``), so the formatting is deferred.
+    """
 
     __slots__ = ("fn", "args")
 
@@ -97,7 +98,8 @@ def _singles(hs: list[np.ndarray], bodies, rule: int, labels: list[str]) -> Colu
 def _sym_columns(ms: MotionSpans, bodies: np.ndarray, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
     """For each body ``bodies[k]``: an orthonormal basis ``(r_k, 10)`` of the combinations of
     ``sym(a_k[i], b_k[j])`` whose potential is constant (gravity filter). ``a, b (m, 4, 4)``:
-    vectors as rows, padded with zero rows. Batched: three SVD calls for all bodies."""
+    vectors as rows, padded with zero rows. Batched: three SVD calls for all bodies.
+    """
     m = len(bodies)
     syms = sym(a[:, :, None], b[:, None, :]).reshape(m, 16, 4, 4)  # zero for padding
     g = ms.robot.gravity
@@ -123,7 +125,8 @@ def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns
     """R-A: ``sym(f, v)`` on every body ``i`` with ``f`` fixed (``∩ ker S_j`` on its path), gravity
     filtered. Closes gravity zero (Puma560's axis-1/axis-2 intersection: +2), translation stages
     (every direction fixed) and a U joint at the base with its first axis along gravity.
-    Batched over bodies."""
+    Batched over bodies.
+    """
     ms = motion_spans(robot) if ms is None else ms
     bodies = np.array([i for i in range(robot.n) if ms.span[i] is not None and len(ms.fixed(i))], dtype=int)
     if not len(bodies):
@@ -155,7 +158,8 @@ def slide_directions(robot: Robot, tol: float = 1e-9) -> np.ndarray:
     from the R joints; free rotations alone never move a point along a straight line, so a
     sliding point needs a P joint, and all P directions on the path must be that line. Bodies
     with no P joint on their path, or two non-parallel ones, get zero (R-B has nothing to add
-    there beyond R-A's fixed vectors)."""
+    there beyond R-A's fixed vectors).
+    """
     s = robot.screws
     pdir = s[robot.q_index, 3:] / np.maximum(np.linalg.norm(s[robot.q_index, 3:], axis=1, keepdims=True), 1e-300)
     pd = pdir.tolist()
@@ -189,7 +193,8 @@ def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     """R-B: ``sym(a, b)`` with ``a`` sliding along ``d`` and ``b`` level in ``d`` (velocity of ``a``
     always along ``d``, of ``b`` always ``⟂ d``), gravity filtered; ``d`` from
     :func:`slide_directions`. Closes a fixed axis beyond the base (a lift followed by coaxial R
-    joints along gravity: +2 per turning body). Batched over bodies."""
+    joints along gravity: +2 per turning body). Batched over bodies.
+    """
     ms = motion_spans(robot) if ms is None else ms
     dirs = slide_directions(robot, ms.tol)
     bodies = np.array([i for i in np.flatnonzero(np.any(dirs, axis=1)) if ms.span[i] is not None], dtype=int)
@@ -238,7 +243,8 @@ def parallelograms(robot: Robot, tol: float = 1e-7) -> list[dict]:
     the fixed base), ``points (4, 3)`` with ``points[j]`` the joint between ``L_j`` and
     ``L_{j+1}``, the common ``axis (3,)`` and ``loop`` (the loop joint's name). The assembly mode
     is the parallelogram one (``P1 - P0 = P2 - P3``: crank and rocker stay parallel); a flattened
-    (collinear) reference, where both modes meet, is not accepted."""
+    (collinear) reference, where both modes meet, is not accepted.
+    """
     out = []
     axw = world_axes(robot)
     org = robot.M0[:, :3, 3]
@@ -288,7 +294,8 @@ def parallelogram_columns(robot: Robot) -> Columns:
     ``L2`` for every direction ``f`` (it only translates), and every parameter of the rocker
     ``L3`` transfers to the crank ``L1`` (``+dN`` on ``L3``, ``-T^-1 dN T^-T`` on ``L1``, ``T`` the
     translation by ``P3 - P0``: ``g_3 = T g_1 T^-1``). With a moving ``L0``: the direction
-    transfers ``sym(f_a, f_b)`` between opposite links."""
+    transfers ``sym(f_a, f_b)`` between opposite links.
+    """
     e = np.eye(4)
     dirs = sym(e[:3, None], e[None, :3]).reshape(-1, 4, 4)
     dir_basis = rowspace(hat10(dirs), 1e-12)  # the 6 direction-direction parameters
@@ -321,7 +328,8 @@ def _moving_root_transfer(p: np.ndarray, axis: np.ndarray, l0: int, l1: int, l3:
     With ``dN' = T^-1 dN T^-T`` and ``w = dN' e4`` shared by ``L0`` and ``L1`` (on the axis of
     their joint, so ``dg_1 w = dg_0 w``), the Lagrangian of ``dN`` on ``L3`` equals that of ``dN'``
     on ``L1`` plus ``sym(w, t) + m' t t^T`` on ``L0`` (``t = (P3 - P0, 0)``, ``m' = dN'_44``): a
-    three-body column. Derivation: ``g_0 T h_1 = g_1 + g_0 tau`` with ``tau = T - I``."""
+    three-body column. Derivation: ``g_0 T h_1 = g_1 + g_0 tau`` with ``tau = T - I``.
+    """
     t = np.eye(4)
     t[:3, 3] = p[3] - p[0]
     tbar = np.r_[p[3] - p[0], 0.0]
@@ -349,7 +357,8 @@ def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     vector fixed by all joint screws between the loop's root link and either body is shared (both
     bodies move it as the root does); e.g. a spherical loop joint closing a planar linkage also
     shares the plane's normal direction. ``sym(a, b)`` of shared vectors: ``+`` on the successor,
-    ``-`` on the predecessor."""
+    ``-`` on the predecessor.
+    """
     screws = hat(robot.screws)
     qi, nd = robot.q_index, robot.ndofs
     e = np.eye(4)
@@ -382,7 +391,8 @@ def _loop_axis(lj) -> np.ndarray:
 def _shared_vectors(jtype: str, origin: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Vectors ``(s, 4)`` a joint's two bodies move alike (principle 1): R its axis point and
     direction; U, S the centre; P every direction; a fixed loop joint everything; a free joint
-    nothing."""
+    nothing.
+    """
     pt = np.r_[origin, 1.0]
     e = np.eye(4)
     return {"R": np.array([pt, np.r_[axis, 0.0]]), "P": e[:3], "U": pt[None], "S": pt[None],
@@ -393,7 +403,8 @@ def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndar
     """Every tree and loop joint as ``(a, b, type, origin (3,), axis (3,), shared (s, 4))``:
     ``a`` the predecessor (``-1``: the base), ``shared`` an orthonormal basis of the vectors both
     bodies move alike (R: axis point and direction; U, S: the centre; P: every direction; a
-    fixed loop joint: everything; a free joint: nothing)."""
+    fixed loop joint: everything; a free joint: nothing).
+    """
     axw = world_axes(robot)
     out = []
     spec = [(int(robot.parent[i]), i, robot.jtype[i], robot.M0[i, :3, 3], axw[i]) for i in range(robot.n)]
@@ -417,7 +428,8 @@ def _cross4(x: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 def _level_spaces(robot: Robot, es: np.ndarray, ms: MotionSpans, joints: list) -> np.ndarray:
     """Loop-aware level spaces for every candidate ``es (C, 3)`` and body at once:
-    ``(C, n, 4, 4)`` orthonormal rows padded with zero rows (see :func:`loop_level_spaces`)."""
+    ``(C, n, 4, 4)`` orthonormal rows padded with zero rows (see :func:`loop_level_spaces`).
+    """
     n, tol = robot.n, ms.tol
     live = np.array([s is not None for s in ms.span])
     h = null_rows(np.einsum("ca,nkab->cnkb", es, ms.padded), tol) * live[None, :, None, None]
@@ -457,7 +469,8 @@ def loop_level_spaces(robot: Robot, e: np.ndarray, ms: MotionSpans | None = None
     the tree, a subset for the closed robot), enlarged to a fixpoint by propagation across every
     tree and loop joint: a vector both bodies move alike that keeps its ``e``-coordinate in one
     body keeps it in the other (``../shared/EXTENDED_PRINCIPLES.md``, R-L2). Safe: everything
-    returned is level on the closed robot."""
+    returned is level on the closed robot.
+    """
     ms = motion_spans(robot) if ms is None else ms
     h = _level_spaces(robot, np.asarray(e, float)[None], ms, _joint_shares(robot))[0]
     return [hi[np.linalg.norm(hi, axis=1) > 0.5] for hi in h]
@@ -475,7 +488,8 @@ def _candidates(robot: Robot, joints: list, tol: float) -> np.ndarray:
 
 class _Level(NamedTuple):
     """Per candidate ``e`` and body: the level directions (all, and those ``⟂ e``), their counts,
-    and a level point when there is one."""
+    and a level point when there is one.
+    """
 
     dirs: np.ndarray  # (C, n, 4, 4) level directions (w = 0), padded with zero rows
     xs: np.ndarray  # (C, n, 4, 4) level directions ⟂ e
@@ -497,7 +511,8 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     pairs have no potential. Single bodies (``A, B`` on one body: any level direction ``d``
     gives ``sym(x, x × d)``), pairs and triples are emitted; ``e`` runs over the joint axes and
     gravity, all candidates batched. Loop robots only: on trees the level spaces are exact and
-    the rule adds nothing beyond R-A and R-B (the special-robot survey)."""
+    the rule adds nothing beyond R-A and R-B (the special-robot survey).
+    """
     if not robot.loops:
         return Columns.empty()
     ms = motion_spans(robot, tol) if ms is None else ms
@@ -535,7 +550,8 @@ def _level_parts(h: np.ndarray, es: np.ndarray, tol: float) -> _Level:
 
 def _level_single_columns(es: np.ndarray, lv: _Level, tol: float) -> Columns | None:
     """Single bodies: ``sym(x_a, x_b × d) + sym(x_b, x_a × d)`` for level x's ⟂ e and level d's
-    (None when no body has both)."""
+    (None when no body has both).
+    """
     ci, bi = np.nonzero((lv.nx >= 1) & (lv.nd >= 2))
     if not len(ci):
         return None
@@ -561,7 +577,8 @@ def _level_single_columns(es: np.ndarray, lv: _Level, tol: float) -> Columns | N
 def _level_edges(links: list, e: np.ndarray, nx: np.ndarray,
                  xs: np.ndarray) -> dict[int, list[tuple[int, np.ndarray, np.ndarray]]]:
     """Body -> ``(neighbour, x, joint point)`` for the R/P ``links`` whose axis ``x`` is ⟂ ``e``
-    and level in the predecessor (both directions of each joint)."""
+    and level in the predecessor (both directions of each joint).
+    """
     edges: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
     for a, b, o, ax in links:
         if abs(ax @ e) > 1e-9 or nx[a] == 0:
@@ -583,7 +600,8 @@ def _seg(x, p, q):
 
 def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, has_pt: np.ndarray) -> list[Columns]:
     """The pairs ``a - b`` (both with a level point) and triples ``b - a - c2`` (``a`` without one,
-    the two joints parallel) of one candidate ``ee`` along its level ``edges``."""
+    the two joints parallel) of one candidate ``ee`` along its level ``edges``.
+    """
     parts: list[Columns] = []
     for a, nbrs in edges.items():
         for b, x, jp in nbrs:

@@ -40,7 +40,8 @@ SATURATED = 12
 class MotionSpans:
     """``span[i] (k_i, 3, 4)``: orthonormal basis of body ``i``'s motion span ``M_i`` (Frobenius
     inner product), world frame at q = 0; ``None`` when saturated (``k_i = 12``: nothing of the
-    body is fixed, level or sliding)."""
+    body is fixed, level or sliding).
+    """
 
     robot: Robot
     span: tuple[np.ndarray | None, ...]
@@ -61,7 +62,8 @@ def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
     """Every body's motion span, base-first, batched over the bodies of each depth.
 
     Spans are padded ``(12, 12)`` row bases (zero rows beyond the dimension); one batched SVD
-    per depth and joint coordinate slot. Bodies below a saturated one are saturated."""
+    per depth and joint coordinate slot. Bodies below a saturated one are saturated.
+    """
     n = robot.n
     screws = hat(robot.screws)  # (dof, 4, 4) world twists at q = 0
     qi, nd = robot.q_index, robot.ndofs

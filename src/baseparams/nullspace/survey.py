@@ -17,7 +17,8 @@ from .drng import drng
 @dataclass(frozen=True, eq=False)
 class SurveyCase:
     """One robot: ``nullity`` (certified), ranks of the paper's principles and of the extended
-    DRNG, the worst relative residual of an emitted column, and the certification status."""
+    DRNG, the worst relative residual of an emitted column, and the certification status.
+    """
 
     name: str
     description: str

@@ -254,7 +254,8 @@ def se3_exp(xi: np.ndarray) -> np.ndarray:
 
 def screw_exp(screw: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """``exp(screw^ theta) (S, 4, 4)`` for one unit screw ``(6,)`` (rotation: |omega| = 1;
-    translation: omega = 0, |v| = 1) and angles/displacements ``theta (S,)``: closed form."""
+    translation: omega = 0, |v| = 1) and angles/displacements ``theta (S,)``: closed form.
+    """
     w, v = screw[:3], screw[3:]
     theta = np.asarray(theta, dtype=float)
     out = np.zeros(theta.shape + (4, 4))

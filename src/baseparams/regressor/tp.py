@@ -27,7 +27,8 @@ _OFF = (_M != _N)[:, None]
 
 def point_accelerations(robot: Robot, state: TreeState) -> tuple[np.ndarray, np.ndarray]:
     """Tetrahedral points ``E (S, n, 4, 4)`` (columns x, y, z, O) and their accelerations
-    ``ddE (S, n, 4, 4)`` including the gravity term (columns; last row zero)."""
+    ``ddE (S, n, 4, 4)`` including the gravity term (columns; last row zero).
+    """
     e = state.g
     vh = hat(state.V)
     acc = (hat(state.dV) + vh @ vh) @ e
@@ -44,7 +45,8 @@ def _bar_lines_swapped(e: np.ndarray, acc: np.ndarray) -> np.ndarray:
     """``swap(bar(E_m v ddE_n))`` ``(S, n, 10, 6)``, built from the 16 products ``e_m x a_n``.
 
     With ``E_m = (e_m, w_m)`` (w = 0, 0, 0, 1) and ``ddE_n = (a_n, 0)``:
-    ``E_m v ddE_n = (w_m a_n, e_m x a_n)``; only pairs with O carry a direction part."""
+    ``E_m v ddE_n = (w_m a_n, e_m x a_n)``; only pairs with O carry a direction part.
+    """
     pts = np.swapaxes(e[..., :3, :], -1, -2)  # (S, n, 4, 3)
     accs = np.swapaxes(acc[..., :3, :], -1, -2)
     c = cross3(pts[..., :, None, :], accs[..., None, :, :])  # (S, n, 4, 4, 3): e_m x a_n
@@ -113,7 +115,8 @@ def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = N
 
 def regressor_tensor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
     """TP regressor in tensor form ``R (S, dof, n, 4, 4)`` (eq. "basic coeff"), computed
-    coefficient by coefficient as ``L_j^i ^ (E_m^i v ddE_n^i)``."""
+    coefficient by coefficient as ``L_j^i ^ (E_m^i v ddE_n^i)``.
+    """
     from ..pga import wedge
 
     state = forward_kinematics(robot, q, dq, ddq)

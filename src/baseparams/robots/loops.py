@@ -67,7 +67,8 @@ def four_bar(parallelogram: bool = False, gravity=(0.0, -9.81, 0.0)) -> Robot:
     Ground pivots A = (0, 0), D = (1, 0); at q = 0 the crank tip is B = (0.3, 0.5) and the
     rocker tip C = (1.25, 0.65) (generic), or C = (1.3, 0.5) for the parallelogram
     (opposite sides equal). Tree: crank (A) - coupler (B); rocker (D); loop R at C between
-    coupler and rocker. Gravity in the plane (-y)."""
+    coupler and rocker. Gravity in the plane (-y).
+    """
     a, b, d = np.zeros(3), np.array([0.3, 0.5, 0]), np.array([1.0, 0, 0])
     c = np.array([1.3, 0.5, 0]) if parallelogram else np.array([1.25, 0.65, 0])
     bl = RobotBuilder("parallelogram" if parallelogram else "four-bar", gravity=gravity)

@@ -68,7 +68,8 @@ def random_robot(rng: np.random.Generator, n: int = 6, joint_types: str = "RPUS"
 
 def random_compound(rng: np.random.Generator, k: int | None = None) -> np.ndarray:
     """Twists ``(k, 6)`` of a random compound (C) joint in its frame: hinges (through the origin,
-    a shared point or a random point) and slides, sometimes parallel or repeated."""
+    a shared point or a random point) and slides, sometimes parallel or repeated.
+    """
     from ..model.robot import compound_screw
 
     k = int(rng.integers(2, 5)) if k is None else k
@@ -154,7 +155,8 @@ def _special(rng: np.random.Generator, n: int | None = None,
     """:func:`special_robot` plus one note per body (joint type, parent, the relations drawn).
 
     The draws happen in a fixed order (the robots are reproducible from the seed): gravity,
-    then per body its parent and joint, the parent's line, the joint point, axis, frame."""
+    then per body its parent and joint, the parent's line, the joint point, axis, frame.
+    """
     n = int(rng.integers(2, 8)) if n is None else int(n)
     gcase, g, g_dir = _special_gravity(rng, gravity)
     z_bias = 0.7 if gcase == "axis" else 1 / 3
@@ -212,7 +214,8 @@ def _special_body(rng: np.random.Generator, b: RobotBuilder, st: _Draw, i: int, 
 
 def _special_joint(rng: np.random.Generator, st: _Draw, i: int, n: int):
     """``(floating, chained, parent, joint type, axis mode, origin mode)`` of body ``i``: the
-    next joint of the current plan, maybe a new plan, or a free draw."""
+    next joint of the current plan, maybe a new plan, or a free draw.
+    """
     floating = i == 0 and rng.random() < 0.1
     chained = bool(st.plan)
     if i == 0:
@@ -237,7 +240,8 @@ def _special_joint(rng: np.random.Generator, st: _Draw, i: int, n: int):
 
 def _special_plan(rng: np.random.Generator, st: _Draw, left: int) -> None:
     """Draw a plan of chained joints (with ``left`` bodies to go): a translation stage, a lift
-    then a coaxial R, or an R then a coaxial P; none when fewer than two bodies are left."""
+    then a coaxial R, or an R then a coaxial P; none when fewer than two bodies are left.
+    """
     u = rng.random()
     if u < 0.45 and left >= 2:  # translation stage: 2 or 3 perpendicular (or parallel) P
         k = int(min(left, rng.integers(2, 4)))
@@ -259,7 +263,8 @@ def _special_plan(rng: np.random.Generator, st: _Draw, left: int) -> None:
 def _special_offset(rng: np.random.Generator, floating: bool, amode, omode, a_p: np.ndarray, o_p: np.ndarray,
                     p_p: np.ndarray, z_bias: float) -> tuple[np.ndarray, str | None]:
     """The joint point as an offset (in world) from the parent's frame origin ``p_p``, and the
-    origin mode (``on-line`` for a coaxial joint)."""
+    origin mode (``on-line`` for a coaxial joint).
+    """
     if floating:
         offset = rng.normal(scale=0.5, size=3) if rng.random() < 0.5 else np.zeros(3)
     elif amode == "coaxial":
@@ -314,7 +319,8 @@ def _special_axes_in_frame(rng: np.random.Generator, jt: str, amode, a_w: np.nda
                            frame: np.ndarray):
     """``(axis, axis2, lines)``: the joint axes in the joint ``frame`` (U: a second axis
     perpendicular to the first, often to the parent's line too) and the body's axis lines in
-    world (S / F: the frame's axes)."""
+    world (S / F: the frame's axes).
+    """
     r_i = frame[:3, :3]
     axis, axis2, mylines = (0.0, 0.0, 1.0), None, []
     if a_w is None:  # S / F: the frame's axes

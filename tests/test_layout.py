@@ -186,7 +186,8 @@ def test_no_submodule_shadows_a_public_name():
     assert callable(baseparams.load) and callable(baseparams.regressor) and callable(baseparams.analyze)
 
 
-#: the longest a function may be (lines from ``def`` to its last line, decorators excluded)
+#: the longest a function may be (lines from ``def`` to its last line, decorators and the
+#: docstring excluded: documenting a function never makes it "long")
 MAX_FUNCTION_LINES = 60
 
 
@@ -200,6 +201,9 @@ def _long_functions(modules: dict[str, Path] = MODULES) -> list[str]:
                 continue
             length = node.end_lineno - node.lineno + 1
             doc = ast.get_docstring(node) or ""
+            if doc:
+                first = node.body[0]
+                length -= first.end_lineno - first.lineno + 1
             if length > MAX_FUNCTION_LINES and not any(ln.strip().startswith("Long:") for ln in doc.splitlines()):
                 out.append(f"{name}:{node.lineno} {node.name} ({length} lines)")
     return out
@@ -216,4 +220,4 @@ def test_function_length_check_sees_long_functions(tmp_path):
     body = "\n".join(f"    x{k} = {k}" for k in range(MAX_FUNCTION_LINES))
     (tmp_path / "long.py").write_text(f'def f():\n    """Doc."""\n{body}\n\n\n'
                                       f'def g():\n    """Doc.\n\n    Long: a reason.\n    """\n{body}\n')
-    assert _long_functions({"long": tmp_path / "long.py"}) == ["long:1 f (62 lines)"]
+    assert _long_functions({"long": tmp_path / "long.py"}) == ["long:1 f (61 lines)"]

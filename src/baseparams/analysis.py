@@ -319,8 +319,6 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
             convention: str = "khalil", extended: bool = True, progress: TextIO | None = None) -> Analysis:
     """Base parameters of ``robot``: DRNG, then certification (and completion), then regrouping.
 
-    Long: most of it is this docstring (the public entry point's reference); the body is ~25 lines.
-
     Parameters
     ----------
     robot : Robot

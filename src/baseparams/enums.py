@@ -1,5 +1,7 @@
-"""The library's named choices, defined once: parameter conventions, measured rows, certificate
-statuses, joint types and the provenance of DRNG columns.
+"""The library's named choices, defined once.
+
+Parameter conventions, measured rows, certificate statuses, joint types and the provenance of
+DRNG columns.
 
 The string-valued ones are :class:`enum.StrEnum`: a member *is* its string (``Status.CERTIFIED
 == "certified"``, ``f"{Rows.ALL}" == "all"``, ``json.dumps`` writes ``"certified"``), so every
@@ -16,18 +18,31 @@ from enum import IntEnum, StrEnum
 __all__ = ["Convention", "JointType", "Rows", "Source", "Status", "values"]
 
 
+# ``numpydoc ignore=PR01`` on the enums below: the signature numpydoc's validator checks for an
+# enum class is ``EnumType.__call__`` (the functional API: value, names, module, ...; ``*values``
+# from Python 3.12), not a constructor of ours, so there are no parameters to document.
+
+
 class _Choice(StrEnum):
-    """A string choice whose ``repr`` is its string's (``'certified'``): tuples, doctests and
-    error messages that show ``repr`` read exactly as with the plain strings.
+    """A string choice whose ``repr`` is its string's (``'certified'``).
+
+    Tuples, doctests and error messages that show ``repr`` read exactly as with the plain strings.
     """
 
     def __repr__(self) -> str:
         return repr(self.value)
 
 
-class Convention(_Choice):
-    """A per-body ordering (and frame) of the ten inertial parameters
-    (:data:`baseparams.model.inertia.SPECS`).
+class Convention(_Choice):  # numpydoc ignore=PR01
+    """A per-body ordering (and frame) of the ten inertial parameters.
+
+    The orderings and frames are tabulated in :data:`baseparams.model.inertia.SPECS`, keyed by
+    these members: ``paper``, ``khalil``, ``pinocchio``, ``idyntree``, ``rpna``.
+
+    Notes
+    -----
+    ``Convention("khalil")`` is ``Convention.KHALIL`` (an unknown string raises
+    ``ValueError``).
     """
 
     PAPER = "paper"
@@ -37,17 +52,31 @@ class Convention(_Choice):
     RPNA = "rpna"
 
 
-class Rows(_Choice):
-    """Which generalized forces are measured (:func:`baseparams.numerics.row_mask`)."""
+class Rows(_Choice):  # numpydoc ignore=PR01
+    """Which generalized forces are measured.
+
+    ``all``; ``joints`` (every coordinate but a floating base's 6); ``base`` (only the floating
+    base's wrench). The mask of a robot's rows is :func:`baseparams.numerics.row_mask`.
+
+    Notes
+    -----
+    ``Rows("joints")`` is ``Rows.JOINTS``.
+    """
 
     ALL = "all"
     JOINTS = "joints"  # every coordinate but a floating base's 6
     BASE = "base"  # only the floating base's wrench
 
 
-class Status(_Choice):
-    """Outcome of certification (:class:`baseparams.nullspace.certify.Certificate`);
-    ``unverified``: an analysis run without it.
+class Status(_Choice):  # numpydoc ignore=PR01
+    """Outcome of certification (:class:`baseparams.nullspace.certify.Certificate`).
+
+    ``certified``, ``completed``, ``undecided``, ``failed``; ``unverified``: an analysis run
+    without certification.
+
+    Notes
+    -----
+    ``Status("certified")`` is ``Status.CERTIFIED``.
     """
 
     CERTIFIED = "certified"
@@ -62,11 +91,17 @@ class Status(_Choice):
         return self in (Status.CERTIFIED, Status.COMPLETED)
 
 
-class JointType(_Choice):
-    """Joint types. One enum for tree and loop (cut) joints: ``R P U S F C`` are the tree joints
-    a body hangs on (:data:`baseparams.model.robot.JOINT_TYPES`); ``fixed`` is no body's joint
-    (the builder and the readers merge a fixed link into its parent) but is a cut joint closing
-    a loop rigidly (:data:`baseparams.model.robot.LOOP_TYPES`: ``R P U S fixed``).
+class JointType(_Choice):  # numpydoc ignore=PR01
+    """Joint types.
+
+    One enum for tree and loop (cut) joints: ``R P U S F C`` are the tree joints a body hangs on
+    (:data:`baseparams.model.robot.JOINT_TYPES`); ``fixed`` is no body's joint (the builder and
+    the readers merge a fixed link into its parent) but is a cut joint closing a loop rigidly
+    (:data:`baseparams.model.robot.LOOP_TYPES`: ``R P U S fixed``).
+
+    Notes
+    -----
+    ``JointType("R")`` is ``JointType.R``.
     """
 
     R = "R"  # revolute
@@ -78,13 +113,19 @@ class JointType(_Choice):
     FIXED = "fixed"
 
 
-class Source(IntEnum):
-    """Provenance of a DRNG column (``Columns.principle``): the paper's three principles, the
-    extended rules (:mod:`baseparams.nullspace.rules`), unmeasured roots, numerical completion.
+class Source(IntEnum):  # numpydoc ignore=PR01
+    """Provenance of a DRNG column (``Columns.principle``).
+
+    The paper's three principles, the extended rules (:mod:`baseparams.nullspace.rules`),
+    unmeasured roots, numerical completion.
 
     Integer-valued (columns store them in integer arrays); the order is the order in which
     :meth:`baseparams.nullspace.drng.DRNGResult.by_principle` takes them, and :attr:`label` is
     the name printed in reports and used as the JSON ``by_rule`` key.
+
+    Notes
+    -----
+    ``Source(0)`` is ``Source.SHARED_POINTS``.
     """
 
     SHARED_POINTS = 0
@@ -99,6 +140,7 @@ class Source(IntEnum):
 
     @property
     def label(self) -> str:
+        """The name printed in reports and used as the JSON ``by_rule`` key (e.g. ``shared points``)."""
         return _LABELS[self]
 
     @property
@@ -118,7 +160,19 @@ _LABELS = ("shared points", "fixed points", "planar rotations",
 
 
 def values(members) -> tuple[str, ...]:
-    """The members' plain strings, in order (tables, error messages and CLI choices print
-    ``('all', 'joints', 'base')``, not the members' reprs).
+    """The members' plain strings, in order.
+
+    Tables, error messages and CLI choices print ``('all', 'joints', 'base')``, not the members'
+    reprs.
+
+    Parameters
+    ----------
+    members : iterable of enum members
+        E.g. an enum class such as :class:`Rows` (iterated in definition order).
+
+    Returns
+    -------
+    tuple of str
+        ``str(m)`` for each member ``m``, e.g. ``values(Rows) == ('all', 'joints', 'base')``.
     """
     return tuple(str(m) for m in members)

@@ -10,6 +10,8 @@ class ModelError(BaseparamsError, ValueError):
 
 
 class NoMovingBodiesError(ModelError):
-    """A model whose links are all welded to the world: it has no inertial parameter that any
-    measurement could see (the CLI reports this as an empty, trivially certified result).
+    """A model whose links are all welded to the world.
+
+    It has no inertial parameter that any measurement could see (the CLI reports this as an
+    empty, trivially certified result).
     """

@@ -20,6 +20,32 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
 
     Files are read by :func:`.io.load.load_file` (gravity, inertia checks and loop assembly are
     described there); ``floating`` applies to files only.
+
+    Parameters
+    ----------
+    model : str
+        A built-in robot's name (case-insensitive; ``baseparams robots`` lists them) or the
+        path of a robot file. An existing file of that name wins over a built-in.
+    floating : bool, optional
+        Attach the file's root link to the world by a floating (F) joint. Files only.
+    gravity : array_like, shape ``(3,)``, optional
+        Gravity in the world frame (m/s^2); default: the built-in's own, ``(0, 0, -9.81)`` for
+        URDF files, the model's own for MJCF.
+    strict_inertia : bool, optional
+        Physically infeasible inertias in a file are errors instead of notes.
+
+    Returns
+    -------
+    robot : Robot
+        The robot (loops assembled and re-referenced if needed).
+    notes : list of str
+        Messages for the user (empty for a built-in robot).
+
+    Raises
+    ------
+    BaseparamsError
+        ``floating`` with a built-in robot, a model that is neither a file nor a built-in, or
+        any error reading the file.
     """
     p = Path(model)
     if model.lower() in BUILTINS and not p.exists():

@@ -1,5 +1,7 @@
-"""The numerical method (the paper's baseline and our judge): random states, the stacked
-TP regressor and a rank decision by SVD with a stated tolerance and singular-value gap.
+"""The numerical method (the paper's baseline and our judge).
+
+Random states, the stacked TP regressor and a rank decision by SVD with a stated tolerance and
+singular-value gap.
 """
 
 from __future__ import annotations
@@ -20,16 +22,48 @@ ROWS = values(Rows)
 
 def sample_states(robot: Robot, samples: int, rng: np.random.Generator, low: float = 0.0,
                   high: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``q, dq, ddq (S, dof)`` uniform in ``(low, high)`` as in the paper's validation."""
+    """Random tree states ``q, dq, ddq (S, dof)``, uniform in ``(low, high)`` as in the paper's validation.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates).
+    samples : int
+        Number of states ``S``.
+    rng : numpy.random.Generator
+        Source of the draws (``q``, then ``dq``, then ``ddq``).
+    low, high : float, optional
+        Bounds of the uniform distribution, default ``(0, 1)``.
+
+    Returns
+    -------
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Coordinates, velocities and accelerations.
+    """
     shape = (samples, robot.dof)
     return rng.uniform(low, high, shape), rng.uniform(low, high, shape), rng.uniform(low, high, shape)
 
 
 def row_mask(robot: Robot, rows: str) -> np.ndarray:
-    """Boolean ``(dof,)``: which generalized forces are measured.
+    """Which generalized forces are measured, as a boolean mask ``(dof,)``.
 
-    ``all``; ``joints`` (every coordinate but the floating base's 6); ``base`` (only the
-    floating base's wrench).
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates).
+    rows : {'all', 'joints', 'base'}
+        A :class:`~baseparams.enums.Rows`: ``all``; ``joints`` (every coordinate but the
+        floating base's 6); ``base`` (only the floating base's wrench).
+
+    Returns
+    -------
+    ndarray of bool, shape ``(dof,)``
+        True for the measured rows. Without a floating base, ``joints`` is every row.
+
+    Raises
+    ------
+    BaseparamsError
+        Unknown ``rows``, or ``base`` for a robot without a floating base.
     """
     if rows not in ROWS:
         raise BaseparamsError(f"unknown measured rows {rows!r}; expected one of {ROWS}")
@@ -47,9 +81,33 @@ def row_mask(robot: Robot, rows: str) -> np.ndarray:
 class NumericalResult:
     """Rank decision on the stacked regressor ``W (S * rows, 10 n)``.
 
-    ``singular_values`` (descending), ``tol`` the absolute threshold used (``rtol * s_max``),
-    ``gap = s[rank-1] / s[rank]`` (inf when full rank or rank 0), ``null_basis (10n, k)`` and
-    ``range_basis (10n, rank)`` orthonormal, paper convention.
+    Made by :func:`rank_decision`; columns of ``W`` and the bases are in the ``paper``
+    convention.
+
+    Parameters
+    ----------
+    rank : int
+        Number of singular values above ``tol``.
+    nullity : int
+        ``10 n - rank``.
+    singular_values : ndarray, shape ``(10 n,)``
+        Descending (zero-padded when ``W`` has fewer rows than columns).
+    rtol : float
+        Relative tolerance.
+    tol : float
+        The absolute threshold used (``rtol * s_max``; ``rtol`` when ``s_max = 0``).
+    gap : float
+        ``gap = s[rank-1] / s[rank]`` (inf when full rank or rank 0).
+    null_basis : ndarray, shape ``(10 n, k)``
+        Orthonormal basis of the nullspace (``k = nullity``), paper convention.
+    range_basis : ndarray, shape ``(10 n, rank)``
+        Orthonormal basis of the row space of ``W``, paper convention.
+    samples : int
+        Number of random states stacked in ``W`` (0 when not recorded).
+    seconds : float
+        Wall time (of the whole numerical method in :func:`numerical_nullspace`).
+    min_gap : float
+        Smallest ``gap`` for a decided rank (:attr:`decided`).
     """
 
     rank: int
@@ -72,7 +130,26 @@ class NumericalResult:
 
 def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, samples: int = 0,
                   seconds: float = 0.0) -> NumericalResult:
-    """SVD rank of ``w`` with relative tolerance ``rtol``; reports the gap."""
+    """SVD rank of ``w`` with relative tolerance ``rtol``; reports the gap.
+
+    Parameters
+    ----------
+    w : ndarray, shape ``(R, 10 n)``
+        The stacked regressor (any matrix).
+    rtol : float, optional
+        Singular values above ``rtol * s_max`` count.
+    min_gap : float, optional
+        Gap ``s[rank-1] / s[rank]`` needed for :attr:`NumericalResult.decided`.
+    samples : int, optional
+        Number of states stacked in ``w``, recorded in the result.
+    seconds : float, optional
+        Wall time, recorded in the result.
+
+    Returns
+    -------
+    NumericalResult
+        Rank, nullity, singular values, gap and orthonormal null and range bases.
+    """
     # economy SVD when tall (U of a 15000-row W would be 1.8 GB); full V either way
     _, s, vt = np.linalg.svd(w, full_matrices=w.shape[0] < w.shape[1])
     ncol = w.shape[1]
@@ -96,9 +173,22 @@ DEFAULT_HALF_WIDTH = 0.3
 
 
 def default_samples(robot: Robot) -> int:
-    """100 random states for trees (the paper); for loops the paper's 5 000 actuated samples
-    on small mechanisms, and enough for a stacked regressor with ~4x more rows than parameters
-    on large ones (e.g. humanoids whose only loops are mimic couplings).
+    """Default number of random samples of the numerical method.
+
+    100 random states for trees (the paper); for loops the paper's 5 000 actuated samples on
+    small mechanisms (``n <= 12``), and enough for a stacked regressor with ~4x more rows than
+    parameters on large ones (e.g. humanoids whose only loops are mimic couplings): at least
+    200 and ``ceil(40 n / len(robot.actuated))``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+
+    Returns
+    -------
+    int
+        Number of samples (tree states or actuated samples).
     """
     if not robot.has_loops:
         return DEFAULT_SAMPLES_TREE
@@ -114,7 +204,19 @@ COND_FACTOR = 3.0
 
 
 def reference_cond(robot: Robot) -> float:
-    """cond(J_p) at the reference configuration q = 0."""
+    """cond(J_p) at the reference configuration q = 0.
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops.
+
+    Returns
+    -------
+    float
+        Condition number of the passive constraint Jacobian ``K_p`` at actuated coordinates 0
+        (:func:`baseparams.kinematics.loops.close_loops`); inf when no closed configuration is found there.
+    """
     from .kinematics.loops import close_loops
 
     cs = close_loops(robot, np.zeros((1, len(robot.actuated))), cond_max=np.inf)
@@ -124,9 +226,25 @@ def reference_cond(robot: Robot) -> float:
 def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_max: float | None = None):
     """Loop-closed random states: actuated q in the robot's box, dq_a, ddq_a in (0, 1).
 
-    ``cond_max`` default: 30 (the paper); when cond(J_p) at the reference is already above 30
-    (coordinates mixing metres and radians with millimetre lever arms, e.g. Cassie's rods),
-    3x the reference's.
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops; its box is ``robot.q_box`` (``(na, 2)``), or ``+-0.3`` around q = 0
+        (:data:`DEFAULT_HALF_WIDTH`) when it has none.
+    samples : int
+        Number of actuated samples drawn.
+    rng : numpy.random.Generator
+        Source of the draws (``q_a``, then ``dq_a``, then ``ddq_a``).
+    cond_max : float, optional
+        Samples with ``cond(J_p) > cond_max`` are discarded. Default: 30 (the paper); when
+        cond(J_p) at the reference is already above 30 (coordinates mixing metres and radians
+        with millimetre lever arms, e.g. Cassie's rods), 3x the reference's.
+
+    Returns
+    -------
+    ClosedStates
+        The kept samples in full tree coordinates and the counts of discarded ones
+        (:func:`baseparams.kinematics.loops.close_loops`).
     """
     from .kinematics.loops import close_loops
 
@@ -147,6 +265,31 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
     Trees: states uniform in (0, 1) (the paper). Closed loops: actuated samples in the robot's
     box, solved exactly (:func:`baseparams.kinematics.loops.close_loops`); discarded samples
     are counted in ``info`` (a dict filled in place) when given.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    samples : int, optional
+        Number of random states (or actuated samples); default :func:`default_samples`.
+    seed : int, optional
+        Seed of :func:`numpy.random.default_rng`.
+    rows : {'all', 'joints', 'base'}, optional
+        Measured generalized forces (:func:`row_mask`); only ``all`` with loops (the rows are
+        then the actuated generalized forces).
+    info : dict, optional
+        Filled in place with ``requested`` and ``kept``, and for loops ``cond_max``,
+        ``not_converged``, ``branch_jumps``, ``ill_conditioned`` and ``max_loop_residual``.
+
+    Returns
+    -------
+    ndarray, shape ``(kept samples * measured rows, 10 n)``
+        The stacked regressor, gravity included, columns in the ``paper`` convention.
+
+    Raises
+    ------
+    BaseparamsError
+        ``rows`` other than ``all`` for a robot with loops, or no sample closing the loops.
     """
     from .regressor import closed_regressor
 
@@ -177,7 +320,33 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
 def numerical_nullspace(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
                         rtol: float = 1e-9, min_gap: float = 1e4, w: np.ndarray | None = None,
                         info: dict | None = None) -> NumericalResult:
-    """The numerical method: random states (see :func:`stacked_regressor`), stacked regressor, SVD."""
+    """The numerical method: random states (see :func:`stacked_regressor`), stacked regressor, SVD.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    samples : int, optional
+        Number of random states (or actuated samples); default :func:`default_samples`.
+    seed : int, optional
+        Seed of the random states.
+    rows : {'all', 'joints', 'base'}, optional
+        Measured generalized forces (:func:`row_mask`).
+    rtol : float, optional
+        Relative singular-value tolerance (:func:`rank_decision`).
+    min_gap : float, optional
+        Singular-value gap for a decided rank.
+    w : ndarray, shape ``(R, 10 n)``, optional
+        A stacked regressor to use instead of sampling one (``samples`` is then only recorded;
+        ``seed``, ``rows`` and ``info`` are unused).
+    info : dict, optional
+        Sampling counts, filled in place (:func:`stacked_regressor`).
+
+    Returns
+    -------
+    NumericalResult
+        The rank decision; ``seconds`` is the wall time of sampling, stacking and SVD.
+    """
     t0 = time.perf_counter()
     samples = default_samples(robot) if samples is None else samples
     if w is None:

@@ -20,6 +20,34 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     infeasible inertias are notes (one per link), or errors with ``strict_inertia``. Loop robots whose
     file is not assembled (or singular) at q = 0 are assembled and re-referenced; the notes say so,
     along with any warning raised while reading.
+
+    Parameters
+    ----------
+    path : str or Path
+        The robot file; its suffix (case-insensitive) picks the reader: ``.urdf``
+        (:func:`~baseparams.io.urdf.load_urdf`) or ``.xml``/``.mjcf``
+        (:func:`~baseparams.io.mjcf.load_mjcf`).
+    floating : bool, optional
+        Attach the root link (MJCF: a top-level body without a joint) to the world by a floating
+        (F) joint.
+    gravity : array_like, shape ``(3,)``, optional
+        Gravity in the world frame (m/s^2); the defaults are above.
+    strict_inertia : bool, optional
+        Physically infeasible inertias are errors instead of notes.
+
+    Returns
+    -------
+    robot : Robot
+        The robot, assembled at its (possibly new) reference q = 0
+        (:func:`~baseparams.kinematics.loops.assemble`).
+    notes : list of str
+        The reader's warnings and the assembly note (prefixed with the path).
+
+    Raises
+    ------
+    BaseparamsError
+        A missing file or an unknown suffix; :class:`~baseparams.errors.ModelError` (a
+        subclass) for an invalid model.
     """
     p = Path(path)
     if not p.exists():

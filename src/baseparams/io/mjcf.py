@@ -1,6 +1,8 @@
-"""MJCF (MuJoCo XML) reader, through MuJoCo itself: the file is parsed and compiled by the
-``mujoco`` package (``MjSpec.from_file`` then ``compile``), and the robot is read off the
-compiled ``MjModel`` and its kinematics at ``qpos0`` (our q = 0). Whatever MuJoCo accepts
+"""MJCF (MuJoCo XML) reader, through MuJoCo itself.
+
+The file is parsed and compiled by the ``mujoco`` package (``MjSpec.from_file`` then
+``compile``), and the robot is read off the compiled ``MjModel`` and its kinematics at
+``qpos0`` (our q = 0). Whatever MuJoCo accepts
 (``<include>``, default classes, ``<frame>``, unnamed bodies, several joints per body, ...) is
 read as MuJoCo reads it; what it rejects is one line ``path: <MuJoCo's message>``.
 
@@ -72,9 +74,10 @@ def _resolve(base: Path, subdir: str, file: str) -> bool:
 
 
 def _strip_assets(mj, spec, base: Path, everything: bool) -> dict[str, str]:
-    """Delete file-backed meshes, textures, height fields and skins whose file is missing (all of
-    them with ``everything``) and the geoms using them; returns ``{body name: geom kind}`` for the
-    bodies that lost a geom.
+    """Delete file-backed meshes, textures, height fields and skins whose file is missing.
+
+    All of them with ``everything``, and the geoms using them; returns ``{body name: geom kind}``
+    for the bodies that lost a geom.
     """
     meshdir = spec.compiler.meshdir or spec.meshdir or ""
     texdir = spec.compiler.texturedir or spec.texturedir or ""
@@ -109,7 +112,7 @@ def _strip_assets(mj, spec, base: Path, everything: bool) -> dict[str, str]:
 
 
 def _compile(mj, path: Path):
-    """``(model, notes)``: parse and compile, stripping missing asset files if needed."""
+    """``(model, notes, affected bodies)``: parse and compile, stripping missing asset files if needed."""
     try:
         spec = mj.MjSpec.from_file(str(path))
     except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others
@@ -168,10 +171,42 @@ def _pose(pos, rot) -> np.ndarray:
 
 def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating: bool = False,
               strict_inertia: bool = False) -> Robot:
-    """Read an MJCF file into a :class:`Robot` (see the module doc). ``gravity``: default the
-    model's ``opt.gravity``. ``floating``: a top-level body without a joint gets a floating (F)
-    joint. ``strict_inertia``: physically infeasible inertias of moving bodies are errors
-    (warnings otherwise).
+    """Read an MJCF file into a :class:`Robot` (see the module doc).
+
+    Parameters
+    ----------
+    path : str or Path
+        The MJCF file (parsed and compiled by MuJoCo).
+    name : str, optional
+        The robot's name; default the model's name (unless MuJoCo's default ``MuJoCo Model``),
+        else the file's stem.
+    gravity : array_like, shape ``(3,)``, optional
+        Gravity in the world frame, m/s^2; default the model's ``opt.gravity`` (zero, with a
+        warning, when the model disables gravity).
+    floating : bool, optional
+        A top-level body without a joint gets a floating (F) joint.
+    strict_inertia : bool, optional
+        Physically infeasible inertias of moving bodies are errors (warnings otherwise).
+
+    Returns
+    -------
+    Robot
+        The robot at ``qpos0`` (our q = 0), with ``armature``, couplings and loop joints from
+        the equalities; with loops, its independent coordinates are chosen from the constraints
+        (:func:`~baseparams.kinematics.loops.choose_independent`, actuated joints preferred).
+
+    Raises
+    ------
+    ModelError
+        A missing file, anything MuJoCo rejects (``path: <MuJoCo's message>``) or an unsupported
+        construct.
+
+    Warns
+    -----
+    MJCFWarning
+        Stripped assets, ignored weld options, inactive or void equalities, disabled gravity.
+    InertiaWarning
+        Physically infeasible inertias of moving bodies (without ``strict_inertia``).
     """
     path = Path(path)
     if not path.is_file():
@@ -262,8 +297,10 @@ def _gravity(mj, model, path: Path, gravity) -> np.ndarray:
 
 def _add_body(mj, model, data, path: Path, b: RobotBuilder, w: _Walk, i: int, bname: str, floating: bool,
               strict_inertia: bool) -> None:
-    """Add MuJoCo body ``i``: merged into its parent when it has no joint (floating instead when
-    ``floating`` and top-level), else a moving link with its joint, armature and dofs mapped.
+    """Add MuJoCo body ``i`` to the builder.
+
+    Merged into its parent when it has no joint (floating instead when ``floating`` and
+    top-level), else a moving link with its joint, armature and dofs mapped.
     """
     what = f"{path}: body {bname!r}"
     p = int(model.body_parentid[i])
@@ -307,8 +344,9 @@ def _joint_ndof(model, j: int) -> int:
 
 
 def _map_dofs(model, w: _Walk, jt: str, joints: list[int]) -> None:
-    """Append the armature of a new link's joint (``jt``, MuJoCo ``joints``; none: a floating
-    joint of ours, zero armature) and map its MuJoCo dofs to our coordinates.
+    """Append the armature of a new link's joint and map its MuJoCo dofs to our coordinates.
+
+    The joint is ``jt`` made of MuJoCo ``joints`` (none: a floating joint of ours, zero armature).
     """
     arm = np.zeros(6) if not joints else np.concatenate(
         [model.dof_armature[model.jnt_dofadr[j]: model.jnt_dofadr[j] + _joint_ndof(model, j)] for j in joints])
@@ -421,10 +459,11 @@ def _tendon_joints(mj, model, t: int, what: str) -> list[tuple[int, float]]:
 
 
 def _tendon_coupling(mj, model, t1: int, t2: int, d: np.ndarray, dof_map, ename: str, what: str) -> Coupling:
-    """``L1 - L1(qpos0) = a0 + a1 (L2 - L2(qpos0))`` with fixed tendons ``L = sum c_j q_j``: one
-    linear coupling of the 1-dof joints involved (any number of them, e.g. dm_control's
-    quadruped ties pitch, knee and ankle). The coordinate with the largest coefficient is solved
-    for: ``q_s = sum(-c_j / c_s q_j) + a0 / c_s``.
+    """One linear coupling from a fixed-tendon equality ``L1 - L1(qpos0) = a0 + a1 (L2 - L2(qpos0))``.
+
+    With fixed tendons ``L = sum c_j q_j``: one linear coupling of the 1-dof joints involved
+    (any number of them, e.g. dm_control's quadruped ties pitch, knee and ankle). The coordinate
+    with the largest coefficient is solved for: ``q_s = sum(-c_j / c_s q_j) + a0 / c_s``.
     """
     _check_poly(d, what)
     coef: dict[int, float] = {}

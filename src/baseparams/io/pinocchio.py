@@ -41,7 +41,26 @@ _SWAP = np.block([[np.zeros((3, 3)), np.eye(3)], [np.eye(3), np.zeros((3, 3))]])
 
 
 def to_pinocchio(robot: Robot):
-    """A ``pin.Model`` of the same tree, inertias and gravity (R, P, F-root joints)."""
+    """A ``pin.Model`` of the same tree, inertias and gravity (R, P, F-root joints).
+
+    Parameters
+    ----------
+    robot : Robot
+        A tree of R and P joints, optionally on a floating (F) root (loops and couplings are
+        not carried over).
+
+    Returns
+    -------
+    pinocchio.Model
+        One joint per body, named ``robot.joint_names``, placed at the body's joint frame at
+        q = 0 relative to its parent's (``robot.M0``); each body's inertia in its joint frame;
+        ``gravity.linear = robot.gravity``.
+
+    Raises
+    ------
+    BaseparamsError
+        Pinocchio is not installed, or a joint type other than R, P and F.
+    """
     pin = _pin()
     model = pin.Model()
     model.name = robot.name
@@ -77,7 +96,26 @@ def _root_maps(robot: Robot, q: np.ndarray):
 
 
 def state_to_pinocchio(robot: Robot, q, dq, ddq):
-    """One state ``(dof,)`` each -> Pinocchio ``(q, v, a)``."""
+    """One state ``(dof,)`` each -> Pinocchio ``(q, v, a)``.
+
+    Without a floating root the coordinates are the same (copies). With one, the root's six
+    coordinates become Pinocchio's free flyer (see the module doc).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree, as for :func:`to_pinocchio`).
+    q, dq, ddq : array_like, shape ``(dof,)``
+        Our coordinates, velocities and accelerations (floating root: twist coordinates in the
+        world frame, spatial twist ``(omega, v)`` and its derivative).
+
+    Returns
+    -------
+    q, v, a : ndarray
+        Pinocchio's ``(nq,)`` configuration (free flyer: position and quaternion ``xyzw`` of the
+        joint placement) and ``(nv,)`` velocity and acceleration (free flyer: body-frame
+        ``(v, omega)``).
+    """
     q, dq, ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
     if robot.jtype[0] != "F":
         return q.copy(), dq.copy(), ddq.copy()
@@ -90,7 +128,23 @@ def state_to_pinocchio(robot: Robot, q, dq, ddq):
 
 
 def forces_from_pinocchio(robot: Robot, q, tau_pin) -> np.ndarray:
-    """Pinocchio generalized forces -> ours (the root wrench re-expressed, see module doc)."""
+    """Pinocchio generalized forces -> ours (the root wrench re-expressed, see module doc).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree, as for :func:`to_pinocchio`).
+    q : array_like, shape ``(dof,)``
+        Our coordinates of the state (the floating root's pose).
+    tau_pin : array_like, shape ``(nv,)``
+        Pinocchio's generalized forces (free flyer: body-frame ``(f, n)``).
+
+    Returns
+    -------
+    ndarray, shape ``(dof,)``
+        Our generalized forces (floating root: world wrench components, moment about the
+        origin, then force); a copy of ``tau_pin`` without a floating root.
+    """
     tau_pin = np.asarray(tau_pin, dtype=float)
     if robot.jtype[0] != "F":
         return tau_pin.copy()

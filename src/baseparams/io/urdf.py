@@ -57,9 +57,10 @@ def _floats(text: str | None, n: int, what: str, default) -> np.ndarray:
 
 
 def _parse(path: Path) -> ET.Element:
-    """The file's root element, tolerating what urdfdom, Pinocchio and pybullet tolerate: a
-    UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after the
-    root element. Anything else malformed is a one-line error naming the file.
+    """The file's root element, tolerating what urdfdom, Pinocchio and pybullet tolerate.
+
+    That is a UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after
+    the root element. Anything else malformed is a one-line error naming the file.
     """
     try:
         data = path.read_bytes()
@@ -86,8 +87,10 @@ def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
 
 
 def _inertial(link: ET.Element, what: str, check: bool = True, strict: bool = False) -> Inertia | None:
-    """The link's ``<inertial>`` (None if absent); ``check``: warn (``strict``: raise) when it
-    is physically infeasible. Links fixed to the world are read unchecked: they never move.
+    """The link's ``<inertial>`` (None if absent).
+
+    ``check``: warn (``strict``: raise) when it is physically infeasible. Links fixed to the
+    world are read unchecked: they never move.
     """
     inl = link.find("inertial")
     if inl is None:
@@ -134,6 +137,40 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
 
     Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
     errors with ``strict_inertia``; links fixed to the world are never checked.
+
+    Parameters
+    ----------
+    path : str or Path
+        The URDF or URDF+ file.
+    floating : bool, optional
+        Attach the root link to the world by an F joint (``root_joint``); ignored when the file
+        has its own ``floating`` joint at the root.
+    gravity : array_like, shape ``(3,)``, optional
+        Gravity in the world frame, m/s^2.
+    name : str, optional
+        The robot's name; default the ``<robot name>`` attribute, else the file's stem.
+    strict_inertia : bool, optional
+        Physically infeasible inertias of moving links are errors instead of warnings.
+
+    Returns
+    -------
+    Robot
+        The robot at the file's q = 0 (fixed links merged into their parent bodies); with loops
+        or couplings, ``q_box`` is the independent joints' limits capped at +-1 (rad or m).
+        Loops are not assembled here (:func:`baseparams.io.load.load_file` does that).
+
+    Raises
+    ------
+    ModelError
+        Malformed XML or an unsupported or inconsistent element (one line naming the file, the
+        element and the problem); :class:`NoMovingBodiesError` when no link moves.
+
+    Warns
+    -----
+    URDFWarning
+        Tolerated irregularities (``sucessor``, ``name=`` for ``link=``, ignored mimics).
+    InertiaWarning
+        Physically infeasible inertias of moving links (without ``strict_inertia``).
     """
     path = Path(path)
     root = _parse(path)
@@ -177,8 +214,9 @@ def _index_links(root: ET.Element, path: Path) -> dict[str, ET.Element]:
 
 
 def _index_joints(root: ET.Element, links: dict[str, ET.Element], path: Path) -> _Index:
-    """Every ``<joint>`` checked (name, parent and child links, one parent per link, mimic,
-    type) and indexed.
+    """Every ``<joint>`` checked and indexed.
+
+    Checked: name, parent and child links, one parent per link, mimic, type.
     """
     ix = _Index(links, {}, {}, {k: [] for k in links}, {})
     for jt in root.findall("joint"):
@@ -228,8 +266,9 @@ def _mimic(mim: ET.Element, what: str) -> tuple[str, float, float]:
 
 
 def _drop_ignored_mimics(ix: _Index, path: Path) -> None:
-    """Drop, with a warning each, the mimics of unknown joints (as urdfdom and Pinocchio do) and
-    those involving a fixed joint.
+    """Drop, with a warning each, the mimics that cannot be kept.
+
+    Those of unknown joints (as urdfdom and Pinocchio do) and those involving a fixed joint.
     """
     for jname, (leader, _, _) in list(ix.mimics.items()):
         if leader not in ix.joints:  # urdfdom and Pinocchio ignore it: say so, once
@@ -254,8 +293,9 @@ def _root_link(ix: _Index, path: Path) -> str:
 
 def _add_root(b: RobotBuilder, ix: _Index, base: str, floating: bool, path: Path,
               strict_inertia: bool) -> list[tuple[float, float]]:
-    """Add the root link, floating (an F joint ``root_joint``) or as the fixed base; the joint
-    limits so far (six unbounded ones when floating).
+    """Add the root link, floating (an F joint ``root_joint``) or as the fixed base.
+
+    Returns the joint limits so far (six unbounded ones when floating).
     """
     if floating:
         b.add_link(base, joint="F", inertia=_inertial(ix.links[base], f"{path}: <link name={base!r}>",
@@ -268,8 +308,9 @@ def _add_root(b: RobotBuilder, ix: _Index, base: str, floating: bool, path: Path
 
 def _add_tree(b: RobotBuilder, ix: _Index, base: str, floating: bool, limits: list[tuple[float, float]],
               path: Path, strict_inertia: bool) -> None:
-    """Add every joint and its child link, depth first from ``base`` in file order; append the
-    independent joints' limits to ``limits``. Every link must be reached, once.
+    """Add every joint and its child link, depth first from ``base`` in file order.
+
+    Appends the independent joints' limits to ``limits``. Every link must be reached, once.
     """
     world_fixed = set() if floating else {base}  # links welded to the world: their inertia never matters
     seen = {base}
@@ -337,8 +378,9 @@ def _joint_limits(jt: ET.Element, t: str, what: str) -> list[tuple[float, float]
 
 
 def _pred_succ(elem: ET.Element, what: str, tag: str, path: Path) -> tuple[ET.Element, ET.Element]:
-    """The ``<predecessor>`` and ``<successor>`` of a ``<loop>`` or ``<coupling>`` (``sucessor``
-    accepted with a warning); ``tag`` is the element as the warning names it.
+    """The ``<predecessor>`` and ``<successor>`` of a ``<loop>`` or ``<coupling>``.
+
+    ``sucessor`` is accepted with a warning; ``tag`` is the element as the warning names it.
     """
     pred, succ = elem.find("predecessor"), elem.find("successor")
     if succ is None and elem.find("sucessor") is not None:
@@ -397,8 +439,10 @@ def _mimic_couplings(ix: _Index) -> list[tuple[str, str, str, float, float]]:
 
 
 def _sampling_box(limits: list[tuple[float, float]]) -> np.ndarray:
-    """The independent joints' limits as a sampling box around q = 0, capped at +-1 (rad or m)
-    so that continuation stays on one assembly mode.
+    """The independent joints' limits as a sampling box around q = 0, capped at +-1 (rad or m).
+
+    The cap keeps continuation on one assembly mode; a joint whose limits do not straddle 0 gets
+    ``(-0.3, 0.3)``.
     """
     return np.array([[max(lo, -1.0), min(hi, 1.0)] if lo < 0 < hi else [-0.3, 0.3] for lo, hi in limits])
 
@@ -423,9 +467,7 @@ def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:
 
 
 def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str) -> None:
-    """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` set to ``params``
-    (``(10 n,)`` in ``convention``, which must be given: link-frame conventions are in each
-    body's joint frame, as read; ``paper`` in the world frame at q = 0).
+    """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` set to ``params``.
 
     Exactly the requested bodies or nothing: each body's ``<inertial>`` (mass, centre of mass,
     inertia about it) is re-read as :func:`load_urdf` reads it and must give the requested
@@ -435,6 +477,27 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     written. Links merged into a moving body by fixed joints get zero inertia (their share is
     in the body's values); links welded to the world (the fixed root and links fixed to it)
     are not part of any body and keep their ``<inertial>`` untouched.
+
+    Parameters
+    ----------
+    source : str or Path
+        The URDF file ``robot`` was read from (every body must be one of its links).
+    dest : str or Path
+        The file written.
+    robot : Robot
+        The robot read from ``source`` (``n`` moving bodies).
+    params : array_like, shape ``(10 n,)``
+        The inertial parameters, ten per body, in ``convention``.
+    convention : str
+        The parameters' convention (:class:`~baseparams.enums.Convention`), which must be given:
+        link-frame conventions are in each body's joint frame, as read; ``paper`` in the world
+        frame at q = 0.
+
+    Raises
+    ------
+    ModelError
+        ``params`` of the wrong size, a body that is not a link of ``source``, or a body a URDF
+        ``<inertial>`` cannot represent (nothing is written then).
     """
     from ..model import inertia as I
     from ..pga import inverse_transform
@@ -476,8 +539,10 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
 
 
 def _exact_inertial(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.ndarray]:
-    """``(mass, com, inertia about the com)`` for a URDF ``<inertial>`` that re-reads as the
-    pseudo-inertia ``n`` (round trip through the reader), or a :class:`ModelError`.
+    """``(mass, com, inertia about the com)`` for a URDF ``<inertial>`` that re-reads as ``n``.
+
+    ``n`` is a pseudo-inertia; the round trip goes through the reader, and a body it does not
+    reproduce to 1e-9 of its scale is a :class:`ModelError`.
     """
     from ..model import inertia as I
 

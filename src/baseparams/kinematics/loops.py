@@ -1,5 +1,7 @@
-"""Closed-loop kinematics: loop-closure constraints, Newton from the actuated coordinates,
-passive velocities and accelerations from the exact analytic ``Jdot qdot`` terms.
+"""Closed-loop kinematics.
+
+Loop-closure constraints, Newton from the actuated coordinates, passive velocities and
+accelerations from the exact analytic ``Jdot qdot`` terms.
 
 Each loop joint (cut joint) between a predecessor body ``p`` and a successor body ``c`` is a
 list of elementary constraints on points/directions given in world coordinates at q = 0
@@ -35,6 +37,29 @@ from .tree import forward_kinematics, re_reference
 
 @dataclass(frozen=True, eq=False)
 class Elementary:
+    """One elementary constraint of a loop joint (see the module doc).
+
+    Vectors are homogeneous ``(4,)`` in world coordinates at q = 0 (``x[3] = 0``: a direction).
+
+    Parameters
+    ----------
+    kind : {'point', 'dot', 'proj'}
+        ``point``: ``g_c b - g_p a = 0`` (3 rows); ``dot``: ``(g_p a) . (g_c b) = 0`` (1 row);
+        ``proj``: ``(g_p a) . (g_c c - g_p b) = 0`` (1 row).
+    pred : int
+        The predecessor body ``p`` (-1: the world).
+    succ : int
+        The successor body ``c``.
+    a : ndarray, shape ``(4,)``
+        The predecessor's point/direction (``proj``: the normal ``n``).
+    b : ndarray, shape ``(4,)``, optional
+        ``point``, ``dot``: the successor's vector; ``proj``: the predecessor's point.
+    c : ndarray, shape ``(4,)``, optional
+        ``proj``: the successor's point.
+    loop : int, optional
+        Index of the loop joint in ``robot.loops``.
+    """
+
     kind: str  # point | dot | proj
     pred: int
     succ: int
@@ -45,7 +70,20 @@ class Elementary:
 
 
 def elementary_constraints(robot: Robot) -> list[Elementary]:
-    """The elementary constraints of every loop joint (see module doc)."""
+    """The elementary constraints of every loop joint (see module doc).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot; its loop joints ``robot.loops`` (frames ``M``, and ``M_child`` for the
+        successor's copy when the file is not assembled at q = 0).
+
+    Returns
+    -------
+    list of Elementary
+        S: point; R: point + axis direction; U: point + dot(axis, axis2); P: three directions +
+        two projections normal to the axis; fixed: point + three directions. Loop by loop.
+    """
     out: list[Elementary] = []
     for k, lj in enumerate(robot.loops):
         mc = lj.M if lj.M_child is None else lj.M_child  # the successor's copy of the frame
@@ -69,7 +107,17 @@ def elementary_constraints(robot: Robot) -> list[Elementary]:
 
 @dataclass(frozen=True, eq=False)
 class ConstraintEval:
-    """``r (S, m)`` residuals, ``K (S, m, dof)`` Jacobian, ``b (S, m)`` bias (needs dq)."""
+    """The loop constraints evaluated at ``S`` states (:func:`evaluate`).
+
+    Parameters
+    ----------
+    r : ndarray, shape ``(S, m)``
+        Residuals.
+    K : ndarray, shape ``(S, m, dof)``
+        Jacobian ``dr/dq``.
+    b : ndarray, shape ``(S, m)``, or None
+        Bias ``d^2 r/dt^2`` at zero ``ddq`` (needs dq; None without it).
+    """
 
     r: np.ndarray
     K: np.ndarray
@@ -103,7 +151,28 @@ def _moving(state, body, x, s, dof, need_bias):
 
 def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
              constraints: list[Elementary] | None = None) -> ConstraintEval:
-    """Residuals, Jacobian and (when ``dq`` is given) the bias of the loop constraints."""
+    """Residuals, Jacobian and (when ``dq`` is given) the bias of the loop constraints.
+
+    The rows are the couplings' (linear: ``q[succ] - sum ratio q[pred] - offset``) first, then
+    the elementary constraints' in order.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` tree coordinates).
+    q : ndarray, shape ``(S, dof)``
+        Tree coordinates (two-dimensional).
+    dq : ndarray, shape ``(S, dof)``, optional
+        Velocities; when given, the bias is computed (exact point accelerations, no finite
+        differences).
+    constraints : list of Elementary, optional
+        The elementary constraints; default :func:`elementary_constraints` of ``robot``.
+
+    Returns
+    -------
+    ConstraintEval
+        ``r (S, m)``, ``K (S, m, dof)`` and ``b (S, m)`` (None without ``dq``).
+    """
     cons = elementary_constraints(robot) if constraints is None else constraints
     s, dof = q.shape
     need = dq is not None
@@ -157,8 +226,9 @@ def _pinv(k: np.ndarray, rcond: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Batched least-squares step ``k x ~ r`` by regularised normal equations (Newton only;
-    redundant rows are fine, a rank-deficient ``k`` gets a tiny Tikhonov term).
+    """Batched least-squares step ``k x ~ r`` by regularised normal equations.
+
+    Newton only; redundant rows are fine, a rank-deficient ``k`` gets a tiny Tikhonov term.
     """
     ktk = np.einsum("smi,smj->sij", k, k)
     eps = 1e-12 * np.trace(ktk, axis1=1, axis2=2)[:, None, None] + 1e-300
@@ -167,8 +237,30 @@ def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class ClosedStates:
-    """Loop-closed samples. ``q, dq, ddq (S, dof)`` full tree coordinates; ``G (S, dof, na)``
-    = dq/dq_a; ``cond (S,)`` condition number of ``K_p``; counts of discarded samples.
+    """Loop-closed samples, as returned by :func:`close_loops`.
+
+    The kept samples' states and rates, and the counts of discarded samples.
+
+    Parameters
+    ----------
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Full tree coordinates, velocities and accelerations of the ``S`` kept samples.
+    G : ndarray, shape ``(S, dof, na)``
+        ``dq/dq_a``: ``dq = G dq_a``.
+    cond : ndarray, shape ``(S,)``
+        Condition number of ``K_p`` (the constraint Jacobian's passive columns).
+    requested : int
+        Number of samples asked for.
+    not_converged : int
+        Discarded as outside the workspace (Newton did not converge).
+    branch_jumps : int
+        Discarded as branch jumps (left the reference assembly mode).
+    ill_conditioned : int
+        Discarded with ``cond(K_p) >= cond_max``.
+    max_residual : float
+        Largest loop residual of the kept samples (nan when none is kept).
+    cond_max : float, optional
+        The conditioning threshold used.
     """
 
     q: np.ndarray
@@ -185,6 +277,7 @@ class ClosedStates:
 
     @property
     def kept(self) -> int:
+        """Number of samples kept, ``S``."""
         return self.q.shape[0]
 
 
@@ -199,6 +292,39 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     ``max_step`` away from the prediction is discarded as a branch jump, one that does not
     converge to ``tol`` is discarded as outside the workspace, and one with
     ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops (``na = len(robot.actuated)`` actuated coordinates).
+    qa : ndarray, shape ``(S, na)`` or ``(na,)``
+        Actuated coordinates.
+    dqa, ddqa : ndarray, shape ``(S, na)`` or ``(na,)``, optional
+        Actuated velocities and accelerations; default zero.
+    steps : int, optional
+        Continuation steps from q = 0 (passive coordinates: from ``q_start`` when given).
+    tol : float, optional
+        Newton's tolerance on the largest residual (a sample is kept below ``max(100 tol, 1e-9)``).
+    max_iter : int, optional
+        Newton iterations per continuation step.
+    cond_max : float, optional
+        Conditioning threshold: samples above it are discarded as ill-conditioned (the paper's 30).
+    max_step : float, optional
+        Largest move of a passive coordinate from the predictor in one step (rad or m) before
+        the sample counts as a branch jump.
+    q_start : ndarray, shape ``(dof,)``, optional
+        Initial guess of the passive coordinates (assembly search); default zero.
+
+    Returns
+    -------
+    ClosedStates
+        The kept samples in full tree coordinates, ``G = dq/dq_a``, ``cond(K_p)`` and the
+        counts of discarded samples.
+
+    Raises
+    ------
+    BaseparamsError
+        ``qa`` with a number of columns other than ``na``.
     """
     act = np.asarray(robot.actuated, dtype=int)
     pas = np.setdiff1d(np.arange(robot.dof), act)
@@ -231,8 +357,10 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
 
 def _continuation(robot: Robot, q: np.ndarray, qa: np.ndarray, act: np.ndarray, pas: np.ndarray, cons: list,
                   steps: int, tol: float, max_iter: int, max_step: float) -> tuple[np.ndarray, np.ndarray]:
-    """Move ``q (S, dof)`` in place from its start to the actuated targets ``qa`` in ``steps``
-    predictor-corrector steps; ``(failed, jumped)`` flags ``(S,)``: no convergence, branch jump.
+    """Move ``q (S, dof)`` in place from its start to the actuated targets ``qa``.
+
+    In ``steps`` predictor-corrector steps; ``(failed, jumped)`` flags ``(S,)``: no convergence,
+    branch jump.
     """
     s = q.shape[0]
     failed = np.zeros(s, dtype=bool)
@@ -257,8 +385,9 @@ def _continuation(robot: Robot, q: np.ndarray, qa: np.ndarray, act: np.ndarray, 
 
 def _damped_newton(robot: Robot, q: np.ndarray, live: np.ndarray, pas: np.ndarray, cons: list, tol: float,
                    max_iter: int) -> np.ndarray:
-    """Correct the passive coordinates of samples ``live`` of ``q`` in place; the samples that
-    did not converge within ``max_iter`` (outside the workspace) are returned.
+    """Correct the passive coordinates of samples ``live`` of ``q`` in place.
+
+    The samples that did not converge within ``max_iter`` (outside the workspace) are returned.
 
     Damped Newton on the samples still iterating (``idx`` shrinks): a step that does not reduce
     the residual is halved and retried from the previous iterate.
@@ -296,8 +425,9 @@ def _damped_newton(robot: Robot, q: np.ndarray, live: np.ndarray, pas: np.ndarra
 
 def _closed_rates(robot: Robot, q: np.ndarray, k: np.ndarray, kp_inv: np.ndarray, act: np.ndarray, pas: np.ndarray,
                   dqa: np.ndarray, ddqa: np.ndarray, cons: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Exact closed-loop rates at ``q``: ``G (S, dof, na)`` with ``dq = G dqa``, ``dq`` and ``ddq``
-    (``K (S, m, dof)`` the constraint Jacobian, ``kp_inv`` the pseudo-inverse of its passive part).
+    """Exact closed-loop rates at ``q``: ``G (S, dof, na)`` with ``dq = G dqa``, ``dq`` and ``ddq``.
+
+    ``K (S, m, dof)`` is the constraint Jacobian, ``kp_inv`` the pseudo-inverse of its passive part.
     """
     g = np.zeros((q.shape[0], robot.dof, len(act)))
     g[:, act, np.arange(len(act))] = 1.0
@@ -318,6 +448,32 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     coordinates at 0 (or, when q = 0 is a singular configuration, at small offsets), and the
     robot is re-referenced there (its new q = 0; ``q_box`` shifted). Returns the robot, the
     reference in the old coordinates, and a note for the user ('' when nothing was done).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (returned unchanged without loops).
+    cond_max : float, optional
+        ``cond(K_p)`` at or above which a configuration counts as singular.
+    tol : float, optional
+        Largest loop residual at q = 0 for the frames to coincide.
+
+    Returns
+    -------
+    robot : Robot
+        The assembled robot (re-referenced, ``q_box`` shifted; when q = 0 was singular, the box
+        is also cut to ``+-|offset| / 2`` so that samples stay on this side of the singular
+        configuration).
+    qref : ndarray, shape ``(dof,)``
+        The new reference in the old coordinates (zero when nothing was done).
+    note : str
+        Why and where the robot was re-referenced ('' when nothing was done).
+
+    Raises
+    ------
+    ModelError
+        No regular assembled configuration found near q = 0 (actuated offsets up to +-0.3, from
+        q = 0 and 20 random starts), or one that needs re-referencing a robot with S joints.
     """
     from dataclasses import replace
 
@@ -372,6 +528,22 @@ def choose_independent(robot: Robot, prefer_independent: set[int] | None = None,
     For files that do not say which coordinates are independent (MJCF): the passive set is a
     maximal set of coordinates whose constraint-Jacobian columns are independent, picked
     greedily, coordinates in ``prefer_independent`` (e.g. actuated joints) last.
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops.
+    prefer_independent : set of int, optional
+        Coordinates to keep independent where possible (down-weighted 1000x in the column-pivoted
+        QR of the constraint Jacobian at q = 0).
+    rtol : float, optional
+        Rank threshold relative to the largest ``|R_ii|`` of the QR.
+
+    Returns
+    -------
+    Robot
+        The robot with ``independent`` set (the coordinates outside the passive set) and
+        ``q_box`` reset to None.
     """
     from dataclasses import replace
 

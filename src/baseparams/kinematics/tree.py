@@ -1,5 +1,7 @@
-"""Tree kinematics batched over samples: body displacements, twists, accelerations and
-the Jacobian lines ``L_j^i`` of the paper (eq. "jacobian line").
+"""Tree kinematics batched over samples.
+
+Body displacements, twists, accelerations and the Jacobian lines ``L_j^i`` of the paper
+(eq. "jacobian line").
 
 Spatial assignment (paper, Sec. "Spatial assignment of tetrahedral points"): every body's
 tetrahedral points coincide with the world frame at q = 0, so a body's state is its
@@ -30,9 +32,22 @@ from ..pga.linalg import skew
 class TreeState:
     """Kinematic state of all bodies for ``S`` samples.
 
-    ``g (S, n, 4, 4)`` displacements from q = 0; ``V, dV (S, n, 6)`` spatial twists and
-    accelerations (world frame, gravity not included); ``lines (S, dof, 6)`` current joint
-    lines; ``support (dof, n)`` which coordinates move which bodies.
+    Made by :func:`forward_kinematics`. Twists, accelerations and lines are ``(omega, v)`` in the
+    world frame (``v`` the velocity of the point at the world origin).
+
+    Parameters
+    ----------
+    g : ndarray, shape ``(S, n, 4, 4)``
+        Displacements from q = 0 (world frame): a body's pose is ``g_i M0_i``.
+    V : ndarray, shape ``(S, n, 6)``
+        Spatial twists of the bodies (world frame).
+    dV : ndarray, shape ``(S, n, 6)``
+        Spatial accelerations (world frame, gravity not included).
+    lines : ndarray, shape ``(S, dof, 6)``
+        Current joint lines ``L_k`` (eq. "jacobian line"); the floating root's are the unit
+        vectors ``e_k`` (quasi-velocities).
+    support : ndarray of bool, shape ``(dof, n)``
+        Which coordinates move which bodies (:attr:`Robot.support`).
     """
 
     g: np.ndarray
@@ -42,7 +57,13 @@ class TreeState:
     support: np.ndarray
 
     def jacobian_lines(self) -> np.ndarray:
-        """Dense Jacobian lines ``L[s, j, i] (S, dof, n, 6)`` (zero where j does not move i)."""
+        """Dense Jacobian lines ``L[s, j, i] (S, dof, n, 6)`` (zero where j does not move i).
+
+        Returns
+        -------
+        ndarray, shape ``(S, dof, n, 6)``
+            ``lines[s, j]`` where coordinate ``j`` moves body ``i``, else zero (world frame).
+        """
         return self.lines[:, :, None, :] * self.support[None, :, :, None]
 
 
@@ -58,8 +79,30 @@ def _as_samples(x, dof: int, label: str) -> np.ndarray:
 
 
 def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
-    """Batched tree kinematics. ``q, dq, ddq``: ``(S, dof)`` (or ``(dof,)``); ``dq, ddq``
-    default to zero. Loops over bodies, vectorised over samples.
+    """Batched tree kinematics (product of exponentials, see the module doc).
+
+    Loops over bodies, vectorised over samples. Loop joints are ignored: this is the spanning
+    tree's kinematics.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, ``dof`` coordinates).
+    q : array_like, shape ``(S, dof)`` or ``(dof,)``
+        Tree coordinates (a floating root's six first: twist coordinates, ``g = exp(q^)``).
+    dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
+        Velocities and accelerations (the floating root's: quasi-velocities, its spatial twist
+        and its derivative); default zero.
+
+    Returns
+    -------
+    TreeState
+        Displacements, twists, accelerations and joint lines of the ``S`` samples.
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes, different numbers of samples, NaN or inf.
     """
     dof = robot.dof
     q = _as_samples(q, dof, "q")
@@ -103,9 +146,28 @@ def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
 
 
 def re_reference(robot: Robot, q0: np.ndarray) -> Robot:
-    """The same robot re-referenced at configuration ``q0 (dof,)``: its new q = 0 is the old
-    ``q0`` (exactly ``q_new = q - q0`` for R, P, U and C joints). Not for S joints, whose
-    Euler axes are tied to the joint frame.
+    """The same robot re-referenced at configuration ``q0 (dof,)``: its new q = 0 is the old ``q0``.
+
+    Exactly ``q_new = q - q0`` for R, P, U and C joints. Not for S joints, whose Euler axes are
+    tied to the joint frame.
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot without S joints.
+    q0 : ndarray, shape ``(dof,)``
+        The new reference configuration, in the old coordinates.
+
+    Returns
+    -------
+    Robot
+        The robot with ``M0`` (world frame), the U and C joints' axes, the loop joints' frames
+        (both copies, each carried by its own body) and the couplings' offsets moved to ``q0``.
+
+    Raises
+    ------
+    ModelError
+        The robot has S joints.
     """
     if "S" in robot.jtype:
         raise ModelError(f"robot {robot.name!r}: re-referencing at q0 is not supported with S joints")

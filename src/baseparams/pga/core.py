@@ -30,13 +30,35 @@ from .linalg import cross3, skew
 # points and lines
 
 def point(xyz: np.ndarray) -> np.ndarray:
-    """Euclidean point ``(*, 4)`` from coordinates ``(*, 3)``."""
+    """Euclidean point ``(*, 4)`` from coordinates ``(*, 3)``.
+
+    Parameters
+    ----------
+    xyz : array_like, shape ``(*, 3)``
+        Coordinates.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4)``
+        ``[x, y, z, 1]``.
+    """
     xyz = np.asarray(xyz, dtype=float)
     return np.concatenate([xyz, np.ones(xyz.shape[:-1] + (1,))], axis=-1)
 
 
 def direction(xyz: np.ndarray) -> np.ndarray:
-    """Infinite point ``(*, 4)`` (a direction) from ``(*, 3)``."""
+    """Infinite point ``(*, 4)`` (a direction) from ``(*, 3)``.
+
+    Parameters
+    ----------
+    xyz : array_like, shape ``(*, 3)``
+        Direction vectors.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4)``
+        ``[x, y, z, 0]``.
+    """
     xyz = np.asarray(xyz, dtype=float)
     return np.concatenate([xyz, np.zeros(xyz.shape[:-1] + (1,))], axis=-1)
 
@@ -45,6 +67,16 @@ def join(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """The line ``P v Q`` through two points ``(*, 4)`` -> ``(*, 6)``.
 
     ``[w1 p2 - w2 p1, p1 x p2]`` (the paper's vee product of two points).
+
+    Parameters
+    ----------
+    p, q : array_like, shape ``(*, 4)``
+        Points ``[p1, w1]`` and ``[p2, w2]`` (Euclidean or infinite).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 6)``
+        The line ``(d, m)``.
     """
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
@@ -54,7 +86,20 @@ def join(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def line_through(p: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """Line ``(*, 6)`` through Euclidean point ``p (*, 3)`` with direction ``d (*, 3)``."""
+    """Line ``(*, 6)`` through Euclidean point ``p (*, 3)`` with direction ``d (*, 3)``.
+
+    Parameters
+    ----------
+    p : array_like, shape ``(*, 3)``
+        A point on the line.
+    d : array_like, shape ``(*, 3)``
+        Its direction (not normalised here).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 6)``
+        ``(d, p x d)``.
+    """
     return join(point(p), direction(d))
 
 
@@ -62,12 +107,33 @@ def wedge(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Outer product of two bivectors ``(*, 6)`` -> pseudoscalar coefficient ``(*)``.
 
     For a wrench ``w`` and a twist ``V``, ``w ^ V`` is the power (eq. "duality").
+
+    Parameters
+    ----------
+    a, b : ndarray, shape ``(*, 6)``
+        Bivectors (lines, twists, wrenches).
+
+    Returns
+    -------
+    ndarray, shape ``(*)``
+        ``a_d . b_m + a_m . b_d``.
     """
     return np.sum(a[..., :3] * b[..., 3:] + a[..., 3:] * b[..., :3], axis=-1)
 
 
 def swap(l: np.ndarray) -> np.ndarray:
-    """``[m, d]`` from ``[d, m]``: ``wedge(a, b) == a . swap(b)``."""
+    """``[m, d]`` from ``[d, m]``: ``wedge(a, b) == a . swap(b)``.
+
+    Parameters
+    ----------
+    l : ndarray, shape ``(*, 6)``
+        Bivectors ``[d, m]``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 6)``
+        ``[m, d]``.
+    """
     return np.concatenate([l[..., 3:], l[..., :3]], axis=-1)
 
 
@@ -77,6 +143,23 @@ def commutator(x: np.ndarray, v: np.ndarray) -> np.ndarray:
     * ``x`` a line ``(*, 6)``: returns the line's velocity ``ad_V X``;
     * ``x`` a point ``(*, 4)``: returns the point's velocity ``omega x p + w v`` as an
       infinite point ``(*, 4)`` (eq. "vel").
+
+    Parameters
+    ----------
+    x : array_like, shape ``(*, 6)`` or ``(*, 4)``
+        A line or a point.
+    v : array_like, shape ``(*, 6)``
+        The bivector (a twist ``(omega, v)``).
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+        The line's velocity (``(*, 6)``) or the point's (an infinite point ``(*, 4)``).
+
+    Raises
+    ------
+    ValueError
+        ``x`` neither a line nor a point.
     """
     x = np.asarray(x, dtype=float)
     v = np.asarray(v, dtype=float)
@@ -111,7 +194,18 @@ _REV = np.array([1, -1, -1, -1, -1, -1, -1, 1.0])
 
 
 def motor_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Geometric product of two even elements ``(*, 8)``: ``a`` first, then ``b``."""
+    """Geometric product of two even elements ``(*, 8)``: ``a`` first, then ``b``.
+
+    Parameters
+    ----------
+    a, b : array_like, shape ``(*, 8)``
+        Motors (broadcast against each other).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 8)``
+        ``a b``: ``matrix(a * b) = matrix(b) @ matrix(a)`` (both in the world frame).
+    """
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     i, j, k = _EVEN_NZ
@@ -123,18 +217,52 @@ def motor_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def reverse(m: np.ndarray) -> np.ndarray:
-    """Reverse ``~M`` of an even element ``(*, 8)``."""
+    """Reverse ``~M`` of an even element ``(*, 8)``.
+
+    Parameters
+    ----------
+    m : array_like, shape ``(*, 8)``
+        Motors.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 8)``
+        ``~m`` (the bivector part negated); for a unit motor, its inverse.
+    """
     return np.asarray(m, dtype=float) * _REV
 
 
 def identity_motor(shape: tuple[int, ...] = ()) -> np.ndarray:
+    """Identity motors ``1``: no displacement.
+
+    Parameters
+    ----------
+    shape : tuple of int, optional
+        Batch shape ``*``.
+
+    Returns
+    -------
+    ndarray, shape ``(*shape, 8)``
+        ``[1, 0, 0, 0, 0, 0, 0, 0]`` each.
+    """
     m = np.zeros(shape + (8,))
     m[..., 0] = 1.0
     return m
 
 
 def quat_to_rot(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(*, 3, 3)`` from unit quaternions ``(*, 4)`` [w, x, y, z]."""
+    """Rotation matrices ``(*, 3, 3)`` from unit quaternions ``(*, 4)`` [w, x, y, z].
+
+    Parameters
+    ----------
+    q : ndarray, shape ``(*, 4)``
+        Unit quaternions, scalar first (not normalised here).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 3, 3)``
+        Rotation matrices.
+    """
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     r = np.empty(q.shape[:-1] + (3, 3))
     r[..., 0, 0] = 1 - 2 * (y * y + z * z)
@@ -150,7 +278,19 @@ def quat_to_rot(q: np.ndarray) -> np.ndarray:
 
 
 def rot_to_quat(r: np.ndarray) -> np.ndarray:
-    """Unit quaternion ``(*, 4)`` [w, x, y, z] from rotation matrices ``(*, 3, 3)``."""
+    """Unit quaternion ``(*, 4)`` [w, x, y, z] from rotation matrices ``(*, 3, 3)``.
+
+    Parameters
+    ----------
+    r : array_like, shape ``(*, 3, 3)``
+        Rotation matrices.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4)``
+        Unit quaternions, scalar first, with ``w >= 0`` (from the best-conditioned diagonal
+        pivot of each matrix).
+    """
     r = np.asarray(r, dtype=float)
     tr = np.trace(r, axis1=-2, axis2=-1)
     # candidates from each diagonal pivot; pick the best-conditioned per element
@@ -172,7 +312,18 @@ def rot_to_quat(r: np.ndarray) -> np.ndarray:
 
 
 def matrix_to_motor(t: np.ndarray) -> np.ndarray:
-    """Motor ``(*, 8)`` from homogeneous matrices ``(*, 4, 4)`` (rigid, det +1)."""
+    """Motor ``(*, 8)`` from homogeneous matrices ``(*, 4, 4)`` (rigid, det +1).
+
+    Parameters
+    ----------
+    t : array_like, shape ``(*, 4, 4)``
+        Rigid displacements ``X = T @ X0``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 8)``
+        Unit motors ``M`` with ``motor_to_matrix(M) == t``: the rotation, then the translation.
+    """
     t = np.asarray(t, dtype=float)
     q = rot_to_quat(t[..., :3, :3])
     rot = np.zeros(t.shape[:-2] + (8,))
@@ -183,7 +334,18 @@ def matrix_to_motor(t: np.ndarray) -> np.ndarray:
 
 
 def motor_to_matrix(m: np.ndarray) -> np.ndarray:
-    """Homogeneous matrix ``(*, 4, 4)`` of a unit motor ``(*, 8)`` (``X = T @ X0``)."""
+    """Homogeneous matrix ``(*, 4, 4)`` of a unit motor ``(*, 8)`` (``X = T @ X0``).
+
+    Parameters
+    ----------
+    m : array_like, shape ``(*, 8)``
+        Unit motors, acting by ``X = ~M X0 M``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        The same displacements as matrices ``T``: ``X = T @ X0``.
+    """
     m = np.asarray(m, dtype=float)
     rot = np.zeros_like(m)
     rot[..., :4] = m[..., :4]
@@ -196,17 +358,57 @@ def motor_to_matrix(m: np.ndarray) -> np.ndarray:
 
 
 def motor_exp(b: np.ndarray) -> np.ndarray:
-    """``exp(B)`` of a bivector ``(*, 6)`` -> motor ``(*, 8)`` (displacement ``exp(2B^)``)."""
+    """``exp(B)`` of a bivector ``(*, 6)`` -> motor ``(*, 8)`` (displacement ``exp(2B^)``).
+
+    Parameters
+    ----------
+    b : array_like, shape ``(*, 6)``
+        Bivectors ``B = theta/2 * S``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 8)``
+        Unit motors; rotation angle and translation are **twice** the bivector's.
+    """
     return matrix_to_motor(se3_exp(2.0 * np.asarray(b, dtype=float)))
 
 
 def motor_log(m: np.ndarray) -> np.ndarray:
-    """Bivector ``B (*, 6)`` with ``exp(B) == M`` (rotation angle of ``M`` in ``[0, pi]``)."""
+    """Bivector ``B (*, 6)`` with ``exp(B) == M`` (rotation angle of ``M`` in ``[0, pi]``).
+
+    Parameters
+    ----------
+    m : array_like, shape ``(*, 8)``
+        Unit motors.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 6)``
+        ``B``: half the twist of the displacement (:func:`se3_log`).
+    """
     return 0.5 * se3_log(motor_to_matrix(m))
 
 
 def sandwich(m: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``~M X M``: move a point ``(*, 4)`` or a line ``(*, 6)`` by the motor ``(*, 8)``."""
+    """``~M X M``: move a point ``(*, 4)`` or a line ``(*, 6)`` by the motor ``(*, 8)``.
+
+    Parameters
+    ----------
+    m : array_like, shape ``(*, 8)``
+        Unit motors.
+    x : array_like, shape ``(*, 4)`` or ``(*, 6)``
+        Points or lines.
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+        The moved points or lines (the paper's sandwich, eq. "position").
+
+    Raises
+    ------
+    ValueError
+        ``x`` neither a point nor a line.
+    """
     t = motor_to_matrix(m)
     x = np.asarray(x, dtype=float)
     if x.shape[-1] == 4:
@@ -220,7 +422,18 @@ def sandwich(m: np.ndarray, x: np.ndarray) -> np.ndarray:
 # the same rigid motions as 4x4 matrices (what the kinematics hot path uses)
 
 def hat(xi: np.ndarray) -> np.ndarray:
-    """se(3) matrix ``(*, 4, 4)`` of a twist ``(*, 6)`` = (omega, v)."""
+    """se(3) matrix ``(*, 4, 4)`` of a twist ``(*, 6)`` = (omega, v).
+
+    Parameters
+    ----------
+    xi : array_like, shape ``(*, 6)``
+        Twists ``(omega, v)``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        ``[[omega]_x, v; 0, 0]``.
+    """
     xi = np.asarray(xi, dtype=float)
     out = np.zeros(xi.shape[:-1] + (4, 4))
     w = xi[..., :3]
@@ -232,7 +445,18 @@ def hat(xi: np.ndarray) -> np.ndarray:
 
 
 def se3_exp(xi: np.ndarray) -> np.ndarray:
-    """Matrix exponential ``exp(xi^) (*, 4, 4)`` of twists ``(*, 6)`` (closed form)."""
+    """Matrix exponential ``exp(xi^) (*, 4, 4)`` of twists ``(*, 6)`` (closed form).
+
+    Parameters
+    ----------
+    xi : array_like, shape ``(*, 6)``
+        Twists ``(omega, v)`` (any magnitude; Taylor series below ``|omega| = 1e-6``).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        Rigid displacements.
+    """
     xi = np.asarray(xi, dtype=float)
     w, v = xi[..., :3], xi[..., 3:]
     th = np.linalg.norm(w, axis=-1)[..., None, None]
@@ -253,8 +477,21 @@ def se3_exp(xi: np.ndarray) -> np.ndarray:
 
 
 def screw_exp(screw: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """``exp(screw^ theta) (S, 4, 4)`` for one unit screw ``(6,)`` (rotation: |omega| = 1;
-    translation: omega = 0, |v| = 1) and angles/displacements ``theta (S,)``: closed form.
+    """``exp(screw^ theta) (S, 4, 4)`` for one unit screw ``(6,)`` and angles/displacements ``theta (S,)``.
+
+    Closed form.
+
+    Parameters
+    ----------
+    screw : ndarray, shape ``(6,)``
+        A unit screw ``(omega, v)`` (rotation: |omega| = 1; translation: omega = 0, |v| = 1).
+    theta : array_like, shape ``(S,)``
+        Angles (rad) or displacements (m); any shape ``(*)``.
+
+    Returns
+    -------
+    ndarray, shape ``(S, 4, 4)``
+        Rigid displacements (``(*, 4, 4)`` for ``theta (*)``).
     """
     w, v = screw[:3], screw[3:]
     theta = np.asarray(theta, dtype=float)
@@ -274,7 +511,23 @@ def screw_exp(screw: np.ndarray, theta: np.ndarray) -> np.ndarray:
 
 
 def se3_log(t: np.ndarray) -> np.ndarray:
-    """Twist ``(*, 6)`` with ``se3_exp(twist) == t`` for rotation angles in ``[0, pi)``."""
+    """Twist ``(*, 6)`` with ``se3_exp(twist) == t`` for rotation angles in ``[0, pi)``.
+
+    Parameters
+    ----------
+    t : array_like, shape ``(*, 4, 4)``
+        Rigid displacements.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 6)``
+        Twists ``(omega, v)`` with ``|omega|`` the rotation angle.
+
+    Notes
+    -----
+    Angles within 1e-4 of pi take the axis from the symmetric part,
+    ``(R + R^T)/2 - cos(theta) I = (1 - cos(theta)) a a^T``, signed like the skew part.
+    """
     t = np.asarray(t, dtype=float)
     r = t[..., :3, :3]
     cos = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0)
@@ -306,7 +559,20 @@ def se3_log(t: np.ndarray) -> np.ndarray:
 
 
 def adjoint(t: np.ndarray, l: np.ndarray) -> np.ndarray:
-    """Move a line / twist ``(*, 6)`` by the rigid displacement ``t (*, 4, 4)``: ``Ad_T L``."""
+    """Move a line / twist ``(*, 6)`` by the rigid displacement ``t (*, 4, 4)``: ``Ad_T L``.
+
+    Parameters
+    ----------
+    t : ndarray, shape ``(*, 4, 4)``
+        Rigid displacements ``(R, p)``.
+    l : ndarray, shape ``(*, 6)``
+        Lines or twists ``(d, m)``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 6)``
+        ``(R d, R m + p x R d)``.
+    """
     r = t[..., :3, :3]
     p = t[..., :3, 3]
     d = np.einsum("...ij,...j->...i", r, l[..., :3])
@@ -315,7 +581,18 @@ def adjoint(t: np.ndarray, l: np.ndarray) -> np.ndarray:
 
 
 def inverse_transform(t: np.ndarray) -> np.ndarray:
-    """Inverse of rigid homogeneous matrices ``(*, 4, 4)``."""
+    """Inverse of rigid homogeneous matrices ``(*, 4, 4)``.
+
+    Parameters
+    ----------
+    t : ndarray, shape ``(*, 4, 4)``
+        Rigid displacements ``(R, p)``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        ``(R^T, -R^T p)``.
+    """
     out = np.zeros_like(t)
     rt = np.swapaxes(t[..., :3, :3], -1, -2)
     out[..., :3, :3] = rt

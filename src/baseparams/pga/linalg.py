@@ -15,11 +15,13 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    a, b : (*, 3) arrays
+    a, b : ndarray, shape ``(*, 3)``
+        Vectors (broadcast against each other).
 
     Returns
     -------
-    (*, 3) array ``a × b``.
+    ndarray, shape ``(*, 3)``
+        ``a × b``.
     """
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
@@ -31,11 +33,13 @@ def skew(w: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    w : (*, 3) array
+    w : array_like, shape ``(*, 3)``
+        Vectors.
 
     Returns
     -------
-    (*, 3, 3) array.
+    ndarray, shape ``(*, 3, 3)``
+        ``[w]_x``.
     """
     w = np.asarray(w, dtype=float)
     out = np.zeros(w.shape[:-1] + (3, 3))
@@ -53,11 +57,13 @@ def perp_basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Parameters
     ----------
-    d : (m, 3) array of unit directions
+    d : ndarray, shape ``(m, 3)``
+        Unit directions.
 
     Returns
     -------
-    x, y : (m, 3) arrays.
+    x, y : ndarray, shape ``(m, 3)``
+        Unit directions with ``(x, y, d)`` right-handed and orthonormal.
     """
     helper = np.where(np.abs(d[:, :1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
     x = cross3(d, np.broadcast_to(helper, d.shape))
@@ -71,18 +77,31 @@ def sym(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    a, b : (*, 4) arrays
+    a, b : ndarray, shape ``(*, 4)``
+        Homogeneous 4-vectors (broadcast against each other).
 
     Returns
     -------
-    (*, 4, 4) array. For ``a == b`` this is ``2 a a^T``: use :func:`outer` for ``a a^T``.
+    ndarray, shape ``(*, 4, 4)``
+        ``a b^T + b a^T``. For ``a == b`` this is ``2 a a^T``: use :func:`outer` for ``a a^T``.
     """
     ab = np.einsum("...i,...j->...ij", a, b)
     return ab + np.swapaxes(ab, -1, -2)
 
 
 def outer(a: np.ndarray) -> np.ndarray:
-    """``a a^T`` of 4-vectors: ``(*, 4) -> (*, 4, 4)``."""
+    """``a a^T`` of 4-vectors: ``(*, 4) -> (*, 4, 4)``.
+
+    Parameters
+    ----------
+    a : ndarray, shape ``(*, 4)``
+        Homogeneous 4-vectors.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        ``a a^T``.
+    """
     return np.einsum("...i,...j->...ij", a, a)
 
 
@@ -91,12 +110,15 @@ def rowspace(a: np.ndarray, tol: float) -> np.ndarray:
 
     Parameters
     ----------
-    a : (k, m) array
-    tol : absolute singular-value threshold
+    a : ndarray, shape ``(k, m)``
+        The matrix.
+    tol : float
+        Absolute singular-value threshold.
 
     Returns
     -------
-    (r, m) array of orthonormal rows (``a`` itself when ``k == 0``).
+    ndarray, shape ``(r, m)``
+        Orthonormal rows (``a`` itself when ``k == 0``).
     """
     if a.shape[0] == 0:
         return a
@@ -109,12 +131,15 @@ def nullspace(a: np.ndarray, tol: float = 1e-9) -> np.ndarray:
 
     Parameters
     ----------
-    a : (k, m) array
-    tol : absolute singular-value threshold
+    a : ndarray, shape ``(k, m)``
+        The matrix.
+    tol : float, optional
+        Absolute singular-value threshold.
 
     Returns
     -------
-    (m - r, m) array of orthonormal rows (the identity when ``k == 0``).
+    ndarray, shape ``(m - r, m)``
+        Orthonormal rows (the identity when ``k == 0``).
     """
     m = a.shape[1]
     if a.shape[0] == 0:
@@ -128,12 +153,15 @@ def column_basis(b: np.ndarray, rtol: float = 1e-10) -> np.ndarray:
 
     Parameters
     ----------
-    b : (m, k) array with nonzero columns
-    rtol : singular-value threshold relative to the largest
+    b : ndarray, shape ``(m, k)``
+        Nonzero columns.
+    rtol : float, optional
+        Singular-value threshold relative to the largest.
 
     Returns
     -------
-    (m, r) array of orthonormal columns (``b`` itself when ``k == 0``).
+    ndarray, shape ``(m, r)``
+        Orthonormal columns (``b`` itself when ``k == 0``).
     """
     if b.shape[1] == 0:
         return b
@@ -147,12 +175,15 @@ def null_rows(k: np.ndarray, tol: float) -> np.ndarray:
 
     Parameters
     ----------
-    k : (..., r, 4) array
-    tol : absolute singular-value threshold
+    k : ndarray, shape ``(..., r, 4)``
+        The matrices.
+    tol : float
+        Absolute singular-value threshold (missing singular values, ``r < 4``, count as zero).
 
     Returns
     -------
-    (..., 4, 4) array: orthonormal nullspace rows, the other rows zero.
+    ndarray, shape ``(..., 4, 4)``
+        Orthonormal nullspace rows, the other rows zero.
     """
     _, sv, vt = np.linalg.svd(k, full_matrices=True)
     full = np.zeros(k.shape[:-2] + (4,))
@@ -165,13 +196,17 @@ def span_rows(z: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
 
     Parameters
     ----------
-    z : (..., R, 4) array, ``R >= 4``
-    tol : absolute singular-value threshold
+    z : ndarray, shape ``(..., R, 4)``
+        The matrices, ``R >= 4``.
+    tol : float
+        Absolute singular-value threshold.
 
     Returns
     -------
-    rows : (..., 4, 4) array, orthonormal rows of the row space, the other rows zero
-    rank : (...) int array
+    rows : ndarray, shape ``(..., 4, 4)``
+        Orthonormal rows of the row space, the other rows zero.
+    rank : ndarray of int, shape ``(...)``
+        The ranks.
     """
     _, sv, vt = np.linalg.svd(z, full_matrices=False)
     keep = sv > tol

@@ -72,10 +72,11 @@ _SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "io", "kinematics",
 
 
 class ModelWarning(UserWarning):
-    """A note about a loaded model that does not stop the analysis: a physically infeasible
-    inertia (the base-parameter structure does not depend on the values), a loop robot
-    assembled or re-referenced because the file's q = 0 is not assembled (or is singular), or
-    a warning of the file's reader.
+    """A note about a loaded model that does not stop the analysis.
+
+    A physically infeasible inertia (the base-parameter structure does not depend on the
+    values), a loop robot assembled or re-referenced because the file's q = 0 is not assembled
+    (or is singular), or a warning of the file's reader.
     """
 
 

@@ -136,12 +136,21 @@ class Analysis:
     direction, completed) by the numerical method, and regrouped into base parameters
     ``beta = pi_I + K pi_D`` in :attr:`convention` (Khalil's rules for serial chains).
 
-    Attributes
+    Parameters
     ----------
     robot : Robot
         The analysed robot (``n`` moving bodies, ``10 n`` standard parameters).
     rows : str
         Measured generalized forces: ``all``, ``joints`` or ``base``.
+    drng_seconds : float
+        DRNG's wall time [s].
+    drng_columns : int
+        Number of columns DRNG generated.
+    drng_rank : int
+        Rank of DRNG's columns (the nullity when unverified).
+    by_principle : dict of str to int
+        Rank added by each principle / extended rule (keyed by
+        :attr:`~baseparams.enums.Source.label`).
     certificate : Certificate or None
         The numerical check (``None`` with ``verify=False``).
     basis : ndarray, shape ``(10 n, nullity)``
@@ -149,10 +158,10 @@ class Analysis:
         numerically completed directions.
     base, base_paper : BaseParameters
         The regrouping in :attr:`convention` and in ``paper``.
-    by_principle : dict
-        Rank added by each principle / extended rule.
-    drng_seconds, seconds : float
-        DRNG's and the whole analysis' wall time.
+    seconds : float
+        The whole analysis' wall time [s].
+    extended : bool
+        Whether the extended geometric rules were used as well as the paper's three principles.
 
     Notes
     -----
@@ -185,7 +194,9 @@ class Analysis:
 
     @property
     def status(self) -> Status:
-        """``certified``, ``completed``, ``undecided``, ``failed`` or ``unverified`` (a
+        """The certification's outcome.
+
+        ``certified``, ``completed``, ``undecided``, ``failed`` or ``unverified`` (a
         :class:`~baseparams.enums.Status`, equal to those strings).
         """
         return Status.UNVERIFIED if self.certificate is None else self.certificate.status
@@ -211,8 +222,13 @@ class Analysis:
         return self.base.base_names()
 
     def expressions(self) -> list[dict[str, str]]:
-        """``[{"name", "expression"}]``: each base parameter as a combination of standard
-        parameters in :attr:`convention`, e.g. ``link1.ZZR = link1.ZZ + link2.YY + ...``.
+        """Each base parameter as a combination of standard parameters in :attr:`convention`.
+
+        Returns
+        -------
+        list of dict
+            ``[{"name", "expression"}]``, e.g. ``link1.ZZR = link1.ZZ + link2.YY + ...``
+            gives ``{"name": "link1.ZZR", "expression": "link1.ZZ + link2.YY + ..."}``.
         """
         return self.base.expressions()
 
@@ -283,7 +299,14 @@ class Analysis:
                 f"({self.convention}), {self.status}>")
 
     def to_json(self) -> dict:
-        """The result as one JSON-able dict (the schema in this module's docstring)."""
+        """The result as one JSON-able dict.
+
+        Returns
+        -------
+        dict
+            The schema in this module's docstring (what ``baseparams analyze MODEL --json``
+            prints).
+        """
         from .nullspace.drng import PAPER
 
         r, c = self.robot, self.certificate
@@ -354,6 +377,15 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     BaseparamsError
         Bad input (unknown convention or rows, ``rows="base"`` without a floating base, loops
         that no sample closes).
+
+    Examples
+    --------
+    >>> import baseparams
+    >>> a = analyze(baseparams.load("puma560"))
+    >>> a.nullity, a.n_base, a.status
+    (24, 36, 'certified')
+    >>> a.expressions()[0]["name"]
+    'link1.ZZR'
     """
     from .model.inertia import check_convention
 

@@ -37,6 +37,18 @@ def _robot(args) -> Robot:  # noqa: F821
 
 
 def cmd_robots(args) -> int:
+    """``baseparams robots``: list the built-in robots, one line each (bodies, dofs, description).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (unused: the command takes no options).
+
+    Returns
+    -------
+    int
+        The exit code, 0.
+    """
     from .robots import BUILTINS
 
     for name, (factory, text) in BUILTINS.items():
@@ -75,8 +87,27 @@ def _emit(args, text: str) -> None:
 
 
 def cmd_regressor(args) -> int:
-    """The TP regressor on random states; for a robot with loops, the closed-loop regressor with
-    respect to its independent (actuated) coordinates on loop-closed samples.
+    """``baseparams regressor MODEL``: time the TP regressor on random states.
+
+    For a robot with loops, the closed-loop regressor with respect to its independent (actuated)
+    coordinates on loop-closed samples. Prints its shape and time (or one JSON object with
+    ``--json``); columns in the ``paper`` convention (spatial pseudo-inertia at q = 0).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`build_parser`): ``model``, ``floating``, ``gravity``,
+        ``strict_inertia``, ``samples`` (default 100), ``seed``, ``json``.
+
+    Returns
+    -------
+    int
+        The exit code: :data:`EXIT_OK` (also for a model without moving bodies).
+
+    Raises
+    ------
+    BaseparamsError
+        Bad input, or no sample closes the loops.
     """
     from .numerics import closed_samples, sample_states
     from .regressor import closed_regressor, regressor
@@ -116,6 +147,29 @@ def cmd_regressor(args) -> int:
 
 
 def cmd_analyze(args) -> int:
+    """``baseparams analyze MODEL``: the base-parameter analysis, as a text report or JSON.
+
+    Writes the report (:func:`~baseparams.analysis.format_report`, or
+    :meth:`~baseparams.analysis.Analysis.to_json` with ``--json``) to stdout or ``--output``;
+    an undecided or failed certification is also one line on stderr.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`build_parser`): the model options and ``no_verify``,
+        ``paper_only``, ``rows``, ``convention``, ``verbose``, ``output``.
+
+    Returns
+    -------
+    int
+        The exit code (module doc): :data:`EXIT_OK` for certified, completed or unverified
+        (and a model without moving bodies), :data:`EXIT_UNDECIDED`, :data:`EXIT_FAILED`.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad input (the model, the options, an unwritable ``--output``).
+    """
     from .analysis import analyze, format_report
 
     try:
@@ -134,6 +188,14 @@ def cmd_analyze(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``baseparams`` command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Subcommands ``robots``, ``analyze`` and ``regressor``; each sets ``func`` to its
+        ``cmd_*`` function.
+    """
     p = argparse.ArgumentParser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "
         "they regroup: the tetrahedral-point model and DRNG, certified by exact numerics."))
@@ -182,6 +244,24 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the ``baseparams`` command line.
+
+    Bad input (a :class:`BaseparamsError`, a missing ``--output`` folder) is one line on
+    stderr, ``baseparams: error: ...``; bad arguments (``--samples`` < 1, ``--seed`` < 0) are
+    argparse's usage errors (``SystemExit`` with status 2).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code (module doc): :data:`EXIT_OK`, :data:`EXIT_INPUT`,
+        :data:`EXIT_UNDECIDED`, :data:`EXIT_FAILED` or :data:`EXIT_INTERRUPTED`; 0 on a
+        broken pipe (e.g. piped into ``head``).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if getattr(args, "samples", None) is not None and args.samples < 1:

@@ -27,8 +27,21 @@ _NAMES = _inertia.NAMES
 
 
 def parameter_names(robot: Robot, convention: str) -> list[str]:
-    """``body.PARAM`` for every parameter, e.g. ``link2.ZZ``; ``paper`` names are the spatial
-    pseudo-inertia entries ``MXX...M`` written ``XX...M`` (at q = 0, world frame).
+    """The standard parameters' names ``body.PARAM``, e.g. ``link2.ZZ``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    convention : str
+        The parameter convention (:data:`~baseparams.model.inertia.CONVENTIONS`); ``paper``
+        names are the spatial pseudo-inertia entries ``MXX...M`` written ``XX...M`` (at q = 0,
+        world frame).
+
+    Returns
+    -------
+    list of str, length ``10 n``
+        One name per parameter, bodies in order, each in the convention's order.
     """
     return [f"{b}.{p}" for b in robot.names for p in _NAMES[convention]]
 
@@ -37,6 +50,18 @@ def paper_from(robot: Robot, convention: str) -> np.ndarray:
     """Block-diagonal ``T (10 n, 10 n)``: paper parameters = ``T @`` convention parameters.
 
     Conventions other than ``paper`` are link-frame (the body frame), mapped by ``M0``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies; its ``M0`` maps body frames to the world frame at q = 0).
+    convention : str
+        The convention of the parameters ``T`` multiplies.
+
+    Returns
+    -------
+    T : ndarray, shape ``(10 n, 10 n)``
+        One ``(10, 10)`` block per body; the identity for ``paper``.
     """
     n = robot.n
     t = np.zeros((10 * n, 10 * n))
@@ -60,10 +85,23 @@ SNAP_RTOL = 1e-13
 
 
 def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
-    """Snap every entry to the shortest decimal (1 to 17 significant digits) within ``rtol``
-    relative of it, e.g. ``0.18645124000000003 -> 0.18645124``, ``0.9999999999999998 -> 1``;
-    no entry moves by more than ``rtol`` relative. Zeros stay zero; removing rounding noise
-    (a relative matter) is the caller's job.
+    """Snap every entry to the shortest decimal within ``rtol`` relative of it.
+
+    E.g. ``0.18645124000000003 -> 0.18645124``, ``0.9999999999999998 -> 1`` (1 to 17
+    significant digits); no entry moves by more than ``rtol`` relative. Zeros stay zero;
+    removing rounding noise (a relative matter) is the caller's job.
+
+    Parameters
+    ----------
+    x : array_like
+        Numbers, any shape; non-finite entries are kept as they are.
+    rtol : float
+        The largest relative move (:data:`SNAP_RTOL`).
+
+    Returns
+    -------
+    ndarray
+        A snapped copy, same shape.
     """
     x = np.array(x, dtype=float)
     flat = x.reshape(-1)
@@ -99,10 +137,29 @@ def _fmt(c: float) -> str:
 class BaseParameters:
     """The base-parameter structure of a robot in one convention.
 
-    ``independent (nb,)`` indices of ``pi_I``; ``dependent (k,)`` of ``pi_D``; ``K (nb, k)``;
-    ``E (nb, 10 n)`` with ``beta = E @ pi`` (convention coordinates); ``names`` of all
-    standard parameters; ``unidentifiable`` indices of parameters that no base parameter sees;
-    ``base_basis (10 n, nb)`` orthonormal basis of ``Null^perp`` in the paper convention.
+    ``beta = pi_I + K pi_D`` (module doc), built by :func:`base_parameters`; ``nb`` base
+    parameters, ``k`` the nullity, ``n`` bodies.
+
+    Parameters
+    ----------
+    convention : str
+        The parameter convention of ``pi``, ``names`` and ``K``.
+    names : list of str, length ``10 n``
+        Names of all standard parameters (:func:`parameter_names`).
+    independent : ndarray of int, shape ``(nb,)``
+        Indices of ``pi_I``.
+    dependent : ndarray of int, shape ``(k,)``
+        Indices of ``pi_D``.
+    K : ndarray, shape ``(nb, k)``
+        Regrouping coefficients.
+    E : ndarray, shape ``(nb, 10 n)``
+        ``beta = E @ pi`` (convention coordinates).
+    unidentifiable : ndarray of int
+        Indices of parameters that no base parameter sees.
+    base_basis : ndarray, shape ``(10 n, nb)``
+        Orthonormal basis of ``Null^perp`` in the paper convention.
+    T : ndarray, shape ``(10 n, 10 n)``
+        :func:`paper_from`: paper parameters = ``T @`` convention parameters.
     """
 
     convention: str
@@ -117,14 +174,28 @@ class BaseParameters:
 
     @property
     def n_base(self) -> int:
+        """Number of base parameters ``nb``."""
         return len(self.independent)
 
     def base_names(self) -> list[str]:
-        """``NAMER`` when the parameter absorbs others (Khalil's suffix), else ``NAME``."""
+        """The base parameters' names.
+
+        Returns
+        -------
+        list of str, length ``nb``
+            ``NAMER`` when the parameter absorbs others (Khalil's suffix), else ``NAME``.
+        """
         return [self.names[i] + ("R" if np.any(self.K[r] != 0) else "") for r, i in enumerate(self.independent)]
 
     def expressions(self) -> list[dict[str, str]]:
-        """``[{name, expression}]``: each base parameter as a combination of standard ones."""
+        """Each base parameter as a combination of standard ones.
+
+        Returns
+        -------
+        list of dict
+            ``[{"name": ..., "expression": ...}]``, e.g. ``link1.ZZR`` and
+            ``link1.ZZ + link2.YY + ...`` (coefficients written only when not 1).
+        """
         out = []
         for r, (i, bname) in enumerate(zip(self.independent, self.base_names())):
             terms = [self.names[i]]
@@ -148,8 +219,23 @@ class BaseParameters:
     def to_base(self, pi: np.ndarray, convention: str) -> np.ndarray:
         """Base parameters ``beta (nb,)`` from a full vector ``pi (10 n,)``.
 
-        ``convention`` (required) names ``pi``'s convention; it must be this object's
-        :attr:`convention` (a mismatch is an error, never a number).
+        Parameters
+        ----------
+        pi : array_like, shape ``(10 n,)``
+            Standard parameters.
+        convention : str
+            Required: names ``pi``'s convention; it must be this object's :attr:`convention`
+            (a mismatch is an error, never a number).
+
+        Returns
+        -------
+        beta : ndarray, shape ``(nb,)``
+            ``E @ pi``.
+
+        Raises
+        ------
+        BaseparamsError
+            A convention mismatch or a wrong shape (:class:`ModelError`: an unknown convention).
         """
         self._check(convention)
         pi = np.asarray(pi, dtype=float)
@@ -158,8 +244,22 @@ class BaseParameters:
         return self.E @ pi
 
     def from_base(self, beta: np.ndarray) -> np.ndarray:
-        """The minimum-norm full vector ``(10 n,)`` with these base parameters, in this object's
-        :attr:`convention`.
+        """The minimum-norm full vector with these base parameters.
+
+        Parameters
+        ----------
+        beta : array_like, shape ``(nb,)``
+            Base parameters.
+
+        Returns
+        -------
+        pi : ndarray, shape ``(10 n,)``
+            ``pinv(E) @ beta``, in this object's :attr:`convention`.
+
+        Raises
+        ------
+        BaseparamsError
+            A wrong shape.
         """
         beta = np.asarray(beta, dtype=float)
         if beta.shape != (self.E.shape[0],):
@@ -193,8 +293,7 @@ def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> n
 
 
 def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str) -> BaseParameters:
-    """Regroup given a nullspace basis ``(10 n, k)`` in the paper convention (orthonormal, or
-    any basis of full column rank such as :attr:`Certificate.span`, which is more precise).
+    """Regroup into base parameters, given a nullspace basis.
 
     Decisions are made on dimensionless coordinates: with ``L`` the robot's
     :func:`length_scale` and ``u`` the length exponent of each parameter (:data:`LENGTH_POWER`),
@@ -208,6 +307,26 @@ def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str) -> Ba
     ``~eps cond(L^-u T^-1)`` in the dimensionless coordinates: ``~1e-8`` for a robot drawn in
     millimetres. The tolerances grow with it (:data:`NOISE_FACTOR`), and so does the error of
     ``K``: such a basis cannot tell more.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    null_basis : ndarray, shape ``(10 n, k)``
+        Nullspace basis in the paper convention: orthonormal, or any basis of full column rank
+        such as :attr:`Certificate.span`, which is more precise.
+    convention : str
+        The parameter convention to regroup in (:data:`~baseparams.model.inertia.CONVENTIONS`).
+
+    Returns
+    -------
+    BaseParameters
+        ``10 n - k`` base parameters in ``convention``.
+
+    Raises
+    ------
+    RuntimeError
+        The basis is rank-deficient.
     """
     n10 = 10 * robot.n
     t = paper_from(robot, convention)

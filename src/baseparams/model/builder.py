@@ -45,7 +45,20 @@ _ALIASES = {"revolute": "R", "continuous": "R", "prismatic": "P", "universal": "
 
 
 def pose(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> np.ndarray:
-    """4x4 pose from a translation and URDF roll-pitch-yaw (``Rz(y) Ry(p) Rx(r)``)."""
+    """4x4 pose from a translation and URDF roll-pitch-yaw (``Rz(y) Ry(p) Rx(r)``).
+
+    Parameters
+    ----------
+    xyz : array_like, shape ``(3,)``
+        Translation [m].
+    rpy : array_like, shape ``(3,)``
+        Roll, pitch, yaw [rad] (URDF ``<origin rpy>``).
+
+    Returns
+    -------
+    ndarray, shape ``(4, 4)``
+        The homogeneous transform.
+    """
     r, p, y = (float(v) for v in rpy)
     cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
     t = np.eye(4)
@@ -57,7 +70,25 @@ def pose(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 
 def quat_pose(xyz=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
-    """4x4 pose from a translation and a (not necessarily unit) quaternion ``w x y z``."""
+    """4x4 pose from a translation and a (not necessarily unit) quaternion ``w x y z``.
+
+    Parameters
+    ----------
+    xyz : array_like, shape ``(3,)``
+        Translation [m].
+    quat : array_like, shape ``(4,)``
+        Quaternion ``w x y z`` (MJCF order), normalised here.
+
+    Returns
+    -------
+    ndarray, shape ``(4, 4)``
+        The homogeneous transform.
+
+    Raises
+    ------
+    ModelError
+        A zero quaternion.
+    """
     q = np.asarray(quat, dtype=float)
     nq = np.linalg.norm(q)
     if nq < 1e-12:
@@ -69,14 +100,37 @@ def quat_pose(xyz=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
 
 
 def joint_type(name: str) -> str:
-    """Normalise a joint type name (``revolute`` -> ``R``, ...); ``fixed`` stays ``fixed``."""
+    """Normalise a joint type name (``revolute`` -> ``R``, ...); ``fixed`` stays ``fixed``.
+
+    Parameters
+    ----------
+    name : str
+        A joint type (``R P U S F C fixed``) or a URDF/MJCF name (``revolute``, ``continuous``,
+        ``prismatic``, ``ball``, ``free``, ...), any case.
+
+    Returns
+    -------
+    str
+        The type in :data:`ALL_TYPES`, or ``name`` unchanged when it is not recognised (the
+        caller reports it).
+    """
     if name in ALL_TYPES:
         return name
     return _ALIASES.get(str(name).lower(), str(name))
 
 
 class RobotBuilder:
-    """Collects links and joints, then :meth:`build` validates and returns a :class:`Robot`."""
+    """Collects links and joints, then :meth:`build` validates and returns a :class:`Robot`.
+
+    See the module doc for an example.
+
+    Parameters
+    ----------
+    name : str
+        The robot's name.
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame.
+    """
 
     def __init__(self, name: str, gravity=(0.0, 0.0, -9.81)):
         self.name = name
@@ -102,7 +156,23 @@ class RobotBuilder:
         return self._frames[key]
 
     def body_index(self, name: str) -> int:
-        """Index of the link ``name`` added so far (its body index in the built robot)."""
+        """Index of a link added so far.
+
+        Parameters
+        ----------
+        name : str
+            A (moving) link's name.
+
+        Returns
+        -------
+        int
+            Its body index in the built robot.
+
+        Raises
+        ------
+        ModelError
+            No moving link of that name.
+        """
         if name not in self._names:
             raise ModelError(f"robot {self.name!r}: no link {name!r}")
         return self._names.index(name)
@@ -112,9 +182,43 @@ class RobotBuilder:
                  joint_name: str | None = None, actuated: bool | None = None, armature=None) -> RobotBuilder:
         """Attach link ``name`` to ``parent`` (default: the fixed base) by a joint.
 
-        ``joint``: ``R P U S F fixed`` or URDF/MJCF names (``revolute``, ``ball``, ...).
-        ``axis`` (and ``axis2`` for U) in the joint frame, C: ``(k, 6)`` twists (module doc);
-        ``inertia`` in the link frame; ``armature``: rotor inertia per coordinate (default 0).
+        Parameters
+        ----------
+        name : str
+            The new link's name (unique).
+        parent : str, optional
+            An earlier link (or fixed link); ``None`` or ``"world"`` (unless a link is named
+            so): the fixed base.
+        joint : str
+            ``R P U S F C fixed`` or URDF/MJCF names (``revolute``, ``ball``, ...).
+        origin : array_like, shape ``(4, 4)``, optional
+            The joint frame's pose in the parent link's frame at q = 0 (URDF ``<origin>``);
+            default identity.
+        axis : array_like, shape ``(3,)`` or ``(k, 6)``
+            Joint axis in the joint frame (normalised); C: ``(k, 6)`` twists (module doc).
+            Ignored for S, F and fixed.
+        axis2 : array_like, shape ``(3,)``, optional
+            Second axis of a U joint, in the joint frame.
+        inertia : Inertia, optional
+            The link's inertia in the link frame (default: massless). A fixed link's is merged
+            into its parent.
+        joint_name : str, optional
+            Default ``name + "_joint"``.
+        actuated : bool, optional
+            Whether the joint's coordinates are independent (actuated); unspecified counts
+            as independent when any link says (URDF+ default).
+        armature : array_like, shape ``(ndof,)``, optional
+            Rotor inertia per coordinate (default 0).
+
+        Returns
+        -------
+        RobotBuilder
+            ``self``, for chaining.
+
+        Raises
+        ------
+        ModelError
+            Duplicate name, unknown joint type or parent, a bad origin, axis or armature.
         """
         jt = joint_type(joint)
         jname = joint_name or f"{name}_joint"
@@ -182,21 +286,55 @@ class RobotBuilder:
 
     def add_loop(self, name: str, type: str, parent: str | None, child: str, origin=None, axis=(0, 0, 1.0),
                  axis2=None, child_origin=None) -> RobotBuilder:
-        """Record a loop (cut) joint between two links (``parent`` None: the world).
+        """Record a loop (cut) joint between two links.
 
-        ``origin``: the loop frame in the parent link's frame; ``child_origin`` (optional): the
-        same frame in the child link's frame (when the two do not coincide at q = 0 the robot
-        is not assembled there: see :func:`baseparams.kinematics.loops.assemble`). The two
-        links may come in either tree order (URDF+ allows it; either may be the world): the
-        built :class:`LoopJoint` has ``parent < child``, with the frames (and a U joint's two
-        axes: ``axis`` carried by ``parent``, ``axis2`` by ``child``) swapped when needed.
+        The two links may come in either tree order (URDF+ allows it; either may be the
+        world): the built :class:`LoopJoint` has ``parent < child``, with the frames (and a U
+        joint's two axes) swapped when needed. Checked by :meth:`build`.
+
+        Parameters
+        ----------
+        name : str
+            The loop joint's name.
+        type : str
+            ``R P U S fixed`` (or URDF/MJCF names, as for :meth:`add_link`).
+        parent : str or None
+            One link (``None``: the world).
+        child : str
+            The other link.
+        origin : array_like, shape ``(4, 4)``, optional
+            The loop frame in the parent link's frame (default identity).
+        axis : array_like, shape ``(3,)``
+            Joint axis in the loop frame (a U joint's first axis, carried by ``parent``).
+        axis2 : array_like, shape ``(3,)``, optional
+            A U joint's second axis, carried by ``child``.
+        child_origin : array_like, shape ``(4, 4)``, optional
+            The same frame in the child link's frame (when the two do not coincide at q = 0
+            the robot is not assembled there: see :func:`baseparams.kinematics.loops.assemble`).
+
+        Returns
+        -------
+        RobotBuilder
+            ``self``, for chaining.
         """
         jt = joint_type(type)
         self._loops.append((name, jt, parent, child, origin, axis, axis2, child_origin))
         return self
 
     def build(self) -> Robot:
-        """Validate and return the :class:`Robot` (raises :class:`ModelError`)."""
+        """Validate and return the :class:`Robot`.
+
+        Returns
+        -------
+        Robot
+            Bodies in the order added; ``independent`` set when any link gave ``actuated``;
+            ``armature`` when any link gave one; loops with ``parent < child``.
+
+        Raises
+        ------
+        ModelError
+            An invalid model; :class:`NoMovingBodiesError` when no moving link was added.
+        """
         if not self._names:
             raise NoMovingBodiesError(f"robot {self.name!r}: no moving links")
         loops = []

@@ -52,12 +52,26 @@ _BACK = ("m", "hz", "hy", "hx", "izz", "iyz", "iyy", "ixz", "ixy", "ixx")
 
 @dataclass(frozen=True)
 class ConventionSpec:
-    """One parameter convention, the one table everything derives from: ``fields`` (what each
-    of a body's ten parameters is, in the convention's order; :data:`PARAMETER_FIELDS`),
-    ``names`` (as printed), ``frame`` (what they are expressed in) and ``regroup`` (fields in
-    the order the regrouping tries them as dependent, within a body). The converters
-    (:func:`to_convention`, :func:`from_convention`), :data:`NAMES`, :data:`FRAMES`,
-    :data:`LENGTH_POWER` and the CLI's ``--convention`` choices come from :data:`SPECS`.
+    """One parameter convention, the one table everything derives from.
+
+    The converters (:func:`to_convention`, :func:`from_convention`), :data:`NAMES`,
+    :data:`FRAMES`, :data:`LENGTH_POWER` and the CLI's ``--convention`` choices come from
+    :data:`SPECS`, which holds one of these per convention.
+
+    Parameters
+    ----------
+    convention : Convention
+        The convention this table describes.
+    fields : tuple of str, length 10
+        What each of a body's ten parameters is, in the convention's order (entries of
+        :data:`PARAMETER_FIELDS`).
+    names : tuple of str, length 10
+        The parameters' names as printed, in the same order.
+    frame : str
+        What the parameters are expressed in (e.g. the link frame, or the world frame at q = 0
+        for ``paper``).
+    regroup : tuple of str, length 10
+        Fields in the order the regrouping tries them as dependent, within a body.
     """
 
     convention: Convention
@@ -114,13 +128,39 @@ FRAMES = {c: s.frame for c, s in SPECS.items()}
 
 
 def describe(convention: str) -> str:
-    """One line: the convention's name, frame and per-body parameter order."""
+    """One line: the convention's name, frame and per-body parameter order.
+
+    Parameters
+    ----------
+    convention : str
+        One of :data:`CONVENTIONS` (``paper``, ``khalil``, ``pinocchio``, ``idyntree``, ``rpna``).
+
+    Returns
+    -------
+    str
+        E.g. ``"khalil convention: link frame (...); per body XX XY XZ YY YZ ZZ MX MY MZ M"``.
+    """
     return f"{convention} convention: {FRAMES[convention]}; per body {' '.join(NAMES[convention])}"
 
 
 def check_convention(convention: str) -> Convention:
-    """``convention`` as a :class:`~baseparams.enums.Convention` if it is one of
-    :data:`CONVENTIONS`, else a :class:`ModelError` naming them.
+    """Check a convention's name.
+
+    Parameters
+    ----------
+    convention : str
+        A parameter convention's name.
+
+    Returns
+    -------
+    Convention
+        ``convention`` as a :class:`~baseparams.enums.Convention` if it is one of
+        :data:`CONVENTIONS`.
+
+    Raises
+    ------
+    ModelError
+        ``convention`` is not one of :data:`CONVENTIONS` (the message names them).
     """
     if convention not in CONVENTIONS:
         raise ModelError(f"unknown parameter convention {convention!r}; expected one of {', '.join(CONVENTIONS)}")
@@ -138,12 +178,35 @@ _COLS = np.array([c for _, c in HAT_INDEX])
 
 
 def hat(n: np.ndarray) -> np.ndarray:
-    """Paper's hat: symmetric ``(*, 4, 4)`` -> ``(*, 10)`` (entries, not doubled)."""
+    """Paper's hat operator (eq. "hat"): symmetric ``(*, 4, 4)`` -> ``(*, 10)``.
+
+    Parameters
+    ----------
+    n : array_like, shape ``(*, 4, 4)``
+        Symmetric matrices, e.g. pseudo-inertias ``N``.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 10)``
+        The entries in :data:`HAT_INDEX` order ``N11 N12 N13 N22 N23 N33 N14 N24 N34 N44``
+        (entries, not doubled).
+    """
     return np.asarray(n)[..., _ROWS, _COLS]
 
 
 def unhat(p: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`hat`: ``(*, 10)`` -> symmetric ``(*, 4, 4)``."""
+    """Inverse of :func:`hat`: ``(*, 10)`` -> symmetric ``(*, 4, 4)``.
+
+    Parameters
+    ----------
+    p : array_like, shape ``(*, 10)``
+        Entries in :data:`HAT_INDEX` order (the ``paper`` convention).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        The symmetric matrices.
+    """
     p = np.asarray(p, dtype=float)
     out = np.zeros(p.shape[:-1] + (4, 4))
     out[..., _ROWS, _COLS] = p
@@ -152,8 +215,23 @@ def unhat(p: np.ndarray) -> np.ndarray:
 
 
 def pseudo_inertia(mass: float, com: np.ndarray, inertia_com: np.ndarray) -> np.ndarray:
-    """Pseudo-inertia ``(4, 4)`` from mass, centre of mass ``(3,)`` and the rotational
-    inertia ``(3, 3)`` about the centre of mass, all in the same frame.
+    """Pseudo-inertia from mass, centre of mass and rotational inertia about the centre of mass.
+
+    All inputs are expressed in the same frame; the result is expressed in it too.
+
+    Parameters
+    ----------
+    mass : float
+        Mass ``m`` [kg].
+    com : array_like, shape ``(3,)``
+        Centre of mass ``c`` [m].
+    inertia_com : array_like, shape ``(3, 3)``
+        Rotational inertia tensor about the centre of mass [kg m^2].
+
+    Returns
+    -------
+    ndarray, shape ``(4, 4)``
+        The pseudo-inertia ``N = [[Sigma, h], [h^T, m]]`` with ``h = m c``.
     """
     com = np.asarray(com, dtype=float)
     j_com = np.asarray(inertia_com, dtype=float)
@@ -162,7 +240,24 @@ def pseudo_inertia(mass: float, com: np.ndarray, inertia_com: np.ndarray) -> np.
 
 
 def pseudo_from_origin(mass: float, h: np.ndarray, j_origin: np.ndarray) -> np.ndarray:
-    """Pseudo-inertia from mass, first moment ``h = m c`` and inertia about the origin."""
+    """Pseudo-inertia from mass, first moment ``h = m c`` and inertia about the origin.
+
+    Uses ``Sigma = tr(J)/2 * 1 - J``; broadcasts over leading axes.
+
+    Parameters
+    ----------
+    mass : float or array_like, shape ``(*)``
+        Mass ``m`` [kg].
+    h : array_like, shape ``(*, 3)``
+        First moment ``m c`` [kg m].
+    j_origin : array_like, shape ``(*, 3, 3)``
+        Rotational inertia tensor ``J`` about the frame origin [kg m^2].
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        The pseudo-inertias ``N = [[Sigma, h], [h^T, m]]``, in the frame of the inputs.
+    """
     n = np.zeros(np.shape(mass) + (4, 4))
     n[..., :3, :3] = 0.5 * np.trace(j_origin, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - j_origin
     n[..., :3, 3] = h
@@ -172,14 +267,42 @@ def pseudo_from_origin(mass: float, h: np.ndarray, j_origin: np.ndarray) -> np.n
 
 
 def split(n: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(m, h, J_origin)`` from pseudo-inertias ``(*, 4, 4)``."""
+    """Mass, first moment and inertia about the origin from pseudo-inertias.
+
+    Parameters
+    ----------
+    n : ndarray, shape ``(*, 4, 4)``
+        Pseudo-inertias.
+
+    Returns
+    -------
+    m : ndarray, shape ``(*)``
+        Masses.
+    h : ndarray, shape ``(*, 3)``
+        First moments ``m c``.
+    J_origin : ndarray, shape ``(*, 3, 3)``
+        Rotational inertia tensors about the frame origin, ``J = tr(Sigma) * 1 - Sigma``.
+    """
     sigma = n[..., :3, :3]
     j = np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - sigma
     return n[..., 3, 3], n[..., :3, 3], j
 
 
 def transform(n: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Express pseudo-inertias in another frame: ``T N T^T`` (``t`` maps old to new coords)."""
+    """Express pseudo-inertias in another frame: ``T N T^T``.
+
+    Parameters
+    ----------
+    n : ndarray, shape ``(*, 4, 4)``
+        Pseudo-inertias in the old frame.
+    t : ndarray, shape ``(*, 4, 4)``
+        Homogeneous transforms mapping old to new coordinates (the old frame's pose in the new one).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        The pseudo-inertias in the new frame.
+    """
     return t @ n @ np.swapaxes(t, -1, -2)
 
 
@@ -187,6 +310,23 @@ def to_convention(n: np.ndarray, convention: str) -> np.ndarray:
     """Parameter vectors ``(*, 10)`` in ``convention`` from pseudo-inertias ``(*, 4, 4)``.
 
     The frame is the one ``n`` is expressed in (no change of frame here).
+
+    Parameters
+    ----------
+    n : array_like, shape ``(*, 4, 4)``
+        Pseudo-inertias.
+    convention : str
+        One of :data:`CONVENTIONS`.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 10)``
+        Ten parameters per body in the convention's order (:data:`NAMES`).
+
+    Raises
+    ------
+    ValueError
+        Unknown convention.
     """
     n = np.asarray(n, dtype=float)
     if convention == "paper":
@@ -199,7 +339,27 @@ def to_convention(n: np.ndarray, convention: str) -> np.ndarray:
 
 
 def from_convention(p: np.ndarray, convention: str) -> np.ndarray:
-    """Pseudo-inertias ``(*, 4, 4)`` from parameter vectors ``(*, 10)`` in ``convention``."""
+    """Pseudo-inertias ``(*, 4, 4)`` from parameter vectors ``(*, 10)`` in ``convention``.
+
+    The inverse of :func:`to_convention` (no change of frame here).
+
+    Parameters
+    ----------
+    p : array_like, shape ``(*, 10)``
+        Ten parameters per body in the convention's order (:data:`NAMES`).
+    convention : str
+        One of :data:`CONVENTIONS`.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 4, 4)``
+        The pseudo-inertias, in the frame the parameters are expressed in.
+
+    Raises
+    ------
+    ValueError
+        ``p`` does not have 10 entries per body, or an unknown convention.
+    """
     p = np.asarray(p, dtype=float)
     if p.shape[-1] != 10:
         raise ValueError(f"parameter vectors must have 10 entries per body, got shape {p.shape}")
@@ -216,15 +376,42 @@ def from_convention(p: np.ndarray, convention: str) -> np.ndarray:
 
 
 def convert(p: np.ndarray, src: str, dst: str) -> np.ndarray:
-    """Convert parameter vectors ``(*, 10)`` between conventions (same frame)."""
+    """Convert parameter vectors ``(*, 10)`` between conventions (same frame).
+
+    Parameters
+    ----------
+    p : array_like, shape ``(*, 10)``
+        Parameter vectors in convention ``src``.
+    src, dst : str
+        The source and destination conventions (:data:`CONVENTIONS`).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 10)``
+        The same parameters in convention ``dst``, expressed in the same frame (``dst="paper"``
+        from link-frame parameters gives the link frame's pseudo-inertia entries, not the world
+        frame at q = 0 of :meth:`~baseparams.model.robot.Robot.parameters`).
+    """
     return to_convention(from_convention(p, src), dst)
 
 
 @dataclass(frozen=True, eq=False)
 class Inertia:
-    """Rigid-body inertia: ``mass`` [kg], ``com`` [m] and ``inertia`` [kg m^2] about the
-    centre of mass, all expressed in ``frame`` (a 4x4 pose relative to the body frame;
-    identity = the body/joint frame, as in URDF ``<inertial>``).
+    """Rigid-body inertia, all expressed in ``frame``.
+
+    Parameters
+    ----------
+    mass : float
+        Mass [kg].
+    com : tuple of float, shape ``(3,)``
+        Centre of mass [m] in ``frame``.
+    inertia : array_like, shape ``(3, 3)``, ``(3,)`` or ``(6,)``
+        Rotational inertia [kg m^2] about the centre of mass, in ``frame``: a 3x3 tensor, the
+        principal moments ``(ixx, iyy, izz)`` or ``(ixx, iyy, izz, ixy, ixz, iyz)`` (URDF
+        attribute order); see :meth:`inertia_matrix`.
+    frame : ndarray, shape ``(4, 4)``, optional
+        Pose of the inertia frame relative to the body frame; ``None`` (identity) = the
+        body/joint frame, as in URDF ``<inertial>``.
     """
 
     mass: float
@@ -233,6 +420,19 @@ class Inertia:
     frame: np.ndarray | None = None
 
     def inertia_matrix(self) -> np.ndarray:
+        """The rotational inertia about the centre of mass as a tensor.
+
+        Returns
+        -------
+        ndarray, shape ``(3, 3)``
+            :attr:`inertia` [kg m^2] in ``frame``: as given when 3x3, diagonal from
+            ``(ixx, iyy, izz)``, symmetric from ``(ixx, iyy, izz, ixy, ixz, iyz)``.
+
+        Raises
+        ------
+        ValueError
+            :attr:`inertia` has another shape.
+        """
         i = np.asarray(self.inertia, dtype=float)
         if i.shape == (3, 3):
             return i
@@ -244,7 +444,13 @@ class Inertia:
         raise ValueError(f"inertia must be 3x3, (ixx, iyy, izz) or (ixx, iyy, izz, ixy, ixz, iyz); got shape {i.shape}")
 
     def pseudo(self) -> np.ndarray:
-        """Pseudo-inertia ``(4, 4)`` in the body frame."""
+        """Pseudo-inertia in the body frame.
+
+        Returns
+        -------
+        ndarray, shape ``(4, 4)``
+            The pseudo-inertia ``N`` in the body (joint) frame (:attr:`frame` applied).
+        """
         n = pseudo_inertia(float(self.mass), np.asarray(self.com, dtype=float), self.inertia_matrix())
         if self.frame is not None:
             n = transform(n, np.asarray(self.frame, dtype=float))
@@ -252,7 +458,20 @@ class Inertia:
 
 
 def is_physically_consistent(n: np.ndarray, tol: float = 0.0) -> np.ndarray:
-    """True where the pseudo-inertia is positive semidefinite (Wensing et al. 2018)."""
+    """True where the pseudo-inertia is positive semidefinite (Wensing et al. 2018).
+
+    Parameters
+    ----------
+    n : array_like, shape ``(*, 4, 4)``
+        Pseudo-inertias.
+    tol : float
+        Allowed negative eigenvalue (absolute).
+
+    Returns
+    -------
+    ndarray of bool, shape ``(*)``
+        True where the smallest eigenvalue is at least ``-tol``.
+    """
     return np.linalg.eigvalsh(np.asarray(n)).min(axis=-1) >= -tol
 
 
@@ -264,10 +483,38 @@ def check_inertia(mass: float, inertia_com: np.ndarray, what: str, rtol: float =
                   strict: bool = False) -> bool:
     """Physical feasibility: mass >= 0, principal moments >= 0 and the triangle inequality.
 
-    Returns True when feasible. A violation is an :class:`InertiaWarning` (one line naming
-    ``what``): the base-parameter structure does not depend on the inertia values, so the
-    analysis goes on. With ``strict`` it is a :class:`ModelError` instead (identification,
-    where a prior must be feasible, or ``strict_inertia`` in the readers).
+    A violation is an :class:`InertiaWarning` (one line naming ``what``): the base-parameter
+    structure does not depend on the inertia values, so the analysis goes on. With ``strict``
+    it is a :class:`ModelError` instead (identification, where a prior must be feasible, or
+    ``strict_inertia`` in the readers).
+
+    Parameters
+    ----------
+    mass : float
+        Mass [kg].
+    inertia_com : array_like, shape ``(3, 3)``
+        Rotational inertia [kg m^2] about the centre of mass (any frame).
+    what : str
+        What the inertia belongs to, for the message (e.g. the file and link).
+    rtol : float
+        Tolerance on the principal moments, relative to the largest.
+    strict : bool
+        Raise instead of warning.
+
+    Returns
+    -------
+    bool
+        True when feasible, False when infeasible (and not ``strict``).
+
+    Raises
+    ------
+    ModelError
+        With ``strict``: the inertia is not feasible (or not symmetric).
+
+    Warns
+    -----
+    InertiaWarning
+        Without ``strict``: the inertia is not feasible (or not symmetric).
     """
     try:
         if mass < 0:

@@ -47,13 +47,44 @@ NDOF = {JointType.R: 1, JointType.P: 1, JointType.U: 2, JointType.S: 3, JointTyp
 
 
 def joint_ndof(jtype: str, axes: np.ndarray) -> int:
-    """Dofs of one joint: :data:`NDOF`, or the number of elementary screws of a C joint."""
+    """Dofs of one joint: :data:`NDOF`, or the number of elementary screws of a C joint.
+
+    Parameters
+    ----------
+    jtype : str
+        Joint type (``R P U S F C`` or ``fixed``).
+    axes : array_like
+        The joint's axes; only their number counts, for a C joint (``(k, 6)`` twists).
+
+    Returns
+    -------
+    int
+        The number of coordinates of the joint.
+    """
     return len(axes) if jtype == "C" else NDOF[jtype]
 
 
 def compound_screw(axis, point=None, slide: bool = False) -> np.ndarray:
-    """One elementary screw ``(6,)`` of a C joint, joint frame: a rotation about unit ``axis``
-    through ``point`` (default the origin), or a translation along it (``slide``).
+    """One elementary screw of a C joint, in the joint frame.
+
+    A rotation about the unit ``axis`` through ``point``, or a translation along it
+    (``slide``).
+
+    Parameters
+    ----------
+    axis : array_like, shape ``(3,)``
+        Direction in the joint frame (normalised here).
+    point : array_like, shape ``(3,)``, optional
+        A point of the rotation axis in the joint frame [m] (default the origin); ignored with
+        ``slide``.
+    slide : bool
+        A translation along ``axis`` instead of a rotation.
+
+    Returns
+    -------
+    ndarray, shape ``(6,)``
+        The unit twist ``(omega, v)`` (basis ``e23 e31 e12 e01 e02 e03``): ``(a, c x a)`` for
+        a rotation, ``(0, a)`` for a translation.
     """
     a = np.asarray(axis, dtype=float).reshape(3)
     a = a / np.linalg.norm(a)
@@ -67,10 +98,26 @@ def compound_screw(axis, point=None, slide: bool = False) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Coupling:
-    """A linear coupling of 1-dof coordinates:
-    ``q[succ] = ratio * q[pred] + sum(r * q[k] for k, r in more) + offset``
-    (URDF+ ``<coupling>``, URDF ``<mimic multiplier offset>``, MJCF ``<equality><joint>`` and
-    fixed-tendon equalities; ``more``: further coordinates, e.g. a tendon tying three joints).
+    """A linear coupling of 1-dof coordinates.
+
+    ``q[succ] = ratio * q[pred] + sum(r * q[k] for k, r in more) + offset`` (URDF+
+    ``<coupling>``, URDF ``<mimic multiplier offset>``, MJCF ``<equality><joint>`` and
+    fixed-tendon equalities).
+
+    Parameters
+    ----------
+    name : str
+        The coupling's name.
+    pred : int
+        Index in ``q`` of the driving coordinate.
+    succ : int
+        Index in ``q`` of the driven coordinate.
+    ratio : float
+        Multiplier of ``q[pred]``.
+    offset : float
+        Constant term (coordinate units: rad or m).
+    more : tuple of (int, float)
+        Further coordinates and their ratios, e.g. a tendon tying three joints.
     """
 
     name: str
@@ -81,16 +128,39 @@ class Coupling:
     more: tuple[tuple[int, float], ...] = ()
 
     def terms(self) -> list[tuple[int, float]]:
-        """``[(coordinate, ratio)]`` of every coordinate on the right-hand side."""
+        """Every coordinate on the right-hand side, with its ratio.
+
+        Returns
+        -------
+        list of (int, float)
+            ``[(coordinate, ratio)]``: ``(pred, ratio)`` first, then :attr:`more`.
+        """
         return [(self.pred, self.ratio), *self.more]
 
 
 @dataclass(frozen=True, eq=False)
 class LoopJoint:
-    """A cut joint closing a loop: type, the two bodies (``parent < child``; parent -1 = the
-    world), the joint frame's world pose ``M`` at q = 0 carried by the predecessor, its axes
-    (joint frame), and ``M_child``: the successor's copy of the frame at q = 0 when it does not
-    coincide with ``M`` (an unassembled file; see :func:`baseparams.kinematics.loops.assemble`).
+    """A cut joint closing a loop.
+
+    Parameters
+    ----------
+    name : str
+        The joint's name.
+    type : str
+        Joint type, one of :data:`LOOP_TYPES` (``R P U S fixed``).
+    parent : int
+        The predecessor body (``parent < child``; -1 = the world).
+    child : int
+        The successor body.
+    M : ndarray, shape ``(4, 4)``
+        The joint frame's world pose at q = 0, carried by the predecessor.
+    axes : ndarray, shape ``(k, 3)``
+        The joint's axes in the joint frame (U: ``axes[0]`` carried by the predecessor,
+        ``axes[1]`` by the successor).
+    M_child : ndarray, shape ``(4, 4)``, optional
+        The successor's copy of the frame (world pose at q = 0) when it does not coincide with
+        ``M`` (an unassembled file; see :func:`baseparams.kinematics.loops.assemble`); ``None``
+        when they coincide.
     """
 
     name: str
@@ -161,15 +231,47 @@ def _check_axes(axes: np.ndarray, jtype: str, what: str) -> np.ndarray:
 class Robot:
     """A validated tree robot (plus loop joints recorded for later use).
 
-    Arrays (``n`` bodies):
+    The paper's Table "rbt" (module doc). Construction validates every field (a one-line
+    :class:`ModelError` naming the robot and the part) and stores the arrays normalised.
+    ``n`` is the number of bodies, ``dof`` the number of coordinates.
 
-    * ``names (n,)``, ``joint_names (n,)``, ``jtype (n,)`` in ``R P U S F``;
-    * ``parent (n,)`` int, ``-1`` = fixed base, ``parent[i] < i``;
-    * ``M0 (n, 4, 4)`` world pose of each joint/body frame at q = 0;
-    * ``axes``: per body ``(k, 3)`` joint axes in the joint frame (C: ``(k, 6)`` twists);
-    * ``N_body (n, 4, 4)`` pseudo-inertias in the body frame;
-    * ``gravity (3,)`` [m/s^2] in the world frame;
-    * ``armature (dof,)`` rotor inertia per coordinate (default zeros; not used by the analysis).
+    Parameters
+    ----------
+    name : str
+        The robot's name.
+    names : tuple of str, shape ``(n,)``
+        Body (link) names, unique.
+    joint_names : tuple of str, shape ``(n,)``
+        Each body's joint name.
+    jtype : tuple of str, shape ``(n,)``
+        Joint types in ``R P U S F C`` (:data:`JOINT_TYPES`); F only at a root.
+    parent : array_like of int, shape ``(n,)``
+        Parent body, ``-1`` = fixed base, ``parent[i] < i``.
+    M0 : array_like, shape ``(n, 4, 4)``
+        World pose of each joint/body frame at q = 0.
+    axes : tuple of ndarray
+        Per body ``(k, 3)`` joint axes in the joint frame (C: ``(k, 6)`` twists).
+    N_body : array_like, shape ``(n, 4, 4)``
+        Pseudo-inertias in the body frame.
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame (default ``(0, 0, -9.81)``).
+    loops : tuple of LoopJoint
+        Loop (cut) joints.
+    independent : tuple of int, optional
+        The independent (actuated) coordinates, distinct indices into ``q`` (stored sorted);
+        required when there are loops or couplings. ``None``: every coordinate.
+    q_box : array_like, shape ``(na, 2)``, optional
+        Sampling box (low < high) of the independent coordinates (``na`` of them).
+    couplings : tuple of Coupling
+        Linear couplings of coordinates.
+    armature : array_like, shape ``(dof,)``, optional
+        Rotor inertia per coordinate (default zeros; not used by the analysis).
+
+    Raises
+    ------
+    ModelError
+        Any field invalid (shapes, names, joint types, parent order, frames, axes, inertias,
+        loops, couplings, ``independent``, ``q_box``, ``armature``).
     """
 
     name: str
@@ -188,8 +290,9 @@ class Robot:
     armature: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        """Validate every field (one-line :class:`ModelError` naming the robot and the part) and
-        store the arrays normalised.
+        """Validate every field and store the arrays normalised.
+
+        A failure is a one-line :class:`ModelError` naming the robot and the part.
         """
         what = f"robot {self.name!r}"
         parent, m0, nb = self._check_shapes(what)
@@ -210,8 +313,9 @@ class Robot:
         object.__setattr__(self, "gravity", g)
 
     def _check_shapes(self, what: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """At least one body, per-body fields of one length, unique names; ``(parent, M0,
-        N_body)`` as arrays of the right shapes.
+        """At least one body, per-body fields of one length, unique names.
+
+        Returns ``(parent, M0, N_body)`` as arrays of the right shapes.
         """
         n = len(self.names)
         if n == 0:
@@ -306,6 +410,7 @@ class Robot:
 
     @property
     def floating(self) -> bool:
+        """True when the root is a floating (F) joint."""
         return "F" in self.jtype
 
     @cached_property
@@ -317,6 +422,7 @@ class Robot:
 
     @property
     def dof(self) -> int:
+        """Number of coordinates (length of ``q``), the sum of :attr:`ndofs`."""
         return int(self.ndofs.sum())
 
     @property
@@ -362,8 +468,10 @@ class Robot:
 
     @cached_property
     def screws(self) -> np.ndarray:
-        """Joint lines ``L0 (dof, 6)``: unit twists in world coordinates at q = 0 (cached; do not
-        modify). For F, the world basis ``e23 e31 e12 e01 e02 e03`` (the root frame is ignored).
+        """Joint lines ``L0 (dof, 6)``: unit twists in world coordinates at q = 0.
+
+        Cached; do not modify. For F, the world basis ``e23 e31 e12 e01 e02 e03`` (the root
+        frame is ignored).
         """
         body = self.dof_body
         s = adjoint(self.M0[body], self.local_screws)
@@ -389,20 +497,51 @@ class Robot:
         return _inertia.transform(self.N_body, self.M0)
 
     def parameters(self, convention: str) -> np.ndarray:
-        """The robot's inertial parameters ``(10 n,)`` in ``convention`` (required: a parameter
-        vector always says its convention; see :data:`baseparams.model.inertia.CONVENTIONS`).
+        """The robot's inertial parameters in ``convention``.
 
-        ``"paper"``: spatial pseudo-inertia entries in the world frame at q = 0 (what the TP
-        regressor multiplies); every other convention: link (body/joint) frame, e.g.
-        ``"khalil"`` (``XX XY XZ YY YZ ZZ MX MY MZ M``) or ``"pinocchio"``.
+        Parameters
+        ----------
+        convention : str
+            Required: a parameter vector always says its convention (see
+            :data:`baseparams.model.inertia.CONVENTIONS`). ``"paper"``: spatial pseudo-inertia
+            entries in the world frame at q = 0 (what the TP regressor multiplies); every other
+            convention: link (body/joint) frame, e.g. ``"khalil"``
+            (``XX XY XZ YY YZ ZZ MX MY MZ M``) or ``"pinocchio"``.
+
+        Returns
+        -------
+        ndarray, shape ``(10 n,)``
+            Ten parameters per body, bodies in order, each in the convention's order.
+
+        Raises
+        ------
+        ModelError
+            Unknown convention.
         """
         _inertia.check_convention(convention)
         n = self.N0 if convention == "paper" else self.N_body
         return _inertia.to_convention(n, convention).reshape(-1)
 
     def with_parameters(self, params: np.ndarray, convention: str) -> Robot:
-        """The same robot with other inertial parameters ``(10 n,)`` in ``convention`` (required;
-        see :meth:`parameters`).
+        """The same robot with other inertial parameters.
+
+        Parameters
+        ----------
+        params : array_like, shape ``(10 n,)``
+            Ten parameters per body in ``convention`` (as :meth:`parameters` returns them).
+        convention : str
+            The convention of ``params`` (required; see :meth:`parameters`): ``"paper"`` in
+            the world frame at q = 0, the others in the link frames.
+
+        Returns
+        -------
+        Robot
+            A copy with :attr:`N_body` replaced; everything else is shared.
+
+        Raises
+        ------
+        ModelError
+            Unknown convention or a wrong number of parameters.
         """
         _inertia.check_convention(convention)
         p = np.asarray(params, dtype=float)
@@ -418,15 +557,38 @@ class Robot:
     def in_world(self, t: np.ndarray) -> Robot:
         """The same robot seen from another world frame: ``M0 -> t M0``, gravity rotated.
 
-        ``t (4, 4)``: pose of the old world frame in the new one. Body-frame inertias and
-        joint axes (in joint frames) are unchanged, so every physical quantity is the same.
+        Body-frame inertias and joint axes (in joint frames) are unchanged, so every physical
+        quantity is the same. Loop joints' frames ``M`` move with the world.
+
+        Parameters
+        ----------
+        t : array_like, shape ``(4, 4)``
+            Pose of the old world frame in the new one (rigid).
+
+        Returns
+        -------
+        Robot
+            The robot with ``M0``, ``gravity`` and the loop frames expressed in the new world
+            frame.
+
+        Raises
+        ------
+        ModelError
+            ``t`` is not a rigid 4x4 transform.
         """
         t = _check_frame(t, f"robot {self.name!r}: world transform")
         loops = tuple(replace(lj, M=t @ lj.M) for lj in self.loops)
         return replace(self, M0=t @ self.M0, gravity=t[:3, :3] @ self.gravity, loops=loops)
 
     def describe(self) -> str:
-        """One line per body: index, name, joint type, parent."""
+        """A text summary of the robot.
+
+        Returns
+        -------
+        str
+            A header line (name, bodies, dofs, gravity), then one line per body: index, name,
+            joint type, parent.
+        """
         lines = [f"{self.name}: {self.n} bodies, {self.dof} dofs, gravity {self.gravity.tolist()} m/s^2"]
         for i in range(self.n):
             p = "world" if self.parent[i] < 0 else self.names[self.parent[i]]

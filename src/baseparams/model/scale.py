@@ -19,11 +19,22 @@ from .robot import Robot
 
 @lru_cache(maxsize=16)  # robots compare by identity and are immutable
 def length_scale(robot: Robot) -> float:
-    """The robot's typical length ``L`` [m]: the median nonzero distance between adjacent frame
-    origins at q = 0 (each body's joint origin from its parent's, a fixed root's from the world
-    origin, each loop frame from both of its bodies' origins). A degree-1 homogeneous function of
-    the geometry (scaling lengths by ``s`` scales it by ``s``) that ignores where a floating base
-    happens to stand; 1 when every distance is zero.
+    """The robot's typical length ``L`` [m].
+
+    The median nonzero distance between adjacent frame origins at q = 0 (each body's joint
+    origin from its parent's, a fixed root's from the world origin, each loop frame from both of
+    its bodies' origins). A degree-1 homogeneous function of the geometry (scaling lengths by
+    ``s`` scales it by ``s``) that ignores where a floating base happens to stand.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (cached by identity: robots are immutable).
+
+    Returns
+    -------
+    float
+        ``L`` in the robot's unit of length; 1 when every distance is zero.
     """
     p = robot.M0[:, :3, 3]
     par = np.asarray(robot.parent)
@@ -49,16 +60,43 @@ METRE_BAND = (0.05, 20.0)
 
 
 def ordinary_size(robot: Robot) -> bool:
-    """True when the robot's :func:`length_scale` lies in :data:`METRE_BAND`."""
+    """True when the robot's :func:`length_scale` lies in :data:`METRE_BAND`.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+
+    Returns
+    -------
+    bool
+        Whether the numerical rank decisions apply to it as they are.
+    """
     lo, hi = METRE_BAND
     return lo <= length_scale(robot) <= hi
 
 
 def decision_scale(robot: Robot, convention: str) -> np.ndarray:
-    """``(L / L_c)^u (10 n,)`` with ``L_c`` the robot's length scale clipped into
-    :data:`METRE_BAND`: ones for a robot of ordinary size, and for a robot drawn in other units
-    (millimetres, micrometres, kilometres) the factors that bring its parameters to an
-    ordinary-sized equivalent, ``pi / decision_scale``. Rank decisions are made on those.
+    """Per-parameter factors ``(L / L_c)^u`` that bring a robot to an ordinary size.
+
+    ``L`` is the robot's :func:`length_scale`, ``L_c`` the same clipped into
+    :data:`METRE_BAND` and ``u`` each parameter's length exponent
+    (:data:`~baseparams.model.inertia.LENGTH_POWER`). Rank decisions are made on
+    ``pi / decision_scale``, an ordinary-sized equivalent of the parameters ``pi``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    convention : str
+        The parameter convention of ``pi`` (:data:`~baseparams.model.inertia.CONVENTIONS`).
+
+    Returns
+    -------
+    ndarray, shape ``(10 n,)``
+        Ones for a robot of ordinary size; for a robot drawn in other units (millimetres,
+        micrometres, kilometres) the factors that bring its parameters to an ordinary-sized
+        equivalent.
     """
     ell = length_scale(robot)
     lo, hi = METRE_BAND

@@ -25,7 +25,25 @@ BUILTINS: dict[str, tuple[Callable[..., Robot], str]] = {
 
 
 def get(name: str, gravity=None) -> Robot:
-    """A built-in robot by name (``gravity`` [m/s^2] overrides its default)."""
+    """A built-in robot by name.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`BUILTINS` (any case), e.g. ``puma560``, ``go2``, ``four-bar``.
+    gravity : array_like, shape ``(3,)``, optional
+        Gravity [m/s^2] in the world frame; overrides the robot's default.
+
+    Returns
+    -------
+    Robot
+        The robot.
+
+    Raises
+    ------
+    BaseparamsError
+        Not a built-in robot (the message lists them).
+    """
     key = name.lower()
     if key not in BUILTINS:
         raise BaseparamsError(f"unknown robot {name!r}; built-in robots: {', '.join(BUILTINS)}")

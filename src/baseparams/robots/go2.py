@@ -14,7 +14,18 @@ from ..model import Robot
 
 
 def go2(gravity=(0.0, 0.0, -9.81)) -> Robot:
-    """The Go2 (F root at the base body's frame, then four RRR legs)."""
+    """The Go2 (F root at the base body's frame, then four RRR legs).
+
+    Parameters
+    ----------
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame.
+
+    Returns
+    -------
+    Robot
+        13 bodies, 130 parameters, 18 dofs.
+    """
     with resources.as_file(resources.files(__package__) / "data" / "unitree_go2" / "go2.xml") as p, \
             warnings.catch_warnings():
         # the shipped file has no meshes on purpose: its inertias are explicit

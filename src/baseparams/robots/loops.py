@@ -68,6 +68,18 @@ def four_bar(parallelogram: bool = False, gravity=(0.0, -9.81, 0.0)) -> Robot:
     rocker tip C = (1.25, 0.65) (generic), or C = (1.3, 0.5) for the parallelogram
     (opposite sides equal). Tree: crank (A) - coupler (B); rocker (D); loop R at C between
     coupler and rocker. Gravity in the plane (-y).
+
+    Parameters
+    ----------
+    parallelogram : bool
+        The parallelogram's dimensions instead of the generic ones.
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame.
+
+    Returns
+    -------
+    Robot
+        3 bodies, 1 loop joint, the crank actuated (``q_box`` +-0.3 rad).
     """
     a, b, d = np.zeros(3), np.array([0.3, 0.5, 0]), np.array([1.0, 0, 0])
     c = np.array([1.3, 0.5, 0]) if parallelogram else np.array([1.25, 0.65, 0])
@@ -82,12 +94,34 @@ def four_bar(parallelogram: bool = False, gravity=(0.0, -9.81, 0.0)) -> Robot:
 
 
 def parallelogram(gravity=(0.0, -9.81, 0.0)) -> Robot:
-    """The four-bar with a parallelogram's dimensions (nullity 27 of 30 on this branch)."""
+    """The four-bar with a parallelogram's dimensions (nullity 27 of 30 on this branch).
+
+    Parameters
+    ----------
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame.
+
+    Returns
+    -------
+    Robot
+        :func:`four_bar` with ``parallelogram=True``.
+    """
     return four_bar(parallelogram=True, gravity=gravity)
 
 
 def pkm_2rru_1rrs(gravity=(0.0, 0.0, -9.81)) -> Robot:
-    """The 2RRU-1RRS PKM (see module doc), generic dimensions."""
+    """The 2RRU-1RRS PKM (see module doc), generic dimensions.
+
+    Parameters
+    ----------
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame.
+
+    Returns
+    -------
+    Robot
+        7 bodies, 70 parameters, 3 actuated coordinates (``q_box`` +-25 deg).
+    """
     z = np.array([0, 0, 1.0])
     limbs = {  # angle, base radius, link-1 length, platform radius
         "a": (0.0, 0.300, 0.300, 0.200),
@@ -135,7 +169,20 @@ def pkm_2rru_1rrs(gravity=(0.0, 0.0, -9.81)) -> Robot:
 
 
 def pkm_2prs_1psr(symmetric: bool = False, gravity=(0.0, 0.0, -9.81)) -> Robot:
-    """The 2PRS-1PSR PKM (see module doc); ``symmetric`` for the mirror-symmetric layout."""
+    """The 2PRS-1PSR PKM (see module doc).
+
+    Parameters
+    ----------
+    symmetric : bool
+        The mirror-symmetric layout (nullity 48, not 47).
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame.
+
+    Returns
+    -------
+    Robot
+        7 bodies, 70 parameters, 3 actuated sliders (``q_box`` +-0.05 m).
+    """
     z = np.array([0, 0, 1.0])
     if symmetric:
         limbs = {n: (np.deg2rad(th), 0.25, 0.12) for n, th in (("a", 0), ("b", 180), ("c", 90))}

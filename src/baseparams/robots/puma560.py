@@ -1,5 +1,6 @@
-"""Puma560: standard Denavit-Hartenberg parameters and inertias as in Corke's Robotics
-Toolbox (``mdl_puma560``), with link 1 given a mass (Corke leaves it at 0 kg, which hides
+"""Puma560: standard Denavit-Hartenberg parameters and inertias as in Corke's Robotics Toolbox.
+
+As Corke's ``mdl_puma560``, with link 1 given a mass (Corke leaves it at 0 kg, which hides
 nothing from the base-parameter analysis but is not physical).
 
 Standard DH: joint ``i`` rotates about ``z_{i-1}``; link ``i``'s frame is
@@ -36,13 +37,41 @@ LINKS = (
 
 
 def dh_offset(a: float, alpha: float, d: float) -> np.ndarray:
-    """``Tz(d) Tx(a) Rx(alpha)``: link frame ``i`` in joint ``i``'s frame (theta applied by the joint)."""
+    """``Tz(d) Tx(a) Rx(alpha)``: link frame ``i`` in joint ``i``'s frame (theta applied by the joint).
+
+    Parameters
+    ----------
+    a : float
+        Link length [m] (along the new x).
+    alpha : float
+        Link twist [rad] (about the new x).
+    d : float
+        Link offset [m] (along the joint's z).
+
+    Returns
+    -------
+    ndarray, shape ``(4, 4)``
+        The homogeneous transform.
+    """
     ca, sa = np.cos(alpha), np.sin(alpha)
     return np.array([[1, 0, 0, a], [0, ca, -sa, 0], [0, sa, ca, d], [0, 0, 0, 1.0]])
 
 
 def puma560(gravity=(0.0, 0.0, -9.81)) -> Robot:
-    """The Puma560 arm (6 R joints, 6 bodies, 60 parameters)."""
+    """The Puma560 arm (6 R joints, 6 bodies, 60 parameters).
+
+    Parameters
+    ----------
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame. The default, along joint 1 (``-z``), gives 36 base
+        parameters (24 nullspace directions).
+
+    Returns
+    -------
+    Robot
+        Bodies ``link1`` ... ``link6`` (joints ``joint1`` ... ``joint6``), inertias in the DH
+        link frames.
+    """
     b = RobotBuilder("puma560", gravity=gravity)
     parent, origin = None, np.eye(4)
     for i, ((a, alpha, d), (m, r, inertia)) in enumerate(zip(DH, LINKS), start=1):

@@ -10,7 +10,18 @@ from ..model import Inertia, Robot, RobotBuilder
 
 
 def random_rotation(rng: np.random.Generator) -> np.ndarray:
-    """Uniform random rotation ``(3, 3)``."""
+    """Uniform random rotation ``(3, 3)``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The random source (the result is deterministic given its state).
+
+    Returns
+    -------
+    ndarray, shape ``(3, 3)``
+        A rotation matrix (from a normalised Gaussian quaternion).
+    """
     q = rng.normal(size=4)
     q /= np.linalg.norm(q)
     w, x, y, z = q
@@ -20,6 +31,20 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
 
 
 def random_pose(rng: np.random.Generator, scale: float = 0.5) -> np.ndarray:
+    """Random rigid pose: a uniform rotation and a Gaussian translation.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The random source (the result is deterministic given its state).
+    scale : float
+        Standard deviation [m] of each translation component.
+
+    Returns
+    -------
+    ndarray, shape ``(4, 4)``
+        The homogeneous transform.
+    """
     t = np.eye(4)
     t[:3, :3] = random_rotation(rng)
     t[:3, 3] = rng.normal(scale=scale, size=3)
@@ -27,7 +52,19 @@ def random_pose(rng: np.random.Generator, scale: float = 0.5) -> np.ndarray:
 
 
 def random_inertia(rng: np.random.Generator) -> Inertia:
-    """A physically consistent random inertia (positive-definite pseudo-inertia)."""
+    """A physically consistent random inertia (positive-definite pseudo-inertia).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The random source (the result is deterministic given its state).
+
+    Returns
+    -------
+    Inertia
+        Mass in [0.5, 5] kg, a Gaussian centre of mass (0.2 m), principal moments satisfying
+        the triangle inequality about randomly rotated axes.
+    """
     mass = rng.uniform(0.5, 5.0)
     com = rng.normal(scale=0.2, size=3)
     r = random_rotation(rng)
@@ -42,10 +79,29 @@ def random_robot(rng: np.random.Generator, n: int = 6, joint_types: str = "RPUS"
                  gravity=(0.0, 0.0, -9.81), name: str | None = None) -> Robot:
     """A random tree of ``n`` bodies with joints drawn from ``joint_types``.
 
-    ``floating``: the first body is a floating (F) root. ``branching``: probability that a
-    body hangs from a random earlier body rather than the previous one. ``C``: a compound joint
-    of 2 to 4 elementary screws (hinges through random points, slides; sometimes two hinges
-    through one point, or parallel slides), as MJCF bodies with several joints.
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The random source (the result is deterministic given its state).
+    n : int
+        Number of bodies.
+    joint_types : str
+        The joint types to draw from, one letter each (``R P U S C``). ``C``: a compound joint
+        of 2 to 4 elementary screws (hinges through random points, slides; sometimes two
+        hinges through one point, or parallel slides), as MJCF bodies with several joints.
+    floating : bool
+        The first body is a floating (F) root.
+    branching : float
+        Probability that a body hangs from a random earlier body rather than the previous one.
+    gravity : array_like, shape ``(3,)``
+        Gravity [m/s^2] in the world frame.
+    name : str, optional
+        The robot's name (default ``random<n>``).
+
+    Returns
+    -------
+    Robot
+        Bodies ``b0`` ... ``b<n-1>`` with random poses, axes and inertias.
     """
     b = RobotBuilder(name or f"random{n}", gravity=gravity)
     for i in range(n):
@@ -67,8 +123,22 @@ def random_robot(rng: np.random.Generator, n: int = 6, joint_types: str = "RPUS"
 
 
 def random_compound(rng: np.random.Generator, k: int | None = None) -> np.ndarray:
-    """Twists ``(k, 6)`` of a random compound (C) joint in its frame: hinges (through the origin,
-    a shared point or a random point) and slides, sometimes parallel or repeated.
+    """Twists of a random compound (C) joint in its frame.
+
+    Hinges (through the origin, a shared point or a random point) and slides, sometimes
+    parallel or repeated.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The random source (the result is deterministic given its state).
+    k : int, optional
+        Number of elementary screws (default: drawn from 2 to 4).
+
+    Returns
+    -------
+    ndarray, shape ``(k, 6)``
+        Unit twists ``(omega, v)`` (:func:`~baseparams.model.robot.compound_screw`).
     """
     from ..model.robot import compound_screw
 
@@ -213,8 +283,9 @@ def _special_body(rng: np.random.Generator, b: RobotBuilder, st: _Draw, i: int, 
 
 
 def _special_joint(rng: np.random.Generator, st: _Draw, i: int, n: int):
-    """``(floating, chained, parent, joint type, axis mode, origin mode)`` of body ``i``: the
-    next joint of the current plan, maybe a new plan, or a free draw.
+    """``(floating, chained, parent, joint type, axis mode, origin mode)`` of body ``i``.
+
+    The next joint of the current plan, maybe a new plan, or a free draw.
     """
     floating = i == 0 and rng.random() < 0.1
     chained = bool(st.plan)
@@ -239,8 +310,10 @@ def _special_joint(rng: np.random.Generator, st: _Draw, i: int, n: int):
 
 
 def _special_plan(rng: np.random.Generator, st: _Draw, left: int) -> None:
-    """Draw a plan of chained joints (with ``left`` bodies to go): a translation stage, a lift
-    then a coaxial R, or an R then a coaxial P; none when fewer than two bodies are left.
+    """Draw a plan of chained joints (with ``left`` bodies to go).
+
+    A translation stage, a lift then a coaxial R, or an R then a coaxial P; none when fewer
+    than two bodies are left.
     """
     u = rng.random()
     if u < 0.45 and left >= 2:  # translation stage: 2 or 3 perpendicular (or parallel) P
@@ -262,8 +335,9 @@ def _special_plan(rng: np.random.Generator, st: _Draw, left: int) -> None:
 
 def _special_offset(rng: np.random.Generator, floating: bool, amode, omode, a_p: np.ndarray, o_p: np.ndarray,
                     p_p: np.ndarray, z_bias: float) -> tuple[np.ndarray, str | None]:
-    """The joint point as an offset (in world) from the parent's frame origin ``p_p``, and the
-    origin mode (``on-line`` for a coaxial joint).
+    """The joint point as an offset (in world) from the parent's frame origin ``p_p``.
+
+    Also the origin mode (``on-line`` for a coaxial joint).
     """
     if floating:
         offset = rng.normal(scale=0.5, size=3) if rng.random() < 0.5 else np.zeros(3)
@@ -317,9 +391,10 @@ def _special_rotation(rng: np.random.Generator, floating: bool) -> np.ndarray:
 
 def _special_axes_in_frame(rng: np.random.Generator, jt: str, amode, a_w: np.ndarray | None, a_p: np.ndarray,
                            frame: np.ndarray):
-    """``(axis, axis2, lines)``: the joint axes in the joint ``frame`` (U: a second axis
-    perpendicular to the first, often to the parent's line too) and the body's axis lines in
-    world (S / F: the frame's axes).
+    """``(axis, axis2, lines)``: the joint axes in the joint ``frame`` and the body's lines.
+
+    U: a second axis perpendicular to the first, often to the parent's line too. The body's
+    axis lines are in world (S / F: the frame's axes).
     """
     r_i = frame[:3, :3]
     axis, axis2, mylines = (0.0, 0.0, 1.0), None, []
@@ -342,7 +417,7 @@ def _special_axes_in_frame(rng: np.random.Generator, jt: str, amode, a_w: np.nda
 
 
 def special_robot(rng: np.random.Generator, n: int | None = None, gravity: str | None = None) -> Robot:
-    """A random tree of ``n`` bodies (default 2..7) with special geometry drawn on purpose.
+    """A random tree of ``n`` bodies with special geometry drawn on purpose.
 
     Joints are mostly R and P (weights R 0.55, P 0.25, U 0.1, S 0.1; a floating root with
     probability 0.1); a body hangs from the previous one or (probability 0.3) an earlier one.
@@ -351,8 +426,26 @@ def special_robot(rng: np.random.Generator, n: int | None = None, gravity: str |
     joint point coincides with the parent's, lies on its axis line, is offset along a world
     axis, or is generic. Translation stages (2-3 chained P), a lift followed by a coaxial R,
     and an R followed by a coaxial P are drawn as such. Exact values (signed permutation
-    frames, ``+-1`` axes) make the relations hold to rounding. ``gravity``: ``"axis"``
-    (``-9.81 z``, axes biased to ``z``), ``"generic"`` (a random direction), ``"zero"``;
-    ``None`` draws one uniformly. Deterministic given ``rng``.
+    frames, ``+-1`` axes) make the relations hold to rounding. Deterministic given ``rng``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The random source (the result is deterministic given its state).
+    n : int, optional
+        Number of bodies (default: drawn from 2..7).
+    gravity : {"axis", "generic", "zero"}, optional
+        The gravity case: ``"axis"`` (``-9.81 z``, axes biased to ``z``), ``"generic"`` (a
+        random direction), ``"zero"``; ``None`` draws one uniformly.
+
+    Returns
+    -------
+    Robot
+        Named ``special<n>-<gravity case>``, bodies ``b0`` ... ``b<n-1>``.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``gravity``.
     """
     return _special(rng, n, gravity)[0]

@@ -26,18 +26,49 @@ from .drng import DRNGResult, drng
 class Certificate:
     """Outcome of checking DRNG against the numerical method.
 
-    ``basis (10 n, nullity)``: orthonormal nullspace basis (paper convention, SI units), DRNG's
-    span first, then the ``completed`` numerical directions. ``span (10 n, nullity)``: the same
-    nullspace, SI units, each entry exact to its own scale (columns not orthonormal): what
-    regrouping should be given, since an SI-orthonormal basis carries only absolute precision
-    in its small (millimetre-scale) entries.
+    Returned by :func:`certify`. The checks are made on parameters ``pi / d`` (``d``: ones for a
+    robot of ordinary size, :func:`baseparams.model.scale.decision_scale`), with ``W`` their
+    stacked regressor; they are the paper's criteria (eq. "criteria": ``||W B_null||_F = 0`` and
+    the ranks) with tolerances. ``certified`` is true when the nullspace is known (``status``
+    certified or completed); ``nullity`` is ``basis.shape[1]``.
 
-    The checks are made on parameters ``pi / d`` (``d``: ones for a robot of ordinary size,
-    :func:`baseparams.model.scale.decision_scale`), with ``W`` their stacked regressor:
-    ``residual = ||W B_drng||_F / ||W||_F`` (orthonormal ``B_drng``); ``max_column_residual``:
-    the worst single DRNG column (unit norm), relative to ``||W||_2``. ``status``:
-    ``certified``, ``completed``, ``undecided`` or ``failed`` (a
-    :class:`~baseparams.enums.Status`; a string given is converted, an unknown one refused).
+    Parameters
+    ----------
+    drng : DRNGResult
+        The DRNG result that was checked.
+    numerical : NumericalResult
+        The numerical method's rank decision on ``W`` (:func:`baseparams.numerics.numerical_nullspace`).
+    basis : ndarray, shape ``(10 n, nullity)``
+        Orthonormal nullspace basis (paper convention: spatial pseudo-inertia entries ``XX XY
+        XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at q = 0; SI units), DRNG's span
+        first, then the ``completed`` numerical directions.
+    drng_rank : int
+        Dimension of DRNG's span (rank of its columns on ``pi / d``).
+    completed : int
+        Number of directions added from the numerical nullspace (marked ``numerical``).
+    residual : float
+        ``||W B_drng||_F / ||W||_F`` with orthonormal ``B_drng``.
+    max_column_residual : float
+        The worst single DRNG column (unit norm): ``||W b|| / ||W||_2``.
+    status : Status or str
+        ``certified``, ``completed``, ``undecided`` or ``failed`` (a
+        :class:`~baseparams.enums.Status`; a string given is converted, an unknown one refused).
+    message : str
+        Why: the ranks compared, the tolerance and singular-value gap, or what to try instead.
+    seconds : float
+        Wall-clock time of the whole check (DRNG included when :func:`certify` ran it).
+    sampling : dict, optional
+        What the sampling did (``requested``, ``kept`` and, for loops, ``cond_max``,
+        ``not_converged``, ``branch_jumps``, ``ill_conditioned``, ``max_loop_residual``).
+    span : ndarray, shape ``(10 n, nullity)``, optional
+        The same nullspace, SI units, each entry exact to its own scale (columns not
+        orthonormal): what regrouping should be given, since an SI-orthonormal basis carries
+        only absolute precision in its small (millimetre-scale) entries.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``status`` string.
     """
 
     drng: DRNGResult
@@ -58,10 +89,12 @@ class Certificate:
 
     @property
     def certified(self) -> bool:
+        """True when the nullspace is known: ``status`` certified or completed."""
         return self.status.ok
 
     @property
     def nullity(self) -> int:
+        """Dimension of the (certified or completed) nullspace: ``basis.shape[1]``."""
         return self.basis.shape[1]
 
 
@@ -73,7 +106,44 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     Steps: the stacked regressor ``W`` and its numerical nullspace; every DRNG column checked
     against ``W`` (:func:`_column_residuals`); the ranks compared (:func:`_verdict`); where DRNG
     misses directions and more samples do not raise the rank, the basis is completed
-    (:func:`_complete`).
+    (:func:`_complete`). The paper's check (eq. "criteria": ``rank(Y B) = rank(B)`` and
+    ``||Y B_null||_F = 0``) with tolerances, on parameters ``pi / d``
+    (:func:`baseparams.model.scale.decision_scale`) so that the decision does not depend on the
+    unit of length.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies, ``10 n`` parameters).
+    samples : int, optional
+        Random states; default :func:`baseparams.numerics.default_samples` (100 for trees, the
+        paper's 5 000 actuated samples for small loop robots).
+    seed : int, default 0
+        Seed of the random states (the saturation check draws a second set with another seed).
+    rows : {"all", "joints", "base"}, default "all"
+        The measured generalized forces (loop robots: ``"all"`` only).
+    result : DRNGResult, optional
+        DRNG's result to check; default ``drng(robot, rows=rows)``.
+    rtol : float, default 1e-9
+        Singular-value threshold of the numerical rank, relative to the largest.
+    min_gap : float, default 1e4
+        Smallest singular-value gap ``s[rank-1] / s[rank]`` that decides the numerical rank.
+    residual_tol : float, default 1e-8
+        Largest relative residual ``||W b|| / ||W||_2`` of a DRNG column (unit norm) in the
+        nullspace; a worse column fails the check.
+
+    Returns
+    -------
+    Certificate
+        The verdict (``certified``, ``completed``, ``undecided`` or ``failed``, with a message)
+        and the orthonormal nullspace basis ``(10 n, nullity)`` in the ``paper`` convention
+        (world frame at q = 0, SI units), DRNG's span first.
+
+    Raises
+    ------
+    BaseparamsError
+        Unknown ``rows``, ``rows`` other than ``"all"`` on a loop robot, or no sample closing the
+        loops (from :func:`baseparams.numerics.stacked_regressor`).
     """
     t0 = time.perf_counter()
     res = drng(robot, rows=rows) if result is None else result
@@ -152,8 +222,9 @@ def _verdict(res: DRNGResult, num: NumericalResult, w: np.ndarray, r_d: int, col
 
 
 def _complete(bd: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, int, float]:
-    """DRNG's orthonormal basis ``bd (10 n, r)`` completed by the directions of the numerical
-    nullspace outside its span: ``(basis, number added, distance of the last added to span(bd))``.
+    """DRNG's orthonormal basis ``bd (10 n, r)`` completed by the numerical nullspace's directions outside its span.
+
+    Returns ``(basis, number added, distance of the last added to span(bd))``.
     """
     r_d = bd.shape[1]
     nb = num.null_basis

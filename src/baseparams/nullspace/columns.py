@@ -28,13 +28,38 @@ PRINCIPLES = tuple(s.label for s in Source)
 def sym_params(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Parameter block ``hat(a b^T + b a^T)`` of 4-vectors: ``(*, 4), (*, 4) -> (*, 10)``.
 
-    For ``a == b`` this is ``hat(2 a a^T)``: use :func:`outer_params`.
+    The ``sym(a, b)`` terms of the paper's principles (eq. "null space cross" symmetrised) as
+    ten-parameter blocks. For ``a == b`` this is ``hat(2 a a^T)``: use :func:`outer_params`.
+
+    Parameters
+    ----------
+    a, b : ndarray, shape ``(*, 4)``
+        Homogeneous 4-vectors (points: ``w = 1``, directions: ``w = 0``), world frame at q = 0,
+        broadcast against each other.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 10)``
+        ``hat(a b^T + b a^T)`` in the ``paper`` convention's ``hat`` order (``XX XY XZ YY YZ ZZ
+        MX MY MZ M``).
     """
     return hat10(sym(a, b))
 
 
 def outer_params(a: np.ndarray) -> np.ndarray:
-    """Parameter block ``hat(a a^T)`` of 4-vectors: ``(*, 4) -> (*, 10)``."""
+    """Parameter block ``hat(a a^T)`` of 4-vectors: ``(*, 4) -> (*, 10)``.
+
+    Parameters
+    ----------
+    a : ndarray, shape ``(*, 4)``
+        Homogeneous 4-vectors (points: ``w = 1``, directions: ``w = 0``), world frame at q = 0.
+
+    Returns
+    -------
+    ndarray, shape ``(*, 10)``
+        ``hat(a a^T)`` in the ``paper`` convention's ``hat`` order (``XX XY XZ YY YZ ZZ MX MY
+        MZ M``).
+    """
     return hat10(outer(a))
 
 
@@ -45,13 +70,34 @@ FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp", "extra", 
 class Columns:
     """A set of nullspace columns in compact form (``k`` columns).
 
-    ``h (k, 10)``: the block on body ``child (k,)`` (the column's highest body); ``parent (k,)``
-    the other body (``-1``: none) whose block is ``hp (k, 10)`` (default ``-h``: the principles'
-    "``+h`` on the child, ``-h`` on the parent"); ``principle (k,)`` a
-    :class:`~baseparams.enums.Source` (index into :data:`PRINCIPLES`); ``joint (k,)`` the joint
-    the column comes from (``n + l`` for loop joint ``l``; a body for the extended rules);
-    ``label (k,)`` which points or vectors; ``extra (k,)`` an optional third body (``-1``: none,
-    lower than ``child``) with block ``he (k, 10)``.
+    Column ``j`` is ``h[j]`` on body ``child[j]``'s ten parameters, plus ``hp[j]`` on body
+    ``parent[j]`` and ``he[j]`` on body ``extra[j]`` where those are ``>= 0``; :func:`to_sparse`
+    expands the set to ``B (10 n, k)``. Blocks are in the ``paper`` convention (spatial
+    pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at q = 0).
+    ``len(columns)`` is ``k``.
+
+    Parameters
+    ----------
+    h : ndarray, shape ``(k, 10)``
+        The block on body ``child`` (the column's highest body).
+    child : ndarray of int, shape ``(k,)``
+        The body carrying ``h``: the column's highest body.
+    parent : ndarray of int, shape ``(k,)``
+        The other body (``-1``: none), whose block is ``hp``.
+    principle : ndarray of int, shape ``(k,)``
+        Provenance: a :class:`~baseparams.enums.Source` (index into :data:`PRINCIPLES`).
+    joint : ndarray of int, shape ``(k,)``
+        The joint the column comes from (``n + l`` for loop joint ``l``; a body for the
+        extended rules).
+    label : ndarray of object, shape ``(k,)``
+        Which points or vectors (a string, or an object formatted on ``str``).
+    hp : ndarray, shape ``(k, 10)``, optional
+        The block on ``parent``; default ``-h``: the principles' "``+h`` on the child, ``-h``
+        on the parent" (eq. "null space", E1 fixed).
+    extra : ndarray of int, shape ``(k,)``, optional
+        An optional third body (``-1``: none, lower than ``child``); default all ``-1``.
+    he : ndarray, shape ``(k, 10)``, optional
+        The block on ``extra``; default zeros.
     """
 
     h: np.ndarray
@@ -74,17 +120,48 @@ class Columns:
 
     @staticmethod
     def empty() -> Columns:
+        """No columns (``k = 0``).
+
+        Returns
+        -------
+        Columns
+            An empty set: ``h (0, 10)`` and empty index arrays.
+        """
         z = np.zeros(0, dtype=int)
         return Columns(np.zeros((0, 10)), z, z, z, z, np.zeros(0, dtype=object))
 
     @staticmethod
     def concat(parts: list[Columns]) -> Columns:
+        """Columns of several sets, one after the other (empty sets skipped).
+
+        Parameters
+        ----------
+        parts : list of Columns
+            The sets, in order.
+
+        Returns
+        -------
+        Columns
+            Their columns concatenated in order (:meth:`empty` when every part is empty).
+        """
         parts = [p for p in parts if len(p.child)]
         if not parts:
             return Columns.empty()
         return Columns(*(np.concatenate([getattr(p, f) for p in parts]) for f in FIELDS))
 
     def subset(self, keep: np.ndarray) -> Columns:
+        """The columns selected by ``keep``, every field indexed alike.
+
+        Parameters
+        ----------
+        keep : ndarray
+            A boolean mask ``(k,)`` or integer indices into the ``k`` columns.
+
+        Returns
+        -------
+        Columns
+            The selected columns, with their provenance.
+        """
         return Columns(*(getattr(self, f)[keep] for f in FIELDS))
 
     def __len__(self) -> int:
@@ -92,7 +169,23 @@ class Columns:
 
 
 def to_sparse(cols: Columns, n: int) -> sp.csc_matrix:
-    """``B (10 n, k)`` as a sparse matrix (paper convention)."""
+    """``B (10 n, k)`` as a sparse matrix (paper convention).
+
+    Parameters
+    ----------
+    cols : Columns
+        ``k`` columns in compact form.
+    n : int
+        Number of moving bodies of the robot.
+
+    Returns
+    -------
+    scipy.sparse.csc_matrix, shape ``(10 n, k)``
+        Column ``j`` holds ``h[j]`` in body ``child[j]``'s rows, ``hp[j]`` in ``parent[j]``'s and
+        ``he[j]`` in ``extra[j]``'s (where ``>= 0``); rows in the ``paper`` convention (spatial
+        pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
+        q = 0).
+    """
     k = len(cols)
     rows_c = (10 * cols.child[:, None] + np.arange(10)).ravel()
     cidx = np.repeat(np.arange(k), 10)

@@ -29,7 +29,26 @@ __all__ = ["DRNGResult", "drng", "unmeasured_columns", "PAPER", "EXTENDED", "UNM
 
 @dataclass(frozen=True, eq=False)
 class DRNGResult:
-    """The DRNG output: columns with provenance, their exact rank and timing."""
+    """The DRNG output: columns with provenance, their exact rank and timing.
+
+    Returned by :func:`drng`. The columns span (part of) the nullspace of the TP regressor in the
+    ``paper`` convention (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of
+    each body, world frame at q = 0); they are redundant, so their rank, not their number, is
+    the dimension found (``../shared/PAPER_NOTES.md``: never certify by counting columns).
+
+    Parameters
+    ----------
+    robot : Robot
+        The analysed robot (``n`` moving bodies, ``10 n`` parameters).
+    columns : Columns
+        The ``k`` columns in compact form, with provenance (:class:`~.columns.Columns`).
+    rank : int
+        Exact rank of ``columns`` (:func:`scaled_rank`).
+    seconds : float
+        Wall-clock time DRNG took.
+    extended : bool, default True
+        Whether the extended rules (R-A, R-B, R-L1, R-L2) ran besides the paper's principles.
+    """
 
     robot: Robot
     columns: Columns
@@ -39,23 +58,60 @@ class DRNGResult:
 
     @property
     def n_columns(self) -> int:
+        """Number of columns ``k`` (not the rank: the columns are redundant)."""
         return len(self.columns)
 
     def sparse(self) -> sp.csc_matrix:
-        """``B_null (10 n, k)`` sparse, paper convention."""
+        """``B_null (10 n, k)`` sparse, paper convention.
+
+        Returns
+        -------
+        scipy.sparse.csc_matrix, shape ``(10 n, k)``
+            The columns expanded (:func:`~.columns.to_sparse`): the paper's ``B_null``
+            (Algorithm "DRNG"), spatial pseudo-inertia entries of each body, world frame at q = 0.
+        """
         return to_sparse(self.columns, self.robot.n)
 
     def dense(self) -> np.ndarray:
+        """``B_null (10 n, k)`` as a dense array, paper convention.
+
+        Returns
+        -------
+        ndarray, shape ``(10 n, k)``
+            :meth:`sparse` as a dense array.
+        """
         return self.sparse().toarray()
 
     def orthonormal(self, rtol: float = 1e-10) -> np.ndarray:
-        """An orthonormal basis ``(10 n, rank)`` of the columns' span."""
+        """An orthonormal basis ``(10 n, rank)`` of the columns' span.
+
+        Parameters
+        ----------
+        rtol : float, default 1e-10
+            Singular-value threshold relative to the largest
+            (:func:`baseparams.pga.linalg.column_basis`, each column first normalised).
+
+        Returns
+        -------
+        ndarray, shape ``(10 n, rank)``
+            Orthonormal columns spanning the DRNG columns, paper convention (SI units, world
+            frame at q = 0).
+        """
         return column_basis(self.dense(), rtol)
 
     def by_principle(self) -> dict[str, int]:
-        """Rank contributed by each source, taken in order: the paper's principles 1, 2, 3, then
-        the extended rules R-A, R-B, R-L1, R-L2 (those run), then the unmeasured root's own
-        parameters (joint-torque rows only).
+        """Rank contributed by each source, taken in order.
+
+        The order is the paper's principles 1, 2, 3, then the extended rules R-A, R-B, R-L1,
+        R-L2 (those run), then the unmeasured root's own parameters (joint-torque rows only).
+        Each source's share is the rank it adds to the sources before it (:func:`scaled_rank`
+        of the cumulative set), so the values sum to :attr:`rank`.
+
+        Returns
+        -------
+        dict of str to int
+            Source label (:attr:`baseparams.enums.Source.label`) -> rank added, in the order
+            above.
         """
         out, prev = {}, 0
         sources = [s for s in Source if s.is_paper or (self.extended and s.is_extended)]
@@ -77,7 +133,20 @@ class DRNGResult:
         return sum(v for k, v in self.by_principle().items() if k in PAPER)
 
     def provenance(self, k: int) -> str:
-        """Human-readable origin of column ``k``."""
+        """Human-readable origin of column ``k``.
+
+        Parameters
+        ----------
+        k : int
+            Column index, ``0 <= k < n_columns``.
+
+        Returns
+        -------
+        str
+            The source, then: for the paper's principles the joint (tree joint or loop joint, with
+            its type), the bodies and the points; for the extended rules the bodies and the rule's
+            label; for an unmeasured root the body and parameter name.
+        """
         c = self.columns
         names = self.robot.names
         body = names[c.child[k]]
@@ -97,10 +166,23 @@ class DRNGResult:
 
 
 def scaled_rank(cols: Columns, robot: Robot) -> int:
-    """Exact rank (:func:`.rank.block_rank`) of the columns for parameters ``pi / d``
-    (:func:`baseparams.model.scale.decision_scale`: ones for a robot of ordinary size): a
-    per-entry scaling of every body block, the same for all bodies, so the block structure is
+    """Exact rank (:func:`.rank.block_rank`) of the columns for parameters ``pi / d``.
+
+    ``d`` is :func:`baseparams.model.scale.decision_scale` (ones for a robot of ordinary size):
+    a per-entry scaling of every body block, the same for all bodies, so the block structure is
     kept and the decision does not depend on the unit of length.
+
+    Parameters
+    ----------
+    cols : Columns
+        Columns in compact form, ``paper`` convention (SI units).
+    robot : Robot
+        The robot the columns belong to (``n`` bodies; its length scale gives ``d``).
+
+    Returns
+    -------
+    int
+        The rank of ``B (10 n, k)`` after scaling.
     """
     from dataclasses import replace
 
@@ -111,12 +193,31 @@ def scaled_rank(cols: Columns, robot: Robot) -> int:
 
 
 def unmeasured_columns(robot: Robot, rows: str) -> Columns:
-    """Columns that the measured rows add: with joint torques alone (``rows="joints"``) on a
-    floating robot, no row sees the floating root's own ten parameters (joint ``j``'s torque is
-    its line against the wrenches of the bodies it carries, and no joint carries the root), so
-    each is a nullspace direction on its own. With the base wrench alone (``"base"``) nothing is
-    added: it sees every direction the full dynamics see (Ayusawa et al. 2014, the paper's
-    remark; certification checks it).
+    """Columns that the measured rows add.
+
+    With joint torques alone (``rows="joints"``) on a floating robot, no row sees the floating
+    root's own ten parameters (joint ``j``'s torque is its line against the wrenches of the bodies
+    it carries, and no joint carries the root), so each is a nullspace direction on its own. With
+    the base wrench alone (``"base"``) nothing is added: it sees every direction the full
+    dynamics see (Ayusawa et al. 2014, the paper's remark; certification checks it).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    rows : {"all", "joints", "base"}
+        The measured generalized forces (:func:`baseparams.numerics.row_mask`).
+
+    Returns
+    -------
+    Columns
+        Ten single-body unit columns per floating (``F``) root, labelled with the parameter names
+        and marked ``unmeasured root``, when ``rows="joints"``; otherwise none.
+
+    Raises
+    ------
+    BaseparamsError
+        ``rows`` is not one of the three (checked unless it is ``"all"``).
     """
     if rows == "all":
         return Columns.empty()
@@ -135,9 +236,33 @@ def unmeasured_columns(robot: Robot, rows: str) -> Columns:
 def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "all") -> DRNGResult:
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
-    ``extended``: add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2);
-    ``False`` gives the paper's three principles alone. ``rows``: the measured generalized
-    forces (``all``, ``joints``, ``base``; see :func:`unmeasured_columns`).
+    The paper's Algorithm "DRNG" with slips E1-E5 fixed (:func:`.principles.drng_columns`), then
+    the extended rules (:func:`.rules.rule_columns`), then :func:`unmeasured_columns`; the rank
+    is decided by :func:`scaled_rank`.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies, ``10 n`` parameters).
+    tol : float, default 1e-9
+        Geometric tolerance of the principles and rules (parallel axes, zero gravity, ...).
+    extended : bool, default True
+        Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2);
+        ``False`` gives the paper's three principles alone.
+    rows : {"all", "joints", "base"}, default "all"
+        The measured generalized forces (see :func:`unmeasured_columns`).
+
+    Returns
+    -------
+    DRNGResult
+        The columns ``B_null (10 n, k)`` in the ``paper`` convention (spatial pseudo-inertia
+        entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at q = 0) with
+        provenance, their exact rank and the time taken.
+
+    Raises
+    ------
+    BaseparamsError
+        Unknown ``rows`` (see :func:`unmeasured_columns`).
     """
     t0 = time.perf_counter()
     cols = drng_columns(robot, tol)

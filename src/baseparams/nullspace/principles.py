@@ -47,7 +47,29 @@ def _pt(v: np.ndarray) -> np.ndarray:
 
 
 def planar_rotations(robot: Robot, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
-    """PRI with E5 fixed: ``is_pr (n,)`` bool and ``d_pr (n, 3)`` (zero for pure translation)."""
+    """PRI with E5 fixed: ``is_pr (n,)`` bool and ``d_pr (n, 3)`` (zero for pure translation).
+
+    The paper's Algorithm "PRI" (planar rotations indicator), O(n): an R or P joint on the fixed
+    base is planar; a child of a planar body is planar when its R axis is parallel to the
+    parent's planar direction ``d_pr`` (E5: not the parent's joint direction, zero for a P
+    parent), or it is a P joint.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Axes are parallel when the squared norm of their cross product is at most ``tol**2``; a
+        planar direction whose squared norm is at most ``tol**2`` counts as zero.
+
+    Returns
+    -------
+    is_pr : ndarray of bool, shape ``(n,)``
+        Whether body ``i`` moves in planar rotations.
+    d_pr : ndarray, shape ``(n, 3)``
+        The planar direction (the rotation axis, world frame at q = 0); zero for pure
+        translation and for bodies that are not planar.
+    """
     n = robot.n
     is_pr = [False] * n
     d_pr = [(0.0, 0.0, 0.0)] * n
@@ -72,8 +94,18 @@ def planar_rotations(robot: Robot, tol: float = 1e-9) -> tuple[np.ndarray, np.nd
 
 @lru_cache(maxsize=16)  # robots compare by identity and are immutable
 def world_axes(robot: Robot) -> np.ndarray:
-    """First joint axis of every body in world coordinates at q = 0 ``(n, 3)`` (zero if none;
-    read-only, cached per robot).
+    """First joint axis of every body in world coordinates at q = 0 ``(n, 3)``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies); robots compare by identity and are immutable.
+
+    Returns
+    -------
+    ndarray, shape ``(n, 3)``
+        The first axis of each R, P or U joint, world frame at q = 0 (zero if none; read-only,
+        cached per robot).
     """
     first = np.array([a[0] if (len(a) and t in ("R", "P", "U")) else (0.0, 0.0, 0.0)
                       for a, t in zip(robot.axes, robot.jtype)], dtype=float).reshape(-1, 3)
@@ -83,9 +115,26 @@ def world_axes(robot: Robot) -> np.ndarray:
 
 
 def compound_shared(robot: Robot, i: int, tol: float = 1e-9) -> np.ndarray:
-    """Vectors ``(r, 4)`` (orthonormal rows) that every screw of body ``i``'s joint leaves fixed:
-    the common kernel of its world screws ``hat(S_k)`` on homogeneous 4-vectors (points and
-    directions both bodies move alike, whatever the joint's coordinates).
+    """Vectors ``(r, 4)`` (orthonormal rows) that every screw of body ``i``'s joint leaves fixed.
+
+    The common kernel of its world screws ``hat(S_k)`` on homogeneous 4-vectors (points and
+    directions both bodies move alike, whatever the joint's coordinates): principle 1's shared
+    points of a compound (C) joint.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    i : int
+        The body whose joint is examined.
+    tol : float, default 1e-9
+        Absolute singular-value threshold of the common kernel
+        (:func:`baseparams.pga.linalg.nullspace`).
+
+    Returns
+    -------
+    ndarray, shape ``(r, 4)``
+        Orthonormal rows, homogeneous coordinates in the world frame at q = 0.
     """
     k0, nd = int(robot.q_index[i]), int(robot.ndofs[i])
     return nullspace(hat(robot.screws[k0:k0 + nd]).reshape(-1, 4), tol)
@@ -116,23 +165,58 @@ def _cols(h, child, parent, principle, labels) -> Columns:
 
 
 def drng_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """All DRNG columns (corrected), vectorised over joints of each type: the paper's
-    principles 1, 2 and 3, then principle 1 across the loop joints, in that order.
+    """All DRNG columns (corrected), vectorised over joints of each type.
+
+    The paper's principles 1, 2 and 3, then principle 1 across the loop joints, in that order
+    (Algorithm "DRNG" with E1-E5 fixed).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Geometric tolerance passed to each principle (parallel axes, zero gravity, zero
+        directions, compound joints' kernels).
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (shared points, fixed points, planar rotations), blocks in
+        the ``paper`` convention (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M``
+        of each body, world frame at q = 0).
     """
     return Columns.concat([shared_point_columns(robot, tol), fixed_point_columns(robot, tol),
                            planar_rotation_columns(robot, tol), loop_columns(robot)])
 
 
 def _joint_data(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Joint types ``(n,)``, parents ``(n,)``, joint origins ``(n, 3)`` and first world axes
-    ``(n, 3)``, all at q = 0.
+    """Joint types ``(n,)``, parents ``(n,)``, joint origins ``(n, 3)`` and first world axes ``(n, 3)``.
+
+    All at q = 0.
     """
     return np.array(robot.jtype), robot.parent, robot.M0[:, :3, 3], world_axes(robot)
 
 
 def shared_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """Principle 1, shared points of every tree joint: R ``{O, z}``, P ``{x, y, z}``, U/S
-    ``{O}``, compound joints their common kernel; parent block negative (E1 fixed).
+    """Principle 1, shared points of every tree joint.
+
+    R ``{O, z}``, P ``{x, y, z}``, U/S ``{O}``, compound joints their common kernel
+    (:func:`compound_shared`); every product of pairs, ``+`` on the child and **parent block
+    negative** (eq. "null space", E1 fixed; none for the fixed base).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Tolerance of the compound joints' common kernel (:func:`compound_shared`).
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (shared points), blocks in the ``paper`` convention
+        (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world
+        frame at q = 0).
     """
     jt, par, org, axw = _joint_data(robot)
     e = np.eye(3)
@@ -156,9 +240,26 @@ def shared_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
 
 
 def fixed_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """Principle 2, fixed points of the joints on the fixed base: S/U ``sym(O, x|y|z)`` only
-    when gravity is zero (E2 fixed), P ``sym(O, x|y|z)``, R ``sym(z, x|y)`` plus ``sym(O, x|y)``
-    when gravity is zero or along the axis.
+    """Principle 2, fixed points of the joints on the fixed base.
+
+    S/U ``sym(O, x|y|z)`` only when gravity is zero (eq. "U/S fixed", E2 fixed), P
+    ``sym(O, x|y|z)`` (eq. "P fixed"), R ``sym(z, x|y)`` plus ``sym(O, x|y)`` when gravity is
+    zero or along the axis (eq. "R fixed"). Single-body columns on the child.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Gravity of norm at most ``tol`` is zero; a (unit) axis is along gravity when the norm of
+        their cross product is at most ``tol * max(1, |g|)``.
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (fixed points), blocks in the ``paper`` convention
+        (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world
+        frame at q = 0).
     """
     jt, par, org, axw = _joint_data(robot)
     g = robot.gravity
@@ -192,9 +293,28 @@ def fixed_point_columns(robot: Robot, tol: float = 1e-9) -> Columns:
 
 
 def planar_rotation_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """Principle 3, planar rotations (E5 fixed, see :func:`planar_rotations`): R ``xx^T - yy^T``,
-    ``sym(x, y)`` and, off the base, ``sym(z, x|y)``; P off the base ``sym(d_pr, O)`` and, when it
-    slides along ``d_pr``, the transfers ``sym(O, x|y)`` to the parent.
+    """Principle 3, planar rotations (E5 fixed, see :func:`planar_rotations`).
+
+    R ``xx^T - yy^T``, ``sym(x, y)`` (eq. "planar rotation xx yy", "planar rotation xy") and, off
+    the base, ``sym(z, x|y)`` ("planar rotation zx", "zy"); P off the base ``sym(d_pr, O)``
+    (eq. "planar rotation Oz") and, when it slides along ``d_pr``, the transfers ``sym(O, x|y)``
+    to the parent (eq. "Ox planar rotations", "Oy planar rotations"). Zero vectors
+    (``d_pr = 0``) are not emitted.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Parallel axes and zero directions (:func:`planar_rotations`); a P joint slides along
+        ``d_pr`` when the cross product of its axis and ``d_pr`` has norm at most ``tol``.
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (planar rotations), blocks in the ``paper`` convention
+        (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world
+        frame at q = 0).
     """
     jt, par, org, axw = _joint_data(robot)
     base = par < 0
@@ -229,6 +349,18 @@ def loop_columns(robot: Robot) -> Columns:
 
     Shared points from the loop frame at q = 0: R ``{O, z}``, P ``{x, y, z}``, U/S ``{O}``,
     fixed ``{O, x, y, z}``; successor block ``+``, predecessor block ``-`` (none for the world).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (shared points, joint ``n + l``), blocks in the ``paper``
+        convention (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body,
+        world frame at q = 0).
     """
     parts = []
     e = np.eye(4)

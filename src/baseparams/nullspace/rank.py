@@ -17,7 +17,25 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
     counts; combinations vanishing there are pushed to lower blocks. All diagonal blocks are
     checked at once (batched SVD); only when one is rank-deficient does the general
     block-by-block elimination (:func:`_elimination_rank`) run. Loop columns (blocks
-    ``{successor, predecessor}``, predecessor < successor) fit the same scheme.
+    ``{successor, predecessor}``, predecessor < successor) fit the same scheme. Single-body
+    columns are first reduced to an orthonormal basis per body (:func:`_reduce_pure`), so a
+    translation chain's redundant columns do not cascade.
+
+    Parameters
+    ----------
+    cols : Columns
+        ``k`` columns in compact form (blocks on ``child``, ``parent`` and ``extra``, each
+        lower than ``child``), ``paper`` convention.
+    n : int
+        Number of moving bodies (``B`` has ``10 n`` rows).
+    rtol : float, default 1e-10
+        Singular-value threshold of each diagonal block, relative to its norm (to the largest
+        entry of ``h`` in the elimination).
+
+    Returns
+    -------
+    int
+        The rank of ``B (10 n, k)`` (:func:`~.columns.to_sparse`), computed without forming it.
     """
     cols = _reduce_pure(cols, rtol)
     k = len(cols)
@@ -89,8 +107,9 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
 
 
 def _pure_bases(cols: Columns, pure_mask: np.ndarray, tol: float) -> dict[int, list[np.ndarray]]:
-    """Body -> orthonormal basis (a list of 10-vectors) of the span of its pure columns, for
-    every body with some, at once (batched SVD over padded blocks).
+    """Body -> orthonormal basis (a list of 10-vectors) of the span of its pure columns.
+
+    For every body with some, at once (batched SVD over padded blocks).
     """
     pk = np.flatnonzero(pure_mask)
     pk = pk[np.argsort(cols.child[pk], kind="stable")]
@@ -121,10 +140,12 @@ def _orthonormal(vectors: list[np.ndarray], fresh: bool, tol: float) -> np.ndarr
 
 
 def _split_off_span(cols: Columns, grp: np.ndarray, basis: np.ndarray, tol: float):
-    """Rotate the two-block columns ``grp`` (one child, one parent) by the right singular vectors
-    of their child parts off ``span basis``: None when none of their combinations has its child
-    part in the span, else ``(child parts, parent parts)`` of the ``r`` combinations kept as
-    two-block columns, and the parent parts of the others (new pure columns of the parent).
+    """Rotate the two-block columns ``grp`` (one child, one parent) to split off ``span basis``.
+
+    The rotation is by the right singular vectors of their child parts off ``span basis``: None
+    when none of their combinations has its child part in the span, else ``(child parts, parent
+    parts)`` of the ``r`` combinations kept as two-block columns, and the parent parts of the
+    others (new pure columns of the parent).
     """
     h, hp = cols.h[grp], cols.hp[grp]
     res = h - (h @ basis) @ basis.T
@@ -164,8 +185,10 @@ def _column_dict(cols: Columns, k: int) -> dict[int, np.ndarray]:
 
 def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, counts: np.ndarray,
                       order: np.ndarray, starts: np.ndarray) -> int:
-    """Exact rank when some diagonal blocks are rank-deficient: eliminate block by block from
-    the highest body down, visiting only the deficient bodies and those that receive vectors.
+    """Exact rank when some diagonal blocks are rank-deficient.
+
+    Eliminate block by block from the highest body down, visiting only the deficient bodies and
+    those that receive vectors.
 
     Vectors are sparse over bodies; at body b, the parts on block b of every vector whose highest
     block is b are ranked, and combinations vanishing there move down to their next highest

@@ -61,8 +61,10 @@ def _describe(v: np.ndarray) -> str:
 
 
 class _Label:
-    """A provenance label formatted on demand: labels are built for every column and read
-    rarely (``DRNGResult.provenance``), so the formatting is deferred.
+    """A provenance label formatted on demand.
+
+    Labels are built for every column and read rarely (``DRNGResult.provenance``), so the
+    formatting is deferred.
     """
 
     __slots__ = ("fn", "args")
@@ -96,9 +98,10 @@ def _singles(hs: list[np.ndarray], bodies, rule: int, labels: list[str]) -> Colu
 
 
 def _sym_columns(ms: MotionSpans, bodies: np.ndarray, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
-    """For each body ``bodies[k]``: an orthonormal basis ``(r_k, 10)`` of the combinations of
-    ``sym(a_k[i], b_k[j])`` whose potential is constant (gravity filter). ``a, b (m, 4, 4)``:
-    vectors as rows, padded with zero rows. Batched: three SVD calls for all bodies.
+    """Gravity-filtered ``sym(a_k[i], b_k[j])`` of each body ``bodies[k]``, as an orthonormal basis ``(r_k, 10)``.
+
+    The basis spans the combinations whose potential is constant (gravity filter). ``a, b (m, 4,
+    4)``: vectors as rows, padded with zero rows. Batched: three SVD calls for all bodies.
     """
     m = len(bodies)
     syms = sym(a[:, :, None], b[:, None, :]).reshape(m, 16, 4, 4)  # zero for padding
@@ -122,10 +125,27 @@ def _padded(vectors: list[np.ndarray]) -> np.ndarray:
 
 
 def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
-    """R-A: ``sym(f, v)`` on every body ``i`` with ``f`` fixed (``∩ ker S_j`` on its path), gravity
-    filtered. Closes gravity zero (Puma560's axis-1/axis-2 intersection: +2), translation stages
-    (every direction fixed) and a U joint at the base with its first axis along gravity.
-    Batched over bodies.
+    """R-A: ``sym(f, v)`` on every body ``i`` with ``f`` fixed (``∩ ker S_j`` on its path), gravity filtered.
+
+    Principle 2 applied beyond the first body (``../shared/EXTENDED_PRINCIPLES.md``, R-A).
+    Closes gravity zero (Puma560's axis-1/axis-2 intersection: +2), translation stages (every
+    direction fixed) and a U joint at the base with its first axis along gravity
+    (``../shared/PAPER_NOTES.md``, gaps 1, 3, 4). Batched over bodies; single-body columns.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    ms : MotionSpans, optional
+        The robot's motion spans (:func:`.subspaces.motion_spans`); built (default tolerance)
+        when not given. Their ``tol`` is the rule's tolerance.
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (R-A fixed vectors), blocks in the ``paper`` convention
+        (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world
+        frame at q = 0).
     """
     ms = motion_spans(robot) if ms is None else ms
     bodies = np.array([i for i in range(robot.n) if ms.span[i] is not None and len(ms.fixed(i))], dtype=int)
@@ -158,7 +178,21 @@ def slide_directions(robot: Robot, tol: float = 1e-9) -> np.ndarray:
     from the R joints; free rotations alone never move a point along a straight line, so a
     sliding point needs a P joint, and all P directions on the path must be that line. Bodies
     with no P joint on their path, or two non-parallel ones, get zero (R-B has nothing to add
-    there beyond R-A's fixed vectors).
+    there beyond R-A's fixed vectors). A compound joint contributes its pure translations; a
+    free (F) joint, and everything below it, gets zero.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Two P directions are parallel when the squared norm of their cross product is at most
+        ``tol**2``.
+
+    Returns
+    -------
+    ndarray, shape ``(n, 3)``
+        The slide direction of each body (a P axis of its path, world frame at q = 0), or zero.
     """
     s = robot.screws
     pdir = s[robot.q_index, 3:] / np.maximum(np.linalg.norm(s[robot.q_index, 3:], axis=1, keepdims=True), 1e-300)
@@ -190,10 +224,28 @@ def slide_directions(robot: Robot, tol: float = 1e-9) -> np.ndarray:
 
 
 def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
-    """R-B: ``sym(a, b)`` with ``a`` sliding along ``d`` and ``b`` level in ``d`` (velocity of ``a``
-    always along ``d``, of ``b`` always ``⟂ d``), gravity filtered; ``d`` from
-    :func:`slide_directions`. Closes a fixed axis beyond the base (a lift followed by coaxial R
-    joints along gravity: +2 per turning body). Batched over bodies.
+    """R-B: ``sym(a, b)`` with ``a`` sliding along ``d`` and ``b`` level in ``d``, gravity filtered.
+
+    Velocity of ``a`` always along ``d``, of ``b`` always ``⟂ d``; ``d`` from
+    :func:`slide_directions` (``../shared/EXTENDED_PRINCIPLES.md``, R-B). Closes a fixed axis
+    beyond the base (a lift followed by coaxial R joints along gravity: +2 per turning body;
+    ``../shared/PAPER_NOTES.md``, gap 2). Batched over bodies; single-body columns, only on
+    bodies where something slides that is not fixed.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    ms : MotionSpans, optional
+        The robot's motion spans (:func:`.subspaces.motion_spans`); built (default tolerance)
+        when not given. Their ``tol`` is the rule's tolerance.
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (R-B sliding points), blocks in the ``paper`` convention
+        (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world
+        frame at q = 0).
     """
     ms = motion_spans(robot) if ms is None else ms
     dirs = slide_directions(robot, ms.tol)
@@ -239,11 +291,25 @@ def _ancestors(robot: Robot, b: int) -> list[int]:
 def parallelograms(robot: Robot, tol: float = 1e-7) -> list[dict]:
     """Loop 4-cycles of parallel R joints whose joint points form a parallelogram at q = 0.
 
-    Returns, per parallelogram, ``links [L0, L1, L2, L3]`` (``L0`` the cycle's root, ``-1`` for
-    the fixed base), ``points (4, 3)`` with ``points[j]`` the joint between ``L_j`` and
-    ``L_{j+1}``, the common ``axis (3,)`` and ``loop`` (the loop joint's name). The assembly mode
-    is the parallelogram one (``P1 - P0 = P2 - P3``: crank and rocker stay parallel); a flattened
-    (collinear) reference, where both modes meet, is not accepted.
+    The assembly mode is the parallelogram one (``P1 - P0 = P2 - P3``: crank and rocker stay
+    parallel); a flattened (collinear) reference, where both modes meet, is not accepted. Only
+    R loop joints closing a cycle of four links through R tree joints are examined.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-7
+        Axes are parallel when the norm of their cross product (unit first axis) is at most
+        ``tol``; the sides must match, and be nonzero, to ``tol`` times the longer side.
+
+    Returns
+    -------
+    list of dict
+        Per parallelogram, ``links [L0, L1, L2, L3]`` (``L0`` the cycle's root, ``-1`` for the
+        fixed base), ``points (4, 3)`` with ``points[j]`` the joint between ``L_j`` and
+        ``L_{j+1}`` (world frame at q = 0), the common ``axis (3,)`` and ``loop`` (the loop
+        joint's name).
     """
     out = []
     axw = world_axes(robot)
@@ -289,12 +355,27 @@ def _pair(h_a: np.ndarray, a: int, h_b: np.ndarray, b: int, label: str, rule: in
 
 
 def parallelogram_columns(robot: Robot) -> Columns:
-    """R-L1: for each parallelogram (:func:`parallelograms`), links ``L0, L2`` (and ``L1, L3``)
-    keep their relative orientation. With the fixed base as ``L0``: ``sym(f, v)`` on the coupler
-    ``L2`` for every direction ``f`` (it only translates), and every parameter of the rocker
-    ``L3`` transfers to the crank ``L1`` (``+dN`` on ``L3``, ``-T^-1 dN T^-T`` on ``L1``, ``T`` the
-    translation by ``P3 - P0``: ``g_3 = T g_1 T^-1``). With a moving ``L0``: the direction
-    transfers ``sym(f_a, f_b)`` between opposite links.
+    """R-L1: for each parallelogram (:func:`parallelograms`), opposite links keep their relative orientation.
+
+    Opposite links are ``L0, L2`` (and ``L1, L3``). With the fixed base as
+    ``L0``: ``sym(f, v)`` on the coupler ``L2`` for every direction ``f`` (it only translates),
+    and every parameter of the rocker ``L3`` transfers to the crank ``L1`` (``+dN`` on ``L3``,
+    ``-T^-1 dN T^-T`` on ``L1``, ``T`` the translation by ``P3 - P0``: ``g_3 = T g_1 T^-1``).
+    With a moving ``L0``: the direction transfers ``sym(f_a, f_b)`` between opposite links, and
+    a three-body rocker-to-crank transfer compensated on the root (:func:`_moving_root_transfer`).
+    Closes ``../shared/PAPER_NOTES.md`` gap 5 (a parallelogram four-bar: 27 of 30).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (R-L1 parallelograms), blocks in the ``paper`` convention
+        (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world
+        frame at q = 0).
     """
     e = np.eye(4)
     dirs = sym(e[:3, None], e[None, :3]).reshape(-1, 4, 4)
@@ -357,7 +438,21 @@ def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     vector fixed by all joint screws between the loop's root link and either body is shared (both
     bodies move it as the root does); e.g. a spherical loop joint closing a planar linkage also
     shares the plane's normal direction. ``sym(a, b)`` of shared vectors: ``+`` on the successor,
-    ``-`` on the predecessor.
+    ``-`` on the predecessor. Loops whose root path fixes nothing are skipped.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Absolute singular-value threshold of the fixed vectors and of the shared span.
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (R-A fixed vectors, joint ``n + l`` for loop joint ``l``),
+        blocks in the ``paper`` convention (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ
+        MX MY MZ M`` of each body, world frame at q = 0).
     """
     screws = hat(robot.screws)
     qi, nd = robot.q_index, robot.ndofs
@@ -389,9 +484,10 @@ def _loop_axis(lj) -> np.ndarray:
 
 
 def _shared_vectors(jtype: str, origin: np.ndarray, axis: np.ndarray) -> np.ndarray:
-    """Vectors ``(s, 4)`` a joint's two bodies move alike (principle 1): R its axis point and
-    direction; U, S the centre; P every direction; a fixed loop joint everything; a free joint
-    nothing.
+    """Vectors ``(s, 4)`` a joint's two bodies move alike (principle 1).
+
+    R its axis point and direction; U, S the centre; P every direction; a fixed loop joint
+    everything; a free joint nothing.
     """
     pt = np.r_[origin, 1.0]
     e = np.eye(4)
@@ -400,7 +496,8 @@ def _shared_vectors(jtype: str, origin: np.ndarray, axis: np.ndarray) -> np.ndar
 
 
 def _joint_shares(robot: Robot) -> list[tuple[int, int, str, np.ndarray, np.ndarray, np.ndarray]]:
-    """Every tree and loop joint as ``(a, b, type, origin (3,), axis (3,), shared (s, 4))``:
+    """Every tree and loop joint as ``(a, b, type, origin (3,), axis (3,), shared (s, 4))``.
+
     ``a`` the predecessor (``-1``: the base), ``shared`` an orthonormal basis of the vectors both
     bodies move alike (R: axis point and direction; U, S: the centre; P: every direction; a
     fixed loop joint: everything; a free joint: nothing).
@@ -427,7 +524,8 @@ def _cross4(x: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 
 def _level_spaces(robot: Robot, es: np.ndarray, ms: MotionSpans, joints: list) -> np.ndarray:
-    """Loop-aware level spaces for every candidate ``es (C, 3)`` and body at once:
+    """Loop-aware level spaces for every candidate ``es (C, 3)`` and body at once.
+
     ``(C, n, 4, 4)`` orthonormal rows padded with zero rows (see :func:`loop_level_spaces`).
     """
     n, tol = robot.n, ms.tol
@@ -465,11 +563,28 @@ def _level_spaces(robot: Robot, es: np.ndarray, ms: MotionSpans, joints: list) -
 
 
 def loop_level_spaces(robot: Robot, e: np.ndarray, ms: MotionSpans | None = None) -> list[np.ndarray]:
-    """Loop-aware level spaces ``H_i((e, 0))`` ``(h_i, 4)`` per body: the open tree's (exact for
-    the tree, a subset for the closed robot), enlarged to a fixpoint by propagation across every
-    tree and loop joint: a vector both bodies move alike that keeps its ``e``-coordinate in one
-    body keeps it in the other (``../shared/EXTENDED_PRINCIPLES.md``, R-L2). Safe: everything
-    returned is level on the closed robot.
+    """Loop-aware level spaces ``H_i((e, 0))`` ``(h_i, 4)`` per body.
+
+    The open tree's (exact for the tree, a subset for the closed robot), enlarged to a fixpoint
+    by propagation across every tree and loop joint: a vector both bodies move alike that keeps
+    its ``e``-coordinate in one body keeps it in the other (``../shared/EXTENDED_PRINCIPLES.md``,
+    R-L2). Safe: everything returned is level on the closed robot.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    e : array_like, shape ``(3,)``
+        The direction whose coordinate is kept (world frame at q = 0).
+    ms : MotionSpans, optional
+        The robot's motion spans (:func:`.subspaces.motion_spans`); built (default tolerance)
+        when not given. Their ``tol`` is used for the level spaces.
+
+    Returns
+    -------
+    list of ndarray
+        Per body ``i``, ``(h_i, 4)`` orthonormal rows: homogeneous 4-vectors (points and
+        directions, world frame at q = 0) whose ``e``-coordinate never changes.
     """
     ms = motion_spans(robot) if ms is None else ms
     h = _level_spaces(robot, np.asarray(e, float)[None], ms, _joint_shares(robot))[0]
@@ -487,8 +602,9 @@ def _candidates(robot: Robot, joints: list, tol: float) -> np.ndarray:
 
 
 class _Level(NamedTuple):
-    """Per candidate ``e`` and body: the level directions (all, and those ``⟂ e``), their counts,
-    and a level point when there is one.
+    """Per candidate ``e`` and body: the level directions (all, and those ``⟂ e``), counts, a point.
+
+    The counts of both kinds of direction, and a level point when there is one.
     """
 
     dirs: np.ndarray  # (C, n, 4, 4) level directions (w = 0), padded with zero rows
@@ -500,9 +616,11 @@ class _Level(NamedTuple):
 
 
 def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float = 1e-9) -> Columns:
-    """R-L2, level chains (loop robots). For a fixed direction ``e`` and a direction ``x`` that
-    stays ``⟂ e`` (level, :func:`loop_level_spaces`), shared by a chain of bodies joined by R or P
-    joints along ``x`` from a level point ``A`` to a level point ``B``:
+    """R-L2, level chains (loop robots).
+
+    For a fixed direction ``e`` and a direction ``x`` that stays ``⟂ e`` (level,
+    :func:`loop_level_spaces`), shared by a chain of bodies joined by R or P joints along ``x``
+    from a level point ``A`` to a level point ``B``:
 
         Σ_j sym(x, x × r_j) on body j,   r_j = J_j - J_{j-1},  J_0 = A, J_m = B, J_j on joint j,
 
@@ -511,7 +629,25 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     pairs have no potential. Single bodies (``A, B`` on one body: any level direction ``d``
     gives ``sym(x, x × d)``), pairs and triples are emitted; ``e`` runs over the joint axes and
     gravity, all candidates batched. Loop robots only: on trees the level spaces are exact and
-    the rule adds nothing beyond R-A and R-B (the special-robot survey).
+    the rule adds nothing beyond R-A and R-B (the special-robot survey). Closes
+    ``../shared/PAPER_NOTES.md`` gap 6 (the symmetric 2PRS-1PSR: +1).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    ms : MotionSpans, optional
+        The robot's motion spans (:func:`.subspaces.motion_spans`); built with ``tol`` when not
+        given. Their ``tol`` is used for the level spaces.
+    tol : float, default 1e-9
+        Geometric tolerance (zero axes and directions, singular values of the level spaces).
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (R-L2 level chains), blocks in the ``paper`` convention
+        (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world
+        frame at q = 0).
     """
     if not robot.loops:
         return Columns.empty()
@@ -549,8 +685,9 @@ def _level_parts(h: np.ndarray, es: np.ndarray, tol: float) -> _Level:
 
 
 def _level_single_columns(es: np.ndarray, lv: _Level, tol: float) -> Columns | None:
-    """Single bodies: ``sym(x_a, x_b × d) + sym(x_b, x_a × d)`` for level x's ⟂ e and level d's
-    (None when no body has both).
+    """Single bodies: ``sym(x_a, x_b × d) + sym(x_b, x_a × d)`` for level x's ⟂ e and level d's.
+
+    Returns None when no body has both.
     """
     ci, bi = np.nonzero((lv.nx >= 1) & (lv.nd >= 2))
     if not len(ci):
@@ -576,8 +713,10 @@ def _level_single_columns(es: np.ndarray, lv: _Level, tol: float) -> Columns | N
 
 def _level_edges(links: list, e: np.ndarray, nx: np.ndarray,
                  xs: np.ndarray) -> dict[int, list[tuple[int, np.ndarray, np.ndarray]]]:
-    """Body -> ``(neighbour, x, joint point)`` for the R/P ``links`` whose axis ``x`` is ⟂ ``e``
-    and level in the predecessor (both directions of each joint).
+    """Body -> ``(neighbour, x, joint point)`` for the level R/P ``links`` ⟂ ``e``.
+
+    A link counts when its axis ``x`` is ⟂ ``e`` and level in the predecessor; both directions of
+    each joint are listed.
     """
     edges: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
     for a, b, o, ax in links:
@@ -599,8 +738,10 @@ def _seg(x, p, q):
 
 
 def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, has_pt: np.ndarray) -> list[Columns]:
-    """The pairs ``a - b`` (both with a level point) and triples ``b - a - c2`` (``a`` without one,
-    the two joints parallel) of one candidate ``ee`` along its level ``edges``.
+    """The pairs and triples of one candidate ``ee`` along its level ``edges``.
+
+    Pairs ``a - b`` (both with a level point) and triples ``b - a - c2`` (``a`` without one, the
+    two joints parallel).
     """
     parts: list[Columns] = []
     for a, nbrs in edges.items():
@@ -626,7 +767,29 @@ def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, ha
 
 
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """All extended-rule columns (R-A, R-B, R-L1, R-L2) for ``robot``."""
+    """All extended-rule columns (R-A, R-B, R-L1, R-L2) for ``robot``.
+
+    In order: R-A on every body (:func:`fixed_vector_columns`) and across loop joints
+    (:func:`loop_shared_columns`), R-B (:func:`sliding_columns`), R-L1
+    (:func:`parallelogram_columns`), R-L2 (:func:`level_chain_columns`), sharing one
+    :func:`.subspaces.motion_spans`. The columns are redundant with each other and with the
+    paper's principles: :func:`.rank.block_rank` decides the rank.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Geometric tolerance of the motion spans and the rules that take one (R-L1 uses its own).
+
+    Returns
+    -------
+    Columns
+        The columns with provenance (R-A fixed vectors, R-B sliding points, R-L1
+        parallelograms, R-L2 level chains), blocks in the ``paper`` convention (spatial
+        pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
+        q = 0).
+    """
     ms = motion_spans(robot, tol)
     return Columns.concat([fixed_vector_columns(robot, ms), loop_shared_columns(robot, tol),
                            sliding_columns(robot, ms), parallelogram_columns(robot),

@@ -38,9 +38,26 @@ SATURATED = 12
 
 @dataclass(frozen=True, eq=False)
 class MotionSpans:
-    """``span[i] (k_i, 3, 4)``: orthonormal basis of body ``i``'s motion span ``M_i`` (Frobenius
-    inner product), world frame at q = 0; ``None`` when saturated (``k_i = 12``: nothing of the
-    body is fixed, level or sliding).
+    """Every body's motion span ``M_i`` and fixed vectors, as built by :func:`motion_spans`.
+
+    ``M_i = span{(g_i(q) - I)[:3, :] : q}`` (module docstring; ``../shared/EXTENDED_PRINCIPLES.md``),
+    built exactly from the joint screws, world frame at q = 0.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    span : tuple of (ndarray or None)
+        ``span[i] (k_i, 3, 4)``: orthonormal basis of body ``i``'s motion span ``M_i`` (Frobenius
+        inner product), world frame at q = 0; ``None`` when saturated (``k_i = 12``: nothing of
+        the body is fixed, level or sliding).
+    tol : float
+        The singular-value threshold the spans were built with (reused by the rules).
+    fix : tuple of ndarray, optional
+        ``fix[i] (f_i, 4)``: orthonormal rows spanning body ``i``'s fixed vectors (empty when
+        saturated); see :meth:`fixed`.
+    padded : ndarray, shape ``(n, 12, 3, 4)``, optional
+        The span bases padded with zero rows (for batched use over bodies).
     """
 
     robot: Robot
@@ -50,11 +67,35 @@ class MotionSpans:
     padded: np.ndarray | None = None  # (n, 12, 3, 4): span bases padded with zero rows
 
     def dim(self, i: int) -> int:
+        """Dimension ``k_i`` of body ``i``'s motion span (12 when saturated).
+
+        Parameters
+        ----------
+        i : int
+            Body index.
+
+        Returns
+        -------
+        int
+            ``dim M_i``, at most 12.
+        """
         s = self.span[i]
         return SATURATED if s is None else s.shape[0]
 
     def fixed(self, i: int) -> np.ndarray:
-        """Fixed vectors of body ``i`` ``(f, 4)``: ``∩_j ker S_j`` over its path."""
+        """Fixed vectors of body ``i`` ``(f, 4)``: ``∩_j ker S_j`` over its path.
+
+        Parameters
+        ----------
+        i : int
+            Body index.
+
+        Returns
+        -------
+        ndarray, shape ``(f, 4)``
+            Orthonormal rows: homogeneous 4-vectors (points and directions, world frame at q = 0)
+            with ``X v = 0`` for every ``X`` in ``M_i``; none when saturated.
+        """
         return self.fix[i]
 
 
@@ -62,7 +103,22 @@ def motion_spans(robot: Robot, tol: float = 1e-9) -> MotionSpans:
     """Every body's motion span, base-first, batched over the bodies of each depth.
 
     Spans are padded ``(12, 12)`` row bases (zero rows beyond the dimension); one batched SVD
-    per depth and joint coordinate slot. Bodies below a saturated one are saturated.
+    per depth and joint coordinate slot. Bodies below a saturated one are saturated. The Krylov
+    recursion of the module docstring over the path's screws (exact, no sampling).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies; loops are ignored: the open tree's spans, a superset of
+        the closed motion).
+    tol : float, default 1e-9
+        Absolute singular-value threshold for new span directions and for the fixed vectors.
+
+    Returns
+    -------
+    MotionSpans
+        Every body's span ``M_i`` (``None`` when saturated), its fixed vectors and the padded
+        bases ``(n, 12, 3, 4)``, world frame at q = 0.
     """
     n = robot.n
     screws = hat(robot.screws)  # (dof, 4, 4) world twists at q = 0

@@ -78,6 +78,38 @@ def _as_samples(x, dof: int, label: str) -> np.ndarray:
     return x
 
 
+def as_states(dof: int, q, dq=None, ddq=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Validated joint states: float arrays of one shape, finite.
+
+    Parameters
+    ----------
+    dof : int
+        Number of coordinates per sample.
+    q : array_like, shape ``(S, dof)`` or ``(dof,)``
+        Positions.
+    dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
+        Velocities and accelerations; default zero.
+
+    Returns
+    -------
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        The states as float64 arrays (views of the inputs where no conversion was needed).
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes, different numbers of samples, NaN or inf (naming the array).
+    """
+    q = _as_samples(q, dof, "q")
+    s = q.shape[0]
+    dq = np.zeros_like(q) if dq is None else _as_samples(dq, dof, "dq")
+    ddq = np.zeros_like(q) if ddq is None else _as_samples(ddq, dof, "ddq")
+    if dq.shape[0] != s or ddq.shape[0] != s:
+        raise BaseparamsError(f"q, dq, ddq must have the same number of samples, got {s}, "
+                              f"{dq.shape[0]}, {ddq.shape[0]}")
+    return q, dq, ddq
+
+
 def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
     """Batched tree kinematics (product of exponentials, see the module doc).
 
@@ -105,13 +137,8 @@ def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
         Wrong shapes, different numbers of samples, NaN or inf.
     """
     dof = robot.dof
-    q = _as_samples(q, dof, "q")
+    q, dq, ddq = as_states(dof, q, dq, ddq)
     s = q.shape[0]
-    dq = np.zeros_like(q) if dq is None else _as_samples(dq, dof, "dq")
-    ddq = np.zeros_like(q) if ddq is None else _as_samples(ddq, dof, "ddq")
-    if dq.shape[0] != s or ddq.shape[0] != s:
-        raise BaseparamsError(f"q, dq, ddq must have the same number of samples, got {s}, "
-                              f"{dq.shape[0]}, {ddq.shape[0]}")
     n = robot.n
     screws = robot.screws
     qi = robot.q_index

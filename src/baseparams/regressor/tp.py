@@ -14,11 +14,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kinematics.tree import TreeState, forward_kinematics
+from ..errors import BaseparamsError
+from ..kinematics.tree import TreeState, as_states, forward_kinematics
 from ..model.inertia import HAT_INDEX
 from ..model.robot import Robot
 from ..pga import hat, join, swap
 from ..pga.linalg import cross3
+from . import compiled
 
 _M = np.array([m for m, _ in HAT_INDEX])
 _N = np.array([n for _, n in HAT_INDEX])
@@ -26,8 +28,22 @@ _OFF = (_M != _N)[:, None]
 
 
 def point_accelerations(robot: Robot, state: TreeState) -> tuple[np.ndarray, np.ndarray]:
-    """Tetrahedral points ``E (S, n, 4, 4)`` (columns x, y, z, O) and their accelerations
-    ``ddE (S, n, 4, 4)`` including the gravity term (columns; last row zero).
+    """Tetrahedral points and their accelerations, gravity included.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (its gravity, world frame [m/s^2]).
+    state : TreeState
+        Kinematics of ``S`` samples.
+
+    Returns
+    -------
+    E : ndarray, shape ``(S, n, 4, 4)``
+        Each body's tetrahedral points as columns ``x, y, z, O`` (world frame; the spatial
+        assignment: the identity at q = 0).
+    ddE : ndarray, shape ``(S, n, 4, 4)``
+        Their accelerations ``(dV^ + V^ V^) E`` minus gravity on the point ``O`` (last row zero).
     """
     e = state.g
     vh = hat(state.V)
@@ -37,7 +53,18 @@ def point_accelerations(robot: Robot, state: TreeState) -> tuple[np.ndarray, np.
 
 
 def bar_lines(e: np.ndarray, acc: np.ndarray) -> np.ndarray:
-    """The ten lines ``bar(E_m v ddE_n)`` per body ``(S, n, 10, 6)`` (paper's bar order)."""
+    """The ten lines ``bar(E_m v ddE_n)`` per body, in the paper's bar order.
+
+    Parameters
+    ----------
+    e, acc : ndarray, shape ``(S, n, 4, 4)``
+        Points and accelerations (:func:`point_accelerations`).
+
+    Returns
+    -------
+    ndarray, shape ``(S, n, 10, 6)``
+        Lines ``(direction, moment)`` in the basis ``e23 e31 e12 e01 e02 e03``.
+    """
     return swap(_bar_lines_swapped(e, acc))
 
 
@@ -69,27 +96,120 @@ def _subtree_slices(robot: Robot) -> list[tuple[int, int]] | None:
     return out
 
 
-def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = None,
-              chunk: int = 1024) -> np.ndarray:
-    """TP regressor in matrix form ``Y (S, dof, 10 n)``, columns in the paper's order
-    (spatial pseudo-inertia at q = 0), gravity included.
+#: regressor backends: ``auto`` (compiled from :data:`compiled.MIN_SAMPLES` samples when numba is
+#: installed, numpy below), ``numpy``, ``compiled`` (numba required)
+BACKENDS = ("auto", "numpy", "compiled")
 
-    ``q, dq, ddq``: ``(S, dof)``. Computed in chunks of ``chunk`` samples (memory, cache).
-    Each coordinate's row is built only over the bodies it moves; the floating root's lines
-    are the constant basis lines, so its rows are the bar lines themselves.
+
+def use_compiled(backend: str, samples: int) -> bool:
+    """Whether a batch of ``samples`` states goes to the compiled kernel.
+
+    Parameters
+    ----------
+    backend : {"auto", "numpy", "compiled"}
+        The caller's choice (:data:`BACKENDS`).
+    samples : int
+        Batch size ``S``.
+
+    Returns
+    -------
+    bool
+        ``True`` for ``compiled``, and for ``auto`` with ``samples >= compiled.MIN_SAMPLES`` and
+        numba installed.
+
+    Raises
+    ------
+    BaseparamsError
+        An unknown backend, or ``compiled`` without numba (names the extra that installs it).
+    """
+    if backend not in BACKENDS:
+        raise BaseparamsError(f"unknown regressor backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    if backend == "numpy":
+        return False
+    if backend == "compiled":
+        if not compiled.available():
+            raise BaseparamsError("the compiled regressor needs numba: pip install 'baseparams[fast]'")
+        return True
+    return samples >= compiled.MIN_SAMPLES and compiled.available()
+
+
+def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = None, chunk: int = 1024,
+              out: np.ndarray | None = None, backend: str = "auto") -> np.ndarray:
+    """TP regressor of a tree in matrix form (the paper's Algorithm DR).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, ``dof`` coordinates); loops, if any, are cut (the spanning
+        tree's regressor: :func:`closed_regressor` closes them).
+    q : array_like, shape ``(S, dof)`` or ``(dof,)``
+        Positions (a floating root's six first: its twist coordinates).
+    dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
+        Velocities and accelerations (a floating root's: quasi-velocities); default zero.
+    state : TreeState, optional
+        Precomputed kinematics of ``q, dq, ddq`` (numpy path; ``q, dq, ddq`` are then ignored).
+    chunk : int
+        Samples per numpy batch (memory, cache).
+    out : ndarray, shape ``(S, dof, 10 n)``, optional
+        A C-contiguous float64 buffer to fill and return, e.g. the previous call's output:
+        every entry is set (the compiled kernel reads the zero blocks and writes only those not
+        already zero).
+    backend : {"auto", "numpy", "compiled"}
+        ``auto``: the compiled kernel (:mod:`baseparams.regressor.compiled`, numba) from
+        ``compiled.MIN_SAMPLES`` samples when numba is installed, numpy below (the compiled
+        path costs ~0.3 s of import per process).
+
+    Returns
+    -------
+    Y : ndarray, shape ``(S, dof, 10 n)``
+        ``tau = Y @ pi``, gravity included; columns in the ``paper`` convention (spatial
+        pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
+        q = 0: ``robot.parameters("paper")``); ``Y[:, j, 10 i + k] = bar(R)[j, i, k]``.
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes, NaN or inf in the states, an unknown backend or a wrong ``out``.
+
+    Notes
+    -----
+    numpy path: each coordinate's row is built only over the bodies it moves; the floating
+    root's lines are the constant basis lines, so its rows are the bar lines themselves.
     """
     if state is None:
-        q = np.atleast_2d(np.asarray(q, dtype=float))
+        q, dq, ddq = as_states(robot.dof, q, dq, ddq)
         s = q.shape[0]
-        dq = np.zeros_like(q) if dq is None else np.atleast_2d(np.asarray(dq, dtype=float))
-        ddq = np.zeros_like(q) if ddq is None else np.atleast_2d(np.asarray(ddq, dtype=float))
+        if use_compiled(backend, s):
+            return compiled.tree_regressor(robot, q, dq, ddq, out=_checked_out(out, (s, robot.dof, 10 * robot.n)))
         if s > chunk:
-            out = np.empty((s, robot.dof, 10 * robot.n))
+            out = _checked_out(out, (s, robot.dof, 10 * robot.n)) if out is not None else \
+                np.empty((s, robot.dof, 10 * robot.n))
             for k in range(0, s, chunk):
                 out[k:k + chunk] = regressor(robot, q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk],
-                                             chunk=chunk)
+                                             chunk=chunk, backend="numpy")
             return out
         state = forward_kinematics(robot, q, dq, ddq)
+    y = _regressor_numpy(robot, state)
+    if out is None:
+        return y
+    out = _checked_out(out, y.shape)
+    out[...] = y
+    return out
+
+
+def _checked_out(out: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray | None:
+    """``out`` after checking it is a writeable C-contiguous float64 array of ``shape``."""
+    if out is None:
+        return None
+    if (not isinstance(out, np.ndarray) or out.shape != shape or out.dtype != np.float64
+            or not out.flags.c_contiguous or not out.flags.writeable):
+        got = f"{out.dtype} {out.shape}" if isinstance(out, np.ndarray) else type(out).__name__
+        raise BaseparamsError(f"out must be a writeable C-contiguous float64 array of shape {shape}, got {got}")
+    return out
+
+
+def _regressor_numpy(robot: Robot, state: TreeState) -> np.ndarray:
+    """The numpy regressor ``(S, dof, 10 n)`` of one batch of states."""
     e, acc = point_accelerations(robot, state)
     xs = _bar_lines_swapped(e, acc)  # (S, n, 10, 6): wedge(L, X) = L . swap(X)
     s, n = xs.shape[:2]
@@ -114,8 +234,23 @@ def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = N
 
 
 def regressor_tensor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
-    """TP regressor in tensor form ``R (S, dof, n, 4, 4)`` (eq. "basic coeff"), computed
-    coefficient by coefficient as ``L_j^i ^ (E_m^i v ddE_n^i)``.
+    """TP regressor in tensor form, coefficient by coefficient (eq. "basic coeff").
+
+    ``R[s, j, i, m, n] = L_j^i ^ (E_m^i v ddE_n^i)``: a slow, literal reference for tests.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, ``dof`` coordinates).
+    q : array_like, shape ``(S, dof)`` or ``(dof,)``
+        Positions.
+    dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
+        Velocities and accelerations; default zero.
+
+    Returns
+    -------
+    R : ndarray, shape ``(S, dof, n, 4, 4)``
+        ``bar(R)`` is the matrix form (:func:`regressor`).
     """
     from ..pga import wedge
 
@@ -129,26 +264,77 @@ def regressor_tensor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
 
 
 def bar(r: np.ndarray) -> np.ndarray:
-    """The paper's bar operator: ``(*, 4, 4)`` -> ``(*, 10)`` (off-diagonal pairs summed)."""
+    """The paper's bar operator (off-diagonal pairs summed), in the hat/bar order.
+
+    Parameters
+    ----------
+    r : ndarray, shape ``(*, 4, 4)``
+        A tensor-form coefficient block (:func:`regressor_tensor`).
+
+    Returns
+    -------
+    ndarray, shape ``(*, 10)``
+        ``r[m, n] + r[n, m]`` for ``m != n``, ``r[m, m]`` on the diagonal.
+    """
     out = r[..., _M, _N]
     return out + np.where(_OFF[:, 0], r[..., _N, _M], 0.0)
 
 
 def generalized_forces(robot: Robot, q, dq, ddq, params=None) -> np.ndarray:
-    """``tau = Y pi`` ``(S, dof)``; ``params`` default to the robot's own (paper convention)."""
+    """Inverse dynamics through the regressor, ``tau = Y pi``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree).
+    q, dq, ddq : array_like, shape ``(S, dof)``
+        Joint states.
+    params : array_like, shape ``(10 n,)``, optional
+        Parameters in the ``paper`` convention; default the robot's own.
+
+    Returns
+    -------
+    tau : ndarray, shape ``(S, dof)``
+        Generalized forces, gravity included.
+    """
     pi = robot.parameters("paper") if params is None else np.asarray(params, dtype=float)
     return regressor(robot, q, dq, ddq) @ pi
 
 
-def closed_regressor(robot: Robot, closed) -> np.ndarray:
-    """TP regressor of a closed-loop robot w.r.t. its actuated coordinates ``(S, na, 10 n)``.
+def closed_regressor(robot: Robot, closed, *, out: np.ndarray | None = None, backend: str = "auto") -> np.ndarray:
+    """TP regressor of a closed-loop robot with respect to its actuated coordinates.
 
-    ``closed``: :class:`baseparams.kinematics.loops.ClosedStates`. The Jacobian lines include
-    ``dq_k/dq_a`` (paper eq. "jacobian line"): ``L~_a^i = sum_k L_k^i G[k, a]``.
+    The Jacobian lines include ``dq_k/dq_a`` (paper eq. "jacobian line"):
+    ``L~_a^i = sum_k L_k^i G[k, a]``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot with loops (``n`` bodies, ``dof`` tree coordinates, ``na`` actuated).
+    closed : ClosedStates
+        Closed-loop states and their ``G = dq/dq_a`` (:class:`baseparams.kinematics.loops.ClosedStates`).
+    out : ndarray, shape ``(S, na, 10 n)``, optional
+        A C-contiguous float64 buffer to fill and return.
+    backend : {"auto", "numpy", "compiled"}
+        As for :func:`regressor`.
+
+    Returns
+    -------
+    Y : ndarray, shape ``(S, na, 10 n)``
+        Columns in the ``paper`` convention, gravity included.
     """
+    s, na = closed.G.shape[0], closed.G.shape[2]
+    shape = (s, na, 10 * robot.n)
+    if use_compiled(backend, s):
+        return compiled.closed_regressor(robot, closed.q, closed.dq, closed.ddq, closed.G,
+                                         out=_checked_out(out, shape))
     state = forward_kinematics(robot, closed.q, closed.dq, closed.ddq)
     e, acc = point_accelerations(robot, state)
     xbar = swap(bar_lines(e, acc))  # (S, n, 10, 6)
     lines = np.einsum("skc,ki,ska->saic", state.lines, state.support.astype(float), closed.G)
-    s, n = xbar.shape[:2]
-    return np.einsum("saic,sikc->saik", lines, xbar).reshape(s, -1, n * 10)
+    y = np.einsum("saic,sikc->saik", lines, xbar).reshape(shape)
+    if out is None:
+        return y
+    out = _checked_out(out, shape)
+    out[...] = y
+    return out

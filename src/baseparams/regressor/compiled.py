@@ -1,0 +1,158 @@
+"""The TP regressor as one fused compiled loop per sample (numba, cached on disk).
+
+The same regressor as :func:`baseparams.regressor.tp.regressor` (the paper's Algorithm DR,
+eq. "basic coeff" in matrix form), computed sample by sample in one pass over the bodies:
+product-of-exponentials kinematics (:mod:`baseparams.kinematics.tree`), the accelerations of
+the four tetrahedral points with gravity, the ten bar lines ``swap(bar(E_m v ddE_n))`` and
+their contraction with the Jacobian lines, written straight into the output rows. Only the
+blocks a coordinate moves are computed; the others are zero.
+
+numba is an optional dependency (``pip install baseparams[fast]``): importing it and loading
+the cached machine code costs ~0.3-0.5 s per process, so :func:`baseparams.regressor.tp.regressor`
+calls this module only for batches of at least :data:`MIN_SAMPLES` samples. The first call on a
+machine compiles (~10-20 s) and caches the result next to this file (or in
+``NUMBA_CACHE_DIR``); later processes load it.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from functools import lru_cache
+
+import numpy as np
+
+from ..model.inertia import HAT_INDEX
+from ..model.robot import Robot
+
+#: batch size from which the compiled kernel is used by default (below it, numpy: the
+#: compiled path's per-process import cost would dominate)
+MIN_SAMPLES = 2000
+
+
+def available() -> bool:
+    """Whether numba can be imported (without importing it).
+
+    Returns
+    -------
+    bool
+        ``True`` when the ``numba`` package is installed.
+    """
+    return importlib.util.find_spec("numba") is not None
+
+
+@lru_cache(maxsize=1)
+def _kernels():
+    """Compile (or load from the on-disk cache) the kernels; imported lazily."""
+    from . import _kernels as k
+
+    return k
+
+
+class Layout:
+    """A robot's static data in the arrays the kernels take.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, ``dof`` coordinates).
+
+    Attributes
+    ----------
+    parent, q_index, ndofs : ndarray of int64, shape ``(n,)``
+        Parent body (``-1`` the world), first coordinate and number of coordinates of each joint.
+    floating : ndarray of bool, shape ``(n,)``
+        The body's joint is a floating (F) root.
+    screws : ndarray, shape ``(dof, 6)``
+        Joint lines at q = 0, world frame (:attr:`Robot.screws`).
+    gravity : ndarray, shape ``(3,)``
+        Gravity [m/s^2], world frame.
+    anc_ptr, anc : ndarray of int64
+        CSR lists: the coordinates moving body ``i`` are ``anc[anc_ptr[i]:anc_ptr[i + 1]]``.
+    pair_m, pair_n : ndarray of int64, shape ``(10,)``
+        The paper's hat/bar order of the tetrahedral point pairs (:data:`HAT_INDEX`).
+    """
+
+    def __init__(self, robot: Robot):
+        self.n, self.dof = robot.n, robot.dof
+        self.parent = np.asarray(robot.parent, dtype=np.int64)
+        self.q_index = np.asarray(robot.q_index, dtype=np.int64)
+        self.ndofs = np.asarray(robot.ndofs, dtype=np.int64)
+        self.floating = np.array([t == "F" for t in robot.jtype], dtype=np.bool_)
+        self.screws = np.ascontiguousarray(robot.screws, dtype=float)
+        self.gravity = np.asarray(robot.gravity, dtype=float).copy()
+        support = robot.support
+        counts = support.sum(axis=0)
+        self.anc_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self.anc = np.concatenate([np.flatnonzero(support[:, i]) for i in range(self.n)]).astype(np.int64)
+        self.pair_m = np.array([m for m, _ in HAT_INDEX], dtype=np.int64)
+        self.pair_n = np.array([n for _, n in HAT_INDEX], dtype=np.int64)
+
+    def args(self) -> tuple:
+        """The kernels' leading arguments.
+
+        Returns
+        -------
+        tuple
+            ``(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n)``.
+        """
+        return (self.parent, self.q_index, self.ndofs, self.floating, self.screws, self.gravity,
+                self.anc_ptr, self.anc, self.pair_m, self.pair_n)
+
+
+def tree_regressor(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray,
+                   out: np.ndarray | None = None) -> np.ndarray:
+    """TP regressor of a tree ``Y (S, dof, 10 n)``, compiled.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree: loops are not closed here).
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Joint positions, velocities and accelerations (float64, validated by the caller); a
+        floating root's six coordinates are its twist coordinates and quasi-velocities.
+    out : ndarray, shape ``(S, dof, 10 n)``, optional
+        A C-contiguous float64 buffer (checked by the caller); every entry is set.
+
+    Returns
+    -------
+    Y : ndarray, shape ``(S, dof, 10 n)``
+        Columns in the ``paper`` convention (spatial pseudo-inertia entries
+        ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at q = 0), gravity included.
+    """
+    lay = Layout(robot)
+    s = q.shape[0]
+    out = np.zeros((s, lay.dof, 10 * lay.n)) if out is None else out
+    _kernels().tree(*lay.args(), _c(q), _c(dq), _c(ddq), out)
+    return out
+
+
+def closed_regressor(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, G: np.ndarray,
+                     out: np.ndarray | None = None) -> np.ndarray:
+    """TP regressor of a closed-loop robot w.r.t. its actuated coordinates, compiled.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot with loops (its spanning tree's kinematics).
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Closed-loop states of all tree coordinates.
+    G : ndarray, shape ``(S, dof, na)``
+        ``dq / dq_a`` of each state (:class:`baseparams.kinematics.loops.ClosedStates`).
+    out : ndarray, shape ``(S, na, 10 n)``, optional
+        A C-contiguous float64 buffer (checked by the caller); every entry is set.
+
+    Returns
+    -------
+    Y : ndarray, shape ``(S, na, 10 n)``
+        Columns in the ``paper`` convention; Jacobian lines ``L~_a^i = sum_k L_k^i G[k, a]``
+        (paper eq. "jacobian line").
+    """
+    lay = Layout(robot)
+    s, na = G.shape[0], G.shape[2]
+    out = np.empty((s, na, 10 * lay.n)) if out is None else out
+    _kernels().closed(*lay.args(), _c(q), _c(dq), _c(ddq), _c(G), out)
+    return out
+
+
+def _c(x: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(x, dtype=float)

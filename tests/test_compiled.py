@@ -1,0 +1,124 @@
+"""The compiled TP regressor (numba) against the numpy one, Newton-Euler and Pinocchio.
+
+numba is a test dependency: CI runs these on the compiled path (never skipped).
+"""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from baseparams.errors import BaseparamsError
+from baseparams.io.pinocchio import forces_from_pinocchio, state_to_pinocchio, to_pinocchio
+from baseparams.kinematics.loops import close_loops
+from baseparams.regressor import closed_regressor, compiled, regressor
+from baseparams.robots import get, go2, puma560, random_robot
+
+from oracles import rnea
+
+CASES = [(seed, jt, fl) for seed in range(3) for jt, fl in
+         [("R", False), ("P", False), ("RPUS", False), ("RPUS", True), ("RPUSC", False), ("RC", True)]]
+
+
+def _states(rng, robot, s, scale=2.0):
+    return rng.uniform(-scale, scale, (3, s, robot.dof))
+
+
+def test_numba_is_installed_for_the_tests():
+    assert compiled.available()
+
+
+@pytest.mark.parametrize("seed, types, floating", CASES)
+def test_compiled_matches_numpy_and_newton_euler(seed, types, floating):
+    """Random trees of every joint type (compound C, floating F root), random gravity."""
+    rng = np.random.default_rng(100 + seed)
+    robot = random_robot(rng, int(rng.integers(2, 9)), joint_types=types, floating=floating,
+                         branching=0.5, gravity=rng.normal(scale=5, size=3))
+    q, dq, ddq = _states(rng, robot, 70)
+    y_c = regressor(robot, q, dq, ddq, backend="compiled")
+    y_n = regressor(robot, q, dq, ddq, backend="numpy")
+    assert y_c.shape == y_n.shape == (70, robot.dof, 10 * robot.n)
+    assert np.abs(y_c - y_n).max() <= 1e-12 * np.abs(y_n).max()
+    pi = robot.parameters("paper")
+    ref = np.array([rnea(robot, q[k], dq[k], ddq[k]) for k in range(5)])
+    assert np.abs(y_c[:5] @ pi - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("make", [puma560, go2])
+def test_compiled_torques_match_pinocchio(make, rng):
+    robot = make()
+    model = to_pinocchio(robot)
+    data = model.createData()
+    q, dq, ddq = _states(rng, robot, 6, 1.0)
+    tau = regressor(robot, q, dq, ddq, backend="compiled") @ robot.parameters("paper")
+    for k in range(6):
+        qp, vp, ap = state_to_pinocchio(robot, q[k], dq[k], ddq[k])
+        ref = forces_from_pinocchio(robot, q[k], pin.rnea(model, data, qp, vp, ap))
+        assert np.allclose(tau[k], ref, rtol=1e-10, atol=1e-9)
+
+
+def test_out_buffer_reused_and_any_content_overwritten(rng):
+    """A reused buffer is returned; whatever it held (NaN, stale rows) never leaks through."""
+    robot = go2()
+    q, dq, ddq = _states(rng, robot, 40, 1.0)
+    ref = regressor(robot, q, dq, ddq, backend="numpy")
+    structural_zero = ~np.repeat(robot.support, 10, axis=1)  # (dof, 10 n): j does not move i
+    for fill in (np.nan, 1.0, 0.0):
+        buf = np.full(ref.shape, fill)
+        y = regressor(robot, q, dq, ddq, out=buf, backend="compiled")
+        assert y is buf
+        assert np.all(y[:, structural_zero] == 0.0)
+        assert np.abs(y - ref).max() <= 1e-12 * np.abs(ref).max()
+    q2 = q[::-1].copy()
+    y = regressor(robot, q2, dq, ddq, out=buf, backend="compiled")  # stale content of the last call
+    assert np.abs(y - regressor(robot, q2, dq, ddq, backend="numpy")).max() <= 1e-12 * np.abs(ref).max()
+    assert regressor(robot, q, dq, ddq, out=np.empty(ref.shape), backend="numpy") is not None
+
+
+@pytest.mark.parametrize("bad", [np.zeros((3, 2)), np.zeros((40, 18, 130), dtype=np.float32),
+                                 np.zeros((40, 130, 18)).transpose(0, 2, 1)])
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
+def test_bad_out_buffer_is_one_clear_error(bad, backend, rng):
+    robot = go2()
+    q = rng.uniform(-1, 1, (40, robot.dof))
+    with pytest.raises(BaseparamsError, match="out must be"):
+        regressor(robot, q, out=bad, backend=backend)
+
+
+def test_auto_backend_threshold(monkeypatch, rng):
+    robot = puma560()
+    calls = []
+    real = compiled.tree_regressor
+    monkeypatch.setattr(compiled, "tree_regressor", lambda *a, **k: calls.append(1) or real(*a, **k))
+    monkeypatch.setattr(compiled, "MIN_SAMPLES", 50)
+    regressor(robot, rng.uniform(-1, 1, (49, 6)))
+    assert calls == []
+    regressor(robot, rng.uniform(-1, 1, (50, 6)))
+    assert calls == [1]
+    regressor(robot, rng.uniform(-1, 1, (500, 6)), backend="numpy")
+    assert calls == [1]
+
+
+def test_compiled_without_numba_says_what_to_install(monkeypatch, rng):
+    monkeypatch.setattr(compiled, "available", lambda: False)
+    robot = puma560()
+    q = rng.uniform(-1, 1, (5000, 6))
+    with pytest.raises(BaseparamsError, match=r"baseparams\[fast\]"):
+        regressor(robot, q, backend="compiled")
+    assert regressor(robot, q).shape == (5000, 6, 60)  # auto falls back to numpy
+    with pytest.raises(BaseparamsError, match="unknown regressor backend"):
+        regressor(robot, q, backend="jax")
+
+
+@pytest.mark.parametrize("name", ["four-bar", "pkm-2rru-1rrs", "pkm-2prs-1psr"])
+def test_compiled_closed_regressor_matches_numpy(name, rng):
+    robot = get(name)
+    na = len(robot.actuated)
+    cs = close_loops(robot, rng.uniform(-0.2, 0.2, (30, na)), rng.uniform(-1, 1, (30, na)),
+                     rng.uniform(-1, 1, (30, na)))
+    y_n = closed_regressor(robot, cs, backend="numpy")
+    y_c = closed_regressor(robot, cs, backend="compiled")
+    assert y_c.shape == y_n.shape == (cs.q.shape[0], na, 10 * robot.n)
+    assert np.abs(y_c - y_n).max() <= 1e-12 * np.abs(y_n).max()
+    buf = np.full(y_n.shape, np.nan)
+    assert closed_regressor(robot, cs, out=buf, backend="compiled") is buf
+    assert np.abs(buf - y_n).max() <= 1e-12 * np.abs(y_n).max()

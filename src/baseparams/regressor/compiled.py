@@ -43,7 +43,7 @@ def available() -> bool:
 @lru_cache(maxsize=1)
 def _kernels():
     """Compile (or load from the on-disk cache) the kernels; imported lazily."""
-    from . import _kernels as k
+    from . import kernels as k
 
     return k
 

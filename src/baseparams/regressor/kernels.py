@@ -1,4 +1,4 @@
-"""numba kernels of :mod:`baseparams.regressor.compiled` (imported only through it).
+"""numba kernels of :mod:`baseparams.regressor.compiled` (importing this module imports numba).
 
 Per sample: phase 1 walks the bodies in topological order (product of exponentials, as
 :func:`baseparams.kinematics.tree.forward_kinematics`) and builds each body's ten swapped bar

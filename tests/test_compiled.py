@@ -85,17 +85,23 @@ def test_bad_out_buffer_is_one_clear_error(bad, backend, rng):
 
 
 def test_auto_backend_threshold(monkeypatch, rng):
+    """auto: numpy for small batches in a process without the kernels, compiled for large ones
+    or once they are loaded."""
     robot = puma560()
     calls = []
     real = compiled.tree_regressor
     monkeypatch.setattr(compiled, "tree_regressor", lambda *a, **k: calls.append(1) or real(*a, **k))
-    monkeypatch.setattr(compiled, "MIN_SAMPLES", 50)
+    monkeypatch.setattr(compiled, "MIN_WORK", 50 * 6 * 6)
+    monkeypatch.setattr(compiled, "loaded", lambda: False)
     regressor(robot, rng.uniform(-1, 1, (49, 6)))
     assert calls == []
     regressor(robot, rng.uniform(-1, 1, (50, 6)))
     assert calls == [1]
     regressor(robot, rng.uniform(-1, 1, (500, 6)), backend="numpy")
     assert calls == [1]
+    monkeypatch.setattr(compiled, "loaded", lambda: True)
+    regressor(robot, rng.uniform(-1, 1, (2, 6)))
+    assert calls == [1, 1]
 
 
 def test_compiled_without_numba_says_what_to_install(monkeypatch, rng):

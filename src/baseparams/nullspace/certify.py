@@ -17,7 +17,7 @@ import numpy as np
 from ..enums import Status
 from ..model.robot import Robot
 from ..model.scale import decision_scale
-from ..numerics import NumericalResult, default_samples, numerical_nullspace, stacked_regressor
+from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, stacked_regressor
 from ..pga.linalg import column_basis
 from .drng import DRNGResult, drng
 
@@ -152,7 +152,10 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     # ranks are decided on pi / d (model.scale.decision_scale): d = 1 for a robot of ordinary
     # size; a robot drawn in millimetres or kilometres is brought to an ordinary-sized equivalent
     d = decision_scale(robot, "paper")
-    w = stacked_regressor(robot, samples, seed, rows, sampling) * d
+    # W (S * rows, 10 n) enters only through its triangular factor R: same singular values,
+    # nullspace and norms ||W x|| = ||R x||, at (10 n)^2 memory
+    qr = StreamingQR(10 * robot.n).add(stacked_regressor(robot, samples, seed, rows, sampling) * d)
+    w = qr.r
     num = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w)
     raw = res.dense() / d[:, None]
     bd = column_basis(raw)
@@ -168,12 +171,12 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         return Certificate(res, num, basis, r_d, completed, residual, worst, status, message,
                            time.perf_counter() - t0, sampling, span)
 
-    verdict = _verdict(res, num, w, r_d, col_res, worst, rtol, min_gap, residual_tol)
+    verdict = _verdict(res, num, qr.rows, r_d, col_res, worst, rtol, min_gap, residual_tol)
     if verdict is not None:
         return done(*verdict)
     # completion needs saturated numerics: more samples must not raise the rank
-    w2x = np.concatenate([w, stacked_regressor(robot, samples, seed + 7919, rows) * d])
-    num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=w2x)
+    qr.add(stacked_regressor(robot, samples, seed + 7919, rows) * d)
+    num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=qr.r)
     if num2.rank != num.rank or not num2.decided:
         return done(Status.UNDECIDED, f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
                                  f"{num2.rank} with twice as many); use more samples")
@@ -197,7 +200,7 @@ def _column_residuals(raw: np.ndarray, w: np.ndarray, num: NumericalResult) -> t
     return col_res, float(col_res.max())
 
 
-def _verdict(res: DRNGResult, num: NumericalResult, w: np.ndarray, r_d: int, col_res: np.ndarray, worst: float,
+def _verdict(res: DRNGResult, num: NumericalResult, nrows: int, r_d: int, col_res: np.ndarray, worst: float,
              rtol: float, min_gap: float, residual_tol: float) -> tuple[Status, str] | None:
     """``(status, message)`` when the check decides without completion, else ``None``."""
     ncols = 10 * res.robot.n
@@ -207,8 +210,8 @@ def _verdict(res: DRNGResult, num: NumericalResult, w: np.ndarray, r_d: int, col
         where = "; ".join(res.provenance(int(k)) for k in bad[:3])
         return Status.FAILED, (f"{len(bad)} DRNG column(s) are not in the numerical nullspace (worst relative "
                           f"residual {worst:.2e}): {where}")
-    if num.rank >= w.shape[0] or w.shape[0] < ncols:
-        return Status.UNDECIDED, (f"too few samples: the stacked regressor has {w.shape[0]} rows for {ncols} "
+    if num.rank >= nrows or nrows < ncols:
+        return Status.UNDECIDED, (f"too few samples: the stacked regressor has {nrows} rows for {ncols} "
                              f"parameters (rank {num.rank}); use more samples")
     if not num.decided:
         return Status.UNDECIDED, (f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "

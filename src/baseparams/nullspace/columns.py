@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..enums import Source
 from ..model.inertia import hat as hat10
@@ -168,7 +167,46 @@ class Columns:
         return len(self.child)
 
 
-def to_sparse(cols: Columns, n: int) -> sp.csc_matrix:
+def _triplets(cols: Columns) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(rows, column indices, values)`` of the entries of ``B``: child, parent and extra blocks."""
+    k = len(cols)
+    rows_c = (10 * cols.child[:, None] + np.arange(10)).ravel()
+    cidx = np.repeat(np.arange(k), 10)
+    vals_c = cols.h.ravel()
+    has_p = cols.parent >= 0
+    rows_p = (10 * cols.parent[has_p][:, None] + np.arange(10)).ravel()
+    cidx_p = np.repeat(np.flatnonzero(has_p), 10)
+    vals_p = cols.hp[has_p].ravel()
+    has_e = cols.extra >= 0
+    if has_e.any():
+        rows_p = np.r_[rows_p, (10 * cols.extra[has_e][:, None] + np.arange(10)).ravel()]
+        cidx_p = np.r_[cidx_p, np.repeat(np.flatnonzero(has_e), 10)]
+        vals_p = np.r_[vals_p, cols.he[has_e].ravel()]
+    return np.r_[rows_c, rows_p], np.r_[cidx, cidx_p], np.r_[vals_c, vals_p]
+
+
+def to_dense(cols: Columns, n: int) -> np.ndarray:
+    """``B (10 n, k)`` as a dense array (paper convention), without scipy.
+
+    Parameters
+    ----------
+    cols : Columns
+        ``k`` columns in compact form.
+    n : int
+        Number of moving bodies of the robot.
+
+    Returns
+    -------
+    ndarray, shape ``(10 n, k)``
+        As :func:`to_sparse`, dense (entries on the same position summed).
+    """
+    rows, cidx, vals = _triplets(cols)
+    b = np.zeros((10 * n, len(cols)))
+    np.add.at(b, (rows, cidx), vals)
+    return b
+
+
+def to_sparse(cols: Columns, n: int):
     """``B (10 n, k)`` as a sparse matrix (paper convention).
 
     Parameters
@@ -184,20 +222,9 @@ def to_sparse(cols: Columns, n: int) -> sp.csc_matrix:
         Column ``j`` holds ``h[j]`` in body ``child[j]``'s rows, ``hp[j]`` in ``parent[j]``'s and
         ``he[j]`` in ``extra[j]``'s (where ``>= 0``); rows in the ``paper`` convention (spatial
         pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
-        q = 0).
+        q = 0). scipy.sparse is imported here only (it costs ~80 ms of import).
     """
-    k = len(cols)
-    rows_c = (10 * cols.child[:, None] + np.arange(10)).ravel()
-    cidx = np.repeat(np.arange(k), 10)
-    vals_c = cols.h.ravel()
-    has_p = cols.parent >= 0
-    rows_p = (10 * cols.parent[has_p][:, None] + np.arange(10)).ravel()
-    cidx_p = np.repeat(np.flatnonzero(has_p), 10)
-    vals_p = cols.hp[has_p].ravel()
-    has_e = cols.extra >= 0
-    if has_e.any():
-        rows_p = np.r_[rows_p, (10 * cols.extra[has_e][:, None] + np.arange(10)).ravel()]
-        cidx_p = np.r_[cidx_p, np.repeat(np.flatnonzero(has_e), 10)]
-        vals_p = np.r_[vals_p, cols.he[has_e].ravel()]
-    b = sp.coo_matrix((np.r_[vals_c, vals_p], (np.r_[rows_c, rows_p], np.r_[cidx, cidx_p])), shape=(10 * n, k))
-    return b.tocsc()
+    import scipy.sparse as sp
+
+    rows, cidx, vals = _triplets(cols)
+    return sp.coo_matrix((vals, (rows, cidx)), shape=(10 * n, len(cols))).tocsc()

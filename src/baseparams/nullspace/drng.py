@@ -11,7 +11,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..enums import Source
 from ..model.inertia import PAPER_NAMES
@@ -19,7 +18,7 @@ from ..model.robot import Robot
 from ..model.scale import decision_scale, ordinary_size
 from ..numerics import row_mask
 from ..pga.linalg import column_basis
-from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_sparse
+from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_dense, to_sparse
 from .principles import drng_columns
 from .rank import block_rank
 from .rules import rule_columns
@@ -61,7 +60,7 @@ class DRNGResult:
         """Number of columns ``k`` (not the rank: the columns are redundant)."""
         return len(self.columns)
 
-    def sparse(self) -> sp.csc_matrix:
+    def sparse(self):
         """``B_null (10 n, k)`` sparse, paper convention.
 
         Returns
@@ -78,9 +77,9 @@ class DRNGResult:
         Returns
         -------
         ndarray, shape ``(10 n, k)``
-            :meth:`sparse` as a dense array.
+            :meth:`sparse` as a dense array (built without scipy.sparse).
         """
-        return self.sparse().toarray()
+        return to_dense(self.columns, self.robot.n)
 
     def orthonormal(self, rtol: float = 1e-10) -> np.ndarray:
         """An orthonormal basis ``(10 n, rank)`` of the columns' span.

@@ -96,26 +96,27 @@ def _subtree_slices(robot: Robot) -> list[tuple[int, int]] | None:
     return out
 
 
-#: regressor backends: ``auto`` (compiled from :data:`compiled.MIN_SAMPLES` samples when numba is
-#: installed, numpy below), ``numpy``, ``compiled`` (numba required)
+#: regressor backends: ``auto`` (compiled for large batches when numba is installed, see
+#: :func:`use_compiled`), ``numpy``, ``compiled`` (numba required)
 BACKENDS = ("auto", "numpy", "compiled")
 
 
-def use_compiled(backend: str, samples: int) -> bool:
-    """Whether a batch of ``samples`` states goes to the compiled kernel.
+def use_compiled(backend: str, work: int) -> bool:
+    """Whether a batch goes to the compiled kernel.
 
     Parameters
     ----------
     backend : {"auto", "numpy", "compiled"}
         The caller's choice (:data:`BACKENDS`).
-    samples : int
-        Batch size ``S``.
+    work : int
+        Size of the batch: samples x rows x bodies (the numpy path costs ~0.1-0.3 us per unit).
 
     Returns
     -------
     bool
-        ``True`` for ``compiled``, and for ``auto`` with ``samples >= compiled.MIN_SAMPLES`` and
-        numba installed.
+        ``True`` for ``compiled``; for ``auto``, when numba is installed and either the kernels
+        are already loaded in this process or ``work >= compiled.MIN_WORK`` (where the numpy path
+        would cost more than loading them, ~0.3 s per process).
 
     Raises
     ------
@@ -130,7 +131,7 @@ def use_compiled(backend: str, samples: int) -> bool:
         if not compiled.available():
             raise BaseparamsError("the compiled regressor needs numba: pip install 'baseparams[fast]'")
         return True
-    return samples >= compiled.MIN_SAMPLES and compiled.available()
+    return compiled.available() and (compiled.loaded() or work >= compiled.MIN_WORK)
 
 
 def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = None, chunk: int = 1024,
@@ -155,9 +156,9 @@ def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = N
         every entry is set (the compiled kernel reads the zero blocks and writes only those not
         already zero).
     backend : {"auto", "numpy", "compiled"}
-        ``auto``: the compiled kernel (:mod:`baseparams.regressor.compiled`, numba) from
-        ``compiled.MIN_SAMPLES`` samples when numba is installed, numpy below (the compiled
-        path costs ~0.3 s of import per process).
+        ``auto``: the compiled kernel (:mod:`baseparams.regressor.compiled`, numba) for large
+        batches when numba is installed (:func:`use_compiled`), numpy for small ones (the
+        compiled path costs ~0.3 s of import per process).
 
     Returns
     -------
@@ -179,7 +180,7 @@ def regressor(robot: Robot, q, dq=None, ddq=None, *, state: TreeState | None = N
     if state is None:
         q, dq, ddq = as_states(robot.dof, q, dq, ddq)
         s = q.shape[0]
-        if use_compiled(backend, s):
+        if use_compiled(backend, s * robot.dof * robot.n):
             return compiled.tree_regressor(robot, q, dq, ddq, out=_checked_out(out, (s, robot.dof, 10 * robot.n)))
         if s > chunk:
             out = _checked_out(out, (s, robot.dof, 10 * robot.n)) if out is not None else \
@@ -325,14 +326,18 @@ def closed_regressor(robot: Robot, closed, *, out: np.ndarray | None = None, bac
     """
     s, na = closed.G.shape[0], closed.G.shape[2]
     shape = (s, na, 10 * robot.n)
-    if use_compiled(backend, s):
+    if use_compiled(backend, s * na * robot.n):
         return compiled.closed_regressor(robot, closed.q, closed.dq, closed.ddq, closed.G,
                                          out=_checked_out(out, shape))
     state = forward_kinematics(robot, closed.q, closed.dq, closed.ddq)
     e, acc = point_accelerations(robot, state)
-    xbar = swap(bar_lines(e, acc))  # (S, n, 10, 6)
-    lines = np.einsum("skc,ki,ska->saic", state.lines, state.support.astype(float), closed.G)
-    y = np.einsum("saic,sikc->saik", lines, xbar).reshape(shape)
+    xs = _bar_lines_swapped(e, acc)  # (S, n, 10, 6): wedge(L, X) = L . swap(X)
+    n = robot.n
+    # L~[s, a, i] = sum_k G[s, k, a] support[k, i] L[s, k]: one batched matmul
+    moved = state.lines[:, :, None, :] * state.support[None, :, :, None]  # (S, dof, n, 6)
+    lines = np.matmul(np.swapaxes(closed.G, 1, 2), moved.reshape(s, -1, n * 6)).reshape(s, na, n, 6)
+    y = np.matmul(lines.transpose(0, 2, 1, 3), np.swapaxes(xs, -1, -2))  # (S, n, na, 10)
+    y = np.ascontiguousarray(y.transpose(0, 2, 1, 3)).reshape(shape)
     if out is None:
         return y
     out = _checked_out(out, shape)

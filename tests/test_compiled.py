@@ -10,7 +10,7 @@ import pytest
 from baseparams.errors import BaseparamsError
 from baseparams.io.pinocchio import forces_from_pinocchio, state_to_pinocchio, to_pinocchio
 from baseparams.kinematics.loops import close_loops
-from baseparams.regressor import closed_regressor, compiled, regressor
+from baseparams.regressor import closed_regressor, compiled, projected_regressor, regressor
 from baseparams.robots import get, go2, puma560, random_robot
 
 from oracles import rnea
@@ -128,3 +128,56 @@ def test_compiled_closed_regressor_matches_numpy(name, rng):
     buf = np.full(y_n.shape, np.nan)
     assert closed_regressor(robot, cs, out=buf, backend="compiled") is buf
     assert np.abs(buf - y_n).max() <= 1e-12 * np.abs(y_n).max()
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
+def test_projected_regressor_is_the_regressor_times_the_map(seed, backend):
+    """Any map P (dense, mixing bodies) and any row subset: ``Y[:, rows] @ P``."""
+    rng = np.random.default_rng(200 + seed)
+    robot = random_robot(rng, int(rng.integers(2, 8)), joint_types="RPUSC", floating=bool(seed % 2), branching=0.5)
+    q, dq, ddq = _states(rng, robot, 33)
+    P = rng.normal(size=(10 * robot.n, int(rng.integers(1, 12))))
+    P[:, 0] = 0.0  # a column no body contributes to
+    rows = rng.permutation(robot.dof)[: int(rng.integers(1, robot.dof + 1))]
+    ref = regressor(robot, q, dq, ddq, backend="numpy")[:, rows] @ P
+    y = projected_regressor(robot, q, dq, ddq, P=P, rows=rows, backend=backend)
+    assert y.shape == ref.shape
+    assert np.abs(y - ref).max() <= 1e-12 * np.abs(ref).max()
+    buf = np.full(ref.shape, np.nan)
+    assert projected_regressor(robot, q, dq, ddq, P=P, rows=rows, out=buf, backend=backend) is buf
+    assert np.abs(buf - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_projected_regressor_bad_input(rng):
+    robot = puma560()
+    q = rng.uniform(-1, 1, (4, 6))
+    with pytest.raises(BaseparamsError, match="P must have shape"):
+        projected_regressor(robot, q, P=np.ones((59, 3)))
+    with pytest.raises(BaseparamsError, match="rows must be"):
+        projected_regressor(robot, q, P=np.ones((60, 3)), rows=[0, 6])
+
+
+@pytest.mark.parametrize("name, rows", [("go2", "all"), ("go2", "joints"), ("go2", "base"), ("puma560", "all"),
+                                        ("pkm-2rru-1rrs", "all"), ("four-bar", "all")])
+def test_base_regressor_predicts_the_torques(name, rows, rng):
+    """``Yb @ to_base(pi) = tau`` on the measured rows, compiled and numpy alike."""
+    from baseparams import analyze, load
+    from baseparams.numerics import closed_samples, row_mask
+
+    robot = load(name)
+    result = analyze(robot, rows=rows)
+    if robot.has_loops:
+        cs = closed_samples(robot, 200, rng)
+        q, dq, ddq = (x[:, robot.actuated] for x in (cs.q, cs.dq, cs.ddq))
+        mask = np.ones(len(robot.actuated), dtype=bool)
+    else:
+        q, dq, ddq = _states(rng, robot, 50, 1.0)
+        mask = row_mask(robot, rows)
+    tau = (regressor(robot, q, dq, ddq, backend="numpy") @ robot.parameters("paper"))[:, mask] \
+        if not robot.has_loops else closed_regressor(robot, cs) @ robot.parameters("paper")
+    beta = result.to_base(robot.parameters(result.convention), result.convention)
+    for backend in ("compiled", "numpy"):
+        yb = result.base_regressor(q, dq, ddq, backend=backend)
+        assert yb.shape == (q.shape[0], int(mask.sum()), result.n_base)
+        assert np.abs(yb @ beta - tau).max() <= 1e-9 * np.abs(tau).max()

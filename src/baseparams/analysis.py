@@ -101,8 +101,15 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
         assembly mode. The spanning tree's regressor (loops cut, tree coordinates) is
         ``baseparams.regressor.tp.regressor``.
     """
+    from .regressor.tp import closed_regressor
     from .regressor.tp import regressor as tree_regressor
 
+    q, dq, ddq, cs = _states(robot, q, dq, ddq)
+    return tree_regressor(robot, q, dq, ddq) if cs is None else closed_regressor(robot, cs)
+
+
+def _states(robot: Robot, q, dq, ddq):
+    """``(q, dq, ddq, closed)``: checked states; for a robot with loops, ``closed`` holds them closed."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     dq = np.zeros_like(q) if dq is None else np.atleast_2d(np.asarray(dq, dtype=float))
     ddq = np.zeros_like(q) if ddq is None else np.atleast_2d(np.asarray(ddq, dtype=float))
@@ -113,9 +120,8 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
             raise BaseparamsError(f"robot {robot.name!r}: {name} must have shape ({q.shape[0]}, {m}) ({m} {what}); "
                                   f"got {x.shape}")
     if not robot.has_loops:
-        return tree_regressor(robot, q, dq, ddq)
+        return q, dq, ddq, None
     from .kinematics.loops import close_loops
-    from .regressor.tp import closed_regressor
 
     cs = close_loops(robot, q, dq, ddq, cond_max=np.inf)
     if cs.kept != q.shape[0]:
@@ -124,7 +130,7 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
             f"({cs.not_converged} outside the workspace, {cs.branch_jumps} leave the reference assembly mode); "
             f"pick states nearer the reference q = 0 (baseparams.numerics.closed_samples draws valid "
             f"ones: its .q[:, robot.actuated])")
-    return closed_regressor(robot, cs)
+    return q, dq, ddq, cs
 
 
 @dataclass(frozen=True, eq=False)
@@ -268,7 +274,8 @@ class Analysis:
         """
         return self.base.from_base(beta)
 
-    def base_regressor(self, q, dq=None, ddq=None) -> np.ndarray:
+    def base_regressor(self, q, dq=None, ddq=None, *, out: np.ndarray | None = None,
+                       backend: str = "auto") -> np.ndarray:
         """The regressor of the base parameters.
 
         Parameters
@@ -277,6 +284,12 @@ class Analysis:
             States as for :func:`regressor`: ``m = robot.dof`` for a tree; for a robot with
             loops the actuated coordinates (``m = len(robot.actuated)``), loops closed from
             the reference assembly.
+        out : ndarray, shape ``(S, rows, n_base)``, optional
+            A C-contiguous float64 buffer to fill and return (reuse it across chunks of a log).
+        backend : {"auto", "numpy", "compiled"}
+            The regressor's backend (:func:`baseparams.regressor.tp.regressor`): the compiled
+            kernel projects each body's columns as it computes them, never forming the
+            ``10 n``-column regressor.
 
         Returns
         -------
@@ -288,11 +301,32 @@ class Analysis:
             on those rows.
         """
         from .numerics import row_mask
+        from .regressor.tp import closed_projected_regressor, projected_regressor
 
-        y = regressor(self.robot, q, dq, ddq)
-        if not self.robot.has_loops:
-            y = y[:, row_mask(self.robot, self.rows)]
-        return (y @ self.base.T)[:, :, self.base.independent]
+        q, dq, ddq, cs = _states(self.robot, q, dq, ddq)
+        if cs is not None:
+            return closed_projected_regressor(self.robot, cs, P=self.base_map, out=out, backend=backend)
+        rows = np.flatnonzero(row_mask(self.robot, self.rows))
+        return projected_regressor(self.robot, q, dq, ddq, P=self.base_map, rows=rows, out=out, backend=backend)
+
+    @property
+    def base_map(self) -> np.ndarray:
+        """The map ``P (10 n, n_base)`` from ``paper`` columns to base-parameter columns.
+
+        ``Yb = Y @ P`` (:meth:`base_regressor`): ``P`` is ``paper_from(convention)`` restricted
+        to the independent parameters; rows in the ``paper`` convention.
+
+        Returns
+        -------
+        ndarray, shape ``(10 n, n_base)``
+            Read-only.
+        """
+        p = self.__dict__.get("_base_map")
+        if p is None:
+            p = np.ascontiguousarray(self.base.T[:, self.base.independent])
+            p.flags.writeable = False
+            object.__setattr__(self, "_base_map", p)
+        return p
 
     def __repr__(self) -> str:
         return (f"<Analysis {self.robot.name}: nullity {self.nullity}, {self.n_base} base parameters "

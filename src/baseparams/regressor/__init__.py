@@ -1,5 +1,14 @@
 """The tetrahedral-point (TP) regressor, tensor and matrix forms."""
 
-from .tp import bar, closed_regressor, generalized_forces, regressor, regressor_tensor
+from .tp import (
+                 bar,
+                 closed_projected_regressor,
+                 closed_regressor,
+                 generalized_forces,
+                 projected_regressor,
+                 regressor,
+                 regressor_tensor,
+)
 
-__all__ = ["bar", "closed_regressor", "generalized_forces", "regressor", "regressor_tensor"]
+__all__ = ["bar", "closed_projected_regressor", "closed_regressor", "generalized_forces", "projected_regressor",
+           "regressor", "regressor_tensor"]

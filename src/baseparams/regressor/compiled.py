@@ -169,3 +169,89 @@ def closed_regressor(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarra
 
 def _c(x: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(x, dtype=float)
+
+
+def projection_csr(P: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A column map ``P (10 n, m)`` per body in CSR form, for the projected kernels.
+
+    Parameters
+    ----------
+    P : ndarray, shape ``(10 n, m)``
+        Rows in the ``paper`` convention (ten per body).
+    n : int
+        Number of bodies.
+
+    Returns
+    -------
+    cptr : ndarray of int64, shape ``(n + 1,)``
+        Body ``i``'s entries are ``cptr[i]:cptr[i + 1]``.
+    ccol : ndarray of int64
+        The column of each entry.
+    cmat : ndarray, shape ``(entries, 10)``
+        Body ``i``'s ten rows of that column (only columns not zero on body ``i`` are listed).
+    """
+    blocks = np.asarray(P, dtype=float).reshape(n, 10, -1)
+    nz = np.any(blocks != 0.0, axis=1)  # (n, m)
+    body, col = np.nonzero(nz)
+    cptr = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int64)
+    cmat = np.ascontiguousarray(blocks[body, :, col])
+    return cptr, col.astype(np.int64), cmat
+
+
+def tree_projected(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, P: np.ndarray,
+                   rowsel: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``Y[:, rowsel] @ P`` of a tree without forming ``Y``, compiled.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree).
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Validated states.
+    P : ndarray, shape ``(10 n, m)``
+        Column map, rows in the ``paper`` convention.
+    rowsel : ndarray of int, shape ``(rows,)``
+        The coordinates whose rows are kept, in order.
+    out : ndarray, shape ``(S, rows, m)``, optional
+        A C-contiguous float64 buffer (checked by the caller); every entry is set.
+
+    Returns
+    -------
+    ndarray, shape ``(S, rows, m)``
+        The projected regressor.
+    """
+    lay = Layout(robot)
+    cptr, ccol, cmat = projection_csr(P, robot.n)
+    rowsel = np.ascontiguousarray(rowsel, dtype=np.int64)
+    out = np.empty((q.shape[0], len(rowsel), P.shape[1])) if out is None else out
+    _kernels().tree_projected(*lay.args(), _c(q), _c(dq), _c(ddq), rowsel, cptr, ccol, cmat, out)
+    return out
+
+
+def closed_projected(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, G: np.ndarray, P: np.ndarray,
+                     out: np.ndarray | None = None) -> np.ndarray:
+    """``Y_closed @ P`` of a closed-loop robot without forming ``Y_closed``, compiled.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot with loops.
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Closed-loop states of all tree coordinates.
+    G : ndarray, shape ``(S, dof, na)``
+        ``dq / dq_a`` of each state.
+    P : ndarray, shape ``(10 n, m)``
+        Column map, rows in the ``paper`` convention.
+    out : ndarray, shape ``(S, na, m)``, optional
+        A C-contiguous float64 buffer (checked by the caller); every entry is set.
+
+    Returns
+    -------
+    ndarray, shape ``(S, na, m)``
+        The projected closed-loop regressor.
+    """
+    lay = Layout(robot)
+    cptr, ccol, cmat = projection_csr(P, robot.n)
+    out = np.empty((G.shape[0], G.shape[2], P.shape[1])) if out is None else out
+    _kernels().closed_projected(*lay.args(), _c(q), _c(dq), _c(ddq), _c(G), cptr, ccol, cmat, out)
+    return out

@@ -291,7 +291,7 @@ def closed(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair
     nblocks = (s + _BLOCK - 1) // _BLOCK
     for blk in prange(nblocks):
         rot, pos, vel, acc, lines, xs, er, et, pts, pacc = _scratch(n, dof)
-        lt = np.empty(6)  # (registers after inlining; read only by this thread)
+        lt = np.empty(6 + 256)[128:134]  # padded: no cache line shared with another thread
         for smp in range(blk * _BLOCK, min(s, (blk + 1) * _BLOCK)):
             _sample(smp, parent, q_index, ndofs, floating, screws, gravity, pair_m, pair_n, q, dq, ddq,
                     rot, pos, vel, acc, lines, xs, er, et, pts, pacc)
@@ -304,3 +304,81 @@ def closed(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair
                         for c in range(6):
                             lt[c] += lines[k, c] * gk
                     _dot_block(out, smp, a, i, lt[0], lt[1], lt[2], lt[3], lt[4], lt[5], xs)
+
+
+@njit(cache=True, inline="always")
+def _emit_projected(out, smp, r, i, l0, l1, l2, l3, l4, l5, c, xs, y10, cptr, ccol, cmat):
+    """``out[smp, r, ccol[t]] += (L . xs[i])[k] cmat[t, k]`` over the projected columns of body ``i``."""
+    for k in range(10):
+        if c >= 0:
+            y10[k] = xs[i, c, k]
+        else:
+            y10[k] = (l0 * xs[i, 0, k] + l1 * xs[i, 1, k] + l2 * xs[i, 2, k]
+                      + l3 * xs[i, 3, k] + l4 * xs[i, 4, k] + l5 * xs[i, 5, k])
+    for t in range(cptr[i], cptr[i + 1]):
+        v = 0.0
+        for k in range(10):
+            v += y10[k] * cmat[t, k]
+        out[smp, r, ccol[t]] += v
+
+
+@njit(cache=True, parallel=True)
+def tree_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n, q, dq, ddq,
+                   rowsel, cptr, ccol, cmat, out):
+    """``out (S, len(rowsel), m) = Y[:, rowsel] @ P`` without forming ``Y``.
+
+    ``P (10 n, m)`` is given per body in CSR form: body ``i``'s ten rows of column ``ccol[t]`` are
+    ``cmat[t]`` for ``t`` in ``cptr[i]:cptr[i + 1]`` (zero elsewhere).
+    """
+    n, dof, s = parent.shape[0], screws.shape[0], q.shape[0]
+    moves = _moves(n, dof, anc_ptr, anc)
+    unit = np.full(dof, -1, dtype=np.int64)
+    for i in range(n):
+        if floating[i]:
+            for c in range(6):
+                unit[q_index[i] + c] = c
+    nblocks = (s + _BLOCK - 1) // _BLOCK
+    for blk in prange(nblocks):
+        rot, pos, vel, acc, lines, xs, er, et, pts, pacc = _scratch(n, dof)
+        y10 = np.empty(10 + 256)[128:138]  # padded: no cache line shared with another thread
+        for smp in range(blk * _BLOCK, min(s, (blk + 1) * _BLOCK)):
+            _sample(smp, parent, q_index, ndofs, floating, screws, gravity, pair_m, pair_n, q, dq, ddq,
+                    rot, pos, vel, acc, lines, xs, er, et, pts, pacc)
+            out[smp] = 0.0
+            for r in range(rowsel.shape[0]):
+                j = rowsel[r]
+                l0, l1, l2, l3, l4, l5 = lines[j, 0], lines[j, 1], lines[j, 2], lines[j, 3], lines[j, 4], lines[j, 5]
+                for i in range(n):
+                    if moves[j, i] and cptr[i + 1] > cptr[i]:
+                        _emit_projected(out, smp, r, i, l0, l1, l2, l3, l4, l5, unit[j], xs, y10, cptr, ccol, cmat)
+
+
+@njit(cache=True, parallel=True)
+def closed_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n, q, dq, ddq,
+                     G, cptr, ccol, cmat, out):
+    """``out (S, na, m) = Y_closed @ P`` without forming the closed-loop regressor.
+
+    ``P`` in CSR form as in :func:`tree_projected`.
+    """
+    n, dof, s, na = parent.shape[0], screws.shape[0], q.shape[0], G.shape[2]
+    nblocks = (s + _BLOCK - 1) // _BLOCK
+    for blk in prange(nblocks):
+        rot, pos, vel, acc, lines, xs, er, et, pts, pacc = _scratch(n, dof)
+        y10 = np.empty(10 + 256)[128:138]
+        lt = np.empty(6 + 256)[128:134]
+        for smp in range(blk * _BLOCK, min(s, (blk + 1) * _BLOCK)):
+            _sample(smp, parent, q_index, ndofs, floating, screws, gravity, pair_m, pair_n, q, dq, ddq,
+                    rot, pos, vel, acc, lines, xs, er, et, pts, pacc)
+            out[smp] = 0.0
+            for a in range(na):
+                for i in range(n):
+                    if cptr[i + 1] == cptr[i]:
+                        continue
+                    lt[:] = 0.0
+                    for t in range(anc_ptr[i], anc_ptr[i + 1]):
+                        k = anc[t]
+                        gk = G[smp, k, a]
+                        for c in range(6):
+                            lt[c] += lines[k, c] * gk
+                    _emit_projected(out, smp, a, i, lt[0], lt[1], lt[2], lt[3], lt[4], lt[5], -1, xs, y10,
+                                    cptr, ccol, cmat)

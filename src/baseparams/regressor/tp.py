@@ -343,3 +343,108 @@ def closed_regressor(robot: Robot, closed, *, out: np.ndarray | None = None, bac
     out = _checked_out(out, shape)
     out[...] = y
     return out
+
+
+def projected_regressor(robot: Robot, q, dq=None, ddq=None, *, P: np.ndarray, rows=None,
+                        out: np.ndarray | None = None, backend: str = "auto", chunk: int = 1024) -> np.ndarray:
+    """``Y[:, rows] @ P``: the TP regressor mapped to other columns (e.g. base parameters).
+
+    The compiled kernel never forms the ``10 n``-column regressor: each body's ten columns are
+    projected as they are computed, so a base regressor costs about as much as the regressor
+    itself and its memory is that of its own output.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree: loops cut; :func:`closed_projected_regressor` closes them).
+    q : array_like, shape ``(S, dof)`` or ``(dof,)``
+        Positions.
+    dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
+        Velocities and accelerations; default zero.
+    P : ndarray, shape ``(10 n, m)``
+        Column map; its rows in the ``paper`` convention (spatial pseudo-inertia entries of each
+        body, world frame at q = 0), e.g. the base-parameter map of
+        :meth:`baseparams.Analysis.base_regressor`.
+    rows : array_like of int, optional
+        Coordinates whose rows are kept, in order (default all ``dof``).
+    out : ndarray, shape ``(S, len(rows), m)``, optional
+        A C-contiguous float64 buffer to fill and return.
+    backend : {"auto", "numpy", "compiled"}
+        As for :func:`regressor`.
+    chunk : int
+        Samples per numpy batch (memory).
+
+    Returns
+    -------
+    ndarray, shape ``(S, len(rows), m)``
+        ``Y[:, rows] @ P`` with ``Y`` the regressor of :func:`regressor` (gravity included).
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes of the states, of ``P`` or of ``out``; rows out of range.
+    """
+    q, dq, ddq = as_states(robot.dof, q, dq, ddq)
+    P = _checked_map(P, robot.n)
+    rowsel = np.arange(robot.dof) if rows is None else np.asarray(rows, dtype=np.int64).reshape(-1)
+    if rowsel.size and (rowsel.min() < 0 or rowsel.max() >= robot.dof):
+        raise BaseparamsError(f"rows must be coordinates 0..{robot.dof - 1}, got {rowsel.tolist()}")
+    s = q.shape[0]
+    shape = (s, len(rowsel), P.shape[1])
+    out = _checked_out(out, shape)
+    if use_compiled(backend, s * len(rowsel) * robot.n):
+        return compiled.tree_projected(robot, q, dq, ddq, P, rowsel, out=out)
+    out = np.empty(shape) if out is None else out
+    for k in range(0, s, chunk):
+        sl = slice(k, k + chunk)
+        out[sl] = regressor(robot, q[sl], dq[sl], ddq[sl], backend="numpy")[:, rowsel] @ P
+    return out
+
+
+def closed_projected_regressor(robot: Robot, closed, *, P: np.ndarray, out: np.ndarray | None = None,
+                               backend: str = "auto") -> np.ndarray:
+    """``Y_closed @ P``: the closed-loop regressor mapped to other columns (e.g. base parameters).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot with loops (``n`` bodies, ``na`` actuated coordinates).
+    closed : ClosedStates
+        Closed-loop states (:func:`baseparams.kinematics.loops.close_loops`).
+    P : ndarray, shape ``(10 n, m)``
+        Column map, rows in the ``paper`` convention.
+    out : ndarray, shape ``(S, na, m)``, optional
+        A C-contiguous float64 buffer to fill and return.
+    backend : {"auto", "numpy", "compiled"}
+        As for :func:`regressor`.
+
+    Returns
+    -------
+    ndarray, shape ``(S, na, m)``
+        ``closed_regressor(robot, closed) @ P``.
+
+    Raises
+    ------
+    BaseparamsError
+        A wrong ``P`` or ``out``.
+    """
+    P = _checked_map(P, robot.n)
+    s, na = closed.G.shape[0], closed.G.shape[2]
+    out = _checked_out(out, (s, na, P.shape[1]))
+    if use_compiled(backend, s * na * robot.n):
+        return compiled.closed_projected(robot, closed.q, closed.dq, closed.ddq, closed.G, P, out=out)
+    y = closed_regressor(robot, closed, backend="numpy") @ P
+    if out is None:
+        return y
+    out[...] = y
+    return out
+
+
+def _checked_map(P, n: int) -> np.ndarray:
+    """``P`` as a float ``(10 n, m)`` array, or one clear error."""
+    P = np.asarray(P, dtype=float)
+    if P.ndim != 2 or P.shape[0] != 10 * n:
+        raise BaseparamsError(f"P must have shape (10 n, m) = ({10 * n}, m), got {P.shape}")
+    if not np.all(np.isfinite(P)):
+        raise BaseparamsError("P contains NaN or inf")
+    return P

@@ -1,0 +1,53 @@
+"""StreamingQR: the triangular factor of a tall matrix fed in blocks of rows."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from baseparams.errors import BaseparamsError
+from baseparams.numerics import StreamingQR, rank_decision
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31), ncols=st.integers(1, 12), splits=st.lists(st.integers(0, 40), max_size=6),
+       rank_deficit=st.integers(0, 3))
+def test_streaming_factor_equals_the_whole_matrix(seed, ncols, splits, rank_deficit):
+    """Any split into blocks: ``R^T R = W^T W``, same singular values, ``||W x|| = ||R x||``."""
+    rng = np.random.default_rng(seed)
+    rows = sum(splits) + 1
+    w = rng.normal(size=(rows, ncols)) * 10.0 ** rng.uniform(-3, 3, ncols)
+    if rank_deficit and ncols > rank_deficit:
+        w[:, :rank_deficit] = w[:, rank_deficit:] @ rng.normal(size=(ncols - rank_deficit, rank_deficit))
+    qr = StreamingQR(ncols)
+    start = 0
+    for k in splits + [1]:
+        qr.add(w[start:start + k])
+        start += k
+    assert qr.rows == rows
+    assert qr.r.shape == (min(rows, ncols), ncols)
+    assert np.allclose(np.triu(qr.r), qr.r)
+    scale = np.linalg.norm(w) ** 2
+    assert np.abs(qr.r.T @ qr.r - w.T @ w).max() <= 1e-12 * scale
+    x = rng.normal(size=ncols)
+    assert np.isclose(np.linalg.norm(qr.r @ x), np.linalg.norm(w @ x), rtol=1e-9, atol=1e-12 * np.linalg.norm(w))
+    sw, sr = np.linalg.svd(w, compute_uv=False), np.linalg.svd(qr.r, compute_uv=False)
+    assert np.allclose(sr, sw[: len(sr)], rtol=1e-9, atol=1e-12 * sw[0])
+
+
+def test_rank_decision_on_the_factor_matches_the_matrix(rng):
+    """The certification's numerical nullspace is the same computed on R as on W."""
+    w = rng.normal(size=(3000, 40)) @ np.diag(np.r_[np.ones(31), np.zeros(9)]) @ rng.normal(size=(40, 40))
+    a, b = rank_decision(w), rank_decision(StreamingQR(40).add(w).r)
+    assert a.rank == b.rank == 31
+    proj = a.null_basis @ a.null_basis.T - b.null_basis @ b.null_basis.T
+    assert np.abs(proj).max() < 1e-9
+
+
+def test_bad_blocks_are_one_clear_error():
+    qr = StreamingQR(3)
+    with pytest.raises(BaseparamsError, match=r"shape \(k, 3\)"):
+        qr.add(np.ones((4, 2)))
+    with pytest.raises(BaseparamsError, match="NaN"):
+        qr.add(np.array([[1.0, np.nan, 0.0]]))
+    assert qr.rows == 0 and qr.r.shape == (0, 3)

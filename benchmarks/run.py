@@ -12,7 +12,11 @@ Usage::
 Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING):
 
 * ``regressor``     TP regressor vs a Python loop over ``pin.computeJointTorqueRegressor``
-                    (Puma560, Go2; S = 1, 100, 10000 samples) and its tracemalloc peak.
+                    (Puma560, Go2, talos_full_v2; S = 1, 100, 10000 samples); at S = 10000 the
+                    compiled kernel (fresh output, reused ``out=``, one thread) vs the floor,
+                    one write pass over the output.
+* ``base_streaming``  base regressor + streaming QR over 10^6 Puma560 samples.
+* ``analyze_cli``   ``baseparams analyze`` end to end in fresh processes.
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
@@ -164,13 +168,40 @@ def machine_info() -> dict:
     return info
 
 
+def _talos_path():
+    """talos_full_v2.urdf of example-robot-data (a test dependency), or None."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    try:
+        from erd import urdf_files
+    except ImportError:
+        return None
+    found = [f for f in urdf_files() if f.name == "talos_full_v2.urdf"]
+    return str(found[0]) if found else None
+
+
 def _robot(name: str):
+    import warnings
+
     from baseparams.robots import go2, puma560
+    if name == "talos_full_v2":
+        from baseparams.loading import load_model
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return load_model(_talos_path(), floating=True, strict_inertia=False)[0]
     return {"puma560": puma560, "go2": go2}[name]()
+
+
+def _numba_threads(k: int | None) -> int:
+    """Set numba's thread count (``None``: all cores); returns the count in effect."""
+    import numba
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS if k is None else k)
+    return numba.get_num_threads()
 
 
 # ----------------------------------------------------------------------------- groups
 def bench_regressor(out: dict, quick: bool) -> None:
+    """Regressor vs Pinocchio's loop; at S = 10000 the compiled kernel (fresh output, reused
+    ``out=`` buffer, one thread) against one write pass over the output (the floor)."""
     from baseparams.regressor import regressor
     try:
         import pinocchio as pin
@@ -182,7 +213,8 @@ def bench_regressor(out: dict, quick: bool) -> None:
 
     sizes = (1, 100, 10000)
     reps = {1: 51, 100: 21, 10000: 5} if not quick else {1: 21, 100: 7, 10000: 3}
-    for name in ROBOTS:
+    names = ROBOTS + (("talos_full_v2",) if _talos_path() else ())
+    for name in names:
         robot = _robot(name)
         model = data = None
         if pin is not None:
@@ -193,23 +225,118 @@ def bench_regressor(out: dict, quick: bool) -> None:
             q, dq, ddq = (rng.uniform(0.0, 1.0, (s, robot.dof)) for _ in range(3))
             key = f"{name}_S{s}"
             log(f"  regressor {key}: ours ...")
-            t_ours, r_ours = measure(lambda: regressor(robot, q, dq, ddq), reps[s])
+            t_ours, r_ours = measure(lambda: regressor(robot, q, dq, ddq, backend="numpy"), reps[s])
             out[f"regressor_ours_{key}_s"] = t_ours
             out[f"regressor_ours_{key}_s_repeats"] = r_ours
-            out[f"regressor_peak_mb_{key}"] = peak_mb(lambda: regressor(robot, q, dq, ddq))
-            if pin is None:
-                continue
-            states = [state_to_pinocchio(robot, q[k], dq[k], ddq[k]) for k in range(s)]  # not timed
+            if s < 10000:
+                out[f"regressor_peak_mb_{key}"] = peak_mb(lambda: regressor(robot, q, dq, ddq, backend="numpy"))
+            t_pin = None
+            if pin is not None:
+                states = [state_to_pinocchio(robot, q[k], dq[k], ddq[k]) for k in range(s)]  # not timed
 
-            def pin_loop():
-                for qp, vp, ap in states:
-                    pin.computeJointTorqueRegressor(model, data, qp, vp, ap)
+                def pin_loop():
+                    for qp, vp, ap in states:
+                        pin.computeJointTorqueRegressor(model, data, qp, vp, ap)
 
-            log(f"  regressor {key}: pinocchio ...")
-            t_pin, r_pin = measure(pin_loop, reps[s])
-            out[f"regressor_pin_{key}_s"] = t_pin
-            out[f"regressor_pin_{key}_s_repeats"] = r_pin
-            out[f"regressor_vs_pinocchio_{key}"] = t_pin / t_ours
+                log(f"  regressor {key}: pinocchio ...")
+                t_pin, r_pin = measure(pin_loop, reps[s])
+                out[f"regressor_pin_{key}_s"] = t_pin
+                out[f"regressor_pin_{key}_s_repeats"] = r_pin
+                out[f"regressor_numpy_vs_pinocchio_{key}"] = t_pin / t_ours
+            if s == 10000:
+                _bench_compiled(out, robot, key, q, dq, ddq, t_pin, reps[s])
+
+
+def _bench_compiled(out: dict, robot, key: str, q, dq, ddq, t_pin: float | None, reps: int) -> None:
+    """The compiled kernel at one batch size: fresh output, reused buffer (all threads, one)."""
+    from baseparams.regressor import regressor
+
+    s = q.shape[0]
+    buf = np.empty((s, robot.dof, 10 * robot.n))
+    regressor(robot, q[:2], dq[:2], ddq[:2], backend="compiled")  # compile / load the cache (not timed)
+    log(f"  regressor {key}: compiled ...")
+    threads = _numba_threads(None)
+    t_floor, _ = measure(lambda: buf.fill(1.0), reps)
+    t_fresh, _ = measure(lambda: regressor(robot, q, dq, ddq, backend="compiled"), reps)
+    t_reuse, n_reuse = measure(lambda: regressor(robot, q, dq, ddq, out=buf, backend="compiled"), reps)
+    _numba_threads(1)
+    t_one, _ = measure(lambda: regressor(robot, q, dq, ddq, out=buf, backend="compiled"), reps)
+    _numba_threads(None)
+    out["regressor_compiled_threads"] = threads
+    out[f"regressor_floor_{key}_us"] = 1e6 * t_floor / s
+    out[f"regressor_compiled_fresh_{key}_us"] = 1e6 * t_fresh / s
+    out[f"regressor_compiled_{key}_us"] = 1e6 * t_reuse / s
+    out[f"regressor_compiled_{key}_us_repeats"] = n_reuse
+    out[f"regressor_compiled_1thread_{key}_us"] = 1e6 * t_one / s
+    out[f"regressor_numpy_{key}_us"] = 1e6 * out[f"regressor_ours_{key}_s"] / s
+    out[f"regressor_vs_floor_{key}"] = t_reuse / t_floor
+    out[f"regressor_fresh_vs_floor_{key}"] = t_fresh / t_floor
+    if t_pin is not None:
+        out[f"regressor_pin_{key}_us"] = 1e6 * t_pin / s
+        out[f"regressor_vs_pinocchio_{key}"] = t_pin / t_reuse
+        out[f"regressor_fresh_vs_pinocchio_{key}"] = t_pin / t_fresh
+        out[f"regressor_1thread_vs_pinocchio_{key}"] = t_pin / t_one
+
+
+def bench_base_streaming(out: dict, quick: bool) -> None:
+    """Base regressor + streaming QR least squares over 10^6 Puma560 samples in chunks of 10^4:
+    time, tracemalloc peak (independent of S), error of the recovered base parameters."""
+    import baseparams
+    from baseparams.numerics import StreamingQR
+
+    robot = baseparams.load("puma560")
+    res = baseparams.analyze(robot)
+    nb, chunk = res.n_base, 10000
+    beta = res.to_base(robot.parameters(res.convention), res.convention)
+    res.base_regressor(np.zeros((2, 6)), backend="compiled")  # compile / load the cache (not timed)
+    buf = np.empty((chunk, robot.dof, nb))
+
+    def run(total: int):
+        rng = np.random.default_rng(0)
+        qr = StreamingQR(nb + 1)
+        for _ in range(0, total, chunk):
+            q, dq, ddq = (rng.uniform(-2.0, 2.0, (chunk, 6)) for _ in range(3))
+            yb = res.base_regressor(q, dq, ddq, out=buf, backend="compiled")
+            qr.add(yb, yb @ beta)
+        return qr
+
+    total = 10**5 if quick else 10**6
+    log(f"  base regressor + streaming QR, {total} samples ...")
+    t, n = measure(lambda: run(total), 1 if not quick else 3, warmup=0)
+    r = run(total).r
+    est = np.linalg.solve(r[:nb, :nb], r[:nb, nb])
+    out["base_streaming_samples"] = total
+    out["base_streaming_s"] = t
+    out["base_streaming_s_repeats"] = n
+    out["base_streaming_per_1e6_s"] = t * 1e6 / total
+    out["base_streaming_peak_mb_1e5"] = peak_mb(lambda: run(10**5))
+    out["base_streaming_beta_rel_error"] = float(np.abs(est - beta).max() / np.abs(beta).max())
+
+
+def bench_analyze_cli(out: dict, quick: bool) -> None:
+    """``baseparams analyze`` end to end in a fresh process (``python -m baseparams``; imports,
+    loading, DRNG, certification, regrouping, report), median of fresh runs."""
+    import subprocess
+
+    cases = [("puma560", ["puma560"]), ("pkm-2rru-1rrs", ["pkm-2rru-1rrs"])]
+    if _talos_path():
+        cases.append(("talos_full_v2", [_talos_path(), "--floating"]))
+    reps = 3 if quick else 5
+    for name, argv in cases:
+        cmd = [sys.executable, "-m", "baseparams", "analyze", *argv, "--json"]
+        log(f"  analyze {name} (fresh processes) ...")
+
+        def once():
+            done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+            if done.returncode != 0:
+                raise RuntimeError(f"{' '.join(cmd)}: exit {done.returncode}: {done.stderr[-300:]}")
+            return done.stdout
+
+        t, n = measure(once, reps)
+        status = json.loads(once())["status"]
+        out[f"analyze_cli_{name}_s"] = t
+        out[f"analyze_cli_{name}_s_repeats"] = n
+        out[f"analyze_cli_{name}_status"] = status
 
 
 def bench_drng_vs_numerical(out: dict, quick: bool) -> None:
@@ -369,6 +496,10 @@ def bench_files(out: dict, quick: bool) -> None:
         robot, _ = load_model(path, floating=True, strict_inertia=False)
         t_d, n_d = measure(lambda: drng(robot), 21)
         t_c, n_c = measure(lambda: certify(robot, seed=1), 3)
+        from baseparams.numerics import numerical_nullspace
+        t_num, _ = measure(lambda: numerical_nullspace(robot, seed=1), 3)
+        out["talos_full_v2_numerical_ms"] = 1e3 * t_num
+        out["talos_full_v2_drng_vs_numerical"] = t_num / t_d
         out["talos_full_v2_bodies"] = robot.n
         out["talos_full_v2_load_ms"] = 1e3 * t_load
         out["talos_full_v2_drng_ms"] = 1e3 * t_d
@@ -402,6 +533,8 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "files": bench_files,
     "special": bench_special,
     "regressor": bench_regressor,
+    "base_streaming": bench_base_streaming,
+    "analyze_cli": bench_analyze_cli,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
     "loops": bench_loops,

@@ -23,11 +23,12 @@ LAYERS = {
     "numerics": 4,
     "nullspace": 5,
     "base": 6,
-    "io": 7,
-    "robots": 8,
-    "loading": 9, "analysis": 9,
-    "cli": 10,
-    "__main__": 11, "__init__": 11,
+    "ident": 7,
+    "io": 8,
+    "robots": 9,
+    "loading": 10, "analysis": 10,
+    "cli": 11,
+    "__main__": 12, "__init__": 12,
 }
 
 

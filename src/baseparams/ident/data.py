@@ -1,0 +1,53 @@
+"""A recorded joint trajectory mapped to a model's joints (what the readers produce).
+
+Units are the model's: rad or m for positions, N m or N for generalized forces, seconds for
+time. Every array's first axis is the sample.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class JointLog:
+    """A joint-space log: time, positions, optional rates, generalized forces.
+
+    Parameters
+    ----------
+    t : ndarray, shape ``(S,)``
+        Time stamps [s], strictly increasing.
+    joints : tuple of str, shape ``(m,)``
+        The model's joint names (1-dof joints: R or P) of the columns, in the log's column order.
+    q : ndarray, shape ``(S, m)``
+        Joint positions [rad or m], joint side (after sign and gear ratio).
+    tau : ndarray, shape ``(S, m)``
+        Joint generalized forces [N m or N], joint side (after sign, gear ratio and
+        current-to-torque gain).
+    dq, ddq : ndarray, shape ``(S, m)``, optional
+        Measured velocities and accelerations; ``None`` when the log has none (derived from
+        ``q`` by the preprocessing).
+    source : str
+        Where the log comes from (a file name), for messages.
+    removed : dict of str to int
+        Samples removed so far and why (reason -> count); nothing is dropped without a count.
+    notes : tuple of str
+        One line per decision taken on the data (defaults chosen, conversions), for the report.
+    """
+
+    t: np.ndarray
+    joints: tuple[str, ...]
+    q: np.ndarray
+    tau: np.ndarray
+    dq: np.ndarray | None = None
+    ddq: np.ndarray | None = None
+    source: str = "<memory>"
+    removed: dict[str, int] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples ``S``."""
+        return len(self.t)

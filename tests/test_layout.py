@@ -27,8 +27,9 @@ LAYERS = {
     "io": 8,
     "robots": 9,
     "loading": 10, "analysis": 10,
-    "cli": 11,
-    "__main__": 12, "__init__": 12,
+    "identify": 11,
+    "cli": 12,
+    "__main__": 13, "__init__": 13,
 }
 
 

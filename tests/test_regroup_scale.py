@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from baseparams.base import base_parameters, paper_from
-from baseparams.base.regroup import LENGTH_POWER, _fmt, clean, length_scale
+from baseparams.base.regroup import LENGTH_POWER, clean, length_scale
+from baseparams.base.regroup import format_coefficient as _fmt
 from baseparams.model import Inertia, RobotBuilder
 from baseparams.nullspace.certify import certify
 from baseparams.numerics import stacked_regressor
@@ -196,3 +197,10 @@ def test_absurd_scales_are_never_certified_wrong(s):
     (Before, x 1e6 was 'completed' with nullity 41 instead of 24, exit 0.)"""
     c = certify(ur5(s), seed=0)
     assert not c.certified or c.nullity == 24
+
+
+def test_clean_snaps_any_memory_layout():
+    """A transposed (Fortran-ordered) array is snapped too: its flat copy was once never written back."""
+    x = np.array([[0.9999999999999989, 2.0000000000000004], [0.30000000000000004, 4.0]])
+    for arr in (x, np.asfortranarray(x), x.T.copy().T, x[:, ::-1][:, ::-1]):
+        assert clean(arr).tolist() == [[1.0, 2.0], [0.3, 4.0]]

@@ -103,7 +103,7 @@ def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
     ndarray
         A snapped copy, same shape.
     """
-    x = np.array(x, dtype=float)
+    x = np.array(x, dtype=float, order="C")  # C order: flat is a view (an F-ordered copy was never snapped)
     flat = x.reshape(-1)
     nz = np.flatnonzero(np.isfinite(flat) & (flat != 0))
     if not len(nz):
@@ -127,8 +127,19 @@ def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
     return x
 
 
-def _fmt(c: float) -> str:
-    """The shortest string that reads back as exactly ``c`` (``repr``), ``2`` for ``2.0``."""
+def format_coefficient(c: float) -> str:
+    """The shortest string that reads back as exactly ``c``.
+
+    Parameters
+    ----------
+    c : float
+        A coefficient.
+
+    Returns
+    -------
+    str
+        ``repr(c)`` without a trailing ``.0`` (``2`` for ``2.0``).
+    """
     s = repr(float(c))
     return s[:-2] if s.endswith(".0") else s
 
@@ -204,7 +215,8 @@ class BaseParameters:
                     continue
                 sign = "-" if c < 0 else "+"
                 mag = abs(c)
-                terms.append(f"{sign} {self.names[d]}" if mag == 1 else f"{sign} {_fmt(mag)}*{self.names[d]}")
+                coef = "" if mag == 1 else f"{format_coefficient(mag)}*"
+                terms.append(f"{sign} {coef}{self.names[d]}")
             out.append({"name": bname, "expression": " ".join(terms)})
         return out
 
@@ -267,12 +279,26 @@ class BaseParameters:
         return np.linalg.pinv(self.E) @ beta
 
 
-def _choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> np.ndarray:
+def choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> np.ndarray:
     """Greedy rows of ``b (m, k)`` (in ``order``) spanning R^k: ``b[D]`` invertible.
 
     A row is taken when its component outside the span of the rows taken so far is above
     ``rtol`` times the largest row norm: with ``b`` an orthonormal basis (of dimensionless
     coordinates) the choice depends on its column space only, not on the basis chosen in it.
+
+    Parameters
+    ----------
+    b : ndarray, shape ``(m, k)``
+        A nullspace basis, one row per parameter.
+    order : ndarray of int
+        Candidate parameters, most preferred dependent first.
+    rtol : float
+        Relative threshold of a row's new component.
+
+    Returns
+    -------
+    ndarray of int, shape ``(<= k,)``
+        The dependent parameters chosen (``k`` of them when ``b`` has full column rank).
     """
     k = b.shape[1]
     basis = np.zeros((0, k))
@@ -346,7 +372,7 @@ def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str) -> Ba
     # MY, MX, then second moments backwards: inertia.SPECS)
     within = _inertia.SPECS[convention].regroup_order
     order = np.array([10 * i + w for i in reversed(range(robot.n)) for w in within])
-    dep = _choose_dependent(q, order, max(1e-8, noise)) if k else np.zeros(0, dtype=int)
+    dep = choose_dependent(q, order, max(1e-8, noise)) if k else np.zeros(0, dtype=int)
     if len(dep) < k:
         raise RuntimeError("nullspace basis is rank-deficient; orthonormalise it first")
     ind = np.setdiff1d(np.arange(n10), dep)

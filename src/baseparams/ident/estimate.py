@@ -1,0 +1,256 @@
+"""Least-squares estimators on a streaming QR: OLS, WLS, standard deviations, excitation.
+
+The model ``tau = A theta + e`` is accumulated row by row of the generalized forces: for each
+measured row ``r`` (a joint's torque), the triangular factor of ``[A_r | tau_r]`` over every
+sample (:class:`~baseparams.numerics.StreamingQR`), so memory and the estimators' cost do not
+grow with the log length, and per-joint residuals and weights come without a second pass.
+
+Ordinary least squares stacks the row factors; weighted least squares (Gautier's per-joint
+weighting) divides row ``r``'s factor by its OLS noise ``sigma_r`` first. Standard deviations:
+``cov(theta) = sigma^2 (A^T W A)^-1`` with ``sigma^2 = ||W^(1/2) e||^2 / (N - p)``, from the
+stacked factor ``R11`` as ``sigma * ||row_i(R11^-1)||``; ``%sigma = 100 std / |theta|``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import BaseparamsError
+from ..numerics import StreamingQR
+
+
+class RowAccumulator:
+    """Per measured row, the triangular factor of ``[A_r | tau_r]`` over all samples fed.
+
+    Parameters
+    ----------
+    nrows : int
+        Number of measured rows ``m`` (generalized forces per sample).
+    nparams : int
+        Number of model parameters ``p`` (columns of ``A``).
+    """
+
+    def __init__(self, nrows: int, nparams: int):
+        self.nrows, self.nparams = int(nrows), int(nparams)
+        self.factors = [StreamingQR(self.nparams + 1) for _ in range(self.nrows)]
+        self.samples = 0
+
+    def add(self, a: np.ndarray, tau: np.ndarray) -> RowAccumulator:
+        """Feed samples.
+
+        Parameters
+        ----------
+        a : ndarray, shape ``(S, m, p)``
+            Model regressor of the samples.
+        tau : ndarray, shape ``(S, m)``
+            Measured generalized forces.
+
+        Returns
+        -------
+        RowAccumulator
+            This object.
+
+        Raises
+        ------
+        BaseparamsError
+            Shapes that do not match, NaN or inf.
+        """
+        if a.shape[1:] != (self.nrows, self.nparams) or tau.shape != a.shape[:2]:
+            raise BaseparamsError(f"regressor {a.shape} and torques {tau.shape} do not match "
+                                  f"({self.nrows} rows, {self.nparams} parameters)")
+        for r, f in enumerate(self.factors):
+            f.add(a[:, r], tau[:, r])
+        self.samples += a.shape[0]
+        return self
+
+
+@dataclass(frozen=True, eq=False)
+class Estimate:
+    """A least-squares estimate of the model parameters.
+
+    Parameters
+    ----------
+    method : str
+        ``ols`` or ``wls``.
+    theta : ndarray, shape ``(p,)``
+        The estimate.
+    std : ndarray, shape ``(p,)``
+        Standard deviations.
+    pct_sigma : ndarray, shape ``(p,)``
+        ``100 std / |theta|`` (inf where ``theta`` is 0).
+    weights : ndarray, shape ``(m,)``
+        Row weights used (``1 / sigma_r`` for WLS, ones for OLS).
+    rms : ndarray, shape ``(m,)``
+        Per-row residual RMS on the data fitted [N m or N].
+    rms_total : float
+        RMS over all rows and samples.
+    condition_number : float
+        Of the regressor with unit-norm columns (weighted as fitted).
+    samples : int
+        Samples fitted.
+    R11 : ndarray, shape ``(p, p)``
+        The stacked (weighted) triangular factor: the fit is ``||R11 theta - r12||^2 + rho^2``.
+    r12 : ndarray, shape ``(p,)``
+        Its right-hand side.
+    """
+
+    method: str
+    theta: np.ndarray
+    std: np.ndarray
+    pct_sigma: np.ndarray
+    weights: np.ndarray
+    rms: np.ndarray
+    rms_total: float
+    condition_number: float
+    samples: int
+    R11: np.ndarray
+    r12: np.ndarray
+
+
+def stacked_factor(acc: RowAccumulator, weights: np.ndarray) -> np.ndarray:
+    """The triangular factor ``(p + 1, p + 1)`` of all rows, row ``r`` scaled by ``weights[r]``.
+
+    Parameters
+    ----------
+    acc : RowAccumulator
+        The accumulated rows.
+    weights : ndarray, shape ``(m,)``
+        Row weights.
+
+    Returns
+    -------
+    ndarray, shape ``(<= p + 1, p + 1)``
+        ``R`` of ``[W^(1/2) A | W^(1/2) tau]``.
+    """
+    qr = StreamingQR(acc.nparams + 1)
+    for w, f in zip(weights, acc.factors):
+        qr.add(w * f.r)
+    return qr.r
+
+
+def least_squares(acc: RowAccumulator, names: list[str], weights: np.ndarray | None = None,
+                  method: str = "ols") -> Estimate:
+    """Weighted least squares on the accumulated rows.
+
+    Parameters
+    ----------
+    acc : RowAccumulator
+        The accumulated rows (``m`` rows, ``p`` parameters).
+    names : list of str, shape ``(p,)``
+        Parameter names, for the error naming the parameters the data do not excite.
+    weights : ndarray, shape ``(m,)``, optional
+        Row weights (default ones: OLS).
+    method : str
+        Label of the estimate.
+
+    Returns
+    -------
+    Estimate
+        The estimate with its statistics.
+
+    Raises
+    ------
+    BaseparamsError
+        Fewer observations than parameters, or a regressor whose columns the data do not
+        separate (naming the parameters of its weakest direction).
+    """
+    p, m = acc.nparams, acc.nrows
+    w = np.ones(m) if weights is None else np.asarray(weights, dtype=float)
+    n_obs = acc.samples * m
+    if n_obs <= p:
+        raise BaseparamsError(f"{acc.samples} samples x {m} rows = {n_obs} observations for {p} parameters: "
+                              f"record a longer log")
+    r = stacked_factor(acc, w)
+    r11, r12, rho = r[:p, :p], r[:p, p], abs(r[p, p]) if r.shape[0] > p else 0.0
+    cond, weak = excitation(r11, names)
+    if not np.isfinite(cond) or cond > 1e12:
+        raise BaseparamsError(f"the data do not excite every model parameter (condition number {cond:.3g}); "
+                              f"weakest: {', '.join(weak)}. Use a richer trajectory, or fewer drive terms")
+    theta = np.linalg.solve(r11, r12)
+    inv = np.linalg.inv(r11)
+    sigma = rho / np.sqrt(n_obs - p)
+    std = sigma * np.linalg.norm(inv, axis=1)
+    with np.errstate(divide="ignore"):
+        pct = np.where(theta != 0, 100 * std / np.abs(theta), np.inf)
+    res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors])
+    rms = res / np.sqrt(max(acc.samples, 1))
+    return Estimate(method, theta, std, pct, w, rms, float(np.sqrt((res**2).sum() / n_obs)), cond, acc.samples,
+                    r11, r12)
+
+
+def ols(acc: RowAccumulator, names: list[str]) -> Estimate:
+    """Ordinary least squares (see :func:`least_squares`).
+
+    Parameters
+    ----------
+    acc : RowAccumulator
+        The accumulated rows.
+    names : list of str
+        Parameter names.
+
+    Returns
+    -------
+    Estimate
+        ``method = "ols"``.
+    """
+    return least_squares(acc, names)
+
+
+def wls(acc: RowAccumulator, names: list[str]) -> Estimate:
+    """Weighted least squares with per-row noise from the OLS residuals (Gautier 1997).
+
+    ``sigma_r^2 = ||e_r||^2 / (S - p / m)``; rows weighted by ``1 / sigma_r``.
+
+    Parameters
+    ----------
+    acc : RowAccumulator
+        The accumulated rows.
+    names : list of str
+        Parameter names.
+
+    Returns
+    -------
+    Estimate
+        ``method = "wls"``; its ``rms`` are the unweighted per-row residuals.
+    """
+    first = ols(acc, names)
+    dof = max(acc.samples - acc.nparams / acc.nrows, 1.0)
+    sig = first.rms * np.sqrt(acc.samples / dof)
+    floor = max(float(sig.max()) * 1e-6, np.finfo(float).tiny)
+    return least_squares(acc, names, 1.0 / np.maximum(sig, floor), "wls")
+
+
+def excitation(r11: np.ndarray, names: list[str], weak_ratio: float = 1e-3) -> tuple[float, list[str]]:
+    """Condition number of the column-scaled regressor, and its poorly excited parameters.
+
+    Parameters
+    ----------
+    r11 : ndarray, shape ``(p, p)``
+        Triangular factor of the regressor (``||A x|| = ||R11 x||``).
+    names : list of str, shape ``(p,)``
+        Parameter names.
+    weak_ratio : float
+        A direction is weak when its singular value is below ``weak_ratio`` times the largest.
+
+    Returns
+    -------
+    condition_number : float
+        ``s_max / s_min`` of ``R11`` with unit-norm columns (inf when singular).
+    weak : list of str
+        The parameters carrying the weak directions (the largest entry of each weak right
+        singular vector), weakest first; empty when none.
+    """
+    norms = np.linalg.norm(r11, axis=0)
+    scaled = r11 / np.where(norms > 0, norms, 1.0)
+    _, s, vt = np.linalg.svd(scaled)
+    cond = float(s[0] / s[-1]) if s[-1] > 0 else np.inf
+    weak_dirs = [k for k in range(len(s) - 1, -1, -1) if s[k] < weak_ratio * s[0]]
+    weak = []
+    for k in weak_dirs:
+        name = names[int(np.argmax(np.abs(vt[k])))]
+        if name not in weak:
+            weak.append(name)
+    zero_cols = [names[k] for k in np.flatnonzero(norms == 0)]
+    return cond, zero_cols + [w for w in weak if w not in zero_cols]

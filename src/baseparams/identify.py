@@ -375,3 +375,278 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     phys = physical_fit(est.R11, est.r12, model.full_map(), model.robot, model.drives.param_kinds,
                         mass_bounds=mass_bounds, **kwargs)
     return Fit(model, method, phys.theta, est, phys)
+
+
+@dataclass(frozen=True, eq=False)
+class Identification:
+    """The result of :func:`identify`: values, statistics, validation, what was done to the data.
+
+    Parameters
+    ----------
+    fit : Fit
+        The identified values (and the model).
+    samples : dict
+        ``{"read": int, "used": int, "removed": {reason: count}}`` for the training data.
+    train : dict
+        ``{"rms": {joint: float}, "rms_total": float}`` on the training samples (filtered).
+    validation : dict, optional
+        The same on held-out data, or ``None``.
+    notes : tuple of str
+        Every decision taken on the data and the model, one line each.
+    """
+
+    fit: Fit
+    samples: dict
+    train: dict
+    validation: dict | None
+    notes: tuple[str, ...]
+
+    @property
+    def model(self) -> IdentModel:
+        """The identified model."""
+        return self.fit.model
+
+    def base_parameters(self) -> list[dict]:
+        """The regrouped base parameters (drive terms regrouped into them included).
+
+        Returns
+        -------
+        list of dict
+            ``{"name", "expression", "value", "std", "pct_sigma"}`` per model parameter that is not
+            a drive parameter; values in the analysis's convention (SI units).
+        """
+        m = self.model
+        est = self.fit.estimate
+        nb = len(m.analysis.base_names)
+        exprs = dict(zip(m.analysis.base_names, (e["expression"] for e in m.analysis.expressions())))
+        out = []
+        for k, (i, extra) in enumerate(zip(m.regrouping.independent, m.regrouping.expressions())):
+            if i >= nb:
+                continue
+            name = m.regrouping.names[i]
+            tail = extra[len(name):]
+            out.append({"name": name, "expression": exprs.get(name, name) + tail, "value": float(self.fit.theta[k]),
+                        "std": float(est.std[k]), "pct_sigma": float(est.pct_sigma[k])})
+        return out
+
+    def drives(self) -> list[dict]:
+        """Drive parameters per joint.
+
+        Returns
+        -------
+        list of dict
+            ``{"joint", "Ia", "Fv", "Fc", "Fo"}``: a value, ``None`` when not modelled, or
+            ``"regrouped into <base parameter>"`` when the data cannot separate it.
+        """
+        m = self.model
+        pos = {name: k for k, name in enumerate(m.names)}
+        absorbed = {}
+        for row, i in enumerate(m.regrouping.independent):
+            for col, d in enumerate(m.regrouping.dependent):
+                if m.regrouping.K[row, col] != 0:
+                    absorbed[m.regrouping.names[d]] = m.regrouping.names[i]
+        out = []
+        for joint in m.drives.joints:
+            entry = {"joint": joint}
+            for kind in ("Ia", "Fv", "Fc", "Fo"):
+                name = f"{kind}_{joint}"
+                if kind not in m.drives.kinds:
+                    entry[kind] = None
+                elif name in pos:
+                    entry[kind] = float(self.fit.theta[pos[name]])
+                else:
+                    entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
+            out.append(entry)
+        return out
+
+    def to_json(self) -> dict:
+        """One JSON-able object (schema in the README's identification section).
+
+        Returns
+        -------
+        dict
+            ``method, model, convention, n_samples{read, used, removed}, condition_number,
+            base_parameters, drives, train, validation, physical, notes``.
+        """
+        f = self.fit
+        phys = None
+        if f.physical is not None:
+            p = f.physical
+            phys = {"feasible": bool(p.feasible), "min_eigenvalue": float(np.min(p.min_eigenvalues)),
+                    "masses": {b: float(v) for b, v in zip(self.model.robot.names, p.masses)},
+                    "solver_status": str(p.solver_status)}
+        return {"method": f.method, "model": self.model.robot.name, "convention": self.model.analysis.convention,
+                "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
+                "base_parameters": self.base_parameters(), "drives": self.drives(), "train": self.train,
+                "validation": self.validation, "physical": phys, "notes": list(self.notes)}
+
+
+def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
+             friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
+             holdout: float | None = None, validation=None, cutoff: float | None = None,
+             decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
+             convention: str = "khalil", memory_mb: float = 512.0) -> Identification:
+    """Identify base-parameter and drive values from a joint log.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (fixed base, or loops closed by the actuated joints).
+    log : JointLog
+        The log (:func:`baseparams.io.logs.read_log`): positions and torques of the measured
+        joints (every joint of a tree; the actuated joints of a robot with loops).
+    method : {"ols", "wls", "physical"}
+        The estimator (:func:`fit`).
+    rotor : bool
+        Model each joint's rotor inertia ``Ia``.
+    friction : iterable of str
+        Friction terms: ``viscous``, ``coulomb``, ``offset`` (empty: none).
+    coulomb_width : float, optional
+        Smooth Coulomb friction's velocity scale [rad/s].
+    holdout : float, optional
+        Hold out the last ``holdout`` seconds of the log for validation.
+    validation : JointLog, optional
+        Another log to validate on (exclusive with ``holdout``).
+    cutoff : float, optional
+        Low-pass cutoff [Hz] (default :func:`baseparams.ident.preprocess.lowpass_design`'s).
+    decimate : int, optional
+        Decimation factor (default from the rate and the cutoff).
+    min_speed : float, optional
+        Remove samples where a joint moves slower than this [rad/s] (Coulomb friction).
+    prior_weight : float, optional
+        ``physical`` only: the weight of the model file's inertias.
+    convention : str
+        Convention of the base parameters' names and values.
+    memory_mb : float
+        Largest regressor formed at once for the parallel filter; longer logs are accumulated
+        in blocks with the regressor computed on the filtered states (said in the notes).
+
+    Returns
+    -------
+    Identification
+        Values, standard deviations, residuals, validation, counts and notes.
+
+    Raises
+    ------
+    BaseparamsError
+        A floating base, a log that misses a measured joint, ``holdout`` with ``validation``, bad
+        data (:class:`~baseparams.errors.DataError`) or data that do not excite the model.
+    """
+    from .ident.preprocess import prepare
+
+    if robot.floating:
+        raise BaseparamsError(f"robot {robot.name!r}: identification from a joint log needs a fixed base (a floating "
+                              f"base's motion and wrench are not in a joint log); use the Python API with states")
+    if holdout is not None and validation is not None:
+        raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
+    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width)
+    cols = log_columns(model, log)
+    prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
+    acc, acc_note = _accumulate_prepared(model, prep, cols, memory_mb)
+    f = fit(model, acc, method, prior_weight)
+    names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
+    res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
+    train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
+    val = None
+    if held is not None:
+        vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
+        vacc, _ = _accumulate_prepared(model, vprep, log_columns(model, held), memory_mb)
+        vres = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in vacc.factors]) / np.sqrt(vacc.samples)
+        val = {"rms": dict(zip(names, vres.tolist())), "rms_total": float(np.sqrt(np.mean(vres**2))),
+               "samples": int(vacc.samples), "source": held.source}
+    samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
+    notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()))
+    return Identification(f, samples, train_rms, val, tuple(notes))
+
+
+def split_log(log, seconds: float):
+    """The log split into training and the last ``seconds`` held out.
+
+    Parameters
+    ----------
+    log : JointLog
+        The log.
+    seconds : float
+        Length of the held-out tail [s].
+
+    Returns
+    -------
+    train, held : JointLog
+        The two parts (each filtered on its own later: no information crosses the split).
+
+    Raises
+    ------
+    BaseparamsError
+        ``seconds`` not inside the log's duration.
+    """
+    from dataclasses import replace
+
+    t = log.t
+    if not 0 < seconds < t[-1] - t[0]:
+        raise BaseparamsError(f"{log.source}: holdout {seconds} s must be inside the log's {t[-1] - t[0]:.6g} s")
+    cut = int(np.searchsorted(t, t[-1] - seconds))
+
+    def part(sl):
+        rates = {k: None if getattr(log, k) is None else getattr(log, k)[sl] for k in ("dq", "ddq")}
+        return replace(log, t=t[sl], q=log.q[sl], tau=log.tau[sl], **rates)
+
+    return part(slice(0, cut)), replace(part(slice(cut, None)), source=f"{log.source} (last {seconds:g} s)")
+
+
+def log_columns(model: IdentModel, log) -> np.ndarray:
+    """The log column of each state column of the model.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model (its states: a tree's coordinates, or a loop robot's actuated ones).
+    log : JointLog
+        The log.
+
+    Returns
+    -------
+    ndarray of int, shape ``(state_columns,)``
+        Index into ``log.joints`` per state column.
+
+    Raises
+    ------
+    BaseparamsError
+        A state coordinate whose joint is not in the log (naming the joints).
+    """
+    r = model.robot
+    coords = np.asarray(r.actuated, dtype=int) if r.has_loops else np.arange(r.dof)
+    wanted = [r.joint_names[r.dof_body[c]] for c in coords]
+    where = {j: k for k, j in enumerate(log.joints)}
+    missing = [j for j in wanted if j not in where]
+    if missing:
+        what = "actuated joints" if r.has_loops else "joints"
+        raise BaseparamsError(f"{log.source}: the log has no column for the {what} {missing} of {r.name!r}")
+    return np.array([where[j] for j in wanted], dtype=int)
+
+
+def _accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float):
+    """Rows accumulated from a prepared log: parallel filtering when the regressor fits in memory."""
+    from .ident.estimate import RowAccumulator
+
+    full = prep.full
+    q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
+    tau = prep.tau[:, cols]
+    size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
+    acc = RowAccumulator(len(model.coords), model.n_params)
+    if size_mb <= memory_mb:
+        acc.add(prep.apply(model.regressor(q, dq, ddq)), tau)
+        return acc, (f"parallel filtering: the regressor's {model.n_params} columns filtered like the torques "
+                     f"({size_mb:.0f} MB)")
+    idx = prep.index
+    chunk = max(1, int(memory_mb * 1e6 / (len(model.coords) * model.n_params * 8)))
+    for k in range(0, len(idx), chunk):
+        sl = idx[k:k + chunk]
+        acc.add(model.regressor(q[sl], dq[sl], ddq[sl]), tau[k:k + chunk])
+    return acc, (f"parallel filtering skipped: the regressor ({size_mb:.0f} MB) exceeds memory_mb {memory_mb:g}; "
+                 f"its columns are computed on the filtered states")
+
+
+def _model_notes(model: IdentModel) -> list[str]:
+    """One line per drive parameter regrouped into a base parameter."""
+    return [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]

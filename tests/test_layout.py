@@ -28,8 +28,9 @@ LAYERS = {
     "robots": 9,
     "loading": 10, "analysis": 10,
     "identify": 11,
-    "cli": 12,
-    "__main__": 13, "__init__": 13,
+    "report": 12,
+    "cli": 13,
+    "__main__": 14, "__init__": 14,
 }
 
 

@@ -187,14 +187,125 @@ def cmd_analyze(args) -> int:
     return _STATUS_EXIT[status]
 
 
+def _friction(text: str) -> tuple[str, ...]:
+    """``--friction viscous,coulomb,offset`` (or ``none``) as a tuple."""
+    return () if text.strip().lower() in ("", "none") else tuple(x.strip() for x in text.split(",") if x.strip())
+
+
+def cmd_identify(args) -> int:
+    """``baseparams identify MODEL DATA``: base-parameter and drive values from a joint log.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line: the model options and ``data``, ``columns``, ``validate``,
+        ``holdout``, ``method``, ``friction``, ``rotor``, ``coulomb_width``, ``cutoff``,
+        ``decimate``, ``min_speed``, ``prior_weight``, ``convention``, ``plot``, ``urdf``,
+        ``output``.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad input (model, data, options).
+    """
+    from .identify import format_identification, identify
+    from .io.logs import read_log
+
+    robot = _robot(args)
+    progress = (lambda msg: print(f"baseparams: {msg}", file=sys.stderr)) if args.verbose else (lambda msg: None)
+    progress(f"reading {args.data}")
+    log = read_log(args.data, robot, columns=args.columns)
+    val = read_log(args.validate, robot, columns=args.columns) if args.validate else None
+    progress(f"identifying ({args.method}) on {log.n_samples} samples")
+    t0 = time.perf_counter()
+    result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
+                      coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
+                      decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
+                      convention=args.convention)
+    progress(f"done in {time.perf_counter() - t0:.2f} s")
+    if args.urdf:
+        _write_identified_urdf(args, robot, result)
+    if args.plot:
+        from .report.plots import torque_plot
+
+        torque_plot(result, args.plot)
+        progress(f"plot written to {args.plot}")
+    _emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
+    return EXIT_OK
+
+
+def _write_identified_urdf(args, robot, result) -> None:
+    """``--urdf FILE``: the model file with the physically consistent inertias."""
+    from .io.urdf import write_urdf
+
+    if result.fit.physical is None:
+        raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies")
+    if Path(args.model).suffix.lower() != ".urdf":
+        raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
+    write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper")
+
+
+def cmd_simulate(args) -> int:
+    """``baseparams simulate MODEL OUT``: a synthetic joint log with known parameters and noise.
+
+    The excitation is a random finite Fourier series per joint (``--duration``, ``--rate``,
+    ``--amplitude``, ``--seed``); the torques are the model's own inertias plus drive terms
+    (rotor inertia: the model's armature, else drawn; friction drawn), plus Gaussian noise
+    (``--noise``). ``OUT`` (``.csv`` or ``.npz``, the default layout) and ``OUT.truth.json``:
+    the true model parameters under their names, to compare an identification with.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad options, or an output that cannot be written.
+    """
+    from .identify import simulate_log
+    from .io.logs import write_log
+
+    robot = _robot(args)
+    log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=args.amplitude,
+                              noise=args.noise, seed=args.seed, rotor=args.rotor, friction=_friction(args.friction),
+                              convention=args.convention)
+    write_log(args.out, log)
+    truth_path = Path(str(args.out) + ".truth.json")
+    truth_path.write_text(json.dumps(truth, indent=2) + "\n")
+    print(f"{args.out}: {log.n_samples} samples of {len(log.joints)} joints; true parameters in {truth_path}")
+    return EXIT_OK
+
+
+def _ident_args(s) -> None:
+    """Options shared by ``identify`` and ``simulate``."""
+    s.add_argument("--friction", default="viscous,coulomb,offset",
+                   help="friction terms per joint: any of viscous, coulomb, offset, comma-separated, or none "
+                        "(default all three)")
+    s.add_argument("--rotor", action="store_true", help="model each joint's rotor inertia Ia (MJCF armature)")
+    s.add_argument("--convention", choices=values(Convention), default=str(Convention.KHALIL),
+                   help="convention of the base parameters' names and values (default khalil)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``baseparams`` command.
 
     Returns
     -------
     argparse.ArgumentParser
-        Subcommands ``robots``, ``analyze`` and ``regressor``; each sets ``func`` to its
-        ``cmd_*`` function.
+        Subcommands ``robots``, ``analyze``, ``regressor``, ``identify`` and ``simulate``; each
+        sets ``func`` to its ``cmd_*`` function.
     """
     p = argparse.ArgumentParser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "
@@ -240,7 +351,47 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("regressor", help="compute the TP regressor on random samples")
     model_args(s)
     s.set_defaults(func=cmd_regressor)
+    _identify_parser(sub, model_args)
+    _simulate_parser(sub, model_args)
     return p
+
+
+def _identify_parser(sub, model_args) -> None:
+    """The ``identify`` subcommand's arguments."""
+    s = sub.add_parser("identify", help="identify base-parameter and drive values from a joint log")
+    model_args(s)
+    s.add_argument("data", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default layout: "
+                                "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>")
+    s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
+    held = s.add_mutually_exclusive_group()
+    held.add_argument("--validate", metavar="DATA2", help="validate on another log")
+    held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
+    s.add_argument("--method", choices=("ols", "wls", "physical"), default="wls",
+                   help="ordinary, weighted (per-joint noise; default) or physically consistent least squares")
+    _ident_args(s)
+    s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
+    s.add_argument("--cutoff", type=float, metavar="HZ", help="low-pass cutoff (default from the sampling rate)")
+    s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
+    s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
+    s.add_argument("--prior-weight", type=float, metavar="W", help="physical: weight of the file's inertias")
+    s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
+    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
+    s.add_argument("--output", metavar="FILE", help="write the report to FILE")
+    s.set_defaults(func=cmd_identify)
+
+
+def _simulate_parser(sub, model_args) -> None:
+    """The ``simulate`` subcommand's arguments."""
+    s = sub.add_parser("simulate", help="write a synthetic joint log with known parameters (tests, demos)")
+    model_args(s)
+    s.add_argument("out", help="output log (.csv or .npz); the true parameters go to OUT.truth.json")
+    s.add_argument("--duration", type=float, default=20.0, help="seconds (default 20)")
+    s.add_argument("--rate", type=float, default=500.0, help="sampling rate in Hz (default 500)")
+    s.add_argument("--amplitude", type=float, default=0.5, help="joint excursion in rad (default 0.5)")
+    s.add_argument("--noise", type=float, default=0.0, help="torque noise standard deviation (default 0)")
+    _ident_args(s)
+    s.set_defaults(func=cmd_simulate)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -393,6 +393,9 @@ class Identification:
         The same on held-out data, or ``None``.
     notes : tuple of str
         Every decision taken on the data and the model, one line each.
+    series : dict, optional
+        ``{"train": {...}, "validation": {...} or None}``, each ``{"t" (S,), "tau" (S, m),
+        "tau_hat" (S, m), "joints" (m,)}``: the filtered measured and predicted torques (plots).
     """
 
     fit: Fit
@@ -400,6 +403,7 @@ class Identification:
     train: dict
     validation: dict | None
     notes: tuple[str, ...]
+    series: dict | None = None
 
     @property
     def model(self) -> IdentModel:
@@ -548,16 +552,32 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
     train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
-    val = None
+    val, series = None, {"train": _series(model, prep, cols, f.theta, names, memory_mb), "validation": None}
     if held is not None:
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
-        vacc, _ = _accumulate_prepared(model, vprep, log_columns(model, held), memory_mb)
+        vcols = log_columns(model, held)
+        vacc, _ = _accumulate_prepared(model, vprep, vcols, memory_mb)
         vres = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in vacc.factors]) / np.sqrt(vacc.samples)
         val = {"rms": dict(zip(names, vres.tolist())), "rms_total": float(np.sqrt(np.mean(vres**2))),
                "samples": int(vacc.samples), "source": held.source}
+        series["validation"] = _series(model, vprep, vcols, f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
     notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()))
-    return Identification(f, samples, train_rms, val, tuple(notes))
+    return Identification(f, samples, train_rms, val, tuple(notes), series)
+
+
+def _series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names: list[str], memory_mb: float):
+    """Measured and predicted torques of a prepared log, as they were compared (filtered)."""
+    full = prep.full
+    q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
+    size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
+    if size_mb <= memory_mb:
+        tau_hat = prep.apply(model.regressor(q, dq, ddq)) @ theta
+    else:
+        idx = prep.index
+        tau_hat = np.concatenate([model.regressor(q[idx[k:k + 20000]], dq[idx[k:k + 20000]],
+                                                  ddq[idx[k:k + 20000]]) @ theta for k in range(0, len(idx), 20000)])
+    return {"t": prep.t, "tau": prep.tau[:, cols], "tau_hat": tau_hat, "joints": names}
 
 
 def split_log(log, seconds: float):
@@ -650,3 +670,142 @@ def _accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: f
 def _model_notes(model: IdentModel) -> list[str]:
     """One line per drive parameter regrouped into a base parameter."""
     return [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]
+
+
+def format_identification(result: Identification) -> str:
+    """The identification as a text report.
+
+    Parameters
+    ----------
+    result : Identification
+        The result of :func:`identify`.
+
+    Returns
+    -------
+    str
+        Header (model, method, samples, condition number), base parameters (value, std, %sigma,
+        expression), drives, residual RMS per joint (training and validation), physical check and
+        the notes.
+    """
+    j = result.to_json()
+    n = j["n_samples"]
+    removed = ", ".join(f"{v} {k}" for k, v in n["removed"].items()) or "none"
+    lines = [f"{j['model']}: identification ({j['method']}), {n['used']} samples used of {n['read']} read "
+             f"(removed: {removed}); condition number {j['condition_number']:.4g}",
+             f"base parameters ({j['convention']} convention, SI units):",
+             f"  {'name':<16s} {'value':>14s} {'std':>11s} {'%sigma':>8s}  expression"]
+    for b in j["base_parameters"]:
+        lines.append(f"  {b['name']:<16s} {b['value']:14.6g} {b['std']:11.3g} {b['pct_sigma']:8.3g}  {b['expression']}")
+    if j["drives"]:
+        lines.append(f"  {'drives':<16s} {'Ia':>12s} {'Fv':>12s} {'Fc':>12s} {'Fo':>12s}")
+        for d in j["drives"]:
+            cells = [("-" if d[k] is None else f"{d[k]:.5g}" if not isinstance(d[k], str) else "regrouped")
+                     for k in ("Ia", "Fv", "Fc", "Fo")]
+            lines.append(f"  {d['joint']:<16s} " + " ".join(f"{c:>12s}" for c in cells))
+    for label in ("train", "validation"):
+        part = j[label]
+        if part is None:
+            lines.append("validation: none (--holdout SECONDS or --validate FILE)")
+            continue
+        per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms"].items())
+        lines.append(f"{label} RMS {part['rms_total']:.4g} (per joint: {per})")
+    if j["physical"] is not None:
+        p = j["physical"]
+        lines.append(f"physical: feasible {p['feasible']}, smallest eigenvalue of the N_i {p['min_eigenvalue']:.3g}, "
+                     f"solver {p['solver_status']}")
+    lines += [f"note: {x}" for x in j["notes"]]
+    return "\n".join(lines)
+
+
+def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float = 0.5,
+                 noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
+                 convention: str = "khalil"):
+    """A synthetic joint log of a fixed-base robot, with its true model parameters.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (fixed base; loops closed by the actuated joints).
+    duration, rate : float
+        Length [s] and sampling rate [Hz].
+    amplitude : float
+        Joint excursion of the Fourier excitation [rad or m].
+    noise : float
+        Standard deviation of the Gaussian torque noise [N m or N].
+    seed : int
+        Seed of the trajectory, the drive parameters and the noise.
+    rotor : bool
+        Include rotor inertias (the model's armature where it has one, else drawn in 0.01-0.1).
+    friction : iterable of str
+        Friction terms (drawn: ``Fv`` in 0.05-0.5, ``Fc`` in 0.1-1, ``Fo`` in -0.2-0.2).
+    convention : str
+        Convention of the true base parameters written out.
+
+    Returns
+    -------
+    log : JointLog
+        ``t``, ``q``, ``dq`` and ``tau`` of the measured joints (no accelerations, like a real log).
+    truth : dict
+        ``{"model", "convention", "noise", "parameters": [{"name", "value"}], "drives": {name: value}}``:
+        the model parameters an identification should return.
+
+    Raises
+    ------
+    BaseparamsError
+        A floating base, or loops the trajectory does not close (lower ``amplitude``).
+    """
+    from .ident.data import JointLog
+    from .ident.simulate import add_noise, fourier_trajectory
+
+    if robot.floating:
+        raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
+    rng = np.random.default_rng(seed)
+    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction))
+    t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
+    delta = _draw_drives(model, rng)
+    sel = np.arange(len(model.coords))
+    tau = (regressor_of(robot, q, dq, ddq) @ robot.parameters("paper")
+           + model.drives.regressor(dq[:, sel], ddq[:, sel], len(model.coords)) @ delta)
+    tau = add_noise(tau, noise, rng) if noise > 0 else tau
+    joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
+    log = JointLog(t, joints, q, tau, dq=dq, source=f"simulated {robot.name}")
+    theta = model.theta(robot.parameters("paper"), delta)
+    truth = {"model": robot.name, "convention": convention, "noise": noise,
+             "parameters": [{"name": n, "value": float(v)} for n, v in zip(model.names, theta)],
+             "drives": dict(zip(model.drives.names, delta.tolist()))}
+    return log, truth
+
+
+def regressor_of(robot: Robot, q, dq, ddq) -> np.ndarray:
+    """The full regressor of the measured rows (a tree's coordinates, a loop robot's actuated).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (fixed base).
+    q, dq, ddq : ndarray, shape ``(S, state_columns)``
+        States.
+
+    Returns
+    -------
+    ndarray, shape ``(S, m, 10 n)``
+        ``paper`` convention columns (:func:`baseparams.analysis.regressor`).
+    """
+    from .analysis import regressor
+
+    return regressor(robot, q, dq, ddq)
+
+
+def _draw_drives(model: IdentModel, rng: np.random.Generator) -> np.ndarray:
+    """Plausible drive parameters: armature where the model has it, friction drawn."""
+    arm = model.robot.armature
+    out = []
+    for row in model.drives.rows:
+        coord = model.coords[row]
+        for kind in model.drives.kinds:
+            if kind == "Ia":
+                out.append(float(arm[coord]) if arm is not None and arm[coord] > 0 else rng.uniform(0.01, 0.1))
+            else:
+                lo, hi = {"Fv": (0.05, 0.5), "Fc": (0.1, 1.0), "Fo": (-0.2, 0.2)}[kind]
+                out.append(rng.uniform(lo, hi))
+    return np.array(out)

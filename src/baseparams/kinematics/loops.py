@@ -30,9 +30,8 @@ import numpy as np
 
 from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
-from ..pga import hat
-from ..pga.linalg import cross3, perp_basis
-from .tree import forward_kinematics, re_reference
+from ..pga.linalg import cross3_first, perp_basis
+from .tree import Poses, as_states, poses, re_reference
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,31 +123,6 @@ class ConstraintEval:
     b: np.ndarray | None
 
 
-def _body_data(state, body: int, s: int, dof: int):
-    if body < 0:
-        eye = np.broadcast_to(np.eye(4), (s, 4, 4))
-        z6 = np.zeros((s, 6))
-        return eye, z6, z6, np.zeros((s, dof, 6))
-    lines = state.lines * state.support[None, :, body, None]
-    return state.g[:, body], state.V[:, body], state.dV[:, body], lines
-
-
-def _moving(state, body, x, s, dof, need_bias):
-    """Current vector X, its per-dof velocities (S, dof, 4), its velocity and bias acceleration."""
-    g, v, dv, lines = _body_data(state, body, s, dof)
-    xw = np.einsum("sij,j->si", g, x)
-    # velocity of X under each line: omega x X + w v  (commutator with the line)
-    om, lv = lines[..., :3], lines[..., 3:]
-    vel = cross3(om, xw[:, None, :3]) + x[3] * lv  # (S, dof, 3)
-    vel = np.concatenate([vel, np.zeros(vel.shape[:-1] + (1,))], axis=-1)
-    if not need_bias:
-        return xw, vel, None, None
-    vh = hat(v)
-    xdot = np.einsum("sij,sj->si", vh, xw)
-    acc = np.einsum("sij,sj->si", hat(dv) + vh @ vh, xw)
-    return xw, vel, xdot, acc
-
-
 def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
              constraints: list[Elementary] | None = None) -> ConstraintEval:
     """Residuals, Jacobian and (when ``dq`` is given) the bias of the loop constraints.
@@ -173,48 +147,187 @@ def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
     ConstraintEval
         ``r (S, m)``, ``K (S, m, dof)`` and ``b (S, m)`` (None without ``dq``).
     """
-    cons = elementary_constraints(robot) if constraints is None else constraints
-    s, dof = q.shape
-    need = dq is not None
-    state = forward_kinematics(robot, q, dq if need else None, None)
-    rs, ks, bs = [], [], []
-    for c in robot.couplings:  # linear: q[succ] - sum ratio q[pred] - offset = 0
-        k = np.zeros((s, 1, dof))
-        k[:, 0, c.succ] = 1.0
-        for j, r in c.terms():
-            k[:, 0, j] -= r
-        rs.append(q @ k[0, 0][:, None] - c.offset)
-        ks.append(k)
-        if need:
-            bs.append(np.zeros((s, 1)))
+    plan = _plan(robot, elementary_constraints(robot) if constraints is None else constraints)
+    r, k, b = _eval(plan, np.asarray(q, dtype=float), np.arange(robot.dof), dq)
+    return ConstraintEval(r.T.copy(), np.ascontiguousarray(k.transpose(2, 0, 1)), None if b is None else b.T.copy())
+
+
+@dataclass(frozen=True, eq=False)
+class _Plan:
+    """What :func:`_eval` needs of a robot and its constraints, computed once per solve.
+
+    ``groups``: per body carrying constraint vectors, ``(body, slots, X (nv, 3), x3 (nv,))``;
+    ``slots``: per constraint, the slots of its vectors ``a, b[, c]``; ``rows``: its first row;
+    ``sup``: ``(dof, n + 1)`` support with a zero last column (the world, body -1).
+    """
+
+    robot: Robot
+    cons: list
+    kc: np.ndarray
+    offsets: np.ndarray
+    groups: list
+    nvec: int
+    slots: list
+    rows: list
+    m: int
+    sup: np.ndarray
+    bodies: np.ndarray
+    columns_cache: dict
+
+
+def _plan(robot: Robot, cons: list[Elementary]) -> _Plan:
+    """The constraint vectors grouped by body, the couplings as a matrix, the row layout."""
+    dof = robot.dof
+    kc = np.zeros((len(robot.couplings), dof))
+    for i, c in enumerate(robot.couplings):
+        kc[i, c.succ] = 1.0
+        for j, ratio in c.terms():
+            kc[i, j] -= ratio
+    offsets = np.array([c.offset for c in robot.couplings], dtype=float)
+    slot_of: dict = {}
+    slots, rows, row = [], [], len(robot.couplings)
     for e in cons:
-        if e.kind == "point":
-            xc, vc, dc, ac = _moving(state, e.succ, e.b, s, dof, need)
-            xp, vp, dp, ap = _moving(state, e.pred, e.a, s, dof, need)
-            rs.append((xc - xp)[:, :3])
-            ks.append(np.swapaxes(vc - vp, 1, 2)[:, :3])
-            if need:
-                bs.append((ac - ap)[:, :3])
-        elif e.kind == "dot":
-            u, vu, du, au = _moving(state, e.pred, e.a, s, dof, need)
-            w, vw, dw, aw = _moving(state, e.succ, e.b, s, dof, need)
-            rs.append(np.sum(u * w, -1)[:, None])
-            ks.append((np.einsum("sjc,sc->sj", vu, w) + np.einsum("sc,sjc->sj", u, vw))[:, None])
-            if need:
-                bs.append((np.sum(au * w, -1) + 2 * np.sum(du * dw, -1) + np.sum(u * aw, -1))[:, None])
-        elif e.kind == "proj":
-            n_, vn, dn, an = _moving(state, e.pred, e.a, s, dof, need)
-            xc, vc, dc, ac = _moving(state, e.succ, e.c, s, dof, need)
-            xp, vp, dp, ap = _moving(state, e.pred, e.b, s, dof, need)
-            d = xc - xp
-            rs.append(np.sum(n_ * d, -1)[:, None])
-            ks.append((np.einsum("sjc,sc->sj", vn, d) + np.einsum("sc,sjc->sj", n_, vc - vp))[:, None])
-            if need:
-                bs.append((np.sum(an * d, -1) + 2 * np.sum(dn * (dc - dp), -1)
-                           + np.sum(n_ * (ac - ap), -1))[:, None])
-    if not rs:
-        return ConstraintEval(np.zeros((s, 0)), np.zeros((s, 0, dof)), np.zeros((s, 0)) if need else None)
-    return ConstraintEval(np.concatenate(rs, 1), np.concatenate(ks, 1), np.concatenate(bs, 1) if need else None)
+        owners = {"point": (e.pred, e.succ), "dot": (e.pred, e.succ), "proj": (e.pred, e.pred, e.succ)}[e.kind]
+        vecs = (e.a, e.b, e.c)[:len(owners)]
+        slots.append(tuple(slot_of.setdefault((body, tuple(np.asarray(x, dtype=float))), len(slot_of))
+                           for body, x in zip(owners, vecs)))
+        rows.append(row)
+        row += 3 if e.kind == "point" else 1
+    groups = []
+    for body in sorted({b for b, _ in slot_of}):
+        items = [(sl, x) for (b, x), sl in slot_of.items() if b == body]
+        xs = np.array([x for _, x in items], dtype=float)
+        groups.append((body, np.array([sl for sl, _ in items]), xs[:, :3].copy(), xs[:, 3].copy()))
+    sup = np.zeros((dof, robot.n + 1))
+    sup[:, :-1] = robot.support
+    bodies = np.array([g[0] for g in groups if g[0] >= 0], dtype=int)
+    return _Plan(robot, list(cons), kc, offsets, groups, len(slot_of), slots, rows, row, sup, bodies, {})
+
+
+def _columns(plan: _Plan, cols: np.ndarray) -> list:
+    """Per constraint ``(J, dofs, s_c, s_p, coef)``: the columns ``J`` of ``cols`` moving its bodies.
+
+    ``s_c``, ``s_p``: whether each moves the successor, the predecessor; ``coef``: the factor of
+    the line's moment (the vectors' homogeneous weights).
+    """
+    key = cols.tobytes()
+    out = plan.columns_cache.get(key)
+    if out is None:
+        out = []
+        for e in plan.cons:
+            sp, sc = plan.sup[cols, e.pred], plan.sup[cols, e.succ]
+            j = np.flatnonzero((sp != 0) | (sc != 0))
+            sp, sc = sp[j], sc[j]
+            if e.kind == "point":
+                coef = sc * e.b[3] - sp * e.a[3]
+            elif e.kind == "proj":
+                coef = sc * e.c[3] - sp * e.b[3]
+            else:
+                coef = None
+            out.append((j, cols[j], sc, sp, coef))
+        plan.columns_cache[key] = out
+    return out
+
+
+def _eval(plan: _Plan, q: np.ndarray, cols: np.ndarray, dq: np.ndarray | None = None):
+    """``r (m, S)``, ``K (m, len(cols), S)`` (the columns ``cols`` of ``dr/dq``) and the bias ``(m, S)``.
+
+    Samples last (see :func:`evaluate` for the rows); the bias is None without ``dq``.
+    """
+    s = q.shape[0]
+    r = np.empty((plan.m, s))
+    k = np.zeros((plan.m, len(cols), s))
+    b = None if dq is None else np.zeros((plan.m, s))
+    nc = len(plan.offsets)
+    if nc:  # linear couplings
+        r[:nc] = plan.kc @ q.T - plan.offsets[:, None]
+        k[:nc] = plan.kc[:, cols][:, :, None]
+    if not plan.cons:
+        as_states(plan.robot.dof, q)  # validated as the kinematics would
+        return r, k, b
+    ps = poses(plan.robot, q, dq, None, bodies=plan.bodies)
+    w, wd, wa = _world_vectors(plan, ps, s)
+    for e, sl, row, cd in zip(plan.cons, plan.slots, plan.rows, _columns(plan, cols)):
+        _ROWS[e.kind](e, ps.lines, w, wd, wa, sl, row, cd, r, k, b)
+    return r, k, b
+
+
+def _world_vectors(plan: _Plan, ps: Poses, s: int):
+    """Constraint vectors ``(3, nvec, S)`` in the world, and (with twists) their velocities and bias accelerations.
+
+    ``x_w = R x + x3 p``; ``dx = omega x x_w + x3 v``; ``ddx = domega x x_w + x3 dv + omega x dx``
+    (the point's acceleration at zero ``ddq``).
+    """
+    w = np.empty((3, plan.nvec, s))
+    need = ps.V is not None
+    wd = np.zeros((3, plan.nvec, s)) if need else None
+    wa = np.zeros((3, plan.nvec, s)) if need else None
+    for body, sl, xs, x3 in plan.groups:
+        if body < 0:
+            w[:, sl] = xs.T[:, :, None]
+            continue
+        xw = (xs @ ps.rot[body].reshape(3, -1)).reshape(len(sl), 3, s).transpose(1, 0, 2)
+        if np.any(x3):
+            xw = xw + x3[:, None] * ps.pos[body][:, None]
+        w[:, sl] = xw
+        if need:
+            om, v = ps.V[body, :3, None], ps.V[body, 3:, None]
+            dom, dv = ps.dV[body, :3, None], ps.dV[body, 3:, None]
+            xd = cross3_first(om, xw) + x3[:, None] * v
+            wd[:, sl] = xd
+            wa[:, sl] = cross3_first(dom, xw) + x3[:, None] * dv + cross3_first(om, xd)
+    return w, wd, wa
+
+
+def _point_rows(e, lines, w, wd, wa, sl, row, cd, r, k, b) -> None:
+    """``g_c b - g_p a``: 3 rows; ``K_j = d_j x (s_c x_c - s_p x_p) + coef_j m_j``."""
+    xp, xc = w[:, sl[0]], w[:, sl[1]]
+    r[row:row + 3] = xc - xp
+    j, dofs, sc, sp, coef = cd
+    if len(j):
+        y = xc[:, None] * sc[:, None] - xp[:, None] * sp[:, None]
+        vel = cross3_first(lines[:3, dofs], y)
+        if np.any(coef):
+            vel += coef[:, None] * lines[3:, dofs]
+        k[row:row + 3, j] = vel
+    if b is not None:
+        b[row:row + 3] = wa[:, sl[1]] - wa[:, sl[0]]
+
+
+def _dot_rows(e, lines, w, wd, wa, sl, row, cd, r, k, b) -> None:
+    """``(g_p a) . (g_c b)``: 1 row; ``K_j = (s_p - s_c) d_j . (u x w)`` (plus moment terms)."""
+    u, v = w[:, sl[0]], w[:, sl[1]]
+    u3, v3 = e.a[3], e.b[3]
+    r[row] = np.sum(u * v, 0) + u3 * v3
+    j, dofs, sc, sp, _ = cd
+    if len(j):
+        kj = (sp - sc)[:, None] * np.sum(lines[:3, dofs] * cross3_first(u, v)[:, None], 0)
+        if u3 or v3:
+            kj += np.sum(lines[3:, dofs] * ((sp * u3)[:, None] * v[:, None] + (sc * v3)[:, None] * u[:, None]), 0)
+        k[row, j] = kj
+    if b is not None:
+        b[row] = (np.sum(wa[:, sl[0]] * v, 0) + 2 * np.sum(wd[:, sl[0]] * wd[:, sl[1]], 0)
+                  + np.sum(u * wa[:, sl[1]], 0))
+
+
+def _proj_rows(e, lines, w, wd, wa, sl, row, cd, r, k, b) -> None:
+    """``(g_p n) . (g_c c - g_p b)``: 1 row; ``K_j = (s_c - s_p) d_j . (x_c x n)`` (plus moment terms)."""
+    n, xp, xc = w[:, sl[0]], w[:, sl[1]], w[:, sl[2]]
+    n3 = e.a[3]
+    dlt = xc - xp
+    r[row] = np.sum(n * dlt, 0) + n3 * (e.c[3] - e.b[3])
+    j, dofs, sc, sp, coef = cd
+    if len(j):
+        kj = (sc - sp)[:, None] * np.sum(lines[:3, dofs] * cross3_first(xc, n)[:, None], 0)
+        if n3 or np.any(coef):
+            kj += np.sum(lines[3:, dofs] * ((sp * n3)[:, None] * dlt[:, None] + coef[:, None] * n[:, None]), 0)
+        k[row, j] = kj
+    if b is not None:
+        b[row] = (np.sum(wa[:, sl[0]] * dlt, 0) + 2 * np.sum(wd[:, sl[0]] * (wd[:, sl[2]] - wd[:, sl[1]]), 0)
+                  + np.sum(n * (wa[:, sl[2]] - wa[:, sl[1]]), 0))
+
+
+_ROWS = {"point": _point_rows, "dot": _dot_rows, "proj": _proj_rows}
 
 
 def _pinv(k: np.ndarray, rcond: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
@@ -226,13 +339,33 @@ def _pinv(k: np.ndarray, rcond: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _lstsq(k: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Batched least-squares step ``k x ~ r`` by regularised normal equations.
+    """Batched least-squares step ``k x ~ r`` by regularised normal equations, samples last.
 
-    Newton only; redundant rows are fine, a rank-deficient ``k`` gets a tiny Tikhonov term.
+    ``k (m, n, S)`` (or ``(m, n, 1)``: one matrix for all), ``r (m, S)`` -> ``x (n, S)``. Newton
+    only; redundant rows are fine, a rank-deficient ``k`` gets a tiny Tikhonov term. Gaussian
+    elimination without pivoting (the matrix is symmetric positive definite), vectorised over the
+    samples.
     """
-    ktk = np.einsum("smi,smj->sij", k, k)
-    eps = 1e-12 * np.trace(ktk, axis1=1, axis2=2)[:, None, None] + 1e-300
-    return np.linalg.solve(ktk + eps * np.eye(k.shape[2]), np.einsum("smi,sm->si", k, r)[..., None])[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # singular: non-finite, filtered
+        return _solve_normal(k, r)
+
+
+def _solve_normal(k: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """:func:`_lstsq`'s normal equations ``(k^T k + eps I) x = k^T r``, eliminated in place."""
+    n = k.shape[1]
+    a = np.einsum("mis,mjs->ijs", k, k)
+    diag = np.arange(n)
+    a[diag, diag] += 1e-12 * a[diag, diag].sum(0) + 1e-300
+    x = k[:, :, 0].T @ r if k.shape[2] == 1 else np.einsum("mis,ms->is", k, r)
+    for p in range(n - 1):
+        f = a[p + 1:, p] / a[p, p]
+        a[p + 1:, p + 1:] -= f[:, None] * a[p, p + 1:]
+        x[p + 1:] -= f * x[p]
+    for p in range(n - 1, -1, -1):
+        if p < n - 1:
+            x[p] -= np.sum(a[p, p + 1:] * x[p + 1:], 0)
+        x[p] /= a[p, p]
+    return x
 
 
 @dataclass(frozen=True, eq=False)
@@ -332,84 +465,127 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     s = qa.shape[0]
     if qa.shape[1] != len(act):
         raise BaseparamsError(f"robot {robot.name!r}: expected {len(act)} actuated coordinates, got {qa.shape[1]}")
-    dqa = np.zeros_like(qa) if dqa is None else np.atleast_2d(np.asarray(dqa, dtype=float))
-    ddqa = np.zeros_like(qa) if ddqa is None else np.atleast_2d(np.asarray(ddqa, dtype=float))
-    cons = elementary_constraints(robot)
+    dqa = np.zeros_like(qa) if dqa is None else np.broadcast_to(np.asarray(dqa, dtype=float), qa.shape)
+    ddqa = np.zeros_like(qa) if ddqa is None else np.broadcast_to(np.asarray(ddqa, dtype=float), qa.shape)
+    plan = _plan(robot, elementary_constraints(robot))
     q = np.zeros((s, robot.dof))
     if q_start is not None:  # initial guess of the passive coordinates (assembly search)
         q[:, pas] = np.asarray(q_start, dtype=float)[pas]
-    failed, jumped = _continuation(robot, q, qa, act, pas, cons, steps, tol, max_iter, max_step)
-    ev = evaluate(robot, q, constraints=cons)
-    err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(s)
+    failed, jumped, err, k = _continuation(plan, q, qa, act, pas, steps, tol, max_iter, max_step)
     converged = (err < max(tol * 100, 1e-9)) & ~failed
-    kp_inv, sv = _pinv(ev.K[:, :, pas])
-    npas = len(pas)
-    smin = sv[:, npas - 1] if sv.shape[1] >= npas and npas else np.ones(s)
-    cond = np.where(smin > 0, sv[:, 0] / np.where(smin > 0, smin, 1.0), np.inf) if npas else np.ones(s)
+    ok = np.flatnonzero(converged & ~jumped)  # conditioning of these
+    k = np.ascontiguousarray(k[:, :, ok].transpose(2, 0, 1))  # (S', m, dof)
+    cond = np.full(s, np.inf)
+    cond[ok] = _conditioning(k[:, :, pas], len(pas))
     good_cond = cond < cond_max
     keep = converged & ~jumped & good_cond
-    g, dq, ddq = _closed_rates(robot, q, ev.K, kp_inv, act, pas, dqa, ddqa, cons)
-    return ClosedStates(q[keep], dq[keep], ddq[keep], g[keep], cond[keep], s,
+    k = k[good_cond[ok]]
+    kp_inv = _passive_pinv(k[:, :, pas], cond[keep])
+    g, dq, ddq = _closed_rates(plan, q[keep], k, kp_inv, act, pas, dqa[keep], ddqa[keep])
+    return ClosedStates(q[keep], dq, ddq, g, cond[keep], s,
                         int((~converged).sum()), int((converged & jumped).sum()),
                         int((converged & ~jumped & ~good_cond).sum()),
                         float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
 
 
-def _continuation(robot: Robot, q: np.ndarray, qa: np.ndarray, act: np.ndarray, pas: np.ndarray, cons: list,
-                  steps: int, tol: float, max_iter: int, max_step: float) -> tuple[np.ndarray, np.ndarray]:
+def _conditioning(kp: np.ndarray, npas: int) -> np.ndarray:
+    """Condition number ``(S,)`` of ``K_p (S, m, npas)`` (singular values only)."""
+    s = kp.shape[0]
+    if not npas:
+        return np.ones(s)
+    sv = np.linalg.svd(kp, compute_uv=False)
+    smin = sv[:, npas - 1] if sv.shape[1] >= npas else np.ones(s)
+    return np.where(smin > 0, sv[:, 0] / np.where(smin > 0, smin, 1.0), np.inf)
+
+
+#: below this cond(K_p), its pseudo-inverse is taken from the normal equations (error ~ cond^2 eps)
+_NORMAL_COND = 100.0
+
+
+def _passive_pinv(kp: np.ndarray, cond: np.ndarray) -> np.ndarray:
+    """Pseudo-inverse ``(S, npas, m)`` of ``K_p (S, m, npas)`` with condition numbers ``cond (S,)``.
+
+    ``(K_p^T K_p)^-1 K_p^T`` where ``K_p`` has full column rank and ``cond < 100``, the SVD
+    elsewhere.
+    """
+    out = np.empty((kp.shape[0], kp.shape[2], kp.shape[1]))
+    regular = (cond < _NORMAL_COND) & (kp.shape[1] >= kp.shape[2])
+    if regular.any():
+        kt = np.swapaxes(kp[regular], 1, 2)
+        out[regular] = np.linalg.solve(kt @ kp[regular], kt)
+    if not regular.all():
+        out[~regular] = _pinv(kp[~regular])[0]
+    return out
+
+
+def _continuation(plan: _Plan, q: np.ndarray, qa: np.ndarray, act: np.ndarray, pas: np.ndarray,
+                  steps: int, tol: float, max_iter: int, max_step: float):
     """Move ``q (S, dof)`` in place from its start to the actuated targets ``qa``.
 
-    In ``steps`` predictor-corrector steps; ``(failed, jumped)`` flags ``(S,)``: no convergence,
-    branch jump.
+    In ``steps`` predictor-corrector steps. Returns ``(failed, jumped, err, K)``: flags ``(S,)``
+    (no convergence, branch jump), and the largest residual ``(S,)`` and Jacobian
+    ``(m, dof, S)`` at the final ``q`` of the samples that converged (inf and zero elsewhere).
     """
-    s = q.shape[0]
+    s, dof = q.shape
     failed = np.zeros(s, dtype=bool)
     jumped = np.zeros(s, dtype=bool)
-    for t in np.linspace(0, 1, steps + 1)[1:]:
+    err, k_all = np.full(s, np.inf), np.zeros((plan.m, dof, s))
+    for step, t in enumerate(np.linspace(0, 1, steps + 1)[1:]):
         live = np.flatnonzero(~failed & ~jumped)
         if not len(live):
             break
-        # predictor: follow the tangent of the solution curve, dq_p = -K_p^+ K_a dq_a
-        ev = evaluate(robot, q[live], constraints=cons)
-        dqa_step = t * qa[live] - q[live][:, act]
-        rhs = np.einsum("smj,sj->sm", ev.K[:, :, act], dqa_step)
-        pred = q[live][:, pas] - _lstsq(ev.K[:, :, pas], rhs) if len(pas) else q[live][:, pas]
+        # predictor: follow the tangent of the solution curve, dq_p = -K_p^+ K_a dq_a; K at the
+        # start (one configuration for all samples) or where the previous step converged
+        ql = q[live]
+        k = _eval(plan, ql[:1], np.arange(dof))[1] if step == 0 else k_all[:, :, live]
+        dqa_step = t * qa[live] - ql[:, act]
+        if k.shape[2] == 1:
+            rhs = k[:, act, 0] @ dqa_step.T
+        else:
+            rhs = np.einsum("mjs,js->ms", k[:, act], dqa_step.T)
+        pred = ql[:, pas] - _lstsq(k[:, pas], rhs).T if len(pas) else ql[:, pas]
         q[live[:, None], act] = t * qa[live]
-        q[live[:, None], pas] = np.where(np.isfinite(pred), pred, q[live][:, pas])
+        q[live[:, None], pas] = np.where(np.isfinite(pred), pred, ql[:, pas])
         start = q[live][:, pas]
-        failed[_damped_newton(robot, q, live, pas, cons, tol, max_iter)] = True
+        failed[_damped_newton(plan, q, live, pas, tol, max_iter, err, k_all)] = True
         moved = np.abs(q[live][:, pas] - start).max(axis=1, initial=0.0)
         jumped[live[(moved > max_step) & ~failed[live]]] = True
-    return failed, jumped
+    return failed, jumped, err, k_all
 
 
-def _damped_newton(robot: Robot, q: np.ndarray, live: np.ndarray, pas: np.ndarray, cons: list, tol: float,
-                   max_iter: int) -> np.ndarray:
+def _damped_newton(plan: _Plan, q: np.ndarray, live: np.ndarray, pas: np.ndarray, tol: float,
+                   max_iter: int, err_out: np.ndarray, k_out: np.ndarray) -> np.ndarray:
     """Correct the passive coordinates of samples ``live`` of ``q`` in place.
 
-    The samples that did not converge within ``max_iter`` (outside the workspace) are returned.
+    The samples that did not converge within ``max_iter`` (outside the workspace) are returned;
+    for those that did, the largest residual and the Jacobian ``(m, dof)`` at the solution are
+    written to ``err_out`` and ``k_out``.
 
     Damped Newton on the samples still iterating (``idx`` shrinks): a step that does not reduce
-    the residual is halved and retried from the previous iterate.
+    the residual is halved and retried from the previous iterate (its Newton step is not needed).
     """
+    cols = np.arange(q.shape[1])
     idx, sub = live, q[live]
     prev_sub, prev_err, prev_step = sub.copy(), np.full(len(idx), np.inf), np.zeros((len(idx), len(pas)))
     lam = np.ones(len(idx))
     for _ in range(max_iter):
-        ev = evaluate(robot, sub, constraints=cons)
-        err = np.abs(ev.r).max(axis=1) if ev.r.shape[1] else np.zeros(len(idx))
+        r, k, _ = _eval(plan, sub, cols)
+        err = np.abs(r).max(axis=0) if len(r) else np.zeros(len(idx))
         done = err < tol
         q[idx[done]] = sub[done]
+        err_out[idx[done]] = err[done]
+        k_out[:, :, idx[done]] = k[:, :, done]
         worse = ~done & (err > prev_err)
         keep = ~done
         idx, sub, err, worse = idx[keep], sub[keep], err[keep], worse[keep]
         prev_sub, prev_err, prev_step, lam = prev_sub[keep], prev_err[keep], prev_step[keep], lam[keep]
         if not len(idx):
             break
-        k_keep = ev.K[keep][:, :, pas]
-        r_keep = ev.r[keep]
-        step = -_lstsq(k_keep, r_keep)
-        step = np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
+        step = np.zeros((len(idx), len(pas)))
+        go = np.flatnonzero(keep)[~worse]
+        if len(go):
+            st = -_lstsq(k[:, pas[:, None], go], r[:, go]).T
+            step[~worse] = np.where(np.isfinite(st), np.clip(st, -1.0, 1.0), 0.0)
         # rejected samples: back to the previous iterate with half the previous step
         lam = np.where(worse, lam * 0.5, np.minimum(1.0, lam * 2.0))
         base = np.where(worse[:, None], prev_sub[:, pas], sub[:, pas])
@@ -423,20 +599,20 @@ def _damped_newton(robot: Robot, q: np.ndarray, live: np.ndarray, pas: np.ndarra
     return idx
 
 
-def _closed_rates(robot: Robot, q: np.ndarray, k: np.ndarray, kp_inv: np.ndarray, act: np.ndarray, pas: np.ndarray,
-                  dqa: np.ndarray, ddqa: np.ndarray, cons: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _closed_rates(plan: _Plan, q: np.ndarray, k: np.ndarray, kp_inv: np.ndarray, act: np.ndarray, pas: np.ndarray,
+                  dqa: np.ndarray, ddqa: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact closed-loop rates at ``q``: ``G (S, dof, na)`` with ``dq = G dqa``, ``dq`` and ``ddq``.
 
     ``K (S, m, dof)`` is the constraint Jacobian, ``kp_inv`` the pseudo-inverse of its passive part.
     """
-    g = np.zeros((q.shape[0], robot.dof, len(act)))
+    g = np.zeros((q.shape[0], q.shape[1], len(act)))
     g[:, act, np.arange(len(act))] = 1.0
     g[:, pas] = -kp_inv @ k[:, :, act]
     dq = np.einsum("sij,sj->si", g, dqa)
-    ev2 = evaluate(robot, q, dq, constraints=cons)
+    _, _, bias = _eval(plan, q, act[:0], dq)
     ddq = np.zeros_like(q)
     ddq[:, act] = ddqa
-    ddq[:, pas] = -np.einsum("sij,sj->si", kp_inv, np.einsum("sij,sj->si", ev2.K[:, :, act], ddqa) + ev2.b)
+    ddq[:, pas] = -np.einsum("sij,sj->si", kp_inv, np.einsum("sij,sj->si", k[:, :, act], ddqa) + bias.T)
     return g, dq, ddq
 
 

@@ -13,10 +13,15 @@ joint lines at q = 0 (:attr:`Robot.screws`). The current line of coordinate ``k`
 ``L_k = Ad(g_parent exp(S_1 q_1) .. exp(S_{k-1} q_{k-1})) S_k``; ``V_i = V_p + sum L_k dq_k``;
 ``dV_i = dV_p + sum ad(V_{k}) L_k dq_k + L_k ddq_k``. The floating (F) root uses
 quasi-velocities: ``L_k = e_k`` and ``V = dq`` (the paper's Go2 section).
+
+:func:`forward_kinematics` returns samples first (``TreeState``); :func:`poses` computes the same
+with samples last (``Poses``: each component a contiguous row), for the bodies asked for only,
+by closed-form screw products -- the loop-closure solver's hot path.
 """
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -25,7 +30,7 @@ from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
 from ..pga import adjoint, commutator, inverse_transform, se3_exp
 from ..pga.core import screw_exp
-from ..pga.linalg import skew
+from ..pga.linalg import cross3_first, skew
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,6 +175,235 @@ def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
             h = h @ screw_exp(screws[jj], q[:, jj])
         g[:, i], v[:, i], a[:, i] = h, vh, ah
     return TreeState(g, v, a, lines, robot.support)
+
+
+@dataclass(frozen=True, eq=False)
+class Poses:
+    """Body displacements, joint lines and (optionally) twists, samples last (:func:`poses`).
+
+    Every component is a contiguous row of ``S`` samples, so that products with constant vectors
+    are single matrix products and elementwise work runs on contiguous rows.
+
+    Parameters
+    ----------
+    rot : ndarray, shape ``(n, 3, 3, S)``
+        Rotations of the displacements ``g_i`` by columns: ``rot[i, k]`` is ``R_i e_k``
+        (components, samples).
+    pos : ndarray, shape ``(n, 3, S)``
+        Translations of the displacements ``g_i``.
+    lines : ndarray, shape ``(6, dof, S)``
+        Current joint lines ``L_k`` (components first; the floating root's: ``e_k``).
+    V, dV : ndarray, shape ``(n, 6, S)``, or None
+        Spatial twists and accelerations (world frame, no gravity); None without ``dq``.
+    bodies : ndarray of bool, shape ``(n,)``
+        The bodies computed (and their coordinates' lines); the others' entries are undefined.
+    """
+
+    rot: np.ndarray
+    pos: np.ndarray
+    lines: np.ndarray
+    V: np.ndarray | None
+    dV: np.ndarray | None
+    bodies: np.ndarray
+
+
+#: per robot: the constant vectors of each coordinate's screw (see :func:`_screw_constants`)
+_SCREW_CONSTANTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _screw_constants(robot: Robot) -> list[tuple[bool, np.ndarray]]:
+    """Per coordinate ``(revolute, C)``: the vectors multiplied by the rotation before the joint.
+
+    Revolute (``omega != 0``, ``K = [omega]_x``): ``C (10, 3)`` = the columns of ``K`` and ``K^2``,
+    then ``v``, ``K v``, ``K^2 v`` and ``omega``. Prismatic: ``C (1, 3)`` = ``v``.
+    """
+    out = _SCREW_CONSTANTS.get(robot)
+    if out is None:
+        out = []
+        for sc in np.asarray(robot.screws, dtype=float):
+            w, v = sc[:3], sc[3:]
+            if np.any(w):
+                k = skew(w)
+                k2 = k @ k
+                out.append((True, np.vstack([k.T, k2.T, v, k @ v, k2 @ v, w])))
+            else:
+                out.append((False, v[None].copy()))
+        _SCREW_CONSTANTS[robot] = out
+    return out
+
+
+def _advance(rev: bool, cm: np.ndarray, th: np.ndarray, rot, pos, line: np.ndarray):
+    """``h exp(S th)`` for ``h = (rot, pos)`` (None: identity / zero); writes ``L = Ad(h) S`` to ``line``.
+
+    Rotation ``R_h (I + sin K + (1 - cos) K^2)``, translation ``p_h + R_h (th v + (1 - cos) K v
+    + (th - sin) K^2 v)``, both from the products of ``R_h`` with the constant vectors ``cm``;
+    sine and cosine from the tangent of the half angle (one vectorised call instead of two).
+    """
+    if rot is None and pos is None:
+        return _advance_root(rev, cm, th, line)
+    out = np.repeat(cm[:, :, None], len(th), 2) if rot is None else (cm @ rot.reshape(3, -1)).reshape(len(cm), 3, -1)
+    if not rev:  # translation along R v
+        line[:3] = 0.0
+        line[3:] = out[0]
+        out[0] *= th
+        return rot, out[0] if pos is None else np.add(pos, out[0], out=out[0])
+    s, c = _sin_versine(th)
+    line[:3] = out[9]
+    if pos is None:
+        line[3:] = out[6]
+    else:
+        _cross_into(pos, out[9], line[3:])
+        line[3:] += out[6]
+    new_rot = out[0:3]
+    new_rot *= s
+    out[3:6] *= c
+    new_rot += out[3:6]
+    new_rot += _EYE3 if rot is None else rot
+    t = out[6]
+    t *= th
+    out[7] *= c
+    t += out[7]
+    out[8] *= th - s
+    t += out[8]
+    if pos is not None:
+        t += pos
+    return new_rot, t
+
+
+def _advance_root(rev: bool, cm: np.ndarray, th: np.ndarray, line: np.ndarray):
+    """:func:`_advance` from the identity: ``exp(S th)`` itself (``L = S``)."""
+    if not rev:
+        line[:3] = 0.0
+        line[3:] = cm[0][:, None]
+        return None, cm[0][:, None] * th
+    s, c = _sin_versine(th)
+    line[:3] = cm[9][:, None]
+    line[3:] = cm[6][:, None]
+    new_rot = cm[0:3, :, None] * s
+    new_rot += cm[3:6, :, None] * c
+    new_rot += _EYE3
+    t = cm[6][:, None] * th
+    t += cm[7][:, None] * c
+    t += cm[8][:, None] * (th - s)
+    return new_rot, t
+
+
+def _sin_versine(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``sin th`` and ``1 - cos th`` from ``u = tan(th / 2)``: ``2u / (1 + u^2)``, ``2u^2 / (1 + u^2)``."""
+    u = np.tan(0.5 * th)
+    u2 = u * u
+    f = 2.0 / (1.0 + u2)
+    u *= f
+    u2 *= f
+    return u, u2
+
+
+def _cross_into(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``out[:] = a x b`` for ``(3, *)`` arrays (components first), without temporaries of ``(3, *)``."""
+    np.multiply(a[1], b[2], out=out[0])
+    out[0] -= a[2] * b[1]
+    np.multiply(a[2], b[0], out=out[1])
+    out[1] -= a[0] * b[2]
+    np.multiply(a[0], b[1], out=out[2])
+    out[2] -= a[1] * b[0]
+    return out
+
+
+_EYE3 = np.eye(3)[:, :, None]
+
+
+def _twist_step(line: np.ndarray, u: np.ndarray, du, vh, ah):
+    """``V += L u``, ``dV += [L, V] u + L du`` (components first; ``du`` None: zero)."""
+    vh = line * u if vh is None else vh + line * u
+    w, v = vh[:3], vh[3:]
+    d, m = line[:3], line[3:]
+    com = np.concatenate([cross3_first(w, d), cross3_first(w, m) + cross3_first(v, d)]) * u
+    ah = com if ah is None else ah + com
+    return vh, ah if du is None else ah + line * du
+
+
+def poses(robot: Robot, q, dq=None, ddq=None, bodies=None) -> Poses:
+    """Tree kinematics with samples last: what :func:`forward_kinematics` computes, faster.
+
+    The same product of exponentials (see the module doc), by closed-form screw products with
+    one matrix product per coordinate; only the bodies asked for and their ancestors are
+    computed, and twists only with ``dq``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, ``dof`` coordinates).
+    q : array_like, shape ``(S, dof)`` or ``(dof,)``
+        Tree coordinates (a floating root's six first: twist coordinates).
+    dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
+        Velocities and accelerations; without ``dq`` no twists are computed, ``ddq`` defaults to
+        zero.
+    bodies : array_like of int, optional
+        The bodies needed (default all); their ancestors are computed too.
+
+    Returns
+    -------
+    Poses
+        Displacements and lines (and twists with ``dq``) of the ``S`` samples, samples last.
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes or NaN or inf.
+    """
+    dof, n = robot.dof, robot.n
+    qt = _as_samples(q, dof, "q").T.copy()
+    s = qt.shape[1]
+    dqt = None if dq is None else _as_samples(dq, dof, "dq").T.copy()
+    ddqt = None if dq is None or ddq is None else _as_samples(ddq, dof, "ddq").T.copy()
+    need = _with_ancestors(robot, bodies)
+    rot, pos = np.empty((n, 3, 3, s)), np.empty((n, 3, s))
+    lines = np.empty((6, dof, s))
+    vel = np.zeros((n, 6, s)) if dqt is not None else None
+    acc = np.zeros((n, 6, s)) if dqt is not None else None
+    consts = _screw_constants(robot)
+    qi, nd, parent = robot.q_index, robot.ndofs, robot.parent
+    for i in np.flatnonzero(need):
+        p, j0 = parent[i], qi[i]
+        h, t = (None, None) if p < 0 else (rot[p], pos[p])
+        vh, ah = (None, None) if p < 0 or vel is None else (vel[p], acc[p])
+        if robot.jtype[i] == "F":
+            h, t, vh, ah = _floating(qt, dqt, ddqt, j0, lines, vh, ah)
+        else:
+            for jj in range(j0, j0 + nd[i]):
+                h, t = _advance(*consts[jj], qt[jj], h, t, lines[:, jj])
+                if vel is not None:
+                    vh, ah = _twist_step(lines[:, jj], dqt[jj], None if ddqt is None else ddqt[jj], vh, ah)
+        rot[i] = _EYE3 if h is None else h
+        pos[i] = 0.0 if t is None else t
+        if vel is not None:
+            vel[i] = 0.0 if vh is None else vh
+            acc[i] = 0.0 if ah is None else ah
+    return Poses(rot, pos, lines, vel, acc, need)
+
+
+def _with_ancestors(robot: Robot, bodies) -> np.ndarray:
+    """Bool mask ``(n,)`` of ``bodies`` (default all) and their ancestors."""
+    need = np.zeros(robot.n, dtype=bool)
+    if bodies is None:
+        need[:] = True
+        return need
+    for b in np.asarray(bodies, dtype=int).ravel():
+        while b >= 0 and not need[b]:
+            need[b] = True
+            b = robot.parent[b]
+    return need
+
+
+def _floating(qt, dqt, ddqt, j0: int, lines: np.ndarray, vh, ah):
+    """The floating root's displacement ``exp(q^)``, unit lines and quasi-velocity twists."""
+    g = se3_exp(qt[j0:j0 + 6].T)
+    lines[:, j0:j0 + 6] = np.eye(6)[:, :, None]
+    if dqt is not None:
+        vh = dqt[j0:j0 + 6] if vh is None else vh + dqt[j0:j0 + 6]
+        du = 0.0 if ddqt is None else ddqt[j0:j0 + 6]
+        ah = du + (0.0 if ah is None else ah)
+    return np.ascontiguousarray(g[:, :3, :3].transpose(2, 1, 0)), g[:, :3, 3].T.copy(), vh, ah
 
 
 def re_reference(robot: Robot, q0: np.ndarray) -> Robot:

@@ -28,6 +28,27 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
+def cross3_first(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the first axis (broadcasting): components first, samples last.
+
+    For arrays laid out ``(3, *)`` (each component a contiguous row), where :func:`cross3`
+    would work on strided columns.
+
+    Parameters
+    ----------
+    a, b : ndarray, shape ``(3, *)``
+        Vectors (the trailing axes broadcast against each other).
+
+    Returns
+    -------
+    ndarray, shape ``(3, *)``
+        ``a × b``.
+    """
+    a0, a1, a2 = a[0], a[1], a[2]
+    b0, b1, b2 = b[0], b[1], b[2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def skew(w: np.ndarray) -> np.ndarray:
     """Skew matrix ``[w]_x`` with ``[w]_x v = w × v``.
 

@@ -434,19 +434,22 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
         if progress is not None:
             print(f"[baseparams] {msg}", file=progress, flush=True)
 
+    from .numerics import blas_threads
+
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
-    res = drng(robot, extended=extended, rows=rows)
-    by = res.by_principle()
-    cert = None
-    if verify:
-        say(f"certifying with {samples or 'the default number of'} random samples (seed {seed}, rows: {rows})")
-        cert = certify(robot, samples, seed, rows, result=res)
-        basis, span = cert.basis, cert.span
-    else:
-        basis = span = res.orthonormal()
-    say("regrouping base parameters")
-    base = base_parameters(robot, span, convention)
-    base_paper = base_parameters(robot, span, "paper")
+    with blas_threads():  # small dense factorizations: one BLAS thread (numerics.blas_threads)
+        res = drng(robot, extended=extended, rows=rows)
+        by = res.by_principle()
+        cert = None
+        if verify:
+            say(f"certifying with {samples or 'the default number of'} random samples (seed {seed}, rows: {rows})")
+            cert = certify(robot, samples, seed, rows, result=res)
+            basis, span = cert.basis, cert.span
+        else:
+            basis = span = res.orthonormal()
+        say("regrouping base parameters")
+        base = base_parameters(robot, span, convention)
+        base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended)
 

@@ -30,7 +30,7 @@ from .analysis import Analysis, analyze
 from .errors import BaseparamsError
 from .ident.drives import DriveRegrouping, Drives, drives_for, regroup_drives
 from .model.robot import Robot
-from .numerics import StreamingQR, closed_samples, row_mask, sample_states
+from .numerics import StreamingQR, blas_threads, closed_samples, row_mask, sample_states
 
 
 @dataclass(frozen=True, eq=False)
@@ -536,13 +536,21 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         A floating base, a log that misses a measured joint, ``holdout`` with ``validation``, bad
         data (:class:`~baseparams.errors.DataError`) or data that do not excite the model.
     """
-    from .ident.preprocess import prepare
-
     if robot.floating:
         raise BaseparamsError(f"robot {robot.name!r}: identification from a joint log needs a fixed base (a floating "
                               f"base's motion and wrench are not in a joint log); use the Python API with states")
     if holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    with blas_threads():
+        return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
+                         min_speed, prior_weight, convention, memory_mb)
+
+
+def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
+              prior_weight, convention, memory_mb) -> Identification:
+    """:func:`identify`'s steps (arguments as there)."""
+    from .ident.preprocess import prepare
+
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
     model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width)
     cols = log_columns(model, log)

@@ -208,11 +208,11 @@ class BaseParameters:
             ``link1.ZZ + link2.YY + ...`` (coefficients written only when not 1).
         """
         out = []
+        order = np.argsort(self.dependent, kind="stable")  # terms in parameter order
         for r, (i, bname) in enumerate(zip(self.independent, self.base_names())):
             terms = [self.names[i]]
-            for c, d in sorted(zip(self.K[r], self.dependent), key=lambda t: t[1]):
-                if c == 0:
-                    continue
+            for col in order[self.K[r, order] != 0]:
+                c, d = self.K[r, col], self.dependent[col]
                 sign = "-" if c < 0 else "+"
                 mag = abs(c)
                 coef = "" if mag == 1 else f"{format_coefficient(mag)}*"

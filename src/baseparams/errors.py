@@ -15,3 +15,7 @@ class NoMovingBodiesError(ModelError):
     It has no inertial parameter that any measurement could see (the CLI reports this as an
     empty, trivially certified result).
     """
+
+
+class DataError(BaseparamsError, ValueError):
+    """Bad measured data: a log file or array (names the file, column, row and the problem)."""

@@ -1,0 +1,714 @@
+"""Read a recorded joint log (CSV/TSV, NPZ, Parquet, ROS bag) into a :class:`~baseparams.ident.data.JointLog`.
+
+:func:`read_log` picks the reader by the path: ``.csv``/``.tsv``/``.txt`` (text table, delimiter
+sniffed, header row required), ``.npz`` (one 1-D array per column), ``.parquet``/``.pq``
+(``pyarrow``, extra ``parquet``), and ROS bags (a rosbag2 folder holding ``metadata.yaml``, a
+``.mcap`` or ``.db3`` file, or a ROS 1 ``.bag``; ``rosbags``, extra ``ros``).
+
+Default layout (tables)
+-----------------------
+A time column ``t`` [s] and per joint of the model ``q_<joint>`` [rad or m], ``tau_<joint>``
+[N m or N], and optionally ``dq_<joint>``, ``ddq_<joint>``, where ``<joint>`` is the model's joint
+name (``robot.joint_names``). Example CSV header for a 2-joint arm::
+
+    t,q_joint1,q_joint2,dq_joint1,dq_joint2,tau_joint1,tau_joint2
+
+Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a joint of the model; other
+columns are ignored, and a note lists them. Every 1-dof (R or P) joint of the model must be in
+the log unless ``allow_subset=True``.
+
+ROS bags
+--------
+``sensor_msgs/msg/JointState`` messages on one topic (default: the first JointState topic; a
+string ``columns`` or the mapping's ``topic`` names it), matched by ``name[]``: ``position[]`` is
+q, ``velocity[]`` dq (when every message has it), ``effort[]`` tau. Time is the header stamp,
+counted from the first message (the bag's record time when every header stamp is zero; a note
+says so). Messages that lack one of the joints read are removed and counted.
+
+Mapping (any other layout)
+--------------------------
+``columns`` may be a TOML file (read with :mod:`tomllib`) or a dict of the same structure::
+
+    time = "stamp_ns"        # time column (default "t")
+    time_scale = 1e-9        # seconds per time unit (default 1)
+    topic = "/franka/joint_states"   # bags only
+
+    [joints.panda_joint1]    # a model joint; only the joints listed here are read
+    q = "motor_pos_1"        # column names (defaults: q_<joint>, dq_<joint>, ...)
+    dq = "motor_vel_1"       # optional
+    tau = "current_1"
+    sign = -1                # +1 or -1 (default 1)
+    gear_ratio = 100         # motor side -> joint side: q = q_motor / ratio, tau = tau_motor * ratio
+    torque_gain = 0.35       # tau column is a current [A]: tau_motor = gain * current [N m/A]
+    offset = 1.5708          # joint-side zero shift [rad or m], added last (default 0)
+
+    [joints.panda_joint2]
+    name = "fr3_joint2"      # columns q_fr3_joint2, ... (bags: the name in JointState.name[])
+
+Conversions, per joint: ``q = sign * q_col / gear_ratio + offset``, the same for ``dq`` and ``ddq``
+without the offset, ``tau = sign * torque_gain * gear_ratio * tau_col``. Coupled transmissions
+(one motor driving two joints) are not expressible here: convert such logs before reading.
+
+Checks
+------
+Bad input is one :class:`~baseparams.errors.DataError` line naming the file, the column and the
+row: NaN/inf values, time not strictly increasing (repeated or going back), rows or arrays of
+different lengths, unknown or missing joints, an empty file, and a revolute joint beyond
+``max_angle`` (default 4 pi: "degrees given as radians?") or a prismatic one beyond
+``max_travel`` (10 m: millimetres?). Rows are named as the file counts them: text files by file
+line (1-based) and data row (1-based, the first row after the header is 1); NPZ and Parquet by
+0-based index; bags by the 1-based message number on the topic.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import itertools
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import DataError
+from ..ident.data import JointLog
+from ..model.robot import Robot
+
+#: suffixes of each kind of log
+TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
+PARQUET_SUFFIXES = (".parquet", ".pq")
+BAG_SUFFIXES = (".mcap", ".db3", ".bag")
+#: the signals of a joint, in the default layout's column prefixes
+KINDS = ("q", "dq", "ddq", "tau")
+#: joint types a log can hold (1-dof)
+LOGGABLE = ("R", "P")
+
+_TOP_KEYS = ("time", "time_scale", "topic", "joints")
+_JOINT_KEYS = ("name", "q", "dq", "ddq", "tau", "sign", "gear_ratio", "torque_gain", "offset")
+_BAG_FIELDS = {"q": "position", "dq": "velocity", "ddq": "acceleration", "tau": "effort"}
+_COLUMN = re.compile(r"^(q|dq|ddq|tau)_(.+)$")
+
+
+@dataclass
+class _Table:
+    """Columns read from a file, before they are mapped to joints."""
+
+    source: str
+    columns: dict[str, np.ndarray]
+    rows: np.ndarray  # the row number shown for each sample
+    row_fmt: str  # "{0}" the shown number, "{1}" the 1-based sample
+    labels: dict[str, str] = field(default_factory=dict)  # column -> how to name it in a message
+    notes: list[str] = field(default_factory=list)
+    removed: dict[str, int] = field(default_factory=dict)
+    is_bag: bool = False
+
+    def row(self, i: int) -> str:
+        return self.row_fmt.format(int(self.rows[i]), i + 1)
+
+    def label(self, col: str) -> str:
+        return self.labels.get(col, f"column {col!r}")
+
+
+@dataclass
+class _Joint:
+    """How one model joint is read: its columns and the conversion to the joint side."""
+
+    joint: str
+    jtype: str
+    cols: dict[str, str | None]
+    sign: float = 1.0
+    ratio: float = 1.0
+    gain: float = 1.0
+    offset: float = 0.0
+
+
+def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
+             max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0) -> JointLog:
+    """Read a joint log and map it to the model's joints.
+
+    Parameters
+    ----------
+    path : str or Path
+        The log: ``.csv``/``.tsv``/``.txt``, ``.npz``, ``.parquet``/``.pq``, a rosbag2 folder
+        (with ``metadata.yaml``), ``.mcap``, ``.db3`` or ``.bag``. Formats: the module docstring.
+    robot : Robot
+        The model; its ``joint_names`` name the columns, its ``jtype`` says which joints can be
+        logged (R and P) and which plausibility check applies.
+    columns : str, Path or dict, optional
+        A mapping (TOML file or dict; see the module docstring) for any other layout, or, for
+        a bag, the JointState topic to read. Default: the default layout, the first JointState
+        topic.
+    allow_subset : bool, optional
+        Accept a log that covers only some of the model's 1-dof joints (default: every R and P
+        joint must be there).
+    max_angle : float or None, optional
+        Largest plausible ``|q|`` of a revolute joint [rad] (default 4 pi, beyond which the
+        values look like degrees); ``None`` disables the check (continuous joints).
+    max_travel : float or None, optional
+        Largest plausible ``|q|`` of a prismatic joint [m] (default 10, beyond which the values
+        look like millimetres); ``None`` disables the check.
+
+    Returns
+    -------
+    JointLog
+        Time ``t (S,)`` [s], ``q, tau (S, m)`` on the joint side in the model's joint order,
+        ``dq, ddq`` when the log has them, the notes of the reading.
+
+    Raises
+    ------
+    DataError
+        One line naming the file, the column and the row, for any problem listed in the module
+        docstring (and a missing optional package: the extra to install).
+    """
+    p = Path(path)
+    if not p.exists():
+        raise DataError(f"{p}: no such file")
+    spec = _mapping(columns)
+    kind = _kind(p)
+    if kind == "bag":
+        table = _read_bag(p, spec)
+    else:
+        if spec["topic"] is not None:
+            raise DataError(f"{spec['label']}: 'topic' applies to ROS bags only, not to {p.name}")
+        table = {"text": _read_text, "npz": _read_npz, "parquet": _read_parquet}[kind](p)
+    joints = _resolve(table, robot, spec, allow_subset)
+    return _assemble(table, joints, spec, max_angle, max_travel)
+
+
+def _kind(p: Path) -> str:
+    """The reader for a path: ``text``, ``npz``, ``parquet`` or ``bag``."""
+    suffix = p.suffix.lower()
+    if p.is_dir():
+        if (p / "metadata.yaml").exists():
+            return "bag"
+        raise DataError(f"{p}: a folder without metadata.yaml (not a rosbag2 recording)")
+    if suffix in TEXT_SUFFIXES:
+        return "text"
+    if suffix == ".npz":
+        return "npz"
+    if suffix in PARQUET_SUFFIXES:
+        return "parquet"
+    if suffix in BAG_SUFFIXES:
+        return "bag"
+    known = ", ".join(TEXT_SUFFIXES + (".npz",) + PARQUET_SUFFIXES + BAG_SUFFIXES)
+    raise DataError(f"{p}: unknown log type {suffix!r}; expected {known} or a rosbag2 folder")
+
+
+# ---------------------------------------------------------------- the mapping
+def _mapping(columns) -> dict:
+    """The mapping as a checked dict: ``time, time_scale, topic, joints, label``."""
+    label = "columns="
+    if columns is None:
+        raw: dict = {}
+    elif isinstance(columns, (str, Path)) and Path(columns).suffix.lower() == ".toml":
+        label = str(columns)
+        try:
+            raw = tomllib.loads(Path(columns).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise DataError(f"{columns}: cannot read the mapping file ({exc.strerror or exc})") from None
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise DataError(f"{columns}: not a valid TOML mapping ({str(exc).splitlines()[0]})") from None
+    elif isinstance(columns, str):
+        raw = {"topic": columns}
+    elif isinstance(columns, Mapping):
+        raw = dict(columns)
+    else:
+        raise DataError(f"columns=: expected a TOML file, a dict or a topic name, got {type(columns).__name__}")
+    return _check_mapping(raw, label)
+
+
+def _check_mapping(raw: dict, label: str) -> dict:
+    """Check the keys and values of a mapping (one line per problem, naming the key)."""
+    for key in raw:
+        if key not in _TOP_KEYS:
+            raise DataError(f"{label}: unknown key {key!r}; expected one of {', '.join(_TOP_KEYS)}")
+    time = raw.get("time", "t")
+    scale = raw.get("time_scale", 1.0)
+    topic = raw.get("topic")
+    if not isinstance(time, str) or not time:
+        raise DataError(f"{label}: time must be a column name, got {time!r}")
+    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not np.isfinite(scale) or scale <= 0:
+        raise DataError(f"{label}: time_scale must be a positive number, got {scale!r}")
+    if topic is not None and not isinstance(topic, str):
+        raise DataError(f"{label}: topic must be a string, got {topic!r}")
+    joints = raw.get("joints", {})
+    if not isinstance(joints, Mapping):
+        raise DataError(f"{label}: joints must be a table of model joints, got {type(joints).__name__}")
+    out = {}
+    for j, entry in joints.items():
+        out[j] = _check_joint_entry(entry, f"{label}: joints.{j}")
+    return {"time": time, "time_scale": float(scale), "topic": topic, "joints": out, "label": label,
+            "explicit_time": "time" in raw or "time_scale" in raw}
+
+
+def _check_joint_entry(entry, what: str) -> dict:
+    """One ``[joints.<name>]`` table: column names are strings, factors finite and nonzero."""
+    if not isinstance(entry, Mapping):
+        raise DataError(f"{what}: expected a table of column names and factors, got {entry!r}")
+    for key, value in entry.items():
+        if key not in _JOINT_KEYS:
+            raise DataError(f"{what}: unknown key {key!r}; expected one of {', '.join(_JOINT_KEYS)}")
+        if key in KINDS + ("name",) and (not isinstance(value, str) or not value):
+            raise DataError(f"{what}.{key}: expected a column name, got {value!r}")
+        if key in ("gear_ratio", "torque_gain", "offset") and (
+                isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value)
+                or (value == 0 and key != "offset")):
+            raise DataError(f"{what}.{key}: expected a finite nonzero number, got {value!r}")
+    if entry.get("sign", 1) not in (1, -1) or isinstance(entry.get("sign", 1), bool):
+        raise DataError(f"{what}.sign: expected +1 or -1, got {entry['sign']!r}")
+    return dict(entry)
+
+
+# ---------------------------------------------------------------- text tables
+def _read_text(path: Path) -> _Table:
+    """A delimited text table with a header row (delimiter sniffed); blank and ``#`` lines skipped."""
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: not a UTF-8 text file (byte {exc.start})") from None
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    lines = text.splitlines()
+    stripped = list(map(str.strip, lines))
+    keep = np.fromiter(map(bool, stripped), bool, len(lines))
+    keep &= ~np.fromiter(map(str.startswith, stripped, itertools.repeat("#")), bool, len(lines))
+    numbers = np.flatnonzero(keep) + 1  # file line numbers, 1-based
+    if len(numbers) == 0:
+        raise DataError(f"{path}: empty file (expected a header row and data rows)")
+    kept = list(itertools.compress(stripped, keep))
+    delim = _sniff(kept[0], path.suffix.lower())
+    if delim is None:  # runs of blanks: one space each
+        blanks = re.compile(r"[ \t]+")
+        kept = list(map(functools.partial(blanks.sub, " "), kept))
+        delim = " "
+    names = [n.strip() for n in next(csv.reader([kept[0]], delimiter=delim, skipinitialspace=True))]
+    _check_header(path, names, numbers[0])
+    data = kept[1:]
+    if not data:
+        raise DataError(f"{path}: no data rows after the header (line {numbers[0]})")
+    counts = np.fromiter(map(str.count, data, itertools.repeat(delim)), int, len(data)) + 1
+    if np.any(bad := counts != len(names)):
+        i = int(np.argmax(bad))
+        raise DataError(f"{path}: line {numbers[i + 1]} (data row {i + 1}): {counts[i]} fields, the header has "
+                        f"{len(names)} (columns of different lengths; {_plural(bad.sum(), 'such row')})")
+    values = _parse_numbers(path, data, delim, names, numbers[1:])
+    table = _Table(str(path), {n: values[:, k] for k, n in enumerate(names)}, numbers[1:],
+                   "line {0} (data row {1})")
+    skipped = len(lines) - len(numbers)
+    table.notes.append(f"{path.name}: {len(data)} rows, delimiter {_delim_name(delim)}"
+                       + (f"; {_plural(skipped, 'blank or comment line')} skipped" if skipped else ""))
+    return table
+
+
+def _sniff(header: str, suffix: str) -> str | None:
+    """The delimiter, from the header row: tab for ``.tsv``, else the most frequent of ``, ; tab |``.
+
+    ``None`` (runs of blanks) when the header has none of them. The header decides, not the data
+    rows, so a malformed data row cannot change the reading of the others.
+    """
+    if suffix == ".tsv" and "\t" in header:
+        return "\t"
+    counts = {d: header.count(d) for d in (",", "\t", ";", "|")}
+    best = max(counts, key=counts.__getitem__)
+    return best if counts[best] else None
+
+
+def _delim_name(delim: str) -> str:
+    return {"\t": "tab", " ": "blanks"}.get(delim, repr(delim))
+
+
+def _check_header(path: Path, names: list[str], line: int) -> None:
+    """Header names: none empty, none repeated, not numbers (a header row is required)."""
+    for k, n in enumerate(names):
+        if not n:
+            raise DataError(f"{path}: line {line} (header): column {k + 1} has no name")
+        if re.fullmatch(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|nan|inf", n, re.IGNORECASE):
+            raise DataError(f"{path}: line {line}: the first row is numbers ({n!r}), expected a header row of "
+                            "column names")
+    seen: dict[str, int] = {}
+    for k, n in enumerate(names):
+        if n in seen:
+            raise DataError(f"{path}: line {line} (header): column {n!r} appears twice (columns {seen[n] + 1} "
+                            f"and {k + 1})")
+        seen[n] = k
+
+
+def _parse_numbers(path: Path, data: list[str], delim: str, names: list[str], numbers: np.ndarray) -> np.ndarray:
+    """``(S, columns)`` floats; a cell that is not a number is one line naming it."""
+    try:
+        return np.loadtxt(data, delimiter=delim, dtype=float, comments=None, ndmin=2, encoding=None)
+    except ValueError:
+        pass
+    cells = np.loadtxt(data, delimiter=delim, dtype=str, comments=None, ndmin=2, encoding=None)
+    for k, n in enumerate(names):  # a loop over columns; bisection over rows
+        col = np.char.strip(cells[:, k])
+        if _floats_ok(col):
+            continue
+        lo, hi = 0, len(col)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            lo, hi = (mid, hi) if _floats_ok(col[lo:mid]) else (lo, mid)
+        value = str(col[lo])
+        hint = " (decimal comma?)" if "," in value and delim != "," else ""
+        what = "an empty field" if not value else f"{value!r} is not a number{hint}"
+        raise DataError(f"{path}: column {n!r}, line {numbers[lo]} (data row {lo + 1}): {what}")
+    raise DataError(f"{path}: cannot read the numbers")  # pragma: no cover - loadtxt and astype agree
+
+
+def _floats_ok(col: np.ndarray) -> bool:
+    try:
+        col.astype(float)
+    except ValueError:
+        return False
+    return True
+
+
+# ---------------------------------------------------------------- NPZ and Parquet
+def _read_npz(path: Path) -> _Table:
+    """One 1-D numeric array per column, all of one length."""
+    try:
+        archive = np.load(path, allow_pickle=False)
+    except Exception as exc:  # zipfile, OSError, ValueError: one line whatever numpy raises
+        raise DataError(f"{path}: not a readable .npz archive ({_first_line(exc)})") from None
+    if not isinstance(archive, np.lib.npyio.NpzFile):
+        raise DataError(f"{path}: a single array, not an .npz archive of named columns")
+    columns: dict[str, np.ndarray] = {}
+    with archive:
+        for name in archive.files:
+            try:
+                a = archive[name]
+            except ValueError as exc:
+                raise DataError(f"{path}: array {name!r}: {_first_line(exc)} (Python objects are not read)") from None
+            if a.ndim != 1:
+                raise DataError(f"{path}: array {name!r} has shape {a.shape}; expected one value per sample (S,)")
+            if a.dtype.kind not in "biuf":
+                raise DataError(f"{path}: array {name!r} holds {a.dtype} values, expected numbers")
+            columns[name] = a.astype(float)
+    return _table_of_arrays(path, columns, "index {0} (0-based)", "array")
+
+
+def _table_of_arrays(path: Path, columns: dict[str, np.ndarray], row_fmt: str, what: str) -> _Table:
+    """A table from named columns: at least one, all of one nonzero length."""
+    if not columns:
+        raise DataError(f"{path}: empty file (no {what}s)")
+    first, n = next((k, len(v)) for k, v in columns.items())
+    for k, v in columns.items():
+        if len(v) != n:
+            raise DataError(f"{path}: {what} {k!r} has {len(v)} rows, {what} {first!r} has {n} (columns of "
+                            "different lengths)")
+    if n == 0:
+        raise DataError(f"{path}: no data rows (every {what} is empty)")
+    table = _Table(str(path), columns, np.arange(n), row_fmt,
+                   labels={k: f"{what} {k!r}" for k in columns})
+    table.notes.append(f"{path.name}: {n} rows, {len(columns)} {what}s")
+    return table
+
+
+def _read_parquet(path: Path) -> _Table:
+    """Numeric (or timestamp) columns of a Parquet file; nulls are errors naming the row."""
+    try:
+        import pyarrow as pa
+        import pyarrow.compute as pc
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise DataError(f"{path}: reading Parquet needs pyarrow: pip install 'baseparams[parquet]'") from None
+    try:
+        table = pq.read_table(path)
+    except Exception as exc:  # pyarrow's errors: one line
+        raise DataError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
+    columns, notes = {}, []
+    for name in table.column_names:
+        col = table.column(name)
+        if col.null_count:
+            i = int(np.argmax(pc.is_null(col).to_numpy(zero_copy_only=False)))
+            raise DataError(f"{path}: column {name!r}, row {i} (0-based): null value")
+        if pa.types.is_timestamp(col.type) or pa.types.is_duration(col.type):
+            unit = col.type.unit
+            columns[name] = col.cast(pa.int64()).to_numpy().astype(float) * {"s": 1.0, "ms": 1e-3, "us": 1e-6,
+                                                                              "ns": 1e-9}[unit]
+            notes.append(f"{path.name}: column {name!r} is a {col.type}: converted to seconds")
+        elif pa.types.is_integer(col.type) or pa.types.is_floating(col.type) or pa.types.is_boolean(col.type):
+            columns[name] = col.to_numpy(zero_copy_only=False).astype(float)
+        else:
+            raise DataError(f"{path}: column {name!r} holds {col.type} values, expected numbers")
+    out = _table_of_arrays(path, columns, "row {0} (0-based)", "column")
+    out.notes += notes
+    return out
+
+
+def _plural(n, what: str) -> str:
+    return f"{int(n)} {what}" + ("" if n == 1 else "s")
+
+
+def _names(names: list[str], most: int = 12) -> str:
+    """Names joined by commas, the first ``most`` of them."""
+    more = f" and {len(names) - most} more" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return text.splitlines()[0].strip()
+
+
+# ---------------------------------------------------------------- ROS bags
+def _read_bag(path: Path, spec: dict) -> _Table:
+    """JointState messages of one topic: per message name, stamps, position, velocity, effort."""
+    try:
+        from rosbags.highlevel import AnyReader
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError:
+        raise DataError(f"{path}: reading ROS bags needs rosbags: pip install 'baseparams[ros]'") from None
+    if spec["explicit_time"]:
+        raise DataError(f"{spec['label']}: time and time_scale do not apply to bags (time is the header stamp)")
+    notes: list[str] = []
+    try:
+        with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+            con = _joint_state_topic(path, reader.connections, spec["topic"], notes)
+            msgs = [(stamp, reader.deserialize(raw, c.msgtype))
+                    for c, stamp, raw in reader.messages(connections=[con])]
+    except DataError:
+        raise
+    except Exception as exc:  # rosbags' reader and deserialiser errors: one line
+        raise DataError(f"{path}: cannot read the bag ({_first_line(exc)})") from None
+    if not msgs:
+        raise DataError(f"{path}: topic {con.topic!r} has no messages")
+    wanted = [e.get("name", j) for j, e in spec["joints"].items()] or None
+    table = _bag_table(path, con.topic, msgs, wanted)
+    table.notes[:0] = notes
+    return table
+
+
+def _joint_state_topic(path: Path, connections, topic: str | None, notes: list[str]):
+    """The connection to read: the named topic, else the first JointState topic."""
+    states = [c for c in connections if c.msgtype == "sensor_msgs/msg/JointState"]
+    if topic is not None:
+        named = [c for c in connections if c.topic == topic]
+        if not named:
+            raise DataError(f"{path}: no topic {topic!r}; topics: {', '.join(sorted({c.topic for c in connections}))}")
+        if named[0].msgtype != "sensor_msgs/msg/JointState":
+            raise DataError(f"{path}: topic {topic!r} carries {named[0].msgtype}, not sensor_msgs/msg/JointState")
+        return named[0]
+    if not states:
+        found = ", ".join(f"{c.topic} ({c.msgtype})" for c in connections) or "none"
+        raise DataError(f"{path}: no sensor_msgs/msg/JointState topic; topics: {found}")
+    others = sorted({c.topic for c in states} - {states[0].topic})
+    notes.append(f"{path.name}: JointState topic {states[0].topic} (default: the first)"
+                 + (f"; also on {', '.join(others)} (columns= picks one)" if others else ""))
+    return states[0]
+
+
+def _bag_table(path: Path, topic: str, msgs: list, wanted: list[str] | None) -> _Table:
+    """Columns ``t, q_<name>, dq_<name>, tau_<name>`` from JointState messages.
+
+    Messages are grouped by their ``name[]`` list; messages lacking a wanted name are removed
+    (counted). ``wanted`` defaults to every name on the topic.
+    """
+    keys = [tuple(m.name) for _, m in msgs]
+    groups = list(dict.fromkeys(keys))
+    code = {g: i for i, g in enumerate(groups)}
+    gid = np.fromiter(map(code.__getitem__, keys), int, len(keys))
+    names = wanted or list(dict.fromkeys(n for g in groups for n in g))
+    full = [i for i, g in enumerate(groups) if set(names) <= set(g)]
+    if not full:
+        sets = "; ".join(f"[{', '.join(g)}] x{int((gid == i).sum())}" for i, g in enumerate(groups[:4]))
+        raise DataError(f"{path}: topic {topic!r}: no message has all of the joints {', '.join(names)} (messages "
+                        f"carry: {sets}); name the joints to read with columns=")
+    keep = np.isin(gid, full)
+    sel = np.flatnonzero(keep)
+    table = _Table(str(path), {}, sel + 1, "message {0}", is_bag=True)
+    if (dropped := int((~keep).sum())):
+        table.removed["JointState messages without every joint read"] = dropped
+        table.notes.append(f"{path.name}: {dropped} messages on {topic} lack some of the joints read: removed")
+    table.columns["t"] = _bag_time(path, msgs, sel, table.notes)
+    for kind, fld in (("q", "position"), ("dq", "velocity"), ("tau", "effort")):
+        block = _bag_field(path, topic, msgs, fld, groups, gid, sel, names, table.notes)
+        for k, n in enumerate(names):
+            table.labels[f"{kind}_{n}"] = f"{fld}[{n!r}] on {topic}"
+            if block is not None:
+                table.columns[f"{kind}_{n}"] = block[:, k]
+    table.labels["t"] = f"header stamp on {topic}"
+    table.notes.append(f"{path.name}: {len(sel)} JointState messages on {topic}")
+    return table
+
+
+def _bag_field(path, topic, msgs, fld, groups, gid, sel, names, notes) -> np.ndarray | None:
+    """``(K, len(names))`` values of one JointState field, or None when some message lacks it."""
+    arrays = [np.asarray(getattr(msgs[i][1], fld), dtype=float) for i in sel]
+    lengths = np.fromiter(map(len, arrays), int, len(arrays))
+    expect = np.array([len(groups[g]) for g in gid[sel]])
+    wrong = (lengths != expect) & (lengths != 0)
+    if wrong.any():
+        i = int(np.argmax(wrong))
+        raise DataError(f"{path}: topic {topic!r}, message {sel[i] + 1}: {lengths[i]} {fld} values for "
+                        f"{expect[i]} names")
+    if np.all(lengths == 0):
+        return None
+    if np.any(lengths == 0):
+        notes.append(f"{path.name}: {int((lengths == 0).sum())} messages on {topic} have no {fld}: {fld} not read")
+        return None
+    out = np.empty((len(sel), len(names)))
+    for g in np.unique(gid[sel]):  # a loop over the distinct name lists, not over messages
+        rows = np.flatnonzero(gid[sel] == g)
+        order = [groups[g].index(n) for n in names]
+        out[rows] = np.stack([arrays[r] for r in rows])[:, order]
+    return out
+
+
+def _bag_time(path: Path, msgs: list, sel: np.ndarray, notes: list[str]) -> np.ndarray:
+    """Header stamps [s] from the first; the record time when every stamp is zero."""
+    sec = np.array([msgs[i][1].header.stamp.sec for i in sel], dtype=np.int64)
+    nsec = np.array([msgs[i][1].header.stamp.nanosec for i in sel], dtype=np.int64)
+    ns = sec * 1_000_000_000 + nsec
+    if not ns.any():
+        ns = np.array([msgs[i][0] for i in sel], dtype=np.int64)
+        notes.append(f"{path.name}: every header stamp is zero: time is the bag's record time")
+    notes.append(f"{path.name}: t = 0 at the first stamp ({ns[0] // 1_000_000_000}.{ns[0] % 1_000_000_000:09d} s)")
+    return (ns - ns[0]) * 1e-9
+
+
+# ---------------------------------------------------------------- joints and conversion
+def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool) -> list[_Joint]:
+    """The joints of the log in the model's order, with their columns, checked against the model."""
+    jtypes = dict(zip(robot.joint_names, robot.jtype))
+    loggable = [j for j, t in jtypes.items() if t in LOGGABLE]
+    entries = spec["joints"] or _detect(table, robot, jtypes, loggable)
+    for j in entries:
+        if j not in jtypes:
+            raise DataError(f"{spec['label']}: joints.{j}: robot {robot.name!r} has no joint {j!r} (1-dof joints: "
+                            f"{_names(loggable)})")
+        if jtypes[j] not in LOGGABLE:
+            raise DataError(f"{spec['label']}: joints.{j}: a {jtypes[j]} joint; only 1-dof R and P joints are logged")
+    missing = [j for j in loggable if j not in entries]
+    if missing and not allow_subset:
+        where = (f"not in the mapping {spec['label']}" if spec["joints"] else
+                 "no columns (expected q_<joint> and tau_<joint> each)")
+        raise DataError(f"{table.source}: joints {_names(missing)} of robot {robot.name!r}: {where}; "
+                        "allow_subset=True reads a subset")
+    out = []
+    for j in [j for j in robot.joint_names if j in entries]:
+        e = entries[j]
+        base = e.get("name", j)
+        cols = {k: e.get(k, f"{k}_{base}") for k in KINDS}
+        for k in KINDS:
+            if cols[k] not in table.columns and (k in ("q", "tau") or k in e):
+                need = "required" if k in ("q", "tau") else "named in the mapping"
+                raise DataError(f"{table.source}: no {table.label(cols[k])} for joint {j!r} ({k} is {need})")
+            if cols[k] not in table.columns:
+                cols[k] = None
+        out.append(_Joint(j, jtypes[j], cols, float(e.get("sign", 1)), float(e.get("gear_ratio", 1.0)),
+                          float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0))))
+    if not out:
+        raise DataError(f"{table.source}: no joint of robot {robot.name!r} in the log")
+    for k in ("dq", "ddq"):
+        have = [x.joint for x in out if x.cols[k] is not None]
+        if have and len(have) < len(out):
+            lack = [x.joint for x in out if x.cols[k] is None]
+            raise DataError(f"{table.source}: {k} given for joints {', '.join(have)} but not for "
+                            f"{', '.join(lack)} (give it for every joint read, or for none)")
+    return out
+
+
+def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> dict[str, dict]:
+    """Joints named by default-layout columns (``q_<joint>`` ...); an unknown joint is an error."""
+    found: dict[str, dict] = {}
+    for col in table.columns:
+        m = _COLUMN.match(col)
+        if not m:
+            continue
+        j = m.group(2)
+        if j not in jtypes:
+            raise DataError(f"{table.source}: {table.label(col)}: robot {robot.name!r} has no joint {j!r} "
+                            f"(1-dof joints: {_names(loggable)})")
+        if jtypes[j] not in LOGGABLE:
+            raise DataError(f"{table.source}: {table.label(col)}: joint {j!r} is a {jtypes[j]} joint; only 1-dof "
+                            "R and P joints are logged")
+        found[j] = {}
+    return found
+
+
+def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_travel) -> JointLog:
+    """Check the values (finite, time increasing, plausible) and convert to the joint side."""
+    tcol = spec["time"] if not table.is_bag else "t"
+    if tcol not in table.columns:
+        raise DataError(f"{table.source}: no time column {tcol!r} (columns: {', '.join(list(table.columns)[:12])})")
+    used = [tcol] + [c for x in joints for c in x.cols.values() if c is not None]
+    _check_finite(table, used)
+    t = table.columns[tcol] * spec["time_scale"]
+    _check_time(table, tcol, t)
+    arrays = {}
+    for k in KINDS:
+        if joints[0].cols[k] is None:
+            arrays[k] = None
+            continue
+        raw = np.stack([table.columns[x.cols[k]] for x in joints], axis=1)
+        sign = np.array([x.sign for x in joints])
+        ratio = np.array([x.ratio for x in joints])
+        if k == "tau":
+            arrays[k] = raw * (sign * ratio * np.array([x.gain for x in joints]))
+        else:
+            arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
+    _check_plausible(table, joints, arrays["q"], max_angle, max_travel)
+    unused = [c for c in table.columns if c not in used]
+    notes = list(table.notes) + _conversion_notes(joints, spec)
+    if unused:
+        notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"
+                     + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))
+    return JointLog(t=t, joints=tuple(x.joint for x in joints), q=arrays["q"], tau=arrays["tau"], dq=arrays["dq"],
+                    ddq=arrays["ddq"], source=table.source, removed=dict(table.removed), notes=tuple(notes))
+
+
+def _conversion_notes(joints: list[_Joint], spec: dict) -> list[str]:
+    notes = []
+    if spec["time_scale"] != 1.0:
+        notes.append(f"time: column {spec['time']!r} x {spec['time_scale']:g} s")
+    for x in joints:
+        parts = [f"sign {x.sign:+g}" if x.sign != 1 else "", f"gear ratio {x.ratio:g}" if x.ratio != 1 else "",
+                 f"torque gain {x.gain:g}" if x.gain != 1 else "", f"offset {x.offset:g}" if x.offset else ""]
+        if any(parts):
+            notes.append(f"joint {x.joint}: " + ", ".join(p for p in parts if p))
+    return notes
+
+
+def _check_finite(table: _Table, used: list[str]) -> None:
+    """The first NaN or inf of the used columns, in file order."""
+    block = np.stack([table.columns[c] for c in used], axis=1)
+    bad = ~np.isfinite(block)
+    if bad.any():
+        i, k = np.unravel_index(int(np.argmax(bad)), bad.shape)
+        raise DataError(f"{table.source}: {table.label(used[k])}, {table.row(i)}: {block[i, k]} (not finite; "
+                        f"{_plural(bad.sum(), 'such value')} in the columns read)")
+
+
+def _check_time(table: _Table, tcol: str, t: np.ndarray) -> None:
+    """Time strictly increasing: a repeated or earlier stamp names its row."""
+    dt = np.diff(t)
+    bad = dt <= 0
+    if bad.any():
+        i = int(np.argmax(bad)) + 1
+        what = "repeats" if dt[i - 1] == 0 else "is before"
+        rows = _plural(bad.sum(), "such row")
+        raise DataError(f"{table.source}: {table.label(tcol)}, {table.row(i)}: time {t[i]:.9g} s {what} the one "
+                        f"before ({t[i - 1]:.9g} s); time must be strictly increasing ({rows})")
+
+
+def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_angle, max_travel) -> None:
+    """A revolute joint beyond ``max_angle`` (degrees?) or a prismatic one beyond ``max_travel`` (mm?)."""
+    limit = np.array([(max_angle if x.jtype == "R" else max_travel) for x in joints], dtype=float)
+    limit = np.where(np.isnan(limit), np.inf, limit)
+    bad = np.abs(q) > limit
+    if not bad.any():
+        return
+    k = int(np.argmax(bad.any(axis=0)))
+    i = int(np.argmax(bad[:, k]))
+    x = joints[k]
+    if x.jtype == "R":
+        why = (f"|q| = {abs(q[i, k]):.4g} rad > {limit[k]:.4g} for revolute joint {x.joint!r}: degrees given as "
+               "radians? (or a motor-side angle without gear_ratio)")
+    else:
+        why = (f"|q| = {abs(q[i, k]):.4g} m > {limit[k]:.4g} for prismatic joint {x.joint!r}: millimetres given as "
+               "metres?")
+    raise DataError(f"{table.source}: {table.label(x.cols['q'])}, {table.row(i)}: {why}")

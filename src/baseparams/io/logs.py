@@ -712,3 +712,62 @@ def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_ang
         why = (f"|q| = {abs(q[i, k]):.4g} m > {limit[k]:.4g} for prismatic joint {x.joint!r}: millimetres given as "
                "metres?")
     raise DataError(f"{table.source}: {table.label(x.cols['q'])}, {table.row(i)}: {why}")
+
+
+def log_columns_of(log: JointLog) -> dict[str, np.ndarray]:
+    """A log in the default layout, one 1-D array per column.
+
+    Parameters
+    ----------
+    log : JointLog
+        The log.
+
+    Returns
+    -------
+    dict of str to ndarray, each shape ``(S,)``
+        ``t``, then ``q_<joint>`` for every joint, ``dq_``/``ddq_`` when the log has them, ``tau_``.
+    """
+    cols = {"t": log.t}
+    for kind in KINDS:
+        arr = getattr(log, kind)
+        if arr is not None:
+            cols.update({f"{kind}_{j}": arr[:, k] for k, j in enumerate(log.joints)})
+    return cols
+
+
+def write_log(path, log: JointLog) -> Path:
+    """Write a log in the default layout, read back exactly by :func:`read_log`.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.csv`` / ``.tsv`` (text, every value as its shortest exact decimal) or ``.npz``.
+    log : JointLog
+        The log.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    DataError
+        Another suffix, or a file that cannot be written.
+    """
+    p = Path(path)
+    cols = log_columns_of(log)
+    try:
+        if p.suffix.lower() == ".npz":
+            np.savez(p, **cols)
+        elif p.suffix.lower() in (".csv", ".tsv"):
+            delim = "\t" if p.suffix.lower() == ".tsv" else ","
+            data = np.column_stack(list(cols.values()))
+            with open(p, "w", newline="") as fh:
+                fh.write(delim.join(cols) + "\n")
+                np.savetxt(fh, data, delimiter=delim, fmt="%.17g")
+        else:
+            raise DataError(f"{p}: write a log as .csv, .tsv or .npz, not {p.suffix or 'no suffix'}")
+    except OSError as exc:
+        raise DataError(f"{p}: cannot write ({exc.strerror or exc})") from None
+    return p

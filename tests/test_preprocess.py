@@ -12,6 +12,7 @@ from baseparams.ident.data import JointLog
 from baseparams.ident.preprocess import (
     decimate,
     derivatives,
+    excitation_bandwidth,
     lowpass_design,
     prepare,
     remove_slow,
@@ -202,11 +203,16 @@ def test_prepare_counts_every_removed_sample_and_notes_every_choice(rng):
     n_full = prep.full.n_samples
     assert sum(v for k, v in prep.removed.items() if k != "resampling to fewer samples") + prep.n_samples == n_full
     assert prep.removed["filter edges"] == 2 * prep.design.pad
-    assert prep.factor == 5 and prep.fs == pytest.approx(100.0, rel=1e-4)  # 500 Hz, cutoff 20 Hz: 500/5 = 100 >= 5 x 20
+    # default cutoff: 10 x the excitation bandwidth (the sines' 1.1 Hz), within [1, 20] Hz
+    band = excitation_bandwidth(prep.full.q, 500.0)
+    assert 1.0 <= band <= 1.5  # the 6 s window: frequency bins of 1/6 Hz
+    assert prep.design.cutoff == pytest.approx(10 * band)
+    k = int(500.0 // (5 * prep.design.cutoff))
+    assert prep.factor == k and prep.fs == pytest.approx(500.0 / k, rel=1e-4)
     assert prep.removed["slow (|dq| < min_speed on a joint)"] > 0
     text = "\n".join(prep.notes)
-    for word in ("resampled", "low-pass", "cutoff 20 Hz (default", "dq: derived", "ddq: derived",
-                 "decimation: 1 sample in 5 kept (default", "slow samples:"):
+    for word in ("resampled", "low-pass", "x the excitation bandwidth", "dq: derived", "ddq: derived",
+                 f"decimation: 1 sample in {k} kept (default", "slow samples:"):
         assert word in text
     assert prep.q.shape == prep.dq.shape == prep.ddq.shape == prep.tau.shape == (prep.n_samples, 3)
     assert np.all(np.abs(prep.dq) >= 0.05)
@@ -258,7 +264,9 @@ def test_real_panda_log(tmp_path):
     assert log.n_samples == 20544 and log.joints == names and log.dq is not None
     prep = prepare(log)
     assert any(n.startswith("time: resampled 20544 non-uniform samples (dt 0.7-8.81 ms") for n in prep.notes)
-    assert prep.full.n_samples == 21000 and prep.fs == pytest.approx(100.0)
+    # the excitation: 5 harmonics of 0.075 Hz -> bandwidth ~0.4-0.5 Hz, cutoff 10x that
+    assert 3.5 <= prep.design.cutoff <= 5.0
+    assert prep.full.n_samples == 21000 and prep.fs >= 5 * prep.design.cutoff
     for a in (prep.q, prep.dq, prep.ddq, prep.tau):
         assert np.all(np.isfinite(a))
     # the robot's dq agrees with d/dt of the filtered q to a few % of its RMS

@@ -34,6 +34,10 @@ CUTOFF_DIVISOR = 20.0
 CUTOFF_CAP = 20.0
 #: edge samples dropped at each end: EDGE_PERIODS periods of the cutoff
 EDGE_PERIODS = 2.0
+#: default cutoff of a log: this multiple of the excitation bandwidth (:func:`excitation_bandwidth`)
+BANDWIDTH_FACTOR = 10.0
+#: ... and never below this [Hz]
+CUTOFF_FLOOR = 1.0
 #: default decimation: the rate after it stays at least DECIMATE_MARGIN x the cutoff
 DECIMATE_MARGIN = 5.0
 #: relative spread of the time steps below which a log counts as uniform
@@ -119,6 +123,40 @@ def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4) -> Lo
     note = (f"low-pass: zero-phase Butterworth order {order} (forward and backward, sosfiltfilt), cutoff "
             f"{cutoff:.4g} Hz ({why}); edges {pad} samples ({EDGE_PERIODS:g} cutoff periods)")
     return LowPass(sos=sos, fs=float(fs), cutoff=float(cutoff), order=int(order), pad=pad, note=note)
+
+
+def excitation_bandwidth(q, fs: float, energy: float = 0.995) -> float:
+    """The frequency below which the motion has ``energy`` of its spectral energy.
+
+    Per joint, the one-sided power spectrum of ``q`` minus its mean (Hann window); the largest
+    over the joints of the frequency where the cumulative energy reaches ``energy``. An
+    excitation trajectory (a Fourier series of a fraction of a hertz, a few harmonics) gives its
+    highest harmonic; encoder noise is far below the motion and does not move it.
+
+    Parameters
+    ----------
+    q : array_like, shape ``(S, m)``
+        Uniformly sampled positions.
+    fs : float
+        Sampling rate [Hz].
+    energy : float
+        Fraction of the energy, in ``(0, 1)``.
+
+    Returns
+    -------
+    float
+        The bandwidth [Hz] (0 for a log without motion).
+    """
+    q = np.asarray(q, dtype=float)
+    x = (q - q.mean(axis=0)) * np.hanning(len(q))[:, None]
+    p = np.abs(np.fft.rfft(x, axis=0)) ** 2
+    total = p.sum(axis=0)
+    moving = total > 0
+    if not moving.any():
+        return 0.0
+    cum = np.cumsum(p[:, moving], axis=0) / total[moving]
+    k = (cum < energy).sum(axis=0)  # first bin reaching the energy, per joint
+    return float(np.fft.rfftfreq(len(q), 1.0 / fs)[min(int(k.max()), p.shape[0] - 1)])
 
 
 def zero_phase(x, design: LowPass, axis: int = 0) -> np.ndarray:
@@ -429,7 +467,8 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         Rate of the uniform grid [Hz]; default the median rate of the log (no resampling when the
         log is already uniform).
     cutoff : float, optional
-        Low-pass cutoff [Hz]; default :func:`lowpass_design`'s.
+        Low-pass cutoff [Hz]; default ten times the excitation bandwidth
+        (:func:`excitation_bandwidth`), within 1 Hz and :func:`lowpass_design`'s default.
     decimate : int, optional
         Keep every k-th sample after the low-pass; default the largest k with
         ``fs / k >= 5 cutoff`` (the filtered signal is then oversampled 2.5 times past Nyquist);
@@ -453,6 +492,13 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     _check_log(log)
     u = resample(log, fs)
     rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])  # the mean rate: the grid's, or a uniform log's
+    if cutoff is None:  # from the excitation: 10x its bandwidth, within [1 Hz, min(fs/20, 20 Hz)]
+        band = excitation_bandwidth(u.q, rate)
+        cutoff = float(np.clip(BANDWIDTH_FACTOR * band, CUTOFF_FLOOR, min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)))
+        log_note = (f"cutoff {cutoff:.4g} Hz: {BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
+                    f"(99.5 % of the motion's energy), within [{CUTOFF_FLOOR:g} Hz, "
+                    f"min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz)]")
+        u = replace(u, notes=u.notes + (log_note,))
     design = lowpass_design(rate, cutoff)
     n = u.n_samples
     if n <= 2 * design.pad + 1:

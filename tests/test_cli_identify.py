@@ -1,0 +1,88 @@
+"""``baseparams simulate`` and ``baseparams identify`` end to end (in-process CLI)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from baseparams.cli import main
+
+from paths import SHARED
+
+PANDA_URDF = SHARED.parent / "ident" / "panda_gaz2019" / "panda_mdh_gaz2019.urdf"
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    d = tmp_path_factory.mktemp("sim")
+    out = d / "sim.csv"
+    assert main(["simulate", "puma560", str(out), "--duration", "30", "--rate", "200", "--noise", "0.05",
+                 "--rotor", "--seed", "3"]) == 0
+    return out, json.loads((d / "sim.csv.truth.json").read_text())
+
+
+def test_identify_json_schema_and_truth(simulated, capsys):
+    out, truth = simulated
+    assert main(["identify", "puma560", str(out), "--rotor", "--holdout", "6", "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    for key in ("method", "n_samples", "condition_number", "base_parameters", "drives", "train", "validation",
+                "physical", "notes"):
+        assert key in j
+    assert j["method"] == "wls" and j["physical"] is None
+    read = j["n_samples"]["read"]
+    assert read in (4799, 4800) and 0 < j["n_samples"]["used"] < read  # 30 s at 200 Hz, the last 6 s held out
+    assert sum(j["n_samples"]["removed"].values()) + j["n_samples"]["used"] == read  # every sample counted
+    true = {p["name"]: p["value"] for p in truth["parameters"]}
+    est = {b["name"]: b for b in j["base_parameters"]}
+    assert set(est) <= set(true) and len(est) == 36
+    z = [(est[n]["value"] - true[n]) / est[n]["std"] for n in est]
+    assert np.sqrt(np.mean(np.square(z))) < 5  # std honest to the filter's small bias
+    assert j["drives"][0]["Ia"] == "regrouped into link1.ZZR"
+    assert j["drives"][3]["Fv"] == pytest.approx(truth["drives"]["Fv_joint4"], rel=0.05)
+    assert set(j["validation"]["rms"]) == {f"joint{k}" for k in range(1, 7)}
+    assert j["validation"]["rms_total"] < 0.05
+
+
+def test_identify_physical_writes_urdf_and_plot(tmp_path, capsys):
+    """A URDF model: simulate, identify physically, write the identified URDF and the plot."""
+    from baseparams import load
+
+    model = str(PANDA_URDF)
+    log = tmp_path / "panda.npz"
+    assert main(["simulate", model, str(log), "--duration", "20", "--rate", "100", "--noise", "0.05"]) == 0
+    urdf, png = tmp_path / "id.urdf", tmp_path / "t.png"
+    assert main(["identify", model, str(log), "--method", "physical", "--urdf", str(urdf), "--plot", str(png),
+                 "--json"]) == 0
+    j = json.loads(capsys.readouterr().out.split("\n", 1)[1])  # after simulate's line
+    assert j["physical"]["feasible"] and all(m > 0 for m in j["physical"]["masses"].values())
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    identified, original = load(str(urdf)), load(model)
+    assert identified.n == original.n
+    assert not np.allclose(identified.parameters("paper"), original.parameters("paper"))
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--method", "bogus"], "invalid choice"),
+    (["--holdout", "99"], "holdout 99"),
+    (["--friction", "sticky"], "unknown friction"),
+    (["--urdf", "x.urdf"], "--urdf needs --method physical"),
+])
+def test_identify_bad_options_one_line(simulated, argv, words, capsys):
+    out, _ = simulated
+    try:
+        code = main(["identify", "puma560", str(out), *argv])
+    except SystemExit as exc:  # argparse's own usage errors
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2 and words in err
+    assert "Traceback" not in err
+
+
+def test_identify_missing_joint_names_the_joint(tmp_path, capsys):
+    path = tmp_path / "bad.csv"
+    t = np.arange(100) / 100
+    cols = {"t": t, **{f"q_joint{k}": np.sin(t) for k in range(1, 6)}, **{f"tau_joint{k}": t for k in range(1, 6)}}
+    np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="")
+    assert main(["identify", "puma560", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "joint6" in err and err.count("\n") == 1

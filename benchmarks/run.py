@@ -17,6 +17,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
                     one write pass over the output.
 * ``base_streaming``  base regressor + streaming QR over 10^6 Puma560 samples.
 * ``analyze_cli``   ``baseparams analyze`` end to end in fresh processes.
+* ``identify``      ``identify`` on 10^6 simulated Puma560 samples end to end; the physical solve
+                    on the Panda and on a 32-body humanoid.
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
@@ -313,6 +315,68 @@ def bench_base_streaming(out: dict, quick: bool) -> None:
     out["base_streaming_beta_rel_error"] = float(np.abs(est - beta).max() / np.abs(beta).max())
 
 
+def bench_identify(out: dict, quick: bool) -> None:
+    """Identification: ``identify`` end to end on 10^6 simulated Puma560 samples (read an NPZ log,
+    filter, regressor, OLS), its tracemalloc peak; the physical solve alone on the Panda log's
+    compressed system and on a 32-body humanoid (talos_reduced, fixed base) with a prior."""
+    import tempfile
+    import warnings
+
+    import baseparams
+    from baseparams.ident.physical import physical_fit
+    from baseparams.ident.simulate import fourier_trajectory
+    from baseparams.identify import accumulate, fit, ident_model, identify, simulate_log
+    from baseparams.io.logs import read_log, write_log
+
+    robot = baseparams.load("puma560")
+    total = 10**5 if quick else 10**6
+    sim, _ = simulate_log(robot, duration=total / 1000.0, rate=1000.0, noise=0.1, seed=0)
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "sim.npz"
+        write_log(path, sim)
+        del sim
+
+        def run():
+            return identify(robot, read_log(path, robot), method="ols")
+
+        log(f"  identify puma560, {total} samples (read, filter, regressor, OLS) ...")
+        t, n = measure(run, 1 if not quick else 2, warmup=1)
+        out["identify_samples"] = total
+        out["identify_puma560_s"] = t
+        out["identify_puma560_s_repeats"] = n
+        out["identify_puma560_peak_mb"] = peak_mb(run)
+    # the physical solve alone: Panda (real log) and a 32-body humanoid (simulated states)
+    panda = Path(__file__).resolve().parents[2] / "shared" / "ident" / "panda_gaz2019"
+    cases = []
+    if panda.is_dir():
+        sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+        rp = baseparams.load(str(panda / "panda_mdh_gaz2019.urdf"))
+        mp = ident_model(baseparams.analyze(rp))
+        rng = np.random.default_rng(0)
+        _, q, dq, ddq = fourier_trajectory(7, 20.0, 100.0, rng, amplitude=0.5)
+        tau = np.asarray(mp.regressor(q, dq, ddq) @ mp.theta(rp.parameters("paper"), np.ones(mp.drives.n_params)))
+        cases.append(("panda", mp, accumulate(mp, q, dq, ddq, tau + rng.normal(scale=0.05, size=tau.shape))))
+    hum = _talos_path()
+    if hum:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            from baseparams.loading import load_model
+            rh, _ = load_model(hum.replace("talos_full_v2", "talos_reduced"), strict_inertia=False)
+        mh = ident_model(baseparams.analyze(rh), friction=("viscous",))
+        rng = np.random.default_rng(1)
+        _, q, dq, ddq = fourier_trajectory(rh.dof, 20.0, 50.0, rng, amplitude=0.3)
+        tau = mh.regressor(q, dq, ddq) @ mh.theta(rh.parameters("paper"), np.ones(mh.drives.n_params))
+        cases.append(("talos_reduced", mh, accumulate(mh, q, dq, ddq, tau + rng.normal(scale=0.05, size=tau.shape))))
+    for name, model, acc in cases:
+        est = fit(model, acc, "wls").estimate
+        log(f"  physical solve {name} ({model.robot.n} bodies) ...")
+        t, n = measure(lambda: physical_fit(est.R11, est.r12, model.full_map(), model.robot,
+                                            model.drives.param_kinds), 3 if not quick else 1)
+        out[f"physical_solve_{name}_s"] = t
+        out[f"physical_solve_{name}_s_repeats"] = n
+        out[f"physical_solve_{name}_bodies"] = model.robot.n
+
+
 def bench_analyze_cli(out: dict, quick: bool) -> None:
     """``baseparams analyze`` end to end in a fresh process (``python -m baseparams``; imports,
     loading, DRNG, certification, regrouping, report), median of fresh runs."""
@@ -535,6 +599,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "regressor": bench_regressor,
     "base_streaming": bench_base_streaming,
     "analyze_cli": bench_analyze_cli,
+    "identify": bench_identify,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
     "loops": bench_loops,

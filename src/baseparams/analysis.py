@@ -104,12 +104,33 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
     from .regressor.tp import closed_regressor
     from .regressor.tp import regressor as tree_regressor
 
-    q, dq, ddq, cs = _states(robot, q, dq, ddq)
+    q, dq, ddq, cs = checked_states(robot, q, dq, ddq)
     return tree_regressor(robot, q, dq, ddq) if cs is None else closed_regressor(robot, cs)
 
 
-def _states(robot: Robot, q, dq, ddq):
-    """``(q, dq, ddq, closed)``: checked states; for a robot with loops, ``closed`` holds them closed."""
+def checked_states(robot: Robot, q, dq=None, ddq=None):
+    """States checked against the robot, and closed when it has loops.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    q, dq, ddq : array_like, shape ``(S, m)``
+        ``m = robot.dof`` for a tree; the actuated coordinates for a robot with loops
+        (``dq``, ``ddq`` default to zero).
+
+    Returns
+    -------
+    q, dq, ddq : ndarray, shape ``(S, m)``
+        The states as float arrays.
+    closed : ClosedStates or None
+        For a robot with loops, the states closed from the reference assembly; else ``None``.
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes, or states that do not close the loops.
+    """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     dq = np.zeros_like(q) if dq is None else np.atleast_2d(np.asarray(dq, dtype=float))
     ddq = np.zeros_like(q) if ddq is None else np.atleast_2d(np.asarray(ddq, dtype=float))
@@ -303,7 +324,7 @@ class Analysis:
         from .numerics import row_mask
         from .regressor.tp import closed_projected_regressor, projected_regressor
 
-        q, dq, ddq, cs = _states(self.robot, q, dq, ddq)
+        q, dq, ddq, cs = checked_states(self.robot, q, dq, ddq)
         if cs is not None:
             return closed_projected_regressor(self.robot, cs, P=self.base_map, out=out, backend=backend)
         rows = np.flatnonzero(row_mask(self.robot, self.rows))

@@ -93,12 +93,41 @@ class IdentModel:
         A : ndarray, shape ``(S, m, p)``
             ``tau = A @ theta`` on the measured rows.
         """
-        yb = self.analysis.base_regressor(q, dq, ddq)
+        from .analysis import checked_states
+        from .regressor.tp import closed_projected_regressor, projected_regressor
+
+        q, dq, ddq, cs = checked_states(self.robot, q, dq, ddq)
+        p_map = self._column_map()
+        if cs is not None:
+            out = closed_projected_regressor(self.robot, cs, P=p_map)
+        else:
+            out = projected_regressor(self.robot, q, dq, ddq, P=p_map, rows=self.coords)
         sel = self.coords if not self.robot.has_loops else np.arange(len(self.coords))
-        dq = np.atleast_2d(np.asarray(dq, dtype=float))[:, sel]
-        ddq = np.atleast_2d(np.asarray(ddq, dtype=float))[:, sel]
-        d = self.drives.regressor(dq, ddq, len(self.coords))
-        return np.concatenate([yb, d], axis=2)[:, :, self.regrouping.independent]
+        self._drive_columns(dq[:, sel], ddq[:, sel], out)
+        return out
+
+    def _column_map(self) -> np.ndarray:
+        """``(10 n, p)``: the base map on the kept base columns, zero on the drive columns (cached)."""
+        p_map = self.__dict__.get("_pmap")
+        if p_map is None:
+            nb = len(self.analysis.base_names)
+            ind = self.regrouping.independent
+            p_map = np.zeros((10 * self.robot.n, len(ind)))
+            base_cols = np.flatnonzero(ind < nb)
+            p_map[:, base_cols] = self.analysis.base_map[:, ind[base_cols]]
+            object.__setattr__(self, "_pmap", p_map)
+        return p_map
+
+    def _drive_columns(self, dq: np.ndarray, ddq: np.ndarray, out: np.ndarray) -> None:
+        """Write the kept drive parameters' columns into ``out (S, m, p)`` in place."""
+        nb = len(self.analysis.base_names)
+        nk = len(self.drives.kinds)
+        for col, i in enumerate(self.regrouping.independent):
+            if i < nb:
+                continue
+            j, k = divmod(int(i - nb), nk)
+            row = self.drives.rows[j]
+            out[:, row, col] = self.drives.column(self.drives.kinds[k], dq[:, row], ddq[:, row])
 
     def full_map(self) -> np.ndarray:
         """``G (p, 10 n + nd)``: ``theta = G [pi_paper; delta]``.
@@ -489,7 +518,7 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
              friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
-             convention: str = "khalil", memory_mb: float = 512.0) -> Identification:
+             convention: str = "khalil", memory_mb: float = 128.0) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -522,8 +551,9 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
     convention : str
         Convention of the base parameters' names and values.
     memory_mb : float
-        Largest regressor formed at once for the parallel filter; longer logs are accumulated
-        in blocks with the regressor computed on the filtered states (said in the notes).
+        Largest regressor formed at once for the parallel filter (the filter's copies make the
+        peak about 4x this); longer logs are accumulated in blocks with the regressor computed
+        on the filtered states (said in the notes).
 
     Returns
     -------

@@ -85,10 +85,24 @@ class Drives:
         for j, r in enumerate(self.rows):
             v, a = dq[:, r], ddq[:, r]
             for k, kind in enumerate(self.kinds):
-                out[:, r, j * nk + k] = self._column(kind, v, a)
+                out[:, r, j * nk + k] = self.column(kind, v, a)
         return out
 
-    def _column(self, kind: str, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    def column(self, kind: str, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """One drive column of one joint.
+
+        Parameters
+        ----------
+        kind : {"Ia", "Fv", "Fc", "Fo"}
+            The parameter kind.
+        v, a : ndarray, shape ``(S,)``
+            The joint's velocity and acceleration.
+
+        Returns
+        -------
+        ndarray, shape ``(S,)``
+            ``a``, ``v``, ``sign(v)`` (or ``tanh(v / w)``) or ones.
+        """
         if kind == "Ia":
             return a
         if kind == "Fv":

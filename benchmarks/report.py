@@ -17,7 +17,8 @@ def main(argv: list[str]) -> int:
     g = lambda k, fmt="{:.3g}": ("n/a" if d.get(k) is None else fmt.format(d[k]))  # noqa: E731
     rows_reg = "".join(
         f"| {r} | {S} | {g(f'regressor_ours_{r}_S{S}_s', '{:.3g}')} s | {g(f'regressor_pin_{r}_S{S}_s', '{:.3g}')} s "
-        f"| {g(f'regressor_vs_pinocchio_{r}_S{S}')} | {g(f'regressor_peak_mb_{r}_S{S}')} MB |\n"
+        f"| {g(f'regressor_numpy_vs_pinocchio_{r}_S{S}')} | "
+        f"{g(f'regressor_peak_mb_{r}_S{S}') + ' MB' if d.get(f'regressor_peak_mb_{r}_S{S}') is not None else '-'} |\n"
         for r in ("puma560", "go2", "talos_full_v2") for S in (1, 100, 10000))
     rows_comp = "".join(
         f"| {r} | {g(f'regressor_pin_{r}_S10000_us')} | {g(f'regressor_numpy_{r}_S10000_us')} "
@@ -93,7 +94,9 @@ Shared and noisy: single figures moved by 10-100 % between runs; read medians as
 ## Results (full run, `--json`, {g('total_seconds', '{:.0f}')} s)
 
 ### 1. TP regressor vs Pinocchio
-| robot | S | ours | Pinocchio loop | ratio pin/ours | our peak memory |
+The numpy path (`backend="numpy"`; what `auto` uses for small batches in a fresh process):
+
+| robot | S | ours (numpy) | Pinocchio loop | ratio pin/ours | our peak memory |
 |---|---:|---:|---:|---:|---:|
 {rows_reg}
 Compiled kernel at S = 10 000, us per sample ({g('regressor_compiled_threads', '{}')} numba threads; "reused" writes into the
@@ -209,6 +212,13 @@ cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-bo
   (~2.5 us per Go2 sample) plus the write reach ~1.2x Pinocchio rather than 2x; the two cores
   of this machine give the 2x. The numpy path stays for small batches (the kernel's import and
   cache load cost ~0.3 s per process).
+* **Puma560 against the floor.** Its output is 360 values per sample: one write pass costs
+  0.11-0.16 us here (the issue measured 0.36 us into fresh memory), and the kernel's own work
+  (six bodies' kinematics and bar lines, ~0.8 us on one thread) dominates: 2.8-3.9x the floor
+  across runs, 1.2x the issue's figure.
+* **DRNG vs the PKM validation.** The ratio fell from ~1000x to ~150x because the validation
+  got faster (loop closure 6x faster this session: 0.13 s instead of ~1 s for 5 000 samples),
+  not because DRNG got slower (~1 ms).
 * **talos_full_v2 end to end.** Its 12 mimic couplings make it a loop robot, DRNG finds 132 of
   190 directions and the rest are completed numerically: certification needs two stacked
   regressors (7 600 and 15 200 rows x 450 columns; the saturation check) and their QR factors,

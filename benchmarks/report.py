@@ -46,6 +46,8 @@ def main(argv: list[str]) -> int:
         f"| {g(f'loops_{k}_nullity', '{}')} | {g(f'loops_{k}_completed', '{}')} | {d.get(f'loops_{k}_by_rule')} |\n"
         for name in ("four-bar", "parallelogram", "pkm-2rru-1rrs", "pkm-2prs-1psr", "pkm-2prs-1psr-symmetric")
         for k in [name.replace("-", "_")])
+    over = [r for r in ("puma560", "go2", "talos_full_v2") if (d.get(f"regressor_vs_floor_{r}_S10000") or 0) > 3]
+    floor_status = "met" if not over else f"met except {', '.join(over)} in this run (see below)"
     text = f"""# Benchmarks
 
 `benchmarks/run.py` is a standalone script (pytest does not collect it):
@@ -194,7 +196,7 @@ cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-bo
 | target | measured | status |
 |---|---|---|
 | compiled regressor >= 2x the Pinocchio loop at S = 10 000 (reused `out=`) | Puma560 {g('regressor_vs_pinocchio_puma560_S10000', '{:.2f}')}x, Go2 {g('regressor_vs_pinocchio_go2_S10000', '{:.2f}')}x, talos {g('regressor_vs_pinocchio_talos_full_v2_S10000', '{:.2f}')}x (one thread: {g('regressor_1thread_vs_pinocchio_puma560_S10000', '{:.2f}')}x, {g('regressor_1thread_vs_pinocchio_go2_S10000', '{:.2f}')}x, {g('regressor_1thread_vs_pinocchio_talos_full_v2_S10000', '{:.2f}')}x) | met with 2 threads; one thread: Puma560 only |
-| compiled regressor within 3x of one write pass | {g('regressor_vs_floor_puma560_S10000', '{:.2f}')}x, {g('regressor_vs_floor_go2_S10000', '{:.2f}')}x, {g('regressor_vs_floor_talos_full_v2_S10000', '{:.2f}')}x | met |
+| compiled regressor within 3x of one write pass | {g('regressor_vs_floor_puma560_S10000', '{:.2f}')}x, {g('regressor_vs_floor_go2_S10000', '{:.2f}')}x, {g('regressor_vs_floor_talos_full_v2_S10000', '{:.2f}')}x | {floor_status} |
 | base regressor + streaming QR: 10^6 Puma560 samples <= 5 s, memory independent of S | {g('base_streaming_per_1e6_s', '{:.2f}')} s, {g('base_streaming_peak_mb_1e5', '{:.1f}')} MB | met |
 | `analyze` end to end: Puma560 <= 0.25 s, pkm-2rru-1rrs <= 0.5 s, talos_full_v2 <= 0.6 s | {g('analyze_cli_puma560_s', '{:.2f}')} s, {g('analyze_cli_pkm-2rru-1rrs_s', '{:.2f}')} s, {g('analyze_cli_talos_full_v2_s', '{:.2f}')} s | Puma560 and the PKM met; talos see below |
 | DRNG >= 100x faster than the numerical method on talos_full_v2 | {g('talos_full_v2_drng_vs_numerical', '{:.0f}')}x | met |

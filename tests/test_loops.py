@@ -207,3 +207,20 @@ def test_re_referencing_keeps_every_loop_constraint():
     cs = close_loops(new, np.random.default_rng(3).uniform(-0.1, 0.1, (20, na)), cond_max=1e6)
     assert cs.kept >= 10
     assert np.abs(evaluate(robot, cs.q + q0).r).max() < 1e-9
+
+
+def test_in_world_moves_both_copies_of_a_loop_frame():
+    """An unassembled loop's successor copy (``M_child``) is a world pose too: it moves with the world."""
+    from dataclasses import replace
+
+    from baseparams import pose
+    from baseparams.robots import get
+
+    robot = get("four-bar")
+    lj = robot.loops[0]
+    shifted = lj.M.copy()
+    shifted[:3, 3] += 0.01
+    r = replace(robot, loops=(replace(lj, M_child=shifted),) + robot.loops[1:])
+    t = pose(rpy=(0.3, -0.2, 1.1), xyz=(0.5, -1.0, 2.0))
+    moved = r.in_world(t).loops[0]
+    assert np.allclose(moved.M, t @ lj.M) and np.allclose(moved.M_child, t @ shifted)

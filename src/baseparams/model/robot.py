@@ -577,7 +577,8 @@ class Robot:
             ``t`` is not a rigid 4x4 transform.
         """
         t = _check_frame(t, f"robot {self.name!r}: world transform")
-        loops = tuple(replace(lj, M=t @ lj.M) for lj in self.loops)
+        loops = tuple(replace(lj, M=t @ lj.M, M_child=None if lj.M_child is None else t @ lj.M_child)
+                      for lj in self.loops)  # both copies of the frame are world poses
         return replace(self, M0=t @ self.M0, gravity=t[:3, :3] @ self.gravity, loops=loops)
 
     def describe(self) -> str:

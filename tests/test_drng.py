@@ -191,3 +191,15 @@ def test_block_rank_handles_dependent_blocks():
     cols2 = Columns(np.stack([h[0], h[0], h[1]]), np.array([1, 1, 2]), np.array([0, 0, 1]),
                     np.zeros(3, dtype=int), np.array([1, 1, 2]), np.array(["a", "b", "c"], dtype=object))
     assert block_rank(cols2, 3) == np.linalg.matrix_rank(to_sparse(cols2, 3).toarray()) == 2
+
+
+def test_certify_refuses_a_drng_result_of_other_rows():
+    """A result computed for all rows, certified for the joints' rows, would lack the unmeasured
+    root's columns: one clear error, not a 'completed' status."""
+    from baseparams.errors import BaseparamsError
+    from baseparams.robots import go2
+
+    robot = go2()
+    with pytest.raises(BaseparamsError, match="computed for rows 'all'.*'joints'"):
+        certify(robot, rows="joints", result=drng(robot, rows="all"))
+    assert certify(robot, rows="joints", result=drng(robot, rows="joints")).status == "certified"

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..enums import Status
+from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..model.scale import decision_scale
 from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, stacked_regressor
@@ -147,6 +148,9 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     """
     t0 = time.perf_counter()
     res = drng(robot, rows=rows) if result is None else result
+    if res.rows != rows:
+        raise BaseparamsError(f"robot {robot.name!r}: the DRNG result was computed for rows {res.rows!r}, "
+                              f"certification asked for {rows!r}")
     samples = default_samples(robot) if samples is None else samples
     sampling: dict = {}
     # ranks are decided on pi / d (model.scale.decision_scale): d = 1 for a robot of ordinary

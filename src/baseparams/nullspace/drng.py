@@ -47,6 +47,9 @@ class DRNGResult:
         Wall-clock time DRNG took.
     extended : bool, default True
         Whether the extended rules (R-A, R-B, R-L1, R-L2) ran besides the paper's principles.
+    rows : str, default "all"
+        The measured rows the columns were computed for (``joints`` adds the floating root's
+        unmeasured columns); :func:`~baseparams.nullspace.certify.certify` checks it.
     """
 
     robot: Robot
@@ -54,6 +57,7 @@ class DRNGResult:
     rank: int
     seconds: float
     extended: bool = True
+    rows: str = "all"
 
     @property
     def n_columns(self) -> int:
@@ -271,4 +275,4 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     if len(extra):
         cols = Columns.concat([cols, extra])
     rank = scaled_rank(cols, robot)
-    return DRNGResult(robot, cols, rank, time.perf_counter() - t0, extended)
+    return DRNGResult(robot, cols, rank, time.perf_counter() - t0, extended, str(rows))

@@ -69,3 +69,15 @@ def test_poor_excitation_names_the_parameters(rng):
     q[:, 5] = dq[:, 5] = ddq[:, 5] = 0.0
     with pytest.raises(BaseparamsError, match="do not excite.*weakest: .*joint6|link6"):
         fit(model, accumulate(model, q, dq, ddq, tau))
+
+
+def test_excitation_names_the_weak_parameter(rng):
+    """A column nearly a combination of two others (1e-5 apart) is named; a well-spread one is not."""
+    from baseparams.ident.estimate import excitation
+    from baseparams.numerics import StreamingQR
+
+    a = rng.normal(size=(500, 5))
+    assert excitation(StreamingQR(5).add(a).r, list("abcde"))[1] == []
+    a[:, 3] = a[:, 0] - 2 * a[:, 1] + 1e-5 * rng.normal(size=500)
+    cond, weak = excitation(StreamingQR(5).add(a).r, list("abcde"))
+    assert cond > 1e4 and weak and weak[0] in ("a", "b", "d")

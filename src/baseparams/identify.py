@@ -499,7 +499,9 @@ class Identification:
         -------
         dict
             ``method, model, convention, n_samples{read, used, removed}, condition_number,
-            base_parameters, drives, train, validation, physical, notes``.
+            excitation{condition_number, weak, all_excited}, base_parameters, drives, train,
+            validation, physical, notes``; ``weak`` names the parameters carrying directions
+            whose singular value is below 1e-3 of the largest (column-scaled regressor).
         """
         f = self.fit
         phys = None
@@ -508,8 +510,13 @@ class Identification:
             phys = {"feasible": bool(p.feasible), "min_eigenvalue": float(np.min(p.min_eigenvalues)),
                     "masses": {b: float(v) for b, v in zip(self.model.robot.names, p.masses)},
                     "solver_status": str(p.solver_status)}
+        from .ident.estimate import excitation
+
+        cond, weak = excitation(f.estimate.R11, self.model.names)
         return {"method": f.method, "model": self.model.robot.name, "convention": self.model.analysis.convention,
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
+                "excitation": {"condition_number": cond, "weak": weak,
+                               "all_excited": not weak},
                 "base_parameters": self.base_parameters(), "drives": self.drives(), "train": self.train,
                 "validation": self.validation, "physical": phys, "notes": list(self.notes)}
 
@@ -728,8 +735,11 @@ def format_identification(result: Identification) -> str:
     j = result.to_json()
     n = j["n_samples"]
     removed = ", ".join(f"{v} {k}" for k, v in n["removed"].items()) or "none"
+    weak = j["excitation"]["weak"]
     lines = [f"{j['model']}: identification ({j['method']}), {n['used']} samples used of {n['read']} read "
              f"(removed: {removed}); condition number {j['condition_number']:.4g}",
+             "excitation: every model parameter excited" if not weak else
+             f"excitation: POORLY EXCITED (singular values below 1e-3 of the largest): {', '.join(weak)}",
              f"base parameters ({j['convention']} convention, SI units):",
              f"  {'name':<16s} {'value':>14s} {'std':>11s} {'%sigma':>8s}  expression"]
     for b in j["base_parameters"]:

@@ -336,12 +336,11 @@ def closed_regressor(robot: Robot, closed, *, out: np.ndarray | None = None, bac
     # L~[s, a, i] = sum_k G[s, k, a] support[k, i] L[s, k]: one batched matmul
     moved = state.lines[:, :, None, :] * state.support[None, :, :, None]  # (S, dof, n, 6)
     lines = np.matmul(np.swapaxes(closed.G, 1, 2), moved.reshape(s, -1, n * 6)).reshape(s, na, n, 6)
-    y = np.matmul(lines.transpose(0, 2, 1, 3), np.swapaxes(xs, -1, -2))  # (S, n, na, 10)
-    y = np.ascontiguousarray(y.transpose(0, 2, 1, 3)).reshape(shape)
-    if out is None:
-        return y
-    out = _checked_out(out, shape)
-    out[...] = y
+    out = np.empty(shape) if out is None else _checked_out(out, shape)
+    y = out.reshape(s, na, n, 10)
+    xt = np.swapaxes(xs, -1, -2)  # (S, n, 6, 10)
+    for i in range(n):  # per body: (S, na, 6) @ (S, 6, 10), written in place (a loop over bodies)
+        np.matmul(lines[:, :, i, :], xt[:, i], out=y[:, :, i, :])
     return out
 
 

@@ -81,3 +81,18 @@ def test_excitation_names_the_weak_parameter(rng):
     a[:, 3] = a[:, 0] - 2 * a[:, 1] + 1e-5 * rng.normal(size=500)
     cond, weak = excitation(StreamingQR(5).add(a).r, list("abcde"))
     assert cond > 1e4 and weak and weak[0] in ("a", "b", "d")
+
+
+@pytest.mark.parametrize("min_speed", [None, 0.05])
+def test_chunked_identification_equals_the_whole_log(min_speed):
+    """Parallel filtering chunk by chunk (overlaps of 12 cutoff periods) gives the whole log's
+    estimate to 1e-10 relative, slow-sample removal and decimation included."""
+    from baseparams.identify import identify, simulate_log
+
+    robot = baseparams.load("puma560")
+    log, _ = simulate_log(robot, duration=40, rate=500, noise=0.1, seed=4)
+    whole = identify(robot, log, method="ols", memory_mb=1e4, min_speed=min_speed)
+    chunked = identify(robot, log, method="ols", memory_mb=1.0, min_speed=min_speed)
+    assert any("chunks of" in n for n in chunked.notes) and not any("chunks of" in n for n in whole.notes)
+    assert chunked.samples == whole.samples
+    assert np.abs(chunked.fit.theta - whole.fit.theta).max() <= 1e-10 * np.abs(whole.fit.theta).max()

@@ -559,8 +559,8 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         Convention of the base parameters' names and values.
     memory_mb : float
         Largest regressor formed at once for the parallel filter (the filter's copies make the
-        peak about 4x this); longer logs are accumulated in blocks with the regressor computed
-        on the filtered states (said in the notes).
+        peak about 4x this); longer logs are processed in chunks with overlapping filter edges,
+        which gives the same estimate to rounding (:mod:`baseparams.ident.chunks`).
 
     Returns
     -------
@@ -592,7 +592,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width)
     cols = log_columns(model, log)
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
-    acc, acc_note = _accumulate_prepared(model, prep, cols, memory_mb)
+    acc, acc_note = _accumulate_prepared(model, prep, cols, memory_mb, train, min_speed)
     f = fit(model, acc, method, prior_weight)
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
@@ -601,7 +601,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     if held is not None:
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
         vcols = log_columns(model, held)
-        vacc, _ = _accumulate_prepared(model, vprep, vcols, memory_mb)
+        vacc, _ = _accumulate_prepared(model, vprep, vcols, memory_mb, held)
         vres = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in vacc.factors]) / np.sqrt(vacc.samples)
         val = {"rms": dict(zip(names, vres.tolist())), "rms_total": float(np.sqrt(np.mean(vres**2))),
                "samples": int(vacc.samples), "source": held.source}
@@ -690,26 +690,34 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     return np.array([where[j] for j in wanted], dtype=int)
 
 
-def _accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float):
-    """Rows accumulated from a prepared log: parallel filtering when the regressor fits in memory."""
+def _accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None):
+    """Rows accumulated from a prepared log, with parallel filtering.
+
+    All at once when the regressor fits in ``memory_mb``, else chunk by chunk with overlaps
+    (:mod:`baseparams.ident.chunks`; ``log`` is then the unfiltered log).
+    """
     from .ident.estimate import RowAccumulator
 
     full = prep.full
-    q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
-    tau = prep.tau[:, cols]
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
-    acc = RowAccumulator(len(model.coords), model.n_params)
-    if size_mb <= memory_mb:
-        acc.add(prep.apply(model.regressor(q, dq, ddq)), tau)
+    if size_mb <= memory_mb or log is None:
+        q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
+        acc = RowAccumulator(len(model.coords), model.n_params)
+        acc.add(prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols])
         return acc, (f"parallel filtering: the regressor's {model.n_params} columns filtered like the torques "
-                     f"({size_mb:.0f} MB)")
-    idx = prep.index
-    chunk = max(1, int(memory_mb * 1e6 / (len(model.coords) * model.n_params * 8)))
-    for k in range(0, len(idx), chunk):
-        sl = idx[k:k + chunk]
-        acc.add(model.regressor(q[sl], dq[sl], ddq[sl]), tau[k:k + chunk])
-    return acc, (f"parallel filtering skipped: the regressor ({size_mb:.0f} MB) exceeds memory_mb {memory_mb:g}; "
-                 f"its columns are computed on the filtered states")
+                     f"({size_mb:.0f} MB at once)")
+    from .ident import chunks
+    from .ident.preprocess import resample
+
+    grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed)
+    margin = chunks.overlap(prep.design)
+    per_sample_mb = len(model.coords) * model.n_params * 8 * 4 / 1e6  # the filter's copies: ~4x
+    size = max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
+    uniform = resample(log)  # the grid prepare() filtered on (it resamples with the same default)
+    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params)[0]
+             for c in chunks.plan(full.n_samples, size, margin)]
+    return chunks.combine(parts), (f"parallel filtering in {len(parts)} chunks of {size} samples with "
+                                   f"{margin}-sample overlaps (equal to the whole log's to rounding)")
 
 
 def _model_notes(model: IdentModel) -> list[str]:

@@ -1,0 +1,224 @@
+"""A long log identified chunk by chunk, with the same answer as all at once.
+
+The preprocessing of :func:`~baseparams.ident.preprocess.prepare` is local but for its
+zero-phase filter, whose response to a chunk's edge decays exponentially: each chunk is read with
+:func:`overlap` samples on both sides (enough for the edge transient to fall below ~1e-12), filtered,
+differentiated, turned into the model regressor, filtered again (parallel filtering), and only the
+samples the chunk owns — those the whole-log path keeps (past the log's filter edges, on its
+decimation grid, not slow) — are reduced to their row factors. Factors of chunks combine exactly
+(:func:`combine`), in any order or tree (TSQR): the estimate equals the whole log's to rounding.
+
+Memory per chunk is ``(chunk + 2 overlap) x m x p`` floats, whatever the log's length.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import DataError
+from .data import JointLog
+from .estimate import RowAccumulator
+from .preprocess import LowPass, prepare, zero_phase
+
+#: edge transient of the zero-phase filter kept below ~1e-12: the least damped pole of a
+#: Butterworth low-pass of order 4 decays as exp(-2 pi fc cos(67.5 deg) t), 27.6 / (2 pi 0.383) = 11.5
+OVERLAP_PERIODS = 12.0
+
+
+def overlap(design: LowPass) -> int:
+    """Samples read on each side of a chunk so that its filtered values equal the whole log's.
+
+    Parameters
+    ----------
+    design : LowPass
+        The low-pass (its rate and cutoff).
+
+    Returns
+    -------
+    int
+        ``ceil(12 fs / cutoff)``: twelve cutoff periods, past which the edge transient of a
+        Butterworth low-pass of order <= 4 has decayed below ~1e-12 of the signal.
+    """
+    return math.ceil(OVERLAP_PERIODS * design.fs / design.cutoff)
+
+
+@dataclass(frozen=True)
+class ChunkPlan:
+    """One chunk: the samples it owns and the samples it reads.
+
+    Parameters
+    ----------
+    start, stop : int
+        Owned samples ``[start, stop)`` of the (uniform) log.
+    lo, hi : int
+        Samples read ``[lo, hi)``: the owned ones and the overlap on both sides.
+    """
+
+    start: int
+    stop: int
+    lo: int
+    hi: int
+
+
+def plan(n: int, chunk: int, margin: int) -> list[ChunkPlan]:
+    """Cut ``n`` samples into chunks of ``chunk`` owned samples with ``margin`` read around them.
+
+    Parameters
+    ----------
+    n : int
+        Samples of the log.
+    chunk : int
+        Owned samples per chunk (the last may be shorter).
+    margin : int
+        Overlap read on each side (:func:`overlap`).
+
+    Returns
+    -------
+    list of ChunkPlan
+        Covering ``[0, n)`` exactly once.
+
+    Raises
+    ------
+    DataError
+        A non-positive chunk.
+    """
+    if chunk < 1:
+        raise DataError(f"chunk must be at least 1 sample, got {chunk}")
+    return [ChunkPlan(s, min(s + chunk, n), max(0, s - margin), min(n, s + chunk + margin))
+            for s in range(0, n, chunk)]
+
+
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """Which samples of the whole log are kept, as :func:`prepare` decides on the whole log.
+
+    Parameters
+    ----------
+    n : int
+        Samples of the log.
+    pad : int
+        Filter edges dropped at both ends of the whole log.
+    factor : int
+        Decimation factor.
+    cutoff : float
+        The low-pass cutoff [Hz].
+    min_speed : float, optional
+        Slow-sample threshold (or ``None``).
+    notes : tuple of str
+        The whole-log decisions (cutoff, decimation), for the report.
+    """
+
+    n: int
+    pad: int
+    factor: int
+    cutoff: float
+    min_speed: float | None = None
+    notes: tuple[str, ...] = field(default=())
+
+    def owned(self, c: ChunkPlan) -> np.ndarray:
+        """Global indices ``(k,)`` the chunk owns and the whole-log path keeps (before slow removal)."""
+        first = max(c.start, self.pad)
+        first += (-(first - self.pad)) % self.factor
+        return np.arange(first, min(c.stop, self.n - self.pad), self.factor)
+
+
+def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int):
+    """The row factors of one chunk (the task a worker runs).
+
+    Parameters
+    ----------
+    log : JointLog
+        The whole (uniform) log, or any log holding samples ``[c.lo, c.hi)`` at those indices
+        (a reader may pass the slice only: see :func:`chunk_factors_of_slice`).
+    c : ChunkPlan
+        The chunk.
+    grid : Grid
+        The whole log's kept-sample rule.
+    regressor : callable
+        ``regressor(q, dq, ddq) -> (S, m, p)`` in the model's state columns.
+    cols : ndarray of int, shape ``(state_columns,)``
+        Log column of each state column.
+    nparams : int
+        ``p``.
+
+    Returns
+    -------
+    acc : RowAccumulator
+        The chunk's row factors.
+    removed : dict of str to int
+        Slow samples removed in the chunk.
+    """
+    sl = slice(c.lo, c.hi)
+    rates = {k: None if getattr(log, k) is None else getattr(log, k)[sl] for k in ("dq", "ddq")}
+    part = replace(log, t=log.t[sl], q=log.q[sl], tau=log.tau[sl], **rates)
+    return chunk_factors_of_slice(part, c, grid, regressor, cols, nparams)
+
+
+def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int):
+    """:func:`chunk_factors` on the slice ``[c.lo, c.hi)`` of the log alone.
+
+    Parameters
+    ----------
+    part : JointLog
+        Samples ``[c.lo, c.hi)`` of the whole log.
+    c : ChunkPlan
+        The chunk.
+    grid : Grid
+        The whole log's kept-sample rule.
+    regressor : callable
+        ``regressor(q, dq, ddq) -> (S, m, p)``.
+    cols : ndarray of int
+        Log column of each state column.
+    nparams : int
+        ``p``.
+
+    Returns
+    -------
+    acc : RowAccumulator
+        The chunk's row factors.
+    removed : dict of str to int
+        Slow samples removed in the chunk.
+    """
+    from .preprocess import remove_slow
+
+    acc = RowAccumulator(len(cols), nparams)
+    idx = grid.owned(c) - c.lo
+    if not len(idx):
+        return acc, {}
+    prep = prepare(part, cutoff=grid.cutoff, decimate=1)
+    f = prep.full
+    q, dq, ddq = f.q[:, cols], f.dq[:, cols], f.ddq[:, cols]
+    removed = {}
+    if grid.min_speed is not None:
+        keep, removed = remove_slow(dq[idx], grid.min_speed)
+        idx = idx[keep]
+    a = zero_phase(regressor(q, dq, ddq), prep.design)[idx]
+    acc.add(a, f.tau[idx][:, cols])
+    return acc, removed
+
+
+def combine(parts) -> RowAccumulator:
+    """Combine chunk factors (TSQR: the factor of the stacked factors is the whole's).
+
+    Parameters
+    ----------
+    parts : iterable of RowAccumulator
+        Accumulators of the same rows and parameters.
+
+    Returns
+    -------
+    RowAccumulator
+        Their combination: the same estimate as one accumulator fed every chunk's samples.
+    """
+    parts = list(parts)
+    out = RowAccumulator(parts[0].nrows, parts[0].nparams)
+    for p in parts:
+        for mine, theirs in zip(out.factors, p.factors):
+            if theirs.rows:
+                mine.add(theirs.r)
+                mine.rows += theirs.rows - theirs.r.shape[0]  # count samples, not factor rows
+        out.samples += p.samples
+    return out

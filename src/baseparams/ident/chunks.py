@@ -119,7 +119,18 @@ class Grid:
     notes: tuple[str, ...] = field(default=())
 
     def owned(self, c: ChunkPlan) -> np.ndarray:
-        """Global indices ``(k,)`` the chunk owns and the whole-log path keeps (before slow removal)."""
+        """The samples a chunk owns that the whole-log path keeps (before slow-sample removal).
+
+        Parameters
+        ----------
+        c : ChunkPlan
+            The chunk.
+
+        Returns
+        -------
+        ndarray of int, shape ``(k,)``
+            Global indices: past the filter edges, on the decimation grid ``pad + j factor``.
+        """
         first = max(c.start, self.pad)
         first += (-(first - self.pad)) % self.factor
         return np.arange(first, min(c.stop, self.n - self.pad), self.factor)

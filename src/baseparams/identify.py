@@ -592,7 +592,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width)
     cols = log_columns(model, log)
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
-    acc, acc_note = _accumulate_prepared(model, prep, cols, memory_mb, train, min_speed)
+    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed)
     f = fit(model, acc, method, prior_weight)
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
@@ -601,7 +601,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     if held is not None:
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
         vcols = log_columns(model, held)
-        vacc, _ = _accumulate_prepared(model, vprep, vcols, memory_mb, held)
+        vacc, _ = accumulate_prepared(model, vprep, vcols, memory_mb, held)
         vres = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in vacc.factors]) / np.sqrt(vacc.samples)
         val = {"rms": dict(zip(names, vres.tolist())), "rms_total": float(np.sqrt(np.mean(vres**2))),
                "samples": int(vacc.samples), "source": held.source}
@@ -690,11 +690,33 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     return np.array([where[j] for j in wanted], dtype=int)
 
 
-def _accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None):
+def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None):
     """Rows accumulated from a prepared log, with parallel filtering.
 
     All at once when the regressor fits in ``memory_mb``, else chunk by chunk with overlaps
-    (:mod:`baseparams.ident.chunks`; ``log`` is then the unfiltered log).
+    (:mod:`baseparams.ident.chunks`), which gives the same factors to rounding.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    prep : Prepared
+        The log prepared (:func:`baseparams.ident.preprocess.prepare`).
+    cols : ndarray of int
+        Log column of each state column (:func:`log_columns`).
+    memory_mb : float
+        Largest regressor formed at once.
+    log : JointLog, optional
+        The unfiltered log ``prep`` came from (needed for the chunked path).
+    min_speed : float, optional
+        The slow-sample threshold ``prep`` used.
+
+    Returns
+    -------
+    acc : RowAccumulator
+        The row factors.
+    note : str
+        How the parallel filtering was done.
     """
     from .ident.estimate import RowAccumulator
 

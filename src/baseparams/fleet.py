@@ -1,0 +1,297 @@
+"""Fleet scale: identification over many logs on Dask, with memory bounded by the chunk.
+
+Every log (file) is read, preprocessed and reduced to its row factors by a Dask task
+(:func:`file_factors`: the same code as :func:`baseparams.identify.identify`, chunked with
+overlapping filter edges past ``memory_mb``); factors combine exactly in a tree (TSQR,
+:func:`baseparams.ident.chunks.combine`), and the estimators — OLS, WLS, the physical fit — run
+on the combined factors, whose size does not depend on the data. ``per_file`` gives one estimate
+per log (one robot each) and the spread across the fleet; ``pooled`` one estimate from all.
+
+The cluster: ``client`` if given, else ``scheduler`` (an address, or Dask's own
+``DASK_SCHEDULER_ADDRESS``), else a local cluster sized to the machine (one single-threaded worker
+process per core), started and stopped here. A worker that dies mid-run loses nothing: the
+scheduler runs its tasks again elsewhere.
+
+Synthetic fleets for tests and benchmarks: :func:`simulate_fleet` writes one log per robot (a
+known parameter vector each), file by file, never holding the fleet; :func:`synthetic_factors` is
+the same data generated inside the task (no disk), for throughput measurements.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import BaseparamsError
+from .identify import Fit, IdentModel, fit
+
+
+def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff: float | None = None,
+                 min_speed: float | None = None):
+    """One log reduced to its row factors (the task a Dask worker runs).
+
+    Parameters
+    ----------
+    path : str
+        A log file (:func:`baseparams.io.logs.read_log`).
+    model : IdentModel
+        The identification model.
+    memory_mb : float
+        Largest regressor formed at once (:func:`baseparams.identify.identify`).
+    cutoff : float, optional
+        Low-pass cutoff [Hz]; default from the log's excitation.
+    min_speed : float, optional
+        Slow-sample threshold.
+
+    Returns
+    -------
+    acc : RowAccumulator
+        The log's row factors.
+    info : dict
+        ``{"path", "read", "used", "removed"}``.
+    """
+    from .ident.preprocess import prepare
+    from .identify import accumulate_prepared, log_columns
+    from .io.logs import read_log
+    from .numerics import blas_threads
+
+    with blas_threads():
+        log = read_log(path, model.robot)
+        prep = prepare(log, cutoff=cutoff, min_speed=min_speed)
+        acc, _ = accumulate_prepared(model, prep, log_columns(model, log), memory_mb, log, min_speed)
+    return acc, {"path": str(path), "read": int(log.n_samples), "used": int(acc.samples),
+                 "removed": dict(prep.removed)}
+
+
+def combine_pair(a, b):
+    """Two accumulators combined (a tree-reduction step).
+
+    Parameters
+    ----------
+    a, b : RowAccumulator
+        Factors of the same model.
+
+    Returns
+    -------
+    RowAccumulator
+        Their TSQR combination.
+    """
+    from .ident.chunks import combine
+
+    return combine([a, b])
+
+
+@dataclass(frozen=True, eq=False)
+class FleetResult:
+    """Estimates over a fleet of logs.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model identified.
+    per_file : dict of str to Fit
+        One estimate per log (empty unless asked).
+    pooled : Fit, optional
+        One estimate from all logs (``None`` unless asked).
+    files : list of dict
+        Per log: ``{"path", "read", "used", "removed"}``.
+    spread : dict, optional
+        Across the per-file estimates: ``{"mean", "std"}`` per model parameter, ``(p,)`` each.
+    """
+
+    model: IdentModel
+    per_file: dict[str, Fit]
+    pooled: Fit | None
+    files: list[dict]
+    spread: dict | None
+
+    def to_json(self) -> dict:
+        """One JSON-able object.
+
+        Returns
+        -------
+        dict
+            ``model, names, files, per_file{path: values}, pooled{values, std} | null,
+            spread{mean, std} | null``.
+        """
+        names = self.model.names
+        return {"model": self.model.robot.name, "names": names, "files": self.files,
+                "per_file": {k: f.theta.tolist() for k, f in self.per_file.items()},
+                "pooled": None if self.pooled is None else {"values": self.pooled.theta.tolist(),
+                                                             "std": self.pooled.estimate.std.tolist()},
+                "spread": None if self.spread is None else {k: v.tolist() for k, v in self.spread.items()}}
+
+
+def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: bool = False, method: str = "wls",
+                   client=None, scheduler: str | None = None, workers: int | None = None, memory_mb: float = 128.0,
+                   cutoff: float | None = None, min_speed: float | None = None, progress=None) -> FleetResult:
+    """Identify over many logs on Dask.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model (:func:`baseparams.identify.ident_model`).
+    paths : iterable of str
+        Log files, one robot each for ``per_file``.
+    per_file : bool
+        One estimate per log, and the spread across them.
+    pooled : bool
+        One estimate from all logs.
+    method : {"ols", "wls", "physical"}
+        The estimator.
+    client : distributed.Client, optional
+        An existing client.
+    scheduler : str, optional
+        A scheduler address (default ``DASK_SCHEDULER_ADDRESS``, else a local cluster).
+    workers : int, optional
+        Local cluster size (default: one worker per core).
+    memory_mb : float
+        Largest regressor a task forms at once: memory per worker is bounded by it and by one
+        log's signals, not by the fleet.
+    cutoff, min_speed : float, optional
+        As for :func:`baseparams.identify.identify`.
+    progress : callable, optional
+        Called with one line per finished log.
+
+    Returns
+    -------
+    FleetResult
+        The estimates.
+
+    Raises
+    ------
+    BaseparamsError
+        No file, neither ``per_file`` nor ``pooled``, or dask missing (names the extra).
+    """
+    paths = [str(p) for p in paths]
+    if not paths:
+        raise BaseparamsError("no log file to identify")
+    if not (per_file or pooled):
+        raise BaseparamsError("ask for per_file and/or pooled estimates")
+    with _client(client, scheduler, workers) as cl:
+        futures = cl.map(file_factors, paths, model=model, memory_mb=memory_mb, cutoff=cutoff, min_speed=min_speed,
+                         pure=False)
+        results = _gather(cl, futures, progress)
+    accs = [a for a, _ in results]
+    files = [i for _, i in results]
+    fits = {i["path"]: fit(model, a, method) for a, i in zip(accs, files)} if per_file else {}
+    spread = None
+    if len(fits) > 1:
+        thetas = np.array([f.theta for f in fits.values()])
+        spread = {"mean": thetas.mean(axis=0), "std": thetas.std(axis=0, ddof=1)}
+    pooled_fit = fit(model, _tree(accs), method) if pooled else None
+    return FleetResult(model, fits, pooled_fit, files, spread)
+
+
+def _gather(cl, futures, progress):
+    """Results in submission order, reporting each as it finishes."""
+    from distributed import as_completed
+
+    done = {}
+    for k, fut in enumerate(as_completed(futures)):
+        acc, info = fut.result()
+        done[fut.key] = (acc, info)
+        if progress is not None:
+            progress(f"[{k + 1}/{len(futures)}] {info['path']}: {info['used']} samples used of {info['read']}")
+    return [done[f.key] for f in futures]
+
+
+def _tree(accs):
+    """Pairwise (TSQR) reduction of accumulators."""
+    level = list(accs)
+    while len(level) > 1:
+        level = [combine_pair(level[k], level[k + 1]) if k + 1 < len(level) else level[k]
+                 for k in range(0, len(level), 2)]
+    return level[0]
+
+
+class _client:
+    """Context manager: the given client, a scheduler's, or a local cluster started and stopped here."""
+
+    def __init__(self, client, scheduler, workers):
+        self.client, self.scheduler, self.workers = client, scheduler, workers
+        self.own = []
+
+    def __enter__(self):
+        if self.client is not None:
+            return self.client
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise BaseparamsError("fleet identification needs Dask: pip install 'baseparams[fleet]'") from None
+        address = self.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
+        if address:
+            cl = Client(address)
+        else:
+            n = self.workers or os.cpu_count() or 1
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+            self.own.append(cluster)
+            cl = Client(cluster)
+        self.own.insert(0, cl)
+        return cl
+
+    def __exit__(self, *exc):
+        for thing in self.own:
+            thing.close()
+        return False
+
+
+def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: float = 1000.0, noise: float = 0.05,
+                   spread: float = 0.1, seed: int = 0, friction=("viscous", "coulomb", "offset"),
+                   suffix: str = ".npz") -> list[Path]:
+    """Write one synthetic log per robot of a fleet, each with its own known parameters.
+
+    Robot ``k``'s bodies have their masses and inertias scaled by ``1 + spread u`` (``u``
+    uniform in [-1, 1], per body; a scaled body stays physically consistent), its drive
+    parameters drawn; each log is simulated and written before the next (the fleet is never
+    held whole). ``<name>.truth.json`` beside each log holds its true model parameters.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (fixed base).
+    outdir : str or Path
+        Output folder (created).
+    robots : int
+        Number of robots.
+    duration, rate, noise : float
+        Per log: length [s], sampling rate [Hz], torque noise [N m].
+    spread : float
+        Relative spread of the bodies' inertial parameters across the fleet.
+    seed : int
+        Seed of the fleet.
+    friction : iterable of str
+        Friction terms simulated.
+    suffix : str
+        ``.npz`` or ``.csv``.
+
+    Returns
+    -------
+    list of Path
+        The logs written.
+    """
+    import json
+    from dataclasses import replace
+
+    from .identify import simulate_log
+    from .io.logs import write_log
+
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    paths = []
+    for k in range(robots):
+        scale = 1.0 + spread * rng.uniform(-1.0, 1.0, robot.n)
+        variant = replace(robot, N_body=robot.N_body * scale[:, None, None])  # a positive scale keeps N_i PSD
+        log, truth = simulate_log(variant, duration=duration, rate=rate, noise=noise, seed=seed * 100003 + k,
+                                  friction=friction)
+        path = out / f"robot{k:04d}{suffix}"
+        write_log(path, log)
+        path.with_name(path.name + ".truth.json").write_text(json.dumps(truth))
+        paths.append(path)
+        print(f"{path}: {log.n_samples} samples", file=sys.stderr)
+    return paths

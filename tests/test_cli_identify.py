@@ -86,3 +86,19 @@ def test_identify_missing_joint_names_the_joint(tmp_path, capsys):
     assert main(["identify", "puma560", str(path)]) == 2
     err = capsys.readouterr().err
     assert "joint6" in err and err.count("\n") == 1
+
+
+def test_fleet_from_the_command_line(tmp_path, capsys):
+    """``simulate --robots`` writes a fleet; ``identify 'glob' --per-file --pooled`` runs it on Dask."""
+    out = tmp_path / "fleet"
+    assert main(["simulate", "puma560", str(out), "--robots", "3", "--duration", "10", "--rate", "200",
+                 "--noise", "0.05", "--friction", "viscous"]) == 0
+    capsys.readouterr()
+    assert main(["identify", "puma560", str(out / "*.npz"), "--per-file", "--pooled", "--workers", "2",
+                 "--friction", "viscous", "--method", "ols", "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert len(j["per_file"]) == 3 and j["pooled"] is not None and len(j["names"]) == 36 + 6
+    truth = json.loads((out / "robot0000.npz.truth.json").read_text())["parameters"]
+    est = j["per_file"][str(out / "robot0000.npz")]
+    assert np.allclose(est[:2], [t["value"] for t in truth[:2]], rtol=0.02)  # link1.ZZR, link2.XXR
+    assert main(["identify", "puma560", str(out / "*.npz"), "--holdout", "2"]) == 2

@@ -218,8 +218,11 @@ def cmd_identify(args) -> int:
 
     robot = _robot(args)
     progress = (lambda msg: print(f"baseparams: {msg}", file=sys.stderr)) if args.verbose else (lambda msg: None)
+    files = _data_files(args.data)
+    if len(files) > 1 or args.per_file or args.pooled:
+        return _identify_fleet(args, robot, files)
     progress(f"reading {args.data}")
-    log = read_log(args.data, robot, columns=args.columns)
+    log = read_log(files[0], robot, columns=args.columns)
     val = read_log(args.validate, robot, columns=args.columns) if args.validate else None
     progress(f"identifying ({args.method}) on {log.n_samples} samples")
     t0 = time.perf_counter()
@@ -236,6 +239,52 @@ def cmd_identify(args) -> int:
         torque_plot(result, args.plot)
         progress(f"plot written to {args.plot}")
     _emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
+    return EXIT_OK
+
+
+def _data_files(pattern: str) -> list[str]:
+    """``DATA``: a file, a folder (a ROS 2 bag), or a glob pattern (``**`` recursive), sorted."""
+    import glob
+
+    if any(ch in pattern for ch in "*?["):
+        files = sorted(glob.glob(pattern, recursive=True))
+        if not files:
+            raise BaseparamsError(f"no file matches {pattern!r}")
+        return files
+    return [pattern]
+
+
+def _identify_fleet(args, robot, files: list[str]) -> int:
+    """``identify`` over many logs on Dask (``--per-file`` / ``--pooled``)."""
+    from .fleet import identify_fleet
+    from .identify import ident_model
+
+    for opt in ("validate", "holdout", "plot", "urdf", "columns"):
+        if getattr(args, opt):
+            raise BaseparamsError(f"--{opt} applies to one log; with several (a fleet) use --per-file / --pooled")
+    from .analysis import analyze
+
+    model = ident_model(analyze(robot, convention=args.convention), args.rotor, _friction(args.friction),
+                        args.coulomb_width)
+    per_file = args.per_file or not args.pooled
+    res = identify_fleet(model, files, per_file=per_file, pooled=args.pooled or len(files) == 1, method=args.method,
+                         scheduler=args.scheduler, workers=args.workers, cutoff=args.cutoff, min_speed=args.min_speed,
+                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
+    if args.json:
+        _emit(args, json.dumps(res.to_json(), indent=2))
+        return EXIT_OK
+    lines = [f"{robot.name}: {len(files)} logs, {sum(f['used'] for f in res.files)} samples used "
+             f"({args.method}); {model.n_params} model parameters"]
+    if res.spread is not None:
+        rel = res.spread["std"] / np.maximum(np.abs(res.spread["mean"]), 1e-300)
+        worst = np.argsort(rel)[::-1][:5]
+        lines.append("largest spread across the fleet (std / |mean|): "
+                     + ", ".join(f"{model.names[k]} {rel[k]:.3g}" for k in worst))
+    if res.pooled is not None:
+        lines.append("pooled estimate:")
+        lines += [f"  {n:<20s} {v:14.6g} {s:11.3g}" for n, v, s in
+                  zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
+    _emit(args, "\n".join(lines))
     return EXIT_OK
 
 
@@ -278,6 +327,13 @@ def cmd_simulate(args) -> int:
     from .io.logs import write_log
 
     robot = _robot(args)
+    if args.robots:
+        from .fleet import simulate_fleet
+
+        paths = simulate_fleet(robot, args.out, args.robots, duration=args.duration, rate=args.rate, noise=args.noise,
+                               seed=args.seed, friction=_friction(args.friction))
+        print(f"{args.out}: {len(paths)} logs, one robot each (true parameters beside each log)")
+        return EXIT_OK
     log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=args.amplitude,
                               noise=args.noise, seed=args.seed, rotor=args.rotor, friction=_friction(args.friction),
                               convention=args.convention)
@@ -361,7 +417,8 @@ def _identify_parser(sub, model_args) -> None:
     s = sub.add_parser("identify", help="identify base-parameter and drive values from a joint log")
     model_args(s)
     s.add_argument("data", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default layout: "
-                                "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>")
+                                "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>; a glob pattern for "
+                                "several logs (a fleet, on Dask)")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
@@ -374,6 +431,13 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
     s.add_argument("--prior-weight", type=float, metavar="W", help="physical: weight of the file's inertias")
+    s.add_argument("--per-file", action="store_true",
+                   help="several logs (a glob such as 'logs/robot-*/*.parquet'): one estimate per log and the "
+                        "spread across them, on Dask")
+    s.add_argument("--pooled", action="store_true", help="several logs: one estimate from all of them, on Dask")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a Dask scheduler (default DASK_SCHEDULER_ADDRESS, else a local cluster for this run)")
+    s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
     s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
@@ -390,6 +454,8 @@ def _simulate_parser(sub, model_args) -> None:
     s.add_argument("--rate", type=float, default=500.0, help="sampling rate in Hz (default 500)")
     s.add_argument("--amplitude", type=float, default=0.5, help="joint excursion in rad (default 0.5)")
     s.add_argument("--noise", type=float, default=0.0, help="torque noise standard deviation (default 0)")
+    s.add_argument("--robots", type=int, metavar="N",
+                   help="a fleet: N logs in the folder OUT, one robot each with its own inertias (10 %% spread)")
     _ident_args(s)
     s.set_defaults(func=cmd_simulate)
 

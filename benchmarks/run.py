@@ -19,6 +19,7 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``analyze_cli``   ``baseparams analyze`` end to end in fresh processes.
 * ``identify``      ``identify`` on 10^6 simulated Puma560 samples end to end; the physical solve
                     on the Panda and on a 32-body humanoid.
+* ``scale``         Dask: 10^8 synthetic Puma560 samples, throughput with 1 and 2 workers, peak memory.
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
@@ -377,6 +378,62 @@ def bench_identify(out: dict, quick: bool) -> None:
         out[f"physical_solve_{name}_bodies"] = model.robot.n
 
 
+def bench_scale(out: dict, quick: bool) -> None:
+    """Fleet scale on a local Dask cluster: 10^8 synthetic Puma560 samples (10^6 with --quick)
+    generated inside the tasks in chunks of 10^5 and reduced by TSQR; throughput with 1 and 2
+    workers, peak memory (workers' max RSS + the driver's), chunked vs in-memory estimate."""
+    import resource
+
+    import distributed
+
+    import baseparams
+    from baseparams.fleet import synthetic_fleet_factors
+    from baseparams.identify import fit, ident_model
+
+    robot = baseparams.load("puma560")
+    model = ident_model(baseparams.analyze(robot), rotor=False)
+    theta = model.theta(robot.parameters("paper"), np.ones(model.drives.n_params))
+    chunk = 10**5
+    # chunked (Dask, 10 chunks) vs in memory (one accumulator over the same 10^6 samples)
+    whole = fit(model, _whole_synthetic(model, theta, 10, chunk), "ols").theta
+    for workers in (1, 2):
+        cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                           dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"})
+        client = distributed.Client(cluster)
+        try:
+            client.run(lambda: None)
+            synthetic_fleet_factors(model, theta, 2 * workers, chunk, client)  # warm the workers (numba cache)
+            if workers == 2:
+                acc = synthetic_fleet_factors(model, theta, 10, chunk, client)
+                out["scale_chunked_vs_inmemory_relerr"] = float(np.abs(fit(model, acc, "ols").theta - whole).max()
+                                                                / np.abs(whole).max())
+            total = (10**6 if quick else (10**7 if workers == 1 else 10**8))
+            log(f"  scale: {total} samples on {workers} worker(s) ...")
+            t0 = time.perf_counter()
+            acc = synthetic_fleet_factors(model, theta, total // chunk, chunk, client)
+            dt = time.perf_counter() - t0
+            est = fit(model, acc, "ols").theta
+            out[f"scale_samples_per_s_{workers}worker{'s' if workers > 1 else ''}"] = total / dt
+            if workers == 2:
+                rss = client.run(lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+                driver = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+                out["scale_peak_mb"] = (sum(rss.values()) + driver) / 1024.0
+                out["scale_samples"] = total
+                out["scale_seconds"] = dt
+                out["scale_theta_rel_error"] = float(np.abs(est - theta).max() / np.abs(theta).max())
+        finally:
+            client.close()
+            cluster.close()
+
+
+def _whole_synthetic(model, theta, chunks: int, chunk: int):
+    """The same synthetic samples as ``chunks`` chunks, accumulated in memory at once."""
+    from baseparams.fleet import synthetic_factors
+    from baseparams.ident.chunks import combine
+
+    return combine([synthetic_factors(model, theta, k, chunk) for k in range(chunks)])
+
+
 def bench_analyze_cli(out: dict, quick: bool) -> None:
     """``baseparams analyze`` end to end in a fresh process (``python -m baseparams``; imports,
     loading, DRNG, certification, regrouping, report), median of fresh runs."""
@@ -600,6 +657,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "base_streaming": bench_base_streaming,
     "analyze_cli": bench_analyze_cli,
     "identify": bench_identify,
+    "scale": bench_scale,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
     "loops": bench_loops,

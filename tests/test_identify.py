@@ -5,6 +5,7 @@ import pytest
 
 import baseparams
 from baseparams.errors import BaseparamsError
+from baseparams.ident.drives import MotorCoupling
 from baseparams.ident.simulate import add_noise, fourier_trajectory
 from baseparams.identify import accumulate, fit, ident_model
 
@@ -96,3 +97,44 @@ def test_chunked_identification_equals_the_whole_log(min_speed):
     assert any("chunks of" in n for n in chunked.notes) and not any("chunks of" in n for n in whole.notes)
     assert chunked.samples == whole.samples
     assert np.abs(chunked.fit.theta - whole.fit.theta).max() <= 1e-10 * np.abs(whole.fit.theta).max()
+
+
+@pytest.mark.parametrize("weights", [(1.0, 1.0), (0.7, -1.3)])
+def test_coupled_motor_noise_free_recovery(weights, rng):
+    """A motor driving joints 5 and 6 (velocity w . dq, torque w * y): Iam, Fvm, Fcm come back exactly.
+
+    The torques are made without the package's drive columns: the motor's joint-side rate
+    ``v = w5 dq5 + w6 dq6``, its torque ``y = Iam a + Fvm v + Fcm sign(v)`` and ``w * y`` added to
+    joints 5 and 6 (the transpose of the velocity map).
+    """
+    robot = baseparams.load("puma560")
+    m6 = MotorCoupling("m6", ("joint5", "joint6"), weights)
+    model = ident_model(baseparams.analyze(robot), couplings=(m6,))
+    assert model.drives.names[-3:] == ["Iam_m6", "Fvm_m6", "Fcm_m6"]
+    assert model.n_params == 40 + 18 + 3  # rigid + Ia3..Ia6, friction, the coupled motor's three
+    t, q, dq, ddq = fourier_trajectory(6, 20.0, 100.0, rng, amplitude=0.6)
+    own = np.abs(rng.normal(size=model.drives.n_params - 3))
+    motor = np.array([0.02, 0.4, 1.5])  # Iam, Fvm, Fcm
+    w = np.asarray(weights)
+    v, a = dq[:, 4:6] @ w, ddq[:, 4:6] @ w
+    tau = baseparams.regressor(robot, q, dq, ddq) @ robot.parameters("paper")
+    tau += model.drives.regressor(dq, ddq, 6)[:, :, :-3] @ own
+    tau[:, 4:6] += np.outer(motor[0] * a + motor[1] * v + motor[2] * np.sign(v), w)
+    f = fit(model, accumulate(model, q, dq, ddq, tau))
+    true = model.theta(robot.parameters("paper"), np.r_[own, motor])
+    assert np.abs(f.theta - true).max() <= 1e-8 * np.abs(true).max()
+    assert np.allclose(f.theta[-3:], motor, rtol=1e-8)
+
+
+def test_coupling_errors_are_one_line():
+    robot = baseparams.load("puma560")
+    analysis = baseparams.analyze(robot)
+    with pytest.raises(BaseparamsError, match=r"not among the driven joints"):
+        ident_model(analysis, couplings=(MotorCoupling("m", ("joint5", "wrist9"), (1, 1)),))
+    with pytest.raises(BaseparamsError, match=r"needs rotor inertia or viscous or Coulomb"):
+        ident_model(analysis, rotor=False, friction=("offset",), couplings=(MotorCoupling("m", ("joint5",), (1,)),))
+    with pytest.raises(BaseparamsError, match=r"expected NAME:JOINT=WEIGHT"):
+        MotorCoupling.parse("m6 joint5=1")
+    with pytest.raises(BaseparamsError, match=r"non-zero"):
+        MotorCoupling.parse("m6:joint5=1,joint6=0")
+    assert MotorCoupling.parse(" m6: joint5=1, joint6=-2.5") == MotorCoupling("m6", ("joint5", "joint6"), (1.0, -2.5))

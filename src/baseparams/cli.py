@@ -199,9 +199,9 @@ def cmd_identify(args) -> int:
     ----------
     args : argparse.Namespace
         The parsed command line: the model options and ``data``, ``columns``, ``validate``,
-        ``holdout``, ``method``, ``friction``, ``rotor``, ``coulomb_width``, ``cutoff``,
-        ``decimate``, ``min_speed``, ``prior_weight``, ``convention``, ``plot``, ``urdf``,
-        ``output``.
+        ``holdout``, ``method``, ``friction``, ``rotor``, ``coulomb_width``, ``coupling``,
+        ``cutoff``, ``decimate``, ``min_speed``, ``prior_weight``, ``convention``, ``plot``,
+        ``urdf``, ``output``.
 
     Returns
     -------
@@ -213,9 +213,11 @@ def cmd_identify(args) -> int:
     BaseparamsError
         Bad input (model, data, options).
     """
+    from .ident.drives import MotorCoupling
     from .identify import format_identification, identify
     from .io.logs import read_log
 
+    couplings = tuple(MotorCoupling.parse(text) for text in args.coupling or ())
     robot = _robot(args)
     progress = (lambda msg: print(f"baseparams: {msg}", file=sys.stderr)) if args.verbose else (lambda msg: None)
     files = _data_files(args.data)
@@ -229,7 +231,7 @@ def cmd_identify(args) -> int:
     result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
                       coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
                       decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
-                      convention=args.convention)
+                      convention=args.convention, couplings=couplings)
     progress(f"done in {time.perf_counter() - t0:.2f} s")
     if args.urdf:
         _write_identified_urdf(args, robot, result)
@@ -427,6 +429,10 @@ def _identify_parser(sub, model_args) -> None:
                    help="ordinary, weighted (per-joint noise; default) or physically consistent least squares")
     _ident_args(s)
     s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
+    s.add_argument("--coupling", action="append", metavar="NAME:JOINT=W,JOINT=W",
+                   help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "
+                        "reaches each JOINT times W; adds Iam_NAME, Fvm_NAME, Fcm_NAME (with --rotor, viscous, "
+                        "coulomb); repeatable")
     s.add_argument("--cutoff", type=float, metavar="HZ", help="low-pass cutoff (default from the sampling rate)")
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")

@@ -121,13 +121,11 @@ class IdentModel:
     def _drive_columns(self, dq: np.ndarray, ddq: np.ndarray, out: np.ndarray) -> None:
         """Write the kept drive parameters' columns into ``out (S, m, p)`` in place."""
         nb = len(self.analysis.base_names)
-        nk = len(self.drives.kinds)
         for col, i in enumerate(self.regrouping.independent):
             if i < nb:
                 continue
-            j, k = divmod(int(i - nb), nk)
-            row = self.drives.rows[j]
-            out[:, row, col] = self.drives.column(self.drives.kinds[k], dq[:, row], ddq[:, row])
+            rows, values = self.drives.param_column(int(i - nb), dq, ddq)
+            out[:, rows, col] = values
 
     def full_map(self) -> np.ndarray:
         """``G (p, 10 n + nd)``: ``theta = G [pi_paper; delta]``.
@@ -186,7 +184,8 @@ def measured_coords(robot: Robot, rows: str) -> np.ndarray:
 
 
 def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
-                coulomb_width: float | None = None, samples: int = 200, seed: int = 0) -> IdentModel:
+                coulomb_width: float | None = None, samples: int = 200, seed: int = 0,
+                couplings=()) -> IdentModel:
     """The identification model of an analysed robot: base parameters plus drives, regrouped.
 
     Parameters
@@ -203,6 +202,9 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "co
         Random states deciding which drive parameters regroup.
     seed : int
         Their seed.
+    couplings : iterable of MotorCoupling
+        Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`): their
+        ``Iam``, ``Fvm``, ``Fcm`` (with ``rotor``, viscous, Coulomb friction).
 
     Returns
     -------
@@ -220,7 +222,7 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "co
                               f"identification needs a certified base set")
     robot = analysis.robot
     coords = measured_coords(robot, analysis.rows)
-    drives = drives_for(robot, coords, rotor, friction, coulomb_width)
+    drives = drives_for(robot, coords, rotor, friction, coulomb_width, couplings)
     rng = np.random.default_rng(seed)
     if robot.has_loops:  # positions that close the loops; rates of both signs (sign(dq) != 1)
         q = closed_samples(robot, samples, rng).q[:, robot.actuated]
@@ -492,6 +494,34 @@ class Identification:
             out.append(entry)
         return out
 
+    def couplings(self) -> list[dict]:
+        """Coupled-motor parameters (:class:`~baseparams.ident.drives.MotorCoupling`).
+
+        Returns
+        -------
+        list of dict
+            ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm"}`` per coupling: a value,
+            ``None`` when not modelled, or ``"regrouped into <parameter>"``.
+        """
+        m = self.model
+        pos = {name: k for k, name in enumerate(m.names)}
+        absorbed = {m.regrouping.names[d]: m.regrouping.names[i]
+                    for row, i in enumerate(m.regrouping.independent)
+                    for col, d in enumerate(m.regrouping.dependent) if m.regrouping.K[row, col] != 0}
+        out = []
+        for c in m.drives.couplings:
+            entry = {"name": c.name, "joints": dict(zip(c.joints, c.weights))}
+            for kind in ("Iam", "Fvm", "Fcm"):
+                name = f"{kind}_{c.name}"
+                if kind not in m.drives.coupled_kinds:
+                    entry[kind] = None
+                elif name in pos:
+                    entry[kind] = float(self.fit.theta[pos[name]])
+                else:
+                    entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
+            out.append(entry)
+        return out
+
     def to_json(self) -> dict:
         """One JSON-able object (schema in the README's identification section).
 
@@ -499,9 +529,9 @@ class Identification:
         -------
         dict
             ``method, model, convention, n_samples{read, used, removed}, condition_number,
-            excitation{condition_number, weak, all_excited}, base_parameters, drives, train,
-            validation, physical, notes``; ``weak`` names the parameters carrying directions
-            whose singular value is below 1e-3 of the largest (column-scaled regressor).
+            excitation{condition_number, weak, all_excited}, base_parameters, drives, couplings,
+            train, validation, physical, notes``; ``weak`` names the parameters carrying
+            directions whose singular value is below 1e-3 of the largest (column-scaled regressor).
         """
         f = self.fit
         phys = None
@@ -517,7 +547,8 @@ class Identification:
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
                 "excitation": {"condition_number": cond, "weak": weak,
                                "all_excited": not weak},
-                "base_parameters": self.base_parameters(), "drives": self.drives(), "train": self.train,
+                "base_parameters": self.base_parameters(), "drives": self.drives(),
+                "couplings": self.couplings(), "train": self.train,
                 "validation": self.validation, "physical": phys, "notes": list(self.notes)}
 
 
@@ -525,7 +556,7 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
              friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
-             convention: str = "khalil", memory_mb: float = 128.0) -> Identification:
+             convention: str = "khalil", memory_mb: float = 128.0, couplings=()) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -561,6 +592,10 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         Largest regressor formed at once for the parallel filter (the filter's copies make the
         peak about 4x this); longer logs are processed in chunks with overlapping filter edges,
         which gives the same estimate to rounding (:mod:`baseparams.ident.chunks`).
+    couplings : iterable of MotorCoupling
+        Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`, e.g. a
+        coupled wrist): their rotor inertia and viscous and Coulomb friction ``Iam``, ``Fvm``,
+        ``Fcm`` (those whose per-joint kind is modelled).
 
     Returns
     -------
@@ -571,7 +606,8 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
     ------
     BaseparamsError
         A floating base, a log that misses a measured joint, ``holdout`` with ``validation``, bad
-        data (:class:`~baseparams.errors.DataError`) or data that do not excite the model.
+        data (:class:`~baseparams.errors.DataError`), a bad coupling or data that do not excite
+        the model.
     """
     if robot.floating:
         raise BaseparamsError(f"robot {robot.name!r}: identification from a joint log needs a fixed base (a floating "
@@ -580,16 +616,17 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
-                         min_speed, prior_weight, convention, memory_mb)
+                         min_speed, prior_weight, convention, memory_mb, tuple(couplings))
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
-              prior_weight, convention, memory_mb) -> Identification:
+              prior_weight, convention, memory_mb, couplings=()) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .ident.preprocess import prepare
 
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
-    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width)
+    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width,
+                        couplings=couplings)
     cols = log_columns(model, log)
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
     acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed)
@@ -759,8 +796,8 @@ def format_identification(result: Identification) -> str:
     -------
     str
         Header (model, method, samples, condition number), base parameters (value, std, %sigma,
-        expression), drives, residual RMS per joint (training and validation), physical check and
-        the notes.
+        expression), drives, coupled motors, residual RMS per joint (training and validation),
+        physical check and the notes.
     """
     j = result.to_json()
     n = j["n_samples"]
@@ -780,6 +817,11 @@ def format_identification(result: Identification) -> str:
             cells = [("-" if d[k] is None else f"{d[k]:.5g}" if not isinstance(d[k], str) else "regrouped")
                      for k in ("Ia", "Fv", "Fc", "Fo")]
             lines.append(f"  {d['joint']:<16s} " + " ".join(f"{c:>12s}" for c in cells))
+    for c in j["couplings"]:
+        cells = ", ".join(f"{k} {'-' if c[k] is None else c[k] if isinstance(c[k], str) else f'{c[k]:.5g}'}"
+                          for k in ("Iam", "Fvm", "Fcm"))
+        lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
+                     + f"): {cells}")
     for label in ("train", "validation"):
         part = j[label]
         if part is None:

@@ -6,12 +6,30 @@ Per driven joint ``j`` (a measured 1-dof coordinate), the generalized force gain
 
 (``sign`` or, with ``coulomb_width`` ``w``, the smooth ``tanh(dq_j / w)``). ``Ia_j`` is the rotor
 inertia reflected to the joint (MJCF ``armature``), ``Fv_j`` [N m s/rad], ``Fc_j`` and ``Fo_j``
-[N m] (or N for prismatic joints). The drive parameters ``delta`` are ordered joint by joint, each
-joint's kinds in :data:`KINDS` order (those selected).
+[N m] (or N for prismatic joints).
+
+Coupled transmissions (:class:`MotorCoupling`, e.g. a wrist whose last motor turns joints 5 and
+6): a motor whose joint-side velocity is ``v_m = sum_j w_j dq_j`` and whose torque ``y`` reaches
+joint ``j`` as ``w_j y`` (the transpose of the velocity map, by virtual work) adds
+
+``tau_j += w_j (Iam a_m + Fvm v_m + Fcm sign(v_m))``, ``a_m = sum_k w_k ddq_k``,
+
+for every joint ``j`` it drives: its rotor inertia ``Iam`` and viscous and Coulomb friction
+``Fvm``, ``Fcm``, reflected to the joint side of the weights (a motor of gear ratio ``N`` turning
+``N (dq_5 + dq_6)`` with weights 1, 1: ``Iam = N^2 J_motor``, ``Fvm = N^2 fv_motor``,
+``Fcm = N fc_motor``). A coupled offset would be a combination of the joints' own ``Fo_j``, so
+there is none. The per-joint terms of a coupled joint remain (its own gearing's friction; a joint
+with no motor of its own has ``Ia_j`` near zero).
+
+The drive parameters ``delta`` are ordered joint by joint, each joint's kinds in :data:`KINDS`
+order (those selected), then coupling by coupling, each coupling's kinds in
+:data:`COUPLED_KINDS` order (those whose per-joint kind is selected).
 """
 
 from __future__ import annotations
 
+import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +41,92 @@ from ..model.robot import Robot
 KINDS = ("Ia", "Fv", "Fc", "Fo")
 #: friction names (CLI ``--friction``) -> kinds
 FRICTION = {"viscous": "Fv", "coulomb": "Fc", "offset": "Fo"}
+#: coupled-motor parameter kinds, in their order within a coupling -> the per-joint kind that selects them
+COUPLED_KINDS = {"Iam": "Ia", "Fvm": "Fv", "Fcm": "Fc"}
+_COUPLING_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
+
+
+@dataclass(frozen=True)
+class MotorCoupling:
+    """A motor driving several joints through a linear transmission (a coupled wrist).
+
+    Its joint-side velocity is ``v_m = sum_j w_j dq_j``; its torque reaches joint ``j`` as
+    ``w_j`` times the motor's (the transpose). Parameters ``Iam_<name>``, ``Fvm_<name>``,
+    ``Fcm_<name>`` (module docstring).
+
+    Parameters
+    ----------
+    name : str
+        The motor's name (letters, digits, ``_``, ``.``, ``-``), e.g. ``m6``.
+    joints : tuple of str, shape ``(k,)``
+        Model joint names of the joints it drives (driven, measured 1-dof joints).
+    weights : tuple of float, shape ``(k,)``
+        ``w_j``, non-zero [dimensionless: joint-side units of the motor per unit of joint ``j``].
+
+    Raises
+    ------
+    BaseparamsError
+        A bad name, no joint, a repeated joint, a weight count that does not match or a weight
+        that is zero or not finite.
+    """
+
+    name: str
+    joints: tuple[str, ...]
+    weights: tuple[float, ...]
+
+    def __post_init__(self):
+        what = f"motor coupling {self.name!r}"
+        if isinstance(self.joints, str):
+            raise BaseparamsError(f"{what}: joints must be a sequence of joint names, got the string {self.joints!r}")
+        joints = tuple(str(j) for j in self.joints)
+        try:
+            weights = tuple(float(w) for w in self.weights)
+        except (TypeError, ValueError):
+            raise BaseparamsError(f"{what}: weights must be numbers, got {self.weights!r}") from None
+        if not isinstance(self.name, str) or not _COUPLING_NAME.match(self.name):
+            raise BaseparamsError(f"{what}: the name must be letters, digits, '_', '.' or '-'")
+        if not joints or len(joints) != len(weights):
+            raise BaseparamsError(f"{what}: give one weight per joint, at least one joint "
+                                  f"(got {len(joints)} joints, {len(weights)} weights)")
+        if len(set(joints)) != len(joints):
+            raise BaseparamsError(f"{what}: a joint is named twice in {list(joints)}")
+        if not all(math.isfinite(w) and w != 0 for w in weights):
+            raise BaseparamsError(f"{what}: weights must be finite and non-zero, got {list(weights)}")
+        object.__setattr__(self, "joints", joints)
+        object.__setattr__(self, "weights", weights)
+
+    @classmethod
+    def parse(cls, text: str) -> MotorCoupling:
+        """A coupling from ``NAME:JOINT=W,JOINT=W`` (the CLI's ``--coupling``).
+
+        Parameters
+        ----------
+        text : str
+            E.g. ``m6:joint_5=1,joint_6=1``.
+
+        Returns
+        -------
+        MotorCoupling
+            The coupling.
+
+        Raises
+        ------
+        BaseparamsError
+            Text not of that form, or a bad coupling (see the class).
+        """
+        name, sep, rest = str(text).partition(":")
+        pairs = [p.partition("=") for p in rest.split(",")] if sep else []
+        if not pairs or any(not j.strip() or not e or not w.strip() for j, e, w in pairs):
+            raise BaseparamsError(f"motor coupling {text!r}: expected NAME:JOINT=WEIGHT,JOINT=WEIGHT "
+                                  f"(e.g. m6:joint_5=1,joint_6=1)")
+        weights = []
+        for j, _, w in pairs:
+            try:
+                weights.append(float(w))
+            except ValueError:
+                raise BaseparamsError(f"motor coupling {text!r}: weight {w.strip()!r} of {j.strip()!r} "
+                                      f"is not a number") from None
+        return cls(name.strip(), tuple(j.strip() for j, _, _ in pairs), tuple(weights))
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,27 +145,39 @@ class Drives:
     coulomb_width : float, optional
         Velocity scale ``w`` of a smooth Coulomb term ``tanh(dq / w)`` [rad/s or m/s]; ``None``:
         ``sign(dq)``.
+    couplings : tuple of MotorCoupling, optional
+        Motors driving several joints (:class:`MotorCoupling`).
+    coupling_rows : tuple of ndarray of int, optional
+        Per coupling, the measured row of each of its joints (its ``joints`` order).
     """
 
     joints: tuple[str, ...]
     rows: np.ndarray
     kinds: tuple[str, ...]
     coulomb_width: float | None = None
+    couplings: tuple[MotorCoupling, ...] = ()
+    coupling_rows: tuple[np.ndarray, ...] = ()
+
+    @property
+    def coupled_kinds(self) -> tuple[str, ...]:
+        """The kinds per coupling: those of :data:`COUPLED_KINDS` whose per-joint kind is selected."""
+        return tuple(c for c, k in COUPLED_KINDS.items() if k in self.kinds)
 
     @property
     def n_params(self) -> int:
-        """Number of drive parameters ``nd = len(joints) * len(kinds)``."""
-        return len(self.joints) * len(self.kinds)
+        """Number of drive parameters ``nd = len(joints) len(kinds) + len(couplings) len(coupled_kinds)``."""
+        return len(self.joints) * len(self.kinds) + len(self.couplings) * len(self.coupled_kinds)
 
     @property
     def names(self) -> list[str]:
-        """``<kind>_<joint>`` for every drive parameter, e.g. ``Fv_joint2``."""
-        return [f"{k}_{j}" for j in self.joints for k in self.kinds]
+        """``<kind>_<joint>`` for every drive parameter, e.g. ``Fv_joint2``, then ``Iam_<coupling>``, ..."""
+        own = [f"{k}_{j}" for j in self.joints for k in self.kinds]
+        return own + [f"{k}_{c.name}" for c in self.couplings for k in self.coupled_kinds]
 
     @property
     def param_kinds(self) -> list[str]:
         """The kind of every drive parameter, ``(nd,)``."""
-        return [k for _ in self.joints for k in self.kinds]
+        return [k for _ in self.joints for k in self.kinds] + [k for _ in self.couplings for k in self.coupled_kinds]
 
     def regressor(self, dq: np.ndarray, ddq: np.ndarray, nrows: int) -> np.ndarray:
         """The drive columns of the measured rows.
@@ -76,33 +192,58 @@ class Drives:
         Returns
         -------
         D : ndarray, shape ``(S, nrows, nd)``
-            ``D[s, rows[j], j * len(kinds) + k]`` is kind ``k``'s column of joint ``j``; zero
+            Column ``k`` is drive parameter ``k``'s (:meth:`param_column`) on its rows; zero
             elsewhere.
         """
-        s = dq.shape[0]
-        out = np.zeros((s, nrows, self.n_params))
-        nk = len(self.kinds)
-        for j, r in enumerate(self.rows):
-            v, a = dq[:, r], ddq[:, r]
-            for k, kind in enumerate(self.kinds):
-                out[:, r, j * nk + k] = self.column(kind, v, a)
+        out = np.zeros((dq.shape[0], nrows, self.n_params))
+        for k in range(self.n_params):
+            rows, values = self.param_column(k, dq, ddq)
+            out[:, rows, k] = values
         return out
 
-    def column(self, kind: str, v: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """One drive column of one joint.
+    def param_column(self, k: int, dq: np.ndarray, ddq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The rows drive parameter ``k`` acts on and its column there.
 
         Parameters
         ----------
-        kind : {"Ia", "Fv", "Fc", "Fo"}
-            The parameter kind.
+        k : int
+            The drive parameter, ``0 <= k < nd``.
+        dq, ddq : ndarray, shape ``(S, nrows)``
+            Velocities and accelerations of the measured rows' coordinates.
+
+        Returns
+        -------
+        rows : ndarray of int, shape ``(r,)``
+            Its measured rows: the joint's one, or a coupling's joints' rows.
+        values : ndarray, shape ``(S, r)``
+            Its column on those rows: :meth:`column` of the joint's rates, or
+            ``w_j column(v_m, a_m)`` of a coupling (module docstring).
+        """
+        own = len(self.joints) * len(self.kinds)
+        if k < own:
+            j, i = divmod(k, len(self.kinds))
+            r = int(self.rows[j])
+            return np.array([r]), self.column(self.kinds[i], dq[:, r], ddq[:, r])[:, None]
+        c, i = divmod(k - own, len(self.coupled_kinds))
+        rows, w = self.coupling_rows[c], np.asarray(self.couplings[c].weights)
+        return rows, self.column(self.coupled_kinds[i], dq[:, rows] @ w, ddq[:, rows] @ w)[:, None] * w
+
+    def column(self, kind: str, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """One drive column of one joint (or of a coupled motor).
+
+        Parameters
+        ----------
+        kind : {"Ia", "Fv", "Fc", "Fo", "Iam", "Fvm", "Fcm"}
+            The parameter kind (a coupled kind acts like its per-joint one on the motor's rates).
         v, a : ndarray, shape ``(S,)``
-            The joint's velocity and acceleration.
+            The joint's (or motor's joint-side) velocity and acceleration.
 
         Returns
         -------
         ndarray, shape ``(S,)``
             ``a``, ``v``, ``sign(v)`` (or ``tanh(v / w)``) or ones.
         """
+        kind = COUPLED_KINDS.get(kind, kind)
         if kind == "Ia":
             return a
         if kind == "Fv":
@@ -113,8 +254,8 @@ class Drives:
 
 
 def drives_for(robot: Robot, coords: np.ndarray, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
-               coulomb_width: float | None = None) -> Drives:
-    """Drives on every measured 1-dof joint (R or P) among ``coords``.
+               coulomb_width: float | None = None, couplings=()) -> Drives:
+    """Drives on every measured 1-dof joint (R or P) among ``coords``, and coupled motors.
 
     Parameters
     ----------
@@ -124,11 +265,14 @@ def drives_for(robot: Robot, coords: np.ndarray, rotor: bool = True, friction=("
         The coordinates of the measured rows, in row order (a floating base's six are not
         driven).
     rotor : bool
-        Include the rotor inertia ``Ia``.
+        Include the rotor inertia ``Ia`` (and a coupled motor's ``Iam``).
     friction : iterable of str
-        Any of ``viscous``, ``coulomb``, ``offset`` (:data:`FRICTION`).
+        Any of ``viscous``, ``coulomb``, ``offset`` (:data:`FRICTION`; a coupled motor gets
+        ``Fvm``, ``Fcm`` with the first two).
     coulomb_width : float, optional
         Smooth Coulomb friction's velocity scale (see :class:`Drives`).
+    couplings : iterable of MotorCoupling
+        Motors driving several of the driven joints (:class:`MotorCoupling`).
 
     Returns
     -------
@@ -138,7 +282,9 @@ def drives_for(robot: Robot, coords: np.ndarray, rotor: bool = True, friction=("
     Raises
     ------
     BaseparamsError
-        An unknown friction name or a non-positive ``coulomb_width``.
+        An unknown friction name, a non-positive ``coulomb_width``, a coupling of a joint that is
+        not driven, two couplings of one name, or couplings without rotor inertia, viscous or
+        Coulomb friction.
     """
     friction = tuple(friction)
     unknown = [f for f in friction if f not in FRICTION]
@@ -152,7 +298,23 @@ def drives_for(robot: Robot, coords: np.ndarray, rotor: bool = True, friction=("
     body = robot.dof_body
     rows = [r for r, c in enumerate(np.asarray(coords, dtype=int)) if robot.jtype[body[c]] in ("R", "P")]
     names = tuple(robot.joint_names[body[coords[r]]] for r in rows)
-    return Drives(names if kinds else (), np.array(rows if kinds else [], dtype=int), kinds, coulomb_width)
+    drives = Drives(names if kinds else (), np.array(rows if kinds else [], dtype=int), kinds, coulomb_width)
+    couplings = tuple(couplings)
+    if not couplings:
+        return drives
+    if not drives.coupled_kinds:
+        raise BaseparamsError("a motor coupling needs rotor inertia or viscous or Coulomb friction to identify")
+    where = dict(zip(names, rows))
+    for c in couplings:
+        if not isinstance(c, MotorCoupling):
+            raise BaseparamsError(f"couplings must be MotorCoupling objects, got {type(c).__name__}")
+        missing = [j for j in c.joints if j not in where]
+        if missing:
+            raise BaseparamsError(f"motor coupling {c.name!r}: {missing} not among the driven joints {list(names)}")
+    if len({c.name for c in couplings}) != len(couplings):
+        raise BaseparamsError(f"motor couplings need distinct names, got {[c.name for c in couplings]}")
+    rows_of = tuple(np.array([where[j] for j in c.joints], dtype=int) for c in couplings)
+    return Drives(drives.joints, drives.rows, kinds, coulomb_width, couplings, rows_of)
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,7 +20,8 @@ minimise over ``N_i`` (symmetric 4x4) and ``delta``::
       + w * sum_i D(N_i || N_i0)                               (log-det prior)
       + w * sum_k c_k (delta_k - delta0_k)^2                   (drive prior, when given)
 
-subject to ``N_i >= min_eig * 1`` (PSD), ``Ia, Fv, Fc >= 0`` and optional mass bounds, with
+subject to ``N_i >= min_eig * 1`` (PSD), ``Ia, Fv, Fc >= 0`` (a coupled motor's ``Iam, Fvm, Fcm``
+too) and optional mass bounds, with
 ``D(N || N0) = -log det(N0^-1 N) + tr(N0^-1 N) - 4`` (zero at ``N = N0``, about
 ``||N0^-1/2 (N - N0) N0^-1/2||_F^2 / 2`` nearby: a squared *relative* deviation, invariant to
 units and to the frame) and ``c_k = ||(R11 G)[:, k]||^2 / s`` (the fit's own curvature along
@@ -53,8 +54,11 @@ from ..model.inertia import HAT_INDEX, hat, unhat
 
 #: default weight of the prior relative to the normalised fit (module docstring)
 DEFAULT_PRIOR_WEIGHT = 1e-6
-#: drive parameter kinds: rotor inertia, viscous, Coulomb friction (all >= 0) and offset (free)
-DRIVE_KINDS = ("Ia", "Fv", "Fc", "Fo")
+#: drive parameter kinds constrained >= 0: rotor inertia, viscous, Coulomb friction, per joint and
+#: of a coupled motor (:class:`~baseparams.ident.drives.MotorCoupling`)
+NONNEGATIVE_KINDS = ("Ia", "Fv", "Fc", "Iam", "Fvm", "Fcm")
+#: every drive parameter kind: the non-negative ones and the offset (free)
+DRIVE_KINDS = NONNEGATIVE_KINDS + ("Fo",)
 #: a prior body is replaced when its smallest eigenvalue is below this fraction of its largest
 PRIOR_PD_RTOL = 1e-9
 #: floor of a replaced prior body's eigenvalues, relative to max(its largest, the robot's median)
@@ -183,8 +187,9 @@ def physical_fit(R11, r12, G, robot, drive_kinds: Sequence[str] = (), *, prior=N
         The model (``n`` bodies); its :attr:`~baseparams.model.robot.Robot.N0` is the default
         prior and its names label the notes.
     drive_kinds : sequence of str, length ``nd``
-        Kind of each drive parameter, in ``{'Ia', 'Fv', 'Fc', 'Fo'}``: ``Ia``, ``Fv``, ``Fc``
-        are constrained ``>= 0``, ``Fo`` is free.
+        Kind of each drive parameter, in :data:`DRIVE_KINDS`: those of
+        :data:`NONNEGATIVE_KINDS` (``Ia``, ``Fv``, ``Fc`` and a coupled motor's ``Iam``, ``Fvm``,
+        ``Fcm``) are constrained ``>= 0``, ``Fo`` is free.
     prior : array_like, shape ``(n, 4, 4)`` or ``(10 n,)``, optional
         Prior pseudo-inertias (world frame at q = 0) or the ``paper`` vector; default
         ``robot.N0`` (the model file's inertias). A body whose prior is not positive definite
@@ -370,7 +375,7 @@ def _build(cp, A, r, s, n0, kinds, bounds, w, d0, min_eig):
         cons.append(v - floor >> 0)
     if w > 0:
         obj = obj + w * cp.sum([-cp.log_det(v) + cp.trace(v) - 4.0 for v in nts])
-    signed = [k for k, kind in enumerate(kinds) if kind != "Fo"]
+    signed = [k for k, kind in enumerate(kinds) if kind in NONNEGATIVE_KINDS]
     if signed:
         cons.append(delta[signed] >= 0)
     if d0 is not None and nd and w > 0:

@@ -138,3 +138,44 @@ def test_coupling_errors_are_one_line():
     with pytest.raises(BaseparamsError, match=r"non-zero"):
         MotorCoupling.parse("m6:joint5=1,joint6=0")
     assert MotorCoupling.parse(" m6: joint5=1, joint6=-2.5") == MotorCoupling("m6", ("joint5", "joint6"), (1.0, -2.5))
+
+
+@pytest.mark.parametrize("frame", ["world", "body"])
+def test_wrench_forces_do_the_wrench_power(frame, rng):
+    """``Q . dq`` equals the wrench's power on the body's twist (force . v + moment . omega)."""
+    from baseparams.kinematics.tree import forward_kinematics, wrench_forces
+
+    robot = baseparams.load("go2")
+    q, dq = rng.uniform(-0.5, 0.5, (2, 20, robot.dof))
+    body = robot.n - 1
+    w = rng.normal(size=(20, 6))
+    Q = wrench_forces(robot, q, body, w, frame=frame)
+    st = forward_kinematics(robot, q, dq)
+    f, m = w[:, :3], w[:, 3:]
+    if frame == "body":
+        pose = st.g[:, body] @ robot.M0[body]
+        f = np.einsum("sij,sj->si", pose[:, :3, :3], f)
+        m = np.einsum("sij,sj->si", pose[:, :3, :3], m) + np.cross(pose[:, :3, 3], f)
+    power = np.sum(f * st.V[:, body, 3:], axis=1) + np.sum(m * st.V[:, body, :3], axis=1)
+    assert np.allclose(np.sum(Q * dq, axis=1), power, rtol=1e-10, atol=1e-10)
+    assert np.all(Q[:, ~robot.support[:, body]] == 0)
+
+
+def test_floating_base_with_measured_contact_wrenches(rng):
+    """Go2, all rows (base wrench + joints): feet pushed by measured wrenches; moving them to the
+    measured side, ``tau + sum J^T W = Y pi``, recovers the true parameters exactly."""
+    from baseparams.kinematics.tree import wrench_forces
+
+    robot = baseparams.load("go2")
+    model = ident_model(baseparams.analyze(robot, rows="all"), rotor=False, friction=())
+    t, q, dq, ddq = fourier_trajectory(robot.dof, 10.0, 100.0, rng, amplitude=0.4)
+    feet = [robot.names.index(n) for n in robot.names if n.endswith("calf")] or [robot.n - 1]
+    wrenches = {b: rng.normal(scale=20.0, size=(len(t), 6)) for b in feet}
+    contact = sum(wrench_forces(robot, q, b, w, frame="body") for b, w in wrenches.items())
+    tau = baseparams.regressor(robot, q, dq, ddq) @ robot.parameters("paper") - contact  # what is measured
+    f = fit(model, accumulate(model, q, dq, ddq, tau + contact))
+    true = model.theta(robot.parameters("paper"))
+    assert np.abs(f.theta - true).max() <= 1e-8 * np.abs(true).max()
+    # ignoring the contacts is visibly wrong
+    g = fit(model, accumulate(model, q, dq, ddq, tau))
+    assert np.abs(g.theta - true).max() > 1e-3 * np.abs(true).max()

@@ -463,3 +463,53 @@ def _re_reference_compound(xs: np.ndarray, q0: np.ndarray) -> np.ndarray:
         new[kk] = adjoint(inverse_transform(later), xs[kk])
         later = screw_exp(xs[kk], np.array(q0[kk])) @ later
     return new
+
+
+def wrench_forces(robot: Robot, q, body: int, wrench, frame: str = "world") -> np.ndarray:
+    """Generalized forces of an external wrench on one body: ``J_body^T W`` (virtual power).
+
+    A measured contact force or force/torque sensor reading on a link enters the identification
+    as ``tau + J^T W = Y pi`` (the wrench moved to the measured side).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates).
+    q : array_like, shape ``(S, dof)``
+        Positions.
+    body : int
+        The body the wrench acts on.
+    wrench : array_like, shape ``(S, 6)`` or ``(6,)``
+        ``(force, moment)`` [N, N m] applied to the body: in the world frame with the moment about
+        the world origin (``frame="world"``), or in the body's own frame with the moment about
+        its origin (``frame="body"``; e.g. a force/torque sensor's reading).
+    frame : {"world", "body"}
+        The frame of ``wrench``.
+
+    Returns
+    -------
+    ndarray, shape ``(S, dof)``
+        ``Q_j = L_j . (m, f)`` for every coordinate ``j`` moving the body (its line
+        ``L_j = (omega, v)``, eq. "jacobian line"), zero for the others: ``Q . dq`` is the
+        wrench's power on the body's twist.
+
+    Raises
+    ------
+    BaseparamsError
+        A wrong shape, an unknown frame, or a body index out of range.
+    """
+    q = as_states(robot.dof, q)[0]
+    w = np.broadcast_to(np.asarray(wrench, dtype=float), (q.shape[0], 6)) if np.ndim(wrench) == 1 else \
+        np.asarray(wrench, dtype=float)
+    if w.shape != (q.shape[0], 6) or not 0 <= body < robot.n or frame not in ("world", "body"):
+        raise BaseparamsError(f"wrench_forces: need a wrench (S, 6) = ({q.shape[0]}, 6) on a body 0..{robot.n - 1} "
+                              f"in the 'world' or 'body' frame; got {w.shape}, body {body}, frame {frame!r}")
+    state = forward_kinematics(robot, q)
+    f, m = w[:, :3], w[:, 3:]
+    if frame == "body":  # to world: rotate, and move the moment to the world origin
+        pose = state.g[:, body] @ robot.M0[body]
+        f = np.einsum("sij,sj->si", pose[:, :3, :3], f)
+        m = np.einsum("sij,sj->si", pose[:, :3, :3], m) + np.cross(pose[:, :3, 3], f)
+    out = np.einsum("sjc,sc->sj", state.lines[..., :3], m) + np.einsum("sjc,sc->sj", state.lines[..., 3:], f)
+    out[:, ~robot.support[:, body]] = 0.0
+    return out

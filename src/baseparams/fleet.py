@@ -375,7 +375,7 @@ def synthetic_fleet_factors(model: IdentModel, theta: np.ndarray, chunks: int, s
     RowAccumulator
         The combined factors of ``chunks * samples`` samples.
     """
-    mfut = client.scatter(model, broadcast=True)
+    mfut = client.scatter(model, broadcast=True, hash=False)  # a fresh key: a previous run may still release its own
     level = client.map(synthetic_factors, [mfut] * chunks, [theta] * chunks, range(chunks), [samples] * chunks,
                        seed=seed, pure=False)
     while len(level) > 1:  # combine on the workers as results arrive, pairwise

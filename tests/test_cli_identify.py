@@ -102,3 +102,16 @@ def test_fleet_from_the_command_line(tmp_path, capsys):
     est = j["per_file"][str(out / "robot0000.npz")]
     assert np.allclose(est[:2], [t["value"] for t in truth[:2]], rtol=0.02)  # link1.ZZR, link2.XXR
     assert main(["identify", "puma560", str(out / "*.npz"), "--holdout", "2"]) == 2
+
+
+def test_analyze_sweep_over_model_files(capsys):
+    """``analyze 'GLOB'``: every file on Dask, the same result as one by one."""
+    pattern = str(SHARED / "urdfplus" / "*_bar.urdf")
+    assert main(["analyze", pattern, "--workers", "2", "--json"]) == 0
+    sweep = json.loads(capsys.readouterr().out)
+    assert [r["path"].rsplit("/", 1)[1] for r in sweep] == ["four_bar.urdf", "six_bar.urdf"]
+    for r in sweep:
+        assert main(["analyze", r["path"], "--json"]) == 0
+        one = json.loads(capsys.readouterr().out)
+        assert (one["nullity"], one["status"], one["base_parameters"]) == (r["nullity"], r["status"],
+                                                                           r["base_parameters"])

@@ -172,6 +172,8 @@ def cmd_analyze(args) -> int:
     """
     from .analysis import analyze, format_report
 
+    if any(ch in args.model for ch in "*?["):
+        return _analyze_sweep(args)
     try:
         robot = _robot(args)
     except NoMovingBodiesError as exc:
@@ -356,6 +358,27 @@ def _ident_args(s) -> None:
                    help="convention of the base parameters' names and values (default khalil)")
 
 
+def _analyze_sweep(args) -> int:
+    """``analyze 'models/*.urdf'``: every matching file on Dask, one line (or JSON object) each."""
+    from .fleet import analyze_fleet
+
+    files = _data_files(args.model)
+    results = analyze_fleet(files, scheduler=getattr(args, "scheduler", None), workers=getattr(args, "workers", None),
+                            floating=args.floating, convention=args.convention, rows=args.rows,
+                            progress=(lambda line: print(f"baseparams: {line}", file=sys.stderr)) if args.verbose
+                            else None)
+    if args.json:
+        _emit(args, json.dumps(results, indent=2))
+    else:
+        _emit(args, "\n".join(f"{r['path']}: error: {r['error']}" if "error" in r else
+                              f"{r['path']}: {r['status']}, nullity {r['nullity']}, {r['n_base']} base parameters"
+                              for r in results))
+    statuses = [Status(r["status"]) for r in results if "error" not in r]
+    if any("error" in r for r in results):
+        return EXIT_INPUT
+    return max((_STATUS_EXIT[s] for s in statuses), default=EXIT_OK)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``baseparams`` command.
 
@@ -376,7 +399,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     def model_args(s):
         s.add_argument("model", help="built-in robot name (see 'baseparams robots') or a robot file: "
-                                     "URDF / URDF+ (.urdf) or MJCF (.xml)")
+                                     "URDF / URDF+ (.urdf) or MJCF (.xml); for analyze, a glob pattern runs a "
+                                     "sweep over many files on Dask")
         s.add_argument("--floating", action="store_true",
                        help="attach the file's root link to the world by a floating (free) joint")
         s.add_argument("--strict-inertia", action="store_true",
@@ -404,6 +428,9 @@ def build_parser() -> argparse.ArgumentParser:
                    default=str(Convention.KHALIL), help="convention of the regrouped expressions (default khalil)")
     s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="MODEL a glob (a design sweep): a Dask scheduler (default: a local cluster)")
+    s.add_argument("--workers", type=int, metavar="N", help="MODEL a glob: local cluster size")
     s.set_defaults(func=cmd_analyze)
 
     s = sub.add_parser("regressor", help="compute the TP regressor on random samples")

@@ -382,3 +382,77 @@ def synthetic_fleet_factors(model: IdentModel, theta: np.ndarray, chunks: int, s
         level = [client.submit(combine_pair, level[k], level[k + 1], pure=False) if k + 1 < len(level) else level[k]
                  for k in range(0, len(level), 2)]
     return level[0].result()
+
+
+def analyze_file(path: str, floating: bool = False, convention: str = "khalil", rows: str = "all") -> dict:
+    """One model file analysed (the task of a design sweep).
+
+    Parameters
+    ----------
+    path : str
+        A robot file (URDF / URDF+ / MJCF) or a built-in name.
+    floating : bool
+        Attach the root link by a free joint.
+    convention : str
+        Convention of the regrouped expressions.
+    rows : {"all", "joints", "base"}
+        Measured rows.
+
+    Returns
+    -------
+    dict
+        :meth:`baseparams.analysis.Analysis.to_json` plus ``"path"``; a file that cannot be
+        analysed gives ``{"path", "error"}`` (one line) instead of failing the sweep.
+    """
+    import warnings
+
+    from .analysis import analyze
+    from .errors import BaseparamsError as _Err
+    from .loading import load_model
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            robot, _ = load_model(path, floating=floating, strict_inertia=False)
+        return {"path": str(path), **analyze(robot, convention=convention, rows=rows).to_json()}
+    except _Err as exc:
+        return {"path": str(path), "error": str(exc)}
+
+
+def analyze_fleet(paths, *, client=None, scheduler: str | None = None, workers: int | None = None,
+                  floating: bool = False, convention: str = "khalil", rows: str = "all", progress=None) -> list[dict]:
+    """Many model files analysed on Dask (a design sweep over geometric variants).
+
+    Parameters
+    ----------
+    paths : iterable of str
+        Robot files.
+    client, scheduler, workers
+        The cluster, as for :func:`identify_fleet`.
+    floating : bool
+        Attach each root link by a free joint.
+    convention : str
+        Convention of the regrouped expressions.
+    rows : {"all", "joints", "base"}
+        Measured rows.
+    progress : callable, optional
+        Called with one line per finished file.
+
+    Returns
+    -------
+    list of dict
+        One :func:`analyze_file` result per path, in order.
+    """
+    from distributed import as_completed
+
+    paths = [str(p) for p in paths]
+    with _client(client, scheduler, workers) as cl:
+        futures = cl.map(analyze_file, paths, floating=floating, convention=convention, rows=rows, pure=False)
+        done = {}
+        for k, fut in enumerate(as_completed(futures)):
+            res = fut.result()
+            done[fut.key] = res
+            if progress is not None:
+                what = res.get("error") or f"{res['status']}, {res['n_base']} base parameters"
+                progress(f"[{k + 1}/{len(futures)}] {res['path']}: {what}")
+    return [done[f.key] for f in futures]

@@ -395,7 +395,7 @@ def bench_scale(out: dict, quick: bool) -> None:
     theta = model.theta(robot.parameters("paper"), np.ones(model.drives.n_params))
     chunk = 10**5
     # chunked (Dask, 10 chunks) vs in memory (one accumulator over the same 10^6 samples)
-    whole = fit(model, _whole_synthetic(model, theta, 10, chunk), "ols").theta
+    whole = fit(model, synthetic_factors(model, theta, 0, 10 * chunk), "ols").theta  # one accumulator
     for workers in (1, 2):
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                            dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"})
@@ -424,14 +424,6 @@ def bench_scale(out: dict, quick: bool) -> None:
         finally:
             client.close()
             cluster.close()
-
-
-def _whole_synthetic(model, theta, chunks: int, chunk: int):
-    """The same synthetic samples as ``chunks`` chunks, accumulated in memory at once."""
-    from baseparams.fleet import synthetic_factors
-    from baseparams.ident.chunks import combine
-
-    return combine([synthetic_factors(model, theta, k, chunk) for k in range(chunks)])
 
 
 def bench_analyze_cli(out: dict, quick: bool) -> None:

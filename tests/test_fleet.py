@@ -77,3 +77,20 @@ def test_a_worker_killed_mid_run_loses_nothing(fleet):
     ref = fit(model, combine([file_factors(p, model)[0] for p in many]), "ols").theta
     assert np.abs(res.pooled.theta - ref).max() <= 1e-10 * np.abs(ref).max()
     assert sum(f["used"] for f in res.files) > 0 and len(res.files) == len(many)
+
+
+@pytest.mark.slow
+def test_a_million_samples_chunked_on_dask_equal_in_memory(client):
+    """10^6 synthetic Puma560 samples: 10 Dask chunks reduced by TSQR on the workers give the same
+    estimate as one accumulator over all samples in memory (to 1e-10 relative)."""
+    from baseparams.fleet import synthetic_fleet_factors
+
+    robot = baseparams.load("puma560")
+    model = ident_model(baseparams.analyze(robot), rotor=False)
+    theta = model.theta(robot.parameters("paper"), np.ones(model.drives.n_params))
+    chunked = fit(model, synthetic_fleet_factors(model, theta, 10, 10**5, client, seed=5), "ols").theta
+    from baseparams.fleet import synthetic_factors
+
+    whole = fit(model, synthetic_factors(model, theta, 0, 10**6, seed=5), "ols").theta
+    assert np.abs(chunked - whole).max() <= 1e-10 * np.abs(whole).max()
+    assert np.abs(whole - theta).max() <= 1e-2 * np.abs(theta).max()  # and it is the truth, to the noise

@@ -303,8 +303,9 @@ def synthetic_factors(model: IdentModel, theta: np.ndarray, chunk: int, samples:
     """Row factors of chunk ``chunk`` of a synthetic log generated inside the task (no disk).
 
     One long periodic Fourier trajectory (coefficients from ``seed``) is evaluated at the
-    chunk's samples, exact states, torques ``A theta`` plus Gaussian noise: the throughput of the
-    regressor and the factorisation alone, for benchmarks (a real log adds reading and filtering).
+    chunk's samples, exact states, torques ``A theta`` plus noise that is a function of the global
+    sample index (so any chunking gives the same data): the throughput of the regressor and the
+    factorisation alone, for benchmarks (a real log adds reading and filtering).
 
     Parameters
     ----------
@@ -319,7 +320,7 @@ def synthetic_factors(model: IdentModel, theta: np.ndarray, chunk: int, samples:
     seed : int
         Seed of the trajectory (shared by all chunks) and of the chunk's noise.
     noise : float
-        Torque noise [N m].
+        Torque noise standard deviation [N m] (uniform, deterministic per sample).
     rate : float
         Sampling rate [Hz].
     harmonics : int
@@ -348,8 +349,14 @@ def synthetic_factors(model: IdentModel, theta: np.ndarray, chunk: int, samples:
     dq, ddq = c @ a + s @ b, -s @ (a * w[:, None]) + c @ (b * w[:, None])
     with blas_threads():
         reg = model.regressor(q, dq, ddq)
-        tau = reg @ theta + np.random.default_rng([seed, chunk]).normal(scale=noise, size=reg.shape[:2])
+        tau = reg @ theta + noise * _sample_noise(chunk * samples + np.arange(samples), reg.shape[1], seed)
         return RowAccumulator(len(model.coords), model.n_params).add(reg, tau)
+
+
+def _sample_noise(index: np.ndarray, m: int, seed: int) -> np.ndarray:
+    """Unit-variance pseudo-random noise ``(S, m)``, a function of the global sample index only."""
+    x = np.sin(index[:, None] * 12.9898 + np.arange(m) * 78.233 + seed * 3.1) * 43758.5453
+    return np.sqrt(12.0) * (x - np.floor(x) - 0.5)
 
 
 def synthetic_fleet_factors(model: IdentModel, theta: np.ndarray, chunks: int, samples: int, client, seed: int = 0):

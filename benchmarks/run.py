@@ -387,7 +387,7 @@ def bench_scale(out: dict, quick: bool) -> None:
     import distributed
 
     import baseparams
-    from baseparams.fleet import synthetic_fleet_factors
+    from baseparams.fleet import synthetic_factors, synthetic_fleet_factors
     from baseparams.identify import fit, ident_model
 
     robot = baseparams.load("puma560")

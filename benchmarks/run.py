@@ -408,6 +408,10 @@ def bench_scale(out: dict, quick: bool) -> None:
                 out["scale_chunked_vs_inmemory_relerr"] = float(np.abs(fit(model, acc, "ols").theta - whole).max()
                                                                 / np.abs(whole).max())
             total = (10**6 if quick else (10**7 if workers == 1 else 10**8))
+            if workers == 1:
+                t0 = time.perf_counter()
+                synthetic_fleet_factors(model, theta, 1, chunk, client)
+                out["scale_chunk_seconds"] = time.perf_counter() - t0
             log(f"  scale: {total} samples on {workers} worker(s) ...")
             t0 = time.perf_counter()
             acc = synthetic_fleet_factors(model, theta, total // chunk, chunk, client)

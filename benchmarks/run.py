@@ -394,8 +394,7 @@ def bench_scale(out: dict, quick: bool) -> None:
     model = ident_model(baseparams.analyze(robot), rotor=False)
     theta = model.theta(robot.parameters("paper"), np.ones(model.drives.n_params))
     chunk = 10**5
-    # chunked (Dask, 10 chunks) vs in memory (one accumulator over the same 10^6 samples)
-    whole = fit(model, synthetic_factors(model, theta, 0, 10 * chunk), "ols").theta  # one accumulator
+    whole = None  # in memory: one accumulator over 10^6 samples, on the 1-worker cluster (not in this process)
     for workers in (1, 2):
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                            dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"})
@@ -403,6 +402,8 @@ def bench_scale(out: dict, quick: bool) -> None:
         try:
             client.run(lambda: None)
             synthetic_fleet_factors(model, theta, 2 * workers, chunk, client)  # warm the workers (numba cache)
+            if whole is None:
+                whole = fit(model, client.submit(synthetic_factors, model, theta, 0, 10 * chunk).result(), "ols").theta
             if workers == 2:
                 acc = synthetic_fleet_factors(model, theta, 10, chunk, client)
                 out["scale_chunked_vs_inmemory_relerr"] = float(np.abs(fit(model, acc, "ols").theta - whole).max()
@@ -421,7 +422,9 @@ def bench_scale(out: dict, quick: bool) -> None:
             if workers == 2:
                 rss = client.run(lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
                 driver = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-                out["scale_peak_mb"] = (sum(rss.values()) + driver) / 1024.0
+                out["scale_peak_mb"] = (sum(rss.values()) + driver) / 1024.0  # fresh workers: this run's peak
+                out["scale_worker_peak_mb"] = max(rss.values()) / 1024.0
+                out["scale_driver_peak_mb"] = driver / 1024.0
                 out["scale_samples"] = total
                 out["scale_seconds"] = dt
                 out["scale_theta_rel_error"] = float(np.abs(est - theta).max() / np.abs(theta).max())

@@ -307,7 +307,8 @@ def cmd_simulate(args) -> int:
     """``baseparams simulate MODEL OUT``: a synthetic joint log with known parameters and noise.
 
     The excitation is a random finite Fourier series per joint (``--duration``, ``--rate``,
-    ``--amplitude``, ``--seed``); the torques are the model's own inertias plus drive terms
+    ``--amplitude``, ``--seed``), or the trajectory of ``--trajectory FILE`` (``baseparams excite
+    --out``: ``t, q_, dq_, ddq_`` columns); the torques are the model's own inertias plus drive terms
     (rotor inertia: the model's armature, else drawn; friction drawn), plus Gaussian noise
     (``--noise``). ``OUT`` (``.csv`` or ``.npz``, the default layout) and ``OUT.truth.json``:
     the true model parameters under their names, to compare an identification with.
@@ -338,9 +339,14 @@ def cmd_simulate(args) -> int:
                                seed=args.seed, friction=_friction(args.friction))
         print(f"{args.out}: {len(paths)} logs, one robot each (true parameters beside each log)")
         return EXIT_OK
+    trajectory = None
+    if args.trajectory:
+        from .excite import read_trajectory
+
+        trajectory = read_trajectory(args.trajectory, robot)
     log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=args.amplitude,
                               noise=args.noise, seed=args.seed, rotor=args.rotor, friction=_friction(args.friction),
-                              convention=args.convention)
+                              convention=args.convention, trajectory=trajectory)
     write_log(args.out, log)
     truth_path = Path(str(args.out) + ".truth.json")
     truth_path.write_text(json.dumps(truth, indent=2) + "\n")
@@ -385,8 +391,8 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Subcommands ``robots``, ``analyze``, ``regressor``, ``identify`` and ``simulate``; each
-        sets ``func`` to its ``cmd_*`` function.
+        Subcommands ``robots``, ``analyze``, ``regressor``, ``identify``, ``simulate`` and
+        ``excite``; each sets ``func`` to its ``cmd_*`` function.
     """
     p = argparse.ArgumentParser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "
@@ -438,6 +444,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_regressor)
     _identify_parser(sub, model_args)
     _simulate_parser(sub, model_args)
+    _excite_parser(sub, model_args)
     return p
 
 
@@ -489,8 +496,87 @@ def _simulate_parser(sub, model_args) -> None:
     s.add_argument("--noise", type=float, default=0.0, help="torque noise standard deviation (default 0)")
     s.add_argument("--robots", type=int, metavar="N",
                    help="a fleet: N logs in the folder OUT, one robot each with its own inertias (10 %% spread)")
+    s.add_argument("--trajectory", metavar="FILE", help="simulate this trajectory (t, q_, dq_, ddq_ columns: "
+                                                        "'baseparams excite --out') instead of a random one")
     _ident_args(s)
     s.set_defaults(func=cmd_simulate)
+
+
+def cmd_excite(args) -> int:
+    """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excite`).
+
+    Progress lines go to stderr; the summary (or ``--json``) to stdout or ``--output``; the
+    trajectory to ``--out`` (CSV ``t, q_<joint>, dq_<joint>, ddq_<joint>``, what ``baseparams
+    simulate --trajectory`` and a controller read) and a plot to ``--plot``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line: the model options and ``harmonics``, ``period`` or
+        ``base_frequency``, ``rate``, ``criterion``, ``drives``, ``rotor``, ``acceleration``,
+        ``torque``, ``starts``, ``grid``, ``out``, ``plot``, ``output``.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad input: the model (no actuated coordinate, a singular reference), infeasible limits,
+        options, unwritable outputs.
+    """
+    from .excite import design_excitation
+
+    try:
+        robot = _robot(args)
+    except NoMovingBodiesError as exc:
+        raise BaseparamsError(f"{exc}: no actuated coordinate to excite") from None
+    f = 1.0 / args.period if args.period else (args.base_frequency or 0.1)
+    if args.period is not None and not args.period > 0:
+        raise BaseparamsError(f"--period must be > 0 seconds, got {args.period}")
+    acc = [float(x) for x in args.acceleration.split(",")] if args.acceleration else None
+    result = design_excitation(robot, harmonics=args.harmonics, base_frequency=f, rate=args.rate,
+                               criterion=args.criterion, drives=args.drives, rotor=args.rotor,
+                               acceleration=None if acc is None else (acc[0] if len(acc) == 1 else acc),
+                               torque=args.torque, starts=args.starts, seed=args.seed, grid=args.grid,
+                               progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
+    if args.out:
+        result.to_csv(args.out)
+        print(f"baseparams: trajectory written to {args.out}", file=sys.stderr)
+    if args.plot:
+        from .report.plots import trajectory_plot
+
+        trajectory_plot(result, args.plot)
+        print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
+    _emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
+    return EXIT_OK
+
+
+def _excite_parser(sub, model_args) -> None:
+    """The ``excite`` subcommand's arguments."""
+    s = sub.add_parser("excite", help="design an excitation trajectory (Fourier series within the joint limits)")
+    model_args(s)
+    s.add_argument("--harmonics", type=int, default=5, help="harmonics per joint (default 5)")
+    per = s.add_mutually_exclusive_group()
+    per.add_argument("--period", type=float, metavar="SECONDS", help="period of the trajectory (default 10 s)")
+    per.add_argument("--base-frequency", type=float, metavar="HZ", help="base frequency (1 / period)")
+    s.add_argument("--rate", type=float, default=1000.0, help="the controller's sampling rate in Hz (default 1000)")
+    s.add_argument("--criterion", choices=("cond", "logdet"), default="cond",
+                   help="minimise the condition number of the column-scaled regressor (default), or maximise "
+                        "log det of the information matrix (D-optimal: smaller standard deviations under noise)")
+    s.add_argument("--drives", action="store_true", help="include the friction columns (viscous, Coulomb, offset)")
+    s.add_argument("--rotor", action="store_true", help="with --drives: the rotor inertia columns too")
+    s.add_argument("--acceleration", metavar="A[,A...]",
+                   help="acceleration limit(s) in rad/s^2 (one for all joints, or one per designed joint)")
+    s.add_argument("--torque", action="store_true", help="keep the model's own torques within the effort limits")
+    s.add_argument("--starts", type=int, default=4, help="random starts of the optimisation (default 4)")
+    s.add_argument("--grid", type=int, default=200, help="samples per period while optimising (default 200)")
+    s.add_argument("--out", metavar="FILE", help="write the trajectory (CSV: t, q_, dq_, ddq_ per joint)")
+    s.add_argument("--plot", metavar="FILE", help="plot q, dq, ddq per joint against the limits (PNG/SVG)")
+    s.add_argument("--output", metavar="FILE", help="write the summary to FILE")
+    s.set_defaults(func=cmd_excite)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -80,13 +80,16 @@ class IdentModel:
         r = self.robot
         return len(r.actuated) if r.has_loops else r.dof
 
-    def regressor(self, q, dq, ddq) -> np.ndarray:
+    def regressor(self, q, dq, ddq, closed=None) -> np.ndarray:
         """The model regressor ``A`` of the measured rows.
 
         Parameters
         ----------
         q, dq, ddq : array_like, shape ``(S, state_columns)``
             States (a tree's coordinates; a loop robot's actuated coordinates).
+        closed : ClosedStates, optional
+            A loop robot's states already closed: :func:`~baseparams.kinematics.loops.close_loops`
+            of these ``q, dq, ddq`` with every sample kept (not closed again).
 
         Returns
         -------
@@ -96,7 +99,10 @@ class IdentModel:
         from .analysis import checked_states
         from .regressor.tp import closed_projected_regressor, projected_regressor
 
-        q, dq, ddq, cs = checked_states(self.robot, q, dq, ddq)
+        if closed is None:
+            q, dq, ddq, cs = checked_states(self.robot, q, dq, ddq)
+        else:
+            q, dq, ddq, cs = np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq), closed
         p_map = self._column_map()
         if cs is not None:
             out = closed_projected_regressor(self.robot, cs, P=p_map)
@@ -839,7 +845,7 @@ def format_identification(result: Identification) -> str:
 
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float = 0.5,
                  noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
-                 convention: str = "khalil"):
+                 convention: str = "khalil", trajectory=None):
     """A synthetic joint log of a fixed-base robot, with its true model parameters.
 
     Parameters
@@ -860,6 +866,10 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         Friction terms (drawn: ``Fv`` in 0.05-0.5, ``Fc`` in 0.1-1, ``Fo`` in -0.2-0.2).
     convention : str
         Convention of the true base parameters written out.
+    trajectory : tuple of ndarray, optional
+        ``(t (S,), q, dq, ddq (S, state_columns))``: the motion to simulate (e.g. a designed
+        excitation, :func:`baseparams.excite.read_trajectory`) instead of a random Fourier series
+        (``duration``, ``rate`` and ``amplitude`` are then ignored).
 
     Returns
     -------
@@ -881,7 +891,10 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
     rng = np.random.default_rng(seed)
     model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction))
-    t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
+    if trajectory is None:
+        t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
+    else:
+        t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
     delta = _draw_drives(model, rng)
     sel = np.arange(len(model.coords))
     tau = (regressor_of(robot, q, dq, ddq) @ robot.parameters("paper")

@@ -279,9 +279,39 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
     robot = replace(robot, armature=np.array(w.armature))
     if couplings:
         robot = replace(robot, couplings=tuple(couplings))
+    robot = _with_limits(mj, model, robot, w.dof_map)
     if robot.has_loops:  # MJCF does not say which coordinates are independent: prefer actuated joints
         robot = choose_independent(robot, _preferred_coordinates(mj, model, robot, w.dof_map))
     return robot
+
+
+def _with_limits(mj, model, robot: Robot, dof_map: dict[int, int]) -> Robot:
+    """The robot with :attr:`Robot.limits` of its hinge and slide joints.
+
+    Positions: ``range`` of limited joints, relative to ``qpos0`` (our q = 0); efforts: the smallest
+    of the joint's ``actuatorfrcrange`` and the force ranges times the gear of the force-limited
+    actuators with a joint transmission on it; velocities: NaN (MJCF has none). Nothing known:
+    ``limits`` stays None.
+    """
+    out = np.full((robot.dof, 4), np.nan)
+    hinge, slide = int(mj.mjtJoint.mjJNT_HINGE), int(mj.mjtJoint.mjJNT_SLIDE)
+    coord = {}
+    for j in range(model.njnt):
+        d = int(model.jnt_dofadr[j])
+        if int(model.jnt_type[j]) in (hinge, slide) and d in dof_map:
+            coord[j] = k = dof_map[d]
+            if model.jnt_limited[j]:
+                out[k, :2] = np.asarray(model.jnt_range[j], dtype=float) - model.qpos0[model.jnt_qposadr[j]]
+            if getattr(model, "jnt_actfrclimited", np.zeros(model.njnt))[j]:
+                out[k, 3] = float(np.abs(model.jnt_actfrcrange[j]).max())
+    joint_trn = (int(mj.mjtTrn.mjTRN_JOINT), int(mj.mjtTrn.mjTRN_JOINTINPARENT))
+    for a in range(model.nu):
+        j = int(model.actuator_trnid[a, 0])
+        if int(model.actuator_trntype[a]) in joint_trn and j in coord and model.actuator_forcelimited[a]:
+            eff = float(np.abs(model.actuator_forcerange[a]).max() * abs(model.actuator_gear[a, 0]))
+            out[coord[j], 3] = np.fmin(out[coord[j], 3], eff)
+    out[:, 3] = np.where(out[:, 3] > 0, out[:, 3], np.nan)
+    return replace(robot, limits=out) if np.isfinite(out).any() else robot
 
 
 def _gravity(mj, model, path: Path, gravity) -> np.ndarray:

@@ -195,7 +195,7 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         raise NoMovingBodiesError(f"{path}: {exc}") from None
     if couplings:
         robot = _with_couplings(robot, couplings, path)
-    return robot
+    return _with_limits(robot, ix, path)
 
 
 def _index_links(root: ET.Element, path: Path) -> dict[str, ET.Element]:
@@ -375,6 +375,36 @@ def _joint_limits(jt: ET.Element, t: str, what: str) -> list[tuple[float, float]
     lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
     hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]
     return [(lo, hi)]
+
+
+def _with_limits(robot: Robot, ix: _Index, path: Path) -> Robot:
+    """The robot with :attr:`Robot.limits` from the ``<limit>`` of its revolute and prismatic joints.
+
+    ``lower``/``upper`` (not for continuous joints), ``velocity``, ``effort``; a missing attribute, a
+    zero velocity or effort (a placeholder in many files) and any coordinate of another joint type
+    are NaN (unknown), and so are position limits with lower > upper (with a warning). No joint with a
+    ``<limit>``: ``limits`` stays None.
+    """
+    from dataclasses import replace
+
+    out = np.full((robot.dof, 4), np.nan)
+    found = False
+    for i, (jname, k) in enumerate(zip(robot.joint_names, robot.q_index)):
+        jt = ix.joints.get(jname)
+        lim = None if jt is None or robot.jtype[i] not in ("R", "P") else jt.find("limit")
+        if lim is None:
+            continue
+        found = True
+        what = f"{path}: <joint name={jname!r}> <limit"
+        keys = ("velocity", "effort") if jt.get("type") == "continuous" else ("lower", "upper", "velocity", "effort")
+        for key in keys:
+            v = float(_floats(lim.get(key), 1, f"{what} {key}>", (np.nan,))[0])
+            out[k, ("lower", "upper", "velocity", "effort").index(key)] = np.nan if key in keys[-2:] and v == 0 else v
+        if out[k, 0] > out[k, 1]:
+            warnings.warn(f"{what}>: lower {out[k, 0]} > upper {out[k, 1]}; position limits ignored", URDFWarning,
+                          stacklevel=3)
+            out[k, :2] = np.nan
+    return replace(robot, limits=out) if found else robot
 
 
 def _pred_succ(elem: ET.Element, what: str, tag: str, path: Path) -> tuple[ET.Element, ET.Element]:

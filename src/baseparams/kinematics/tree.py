@@ -423,7 +423,8 @@ def re_reference(robot: Robot, q0: np.ndarray) -> Robot:
     -------
     Robot
         The robot with ``M0`` (world frame), the U and C joints' axes, the loop joints' frames
-        (both copies, each carried by its own body) and the couplings' offsets moved to ``q0``.
+        (both copies, each carried by its own body), the couplings' offsets and the position
+        limits (``lower - q0``, ``upper - q0``) moved to ``q0``.
 
     Raises
     ------
@@ -452,7 +453,9 @@ def re_reference(robot: Robot, q0: np.ndarray) -> Robot:
         loops.append(replace(lj, M=m, M_child=None if np.abs(mc - m).max() <= 1e-12 else mc))
     couplings = tuple(replace(c, offset=c.offset + sum(r * q0[k] for k, r in c.terms()) - q0[c.succ])
                       for c in robot.couplings)
-    return replace(robot, M0=g @ robot.M0, axes=tuple(axes), loops=tuple(loops), couplings=couplings)
+    limits = None if robot.limits is None else robot.limits - np.c_[q0, q0, np.zeros((len(q0), 2))]
+    return replace(robot, M0=g @ robot.M0, axes=tuple(axes), loops=tuple(loops), couplings=couplings,
+                   limits=limits)
 
 
 def _re_reference_compound(xs: np.ndarray, q0: np.ndarray) -> np.ndarray:

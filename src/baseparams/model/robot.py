@@ -25,6 +25,13 @@ C    k     compound: ``exp(xi_1 q_1) ... exp(xi_k q_k)`` with ``axes (k, 6)`` un
 
 ``armature (dof,)``: rotor inertia per coordinate (MJCF ``armature``), a prior for
 identification; the link base-parameter analysis does not use it.
+
+``limits (dof, 4)``: per coordinate ``[lower, upper, velocity, effort]`` (rad or m, rad/s or m/s,
+N m or N), NaN where the file does not say (``None``: nothing known). URDF ``<limit>`` of
+revolute and prismatic joints (continuous joints: no position limits), MJCF ``range`` of limited
+joints and actuator force ranges. Position limits are in the robot's coordinates: they shift with
+the reference (:func:`~baseparams.kinematics.tree.re_reference`: ``lower - q0, upper - q0``). The
+analysis does not use them; the excitation designer (:mod:`baseparams.excite`) does.
 """
 
 from __future__ import annotations
@@ -266,12 +273,16 @@ class Robot:
         Linear couplings of coordinates.
     armature : array_like, shape ``(dof,)``, optional
         Rotor inertia per coordinate (default zeros; not used by the analysis).
+    limits : array_like, shape ``(dof, 4)``, optional
+        Per coordinate ``[lower, upper, velocity, effort]`` (rad or m; rad/s or m/s; N m or N),
+        NaN where unknown (module doc); ``None`` (default): all unknown. ``lower <= upper`` where
+        both are known; velocity and effort limits are non-negative.
 
     Raises
     ------
     ModelError
         Any field invalid (shapes, names, joint types, parent order, frames, axes, inertias,
-        loops, couplings, ``independent``, ``q_box``, ``armature``).
+        loops, couplings, ``independent``, ``q_box``, ``armature``, ``limits``).
     """
 
     name: str
@@ -288,6 +299,7 @@ class Robot:
     q_box: np.ndarray | None = None
     couplings: tuple[Coupling, ...] = ()
     armature: np.ndarray | None = None
+    limits: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         """Validate every field and store the arrays normalised.
@@ -306,6 +318,7 @@ class Robot:
         self._check_independent(what, dof)
         self._check_couplings(what, dof)
         self._check_q_box(what, dof)
+        self._check_limits(what, dof)
         object.__setattr__(self, "parent", parent)
         object.__setattr__(self, "M0", m0)
         object.__setattr__(self, "N_body", nb)
@@ -401,6 +414,21 @@ class Robot:
             if box.shape != (na, 2) or not np.all(box[:, 0] < box[:, 1]):
                 raise ModelError(f"{what}: q_box must be ({na}, 2) with low < high, got {box.shape}")
             object.__setattr__(self, "q_box", box)
+
+    def _check_limits(self, what: str, dof: int) -> None:
+        """``limits``: ``(dof, 4)`` numbers or NaN, lower <= upper, rates and efforts >= 0."""
+        if self.limits is None:
+            return
+        lim = np.array(self.limits, dtype=float)
+        if lim.shape != (dof, 4):
+            raise ModelError(f"{what}: limits must have shape ({dof}, 4) (lower, upper, velocity, effort per "
+                             f"coordinate), got {lim.shape}")
+        with np.errstate(invalid="ignore"):
+            bad = np.flatnonzero((lim[:, 0] > lim[:, 1]) | np.any(lim[:, 2:] < 0, axis=1))
+        if bad.size:
+            raise ModelError(f"{what}: limits of coordinate {int(bad[0])} {lim[bad[0]].tolist()}: need lower <= upper "
+                             f"and non-negative velocity and effort (NaN: unknown)")
+        object.__setattr__(self, "limits", lim)
 
     # ---------------------------------------------------------------- derived data
     @property
@@ -558,7 +586,8 @@ class Robot:
         """The same robot seen from another world frame: ``M0 -> t M0``, gravity rotated.
 
         Body-frame inertias and joint axes (in joint frames) are unchanged, so every physical
-        quantity is the same. Loop joints' frames ``M`` move with the world.
+        quantity is the same. Loop joints' frames ``M`` move with the world. The coordinates do
+        not change, nor do :attr:`limits`.
 
         Parameters
         ----------

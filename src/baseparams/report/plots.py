@@ -1,10 +1,74 @@
-"""Plots of an identification: measured vs predicted torques per joint (matplotlib)."""
+"""Plots: an identification's measured vs predicted torques, an excitation trajectory (matplotlib)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from ..errors import BaseparamsError
+
+
+def _pyplot():
+    """The pyplot module on the Agg backend, or a one-line error naming the extra."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise BaseparamsError("--plot needs matplotlib: pip install 'baseparams[plot]'") from None
+    return plt
+
+
+def trajectory_plot(excitation, path) -> Path:
+    """An excitation trajectory: position, velocity and acceleration per joint, with the limits.
+
+    Parameters
+    ----------
+    excitation : baseparams.excite.Excitation
+        The design.
+    path : str or Path
+        Output file; the format from its suffix (``.png``, ``.svg``, ``.pdf``).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    BaseparamsError
+        matplotlib missing (names the extra), or an unwritable path.
+    """
+    plt = _pyplot()
+    e = excitation
+    fig, axes = plt.subplots(len(e.joints), 3, figsize=(12, 1.6 * len(e.joints) + 0.8), sharex=True, squeeze=False)
+    for j, name in enumerate(e.joints):
+        lo, hi, v, a, _ = e.limits[j]
+        for col, (y, bounds, label) in enumerate(((e.q[:, j], (lo, hi), "q"), (e.dq[:, j], (-v, v), "dq"),
+                                                 (e.ddq[:, j], (-a, a), "ddq"))):
+            ax = axes[j, col]
+            ax.plot(e.t, y, lw=0.8, color="C0")
+            for b in bounds:
+                if b == b:  # not NaN: a limit
+                    ax.axhline(b, lw=0.6, ls="--", color="C3")
+            ax.set_ylabel(f"{label} {name}", fontsize=7)
+    for col in range(3):
+        axes[-1, col].set_xlabel("t [s]")
+    fig.suptitle(f"{e.robot}: {e.harmonics} harmonics, period {e.period:.4g} s, {e.criterion} {e.value:.4g} "
+                 f"(condition number {e.condition_number:.4g}); dashed: limits", fontsize=9)
+    fig.tight_layout()
+    return _save(plt, fig, Path(path))
+
+
+def _save(plt, fig, path: Path) -> Path:
+    """Save and close the figure; an unwritable path is one line."""
+    try:
+        fig.savefig(path)
+    except OSError as exc:
+        raise BaseparamsError(f"--plot {path}: cannot write ({exc.strerror or exc})") from None
+    finally:
+        plt.close(fig)
+    return path
 
 
 def torque_plot(result, path) -> Path:

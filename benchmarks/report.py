@@ -138,6 +138,13 @@ estimate on 10^6 samples: {g('scale_chunked_vs_inmemory_relerr', '{:.1e}')} rela
 ~1 ms per task (~100 000 samples/ms across the cluster) and the log2 N-deep combine tree
 dominate: on paper ~100 workers give ~10^7 samples/s.
 
+Excitation design (5 harmonics, 4 seeded starts, condition-number criterion, 1 kHz):
+Puma560 (+-1 rad) {g('excite_puma560_s', '{:.1f}')} s, cond {g('excite_puma560_cond', '{:.3g}')} (a random Fourier trajectory within
+the same limits: {g('excite_puma560_random_cond', '{:.3g}')}); Panda (manufacturer's limits, 0.075 Hz) {g('excite_panda_s', '{:.1f}')} s,
+cond {g('excite_panda_cond', '{:.3g}')} (random {g('excite_panda_random_cond', '{:.3g}')}; the recorded trajectory: 15.6 with friction columns,
+`tests/test_excite.py`); pkm-2rru-1rrs {g('excite_pkm_2rru_1rrs_s', '{:.1f}')} s, cond {g('excite_pkm_2rru_1rrs_cond', '{:.3g}')}
+(random {g('excite_pkm_2rru_1rrs_random_cond', '{:.3g}')}).
+
 ### 2. DRNG vs the numerical method (100 samples)
 "DRNG" is the paper's three principles (as timed in the paper); "extended" adds the rules of
 section 6 (the product's default).
@@ -214,6 +221,7 @@ cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-bo
 | base regressor + streaming QR: 10^6 Puma560 samples <= 5 s, memory independent of S | {g('base_streaming_per_1e6_s', '{:.2f}')} s, {g('base_streaming_peak_mb_1e5', '{:.1f}')} MB | met |
 | `analyze` end to end: Puma560 <= 0.25 s, pkm-2rru-1rrs <= 0.5 s, talos_full_v2 <= 0.6 s | {g('analyze_cli_puma560_s', '{:.2f}')} s, {g('analyze_cli_pkm-2rru-1rrs_s', '{:.2f}')} s, {g('analyze_cli_talos_full_v2_s', '{:.2f}')} s | Puma560 and the PKM met; talos see below |
 | 10^8 samples on this machine, peak memory <= 2 GB | {g('scale_samples', '{:.3g}')} samples, {g('scale_peak_mb', '{:.0f}')} MB | {scale_status} |
+| excitation design under a minute (Puma560, Panda, pkm-2rru-1rrs) | {g('excite_puma560_s', '{:.0f}')} s, {g('excite_panda_s', '{:.0f}')} s, {g('excite_pkm_2rru_1rrs_s', '{:.0f}')} s | {'met' if max(d.get('excite_puma560_s', 99), d.get('excite_panda_s', 99), d.get('excite_pkm_2rru_1rrs_s', 99)) < 60 else 'missed'} |
 | chunked = in-memory (1e-10) | {g('scale_chunked_vs_inmemory_relerr', '{:.1e}')} | met |
 | DRNG >= 100x faster than the numerical method on talos_full_v2 | {g('talos_full_v2_drng_vs_numerical', '{:.0f}')}x | met |
 | DRNG >= 100x faster than the numerical method, Puma560 | {g('drng_speedup_puma560', '{:.1f}')}x | **missed** |

@@ -20,6 +20,7 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``identify``      ``identify`` on 10^6 simulated Puma560 samples end to end; the physical solve
                     on the Panda and on a 32-body humanoid.
 * ``scale``         Dask: 10^8 synthetic Puma560 samples, throughput with 1 and 2 workers, peak memory.
+* ``excite``        excitation design time and condition number (Puma560, Panda, pkm-2rru-1rrs).
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
@@ -433,6 +434,28 @@ def bench_scale(out: dict, quick: bool) -> None:
             cluster.close()
 
 
+def bench_excite(out: dict, quick: bool) -> None:
+    """Excitation design (5 harmonics, 4 starts, cond criterion): time and achieved condition
+    number for Puma560 (+-1 rad), the Panda (its limits, 0.075 Hz) and pkm-2rru-1rrs; the Panda's
+    recorded trajectory's condition number by the same code."""
+    import baseparams
+    from baseparams.excite import design_excitation, random_excitation
+
+    panda = Path(__file__).resolve().parents[2] / "shared" / "ident" / "panda_gaz2019" / "panda_mdh_gaz2019.urdf"
+    cases = [("puma560", "puma560", 0.1), ("pkm_2rru_1rrs", "pkm-2rru-1rrs", 0.1)]
+    if panda.is_file():
+        cases.insert(1, ("panda", str(panda), 0.075))
+    starts = 1 if quick else 4
+    for key, model, f in cases:
+        robot = baseparams.load(model)
+        log(f"  excite {key} ({starts} starts) ...")
+        t0 = time.perf_counter()
+        ex = design_excitation(robot, base_frequency=f, starts=starts, seed=0)
+        out[f"excite_{key}_s"] = time.perf_counter() - t0
+        out[f"excite_{key}_cond"] = ex.condition_number
+        out[f"excite_{key}_random_cond"] = random_excitation(robot, base_frequency=f, seed=0).condition_number
+
+
 def bench_analyze_cli(out: dict, quick: bool) -> None:
     """``baseparams analyze`` end to end in a fresh process (``python -m baseparams``; imports,
     loading, DRNG, certification, regrouping, report), median of fresh runs."""
@@ -657,6 +680,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "analyze_cli": bench_analyze_cli,
     "identify": bench_identify,
     "scale": bench_scale,
+    "excite": bench_excite,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
     "loops": bench_loops,

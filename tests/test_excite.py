@@ -311,3 +311,25 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys):
     assert main(["excite", str(tmp_path / "empty.urdf")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no actuated coordinate" in err[0]
+
+
+def test_keepout_keeps_a_link_above_the_floor():
+    """A floor plane for the Panda's last link: the free design dips lower; with the keep-out every
+    sample at the controller's rate stays above it, and the criterion stays good."""
+    from baseparams.kinematics.tree import forward_kinematics
+
+    robot = baseparams.load(str(URDF))
+    link = robot.names[-1]
+
+    def lowest(ex):
+        return float((forward_kinematics(robot, ex.q).g[:, -1] @ robot.M0[-1])[:, 2, 3].min())
+
+    free = design_excitation(robot, base_frequency=PANDA_F, starts=1, seed=0)
+    floor = lowest(free) + 0.2
+    ex = design_excitation(robot, base_frequency=PANDA_F, starts=1, seed=0, keepout=(link, floor))
+    assert lowest(ex) >= floor - 1e-9 and ex.condition_number < 10
+    assert any("keep-out" in n for n in ex.notes)
+    with pytest.raises(BaseparamsError, match="already below the keep-out height"):
+        design_excitation(robot, starts=1, keepout=(link, 5.0))
+    with pytest.raises(BaseparamsError, match="no link 'nope'"):
+        design_excitation(robot, starts=1, keepout=("nope", 0.0))

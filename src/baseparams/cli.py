@@ -502,6 +502,17 @@ def _simulate_parser(sub, model_args) -> None:
     s.set_defaults(func=cmd_simulate)
 
 
+def _keepout(text: str | None):
+    """``--keepout LINK:Z`` as ``(link, z)``, or None."""
+    if not text:
+        return None
+    link, sep, z = text.rpartition(":")
+    try:
+        return (link, float(z)) if sep and link else float("x")
+    except ValueError:
+        raise BaseparamsError(f"--keepout expects LINK:Z (e.g. panda_link7:0.3), got {text!r}") from None
+
+
 def cmd_excite(args) -> int:
     """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excite`).
 
@@ -541,6 +552,7 @@ def cmd_excite(args) -> int:
                                criterion=args.criterion, drives=args.drives, rotor=args.rotor,
                                acceleration=None if acc is None else (acc[0] if len(acc) == 1 else acc),
                                torque=args.torque, starts=args.starts, seed=args.seed, grid=args.grid,
+                               keepout=_keepout(args.keepout),
                                progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
     if args.out:
         result.to_csv(args.out)
@@ -571,6 +583,8 @@ def _excite_parser(sub, model_args) -> None:
     s.add_argument("--acceleration", metavar="A[,A...]",
                    help="acceleration limit(s) in rad/s^2 (one for all joints, or one per designed joint)")
     s.add_argument("--torque", action="store_true", help="keep the model's own torques within the effort limits")
+    s.add_argument("--keepout", metavar="LINK:Z", help="keep LINK's frame origin at or above the height Z [m, world z] "
+                                                        "(a floor or a table)")
     s.add_argument("--starts", type=int, default=4, help="random starts of the optimisation (default 4)")
     s.add_argument("--grid", type=int, default=200, help="samples per period while optimising (default 200)")
     s.add_argument("--out", metavar="FILE", help="write the trajectory (CSV: t, q_, dq_, ddq_ per joint)")

@@ -432,6 +432,7 @@ class _Problem:
     limits: np.ndarray  # (m, 5)
     theta: np.ndarray | None  # (p,) prior model parameters (torque limits), or None
     cond_max: float | None  # loops: the bound on cond(J_p), else None
+    keepout: tuple[int, float] | None = None  # (body, lowest height of its origin [m]), or None
 
     @property
     def m(self) -> int:
@@ -519,7 +520,16 @@ def _values(prob: _Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> d
     a = prob.model.regressor(q, dq, ddq, closed=cs)
     value, gamma = criterion_terms(a, prob.criterion)
     return {"a": a, "value": value, "gamma": gamma, "tau": None if prob.theta is None else a @ prob.theta,
-            "logc": logc}
+            "logc": logc, "z": None if prob.keepout is None else _height(prob, q)}
+
+
+def _height(prob: _Problem, q: np.ndarray) -> np.ndarray:
+    """Height ``(S,)`` [m] of the keep-out body's frame origin (world z) at tree states ``q (S, dof)``."""
+    from .kinematics.tree import forward_kinematics
+
+    body = prob.keepout[0]
+    robot = prob.model.robot
+    return (forward_kinematics(robot, q).g[:, body] @ robot.M0[body])[:, 2, 3]
 
 
 def _gradients(prob: _Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, val: dict) -> dict | None:
@@ -531,8 +541,10 @@ def _gradients(prob: _Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, v
     from .kinematics.loops import close_loops
 
     g, m = q.shape
-    out = {"dtau": None, "dlogc": None}
+    out = {"dtau": None, "dlogc": None, "dz": None}
     states, cs = _perturbed(q, dq, ddq), None
+    if prob.keepout is not None:  # the first m blocks move q
+        out["dz"] = (_height(prob, states[0][: g * m]).reshape(m, g) - val["z"]) / STEPS[0]
     if prob.cond_max is not None:  # the first m blocks move q: cond(J_p) changes with them only
         cs = close_loops(prob.model.robot, *states, cond_max=np.inf)
         if cs.kept != 3 * g * m:
@@ -593,7 +605,7 @@ class _Evaluator:
 def _n_nonlinear(prob: _Problem) -> int:
     """Number of nonlinear constraint rows: torques (two per grid sample and limited joint), loops."""
     n = 0 if prob.theta is None else 2 * prob.t.size * int(np.isfinite(prob.limits[:, 4]).sum())
-    return n + (prob.t.size if prob.cond_max is not None else 0)
+    return n + (prob.t.size if prob.cond_max is not None else 0) + (prob.t.size if prob.keepout is not None else 0)
 
 
 def _nonlinear_values(prob: _Problem, val: dict) -> np.ndarray:
@@ -606,6 +618,8 @@ def _nonlinear_values(prob: _Problem, val: dict) -> np.ndarray:
         out += [(MARGIN - frac).reshape(-1), (MARGIN + frac).reshape(-1)]
     if val["logc"] is not None:
         out.append(np.log(LOOP_MARGIN * prob.cond_max) - val["logc"])
+    if val["z"] is not None:  # keep-out: height above the floor [m]
+        out.append(val["z"] - prob.keepout[1])
     return np.concatenate(out)
 
 
@@ -622,6 +636,8 @@ def _nonlinear_jacobian(prob: _Problem, d: dict) -> np.ndarray:
     if d["dlogc"] is not None:
         jl = -d["dlogc"].T[:, :, None] * prob.bases[0][:, None, :]  # (G, m, k)
         jac.append(jl.reshape(g, m * k))
+    if d["dz"] is not None:
+        jac.append((d["dz"].T[:, :, None] * prob.bases[0][:, None, :]).reshape(g, m * k))
     return np.vstack(jac)
 
 
@@ -684,13 +700,13 @@ def _start(prob: _Problem, rng: np.random.Generator, fill: float = 0.5) -> np.nd
     """
     lim = prob.limits
     lo, hi = _shrunk_range(lim)
-    if prob.cond_max is not None:
+    if prob.cond_max is not None or prob.keepout is not None:  # q = 0 is known feasible
         off = np.clip(0.0, lo, hi)
     else:
         off = 0.5 * (lo + hi) + rng.uniform(-0.15, 0.15, prob.m) * (hi - lo)
     x = np.column_stack([off, rng.normal(size=(prob.m, prob.k - 1))])
     x = _scaled(x, prob.bases, np.column_stack([lo, hi, MARGIN * lim[:, 2:4]]), fill, grow=True).reshape(-1)
-    if prob.theta is None and prob.cond_max is None:
+    if prob.theta is None and prob.cond_max is None and prob.keepout is None:
         return x
     ev = _Evaluator(prob, (np.zeros((0, x.size)), np.zeros(0)))
     for _ in range(40):
@@ -828,7 +844,7 @@ def loop_bound(robot: Robot) -> float:
 def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: float = 0.1, rate: float = 1000.0,
                       criterion: str = "cond", drives: bool = False, limits=None, acceleration=None,
                       torque: bool = False, starts: int = 4, seed: int = 0, grid: int = 200, max_iter: int = 150,
-                      rotor: bool = False, progress=None) -> Excitation:
+                      rotor: bool = False, progress=None, keepout: tuple[str, float] | None = None) -> Excitation:
     """Design a periodic excitation trajectory that identifies every base parameter (module doc).
 
     Parameters
@@ -868,6 +884,9 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
         With ``drives``: rotor inertia columns too.
     progress : callable, optional
         Called with one line of text per start (and every 25 iterations).
+    keepout : tuple of (str, float), optional
+        ``(link, z_min)``: the named link's frame origin stays at or above the height ``z_min``
+        [m, world z] at every sample (a floor plane or a table; trees only).
 
     Returns
     -------
@@ -887,11 +906,37 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
     t0 = time.perf_counter()
     model = _model(robot_or_analysis, drives, rotor)
     prob, notes = _problem(model, criterion, harmonics, base_frequency, rate, grid, limits, acceleration, torque)
+    if keepout is not None:
+        prob, note = _with_keepout(prob, keepout)
+        notes.append(note)
     with blas_threads(), _kernel_threads():
         x, value = _multistart(prob, starts, seed, max_iter, progress or (lambda msg: None))
         notes.append(f"best of {starts} starts (seed {seed}): {_shown(prob, value)} on the {grid}-sample design "
                      f"grid; designed in {time.perf_counter() - t0:.1f} s")
         return _finish(prob, x, rate, notes)
+
+
+def _with_keepout(prob: _Problem, keepout) -> tuple[_Problem, str]:
+    """The problem with a keep-out height for a named link, checked at the start (q = offsets)."""
+    from dataclasses import replace
+
+    robot = prob.model.robot
+    try:
+        link, z_min = keepout
+        z_min = float(z_min)
+    except (TypeError, ValueError):
+        raise BaseparamsError(f"keepout must be (link name, lowest height in m), got {keepout!r}") from None
+    if robot.has_loops:
+        raise BaseparamsError(f"robot {robot.name!r}: a Cartesian keep-out is supported for trees only")
+    if link not in robot.names:
+        raise BaseparamsError(f"robot {robot.name!r}: no link {link!r} for the keep-out; links: "
+                              f"{', '.join(robot.names)}")
+    prob = replace(prob, keepout=(robot.names.index(link), z_min))
+    z0 = float(_height(prob, np.zeros((1, robot.dof)))[0])
+    if z0 < z_min:
+        raise BaseparamsError(f"robot {robot.name!r}: link {link!r} is at z = {z0:.4g} m at q = 0, already below the "
+                              f"keep-out height {z_min:.4g} m")
+    return prob, f"keep-out: link {link!r} stays at z >= {z_min:.4g} m (world) at every sample"
 
 
 def random_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: float = 0.1, rate: float = 1000.0,
@@ -1068,6 +1113,10 @@ def _violation(prob: _Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -
         if cs.kept < len(q):
             return (f"{len(q) - cs.kept} samples outside the workspace, off the assembly mode or with "
                     f"cond(J_p) > {prob.cond_max:.3g}")
+    if prob.keepout is not None:
+        low = _height(prob, q) < prob.keepout[1] - 1e-9
+        if low.any():
+            return f"{int(low.sum())} samples with {robot.names[prob.keepout[0]]!r} below the keep-out height"
     if prob.theta is not None:
         tau = np.concatenate([prob.model.regressor(q[k:k + 4000], dq[k:k + 4000], ddq[k:k + 4000]) @ prob.theta
                               for k in range(0, len(q), 4000)])

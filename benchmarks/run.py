@@ -38,6 +38,7 @@ noisy 2-vCPU machine, and no faster when the machine was quiet.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
@@ -383,8 +384,6 @@ def bench_scale(out: dict, quick: bool) -> None:
     """Fleet scale on a local Dask cluster: 10^8 synthetic Puma560 samples (10^6 with --quick)
     generated inside the tasks in chunks of 10^5 and reduced by TSQR; throughput with 1 and 2
     workers, peak memory (workers' max RSS + the driver's), chunked vs in-memory estimate."""
-    import resource
-
     import distributed
 
     import baseparams
@@ -415,23 +414,55 @@ def bench_scale(out: dict, quick: bool) -> None:
                 synthetic_fleet_factors(model, theta, 1, chunk, client)
                 out["scale_chunk_seconds"] = time.perf_counter() - t0
             log(f"  scale: {total} samples on {workers} worker(s) ...")
-            t0 = time.perf_counter()
-            acc = synthetic_fleet_factors(model, theta, total // chunk, chunk, client)
-            dt = time.perf_counter() - t0
+            pids = list(client.run(os.getpid).values())
+            with _RssPeak(pids + [os.getpid()]) as peak:
+                t0 = time.perf_counter()
+                acc = synthetic_fleet_factors(model, theta, total // chunk, chunk, client)
+                dt = time.perf_counter() - t0
             est = fit(model, acc, "ols").theta
             out[f"scale_samples_per_s_{workers}worker{'s' if workers > 1 else ''}"] = total / dt
             if workers == 2:
-                rss = client.run(lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
-                driver = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-                out["scale_peak_mb"] = (sum(rss.values()) + driver) / 1024.0  # fresh workers: this run's peak
-                out["scale_worker_peak_mb"] = max(rss.values()) / 1024.0
-                out["scale_driver_peak_mb"] = driver / 1024.0
+                out["scale_peak_mb"] = peak.total_mb  # workers + driver, sampled every 0.2 s during the run
+                out["scale_worker_peak_mb"] = peak.largest_mb
                 out["scale_samples"] = total
                 out["scale_seconds"] = dt
                 out["scale_theta_rel_error"] = float(np.abs(est - theta).max() / np.abs(theta).max())
         finally:
             client.close()
             cluster.close()
+
+
+class _RssPeak:
+    """The peak of the summed resident memory of some processes, sampled in a thread (psutil)."""
+
+    def __init__(self, pids: list[int], period: float = 0.2):
+        import threading
+
+        import psutil
+
+        self.procs = [psutil.Process(p) for p in pids]
+        self.period, self.total_mb, self.largest_mb = period, 0.0, 0.0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            rss = []
+            for p in self.procs:
+                with contextlib.suppress(Exception):  # a worker restarted: not counted
+                    rss.append(p.memory_info().rss / 2**20)
+            self.total_mb = max(self.total_mb, sum(rss))
+            self.largest_mb = max(self.largest_mb, max(rss, default=0.0))
+            self._stop.wait(self.period)
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+        return False
 
 
 def bench_excite(out: dict, quick: bool) -> None:

@@ -130,7 +130,7 @@ Fleet scale (Dask, local cluster, one single-threaded worker process per core; s
 samples generated inside the tasks in chunks of 10^5, reduced by TSQR on the workers, OLS):
 **{g('scale_samples', '{:.3g}')} samples in {g('scale_seconds', '{:.0f}')} s** with 2 workers; throughput
 {g('scale_samples_per_s_1worker', '{:.3g}')} samples/s with 1 worker (measured on 10^7), {g('scale_samples_per_s_2workers', '{:.3g}')}
-samples/s with 2; peak memory (workers' max RSS + the driver's) **{g('scale_peak_mb', '{:.0f}')} MB**; chunked vs in-memory
+samples/s with 2; peak resident memory (workers + driver, sampled every 0.2 s during the run) **{g('scale_peak_mb', '{:.0f}')} MB**; chunked vs in-memory
 estimate on 10^6 samples: {g('scale_chunked_vs_inmemory_relerr', '{:.1e}')} relative; estimate vs truth
 {g('scale_theta_rel_error', '{:.1e}')}. Beyond this machine: a chunk of 10^5 samples costs
 ~{g('scale_chunk_seconds', '{:.2f}')} s of one core and its factors (6 x 49^2 floats, ~0.1 MB) one combine step of

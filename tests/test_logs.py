@@ -434,3 +434,25 @@ def test_degrees_are_caught_after_the_conversion(tmp_path, rng):
     read_log(path, PUMA, columns={"joints": {"joint1": {"gear_ratio": 100}}}, allow_subset=True)
     msg = one_line_error(read_log, path, PUMA, allow_subset=True)
     assert re.search(r"\|q\| = [\d.]+ rad > 12.57 for revolute joint 'joint1': degrees given as radians\?", msg)
+
+
+def test_identify_end_to_end_from_a_ros2_bag(tmp_path, capsys):
+    """A simulated Puma560 log recorded as a ROS 2 bag (MCAP, JointState): `baseparams identify`
+    reads it and returns the true parameters within their standard deviations."""
+    import json
+
+    import baseparams
+    from baseparams.cli import main
+    from baseparams.identify import simulate_log
+
+    robot = baseparams.load("puma560")
+    log, truth = simulate_log(robot, duration=20.0, rate=200.0, noise=0.05, seed=7, friction=("viscous",))
+    bag = write_bag(tmp_path / "run1", log, storage="mcap")
+    assert main(["identify", "puma560", str(bag), "--friction", "viscous", "--method", "ols", "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["n_samples"]["read"] == log.n_samples
+    true = {p["name"]: p["value"] for p in truth["parameters"]}
+    z = [(b["value"] - true[b["name"]]) / b["std"] for b in j["base_parameters"]]
+    assert len(z) == 36 and np.sqrt(np.mean(np.square(z))) < 5
+    assert [d["Fv"] for d in j["drives"]] == pytest.approx([truth["drives"][f"Fv_joint{k}"] for k in range(1, 7)],
+                                                           rel=0.05)

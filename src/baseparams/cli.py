@@ -182,6 +182,10 @@ def cmd_analyze(args) -> int:
                      extended=not args.paper_only, rows=args.rows, convention=args.convention,
                      progress=sys.stderr if args.verbose else None)
     text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
+    if args.html:
+        from .report.html import analysis_html
+
+        _write_html(args.html, analysis_html(result))
     _emit(args, text)
     status = result.status
     if status in (Status.UNDECIDED, Status.FAILED):
@@ -242,8 +246,21 @@ def cmd_identify(args) -> int:
 
         torque_plot(result, args.plot)
         progress(f"plot written to {args.plot}")
+    if args.html:
+        from .report.html import identification_html
+
+        _write_html(args.html, identification_html(result))
     _emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
     return EXIT_OK
+
+
+def _write_html(path: str, page: str) -> None:
+    """``--html FILE``: write a self-contained report, or one line saying why not."""
+    try:
+        Path(path).write_text(page)
+    except OSError as exc:
+        raise BaseparamsError(f"--html {path}: cannot write ({exc.strerror or exc})") from None
+    print(f"baseparams: HTML report written to {path}", file=sys.stderr)
 
 
 def _data_files(pattern: str) -> list[str]:
@@ -434,6 +451,8 @@ def build_parser() -> argparse.ArgumentParser:
                    default=str(Convention.KHALIL), help="convention of the regrouped expressions (default khalil)")
     s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
+    s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: the robot in 3D, each body's "
+                                                  "parameters classed, the base parameters, the certification")
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="MODEL a glob (a design sweep): a Dask scheduler (default: a local cluster)")
     s.add_argument("--workers", type=int, metavar="N", help="MODEL a glob: local cluster size")
@@ -479,6 +498,7 @@ def _identify_parser(sub, model_args) -> None:
                    help="a Dask scheduler (default DASK_SCHEDULER_ADDRESS, else a local cluster for this run)")
     s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
+    s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
     s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
     s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")

@@ -175,18 +175,12 @@ class Excitation:
         BaseparamsError
             Another suffix, or a file that cannot be written.
         """
-        p = Path(path)
-        if p.suffix.lower() not in (".csv", ".tsv"):
-            raise BaseparamsError(f"{p}: write a trajectory as .csv or .tsv, not {p.suffix or 'no suffix'}")
-        delim = "\t" if p.suffix.lower() == ".tsv" else ","
-        header = ["t"] + [f"{k}_{j}" for k in ("q", "dq", "ddq") for j in self.joints]
-        try:
-            with open(p, "w", newline="") as fh:
-                fh.write(delim.join(header) + "\n")
-                np.savetxt(fh, np.column_stack([self.t, self.q, self.dq, self.ddq]), delimiter=delim, fmt="%.17g")
-        except OSError as exc:
-            raise BaseparamsError(f"{p}: cannot write ({exc.strerror or exc})") from None
-        return p
+        from .io.logs import write_table
+
+        cols = {"t": self.t}
+        for kind, arr in (("q", self.q), ("dq", self.dq), ("ddq", self.ddq)):
+            cols.update({f"{kind}_{j}": arr[:, k] for k, j in enumerate(self.joints)})
+        return write_table(path, cols, "a trajectory as .csv or .tsv")
 
     def to_json(self) -> dict:
         """The design as one JSON-able object (no sampled arrays: :meth:`to_csv` writes those).

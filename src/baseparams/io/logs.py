@@ -757,17 +757,46 @@ def write_log(path, log: JointLog) -> Path:
     """
     p = Path(path)
     cols = log_columns_of(log)
-    try:
-        if p.suffix.lower() == ".npz":
+    if p.suffix.lower() == ".npz":
+        try:
             np.savez(p, **cols)
-        elif p.suffix.lower() in (".csv", ".tsv"):
-            delim = "\t" if p.suffix.lower() == ".tsv" else ","
-            data = np.column_stack(list(cols.values()))
-            with open(p, "w", newline="") as fh:
-                fh.write(delim.join(cols) + "\n")
-                np.savetxt(fh, data, delimiter=delim, fmt="%.17g")
-        else:
-            raise DataError(f"{p}: write a log as .csv, .tsv or .npz, not {p.suffix or 'no suffix'}")
+        except OSError as exc:
+            raise DataError(f"{p}: cannot write ({exc.strerror or exc})") from None
+    else:
+        write_table(p, cols, "a log as .csv, .tsv or .npz")
+    return p
+
+
+def write_table(path, cols: dict[str, np.ndarray], what: str = "a table as .csv or .tsv") -> Path:
+    """Columns as a text table with a header row (every value as its shortest exact decimal).
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.csv`` (comma-separated) or ``.tsv`` (tab-separated).
+    cols : dict of str to ndarray, each shape ``(S,)``
+        The columns, in order.
+    what : str
+        How a wrong suffix is named in the error (``"a log as .csv, .tsv or .npz"``).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    DataError
+        Another suffix, or a file that cannot be written.
+    """
+    p = Path(path)
+    if p.suffix.lower() not in (".csv", ".tsv"):
+        raise DataError(f"{p}: write {what}, not {p.suffix or 'no suffix'}")
+    delim = "\t" if p.suffix.lower() == ".tsv" else ","
+    try:
+        with open(p, "w", newline="") as fh:
+            fh.write(delim.join(cols) + "\n")
+            np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=delim, fmt="%.17g")
     except OSError as exc:
         raise DataError(f"{p}: cannot write ({exc.strerror or exc})") from None
     return p

@@ -216,6 +216,17 @@ def _copy_block(out, smp, r, i, c, xs):
 
 
 @njit(cache=True, inline="always")
+def _unit(floating, q_index, dof):
+    """``(dof,)``: for a floating root's coordinates the index of their basis line ``e_c``, else -1."""
+    unit = np.full(dof, -1, dtype=np.int64)
+    for i in range(floating.shape[0]):
+        if floating[i]:
+            for c in range(6):
+                unit[q_index[i] + c] = c
+    return unit
+
+
+@njit(cache=True, inline="always")
 def _moves(n, dof, anc_ptr, anc):
     """Dense ``(dof, n)`` mask: coordinate ``j`` moves body ``i``."""
     moves = np.zeros((dof, n), dtype=np.bool_)
@@ -260,11 +271,7 @@ def tree(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m
     """TP regressor of a tree into ``out (S, dof, 10 n)`` (every entry right, zeros read before written)."""
     n, dof, s = parent.shape[0], screws.shape[0], q.shape[0]
     moves = _moves(n, dof, anc_ptr, anc)
-    unit = np.full(dof, -1, dtype=np.int64)  # floating coordinates: index of their basis line
-    for i in range(n):
-        if floating[i]:
-            for c in range(6):
-                unit[q_index[i] + c] = c
+    unit = _unit(floating, q_index, dof)
     nblocks = (s + _BLOCK - 1) // _BLOCK
     for blk in prange(nblocks):
         rot, pos, vel, acc, lines, xs, er, et, pts, pacc = _scratch(n, dof)
@@ -332,11 +339,7 @@ def tree_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, a
     """
     n, dof, s = parent.shape[0], screws.shape[0], q.shape[0]
     moves = _moves(n, dof, anc_ptr, anc)
-    unit = np.full(dof, -1, dtype=np.int64)
-    for i in range(n):
-        if floating[i]:
-            for c in range(6):
-                unit[q_index[i] + c] = c
+    unit = _unit(floating, q_index, dof)
     nblocks = (s + _BLOCK - 1) // _BLOCK
     for blk in prange(nblocks):
         rot, pos, vel, acc, lines, xs, er, et, pts, pacc = _scratch(n, dof)

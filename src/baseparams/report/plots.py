@@ -91,13 +91,7 @@ def torque_plot(result, path) -> Path:
     BaseparamsError
         matplotlib missing (names the extra), a result without series, or an unwritable path.
     """
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise BaseparamsError("--plot needs matplotlib: pip install 'baseparams[plot]'") from None
+    plt = _pyplot()
     if not result.series:
         raise BaseparamsError("this identification kept no torque series to plot")
     parts = [(k, v) for k, v in (("train", result.series["train"]), ("validation", result.series["validation"])) if v]
@@ -116,11 +110,4 @@ def torque_plot(result, path) -> Path:
     fig.suptitle(f"{j['model']}: {j['method']}, train RMS {j['train']['rms_total']:.3g}"
                  + (f", validation RMS {j['validation']['rms_total']:.3g}" if j["validation"] else ""), fontsize=9)
     fig.tight_layout()
-    path = Path(path)
-    try:
-        fig.savefig(path)
-    except OSError as exc:
-        raise BaseparamsError(f"--plot {path}: cannot write ({exc.strerror or exc})") from None
-    finally:
-        plt.close(fig)
-    return path
+    return _save(plt, fig, Path(path))

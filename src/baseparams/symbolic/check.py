@@ -1,0 +1,148 @@
+"""The symbolic result against the certified numerical analysis, and where it stops holding.
+
+:func:`check` substitutes random values for the symbols and compares with
+:func:`baseparams.analysis.analyze` of the same robot in numbers: the same count, ``K`` equal
+(to 1e-9 relative) where both chose the same dependent parameters, and in every case every
+regrouped combination orthogonal to the numerical nullspace. :func:`probe` visits the
+conditions (and each symbol at zero) and says what the numerical analysis finds there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..analysis import analyze
+from ..errors import BaseparamsError
+from .solve import SymbolicAnalysis, body_parameters, no_rule_error, random_point
+
+#: relative agreement required between the formulas at numbers and the numerical analysis
+RTOL = 1e-9
+
+
+def _conversion(sa: SymbolicAnalysis) -> sp.Matrix:
+    """``C (10 n, 10 n)``: convention parameters = ``C @`` paper parameters (block diagonal, symbolic)."""
+    n = sa.robot.n
+    c = sp.zeros(10 * n, 10 * n)
+    units = []
+    for k in range(10):  # paper unit parameter k as a symmetric 4x4 (hat order)
+        (a, b) = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2), (0, 3), (1, 3), (2, 3), (3, 3))[k]
+        m = sp.zeros(4, 4)
+        m[a, b] = m[b, a] = 1
+        units.append(m)
+    for i in range(n):
+        for k, m in enumerate(units):
+            c[10 * i:10 * i + 10, 10 * i + k] = sp.Matrix(body_parameters(sa.robot, i, m, sa.convention))
+    return c
+
+
+def _p_matrix(sa: SymbolicAnalysis, kmat: np.ndarray) -> np.ndarray:
+    p = np.zeros((sa.n_base, 10 * sa.robot.n))
+    p[np.arange(sa.n_base), sa.independent] = 1.0
+    p[:, sa.dependent] = kmat
+    return p
+
+
+def _floats(m: sp.Matrix) -> np.ndarray:
+    return np.array(m.evalf(17).tolist(), dtype=float).reshape(m.shape)
+
+
+def check(sa: SymbolicAnalysis, seeds=(101, 202)) -> list[dict]:
+    """Compare with the certified numerical analysis at random values; record in ``sa.checks``.
+
+    Parameters
+    ----------
+    sa : SymbolicAnalysis
+        The symbolic result (changed in place: ``checks``, and the conditions' effects).
+    seeds : sequence of int
+        One random rational point per seed.
+
+    Returns
+    -------
+    list of dict
+        Per point: ``values``, numeric ``n_base``, ``status``, ``same_dependent``, ``K_error``
+        (relative, where the dependent sets agree) and ``residual`` (``|P N| / |P| |N|``).
+
+    Raises
+    ------
+    BaseparamsError
+        The counts differ (the rules miss directions, or the model is degenerate at that point)
+        or the formulas are not orthogonal to the numerical nullspace.
+    """
+    conv = _conversion(sa)
+    for seed in seeds:
+        point = random_point(sa.robot, seed)
+        robot = sa.robot.to_robot(point)
+        num = analyze(robot, convention=sa.convention if sa.robot.convention != "standard DH" else "paper")
+        if num.nullity > sa.nullity:
+            raise no_rule_error(sa.robot, sa.nullity, num.nullity)
+        if num.nullity < sa.nullity or not num.certified:
+            raise BaseparamsError(f"{sa.robot.name}: the symbolic rules give {sa.nullity} nullspace directions, the "
+                                  f"numerical analysis {num.nullity} ({num.status}) at {point}")
+        kmat = _floats(sa.K.subs(point))
+        p = _p_matrix(sa, kmat)
+        n_conv = _floats(conv.subs(point)) @ num.basis
+        residual = float(np.linalg.norm(p @ n_conv) / (np.linalg.norm(p) * np.linalg.norm(n_conv)))
+        same = sorted(num.base.dependent) == list(sa.dependent) and num.convention == sa.convention
+        k_num = num.base.K[:, np.argsort(num.base.dependent)] if same else None
+        k_err = float(np.abs(k_num - kmat).max() / max(1.0, np.abs(kmat).max())) if same else None
+        if residual > RTOL or (k_err is not None and k_err > 1e-8):
+            raise BaseparamsError(f"{sa.robot.name}: the formulas disagree with the numerical analysis at {point} "
+                                  f"(residual {residual:.1e}, K error {k_err})")
+        sa.checks.append({"values": {s.name: str(v) for s, v in point.items()}, "n_base": num.n_base,
+                          "status": str(num.status), "same_dependent": same, "K_error": k_err,
+                          "residual": residual})
+    return sa.checks
+
+
+def _on_condition(sa: SymbolicAnalysis, polys: list, seed: int) -> dict | None:
+    """A random point where all ``polys`` vanish (solving the first for a symbol it has at degree 1)."""
+    point = random_point(sa.robot, seed)
+    first = sp.expand(polys[0])
+    for s in sorted(first.free_symbols, key=lambda x: x.name):
+        if sp.degree(first, s) == 1:
+            rest = {k: v for k, v in point.items() if k != s}
+            sol = sp.solve(first.subs(rest), s)
+            if sol:
+                point[s] = sol[0]
+                if all(sp.simplify(p.subs(point)) == 0 for p in polys):
+                    return point
+    return None
+
+
+def probe(sa: SymbolicAnalysis, seed: int = 7) -> list:
+    """What the certified numerical analysis finds on each condition, and with each symbol at zero.
+
+    Parameters
+    ----------
+    sa : SymbolicAnalysis
+        The symbolic result; symbols at zero not already among its conditions are added as
+        conditions when they change the count.
+    seed : int
+        Seed of the random points on the conditions.
+
+    Returns
+    -------
+    list of Condition
+        ``sa.conditions``, each with ``effect`` filled (e.g. ``"34 base parameters, not 36"``).
+    """
+    from .solve import Condition
+
+    have = {str(c.polynomials) for c in sa.conditions}
+    extra = [Condition([s], f"{s.name} = 0") for s in sa.robot.symbols if str([s]) not in have]
+    for c in sa.conditions + extra:
+        point = _on_condition(sa, c.polynomials, seed)
+        if point is None:
+            c.effect = "not probed (no rational point found on it)"
+            continue
+        try:
+            num = analyze(sa.robot.to_robot(point))
+        except BaseparamsError as e:
+            c.effect = f"the numerical analysis refuses that geometry ({e})"
+            continue
+        if num.n_base != sa.n_base:
+            c.effect = f"{num.n_base} base parameters there, not {sa.n_base}"
+        else:
+            c.effect = f"same count ({num.n_base})" + (", other formulas" if "pivot" in c.reason else "")
+    sa.conditions += [c for c in extra if "base parameters there" in c.effect]
+    return sa.conditions

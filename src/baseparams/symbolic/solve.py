@@ -1,0 +1,375 @@
+"""Exact regrouping over the rational functions of the symbols: base parameters as SymPy formulas.
+
+Given DRNG's columns on a symbolic geometry (:mod:`.columns`) in the parameters of a convention
+(``A (10 n, c)``, polynomial entries), the regrouping ``beta = pi_I + K pi_D`` is
+``K = -A_I A_D^-1`` on a basis of the columns (``A_D`` square). Which columns form a basis and
+which parameters are dependent is decided at random rational values of the symbols (exact
+arithmetic; a generic choice with probability 1, Schwartz-Zippel), in the numeric regrouping's
+order (last body first; within a body the convention's order: M, MZ, MY, MX, ZZ, ...), so the
+dependent parameters are Khalil's. ``K`` is then solved exactly, fraction-free, over the
+polynomials in the symbols. It is valid wherever ``det A_D != 0``: its factors are the conditions
+reported (:attr:`SymbolicAnalysis.conditions`), with the decisions the rules took.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+from dataclasses import dataclass, field
+
+import sympy as sp
+from sympy.polys.matrices import DomainMatrix
+
+from ..enums import Source
+from ..errors import BaseparamsError
+from ..model.inertia import SPECS, check_convention
+from .columns import SymColumn, symbolic_columns
+from .geometry import SymbolicRobot, transform
+
+
+def _inverse(f: sp.Matrix) -> sp.Matrix:
+    r = f[:3, :3].T
+    return transform(r, -r * f[:3, 3])
+
+
+def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention: str) -> list:
+    """Body ``i``'s ten parameters (``convention``'s order) of a pseudo-inertia given in the world at q = 0.
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    i : int
+        The body.
+    n_world : sympy.Matrix, shape ``(4, 4)``
+        A symmetric pseudo-inertia (or change of one), world frame at q = 0.
+    convention : str
+        ``paper`` (the pseudo-inertia's entries in the world frame) or a link-frame convention
+        (expressed in :attr:`SymbolicRobot.link_frames` ``[i]``, inertia about its origin).
+
+    Returns
+    -------
+    list of sympy.Expr, length 10
+        The parameters, expanded.
+    """
+    if convention == "paper":
+        nl = n_world
+    else:
+        fi = _inverse(robot.link_frames[i])
+        nl = fi * n_world * fi.T
+    s, h, m = nl[:3, :3], nl[:3, 3], nl[3, 3]
+    j = sp.eye(3) * s.trace() - s if convention != "paper" else s
+    vals = {"m": m, "hx": h[0], "hy": h[1], "hz": h[2]}
+    for a, b, key in ((0, 0, "xx"), (0, 1, "xy"), (0, 2, "xz"), (1, 1, "yy"), (1, 2, "yz"), (2, 2, "zz")):
+        vals["i" + key] = vals["s" + key] = j[a, b]
+    return [sp.expand(vals[f]) for f in SPECS[check_convention(convention)].fields]
+
+
+def parameter_symbols(robot: SymbolicRobot, convention: str) -> tuple[list, list]:
+    """Standard parameters as SymPy symbols, and the names of their base parameters when regrouped.
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    convention : str
+        The parameter convention (its SYMORO-style names: ``XX`` ... ``M``; the ``paper``
+        convention's ``XX`` is the world-frame second moment ``MXX``).
+
+    Returns
+    -------
+    symbols : list of sympy.Symbol, length ``10 n``
+        ``XX3`` for a body labelled ``3``, ``XX_crank`` for one labelled ``crank``.
+    regrouped : list of str, length ``10 n``
+        ``XXR3`` / ``XXR_crank``: the name of the base parameter a standard one becomes when
+        others are grouped into it.
+    """
+    spec = SPECS[check_convention(convention)]
+    names = [n if convention in ("khalil", "paper") else f for n, f in zip(spec.names, spec.fields)]
+    syms, regrouped = [], []
+    for lab in robot.labels:
+        sep = "" if lab.isdigit() else "_"
+        for n in names:
+            syms.append(sp.Symbol(f"{n}{sep}{lab}", real=True))
+            regrouped.append(f"{n}R{sep}{lab}")
+    return syms, regrouped
+
+
+def column_matrix(robot: SymbolicRobot, cols: list[SymColumn], convention: str) -> sp.Matrix:
+    """``A (10 n, c)``: the columns in ``convention``'s parameters (polynomial entries).
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    cols : list of SymColumn
+        The columns.
+    convention : str
+        The parameter convention.
+
+    Returns
+    -------
+    sympy.Matrix, shape ``(10 n, c)``
+        One column per :class:`SymColumn`.
+    """
+    a = sp.zeros(10 * robot.n, len(cols))
+    for k, c in enumerate(cols):
+        for i, blk in c.blocks.items():
+            a[10 * i:10 * i + 10, k] = sp.Matrix(body_parameters(robot, i, blk, convention))
+    return a
+
+
+def random_point(robot: SymbolicRobot, seed: int) -> dict:
+    """Random rational values of the symbols (integers over 97, in ``(0.1, 2)`` m).
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    seed : int
+        Seed.
+
+    Returns
+    -------
+    dict
+        ``{symbol: Rational}``.
+    """
+    rng = random.Random(seed)
+    return {s: sp.Rational(rng.randint(10, 190), 97) for s in robot.symbols}
+
+
+def _numeric(a: sp.Matrix, point: dict) -> DomainMatrix:
+    return DomainMatrix.from_Matrix(a.subs(point)).convert_to(sp.QQ)
+
+
+def _pivots(m: DomainMatrix) -> tuple:
+    return m.rref()[1]
+
+
+@dataclass
+class Condition:
+    """Where the generic result may change.
+
+    Parameters
+    ----------
+    polynomials : list of sympy.Expr
+        The result may change where all of these vanish.
+    reason : str
+        Where it comes from (a pivot of the elimination, a rule's decision, a symbol at zero).
+    effect : str
+        What the numerical, certified analysis finds there (filled by :func:`.check.probe`).
+    """
+
+    polynomials: list
+    reason: str
+    effect: str = ""
+
+    def __str__(self) -> str:
+        eq = " and ".join(f"{sp.sstr(sp.factor(p))} = 0" for p in self.polynomials)
+        return f"{eq}  ({self.reason}{': ' + self.effect if self.effect else ''})"
+
+
+@dataclass
+class SymbolicAnalysis:
+    """Base parameters of a symbolic robot as formulas, as returned by :func:`symbolic_analysis`.
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    convention : str
+        Parameter convention of :attr:`params` and the formulas.
+    params : list of sympy.Symbol
+        The ``10 n`` standard parameters (``XX1`` ... ``M6``).
+    independent, dependent : list of int
+        Indices into :attr:`params`: kept and eliminated parameters.
+    K : sympy.Matrix, shape ``(len(independent), len(dependent))``
+        ``beta = pi_I + K pi_D``, rational functions of the symbols.
+    base_names : list of str
+        One per base parameter (suffix ``R`` when others are grouped into it).
+    columns : list of SymColumn
+        DRNG's columns on the symbolic geometry (a spanning set).
+    basis : list of int
+        The columns used as a nullspace basis.
+    conditions : list of Condition
+        Where the result may change (pivots and decisions).
+    seconds : float
+        Wall time [s].
+    by_source : dict
+        Nullspace directions per principle or rule.
+    checks : list of dict
+        Comparisons with the numerical analysis (:func:`.check.check`).
+    """
+
+    robot: SymbolicRobot
+    convention: str
+    params: list
+    independent: list
+    dependent: list
+    K: sp.Matrix
+    base_names: list
+    columns: list
+    basis: list
+    conditions: list
+    seconds: float
+    by_source: dict
+    checks: list = field(default_factory=list)
+
+    @property
+    def nullity(self) -> int:
+        """Number of nullspace directions (generic)."""
+        return len(self.dependent)
+
+    @property
+    def n_base(self) -> int:
+        """Number of base parameters (generic)."""
+        return len(self.independent)
+
+    @property
+    def base(self) -> dict:
+        """``{name: sympy expression}`` of every base parameter, in parameter order."""
+        out = {}
+        for r, i in enumerate(self.independent):
+            out[self.base_names[r]] = self.params[i] + sum(
+                (self.K[r, c] * self.params[d] for c, d in enumerate(self.dependent) if self.K[r, c] != 0), sp.S.Zero)
+        return out
+
+    @property
+    def unidentifiable(self) -> list:
+        """Parameters that enter no base parameter (their effect on every measurement is zero)."""
+        return [self.params[d] for c, d in enumerate(self.dependent) if all(self.K[r, c] == 0 for r in range(self.K.rows))]
+
+    def expressions(self) -> list[dict]:
+        """Every base parameter as strings: ``[{"name", "expression"}]``.
+
+        Returns
+        -------
+        list of dict
+            E.g. ``{"name": "ZZR1", "expression": "ZZ1 + YY2 + ..."}``.
+        """
+        return [{"name": k, "expression": sp.sstr(v, order="none")} for k, v in self.base.items()]
+
+    def substitute(self, values: dict) -> sp.Matrix:
+        """``K`` at numbers for the symbols (exact where they are).
+
+        Parameters
+        ----------
+        values : dict
+            ``{symbol or name: number}``; missing symbols take the table's values.
+
+        Returns
+        -------
+        sympy.Matrix
+            ``K`` evaluated.
+        """
+        return self.K.subs(self.robot.complete_values(values))
+
+
+def _choose(a: sp.Matrix, robot: SymbolicRobot, convention: str, seed: int) -> tuple[list, list]:
+    """A basis of the columns and the dependent parameters, decided at a random rational point."""
+    num = _numeric(a, random_point(robot, seed))
+    basis = list(_pivots(num))
+    within = SPECS[check_convention(convention)].regroup_order
+    order = [10 * i + w for i in reversed(range(robot.n)) for w in within]
+    sub = num.extract(order, basis).transpose()  # rows: basis columns; columns: parameters in order
+    dep = [order[p] for p in _pivots(sub)]
+    return basis, dep
+
+
+def _solve(a: sp.Matrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, sp.Expr]:
+    """``K = -A_I A_D^-1`` exactly, and ``det A_D``."""
+    syms = sorted(a.free_symbols, key=lambda s: s.name)
+    ad, ai = a.extract(dep, basis), a.extract(ind, basis)
+    dom = sp.QQ[tuple(syms)] if syms else sp.QQ
+    adt = DomainMatrix.from_Matrix(ad.T).convert_to(dom)
+    ait = DomainMatrix.from_Matrix(ai.T).convert_to(dom)
+    if not len(dep):
+        return sp.zeros(len(ind), 0), sp.S.One
+    x, den = adt.solve_den(ait)  # A_D^T X = A_I^T den
+    k = (-x.to_Matrix().T / dom.to_sympy(den)).applyfunc(sp.cancel)
+    return k, sp.factor(dom.to_sympy(adt.det()))
+
+
+def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0,
+                      check: bool = True) -> SymbolicAnalysis:
+    """Base parameters of ``robot`` as formulas in its symbols (DRNG on the symbolic geometry).
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    convention : str, default "khalil"
+        Parameter convention of the formulas: ``khalil`` (link frames, Khalil & Dombre) or
+        ``paper`` (spatial pseudo-inertia entries at q = 0), or any of
+        :data:`~baseparams.model.inertia.CONVENTIONS`.
+    seed : int
+        Seed of the random rational point that decides the column basis and the dependent
+        parameters.
+    check : bool, default True
+        Compare with the certified numerical analysis at two random points and refuse a result
+        whose count differs (:func:`.check.check`); also completes the conditions' effects.
+
+    Returns
+    -------
+    SymbolicAnalysis
+        The formulas, the conditions under which they hold, the checks.
+
+    Raises
+    ------
+    BaseparamsError
+        The rules do not span the whole nullspace (the numerical analysis finds more directions),
+        or the formulas disagree with it.
+    """
+    t0 = time.perf_counter()
+    convention = str(check_convention(convention))
+    cols, dec = symbolic_columns(robot, random_point(robot, seed + 1))
+    a = column_matrix(robot, cols, convention)
+    basis, dep = _choose(a, robot, convention, seed)
+    ind = [i for i in range(10 * robot.n) if i not in set(dep)]
+    k, det = _solve(a, basis, dep, ind)
+    params, regrouped = parameter_symbols(robot, convention)
+    names = [regrouped[i] if any(e != 0 for e in k.row(r)) else params[i].name for r, i in enumerate(ind)]
+    conditions = [Condition(p, r) for p, r in dec.conditions]
+    for f, _ in sp.factor_list(det)[1] if det.free_symbols else []:
+        conditions.append(Condition([f], "a pivot of the elimination vanishes: the regrouping changes"))
+    by_source: dict = {}
+    chosen = [cols[b] for b in basis]
+    for s in Source:
+        if s.label not in by_source and any(c.source == s for c in chosen):
+            by_source[s.label] = sum(1 for c in chosen if c.source == s)
+    out = SymbolicAnalysis(robot, convention, params, ind, sorted(dep), _reorder(k, dep), names, cols, basis,
+                           conditions, 0.0, by_source)
+    if check:
+        from .check import check as run_check
+
+        run_check(out)
+    out.seconds = time.perf_counter() - t0
+    return out
+
+
+def _reorder(k: sp.Matrix, dep: list) -> sp.Matrix:
+    order = sorted(range(len(dep)), key=lambda c: dep[c])
+    return k.extract(list(range(k.rows)), order) if len(dep) else k
+
+
+def no_rule_error(robot: SymbolicRobot, found: int, nullity: int) -> BaseparamsError:
+    """The error for a nullspace the symbolic rules do not span.
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    found : int
+        Directions the rules give (generic rank).
+    nullity : int
+        Directions the certified numerical analysis finds.
+
+    Returns
+    -------
+    BaseparamsError
+        One line saying what is missing and what would help.
+    """
+    return BaseparamsError(
+        f"{robot.name}: the rules give {found} of the {nullity} nullspace directions the certified numerical "
+        f"analysis finds at random values of the symbols; the other {nullity - found} have no symbolic rule, so "
+        f"no formula is given (analyse numbers instead: 'baseparams analyze {robot.name}')")

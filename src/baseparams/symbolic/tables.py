@@ -1,0 +1,285 @@
+"""Denavit-Hartenberg tables with symbols: a small text format and the built-in examples.
+
+The format (one table per file, ``.dh``)::
+
+    # comments
+    name puma560-symbolic
+    description Puma560 arm in modified DH
+    convention modified            # or: standard
+    gravity 0 0 -9.81
+    values D3=0.4318 RL3=0.15005   # optional default numbers
+    j  ant  sigma  alpha   d   theta  r
+    1  0    0      0       0   0      0
+    2  1    0      -pi/2   0   0      0
+    3  2    0      0       D3  0      RL3
+
+``modified`` (Khalil & Dombre's table, Khalil-Kleinfinger): ``T(ant, j) = Rot(x, alpha) Trans(x, d)
+Rot(z, theta) Trans(z, r)``; the parameters of link ``j`` are in frame ``j`` (the joint
+frame). ``standard`` (Denavit-Hartenberg, Corke): columns ``j ant sigma theta d a alpha``,
+joint ``j`` moves about (along) ``z_{j-1}`` and ``T(j-1, j) = Rot(z, theta) Trans(z, d) Trans(x, a)
+Rot(x, alpha)``; the parameters of link ``j`` are in frame ``j`` (its distal frame). ``ant`` is
+the antecedent (0: the base; optional, default ``j - 1``), ``sigma`` 0 revolute (``q``
+adds to ``theta``), 1 prismatic (``q`` adds to ``r``, or ``d`` for standard DH). Lengths are
+numbers or names (SymPy symbols, real); angles are exact numbers (``pi/2``, ``-pi/2``, ``0``,
+``pi/3``...).
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+import sympy as sp
+from sympy.parsing.sympy_parser import parse_expr
+
+from ..errors import ModelError
+from .geometry import SymbolicBuilder, SymbolicRobot, exact, rot, trans
+
+#: the columns of each convention (``ant`` optional)
+COLUMNS = {"modified": ("j", "ant", "sigma", "alpha", "d", "theta", "r"),
+           "standard": ("j", "ant", "sigma", "theta", "d", "a", "alpha")}
+_ANGLES = {"modified": ("alpha", "theta"), "standard": ("alpha", "theta")}
+
+
+def _entry(text: str, where: str, angle: bool) -> sp.Expr:
+    try:
+        e = parse_expr(text, local_dict={"pi": sp.pi, "sqrt": sp.sqrt}, evaluate=True)
+    except Exception:  # noqa: BLE001 -- SymPy's parser raises many types; one clear line instead
+        raise ModelError(f"{where}: cannot read {text!r} (a number, a name or an expression like pi/2)") from None
+    e = sp.sympify(e, rational=True)
+    if e.free_symbols:
+        if angle:
+            raise ModelError(f"{where}: symbolic angles are not supported ({text!r}); give the angle as a "
+                             f"number such as pi/2")
+        e = e.subs({s: sp.Symbol(s.name, real=True) for s in e.free_symbols})
+    return e
+
+
+def mdh(alpha, d, theta, r) -> sp.Matrix:
+    """Modified DH transform ``Rot(x, alpha) Trans(x, d) Rot(z, theta) Trans(z, r)`` ``(4, 4)``.
+
+    Parameters
+    ----------
+    alpha, d, theta, r : sympy expression or number
+        Khalil & Dombre's link parameters (angles exact).
+
+    Returns
+    -------
+    sympy.Matrix, shape ``(4, 4)``
+        Frame ``j`` in frame ``ant(j)``.
+    """
+    return rot("x", alpha) * trans("x", d) * rot("z", theta) * trans("z", r)
+
+
+def sdh(theta, d, a, alpha) -> sp.Matrix:
+    """Standard DH transform ``Rot(z, theta) Trans(z, d) Trans(x, a) Rot(x, alpha)`` ``(4, 4)``.
+
+    Parameters
+    ----------
+    theta, d, a, alpha : sympy expression or number
+        Denavit-Hartenberg link parameters (angles exact).
+
+    Returns
+    -------
+    sympy.Matrix, shape ``(4, 4)``
+        Frame ``j`` in frame ``j - 1``.
+    """
+    return rot("z", theta) * trans("z", d) * trans("x", a) * rot("x", alpha)
+
+
+def from_dh(rows: list[dict], convention: str = "modified", name: str = "dh", gravity=(0, 0, -9.81),
+            values: dict | None = None, description: str = "") -> SymbolicRobot:
+    """A :class:`SymbolicRobot` from DH rows.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One per link, keys as :data:`COLUMNS` (``ant`` optional: ``j - 1``), SymPy entries or
+        numbers.
+    convention : {"modified", "standard"}
+        The table's convention (module docstring).
+    name : str
+        The robot's name.
+    gravity : array_like, shape ``(3,)``
+        Gravity in frame 0 [m/s^2].
+    values : dict, optional
+        Default numbers for the symbols.
+    description : str
+        One line.
+
+    Returns
+    -------
+    SymbolicRobot
+        Body ``j`` named ``link{j}``, labelled ``j`` (parameters ``XX{j}``...); the parameter
+        frame of link ``j`` is DH frame ``j``.
+    """
+    if convention not in COLUMNS:
+        raise ModelError(f"robot {name!r}: unknown DH convention {convention!r} (modified or standard)")
+    b = SymbolicBuilder(name, gravity=gravity, values=values, description=description)
+    b.convention = f"{convention} DH"
+    end = {0: sp.eye(4)}  # standard DH: each link's distal frame in its joint frame
+    for row in rows:
+        j, ant = int(row["j"]), int(row.get("ant", int(row["j"]) - 1))
+        sigma = int(row["sigma"])
+        joint = "R" if sigma == 0 else "P"
+        parent = None if ant == 0 else f"link{ant}"
+        if convention == "modified":
+            origin, frame = mdh(row["alpha"], row["d"], row["theta"], row["r"]), None
+        else:
+            origin = end[ant]  # joint j sits in frame ant (= j - 1), moving about its z
+            frame = rot("z", row["theta"]) * trans("z", row["d"]) * trans("x", row["a"]) * rot("x", row["alpha"])
+            end[j] = frame
+        if ant not in end and convention == "standard":
+            raise ModelError(f"robot {name!r}, row j={j}: antecedent {ant} comes later in the table")
+        b.add_link(f"link{j}", parent=parent, joint=joint, origin=origin, label=str(j), param_frame=frame)
+    return b.build()
+
+
+def _values(words: list[str], where: str) -> dict:
+    out = {}
+    for w in words:
+        key, eq, val = w.partition("=")
+        if not eq:
+            raise ModelError(f"{where}: expected NAME=NUMBER, got {w!r}")
+        try:
+            out[key] = exact(float(val))
+        except ValueError:
+            raise ModelError(f"{where}: {val!r} is not a number") from None
+    return out
+
+
+def read_table(path: str | Path, text: str | None = None) -> SymbolicRobot:
+    """Read a DH table file (module docstring for the format).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (also used in messages when ``text`` is given).
+    text : str, optional
+        The file's content (default: read ``path``).
+
+    Returns
+    -------
+    SymbolicRobot
+        The robot (:func:`from_dh`).
+
+    Raises
+    ------
+    ModelError
+        One line naming the file, line and problem.
+    """
+    path = Path(path)
+    if text is None:
+        try:
+            text = path.read_text()
+        except OSError as e:
+            raise ModelError(f"{path}: cannot read ({e.strerror})") from None
+    meta = {"name": path.stem, "convention": "modified", "gravity": (0, 0, -9.81), "values": {}, "description": ""}
+    header, rows = None, []
+    for no, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        where = f"{path}, line {no}"
+        if not line:
+            continue
+        key, _, rest = line.partition(" ")
+        words = rest.split()
+        if header is None and key in ("name", "description"):
+            meta[key] = rest.strip()
+        elif header is None and key == "convention":
+            meta["convention"] = rest.strip().replace("-dh", "").replace(" dh", "")
+            if meta["convention"] not in COLUMNS:
+                raise ModelError(f"{where}: convention must be 'modified' or 'standard', got {rest.strip()!r}")
+        elif header is None and key == "gravity":
+            if len(words) != 3:
+                raise ModelError(f"{where}: gravity needs 3 numbers")
+            meta["gravity"] = tuple(_entry(w, where, False) for w in words)
+        elif header is None and key == "values":
+            meta["values"] = _values(words, where)
+        elif header is None and key == "j":
+            header = [key] + words
+            need = [c for c in COLUMNS[meta["convention"]] if c != "ant"]
+            missing = [c for c in need if c not in header]
+            if missing or any(c not in COLUMNS[meta["convention"]] for c in header):
+                raise ModelError(f"{where}: {meta['convention']} DH columns are {' '.join(COLUMNS[meta['convention']])}"
+                                 f" ('ant' optional); got {' '.join(header)}")
+        elif header is None:
+            raise ModelError(f"{where}: unknown line {key!r} (expected name, description, convention, gravity, "
+                             f"values or the column header starting with j)")
+        else:
+            cells = line.split()
+            if len(cells) != len(header):
+                raise ModelError(f"{where}: {len(cells)} entries for {len(header)} columns")
+            row = {c: _entry(v, f"{where}, column {c}", c in _ANGLES[meta["convention"]])
+                   for c, v in zip(header, cells)}
+            for c in ("j", "ant", "sigma"):
+                if c in row and (not row[c].is_Integer or row[c] < 0):
+                    raise ModelError(f"{where}, column {c}: expected a non-negative integer, got {row[c]}")
+            if row["sigma"] not in (0, 1):
+                raise ModelError(f"{where}, column sigma: 0 (revolute) or 1 (prismatic), got {row['sigma']}")
+            if int(row["j"]) != len(rows) + 1:
+                raise ModelError(f"{where}: rows must be numbered 1, 2, ... in order (got j={row['j']})")
+            if "ant" in row and int(row["ant"]) >= int(row["j"]):
+                raise ModelError(f"{where}: antecedent {row['ant']} must be below j={row['j']}")
+            rows.append(row)
+    if not rows:
+        raise ModelError(f"{path}: no table rows (a header line starting with 'j', then one row per link)")
+    return from_dh(rows, meta["convention"], meta["name"], meta["gravity"], meta["values"], meta["description"])
+
+
+def _table_dir():
+    return resources.files("baseparams") / "robots" / "data" / "symbolic"
+
+
+def builtin_tables() -> dict[str, str]:
+    """The built-in symbolic robots: ``{name: description}`` (``baseparams robots`` lists them).
+
+    Returns
+    -------
+    dict
+        Table robots read from the package's ``robots/data/symbolic/*.dh`` and the Python-built
+        closed chains (:mod:`.examples`).
+    """
+    from .examples import EXAMPLES
+
+    out = {}
+    for f in sorted(_table_dir().iterdir(), key=lambda p: p.name):
+        if f.name.endswith(".dh"):
+            r = read_table(Path(f.name), f.read_text())
+            out[r.name] = r.description
+    out.update({k: d for k, (_, d) in EXAMPLES.items()})
+    return out
+
+
+def load_symbolic(model: str) -> SymbolicRobot:
+    """A symbolic robot by built-in name (``puma560-symbolic``...) or ``.dh`` file path.
+
+    Parameters
+    ----------
+    model : str
+        A built-in name (:func:`builtin_tables`) or a table file.
+
+    Returns
+    -------
+    SymbolicRobot
+        The robot.
+
+    Raises
+    ------
+    ModelError
+        Neither a file nor a built-in symbolic robot.
+    """
+    from .examples import EXAMPLES
+
+    p = Path(model)
+    if p.is_file():
+        return read_table(p)
+    key = model.lower()
+    if key in EXAMPLES:
+        return EXAMPLES[key][0]()
+    for f in _table_dir().iterdir():
+        if f.name.endswith(".dh"):
+            r = read_table(Path(f.name), f.read_text())
+            if r.name == key:
+                return r
+    raise ModelError(f"{model}: no such table file, and not a built-in symbolic robot "
+                     f"({', '.join(builtin_tables())})")

@@ -27,7 +27,7 @@ LAYERS = {
     "io": 8,
     "robots": 9,
     "loading": 10, "analysis": 10,
-    "identify": 11,
+    "identify": 11, "symbolic": 11,
     "report": 12, "fleet": 12, "excite": 12,
     "cli": 13,
     "__main__": 14, "__init__": 14,

@@ -32,7 +32,9 @@ BaseparamsError, ModelError
 Everything else lives in submodules, imported on first use: ``baseparams.robots``,
 ``baseparams.io`` (readers, URDF export, Pinocchio interop), ``baseparams.nullspace`` (DRNG,
 certification), ``baseparams.base`` (regrouping), ``baseparams.numerics``, ``baseparams.pga``,
-``baseparams.kinematics``, ``baseparams.model``. The name ``baseparams.regressor`` is the
+``baseparams.kinematics``, ``baseparams.model``, ``baseparams.symbolic`` (base parameters as
+formulas in a robot's dimensions, from a DH table with symbols; SymPy, the extra ``symbolic``).
+The name ``baseparams.regressor`` is the
 function above; the subpackage of the same name is imported as usual
 (``from baseparams.regressor import regressor_tensor``).
 """
@@ -68,7 +70,7 @@ __all__ = [
 ]
 
 _SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "io", "kinematics", "model", "nullspace", "numerics",
-               "pga", "robots")
+               "pga", "robots", "symbolic")
 
 
 class ModelWarning(UserWarning):

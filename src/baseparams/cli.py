@@ -29,6 +29,8 @@ _STATUS_EXIT = {Status.CERTIFIED: EXIT_OK, Status.COMPLETED: EXIT_OK, Status.UNV
 def _robot(args) -> Robot:  # noqa: F821
     from .loading import load_model
 
+    if _is_symbolic(args.model):  # a DH table with symbols: analysed numerically at its values
+        return _symbolic_robot(args)
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
                               strict_inertia=getattr(args, "strict_inertia", False))
     for note in notes:
@@ -54,6 +56,15 @@ def cmd_robots(args) -> int:
     for name, (factory, text) in BUILTINS.items():
         r = factory()
         print(f"{name:<10s} {r.n:3d} bodies {r.dof:3d} dofs  {text}")
+    try:
+        from .symbolic import builtin_tables, load_symbolic
+    except ImportError:
+        print("(symbolic robots: install the extra 'symbolic' (SymPy) to list them)")
+        return 0
+    print("\nsymbolic geometry ('baseparams analyze NAME --symbolic'; without --symbolic: at the listed values):")
+    for name, text in builtin_tables().items():
+        r = load_symbolic(name)
+        print(f"{name:<24s} {r.n:3d} bodies  {text}")
     return 0
 
 
@@ -174,6 +185,8 @@ def cmd_analyze(args) -> int:
 
     if any(ch in args.model for ch in "*?["):
         return _analyze_sweep(args)
+    if args.symbolic or args.latex or args.codegen:
+        return _analyze_symbolic(args)
     try:
         robot = _robot(args)
     except NoMovingBodiesError as exc:
@@ -456,6 +469,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="MODEL a glob (a design sweep): a Dask scheduler (default: a local cluster)")
     s.add_argument("--workers", type=int, metavar="N", help="MODEL a glob: local cluster size")
+    _symbolic_args(s)
     s.set_defaults(func=cmd_analyze)
 
     s = sub.add_parser("regressor", help="compute the TP regressor on random samples")
@@ -611,6 +625,74 @@ def _excite_parser(sub, model_args) -> None:
     s.add_argument("--plot", metavar="FILE", help="plot q, dq, ddq per joint against the limits (PNG/SVG)")
     s.add_argument("--output", metavar="FILE", help="write the summary to FILE")
     s.set_defaults(func=cmd_excite)
+
+
+def _is_symbolic(model: str) -> bool:
+    """A DH table file or a built-in symbolic robot's name (``*-symbolic``)."""
+    return model.endswith(".dh") or (model.lower().endswith("-symbolic") and not Path(model).exists())
+
+
+def _load_symbolic(args):
+    try:
+        from .symbolic import load_symbolic
+    except ImportError:
+        raise BaseparamsError("symbolic robots need SymPy: pip install 'baseparams[symbolic]'") from None
+    robot = load_symbolic(args.model)
+    if args.gravity is not None:
+        raise BaseparamsError(f"{args.model}: a symbolic robot's gravity is in its table (the 'gravity' line)")
+    return robot
+
+
+def _symbolic_robot(args):
+    """The numeric robot of a symbolic table at its ``values`` (``--values`` overrides)."""
+    vals = dict(v.split("=", 1) for v in (args.values or []) if "=" in v)
+    bad = [v for v in (args.values or []) if "=" not in v]
+    if bad:
+        raise BaseparamsError(f"--values {bad[0]}: expected NAME=NUMBER")
+    robot = _load_symbolic(args)
+    try:
+        vals = {k: float(v) for k, v in vals.items()}
+    except ValueError as exc:
+        raise BaseparamsError(f"--values: {exc}") from None
+    return robot.to_robot(vals)
+
+
+def _analyze_symbolic(args) -> int:
+    """``analyze TABLE --symbolic [--json | --latex] [--codegen FILE]``: base parameters as formulas."""
+    robot = _load_symbolic(args)
+    from .symbolic import probe, symbolic_analysis
+    from .symbolic.report import codegen, format_symbolic, symbolic_json, symbolic_latex
+
+    if args.verbose:
+        print(f"baseparams: {robot.name}: DRNG on the symbolic geometry, exact regrouping"
+              + ("" if args.no_verify else ", checks against the numerical analysis"), file=sys.stderr)
+    result = symbolic_analysis(robot, convention=args.convention, seed=args.seed, check=not args.no_verify)
+    if not args.no_verify:
+        if args.verbose:
+            print(f"baseparams: probing {len(result.conditions) + len(robot.symbols)} conditions", file=sys.stderr)
+        probe(result)
+    if args.codegen:
+        try:
+            Path(args.codegen).write_text(codegen(result))
+        except OSError as exc:
+            raise BaseparamsError(f"--codegen {args.codegen}: cannot write ({exc.strerror or exc})") from None
+        print(f"baseparams: regrouping code written to {args.codegen}", file=sys.stderr)
+    if args.json:
+        _emit(args, json.dumps(symbolic_json(result), indent=2))
+    else:
+        _emit(args, symbolic_latex(result) if args.latex else format_symbolic(result))
+    return EXIT_OK
+
+
+def _symbolic_args(s) -> None:
+    g = s.add_argument_group("symbolic geometry (MODEL a DH table .dh or a '*-symbolic' built-in; SymPy)")
+    g.add_argument("--symbolic", action="store_true",
+                   help="the base parameters as formulas in the table's symbols (lengths, offsets)")
+    g.add_argument("--latex", action="store_true", help="with --symbolic: a LaTeX table of the formulas")
+    g.add_argument("--codegen", metavar="FILE.py", help="with --symbolic: write Python (NumPy) code of the "
+                                                        "regrouping K(dimensions)")
+    g.add_argument("--values", nargs="+", metavar="NAME=NUMBER",
+                   help="without --symbolic: numbers for the table's symbols (default: its 'values' line)")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -14,7 +14,7 @@ import sympy as sp
 
 from ..analysis import analyze
 from ..errors import BaseparamsError
-from .solve import SymbolicAnalysis, body_parameters, no_rule_error, random_point
+from .solve import Condition, SymbolicAnalysis, body_parameters, no_rule_error, random_point
 
 #: relative agreement required between the formulas at numbers and the numerical analysis
 RTOL = 1e-9
@@ -126,22 +126,22 @@ def probe(sa: SymbolicAnalysis, seed: int = 7) -> list:
     list of Condition
         ``sa.conditions``, each with ``effect`` filled (e.g. ``"34 base parameters, not 36"``).
     """
-    from .solve import Condition
-
     have = {str(c.polynomials) for c in sa.conditions}
-    extra = [Condition([s], f"{s.name} = 0") for s in sa.robot.symbols if str([s]) not in have]
+    extra = [Condition([s], "the symbol at zero") for s in sa.robot.symbols if str([s]) not in have]
     for c in sa.conditions + extra:
         point = _on_condition(sa, c.polynomials, seed)
         if point is None:
             c.effect = "not probed (no rational point found on it)"
             continue
+        c.point = point
         try:
             num = analyze(sa.robot.to_robot(point))
         except BaseparamsError as e:
             c.effect = f"the numerical analysis refuses that geometry ({e})"
             continue
         if num.n_base != sa.n_base:
-            c.effect = f"{num.n_base} base parameters there, not {sa.n_base}"
+            at = ", ".join(f"{k}={float(v):.4g}" for k, v in point.items())
+            c.effect = f"{num.n_base} base parameters there, not {sa.n_base} (certified numerically at {at})"
         else:
             c.effect = f"same count ({num.n_base})" + (", other formulas" if "pivot" in c.reason else "")
     sa.conditions += [c for c in extra if "base parameters there" in c.effect]

@@ -82,12 +82,34 @@ class Decisions:
 
 
 def outer(a: sp.Matrix) -> sp.Matrix:
-    """``a a^T`` of a homogeneous 4-vector ``(4, 1)``."""
+    """``a a^T`` of a homogeneous 4-vector.
+
+    Parameters
+    ----------
+    a : sympy.Matrix, shape ``(4, 1)``
+        A point (``w = 1``) or direction (``w = 0``).
+
+    Returns
+    -------
+    sympy.Matrix, shape ``(4, 4)``
+        The symmetric product.
+    """
     return a * a.T
 
 
 def sym(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
-    """``a b^T + b a^T`` of homogeneous 4-vectors ``(4, 1)``."""
+    """``a b^T + b a^T`` of homogeneous 4-vectors (the paper's ``sym``).
+
+    Parameters
+    ----------
+    a, b : sympy.Matrix, shape ``(4, 1)``
+        Points (``w = 1``) or directions (``w = 0``).
+
+    Returns
+    -------
+    sympy.Matrix, shape ``(4, 4)``
+        The symmetrised product.
+    """
     return a * b.T + b * a.T
 
 
@@ -190,9 +212,10 @@ def fixed_points(robot: SymbolicRobot, dec: Decisions, probe: dict) -> list[SymC
         elif t == "R":
             z = robot.world_axes(i)[0]
             x, y = perp_pair(z, probe)
-            out += [SymColumn({i: sym(_dir(z), _dir(v))}, Source.FIXED_POINTS, i, f"z {n}") for v, n in ((x, "x"), (y, "y"))]
+            xy = ((x, "x"), (y, "y"))
+            out += [SymColumn({i: sym(_dir(z), _dir(v))}, Source.FIXED_POINTS, i, f"z {n}") for v, n in xy]
             if g_zero or dec.is_zero(z.cross(g), f"joint {robot.labels[i]}'s axis along gravity"):
-                out += [SymColumn({i: sym(o, _dir(v))}, Source.FIXED_POINTS, i, f"O {n}") for v, n in ((x, "x"), (y, "y"))]
+                out += [SymColumn({i: sym(o, _dir(v))}, Source.FIXED_POINTS, i, f"O {n}") for v, n in xy]
     return out
 
 

@@ -67,7 +67,7 @@ def pkm_2rru_1rrs() -> SymbolicRobot:
     world = {}
     for name, d in dirs.items():
         rb, l1, rp = _syms(f"RB{name} L1{name} RP{name}")
-        values.update({f"RB{name}": defaults[name][0], f"L1{name}": defaults[name][1], f"RP{name}": defaults[name][2]})
+        bl.values.update(dict(zip((f"RB{name}", f"L1{name}", f"RP{name}"), defaults[name])))
         r = sp.Matrix(d)
         u = z.cross(r)
         a_pt = rb * r

@@ -158,11 +158,14 @@ class Condition:
         Where it comes from (a pivot of the elimination, a rule's decision, a symbol at zero).
     effect : str
         What the numerical, certified analysis finds there (filled by :func:`.check.probe`).
+    point : dict, optional
+        The values of the symbols it was probed at.
     """
 
     polynomials: list
     reason: str
     effect: str = ""
+    point: dict | None = None
 
     def __str__(self) -> str:
         eq = " and ".join(f"{sp.sstr(sp.factor(p))} = 0" for p in self.polynomials)
@@ -237,7 +240,8 @@ class SymbolicAnalysis:
     @property
     def unidentifiable(self) -> list:
         """Parameters that enter no base parameter (their effect on every measurement is zero)."""
-        return [self.params[d] for c, d in enumerate(self.dependent) if all(self.K[r, c] == 0 for r in range(self.K.rows))]
+        return [self.params[d] for c, d in enumerate(self.dependent)
+                if all(self.K[r, c] == 0 for r in range(self.K.rows))]
 
     def expressions(self) -> list[dict]:
         """Every base parameter as strings: ``[{"name", "expression"}]``.
@@ -290,9 +294,8 @@ def _solve(a: sp.Matrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, 
     return k, sp.factor(dom.to_sympy(adt.det()))
 
 
-def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0,
-                      check: bool = True) -> SymbolicAnalysis:
-    """Base parameters of ``robot`` as formulas in its symbols (DRNG on the symbolic geometry).
+def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> SymbolicAnalysis:
+    """The regrouping of ``robot`` as formulas in its symbols, unchecked (:func:`.analyze.symbolic_analysis` checks).
 
     Parameters
     ----------
@@ -305,20 +308,11 @@ def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: in
     seed : int
         Seed of the random rational point that decides the column basis and the dependent
         parameters.
-    check : bool, default True
-        Compare with the certified numerical analysis at two random points and refuse a result
-        whose count differs (:func:`.check.check`); also completes the conditions' effects.
 
     Returns
     -------
     SymbolicAnalysis
-        The formulas, the conditions under which they hold, the checks.
-
-    Raises
-    ------
-    BaseparamsError
-        The rules do not span the whole nullspace (the numerical analysis finds more directions),
-        or the formulas disagree with it.
+        The formulas and the conditions under which they hold (no checks yet).
     """
     t0 = time.perf_counter()
     convention = str(check_convention(convention))
@@ -339,10 +333,6 @@ def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: in
             by_source[s.label] = sum(1 for c in chosen if c.source == s)
     out = SymbolicAnalysis(robot, convention, params, ind, sorted(dep), _reorder(k, dep), names, cols, basis,
                            conditions, 0.0, by_source)
-    if check:
-        from .check import check as run_check
-
-        run_check(out)
     out.seconds = time.perf_counter() - t0
     return out
 

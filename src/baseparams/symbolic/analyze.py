@@ -1,0 +1,47 @@
+"""The front door of the symbolic analysis: regroup exactly, then check against the numerics."""
+
+from __future__ import annotations
+
+import time
+
+from .check import check as run_check
+from .geometry import SymbolicRobot
+from .solve import SymbolicAnalysis, regroup
+
+
+def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0,
+                      check: bool = True) -> SymbolicAnalysis:
+    """Base parameters of ``robot`` as formulas in its symbols (DRNG on the symbolic geometry).
+
+    Parameters
+    ----------
+    robot : SymbolicRobot
+        The robot.
+    convention : str, default "khalil"
+        Parameter convention of the formulas: ``khalil`` (link frames, Khalil & Dombre) or
+        ``paper`` (spatial pseudo-inertia entries at q = 0), or any of
+        :data:`~baseparams.model.inertia.CONVENTIONS`.
+    seed : int
+        Seed of the random rational point that decides the column basis and the dependent
+        parameters.
+    check : bool, default True
+        Compare with the certified numerical analysis at two random points and refuse a result
+        whose count or formulas differ (:func:`.check.check`).
+
+    Returns
+    -------
+    SymbolicAnalysis
+        The formulas, the conditions under which they hold, the checks.
+
+    Raises
+    ------
+    BaseparamsError
+        The rules do not span the whole nullspace (the numerical analysis finds more directions),
+        or the formulas disagree with it.
+    """
+    t0 = time.perf_counter()
+    out = regroup(robot, convention, seed)
+    if check:
+        run_check(out)
+    out.seconds = time.perf_counter() - t0
+    return out

@@ -1,0 +1,217 @@
+"""Symbolic base parameters (issue 18): formulas in the robot's dimensions.
+
+Oracles: the certified numerical analysis of the same robot at random values of the symbols
+(computed here, independently of the symbolic checks), random DH tables, the textbook rules
+(:mod:`khalil_rules`, written without the symbolic code).
+"""
+
+import json
+import random
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import baseparams
+from baseparams.cli import main
+from baseparams.errors import BaseparamsError, ModelError
+from baseparams.symbolic import (
+    SymbolicBuilder,
+    builtin_tables,
+    from_dh,
+    load_symbolic,
+    probe,
+    read_table,
+    symbolic_analysis,
+    trans,
+)
+from baseparams.symbolic.report import symbolic_json
+
+ACCEPTANCE = ["puma560-symbolic", "6r-wrist-symbolic", "stanford-symbolic", "scara-symbolic",
+              "parallelogram-symbolic", "pkm-2rru-1rrs-symbolic"]
+
+
+def _point(robot, seed):
+    rng = random.Random(seed)
+    return {s: sp.Rational(rng.randint(20, 180), 89) for s in robot.symbols}
+
+
+def _numeric_k(sa, point):
+    """The numerical analysis' regrouping at ``point``: (dependent sorted, K with columns sorted alike)."""
+    num = baseparams.analyze(sa.robot.to_robot(point), convention=sa.convention)
+    order = np.argsort(num.base.dependent)
+    return num, np.asarray(num.base.dependent)[order], num.base.K[:, order]
+
+
+@pytest.mark.parametrize("name", ACCEPTANCE)
+def test_formulas_equal_the_certified_numerical_analysis_at_random_values(name):
+    sa = symbolic_analysis(load_symbolic(name), check=False)
+    for seed in (11, 12):
+        point = _point(sa.robot, seed)
+        num, dep, k = _numeric_k(sa, point)
+        assert num.certified and num.n_base == sa.n_base
+        assert list(dep) == sa.dependent
+        ks = np.array(sa.K.subs(point).evalf(17).tolist(), dtype=float).reshape(k.shape)
+        assert np.abs(ks - k).max() <= 1e-9 * max(1.0, np.abs(k).max())
+
+
+def test_puma560_has_36_base_parameters_and_the_textbook_eliminations():
+    sa = symbolic_analysis(load_symbolic("puma560-symbolic"))
+    assert sa.n_base == 36 and len(sa.checks) == 2
+    names = [p.name for p in sa.params]
+    eliminated = {names[d] for d in sa.dependent}
+    # Khalil: link 1 keeps ZZR1 only; every other link loses YY, MZ and M
+    assert eliminated == {f"{p}1" for p in ("XX", "XY", "XZ", "YY", "YZ", "MX", "MY", "MZ", "M")} | {
+        f"{p}{j}" for j in range(2, 7) for p in ("YY", "MZ", "M")}
+
+
+def test_generic_count_changes_when_a_symbol_is_zero_and_the_tool_says_so():
+    sa = symbolic_analysis(load_symbolic("scara-symbolic"))
+    probe(sa)
+    d2 = next(c for c in sa.conditions if [str(p) for p in c.polynomials] == ["D2"])
+    robot = sa.robot.to_robot(d2.point)
+    at_zero = baseparams.analyze(robot).n_base  # the independent, numerical count
+    assert at_zero < sa.n_base
+    assert f"{at_zero} base parameters there, not {sa.n_base}" in d2.effect
+    # the same report on the command line and in JSON
+    j = symbolic_json(sa)
+    assert any(c["condition"] == "D2 = 0" and str(at_zero) in c["effect"] for c in j["conditions"])
+
+
+def test_parallelogram_flattened_is_a_condition_with_its_count():
+    sa = symbolic_analysis(load_symbolic("parallelogram-symbolic"))
+    probe(sa)
+    flat = [c for c in sa.conditions if "base parameters there" in c.effect]
+    assert flat, [str(c) for c in sa.conditions]
+    for c in flat:  # on the condition the numerical count is what the tool says
+        assert c.point[c.polynomials[0]] == 0
+        n = baseparams.analyze(sa.robot.to_robot(c.point)).n_base
+        assert c.effect.startswith(f"{n} base parameters there")
+
+
+def _random_table(rng: random.Random, n: int) -> list[dict]:
+    rows = []
+    for j in range(1, n + 1):
+        sigma = 1 if rng.random() < 0.25 else 0
+        length = [0, sp.Symbol(f"L{j}", real=True), sp.Rational(rng.randint(1, 9), 10)]
+        rows.append({"j": j, "sigma": sigma, "alpha": rng.choice([0, sp.pi / 2, -sp.pi / 2, sp.pi]),
+                     "d": rng.choice(length), "theta": rng.choice([0, sp.pi / 2]),
+                     "r": rng.choice(length[:2] + [sp.Symbol(f"R{j}", real=True)])})
+    return rows
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_dh_chains_are_right_or_refused(seed):
+    """Never a silently wrong formula: agreement with the numerics at a fresh point, or a clear refusal."""
+    rng = random.Random(seed)
+    robot = from_dh(_random_table(rng, rng.randint(2, 5)), name=f"random{seed}",
+                    gravity=rng.choice([(0, 0, -9.81), (0, -9.81, 0), (0, 0, 0)]))
+    try:
+        sa = symbolic_analysis(robot, seed=seed)
+    except BaseparamsError as e:
+        assert "no symbolic rule" in str(e) or "symbolic rules give" in str(e)
+        num = baseparams.analyze(robot.to_robot(_point(robot, seed)))
+        assert f"of the {num.nullity} nullspace directions" in str(e)
+        return
+    point = _point(robot, 1000 + seed)
+    num, dep, k = _numeric_k(sa, point)
+    assert num.n_base == sa.n_base and list(dep) == sa.dependent
+    ks = np.array(sa.K.subs(point).evalf(17).tolist(), dtype=float).reshape(k.shape)
+    assert np.abs(ks - k).max() <= 1e-9 * max(1.0, np.abs(k).max())
+
+
+def test_standard_dh_puma_agrees_with_the_builtin_numeric_puma():
+    text = """name puma-sdh
+convention standard
+values A2=0.4318 A3=0.0203 D3=0.15005 D4=0.4318
+j sigma theta d a alpha
+1 0 0 0 0 pi/2
+2 0 0 0 A2 0
+3 0 0 D3 A3 -pi/2
+4 0 0 D4 0 pi/2
+5 0 0 0 0 -pi/2
+6 0 0 0 0 0
+"""
+    sa = symbolic_analysis(read_table("puma-sdh.dh", text))
+    assert sa.n_base == baseparams.analyze(baseparams.load("puma560")).n_base == 36
+    # the built-in puma560 is this table at Corke's numbers: the same world geometry at q = 0
+    ours = sa.robot.to_robot()
+    np.testing.assert_allclose(ours.M0, baseparams.load("puma560").M0, atol=1e-12)
+
+
+def test_builder_with_sympy_symbols_and_exact_angles():
+    ell = sp.Symbol("L", positive=True)
+    b = SymbolicBuilder("2R", gravity=(0, -9.81, 0), values={"L": 0.4})
+    b.add_link("upper", joint="R").add_link("lower", parent="upper", joint="R", origin=trans("x", ell))
+    sa = symbolic_analysis(b.build())
+    z = {s.name: s for s in sa.params}
+    assert sa.n_base == baseparams.analyze(sa.robot.to_robot()).n_base == 6
+    # planar 2R, gravity in the plane (by hand: the lower link's mass seen from the upper axis)
+    assert sp.expand(sa.base["ZZR_upper"] - (z["ZZ_upper"] + ell**2 * z["M_lower"])) == 0
+    assert sp.expand(sa.base["MXR_upper"] - (z["MX_upper"] + ell * z["M_lower"])) == 0
+    assert {"ZZ_lower", "MX_lower", "MY_lower", "MY_upper"} <= set(sa.base)
+
+
+@pytest.mark.parametrize("text,needle", [
+    ("j ant sigma alpha d theta r\n1 0 0 a 0 0 0\n", "symbolic angles are not supported"),
+    ("j ant sigma alpha d theta r\n1 0 2 0 0 0 0\n", "column sigma"),
+    ("j ant sigma alpha d theta\n1 0 0 0 0 0\n", "columns are"),
+    ("j ant sigma alpha d theta r\n2 0 0 0 0 0 0\n", "numbered 1, 2"),
+    ("j ant sigma alpha d theta r\n1 0 0 0 0 0\n", "6 entries for 7 columns"),
+    ("j ant sigma alpha d theta r\n1 0 0 0 0 0 (\n", "cannot read"),
+    ("frobnicate 3\n", "unknown line"),
+    ("values D3=x\n", "not a number"),
+    ("name x\n", "no table rows"),
+])
+def test_bad_tables_are_one_line_naming_file_and_line(text, needle):
+    with pytest.raises(ModelError) as e:
+        read_table("bad.dh", text)
+    msg = str(e.value)
+    assert needle in msg and msg.startswith("bad.dh") and "\n" not in msg
+
+
+def test_missing_values_are_named():
+    r = read_table("t.dh", "j sigma alpha d theta r\n1 0 0 0 0 0\n2 0 pi/2 A 0 B\n")
+    with pytest.raises(ModelError, match="no value for A, B"):
+        r.to_robot()
+
+
+def test_cli_symbolic_json_latex_and_codegen(tmp_path, capsys):
+    assert main(["analyze", "puma560-symbolic", "--symbolic", "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    sa = symbolic_analysis(load_symbolic("puma560-symbolic"), check=False)
+    assert j["n_base"] == 36 and j["symbols"] == ["D3", "D4", "RL3", "RL4"]
+    params = {p.name: p for p in sa.params} | {s.name: s for s in sa.robot.symbols}
+    for e in j["base_parameters"]:  # the printed strings parse back to the SymPy formulas
+        assert sp.expand(sp.sympify(e["expression"], locals=params) - sa.base[e["name"]]) == 0
+    assert main(["analyze", "puma560-symbolic", "--symbolic", "--latex", "--no-verify"]) == 0
+    tex = capsys.readouterr().out
+    assert tex.count(r"\\") >= 36 + 2 and r"\begin{longtable}" in tex and "ZZR_{1}" in tex
+    gen = tmp_path / "puma_regrouping.py"
+    assert main(["analyze", "puma560-symbolic", "--symbolic", "--no-verify", "--codegen", str(gen)]) == 0
+    ns = {}
+    exec(compile(gen.read_text(), str(gen), "exec"), ns)  # pure NumPy: no SymPy, no baseparams needed
+    vals = {"D3": 0.41, "D4": -0.03, "RL3": 0.12, "RL4": 0.44}
+    np.testing.assert_allclose(ns["regrouping"](**vals), np.array(sa.substitute(vals).evalf().tolist(), dtype=float),
+                               rtol=1e-12, atol=1e-14)
+    theta = np.random.default_rng(0).normal(size=60)
+    beta = ns["base_parameters"](theta, **vals)
+    assert beta.shape == (36,)
+
+
+def test_cli_text_report_and_numeric_analysis_of_a_table(capsys):
+    assert main(["analyze", "scara-symbolic", "--symbolic"]) == 0
+    out = capsys.readouterr().out
+    assert "8 base parameters" in out and "ZZR1 = ZZ1 + D2**2*M2" in out and "D2 = 0" in out
+    assert main(["analyze", "scara-symbolic", "--values", "D2=0", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["n_base"] == 6
+    assert main(["analyze", "scara-symbolic", "--values", "D2"]) == 2
+    assert "NAME=NUMBER" in capsys.readouterr().err
+
+
+def test_builtin_tables_are_listed_and_load():
+    names = builtin_tables()
+    assert set(ACCEPTANCE) <= set(names)
+    for n in names:
+        r = load_symbolic(n)
+        assert r.symbols and r.complete_values(None)

@@ -703,6 +703,32 @@ def bench_special(out: dict, quick: bool) -> None:
     out["special_robots_using_rule"] = rules
 
 
+def bench_symbolic(out: dict, quick: bool) -> None:
+    """Symbolic base parameters (issue 18): the formulas of each built-in symbolic robot in process
+    (DRNG on the symbolic geometry, exact regrouping, two numerical checks), and Puma560's
+    ``analyze --symbolic`` end to end in a fresh process (SymPy import, probing the conditions)."""
+    import subprocess
+
+    from baseparams.symbolic import load_symbolic, symbolic_analysis
+
+    names = ["puma560-symbolic"] if quick else ["puma560-symbolic", "6r-wrist-symbolic", "stanford-symbolic",
+                                                 "scara-symbolic", "parallelogram-symbolic", "pkm-2rru-1rrs-symbolic"]
+    for name in names:
+        robot = load_symbolic(name)
+        log(f"  symbolic {name} ...")
+        t, n = measure(lambda: symbolic_analysis(load_symbolic(name)), 1 if quick else 3, warmup=0)
+        sa = symbolic_analysis(robot)
+        key = name.replace("-symbolic", "").replace("-", "_")
+        out[f"symbolic_{key}_s"] = t
+        out[f"symbolic_{key}_s_repeats"] = n
+        out[f"symbolic_{key}_n_base"] = sa.n_base
+    cmd = [sys.executable, "-m", "baseparams", "analyze", "puma560-symbolic", "--symbolic", "--json"]
+    log("  analyze puma560-symbolic --symbolic (fresh processes) ...")
+    t, n = measure(lambda: subprocess.run(cmd, capture_output=True, check=True), 1 if quick else 3, warmup=0)
+    out["symbolic_cli_puma560_s"] = t
+    out["symbolic_cli_puma560_s_repeats"] = n
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "files": bench_files,
     "special": bench_special,
@@ -715,6 +741,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
     "loops": bench_loops,
+    "symbolic": bench_symbolic,
 }
 
 

@@ -7,6 +7,7 @@ Oracles: the certified numerical analysis of the same robot at random values of 
 
 import json
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -215,3 +216,22 @@ def test_builtin_tables_are_listed_and_load():
     for n in names:
         r = load_symbolic(n)
         assert r.symbols and r.complete_values(None)
+
+
+def _by_name(e):
+    return sp.expand(e).subs({s: sp.Symbol(s.name) for s in e.free_symbols})
+
+
+@pytest.mark.parametrize("table", ["puma560", "6r-wrist", "stanford", "scara"])
+def test_formulas_match_the_textbook_rules(table):
+    """Khalil & Dombre's regrouping, derived independently in tests/khalil_rules.py from the same table."""
+    from khalil_rules import khalil_base_parameters, read_dh
+
+    path = Path(baseparams.__file__).parent / "robots" / "data" / "symbolic" / f"{table}.dh"
+    textbook = khalil_base_parameters(read_dh(path).rows)
+    sa = symbolic_analysis(read_table(path), check=False)
+    assert list(sa.base) == list(textbook)  # the same base parameters, names and order
+    for name, expr in sa.base.items():
+        assert sp.expand(_by_name(expr) - _by_name(textbook[name])) == 0, name
+    if table in ("puma560", "6r-wrist"):
+        assert sa.n_base == 36

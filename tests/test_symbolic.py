@@ -25,6 +25,7 @@ from baseparams.symbolic import (
     read_table,
     symbolic_analysis,
     trans,
+    transform,
 )
 from baseparams.symbolic.report import symbolic_json
 
@@ -101,24 +102,44 @@ def _random_table(rng: random.Random, n: int) -> list[dict]:
     return rows
 
 
-@pytest.mark.parametrize("seed", range(8))
-def test_random_dh_chains_are_right_or_refused(seed):
-    """Never a silently wrong formula: agreement with the numerics at a fresh point, or a clear refusal."""
+@pytest.mark.parametrize("seed", range(10))
+def test_random_dh_chains_equal_the_numerical_analysis(seed):
+    """Random serial R/P chains (exact twists, symbolic and numeric lengths, gravity along z, y or
+    zero): DRNG's principles with R-A and R-B on the symbolic geometry span the whole nullspace
+    (60 of 60 seeds when measured), and the formulas equal the numerics at a fresh point."""
     rng = random.Random(seed)
     robot = from_dh(_random_table(rng, rng.randint(2, 5)), name=f"random{seed}",
                     gravity=rng.choice([(0, 0, -9.81), (0, -9.81, 0), (0, 0, 0)]))
-    try:
-        sa = symbolic_analysis(robot, seed=seed)
-    except BaseparamsError as e:
-        assert "no symbolic rule" in str(e) or "symbolic rules give" in str(e)
-        num = baseparams.analyze(robot.to_robot(_point(robot, seed)))
-        assert f"of the {num.nullity} nullspace directions" in str(e)
-        return
+    sa = symbolic_analysis(robot, seed=seed)
     point = _point(robot, 1000 + seed)
     num, dep, k = _numeric_k(sa, point)
     assert num.n_base == sa.n_base and list(dep) == sa.dependent
     ks = np.array(sa.K.subs(point).evalf(17).tolist(), dtype=float).reshape(k.shape)
     assert np.abs(ks - k).max() <= 1e-9 * max(1.0, np.abs(k).max())
+
+
+def _turret_parallelogram():
+    """A parallelogram carried by a turret: R-L1 with a moving root, not available symbolically."""
+    a, b, ell = sp.symbols("A B L", real=True)
+    bl = SymbolicBuilder("turret-parallelogram", gravity=(0, 0, -9.81), values={"A": 0.3, "B": 0.5, "L": 1.0})
+    bl.add_link("turret", joint="R", actuated=True)
+    bl.add_link("crank", parent="turret", joint="R", axis=(0, 1, 0), actuated=True)
+    bl.add_link("coupler", parent="crank", joint="R", axis=(0, 1, 0), origin=transform(translation=(a, 0, b)),
+                actuated=False)
+    bl.add_link("rocker", parent="turret", joint="R", axis=(0, 1, 0), origin=transform(translation=(ell, 0, 0)),
+                actuated=False)
+    bl.add_loop("closure", "R", "coupler", "rocker", origin=transform(translation=(ell, 0, 0)), axis=(0, 1, 0))
+    bl.q_box = np.array([[-0.3, 0.3], [-0.3, 0.3]])
+    return bl.build()
+
+
+def test_a_nullspace_without_symbolic_rules_is_refused_with_the_missing_count():
+    robot = _turret_parallelogram()
+    num = baseparams.analyze(robot.to_robot())  # also: a zero R-L2 column no longer breaks certification
+    assert num.certified and num.status == "completed"
+    with pytest.raises(BaseparamsError) as e:
+        symbolic_analysis(robot)
+    assert f"of the {num.nullity} nullspace directions" in str(e.value) and "no symbolic rule" in str(e.value)
 
 
 def test_standard_dh_puma_agrees_with_the_builtin_numeric_puma():

@@ -199,7 +199,8 @@ def _column_residuals(raw: np.ndarray, w: np.ndarray, num: NumericalResult) -> t
     if not raw.shape[1]:
         return np.zeros(0), 0.0
     w2 = num.singular_values[0] if num.singular_values[0] > 0 else 1.0
-    raw = raw / np.linalg.norm(raw, axis=0)
+    norms = np.linalg.norm(raw, axis=0)
+    raw = raw / np.where(norms > 0, norms, 1.0)  # a zero column (spans nothing) has residual 0
     col_res = np.linalg.norm(w @ raw, axis=0) / w2
     return col_res, float(col_res.max())
 

@@ -175,7 +175,7 @@ def column_basis(b: np.ndarray, rtol: float = 1e-10) -> np.ndarray:
     Parameters
     ----------
     b : ndarray, shape ``(m, k)``
-        Nonzero columns.
+        Columns; exactly zero ones (a rule may emit one) span nothing and are skipped.
     rtol : float, optional
         Singular-value threshold relative to the largest.
 
@@ -184,9 +184,10 @@ def column_basis(b: np.ndarray, rtol: float = 1e-10) -> np.ndarray:
     ndarray, shape ``(m, r)``
         Orthonormal columns (``b`` itself when ``k == 0``).
     """
-    if b.shape[1] == 0:
-        return b
-    b = b / np.linalg.norm(b, axis=0)
+    norms = np.linalg.norm(b, axis=0)
+    if b.shape[1] == 0 or not np.any(norms > 0):
+        return b[:, :0]
+    b = b[:, norms > 0] / norms[norms > 0]
     u, s, _ = np.linalg.svd(b, full_matrices=False)
     return u[:, : int(np.sum(s > rtol * s[0]))]
 

@@ -104,7 +104,9 @@ def exact(x) -> sp.Expr:
     """
     if isinstance(x, float | np.floating):
         return sp.Rational(repr(float(x)))
-    return sp.sympify(x, rational=True)
+    e = sp.sympify(x, rational=True)
+    floats = e.atoms(sp.Float)  # SymPy Floats (e.g. from sp.Matrix([0.5])): their shortest decimal
+    return e.xreplace({f: sp.Rational(repr(float(f))) for f in floats}) if floats else e
 
 
 def _as_matrix(m, shape: tuple[int, int], what: str) -> sp.Matrix:

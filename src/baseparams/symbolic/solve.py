@@ -25,6 +25,7 @@ from ..errors import BaseparamsError
 from ..model.inertia import SPECS, check_convention
 from .columns import SymColumn, symbolic_columns
 from .geometry import SymbolicRobot, transform
+from .rules import rule_columns
 
 
 def _inverse(f: sp.Matrix) -> sp.Matrix:
@@ -316,7 +317,9 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> 
     """
     t0 = time.perf_counter()
     convention = str(check_convention(convention))
-    cols, dec = symbolic_columns(robot, random_point(robot, seed + 1))
+    probe = random_point(robot, seed + 1)
+    cols, dec = symbolic_columns(robot, probe)
+    cols = cols + rule_columns(robot, probe)
     a = column_matrix(robot, cols, convention)
     basis, dep = _choose(a, robot, convention, seed)
     ind = [i for i in range(10 * robot.n) if i not in set(dep)]
@@ -362,4 +365,5 @@ def no_rule_error(robot: SymbolicRobot, found: int, nullity: int) -> BaseparamsE
     return BaseparamsError(
         f"{robot.name}: the rules give {found} of the {nullity} nullspace directions the certified numerical "
         f"analysis finds at random values of the symbols; the other {nullity - found} have no symbolic rule, so "
-        f"no formula is given (analyse numbers instead: 'baseparams analyze {robot.name}')")
+        f"no formula is given (analyse it in numbers instead: 'baseparams analyze TABLE --values ...' without "
+        f"--symbolic, or SymbolicRobot.to_robot(values) and baseparams.analyze)")

@@ -25,6 +25,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
 * ``files``         every example-robot-data URDF: certified, DRNG complete?; talos_full_v2 times.
+* ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the
+                    page's own render time in headless Chromium (``data-render-ms``).
 
 Every timing is the median over ``repeats`` runs of ``time.perf_counter`` after one
 untimed warm-up call; the number of repeats is reported next to every timing (the
@@ -728,6 +730,47 @@ def bench_symbolic(out: dict, quick: bool) -> None:
     out["symbolic_cli_puma560_s"] = t
     out["symbolic_cli_puma560_s_repeats"] = n
 
+def _render_ms(page: str) -> float | None:
+    """The page's own render time in headless Chromium: its ``data-render-ms`` (navigation start to
+    the end of its scripts), or None without Chromium."""
+    import re
+    import shutil
+    import subprocess
+    import tempfile
+
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        return None
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "report.html"
+        path.write_text(page)
+        dom = subprocess.run([chromium, "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom", path.as_uri()],
+                             capture_output=True, text=True, timeout=120).stdout
+    m = re.search(r'data-render-ms="([0-9.]+)"', dom)
+    return float(m.group(1)) if m else None
+
+
+def bench_report(out: dict, quick: bool) -> None:
+    """The HTML analysis report: ``analysis_html`` time (DRNG re-run for the provenance included),
+    page size, and the render time the page itself measures in headless Chromium (median of fresh
+    browser runs), for Puma560 and talos_full_v2 (45 bodies, floating)."""
+    import baseparams
+    from baseparams.report.html import analysis_html
+
+    cases = ["puma560"] + (["talos_full_v2"] if _talos_path() else [])
+    reps, browser_reps = (3, 1) if quick else (11, 5)
+    for key in cases:
+        result = baseparams.analyze(_robot(key))
+        log(f"  report {key} ...")
+        t, n = measure(lambda: analysis_html(result), reps)
+        page = analysis_html(result)
+        out[f"report_{key}_html_ms"] = 1e3 * t
+        out[f"report_{key}_html_ms_repeats"] = n
+        out[f"report_{key}_kb"] = len(page.encode()) / 1e3
+        ms = [_render_ms(page) for _ in range(browser_reps)]
+        out[f"report_{key}_render_ms"] = None if None in ms else statistics.median(ms)
+        out[f"report_{key}_render_ms_repeats"] = browser_reps
+
 
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "files": bench_files,
@@ -742,6 +785,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "drng_scaling": bench_drng_scaling,
     "loops": bench_loops,
     "symbolic": bench_symbolic,
+    "report": bench_report,
 }
 
 

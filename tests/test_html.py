@@ -2,8 +2,10 @@
 
 The checks read the page after its scripts ran (``--dump-dom``): the 3D view holds one ``g.body``
 per body with projected coordinates, the grid has ten cells per body classed as the analysis JSON
-says, the identification plots have two series (measured, predicted) per joint and part. A
-screenshot of each report is saved in the test's temporary folder.
+says, the provenance groups drawn on the 3D view account for every DRNG column and their sources'
+ranks are the JSON's, the identification plots have two series (measured, predicted) per joint and
+part and one spectrum per joint. A screenshot of each report is saved in the test's temporary
+folder; the page's own render time (``data-render-ms``) is read from the DOM.
 """
 
 import json
@@ -50,6 +52,28 @@ def _render(page: str, tmp_path, name: str):
     return parser.elements, seconds, path.stat().st_size
 
 
+def _check_provenance(els, result, view_bodies: set[str]) -> None:
+    """The provenance groups on the 3D view and in the list against DRNG and the analysis JSON."""
+    from baseparams.nullspace.drng import drng
+
+    j = result.to_json()
+    res = drng(result.robot, extended=result.extended, rows=result.rows)
+    groups = [a for t, a in els if t == "g" and "prov" in a.get("class", "").split()]
+    assert groups and sum(int(g["data-columns"]) for g in groups) == res.n_columns == j["drng"]["columns"]
+    for g in groups:
+        bodies = json.loads(g["data-bodies"])
+        assert bodies and set(bodies) <= view_bodies, g
+    dots = [a for t, a in els if t == "circle" and "data-p" in a]
+    assert len(dots) >= len(groups) and all(np.isfinite(float(a["cx"])) for a in dots)  # projected by the script
+    items = [a for t, a in els if t == "li" and "prov-item" in a.get("class", "")]
+    assert [a["data-group"] for a in items] == [g["data-group"] for g in groups]
+    assert [a["data-columns"] for a in items] == [g["data-columns"] for g in groups]
+    ranks = {a["data-source"]: int(a["data-rank"]) for t, a in els if t == "li" and a.get("class") == "source"}
+    numerical = next(a for t, a in els if a.get("id") == "numerical")
+    assert {**ranks, "numerical": int(numerical["data-count"])} == j["drng"]["by_rule"]
+    assert sum(ranks.values()) == j["drng"]["rank"] and sum(ranks.values()) + j["completed"] == j["nullity"]
+
+
 def _expected_classes(j: dict, names: list[str]) -> list[str]:
     alone = {b["expression"] for b in j["base_parameters"] if " " not in b["expression"]}
     return ["unidentifiable" if n in j["unidentifiable"] else "identifiable" if n in alone else "regrouped"
@@ -71,6 +95,13 @@ def test_analysis_report_in_a_browser(name, tmp_path):
     assert len(cells) == 10 * result.robot.n
     assert cells == _expected_classes(result.to_json(), list(result.names))
     assert sum(1 for t, a in els if t == "circle" and a.get("class") == "sv") == 10 * result.robot.n
+    assert sum(1 for t, a in els if t == "line" and a.get("class") in ("tol", "gap")) == 2
+    exprs = {b["name"]: b["expression"] for b in result.to_json()["base_parameters"]}
+    for a in (a for t, a in els if t == "td" and a.get("class") == "regrouped"):
+        into = a["data-into"].split()
+        assert into and all(a["data-param"] in exprs[b].replace("*", " ").split() for b in into)
+    _check_provenance(els, result, set(bodies))
+    assert float(body["data-render-ms"]) < 2000
 
 
 def test_identification_report_in_a_browser(tmp_path):
@@ -91,6 +122,11 @@ def test_identification_report_in_a_browser(tmp_path):
     assert len(series) == 2 * 7 * 2  # measured and predicted, 7 joints, training and held-out
     assert sum(1 for t, a in els if t == "rect" and a.get("class") == "pct") == len(ident.to_json()["base_parameters"])
     assert sum(1 for t, a in els if t == "table" and a.get("id") == "physical") == 1
+    spectra = [a["data-joint"] for t, a in els if t == "polyline" and a.get("class") == "spectrum"]
+    assert spectra == list(robot.joint_names)  # one amplitude spectrum per joint
+    assert sum(1 for t, a in els if t == "line" and a.get("class") == "cutoff") == 1
+    spec = ident.series["train"]["spectrum"]
+    assert spec["amplitude"].shape == (len(spec["f"]), 7) and spec["cutoff"] > 0
 
 
 @pytest.mark.slow
@@ -107,6 +143,10 @@ def test_talos_report_is_small_and_opens_fast(tmp_path):
         robot, _ = load_model(str(talos), floating=True, strict_inertia=False)
     result = baseparams.analyze(robot)
     els, seconds, size = _render(analysis_html(result), tmp_path, "talos")
-    assert size < 5e6 and seconds < 10  # headless start included; the page itself renders in well under 2 s
-    assert sum(1 for t, a in els if t == "g" and "body" in a.get("class", "")) == robot.n
-    assert json.loads(json.dumps(result.to_json()))["n_bodies"] == robot.n
+    assert size < 5e6 and seconds < 10  # headless start included
+    body = next(a for t, a in els if t == "body")
+    assert float(body["data-render-ms"]) < 2000  # the page's own time: navigation start to its scripts' end
+    bodies = [a["data-body"] for t, a in els if t == "g" and "body" in a.get("class", "")]
+    assert bodies == list(robot.names) and robot.n == 45
+    _check_provenance(els, result, set(bodies))
+    assert int(next(a for t, a in els if a.get("id") == "numerical")["data-count"]) == result.certificate.completed

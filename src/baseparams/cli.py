@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -24,6 +25,89 @@ from .errors import BaseparamsError, NoMovingBodiesError
 EXIT_OK, EXIT_INPUT, EXIT_UNDECIDED, EXIT_FAILED, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
 _STATUS_EXIT = {Status.CERTIFIED: EXIT_OK, Status.COMPLETED: EXIT_OK, Status.UNVERIFIED: EXIT_OK,
                 Status.UNDECIDED: EXIT_UNDECIDED, Status.FAILED: EXIT_FAILED}
+
+#: seconds after which a run without ``-v`` starts showing its progress lines on stderr
+PROGRESS_AFTER_S = 2.0
+
+
+class Progress:
+    """Progress lines on stderr (``baseparams: STEP [elapsed]``) for long runs.
+
+    With ``verbose`` every line is printed. Otherwise the lines are held back until the run has
+    taken :data:`PROGRESS_AFTER_S` seconds: then the current step is printed (a timer thread, so a
+    long step shows even before the next line) and every later line as it comes; a short run stays
+    quiet. Callable with one line, or usable as the text stream that
+    :func:`baseparams.analysis.analyze` writes to (``write``, ``flush``). A context manager: leaving
+    it stops the timer.
+
+    Parameters
+    ----------
+    verbose : bool
+        Print every line from the start (``-v``).
+    after : float, optional
+        Seconds before the lines show without ``verbose`` (default :data:`PROGRESS_AFTER_S`).
+    """
+
+    def __init__(self, verbose: bool, after: float | None = None):
+        self.t0 = time.perf_counter()
+        self.shown = bool(verbose)
+        self.last: str | None = None
+        self.lock = threading.Lock()
+        self.timer = None
+        if not verbose:
+            self.timer = threading.Timer(PROGRESS_AFTER_S if after is None else after, self._late)
+            self.timer.daemon = True
+            self.timer.start()
+
+    def _print(self, msg: str) -> None:
+        print(f"baseparams: {msg} [{time.perf_counter() - self.t0:.1f} s]", file=sys.stderr, flush=True)
+
+    def _late(self) -> None:
+        with self.lock:
+            self.shown = True
+            if self.last is not None:
+                self._print(f"{self.last} ...")
+
+    def __call__(self, msg: str) -> None:
+        """One progress line: printed now if lines show, else held as the current step."""
+        with self.lock:
+            self.last = msg
+            if self.shown:
+                self._print(msg)
+
+    def write(self, text: str) -> int:
+        """Take text written as to a stream: each non-empty line is a progress line.
+
+        Parameters
+        ----------
+        text : str
+            The text (``[baseparams]`` prefixes dropped).
+
+        Returns
+        -------
+        int
+            ``len(text)``, as a stream's ``write``.
+        """
+        for line in text.splitlines():
+            if line.strip():
+                self(line.removeprefix("[baseparams] ").strip())
+        return len(text)
+
+    def flush(self) -> None:
+        """Nothing to flush: lines are printed as they come."""
+
+    def close(self) -> None:
+        """Stop the timer (no line is printed after this)."""
+        with self.lock:
+            self.shown = False
+        if self.timer is not None:
+            self.timer.cancel()
+
+    def __enter__(self) -> Progress:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def _robot(args) -> Robot:  # noqa: F821
@@ -184,6 +268,8 @@ def cmd_analyze(args) -> int:
     from .analysis import analyze, format_report
 
     if any(ch in args.model for ch in "*?["):
+        if args.plot:
+            raise BaseparamsError("--plot applies to one model, not to a sweep over files")
         return _analyze_sweep(args)
     if args.symbolic or args.latex or args.codegen:
         return _analyze_symbolic(args)
@@ -191,14 +277,21 @@ def cmd_analyze(args) -> int:
         robot = _robot(args)
     except NoMovingBodiesError as exc:
         return _no_moving_bodies(args, exc)
-    result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
-                     extended=not args.paper_only, rows=args.rows, convention=args.convention,
-                     progress=sys.stderr if args.verbose else None)
-    text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
-    if args.html:
-        from .report.html import analysis_html
+    with Progress(args.verbose) as progress:
+        result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
+                         extended=not args.paper_only, rows=args.rows, convention=args.convention, progress=progress)
+        text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
+        if args.html:
+            from .report.html import analysis_html
 
-        _write_html(args.html, analysis_html(result))
+            progress("writing the HTML report")
+            _write_html(args.html, analysis_html(result))
+        if args.plot:
+            from .report.plots import analysis_plot
+
+            progress("drawing the figure")
+            analysis_plot(result, args.plot)
+            print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
     _emit(args, text)
     status = result.status
     if status in (Status.UNDECIDED, Status.FAILED):
@@ -238,31 +331,31 @@ def cmd_identify(args) -> int:
 
     couplings = tuple(MotorCoupling.parse(text) for text in args.coupling or ())
     robot = _robot(args)
-    progress = (lambda msg: print(f"baseparams: {msg}", file=sys.stderr)) if args.verbose else (lambda msg: None)
     files = _data_files(args.data)
     if len(files) > 1 or args.per_file or args.pooled:
         return _identify_fleet(args, robot, files)
-    progress(f"reading {args.data}")
-    log = read_log(files[0], robot, columns=args.columns)
-    val = read_log(args.validate, robot, columns=args.columns) if args.validate else None
-    progress(f"identifying ({args.method}) on {log.n_samples} samples")
-    t0 = time.perf_counter()
-    result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
-                      coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
-                      decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
-                      convention=args.convention, couplings=couplings)
-    progress(f"done in {time.perf_counter() - t0:.2f} s")
-    if args.urdf:
-        _write_identified_urdf(args, robot, result)
-    if args.plot:
-        from .report.plots import torque_plot
+    with Progress(args.verbose) as progress:
+        progress(f"reading {args.data}")
+        log = read_log(files[0], robot, columns=args.columns)
+        val = read_log(args.validate, robot, columns=args.columns) if args.validate else None
+        progress(f"identifying ({args.method}) on {log.n_samples} samples")
+        t0 = time.perf_counter()
+        result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
+                          coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
+                          decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
+                          convention=args.convention, couplings=couplings, progress=progress)
+        progress(f"identified in {time.perf_counter() - t0:.2f} s")
+        if args.urdf:
+            _write_identified_urdf(args, robot, result)
+        if args.plot:
+            from .report.plots import torque_plot
 
-        torque_plot(result, args.plot)
-        progress(f"plot written to {args.plot}")
-    if args.html:
-        from .report.html import identification_html
+            torque_plot(result, args.plot)
+            progress(f"plot written to {args.plot}")
+        if args.html:
+            from .report.html import identification_html
 
-        _write_html(args.html, identification_html(result))
+            _write_html(args.html, identification_html(result))
     _emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
     return EXIT_OK
 
@@ -462,10 +555,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "floating base's wrench only")
     s.add_argument("--convention", choices=values(Convention),
                    default=str(Convention.KHALIL), help="convention of the regrouped expressions (default khalil)")
-    s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
+    s.add_argument("-v", "--verbose", action="store_true",
+                   help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: the robot in 3D, each body's "
                                                   "parameters classed, the base parameters, the certification")
+    s.add_argument("--plot", metavar="FILE", help="a static figure (PNG/SVG/PDF; matplotlib): the robot at q = 0, the "
+                                                  "parameter grid by class, the singular values")
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="MODEL a glob (a design sweep): a Dask scheduler (default: a local cluster)")
     s.add_argument("--workers", type=int, metavar="N", help="MODEL a glob: local cluster size")
@@ -514,7 +610,8 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
     s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
-    s.add_argument("-v", "--verbose", action="store_true", help="progress lines on stderr")
+    s.add_argument("-v", "--verbose", action="store_true",
+                   help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.set_defaults(func=cmd_identify)
 

@@ -432,7 +432,9 @@ class Identification:
         Every decision taken on the data and the model, one line each.
     series : dict, optional
         ``{"train": {...}, "validation": {...} or None}``, each ``{"t" (S,), "tau" (S, m),
-        "tau_hat" (S, m), "joints" (m,)}``: the filtered measured and predicted torques (plots).
+        "tau_hat" (S, m), "joints" (m,)}``: the filtered measured and predicted torques (plots);
+        ``train`` also has ``"spectrum"``: the excitation spectrum of the training positions
+        (:func:`position_spectrum`).
     """
 
     fit: Fit
@@ -562,7 +564,7 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
              friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
-             convention: str = "khalil", memory_mb: float = 128.0, couplings=()) -> Identification:
+             convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -602,6 +604,9 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`, e.g. a
         coupled wrist): their rotor inertia and viscous and Coulomb friction ``Iam``, ``Fvm``,
         ``Fcm`` (those whose per-joint kind is modelled).
+    progress : callable, optional
+        Called with one line of text at each step (analysis, preprocessing, accumulation, fit,
+        validation, report series).
 
     Returns
     -------
@@ -622,26 +627,34 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
-                         min_speed, prior_weight, convention, memory_mb, tuple(couplings))
+                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
-              prior_weight, convention, memory_mb, couplings=()) -> Identification:
+              prior_weight, convention, memory_mb, couplings=(), progress=None) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .ident.preprocess import prepare
 
+    say = progress or (lambda msg: None)
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
+    say(f"analysing {robot.name} (base parameters, drive model)")
     model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width,
                         couplings=couplings)
     cols = log_columns(model, log)
+    say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
+    say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
     acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed)
+    say(f"fitting ({method})")
     f = fit(model, acc, method, prior_weight)
+    say("predicted torques and excitation spectrum for the report")
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
     train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
     val, series = None, {"train": _series(model, prep, cols, f.theta, names, memory_mb), "validation": None}
+    series["train"]["spectrum"] = position_spectrum(train, cols, prep.design.fs, prep.design.cutoff, prep.full.t)
     if held is not None:
+        say(f"validating on {held.n_samples} held-out samples")
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
         vcols = log_columns(model, held)
         vacc, _ = accumulate_prepared(model, vprep, vcols, memory_mb, held)
@@ -666,6 +679,59 @@ def _series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names:
         tau_hat = np.concatenate([model.regressor(q[idx[k:k + 20000]], dq[idx[k:k + 20000]],
                                                   ddq[idx[k:k + 20000]]) @ theta for k in range(0, len(idx), 20000)])
     return {"t": prep.t, "tau": prep.tau[:, cols], "tau_hat": tau_hat, "joints": names}
+
+
+def position_spectrum(log, cols, fs: float, cutoff: float | None = None, t=None, bands: int = 300,
+                      segment: int = 2**16, max_segments: int = 64) -> dict:
+    """The amplitude spectrum of a log's positions per joint (the excitation spectrum).
+
+    The raw (unfiltered) positions on a uniform grid, split into Hann-windowed segments of at most
+    ``segment`` samples (half overlapping, at most ``max_segments`` spread over the log), their
+    power averaged; then, for plotting on a log axis, the largest amplitude in each of ``bands``
+    log-spaced frequency bands.
+
+    Parameters
+    ----------
+    log : JointLog
+        The log (``t (S,)``, ``q (S, joints)``).
+    cols : array_like of int, shape ``(m,)``
+        The log columns to analyse.
+    fs : float
+        The uniform grid's rate [Hz].
+    cutoff : float, optional
+        The low-pass cutoff [Hz] used on the log (recorded, for the plot).
+    t : ndarray, optional
+        The uniform grid (default: ``log.t``, taken as uniform); positions are interpolated on it.
+    bands : int
+        Log-spaced frequency bands of the result.
+    segment : int
+        Longest segment [samples]: the frequency resolution is ``fs / segment``.
+    max_segments : int
+        Most segments averaged (a very long log is sampled, not read whole).
+
+    Returns
+    -------
+    dict
+        ``{"f": ndarray (F,) [Hz], "amplitude": ndarray (F, m) [rad or m], "cutoff": float or None,
+        "fs": float, "of": "q"}``: ``F <= bands`` band frequencies (mean of each band's bins) and
+        the largest single-sided amplitude in the band (a sinusoid of amplitude ``A`` reads ``A``).
+    """
+    cols = np.asarray(cols, dtype=int)
+    t = log.t if t is None else np.asarray(t, dtype=float)
+    seg = int(min(len(t), segment))
+    w = np.hanning(seg)
+    starts = np.unique(np.linspace(0, len(t) - seg, min(max_segments, (len(t) - seg) // max(seg // 2, 1) + 1))
+                       .astype(int))
+    power = np.zeros((seg // 2 + 1, len(cols)))
+    for k in starts:
+        x = np.column_stack([np.interp(t[k:k + seg], log.t, log.q[:, c]) for c in cols])
+        power += np.abs(np.fft.rfft((x - x.mean(axis=0)) * w[:, None], axis=0)) ** 2
+    amp = (2 * np.sqrt(power / len(starts)) / w.sum())[1:]
+    f = np.fft.rfftfreq(seg, 1.0 / fs)[1:]
+    band = np.floor(np.log(f / f[0]) / np.log(max(f[-1] / f[0], 1.0 + 1e-12)) * bands).clip(0, bands - 1)
+    first = np.flatnonzero(np.r_[True, np.diff(band) > 0])
+    return {"f": np.add.reduceat(f, first) / np.diff(np.r_[first, len(f)]),
+            "amplitude": np.maximum.reduceat(amp, first, axis=0), "cutoff": cutoff, "fs": float(fs), "of": "q"}
 
 
 def split_log(log, seconds: float):

@@ -3,12 +3,18 @@
 Everything is inlined: the data as JSON in a ``<script type="application/json">`` element, the
 styles and a small vanilla-JavaScript viewer. The analysis report draws the robot at q = 0 in 3D
 (links as segments between joint frames, joint axes, loop joints marked; drag to rotate), a grid of
-each body's ten standard parameters classed ``identifiable`` / ``regrouped`` /
-``unidentifiable`` (clicking a body highlights its row), the regrouped base parameters and the
-certification's singular values on a log scale with the tolerance. The identification report
-plots measured and predicted torques per joint, residual histograms, the base parameters with
-their %sigma as bars, the condition number and, for a physical fit, each body's mass and the
-smallest eigenvalue of its pseudo-inertia.
+each body's ten standard parameters classed ``identifiable`` / ``regrouped`` (into which base
+parameter) / ``unidentifiable`` (clicking a body highlights its row and back), the nullspace
+directions grouped by provenance (principle or rule, joint, points; hovering or clicking one shows
+the joint's point and axis and the bodies involved on the 3D view), the regrouped base parameters
+and the certification's singular values on a log scale with the tolerance and the gap. The
+identification report plots measured and predicted torques per joint, residual histograms, the
+base parameters with their %sigma as bars, the condition number, for a physical fit each body's
+mass and the smallest eigenvalue of its pseudo-inertia, and the excitation spectrum of the
+training positions with the low-pass cutoff.
+
+Both pages write the time their scripts finished, ``performance.now()`` in milliseconds since
+navigation started, into ``data-render-ms`` on ``<body>`` (and ``data-ready="1"``).
 """
 
 from __future__ import annotations
@@ -19,49 +25,92 @@ import json
 import numpy as np
 
 _STYLE = """
-body{font-family:system-ui,sans-serif;margin:1.5em;color:#222;max-width:1200px}
+body{font-family:system-ui,sans-serif;margin:1.5em;color:#222;max-width:1250px}
 h1{font-size:1.4em} h2{font-size:1.15em;margin-top:1.6em}
 table{border-collapse:collapse;font-size:12px} td,th{border:1px solid #ccc;padding:2px 5px}
 td.identifiable{background:#cfe8cf} td.regrouped{background:#ffe9b3} td.unidentifiable{background:#f4c7c7}
-tr.hl td{outline:2px solid #1f5fbf}
+tr.hl td,tr.hl th{outline:2px solid #1f5fbf} #grid tr[data-body]{cursor:pointer}
 .expr{font-family:monospace;font-size:12px;white-space:pre-wrap}
-svg{background:#fafafa;border:1px solid #ddd}
+svg{background:#fafafa;border:1px solid #ddd} svg text{font-size:10px;fill:#555}
+#view3d{cursor:grab} g.body line.link{stroke:#333} g.body.sel line.link{stroke:#1f5fbf}
+g.body.involved line.link{stroke:#e07000;stroke-width:5} g.body{cursor:pointer}
+g.prov{display:none} g.prov.on{display:inline} g.prov circle{fill:#e07000;stroke:#fff}
+g.prov line{stroke:#e07000;stroke-width:2;stroke-dasharray:6 3} g.prov text{fill:#a04000;font-size:11px}
+#provenance li.prov-item{cursor:pointer;font-size:13px} #provenance li.prov-item.on{background:#ffe2c2}
+#provenance li.source{margin-top:.4em} .muted{color:#777}
 .legend span{display:inline-block;padding:0 6px;margin-right:6px}
+#torques{display:flex;flex-wrap:wrap;gap:.3em 1.2em} div.joint{font-size:13px}
 """
 
 _VIEWER = """
 (function(){
 const data = JSON.parse(document.getElementById('robot-data').textContent);
-const svg = document.getElementById('view3d'); const W = svg.clientWidth || 480, H = 420;
-let ax = -0.5, az = 0.6, drag = null;
+const svg = document.getElementById('view3d');
+const W = +svg.getAttribute('width'), H = +svg.getAttribute('height'), C = data.center, S = data.scale;
+let ax = -0.35, az = 0.6, drag = null, pinned = null;
+const lines = Array.from(svg.querySelectorAll('line[data-a]'),
+  el => [el, JSON.parse(el.dataset.a), JSON.parse(el.dataset.b)]);
+const dots = Array.from(svg.querySelectorAll('[data-p]'), el => [el, JSON.parse(el.dataset.p)]);
 function project(p){
-  const ca=Math.cos(az), sa=Math.sin(az), cb=Math.cos(ax), sb=Math.sin(ax);
-  const x = ca*p[0] - sa*p[1], y = sa*p[0] + ca*p[1], z = p[2];
-  const y2 = cb*y - sb*z, z2 = sb*y + cb*z;
-  return [W/2 + data.scale*x, H/2 - data.scale*z2];
+  const x0 = p[0] - C[0], y0 = p[1] - C[1], z0 = p[2] - C[2];
+  const ca = Math.cos(az), sa = Math.sin(az), cb = Math.cos(ax), sb = Math.sin(ax);
+  const x = ca*x0 - sa*y0, y = sa*x0 + ca*y0, z = sb*y + cb*z0;
+  return [(W/2 + S*x).toFixed(1), (H/2 - S*z).toFixed(1)];
 }
 function draw(){
-  for (const el of svg.querySelectorAll('line[data-a]')) {
-    const a = project(JSON.parse(el.dataset.a)), b = project(JSON.parse(el.dataset.b));
-    el.setAttribute('x1', a[0]); el.setAttribute('y1', a[1]); el.setAttribute('x2', b[0]); el.setAttribute('y2', b[1]);
-  }
+  for (const [el, a, b] of lines) { const p = project(a), q = project(b);
+    el.setAttribute('x1', p[0]); el.setAttribute('y1', p[1]);
+    el.setAttribute('x2', q[0]); el.setAttribute('y2', q[1]); }
+  for (const [el, a] of dots) { const p = project(a);
+    if (el.tagName === 'circle') { el.setAttribute('cx', p[0]); el.setAttribute('cy', p[1]); }
+    else { el.setAttribute('x', +p[0] + 7); el.setAttribute('y', +p[1] - 7); } }
 }
-svg.addEventListener('mousedown', e => drag = [e.clientX, e.clientY, ax, az]);
+svg.addEventListener('mousedown', e => { drag = [e.clientX, e.clientY, ax, az]; e.preventDefault(); });
 window.addEventListener('mouseup', () => drag = null);
 window.addEventListener('mousemove', e => { if (!drag) return;
   az = drag[3] + (e.clientX - drag[0]) / 150; ax = drag[2] + (e.clientY - drag[1]) / 150; draw(); });
-for (const g of svg.querySelectorAll('g.body')) g.addEventListener('click', () => {
-  for (const r of document.querySelectorAll('tr.hl')) r.classList.remove('hl');
-  const row = document.querySelector('tr[data-body="' + g.dataset.body + '"]'); if (row) row.classList.add('hl');
-});
-draw(); document.body.dataset.ready = '1';
+const bodyEl = {}; for (const g of svg.querySelectorAll('g.body')) bodyEl[g.dataset.body] = g;
+function select(name){
+  for (const el of document.querySelectorAll('tr.hl, g.body.sel')) el.classList.remove('hl', 'sel');
+  const row = document.querySelector('#grid tr[data-body="' + CSS.escape(name) + '"]');
+  if (row) row.classList.add('hl'); if (bodyEl[name]) bodyEl[name].classList.add('sel');
+}
+for (const g of svg.querySelectorAll('g.body')) g.addEventListener('click', () => select(g.dataset.body));
+for (const r of document.querySelectorAll('#grid tr[data-body]'))
+  r.addEventListener('click', () => select(r.dataset.body));
+const provs = {}; for (const g of svg.querySelectorAll('g.prov')) provs[g.dataset.group] = g;
+function show(id, on){
+  const g = provs[id]; if (!g) return; g.classList.toggle('on', on);
+  for (const b of JSON.parse(g.dataset.bodies)) if (bodyEl[b]) bodyEl[b].classList.toggle('involved', on);
+  const li = document.querySelector('li.prov-item[data-group="' + id + '"]'); if (li) li.classList.toggle('on', on);
+}
+for (const li of document.querySelectorAll('li.prov-item')) { const id = li.dataset.group;
+  li.addEventListener('mouseenter', () => { if (pinned === null) show(id, true); });
+  li.addEventListener('mouseleave', () => { if (pinned === null) show(id, false); });
+  li.addEventListener('click', () => { const was = pinned; if (was !== null) show(was, false);
+    pinned = was === id ? null : id; if (pinned !== null) show(id, true); });
+}
+const h = location.hash.match(/prov=(\\d+)/); if (h && provs[h[1]]) { pinned = h[1]; show(h[1], true); }
+draw();
+document.body.dataset.renderMs = performance.now().toFixed(1); document.body.dataset.ready = '1';
 })();
 """
+
+_DONE = "document.body.dataset.renderMs = performance.now().toFixed(1); document.body.dataset.ready = '1';"
+
+#: line colours of per-joint series (matplotlib's tab10)
+PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22",
+           "#17becf")
 
 
 def _page(title: str, body: str, script: str = "") -> str:
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
             f"<style>{_STYLE}</style></head><body>{body}<script>{script}</script></body></html>")
+
+
+def _attr(value) -> str:
+    """A JSON value as an HTML attribute's text (quoted with ``'``)."""
+    return html.escape(json.dumps(value), quote=True)
 
 
 def parameter_classes(result) -> dict[str, str]:
@@ -88,64 +137,258 @@ def parameter_classes(result) -> dict[str, str]:
     return out
 
 
-def _robot_svg(robot) -> tuple[str, dict]:
-    """The 3D view's SVG (one ``g.body`` per body) and its data (scale)."""
+def regrouped_into(result) -> dict[str, list[str]]:
+    """The base parameters each standard parameter appears in.
+
+    Parameters
+    ----------
+    result : Analysis
+        The analysis.
+
+    Returns
+    -------
+    dict of str to list of str
+        ``name -> [base parameter names]`` in :attr:`~baseparams.analysis.Analysis.convention`:
+        empty for an unidentifiable parameter, its own name for one identifiable alone.
+    """
+    base = result.base
+    names = base.base_names()
+    return {name: [names[r] for r in np.flatnonzero(base.E[:, k] != 0)] for k, name in enumerate(base.names)}
+
+
+def _axis(robot, i: int) -> np.ndarray | None:
+    """Body ``i``'s (first) joint axis in the world at q = 0, or None (S, F joints)."""
+    if robot.jtype[i] not in "RPUC":
+        return None
+    z = robot.M0[i, :3, :3] @ np.asarray(robot.axes[i], dtype=float).reshape(-1, 3)[0][:3]
+    return z / np.linalg.norm(z) if np.linalg.norm(z) > 0 else None
+
+
+def _pt(p) -> str:
+    return _attr(np.round(np.asarray(p, dtype=float), 6).tolist())
+
+
+def _robot_parts(robot, span: float) -> list[str]:
+    """One ``g.body`` per body (its link and joint axis) and one ``g.loop`` per loop joint."""
     pos = robot.M0[:, :3, 3]
-    span = float(np.ptp(np.vstack([pos, np.zeros((1, 3))]), axis=0).max()) or 1.0
     parts = []
     for i, name in enumerate(robot.names):
         p = robot.parent[i]
         a = np.zeros(3) if p < 0 else pos[p]
-        z = robot.M0[i, :3, :3] @ np.asarray(robot.axes[i]).reshape(-1, 3)[0][:3] if robot.jtype[i] in "RPU" else None
-        lines = [f"<line data-a='{json.dumps(a.round(6).tolist())}' data-b='{json.dumps(pos[i].round(6).tolist())}' "
-                 f"stroke='#333' stroke-width='3'/>"]
-        if z is not None and np.linalg.norm(z) > 0:
-            tip = pos[i] + 0.08 * span * z / np.linalg.norm(z)
-            lines.append(f"<line data-a='{json.dumps(pos[i].round(6).tolist())}' "
-                         f"data-b='{json.dumps(tip.round(6).tolist())}' stroke='#c33' stroke-width='2'/>")
+        lines = [f"<line class='link' data-a='{_pt(a)}' data-b='{_pt(pos[i])}' stroke-width='3'/>"]
+        z = _axis(robot, i)
+        if z is not None:
+            lines.append(f"<line class='axis' data-a='{_pt(pos[i] - 0.04 * span * z)}' "
+                         f"data-b='{_pt(pos[i] + 0.06 * span * z)}' stroke='#c33' stroke-width='2'/>")
         parts.append(f"<g class='body' data-body='{html.escape(name)}'><title>{html.escape(name)} "
-                     f"({robot.jtype[i]})</title>{''.join(lines)}</g>")
-    for lj in robot.loops:
+                     f"(joint {html.escape(robot.joint_names[i])}, {robot.jtype[i]})</title>{''.join(lines)}</g>")
+    for lj in robot.loops:  # the cut joint, and both sides' links to it (dashed)
         m = lj.M[:3, 3]
-        parts.append(f"<g class='loop' data-loop='{html.escape(lj.name)}'><line data-a='{json.dumps(m.tolist())}' "
-                     f"data-b='{json.dumps((m + 0.02 * span).tolist())}' stroke='#1f5fbf' stroke-width='6'/></g>")
-    return (f"<svg id='view3d' width='480' height='420'>{''.join(parts)}</svg>",
-            {"scale": 0.8 * 420 / span / 1.6})
+        ends = [(lj.parent, m), (lj.child, m if lj.M_child is None else lj.M_child[:3, 3])]
+        sides = "".join(f"<line data-a='{_pt(np.zeros(3) if b < 0 else pos[b])}' data-b='{_pt(e)}' stroke='#1f5fbf' "
+                        f"stroke-width='2' stroke-dasharray='5 3'/>" for b, e in ends)
+        parts.append(f"<g class='loop' data-loop='{html.escape(lj.name)}'><title>loop joint {html.escape(lj.name)} "
+                     f"({lj.type})</title>{sides}<circle data-p='{_pt(m)}' r='5' fill='#fff' stroke='#1f5fbf' "
+                     f"stroke-width='2'/></g>")
+    return parts
+
+
+def _joint_place(robot, source, j: int) -> tuple[str, np.ndarray, np.ndarray | None]:
+    """What a column's ``joint`` index names: its description, point O and axis (world, q = 0).
+
+    A tree joint (the paper's principles), a body (the extended rules, unmeasured roots; drawn at
+    its joint frame) or, for ``j >= n``, loop joint ``j - n``.
+    """
+    if j >= robot.n:
+        lj = robot.loops[j - robot.n]
+        axes = np.asarray(lj.axes, dtype=float).reshape(-1, 3)
+        axis = lj.M[:3, :3] @ axes[0] if len(axes) else None
+        return f"loop joint {lj.name} ({lj.type})", lj.M[:3, 3], axis
+    if source.is_paper:
+        return f"joint {robot.joint_names[j]} ({robot.jtype[j]})", robot.M0[j, :3, 3], _axis(robot, j)
+    return f"body {robot.names[j]}", robot.M0[j, :3, 3], None
+
+
+def provenance_groups(result) -> tuple[object, list[dict]]:
+    """DRNG's columns grouped by provenance: (principle or rule, joint).
+
+    DRNG is run again on the analysed robot (``result.extended``, ``result.rows``): an
+    :class:`~baseparams.analysis.Analysis` keeps its counts, not its columns.
+
+    Parameters
+    ----------
+    result : Analysis
+        The analysis.
+
+    Returns
+    -------
+    drng : DRNGResult
+        The columns (:func:`baseparams.nullspace.drng.drng`).
+    groups : list of dict
+        In source order, then joint order: ``{"source": Source, "joint": int (column's joint
+        index), "place": str, "point": ndarray (3,), "axis": ndarray (3,) or None, "columns": int,
+        "labels": [str] (distinct, e.g. "O z"), "bodies": [str] (child, parent and extra bodies)}``.
+    """
+    from ..enums import Source
+    from ..nullspace.drng import drng
+
+    res = drng(result.robot, extended=result.extended, rows=result.rows)
+    c, robot = res.columns, result.robot
+    groups: dict[tuple[int, int], dict] = {}
+    for k in range(len(c)):
+        g = groups.setdefault((int(c.principle[k]), int(c.joint[k])), {"columns": 0, "labels": [], "bodies": set()})
+        g["columns"] += 1
+        if str(c.label[k]) not in g["labels"]:
+            g["labels"].append(str(c.label[k]))
+        g["bodies"] |= {int(b) for b in (c.child[k], c.parent[k], c.extra[k]) if b >= 0}
+    out = []
+    for (s, j), g in sorted(groups.items()):
+        place, point, axis = _joint_place(robot, Source(s), j)
+        out.append({"source": Source(s), "joint": j, "place": place, "point": point, "axis": axis,
+                    "columns": g["columns"], "labels": g["labels"],
+                    "bodies": [robot.names[b] for b in sorted(g["bodies"])]})
+    return res, out
+
+
+def _prov_parts(groups: list[dict], span: float) -> list[str]:
+    """One hidden ``g.prov`` per provenance group: the joint's point O, its axis and a label."""
+    parts = []
+    for k, g in enumerate(groups):
+        o = np.asarray(g["point"], dtype=float)
+        axis = ""
+        if g["axis"] is not None:
+            z = np.asarray(g["axis"], dtype=float)
+            axis = f"<line data-a='{_pt(o - 0.25 * span * z)}' data-b='{_pt(o + 0.25 * span * z)}'/>"
+        parts.append(f"<g class='prov' data-group='{k}' data-source='{html.escape(g['source'].label)}' "
+                     f"data-joint='{html.escape(g['place'])}' data-columns='{g['columns']}' "
+                     f"data-bodies='{_attr(g['bodies'])}'>{axis}<circle data-p='{_pt(o)}' r='6'/>"
+                     f"<text data-p='{_pt(o)}'>{html.escape(g['place'])}</text></g>")
+    return parts
+
+
+def _robot_svg(robot, groups: list[dict], width: int = 500, height: int = 440) -> tuple[str, dict]:
+    """The 3D view's SVG (``g.body`` per body, ``g.loop``, ``g.prov`` per provenance group) and its data."""
+    pts = np.vstack([robot.M0[:, :3, 3], np.zeros((1, 3))] + [lj.M[None, :3, 3] for lj in robot.loops])
+    center = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+    radius = float(np.linalg.norm(pts - center, axis=1).max()) or 1.0
+    parts = _robot_parts(robot, 2 * radius) + _prov_parts(groups, 2 * radius)
+    return (f"<svg id='view3d' width='{width}' height='{height}'>{''.join(parts)}</svg>",
+            {"scale": 0.45 * min(width, height) / radius, "center": center.round(6).tolist()})
 
 
 def _grid(result) -> str:
     cls = parameter_classes(result)
+    into = regrouped_into(result)
     from ..model import inertia
 
     head = "".join(f"<th>{html.escape(str(p))}</th>" for p in inertia.NAMES.get(result.convention, range(10)))
     rows = []
     for i, body in enumerate(result.robot.names):
-        cells = "".join(f"<td class='{cls[n]}' title='{html.escape(n)}: {cls[n]}'>{html.escape(n.split('.')[-1])}</td>"
-                        for n in result.names[10 * i:10 * i + 10])
-        rows.append(f"<tr data-body='{html.escape(body)}'><th>{html.escape(body)}</th>{cells}</tr>")
-    legend = ("<p class='legend'><span class='identifiable' style='background:#cfe8cf'>identifiable alone</span>"
-              "<span style='background:#ffe9b3'>regrouped</span><span style='background:#f4c7c7'>unidentifiable"
-              "</span></p>")
+        cells = []
+        for n in result.names[10 * i:10 * i + 10]:
+            why = {"regrouped": f" into {', '.join(into[n])}", "identifiable": " alone"}.get(cls[n], "")
+            cells.append(f"<td class='{cls[n]}' data-param='{html.escape(n)}' "
+                         f"data-into='{html.escape(' '.join(into[n]))}' "
+                         f"title='{html.escape(n)}: {cls[n]}{html.escape(why)}'>{html.escape(n.split('.')[-1])}</td>")
+        rows.append(f"<tr data-body='{html.escape(body)}'><th>{html.escape(body)}</th>{''.join(cells)}</tr>")
+    legend = ("<p class='legend'><span style='background:#cfe8cf'>identifiable alone</span>"
+              "<span style='background:#ffe9b3'>regrouped (hover: into which)</span>"
+              "<span style='background:#f4c7c7'>unidentifiable</span></p>")
     return f"{legend}<table id='grid'><tr><th>body</th>{head}</tr>{''.join(rows)}</table>"
 
 
-def _log_plot(values: np.ndarray, tol: float | None, plot_id: str, width: int = 600, height: int = 220) -> str:
-    """An SVG of positive values on a log scale (one ``circle.sv`` each), a dashed tolerance line."""
+def _source_kind(source) -> str:
+    return ("paper principle" if source.is_paper else "extended rule" if source.is_extended
+            else "measured rows: joint torques only")
+
+
+def _provenance_list(result, groups: list[dict]) -> str:
+    """The nullspace directions by source, each source's groups as hoverable entries."""
+    from ..enums import Source
+
+    items = []
+    for src in Source:
+        if src.label not in result.by_principle:
+            continue
+        mine = [(k, g) for k, g in enumerate(groups) if g["source"] is src]
+        sub = "".join(
+            f"<li class='prov-item' data-group='{k}' data-source='{html.escape(src.label)}' "
+            f"data-columns='{g['columns']}'><b>{html.escape(g['place'])}</b>: {g['columns']} "
+            f"column{'s' * (g['columns'] != 1)} ({html.escape(', '.join(g['labels'][:4]))}"
+            f"{', ...' if len(g['labels']) > 4 else ''}); bodies {html.escape(', '.join(g['bodies']))}</li>"
+            for k, g in mine)
+        ncols = sum(g["columns"] for _, g in mine)
+        items.append(f"<li class='source' data-source='{html.escape(src.label)}' "
+                     f"data-rank='{result.by_principle[src.label]}'><b>{html.escape(src.label)}</b> "
+                     f"<span class='muted'>({_source_kind(src)})</span>: rank {result.by_principle[src.label]} "
+                     f"from {ncols} column{'s' * (ncols != 1)}<ul>{sub}</ul></li>")
+    cert = result.certificate
+    if cert is None:
+        num = ("<p id='numerical' data-count='0'>Not certified (<code>--no-verify</code>): the directions above "
+               "are DRNG's, unverified.</p>")
+    else:
+        num = (f"<p id='numerical' data-count='{cert.completed}'><b>{cert.completed}</b> "
+               f"direction{'s' * (cert.completed != 1)} found numerically (no geometric rule).</p>")
+    return (f"<p>Each direction of the nullspace is a combination of parameters that no measurement sees; "
+            f"it comes from a geometric principle or rule at a joint (O: the joint's point, z: its axis, "
+            f"x, y: directions across it). Hover or click an entry to show it on the 3D view "
+            f"(<code>#prov=K</code> in the address shows entry K on opening).</p>"
+            f"<ul id='provenance'>{''.join(items)}</ul>{num}")
+
+
+def _decade_ticks(lo: float, hi: float) -> list[int]:
+    """Integer powers of ten in ``[lo, hi]`` (log10 values), at most about eight."""
+    ks = list(range(int(np.ceil(lo)), int(np.floor(hi)) + 1))
+    step = max(1, len(ks) // 8)
+    return ks[::step]
+
+
+def _log_plot(values: np.ndarray, tol: float | None, plot_id: str, rank: int | None = None, width: int = 640,
+              height: int = 240) -> str:
+    """An SVG of positive values on a log scale (``circle.sv`` each), the tolerance, the rank gap."""
     v = np.asarray(values, dtype=float)
     v = np.where(v > 0, v, np.nan)
     finite = v[np.isfinite(v)]
     lo, hi = (np.log10(finite.min()) - 0.5, np.log10(finite.max()) + 0.5) if finite.size else (-1, 1)
     if tol:
         lo = min(lo, np.log10(tol) - 0.5)
+    left, right = 45, 10
+
+    def x(k):
+        return left + k * (width - left - right) / max(len(v) - 1, 1)
 
     def y(val):
         return height - 10 - (np.log10(val) - lo) / (hi - lo) * (height - 20)
 
-    pts = "".join(f"<circle class='sv' cx='{10 + k * (width - 20) / max(len(v) - 1, 1):.1f}' "
-                  f"cy='{(y(val) if np.isfinite(val) else height - 5):.1f}' r='2'/>" for k, val in enumerate(v))
-    line = (f"<line class='tol' x1='0' x2='{width}' y1='{y(tol):.1f}' y2='{y(tol):.1f}' stroke='#c33' "
+    ticks = "".join(f"<line x1='{left - 4}' x2='{width}' y1='{y(10.0**e):.1f}' y2='{y(10.0**e):.1f}' "
+                    f"stroke='#eee'/><text x='2' y='{y(10.0**e) + 3:.1f}'>1e{e}</text>" for e in _decade_ticks(lo, hi))
+    pts = "".join(f"<circle class='sv' cx='{x(k):.1f}' cy='{(y(val) if np.isfinite(val) else height - 5):.1f}' "
+                  f"r='2.5'/>" for k, val in enumerate(v))
+    line = (f"<line class='tol' x1='{left}' x2='{width}' y1='{y(tol):.1f}' y2='{y(tol):.1f}' stroke='#c33' "
             f"stroke-dasharray='4'/>") if tol else ""
-    return f"<svg id='{plot_id}' width='{width}' height='{height}'>{pts}{line}</svg>"
+    gap = ""
+    if rank is not None and 0 < rank < len(v):
+        gx = 0.5 * (x(rank - 1) + x(rank))
+        gap = (f"<line class='gap' x1='{gx:.1f}' x2='{gx:.1f}' y1='0' y2='{height}' stroke='#1f5fbf' "
+               f"stroke-dasharray='2 3'/><text x='{gx + 4:.1f}' y='12'>rank {rank} | nullity {len(v) - rank}</text>")
+    return f"<svg id='{plot_id}' width='{width}' height='{height}'>{ticks}{pts}{line}{gap}</svg>"
+
+
+def _certification(result) -> str:
+    cert = result.certificate
+    if cert is None:
+        return "<h2>Certification: skipped</h2><p>The nullity is DRNG's rank, unverified (--no-verify).</p>"
+    num = cert.numerical
+    s = cert.sampling or {}
+    sampling = f"{s.get('kept', num.samples)} of {s.get('requested', num.samples)} random samples kept"
+    if "not_converged" in s:
+        sampling += (f" ({s['not_converged']} outside the workspace, {s['branch_jumps']} left the assembly mode, "
+                     f"{s['ill_conditioned']} ill-conditioned; max loop residual {s['max_loop_residual']:.1e})")
+    return (f"<h2>Certification: {html.escape(str(cert.status))}</h2><p>{html.escape(cert.message)}</p>"
+            f"<p>Singular values of the sampled regressor (log scale); dashed red: the tolerance "
+            f"({num.tol:.3g}); dotted blue: the rank decision, singular-value gap {num.gap:.3g}.</p>"
+            f"{_log_plot(num.singular_values, num.tol, 'svplot', num.rank)}"
+            f"<p id='sampling'>Sampling: {html.escape(sampling)}.</p>")
 
 
 def analysis_html(result) -> str:
@@ -162,30 +405,24 @@ def analysis_html(result) -> str:
         The page.
     """
     j = result.to_json()
-    view, data = _robot_svg(result.robot)
+    _, groups = provenance_groups(result)
+    view, data = _robot_svg(result.robot, groups)
     exprs = "".join(f"<tr><td>{html.escape(b['name'])}</td><td class='expr'>{html.escape(b['expression'])}</td></tr>"
                     for b in j["base_parameters"])
-    cert = result.certificate
-    sv = ""
-    if cert is not None:
-        num = cert.numerical
-        sv = (f"<h2>Certification: {html.escape(str(cert.status))}</h2><p>{html.escape(cert.message)}</p>"
-              f"<p>Singular values of the sampled regressor (log scale), tolerance dashed "
-              f"({num.tol:.3g}), gap {num.gap:.3g}:</p>{_log_plot(num.singular_values, num.tol, 'svplot')}"
-              f"<p>Sampling: {html.escape(json.dumps(cert.sampling))}</p>")
-    prov = "".join(f"<li>{html.escape(str(k))}: rank {v}</li>" for k, v in result.by_principle.items())
+    loops = (f", {len(result.robot.loops)} loop joints (blue circles)" if result.robot.loops else "")
     body = (f"<h1>{html.escape(result.robot.name)}: {result.n_base} base parameters, nullity {result.nullity} "
             f"({html.escape(str(result.status))})</h1>"
-            f"<p>{result.robot.n} bodies, {10 * result.robot.n} standard parameters ({html.escape(result.convention)} "
-            f"convention), rows: {html.escape(str(result.rows))}. Drag the view to rotate; click a body.</p>"
+            f"<p>{result.robot.n} bodies{loops}, {10 * result.robot.n} standard parameters "
+            f"({html.escape(result.convention)} convention), rows: {html.escape(str(result.rows))}. The robot at "
+            f"q = 0 (red: joint axes); drag the view to rotate; click a body or a row.</p>"
             f"<div style='display:flex;gap:1em;flex-wrap:wrap'><div>{view}</div><div>{_grid(result)}</div></div>"
-            f"<h2>Nullspace directions by source</h2><ul>{prov}</ul>"
-            f"<h2>Base parameters</h2><table id='base'>{exprs}</table>{sv}"
+            f"<h2>Why: the nullspace directions by provenance</h2>{_provenance_list(result, groups)}"
+            f"<h2>Base parameters</h2><table id='base'>{exprs}</table>{_certification(result)}"
             f"<script type='application/json' id='robot-data'>{json.dumps(data)}</script>")
     return _page(f"{result.robot.name}: base parameters", body, _VIEWER)
 
 
-def _series_svg(t: np.ndarray, ys: list[np.ndarray], plot_id: str, width: int = 560, height: int = 120,
+def _series_svg(t: np.ndarray, ys: list[np.ndarray], plot_id: str, width: int = 380, height: int = 110,
                 colors=("#555", "#1f5fbf")) -> str:
     """Polylines (one ``polyline.series`` per array in ``ys``) over ``t``, at most 1500 points each."""
     step = max(1, len(t) // 1500)
@@ -203,12 +440,71 @@ def _series_svg(t: np.ndarray, ys: list[np.ndarray], plot_id: str, width: int = 
     return f"<svg class='plot' id='{plot_id}' width='{width}' height='{height}'>{''.join(lines)}</svg>"
 
 
-def _histogram(e: np.ndarray, width: int = 200, height: int = 120) -> str:
+def _histogram(e: np.ndarray, width: int = 150, height: int = 110) -> str:
     counts, _ = np.histogram(e, bins=30)
     top = max(int(counts.max()), 1)
     bars = "".join(f"<rect x='{k * width / 30:.1f}' y='{height - c / top * height:.1f}' width='{width / 30 - 1:.1f}' "
                    f"height='{c / top * height:.1f}' fill='#888'/>" for k, c in enumerate(counts))
     return f"<svg class='hist' width='{width}' height='{height}'>{bars}</svg>"
+
+
+def _spectrum_svg(spec: dict, joints: list[str], width: int = 640, height: int = 260) -> str:
+    """Amplitude spectra on log-log axes: one ``polyline.spectrum`` per joint, ``line.cutoff``."""
+    f, a = np.asarray(spec["f"], dtype=float), np.asarray(spec["amplitude"], dtype=float)
+    keep = f > 0
+    f, a = f[keep], a[keep]
+    top = float(np.max(a)) if a.size and np.max(a) > 0 else 1.0
+    a = np.clip(a, top * 1e-7, None)
+    (x0, x1), (y0, y1) = np.log10([f.min(), f.max()]), (np.log10(top) - 7.2, np.log10(top) + 0.2)
+    left, bottom = 45, 18
+
+    def x(v):
+        return left + (np.log10(v) - x0) / ((x1 - x0) or 1.0) * (width - left - 10)
+
+    def y(v):
+        return height - bottom - (np.log10(v) - y0) / (y1 - y0) * (height - bottom - 5)
+
+    grid = "".join(f"<line x1='{x(10.0**e):.1f}' x2='{x(10.0**e):.1f}' y1='0' y2='{height - bottom}' stroke='#eee'/>"
+                   f"<text x='{x(10.0**e) - 10:.1f}' y='{height - 4}'>{10.0**e:g} Hz</text>"
+                   for e in _decade_ticks(x0, x1))
+    grid += "".join(f"<text x='2' y='{y(10.0**e) + 3:.1f}'>1e{e}</text>" for e in _decade_ticks(y0, y1))
+    lines = "".join(f"<polyline class='spectrum' data-joint='{html.escape(name)}' fill='none' stroke-width='1' "
+                    f"stroke='{PALETTE[k % len(PALETTE)]}' points='"
+                    + " ".join(f"{x(fv):.1f},{y(av):.1f}" for fv, av in zip(f, a[:, k])) + "'/>"
+                    for k, name in enumerate(joints))
+    cut = spec.get("cutoff")
+    if cut and f.min() <= cut <= f.max():
+        lines += (f"<line class='cutoff' x1='{x(cut):.1f}' x2='{x(cut):.1f}' y1='0' y2='{height - bottom}' "
+                  f"stroke='#c33' stroke-dasharray='4'/>")
+    return f"<svg id='spectrum' width='{width}' height='{height}'>{grid}{lines}</svg>"
+
+
+def _spectrum_section(ident) -> str:
+    s = (ident.series or {}).get("train") or {}
+    spec = s.get("spectrum")
+    if not spec:
+        return ""
+    legend = "".join(f"<span style='color:{PALETTE[k % len(PALETTE)]}'>&#9644; {html.escape(name)}</span>"
+                     for k, name in enumerate(s["joints"]))
+    return (f"<h2>Excitation spectrum</h2><p>Amplitude spectrum of the training positions per joint "
+            f"({html.escape(spec.get('of', 'q'))}, log scales, largest amplitude per band); dashed red: the "
+            f"low-pass cutoff {spec['cutoff']:.3g} Hz. Content above the cutoff is removed before the "
+            f"fit.</p>{_spectrum_svg(spec, list(s['joints']))}<p class='legend'>{legend}</p>")
+
+
+def _torque_blocks(ident) -> str:
+    blocks = []
+    for part in ("train", "validation"):
+        s = (ident.series or {}).get(part)
+        if not s:
+            continue
+        for k, joint in enumerate(s["joints"]):
+            e = s["tau"][:, k] - s["tau_hat"][:, k]
+            blocks.append(f"<div class='joint' data-part='{part}' data-joint='{html.escape(joint)}'><b>{part}: "
+                          f"{html.escape(joint)}</b> (RMS {np.sqrt(np.mean(e**2)):.4g})<br>"
+                          f"{_series_svg(s['t'], [s['tau'][:, k], s['tau_hat'][:, k]], f'{part}-{k}')}"
+                          f"{_histogram(e)}</div>")
+    return "".join(blocks)
 
 
 def identification_html(ident) -> str:
@@ -225,17 +521,6 @@ def identification_html(ident) -> str:
         The page.
     """
     j = ident.to_json()
-    blocks = []
-    for part in ("train", "validation"):
-        s = (ident.series or {}).get(part)
-        if not s:
-            continue
-        for k, joint in enumerate(s["joints"]):
-            e = s["tau"][:, k] - s["tau_hat"][:, k]
-            blocks.append(f"<div class='joint' data-part='{part}' data-joint='{html.escape(joint)}'><b>{part}: "
-                          f"{html.escape(joint)}</b> (RMS {np.sqrt(np.mean(e**2)):.4g})<br>"
-                          f"{_series_svg(s['t'], [s['tau'][:, k], s['tau_hat'][:, k]], f'{part}-{k}')}"
-                          f"{_histogram(e)}</div>")
     pct = [b["pct_sigma"] for b in j["base_parameters"]]
     top = max([p for p in pct if np.isfinite(p)] + [1.0])
     bars = "".join(f"<tr><td>{html.escape(b['name'])}</td><td>{b['value']:.6g}</td><td>{b['pct_sigma']:.3g}</td>"
@@ -254,7 +539,8 @@ def identification_html(ident) -> str:
             f"<p>{j['n_samples']['used']} samples used of {j['n_samples']['read']}; condition number "
             f"{j['condition_number']:.4g}; train RMS {j['train']['rms_total']:.4g}"
             + (f"; validation RMS {val['rms_total']:.4g}" if val else "") + "</p>"
-            f"<h2>Measured (grey) and predicted (blue) torques, residual histograms</h2>{''.join(blocks)}"
+            f"<h2>Measured (grey) and predicted (blue) torques, residual histograms</h2>"
+            f"<div id='torques'>{_torque_blocks(ident)}</div>{_spectrum_section(ident)}"
             f"<h2>Base parameters and %sigma</h2><table id='values'><tr><th>name</th><th>value</th><th>%sigma</th>"
             f"<th></th></tr>{bars}</table>{phys}")
-    return _page(f"{j['model']}: identification", body, "document.body.dataset.ready='1';")
+    return _page(f"{j['model']}: identification", body, _DONE)

@@ -256,3 +256,15 @@ def test_formulas_match_the_textbook_rules(table):
         assert sp.expand(_by_name(expr) - _by_name(textbook[name])) == 0, name
     if table in ("puma560", "6r-wrist"):
         assert sa.n_base == 36
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["analyze", "puma560-symbolic", "--symbolic", "--html", "x.html"], "--html draws the numerical analysis"),
+    (["analyze", "puma560-symbolic", "--latex"], "need --symbolic"),
+    (["analyze", "*.urdf", "--symbolic"], "--symbolic applies to one model"),
+    (["analyze", "puma560-symbolic", "--symbolic", "--gravity", "0", "0", "-1"], "gravity is in its table"),
+])
+def test_cli_refuses_option_combinations_it_would_ignore(argv, needle, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert needle in err and err.count("\n") == 1

@@ -268,10 +268,17 @@ def cmd_analyze(args) -> int:
     from .analysis import analyze, format_report
 
     if any(ch in args.model for ch in "*?["):
-        if args.plot:
-            raise BaseparamsError("--plot applies to one model, not to a sweep over files")
+        for opt in ("plot", "html", "symbolic"):
+            if getattr(args, opt):
+                raise BaseparamsError(f"--{opt} applies to one model, not to a sweep over files")
         return _analyze_sweep(args)
     if args.symbolic or args.latex or args.codegen:
+        for opt in ("plot", "html"):
+            if getattr(args, opt):
+                raise BaseparamsError(f"--{opt} draws the numerical analysis: run it without --symbolic "
+                                      f"(the table at its values)")
+        if (args.latex or args.codegen) and not args.symbolic:
+            raise BaseparamsError("--latex and --codegen need --symbolic")
         return _analyze_symbolic(args)
     try:
         robot = _robot(args)

@@ -27,7 +27,7 @@ from baseparams.symbolic import (
     trans,
     transform,
 )
-from baseparams.symbolic.report import symbolic_json
+from baseparams.symbolic.report import codegen, symbolic_json
 
 ACCEPTANCE = ["puma560-symbolic", "6r-wrist-symbolic", "stanford-symbolic", "scara-symbolic",
               "parallelogram-symbolic", "pkm-2rru-1rrs-symbolic"]
@@ -268,3 +268,35 @@ def test_cli_refuses_option_combinations_it_would_ignore(argv, needle, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert needle in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("name", ["puma560-symbolic", "stanford-symbolic", "pkm-2rru-1rrs-symbolic"])
+def test_base_regressor_of_the_family_reproduces_the_torques(name):
+    """tau = W_b(q, dq, ddq; dims) @ beta(theta; dims) at dimensions other than the table's, for random theta."""
+    from baseparams.symbolic import base_regressor
+    from baseparams.symbolic.check import conversion, floats
+
+    sa = symbolic_analysis(load_symbolic(name), check=False)
+    rng = np.random.default_rng(3)
+    dims = {s.name: float(v) * rng.uniform(0.8, 1.2) for s, v in sa.robot.complete_values(None).items()}
+    robot = sa.robot.to_robot(dims)
+    m = len(robot.actuated) if robot.loops else robot.dof
+    q, dq, ddq = 0.2 * rng.uniform(-1, 1, size=(3, 4, m))
+    if robot.loops:  # states that close the loops (actuated coordinates)
+        from baseparams.numerics import closed_samples
+
+        cs = closed_samples(robot, 300, rng)  # ~10 % of the box closes (as the built-in PKM)
+        q, dq, ddq = (x[:4, robot.actuated] for x in (cs.q, cs.dq, cs.ddq))
+    theta = rng.normal(size=10 * robot.n)  # standard parameters, khalil convention
+    vals = sa.robot.complete_values(dims)
+    c = floats(conversion(sa).subs(vals))
+    tau = baseparams.regressor(robot, q, dq, ddq) @ np.linalg.solve(c, theta)
+    k = floats(sa.K.subs(vals))
+    beta = theta[sa.independent] + k @ theta[sa.dependent]
+    wb = base_regressor(sa, q, dq, ddq, dims)
+    assert wb.shape == (4, m, sa.n_base)
+    np.testing.assert_allclose(wb @ beta, tau, atol=1e-9 * max(1.0, np.abs(tau).max()))
+    gen = {}
+    exec(codegen(sa), gen)  # the generated module: the same regressor and regrouping
+    np.testing.assert_allclose(gen["base_regressor"](q, dq, ddq, **dims), wb, atol=1e-12)
+    np.testing.assert_allclose(gen["base_parameters"](theta, **dims), beta, atol=1e-12)

@@ -9,12 +9,12 @@ optional extra ``symbolic`` (SymPy).
 
 from __future__ import annotations
 
-from .analyze import symbolic_analysis
+from .analyze import base_regressor, symbolic_analysis
 from .check import check, probe
 from .geometry import SymbolicBuilder, SymbolicRobot, rot, trans, transform
 from .solve import Condition, SymbolicAnalysis, regroup
 from .tables import builtin_tables, from_dh, load_symbolic, mdh, read_table, sdh
 
-__all__ = ["Condition", "SymbolicAnalysis", "SymbolicBuilder", "SymbolicRobot", "builtin_tables", "check",
-           "from_dh", "load_symbolic", "mdh", "probe", "read_table", "regroup", "rot", "sdh", "symbolic_analysis",
-           "trans", "transform"]
+__all__ = ["Condition", "SymbolicAnalysis", "SymbolicBuilder", "SymbolicRobot", "base_regressor", "builtin_tables",
+           "check", "from_dh", "load_symbolic", "mdh", "probe", "read_table", "regroup", "rot", "sdh",
+           "symbolic_analysis", "trans", "transform"]

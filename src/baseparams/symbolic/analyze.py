@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
+from ..analysis import regressor
 from .check import check as run_check
+from .check import conversion, floats
 from .geometry import SymbolicRobot
 from .solve import SymbolicAnalysis, regroup
 
@@ -45,3 +49,29 @@ def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: in
         run_check(out)
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def base_regressor(sa: SymbolicAnalysis, q, dq=None, ddq=None, values: dict | None = None) -> np.ndarray:
+    """The family's base regressor at some dimensions: ``tau = W_b @ beta``.
+
+    ``W_b = Y_c[..., independent]`` with ``Y_c`` the TP regressor in the result's convention
+    (``beta = pi_I + K pi_D`` absorbs the rest), for the robot at ``values``.
+
+    Parameters
+    ----------
+    sa : SymbolicAnalysis
+        The symbolic result.
+    q, dq, ddq : array_like, shape ``(S, m)``
+        States, as :func:`baseparams.regressor` (loops: the actuated coordinates).
+    values : dict, optional
+        Numbers for the symbols (default: the table's).
+
+    Returns
+    -------
+    ndarray, shape ``(S, m, n_base)``
+        Columns in the order of ``sa.base``.
+    """
+    vals = sa.robot.complete_values(values)
+    y = regressor(sa.robot.to_robot(vals), q, dq, ddq)  # paper convention
+    paper_from_conv = np.linalg.inv(floats(conversion(sa).subs(vals)))
+    return (y @ paper_from_conv)[..., sa.independent]

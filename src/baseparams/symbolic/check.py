@@ -20,8 +20,19 @@ from .solve import Condition, SymbolicAnalysis, body_parameters, no_rule_error, 
 RTOL = 1e-9
 
 
-def _conversion(sa: SymbolicAnalysis) -> sp.Matrix:
-    """``C (10 n, 10 n)``: convention parameters = ``C @`` paper parameters (block diagonal, symbolic)."""
+def conversion(sa: SymbolicAnalysis) -> sp.Matrix:
+    """``C (10 n, 10 n)``: convention parameters = ``C @`` paper parameters (block diagonal, symbolic).
+
+    Parameters
+    ----------
+    sa : SymbolicAnalysis
+        The result (its robot's link frames and convention).
+
+    Returns
+    -------
+    sympy.Matrix, shape ``(10 n, 10 n)``
+        Polynomial in the symbols; the identity for the ``paper`` convention.
+    """
     n = sa.robot.n
     c = sp.zeros(10 * n, 10 * n)
     units = []
@@ -43,7 +54,19 @@ def _p_matrix(sa: SymbolicAnalysis, kmat: np.ndarray) -> np.ndarray:
     return p
 
 
-def _floats(m: sp.Matrix) -> np.ndarray:
+def floats(m: sp.Matrix) -> np.ndarray:
+    """A SymPy matrix of numbers as a float array (17 digits).
+
+    Parameters
+    ----------
+    m : sympy.Matrix
+        Entries without free symbols.
+
+    Returns
+    -------
+    ndarray
+        Same shape.
+    """
     return np.array(m.evalf(17).tolist(), dtype=float).reshape(m.shape)
 
 
@@ -69,7 +92,7 @@ def check(sa: SymbolicAnalysis, seeds=(101, 202)) -> list[dict]:
         The counts differ (the rules miss directions, or the model is degenerate at that point)
         or the formulas are not orthogonal to the numerical nullspace.
     """
-    conv = _conversion(sa)
+    conv = conversion(sa)
     for seed in seeds:
         point = random_point(sa.robot, seed)
         robot = sa.robot.to_robot(point)
@@ -79,9 +102,9 @@ def check(sa: SymbolicAnalysis, seeds=(101, 202)) -> list[dict]:
         if num.nullity < sa.nullity or not num.certified:
             raise BaseparamsError(f"{sa.robot.name}: the symbolic rules give {sa.nullity} nullspace directions, the "
                                   f"numerical analysis {num.nullity} ({num.status}) at {point}")
-        kmat = _floats(sa.K.subs(point))
+        kmat = floats(sa.K.subs(point))
         p = _p_matrix(sa, kmat)
-        n_conv = _floats(conv.subs(point)) @ num.basis
+        n_conv = floats(conv.subs(point)) @ num.basis
         residual = float(np.linalg.norm(p @ n_conv) / (np.linalg.norm(p) * np.linalg.norm(n_conv)))
         same = sorted(num.base.dependent) == list(sa.dependent) and num.convention == sa.convention
         k_num = num.base.K[:, np.argsort(num.base.dependent)] if same else None

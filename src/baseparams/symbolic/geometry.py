@@ -184,6 +184,9 @@ class SymbolicRobot:
         One line.
     convention : str
         How the geometry was given (e.g. ``modified DH``), for reports.
+    source : str
+        Where :func:`~baseparams.symbolic.load_symbolic` finds it again (a built-in name or a
+        table file), or empty.
     """
 
     name: str
@@ -201,6 +204,7 @@ class SymbolicRobot:
     q_box: np.ndarray | None = None
     description: str = ""
     convention: str = "poses"
+    source: str = ""
 
     @property
     def n(self) -> int:

@@ -223,7 +223,10 @@ def read_table(path: str | Path, text: str | None = None) -> SymbolicRobot:
             rows.append(row)
     if not rows:
         raise ModelError(f"{path}: no table rows (a header line starting with 'j', then one row per link)")
-    return from_dh(rows, meta["convention"], meta["name"], meta["gravity"], meta["values"], meta["description"])
+    robot = from_dh(rows, meta["convention"], meta["name"], meta["gravity"], meta["values"], meta["description"])
+    if path.is_file():
+        object.__setattr__(robot, "source", str(path.resolve()))
+    return robot
 
 
 def _table_dir():
@@ -275,11 +278,14 @@ def load_symbolic(model: str) -> SymbolicRobot:
         return read_table(p)
     key = model.lower()
     if key in EXAMPLES:
-        return EXAMPLES[key][0]()
+        r = EXAMPLES[key][0]()
+        object.__setattr__(r, "source", key)
+        return r
     for f in _table_dir().iterdir():
         if f.name.endswith(".dh"):
             r = read_table(Path(f.name), f.read_text())
             if r.name == key:
+                object.__setattr__(r, "source", key)
                 return r
     raise ModelError(f"{model}: no such table file, and not a built-in symbolic robot "
                      f"({', '.join(builtin_tables())})")

@@ -86,7 +86,7 @@ def parameter_symbols(robot: SymbolicRobot, convention: str) -> tuple[list, list
         others are grouped into it.
     """
     spec = SPECS[check_convention(convention)]
-    names = [n if convention in ("khalil", "paper") else f for n, f in zip(spec.names, spec.fields)]
+    names = list(spec.names)
     syms, regrouped = [], []
     for lab in robot.labels:
         sep = "" if lab.isdigit() else "_"

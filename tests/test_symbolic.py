@@ -300,3 +300,19 @@ def test_base_regressor_of_the_family_reproduces_the_torques(name):
     exec(codegen(sa), gen)  # the generated module: the same regressor and regrouping
     np.testing.assert_allclose(gen["base_regressor"](q, dq, ddq, **dims), wb, atol=1e-12)
     np.testing.assert_allclose(gen["base_parameters"](theta, **dims), beta, atol=1e-12)
+
+
+def test_khalil_tree_columns_gamma_and_b():
+    """Khalil's gamma, b columns: a tree (two arms on link 1) equals the same tree built with poses."""
+    text = """name tree
+j ant sigma gamma b alpha d theta r
+1 0 0 0 0 0 0 0 0
+2 1 0 0 0 pi/2 A 0 0
+3 1 0 pi/2 B pi/2 C 0 0
+"""
+    sa = symbolic_analysis(read_table("tree.dh", text))
+    a, b, c = sp.symbols("A B C", real=True)
+    m3 = sa.robot.M0[2]
+    # frame 3 = Rot(z, pi/2) Trans(z, B) Rot(x, pi/2) Trans(x, C) from frame 1 (at the origin)
+    assert list(m3[:3, 3]) == [0, c, b] and list(m3[:3, 2]) == [1, 0, 0]
+    assert sa.n_base == baseparams.analyze(sa.robot.to_robot({"A": 0.3, "B": 0.2, "C": 0.4})).n_base

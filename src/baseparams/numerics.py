@@ -292,7 +292,8 @@ def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, sampl
     tol = rtol * (sv[0] if sv[0] > 0 else 1.0)
     rank = int(np.sum(sv > tol))
     if 0 < rank < ncol:
-        gap = sv[rank - 1] / max(sv[rank], np.finfo(float).tiny)
+        with np.errstate(over="ignore"):  # a gap beyond the float range is an infinite gap
+            gap = sv[rank - 1] / max(sv[rank], np.finfo(float).tiny)
     else:
         gap = np.inf
     return NumericalResult(rank, ncol - rank, sv, rtol, tol, float(gap), vt[rank:].T, vt[:rank].T,

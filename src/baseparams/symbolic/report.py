@@ -81,9 +81,11 @@ def format_symbolic(sa: SymbolicAnalysis) -> str:
     r = sa.robot
     syms = ", ".join(s.name for s in r.symbols) or "none"
     src = ", ".join(f"{k} {v}" for k, v in sa.by_source.items())
+    frame = FRAMES[sa.convention] if sa.convention == "paper" else "the link frames of the geometry, inertia about " \
+        "their origins" + (" (DH frame j)" if "DH" in r.convention else "")
     lines = [f"{r.name}: {r.description}" if r.description else r.name,
              f"geometry: {r.convention}, symbols {syms}; gravity {tuple(float(g) for g in r.gravity)}",
-             f"{10 * r.n} standard parameters ({sa.convention}: {FRAMES[sa.convention]}), {sa.nullity} nullspace "
+             f"{10 * r.n} standard parameters ({sa.convention}: {frame}), {sa.nullity} nullspace "
              f"directions (DRNG on the symbolic geometry: {src}), {sa.n_base} base parameters"]
     if sa.checks:
         errs = [c["K_error"] for c in sa.checks if c["K_error"] is not None]

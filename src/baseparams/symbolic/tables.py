@@ -13,8 +13,9 @@ The format (one table per file, ``.dh``)::
     2  1    0      -pi/2   0   0      0
     3  2    0      0       D3  0      RL3
 
-``modified`` (Khalil & Dombre's table, Khalil-Kleinfinger): ``T(ant, j) = Rot(x, alpha) Trans(x, d)
-Rot(z, theta) Trans(z, r)``; the parameters of link ``j`` are in frame ``j`` (the joint
+``modified`` (Khalil & Dombre's table, Khalil-Kleinfinger): ``T(ant, j) = Rot(z, gamma) Trans(z, b)
+Rot(x, alpha) Trans(x, d) Rot(z, theta) Trans(z, r)`` (``gamma``, ``b``: Khalil's optional
+columns for trees, default 0); the parameters of link ``j`` are in frame ``j`` (the joint
 frame). ``standard`` (Denavit-Hartenberg, Corke): columns ``j ant sigma theta d a alpha``,
 joint ``j`` moves about (along) ``z_{j-1}`` and ``T(j-1, j) = Rot(z, theta) Trans(z, d) Trans(x, a)
 Rot(x, alpha)``; the parameters of link ``j`` are in frame ``j`` (its distal frame). ``ant`` is
@@ -36,9 +37,11 @@ from ..errors import ModelError
 from .geometry import SymbolicBuilder, SymbolicRobot, exact, rot, trans
 
 #: the columns of each convention (``ant`` optional)
-COLUMNS = {"modified": ("j", "ant", "sigma", "alpha", "d", "theta", "r"),
+COLUMNS = {"modified": ("j", "ant", "sigma", "gamma", "b", "alpha", "d", "theta", "r"),
            "standard": ("j", "ant", "sigma", "theta", "d", "a", "alpha")}
-_ANGLES = {"modified": ("alpha", "theta"), "standard": ("alpha", "theta")}
+#: columns a table may leave out (``ant``: ``j - 1``; Khalil's tree columns ``gamma``, ``b``: 0)
+OPTIONAL = ("ant", "gamma", "b")
+_ANGLES = {"modified": ("alpha", "theta", "gamma"), "standard": ("alpha", "theta")}
 
 
 def _entry(text: str, where: str, angle: bool) -> sp.Expr:
@@ -94,8 +97,8 @@ def from_dh(rows: list[dict], convention: str = "modified", name: str = "dh", gr
     Parameters
     ----------
     rows : list of dict
-        One per link, keys as :data:`COLUMNS` (``ant`` optional: ``j - 1``), SymPy entries or
-        numbers.
+        One per link, keys as :data:`COLUMNS` (``ant`` optional: ``j - 1``; ``gamma``, ``b``
+        optional: 0), SymPy entries or numbers.
     convention : {"modified", "standard"}
         The table's convention (module docstring).
     name : str
@@ -124,7 +127,8 @@ def from_dh(rows: list[dict], convention: str = "modified", name: str = "dh", gr
         joint = "R" if sigma == 0 else "P"
         parent = None if ant == 0 else f"link{ant}"
         if convention == "modified":
-            origin, frame = mdh(row["alpha"], row["d"], row["theta"], row["r"]), None
+            origin = rot("z", row.get("gamma", 0)) * trans("z", row.get("b", 0))
+            origin, frame = origin * mdh(row["alpha"], row["d"], row["theta"], row["r"]), None
         else:
             origin = end[ant]  # joint j sits in frame ant (= j - 1), moving about its z
             frame = rot("z", row["theta"]) * trans("z", row["d"]) * trans("x", row["a"]) * rot("x", row["alpha"])
@@ -197,11 +201,11 @@ def read_table(path: str | Path, text: str | None = None) -> SymbolicRobot:
             meta["values"] = _values(words, where)
         elif header is None and key == "j":
             header = [key] + words
-            need = [c for c in COLUMNS[meta["convention"]] if c != "ant"]
+            need = [c for c in COLUMNS[meta["convention"]] if c not in OPTIONAL]
             missing = [c for c in need if c not in header]
             if missing or any(c not in COLUMNS[meta["convention"]] for c in header):
                 raise ModelError(f"{where}: {meta['convention']} DH columns are {' '.join(COLUMNS[meta['convention']])}"
-                                 f" ('ant' optional); got {' '.join(header)}")
+                                 f" ({', '.join(OPTIONAL)} optional); got {' '.join(header)}")
         elif header is None:
             raise ModelError(f"{where}: unknown line {key!r} (expected name, description, convention, gravity, "
                              f"values or the column header starting with j)")

@@ -175,7 +175,7 @@ def test_builder_with_sympy_symbols_and_exact_angles():
 
 
 @pytest.mark.parametrize("text,needle", [
-    ("j ant sigma alpha d theta r\n1 0 0 a 0 0 0\n", "symbolic angles are not supported"),
+    ("j ant sigma alpha d theta r\n1 0 0 2*a 0 0 0\n", "a symbolic angle must be a name"),
     ("j ant sigma alpha d theta r\n1 0 2 0 0 0 0\n", "column sigma"),
     ("j ant sigma alpha d theta\n1 0 0 0 0 0\n", "columns are"),
     ("j ant sigma alpha d theta r\n2 0 0 0 0 0 0\n", "numbered 1, 2"),
@@ -316,3 +316,38 @@ j ant sigma gamma b alpha d theta r
     # frame 3 = Rot(z, pi/2) Trans(z, B) Rot(x, pi/2) Trans(x, C) from frame 1 (at the origin)
     assert list(m3[:3, 3]) == [0, c, b] and list(m3[:3, 2]) == [1, 0, 0]
     assert sa.n_base == baseparams.analyze(sa.robot.to_robot({"A": 0.3, "B": 0.2, "C": 0.4})).n_base
+
+
+def _table_with(table: str, row: str, new: str, values: str) -> str:
+    path = Path(baseparams.__file__).parent / "robots" / "data" / "symbolic" / f"{table}.dh"
+    text = path.read_text()
+    assert row in text
+    return text.replace(row, new).replace("\nvalues ", f"\nvalues {values} ")
+
+
+def test_symbolic_twist_angle_matches_the_textbook_rules(tmp_path):
+    """Puma560 with a symbolic twist alpha3 (axes 2 and 3 no longer parallel): cos/sin formulas."""
+    from khalil_rules import khalil_base_parameters, read_dh
+
+    f = tmp_path / "puma_alpha3.dh"
+    f.write_text(_table_with("puma560", "3  2    0      0       D3  0      RL3", "3 2 0 alpha3 D3 0 RL3", "alpha3=0.2"))
+    sa = symbolic_analysis(read_table(f))
+    textbook = khalil_base_parameters(read_dh(f).rows)
+    assert list(sa.base) == list(textbook) and sa.n_base == 36
+    for name, expr in sa.base.items():
+        assert sp.simplify(_by_name(expr) - _by_name(textbook[name])) == 0, name
+    assert sa.base["ZZR2"].has(sp.sin(sp.Symbol("alpha3", real=True)))
+
+
+def test_symbolic_twist_angle_condition_and_count(tmp_path):
+    """SCARA with a symbolic twist alpha2: generic spatial count, and alpha2 = 0 (planar) reported."""
+    f = tmp_path / "scara_alpha2.dh"
+    f.write_text(_table_with("scara", "2  1    0      0      D2  0      0", "2 1 0 alpha2 D2 0 0", "alpha2=0.3"))
+    sa = symbolic_analysis(read_table(f))
+    probe(sa)
+    generic = baseparams.analyze(sa.robot.to_robot({"alpha2": 0.7, "D2": 0.3, "D3": 0.2})).n_base
+    planar = baseparams.analyze(sa.robot.to_robot({"alpha2": 0.0, "D2": 0.3, "D3": 0.2})).n_base
+    assert sa.n_base == generic > planar
+    cond = [c for c in sa.conditions if "alpha2" in c.equation()]
+    assert cond and f"{planar} base parameters there" in cond[0].effect, [str(c) for c in sa.conditions]
+    assert cond[0].equation() == "sin(alpha2) = 0"

@@ -14,6 +14,7 @@ import sympy as sp
 
 from ..analysis import analyze
 from ..errors import BaseparamsError
+from .angles import angle_of, circle_probes
 from .solve import Condition, SymbolicAnalysis, body_parameters, no_rule_error, random_point
 
 #: relative agreement required between the formulas at numbers and the numerical analysis
@@ -102,7 +103,7 @@ def check(sa: SymbolicAnalysis, seeds=(101, 202)) -> list[dict]:
         if num.nullity < sa.nullity or not num.certified:
             raise BaseparamsError(f"{sa.robot.name}: the symbolic rules give {sa.nullity} nullspace directions, the "
                                   f"numerical analysis {num.nullity} ({num.status}) at {point}")
-        kmat = floats(sa.K.subs(point))
+        kmat = floats(sa.K_rational.subs(point))
         p = _p_matrix(sa, kmat)
         n_conv = floats(conv.subs(point)) @ num.basis
         residual = float(np.linalg.norm(p @ n_conv) / (np.linalg.norm(p) * np.linalg.norm(n_conv)))
@@ -133,6 +134,11 @@ def _on_condition(sa: SymbolicAnalysis, polys: list, seed: int) -> dict | None:
     return None
 
 
+def _shown_value(s, v) -> float:
+    """A point's value as users write it (an angle, not its half-angle tangent)."""
+    return 2 * float(sp.atan(v)) if angle_of(s) is not None else float(v)
+
+
 def probe(sa: SymbolicAnalysis, seed: int = 7) -> list:
     """What the certified numerical analysis finds on each condition, and with each symbol at zero.
 
@@ -150,7 +156,12 @@ def probe(sa: SymbolicAnalysis, seed: int = 7) -> list:
         ``sa.conditions``, each with ``effect`` filled (e.g. ``"34 base parameters, not 36"``).
     """
     have = {str(c.polynomials) for c in sa.conditions}
-    extra = [Condition([s], "the symbol at zero") for s in sa.robot.symbols if str([s]) not in have]
+    extra = [Condition([s], "the symbol at zero") for s in sa.robot.symbols
+             if str([s]) not in have and angle_of(s) is None]
+    for t in (s for s in sa.robot.symbols if angle_of(s) is not None):  # an angle at 0 and at pi/2
+        extra += [Condition([t - v], "the angle at a special value", text=label) for v, label in circle_probes(t)]
+    known = [c.polynomials[0] for c in sa.conditions if len(c.polynomials) == 1]
+    extra = [c for c in extra if not any(sp.cancel(c.polynomials[0] / p).is_number for p in known)]
     for c in sa.conditions + extra:
         point = _on_condition(sa, c.polynomials, seed)
         if point is None:
@@ -163,7 +174,7 @@ def probe(sa: SymbolicAnalysis, seed: int = 7) -> list:
             c.effect = f"the numerical analysis refuses that geometry ({e})"
             continue
         if num.n_base != sa.n_base:
-            at = ", ".join(f"{k}={float(v):.4g}" for k, v in point.items())
+            at = ", ".join(f"{sa.robot.display(k)}={_shown_value(k, v):.4g}" for k, v in point.items())
             c.effect = f"{num.n_base} base parameters there, not {sa.n_base} (certified numerically at {at})"
         else:
             c.effect = f"same count ({num.n_base})" + (", other formulas" if "pivot" in c.reason else "")

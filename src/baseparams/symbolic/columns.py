@@ -72,8 +72,8 @@ class Decisions:
         bool
             True when identically zero.
         """
-        entries = [sp.expand(e) for e in v]
-        nonzero = [e for e in entries if e != 0]
+        entries = [sp.cancel(e) for e in v]  # rational functions (symbolic angles)
+        nonzero = [sp.fraction(e)[0] for e in entries if e != 0]
         if not nonzero:
             return True
         if all(e.free_symbols for e in nonzero):

@@ -22,6 +22,7 @@ import sympy as sp
 
 from ..errors import ModelError
 from ..model import Inertia, Robot, RobotBuilder
+from .angles import angle_of, cos_sin
 
 
 def rot(axis: str, angle) -> sp.Matrix:
@@ -32,14 +33,15 @@ def rot(axis: str, angle) -> sp.Matrix:
     axis : {"x", "y", "z"}
         The rotation axis.
     angle : sympy expression or number
-        The angle [rad]; multiples of ``pi/2`` give exact 0 and +-1.
+        The angle [rad]; multiples of ``pi/2`` give exact 0 and +-1; ``+-a + c`` for an angle
+        symbol ``a`` gives rational functions of ``tan(a/2)`` (:mod:`.angles`).
 
     Returns
     -------
     sympy.Matrix, shape ``(4, 4)``
         The rotation.
     """
-    c, s = sp.cos(angle), sp.sin(angle)
+    c, s = cos_sin(angle)
     i = "xyz".index(axis)
     j, k = (i + 1) % 3, (i + 2) % 3
     m = sp.eye(4)
@@ -219,6 +221,22 @@ class SymbolicRobot:
             s |= m.free_symbols
         return tuple(sorted(s, key=lambda x: x.name))
 
+    def display(self, s: sp.Symbol) -> sp.Symbol:
+        """The symbol as users write it: an angle for its half-angle tangent, else itself.
+
+        Parameters
+        ----------
+        s : sympy.Symbol
+            One of :attr:`symbols`.
+
+        Returns
+        -------
+        sympy.Symbol
+            The angle ``a`` for ``tan(a/2)``'s symbol, else ``s``.
+        """
+        a = angle_of(s)
+        return s if a is None else a
+
     @cached_property
     def M0(self) -> tuple:
         """World pose ``(4, 4)`` of every body (joint) frame at q = 0, expanded polynomials."""
@@ -268,15 +286,23 @@ class SymbolicRobot:
         ModelError
             A symbol has no value, or a key is not a symbol of the robot.
         """
-        by_name = {s.name: s for s in self.symbols}
-        out = {by_name[k]: exact(v) for k, v in self.values.items() if k in by_name}
+        by_name = {self.display(s).name: s for s in self.symbols}
+
+        def value(sym, v):  # an angle's number goes in as its half-angle tangent
+            return exact(np.tan(float(v) / 2)) if angle_of(sym) is not None and not isinstance(v, sp.Rational) \
+                else exact(v)
+
+        out = {by_name[k]: value(by_name[k], v) for k, v in self.values.items() if k in by_name}
         for k, v in (values or {}).items():
             key = k.name if isinstance(k, sp.Symbol) else str(k)
+            if key in {s.name for s in self.symbols}:  # a half-angle tangent itself (internal)
+                out[next(s for s in self.symbols if s.name == key)] = exact(v)
+                continue
             if key not in by_name:
                 raise ModelError(f"robot {self.name!r}: {key!r} is not one of its symbols "
                                  f"({', '.join(by_name) or 'none'})")
-            out[by_name[key]] = exact(v)
-        missing = [s.name for s in self.symbols if s not in out]
+            out[by_name[key]] = value(by_name[key], v)
+        missing = [self.display(s).name for s in self.symbols if s not in out]
         if missing:
             raise ModelError(f"robot {self.name!r}: no value for {', '.join(missing)} "
                              f"(give them, e.g. {missing[0]}=0.3)")

@@ -158,7 +158,7 @@ def _slide_direction(robot: SymbolicRobot, i: int) -> sp.Matrix | None:
             z = robot.world_axes(b)[0]
             if d is None:
                 d = z
-            elif any(sp.expand(e) != 0 for e in d.cross(z)):
+            elif any(sp.cancel(e) != 0 for e in d.cross(z)):
                 return None
         b = robot.parent[b]
     return d

@@ -23,6 +23,7 @@ from sympy.polys.matrices import DomainMatrix
 from ..enums import Source
 from ..errors import BaseparamsError
 from ..model.inertia import SPECS, check_convention
+from .angles import angle_of, to_trig
 from .columns import SymColumn, symbolic_columns
 from .geometry import SymbolicRobot, transform
 from .rules import rule_columns
@@ -161,15 +162,41 @@ class Condition:
         What the numerical, certified analysis finds there (filled by :func:`.check.probe`).
     point : dict, optional
         The values of the symbols it was probed at.
+    text : str
+        How to write it, when not as its polynomials (e.g. ``alpha2 = pi/2``).
     """
 
     polynomials: list
     reason: str
     effect: str = ""
     point: dict | None = None
+    text: str = ""
+
+    def equation(self) -> str:
+        """The condition as text, angles through ``tan(a/2)``.
+
+        Returns
+        -------
+        str
+            E.g. ``D2 = 0`` or ``3*L1b + 5*RBb - 5*RPb = 0``.
+        """
+        if self.text:
+            return self.text
+
+        def show(p):
+            ts = [t for t in p.free_symbols if angle_of(t) is not None]
+            for t in ts:  # p(t) / (1 + t^2)^k is a trigonometric polynomial: write it so
+                trig = to_trig(sp.cancel(p / (1 + t**2) ** ((sp.degree(p, t) + 1) // 2)))
+                if not trig.has(sp.tan):
+                    p = trig
+            back = {t: sp.tan(angle_of(t) / 2) for t in p.free_symbols if angle_of(t) is not None}
+            p = sp.factor(p).subs(back)
+            return sp.sstr(-p if p.could_extract_minus_sign() else p)
+
+        return " and ".join(f"{show(p)} = 0" for p in self.polynomials)
 
     def __str__(self) -> str:
-        eq = " and ".join(f"{sp.sstr(sp.factor(p))} = 0" for p in self.polynomials)
+        eq = self.equation()
         return f"{eq}  ({self.reason}{': ' + self.effect if self.effect else ''})"
 
 
@@ -188,7 +215,8 @@ class SymbolicAnalysis:
     independent, dependent : list of int
         Indices into :attr:`params`: kept and eliminated parameters.
     K : sympy.Matrix, shape ``(len(independent), len(dependent))``
-        ``beta = pi_I + K pi_D``, rational functions of the symbols.
+        ``beta = pi_I + K pi_D``, rational functions of the symbols (symbolic angles through
+        their ``cos`` and ``sin``).
     base_names : list of str
         One per base parameter (suffix ``R`` when others are grouped into it).
     columns : list of SymColumn
@@ -203,6 +231,10 @@ class SymbolicAnalysis:
         Nullspace directions per principle or rule.
     checks : list of dict
         Comparisons with the numerical analysis (:func:`.check.check`).
+    K_rational : sympy.Matrix, optional
+        ``K`` as rational functions of :attr:`SymbolicRobot.symbols` (symbolic angles through
+        their half-angle tangents, :mod:`.angles`): what numbers are substituted into. Default
+        ``K``.
     """
 
     robot: SymbolicRobot
@@ -218,6 +250,11 @@ class SymbolicAnalysis:
     seconds: float
     by_source: dict
     checks: list = field(default_factory=list)
+    K_rational: sp.Matrix | None = None
+
+    def __post_init__(self) -> None:
+        if self.K_rational is None:
+            self.K_rational = self.K
 
     @property
     def nullity(self) -> int:
@@ -267,7 +304,7 @@ class SymbolicAnalysis:
         sympy.Matrix
             ``K`` evaluated.
         """
-        return self.K.subs(self.robot.complete_values(values))
+        return self.K_rational.subs(self.robot.complete_values(values))
 
 
 def _choose(a: sp.Matrix, robot: SymbolicRobot, convention: str, seed: int) -> tuple[list, list]:
@@ -282,8 +319,14 @@ def _choose(a: sp.Matrix, robot: SymbolicRobot, convention: str, seed: int) -> t
 
 
 def _solve(a: sp.Matrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, sp.Expr]:
-    """``K = -A_I A_D^-1`` exactly, and ``det A_D``."""
+    """``K = -A_I A_D^-1`` exactly, and ``det A_D`` (columns first cleared of denominators: same ``K``)."""
     syms = sorted(a.free_symbols, key=lambda s: s.name)
+    a = a.extract(list(range(a.rows)), basis).applyfunc(sp.cancel)
+    for j in range(a.cols):  # symbolic angles: rational entries; a column's scale does not change K
+        den = sp.lcm([sp.fraction(e)[1] for e in a.col(j)])
+        if den != 1:
+            a[:, j] = (a.col(j) * den).applyfunc(sp.cancel)
+    basis = list(range(a.cols))
     ad, ai = a.extract(dep, basis), a.extract(ind, basis)
     dom = sp.QQ[tuple(syms)] if syms else sp.QQ
     adt = DomainMatrix.from_Matrix(ad.T).convert_to(dom)
@@ -328,14 +371,17 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> 
     names = [regrouped[i] if any(e != 0 for e in k.row(r)) else params[i].name for r, i in enumerate(ind)]
     conditions = [Condition(p, r) for p, r in dec.conditions]
     for f, _ in sp.factor_list(det)[1] if det.free_symbols else []:
-        conditions.append(Condition([f], "a pivot of the elimination vanishes: the regrouping changes"))
+        if not any(sp.expand(f - (t**2 + 1)) == 0 for t in f.free_symbols if angle_of(t) is not None):
+            conditions.append(Condition([f], "a pivot of the elimination vanishes: the regrouping changes"))
     by_source: dict = {}
     chosen = [cols[b] for b in basis]
     for s in Source:
         if s.label not in by_source and any(c.source == s for c in chosen):
             by_source[s.label] = sum(1 for c in chosen if c.source == s)
-    out = SymbolicAnalysis(robot, convention, params, ind, sorted(dep), _reorder(k, dep), names, cols, basis,
-                           conditions, 0.0, by_source)
+    k = _reorder(k, dep)
+    shown = k.applyfunc(to_trig) if any(angle_of(x) is not None for x in robot.symbols) else k
+    out = SymbolicAnalysis(robot, convention, params, ind, sorted(dep), shown, names, cols, basis,
+                           conditions, 0.0, by_source, K_rational=k)
     out.seconds = time.perf_counter() - t0
     return out
 

@@ -22,7 +22,8 @@ Rot(x, alpha)``; the parameters of link ``j`` are in frame ``j`` (its distal fra
 the antecedent (0: the base; optional, default ``j - 1``), ``sigma`` 0 revolute (``q``
 adds to ``theta``), 1 prismatic (``q`` adds to ``r``, or ``d`` for standard DH). Lengths are
 numbers or names (SymPy symbols, real); angles are exact numbers (``pi/2``, ``-pi/2``, ``0``,
-``pi/3``...).
+``pi/3``...) or a name, possibly signed and plus a constant (``alpha2``, ``-a + pi/2``), handled
+through its half-angle tangent (:mod:`.angles`).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ import sympy as sp
 from sympy.parsing.sympy_parser import parse_expr
 
 from ..errors import ModelError
+from .angles import cos_sin
 from .geometry import SymbolicBuilder, SymbolicRobot, exact, rot, trans
 
 #: the columns of each convention (``ant`` optional)
@@ -51,10 +53,13 @@ def _entry(text: str, where: str, angle: bool) -> sp.Expr:
         raise ModelError(f"{where}: cannot read {text!r} (a number, a name or an expression like pi/2)") from None
     e = sp.sympify(e, rational=True)
     if e.free_symbols:
-        if angle:
-            raise ModelError(f"{where}: symbolic angles are not supported ({text!r}); give the angle as a "
-                             f"number such as pi/2")
         e = e.subs({s: sp.Symbol(s.name, real=True) for s in e.free_symbols})
+        if angle:
+            try:
+                cos_sin(e)
+            except ValueError:
+                raise ModelError(f"{where}: a symbolic angle must be a name, possibly signed and plus a constant "
+                                 f"(a, -a, a + pi/2), got {text!r}") from None
     return e
 
 

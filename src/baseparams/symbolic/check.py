@@ -14,6 +14,7 @@ import sympy as sp
 
 from ..analysis import analyze
 from ..errors import BaseparamsError
+from ..model.inertia import HAT_INDEX
 from .angles import angle_of, circle_probes
 from .solve import Condition, SymbolicAnalysis, body_parameters, no_rule_error, random_point
 
@@ -37,8 +38,7 @@ def conversion(sa: SymbolicAnalysis) -> sp.Matrix:
     n = sa.robot.n
     c = sp.zeros(10 * n, 10 * n)
     units = []
-    for k in range(10):  # paper unit parameter k as a symmetric 4x4 (hat order)
-        (a, b) = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2), (0, 3), (1, 3), (2, 3), (3, 3))[k]
+    for a, b in HAT_INDEX:  # paper unit parameter k as a symmetric 4x4 (hat order)
         m = sp.zeros(4, 4)
         m[a, b] = m[b, a] = 1
         units.append(m)
@@ -97,7 +97,10 @@ def check(sa: SymbolicAnalysis, seeds=(101, 202)) -> list[dict]:
     for seed in seeds:
         point = random_point(sa.robot, seed)
         robot = sa.robot.to_robot(point)
-        num = analyze(robot, convention=sa.convention if sa.robot.convention != "standard DH" else "paper")
+        # the numeric link-frame conventions use the body (joint) frames: comparable when the
+        # symbolic parameter frames are those (modified DH, the builder's default)
+        same_frames = sa.convention == "paper" or all(f == sp.eye(4) for f in sa.robot.param_frames)
+        num = analyze(robot, convention=sa.convention if same_frames else "paper")
         if num.nullity > sa.nullity:
             raise no_rule_error(sa.robot, sa.nullity, num.nullity)
         if num.nullity < sa.nullity or not num.certified:

@@ -20,7 +20,8 @@ import sympy as sp
 from ..enums import Source
 from .geometry import SymbolicRobot
 
-_E = [sp.Matrix([1 if k == i else 0 for k in range(4)]) for i in range(4)]
+#: the homogeneous unit 4-vectors ``e1 e2 e3`` (directions) and ``e4`` (the origin)
+UNIT = [sp.Matrix([1 if k == i else 0 for k in range(4)]) for i in range(4)]
 
 
 @dataclass
@@ -175,7 +176,7 @@ def shared_points(robot: SymbolicRobot) -> list[SymColumn]:
         if t == "R":
             vs, names = [o, _dir(robot.world_axes(i)[0])], ["O", "z"]
         elif t == "P":
-            vs, names = _E[:3], ["x", "y", "z"]
+            vs, names = UNIT[:3], ["x", "y", "z"]
         else:
             vs, names = [o], ["O"]
         out += [SymColumn(_two(h, i, robot.parent[i]), Source.SHARED_POINTS, i, lab) for h, lab in _pairs(vs, names)]
@@ -208,7 +209,7 @@ def fixed_points(robot: SymbolicRobot, dec: Decisions, probe: dict) -> list[SymC
         o = _pt(robot.M0[i][:3, 3])
         t = robot.jtype[i]
         if t == "P" or (t in ("U", "S") and g_zero):
-            out += [SymColumn({i: sym(o, _E[k])}, Source.FIXED_POINTS, i, f"O {'xyz'[k]}") for k in range(3)]
+            out += [SymColumn({i: sym(o, UNIT[k])}, Source.FIXED_POINTS, i, f"O {'xyz'[k]}") for k in range(3)]
         elif t == "R":
             z = robot.world_axes(i)[0]
             x, y = perp_pair(z, probe)
@@ -296,11 +297,11 @@ def loop_columns(robot: SymbolicRobot) -> list[SymColumn]:
         if lp.type == "R":
             vs, names = [o, _dir(lp.frame[:3, :3] * lp.axes[0])], ["O", "z"]
         elif lp.type == "P":
-            vs, names = _E[:3], ["x", "y", "z"]
+            vs, names = UNIT[:3], ["x", "y", "z"]
         elif lp.type in ("U", "S"):
             vs, names = [o], ["O"]
         else:
-            vs, names = [o] + _E[:3], ["O", "x", "y", "z"]
+            vs, names = [o] + UNIT[:3], ["O", "x", "y", "z"]
         out += [SymColumn(_two(h, lp.child, lp.parent), Source.SHARED_POINTS, robot.n + k, f"{lab} (loop)")
                 for h, lab in _pairs(vs, names)]
     return out
@@ -351,14 +352,14 @@ def parallelogram_columns(robot: SymbolicRobot, dec: Decisions) -> list[SymColum
         if not dec.is_zero((pts[1] - pts[0]) - (pts[2] - pts[3]), f"loop {lp.name!r} a parallelogram"):
             continue
         label = f"parallelogram (loop {lp.name!r})"
-        out += [SymColumn({l2: sym(_E[a], _E[b])}, Source.R_L1, l2, f"{label}: coupler translates")
+        out += [SymColumn({l2: sym(UNIT[a], UNIT[b])}, Source.R_L1, l2, f"{label}: coupler translates")
                 for a in range(3) for b in range(a, 4)]
         t = sp.eye(4)
         t[:3, 3] = pts[3] - pts[0]
         ti = t.inv()
         for a in range(4):
             for b in range(a, 4):
-                dn = outer(_E[a]) if a == b else sym(_E[a], _E[b])
+                dn = outer(UNIT[a]) if a == b else sym(UNIT[a], UNIT[b])
                 out.append(SymColumn({l3: dn, l1: -(ti * dn * ti.T)}, Source.R_L1, l3,
                                      f"{label}: rocker to crank"))
     return out

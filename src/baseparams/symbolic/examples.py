@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .geometry import SymbolicBuilder, SymbolicRobot, transform
+from .geometry import SymbolicBuilder, SymbolicRobot, inverse, transform
 
 
 def _syms(names: str) -> list:
@@ -75,11 +75,11 @@ def pkm_2rru_1rrs() -> SymbolicRobot:
         c_pt = rp * r + h * z
         fa, fb = _frame(a_pt, u), _frame(b_pt, u)
         bl.add_link(f"link1{name}", joint="R", origin=fa, actuated=True)
-        bl.add_link(f"link2{name}", parent=f"link1{name}", joint="R", origin=_inv(fa) * fb, actuated=False)
+        bl.add_link(f"link2{name}", parent=f"link1{name}", joint="R", origin=inverse(fa) * fb, actuated=False)
         world[name] = (fb, c_pt, u, r)
         if name == "a":
             fc = _frame(c_pt, u)
-            bl.add_link("platform", parent="link2a", joint="U", origin=_inv(fb) * fc, axis=(0, 0, 1),
+            bl.add_link("platform", parent="link2a", joint="U", origin=inverse(fb) * fc, axis=(0, 0, 1),
                         axis2=list(fc[:3, :3].T * r), actuated=False)
     _, c_b, u_b, r_b = world["b"]
     fl = _frame(c_b, r_b)
@@ -88,12 +88,6 @@ def pkm_2rru_1rrs() -> SymbolicRobot:
     bl.add_loop("S_c", "S", "platform", "link2c", origin=transform(translation=world["c"][1]), in_world=True)
     bl.q_box = np.tile([-np.deg2rad(25), np.deg2rad(25)], (3, 1))
     return bl.build()
-
-
-def _inv(m: sp.Matrix) -> sp.Matrix:
-    """Inverse of a rigid transform with an exact rotation."""
-    r = m[:3, :3].T
-    return transform(r, -r * m[:3, 3])
 
 
 #: name -> (factory, one-line description)

@@ -91,6 +91,43 @@ def transform(rotation=None, translation=(0, 0, 0)) -> sp.Matrix:
     return m
 
 
+def inverse(m: sp.Matrix) -> sp.Matrix:
+    """Inverse ``(4, 4)`` of a rigid transform with an exact rotation: ``[R^T, -R^T p]``.
+
+    Parameters
+    ----------
+    m : sympy.Matrix, shape ``(4, 4)``
+        The transform.
+
+    Returns
+    -------
+    sympy.Matrix, shape ``(4, 4)``
+        Its inverse, polynomial when ``m`` is.
+    """
+    r = m[:3, :3].T
+    return transform(r, -r * m[:3, 3])
+
+
+def at_point(m: sp.Matrix, point: dict):
+    """``m`` at rational values of its symbols, exactly: a ``DomainMatrix`` over QQ.
+
+    Parameters
+    ----------
+    m : sympy.Matrix
+        Entries rational in the symbols.
+    point : dict
+        ``{symbol: Rational}``.
+
+    Returns
+    -------
+    sympy.polys.matrices.DomainMatrix
+        Over ``QQ``; ``.rref()[1]`` are the pivots (generic ranks decided at random points).
+    """
+    from sympy.polys.matrices import DomainMatrix
+
+    return DomainMatrix.from_Matrix(m.subs(point)).convert_to(sp.QQ)
+
+
 def exact(x) -> sp.Expr:
     """A number or expression as an exact SymPy object (floats through their shortest decimal).
 

@@ -16,10 +16,8 @@ import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
 from ..enums import Source
-from .columns import SymColumn, sym
-from .geometry import SymbolicRobot
-
-_E4 = [sp.Matrix([1 if k == i else 0 for k in range(4)]) for i in range(4)]
+from .columns import UNIT, SymColumn, sym
+from .geometry import SymbolicRobot, at_point
 
 
 def _skew(w: sp.Matrix) -> sp.Matrix:
@@ -64,8 +62,7 @@ def _select(mats: list, point: dict, limit: int = 12) -> list:
     if not mats:
         return []
     flat = sp.Matrix.hstack(*[m.reshape(len(m), 1) for m in mats])
-    num = DomainMatrix.from_Matrix(flat.subs(point)).convert_to(sp.QQ)
-    return [mats[p] for p in num.rref()[1][:limit]]
+    return [mats[p] for p in at_point(flat, point).rref()[1][:limit]]
 
 
 def motion_spans(robot: SymbolicRobot, point: dict) -> list:
@@ -104,15 +101,13 @@ def _mul(x: sp.Matrix, s: sp.Matrix) -> sp.Matrix:
     return (x * s).applyfunc(sp.expand)
 
 
-def kernel(rows: sp.Matrix, point: dict) -> list:
+def kernel(rows: sp.Matrix) -> list:
     """Exact right kernel of ``rows`` over the rational functions of its symbols, denominators cleared.
 
     Parameters
     ----------
     rows : sympy.Matrix, shape ``(m, c)``
         Polynomial entries.
-    point : dict
-        Unused for the exact kernel; kept for a uniform interface.
 
     Returns
     -------
@@ -138,13 +133,13 @@ def _stack(span: list, left: sp.Matrix | None = None) -> sp.Matrix:
     return sp.Matrix.vstack(*mats) if mats else sp.zeros(0, 4)
 
 
-def _gravity_filtered(robot: SymbolicRobot, span: list, blocks: list, point: dict) -> list:
+def _gravity_filtered(robot: SymbolicRobot, span: list, blocks: list) -> list:
     """Combinations of ``blocks`` whose ``dN e4`` is level in gravity (the potential never changes)."""
     g = robot.gravity
     if not blocks or all(e == 0 for e in g) or not span:
         return blocks
     rows = sp.Matrix([[sp.expand((g.T * x * b[:, 3])[0]) for b in blocks] for x in span])
-    coefs = kernel(rows, point)
+    coefs = kernel(rows)
     return [sum((c[m] * blocks[m] for m in range(len(blocks))), sp.zeros(4, 4)).applyfunc(sp.expand)
             for c in coefs]
 
@@ -184,20 +179,20 @@ def rule_columns(robot: SymbolicRobot, point: dict) -> list[SymColumn]:
     for i, span in enumerate(motion_spans(robot, point)):
         if span is None:
             continue
-        fixed = kernel(_stack(span), point)
+        fixed = kernel(_stack(span))
         if fixed:
-            blocks = [sym(f, e) for f in fixed for e in _E4]
+            blocks = [sym(f, e) for f in fixed for e in UNIT]
             out += [SymColumn({i: h}, Source.R_A, i, "sym(f, v), f fixed")
-                    for h in _gravity_filtered(robot, span, blocks, point)]
+                    for h in _gravity_filtered(robot, span, blocks)]
         d = _slide_direction(robot, i)
         if d is None:
             continue
         proj = (d.dot(d) * sp.eye(3) - d * d.T).applyfunc(sp.expand)
-        sliding = kernel(_stack(span, proj), point)
+        sliding = kernel(_stack(span, proj))
         if len(sliding) <= len(fixed):
             continue
-        level = kernel(_stack(span, d.T), point)
+        level = kernel(_stack(span, d.T))
         blocks = [sym(a, b) for a in sliding for b in level]
         out += [SymColumn({i: h}, Source.R_B, i, "sym(a, b), a sliding, b level")
-                for h in _gravity_filtered(robot, span, blocks, point)]
+                for h in _gravity_filtered(robot, span, blocks)]
     return out

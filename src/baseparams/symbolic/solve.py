@@ -25,13 +25,8 @@ from ..errors import BaseparamsError
 from ..model.inertia import SPECS, check_convention
 from .angles import angle_of, to_trig
 from .columns import SymColumn, symbolic_columns
-from .geometry import SymbolicRobot, transform
+from .geometry import SymbolicRobot, at_point, inverse
 from .rules import rule_columns
-
-
-def _inverse(f: sp.Matrix) -> sp.Matrix:
-    r = f[:3, :3].T
-    return transform(r, -r * f[:3, 3])
 
 
 def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention: str) -> list:
@@ -57,7 +52,7 @@ def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention
     if convention == "paper":
         nl = n_world
     else:
-        fi = _inverse(robot.link_frames[i])
+        fi = inverse(robot.link_frames[i])
         nl = fi * n_world * fi.T
     s, h, m = nl[:3, :3], nl[:3, 3], nl[3, 3]
     j = sp.eye(3) * s.trace() - s if convention != "paper" else s
@@ -138,14 +133,6 @@ def random_point(robot: SymbolicRobot, seed: int) -> dict:
     """
     rng = random.Random(seed)
     return {s: sp.Rational(rng.randint(10, 190), 97) for s in robot.symbols}
-
-
-def _numeric(a: sp.Matrix, point: dict) -> DomainMatrix:
-    return DomainMatrix.from_Matrix(a.subs(point)).convert_to(sp.QQ)
-
-
-def _pivots(m: DomainMatrix) -> tuple:
-    return m.rref()[1]
 
 
 @dataclass
@@ -309,12 +296,12 @@ class SymbolicAnalysis:
 
 def _choose(a: sp.Matrix, robot: SymbolicRobot, convention: str, seed: int) -> tuple[list, list]:
     """A basis of the columns and the dependent parameters, decided at a random rational point."""
-    num = _numeric(a, random_point(robot, seed))
-    basis = list(_pivots(num))
+    num = at_point(a, random_point(robot, seed))
+    basis = list(num.rref()[1])
     within = SPECS[check_convention(convention)].regroup_order
     order = [10 * i + w for i in reversed(range(robot.n)) for w in within]
     sub = num.extract(order, basis).transpose()  # rows: basis columns; columns: parameters in order
-    dep = [order[p] for p in _pivots(sub)]
+    dep = [order[p] for p in sub.rref()[1]]
     return basis, dep
 
 

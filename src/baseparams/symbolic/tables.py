@@ -238,8 +238,11 @@ def read_table(path: str | Path, text: str | None = None) -> SymbolicRobot:
     return robot
 
 
-def _table_dir():
-    return resources.files("baseparams") / "robots" / "data" / "symbolic"
+def _bundled_tables() -> list[SymbolicRobot]:
+    """The package's ``robots/data/symbolic/*.dh`` tables, read, by file name."""
+    folder = resources.files("baseparams") / "robots" / "data" / "symbolic"
+    return [read_table(Path(f.name), f.read_text()) for f in sorted(folder.iterdir(), key=lambda p: p.name)
+            if f.name.endswith(".dh")]
 
 
 def builtin_tables() -> dict[str, str]:
@@ -253,11 +256,7 @@ def builtin_tables() -> dict[str, str]:
     """
     from .examples import EXAMPLES
 
-    out = {}
-    for f in sorted(_table_dir().iterdir(), key=lambda p: p.name):
-        if f.name.endswith(".dh"):
-            r = read_table(Path(f.name), f.read_text())
-            out[r.name] = r.description
+    out = {r.name: r.description for r in _bundled_tables()}
     out.update({k: d for k, (_, d) in EXAMPLES.items()})
     return out
 
@@ -290,11 +289,9 @@ def load_symbolic(model: str) -> SymbolicRobot:
         r = EXAMPLES[key][0]()
         object.__setattr__(r, "source", key)
         return r
-    for f in _table_dir().iterdir():
-        if f.name.endswith(".dh"):
-            r = read_table(Path(f.name), f.read_text())
-            if r.name == key:
-                object.__setattr__(r, "source", key)
-                return r
+    for r in _bundled_tables():
+        if r.name == key:
+            object.__setattr__(r, "source", key)
+            return r
     raise ModelError(f"{model}: no such table file, and not a built-in symbolic robot "
                      f"({', '.join(builtin_tables())})")

@@ -17,7 +17,7 @@ from baseparams.numerics import closed_samples, row_mask
 from baseparams.regressor import closed_regressor
 from baseparams.regressor.tp import regressor as tree_regressor
 
-SHARED = Path("/work/shared/models")
+from paths import SHARED
 SRC = str(Path(baseparams.__file__).resolve().parents[1])
 PUBLIC = {"Analysis", "BaseparamsError", "CONVENTIONS", "Inertia", "ModelError", "ModelWarning", "Robot",
           "RobotBuilder", "analyze", "load", "pose", "regressor", "__version__"}
@@ -102,6 +102,7 @@ def test_load_builtin():
         baseparams.load("no-such-robot")
 
 
+@pytest.mark.shared
 def test_load_urdf_loops_are_assembled_with_a_warning():
     path = SHARED / "urdfplus/four_bar.urdf"
     with pytest.warns(baseparams.ModelWarning, match="assembled"):
@@ -109,6 +110,7 @@ def test_load_urdf_loops_are_assembled_with_a_warning():
     assert robot.has_loops and len(robot.actuated) == 1 and robot.n == 3
 
 
+@pytest.mark.shared
 def test_load_infeasible_inertia_warns_or_raises():
     path = SHARED / "urdfplus/planar_leg_linkage.urdf"
     with pytest.warns(baseparams.ModelWarning, match="(?i)inertia"):
@@ -117,6 +119,7 @@ def test_load_infeasible_inertia_warns_or_raises():
         baseparams.load(str(path), strict_inertia=True)
 
 
+@pytest.mark.shared
 def test_load_mjcf():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", baseparams.ModelWarning)  # stripped mesh assets

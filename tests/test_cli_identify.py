@@ -43,6 +43,7 @@ def test_identify_json_schema_and_truth(simulated, capsys):
     assert j["validation"]["rms_total"] < 0.05
 
 
+@pytest.mark.shared
 def test_identify_physical_writes_urdf_and_plot(tmp_path, capsys):
     """A URDF model: simulate, identify physically, write the identified URDF and the plot."""
     from baseparams import load
@@ -104,6 +105,7 @@ def test_fleet_from_the_command_line(tmp_path, capsys):
     assert main(["identify", "puma560", str(out / "*.npz"), "--holdout", "2"]) == 2
 
 
+@pytest.mark.shared
 def test_analyze_sweep_over_model_files(capsys):
     """``analyze 'GLOB'``: every file on Dask, the same result as one by one."""
     pattern = str(SHARED / "urdfplus" / "*_bar.urdf")

@@ -60,6 +60,7 @@ def _within_limits(e, lim, tol=1e-9):
 
 
 # ---------------------------------------------------------------- limits in the model
+@pytest.mark.shared
 def test_urdf_limits_are_the_manufacturers(panda):
     robot, _ = panda
     assert robot.limits.shape == (7, 4)
@@ -106,6 +107,7 @@ def test_limits_validated():
         replace(robot, limits=bad)
 
 
+@pytest.mark.shared
 def test_re_reference_shifts_position_limits(panda):
     robot, _ = panda
     q0 = np.linspace(-0.3, 0.3, 7)
@@ -137,6 +139,7 @@ def test_series_at_rest_at_both_ends_with_exact_derivatives():
 
 
 # ---------------------------------------------------------------- acceptance: Panda
+@pytest.mark.shared
 def test_panda_design_beats_the_recorded_trajectory(panda):
     """43 rigid base parameters + 21 friction columns, column-scaled, 100 Hz over one period."""
     robot, model = panda
@@ -157,6 +160,7 @@ def test_panda_design_beats_the_recorded_trajectory(panda):
     assert designed < 8.0  # and by a margin (about 5 to 6 with one start)
 
 
+@pytest.mark.shared
 def test_panda_torque_and_acceleration_limits(panda):
     """Optional limits: the datasheet's accelerations and the URDF's efforts with the model's own inertias."""
     robot, model = panda
@@ -170,6 +174,7 @@ def test_panda_torque_and_acceleration_limits(panda):
     assert np.abs(e.ddq).max(axis=0).max() > 0.9 * acc.min()  # an acceleration limit is reached
 
 
+@pytest.mark.shared
 def test_round_trip_design_gives_smaller_standard_deviations(panda):
     """simulate -> identify under noise: D-optimal design against random series in the same limits.
 
@@ -291,6 +296,7 @@ def test_bad_input_one_line(case, match):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.shared
 def test_excitation_limits_override_and_defaults(panda):
     robot, _ = panda
     user = np.full((7, 4), np.nan)
@@ -313,6 +319,7 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys):
     assert len(err) == 1 and "no actuated coordinate" in err[0]
 
 
+@pytest.mark.shared
 def test_keepout_keeps_a_link_above_the_floor():
     """A floor plane for the Panda's last link: the free design dips lower; with the keep-out every
     sample at the controller's rate stays above it, and the criterion stays good."""

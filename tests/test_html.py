@@ -22,6 +22,8 @@ from baseparams.report.html import analysis_html, identification_html
 
 from paths import SHARED
 
+pytestmark = pytest.mark.chromium
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
@@ -104,6 +106,7 @@ def test_analysis_report_in_a_browser(name, tmp_path):
     assert float(body["data-render-ms"]) < 2000
 
 
+@pytest.mark.shared
 def test_identification_report_in_a_browser(tmp_path):
     from baseparams.identify import identify
     from baseparams.io.logs import read_log

@@ -34,6 +34,7 @@ SHARED_FILES = [  # (file, floating, certified nullity, directions left to numer
 ]
 
 
+@pytest.mark.shared
 @pytest.mark.parametrize("rel, floating, nullity, completed", SHARED_FILES, ids=[r[0] for r in SHARED_FILES])
 def test_shared_models_load_analyse_certify(rel, floating, nullity, completed):
     path = SHARED / rel
@@ -47,6 +48,7 @@ def test_shared_models_load_analyse_certify(rel, floating, nullity, completed):
     assert c.completed == completed  # the extended rules' geometric span, known remaining cases
 
 
+@pytest.mark.shared
 def test_go2_file_equals_builtin():
     from baseparams.robots import go2
 
@@ -55,6 +57,7 @@ def test_go2_file_equals_builtin():
     assert np.allclose(robot.M0, go2().M0)
 
 
+@pytest.mark.shared
 def test_loops_are_never_dropped():
     robot = load_urdf(SHARED / "urdfplus/four_bar.urdf")
     assert len(robot.loops) == 1 and robot.loops[0].type == "R"
@@ -62,6 +65,7 @@ def test_loops_are_never_dropped():
     assert len(cassie.loops) == 4 and all(lj.type == "S" for lj in cassie.loops)
 
 
+@pytest.mark.shared
 def test_infeasible_inertia_is_a_note_by_default_and_an_error_when_strict():
     from baseparams.model.inertia import InertiaWarning
 
@@ -169,6 +173,7 @@ def test_fixed_joint_merge_matches_two_body_model(tmp_path):
     assert np.allclose(robot.N_body[1][:3, 3], 0.5 * np.array([0, 0.2, 0]) + 0.2 * np.array([0, 0, 0.1]))
 
 
+@pytest.mark.shared
 def test_urdfplus_tolerated_spellings_warn(tmp_path):
     f = tmp_path / "robot.urdf"
     f.write_text((SHARED / "urdfplus/four_bar.urdf").read_text()

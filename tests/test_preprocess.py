@@ -245,7 +245,7 @@ def test_prepare_rejects_bad_logs_in_one_line(make, expect):
 
 
 # ---------------------------------------------------------------- a real log
-@pytest.mark.skipif(not PANDA.is_dir(), reason="../shared/ident/panda_gaz2019 is not here")
+@pytest.mark.shared
 def test_real_panda_log(tmp_path):
     """Gaz et al. 2019 Panda log: sample-major single-column files, converted here to the default CSV layout."""
     import baseparams

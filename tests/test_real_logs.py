@@ -18,6 +18,8 @@ from baseparams.io.logs import read_log
 
 from paths import SHARED
 
+pytestmark = pytest.mark.shared
+
 PANDA = SHARED.parent / "ident" / "panda_gaz2019"
 URDF = PANDA / "panda_mdh_gaz2019.urdf"
 

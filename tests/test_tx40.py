@@ -60,6 +60,8 @@ from baseparams.io.logs import read_log, write_log
 
 from paths import SHARED
 
+pytestmark = pytest.mark.shared
+
 TX40 = SHARED.parent / "ident" / "staubli_tx40_figaroh"
 URDF = TX40 / "tx40_mdh_modified.urdf"
 M6 = MotorCoupling("m6", ("joint_5", "joint_6"), (1.0, 1.0))

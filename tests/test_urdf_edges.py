@@ -20,7 +20,7 @@ from baseparams.robots import get
 from paths import SHARED
 
 URDFPLUS = SHARED / "urdfplus"
-LOOP_FILES = sorted(p for p in URDFPLUS.glob("*.urdf") if "<loop" in p.read_text()) if URDFPLUS.is_dir() else []
+LOOP_FILES = sorted(p for p in URDFPLUS.glob("*.urdf") if "<loop" in p.read_text()) if URDFPLUS.is_dir() else [URDFPLUS / "absent.urdf"]
 
 
 # ------------------------------------------------------------------ A: loop joint orientation
@@ -104,6 +104,7 @@ def _swap_in_file(text: str, names: set[str]) -> str:
     return re.sub(r'<loop\s+name="([^"]+)".*?</loop>', one, text, flags=re.S)
 
 
+@pytest.mark.shared
 @pytest.mark.parametrize("path", LOOP_FILES, ids=[p.name for p in LOOP_FILES])
 def test_urdfplus_loops_in_either_orientation(path, tmp_path):
     text = path.read_text()

@@ -328,9 +328,10 @@ def bench_identify(out: dict, quick: bool) -> None:
     import warnings
 
     import baseparams
+    from baseparams.ident.model import ident_model
     from baseparams.ident.physical import physical_fit
-    from baseparams.ident.simulate import fourier_trajectory
-    from baseparams.identify import accumulate, fit, ident_model, identify, simulate_log
+    from baseparams.ident.pipeline import accumulate, fit, identify
+    from baseparams.ident.simulate import fourier_trajectory, simulate_log
     from baseparams.io.logs import read_log, write_log
 
     robot = baseparams.load("puma560")
@@ -390,7 +391,8 @@ def bench_scale(out: dict, quick: bool) -> None:
 
     import baseparams
     from baseparams.fleet import synthetic_factors, synthetic_fleet_factors
-    from baseparams.identify import fit, ident_model
+    from baseparams.ident.model import ident_model
+    from baseparams.ident.pipeline import fit
 
     robot = baseparams.load("puma560")
     model = ident_model(baseparams.analyze(robot), rotor=False)

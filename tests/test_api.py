@@ -18,6 +18,7 @@ from baseparams.regressor import closed_regressor
 from baseparams.regressor.tp import regressor as tree_regressor
 
 from paths import SHARED
+
 SRC = str(Path(baseparams.__file__).resolve().parents[1])
 PUBLIC = {"Analysis", "BaseparamsError", "CONVENTIONS", "Inertia", "ModelError", "ModelWarning", "Robot",
           "RobotBuilder", "analyze", "load", "pose", "regressor", "__version__"}

@@ -26,7 +26,9 @@ from baseparams.excite import (
     rest_map,
     trajectory_criterion,
 )
-from baseparams.identify import accumulate, fit, ident_model, identify, regressor_of, simulate_log
+from baseparams.ident.model import ident_model
+from baseparams.ident.pipeline import accumulate, fit, identify
+from baseparams.ident.simulate import regressor_of, simulate_log
 from baseparams.kinematics.loops import close_loops
 from baseparams.kinematics.tree import re_reference
 from baseparams.model import Inertia, RobotBuilder, pose

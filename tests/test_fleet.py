@@ -11,7 +11,8 @@ import pytest
 import baseparams
 from baseparams.fleet import file_factors, identify_fleet, simulate_fleet
 from baseparams.ident.chunks import combine
-from baseparams.identify import fit, ident_model
+from baseparams.ident.model import ident_model
+from baseparams.ident.pipeline import fit
 
 
 @pytest.fixture(scope="module")

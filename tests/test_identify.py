@@ -6,8 +6,9 @@ import pytest
 import baseparams
 from baseparams.errors import BaseparamsError
 from baseparams.ident.drives import MotorCoupling
+from baseparams.ident.model import ident_model
+from baseparams.ident.pipeline import accumulate, fit
 from baseparams.ident.simulate import add_noise, fourier_trajectory
-from baseparams.identify import accumulate, fit, ident_model
 
 
 def _simulate(name, rows, rng, duration=20.0, rate=100.0, amplitude=0.6, friction=("viscous", "coulomb", "offset")):
@@ -88,7 +89,8 @@ def test_excitation_names_the_weak_parameter(rng):
 def test_chunked_identification_equals_the_whole_log(min_speed):
     """Parallel filtering chunk by chunk (overlaps of 12 cutoff periods) gives the whole log's
     estimate to 1e-10 relative, slow-sample removal and decimation included."""
-    from baseparams.identify import identify, simulate_log
+    from baseparams.ident.pipeline import identify
+    from baseparams.ident.simulate import simulate_log
 
     robot = baseparams.load("puma560")
     log, _ = simulate_log(robot, duration=40, rate=500, noise=0.1, seed=4)

@@ -27,7 +27,9 @@ LAYERS = {
     "io": 8,
     "robots": 9,
     "loading": 10, "analysis": 10,
-    "identify": 11, "symbolic": 11,
+    # the identification pipeline sits on the analysis; ident's other modules (logs, filters,
+    # estimators) below the readers
+    "ident.model": 10.2, "ident.pipeline": 10.4, "ident.simulate": 10.4, "ident.report": 10.6, "symbolic": 11,
     "report": 12, "fleet": 12, "excite": 12,
     "cli": 13,
     "__main__": 14, "__init__": 14,
@@ -104,6 +106,8 @@ def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
 
 def _part(module: str) -> str:
     parts = module.split(".")
+    if ".".join(parts[1:3]) in LAYERS:
+        return ".".join(parts[1:3])
     return parts[1] if len(parts) > 1 else "__init__"
 
 

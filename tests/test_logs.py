@@ -443,7 +443,7 @@ def test_identify_end_to_end_from_a_ros2_bag(tmp_path, capsys):
 
     import baseparams
     from baseparams.cli import main
-    from baseparams.identify import simulate_log
+    from baseparams.ident.simulate import simulate_log
 
     robot = baseparams.load("puma560")
     log, truth = simulate_log(robot, duration=20.0, rate=200.0, noise=0.05, seed=7, friction=("viscous",))

@@ -12,8 +12,8 @@ import pytest
 
 import baseparams
 from baseparams.ident.data import JointLog
+from baseparams.ident.pipeline import identify
 from baseparams.ident.preprocess import prepare
-from baseparams.identify import identify
 from baseparams.io.logs import read_log
 
 from paths import SHARED

@@ -55,7 +55,8 @@ import baseparams
 from baseparams.cli import main
 from baseparams.ident.data import JointLog
 from baseparams.ident.drives import MotorCoupling
-from baseparams.identify import ident_model, identify
+from baseparams.ident.model import ident_model
+from baseparams.ident.pipeline import identify
 from baseparams.io.logs import read_log, write_log
 
 from paths import SHARED

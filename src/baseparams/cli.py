@@ -333,7 +333,8 @@ def cmd_identify(args) -> int:
         Bad input (model, data, options).
     """
     from .ident.drives import MotorCoupling
-    from .identify import format_identification, identify
+    from .ident.pipeline import identify
+    from .ident.report import format_identification
     from .io.logs import read_log
 
     couplings = tuple(MotorCoupling.parse(text) for text in args.coupling or ())
@@ -391,7 +392,7 @@ def _data_files(pattern: str) -> list[str]:
 def _identify_fleet(args, robot, files: list[str]) -> int:
     """``identify`` over many logs on Dask (``--per-file`` / ``--pooled``)."""
     from .fleet import identify_fleet
-    from .identify import ident_model
+    from .ident.model import ident_model
 
     for opt in ("validate", "holdout", "plot", "urdf", "columns"):
         if getattr(args, opt):
@@ -458,7 +459,7 @@ def cmd_simulate(args) -> int:
     BaseparamsError
         Bad options, or an output that cannot be written.
     """
-    from .identify import simulate_log
+    from .ident.simulate import simulate_log
     from .io.logs import write_log
 
     robot = _robot(args)

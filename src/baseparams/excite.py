@@ -12,7 +12,7 @@ so ``dq_j = sum_l a_lj cos(l w t) + b_lj sin(l w t)`` and ``ddq_j = sum_l l w (b
 at rest at ``t = T`` too and can be repeated. The free variables per coordinate are the offset
 ``q0`` and ``a_l, b_l`` for ``l = 2..L`` (:func:`fourier_basis`).
 
-Criterion, on the identification model's regressor (:class:`~baseparams.identify.IdentModel`:
+Criterion, on the identification model's regressor (:class:`~baseparams.ident.pipeline.IdentModel`:
 the certified base parameters, and the drive columns when asked), evaluated on a coarse grid of
 one period (``grid`` samples): ``cond``, the condition number of the column-scaled stacked
 regressor (minimised as ``log cond``), or ``logdet``, D-optimality, ``log det`` of the
@@ -45,7 +45,7 @@ import numpy as np
 
 from .analysis import Analysis, analyze
 from .errors import BaseparamsError
-from .identify import IdentModel, ident_model
+from .ident.model import IdentModel, ident_model
 from .model.robot import Robot
 
 #: the criteria: ``cond`` (column-scaled condition number) and ``logdet`` (D-optimality)
@@ -332,7 +332,7 @@ def design_coordinates(robot: Robot) -> np.ndarray:
     -------
     ndarray of int, shape ``(m,)``
         Indices into ``q``: every coordinate of a tree, the actuated ones of a robot with loops
-        (the states :meth:`~baseparams.identify.IdentModel.regressor` takes).
+        (the states :meth:`~baseparams.ident.pipeline.IdentModel.regressor` takes).
     """
     return np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
 

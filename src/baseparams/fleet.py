@@ -1,7 +1,7 @@
 """Fleet scale: identification over many logs on Dask, with memory bounded by the chunk.
 
 Every log (file) is read, preprocessed and reduced to its row factors by a Dask task
-(:func:`file_factors`: the same code as :func:`baseparams.identify.identify`, chunked with
+(:func:`file_factors`: the same code as :func:`baseparams.ident.pipeline.identify`, chunked with
 overlapping filter edges past ``memory_mb``); factors combine exactly in a tree (TSQR,
 :func:`baseparams.ident.chunks.combine`), and the estimators — OLS, WLS, the physical fit — run
 on the combined factors, whose size does not depend on the data. ``per_file`` gives one estimate
@@ -27,7 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import BaseparamsError
-from .identify import Fit, IdentModel, fit
+from .ident.model import IdentModel
+from .ident.pipeline import Fit, fit
 
 
 def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff: float | None = None,
@@ -41,7 +42,7 @@ def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff:
     model : IdentModel
         The identification model.
     memory_mb : float
-        Largest regressor formed at once (:func:`baseparams.identify.identify`).
+        Largest regressor formed at once (:func:`baseparams.ident.pipeline.identify`).
     cutoff : float, optional
         Low-pass cutoff [Hz]; default from the log's excitation.
     min_speed : float, optional
@@ -54,8 +55,8 @@ def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff:
     info : dict
         ``{"path", "read", "used", "removed"}``.
     """
+    from .ident.pipeline import accumulate_prepared, log_columns
     from .ident.preprocess import prepare
-    from .identify import accumulate_prepared, log_columns
     from .io.logs import read_log
     from .numerics import blas_threads
 
@@ -134,7 +135,7 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
     Parameters
     ----------
     model : IdentModel
-        The model (:func:`baseparams.identify.ident_model`).
+        The model (:func:`baseparams.ident.pipeline.ident_model`).
     paths : iterable of str
         Log files, one robot each for ``per_file``.
     per_file : bool
@@ -153,7 +154,7 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         Largest regressor a task forms at once: memory per worker is bounded by it and by one
         log's signals, not by the fleet.
     cutoff, min_speed : float, optional
-        As for :func:`baseparams.identify.identify`.
+        As for :func:`baseparams.ident.pipeline.identify`.
     progress : callable, optional
         Called with one line per finished log.
 
@@ -277,7 +278,7 @@ def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: flo
     import json
     from dataclasses import replace
 
-    from .identify import simulate_log
+    from .ident.simulate import simulate_log
     from .io.logs import write_log
 
     out = Path(outdir)

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..analysis import analyze
 from ..errors import BaseparamsError
+from ..model.robot import Robot
+from .model import IdentModel, ident_model
 
 
 def fourier_trajectory(m: int, duration: float, rate: float, rng: np.random.Generator, harmonics: int = 5,
@@ -85,3 +88,103 @@ def add_noise(tau: np.ndarray, std, rng: np.random.Generator) -> np.ndarray:
         ``tau`` plus noise.
     """
     return tau + rng.normal(size=tau.shape) * np.broadcast_to(np.asarray(std, dtype=float), tau.shape[1:])
+
+
+def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float = 0.5,
+                 noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
+                 convention: str = "khalil", trajectory=None):
+    """A synthetic joint log of a fixed-base robot, with its true model parameters.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (fixed base; loops closed by the actuated joints).
+    duration, rate : float
+        Length [s] and sampling rate [Hz].
+    amplitude : float
+        Joint excursion of the Fourier excitation [rad or m].
+    noise : float
+        Standard deviation of the Gaussian torque noise [N m or N].
+    seed : int
+        Seed of the trajectory, the drive parameters and the noise.
+    rotor : bool
+        Include rotor inertias (the model's armature where it has one, else drawn in 0.01-0.1).
+    friction : iterable of str
+        Friction terms (drawn: ``Fv`` in 0.05-0.5, ``Fc`` in 0.1-1, ``Fo`` in -0.2-0.2).
+    convention : str
+        Convention of the true base parameters written out.
+    trajectory : tuple of ndarray, optional
+        ``(t (S,), q, dq, ddq (S, state_columns))``: the motion to simulate (e.g. a designed
+        excitation, :func:`baseparams.excite.read_trajectory`) instead of a random Fourier series
+        (``duration``, ``rate`` and ``amplitude`` are then ignored).
+
+    Returns
+    -------
+    log : JointLog
+        ``t``, ``q``, ``dq`` and ``tau`` of the measured joints (no accelerations, like a real log).
+    truth : dict
+        ``{"model", "convention", "noise", "parameters": [{"name", "value"}], "drives": {name: value}}``:
+        the model parameters an identification should return.
+
+    Raises
+    ------
+    BaseparamsError
+        A floating base, or loops the trajectory does not close (lower ``amplitude``).
+    """
+    from .data import JointLog
+
+    if robot.floating:
+        raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
+    rng = np.random.default_rng(seed)
+    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction))
+    if trajectory is None:
+        t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
+    else:
+        t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
+    delta = _draw_drives(model, rng)
+    sel = np.arange(len(model.coords))
+    tau = (regressor_of(robot, q, dq, ddq) @ robot.parameters("paper")
+           + model.drives.regressor(dq[:, sel], ddq[:, sel], len(model.coords)) @ delta)
+    tau = add_noise(tau, noise, rng) if noise > 0 else tau
+    joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
+    log = JointLog(t, joints, q, tau, dq=dq, source=f"simulated {robot.name}")
+    theta = model.theta(robot.parameters("paper"), delta)
+    truth = {"model": robot.name, "convention": convention, "noise": noise,
+             "parameters": [{"name": n, "value": float(v)} for n, v in zip(model.names, theta)],
+             "drives": dict(zip(model.drives.names, delta.tolist()))}
+    return log, truth
+
+
+def regressor_of(robot: Robot, q, dq, ddq) -> np.ndarray:
+    """The full regressor of the measured rows (a tree's coordinates, a loop robot's actuated).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (fixed base).
+    q, dq, ddq : ndarray, shape ``(S, state_columns)``
+        States.
+
+    Returns
+    -------
+    ndarray, shape ``(S, m, 10 n)``
+        ``paper`` convention columns (:func:`baseparams.analysis.regressor`).
+    """
+    from ..analysis import regressor
+
+    return regressor(robot, q, dq, ddq)
+
+
+def _draw_drives(model: IdentModel, rng: np.random.Generator) -> np.ndarray:
+    """Plausible drive parameters: armature where the model has it, friction drawn."""
+    arm = model.robot.armature
+    out = []
+    for row in model.drives.rows:
+        coord = model.coords[row]
+        for kind in model.drives.kinds:
+            if kind == "Ia":
+                out.append(float(arm[coord]) if arm is not None and arm[coord] > 0 else rng.uniform(0.01, 0.1))
+            else:
+                lo, hi = {"Fv": (0.05, 0.5), "Fc": (0.1, 1.0), "Fo": (-0.2, 0.2)}[kind]
+                out.append(rng.uniform(lo, hi))
+    return np.array(out)

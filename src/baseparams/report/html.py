@@ -513,7 +513,7 @@ def identification_html(ident) -> str:
     Parameters
     ----------
     ident : Identification
-        The result of :func:`baseparams.identify.identify`.
+        The result of :func:`baseparams.ident.pipeline.identify`.
 
     Returns
     -------

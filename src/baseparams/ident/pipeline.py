@@ -26,249 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .analysis import Analysis, analyze
-from .errors import BaseparamsError
-from .ident.drives import DriveRegrouping, Drives, drives_for, regroup_drives
-from .model.robot import Robot
-from .numerics import StreamingQR, blas_threads, closed_samples, row_mask, sample_states
-
-
-@dataclass(frozen=True, eq=False)
-class IdentModel:
-    """The linear model identified: base parameters and drive parameters, regrouped.
-
-    ``tau = A(q, dq, ddq) theta`` on the measured rows, ``theta = E phi`` with
-    ``phi = [beta (nb); delta (nd)]``: ``beta`` the analysis's base parameters (its
-    convention), ``delta`` the drive parameters (:class:`~baseparams.ident.drives.Drives`).
-
-    Parameters
-    ----------
-    analysis : Analysis
-        The certified base-parameter analysis.
-    drives : Drives
-        The drive model of the measured rows.
-    regrouping : DriveRegrouping
-        Which drive parameters regroup into base parameters.
-    coords : ndarray of int, shape ``(m,)``
-        The coordinate of each measured row (a tree's ``q`` index; for a robot with loops the
-        actuated coordinates, in ``robot.actuated`` order).
-    """
-
-    analysis: Analysis
-    drives: Drives
-    regrouping: DriveRegrouping
-    coords: np.ndarray
-
-    @property
-    def robot(self) -> Robot:
-        """The robot."""
-        return self.analysis.robot
-
-    @property
-    def names(self) -> list[str]:
-        """Model parameter names ``(p,)``: regrouped base parameters, then drive parameters."""
-        return self.regrouping.model_names
-
-    @property
-    def n_params(self) -> int:
-        """Number of model parameters ``p``."""
-        return len(self.regrouping.independent)
-
-    @property
-    def state_columns(self) -> int:
-        """Columns of the states this model takes: ``robot.dof``, or ``len(robot.actuated)`` with loops."""
-        r = self.robot
-        return len(r.actuated) if r.has_loops else r.dof
-
-    def regressor(self, q, dq, ddq, closed=None) -> np.ndarray:
-        """The model regressor ``A`` of the measured rows.
-
-        Parameters
-        ----------
-        q, dq, ddq : array_like, shape ``(S, state_columns)``
-            States (a tree's coordinates; a loop robot's actuated coordinates).
-        closed : ClosedStates, optional
-            A loop robot's states already closed: :func:`~baseparams.kinematics.loops.close_loops`
-            of these ``q, dq, ddq`` with every sample kept (not closed again).
-
-        Returns
-        -------
-        A : ndarray, shape ``(S, m, p)``
-            ``tau = A @ theta`` on the measured rows.
-        """
-        from .analysis import checked_states
-        from .regressor.tp import closed_projected_regressor, projected_regressor
-
-        if closed is None:
-            q, dq, ddq, cs = checked_states(self.robot, q, dq, ddq)
-        else:
-            q, dq, ddq, cs = np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq), closed
-        p_map = self._column_map()
-        if cs is not None:
-            out = closed_projected_regressor(self.robot, cs, P=p_map)
-        else:
-            out = projected_regressor(self.robot, q, dq, ddq, P=p_map, rows=self.coords)
-        sel = self.coords if not self.robot.has_loops else np.arange(len(self.coords))
-        self._drive_columns(dq[:, sel], ddq[:, sel], out)
-        return out
-
-    def _column_map(self) -> np.ndarray:
-        """``(10 n, p)``: the base map on the kept base columns, zero on the drive columns (cached)."""
-        p_map = self.__dict__.get("_pmap")
-        if p_map is None:
-            nb = len(self.analysis.base_names)
-            ind = self.regrouping.independent
-            p_map = np.zeros((10 * self.robot.n, len(ind)))
-            base_cols = np.flatnonzero(ind < nb)
-            p_map[:, base_cols] = self.analysis.base_map[:, ind[base_cols]]
-            object.__setattr__(self, "_pmap", p_map)
-        return p_map
-
-    def _drive_columns(self, dq: np.ndarray, ddq: np.ndarray, out: np.ndarray) -> None:
-        """Write the kept drive parameters' columns into ``out (S, m, p)`` in place."""
-        nb = len(self.analysis.base_names)
-        for col, i in enumerate(self.regrouping.independent):
-            if i < nb:
-                continue
-            rows, values = self.drives.param_column(int(i - nb), dq, ddq)
-            out[:, rows, col] = values
-
-    def full_map(self) -> np.ndarray:
-        """``G (p, 10 n + nd)``: ``theta = G [pi_paper; delta]``.
-
-        Returns
-        -------
-        ndarray, shape ``(p, 10 n + nd)``
-            ``pi_paper`` in the ``paper`` convention (``robot.parameters("paper")``).
-        """
-        base = self.analysis.base
-        beta_of_paper = base.E @ np.linalg.inv(base.T)  # (nb, 10 n): paper -> convention -> base
-        nd = self.drives.n_params
-        blk = np.zeros((beta_of_paper.shape[0] + nd, beta_of_paper.shape[1] + nd))
-        blk[: beta_of_paper.shape[0], : beta_of_paper.shape[1]] = beta_of_paper
-        blk[beta_of_paper.shape[0]:, beta_of_paper.shape[1]:] = np.eye(nd)
-        return self.regrouping.matrix() @ blk
-
-    def theta(self, pi_paper: np.ndarray, delta: np.ndarray | None = None) -> np.ndarray:
-        """Model parameters of full parameters.
-
-        Parameters
-        ----------
-        pi_paper : ndarray, shape ``(10 n,)``
-            Inertial parameters, ``paper`` convention.
-        delta : ndarray, shape ``(nd,)``, optional
-            Drive parameters (default zero).
-
-        Returns
-        -------
-        ndarray, shape ``(p,)``
-            ``theta = G [pi_paper; delta]``.
-        """
-        nd = self.drives.n_params
-        delta = np.zeros(nd) if delta is None else np.asarray(delta, dtype=float)
-        return self.full_map() @ np.r_[np.asarray(pi_paper, dtype=float), delta]
-
-
-def measured_coords(robot: Robot, rows: str) -> np.ndarray:
-    """The coordinate of each measured row.
-
-    Parameters
-    ----------
-    robot : Robot
-        The robot.
-    rows : {"all", "joints", "base"}
-        The measured generalized forces (loops: the actuated ones).
-
-    Returns
-    -------
-    ndarray of int, shape ``(m,)``
-        Indices into the tree coordinates ``q``.
-    """
-    if robot.has_loops:
-        return np.asarray(robot.actuated, dtype=int)
-    return np.flatnonzero(row_mask(robot, rows))
-
-
-def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
-                coulomb_width: float | None = None, samples: int = 200, seed: int = 0,
-                couplings=()) -> IdentModel:
-    """The identification model of an analysed robot: base parameters plus drives, regrouped.
-
-    Parameters
-    ----------
-    analysis : Analysis
-        The base-parameter analysis (:func:`baseparams.analyze`).
-    rotor : bool
-        Include each driven joint's rotor inertia ``Ia``.
-    friction : iterable of str
-        Friction terms: any of ``viscous``, ``coulomb``, ``offset``.
-    coulomb_width : float, optional
-        Smooth Coulomb velocity scale (``tanh(dq / w)``); ``None``: ``sign(dq)``.
-    samples : int
-        Random states deciding which drive parameters regroup.
-    seed : int
-        Their seed.
-    couplings : iterable of MotorCoupling
-        Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`): their
-        ``Iam``, ``Fvm``, ``Fcm`` (with ``rotor``, viscous, Coulomb friction).
-
-    Returns
-    -------
-    IdentModel
-        The model; drive parameters that regroup are absorbed by base parameters.
-
-    Raises
-    ------
-    BaseparamsError
-        An analysis that is not certified or completed (its base set is not trustworthy), or a
-        drive regrouping without a clear rank decision.
-    """
-    if not analysis.status.ok and analysis.status != "unverified":
-        raise BaseparamsError(f"robot {analysis.robot.name!r}: the base-parameter analysis is {analysis.status}; "
-                              f"identification needs a certified base set")
-    robot = analysis.robot
-    coords = measured_coords(robot, analysis.rows)
-    drives = drives_for(robot, coords, rotor, friction, coulomb_width, couplings)
-    rng = np.random.default_rng(seed)
-    if robot.has_loops:  # positions that close the loops; rates of both signs (sign(dq) != 1)
-        q = closed_samples(robot, samples, rng).q[:, robot.actuated]
-    else:
-        q = sample_states(robot, samples, rng)[0]
-    dq, ddq = rng.uniform(-1.0, 1.0, (2,) + q.shape)
-    probe = IdentModel(analysis, drives, _identity_regrouping(analysis, drives), coords)
-    a = probe.regressor(q, dq, ddq)
-    factor = StreamingQR(a.shape[2]).add(a.reshape(-1, a.shape[2])).r
-    regrouping = regroup_drives(factor, analysis.base_names, drives)
-    if not regrouping.decided:
-        raise BaseparamsError(f"robot {robot.name!r}: whether the drive parameters regroup is not decided "
-                              f"(singular-value gap {regrouping.gap:.3g}); try another seed or more samples")
-    return IdentModel(analysis, drives, regrouping, coords)
-
-
-def _identity_regrouping(analysis: Analysis, drives: Drives) -> DriveRegrouping:
-    names = list(analysis.base_names) + drives.names
-    p = len(names)
-    return DriveRegrouping(names, np.arange(p), np.zeros(0, dtype=int), np.zeros((p, 0)), True, np.inf)
-
-
-def analyze_for_identification(robot: Robot, rows: str = "all", **kwargs) -> Analysis:
-    """The base-parameter analysis an identification starts from.
-
-    Parameters
-    ----------
-    robot : Robot
-        The robot.
-    rows : {"all", "joints", "base"}
-        The measured generalized forces.
-    **kwargs
-        Passed to :func:`baseparams.analyze` (``convention``, ``samples``, ``seed``).
-
-    Returns
-    -------
-    Analysis
-        Certified (or completed) analysis.
-    """
-    return analyze(robot, rows=rows, **kwargs)
+from ..analysis import analyze
+from ..errors import BaseparamsError
+from ..model.robot import Robot
+from ..numerics import blas_threads
+from .model import IdentModel, ident_model
 
 
 @dataclass(frozen=True, eq=False)
@@ -357,7 +119,7 @@ def accumulate(model: IdentModel, q, dq, ddq, tau, chunk: int = 20000, transform
     RowAccumulator
         The accumulated factors.
     """
-    from .ident.estimate import RowAccumulator
+    from .estimate import RowAccumulator
 
     acc = RowAccumulator(len(model.coords), model.n_params)
     tau = np.asarray(tau, dtype=float)
@@ -399,14 +161,14 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     BaseparamsError
         An unknown method, or data that do not excite the model.
     """
-    from .ident.estimate import ols, wls
+    from .estimate import ols, wls
 
     if method not in ("ols", "wls", "physical"):
         raise BaseparamsError(f"unknown identification method {method!r}; choose ols, wls or physical")
     est = ols(acc, model.names) if method == "ols" else wls(acc, model.names)
     if method != "physical":
         return Fit(model, method, est.theta, est)
-    from .ident.physical import physical_fit
+    from .physical import physical_fit
 
     kwargs = {} if prior_weight is None else {"prior_weight": prior_weight}
     phys = physical_fit(est.R11, est.r12, model.full_map(), model.robot, model.drives.param_kinds,
@@ -548,7 +310,7 @@ class Identification:
             phys = {"feasible": bool(p.feasible), "min_eigenvalue": float(np.min(p.min_eigenvalues)),
                     "masses": {b: float(v) for b, v in zip(self.model.robot.names, p.masses)},
                     "solver_status": str(p.solver_status)}
-        from .ident.estimate import excitation
+        from .estimate import excitation
 
         cond, weak = excitation(f.estimate.R11, self.model.names)
         return {"method": f.method, "model": self.model.robot.name, "convention": self.model.analysis.convention,
@@ -633,7 +395,7 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
               prior_weight, convention, memory_mb, couplings=(), progress=None) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
-    from .ident.preprocess import prepare
+    from .preprocess import prepare
 
     say = progress or (lambda msg: None)
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
@@ -827,7 +589,7 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     note : str
         How the parallel filtering was done.
     """
-    from .ident.estimate import RowAccumulator
+    from .estimate import RowAccumulator
 
     full = prep.full
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
@@ -837,8 +599,8 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
         acc.add(prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols])
         return acc, (f"parallel filtering: the regressor's {model.n_params} columns filtered like the torques "
                      f"({size_mb:.0f} MB at once)")
-    from .ident import chunks
-    from .ident.preprocess import resample
+    from . import chunks
+    from .preprocess import resample
 
     grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed)
     margin = chunks.overlap(prep.design)
@@ -854,157 +616,3 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
 def _model_notes(model: IdentModel) -> list[str]:
     """One line per drive parameter regrouped into a base parameter."""
     return [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]
-
-
-def format_identification(result: Identification) -> str:
-    """The identification as a text report.
-
-    Parameters
-    ----------
-    result : Identification
-        The result of :func:`identify`.
-
-    Returns
-    -------
-    str
-        Header (model, method, samples, condition number), base parameters (value, std, %sigma,
-        expression), drives, coupled motors, residual RMS per joint (training and validation),
-        physical check and the notes.
-    """
-    j = result.to_json()
-    n = j["n_samples"]
-    removed = ", ".join(f"{v} {k}" for k, v in n["removed"].items()) or "none"
-    weak = j["excitation"]["weak"]
-    lines = [f"{j['model']}: identification ({j['method']}), {n['used']} samples used of {n['read']} read "
-             f"(removed: {removed}); condition number {j['condition_number']:.4g}",
-             "excitation: every model parameter excited" if not weak else
-             f"excitation: POORLY EXCITED (singular values below 1e-3 of the largest): {', '.join(weak)}",
-             f"base parameters ({j['convention']} convention, SI units):",
-             f"  {'name':<16s} {'value':>14s} {'std':>11s} {'%sigma':>8s}  expression"]
-    for b in j["base_parameters"]:
-        lines.append(f"  {b['name']:<16s} {b['value']:14.6g} {b['std']:11.3g} {b['pct_sigma']:8.3g}  {b['expression']}")
-    if j["drives"]:
-        lines.append(f"  {'drives':<16s} {'Ia':>12s} {'Fv':>12s} {'Fc':>12s} {'Fo':>12s}")
-        for d in j["drives"]:
-            cells = [("-" if d[k] is None else f"{d[k]:.5g}" if not isinstance(d[k], str) else "regrouped")
-                     for k in ("Ia", "Fv", "Fc", "Fo")]
-            lines.append(f"  {d['joint']:<16s} " + " ".join(f"{c:>12s}" for c in cells))
-    for c in j["couplings"]:
-        cells = ", ".join(f"{k} {'-' if c[k] is None else c[k] if isinstance(c[k], str) else f'{c[k]:.5g}'}"
-                          for k in ("Iam", "Fvm", "Fcm"))
-        lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
-                     + f"): {cells}")
-    for label in ("train", "validation"):
-        part = j[label]
-        if part is None:
-            lines.append("validation: none (--holdout SECONDS or --validate FILE)")
-            continue
-        per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms"].items())
-        lines.append(f"{label} RMS {part['rms_total']:.4g} (per joint: {per})")
-    if j["physical"] is not None:
-        p = j["physical"]
-        lines.append(f"physical: feasible {p['feasible']}, smallest eigenvalue of the N_i {p['min_eigenvalue']:.3g}, "
-                     f"solver {p['solver_status']}")
-    lines += [f"note: {x}" for x in j["notes"]]
-    return "\n".join(lines)
-
-
-def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float = 0.5,
-                 noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
-                 convention: str = "khalil", trajectory=None):
-    """A synthetic joint log of a fixed-base robot, with its true model parameters.
-
-    Parameters
-    ----------
-    robot : Robot
-        The model (fixed base; loops closed by the actuated joints).
-    duration, rate : float
-        Length [s] and sampling rate [Hz].
-    amplitude : float
-        Joint excursion of the Fourier excitation [rad or m].
-    noise : float
-        Standard deviation of the Gaussian torque noise [N m or N].
-    seed : int
-        Seed of the trajectory, the drive parameters and the noise.
-    rotor : bool
-        Include rotor inertias (the model's armature where it has one, else drawn in 0.01-0.1).
-    friction : iterable of str
-        Friction terms (drawn: ``Fv`` in 0.05-0.5, ``Fc`` in 0.1-1, ``Fo`` in -0.2-0.2).
-    convention : str
-        Convention of the true base parameters written out.
-    trajectory : tuple of ndarray, optional
-        ``(t (S,), q, dq, ddq (S, state_columns))``: the motion to simulate (e.g. a designed
-        excitation, :func:`baseparams.excite.read_trajectory`) instead of a random Fourier series
-        (``duration``, ``rate`` and ``amplitude`` are then ignored).
-
-    Returns
-    -------
-    log : JointLog
-        ``t``, ``q``, ``dq`` and ``tau`` of the measured joints (no accelerations, like a real log).
-    truth : dict
-        ``{"model", "convention", "noise", "parameters": [{"name", "value"}], "drives": {name: value}}``:
-        the model parameters an identification should return.
-
-    Raises
-    ------
-    BaseparamsError
-        A floating base, or loops the trajectory does not close (lower ``amplitude``).
-    """
-    from .ident.data import JointLog
-    from .ident.simulate import add_noise, fourier_trajectory
-
-    if robot.floating:
-        raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
-    rng = np.random.default_rng(seed)
-    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction))
-    if trajectory is None:
-        t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
-    else:
-        t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
-    delta = _draw_drives(model, rng)
-    sel = np.arange(len(model.coords))
-    tau = (regressor_of(robot, q, dq, ddq) @ robot.parameters("paper")
-           + model.drives.regressor(dq[:, sel], ddq[:, sel], len(model.coords)) @ delta)
-    tau = add_noise(tau, noise, rng) if noise > 0 else tau
-    joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
-    log = JointLog(t, joints, q, tau, dq=dq, source=f"simulated {robot.name}")
-    theta = model.theta(robot.parameters("paper"), delta)
-    truth = {"model": robot.name, "convention": convention, "noise": noise,
-             "parameters": [{"name": n, "value": float(v)} for n, v in zip(model.names, theta)],
-             "drives": dict(zip(model.drives.names, delta.tolist()))}
-    return log, truth
-
-
-def regressor_of(robot: Robot, q, dq, ddq) -> np.ndarray:
-    """The full regressor of the measured rows (a tree's coordinates, a loop robot's actuated).
-
-    Parameters
-    ----------
-    robot : Robot
-        The robot (fixed base).
-    q, dq, ddq : ndarray, shape ``(S, state_columns)``
-        States.
-
-    Returns
-    -------
-    ndarray, shape ``(S, m, 10 n)``
-        ``paper`` convention columns (:func:`baseparams.analysis.regressor`).
-    """
-    from .analysis import regressor
-
-    return regressor(robot, q, dq, ddq)
-
-
-def _draw_drives(model: IdentModel, rng: np.random.Generator) -> np.ndarray:
-    """Plausible drive parameters: armature where the model has it, friction drawn."""
-    arm = model.robot.armature
-    out = []
-    for row in model.drives.rows:
-        coord = model.coords[row]
-        for kind in model.drives.kinds:
-            if kind == "Ia":
-                out.append(float(arm[coord]) if arm is not None and arm[coord] > 0 else rng.uniform(0.01, 0.1))
-            else:
-                lo, hi = {"Fv": (0.05, 0.5), "Fc": (0.1, 1.0), "Fo": (-0.2, 0.2)}[kind]
-                out.append(rng.uniform(lo, hi))
-    return np.array(out)

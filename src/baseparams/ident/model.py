@@ -1,0 +1,256 @@
+"""The identification model: base parameters and drive terms of the measured joints.
+
+:class:`IdentModel` (its regressor, parameter names and the map back to full parameters),
+:func:`ident_model` and the measured coordinates of a robot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..analysis import Analysis, analyze
+from ..errors import BaseparamsError
+from ..model.robot import Robot
+from ..numerics import StreamingQR, closed_samples, row_mask, sample_states
+from .drives import DriveRegrouping, Drives, drives_for, regroup_drives
+
+
+@dataclass(frozen=True, eq=False)
+class IdentModel:
+    """The linear model identified: base parameters and drive parameters, regrouped.
+
+    ``tau = A(q, dq, ddq) theta`` on the measured rows, ``theta = E phi`` with
+    ``phi = [beta (nb); delta (nd)]``: ``beta`` the analysis's base parameters (its
+    convention), ``delta`` the drive parameters (:class:`~baseparams.ident.drives.Drives`).
+
+    Parameters
+    ----------
+    analysis : Analysis
+        The certified base-parameter analysis.
+    drives : Drives
+        The drive model of the measured rows.
+    regrouping : DriveRegrouping
+        Which drive parameters regroup into base parameters.
+    coords : ndarray of int, shape ``(m,)``
+        The coordinate of each measured row (a tree's ``q`` index; for a robot with loops the
+        actuated coordinates, in ``robot.actuated`` order).
+    """
+
+    analysis: Analysis
+    drives: Drives
+    regrouping: DriveRegrouping
+    coords: np.ndarray
+
+    @property
+    def robot(self) -> Robot:
+        """The robot."""
+        return self.analysis.robot
+
+    @property
+    def names(self) -> list[str]:
+        """Model parameter names ``(p,)``: regrouped base parameters, then drive parameters."""
+        return self.regrouping.model_names
+
+    @property
+    def n_params(self) -> int:
+        """Number of model parameters ``p``."""
+        return len(self.regrouping.independent)
+
+    @property
+    def state_columns(self) -> int:
+        """Columns of the states this model takes: ``robot.dof``, or ``len(robot.actuated)`` with loops."""
+        r = self.robot
+        return len(r.actuated) if r.has_loops else r.dof
+
+    def regressor(self, q, dq, ddq, closed=None) -> np.ndarray:
+        """The model regressor ``A`` of the measured rows.
+
+        Parameters
+        ----------
+        q, dq, ddq : array_like, shape ``(S, state_columns)``
+            States (a tree's coordinates; a loop robot's actuated coordinates).
+        closed : ClosedStates, optional
+            A loop robot's states already closed: :func:`~baseparams.kinematics.loops.close_loops`
+            of these ``q, dq, ddq`` with every sample kept (not closed again).
+
+        Returns
+        -------
+        A : ndarray, shape ``(S, m, p)``
+            ``tau = A @ theta`` on the measured rows.
+        """
+        from ..analysis import checked_states
+        from ..regressor.tp import closed_projected_regressor, projected_regressor
+
+        if closed is None:
+            q, dq, ddq, cs = checked_states(self.robot, q, dq, ddq)
+        else:
+            q, dq, ddq, cs = np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq), closed
+        p_map = self._column_map()
+        if cs is not None:
+            out = closed_projected_regressor(self.robot, cs, P=p_map)
+        else:
+            out = projected_regressor(self.robot, q, dq, ddq, P=p_map, rows=self.coords)
+        sel = self.coords if not self.robot.has_loops else np.arange(len(self.coords))
+        self._drive_columns(dq[:, sel], ddq[:, sel], out)
+        return out
+
+    def _column_map(self) -> np.ndarray:
+        """``(10 n, p)``: the base map on the kept base columns, zero on the drive columns (cached)."""
+        p_map = self.__dict__.get("_pmap")
+        if p_map is None:
+            nb = len(self.analysis.base_names)
+            ind = self.regrouping.independent
+            p_map = np.zeros((10 * self.robot.n, len(ind)))
+            base_cols = np.flatnonzero(ind < nb)
+            p_map[:, base_cols] = self.analysis.base_map[:, ind[base_cols]]
+            object.__setattr__(self, "_pmap", p_map)
+        return p_map
+
+    def _drive_columns(self, dq: np.ndarray, ddq: np.ndarray, out: np.ndarray) -> None:
+        """Write the kept drive parameters' columns into ``out (S, m, p)`` in place."""
+        nb = len(self.analysis.base_names)
+        for col, i in enumerate(self.regrouping.independent):
+            if i < nb:
+                continue
+            rows, values = self.drives.param_column(int(i - nb), dq, ddq)
+            out[:, rows, col] = values
+
+    def full_map(self) -> np.ndarray:
+        """``G (p, 10 n + nd)``: ``theta = G [pi_paper; delta]``.
+
+        Returns
+        -------
+        ndarray, shape ``(p, 10 n + nd)``
+            ``pi_paper`` in the ``paper`` convention (``robot.parameters("paper")``).
+        """
+        base = self.analysis.base
+        beta_of_paper = base.E @ np.linalg.inv(base.T)  # (nb, 10 n): paper -> convention -> base
+        nd = self.drives.n_params
+        blk = np.zeros((beta_of_paper.shape[0] + nd, beta_of_paper.shape[1] + nd))
+        blk[: beta_of_paper.shape[0], : beta_of_paper.shape[1]] = beta_of_paper
+        blk[beta_of_paper.shape[0]:, beta_of_paper.shape[1]:] = np.eye(nd)
+        return self.regrouping.matrix() @ blk
+
+    def theta(self, pi_paper: np.ndarray, delta: np.ndarray | None = None) -> np.ndarray:
+        """Model parameters of full parameters.
+
+        Parameters
+        ----------
+        pi_paper : ndarray, shape ``(10 n,)``
+            Inertial parameters, ``paper`` convention.
+        delta : ndarray, shape ``(nd,)``, optional
+            Drive parameters (default zero).
+
+        Returns
+        -------
+        ndarray, shape ``(p,)``
+            ``theta = G [pi_paper; delta]``.
+        """
+        nd = self.drives.n_params
+        delta = np.zeros(nd) if delta is None else np.asarray(delta, dtype=float)
+        return self.full_map() @ np.r_[np.asarray(pi_paper, dtype=float), delta]
+
+
+def measured_coords(robot: Robot, rows: str) -> np.ndarray:
+    """The coordinate of each measured row.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    rows : {"all", "joints", "base"}
+        The measured generalized forces (loops: the actuated ones).
+
+    Returns
+    -------
+    ndarray of int, shape ``(m,)``
+        Indices into the tree coordinates ``q``.
+    """
+    if robot.has_loops:
+        return np.asarray(robot.actuated, dtype=int)
+    return np.flatnonzero(row_mask(robot, rows))
+
+
+def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
+                coulomb_width: float | None = None, samples: int = 200, seed: int = 0,
+                couplings=()) -> IdentModel:
+    """The identification model of an analysed robot: base parameters plus drives, regrouped.
+
+    Parameters
+    ----------
+    analysis : Analysis
+        The base-parameter analysis (:func:`baseparams.analyze`).
+    rotor : bool
+        Include each driven joint's rotor inertia ``Ia``.
+    friction : iterable of str
+        Friction terms: any of ``viscous``, ``coulomb``, ``offset``.
+    coulomb_width : float, optional
+        Smooth Coulomb velocity scale (``tanh(dq / w)``); ``None``: ``sign(dq)``.
+    samples : int
+        Random states deciding which drive parameters regroup.
+    seed : int
+        Their seed.
+    couplings : iterable of MotorCoupling
+        Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`): their
+        ``Iam``, ``Fvm``, ``Fcm`` (with ``rotor``, viscous, Coulomb friction).
+
+    Returns
+    -------
+    IdentModel
+        The model; drive parameters that regroup are absorbed by base parameters.
+
+    Raises
+    ------
+    BaseparamsError
+        An analysis that is not certified or completed (its base set is not trustworthy), or a
+        drive regrouping without a clear rank decision.
+    """
+    if not analysis.status.ok and analysis.status != "unverified":
+        raise BaseparamsError(f"robot {analysis.robot.name!r}: the base-parameter analysis is {analysis.status}; "
+                              f"identification needs a certified base set")
+    robot = analysis.robot
+    coords = measured_coords(robot, analysis.rows)
+    drives = drives_for(robot, coords, rotor, friction, coulomb_width, couplings)
+    rng = np.random.default_rng(seed)
+    if robot.has_loops:  # positions that close the loops; rates of both signs (sign(dq) != 1)
+        q = closed_samples(robot, samples, rng).q[:, robot.actuated]
+    else:
+        q = sample_states(robot, samples, rng)[0]
+    dq, ddq = rng.uniform(-1.0, 1.0, (2,) + q.shape)
+    probe = IdentModel(analysis, drives, _identity_regrouping(analysis, drives), coords)
+    a = probe.regressor(q, dq, ddq)
+    factor = StreamingQR(a.shape[2]).add(a.reshape(-1, a.shape[2])).r
+    regrouping = regroup_drives(factor, analysis.base_names, drives)
+    if not regrouping.decided:
+        raise BaseparamsError(f"robot {robot.name!r}: whether the drive parameters regroup is not decided "
+                              f"(singular-value gap {regrouping.gap:.3g}); try another seed or more samples")
+    return IdentModel(analysis, drives, regrouping, coords)
+
+
+def _identity_regrouping(analysis: Analysis, drives: Drives) -> DriveRegrouping:
+    names = list(analysis.base_names) + drives.names
+    p = len(names)
+    return DriveRegrouping(names, np.arange(p), np.zeros(0, dtype=int), np.zeros((p, 0)), True, np.inf)
+
+
+def analyze_for_identification(robot: Robot, rows: str = "all", **kwargs) -> Analysis:
+    """The base-parameter analysis an identification starts from.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    rows : {"all", "joints", "base"}
+        The measured generalized forces.
+    **kwargs
+        Passed to :func:`baseparams.analyze` (``convention``, ``samples``, ``seed``).
+
+    Returns
+    -------
+    Analysis
+        Certified (or completed) analysis.
+    """
+    return analyze(robot, rows=rows, **kwargs)
+

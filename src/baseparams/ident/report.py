@@ -1,0 +1,59 @@
+"""The identification as a text report."""
+
+from __future__ import annotations
+
+from .pipeline import Identification
+
+
+def format_identification(result: Identification) -> str:
+    """The identification as a text report.
+
+    Parameters
+    ----------
+    result : Identification
+        The result of :func:`identify`.
+
+    Returns
+    -------
+    str
+        Header (model, method, samples, condition number), base parameters (value, std, %sigma,
+        expression), drives, coupled motors, residual RMS per joint (training and validation),
+        physical check and the notes.
+    """
+    j = result.to_json()
+    n = j["n_samples"]
+    removed = ", ".join(f"{v} {k}" for k, v in n["removed"].items()) or "none"
+    weak = j["excitation"]["weak"]
+    lines = [f"{j['model']}: identification ({j['method']}), {n['used']} samples used of {n['read']} read "
+             f"(removed: {removed}); condition number {j['condition_number']:.4g}",
+             "excitation: every model parameter excited" if not weak else
+             f"excitation: POORLY EXCITED (singular values below 1e-3 of the largest): {', '.join(weak)}",
+             f"base parameters ({j['convention']} convention, SI units):",
+             f"  {'name':<16s} {'value':>14s} {'std':>11s} {'%sigma':>8s}  expression"]
+    for b in j["base_parameters"]:
+        lines.append(f"  {b['name']:<16s} {b['value']:14.6g} {b['std']:11.3g} {b['pct_sigma']:8.3g}  {b['expression']}")
+    if j["drives"]:
+        lines.append(f"  {'drives':<16s} {'Ia':>12s} {'Fv':>12s} {'Fc':>12s} {'Fo':>12s}")
+        for d in j["drives"]:
+            cells = [("-" if d[k] is None else f"{d[k]:.5g}" if not isinstance(d[k], str) else "regrouped")
+                     for k in ("Ia", "Fv", "Fc", "Fo")]
+            lines.append(f"  {d['joint']:<16s} " + " ".join(f"{c:>12s}" for c in cells))
+    for c in j["couplings"]:
+        cells = ", ".join(f"{k} {'-' if c[k] is None else c[k] if isinstance(c[k], str) else f'{c[k]:.5g}'}"
+                          for k in ("Iam", "Fvm", "Fcm"))
+        lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
+                     + f"): {cells}")
+    for label in ("train", "validation"):
+        part = j[label]
+        if part is None:
+            lines.append("validation: none (--holdout SECONDS or --validate FILE)")
+            continue
+        per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms"].items())
+        lines.append(f"{label} RMS {part['rms_total']:.4g} (per joint: {per})")
+    if j["physical"] is not None:
+        p = j["physical"]
+        lines.append(f"physical: feasible {p['feasible']}, smallest eigenvalue of the N_i {p['min_eigenvalue']:.3g}, "
+                     f"solver {p['solver_status']}")
+    lines += [f"note: {x}" for x in j["notes"]]
+    return "\n".join(lines)
+

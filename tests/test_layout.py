@@ -16,7 +16,7 @@ PKG = SRC / "baseparams"
 
 #: layer of each top-level part: a module may import only from its own part or lower layers
 LAYERS = {
-    "errors": 0, "enums": 0, "pga": 0,
+    "errors": 0, "enums": 0, "pga": 0, "files": 0.5,
     "model": 1,
     "kinematics": 2,
     "regressor": 3,

@@ -51,3 +51,27 @@ def test_bad_blocks_are_one_clear_error():
     with pytest.raises(BaseparamsError, match="NaN"):
         qr.add(np.array([[1.0, np.nan, 0.0]]))
     assert qr.rows == 0 and qr.r.shape == (0, 3)
+
+
+def test_an_empty_block_changes_nothing(rng):
+    a = rng.normal(size=(30, 4))
+    f = StreamingQR(4).add(a[:20]).add(np.zeros((0, 4))).add(a[20:])
+    g = StreamingQR(4).add(a)
+    np.testing.assert_allclose(np.abs(f.r), np.abs(g.r), atol=1e-12)
+
+
+def test_a_chunk_whose_samples_are_all_too_slow_is_skipped_not_a_traceback():
+    """A rest in the middle of a log, chunked (small memory) with --min-speed: the rest chunk is empty."""
+    import baseparams
+    from baseparams.ident.pipeline import identify
+    from baseparams.ident.simulate import fourier_trajectory, simulate_log
+
+    robot = baseparams.load("puma560")
+    t, q, dq, ddq = fourier_trajectory(6, 30.0, 200.0, np.random.default_rng(1))
+    rest = (t > 5) & (t < 25)
+    q[rest], dq[rest], ddq[rest] = q[rest][0], 0.0, 0.0  # the robot stops for 20 s: whole chunks at rest
+    log, _ = simulate_log(robot, trajectory=(t, q, dq, ddq), seed=1)
+    res = identify(robot, log, method="ols", min_speed=0.01, memory_mb=0.5, cutoff=10.0)
+    assert any("chunks" in n for n in res.notes)
+    assert res.samples["removed"] and sum(res.samples["removed"].values()) > 0
+    assert np.all(np.isfinite(res.fit.theta))

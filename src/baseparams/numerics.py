@@ -234,6 +234,8 @@ class StreamingQR:
         """
         block = np.asarray(block, dtype=float)
         block = block.reshape(-1, block.shape[-1]) if block.ndim != 2 else block
+        if block.shape[0] == 0:  # e.g. a chunk whose samples were all removed (too slow): nothing to add
+            return self
         parts = [block] if rhs is None else [block, np.asarray(rhs, dtype=float).reshape(block.shape[0], -1)]
         width = sum(p.shape[1] for p in parts)
         if width != self.ncols:

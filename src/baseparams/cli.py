@@ -311,6 +311,32 @@ def _friction(text: str) -> tuple[str, ...]:
     return () if text.strip().lower() in ("", "none") else tuple(x.strip() for x in text.split(",") if x.strip())
 
 
+def _read_identification_logs(args, robot, path):
+    """The training log, the validation log (or None) and the robot (a sub-chain with ``--joints``)."""
+    from .io.logs import read_log
+
+    subset = bool(args.joints)
+    log = read_log(path, robot, columns=args.columns, allow_subset=subset)
+    val = read_log(args.validate, robot, columns=args.columns, allow_subset=subset) if args.validate else None
+    if args.weld and not subset:
+        raise BaseparamsError("--weld applies with --joints (the joints to identify; the others are welded)")
+    if subset and args.urdf:
+        raise BaseparamsError("--urdf with --joints: writing a sub-chain's values into the whole robot's file is "
+                              "not supported; identify every moving joint to export")
+    if not subset:
+        return log, val, robot
+    from .ident.subchain import parse_welds, subchain
+
+    joints = [j.strip() for j in args.joints.split(",") if j.strip()]
+    welds = parse_welds(args.weld)
+    small, log, notes = subchain(robot, log, joints, welds)
+    if val is not None:
+        val = subchain(robot, val, joints, welds)[1]
+    for note in notes:
+        print(f"baseparams: note: {note}", file=sys.stderr)
+    return log, val, small
+
+
 def cmd_identify(args) -> int:
     """``baseparams identify MODEL DATA``: base-parameter and drive values from a joint log.
 
@@ -335,17 +361,17 @@ def cmd_identify(args) -> int:
     from .ident.drives import MotorCoupling
     from .ident.pipeline import identify
     from .ident.report import format_identification
-    from .io.logs import read_log
 
     couplings = tuple(MotorCoupling.parse(text) for text in args.coupling or ())
     robot = _robot(args)
     files = _data_files(args.data)
     if len(files) > 1 or args.per_file or args.pooled:
+        if args.joints:
+            raise BaseparamsError("--joints applies to one log, not to a fleet of logs")
         return _identify_fleet(args, robot, files)
     with Progress(args.verbose) as progress:
         progress(f"reading {args.data}")
-        log = read_log(files[0], robot, columns=args.columns)
-        val = read_log(args.validate, robot, columns=args.columns) if args.validate else None
+        log, val, robot = _read_identification_logs(args, robot, files[0])
         progress(f"identifying ({args.method}) on {log.n_samples} samples")
         t0 = time.perf_counter()
         result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
@@ -608,6 +634,11 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
     s.add_argument("--prior-weight", type=float, metavar="W", help="physical: weight of the file's inertias")
+    s.add_argument("--joints", metavar="A,B,...",
+                   help="identify only these joints; every other joint is welded (at its logged position if it "
+                        "does not move, at --weld, or at 0)")
+    s.add_argument("--weld", action="append", metavar="JOINT=VALUE",
+                   help="with --joints: weld JOINT at VALUE (rad or m); repeatable")
     s.add_argument("--per-file", action="store_true",
                    help="several logs (a glob such as 'logs/robot-*/*.parquet'): one estimate per log and the "
                         "spread across them, on Dask")

@@ -587,7 +587,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool) -> lis
         where = (f"not in the mapping {spec['label']}" if spec["joints"] else
                  "no columns (expected q_<joint> and tau_<joint> each)")
         raise DataError(f"{table.source}: joints {_names(missing)} of robot {robot.name!r}: {where}; "
-                        "allow_subset=True reads a subset")
+                        "to identify a sub-chain: --joints A,B,... on the command line (allow_subset=True in Python)")
     out = []
     for j in [j for j in robot.joint_names if j in entries]:
         e = entries[j]

@@ -1,0 +1,116 @@
+"""Identify part of a robot: the listed joints, every other joint welded.
+
+``identify MODEL LOG --joints A,B,...`` identifies the listed joints' model. Every other 1-dof
+joint becomes rigid (:func:`baseparams.model.weld.weld`):
+
+* at ``--weld NAME=VALUE`` when given;
+* else, when the log has the joint, at the median of its logged position, provided it does not
+  move (a range above :data:`STILL` is refused: a moving joint cannot be welded, list it);
+* else at 0, with a note naming the joints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from ..errors import DataError, ModelError
+from ..model.robot import Robot
+from ..model.weld import weld
+from .data import JointLog
+
+#: largest logged range [rad or m] of a joint held still (welded at its median)
+STILL = 1e-3
+
+
+def parse_welds(items: Sequence[str] | None) -> dict[str, float]:
+    """``["NAME=VALUE", ...]`` as a dict (one clear error per bad item)."""
+    out: dict[str, float] = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            sep = ""
+        if not sep or not name.strip():
+            raise ModelError(f"--weld {item!r}: expected NAME=VALUE (a joint name and a number)")
+    return out
+
+
+def subchain(robot: Robot, log: JointLog, joints: Sequence[str],
+             welds: Mapping[str, float] | None = None) -> tuple[Robot, JointLog, list[str]]:
+    """The model of the listed joints and the log restricted to them.
+
+    Parameters
+    ----------
+    robot : Robot
+        The whole robot (a tree without loops or couplings).
+    log : JointLog
+        The log, read with ``allow_subset=True`` (it may lack the joints that are welded).
+    joints : sequence of str
+        The joints to identify (R or P).
+    welds : mapping of str to float, optional
+        Values at which to weld other joints (rad or m).
+
+    Returns
+    -------
+    robot : Robot
+        The robot with every other R/P joint welded.
+    log : JointLog
+        The log's columns of the listed joints, in the new robot's joint order.
+    notes : list of str
+        Where each welded joint was welded.
+
+    Raises
+    ------
+    ModelError
+        An unknown joint, a weld of a listed joint.
+    DataError
+        A listed joint missing from the log, or an unlisted joint that moves in the log.
+    """
+    welds = dict(welds or {})
+    names = list(robot.joint_names)
+    for j in list(joints) + list(welds):
+        if j not in names:
+            raise ModelError(f"robot {robot.name!r}: no joint {j!r} (joints: {', '.join(names)})")
+    both = sorted(set(joints) & set(welds))
+    if both:
+        raise ModelError(f"joint(s) {', '.join(both)} both identified (--joints) and welded (--weld)")
+    missing = [j for j in joints if j not in log.joints]
+    if missing:
+        raise DataError(f"{log.source}: no column for the listed joint(s) {', '.join(missing)}")
+    values, held, zero = {}, [], []
+    for i, j in enumerate(names):
+        if j in joints or robot.jtype[i] not in ("R", "P"):
+            continue
+        if j in welds:
+            values[j] = welds[j]
+        elif j in log.joints:
+            qj = log.q[:, log.joints.index(j)]
+            span = float(np.ptp(qj))
+            if span > STILL:
+                raise DataError(f"{log.source}: joint {j!r} moves in the log (range {span:.3g}) and is not in "
+                                "--joints: identify it too, or cut the log where it is still")
+            values[j] = float(np.median(qj))
+            held.append(j)
+        else:
+            values[j] = 0.0
+            zero.append(j)
+    small = weld(robot, values)
+    other = [j for j in small.joint_names if j not in joints]
+    if other:
+        raise ModelError(f"robot {robot.name!r}: joint(s) {', '.join(other)} can be neither welded (not R or P) nor "
+                         "identified (not in --joints)")
+    cols = [log.joints.index(j) for j in small.joint_names]
+    sub = JointLog(log.t, tuple(small.joint_names), log.q[:, cols], log.tau[:, cols],
+                   dq=None if log.dq is None else log.dq[:, cols], ddq=None if log.ddq is None else log.ddq[:, cols],
+                   source=log.source, removed=dict(log.removed), notes=log.notes)
+    notes = [f"sub-chain: {len(small.joint_names)} joint(s) identified, {len(values)} welded"]
+    if held:
+        notes.append(f"welded at their logged (still) positions: {', '.join(held)}")
+    if welds:
+        notes.append("welded at --weld values: " + ", ".join(f"{k}={v:g}" for k, v in welds.items()))
+    if zero:
+        notes.append(f"not in the log, welded at 0 (--weld NAME=VALUE to choose): {', '.join(zero)}")
+    return small, sub, notes

@@ -112,14 +112,48 @@ def atomic_path(path, inputs: Iterable = (), what: str = "output") -> Iterator[P
 
 
 def write_text(path, text: str, inputs: Iterable = (), what: str = "output") -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_path`); returns the path."""
+    """Write to ``path`` atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path
+        The final file.
+    text : str
+        The content (written as UTF-8).
+    inputs : iterable of str or path
+        Input files the output must not overwrite.
+    what : str
+        The output's role, for messages.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_path(path, inputs, what) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)
 
 
 def write_bytes(path, data: bytes, inputs: Iterable = (), what: str = "output") -> Path:
-    """Write ``data`` to ``path`` atomically (:func:`atomic_path`); returns the path."""
+    """Write to ``path`` atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path
+        The final file.
+    data : bytes
+        The content.
+    inputs : iterable of str or path
+        Input files the output must not overwrite.
+    what : str
+        The output's role, for messages.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_path(path, inputs, what) as tmp:
         tmp.write_bytes(data)
     return Path(path)

@@ -25,7 +25,23 @@ STILL = 1e-3
 
 
 def parse_welds(items: Sequence[str] | None) -> dict[str, float]:
-    """``["NAME=VALUE", ...]`` as a dict (one clear error per bad item)."""
+    """The ``--weld`` items as a dict.
+
+    Parameters
+    ----------
+    items : sequence of str or None
+        ``["NAME=VALUE", ...]`` (rad or m).
+
+    Returns
+    -------
+    dict of str to float
+        Joint name -> value.
+
+    Raises
+    ------
+    ModelError
+        An item that is not ``NAME=VALUE`` with a number.
+    """
     out: dict[str, float] = {}
     for item in items or ():
         name, sep, value = item.partition("=")

@@ -50,6 +50,37 @@ def _with_couplings(robot: Robot, index: dict[str, int], values: dict[str, float
     return values
 
 
+def _reposed_and_merged(robot: Robot, index: dict[str, int], values: Mapping[str, float]):
+    """World poses with the welded joints at their values, merged inertias, merge targets, welded mask."""
+    m0 = robot.M0.copy()
+    parent = robot.parent.copy()
+    n_body = robot.N_body.copy()
+    children: list[list[int]] = [[] for _ in range(robot.n)]
+    for i, p in enumerate(parent):
+        if p >= 0:
+            children[p].append(i)
+    welded = np.zeros(robot.n, dtype=bool)
+    for name, v in values.items():
+        j = index[name]
+        welded[j] = True
+        d = m0[j] @ _local_motion(robot.jtype[j], robot.axes[j][0], float(v)) @ np.linalg.inv(m0[j])
+        stack = [j]
+        while stack:  # re-pose the subtree in the world
+            k = stack.pop()
+            m0[k] = d @ m0[k]
+            stack += children[k]
+    # merge each welded body into its nearest kept ancestor (or drop it on the world), deepest first
+    target = np.arange(robot.n)
+    for i in range(robot.n):
+        if welded[i]:
+            target[i] = target[parent[i]] if parent[i] >= 0 else -1
+    for i in range(robot.n - 1, -1, -1):
+        if welded[i] and target[i] >= 0:
+            t = np.linalg.inv(m0[target[i]]) @ m0[i]
+            n_body[target[i]] += _inertia.transform(n_body[i], t)
+    return m0, n_body, target, welded
+
+
 def weld(robot: Robot, values: Mapping[str, float]) -> Robot:
     """The robot with the named joints welded at the given coordinates.
 
@@ -88,32 +119,8 @@ def weld(robot: Robot, values: Mapping[str, float]) -> Robot:
                              "joints can be welded")
         if not np.isfinite(v):
             raise ModelError(f"robot {robot.name!r}: joint {name!r} cannot be welded at {v}")
-    m0 = robot.M0.copy()
-    parent = robot.parent.copy()
-    n_body = robot.N_body.copy()
-    children: list[list[int]] = [[] for _ in range(robot.n)]
-    for i, p in enumerate(parent):
-        if p >= 0:
-            children[p].append(i)
-    welded = np.zeros(robot.n, dtype=bool)
-    for name, v in values.items():
-        j = index[name]
-        welded[j] = True
-        d = m0[j] @ _local_motion(robot.jtype[j], robot.axes[j][0], float(v)) @ np.linalg.inv(m0[j])
-        stack = [j]
-        while stack:  # re-pose the subtree in the world
-            k = stack.pop()
-            m0[k] = d @ m0[k]
-            stack += children[k]
-    # merge each welded body into its nearest kept ancestor (or drop it on the world), deepest first
-    target = np.arange(robot.n)
-    for i in range(robot.n):
-        if welded[i]:
-            target[i] = target[parent[i]] if parent[i] >= 0 else -1
-    for i in range(robot.n - 1, -1, -1):
-        if welded[i] and target[i] >= 0:
-            t = np.linalg.inv(m0[target[i]]) @ m0[i]
-            n_body[target[i]] += _inertia.transform(n_body[i], t)
+    m0, n_body, target, welded = _reposed_and_merged(robot, index, values)
+    parent = robot.parent
     keep = np.flatnonzero(~welded)
     new_index = -np.ones(robot.n, dtype=int)
     new_index[keep] = np.arange(len(keep))

@@ -143,6 +143,10 @@ def exact(x) -> sp.Expr:
     """
     if isinstance(x, float | np.floating):
         return sp.Rational(repr(float(x)))
+    if isinstance(x, str):  # text is read by the allow-list grammar, never evaluated (sympify would)
+        from .expr import parse
+
+        return parse(x)
     e = sp.sympify(x, rational=True)
     floats = e.atoms(sp.Float)  # SymPy Floats (e.g. from sp.Matrix([0.5])): their shortest decimal
     return e.xreplace({f: sp.Rational(repr(float(f))) for f in floats}) if floats else e

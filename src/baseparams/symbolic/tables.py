@@ -32,10 +32,10 @@ from importlib import resources
 from pathlib import Path
 
 import sympy as sp
-from sympy.parsing.sympy_parser import parse_expr
 
 from ..errors import ModelError
 from .angles import cos_sin
+from .expr import ExpressionError, parse
 from .geometry import SymbolicBuilder, SymbolicRobot, exact, rot, trans
 
 #: the columns of each convention (``ant`` optional)
@@ -48,10 +48,10 @@ _ANGLES = {"modified": ("alpha", "theta", "gamma"), "standard": ("alpha", "theta
 
 def _entry(text: str, where: str, angle: bool) -> sp.Expr:
     try:
-        e = parse_expr(text, local_dict={"pi": sp.pi, "sqrt": sp.sqrt}, evaluate=True)
-    except Exception:  # noqa: BLE001 -- SymPy's parser raises many types; one clear line instead
-        raise ModelError(f"{where}: cannot read {text!r} (a number, a name or an expression like pi/2)") from None
-    e = sp.sympify(e, rational=True)
+        e = parse(text)  # an allow-list grammar: nothing in a table is evaluated as Python
+    except ExpressionError as exc:
+        raise ModelError(f"{where}: cannot read {text[:60]!r}: {exc} (a number, a name or an expression like "
+                         "pi/2)") from None
     if e.free_symbols:
         e = e.subs({s: sp.Symbol(s.name, real=True) for s in e.free_symbols})
         if angle:

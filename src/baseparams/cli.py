@@ -423,9 +423,9 @@ def cmd_predict(args) -> int:
 
     Writes ``t, tau_<joint>`` (one row per log sample, the log's time stamps; CSV/TSV, or Parquet
     by the suffix) and prints the RMS against the log's measured torques when it has them:
-    against the measured torques low-passed with the identification's zero-phase filter (what
-    identify's train and validation RMS compare; ``rms`` in JSON), and against the raw ones
-    (``rms_raw``, which also holds the sensor noise above the cutoff).
+    predicted and measured torques both low-passed with the identification's zero-phase filter
+    (parallel filtering, what identify's train and validation RMS compare; ``rms`` in JSON), and
+    unfiltered (``rms_raw``, which also holds the sensor noise above the cutoff).
 
     Parameters
     ----------
@@ -472,27 +472,27 @@ def cmd_predict(args) -> int:
     lines = [f"{robot.name}: predicted {len(joints)} joint torques at {log.n_samples} samples"
              + (f", written to {args.out}" if args.out else "")]
     if out["rms"] is not None:
-        what = (f"low-passed at the identification's {cutoff:.4g} Hz (as identify compares)" if cutoff
-                else "as logged")
+        what = (f"(both low-passed at the identification's {cutoff:.4g} Hz, as identify compares)" if cutoff
+                else "(as logged)")
         lines.append(f"RMS vs the log's measured torques {what}: {out['rms']['total']:.4g} (all joints); "
                      + ", ".join(f"{j} {out['rms'][j]:.3g}" for j in joints))
         if "rms_inner" in out:
             lines.append(f"  without the first and last {pad} samples (filter edges): {out['rms_inner']:.4g}")
         if "rms_raw" in out:
-            lines.append(f"  vs the raw measured torques: {out['rms_raw']:.4g} (their content above the cutoff alone: "
-                         f"{out['raw_above_cutoff']:.4g}: sensor noise, unmodelled vibration)")
+            lines.append(f"  unfiltered, prediction vs the raw measured torques: {out['rms_raw']:.4g} (the measured "
+                         f"torques' content above the cutoff alone: {out['raw_above_cutoff']:.4g})")
     print("\n".join(lines))
     return EXIT_OK
 
 
 def _predict_rms(out: dict, log, tau, joints: list[str], cutoff, pad) -> None:
-    """``predict``'s RMS against the log's torques: low-passed like identify, raw, without the edges."""
+    """``predict``'s RMS against the log's torques: both low-passed like identify, raw, without the edges."""
     from .ident.results import lowpass_at
 
     where = {j: k for k, j in enumerate(log.joints)}
     measured = log.tau[:, [where[j] for j in joints]]
-    ref = measured if not cutoff else lowpass_at(log.t, measured, cutoff)
-    err = ref - tau
+    both = np.hstack([measured, tau]) if not cutoff else lowpass_at(log.t, np.hstack([measured, tau]), cutoff)
+    ref, err = both[:, :len(joints)], both[:, :len(joints)] - both[:, len(joints):]
     out["rms"] = {"total": float(np.sqrt(np.mean(err**2))),
                   **{j: float(v) for j, v in zip(joints, np.sqrt(np.mean(err**2, axis=0)))}}
     if pad and log.n_samples > 2 * pad + 1:

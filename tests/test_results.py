@@ -202,3 +202,17 @@ def test_panda_save_then_predict_whole_log(tmp_path, capsys):
     # both low-passed as identify compares them: 0.087 N m measured (0.074 without the filter edges)
     assert j["rms"]["total"] <= 0.15
     assert j["rms_raw"] < 0.35  # raw: plus the sensor's content above the cutoff (0.27 N m RMS alone)
+
+
+def test_round_trip_physical_with_coupling_and_smooth_coulomb(puma, tmp_path):
+    """The physical fit, a coupled motor and a Coulomb width are saved and rebuilt."""
+    pytest.importorskip("cvxpy")
+    from baseparams.ident.drives import MotorCoupling
+
+    log, _ = simulate_log(puma, duration=10, rate=200, noise=0.01, seed=1)
+    res = identify(puma, log, method="physical", coulomb_width=0.05,
+                   couplings=(MotorCoupling("m6", ("joint5", "joint6"), (1.0, 1.0)),))
+    back = Identification.load(res.save(tmp_path / "phys.json"), puma)
+    assert back.options["coulomb_width"] == 0.05 and back.options["couplings"][0].name == "m6"
+    assert back.fit.physical.feasible and np.array_equal(back.fit.physical.pi, res.fit.physical.pi)
+    assert np.array_equal(back.predict(log), res.predict(log)) and back.to_json() == res.to_json()

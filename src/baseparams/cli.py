@@ -182,7 +182,13 @@ def _emit(args, text: str) -> None:
 
 
 def cmd_regressor(args) -> int:
-    """``baseparams regressor MODEL``: time the TP regressor on random states.
+    """``baseparams regressor MODEL``: time the TP regressor on random states (or ``--states FILE``).
+
+    With ``--states FILE`` the states come from a file (``q_``, ``dq_``, ``ddq_<joint>`` columns,
+    the log or the excite layout) and ``--out`` saves the regressor ``(S, m, 10 n)``: NPZ arrays
+    ``Y`` (that shape), ``columns`` (parameter names), ``joints``, ``t``; CSV/TSV/Parquet one row
+    per (sample, joint), columns ``sample, joint`` and one per parameter (row ``s * m + j`` is
+    ``Y[s, j]``).
 
     For a robot with loops, the closed-loop regressor with respect to its independent (actuated)
     coordinates on loop-closed samples. Prints its shape and time (or one JSON object with
@@ -192,7 +198,7 @@ def cmd_regressor(args) -> int:
     ----------
     args : argparse.Namespace
         The parsed command line (:func:`build_parser`): ``model``, ``floating``, ``gravity``,
-        ``strict_inertia``, ``samples`` (default 100), ``seed``, ``json``.
+        ``strict_inertia``, ``samples`` (default 100), ``seed``, ``json``, ``states``, ``out``.
 
     Returns
     -------
@@ -207,10 +213,14 @@ def cmd_regressor(args) -> int:
     from .numerics import closed_samples, sample_states
     from .regressor import closed_regressor, regressor
 
+    if args.out and not args.states:
+        raise BaseparamsError("--out saves the regressor of --states FILE; give the states")
     try:
         robot = _robot(args)
     except NoMovingBodiesError as exc:
         return _no_moving_bodies(args, exc)
+    if args.states:
+        return _regressor_states(args, robot)
     rng = np.random.default_rng(args.seed)
     args.samples = args.samples or 100
     t0 = time.perf_counter()
@@ -365,6 +375,7 @@ def cmd_identify(args) -> int:
     couplings = tuple(MotorCoupling.parse(text) for text in args.coupling or ())
     robot = _robot(args)
     files = _data_files(args.data)
+    truth = _results_check(args, files)  # --save, --truth: checked before the fit
     if len(files) > 1 or args.per_file or args.pooled:
         if args.joints:
             raise BaseparamsError("--joints applies to one log, not to a fleet of logs")
@@ -379,6 +390,9 @@ def cmd_identify(args) -> int:
                           decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
                           convention=args.convention, couplings=couplings, progress=progress)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
+        if args.save:
+            result.save(args.save, inputs=[args.model, *files, args.validate, args.columns, args.truth], what="--save")
+            progress(f"result saved to {args.save}")
         if args.urdf:
             _write_identified_urdf(args, robot, result)
         if args.plot:
@@ -390,8 +404,196 @@ def cmd_identify(args) -> int:
             from .report.html import identification_html
 
             _write_html(args.html, identification_html(result))
-    _emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
+    _emit(args, _with_truth(args, result, truth, format_identification))
     return EXIT_OK
+
+
+def _results_check(args, files: list[str]) -> dict | None:
+    """``identify --save/--truth``: refused with several logs; the save path and the truth read now."""
+    from .io.tables import check_output_path
+
+    if not (args.save or args.truth):
+        return None
+    if len(files) > 1 or args.per_file or args.pooled:
+        raise BaseparamsError("--save and --truth apply to one log, not to a fleet (--per-file / --pooled)")
+    check_output_path(args.save, [args.model, *files, args.validate, args.columns, args.truth], "--save")
+    if not args.truth:
+        return None
+    try:
+        truth = json.loads(Path(args.truth).read_text())
+    except FileNotFoundError:
+        raise BaseparamsError(f"--truth {args.truth}: no such file") from None
+    except (OSError, ValueError) as exc:
+        raise BaseparamsError(f"--truth {args.truth}: not a JSON truth file ({exc})") from None
+    if not isinstance(truth, dict) or not isinstance(truth.get("parameters"), list):
+        raise BaseparamsError(f"--truth {args.truth}: no 'parameters' list (write one with 'baseparams simulate': "
+                              f"OUT.truth.json)")
+    return truth
+
+
+def _with_truth(args, result, truth: dict | None, text_report) -> str:
+    """The report (text or JSON), with the comparison to ``--truth`` when given."""
+    from .ident.results import format_truth
+
+    cmp = None if truth is None else result.compare_truth(truth, args.truth)
+    if args.json:
+        out = result.to_json()
+        if cmp is not None:
+            out["truth"] = cmp
+        return json.dumps(out, indent=2)
+    return text_report(result) + ("" if cmp is None else "\n\n" + format_truth(cmp))
+
+
+def cmd_predict(args) -> int:
+    """``baseparams predict MODEL RESULT LOG --out PRED``: torques of a log from a saved identification.
+
+    Writes ``t, tau_<joint>`` (one row per log sample, the log's time stamps; CSV/TSV, or Parquet
+    by the suffix) and prints the RMS against the log's measured torques when it has them:
+    predicted and measured torques both low-passed with the identification's zero-phase filter
+    (parallel filtering, what identify's train and validation RMS compare; ``rms`` in JSON), and
+    unfiltered (``rms_raw``, which also holds the sensor noise above the cutoff).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line: the model options and ``result``, ``log``, ``columns``, ``out``,
+        ``filtered``.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+
+    Raises
+    ------
+    BaseparamsError
+        Another robot than the result's, a bad result file, log or output.
+    """
+    from .ident.pipeline import Identification
+    from .io.logs import read_log
+    from .io.tables import check_table_path, write_columns
+
+    inputs = [args.model, args.result, args.log, args.columns]
+    check_table_path(args.out, inputs, "--out")
+    if args.out and Path(args.out).suffix.lower() == ".npz":
+        raise BaseparamsError(f"--out {args.out}: predictions are written as .csv, .tsv or .parquet")
+    robot = _robot(args)
+    ident = Identification.load(args.result, robot)
+    log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False)
+    tau = ident.predict(log, filtered=args.filtered)
+    joints = ident.joints
+    if args.out:
+        write_columns(args.out, {"t": log.t, **{f"tau_{j}": tau[:, k] for k, j in enumerate(joints)}}, inputs, "--out")
+    pad = None
+    cutoff = (ident.options or {}).get("cutoff")
+    if cutoff and log.n_samples > 1:
+        pad = int(np.ceil(2 * (log.n_samples - 1) / (log.t[-1] - log.t[0]) / cutoff))
+    out = {"model": robot.name, "result": args.result, "log": args.log, "samples": log.n_samples, "joints": joints,
+           "out": args.out, "rms": None}
+    if log.tau is not None:
+        _predict_rms(out, log, tau, joints, cutoff, pad)
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return EXIT_OK
+    lines = [f"{robot.name}: predicted {len(joints)} joint torques at {log.n_samples} samples"
+             + (f", written to {args.out}" if args.out else "")]
+    if out["rms"] is not None:
+        what = (f"(both low-passed at the identification's {cutoff:.4g} Hz, as identify compares)" if cutoff
+                else "(as logged)")
+        lines.append(f"RMS vs the log's measured torques {what}: {out['rms']['total']:.4g} (all joints); "
+                     + ", ".join(f"{j} {out['rms'][j]:.3g}" for j in joints))
+        if "rms_inner" in out:
+            lines.append(f"  without the first and last {pad} samples (filter edges): {out['rms_inner']:.4g}")
+        if "rms_raw" in out:
+            lines.append(f"  unfiltered, prediction vs the raw measured torques: {out['rms_raw']:.4g} (the measured "
+                         f"torques' content above the cutoff alone: {out['raw_above_cutoff']:.4g})")
+    print("\n".join(lines))
+    return EXIT_OK
+
+
+def _predict_rms(out: dict, log, tau, joints: list[str], cutoff, pad) -> None:
+    """``predict``'s RMS against the log's torques: both low-passed like identify, raw, without the edges."""
+    from .ident.results import lowpass_at
+
+    where = {j: k for k, j in enumerate(log.joints)}
+    measured = log.tau[:, [where[j] for j in joints]]
+    both = np.hstack([measured, tau]) if not cutoff else lowpass_at(log.t, np.hstack([measured, tau]), cutoff)
+    ref, err = both[:, :len(joints)], both[:, :len(joints)] - both[:, len(joints):]
+    out["rms"] = {"total": float(np.sqrt(np.mean(err**2))),
+                  **{j: float(v) for j, v in zip(joints, np.sqrt(np.mean(err**2, axis=0)))}}
+    if pad and log.n_samples > 2 * pad + 1:
+        out["rms_inner"] = float(np.sqrt(np.mean(err[pad:-pad] ** 2)))
+    if cutoff:
+        out["rms_raw"] = float(np.sqrt(np.mean((measured - tau) ** 2)))
+        out["raw_above_cutoff"] = float(np.sqrt(np.mean((measured - ref) ** 2)))
+
+
+def _predict_parser(sub, model_args) -> None:
+    """The ``predict`` subcommand's arguments."""
+    s = sub.add_parser("predict", help="predict joint torques of a log from a saved identification (identify --save)")
+    model_args(s)
+    s.add_argument("result", help="the saved identification (RESULT.json from 'identify --save')")
+    s.add_argument("log", help="the log or trajectory: t, q_<joint>, [dq_<joint>, ddq_<joint>], [tau_<joint>] "
+                               "(CSV/TSV, NPZ, Parquet, a ROS 2 bag); rates it lacks are derived as identify does")
+    s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
+    s.add_argument("--out", metavar="FILE", help="write t, tau_<joint> per log sample (.csv, .tsv or .parquet)")
+    s.add_argument("--filtered", action="store_true",
+                   help="low-pass the logged q, dq, ddq with the identification's cutoff (default: as logged)")
+    s.set_defaults(func=cmd_predict)
+
+
+def _regressor_states(args, robot) -> int:
+    """``regressor MODEL --states FILE [--out FILE]``: the TP regressor of given states, saved."""
+    from .analysis import regressor
+    from .base.regroup import parameter_names
+    from .io.logs import read_log
+    from .io.tables import check_table_path, write_columns
+
+    check_table_path(args.out, [args.model, args.states], "--out")
+    if robot.floating:
+        raise BaseparamsError(f"--states: robot {robot.name!r} has a floating base, whose coordinates are not "
+                              f"columns of a states file; use baseparams.regressor in Python")
+    coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
+    joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    log = read_log(args.states, robot, allow_subset=True, require_tau=False, require_time=False)
+    missing = [j for j in joints if j not in log.joints]
+    if missing or log.dq is None or log.ddq is None:
+        what = f"no q_ columns for {missing}" if missing else "no dq_ and ddq_ columns"
+        raise BaseparamsError(f"--states {args.states}: {what} (states need q_, dq_, ddq_<joint> for the "
+                              f"{'actuated ' if robot.has_loops else ''}joints {joints})")
+    cols = [log.joints.index(j) for j in joints]
+    t0 = time.perf_counter()
+    y = regressor(robot, log.q[:, cols], log.dq[:, cols], log.ddq[:, cols])
+    dt = time.perf_counter() - t0
+    names = parameter_names(robot, "paper")
+    if args.out:
+        if Path(args.out).suffix.lower() == ".npz":
+            write_columns(args.out, {"Y": y, "columns": np.array(names), "joints": np.array(joints), "t": log.t},
+                          [args.model, args.states])
+        else:
+            s, m, p = y.shape
+            table = {"sample": np.repeat(np.arange(s), m), "joint": np.tile(np.array(joints), s)}
+            table.update({n: y[:, :, k].reshape(-1) for k, n in enumerate(names)})
+            write_columns(args.out, table, [args.model, args.states])
+    out = {"model": robot.name, "states": args.states, "samples": int(y.shape[0]), "shape": list(y.shape),
+           "seconds": dt, "out": args.out, "convention": "paper (spatial pseudo-inertia at q = 0)"}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{robot.name}: TP regressor {y.shape} (samples, joints, 10 x bodies) of {args.states} in "
+              f"{dt * 1e3:.2f} ms" + (f", written to {args.out}" if args.out else ""))
+    return EXIT_OK
+
+
+def _regressor_args(s) -> None:
+    """``regressor``'s ``--states`` and ``--out`` (and its function)."""
+    s.set_defaults(func=cmd_regressor)
+    s.add_argument("--states", metavar="FILE",
+                   help="states from a file (CSV/TSV, NPZ, Parquet: q_<joint>, dq_<joint>, ddq_<joint>, as a log or "
+                        "'excite --out'; loops: the actuated joints) instead of random samples")
+    s.add_argument("--out", metavar="FILE", help="with --states: save the regressor: .npz (Y (S, m, 10 n), columns, "
+                                                 "joints, t) or .csv/.tsv/.parquet (one row per sample and joint: "
+                                                 "sample, joint, one column per parameter)")
 
 
 def _write_html(path: str, page: str) -> None:
@@ -548,7 +750,7 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Subcommands ``robots``, ``analyze``, ``regressor``, ``identify``, ``simulate`` and
+        Subcommands ``robots``, ``analyze``, ``regressor``, ``identify``, ``predict``, ``simulate`` and
         ``excite``; each sets ``func`` to its ``cmd_*`` function.
     """
     p = argparse.ArgumentParser(prog="baseparams", description=(
@@ -602,10 +804,11 @@ def build_parser() -> argparse.ArgumentParser:
     _symbolic_args(s)
     s.set_defaults(func=cmd_analyze)
 
-    s = sub.add_parser("regressor", help="compute the TP regressor on random samples")
+    s = sub.add_parser("regressor", help="compute the TP regressor on random samples (or --states FILE)")
     model_args(s)
-    s.set_defaults(func=cmd_regressor)
+    _regressor_args(s)
     _identify_parser(sub, model_args)
+    _predict_parser(sub, model_args)
     _simulate_parser(sub, model_args)
     _excite_parser(sub, model_args)
     return p
@@ -649,6 +852,10 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
     s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    s.add_argument("--save", metavar="RESULT.json", help="save the result (values, std, options, the model's "
+                                                         "fingerprint) for 'baseparams predict'")
+    s.add_argument("--truth", metavar="TRUTH.json", help="compare with the true parameters of 'baseparams simulate' "
+                                                         "(OUT.truth.json): true, estimate, error, z per term")
     s.add_argument("-v", "--verbose", action="store_true",
                    help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")

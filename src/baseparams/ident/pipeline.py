@@ -197,6 +197,11 @@ class Identification:
         "tau_hat" (S, m), "joints" (m,)}``: the filtered measured and predicted torques (plots);
         ``train`` also has ``"spectrum"``: the excitation spectrum of the training positions
         (:func:`position_spectrum`).
+    options : dict, optional
+        How the model was built and the data prepared, what :meth:`save` writes and
+        :meth:`load` rebuilds the model from: ``{"method", "convention", "rows", "rotor",
+        "friction" (tuple), "coulomb_width", "couplings" (tuple of MotorCoupling), "cutoff" [Hz],
+        "decimate", "min_speed"}``.
     """
 
     fit: Fit
@@ -205,6 +210,198 @@ class Identification:
     validation: dict | None
     notes: tuple[str, ...]
     series: dict | None = None
+    options: dict | None = None
+
+    def predict(self, log, filtered: bool = False) -> np.ndarray:
+        """Predicted joint torques at every sample of a log (its own time stamps).
+
+        States: the log's ``q``, ``dq``, ``ddq`` as logged; rates it lacks are derived as the
+        identification derives them, with its cutoff
+        (:func:`baseparams.ident.results.log_states`: zero-phase low-pass of ``q``, central
+        differences; no sample dropped, the first and last ``2 fs / cutoff`` samples carry the
+        filter's edge transient).
+
+        Parameters
+        ----------
+        log : JointLog
+            ``S`` samples of the model's measured joints (``tau`` may be ``None``), e.g.
+            :func:`baseparams.io.logs.read_log` with ``require_tau=False``.
+        filtered : bool
+            Low-pass the logged states too (the identification's treatment of every signal).
+
+        Returns
+        -------
+        ndarray, shape ``(S, m)``
+            ``A(q, dq, ddq) @ theta`` [N m or N]: columns the measured joints in the model's
+            order (:attr:`joints`), rows the log's samples.
+
+        Raises
+        ------
+        BaseparamsError
+            A log missing a measured joint, too short or too slowly sampled for the cutoff.
+        """
+        from .results import log_states
+
+        cols = log_columns(self.model, log)
+        q, dq, ddq, _ = log_states(log, (self.options or {}).get("cutoff"), filtered)
+        q, dq, ddq = q[:, cols], dq[:, cols], ddq[:, cols]
+        with blas_threads():
+            return np.concatenate([self.fit.predict(q[k:k + 20000], dq[k:k + 20000], ddq[k:k + 20000])
+                                   for k in range(0, max(len(q), 1), 20000)])
+
+    @property
+    def joints(self) -> list[str]:
+        """The measured joints ``(m,)``, the columns of :meth:`predict`."""
+        r = self.model.robot
+        return [r.joint_names[r.dof_body[c]] for c in self.model.coords]
+
+    def compare_truth(self, truth: dict, source: str = "truth") -> dict:
+        """Compare with the true parameters of a simulation (``OUT.truth.json``).
+
+        Parameters
+        ----------
+        truth : dict
+            :func:`~baseparams.ident.simulate.simulate_log`'s truth.
+        source : str
+            Its file, for messages.
+
+        Returns
+        -------
+        dict
+            Per term ``true, estimate, error, std, z`` (:func:`baseparams.ident.results.compare_truth`).
+        """
+        from .results import compare_truth
+
+        return compare_truth(self.model.names, self.fit.theta, self.fit.estimate.std, truth, source)
+
+    def document(self) -> dict:
+        """The JSON object :meth:`save` writes (:mod:`baseparams.ident.results` describes it).
+
+        Returns
+        -------
+        dict
+            Format, version, the robot's name and fingerprint, the options, the model
+            parameters' names, values and std, the readable tables, the estimate's statistics
+            and triangular factor, the physical fit, counts and notes.
+        """
+        from dataclasses import fields
+
+        from .. import __version__
+        from .results import FORMAT, VERSION, numbers, robot_fingerprint
+
+        r = self.model.robot
+        opts = dict(self.options or {})
+        opts["friction"] = list(opts.get("friction", ()))
+        opts["couplings"] = [{"name": c.name, "joints": list(c.joints), "weights": list(c.weights)}
+                             for c in opts.get("couplings", ())]
+        est = self.fit.estimate
+        phys = self.fit.physical
+        body = self.to_json()
+        doc = {"format": FORMAT, "version": VERSION, "baseparams": __version__,
+               "robot": {"name": r.name, "fingerprint": robot_fingerprint(r), "bodies": r.n, "dof": r.dof,
+                         "parameters": 10 * r.n, "joints": self.joints},
+               "options": opts,
+               "parameters": {"names": list(self.model.names), "values": numbers(self.fit.theta),
+                              "std": numbers(est.std)},
+               "base_parameters": body["base_parameters"], "drives": body["drives"], "couplings": body["couplings"],
+               "estimate": {f.name: (numbers(getattr(est, f.name)) if isinstance(getattr(est, f.name), np.ndarray)
+                                     else getattr(est, f.name)) for f in fields(est) if f.name != "pct_sigma"},
+               "physical": None if phys is None else {
+                   f.name: (numbers(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), np.ndarray)
+                            else list(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), tuple)
+                            else getattr(phys, f.name)) for f in fields(phys)},
+               "samples": self.samples, "train": self.train, "validation": self.validation, "notes": list(self.notes)}
+        return _plain(doc)
+
+    def save(self, path, inputs=(), what: str = "output"):
+        """Write the result to a JSON file (atomically; :func:`baseparams.files.write_text`).
+
+        Parameters
+        ----------
+        path : str or path
+            The file (``RESULT.json``).
+        inputs : iterable of str or path
+            The run's input files, which the output must not overwrite.
+        what : str
+            The output's role, for messages (``--save``).
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+
+        Raises
+        ------
+        BaseparamsError
+            An output onto an input, a missing folder, a non-regular target.
+        """
+        import json
+
+        from ..files import write_text
+
+        return write_text(path, json.dumps(self.document(), indent=1, allow_nan=False) + "\n", inputs, what)
+
+    @classmethod
+    def load(cls, path, robot: Robot) -> Identification:
+        """Read a saved result back, for the robot it was identified on.
+
+        The model is rebuilt from the saved options (analysis, drive model and regrouping, as
+        :func:`identify` built it) and its parameter names checked against the saved ones; the
+        values, statistics, counts and notes are the saved ones (``series`` is not saved:
+        ``None``).
+
+        Parameters
+        ----------
+        path : str or path
+            The file (:meth:`save`).
+        robot : Robot
+            The model: its structure's fingerprint must be the saved one.
+
+        Returns
+        -------
+        Identification
+            The result; :meth:`predict` gives the same torques as the saved object's.
+
+        Raises
+        ------
+        BaseparamsError
+            No such file, another format, another version, another robot (both fingerprints
+            named), or a model whose rebuilt parameters differ from the saved ones.
+        """
+        from .drives import MotorCoupling
+        from .estimate import Estimate
+        from .physical import PhysicalFit
+        from .results import array, check_robot, read_document
+
+        doc = read_document(path)
+        check_robot(doc, robot, str(path))
+        o = dict(doc["options"])
+        o["friction"] = tuple(o.get("friction", ()))
+        o["couplings"] = tuple(MotorCoupling(c["name"], tuple(c["joints"]), tuple(c["weights"]))
+                               for c in o.get("couplings", ()))
+        model = ident_model(analyze(robot, convention=o["convention"], rows=o.get("rows", "all")), o["rotor"],
+                            o["friction"], o.get("coulomb_width"), couplings=o["couplings"])
+        names = doc["parameters"]["names"]
+        if list(model.names) != list(names):
+            diff = next((f"{a} vs {b}" for a, b in zip(model.names, names) if a != b),
+                        f"{len(model.names)} vs {len(names)} parameters")
+            raise BaseparamsError(f"{path}: the model rebuilt for {robot.name!r} has other parameters than the "
+                                  f"saved ones ({diff}); saved by another baseparams version?")
+        theta = array(doc["parameters"]["values"])
+        e = doc["estimate"]
+        std = array(e["std"])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pct = 100 * std / np.abs(array(e["theta"]))
+        est = Estimate(e["method"], array(e["theta"]), std, pct, array(e["weights"]), array(e["rms"]),
+                       float(e["rms_total"]), float(e["condition_number"]), int(e["samples"]), array(e["R11"]),
+                       array(e["r12"]))
+        phys = None
+        if doc.get("physical") is not None:
+            p = doc["physical"]
+            phys = PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
+                                      tuple(v) if k == "notes" else v) for k, v in p.items()})
+        f = Fit(model, o.get("method", e["method"]), theta, est, phys)
+        return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o)
 
     @property
     def model(self) -> IdentModel:
@@ -426,7 +623,10 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         series["validation"] = _series(model, vprep, vcols, f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
     notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()))
-    return Identification(f, samples, train_rms, val, tuple(notes), series)
+    options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
+               "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
+               "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed}
+    return Identification(f, samples, train_rms, val, tuple(notes), series, options)
 
 
 def _series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names: list[str], memory_mb: float):
@@ -611,6 +811,21 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
              for c in chunks.plan(full.n_samples, size, margin)]
     return chunks.combine(parts), (f"parallel filtering in {len(parts)} chunks of {size} samples with "
                                    f"{margin}-sample overlaps (equal to the whole log's to rounding)")
+
+
+def _plain(x):
+    """Numpy scalars and tuples as JSON types; non-finite floats as ``None``."""
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if np.isfinite(x) else None
+    return x
 
 
 def _model_notes(model: IdentModel) -> list[str]:

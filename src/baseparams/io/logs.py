@@ -126,7 +126,8 @@ class _Joint:
 
 
 def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
-             max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0) -> JointLog:
+             max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0, require_tau: bool = True,
+             require_time: bool = True) -> JointLog:
     """Read a joint log and map it to the model's joints.
 
     Parameters
@@ -150,6 +151,13 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
     max_travel : float or None, optional
         Largest plausible ``|q|`` of a prismatic joint [m] (default 10, beyond which the values
         look like millimetres); ``None`` disables the check.
+    require_tau : bool, optional
+        Every joint read must have a ``tau`` column (default). ``False``: states only (a
+        trajectory to predict torques of, states for a regressor); ``tau`` is then ``None`` when
+        no joint has one.
+    require_time : bool, optional
+        The time column must be there (default). ``False``: without one, ``t`` is the sample
+        index ``0, 1, ...`` and a note says so.
 
     Returns
     -------
@@ -174,8 +182,8 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         if spec["topic"] is not None:
             raise DataError(f"{spec['label']}: 'topic' applies to ROS bags only, not to {p.name}")
         table = {"text": _read_text, "npz": _read_npz, "parquet": _read_parquet}[kind](p)
-    joints = _resolve(table, robot, spec, allow_subset)
-    return _assemble(table, joints, spec, max_angle, max_travel)
+    joints = _resolve(table, robot, spec, allow_subset, require_tau)
+    return _assemble(table, joints, spec, max_angle, max_travel, require_time)
 
 
 def _kind(p: Path) -> str:
@@ -571,7 +579,7 @@ def _bag_time(path: Path, msgs: list, sel: np.ndarray, notes: list[str]) -> np.n
 
 
 # ---------------------------------------------------------------- joints and conversion
-def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool) -> list[_Joint]:
+def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, require_tau: bool = True) -> list[_Joint]:
     """The joints of the log in the model's order, with their columns, checked against the model."""
     jtypes = dict(zip(robot.joint_names, robot.jtype))
     loggable = [j for j, t in jtypes.items() if t in LOGGABLE]
@@ -594,8 +602,9 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool) -> lis
         base = e.get("name", j)
         cols = {k: e.get(k, f"{k}_{base}") for k in KINDS}
         for k in KINDS:
-            if cols[k] not in table.columns and (k in ("q", "tau") or k in e):
-                need = "required" if k in ("q", "tau") else "named in the mapping"
+            required = k == "q" or (k == "tau" and require_tau)
+            if cols[k] not in table.columns and (required or k in e):
+                need = "required" if required else "named in the mapping"
                 raise DataError(f"{table.source}: no {table.label(cols[k])} for joint {j!r} ({k} is {need})")
             if cols[k] not in table.columns:
                 cols[k] = None
@@ -603,7 +612,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool) -> lis
                           float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0))))
     if not out:
         raise DataError(f"{table.source}: no joint of robot {robot.name!r} in the log")
-    for k in ("dq", "ddq"):
+    for k in ("dq", "ddq") if require_tau else ("dq", "ddq", "tau"):
         have = [x.joint for x in out if x.cols[k] is not None]
         if have and len(have) < len(out):
             lack = [x.joint for x in out if x.cols[k] is None]
@@ -630,15 +639,21 @@ def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> d
     return found
 
 
-def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_travel) -> JointLog:
+def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_travel,
+              require_time: bool = True) -> JointLog:
     """Check the values (finite, time increasing, plausible) and convert to the joint side."""
     tcol = spec["time"] if not table.is_bag else "t"
-    if tcol not in table.columns:
+    untimed = tcol not in table.columns and not require_time
+    if tcol not in table.columns and not untimed:
         raise DataError(f"{table.source}: no time column {tcol!r} (columns: {', '.join(list(table.columns)[:12])})")
-    used = [tcol] + [c for x in joints for c in x.cols.values() if c is not None]
+    used = ([] if untimed else [tcol]) + [c for x in joints for c in x.cols.values() if c is not None]
     _check_finite(table, used)
-    t = table.columns[tcol] * spec["time_scale"]
-    _check_time(table, tcol, t)
+    if untimed:
+        t = np.arange(len(table.columns[joints[0].cols["q"]]), dtype=float)
+        table.notes.append(f"no time column {tcol!r}: samples numbered 0, 1, ...")
+    else:
+        t = table.columns[tcol] * spec["time_scale"]
+        _check_time(table, tcol, t)
     arrays = {}
     for k in KINDS:
         if joints[0].cols[k] is None:

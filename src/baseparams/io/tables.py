@@ -1,0 +1,132 @@
+"""Write named columns to CSV/TSV, Parquet or NPZ, atomically (predicted torques, regressors).
+
+The format is chosen by the suffix: ``.csv`` / ``.tsv`` (a header row, every value as its
+shortest exact decimal, ``%.17g``), ``.parquet`` / ``.pq`` (pyarrow, the extra ``parquet``;
+float64 columns, string columns kept as strings), ``.npz`` (one array per name, any shape).
+Every write goes through :func:`baseparams.files.atomic_path`.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import BaseparamsError
+from ..files import atomic_path, refuse_inputs
+
+#: suffixes :func:`write_columns` writes
+TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq", ".npz")
+
+
+def check_table_path(path, inputs=(), what: str = "--out") -> None:
+    """Refuse an output that cannot be written, before any work is done.
+
+    Parameters
+    ----------
+    path : str or path or None
+        The output (None: nothing to check).
+    inputs : iterable of str or path
+        The run's input files (the output must not overwrite one).
+    what : str
+        The option, for messages.
+
+    Raises
+    ------
+    BaseparamsError
+        An unknown suffix, a Parquet output without pyarrow, a missing folder, a non-regular
+        target, an output onto an input.
+    """
+    if path is None:
+        return
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix not in TABLE_SUFFIXES:
+        raise BaseparamsError(f"{what} {p}: write .csv, .tsv, .parquet or .npz, not {p.suffix or 'no suffix'}")
+    if suffix in (".parquet", ".pq"):
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise BaseparamsError(f"{what} {p}: writing Parquet needs pyarrow: pip install "
+                                  f"'baseparams[parquet]'") from None
+    check_output_path(p, inputs, what)
+
+
+def check_output_path(path, inputs=(), what: str = "output") -> None:
+    """Refuse an output path whose folder is missing, that is not a regular file, or an input.
+
+    Parameters
+    ----------
+    path : str or path or None
+        The output (None: nothing to check).
+    inputs : iterable of str or path
+        The run's input files.
+    what : str
+        The option, for messages.
+
+    Raises
+    ------
+    BaseparamsError
+        One line naming the option and the problem.
+    """
+    if path is None:
+        return
+    p = Path(path)
+    refuse_inputs(p, inputs, what)
+    if p.exists() and not p.is_file():
+        raise BaseparamsError(f"{what} {p}: exists and is not a regular file")
+    folder = p.parent if str(p.parent) else Path(".")
+    if not folder.is_dir():
+        raise BaseparamsError(f"{what} {p}: the folder {folder} does not exist")
+
+
+def write_columns(path, cols: dict, inputs=(), what: str = "--out") -> Path:
+    """Write columns by the path's suffix (module docstring).
+
+    Parameters
+    ----------
+    path : str or path
+        The file.
+    cols : dict of str to ndarray
+        For CSV/TSV/Parquet: 1-D columns of one length ``S`` (numbers, or strings); for NPZ:
+        arrays of any shape.
+    inputs : iterable of str or path
+        The run's input files.
+    what : str
+        The option, for messages.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    BaseparamsError
+        As :func:`check_table_path`, or a failed write.
+    """
+    check_table_path(path, inputs, what)
+    suffix = Path(path).suffix.lower()
+    with atomic_path(path, inputs, what) as tmp:
+        if suffix == ".npz":
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **cols)
+        elif suffix in (".parquet", ".pq"):
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            arrays = {k: pa.array(np.asarray(v)) for k, v in cols.items()}
+            pq.write_table(pa.table(arrays), tmp)
+        else:
+            delim = "\t" if suffix == ".tsv" else ","
+            buf = io.StringIO()
+            buf.write(delim.join(cols) + "\n")
+            text_cols = [np.asarray(v) for v in cols.values()]
+            if all(c.dtype.kind in "fiub" for c in text_cols):
+                np.savetxt(buf, np.column_stack(text_cols).astype(float), delimiter=delim, fmt="%.17g")
+            else:
+                for row in zip(*text_cols):
+                    buf.write(delim.join(str(x) if isinstance(x, str) else f"{float(x):.17g}" for x in row) + "\n")
+            tmp.write_text(buf.getvalue(), encoding="utf-8")
+    return Path(path)

@@ -51,7 +51,13 @@ class Selection:
     folds: int
 
     def note(self) -> str:
-        """One line for the report: what was chosen and why."""
+        """One line for the report: what was chosen and why.
+
+        Returns
+        -------
+        str
+            The chosen weight, the number of blocks and the held-out RMS with and without it.
+        """
         best = self.cv_rms[self.lambdas.index(self.lam)]
         plain = self.cv_rms[0]
         if self.lam == 0:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
+from ..display import summary_repr
 from ..enums import Source
 from ..errors import BaseparamsError
 from ..model.inertia import SPECS, check_convention
@@ -158,6 +159,8 @@ class Condition:
     effect: str = ""
     point: dict | None = None
     text: str = ""
+
+    __repr__ = summary_repr
 
     def equation(self) -> str:
         """The condition as text, angles through ``tan(a/2)``.

@@ -191,6 +191,10 @@ class BaseParameters:
         """Number of base parameters ``nb``."""
         return len(self.independent)
 
+    def __repr__(self) -> str:
+        return (f"<BaseParameters {self.convention}: {self.n_base} base of {len(self.names)} standard parameters, "
+                f"nullity {len(self.dependent)}, {len(self.unidentifiable)} unidentifiable>")
+
     def base_names(self) -> list[str]:
         """The base parameters' names.
 

@@ -134,9 +134,10 @@ class Excitation:
     notes: tuple[str, ...] = field(default_factory=tuple)
 
     def __repr__(self) -> str:
+        crit = "" if self.criterion == "cond" else f"{self.criterion} {format_number(self.value, 4)}, "
         return clip(f"<Excitation {self.robot}: {len(self.joints)} joints, {self.harmonics} harmonics of "
-                    f"{format_number(self.base_frequency, 4)} Hz, {self.criterion} {format_number(self.value, 4)}, "
-                    f"condition number {format_number(self.condition_number, 4)}, {len(self.t)} samples at "
+                    f"{format_number(self.base_frequency, 4)} Hz, {crit}condition number "
+                    f"{format_number(self.condition_number, 4)}, {len(self.t)} samples at "
                     f"{format_number(self.rate, 6)} Hz>")
 
     @property

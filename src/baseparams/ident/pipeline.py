@@ -235,7 +235,7 @@ class Identification:
         The order of :attr:`values`, :attr:`std`, :meth:`table` and :meth:`to_frame`; the names of
         :meth:`base_parameters` and (``<kind>_<joint>``) of :meth:`drives` and :meth:`couplings`.
         """
-        return np.array(self.model.names, dtype=str)
+        return np.array(self.model.names, dtype=object)  # Python strings, as pandas holds them
 
     @property
     def values(self) -> np.ndarray:

@@ -135,10 +135,11 @@ def test_ur5_at_other_scales_keeps_its_base_parameters(s):
 def test_printed_expressions_rebuild_torques(case):
     """Parse the printed expressions, multiply by the robot's parameters, rebuild ``Y pi``.
 
-    Link-frame conventions (and the paper convention on Puma and the four-bar) to 1e-12 of the
-    torques. In the paper's spatial convention a random tree regroups with coefficients ~1e4
-    that cancel ~1e3-fold: there 1e-12 of the magnitude of the terms summed (exact doubles of the
-    same K miss 1e-12 of the torques already)."""
+    Coefficients are printed at 12 significant digits. Link-frame conventions (and the paper
+    convention on Puma and the four-bar) to 1e-11 of the torques. In the paper's spatial
+    convention a random tree regroups with coefficients ~1e4 that cancel ~1e3-fold: there 1e-11
+    of the magnitude of the terms summed (exact doubles of the same K miss 1e-12 of the torques
+    already)."""
     make, samples = CASES[case]
     robot = make()
     c = certify(robot, samples, seed=0)
@@ -147,14 +148,16 @@ def test_printed_expressions_rebuild_torques(case):
     for conv in ("khalil", "pinocchio", "paper"):
         bp = base_parameters(robot, c.span, conv)
         e = parse(bp, bp.expressions())
-        assert np.array_equal(e, bp.E)  # what is printed is what is computed, exactly
+        # what is printed is what is computed, to the 12 significant digits printed
+        assert np.array_equal(e != 0, bp.E != 0) and np.allclose(e, bp.E, rtol=5e-12, atol=0)
         pi = robot.parameters(conv)
         y_base = (w @ paper_from(robot, conv))[:, bp.independent]
         err = np.linalg.norm(y_base @ (e @ pi) - tau)
+        # 12 printed digits move a coefficient by up to 5e-13; the terms summed cancel up to ~10-fold
         if conv == "paper" and case.startswith("random"):
-            assert err <= 1e-12 * np.linalg.norm(np.abs(y_base) @ (np.abs(e) @ np.abs(pi))), (case, conv)
+            assert err <= 1e-11 * np.linalg.norm(np.abs(y_base) @ (np.abs(e) @ np.abs(pi))), (case, conv)
         else:
-            assert err <= 1e-12 * np.linalg.norm(tau), (case, conv)
+            assert err <= 1e-11 * np.linalg.norm(tau), (case, conv)
 
 
 def test_clean_snaps_to_shortest_decimal():
@@ -169,7 +172,8 @@ def test_clean_snaps_to_shortest_decimal():
     rng = np.random.default_rng(0)
     z = rng.normal(size=1000) * 10.0 ** rng.integers(-12, 12, size=1000)
     assert np.all(np.abs(clean(z) - z) <= 1e-13 * np.abs(z))
-    assert all(float(_fmt(v)) == v for v in clean(z))
+    # printed at 12 significant digits (the arrays keep every bit)
+    assert all(abs(float(_fmt(v)) - v) <= 5e-12 * abs(v) for v in clean(z))
 
 
 def test_length_scale():

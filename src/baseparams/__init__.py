@@ -33,7 +33,10 @@ Everything else lives in submodules, imported on first use: ``baseparams.robots`
 ``baseparams.io`` (readers, URDF export, Pinocchio interop), ``baseparams.nullspace`` (DRNG,
 certification), ``baseparams.base`` (regrouping), ``baseparams.numerics``, ``baseparams.pga``,
 ``baseparams.kinematics``, ``baseparams.model``, ``baseparams.symbolic`` (base parameters as
-formulas in a robot's dimensions, from a DH table with symbols; SymPy, the extra ``symbolic``).
+formulas in a robot's dimensions, from a DH table with symbols; SymPy, the extra ``symbolic``),
+``baseparams.ident`` (identification from joint logs: ``from baseparams.ident.pipeline import
+identify``; ``baseparams.ident.simulate.simulate_log``), ``baseparams.excite`` (excitation trajectories),
+``baseparams.fleet`` (many logs on Dask). ``dir(baseparams)`` lists these and the names above.
 The name ``baseparams.regressor`` is the
 function above; the subpackage of the same name is imported as usual
 (``from baseparams.regressor import regressor_tensor``).
@@ -41,9 +44,9 @@ function above; the subpackage of the same name is imported as usual
 
 from __future__ import annotations
 
-import importlib
-import os
-import warnings
+import importlib as _importlib
+import os as _os
+import warnings as _warnings
 
 __version__ = "0.1.0"
 
@@ -69,8 +72,9 @@ __all__ = [
     "regressor",
 ]
 
-_SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "io", "kinematics", "model", "nullspace", "numerics",
-               "pga", "robots", "symbolic")
+#: the documented subpackages, imported on first use (``dir(baseparams)`` shows these and ``__all__``)
+_SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "excite", "fleet", "ident", "io", "kinematics", "model",
+               "nullspace", "numerics", "pga", "robots", "symbolic")
 
 
 class ModelWarning(UserWarning):
@@ -82,7 +86,7 @@ class ModelWarning(UserWarning):
     """
 
 
-def load(model: str | os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False) -> Robot:
+def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False) -> Robot:
     """A robot from a built-in name or a file.
 
     Parameters
@@ -127,18 +131,20 @@ def load(model: str | os.PathLike, floating: bool = False, gravity=None, strict_
     """
     from .loading import load_model
 
-    robot, notes = load_model(os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia)
+    robot, notes = load_model(_os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia)
     for note in notes:
-        warnings.warn(note, ModelWarning, stacklevel=2)
+        _warnings.warn(note, ModelWarning, stacklevel=2)
     return robot
 
 
 def __getattr__(name: str):
     """Submodules on first use (``baseparams.robots.BUILTINS`` without importing it first)."""
     if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
+        return _importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_SUBMODULES))
+    # the public names and documented subpackages: not the helpers a submodule import binds
+    # (``baseparams.display``), nor ``annotations`` or private names
+    return sorted(set(__all__) | set(_SUBMODULES) | {n for n in globals() if n.startswith("__")})

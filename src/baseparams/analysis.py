@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import numpy as np
 
+from .display import data_frame, text_table
 from .enums import Source, Status, values
 from .errors import BaseparamsError
 from .model.robot import Robot
@@ -247,6 +248,49 @@ class Analysis:
     def base_names(self) -> list[str]:
         """The ``n_base`` base parameter names (suffix ``R``: it absorbs others)."""
         return self.base.base_names()
+
+    @property
+    def base_values(self) -> np.ndarray:
+        """The robot's own base-parameter values ``(n_base,)``, named by :attr:`base_names`.
+
+        ``to_base(robot.parameters(convention), convention)``: what an identification of this
+        model should find (SI units, :attr:`convention`).
+        """
+        return self.to_base(self.robot.parameters(self.convention), self.convention)
+
+    def _columns(self) -> dict[str, list]:
+        """Each base parameter's name, expression and model value."""
+        exprs = self.expressions()
+        return {"name": [e["name"] for e in exprs], "expression": [e["expression"] for e in exprs],
+                "value": self.base_values.tolist()}
+
+    def table(self) -> str:
+        """The base parameters as a text table.
+
+        Returns
+        -------
+        str
+            Columns ``name, value, expression`` (:attr:`base_names`, :attr:`base_values` at 6
+            significant digits, :meth:`expressions`), one row per base parameter.
+        """
+        c = self._columns()
+        return text_table({"name": c["name"], "value": c["value"], "expression": c["expression"]})
+
+    def to_frame(self):
+        """The base parameters as a pandas DataFrame (pandas is optional).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``name, expression, value`` (:attr:`base_names`, :meth:`expressions`,
+            :attr:`base_values`), one row per base parameter.
+
+        Raises
+        ------
+        BaseparamsError
+            pandas is not installed.
+        """
+        return data_frame(self._columns())
 
     def expressions(self) -> list[dict[str, str]]:
         """Each base parameter as a combination of standard parameters in :attr:`convention`.

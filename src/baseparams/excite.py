@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .analysis import Analysis, analyze
+from .display import clip, format_number
 from .errors import BaseparamsError
 from .ident.model import IdentModel, ident_model
 from .model.robot import Robot
@@ -131,6 +132,13 @@ class Excitation:
     limits: np.ndarray
     parameters: tuple[str, ...] = ()
     notes: tuple[str, ...] = field(default_factory=tuple)
+
+    def __repr__(self) -> str:
+        crit = "" if self.criterion == "cond" else f"{self.criterion} {format_number(self.value, 4)}, "
+        return clip(f"<Excitation {self.robot}: {len(self.joints)} joints, {self.harmonics} harmonics of "
+                    f"{format_number(self.base_frequency, 4)} Hz, {crit}condition number "
+                    f"{format_number(self.condition_number, 4)}, {len(self.t)} samples at "
+                    f"{format_number(self.rate, 6)} Hz>")
 
     @property
     def period(self) -> float:

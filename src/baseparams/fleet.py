@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .display import clip
 from .errors import BaseparamsError
 from .ident.model import IdentModel
 from .ident.pipeline import Fit, fit
@@ -109,6 +110,12 @@ class FleetResult:
     pooled: Fit | None
     files: list[dict]
     spread: dict | None
+
+    def __repr__(self) -> str:
+        what = [f"{len(self.per_file)} per-file fits"] if self.per_file else []
+        what += ["pooled " + self.pooled.method] if self.pooled is not None else []
+        return clip(f"<FleetResult {self.model.robot.name}: {len(self.files)} logs, {self.model.n_params} terms, "
+                    f"{', '.join(what) or 'no fits'}>")
 
     def to_json(self) -> dict:
         """One JSON-able object.

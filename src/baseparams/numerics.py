@@ -14,6 +14,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .display import summary_repr
 from .enums import Rows, values
 from .errors import BaseparamsError
 from .model.robot import Robot
@@ -124,6 +125,8 @@ class NumericalResult:
     samples: int
     seconds: float
     min_gap: float
+
+    __repr__ = summary_repr
 
     @property
     def decided(self) -> bool:

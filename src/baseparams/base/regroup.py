@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import format_number
 from ..errors import BaseparamsError
 from ..model import inertia as _inertia
 from ..model.inertia import LENGTH_POWER
@@ -128,7 +129,7 @@ def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
 
 
 def format_coefficient(c: float) -> str:
-    """The shortest string that reads back as exactly ``c``.
+    """A coefficient at the precision it has, without float-repr noise.
 
     Parameters
     ----------
@@ -138,10 +139,12 @@ def format_coefficient(c: float) -> str:
     Returns
     -------
     str
-        ``repr(c)`` without a trailing ``.0`` (``2`` for ``2.0``).
+        The shortest decimal of ``c`` rounded to 12 significant digits
+        (:func:`baseparams.display.format_number`): ``2`` for ``2.0``, ``0.00041209`` for
+        ``0.0004120899999999``. A computed coefficient is not more precise than that; the
+        arrays (``K``, ``E``) keep every bit.
     """
-    s = repr(float(c))
-    return s[:-2] if s.endswith(".0") else s
+    return format_number(c)
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,6 +190,10 @@ class BaseParameters:
     def n_base(self) -> int:
         """Number of base parameters ``nb``."""
         return len(self.independent)
+
+    def __repr__(self) -> str:
+        return (f"<BaseParameters {self.convention}: {self.n_base} base of {len(self.names)} standard parameters, "
+                f"nullity {len(self.dependent)}, {len(self.unidentifiable)} unidentifiable>")
 
     def base_names(self) -> list[str]:
         """The base parameters' names.

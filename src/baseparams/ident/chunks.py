@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..display import summary_repr
 from ..errors import DataError
 from .data import JointLog
 from .estimate import RowAccumulator
@@ -61,6 +62,8 @@ class ChunkPlan:
     stop: int
     lo: int
     hi: int
+
+    __repr__ = summary_repr
 
 
 def plan(n: int, chunk: int, margin: int) -> list[ChunkPlan]:
@@ -117,6 +120,8 @@ class Grid:
     cutoff: float
     min_speed: float | None = None
     notes: tuple[str, ...] = field(default=())
+
+    __repr__ = summary_repr
 
     def owned(self, c: ChunkPlan) -> np.ndarray:
         """The samples a chunk owns that the whole-log path keeps (before slow-sample removal).

@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..display import clip, format_number
+
 
 @dataclass(frozen=True, eq=False)
 class JointLog:
@@ -51,3 +53,13 @@ class JointLog:
     def n_samples(self) -> int:
         """Number of samples ``S``."""
         return len(self.t)
+
+    def __repr__(self) -> str:
+        s = self.n_samples
+        span = float(self.t[-1] - self.t[0]) if s > 1 else 0.0
+        rate = f" ({format_number((s - 1) / span, 4)} Hz)" if span > 0 else ""
+        has = [k for k in ("dq", "ddq") if getattr(self, k) is not None]
+        text = (f"<JointLog {self.source}: {s} samples of {len(self.joints)} joints over {format_number(span, 4)} s"
+                f"{rate}{', with ' + ' and '.join(has) if has else ''}")
+        removed = sum(self.removed.values())
+        return clip(text + (f", {removed} removed" if removed else "") + ">")

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 
@@ -73,6 +74,8 @@ class MotorCoupling:
     name: str
     joints: tuple[str, ...]
     weights: tuple[float, ...]
+
+    __repr__ = summary_repr
 
     def __post_init__(self):
         what = f"motor coupling {self.name!r}"
@@ -157,6 +160,8 @@ class Drives:
     coulomb_width: float | None = None
     couplings: tuple[MotorCoupling, ...] = ()
     coupling_rows: tuple[np.ndarray, ...] = ()
+
+    __repr__ = summary_repr
 
     @property
     def coupled_kinds(self) -> tuple[str, ...]:
@@ -349,6 +354,8 @@ class DriveRegrouping:
     K: np.ndarray
     decided: bool
     gap: float
+
+    __repr__ = summary_repr
 
     @property
     def model_names(self) -> list[str]:

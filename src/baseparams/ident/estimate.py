@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..errors import BaseparamsError
 from ..numerics import StreamingQR
 
@@ -107,6 +108,8 @@ class Estimate:
     samples: int
     R11: np.ndarray
     r12: np.ndarray
+
+    __repr__ = summary_repr
 
 
 def stacked_factor(acc: RowAccumulator, weights: np.ndarray) -> np.ndarray:

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..analysis import Analysis, analyze
+from ..display import clip
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..numerics import StreamingQR, closed_samples, row_mask, sample_states
@@ -57,6 +58,31 @@ class IdentModel:
     def n_params(self) -> int:
         """Number of model parameters ``p``."""
         return len(self.regrouping.independent)
+
+    @property
+    def n_base(self) -> int:
+        """Model parameters that are base parameters (drive terms regrouped into them included)."""
+        return int(np.count_nonzero(self.regrouping.independent < len(self.analysis.base_names)))
+
+    @property
+    def n_drive(self) -> int:
+        """Model parameters that are drive terms (those not regrouped into base parameters)."""
+        return self.n_params - self.n_base
+
+    @property
+    def torque_unit(self) -> str:
+        """Unit of the measured generalized forces: ``N m`` (revolute), ``N`` (prismatic) or both."""
+        r = self.robot
+        kinds = {"N" if r.jtype[r.dof_body[c]] == "P" else "N m" for c in self.coords}
+        return kinds.pop() if len(kinds) == 1 else "N m or N"
+
+    def __repr__(self) -> str:
+        d = self.drives
+        terms = f"{self.n_base} base + {self.n_drive} drive terms"
+        if d.kinds:
+            terms += f" ({' '.join(d.kinds)} on {len(d.joints)} joints"
+            terms += f", {len(self.regrouping.dependent)} regrouped)" if len(self.regrouping.dependent) else ")"
+        return clip(f"<IdentModel {self.robot.name}: {terms}, {len(self.coords)} measured rows>")
 
     @property
     def state_columns(self) -> int:

@@ -49,6 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..errors import BaseparamsError
 from ..model.inertia import HAT_INDEX, hat, unhat
 
@@ -124,6 +125,8 @@ class PhysicalFit:
     solver_status: str
     seconds: float
     notes: tuple[str, ...] = ()
+
+    __repr__ = summary_repr
 
     @property
     def N(self) -> np.ndarray:

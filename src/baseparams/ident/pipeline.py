@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..analysis import analyze
+from ..display import clip, data_frame, format_number, text_table
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..numerics import blas_threads
@@ -59,6 +60,15 @@ class Fit:
     theta: np.ndarray
     estimate: object
     physical: object = None
+
+    def __repr__(self) -> str:
+        m = self.model
+        how = self.method
+        if self.physical is not None:
+            how += " (feasible)" if getattr(self.physical, "feasible", False) else " (not feasible)"
+        rms = getattr(self.estimate, "rms_total", None)
+        tail = "" if rms is None else f", residual RMS {format_number(rms, 3)} {m.torque_unit}"
+        return clip(f"<Fit {m.robot.name}: {how}, {m.n_base} base + {m.n_drive} drive terms{tail}>")
 
     def predict(self, q, dq, ddq) -> np.ndarray:
         """Predicted generalized forces of the measured rows.
@@ -407,6 +417,71 @@ class Identification:
     def model(self) -> IdentModel:
         """The identified model."""
         return self.fit.model
+
+    def __repr__(self) -> str:
+        m = self.model
+        held = self.validation is not None
+        rms = (self.validation if held else self.train)["rms_total"]
+        return clip(f"<Identification {m.robot.name}: {self.fit.method}, {m.n_base} base + {m.n_drive} drive terms, "
+                    f"{'held-out' if held else 'training'} RMS {format_number(rms, 3)} {m.torque_unit}>")
+
+    @property
+    def names(self) -> np.ndarray:
+        """Names of every identified term ``(p,)``: base parameters, then drive terms.
+
+        The order of :attr:`values`, :attr:`std`, :meth:`table` and :meth:`to_frame`; the names of
+        :meth:`base_parameters` and (``<kind>_<joint>``) of :meth:`drives` and :meth:`couplings`.
+        """
+        return np.array(self.model.names, dtype=object)  # Python strings, as pandas holds them
+
+    @property
+    def values(self) -> np.ndarray:
+        """The identified values ``(p,)`` in :attr:`names`' order (SI units, the analysis's convention)."""
+        return np.array(self.fit.theta, dtype=float)
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard deviations ``(p,)`` of :attr:`values` (the least-squares estimate's)."""
+        return np.array(self.fit.estimate.std, dtype=float)
+
+    def _columns(self) -> dict[str, list]:
+        """Every identified term's name, kind, value, std, %sigma and expression, in :attr:`names`' order."""
+        m = self.model
+        nb = len(m.analysis.base_names)
+        base = {b["name"]: b["expression"] for b in self.base_parameters()}
+        exprs = m.regrouping.expressions()
+        kinds = ["base" if i < nb else "drive" for i in m.regrouping.independent]
+        names = list(m.names)
+        return {"name": names, "kind": kinds, "value": self.values.tolist(), "std": self.std.tolist(),
+                "pct_sigma": np.asarray(self.fit.estimate.pct_sigma, dtype=float).tolist(),
+                "expression": [base[n] if k == "base" else e for n, k, e in zip(names, kinds, exprs)]}
+
+    def table(self) -> str:
+        """Every identified term as a text table.
+
+        Returns
+        -------
+        str
+            Columns ``name, kind, value, std, pct_sigma, expression``, one row per term in
+            :attr:`names`' order (values at 6 significant digits, std and %sigma at 3).
+        """
+        return text_table(self._columns(), digits={"value": 6, "std": 3, "pct_sigma": 3})
+
+    def to_frame(self):
+        """Every identified term as a pandas DataFrame (pandas is optional).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``name, kind`` (``base`` or ``drive``), ``value, std, pct_sigma,
+            expression``; one row per term in :attr:`names`' order, values at full precision.
+
+        Raises
+        ------
+        BaseparamsError
+            pandas is not installed.
+        """
+        return data_frame(self._columns())
 
     def base_parameters(self) -> list[dict]:
         """The regrouped base parameters (drive terms regrouped into them included).

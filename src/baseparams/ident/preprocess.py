@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import signal
 
+from ..display import summary_repr
 from ..errors import DataError
 from .data import JointLog
 
@@ -71,6 +72,8 @@ class LowPass:
     order: int
     pad: int
     note: str = ""
+
+    __repr__ = summary_repr
 
 
 def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4) -> LowPass:
@@ -423,6 +426,8 @@ class Prepared:
     source: str = "<memory>"
     removed: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+
+    __repr__ = summary_repr
 
     @property
     def n_samples(self) -> int:

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
 from ..pga.linalg import cross3_first, perp_basis
@@ -66,6 +67,8 @@ class Elementary:
     b: np.ndarray | None = None  # point, dot: the successor's vector; proj: the predecessor's point
     c: np.ndarray | None = None  # proj: the successor's point
     loop: int = 0
+
+    __repr__ = summary_repr
 
 
 def elementary_constraints(robot: Robot) -> list[Elementary]:
@@ -121,6 +124,8 @@ class ConstraintEval:
     r: np.ndarray
     K: np.ndarray
     b: np.ndarray | None
+
+    __repr__ = summary_repr
 
 
 def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
@@ -407,6 +412,8 @@ class ClosedStates:
     ill_conditioned: int
     max_residual: float
     cond_max: float = 30.0
+
+    __repr__ = summary_repr
 
     @property
     def kept(self) -> int:

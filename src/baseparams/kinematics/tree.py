@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..display import summary_repr
 from ..errors import BaseparamsError, ModelError
 from ..model.robot import Robot
 from ..pga import adjoint, commutator, inverse_transform, se3_exp
@@ -60,6 +61,8 @@ class TreeState:
     dV: np.ndarray
     lines: np.ndarray
     support: np.ndarray
+
+    __repr__ = summary_repr
 
     def jacobian_lines(self) -> np.ndarray:
         """Dense Jacobian lines ``L[s, j, i] (S, dof, n, 6)`` (zero where j does not move i).
@@ -205,6 +208,8 @@ class Poses:
     V: np.ndarray | None
     dV: np.ndarray | None
     bodies: np.ndarray
+
+    __repr__ = summary_repr
 
 
 #: per robot: the constant vectors of each coordinate's screw (see :func:`_screw_constants`)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..enums import Convention, values
 from ..errors import ModelError
 
@@ -79,6 +80,8 @@ class ConventionSpec:
     names: tuple[str, ...]
     frame: str
     regroup: tuple[str, ...]
+
+    __repr__ = summary_repr
 
     @property
     def length_power(self) -> np.ndarray:
@@ -418,6 +421,8 @@ class Inertia:
     com: tuple[float, float, float] = (0.0, 0.0, 0.0)
     inertia: tuple[tuple[float, float, float], ...] | tuple[float, ...] = ((0, 0, 0), (0, 0, 0), (0, 0, 0))
     frame: np.ndarray | None = None
+
+    __repr__ = summary_repr
 
     def inertia_matrix(self) -> np.ndarray:
         """The rotational inertia about the centre of mass as a tensor.

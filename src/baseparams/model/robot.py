@@ -36,11 +36,13 @@ analysis does not use them; the excitation designer (:mod:`baseparams.excite`) d
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
 
+from ..display import clip, summary_repr
 from ..enums import JointType, values
 from ..errors import ModelError
 from ..pga import adjoint
@@ -134,6 +136,8 @@ class Coupling:
     offset: float = 0.0
     more: tuple[tuple[int, float], ...] = ()
 
+    __repr__ = summary_repr
+
     def terms(self) -> list[tuple[int, float]]:
         """Every coordinate on the right-hand side, with its ratio.
 
@@ -177,6 +181,8 @@ class LoopJoint:
     M: np.ndarray
     axes: np.ndarray
     M_child: np.ndarray | None = None
+
+    __repr__ = summary_repr
 
 
 def _check_frame(t: np.ndarray, what: str) -> np.ndarray:
@@ -429,6 +435,19 @@ class Robot:
             raise ModelError(f"{what}: limits of coordinate {int(bad[0])} {lim[bad[0]].tolist()}: need lower <= upper "
                              f"and non-negative velocity and effort (NaN: unknown)")
         object.__setattr__(self, "limits", lim)
+
+    def __repr__(self) -> str:
+        kinds = Counter(self.jtype)
+        joints = ", ".join(f"{kinds[t]} {t}" for t in JOINT_TYPES if kinds[t])
+        text = f"<Robot {self.name}: {self.n} bodies, {self.dof} dofs ({joints}), "
+        text += "floating base" if self.floating else "fixed base"
+        if self.loops:
+            text += f", {len(self.loops)} loop joint{'s' if len(self.loops) > 1 else ''}"
+        if self.couplings:
+            text += f", {len(self.couplings)} coupling{'s' if len(self.couplings) > 1 else ''}"
+        if self.has_loops:
+            text += f", {len(self.actuated)} actuated"
+        return clip(text + ">")
 
     # ---------------------------------------------------------------- derived data
     @property

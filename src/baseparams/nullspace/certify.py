@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
@@ -84,6 +85,8 @@ class Certificate:
     seconds: float
     sampling: dict | None = None
     span: np.ndarray | None = None
+
+    __repr__ = summary_repr
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "status", Status(self.status))

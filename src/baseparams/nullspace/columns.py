@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..enums import Source
 from ..model.inertia import hat as hat10
 from ..pga.linalg import outer, sym
@@ -108,6 +109,8 @@ class Columns:
     hp: np.ndarray | None = None
     extra: np.ndarray | None = None
     he: np.ndarray | None = None
+
+    __repr__ = summary_repr
 
     def __post_init__(self) -> None:
         if self.hp is None:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..enums import Source
 from ..model.inertia import PAPER_NAMES
 from ..model.robot import Robot
@@ -58,6 +59,8 @@ class DRNGResult:
     seconds: float
     extended: bool = True
     rows: str = "all"
+
+    __repr__ = summary_repr
 
     @property
     def n_columns(self) -> int:

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..model.robot import Robot
 from ..pga.core import hat
 
@@ -65,6 +66,8 @@ class MotionSpans:
     tol: float
     fix: tuple[np.ndarray, ...] = ()
     padded: np.ndarray | None = None  # (n, 12, 3, 4): span bases padded with zero rows
+
+    __repr__ = summary_repr
 
     def dim(self, i: int) -> int:
         """Dimension ``k_i`` of body ``i``'s motion span (12 when saturated).

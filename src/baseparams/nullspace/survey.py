@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..enums import Status
 from ..model.robot import Robot
 from .certify import certify
@@ -51,6 +52,8 @@ class SurveyCase:
     by_rule: dict
     max_column_residual: float
     status: Status
+
+    __repr__ = summary_repr
 
     @property
     def paper_complete(self) -> bool:

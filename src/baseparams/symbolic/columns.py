@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from ..display import summary_repr
 from ..enums import Source
 from .geometry import SymbolicRobot
 
@@ -45,6 +46,8 @@ class SymColumn:
     joint: int
     label: str
 
+    __repr__ = summary_repr
+
 
 @dataclass
 class Decisions:
@@ -57,6 +60,8 @@ class Decisions:
     """
 
     conditions: list = field(default_factory=list)
+
+    __repr__ = summary_repr
 
     def is_zero(self, v: sp.Matrix, reason: str) -> bool:
         """Whether every entry of ``v`` is identically zero; if not, and it can vanish, record it.

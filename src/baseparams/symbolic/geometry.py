@@ -20,6 +20,7 @@ from functools import cached_property
 import numpy as np
 import sympy as sp
 
+from ..display import summary_repr
 from ..errors import ModelError
 from ..model import Inertia, Robot, RobotBuilder
 from .angles import angle_of, cos_sin
@@ -189,6 +190,8 @@ class SymbolicLoop:
     frame: sp.Matrix
     axes: tuple
 
+    __repr__ = summary_repr
+
 
 @dataclass(frozen=True, eq=False)
 class SymbolicRobot:
@@ -248,6 +251,8 @@ class SymbolicRobot:
     description: str = ""
     convention: str = "poses"
     source: str = ""
+
+    __repr__ = summary_repr
 
     @property
     def n(self) -> int:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
+from ..display import clip, summary_repr
 from ..enums import Source
 from ..errors import BaseparamsError
 from ..model.inertia import SPECS, check_convention
@@ -159,6 +160,8 @@ class Condition:
     point: dict | None = None
     text: str = ""
 
+    __repr__ = summary_repr
+
     def equation(self) -> str:
         """The condition as text, angles through ``tan(a/2)``.
 
@@ -242,6 +245,11 @@ class SymbolicAnalysis:
     def __post_init__(self) -> None:
         if self.K_rational is None:
             self.K_rational = self.K
+
+    def __repr__(self) -> str:
+        name = getattr(self.robot, "name", "robot")
+        return clip(f"<SymbolicAnalysis {name}: nullity {self.nullity}, {self.n_base} base parameters "
+                    f"({self.convention}), {len(self.conditions)} conditions>")
 
     @property
     def nullity(self) -> int:

@@ -480,52 +480,33 @@ def cmd_predict(args) -> int:
     robot = _robot(args)
     ident = Identification.load(args.result, robot)
     log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False)
-    tau = ident.predict(log, filtered=args.filtered)
+    tau = ident.predict(log, smooth=not args.raw_states)
     joints = ident.joints
     if args.out:
         write_columns(args.out, {"t": log.t, **{f"tau_{j}": tau[:, k] for k, j in enumerate(joints)}}, inputs, "--out")
-    pad = None
-    cutoff = (ident.options or {}).get("cutoff")
-    if cutoff and log.n_samples > 1:
-        pad = int(np.ceil(2 * (log.n_samples - 1) / (log.t[-1] - log.t[0]) / cutoff))
     out = {"model": robot.name, "result": args.result, "log": args.log, "samples": log.n_samples, "joints": joints,
-           "out": args.out, "rms": None}
+           "out": args.out, "prediction": "raw states" if args.raw_states else "smooth", "rms": None}
     if log.tau is not None:
-        _predict_rms(out, log, tau, joints, cutoff, pad)
+        from .ident.pipeline import validation_scores
+
+        s = validation_scores(log, tau, joints, score_cutoff=args.score_cutoff)
+        out["rms"] = {"total": s["rms_total"], **s["rms"]}
+        if "score_cutoff" in s:
+            out["score_cutoff"] = s["score_cutoff"]
+            out["rms_lowpassed"] = {"total": s["rms_lowpassed_total"], **s["rms_lowpassed"]}
     if args.json:
         print(json.dumps(out, indent=2))
         return EXIT_OK
     lines = [f"{robot.name}: predicted {len(joints)} joint torques at {log.n_samples} samples"
              + (f", written to {args.out}" if args.out else "")]
     if out["rms"] is not None:
-        what = (f"(both low-passed at the identification's {cutoff:.4g} Hz, as identify compares)" if cutoff
-                else "(as logged)")
-        lines.append(f"RMS vs the log's measured torques {what}: {out['rms']['total']:.4g} (all joints); "
+        lines.append(f"RMS vs the raw measured torques at every sample: {out['rms']['total']:.4g} (all joints); "
                      + ", ".join(f"{j} {out['rms'][j]:.3g}" for j in joints))
-        if "rms_inner" in out:
-            lines.append(f"  without the first and last {pad} samples (filter edges): {out['rms_inner']:.4g}")
-        if "rms_raw" in out:
-            lines.append(f"  unfiltered, prediction vs the raw measured torques: {out['rms_raw']:.4g} (the measured "
-                         f"torques' content above the cutoff alone: {out['raw_above_cutoff']:.4g})")
+        if "rms_lowpassed" in out:
+            lines.append(f"RMS vs the measured torques low-passed at {out['score_cutoff']:g} Hz (--score-cutoff): "
+                         f"{out['rms_lowpassed']['total']:.4g}")
     print("\n".join(lines))
     return EXIT_OK
-
-
-def _predict_rms(out: dict, log, tau, joints: list[str], cutoff, pad) -> None:
-    """``predict``'s RMS against the log's torques: both low-passed like identify, raw, without the edges."""
-    from .ident.results import lowpass_at
-
-    where = {j: k for k, j in enumerate(log.joints)}
-    measured = log.tau[:, [where[j] for j in joints]]
-    both = np.hstack([measured, tau]) if not cutoff else lowpass_at(log.t, np.hstack([measured, tau]), cutoff)
-    ref, err = both[:, :len(joints)], both[:, :len(joints)] - both[:, len(joints):]
-    out["rms"] = {"total": float(np.sqrt(np.mean(err**2))),
-                  **{j: float(v) for j, v in zip(joints, np.sqrt(np.mean(err**2, axis=0)))}}
-    if pad and log.n_samples > 2 * pad + 1:
-        out["rms_inner"] = float(np.sqrt(np.mean(err[pad:-pad] ** 2)))
-    if cutoff:
-        out["rms_raw"] = float(np.sqrt(np.mean((measured - tau) ** 2)))
-        out["raw_above_cutoff"] = float(np.sqrt(np.mean((measured - ref) ** 2)))
 
 
 def _predict_parser(sub, model_args) -> None:
@@ -537,8 +518,11 @@ def _predict_parser(sub, model_args) -> None:
                                "(CSV/TSV, NPZ, Parquet, a ROS 2 bag); rates it lacks are derived as identify does")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
     s.add_argument("--out", metavar="FILE", help="write t, tau_<joint> per log sample (.csv, .tsv or .parquet)")
-    s.add_argument("--filtered", action="store_true",
-                   help="low-pass the logged q, dq, ddq with the identification's cutoff (default: as logged)")
+    s.add_argument("--raw-states", action="store_true",
+                   help="the model's torques on the states as logged (default: on the states low-passed at the "
+                        "identification's cutoff, as it was fitted)")
+    s.add_argument("--score-cutoff", type=float, metavar="HZ",
+                   help="also score against the measured torques low-passed at HZ (zero-phase Butterworth order 4)")
     s.set_defaults(func=cmd_predict)
 
 
@@ -825,8 +809,10 @@ def _identify_parser(sub, model_args) -> None:
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
     held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
-    s.add_argument("--method", choices=("ols", "wls", "physical"), default="wls",
-                   help="ordinary, weighted (per-joint noise; default) or physically consistent least squares")
+    s.add_argument("--method", choices=("auto", "ols", "wls", "physical"), default="auto",
+                   help="auto (default): weighted least squares pulled towards the model file's parameters as far "
+                        "as blocked cross-validation on the training data asks; ols, wls (per-joint noise) or "
+                        "physical (physically consistent) least squares")
     _ident_args(s)
     s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
     s.add_argument("--coupling", action="append", metavar="NAME:JOINT=W,JOINT=W",

@@ -53,6 +53,9 @@ class Fit:
     physical : object, optional
         The physically consistent fit (:class:`baseparams.ident.physical.PhysicalFit`), or
         ``None``.
+    selection : object, optional
+        ``auto``: the cross-validated pull towards the model file
+        (:class:`baseparams.ident.select.Selection`), or ``None``.
     """
 
     model: IdentModel
@@ -60,6 +63,7 @@ class Fit:
     theta: np.ndarray
     estimate: object
     physical: object = None
+    selection: object = None
 
     def __repr__(self) -> str:
         m = self.model
@@ -142,7 +146,7 @@ def accumulate(model: IdentModel, q, dq, ddq, tau, chunk: int = 20000, transform
 
 
 def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None = None,
-        mass_bounds=None) -> Fit:
+        mass_bounds=None, blocks=None) -> Fit:
     """Estimate the model parameters from accumulated data.
 
     Parameters
@@ -151,15 +155,20 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
         The model.
     acc : RowAccumulator
         The data (:func:`accumulate`).
-    method : {"ols", "wls", "physical"}
-        The estimator. ``physical``: full parameters with every ``N_i`` positive semidefinite,
-        rotor inertia and friction non-negative, pulled towards the model file's inertias
-        (log-det divergence, weight ``prior_weight``), on the WLS-weighted compressed system.
+    method : {"auto", "ols", "wls", "physical"}
+        The estimator. ``auto``: WLS pulled towards the model file's parameters with a weight
+        chosen by blocked cross-validation on ``blocks`` (:mod:`baseparams.ident.select`; plain
+        WLS when it does not predict better, or without blocks). ``physical``: full parameters
+        with every ``N_i`` positive semidefinite, rotor inertia and friction non-negative,
+        pulled towards the model file's inertias (log-det divergence, weight ``prior_weight``),
+        on the WLS-weighted compressed system.
     prior_weight : float, optional
         Weight of the prior (``physical`` only; default that of
         :func:`baseparams.ident.physical.physical_fit`).
     mass_bounds : ndarray, shape ``(n, 2)``, optional
         Mass bounds per body [kg] (``physical`` only).
+    blocks : list of RowAccumulator, optional
+        Time-ordered pieces of ``acc``'s rows (``auto`` only).
 
     Returns
     -------
@@ -173,9 +182,11 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     """
     from .estimate import ols, wls
 
-    if method not in ("ols", "wls", "physical"):
-        raise BaseparamsError(f"unknown identification method {method!r}; choose ols, wls or physical")
+    if method not in ("auto", "ols", "wls", "physical"):
+        raise BaseparamsError(f"unknown identification method {method!r}; choose auto, ols, wls or physical")
     est = ols(acc, model.names) if method == "ols" else wls(acc, model.names)
+    if method == "auto":
+        return _auto(model, est, acc, blocks or [])
     if method != "physical":
         return Fit(model, method, est.theta, est)
     from .physical import physical_fit
@@ -184,6 +195,32 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     phys = physical_fit(est.R11, est.r12, model.full_map(), model.robot, model.drives.param_kinds,
                         mass_bounds=mass_bounds, **kwargs)
     return Fit(model, method, phys.theta, est, phys)
+
+
+def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
+    """WLS, pulled towards the model file's parameters as far as blocked cross-validation asks."""
+    from dataclasses import replace
+
+    from .select import ridge, select, split_blocks
+
+    theta0 = model.theta(model.robot.parameters("paper"))
+    sel = select(split_blocks(blocks), est.weights, theta0) if len(blocks) >= 2 else None
+    if sel is None or sel.lam == 0:
+        return Fit(model, "auto", est.theta, est, selection=sel)
+    scale = np.linalg.norm(est.R11, axis=0)
+    theta = ridge(est.R11, est.r12, theta0, scale, sel.lam)
+    # covariance of the pulled estimate: theta = M theta_ls + const, M = H^-1 R11^T R11
+    gram = est.R11.T @ est.R11
+    m = np.linalg.solve(gram + sel.lam * np.diag(scale**2), gram)
+    inv = np.linalg.inv(est.R11)
+    sigma = est.std[0] / max(np.linalg.norm(inv[0]), np.finfo(float).tiny)
+    cov = sigma**2 * (m @ inv) @ (m @ inv).T
+    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(divide="ignore"):
+        pct = np.where(theta != 0, 100 * std / np.abs(theta), np.inf)
+    res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
+    return Fit(model, "auto", theta, replace(est, method="auto", theta=theta, std=std, pct_sigma=pct, rms=res),
+               selection=sel)
 
 
 @dataclass(frozen=True, eq=False)
@@ -222,42 +259,39 @@ class Identification:
     series: dict | None = None
     options: dict | None = None
 
-    def predict(self, log, filtered: bool = False) -> np.ndarray:
+    def predict(self, log, smooth: bool = True) -> np.ndarray:
         """Predicted joint torques at every sample of a log (its own time stamps).
 
-        States: the log's ``q``, ``dq``, ``ddq`` as logged; rates it lacks are derived as the
-        identification derives them, with its cutoff
-        (:func:`baseparams.ident.results.log_states`: zero-phase low-pass of ``q``, central
-        differences; no sample dropped, the first and last ``2 fs / cutoff`` samples carry the
-        filter's edge transient).
+        ``smooth`` (default): the model's torques on the log's states low-passed with the
+        identification's cutoff (zero-phase on the log's time base; rates it lacks derived from
+        the filtered ``q``): the states the fit was computed from, without the measurement noise
+        of the logged rates. The torques themselves are not filtered, so Coulomb friction keeps
+        its steps. A function of the logged motion only (no torque enters). ``smooth=False``: the
+        model's torques on the states as logged (rates it lacks derived as above).
+
+        No sample is dropped: the first and last ``2 fs / cutoff`` samples carry the filter's
+        edge transient (:func:`baseparams.ident.results.log_states`).
 
         Parameters
         ----------
         log : JointLog
             ``S`` samples of the model's measured joints (``tau`` may be ``None``), e.g.
             :func:`baseparams.io.logs.read_log` with ``require_tau=False``.
-        filtered : bool
-            Low-pass the logged states too (the identification's treatment of every signal).
+        smooth : bool
+            Filtered states (default), or the states as logged.
 
         Returns
         -------
         ndarray, shape ``(S, m)``
-            ``A(q, dq, ddq) @ theta`` [N m or N]: columns the measured joints in the model's
-            order (:attr:`joints`), rows the log's samples.
+            Predicted torques [N m or N]: columns the measured joints in the model's order
+            (:attr:`joints`), rows the log's samples.
 
         Raises
         ------
         BaseparamsError
             A log missing a measured joint, too short or too slowly sampled for the cutoff.
         """
-        from .results import log_states
-
-        cols = log_columns(self.model, log)
-        q, dq, ddq, _ = log_states(log, (self.options or {}).get("cutoff"), filtered)
-        q, dq, ddq = q[:, cols], dq[:, cols], ddq[:, cols]
-        with blas_threads():
-            return np.concatenate([self.fit.predict(q[k:k + 20000], dq[k:k + 20000], ddq[k:k + 20000])
-                                   for k in range(0, max(len(q), 1), 20000)])
+        return predict_log(self.fit, log, (self.options or {}).get("cutoff"), smooth)
 
     @property
     def joints(self) -> list[str]:
@@ -594,11 +628,12 @@ class Identification:
                 "validation": self.validation, "physical": phys, "notes": list(self.notes)}
 
 
-def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
+def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
              friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
-             convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None) -> Identification:
+             convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
+             score_cutoff: float | None = None) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -608,7 +643,7 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
     log : JointLog
         The log (:func:`baseparams.io.logs.read_log`): positions and torques of the measured
         joints (every joint of a tree; the actuated joints of a robot with loops).
-    method : {"ols", "wls", "physical"}
+    method : {"auto", "ols", "wls", "physical"}
         The estimator (:func:`fit`).
     rotor : bool
         Model each joint's rotor inertia ``Ia``.
@@ -617,9 +652,12 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
     coulomb_width : float, optional
         Smooth Coulomb friction's velocity scale [rad/s].
     holdout : float, optional
-        Hold out the last ``holdout`` seconds of the log for validation.
+        Hold out the samples with ``t >= t_end - holdout`` for validation (training: the
+        samples before).
     validation : JointLog, optional
-        Another log to validate on (exclusive with ``holdout``).
+        Another log to validate on (exclusive with ``holdout``). Validation predicts every
+        held-out sample (:meth:`Identification.predict`) and compares with the raw measured
+        torques (:func:`validation_scores`).
     cutoff : float, optional
         Low-pass cutoff [Hz] (default :func:`baseparams.ident.preprocess.lowpass_design`'s).
     decimate : int, optional
@@ -638,6 +676,9 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`, e.g. a
         coupled wrist): their rotor inertia and viscous and Coulomb friction ``Iam``, ``Fvm``,
         ``Fcm`` (those whose per-joint kind is modelled).
+    score_cutoff : float, optional
+        Also score the validation against the measured torques low-passed at this cutoff [Hz]
+        (zero-phase Butterworth, order 4), labelled with it.
     progress : callable, optional
         Called with one line of text at each step (analysis, preprocessing, accumulation, fit,
         validation, report series).
@@ -661,11 +702,13 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
-                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress)
+                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress,
+                         score_cutoff)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
-              prior_weight, convention, memory_mb, couplings=(), progress=None) -> Identification:
+              prior_weight, convention, memory_mb, couplings=(), progress=None,
+              score_cutoff=None) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .preprocess import prepare
 
@@ -678,9 +721,10 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
-    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed)
+    parts: list = []
+    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed, parts_out=parts)
     say(f"fitting ({method})")
-    f = fit(model, acc, method, prior_weight)
+    f = fit(model, acc, method, prior_weight, blocks=parts)
     say("predicted torques and excitation spectrum for the report")
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
@@ -688,16 +732,15 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     val, series = None, {"train": _series(model, prep, cols, f.theta, names, memory_mb), "validation": None}
     series["train"]["spectrum"] = position_spectrum(train, cols, prep.design.fs, prep.design.cutoff, prep.full.t)
     if held is not None:
-        say(f"validating on {held.n_samples} held-out samples")
+        say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
+        whole, mask = (log, log.t >= log.t[-1] - holdout) if holdout is not None else (held, None)
+        pred = predict_log(f, whole, float(prep.design.cutoff))
+        val = validation_scores(whole, pred, names, mask, score_cutoff)
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
-        vcols = log_columns(model, held)
-        vacc, _ = accumulate_prepared(model, vprep, vcols, memory_mb, held)
-        vres = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in vacc.factors]) / np.sqrt(vacc.samples)
-        val = {"rms": dict(zip(names, vres.tolist())), "rms_total": float(np.sqrt(np.mean(vres**2))),
-               "samples": int(vacc.samples), "source": held.source}
-        series["validation"] = _series(model, vprep, vcols, f.theta, names, memory_mb)
+        series["validation"] = _series(model, vprep, log_columns(model, held), f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()))
+    notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()),
+             *((f.selection.note(),) if f.selection is not None else ()))
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed}
@@ -836,7 +879,8 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     return np.array([where[j] for j in wanted], dtype=int)
 
 
-def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None):
+def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None,
+                        parts_out: list | None = None):
     """Rows accumulated from a prepared log, with parallel filtering.
 
     All at once when the regressor fits in ``memory_mb``, else chunk by chunk with overlaps
@@ -856,6 +900,9 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
         The unfiltered log ``prep`` came from (needed for the chunked path).
     min_speed : float, optional
         The slow-sample threshold ``prep`` used.
+    parts_out : list, optional
+        When given, receives time-ordered pieces of the rows (RowAccumulator each; their
+        combination is ``acc``), for the blocked cross-validation of the default estimate.
 
     Returns
     -------
@@ -870,8 +917,16 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb or log is None:
         q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
-        acc = RowAccumulator(len(model.coords), model.n_params)
-        acc.add(prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols])
+        a, tau = prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols]
+        if parts_out is None:
+            acc = RowAccumulator(len(model.coords), model.n_params).add(a, tau)
+        else:
+            from . import chunks
+            from .select import FOLDS
+
+            for idx in np.array_split(np.arange(len(a)), FOLDS):
+                parts_out.append(RowAccumulator(len(model.coords), model.n_params).add(a[idx], tau[idx]))
+            acc = chunks.combine(parts_out)
         return acc, (f"parallel filtering: the regressor's {model.n_params} columns filtered like the torques "
                      f"({size_mb:.0f} MB at once)")
     from . import chunks
@@ -884,6 +939,8 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     uniform = resample(log)  # the grid prepare() filtered on (it resamples with the same default)
     parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params)[0]
              for c in chunks.plan(full.n_samples, size, margin)]
+    if parts_out is not None:
+        parts_out.extend(parts)
     return chunks.combine(parts), (f"parallel filtering in {len(parts)} chunks of {size} samples with "
                                    f"{margin}-sample overlaps (equal to the whole log's to rounding)")
 
@@ -906,3 +963,76 @@ def _plain(x):
 def _model_notes(model: IdentModel) -> list[str]:
     """One line per drive parameter regrouped into a base parameter."""
     return [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]
+
+
+def predict_log(f: Fit, log, cutoff: float | None, smooth: bool = True) -> np.ndarray:
+    """Predicted torques ``(S, m)`` at every sample of ``log`` (:meth:`Identification.predict`).
+
+    Parameters
+    ----------
+    f : Fit
+        The identified values.
+    log : JointLog
+        ``S`` samples of the measured joints.
+    cutoff : float or None
+        The identification's low-pass cutoff [Hz] (None: the log's default).
+    smooth : bool
+        Filtered states (default), or the states as logged.
+
+    Returns
+    -------
+    ndarray, shape ``(S, m)``
+        Columns the measured joints in the model's order.
+    """
+    from .results import log_states
+
+    cols = log_columns(f.model, log)
+    q, dq, ddq, _ = log_states(log, cutoff, smooth)
+    q, dq, ddq = q[:, cols], dq[:, cols], ddq[:, cols]
+    with blas_threads():
+        tau = np.concatenate([f.predict(q[k:k + 20000], dq[k:k + 20000], ddq[k:k + 20000])
+                              for k in range(0, max(len(q), 1), 20000)])
+    return tau
+
+
+def validation_scores(log, pred: np.ndarray, names: list[str], mask=None, score_cutoff: float | None = None) -> dict:
+    """Held-out error the way an outsider measures it: against the raw measured torques.
+
+    Parameters
+    ----------
+    log : JointLog
+        The log whose samples were predicted (``S`` samples, measured torques ``tau``).
+    pred : ndarray, shape ``(S, m)``
+        Predicted torques of the measured joints ``names`` (:func:`predict_log`).
+    names : list of str, shape ``(m,)``
+        The measured joints, in ``pred``'s column order.
+    mask : ndarray of bool, shape ``(S,)``, optional
+        The held-out samples (default: all).
+    score_cutoff : float, optional
+        Also score against the measured torques low-passed at this cutoff [Hz] (zero-phase
+        Butterworth order 4 on the held-out samples).
+
+    Returns
+    -------
+    dict
+        ``rms`` (per joint), ``rms_total`` (over every held-out sample and joint), ``samples``,
+        ``t_start``, ``t_end``, ``source``, ``measure``; with ``score_cutoff`` also
+        ``score_cutoff``, ``rms_lowpassed`` and ``rms_lowpassed_total``.
+    """
+    from .results import lowpass_at
+
+    mask = np.ones(log.n_samples, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+    where = {j: k for k, j in enumerate(log.joints)}
+    measured = log.tau[:, [where[j] for j in names]][mask]
+    err = pred[mask] - measured
+    out = {"rms": dict(zip(names, np.sqrt(np.mean(err**2, axis=0)).tolist())),
+           "rms_total": float(np.sqrt(np.mean(err**2))), "samples": int(mask.sum()),
+           "t_start": float(log.t[mask][0]), "t_end": float(log.t[mask][-1]), "source": log.source,
+           "measure": "RMS of predicted minus raw measured torques at every held-out sample"}
+    if score_cutoff is not None:
+        lp = lowpass_at(log.t[mask], measured, float(score_cutoff))
+        e2 = pred[mask] - lp
+        out.update({"score_cutoff": float(score_cutoff),
+                    "rms_lowpassed": dict(zip(names, np.sqrt(np.mean(e2**2, axis=0)).tolist())),
+                    "rms_lowpassed_total": float(np.sqrt(np.mean(e2**2)))})
+    return out

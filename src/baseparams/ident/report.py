@@ -49,7 +49,17 @@ def format_identification(result: Identification) -> str:
             lines.append("validation: none (--holdout SECONDS or --validate FILE)")
             continue
         per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms"].items())
-        lines.append(f"{label} RMS {part['rms_total']:.4g} (per joint: {per})")
+        if label == "train":
+            lines.append(f"train RMS {part['rms_total']:.4g} (the fit's own rows: filtered and decimated as fitted; "
+                         f"per joint: {per})")
+            continue
+        lines.append(f"validation RMS {part['rms_total']:.4g} against the raw measured torques at every held-out "
+                     f"sample ({part['samples']} samples, t {part['t_start']:.6g} to {part['t_end']:.6g} s of "
+                     f"{part['source']}; per joint: {per})")
+        if "score_cutoff" in part:
+            per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms_lowpassed"].items())
+            lines.append(f"validation RMS {part['rms_lowpassed_total']:.4g} against the measured torques low-passed "
+                         f"at {part['score_cutoff']:g} Hz (--score-cutoff; per joint: {per})")
     if j["physical"] is not None:
         p = j["physical"]
         lines.append(f"physical: feasible {p['feasible']}, smallest eigenvalue of the N_i {p['min_eigenvalue']:.3g}, "

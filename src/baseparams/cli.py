@@ -119,7 +119,40 @@ def _robot(args) -> Robot:  # noqa: F821
                               strict_inertia=getattr(args, "strict_inertia", False))
     for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
+    hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""
+    if hint:
+        print(f"baseparams: note: {hint}", file=sys.stderr)
     return robot
+
+
+#: names of joints on a fixed root that suggest the base moves (a leg's hip, a wheel)
+_MOBILE_WORDS = ("wheel", "leg", "hip", "haa", "hfe", "foot", "caster")
+
+
+def floating_hint(robot) -> str:
+    """A hint to pass ``--floating`` when a fixed root carries legs or wheels ('' when not).
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot read with a fixed base.
+
+    Returns
+    -------
+    str
+        One line when the root link carries three or more chains, or chains whose joints are
+        named like legs or wheels; else ''.
+    """
+    if robot.floating or robot.n == 0:
+        return ""
+    roots = [k for k in range(robot.n) if robot.parent[k] < 0]
+    names = [robot.joint_names[k].lower() for k in roots]
+    mobile = [n for n in names if any(w in n for w in _MOBILE_WORDS)]
+    if len(roots) < 3 and not mobile:
+        return ""
+    return (f"the fixed root link carries {len(roots)} chains ({', '.join(robot.joint_names[k] for k in roots[:4])}"
+            f"{', ...' if len(roots) > 4 else ''}): if they are legs or wheels the base moves: pass --floating to "
+            f"attach it by a free joint")
 
 
 def cmd_robots(args) -> int:
@@ -352,7 +385,8 @@ def cmd_identify(args) -> int:
         result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
                           coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
                           decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
-                          convention=args.convention, couplings=couplings, progress=progress)
+                          convention=args.convention, couplings=couplings, progress=progress,
+                          samples=args.samples)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
         if args.urdf:
             _write_identified_urdf(args, robot, result)
@@ -480,7 +514,7 @@ def cmd_simulate(args) -> int:
         trajectory = read_trajectory(args.trajectory, robot)
     log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=args.amplitude,
                               noise=args.noise, seed=args.seed, rotor=args.rotor, friction=_friction(args.friction),
-                              convention=args.convention, trajectory=trajectory)
+                              convention=args.convention, trajectory=trajectory, samples=args.samples)
     from .files import write_text
 
     _write(args.out, lambda tmp: write_log(tmp, log), args, "OUT")

@@ -812,8 +812,7 @@ def _need(module: str, why: str) -> None:
     try:
         importlib.import_module(module)
     except ImportError:
-        raise BaseparamsError(f"{why} needs {module}: pip install 'baseparams[{EXTRAS[module]}]' "
-                              f"(or 'baseparams[all]')") from None
+        raise BaseparamsError(f"{why} needs {module}: pip install 'baseparams[{EXTRAS[module]}]'") from None
 
 
 def _inputs(args) -> list[str]:

@@ -342,3 +342,52 @@ def test_keepout_keeps_a_link_above_the_floor():
         design_excitation(robot, starts=1, keepout=(link, 5.0))
     with pytest.raises(BaseparamsError, match="no link 'nope'"):
         design_excitation(robot, starts=1, keepout=("nope", 0.0))
+
+
+# ---------------------------------------------------------------- issue 29: the README example, binding constraints
+@pytest.mark.shared
+def test_readme_excite_drives_with_keepout(tmp_path, capsys):
+    """The README's example (--drives with --keepout) designs a trajectory: it failed with every start
+    frozen on a joint at its range's edge (joints 4 and 6 of the Panda, their Coulomb columns zero)."""
+    from baseparams.kinematics.tree import forward_kinematics
+
+    out = tmp_path / "traj.csv"
+    code = main(["excite", str(URDF), "--base-frequency", "0.075", "--drives", "--keepout", "panda_link7:0.3",
+                 "--out", str(out), "--starts", "1", "--json"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    j = json.loads(captured.out)
+    assert j["condition_number"] < 10 and len(j["parameters"]) == 43 + 21
+    robot = baseparams.load(str(URDF))
+    _, q, _, _ = read_trajectory(out, robot)
+    z = (forward_kinematics(robot, q).g[:, -1] @ robot.M0[-1])[:, 2, 3]
+    assert z.min() >= 0.3 - 1e-9
+    lim = PANDA_LIMITS
+    assert np.all(q >= lim[:, 0] - 1e-9) and np.all(q <= lim[:, 1] + 1e-9)
+
+
+def test_infeasible_design_names_the_binding_constraint():
+    robot = baseparams.load("puma560")
+    lim = np.tile([-1.0, 1.0, 2.0, np.nan], (6, 1))
+    with pytest.raises(BaseparamsError) as info:
+        design_excitation(robot, harmonics=3, base_frequency=0.2, rate=50.0, starts=1, grid=40, max_iter=20,
+                          limits=lim, acceleration=1e-4)
+    msg = str(info.value)
+    assert "acceleration limit 0.0001" in msg and "joint 'joint1'" in msg and "a higher --acceleration" in msg
+    assert "widen the limits" not in msg and "\n" not in msg
+
+
+def test_summary_shows_no_nan_and_margin_keeps_off_the_limits():
+    robot = baseparams.load("puma560")
+    kw = dict(harmonics=3, base_frequency=0.2, rate=50.0, starts=1, grid=40, max_iter=30)
+    ex = design_excitation(robot, margin=0.2, **kw)
+    text = ex.summary()
+    assert "nan" not in text and "(-: no limit set)" in text
+    amax = text.splitlines()[2].split()[-1]
+    assert amax == "-"
+    # puma560 has no position limits: +-1 rad, 20 % of the 2 rad range kept free at both ends
+    assert ex.q.min() >= -0.6 - 1e-9 and ex.q.max() <= 0.6 + 1e-9
+    np.testing.assert_allclose(ex.limits[:, :2], np.tile([-0.6, 0.6], (6, 1)))
+    assert any("position margin: 20 %" in n for n in ex.notes)
+    with pytest.raises(BaseparamsError, match="margin must be"):
+        excitation_limits(robot, margin=0.5)

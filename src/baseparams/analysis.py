@@ -73,7 +73,8 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
+def regressor(robot: Robot, q, dq=None, ddq=None, *, backend: str = "auto",
+              out: np.ndarray | None = None) -> np.ndarray:
     """The TP regressor: ``tau = regressor(robot, q, dq, ddq) @ robot.parameters("paper")``.
 
     Parameters
@@ -87,6 +88,13 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
         with loops, ``m = len(robot.actuated)``: the states are the **actuated**
         coordinates, the loops are closed from the reference assembly (q = 0) and the rows
         are the actuated generalized forces.
+    backend : {"auto", "numpy", "compiled"}
+        ``compiled``: the numba kernel (the ``fast`` extra); ``numpy``: batched numpy; ``auto``
+        (default): the kernel for large batches when numba is installed, numpy otherwise. Both
+        give the same matrix to rounding.
+    out : ndarray, shape ``(S, m, 10 n)``, optional
+        A C-contiguous float64 buffer to fill and return (e.g. the previous call's output, to
+        reuse across chunks of a log).
 
     Returns
     -------
@@ -98,7 +106,8 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
     Raises
     ------
     BaseparamsError
-        Wrong shapes, or (loops) a state that does not close its loops on the reference
+        Wrong shapes, an unknown backend, a wrong ``out`` (shape, dtype, layout), a compiled
+        backend without numba, or (loops) a state that does not close its loops on the reference
         assembly mode. The spanning tree's regressor (loops cut, tree coordinates) is
         ``baseparams.regressor.tp.regressor``.
     """
@@ -106,7 +115,9 @@ def regressor(robot: Robot, q, dq=None, ddq=None) -> np.ndarray:
     from .regressor.tp import regressor as tree_regressor
 
     q, dq, ddq, cs = checked_states(robot, q, dq, ddq)
-    return tree_regressor(robot, q, dq, ddq) if cs is None else closed_regressor(robot, cs)
+    if cs is None:
+        return tree_regressor(robot, q, dq, ddq, out=out, backend=backend)
+    return closed_regressor(robot, cs, out=out, backend=backend)
 
 
 def checked_states(robot: Robot, q, dq=None, ddq=None):

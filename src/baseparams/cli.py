@@ -119,7 +119,40 @@ def _robot(args) -> Robot:  # noqa: F821
                               strict_inertia=getattr(args, "strict_inertia", False))
     for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
+    hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""
+    if hint:
+        print(f"baseparams: note: {hint}", file=sys.stderr)
     return robot
+
+
+#: names of joints on a fixed root that suggest the base moves (a leg's hip, a wheel)
+_MOBILE_WORDS = ("wheel", "leg", "hip", "haa", "hfe", "foot", "caster")
+
+
+def floating_hint(robot) -> str:
+    """A hint to pass ``--floating`` when a fixed root carries legs or wheels ('' when not).
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot read with a fixed base.
+
+    Returns
+    -------
+    str
+        One line when the root link carries three or more chains, or chains whose joints are
+        named like legs or wheels; else ''.
+    """
+    if robot.floating or robot.n == 0:
+        return ""
+    roots = [k for k in range(robot.n) if robot.parent[k] < 0]
+    names = [robot.joint_names[k].lower() for k in roots]
+    mobile = [n for n in names if any(w in n for w in _MOBILE_WORDS)]
+    if len(roots) < 3 and not mobile:
+        return ""
+    return (f"the fixed root link carries {len(roots)} chains ({', '.join(robot.joint_names[k] for k in roots[:4])}"
+            f"{', ...' if len(roots) > 4 else ''}): if they are legs or wheels the base moves: pass --floating to "
+            f"attach it by a free joint")
 
 
 def cmd_robots(args) -> int:
@@ -172,9 +205,10 @@ def _emit(args, text: str) -> None:
     if not out:
         print(text)
         return
+    from .files import write_text
+
     try:
-        with open(out, "w") as fh:
-            fh.write(text + "\n")
+        write_text(out, text + "\n", _inputs(args), "--output")
     except OSError as exc:
         raise BaseparamsError(f"--output {out}: cannot write ({exc.strerror or exc})") from None
     if not args.json:
@@ -302,12 +336,12 @@ def cmd_analyze(args) -> int:
             from .report.html import analysis_html
 
             progress("writing the HTML report")
-            _write_html(args.html, analysis_html(result))
+            _write_html(args.html, analysis_html(result), _inputs(args))
         if args.plot:
             from .report.plots import analysis_plot
 
             progress("drawing the figure")
-            analysis_plot(result, args.plot)
+            _write(args.plot, lambda tmp: analysis_plot(result, tmp), args, "--plot")
             print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
     _emit(args, text)
     status = result.status
@@ -388,7 +422,8 @@ def cmd_identify(args) -> int:
         result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
                           coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
                           decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
-                          convention=args.convention, couplings=couplings, progress=progress)
+                          convention=args.convention, couplings=couplings, progress=progress,
+                          samples=args.samples)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
         if args.save:
             result.save(args.save, inputs=[args.model, *files, args.validate, args.columns, args.truth], what="--save")
@@ -398,12 +433,12 @@ def cmd_identify(args) -> int:
         if args.plot:
             from .report.plots import torque_plot
 
-            torque_plot(result, args.plot)
+            _write(args.plot, lambda tmp: torque_plot(result, tmp), args, "--plot")
             progress(f"plot written to {args.plot}")
         if args.html:
             from .report.html import identification_html
 
-            _write_html(args.html, identification_html(result))
+            _write_html(args.html, identification_html(result), _inputs(args))
     _emit(args, _with_truth(args, result, truth, format_identification))
     return EXIT_OK
 
@@ -580,10 +615,12 @@ def _regressor_args(s) -> None:
                                                  "sample, joint, one column per parameter)")
 
 
-def _write_html(path: str, page: str) -> None:
-    """``--html FILE``: write a self-contained report, or one line saying why not."""
+def _write_html(path: str, page: str, inputs=()) -> None:
+    """``--html FILE``: write a self-contained report (atomically, never onto an input), or one line saying why not."""
+    from .files import write_text
+
     try:
-        Path(path).write_text(page)
+        write_text(path, page, inputs, "--html")
     except OSError as exc:
         raise BaseparamsError(f"--html {path}: cannot write ({exc.strerror or exc})") from None
     print(f"baseparams: HTML report written to {path}", file=sys.stderr)
@@ -643,7 +680,7 @@ def _write_identified_urdf(args, robot, result) -> None:
         raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies")
     if Path(args.model).suffix.lower() != ".urdf":
         raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
-    write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper")
+    _write(args.urdf, lambda tmp: write_urdf(args.model, tmp, robot, result.fit.physical.pi, "paper"), args, "--urdf")
 
 
 def cmd_simulate(args) -> int:
@@ -689,10 +726,11 @@ def cmd_simulate(args) -> int:
         trajectory = read_trajectory(args.trajectory, robot)
     log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=args.amplitude,
                               noise=args.noise, seed=args.seed, rotor=args.rotor, friction=_friction(args.friction),
-                              convention=args.convention, trajectory=trajectory)
-    write_log(args.out, log)
-    truth_path = Path(str(args.out) + ".truth.json")
-    truth_path.write_text(json.dumps(truth, indent=2) + "\n")
+                              convention=args.convention, trajectory=trajectory, samples=args.samples)
+    from .files import write_text
+
+    _write(args.out, lambda tmp: write_log(tmp, log), args, "OUT")
+    truth_path = write_text(str(args.out) + ".truth.json", json.dumps(truth, indent=2) + "\n", _inputs(args), "OUT")
     print(f"{args.out}: {log.n_samples} samples of {len(log.joints)} joints; true parameters in {truth_path}")
     return EXIT_OK
 
@@ -747,9 +785,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_robots)
 
     def model_args(s):
-        s.add_argument("model", help="built-in robot name (see 'baseparams robots') or a robot file: "
-                                     "URDF / URDF+ (.urdf) or MJCF (.xml); for analyze, a glob pattern runs a "
-                                     "sweep over many files on Dask")
+        s.add_argument("model", help=MODEL_HELP[s.prog.split()[-1]])
         s.add_argument("--floating", action="store_true",
                        help="attach the file's root link to the world by a floating (free) joint")
         s.add_argument("--strict-inertia", action="store_true",
@@ -759,9 +795,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--allow-infeasible-inertia", action="store_true", help=argparse.SUPPRESS)
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
-        s.add_argument("--samples", type=int, default=None,
-                       help="random samples for the numerical method (default: 100 for trees, "
-                            "5000 actuated samples for closed loops, as the paper)")
+        _samples_args(s)
         s.add_argument("--seed", type=int, default=0, help="random seed")
         s.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -796,6 +830,35 @@ def build_parser() -> argparse.ArgumentParser:
     _simulate_parser(sub, model_args)
     _excite_parser(sub, model_args)
     return p
+
+
+#: each subcommand's help for its MODEL argument
+_MODEL_FILES = "built-in robot name (see 'baseparams robots') or a robot file: URDF / URDF+ (.urdf) or MJCF (.xml)"
+MODEL_HELP = {
+    "analyze": f"{_MODEL_FILES}, or a DH table (.dh, '*-symbolic'); a glob pattern ('models/*.urdf') runs a sweep "
+               "over many files on Dask",
+    "regressor": f"{_MODEL_FILES}: the robot whose TP regressor is computed",
+    "identify": f"{_MODEL_FILES}: the robot the log was recorded on (--urdf needs a .urdf file)",
+    "predict": f"{_MODEL_FILES}: the robot the saved identification belongs to (its fingerprint is checked)",
+    "simulate": f"{_MODEL_FILES}: the robot simulated (its own inertias are the true parameters)",
+    "excite": f"{_MODEL_FILES}: the robot (its joint limits are read from the file)",
+}
+
+#: the subcommands whose ``--samples`` was renamed ``--analysis-samples`` (it reads as log samples there)
+RENAMED_SAMPLES = ("identify", "predict", "simulate", "excite")
+
+
+def _samples_args(s) -> None:
+    """``--samples`` (analyze, regressor) or ``--analysis-samples`` (identify, simulate, excite)."""
+    if s.prog.split()[-1] not in RENAMED_SAMPLES:
+        s.add_argument("--samples", type=int, default=None,
+                       help="random samples for the numerical method (default: 100 for trees, "
+                            "5000 actuated samples for closed loops, as the paper)")
+        return
+    s.add_argument("--analysis-samples", dest="samples", type=int, default=None, metavar="N",
+                   help="random states of the base-parameter analysis the model is built on (default: 100 for "
+                        "trees, 5000 actuated samples for closed loops); not the log's samples")
+    s.add_argument("--samples", dest="old_samples", type=int, default=None, help=argparse.SUPPRESS)
 
 
 def _identify_parser(sub, model_args) -> None:
@@ -908,22 +971,23 @@ def cmd_excite(args) -> int:
     except NoMovingBodiesError as exc:
         raise BaseparamsError(f"{exc}: no actuated coordinate to excite") from None
     f = 1.0 / args.period if args.period else (args.base_frequency or 0.1)
-    if args.period is not None and not args.period > 0:
-        raise BaseparamsError(f"--period must be > 0 seconds, got {args.period}")
-    acc = [float(x) for x in args.acceleration.split(",")] if args.acceleration else None
-    result = design_excitation(robot, harmonics=args.harmonics, base_frequency=f, rate=args.rate,
+    target = robot
+    if args.samples is not None:
+        from .analysis import analyze
+
+        target = analyze(robot, samples=args.samples, seed=args.seed)
+    result = design_excitation(target, harmonics=args.harmonics, base_frequency=f, rate=args.rate,
                                criterion=args.criterion, drives=args.drives, rotor=args.rotor,
-                               acceleration=None if acc is None else (acc[0] if len(acc) == 1 else acc),
-                               torque=args.torque, starts=args.starts, seed=args.seed, grid=args.grid,
-                               keepout=_keepout(args.keepout),
+                               acceleration=_acceleration(args.acceleration), torque=args.torque, starts=args.starts,
+                               seed=args.seed, grid=args.grid, keepout=_keepout(args.keepout), margin=args.margin,
                                progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
     if args.out:
-        result.to_csv(args.out)
+        _write(args.out, result.to_csv, args, "--out")
         print(f"baseparams: trajectory written to {args.out}", file=sys.stderr)
     if args.plot:
         from .report.plots import trajectory_plot
 
-        trajectory_plot(result, args.plot)
+        _write(args.plot, lambda tmp: trajectory_plot(result, tmp), args, "--plot")
         print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
     _emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
     return EXIT_OK
@@ -948,12 +1012,166 @@ def _excite_parser(sub, model_args) -> None:
     s.add_argument("--torque", action="store_true", help="keep the model's own torques within the effort limits")
     s.add_argument("--keepout", metavar="LINK:Z", help="keep LINK's frame origin at or above the height Z [m, world z] "
                                                         "(a floor or a table)")
+    s.add_argument("--margin", type=float, default=0.0, metavar="FRACTION",
+                   help="keep this fraction of each joint's position range free at both ends (0.05: 5 %% of the "
+                        "range from each limit; default 0)")
     s.add_argument("--starts", type=int, default=4, help="random starts of the optimisation (default 4)")
     s.add_argument("--grid", type=int, default=200, help="samples per period while optimising (default 200)")
     s.add_argument("--out", metavar="FILE", help="write the trajectory (CSV: t, q_, dq_, ddq_ per joint)")
     s.add_argument("--plot", metavar="FILE", help="plot q, dq, ddq per joint against the limits (PNG/SVG)")
     s.add_argument("--output", metavar="FILE", help="write the summary to FILE")
     s.set_defaults(func=cmd_excite)
+
+
+#: the optional modules a flag needs, and the extra that installs each
+EXTRAS = {"matplotlib": "plot", "cvxpy": "ident", "clarabel": "ident", "pyarrow": "parquet", "rosbags": "ros",
+          "dask": "fleet", "distributed": "fleet", "sympy": "symbolic"}
+#: the figure formats ``--plot`` writes (matplotlib's, by suffix)
+PLOT_SUFFIXES = (".png", ".svg", ".svgz", ".pdf", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff", ".webp", ".pgf")
+
+
+def _need(module: str, why: str) -> None:
+    """Raise a one-line error when an optional module is missing (checked by importing it)."""
+    import importlib
+
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        raise BaseparamsError(f"{why} needs {module}: pip install 'baseparams[{EXTRAS[module]}]'") from None
+
+
+def _inputs(args) -> list[str]:
+    """The run's input files (model, logs, mapping, trajectory): outputs must not overwrite them."""
+    out = [args.model] if getattr(args, "model", None) and Path(args.model).exists() else []
+    if getattr(args, "data", None):
+        out += _data_files(args.data)
+    out += [getattr(args, k) for k in ("validate", "columns", "trajectory") if getattr(args, k, None)]
+    return out
+
+
+def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
+    """The run's output files: ``(flag, path, allowed suffixes or None)``."""
+    cmd = args.command
+    out = [("--output", getattr(args, "output", None), None), ("--html", getattr(args, "html", None), None),
+           ("--plot", getattr(args, "plot", None), PLOT_SUFFIXES), ("--urdf", getattr(args, "urdf", None), None),
+           ("--codegen", getattr(args, "codegen", None), None)]
+    if cmd == "excite":
+        out.append(("--out", args.out, (".csv", ".tsv")))
+    if cmd == "simulate" and not args.robots:
+        out += [("OUT", args.out, (".csv", ".tsv", ".npz")), ("OUT.truth.json", f"{args.out}.truth.json", None)]
+    return [(flag, path, suffixes) for flag, path, suffixes in out if path]
+
+
+def _check_output(flag: str, path: str, suffixes, inputs: list[str]) -> None:
+    """One output path: a known suffix, an existing folder, not a folder itself, not an input."""
+    from .files import refuse_inputs
+
+    p = Path(path)
+    if suffixes and p.suffix.lower() not in suffixes:
+        raise BaseparamsError(f"{flag} {path}: the format comes from the suffix: {', '.join(suffixes)}, "
+                              f"not {p.suffix or 'none'}")
+    if p.exists() and not p.is_file():
+        raise BaseparamsError(f"{flag} {path}: exists and is not a regular file (a folder?)")
+    if not p.resolve().parent.is_dir():
+        raise BaseparamsError(f"{flag} {path}: the folder {p.resolve().parent} does not exist")
+    refuse_inputs(p, inputs, flag)
+
+
+def _check_extras(args) -> None:
+    """The optional modules the flags need, before any work."""
+    cmd = args.command
+    if getattr(args, "plot", None):
+        _need("matplotlib", "--plot")
+    model = getattr(args, "model", None)
+    if model and _is_symbolic(model) or getattr(args, "symbolic", False):
+        _need("sympy", "a symbolic robot (DH table)")
+    if cmd == "analyze" and model and any(ch in model for ch in "*?["):
+        _need("distributed", "a sweep over files (a glob MODEL)")
+    if cmd != "identify":
+        return
+    if args.method == "physical":
+        _need("cvxpy", "--method physical")
+        _need("clarabel", "--method physical")
+    files = _data_files(args.data) + ([args.validate] if args.validate else [])
+    if len(files) > 1 + bool(args.validate) or args.per_file or args.pooled:
+        _need("distributed", "identification over several logs (a fleet)")
+    for f in files:
+        suffix = Path(f).suffix.lower()
+        if suffix in (".parquet", ".pq"):
+            _need("pyarrow", f"{f}: reading Parquet")
+        elif suffix in (".mcap", ".db3", ".bag") or Path(f).is_dir():
+            _need("rosbags", f"{f}: reading a ROS bag")
+
+
+def _check_flags(args) -> None:
+    """Flags that cannot be honoured, before any work (a fit, an optimisation, a file)."""
+    if getattr(args, "old_samples", None) is not None:
+        print(f"baseparams: note: {args.command} --samples is deprecated: it is --analysis-samples (the random states "
+              f"of the base-parameter analysis, not log samples)", file=sys.stderr)
+        if args.samples is None:
+            args.samples = args.old_samples
+    if args.command == "identify" and args.urdf:
+        if args.method != "physical":
+            raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies "
+                                  "(nothing was fitted)")
+        if Path(args.model).suffix.lower() != ".urdf" or not Path(args.model).is_file():
+            raise BaseparamsError(f"--urdf writes the model file with the identified inertias: it needs a URDF "
+                                  f"model file, got {args.model} (nothing was fitted)")
+    if args.command == "excite":
+        _keepout(args.keepout)
+        _acceleration(args.acceleration)
+        if args.period is not None and not args.period > 0:
+            raise BaseparamsError(f"--period must be > 0 seconds, got {args.period}")
+        if not 0.0 <= args.margin < 0.5:
+            raise BaseparamsError(f"--margin is a fraction of each position range kept free at both ends, in "
+                                  f"[0, 0.5); got {args.margin}")
+
+
+def preflight(args) -> None:
+    """Check flags, needed extras and output paths before any long work or write.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`build_parser`).
+
+    Raises
+    ------
+    BaseparamsError
+        A flag that cannot be honoured, a missing optional module (naming the extra), an
+        output in a missing folder, onto a folder or onto an input, a suffix of no known format,
+        two outputs onto one file.
+    """
+    _check_flags(args)
+    _check_extras(args)
+    inputs = _inputs(args)
+    seen: dict[Path, str] = {}
+    for flag, path, suffixes in _outputs(args):
+        _check_output(flag, path, suffixes, inputs)
+        key = Path(path).resolve()
+        if key in seen:
+            raise BaseparamsError(f"{flag} and {seen[key]} name the same file {path}")
+        seen[key] = flag
+
+
+def _write(path, writer, args, what: str):
+    """Write an output atomically, never onto an input: ``writer(tmp_path)`` (:func:`baseparams.files.atomic_path`)."""
+    from .files import atomic_path
+
+    with atomic_path(path, _inputs(args), what) as tmp:
+        writer(tmp)
+    return Path(path)
+
+
+def _acceleration(text: str | None):
+    """``--acceleration A[,A...]`` as a float, a list, or None."""
+    if not text:
+        return None
+    try:
+        acc = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise BaseparamsError(f"--acceleration expects A or A,A,... in rad/s^2, got {text!r}") from None
+    return acc[0] if len(acc) == 1 else acc
 
 
 def _is_symbolic(model: str) -> bool:
@@ -1001,8 +1219,10 @@ def _analyze_symbolic(args) -> int:
             print(f"baseparams: probing {len(result.conditions) + len(robot.symbols)} conditions", file=sys.stderr)
         probe(result)
     if args.codegen:
+        from .files import write_text
+
         try:
-            Path(args.codegen).write_text(codegen(result))
+            write_text(args.codegen, codegen(result), _inputs(args), "--codegen")
         except OSError as exc:
             raise BaseparamsError(f"--codegen {args.codegen}: cannot write ({exc.strerror or exc})") from None
         print(f"baseparams: regrouping code written to {args.codegen}", file=sys.stderr)
@@ -1049,12 +1269,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--samples must be at least 1")
     if getattr(args, "seed", 0) < 0:
         parser.error("--seed must be a non-negative integer")
-    out = getattr(args, "output", None)
-    if out and not Path(out).resolve().parent.is_dir():
-        print(f"baseparams: error: --output {out}: the folder {Path(out).resolve().parent} does not exist",
-              file=sys.stderr)
-        return EXIT_INPUT
     try:
+        preflight(args)
         return args.func(args)
     except BaseparamsError as exc:
         print(f"baseparams: error: {exc}", file=sys.stderr)

@@ -69,6 +69,8 @@ STEPS = (1e-6, 1e-6, 1.0)
 FEAS_TOL = 5e-3
 #: a start stops when its best value has not improved by STALL[0] (log cond, or logdet / p) in STALL[1] iterations
 STALL = (1e-3, 20)
+#: the keep-out height is raised by this [m] while optimising (the controller-rate check then rarely scales)
+KEEPOUT_MARGIN = 0.01
 #: a design whose condition number is above this does not excite the model
 COND_LIMIT = 1e8
 
@@ -231,11 +233,16 @@ class Excitation:
                  f"{self.value:.6g}, condition number {self.condition_number:.6g} ({len(self.parameters)} parameters)",
                  f"  {'joint':<20s} {'offset':>8s} {'min':>8s} {'max':>8s} {'lower':>8s} {'upper':>8s} "
                  f"{'|dq|':>7s} {'vmax':>7s} {'|ddq|':>7s} {'amax':>7s}"]
+        def lim(x, width, digits):  # a limit, or '-' where none is set
+            return f"{x:{width}.{digits}f}" if np.isfinite(x) else f"{'-':>{width}s}"
+
         for j, name in enumerate(self.joints):
             lo, hi, v, acc, _ = self.limits[j]
             lines.append(f"  {name:<20s} {self.offsets[j]:8.4f} {self.q[:, j].min():8.4f} {self.q[:, j].max():8.4f} "
-                         f"{lo:8.4f} {hi:8.4f} {np.abs(self.dq[:, j]).max():7.3f} {v:7.3f} "
-                         f"{np.abs(self.ddq[:, j]).max():7.3f} {acc:7.3f}")
+                         f"{lim(lo, 8, 4)} {lim(hi, 8, 4)} {np.abs(self.dq[:, j]).max():7.3f} {lim(v, 7, 3)} "
+                         f"{np.abs(self.ddq[:, j]).max():7.3f} {lim(acc, 7, 3)}")
+        if not np.all(np.isfinite(self.limits[:, 2:4])):
+            lines.append("  (-: no limit set)")
         return "\n".join(lines + [f"note: {n}" for n in self.notes])
 
 
@@ -345,7 +352,8 @@ def design_coordinates(robot: Robot) -> np.ndarray:
     return np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
 
 
-def excitation_limits(robot: Robot, limits=None, acceleration=None) -> tuple[np.ndarray, list[str]]:
+def excitation_limits(robot: Robot, limits=None, acceleration=None,
+                      margin: float = 0.0) -> tuple[np.ndarray, list[str]]:
     """The limits a design respects, per designed coordinate.
 
     Parameters
@@ -357,6 +365,9 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None) -> tuple[np.
         overriding the model's; NaN entries keep the model's.
     acceleration : float or array_like, shape ``(m,)``, optional
         Acceleration limits [rad/s^2 or m/s^2] (models do not give them); default none.
+    margin : float
+        A fraction ``0 <= margin < 0.5`` of each position range kept free at both ends: the range
+        used is ``[lower + margin w, upper - margin w]``, ``w = upper - lower`` (0.05: 5 %).
 
     Returns
     -------
@@ -370,8 +381,10 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None) -> tuple[np.
     ------
     BaseparamsError
         ``limits`` of the wrong shape, or limits that leave no room for motion (an empty position
-        range, a non-positive velocity or acceleration limit).
+        range, a non-positive velocity or acceleration limit, a margin outside ``[0, 0.5)``).
     """
+    if not 0.0 <= margin < 0.5:
+        raise BaseparamsError(f"margin must be a fraction of each position range in [0, 0.5), got {margin}")
     coords = design_coordinates(robot)
     m = len(coords)
     lim = np.full((m, 5), np.nan)
@@ -387,6 +400,12 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None) -> tuple[np.
         lim[:, 3] = np.broadcast_to(np.asarray(acceleration, dtype=float), (m,))
     names = [robot.joint_names[robot.dof_body[c]] for c in coords]
     notes = _default_positions(robot, coords, lim, names)
+    if margin > 0:
+        pad = margin * (lim[:, 1] - lim[:, 0])
+        lim[:, 0] += pad
+        lim[:, 1] -= pad
+        notes.append(f"position margin: {100 * margin:.3g} % of each range kept free at both ends (the limits "
+                     f"shown are the narrowed ones)")
     _check_room(robot, lim, names)
     unknown = [n for n, v in zip(names, lim[:, 2]) if np.isnan(v)]
     if unknown:
@@ -621,7 +640,7 @@ def _nonlinear_values(prob: _Problem, val: dict) -> np.ndarray:
     if val["logc"] is not None:
         out.append(np.log(LOOP_MARGIN * prob.cond_max) - val["logc"])
     if val["z"] is not None:  # keep-out: height above the floor [m]
-        out.append(val["z"] - prob.keepout[1])
+        out.append(val["z"] - prob.keepout[1] - KEEPOUT_MARGIN)
     return np.concatenate(out)
 
 
@@ -650,12 +669,18 @@ def _linear_constraints(prob: _Problem) -> tuple[np.ndarray, np.ndarray]:
     ``LIMIT_STRIDE``-th grid sample only: the rows cost SLSQP more than the criterion does, and the
     controller-rate check closes the gaps.
     """
+    c, rhs, _ = _linear_rows(prob)
+    return c, rhs
+
+
+def _linear_rows(prob: _Problem) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
+    """:func:`_linear_constraints` and, per row, ``(kind, joint)`` (kind 0, 1, 2: position, velocity, acceleration)."""
     m, k = prob.m, prob.k
     bases = [b[::LIMIT_STRIDE] for b in prob.bases]
     g = len(bases[0])
     lim = prob.limits
     lo, hi = _shrunk_range(lim)
-    rows, rhs = [], []
+    rows, rhs, labels = [], [], []
     for j in range(m):
         for kind, lower, upper, unit in ((0, lo[j], hi[j], lim[j, 1] - lim[j, 0]),
                                          (1, -MARGIN * lim[j, 2], MARGIN * lim[j, 2], lim[j, 2]),
@@ -666,9 +691,87 @@ def _linear_constraints(prob: _Problem) -> tuple[np.ndarray, np.ndarray]:
             block[:, j * k:(j + 1) * k] = bases[kind] / unit
             rows += [block, -block]
             rhs += [np.full(g, -lower / unit), np.full(g, upper / unit)]
+            labels += [(kind, j)] * (2 * g)
     if not rows:
-        return np.zeros((0, m * k)), np.zeros(0)
-    return np.vstack(rows), np.concatenate(rhs)
+        return np.zeros((0, m * k)), np.zeros(0), []
+    return np.vstack(rows), np.concatenate(rhs), labels
+
+
+def _nonlinear_labels(prob: _Problem) -> list[tuple[int, int]]:
+    """Per row of :func:`_nonlinear_values`: ``(kind, joint)``, kind 3 torque, 4 loops, 5 keep-out (joint -1)."""
+    g = prob.t.size
+    out = []
+    if prob.theta is not None:
+        rows = np.flatnonzero(np.isfinite(prob.limits[:, 4]))
+        out += [(3, int(rows[i % len(rows)])) for i in range(g * len(rows))] * 2
+    if prob.cond_max is not None:
+        out += [(4, -1)] * g
+    if prob.keepout is not None:
+        out += [(5, -1)] * g
+    return out
+
+
+def _constraint_text(prob: _Problem, kind: int, joint: int) -> tuple[str, str]:
+    """A constraint named for a user, and what would loosen it."""
+    lim, robot = prob.limits, prob.model.robot
+    name = robot.joint_names[robot.dof_body[design_coordinates(robot)[joint]]] if joint >= 0 else ""
+    if kind == 0:
+        return (f"joint {name!r}: position range [{lim[joint, 0]:.4g}, {lim[joint, 1]:.4g}]",
+                "widen its position limits (or a smaller --margin)")
+    if kind == 1:
+        return (f"joint {name!r}: velocity limit {lim[joint, 2]:.4g}",
+                "a lower base frequency or fewer harmonics (slower motion), or a higher velocity limit")
+    if kind == 2:
+        return (f"joint {name!r}: acceleration limit {lim[joint, 3]:.4g}",
+                "a higher --acceleration, a lower base frequency or fewer harmonics")
+    if kind == 3:
+        return (f"joint {name!r}: effort limit {lim[joint, 4]:.4g} N m (model torques, --torque)",
+                "a lower base frequency (smaller inertial torques), or no --torque")
+    if kind == 4:
+        return (f"the loops' conditioning cond(J_p) <= {prob.cond_max:.3g}",
+                "narrower actuated ranges around the reference assembly")
+    link = robot.names[prob.keepout[0]]
+    return f"the keep-out of link {link!r} (z >= {prob.keepout[1]:.4g} m)", "a lower keep-out height"
+
+
+def _binding(prob: _Problem, x: np.ndarray, at_rest: bool = False) -> str:
+    """Why ``x (m k,)`` is not a usable design, with what would help.
+
+    The most violated constraint; else the ones that bind and the parameters the motion leaves
+    unexcited.
+    """
+    c, rhs, labels = _linear_rows(prob)
+    ev = _Evaluator(prob, (c, rhs))
+    out = ev(x)
+    if not out["valid"]:
+        kind, joint = 4, -1
+        text, helps = _constraint_text(prob, kind, joint)
+        return f"the loops do not close there: the binding constraint is {text}; {helps}"
+    slack = np.concatenate([c @ x + rhs, out["cons"]])
+    labels = labels + _nonlinear_labels(prob)
+    if at_rest:  # motion rows do not bind at rest
+        keep = [i for i, (kind, _) in enumerate(labels) if kind >= 3]
+        slack, labels = slack[keep], [labels[i] for i in keep]
+    if slack.size and slack.min() < -FEAS_TOL:
+        text, helps = _constraint_text(prob, *labels[int(np.argmin(slack))])
+        return f"the binding constraint is {text}; {helps}"
+    tight = [lab for lab in dict.fromkeys(labels[i] for i in np.flatnonzero(slack < 0.02)) if lab[0] >= 3]
+    tight += _limiting(prob, x.reshape(prob.m, prob.k))
+    tight = list(dict.fromkeys(tight))[:4]
+    a = ev.val["a"].reshape(-1, ev.val["a"].shape[2])
+    norm = np.linalg.norm(a, axis=0)
+    weak = [prob.model.names[i] for i in np.flatnonzero(norm <= 1e-9 * max(norm.max(), 1e-300))]
+    if not weak:
+        from .ident.estimate import excitation
+        from .numerics import StreamingQR
+
+        weak = list(excitation(StreamingQR(prob.model.n_params).add(a).r, prob.model.names)[1])
+    texts = [_constraint_text(prob, *lab) for lab in tight]
+    what = f"the motion leaves {', '.join(weak[:5])}{' ...' if len(weak) > 5 else ''} unexcited"
+    if not texts:
+        return f"{what}; more harmonics or looser limits (a wider, faster motion) would help"
+    return (f"{what}; binding: {'; '.join(t for t, _ in texts)}; what would help: "
+            f"{'; '.join(dict.fromkeys(h for _, h in texts))}")
 
 
 def _shrunk_range(lim: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -702,10 +805,11 @@ def _start(prob: _Problem, rng: np.random.Generator, fill: float = 0.5) -> np.nd
     """
     lim = prob.limits
     lo, hi = _shrunk_range(lim)
-    if prob.cond_max is not None or prob.keepout is not None:  # q = 0 is known feasible
+    off = 0.5 * (lo + hi) + rng.uniform(-0.15, 0.15, prob.m) * (hi - lo)
+    if prob.cond_max is not None:  # q = 0 is known feasible (the loops' reference)
         off = np.clip(0.0, lo, hi)
-    else:
-        off = 0.5 * (lo + hi) + rng.uniform(-0.15, 0.15, prob.m) * (hi - lo)
+    elif prob.keepout is not None:
+        off = _keepout_offsets(prob, off)
     x = np.column_stack([off, rng.normal(size=(prob.m, prob.k - 1))])
     x = _scaled(x, prob.bases, np.column_stack([lo, hi, MARGIN * lim[:, 2:4]]), fill, grow=True).reshape(-1)
     if prob.theta is None and prob.cond_max is None and prob.keepout is None:
@@ -719,12 +823,54 @@ def _start(prob: _Problem, rng: np.random.Generator, fill: float = 0.5) -> np.nd
         x[:, 1:] *= 0.7
         x = x.reshape(-1)
     raise BaseparamsError(f"robot {prob.model.robot.name!r}: no feasible start: even at rest at the offsets "
-                          + ("the prior torques exceed the effort limits" if prob.cond_max is None else
-                             "the loops do not close with a bounded cond(J_p) or the torques exceed the effort limits"))
+                          f"{_binding(prob, x, at_rest=True)}")
 
 
-def _optimise(prob: _Problem, x0: np.ndarray, max_iter: int, say) -> tuple[float, np.ndarray | None, int]:
-    """SLSQP from ``x0``: ``(best value, best feasible x or None, iterations)``."""
+def _limiting(prob: _Problem, xm: np.ndarray) -> list[tuple[int, int]]:
+    """Per joint ``(kind, joint)``, tightest first: which limit bounds its oscillation most.
+
+    Kind 0, 1, 2: position, velocity, acceleration; the room is the factor by which the
+    oscillation could grow.
+    """
+    q, dq, ddq = (b @ xm.T for b in prob.bases)
+    lim = prob.limits
+    dev = q - xm[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        room = np.where(dev > 0, (lim[:, 1] - xm[:, 0]) / dev, np.where(dev < 0, (lim[:, 0] - xm[:, 0]) / dev, np.inf))
+        ratios = np.vstack([room.min(axis=0), lim[:, 2] / np.abs(dq).max(axis=0), lim[:, 3] / np.abs(ddq).max(axis=0)])
+    ratios = np.where(np.isfinite(ratios), ratios, np.inf)
+    kinds = np.argmin(ratios, axis=0)
+    best = ratios[kinds, np.arange(prob.m)]
+    return [(int(kinds[j]), int(j)) for j in np.argsort(best) if np.isfinite(best[j])]
+
+
+def _keepout_offsets(prob: _Problem, off: np.ndarray) -> np.ndarray:
+    """Offsets ``(m,)`` at which the keep-out link rests above its height, with room to move every joint.
+
+    Tried in turn: ``off`` (near the ranges' middle), the middle, then points on the way from the
+    middle to the nearest point to q = 0 (known above the height) that keeps a quarter of each
+    range on either side; the last resort is that point itself.
+    """
+    lim = prob.limits
+    lo, hi = _shrunk_range(lim)
+    mid = 0.5 * (lo + hi)
+    near0 = np.clip(0.0, lo + 0.25 * (hi - lo), hi - 0.25 * (hi - lo))
+    cands = [off, mid] + [(1 - s) * mid + s * near0 for s in (0.25, 0.5, 0.75, 1.0)] + [np.clip(0.0, lo, hi)]
+    z = _height(prob, np.array(cands))
+    ok = np.flatnonzero(z >= prob.keepout[1] + 2 * KEEPOUT_MARGIN)
+    if ok.size == 0 and z.max() > prob.keepout[1]:
+        ok = np.array([int(np.argmax(z))])  # the most room there is
+    if ok.size == 0:
+        link, z_min = prob.model.robot.names[prob.keepout[0]], prob.keepout[1]
+        raise BaseparamsError(f"robot {prob.model.robot.name!r}: the keep-out binds: link {link!r} is below "
+                              f"z = {z_min:.4g} m even at rest at the middle of the joint ranges (z = {z[1]:.4g} m) "
+                              f"and at the point nearest to q = 0 within them (z = {z[-1]:.4g} m); lower the "
+                              f"keep-out height or widen the position limits")
+    return cands[ok[0]]
+
+
+def _optimise(prob: _Problem, x0: np.ndarray, max_iter: int, say) -> tuple[float, np.ndarray | None, int, np.ndarray]:
+    """SLSQP from ``x0``: ``(best value, best feasible x or None, iterations, the last point evaluated)``."""
     from scipy.optimize import minimize
 
     lin = _linear_constraints(prob)
@@ -748,7 +894,7 @@ def _optimise(prob: _Problem, x0: np.ndarray, max_iter: int, say) -> tuple[float
     ev(x0)
     minimize(lambda x: ev(x)["value"], x0, jac=lambda x: ev(x, True)["grad"], method="SLSQP", bounds=bounds,
              constraints=cons, callback=callback, options={"maxiter": max_iter, "ftol": 1e-7})
-    return ev.best[0], ev.best[1], it[0]
+    return ev.best[0], ev.best[1], it[0], ev.x
 
 
 def _shown(prob: _Problem, value: float) -> str:
@@ -846,7 +992,8 @@ def loop_bound(robot: Robot) -> float:
 def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: float = 0.1, rate: float = 1000.0,
                       criterion: str = "cond", drives: bool = False, limits=None, acceleration=None,
                       torque: bool = False, starts: int = 4, seed: int = 0, grid: int = 200, max_iter: int = 150,
-                      rotor: bool = False, progress=None, keepout: tuple[str, float] | None = None) -> Excitation:
+                      rotor: bool = False, progress=None, keepout: tuple[str, float] | None = None,
+                      margin: float = 0.0) -> Excitation:
     """Design a periodic excitation trajectory that identifies every base parameter (module doc).
 
     Parameters
@@ -889,6 +1036,8 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
     keepout : tuple of (str, float), optional
         ``(link, z_min)``: the named link's frame origin stays at or above the height ``z_min``
         [m, world z] at every sample (a floor plane or a table; trees only).
+    margin : float
+        Fraction of each position range kept free at both ends (:func:`excitation_limits`).
 
     Returns
     -------
@@ -907,7 +1056,8 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
     _check_options(harmonics, base_frequency, rate, criterion, starts, grid)
     t0 = time.perf_counter()
     model = _model(robot_or_analysis, drives, rotor)
-    prob, notes = _problem(model, criterion, harmonics, base_frequency, rate, grid, limits, acceleration, torque)
+    prob, notes = _problem(model, criterion, harmonics, base_frequency, rate, grid, limits, acceleration, torque,
+                           margin)
     if keepout is not None:
         prob, note = _with_keepout(prob, keepout)
         notes.append(note)
@@ -943,7 +1093,7 @@ def _with_keepout(prob: _Problem, keepout) -> tuple[_Problem, str]:
 
 def random_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: float = 0.1, rate: float = 1000.0,
                       drives: bool = False, limits=None, acceleration=None, torque: bool = False, seed: int = 0,
-                      rotor: bool = False) -> Excitation:
+                      rotor: bool = False, margin: float = 0.0) -> Excitation:
     """A random excitation within the same limits, not optimised: the baseline a design is compared with.
 
     Random normal coefficients (at rest at both ends), offsets near the middle of the ranges (loops:
@@ -954,7 +1104,7 @@ def random_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
     ----------
     robot_or_analysis : Robot, Analysis or IdentModel
         As :func:`design_excitation`.
-    harmonics, base_frequency, rate, drives, limits, acceleration, torque, rotor
+    harmonics, base_frequency, rate, drives, limits, acceleration, torque, rotor, margin
         As :func:`design_excitation`.
     seed : int
         Seed of the coefficients.
@@ -973,7 +1123,7 @@ def random_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
 
     _check_options(harmonics, base_frequency, rate, "cond", 1, 8 * harmonics)
     model = _model(robot_or_analysis, drives, rotor)
-    prob, notes = _problem(model, "cond", harmonics, base_frequency, rate, 200, limits, acceleration, torque)
+    prob, notes = _problem(model, "cond", harmonics, base_frequency, rate, 200, limits, acceleration, torque, margin)
     with blas_threads(), _kernel_threads():
         x = _start(prob, np.random.default_rng(seed), fill=1.0 / MARGIN)
         return _finish(prob, x, rate, notes + [f"random coefficients (seed {seed}), not optimised"])
@@ -1008,17 +1158,18 @@ def _kernel_threads():
 def _multistart(prob: _Problem, starts: int, seed: int, max_iter: int, say) -> tuple[np.ndarray, float]:
     """The best feasible design ``(x (m k,), value)`` of ``starts`` seeded random starts."""
     rng = np.random.default_rng(seed)
-    best = (np.inf, None)
+    best, last = (np.inf, None), None
     for s in range(starts):
         ts = time.perf_counter()
-        value, x, nit = _optimise(prob, _start(prob, rng), max_iter, lambda msg: say(f"start {s + 1}/{starts}: {msg}"))
+        value, x, nit, last = _optimise(prob, _start(prob, rng), max_iter,
+                                        lambda msg: say(f"start {s + 1}/{starts}: {msg}"))
         say(f"start {s + 1}/{starts}: {_shown(prob, value)} on the design grid after {nit} iterations "
             f"({time.perf_counter() - ts:.1f} s)")
         if x is not None and value < best[0]:
             best = (value, x)
     if best[1] is None:
         raise BaseparamsError(f"robot {prob.model.robot.name!r}: no start reached a feasible design that excites every "
-                              f"model parameter; widen the limits")
+                              f"model parameter: {_binding(prob, last)}")
     return best[1], best[0]
 
 
@@ -1039,10 +1190,10 @@ def _check_options(harmonics, base_frequency, rate, criterion, starts, grid) -> 
 
 
 def _problem(model: IdentModel, criterion, harmonics, base_frequency, rate, grid, limits, acceleration,
-             torque) -> tuple[_Problem, list[str]]:
+             torque, margin=0.0) -> tuple[_Problem, list[str]]:
     """The design problem and the notes of its defaults."""
     robot = model.robot
-    lim, notes = excitation_limits(robot, limits, acceleration)
+    lim, notes = excitation_limits(robot, limits, acceleration, margin)
     if robot.has_loops and not np.all((lim[:, 0] < 0) & (lim[:, 1] > 0)):
         raise BaseparamsError(f"robot {robot.name!r}: the reference configuration q = 0 (where the loops are "
                               f"assembled) is outside the actuated coordinates' position limits")
@@ -1092,7 +1243,7 @@ def _finish(prob: _Problem, x: np.ndarray, rate: float, notes: list[str]) -> Exc
 
         weak = excitation(StreamingQR(model.n_params).add(model.regressor(q, dq, ddq)).r, model.names)[1]
         raise BaseparamsError(f"robot {robot.name!r}: within these limits the trajectory does not excite {weak[:5]} "
-                              f"(condition number {cond:.3g}); widen the position ranges or the velocity limits")
+                              f"(condition number {cond:.3g}): {_binding(prob, xm.reshape(-1))}")
     if prob.cond_max is not None:
         from .kinematics.loops import close_loops
 
@@ -1114,18 +1265,22 @@ def _violation(prob: _Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -
         cs = close_loops(robot, q, dq, ddq, cond_max=prob.cond_max)
         if cs.kept < len(q):
             return (f"{len(q) - cs.kept} samples outside the workspace, off the assembly mode or with "
-                    f"cond(J_p) > {prob.cond_max:.3g}")
+                    f"cond(J_p) > {prob.cond_max:.3g}: narrower actuated ranges would help")
     if prob.keepout is not None:
         low = _height(prob, q) < prob.keepout[1] - 1e-9
         if low.any():
-            return f"{int(low.sum())} samples with {robot.names[prob.keepout[0]]!r} below the keep-out height"
+            return (f"{int(low.sum())} samples with {robot.names[prob.keepout[0]]!r} below the keep-out height "
+                    f"{prob.keepout[1]:.4g} m: a lower keep-out height would help")
     if prob.theta is not None:
         tau = np.concatenate([prob.model.regressor(q[k:k + 4000], dq[k:k + 4000], ddq[k:k + 4000]) @ prob.theta
                               for k in range(0, len(q), 4000)])
         with np.errstate(invalid="ignore"):
             over = np.abs(tau) > prob.limits[:, 4]
         if over.any():
-            return f"{int(over.any(axis=1).sum())} samples with torques above the effort limits"
+            names = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+            return (f"{int(over.any(axis=1).sum())} samples with torques above the effort limits of "
+                    f"{[n for n, o in zip(names, over.any(axis=0)) if o]}: a lower base frequency or no --torque "
+                    f"would help")
     return ""
 
 

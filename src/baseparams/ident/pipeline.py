@@ -633,7 +633,7 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
              convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
-             score_cutoff: float | None = None) -> Identification:
+             samples: int | None = None, score_cutoff: float | None = None) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -682,6 +682,9 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     progress : callable, optional
         Called with one line of text at each step (analysis, preprocessing, accumulation, fit,
         validation, report series).
+    samples : int, optional
+        Random states of the base-parameter analysis the model is built on (default: the
+        analysis's own).
 
     Returns
     -------
@@ -702,12 +705,12 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
-                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress,
+                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,
                          score_cutoff)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
-              prior_weight, convention, memory_mb, couplings=(), progress=None,
+              prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
               score_cutoff=None) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .preprocess import prepare
@@ -715,7 +718,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     say = progress or (lambda msg: None)
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width,
+    model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction), coulomb_width,
                         couplings=couplings)
     cols = log_columns(model, log)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")

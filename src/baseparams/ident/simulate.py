@@ -92,7 +92,7 @@ def add_noise(tau: np.ndarray, std, rng: np.random.Generator) -> np.ndarray:
 
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float = 0.5,
                  noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
-                 convention: str = "khalil", trajectory=None):
+                 convention: str = "khalil", trajectory=None, samples: int | None = None):
     """A synthetic joint log of a fixed-base robot, with its true model parameters.
 
     Parameters
@@ -117,6 +117,8 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         ``(t (S,), q, dq, ddq (S, state_columns))``: the motion to simulate (e.g. a designed
         excitation, :func:`baseparams.excite.read_trajectory`) instead of a random Fourier series
         (``duration``, ``rate`` and ``amplitude`` are then ignored).
+    samples : int, optional
+        Random states of the base-parameter analysis (default: the analysis's own).
 
     Returns
     -------
@@ -136,7 +138,7 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     if robot.floating:
         raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
     rng = np.random.default_rng(seed)
-    model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction))
+    model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction))
     if trajectory is None:
         t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
     else:

@@ -1,0 +1,173 @@
+"""Issue 29: flags, extras and output paths checked before the long work; per-subcommand help;
+--analysis-samples; the --floating hint; baseparams.regressor(backend=, out=)."""
+
+import importlib.metadata
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import baseparams
+from baseparams.cli import build_parser, main
+from baseparams.regressor import compiled
+
+
+def run(args, capsys):
+    code = main(args)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def _missing(monkeypatch, *modules):
+    """Make ``import MODULE`` fail, as without the extra."""
+    for m in modules:
+        monkeypatch.setitem(sys.modules, m, None)
+
+
+def _no_work(monkeypatch):
+    """Fail the test if the design or the fit starts."""
+    def boom(*a, **k):
+        raise AssertionError("the long work started")
+
+    monkeypatch.setattr("baseparams.excite.design_excitation", boom)
+    monkeypatch.setattr("baseparams.ident.pipeline.identify", boom)
+
+
+def test_excite_plot_without_matplotlib_refused_at_once(tmp_path, capsys, monkeypatch):
+    _missing(monkeypatch, "matplotlib", "matplotlib.pyplot")
+    _no_work(monkeypatch)
+    out, plot = tmp_path / "traj.csv", tmp_path / "traj.png"
+    t0 = time.perf_counter()
+    code, _, err = run(["excite", "puma560", "--out", str(out), "--plot", str(plot)], capsys)
+    assert time.perf_counter() - t0 < 5
+    assert code == 2 and "--plot needs matplotlib" in err and "baseparams[plot]" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("extra, argv, words", [
+    ("cvxpy", ["identify", "puma560", "LOG.csv", "--method", "physical"], "--method physical needs cvxpy"),
+    ("pyarrow", ["identify", "puma560", "LOG.parquet"], "reading Parquet needs pyarrow"),
+    ("matplotlib", ["identify", "puma560", "LOG.csv", "--plot", "OUT.png"], "--plot needs matplotlib"),
+    ("matplotlib", ["analyze", "puma560", "--plot", "OUT.png"], "--plot needs matplotlib"),
+])
+def test_missing_extra_refused_before_work(extra, argv, words, tmp_path, capsys, monkeypatch):
+    _missing(monkeypatch, extra)
+    _no_work(monkeypatch)
+    argv = [str(tmp_path / a) if a.isupper() or "." in a and a.split(".")[0].isupper() else a for a in argv]
+    code, _, err = run(argv, capsys)
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("model, method, words", [
+    ("puma560", "physical", "needs a URDF model file"),
+    ("MODEL.xml", "physical", "needs a URDF model file"),
+    ("MODEL.urdf", "wls", "--urdf needs --method physical"),
+])
+def test_identify_urdf_refused_before_the_fit(model, method, words, tmp_path, capsys, monkeypatch):
+    _no_work(monkeypatch)
+    if model.startswith("MODEL"):
+        model = str(tmp_path / model)
+        Path(model).write_text("<robot/>")
+    code, _, err = run(["identify", model, str(tmp_path / "log.csv"), "--method", method, "--urdf",
+                        str(tmp_path / "out.urdf")], capsys)
+    assert code == 2 and words in err and "nothing was fitted" in err
+    assert not (tmp_path / "out.urdf").exists()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["identify", "puma560", "LOG", "--output", "LOG"], "would overwrite the input"),
+    (["excite", "puma560", "--out", "DIR"], "the format comes from the suffix"),
+    (["excite", "puma560", "--out", "DIR/x.csv", "--output", "DIR/x.csv"], "name the same file"),
+    (["excite", "puma560", "--plot", "DIR/x.txt"], "the format comes from the suffix"),
+    (["excite", "puma560", "--out", "DIR/nope/x.csv"], "does not exist"),
+    (["analyze", "puma560", "--output", "DIR"], "is not a regular file"),
+    (["simulate", "puma560", "DIR/log.parquet"], "the format comes from the suffix"),
+    (["excite", "puma560", "--acceleration", "fast"], "--acceleration expects"),
+    (["excite", "puma560", "--margin", "0.5"], "--margin is a fraction"),
+])
+def test_bad_outputs_and_flags_refused_before_work(argv, words, tmp_path, capsys, monkeypatch):
+    _no_work(monkeypatch)
+    log = tmp_path / "log.csv"
+    log.write_text("t\n0\n")
+    argv = [a.replace("DIR", str(tmp_path)).replace("LOG", str(log)) for a in argv]
+    code, _, err = run(argv, capsys)
+    assert code == 2 and words in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"] and log.read_text() == "t\n0\n"
+
+
+def test_each_subcommand_has_its_own_model_help():
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command").choices
+    helps = {name: next(a.help for a in p._actions if a.dest == "model") for name, p in sub.items() if name != "robots"}
+    assert "glob" in helps["analyze"]
+    assert all("analyze" not in h and "glob" not in h for name, h in helps.items() if name != "analyze")
+    assert len(set(helps.values())) == len(helps)
+
+
+def test_analysis_samples_and_the_deprecated_spelling(tmp_path, capsys):
+    out = tmp_path / "log.csv"
+    code, _, err = run(["simulate", "puma560", str(out), "--duration", "0.2", "--samples", "30"], capsys)
+    assert code == 0 and "--samples is deprecated" in err and "--analysis-samples" in err
+    code, _, err = run(["simulate", "puma560", str(out), "--duration", "0.2", "--analysis-samples", "30"], capsys)
+    assert code == 0 and "deprecated" not in err
+    assert (tmp_path / "log.csv.truth.json").is_file()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary file left
+    with pytest.raises(SystemExit):
+        main(["analyze", "puma560", "--analysis-samples", "30"])  # analyze keeps --samples
+
+
+def _solo12():
+    try:
+        files = importlib.metadata.files("example-robot-data") or []
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    hit = [f for f in files if str(f).endswith("solo_description/robots/solo12.urdf")]
+    return Path(hit[0].locate()) if hit else None
+
+
+@pytest.mark.skipif(_solo12() is None, reason="needs the example-robot-data package (the test extra)")
+def test_solo12_without_floating_gets_a_hint(capsys):
+    code, _, err = run(["analyze", str(_solo12())], capsys)
+    hint = [line for line in err.splitlines() if "--floating" in line]
+    assert code == 0 and len(hint) == 1 and hint[0].startswith("baseparams: note: ") and "4 chains" in hint[0]
+    code, _, err = run(["analyze", str(_solo12()), "--floating"], capsys)
+    assert "pass --floating" not in err
+
+
+def test_no_hint_for_an_arm(tmp_path, capsys):
+    from baseparams.cli import floating_hint
+
+    assert floating_hint(baseparams.load("puma560")) == ""
+    assert floating_hint(baseparams.load("go2")) == ""  # already floating
+
+
+@pytest.mark.parametrize("model", ["puma560", "four-bar"])
+def test_regressor_backend_and_out_give_the_same_matrix(model):
+    robot = baseparams.load(model)
+    m = len(robot.actuated) if robot.has_loops else robot.dof
+    rng = np.random.default_rng(1)
+    q, dq, ddq = 0.3 * rng.normal(size=(3, 64, m))
+    ref = baseparams.regressor(robot, q, dq, ddq, backend="numpy")
+    buf = np.empty_like(ref)
+    got = baseparams.regressor(robot, q, dq, ddq, backend="auto", out=buf)
+    assert got is buf
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    if compiled.available():
+        fast = baseparams.regressor(robot, q, dq, ddq, backend="compiled")
+        np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    with pytest.raises(baseparams.BaseparamsError, match="backend"):
+        baseparams.regressor(robot, q, dq, ddq, backend="gpu")
+
+
+def test_all_extra_names_every_extra():
+    import tomllib
+
+    meta = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]
+    extras = meta["optional-dependencies"]
+    named = extras["all"][0].split("[")[1].rstrip("]").split(",")
+    assert set(named) == set(extras) - {"all", "test"}
+    assert not any(d.startswith("mujoco>") or d == "mujoco" for d in meta["dependencies"])  # no GUI packages
+    assert any(d.startswith("mujoco-core") for d in meta["dependencies"])

@@ -240,8 +240,9 @@ class Identification:
         Returns
         -------
         list of dict
-            ``{"joint", "Ia", "Fv", "Fc", "Fo"}``: a value, ``None`` when not modelled, or
-            ``"regrouped into <base parameter>"`` when the data cannot separate it.
+            ``{"joint", "Ia", "Fv", "Fc", "Fo", "std"}``: a value, ``None`` when not modelled, or
+            ``"regrouped into <base parameter>"`` when the data cannot separate it; ``std``: the
+            standard deviation of each identified value (``{kind: float}``).
         """
         m = self.model
         pos = {name: k for k, name in enumerate(m.names)}
@@ -251,14 +252,16 @@ class Identification:
                 if m.regrouping.K[row, col] != 0:
                     absorbed[m.regrouping.names[d]] = m.regrouping.names[i]
         out = []
+        std = self.fit.estimate.std
         for joint in m.drives.joints:
-            entry = {"joint": joint}
+            entry = {"joint": joint, "std": {}}
             for kind in ("Ia", "Fv", "Fc", "Fo"):
                 name = f"{kind}_{joint}"
                 if kind not in m.drives.kinds:
                     entry[kind] = None
                 elif name in pos:
                     entry[kind] = float(self.fit.theta[pos[name]])
+                    entry["std"][kind] = float(std[pos[name]])
                 else:
                     entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
             out.append(entry)
@@ -270,8 +273,9 @@ class Identification:
         Returns
         -------
         list of dict
-            ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm"}`` per coupling: a value,
-            ``None`` when not modelled, or ``"regrouped into <parameter>"``.
+            ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm", "std"}`` per coupling: a
+            value, ``None`` when not modelled, or ``"regrouped into <parameter>"``; ``std``: the
+            standard deviation of each identified value.
         """
         m = self.model
         pos = {name: k for k, name in enumerate(m.names)}
@@ -279,14 +283,16 @@ class Identification:
                     for row, i in enumerate(m.regrouping.independent)
                     for col, d in enumerate(m.regrouping.dependent) if m.regrouping.K[row, col] != 0}
         out = []
+        std = self.fit.estimate.std
         for c in m.drives.couplings:
-            entry = {"name": c.name, "joints": dict(zip(c.joints, c.weights))}
+            entry = {"name": c.name, "joints": dict(zip(c.joints, c.weights)), "std": {}}
             for kind in ("Iam", "Fvm", "Fcm"):
                 name = f"{kind}_{c.name}"
                 if kind not in m.drives.coupled_kinds:
                     entry[kind] = None
                 elif name in pos:
                     entry[kind] = float(self.fit.theta[pos[name]])
+                    entry["std"][kind] = float(std[pos[name]])
                 else:
                     entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
             out.append(entry)
@@ -298,10 +304,11 @@ class Identification:
         Returns
         -------
         dict
-            ``method, model, convention, n_samples{read, used, removed}, condition_number,
+            ``method, covariance, model, convention, n_samples{read, used, removed}, condition_number,
             excitation{condition_number, weak, all_excited}, base_parameters, drives, couplings,
             train, validation, physical, notes``; ``weak`` names the parameters carrying
-            directions whose singular value is below 1e-3 of the largest (column-scaled regressor).
+            directions whose singular value is below 1e-3 of the largest (column-scaled regressor);
+            ``covariance`` says how every ``std`` was computed.
         """
         f = self.fit
         phys = None
@@ -313,7 +320,8 @@ class Identification:
         from .estimate import excitation
 
         cond, weak = excitation(f.estimate.R11, self.model.names)
-        return {"method": f.method, "model": self.model.robot.name, "convention": self.model.analysis.convention,
+        return {"method": f.method, "covariance": f.estimate.covariance, "model": self.model.robot.name,
+                "convention": self.model.analysis.convention,
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
                 "excitation": {"condition_number": cond, "weak": weak,
                                "all_excited": not weak},
@@ -326,7 +334,8 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
              friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
-             convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None) -> Identification:
+             convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
+             covariance: str = "hac") -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -369,6 +378,9 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
     progress : callable, optional
         Called with one line of text at each step (analysis, preprocessing, accumulation, fit,
         validation, report series).
+    covariance : {"hac", "white"}
+        The standard deviations' covariance: ``hac`` (default) Newey-West, true under correlated
+        residuals; ``white`` the least-squares formula (:mod:`baseparams.ident.uncertainty`).
 
     Returns
     -------
@@ -389,11 +401,11 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
-                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress)
+                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, covariance)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
-              prior_weight, convention, memory_mb, couplings=(), progress=None) -> Identification:
+              prior_weight, convention, memory_mb, couplings=(), progress=None, covariance="hac") -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .preprocess import prepare
 
@@ -406,9 +418,11 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
-    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed)
+    kept = []
+    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed, keep=kept)
     say(f"fitting ({method})")
     f = fit(model, acc, method, prior_weight)
+    f, cov_note = _uncertainty(f, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say)
     say("predicted torques and excitation spectrum for the report")
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
@@ -425,8 +439,19 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
                "samples": int(vacc.samples), "source": held.source}
         series["validation"] = _series(model, vprep, vcols, f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()))
+    notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()),
+             cov_note)
     return Identification(f, samples, train_rms, val, tuple(notes), series)
+
+
+def _uncertainty(f: Fit, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say):
+    """The fit's standard deviations from the chosen covariance (a second pass for HAC)."""
+    from .uncertainty import apply_covariance, fitted_rows
+
+    if covariance == "hac":
+        say("covariance (HAC: a second pass over the fitted rows)")
+    rows = kept if kept else (lambda: fitted_rows(model, prep, cols, memory_mb, train, min_speed))
+    return apply_covariance(f, acc, rows, covariance, prep.design.fs / prep.factor)
 
 
 def _series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names: list[str], memory_mb: float):
@@ -561,7 +586,8 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     return np.array([where[j] for j in wanted], dtype=int)
 
 
-def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None):
+def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None,
+                        keep=None):
     """Rows accumulated from a prepared log, with parallel filtering.
 
     All at once when the regressor fits in ``memory_mb``, else chunk by chunk with overlaps
@@ -581,6 +607,10 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
         The unfiltered log ``prep`` came from (needed for the chunked path).
     min_speed : float, optional
         The slow-sample threshold ``prep`` used.
+    keep : list, optional
+        When given and the regressor is formed at once, ``(A, tau)`` of the fitted samples are
+        appended to it (no longer than the regressor formed: the covariance's second pass,
+        :mod:`baseparams.ident.uncertainty`, then needs no second regressor).
 
     Returns
     -------
@@ -596,7 +626,10 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     if size_mb <= memory_mb or log is None:
         q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
         acc = RowAccumulator(len(model.coords), model.n_params)
-        acc.add(prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols])
+        a, tau = prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols]
+        acc.add(a, tau)
+        if keep is not None:
+            keep.append((a, tau))
         return acc, (f"parallel filtering: the regressor's {model.n_params} columns filtered like the torques "
                      f"({size_mb:.0f} MB at once)")
     from . import chunks

@@ -352,7 +352,7 @@ def cmd_identify(args) -> int:
                           coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
                           decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
                           convention=args.convention, couplings=couplings, progress=progress,
-                          covariance=args.covariance)
+                          covariance=args.covariance, allow_units=args.allow_units)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
         if args.urdf:
             _write_identified_urdf(args, robot, result)
@@ -609,6 +609,8 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
     s.add_argument("--prior-weight", type=float, metavar="W", help="physical: weight of the file's inertias")
+    s.add_argument("--allow-units", action="store_true",
+                   help="go on when the log's units look wrong (deg/s, ms, mN m, absurd samples); refused otherwise")
     s.add_argument("--covariance", choices=("hac", "white"), default="hac",
                    help="standard deviations: hac (default; Newey-West, true when residuals are correlated) or "
                         "white (the least-squares formula, residuals taken as uncorrelated)")

@@ -335,7 +335,7 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
              convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
-             covariance: str = "hac") -> Identification:
+             covariance: str = "hac", allow_units: bool = False) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -381,6 +381,9 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
     covariance : {"hac", "white"}
         The standard deviations' covariance: ``hac`` (default) Newey-West, true under correlated
         residuals; ``white`` the least-squares formula (:mod:`baseparams.ident.uncertainty`).
+    allow_units : bool
+        Go on when the units look wrong (:mod:`baseparams.ident.plausibility`: velocities,
+        time base, torques against the model file's, absurd samples), which otherwise refuses.
 
     Returns
     -------
@@ -401,11 +404,13 @@ def identify(robot: Robot, log, *, method: str = "wls", rotor: bool = False,
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
-                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, covariance)
+                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, covariance,
+                         allow_units)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
-              prior_weight, convention, memory_mb, couplings=(), progress=None, covariance="hac") -> Identification:
+              prior_weight, convention, memory_mb, couplings=(), progress=None, covariance="hac",
+              allow_units=False) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .preprocess import prepare
 
@@ -415,6 +420,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     model = ident_model(analyze(robot, convention=convention), rotor, tuple(friction), coulomb_width,
                         couplings=couplings)
     cols = log_columns(model, log)
+    unit_notes = _units(model, train, cols, allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
@@ -440,8 +446,26 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         series["validation"] = _series(model, vprep, vcols, f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
     notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()),
-             cov_note)
+             cov_note, *unit_notes)
     return Identification(f, samples, train_rms, val, tuple(notes), series)
+
+
+def _units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:
+    """Units and plausibility of the log before any fit (:func:`~baseparams.ident.plausibility.check_units`)."""
+    from ..analysis import regressor
+    from ..errors import DataError
+    from .plausibility import check_units
+
+    robot = model.robot
+    params = robot.parameters("paper")
+    coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
+    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" for c in coords])
+    try:
+        return check_units(log, cols, lambda q, dq, ddq: regressor(robot, q, dq, ddq) @ params, revolute)
+    except DataError as exc:
+        if not allow_units:
+            raise
+        return [f"units: WARNING, going on (allow_units): {exc}"]
 
 
 def _uncertainty(f: Fit, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say):

@@ -80,9 +80,9 @@ def test_identification_reprs(ident):
     m = res.model
     nb, nd = m.n_base, m.n_drive
     assert nb + nd == len(res.names) and nb == 36
-    assert re.fullmatch(rf"<Identification puma560: wls, {nb} base \+ {nd} drive terms, held-out RMS [0-9.e-]+ N m>",
+    assert re.fullmatch(rf"<Identification puma560: auto, {nb} base \+ {nd} drive terms, held-out RMS [0-9.e-]+ N m>",
                         text), text
-    assert _short(res.fit).startswith(f"<Fit puma560: wls, {nb} base + {nd} drive terms, residual RMS")
+    assert _short(res.fit).startswith(f"<Fit puma560: auto, {nb} base + {nd} drive terms, residual RMS")
     assert _short(m).startswith(f"<IdentModel puma560: {nb} base + {nd} drive terms (Ia Fv Fc Fo on 6 joints")
     assert _short(log).startswith("<JointLog simulated puma560: 2000 samples of 6 joints over 9.995 s (200 Hz)")
     for obj in (res.fit.estimate, m.drives, m.regrouping):
@@ -97,7 +97,7 @@ def test_excitation_and_fleet_reprs(ident):
     assert _short(exc).startswith("<Excitation puma560: 6 joints, 5 harmonics of 0.1 Hz, condition number")
     _, res = ident
     fleet = FleetResult(res.model, {"a.csv": res.fit}, res.fit, [{"path": "a.csv"}], None)
-    assert _short(fleet) == "<FleetResult puma560: 1 logs, 58 terms, 1 per-file fits, pooled wls>".replace(
+    assert _short(fleet) == "<FleetResult puma560: 1 logs, 58 terms, 1 per-file fits, pooled auto>".replace(
         "58", str(res.model.n_params))
 
 

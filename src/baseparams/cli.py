@@ -423,8 +423,11 @@ def cmd_identify(args) -> int:
                           coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
                           decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
                           convention=args.convention, couplings=couplings, progress=progress,
-                          samples=args.samples)
+                          samples=args.samples, covariance=args.covariance, allow_units=args.allow_units,
+                          score_cutoff=args.score_cutoff)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
+        if args.predictions:
+            _write_predictions(args, result, log, val, files)
         if args.save:
             result.save(args.save, inputs=[args.model, *files, args.validate, args.columns, args.truth], what="--save")
             progress(f"result saved to {args.save}")
@@ -441,6 +444,19 @@ def cmd_identify(args) -> int:
             _write_html(args.html, identification_html(result), _inputs(args))
     _emit(args, _with_truth(args, result, truth, format_identification))
     return EXIT_OK
+
+
+def _write_predictions(args, result, log, val, files) -> None:
+    """``identify --predictions FILE``: predicted torques at every validation sample, the log's own times."""
+    from .io.tables import write_columns
+
+    whole = val if val is not None else log
+    tau = result.predict(whole)
+    keep = np.ones(whole.n_samples, dtype=bool) if val is not None else whole.t >= whole.t[-1] - args.holdout
+    cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
+    write_columns(args.predictions, cols, [args.model, *files, args.validate, args.columns], "--predictions")
+    print(f"baseparams: predictions of {int(keep.sum())} validation samples written to {args.predictions}",
+          file=sys.stderr)
 
 
 def _results_check(args, files: list[str]) -> dict | None:
@@ -891,6 +907,17 @@ def _identify_parser(sub, model_args) -> None:
                         "does not move, at --weld, or at 0)")
     s.add_argument("--weld", action="append", metavar="JOINT=VALUE",
                    help="with --joints: weld JOINT at VALUE (rad or m); repeatable")
+    s.add_argument("--allow-units", action="store_true",
+                   help="go on when the log's units look wrong (deg/s, ms, mN m, absurd samples); refused otherwise")
+    s.add_argument("--covariance", choices=("hac", "white"), default="hac",
+                   help="standard deviations: hac (default; Newey-West, true when residuals are correlated) or "
+                        "white (the least-squares formula, residuals taken as uncorrelated)")
+    s.add_argument("--score-cutoff", type=float, metavar="HZ",
+                   help="validation: also score against the measured torques low-passed at HZ (zero-phase "
+                        "Butterworth order 4); the main figure is against the raw measured torques")
+    s.add_argument("--predictions", metavar="FILE",
+                   help="write the predicted torques at every validation sample (t, tau_<joint>; .csv, .tsv or "
+                        ".parquet)")
     s.add_argument("--per-file", action="store_true",
                    help="several logs (a glob such as 'logs/robot-*/*.parquet'): one estimate per log and the "
                         "spread across them, on Dask")
@@ -1055,6 +1082,8 @@ def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
     out = [("--output", getattr(args, "output", None), None), ("--html", getattr(args, "html", None), None),
            ("--plot", getattr(args, "plot", None), PLOT_SUFFIXES), ("--urdf", getattr(args, "urdf", None), None),
            ("--codegen", getattr(args, "codegen", None), None)]
+    if cmd == "identify":
+        out.append(("--predictions", args.predictions, (".csv", ".tsv", ".parquet", ".pq")))
     if cmd == "excite":
         out.append(("--out", args.out, (".csv", ".tsv")))
     if cmd == "simulate" and not args.robots:
@@ -1110,6 +1139,12 @@ def _check_flags(args) -> None:
               f"of the base-parameter analysis, not log samples)", file=sys.stderr)
         if args.samples is None:
             args.samples = args.old_samples
+    if args.command == "identify" and (args.predictions or args.score_cutoff is not None):
+        if args.holdout is None and args.validate is None:
+            raise BaseparamsError("--predictions and --score-cutoff are about validation data: give --holdout SECONDS "
+                                  "or --validate FILE (nothing was fitted)")
+        if args.score_cutoff is not None and not args.score_cutoff > 0:
+            raise BaseparamsError(f"--score-cutoff must be > 0 Hz, got {args.score_cutoff}")
     if args.command == "identify" and args.urdf:
         if args.method != "physical":
             raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies "

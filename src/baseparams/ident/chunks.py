@@ -198,12 +198,43 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
     removed : dict of str to int
         Slow samples removed in the chunk.
     """
+    acc = RowAccumulator(len(cols), nparams)
+    a, tau, removed = chunk_rows(part, c, grid, regressor, cols)
+    if a is not None:
+        acc.add(a, tau)
+    return acc, removed
+
+
+def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray):
+    """The fitted rows one chunk owns, in time order (what :func:`chunk_factors_of_slice` reduces).
+
+    Parameters
+    ----------
+    part : JointLog
+        Samples ``[c.lo, c.hi)`` of the whole log.
+    c : ChunkPlan
+        The chunk.
+    grid : Grid
+        The whole log's kept-sample rule.
+    regressor : callable
+        ``regressor(q, dq, ddq) -> (S, m, p)``.
+    cols : ndarray of int
+        Log column of each state column.
+
+    Returns
+    -------
+    a : ndarray, shape ``(k, m, p)``, or None
+        The parallel-filtered regressor of the kept samples (``None`` when the chunk keeps none).
+    tau : ndarray, shape ``(k, m)``, or None
+        Their filtered torques.
+    removed : dict of str to int
+        Slow samples removed in the chunk.
+    """
     from .preprocess import remove_slow
 
-    acc = RowAccumulator(len(cols), nparams)
     idx = grid.owned(c) - c.lo
     if not len(idx):
-        return acc, {}
+        return None, None, {}
     prep = prepare(part, cutoff=grid.cutoff, decimate=1)
     f = prep.full
     q, dq, ddq = f.q[:, cols], f.dq[:, cols], f.ddq[:, cols]
@@ -212,8 +243,7 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
         keep, removed = remove_slow(dq[idx], grid.min_speed)
         idx = idx[keep]
     a = zero_phase(regressor(q, dq, ddq), prep.design)[idx]
-    acc.add(a, f.tau[idx][:, cols])
-    return acc, removed
+    return a, f.tau[idx][:, cols], removed
 
 
 def combine(parts) -> RowAccumulator:

@@ -95,6 +95,11 @@ class Estimate:
         The stacked (weighted) triangular factor: the fit is ``||R11 theta - r12||^2 + rho^2``.
     r12 : ndarray, shape ``(p,)``
         Its right-hand side.
+    cov : ndarray, shape ``(p, p)``, optional
+        The covariance ``std`` comes from, when not the white formula's
+        (:mod:`baseparams.ident.uncertainty`).
+    covariance : str
+        How ``std`` was computed (one line for the report).
     """
 
     method: str
@@ -108,6 +113,8 @@ class Estimate:
     samples: int
     R11: np.ndarray
     r12: np.ndarray
+    cov: np.ndarray | None = None
+    covariance: str = "white (OLS formula: residuals taken as uncorrelated noise)"
 
     __repr__ = summary_repr
 

@@ -209,18 +209,28 @@ def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
         return Fit(model, "auto", est.theta, est, selection=sel)
     scale = np.linalg.norm(est.R11, axis=0)
     theta = ridge(est.R11, est.r12, theta0, scale, sel.lam)
-    # covariance of the pulled estimate: theta = M theta_ls + const, M = H^-1 R11^T R11
+    res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
+    # the least-squares statistics stay: _pulled_covariance maps the covariance once it is chosen
+    return Fit(model, "auto", theta, replace(est, method="auto", theta=theta, rms=res), selection=sel)
+
+
+def _pulled_covariance(f: Fit) -> Fit:
+    """The covariance of the pulled estimate: ``theta = M theta_ls + const``, ``M = H^-1 R11^T R11``.
+
+    No term for the pull's bias (the prior is taken as exact); a pull of weight 0 changes nothing.
+    """
+    from dataclasses import replace
+
+    from .uncertainty import with_covariance
+
+    sel, est = f.selection, f.estimate
+    if sel is None or sel.lam == 0 or getattr(est, "cov", None) is None:
+        return f
+    scale = np.linalg.norm(est.R11, axis=0)
     gram = est.R11.T @ est.R11
     m = np.linalg.solve(gram + sel.lam * np.diag(scale**2), gram)
-    inv = np.linalg.inv(est.R11)
-    sigma = est.std[0] / max(np.linalg.norm(inv[0]), np.finfo(float).tiny)
-    cov = sigma**2 * (m @ inv) @ (m @ inv).T
-    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    with np.errstate(divide="ignore"):
-        pct = np.where(theta != 0, 100 * std / np.abs(theta), np.inf)
-    res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
-    return Fit(model, "auto", theta, replace(est, method="auto", theta=theta, std=std, pct_sigma=pct, rms=res),
-               selection=sel)
+    label = f"{est.covariance}, mapped through the pull towards the model file (weight {sel.lam:g})"
+    return replace(f, estimate=with_covariance(est, f.theta, m @ est.cov @ m.T, label))
 
 
 @dataclass(frozen=True, eq=False)
@@ -435,10 +445,13 @@ class Identification:
         e = doc["estimate"]
         std = array(e["std"])
         with np.errstate(divide="ignore", invalid="ignore"):
-            pct = 100 * std / np.abs(array(e["theta"]))
+            pct = 100 * std / np.abs(theta if e.get("cov") is not None else array(e["theta"]))
+        extra = {k: e[k] for k in ("covariance",) if e.get(k) is not None}
+        if e.get("cov") is not None:
+            extra["cov"] = array(e["cov"])
         est = Estimate(e["method"], array(e["theta"]), std, pct, array(e["weights"]), array(e["rms"]),
                        float(e["rms_total"]), float(e["condition_number"]), int(e["samples"]), array(e["R11"]),
-                       array(e["r12"]))
+                       array(e["r12"]), **extra)
         phys = None
         if doc.get("physical") is not None:
             p = doc["physical"]
@@ -546,8 +559,9 @@ class Identification:
         Returns
         -------
         list of dict
-            ``{"joint", "Ia", "Fv", "Fc", "Fo"}``: a value, ``None`` when not modelled, or
-            ``"regrouped into <base parameter>"`` when the data cannot separate it.
+            ``{"joint", "Ia", "Fv", "Fc", "Fo", "std"}``: a value, ``None`` when not modelled, or
+            ``"regrouped into <base parameter>"`` when the data cannot separate it; ``std``: the
+            standard deviation of each identified value (``{kind: float}``).
         """
         m = self.model
         pos = {name: k for k, name in enumerate(m.names)}
@@ -557,14 +571,16 @@ class Identification:
                 if m.regrouping.K[row, col] != 0:
                     absorbed[m.regrouping.names[d]] = m.regrouping.names[i]
         out = []
+        std = self.fit.estimate.std
         for joint in m.drives.joints:
-            entry = {"joint": joint}
+            entry = {"joint": joint, "std": {}}
             for kind in ("Ia", "Fv", "Fc", "Fo"):
                 name = f"{kind}_{joint}"
                 if kind not in m.drives.kinds:
                     entry[kind] = None
                 elif name in pos:
                     entry[kind] = float(self.fit.theta[pos[name]])
+                    entry["std"][kind] = float(std[pos[name]])
                 else:
                     entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
             out.append(entry)
@@ -576,8 +592,9 @@ class Identification:
         Returns
         -------
         list of dict
-            ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm"}`` per coupling: a value,
-            ``None`` when not modelled, or ``"regrouped into <parameter>"``.
+            ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm", "std"}`` per coupling: a
+            value, ``None`` when not modelled, or ``"regrouped into <parameter>"``; ``std``: the
+            standard deviation of each identified value.
         """
         m = self.model
         pos = {name: k for k, name in enumerate(m.names)}
@@ -585,14 +602,16 @@ class Identification:
                     for row, i in enumerate(m.regrouping.independent)
                     for col, d in enumerate(m.regrouping.dependent) if m.regrouping.K[row, col] != 0}
         out = []
+        std = self.fit.estimate.std
         for c in m.drives.couplings:
-            entry = {"name": c.name, "joints": dict(zip(c.joints, c.weights))}
+            entry = {"name": c.name, "joints": dict(zip(c.joints, c.weights)), "std": {}}
             for kind in ("Iam", "Fvm", "Fcm"):
                 name = f"{kind}_{c.name}"
                 if kind not in m.drives.coupled_kinds:
                     entry[kind] = None
                 elif name in pos:
                     entry[kind] = float(self.fit.theta[pos[name]])
+                    entry["std"][kind] = float(std[pos[name]])
                 else:
                     entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
             out.append(entry)
@@ -604,10 +623,11 @@ class Identification:
         Returns
         -------
         dict
-            ``method, model, convention, n_samples{read, used, removed}, condition_number,
+            ``method, covariance, model, convention, n_samples{read, used, removed}, condition_number,
             excitation{condition_number, weak, all_excited}, base_parameters, drives, couplings,
             train, validation, physical, notes``; ``weak`` names the parameters carrying
-            directions whose singular value is below 1e-3 of the largest (column-scaled regressor).
+            directions whose singular value is below 1e-3 of the largest (column-scaled regressor);
+            ``covariance`` says how every ``std`` was computed.
         """
         f = self.fit
         phys = None
@@ -619,7 +639,8 @@ class Identification:
         from .estimate import excitation
 
         cond, weak = excitation(f.estimate.R11, self.model.names)
-        return {"method": f.method, "model": self.model.robot.name, "convention": self.model.analysis.convention,
+        return {"method": f.method, "covariance": f.estimate.covariance, "model": self.model.robot.name,
+                "convention": self.model.analysis.convention,
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
                 "excitation": {"condition_number": cond, "weak": weak,
                                "all_excited": not weak},
@@ -633,7 +654,8 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
              holdout: float | None = None, validation=None, cutoff: float | None = None,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
              convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
-             samples: int | None = None, score_cutoff: float | None = None) -> Identification:
+             samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
+             allow_units: bool = False) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -685,6 +707,12 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     samples : int, optional
         Random states of the base-parameter analysis the model is built on (default: the
         analysis's own).
+    covariance : {"hac", "white"}
+        The standard deviations' covariance: ``hac`` (default) Newey-West, true under correlated
+        residuals; ``white`` the least-squares formula (:mod:`baseparams.ident.uncertainty`).
+    allow_units : bool
+        Go on when the units look wrong (:mod:`baseparams.ident.plausibility`: velocities,
+        time base, torques against the model file's, absurd samples), which otherwise refuses.
 
     Returns
     -------
@@ -706,12 +734,12 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
                          min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,
-                         score_cutoff)
+                         score_cutoff, covariance, allow_units)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
               prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
-              score_cutoff=None) -> Identification:
+              score_cutoff=None, covariance="hac", allow_units=False) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .preprocess import prepare
 
@@ -721,13 +749,18 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction), coulomb_width,
                         couplings=couplings)
     cols = log_columns(model, log)
+    unit_notes = _units(model, train, cols, allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
     parts: list = []
-    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed, parts_out=parts)
+    kept: list = []
+    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed, parts_out=parts,
+                                        keep=kept)
     say(f"fitting ({method})")
     f = fit(model, acc, method, prior_weight, blocks=parts)
+    f, cov_note = _uncertainty(f, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say)
+    f = _pulled_covariance(f)
     say("predicted torques and excitation spectrum for the report")
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
@@ -743,11 +776,39 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         series["validation"] = _series(model, vprep, log_columns(model, held), f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
     notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()),
-             *((f.selection.note(),) if f.selection is not None else ()))
+             *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+
+
+def _units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:
+    """Units and plausibility of the log before any fit (:func:`~baseparams.ident.plausibility.check_units`)."""
+    from ..analysis import regressor
+    from ..errors import DataError
+    from .plausibility import check_units
+
+    robot = model.robot
+    params = robot.parameters("paper")
+    coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
+    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" for c in coords])
+    try:
+        return check_units(log, cols, lambda q, dq, ddq: regressor(robot, q, dq, ddq) @ params, revolute)
+    except DataError as exc:
+        if not allow_units:
+            raise
+        return [f"units: WARNING, going on (allow_units): {exc}"]
+
+
+def _uncertainty(f: Fit, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say):
+    """The fit's standard deviations from the chosen covariance (a second pass for HAC)."""
+    from .uncertainty import apply_covariance, fitted_rows
+
+    if covariance == "hac":
+        say("covariance (HAC: a second pass over the fitted rows)")
+    rows = kept if kept else (lambda: fitted_rows(model, prep, cols, memory_mb, train, min_speed))
+    return apply_covariance(f, acc, rows, covariance, prep.design.fs / prep.factor)
 
 
 def _series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names: list[str], memory_mb: float):
@@ -883,7 +944,7 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
 
 
 def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log=None, min_speed=None,
-                        parts_out: list | None = None):
+                        parts_out: list | None = None, keep=None):
     """Rows accumulated from a prepared log, with parallel filtering.
 
     All at once when the regressor fits in ``memory_mb``, else chunk by chunk with overlaps
@@ -906,6 +967,10 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     parts_out : list, optional
         When given, receives time-ordered pieces of the rows (RowAccumulator each; their
         combination is ``acc``), for the blocked cross-validation of the default estimate.
+    keep : list, optional
+        When given and the regressor is formed at once, ``(A, tau)`` of the fitted samples are
+        appended to it (no longer than the regressor formed: the covariance's second pass,
+        :mod:`baseparams.ident.uncertainty`, then needs no second regressor).
 
     Returns
     -------
@@ -930,6 +995,8 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
             for idx in np.array_split(np.arange(len(a)), FOLDS):
                 parts_out.append(RowAccumulator(len(model.coords), model.n_params).add(a[idx], tau[idx]))
             acc = chunks.combine(parts_out)
+        if keep is not None:
+            keep.append((a, tau))
         return acc, (f"parallel filtering: the regressor's {model.n_params} columns filtered like the torques "
                      f"({size_mb:.0f} MB at once)")
     from . import chunks

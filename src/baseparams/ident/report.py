@@ -16,8 +16,9 @@ def format_identification(result: Identification) -> str:
     Returns
     -------
     str
-        Header (model, method, samples, condition number), base parameters (value, std, %sigma,
-        expression), drives, coupled motors, residual RMS per joint (training and validation),
+        Header (model, method, samples, condition number), how the standard deviations were
+        computed, base parameters (value, std, %sigma, expression), drives and coupled motors
+        with their std, residual RMS per joint (training and validation),
         physical check and the notes.
     """
     j = result.to_json()
@@ -28,6 +29,7 @@ def format_identification(result: Identification) -> str:
              f"(removed: {removed}); condition number {j['condition_number']:.4g}",
              "excitation: every model parameter excited" if not weak else
              f"excitation: POORLY EXCITED (singular values below 1e-3 of the largest): {', '.join(weak)}",
+             f"standard deviations: {j['covariance']}",
              f"base parameters ({j['convention']} convention, SI units):",
              f"  {'name':<16s} {'value':>14s} {'std':>11s} {'%sigma':>8s}  expression"]
     for b in j["base_parameters"]:
@@ -38,8 +40,12 @@ def format_identification(result: Identification) -> str:
             cells = [("-" if d[k] is None else f"{d[k]:.5g}" if not isinstance(d[k], str) else "regrouped")
                      for k in ("Ia", "Fv", "Fc", "Fo")]
             lines.append(f"  {d['joint']:<16s} " + " ".join(f"{c:>12s}" for c in cells))
+            if d.get("std"):
+                lines.append(f"  {'  std':<16s} " + " ".join(f"{d['std'][k]:>12.3g}" if k in d["std"] else f"{'':>12s}"
+                                                         for k in ("Ia", "Fv", "Fc", "Fo")))
     for c in j["couplings"]:
         cells = ", ".join(f"{k} {'-' if c[k] is None else c[k] if isinstance(c[k], str) else f'{c[k]:.5g}'}"
+                          + (f" (std {c['std'][k]:.3g})" if k in c.get("std", {}) else "")
                           for k in ("Iam", "Fvm", "Fcm"))
         lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
                      + f"): {cells}")

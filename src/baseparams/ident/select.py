@@ -50,6 +50,9 @@ class Selection:
     cv_rms: tuple[float, ...]
     folds: int
 
+    def __repr__(self) -> str:
+        return f"<Selection: weight {self.lam:g} of {len(self.lambdas)} by {self.folds}-fold blocked cross-validation>"
+
     def note(self) -> str:
         """One line for the report: what was chosen and why.
 

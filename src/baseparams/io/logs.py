@@ -104,6 +104,7 @@ class _Table:
     notes: list[str] = field(default_factory=list)
     removed: dict[str, int] = field(default_factory=dict)
     is_bag: bool = False
+    booleans: set = field(default_factory=set)  # columns stored as true/false (refused when used)
 
     def row(self, i: int) -> str:
         return self.row_fmt.format(int(self.rows[i]), i + 1)
@@ -427,7 +428,7 @@ def _read_parquet(path: Path) -> _Table:
         table = pq.read_table(path)
     except Exception as exc:  # pyarrow's errors: one line
         raise DataError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
-    columns, notes = {}, []
+    columns, notes, booleans = {}, [], set()
     for name in table.column_names:
         col = table.column(name)
         if col.null_count:
@@ -440,10 +441,13 @@ def _read_parquet(path: Path) -> _Table:
             notes.append(f"{path.name}: column {name!r} is a {col.type}: converted to seconds")
         elif pa.types.is_integer(col.type) or pa.types.is_floating(col.type) or pa.types.is_boolean(col.type):
             columns[name] = col.to_numpy(zero_copy_only=False).astype(float)
+            if pa.types.is_boolean(col.type):
+                booleans.add(name)
         else:
             raise DataError(f"{path}: column {name!r} holds {col.type} values, expected numbers")
     out = _table_of_arrays(path, columns, "row {0} (0-based)", "column")
     out.notes += notes
+    out.booleans = booleans
     return out
 
 
@@ -688,8 +692,17 @@ def _conversion_notes(joints: list[_Joint], spec: dict) -> list[str]:
     return notes
 
 
+def _check_numeric(table: _Table, used: list[str]) -> None:
+    """A used column stored as booleans (e.g. a Parquet ``bool``) is no measurement: refused."""
+    for c in used:
+        if c in table.booleans:
+            raise DataError(f"{table.source}: {table.label(c)} holds booleans (true/false), not numbers: "
+                            f"not used as a measurement")
+
+
 def _check_finite(table: _Table, used: list[str]) -> None:
     """The first NaN or inf of the used columns, in file order."""
+    _check_numeric(table, used)
     block = np.stack([table.columns[c] for c in used], axis=1)
     bad = ~np.isfinite(block)
     if bad.any():

@@ -425,13 +425,17 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
 
 def _write_identified_urdf(args, robot, result) -> None:
     """``--urdf FILE``: the model file with the physically consistent inertias."""
-    from .io.urdf import write_urdf
+    from .io.urdf import identified_drives, write_urdf
 
     if result.fit.physical is None:
         raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies")
     if Path(args.model).suffix.lower() != ".urdf":
         raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
-    write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper")
+    drives, couplings = identified_drives(result)
+    for note in write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
+                           couplings=couplings, inputs=[args.data, args.validate]):
+        print(f"baseparams: note: {note}", file=sys.stderr)
+    print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
 
 
 def cmd_simulate(args) -> int:

@@ -112,14 +112,48 @@ def atomic_path(path, inputs: Iterable = (), what: str = "output") -> Iterator[P
 
 
 def write_text(path, text: str, inputs: Iterable = (), what: str = "output") -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_path`); returns the path."""
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path
+        The file written.
+    text : str
+        Its content.
+    inputs : iterable of str or path
+        Input files ``path`` must not be (:func:`refuse_inputs`).
+    what : str
+        The output's role, for messages (``--urdf``, ...).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_path(path, inputs, what) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)
 
 
 def write_bytes(path, data: bytes, inputs: Iterable = (), what: str = "output") -> Path:
-    """Write ``data`` to ``path`` atomically (:func:`atomic_path`); returns the path."""
+    """Write ``data`` to ``path`` atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path
+        The file written.
+    data : bytes
+        Its content.
+    inputs : iterable of str or path
+        Input files ``path`` must not be (:func:`refuse_inputs`).
+    what : str
+        The output's role, for messages.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_path(path, inputs, what) as tmp:
         tmp.write_bytes(data)
     return Path(path)

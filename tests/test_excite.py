@@ -342,3 +342,13 @@ def test_keepout_keeps_a_link_above_the_floor():
         design_excitation(robot, starts=1, keepout=(link, 5.0))
     with pytest.raises(BaseparamsError, match="no link 'nope'"):
         design_excitation(robot, starts=1, keepout=("nope", 0.0))
+
+
+def test_summary_prints_a_dash_where_no_limit_is_set(tmp_path, capsys):
+    """The four-bar has no velocity or acceleration limits: the table says ``-`` there, never ``nan``."""
+    assert main(["excite", "four-bar", "--harmonics", "3", "--period", "5", "--rate", "50", "--starts", "1",
+                 "--grid", "40"]) == 0
+    out = capsys.readouterr().out
+    rows = out.splitlines()
+    head = next(k for k, line in enumerate(rows) if line.split()[:2] == ["joint", "offset"])
+    assert "nan" not in out.lower().split() and len(rows[head + 1].split()) == len(rows[head].split())

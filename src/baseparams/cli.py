@@ -416,8 +416,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
         lines.append("largest spread across the fleet (std / |mean|): "
                      + ", ".join(f"{model.names[k]} {rel[k]:.3g}" for k in worst))
     if res.pooled is not None:
-        lines.append("pooled estimate:")
-        lines += [f"  {n:<20s} {v:14.6g} {s:11.3g}" for n, v, s in
+        lines += ["pooled estimate:", f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
+        lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in
                   zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
     _emit(args, "\n".join(lines))
     return EXIT_OK
@@ -703,7 +703,7 @@ def cmd_excite(args) -> int:
     if args.plot:
         from .report.plots import trajectory_plot
 
-        trajectory_plot(result, args.plot)
+        trajectory_plot(result, args.plot, robot)
         print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
     _emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
     return EXIT_OK

@@ -223,11 +223,14 @@ class Excitation:
                  f"{self.value:.6g}, condition number {self.condition_number:.6g} ({len(self.parameters)} parameters)",
                  f"  {'joint':<20s} {'offset':>8s} {'min':>8s} {'max':>8s} {'lower':>8s} {'upper':>8s} "
                  f"{'|dq|':>7s} {'vmax':>7s} {'|ddq|':>7s} {'amax':>7s}"]
+        def lim(x: float, spec: str) -> str:  # a limit not set reads "-", not nan
+            return format(x, spec) if np.isfinite(x) else format("-", ">" + spec.split(".")[0] + "s")
+
         for j, name in enumerate(self.joints):
             lo, hi, v, acc, _ = self.limits[j]
             lines.append(f"  {name:<20s} {self.offsets[j]:8.4f} {self.q[:, j].min():8.4f} {self.q[:, j].max():8.4f} "
-                         f"{lo:8.4f} {hi:8.4f} {np.abs(self.dq[:, j]).max():7.3f} {v:7.3f} "
-                         f"{np.abs(self.ddq[:, j]).max():7.3f} {acc:7.3f}")
+                         f"{lim(lo, '8.4f')} {lim(hi, '8.4f')} {np.abs(self.dq[:, j]).max():7.3f} {lim(v, '7.3f')} "
+                         f"{np.abs(self.ddq[:, j]).max():7.3f} {lim(acc, '7.3f')}")
         return "\n".join(lines + [f"note: {n}" for n in self.notes])
 
 

@@ -105,6 +105,12 @@ def test_fleet_from_the_command_line(tmp_path, capsys):
     truth = json.loads((out / "robot0000.npz.truth.json").read_text())["parameters"]
     est = j["per_file"][str(out / "robot0000.npz")]
     assert np.allclose(est[:2], [t["value"] for t in truth[:2]], rtol=0.02)  # link1.ZZR, link2.XXR
+    assert main(["identify", "puma560", str(out / "*.npz"), "--pooled", "--workers", "1", "--friction", "viscous",
+                 "--method", "ols"]) == 0
+    text = capsys.readouterr().out.splitlines()
+    head = text.index("pooled estimate:") + 1
+    assert text[head].split() == ["name", "value", "std"]  # the pooled table's column headers
+    assert len(text) - head - 1 == 36 + 6 and "nan" not in " ".join(text).lower().split()
     assert main(["identify", "puma560", str(out / "*.npz"), "--holdout", "2"]) == 2
 
 

@@ -9,6 +9,7 @@ folder; the page's own render time (``data-render-ms``) is read from the DOM.
 """
 
 import json
+import re
 import shutil
 import subprocess
 import time
@@ -28,14 +29,53 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
 class _Dom(HTMLParser):
-    """Elements as (tag, attributes) in document order."""
+    """Elements as (tag, attributes) in document order; ``texts[k]``: element k's own text."""
+
+    VOID = {"br", "meta", "img", "input", "hr", "link", "col", "wbr"}
 
     def __init__(self):
         super().__init__()
         self.elements = []
+        self.texts = []
+        self._open = []
 
     def handle_starttag(self, tag, attrs):
         self.elements.append((tag, dict(attrs)))
+        self.texts.append("")
+        if tag not in self.VOID:
+            self._open.append(len(self.elements) - 1)
+
+    def handle_startendtag(self, tag, attrs):
+        self.elements.append((tag, dict(attrs)))
+        self.texts.append("")
+
+    def handle_endtag(self, tag):
+        while self._open:
+            k = self._open.pop()
+            if self.elements[k][0] == tag:
+                break
+
+    def handle_data(self, data):
+        if self._open:
+            self.texts[self._open[-1]] += data
+
+    def tables(self) -> dict[str, list[list[tuple[str, str]]]]:
+        """Each table (by id) as rows of ``(cell tag, text)`` (nested elements' text included)."""
+        out, current, row = {}, None, None
+        for k, (tag, attrs) in enumerate(self.elements):
+            if tag == "table":
+                current = out.setdefault(attrs.get("id", f"table{k}"), [])
+            elif tag == "tr" and current is not None:
+                row = []
+                current.append(row)
+            elif tag in ("td", "th") and row is not None:
+                row.append((tag, self.texts[k]))
+            elif tag in ("b", "code", "span", "i", "a", "sub", "sup"):
+                if row:
+                    row[-1] = (row[-1][0], row[-1][1] + self.texts[k])
+            elif tag not in ("svg", "rect", "tbody", "thead"):  # outside the table
+                current, row = None, None
+        return out
 
 
 def _render(page: str, tmp_path, name: str):
@@ -51,7 +91,23 @@ def _render(page: str, tmp_path, name: str):
     assert (tmp_path / f"{name}.png").stat().st_size > 10_000
     parser = _Dom()
     parser.feed(dom)
+    _render.last = parser
     return parser.elements, seconds, path.stat().st_size
+
+
+def _visible_text(dom: _Dom) -> str:
+    """The page's text (tables, headings, SVG labels), scripts and styles left out."""
+    return " ".join(t for (tag, _), t in zip(dom.elements, dom.texts) if tag not in ("script", "style"))
+
+
+def _check_tables(dom: _Dom) -> dict:
+    """Every table starts with a row of headers; no cell, and no text of the page, reads ``nan``."""
+    tables = dom.tables()
+    for name, rows in tables.items():
+        assert rows and rows[0] and all(tag == "th" for tag, _ in rows[0]), name
+        assert all(text.strip() for _, text in rows[0]), name  # every column named
+    assert not re.search(r"\bnan\b", _visible_text(dom), re.I)
+    return tables
 
 
 def _check_provenance(els, result, view_bodies: set[str]) -> None:
@@ -104,6 +160,12 @@ def test_analysis_report_in_a_browser(name, tmp_path):
         assert into and all(a["data-param"] in exprs[b].replace("*", " ").split() for b in into)
     _check_provenance(els, result, set(bodies))
     assert float(body["data-render-ms"]) < 2000
+    dom = _render.last
+    tables = _check_tables(dom)
+    assert [t for _, t in tables["base"][0]] == ["name", "expression"]
+    assert len(tables["base"]) == 1 + result.n_base
+    labels = [t for (tag, a), t in zip(dom.elements, dom.texts) if "axis-label" in a.get("class", "")]
+    assert "singular value" in labels and any(x.startswith("index") for x in labels)
 
 
 @pytest.mark.shared
@@ -130,6 +192,46 @@ def test_identification_report_in_a_browser(tmp_path):
     assert sum(1 for t, a in els if t == "line" and a.get("class") == "cutoff") == 1
     spec = ident.series["train"]["spectrum"]
     assert spec["amplitude"].shape == (len(spec["f"]), 7) and spec["cutoff"] > 0
+    _check_report_axes_and_tables(_render.last, ident)
+
+
+def _check_report_axes_and_tables(dom: _Dom, ident) -> None:
+    """Units on every axis; base parameters with std and expression; one row per drive term."""
+    j = ident.to_json()
+    texts = list(zip(dom.elements, dom.texts))
+    for svg_id in [a["id"] for (tag, a), _ in texts if tag == "svg" and a.get("class") == "plot"]:
+        k = next(i for i, ((tag, a), _) in enumerate(texts) if a.get("id") == svg_id)
+        end = next((i for i in range(k + 1, len(texts)) if texts[i][0][0] == "svg"), len(texts))
+        labels = [t for (_, a), t in texts[k:end] if a.get("class") == "axis-label"]
+        ticks = [t for (_, a), t in texts[k:end] if a.get("class") == "tick"]
+        assert labels[:2] == ["time [s]", "torque [N m]"], (svg_id, labels)
+        assert len(ticks) >= 4 and all(re.fullmatch(r"-?[\d.]+(e[-+]?\d+)?", t) for t in ticks), ticks
+    labels = [t for (_, a), t in texts if a.get("class") == "axis-label"]
+    assert labels.count("residual [N m]") == labels.count("count") == 2 * 7
+    assert "frequency [Hz]" in labels and "amplitude [rad]" in labels
+    tables = _check_tables(dom)
+    head = [t for _, t in tables["values"][0]]
+    assert {"name", "value", "unit", "std", "%sigma", "expression"} <= set(head)
+    rows = tables["values"][1:]
+    assert len(rows) == len(j["base_parameters"])
+    for row, b in zip(rows, j["base_parameters"]):
+        cells = dict(zip(head, (t for _, t in row)))
+        assert cells["name"] == b["name"] and cells["expression"] == b["expression"]
+        assert np.isclose(float(cells["value"]), b["value"], rtol=1e-5) and np.isclose(float(cells["std"]), b["std"],
+                                                                                        rtol=1e-2)
+        assert cells["unit"] in ("kg", "kg m", "kg m^2")
+    drives = [(a["data-owner"], a["data-kind"]) for (tag, a), _ in texts if tag == "tr" and a.get("class") == "drive"]
+    expected = [(d["joint"], k) for d in j["drives"] for k in ("Ia", "Fv", "Fc", "Fo") if d[k] is not None]
+    assert drives == expected and len(expected) == 7 * 3  # viscous, Coulomb, offset per joint
+    head = [t for _, t in tables["drives"][0]]
+    assert {"term", "value", "std", "unit"} <= set(head)
+    units = {t[head.index("term")].split()[0]: t[head.index("unit")] for t in
+             ([x for _, x in row] for row in tables["drives"][1:])}
+    assert units == {"Fv": "N m s/rad", "Fc": "N m", "Fo": "N m"}
+    for row, (joint, kind) in zip(tables["drives"][1:], expected):
+        value = next(d[kind] for d in j["drives"] if d["joint"] == joint)
+        assert np.isclose(float(row[head.index("value")][1]), value, rtol=1e-5, atol=1e-12)
+    assert [t for _, t in tables["rms"][0]] == ["joint", "train RMS", "validation RMS", "unit"]
 
 
 @pytest.mark.slow

@@ -58,3 +58,57 @@ def test_plot_without_matplotlib_is_one_line(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["baseparams: error: --plot needs matplotlib: pip install 'baseparams[plot]'"]
     assert not (tmp_path / "a.png").exists()
+
+
+def _svg_texts(path) -> list[str]:
+    """The text elements of an SVG written with ``svg.fonttype = none`` (text kept as text)."""
+    import html
+
+    return [html.unescape(t) for t in re.findall(r"<text[^>]*>([^<]*)</text>", path.read_text())]
+
+
+def _with_text_svg(fn, *args):
+    import matplotlib
+
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        return fn(*args)
+
+
+def test_torque_plot_axes_have_units(tmp_path, capsys):
+    """``identify --plot``: every joint's axis reads torque [N m], the time axis time [s]."""
+    from baseparams.ident.pipeline import identify
+    from baseparams.io.logs import read_log
+    from baseparams.report.plots import torque_plot
+
+    log = tmp_path / "sim.npz"
+    assert main(["simulate", "puma560", str(log), "--duration", "6", "--rate", "100", "--noise", "0.05"]) == 0
+    robot = baseparams.load("puma560")
+    result = identify(robot, read_log(log, robot), method="ols", holdout=2.0)
+    svg = _with_text_svg(torque_plot, result, tmp_path / "t.svg")
+    texts = _svg_texts(svg)
+    assert texts.count("torque [N m]") == robot.dof
+    assert "time [s]" in texts
+    assert any(t.endswith("N m") and "train RMS" in t for t in texts)  # the title's RMS has its unit
+    assert not any("nan" in t.lower().split() for t in texts)
+
+
+def test_trajectory_plot_axes_have_units(tmp_path, capsys):
+    """``excite --plot``: q [rad], dq [rad/s], ddq [rad/s^2] per joint, time [s]."""
+    import matplotlib
+
+    plot = tmp_path / "traj.svg"
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        assert main(["excite", "four-bar", "--harmonics", "3", "--period", "5", "--rate", "50", "--starts", "1",
+                     "--grid", "40", "--plot", str(plot)]) == 0
+    texts = _svg_texts(plot)
+    for label in ("q [rad]", "dq [rad/s]", "ddq [rad/s^2]"):
+        assert texts.count(label) == 1, (label, texts)
+    assert texts.count("time [s]") == 3
+
+
+def test_analysis_figure_axes_are_labelled():
+    result = baseparams.analyze(baseparams.load("puma560"))
+    robot_ax, grid_ax, sv_ax = analysis_figure(result).axes[:3]
+    assert (robot_ax.get_xlabel(), robot_ax.get_ylabel(), robot_ax.get_zlabel()) == ("x [m]", "y [m]", "z [m]")
+    assert grid_ax.get_xlabel().startswith("parameter") and grid_ax.get_ylabel() == "body"
+    assert sv_ax.get_xlabel().startswith("index") and sv_ax.get_ylabel().startswith("singular value")

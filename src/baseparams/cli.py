@@ -681,8 +681,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
         lines.append("largest spread across the fleet (std / |mean|): "
                      + ", ".join(f"{model.names[k]} {rel[k]:.3g}" for k in worst))
     if res.pooled is not None:
-        lines.append("pooled estimate:")
-        lines += [f"  {n:<20s} {v:14.6g} {s:11.3g}" for n, v, s in
+        lines += ["pooled estimate:", f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
+        lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in
                   zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
     _emit(args, "\n".join(lines))
     return EXIT_OK
@@ -690,13 +690,17 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
 
 def _write_identified_urdf(args, robot, result) -> None:
     """``--urdf FILE``: the model file with the physically consistent inertias."""
-    from .io.urdf import write_urdf
+    from .io.urdf import identified_drives, write_urdf
 
     if result.fit.physical is None:
         raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies")
     if Path(args.model).suffix.lower() != ".urdf":
         raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
-    _write(args.urdf, lambda tmp: write_urdf(args.model, tmp, robot, result.fit.physical.pi, "paper"), args, "--urdf")
+    drives, couplings = identified_drives(result)
+    for note in write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
+                           couplings=couplings, inputs=[args.data, args.validate]):
+        print(f"baseparams: note: {note}", file=sys.stderr)
+    print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
 
 
 def cmd_simulate(args) -> int:
@@ -1014,7 +1018,7 @@ def cmd_excite(args) -> int:
     if args.plot:
         from .report.plots import trajectory_plot
 
-        _write(args.plot, lambda tmp: trajectory_plot(result, tmp), args, "--plot")
+        _write(args.plot, lambda tmp: trajectory_plot(result, tmp, robot), args, "--plot")
         print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
     _emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
     return EXIT_OK

@@ -496,8 +496,31 @@ def _with_couplings(robot: Robot, couplings, path: Path) -> Robot:
     return replace(robot, couplings=tuple(out))
 
 
-def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str) -> None:
+#: what each drive parameter kind is, and its units for a revolute and a prismatic joint
+_DRIVE_KINDS = {"Ia": ("rotor inertia (armature)", "kg m^2", "kg"), "Fv": ("viscous friction", "N m s/rad", "N s/m"),
+                "Fc": ("Coulomb friction", "N m", "N"), "Fo": ("torque offset", "N m", "N"),
+                "Iam": ("rotor inertia", "kg m^2", "kg"), "Fvm": ("viscous friction", "N m s/rad", "N s/m"),
+                "Fcm": ("Coulomb friction", "N m", "N")}
+#: the drive kinds a URDF ``<dynamics>`` holds, and the attribute each goes to
+_URDF_DYNAMICS = {"Fv": "damping", "Fc": "friction"}
+
+
+def _num(v: float, digits: int = 10) -> str:
+    """``v`` at ``digits`` significant digits, without float-repr noise (``-0`` written ``0``)."""
+    text = f"{float(v):.{digits}g}"
+    return "0" if float(text) == 0 else text
+
+
+def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str, *,
+               drives: dict | None = None, couplings=(), inputs=()) -> list[str]:
     """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` set to ``params``.
+
+    Only values change: the file is edited in place (:mod:`baseparams.io.xmledit`), so the
+    output keeps the source's elements, their order, comments, blank lines, indentation and
+    attribute quoting, and a diff of the two shows the changed attribute values (and the
+    ``<dynamics>`` elements and comments added). Numbers are written at 10 significant digits
+    (more for a body that needs them to re-read exactly); an ``<inertial>`` keeps its
+    ``<origin rpy>`` (the inertia is written in that frame).
 
     Exactly the requested bodies or nothing: each body's ``<inertial>`` (mass, centre of mass,
     inertia about it) is re-read as :func:`load_urdf` reads it and must give the requested
@@ -508,12 +531,18 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     in the body's values); links welded to the world (the fixed root and links fixed to it)
     are not part of any body and keep their ``<inertial>`` untouched.
 
+    Drive terms: viscous ``Fv`` and Coulomb ``Fc`` friction go to the joint's ``<dynamics
+    damping friction>`` (the element is added when missing; a kind not given keeps the
+    source's attribute). What a URDF cannot hold (rotor inertia / armature ``Ia``, torque
+    offsets ``Fo``, coupled motors) is written as an XML comment inside each joint
+    (``<!-- baseparams: ... -->``, replacing an earlier one) and summed up in the returned notes.
+
     Parameters
     ----------
     source : str or Path
         The URDF file ``robot`` was read from (every body must be one of its links).
     dest : str or Path
-        The file written.
+        The file written (atomically; never one of ``source`` and ``inputs``).
     robot : Robot
         The robot read from ``source`` (``n`` moving bodies).
     params : array_like, shape ``(10 n,)``
@@ -522,15 +551,33 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         The parameters' convention (:class:`~baseparams.enums.Convention`), which must be given:
         link-frame conventions are in each body's joint frame, as read; ``paper`` in the world
         frame at q = 0.
+    drives : dict, optional
+        ``{joint name: {"Ia", "Fv", "Fc", "Fo": float or None}}`` (missing or None: not
+        identified), in the joint's units (N m s/rad, N m, kg m^2 for a revolute joint).
+    couplings : iterable of dict
+        Coupled motors, ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm"}`` (as
+        :meth:`baseparams.ident.pipeline.Identification.couplings`): noted in each joint's comment.
+    inputs : iterable of str or Path
+        Further input files ``dest`` must not overwrite (the log, ...).
+
+    Returns
+    -------
+    list of str
+        Notes: the ``<dynamics>`` written and what URDF cannot hold (empty without drive terms).
 
     Raises
     ------
     ModelError
-        ``params`` of the wrong size, a body that is not a link of ``source``, or a body a URDF
-        ``<inertial>`` cannot represent (nothing is written then).
+        ``params`` of the wrong size, a body that is not a link of ``source``, a joint of
+        ``drives`` that is not in it, a negative friction, or a body a URDF ``<inertial>``
+        cannot represent (nothing is written then).
+    BaseparamsError
+        ``dest`` is an input or cannot be written.
     """
+    from ..files import write_text
     from ..model import inertia as I
     from ..pga import inverse_transform
+    from . import xmledit
 
     source, dest = Path(source), Path(dest)
     root = _parse(source)
@@ -557,25 +604,54 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
             k = parent_link[k][0]
         if ln_name not in bodies and k in bodies:
             merged.append(ln_name)
-    new = {}
+    try:
+        text = source.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise ModelError(f"{source}: not UTF-8 text; --urdf edits UTF-8 files only") from None
+    doc = xmledit.parse(text, str(source))
+    edit = xmledit.Editor(text)
+    nodes = {ln.attrs.get("name"): ln for ln in doc.findall("link")}
     for i, name in enumerate(robot.names):
-        new[name] = _exact_inertial(n_body[i], f"{dest}: <link name={name!r}>")
-    for name, vals in new.items():
-        _set_inertial(links[name], *vals)
+        what = f"{dest}: <link name={name!r}>"
+        _edit_inertial(edit, nodes[name], _exact_inertial(n_body[i], what, _inertial_rotation(links[name], what)))
     for name in merged:
         if links[name].find("inertial") is not None:
-            _set_inertial(links[name], 0.0, np.zeros(3), np.zeros((3, 3)))
-    ET.ElementTree(root).write(dest, encoding="unicode", xml_declaration=True)
+            zero = {"mass": "0", "xyz": "0 0 0", "inertia": dict.fromkeys(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+                                                                          "0")}
+            _edit_inertial(edit, nodes[name], zero)
+    notes = _edit_drives(edit, doc, source, drives or {}, list(couplings))
+    out = edit.text()
+    back = ET.fromstring(out.lstrip("\ufeff \t\r\n").rstrip(" \t\r\n\x00").encode("utf-8"))
+    back_links = {ln.get("name"): ln for ln in back.findall("link")}
+    for i, name in enumerate(robot.names):  # what the reader gets from the text written
+        got = _inertial(back_links[name], name, check=False)
+        err = np.abs((got.pseudo() if got is not None else 0.0) - n_body[i]).max()
+        if not err <= 1e-9 * max(float(np.abs(n_body[i]).max()), np.finfo(float).tiny):
+            raise ModelError(f"{dest}: <link name={name!r}>: the edited file re-reads with error {err:.3g}; "
+                             f"not written")  # pragma: no cover - a bug of the editor
+    write_text(dest, out, inputs=[source, *inputs], what="--urdf")
+    return notes
 
 
-def _exact_inertial(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.ndarray]:
-    """``(mass, com, inertia about the com)`` for a URDF ``<inertial>`` that re-reads as ``n``.
+def _inertial_rotation(link: ET.Element, what: str) -> np.ndarray:
+    """The rotation of the link's ``<inertial><origin rpy>`` (identity when absent)."""
+    inl = link.find("inertial")
+    return _origin(inl.find("origin") if inl is not None else None, what)[:3, :3]
 
-    ``n`` is a pseudo-inertia; the round trip goes through the reader, and a body it does not
-    reproduce to 1e-9 of its scale is a :class:`ModelError`.
+
+def _exact_inertial(n: np.ndarray, what: str, rot: np.ndarray | None = None) -> dict:
+    """The attribute values of a URDF ``<inertial>`` that re-reads as ``n``.
+
+    ``n`` is a pseudo-inertia in the link frame; ``rot`` the rotation of the ``<inertial>``'s
+    frame (its ``<origin rpy>``, kept: the inertia is written in that frame). Numbers are
+    written at 10 significant digits, more when the body needs them to re-read to 1e-9 of its
+    scale; a body no precision reproduces is a :class:`ModelError`.
+
+    Returns ``{"mass": str, "xyz": str, "inertia": {"ixx": str, ...}}``.
     """
     from ..model import inertia as I
 
+    rot = np.eye(3) if rot is None else rot
     m, h, j_o = I.split(n)
     m = float(m)
     scale = float(np.abs(n).max())
@@ -590,22 +666,168 @@ def _exact_inertial(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.nda
     if m <= 0 and hn > 1e-9 * max(scale, np.finfo(float).tiny):
         raise ModelError(f"{what}: mass {m:.6g} with a nonzero first moment (|m c| = {hn:.3g}) has no URDF "
                          f"<inertial>: the centre of mass of a body with mass <= 0 is undefined")
-    el = ET.Element("link")
-    _set_inertial(el, m, c, j_c)
-    back = _inertial(el, what, check=False).pseudo()
-    err = float(np.abs(back - n).max()) if np.all(np.isfinite(back)) else np.inf
-    if not err <= 1e-9 * scale:
-        raise ModelError(f"{what}: mass {m:.6g} with first moment |m c| = {hn:.3g} puts the centre of mass "
-                         f"{np.linalg.norm(c):.3g} m from the link frame; a URDF <inertial> re-reads it with "
-                         f"relative error {err / max(scale, np.finfo(float).tiny):.2g} (> 1e-9): not representable")
-    return m, c, j_c
-def _set_inertial(link: ET.Element, m: float, c: np.ndarray, j: np.ndarray) -> None:
+    j = rot.T @ j_c @ rot
+    tiny = 1e-13 * max(float(np.abs(j).max()), np.finfo(float).tiny)
+    j = np.where(np.abs(j) < tiny, 0.0, j)  # rounding residue of exact zeros
+    c = np.where(np.abs(c) < 1e-13 * max(float(np.abs(c).max()), np.finfo(float).tiny), 0.0, c)
+    frame = np.eye(4)
+    frame[:3, :3] = rot
+    err = np.inf
+    for digits in (10, 12, 14, 17):
+        vals = {"mass": _num(m, digits), "xyz": " ".join(_num(v, digits) for v in c),
+                "inertia": {k: _num(j[a, b], digits) for k, (a, b) in
+                            zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"), ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2),
+                                                                             (2, 2)))}}
+        jj = np.array([[float(vals["inertia"][k]) for k in row] for row in
+                       (("ixx", "ixy", "ixz"), ("ixy", "iyy", "iyz"), ("ixz", "iyz", "izz"))])
+        frame[:3, 3] = [float(v) for v in vals["xyz"].split()]
+        back = Inertia(float(vals["mass"]), com=(0.0, 0.0, 0.0), inertia=jj, frame=frame).pseudo()
+        err = float(np.abs(back - n).max()) if np.all(np.isfinite(back)) else np.inf
+        if err <= 1e-9 * scale:
+            return vals
+    raise ModelError(f"{what}: mass {m:.6g} with first moment |m c| = {hn:.3g} puts the centre of mass "
+                     f"{np.linalg.norm(c):.3g} m from the link frame; a URDF <inertial> re-reads it with "
+                     f"relative error {err / max(scale, np.finfo(float).tiny):.2g} (> 1e-9): not representable")
+
+
+def _edit_inertial(edit, link, vals: dict) -> None:
+    """Set a link's ``<inertial>`` values in place, adding the elements it lacks (one per line)."""
+    inertia = " ".join(f'{k}="{v}"' for k, v in vals["inertia"].items())
     inl = link.find("inertial")
+    if inl is None and float(vals["mass"]) == 0 and not any(float(v) for v in vals["inertia"].values()):
+        return  # absent reads as zero
     if inl is None:
-        inl = ET.SubElement(link, "inertial")
-    for child in list(inl):
-        inl.remove(child)
-    ET.SubElement(inl, "origin", xyz=" ".join(f"{v:.17g}" for v in c), rpy="0 0 0")
-    ET.SubElement(inl, "mass", value=f"{m:.17g}")
-    ET.SubElement(inl, "inertia", ixx=f"{j[0, 0]:.17g}", ixy=f"{j[0, 1]:.17g}", ixz=f"{j[0, 2]:.17g}",
-                  iyy=f"{j[1, 1]:.17g}", iyz=f"{j[1, 2]:.17g}", izz=f"{j[2, 2]:.17g}")
+        edit.append(link, ["<inertial>", f'  <origin xyz="{vals["xyz"]}" rpy="0 0 0"/>',
+                           f'  <mass value="{vals["mass"]}"/>', f"  <inertia {inertia}/>", "</inertial>"])
+        return
+    add = []
+    for tag, values in (("origin", {"xyz": vals["xyz"]}), ("mass", {"value": vals["mass"]}),
+                        ("inertia", vals["inertia"])):
+        el = inl.find(tag)
+        if el is not None:
+            changed = {k: v for k, v in values.items() if not _same_numbers(el.attrs.get(k), v)}
+            if changed:
+                edit.set(el, **changed)
+        elif tag == "origin" and vals["xyz"] == "0 0 0":
+            continue  # absent reads as the origin
+        else:
+            add.append(f"<{tag} " + " ".join(f'{k}="{v}"' for k, v in values.items()) + "/>")
+    if add:
+        edit.append(inl, add)
+
+
+def _same_numbers(old: str | None, new: str) -> bool:
+    """Whether an attribute's text reads as the same numbers as ``new`` (then it is kept as written)."""
+    try:
+        return old is not None and [float(x) for x in old.split()] == [float(x) for x in new.split()]
+    except ValueError:
+        return False
+
+
+def _edit_drives(edit, doc, source: Path, drives: dict, couplings: list) -> list[str]:
+    """``<dynamics damping friction>`` and a comment of what URDF cannot hold, per joint; the notes."""
+    joints = {jt.attrs.get("name"): jt for jt in doc.findall("joint")}
+    unknown = [j for j in list(drives) + [j for c in couplings for j in c["joints"]] if j not in joints]
+    if unknown:
+        raise ModelError(f"{source}: drive terms of joints {sorted(set(unknown))[:5]} that are not in the file")
+    written, held_out = 0, {}
+    for name, jt in joints.items():
+        terms = drives.get(name) or {}
+        dyn_values = _dynamics_values(source, name, terms)
+        lost = _not_in_urdf(name, terms, couplings, 2 if jt.attrs.get("type") == "prismatic" else 1, held_out)
+        comment = ("<!-- baseparams: not in URDF: " + "; ".join(lost).replace("--", "- -") + " -->") if lost else None
+        old = [cm for cm in jt.comments if cm[2].strip().startswith("baseparams:")]
+        for k, (start, end, _) in enumerate(old):  # an earlier export's comment: replaced, not repeated
+            if k == 0 and comment is not None:
+                edit.replace(start, end, comment)
+                comment = None
+            else:
+                edit.remove_line(start, end)
+        dyn = jt.find("dynamics")
+        if dyn_values:
+            written += 1
+            if dyn is not None:
+                dyn_values = {k: v for k, v in dyn_values.items() if not _same_numbers(dyn.attrs.get(k), v)}
+                if dyn_values:
+                    edit.set(dyn, **dyn_values)
+            else:
+                line = "<dynamics " + " ".join(f'{k}="{v}"' for k, v in dyn_values.items()) + "/>"
+                edit.append(jt, ([comment] if comment else []) + [line])
+                comment = None
+        if comment is not None:
+            if dyn is not None:
+                edit.insert_before(dyn, comment)
+            else:
+                edit.append(jt, [comment])
+    return _drive_notes(drives, written, held_out)
+
+
+def _dynamics_values(source: Path, joint: str, terms: dict) -> dict[str, str]:
+    """The ``<dynamics>`` attributes of a joint's identified terms (a negative friction refused)."""
+    out = {}
+    for kind, attr in _URDF_DYNAMICS.items():
+        v = terms.get(kind)
+        if v is None:
+            continue
+        if not v >= 0:
+            raise ModelError(f"{source}: joint {joint!r}: {_DRIVE_KINDS[kind][0]} {kind} = {v:.6g} < 0 has no URDF "
+                             f"<dynamics {attr}>")
+        out[attr] = _num(v)
+    return out
+
+
+def _not_in_urdf(joint: str, terms: dict, couplings: list, col: int, held_out: dict) -> list[str]:
+    """The joint's terms a URDF cannot hold, as text; ``held_out`` gathers them by kind."""
+    lost = [f"{_DRIVE_KINDS[k][0]} {k} = {_num(terms[k], 6)} {_DRIVE_KINDS[k][col]}"
+            for k in ("Ia", "Fo") if terms.get(k) is not None]
+    for k in ("Ia", "Fo"):
+        if terms.get(k) is not None:
+            held_out.setdefault(k, []).append(joint)
+    for c in couplings:
+        if joint in c["joints"]:
+            vals = ", ".join(f"{k} {_num(c[k], 6)} {_DRIVE_KINDS[k][1]}" for k in ("Iam", "Fvm", "Fcm")
+                             if isinstance(c.get(k), float))
+            lost.append(f"coupled motor {c['name']} (" + ", ".join(f"{w:g} {j}" for j, w in c["joints"].items())
+                        + (f"): {vals}" if vals else ")"))
+            held_out.setdefault("coupled motors", []).append(c["name"])
+    return lost
+
+
+def _drive_notes(drives: dict, written: int, held_out: dict) -> list[str]:
+    """The export's notes: the ``<dynamics>`` written, what URDF cannot hold."""
+    notes = []
+    if written:
+        kinds = [k for k in _URDF_DYNAMICS if any(d.get(k) is not None for d in drives.values())]
+        notes.append(f"--urdf: <dynamics> of {written} joints set to the identified "
+                     + " and ".join(f"{_DRIVE_KINDS[k][0]} {k} ({_URDF_DYNAMICS[k]}=)" for k in kinds))
+    if held_out:
+        what = {"Ia": "rotor inertia (armature) Ia", "Fo": "torque offsets Fo", "coupled motors": "coupled motors"}
+        notes.append("--urdf: URDF cannot hold " + ", ".join(
+            f"{what[k]} ({len(set(v))} {'motors' if k == 'coupled motors' else 'joints'})" for k, v in held_out.items())
+            + "; their values are in an XML comment <!-- baseparams: ... --> inside each joint")
+    return notes
+
+
+def identified_drives(ident) -> tuple[dict, list]:
+    """The drive terms of a physical identification, as :func:`write_urdf` takes them.
+
+    Parameters
+    ----------
+    ident : Identification
+        A physically consistent identification (``method="physical"``): its drive values are
+        the physical fit's (every modelled drive parameter has one, also those the data regroup
+        with base parameters).
+
+    Returns
+    -------
+    drives : dict
+        ``{joint: {"Ia", "Fv", "Fc", "Fo": float or None}}`` (None: not modelled).
+    couplings : list of dict
+        ``{"name", "joints", "Iam", "Fvm", "Fcm"}`` per coupled motor.
+    """
+    d = ident.model.drives
+    values = dict(zip(d.names, np.asarray(ident.fit.physical.delta, dtype=float).tolist()))
+    drives = {j: {k: values.get(f"{k}_{j}") for k in ("Ia", "Fv", "Fc", "Fo")} for j in d.joints}
+    couplings = [{"name": c.name, "joints": dict(zip(c.joints, c.weights)),
+                  **{k: values.get(f"{k}_{c.name}") for k in ("Iam", "Fvm", "Fcm")}} for c in d.couplings]
+    return drives, couplings

@@ -30,7 +30,7 @@ h1{font-size:1.4em} h2{font-size:1.15em;margin-top:1.6em}
 table{border-collapse:collapse;font-size:12px} td,th{border:1px solid #ccc;padding:2px 5px}
 td.identifiable{background:#cfe8cf} td.regrouped{background:#ffe9b3} td.unidentifiable{background:#f4c7c7}
 tr.hl td,tr.hl th{outline:2px solid #1f5fbf} #grid tr[data-body]{cursor:pointer}
-.expr{font-family:monospace;font-size:12px;white-space:pre-wrap}
+.expr{font-family:monospace;font-size:12px;white-space:pre-wrap} td.unit{white-space:nowrap}
 svg{background:#fafafa;border:1px solid #ddd} svg text{font-size:10px;fill:#555}
 #view3d{cursor:grab} g.body line.link{stroke:#333} g.body.sel line.link{stroke:#1f5fbf}
 g.body.involved line.link{stroke:#e07000;stroke-width:5} g.body{cursor:pointer}
@@ -352,16 +352,17 @@ def _log_plot(values: np.ndarray, tol: float | None, plot_id: str, rank: int | N
     lo, hi = (np.log10(finite.min()) - 0.5, np.log10(finite.max()) + 0.5) if finite.size else (-1, 1)
     if tol:
         lo = min(lo, np.log10(tol) - 0.5)
-    left, right = 45, 10
+    left, right = 58, 10
 
     def x(k):
         return left + k * (width - left - right) / max(len(v) - 1, 1)
 
     def y(val):
-        return height - 10 - (np.log10(val) - lo) / (hi - lo) * (height - 20)
+        return height - 22 - (np.log10(val) - lo) / (hi - lo) * (height - 32)
 
     ticks = "".join(f"<line x1='{left - 4}' x2='{width}' y1='{y(10.0**e):.1f}' y2='{y(10.0**e):.1f}' "
-                    f"stroke='#eee'/><text x='2' y='{y(10.0**e) + 3:.1f}'>1e{e}</text>" for e in _decade_ticks(lo, hi))
+                    f"stroke='#eee'/><text class='tick' x='16' y='{y(10.0**e) + 3:.1f}'>1e{e}</text>"
+                    for e in _decade_ticks(lo, hi))
     pts = "".join(f"<circle class='sv' cx='{x(k):.1f}' cy='{(y(val) if np.isfinite(val) else height - 5):.1f}' "
                   f"r='2.5'/>" for k, val in enumerate(v))
     line = (f"<line class='tol' x1='{left}' x2='{width}' y1='{y(tol):.1f}' y2='{y(tol):.1f}' stroke='#c33' "
@@ -371,7 +372,10 @@ def _log_plot(values: np.ndarray, tol: float | None, plot_id: str, rank: int | N
         gx = 0.5 * (x(rank - 1) + x(rank))
         gap = (f"<line class='gap' x1='{gx:.1f}' x2='{gx:.1f}' y1='0' y2='{height}' stroke='#1f5fbf' "
                f"stroke-dasharray='2 3'/><text x='{gx + 4:.1f}' y='12'>rank {rank} | nullity {len(v) - rank}</text>")
-    return f"<svg id='{plot_id}' width='{width}' height='{height}'>{ticks}{pts}{line}{gap}</svg>"
+    labels = (f"<text class='axis-label' x='{(left + width) / 2:.0f}' y='{height - 1}' text-anchor='middle'>index "
+              f"(largest first)</text><text class='axis-label' transform='translate(10,{height / 2:.0f}) rotate(-90)' "
+              f"text-anchor='middle'>singular value</text>")
+    return f"<svg id='{plot_id}' width='{width}' height='{height}'>{ticks}{pts}{line}{gap}{labels}</svg>"
 
 
 def _certification(result) -> str:
@@ -417,38 +421,100 @@ def analysis_html(result) -> str:
             f"q = 0 (red: joint axes); drag the view to rotate; click a body or a row.</p>"
             f"<div style='display:flex;gap:1em;flex-wrap:wrap'><div>{view}</div><div>{_grid(result)}</div></div>"
             f"<h2>Why: the nullspace directions by provenance</h2>{_provenance_list(result, groups)}"
-            f"<h2>Base parameters</h2><table id='base'>{exprs}</table>{_certification(result)}"
+            f"<h2>Base parameters</h2><table id='base'><tr><th>name</th><th>expression</th></tr>{exprs}</table>"
+            f"{_certification(result)}"
             f"<script type='application/json' id='robot-data'>{json.dumps(data)}</script>")
     return _page(f"{result.robot.name}: base parameters", body, _VIEWER)
 
 
-def _series_svg(t: np.ndarray, ys: list[np.ndarray], plot_id: str, width: int = 380, height: int = 110,
-                colors=("#555", "#1f5fbf")) -> str:
-    """Polylines (one ``polyline.series`` per array in ``ys``) over ``t``, at most 1500 points each."""
+def _num(v, spec: str = ".6g", missing: str = "-") -> str:
+    """A number for a table or a label: ``missing`` when absent or not finite (never ``nan``)."""
+    if v is None or isinstance(v, str):
+        return missing
+    v = float(v)
+    if not np.isfinite(v):
+        return missing
+    text = format(v, spec)
+    return "0" if float(text) == 0 else text
+
+
+def _ticks(lo: float, hi: float, n: int = 4) -> list[float]:
+    """About ``n`` round tick values (1, 2, 5 times a power of ten) in ``[lo, hi]``."""
+    span = hi - lo
+    if not np.isfinite(span) or span <= 0:
+        return [lo]
+    raw = span / n
+    mag = 10.0 ** np.floor(np.log10(raw))
+    step = next(m * mag for m in (1, 2, 5, 10) if m * mag >= raw)
+    first = np.ceil(lo / step) * step
+    return [float(v) for v in np.arange(first, hi + 1e-9 * span, step)]
+
+
+def _frame(width: int, height: int, box: tuple[int, int, int, int], xr, yr, xlabel: str, ylabel: str,
+           xticks=None, yticks=None) -> tuple[str, callable, callable]:
+    """Axes of a plot: the axis lines, ticks with labels (``text.tick``) and axis titles (``text.axis-label``).
+
+    ``box`` is ``(left, right, top, bottom)`` margins; ``xr``, ``yr`` the data ranges. Returns the
+    SVG parts and the maps from data to pixel coordinates.
+    """
+    left, right, top, bottom = box
+    (x0, x1), (y0, y1) = xr, yr
+    x1 = x1 if x1 > x0 else x0 + 1.0
+    y1 = y1 if y1 > y0 else y0 + 1.0
+
+    def px(v):
+        return left + (np.asarray(v, dtype=float) - x0) / (x1 - x0) * (width - left - right)
+
+    def py(v):
+        return height - bottom - (np.asarray(v, dtype=float) - y0) / (y1 - y0) * (height - top - bottom)
+
+    yb = height - bottom
+    parts = [f"<line class='axis' x1='{left}' x2='{width - right}' y1='{yb}' y2='{yb}' stroke='#888'/>",
+             f"<line class='axis' x1='{left}' x2='{left}' y1='{top}' y2='{yb}' stroke='#888'/>"]
+    for v in (_ticks(x0, x1) if xticks is None else xticks):
+        x = float(px(v))
+        parts.append(f"<line x1='{x:.1f}' x2='{x:.1f}' y1='{yb}' y2='{yb + 3}' stroke='#888'/>"
+                     f"<text class='tick' x='{x:.1f}' y='{yb + 12}' text-anchor='middle'>{_num(v, '.3g')}</text>")
+    for v in (_ticks(y0, y1) if yticks is None else yticks):
+        y = float(py(v))
+        parts.append(f"<line x1='{left - 3}' x2='{width - right}' y1='{y:.1f}' y2='{y:.1f}' stroke='#eee'/>"
+                     f"<text class='tick' x='{left - 4}' y='{y + 3:.1f}' text-anchor='end'>{_num(v, '.3g')}</text>")
+    parts.append(f"<text class='axis-label' x='{(left + width - right) / 2:.0f}' y='{height - 3}' "
+                 f"text-anchor='middle'>{html.escape(xlabel)}</text>"
+                 f"<text class='axis-label' transform='translate(10,{(top + yb) / 2:.0f}) rotate(-90)' "
+                 f"text-anchor='middle'>{html.escape(ylabel)}</text>")
+    return "".join(parts), px, py
+
+
+def _series_svg(t: np.ndarray, ys: list[np.ndarray], plot_id: str, ylabel: str, width: int = 380,
+                height: int = 150, colors=("#555", "#1f5fbf")) -> str:
+    """Polylines (one ``polyline.series`` per array in ``ys``) over ``t`` [s] on labelled axes, <= 1500 points."""
     step = max(1, len(t) // 1500)
     t = t[::step]
     lo = min(float(np.min(y[::step])) for y in ys)
     hi = max(float(np.max(y[::step])) for y in ys)
-    hi = hi if hi > lo else lo + 1.0
-    span = float(t[-1] - t[0]) or 1.0
+    axes, px, py = _frame(width, height, (52, 8, 6, 30), (float(t[0]), float(t[-1])), (lo, hi), "time [s]", ylabel)
     lines = []
     for k, y in enumerate(ys):
-        xs = 5 + (t - t[0]) / span * (width - 10)
-        yy = height - 5 - (y[::step] - lo) / (hi - lo) * (height - 10)
-        pts = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(xs, yy))
+        pts = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(px(t), py(y[::step])))
         lines.append(f"<polyline class='series' points='{pts}' fill='none' stroke='{colors[k % 2]}' stroke-width='1'/>")
-    return f"<svg class='plot' id='{plot_id}' width='{width}' height='{height}'>{''.join(lines)}</svg>"
+    return f"<svg class='plot' id='{plot_id}' width='{width}' height='{height}'>{axes}{''.join(lines)}</svg>"
 
 
-def _histogram(e: np.ndarray, width: int = 150, height: int = 110) -> str:
-    counts, _ = np.histogram(e, bins=30)
+def _histogram(e: np.ndarray, unit: str, width: int = 170, height: int = 150) -> str:
+    """The residuals' histogram (30 bins) with a labelled residual axis [unit] and a count axis."""
+    counts, edges = np.histogram(e, bins=30)
     top = max(int(counts.max()), 1)
-    bars = "".join(f"<rect x='{k * width / 30:.1f}' y='{height - c / top * height:.1f}' width='{width / 30 - 1:.1f}' "
-                   f"height='{c / top * height:.1f}' fill='#888'/>" for k, c in enumerate(counts))
-    return f"<svg class='hist' width='{width}' height='{height}'>{bars}</svg>"
+    axes, px, py = _frame(width, height, (34, 6, 6, 30), (float(edges[0]), float(edges[-1])), (0.0, float(top)),
+                          f"residual [{unit}]", "count", xticks=_ticks(float(edges[0]), float(edges[-1]), 3),
+                          yticks=[0, top])
+    x, y = px(edges), py(counts)
+    bars = "".join(f"<rect x='{x[k]:.1f}' y='{y[k]:.1f}' width='{max(x[k + 1] - x[k] - 1, 0.5):.1f}' "
+                   f"height='{float(py(0)) - y[k]:.1f}' fill='#888'/>" for k in range(len(counts)))
+    return f"<svg class='hist' width='{width}' height='{height}'>{axes}{bars}</svg>"
 
 
-def _spectrum_svg(spec: dict, joints: list[str], width: int = 640, height: int = 260) -> str:
+def _spectrum_svg(spec: dict, joints: list[str], unit: str, width: int = 640, height: int = 270) -> str:
     """Amplitude spectra on log-log axes: one ``polyline.spectrum`` per joint, ``line.cutoff``."""
     f, a = np.asarray(spec["f"], dtype=float), np.asarray(spec["amplitude"], dtype=float)
     keep = f > 0
@@ -456,7 +522,7 @@ def _spectrum_svg(spec: dict, joints: list[str], width: int = 640, height: int =
     top = float(np.max(a)) if a.size and np.max(a) > 0 else 1.0
     a = np.clip(a, top * 1e-7, None)
     (x0, x1), (y0, y1) = np.log10([f.min(), f.max()]), (np.log10(top) - 7.2, np.log10(top) + 0.2)
-    left, bottom = 45, 18
+    left, bottom = 52, 30
 
     def x(v):
         return left + (np.log10(v) - x0) / ((x1 - x0) or 1.0) * (width - left - 10)
@@ -465,9 +531,13 @@ def _spectrum_svg(spec: dict, joints: list[str], width: int = 640, height: int =
         return height - bottom - (np.log10(v) - y0) / (y1 - y0) * (height - bottom - 5)
 
     grid = "".join(f"<line x1='{x(10.0**e):.1f}' x2='{x(10.0**e):.1f}' y1='0' y2='{height - bottom}' stroke='#eee'/>"
-                   f"<text x='{x(10.0**e) - 10:.1f}' y='{height - 4}'>{10.0**e:g} Hz</text>"
+                   f"<text class='tick' x='{x(10.0**e) - 10:.1f}' y='{height - bottom + 12}'>{10.0**e:g}</text>"
                    for e in _decade_ticks(x0, x1))
-    grid += "".join(f"<text x='2' y='{y(10.0**e) + 3:.1f}'>1e{e}</text>" for e in _decade_ticks(y0, y1))
+    grid += "".join(f"<text class='tick' x='{left - 4}' y='{y(10.0**e) + 3:.1f}' text-anchor='end'>1e{e}</text>"
+                    for e in _decade_ticks(y0, y1))
+    grid += (f"<text class='axis-label' x='{(left + width) / 2:.0f}' y='{height - 3}' text-anchor='middle'>"
+             f"frequency [Hz]</text><text class='axis-label' transform='translate(10,{(height - bottom) / 2:.0f}) "
+             f"rotate(-90)' text-anchor='middle'>amplitude [{html.escape(unit)}]</text>")
     lines = "".join(f"<polyline class='spectrum' data-joint='{html.escape(name)}' fill='none' stroke-width='1' "
                     f"stroke='{PALETTE[k % len(PALETTE)]}' points='"
                     + " ".join(f"{x(fv):.1f},{y(av):.1f}" for fv, av in zip(f, a[:, k])) + "'/>"
@@ -479,20 +549,55 @@ def _spectrum_svg(spec: dict, joints: list[str], width: int = 640, height: int =
     return f"<svg id='spectrum' width='{width}' height='{height}'>{grid}{lines}</svg>"
 
 
+def joint_units(ident) -> dict[str, dict[str, str]]:
+    """Units of each measured joint's quantities in an identification.
+
+    Parameters
+    ----------
+    ident : Identification
+        The identification.
+
+    Returns
+    -------
+    dict
+        ``joint -> {"force", "position", "Ia", "Fv", "Fc", "Fo"}``: ``N m``, ``rad``, ``kg m^2``,
+        ``N m s/rad``, ``N m``, ``N m`` for a revolute joint; ``N``, ``m``, ``kg``, ``N s/m``, ``N``,
+        ``N`` for a prismatic one.
+    """
+    r = ident.model.robot
+    out = {}
+    for i, name in enumerate(r.joint_names):
+        if r.jtype[i] == "P":
+            out[name] = {"force": "N", "position": "m", "Ia": "kg", "Fv": "N s/m", "Fc": "N", "Fo": "N"}
+        else:
+            out[name] = {"force": "N m", "position": "rad", "Ia": "kg m^2", "Fv": "N m s/rad", "Fc": "N m",
+                         "Fo": "N m"}
+    return out
+
+
+def _one(units: list[str]) -> str:
+    """One unit, or the distinct ones joined (``N m or N``)."""
+    return " or ".join(dict.fromkeys(units)) or "-"
+
+
 def _spectrum_section(ident) -> str:
     s = (ident.series or {}).get("train") or {}
     spec = s.get("spectrum")
     if not spec:
         return ""
+    units = joint_units(ident)
     legend = "".join(f"<span style='color:{PALETTE[k % len(PALETTE)]}'>&#9644; {html.escape(name)}</span>"
                      for k, name in enumerate(s["joints"]))
+    cut = _num(spec.get("cutoff"), ".3g", "none")
     return (f"<h2>Excitation spectrum</h2><p>Amplitude spectrum of the training positions per joint "
             f"({html.escape(spec.get('of', 'q'))}, log scales, largest amplitude per band); dashed red: the "
-            f"low-pass cutoff {spec['cutoff']:.3g} Hz. Content above the cutoff is removed before the "
-            f"fit.</p>{_spectrum_svg(spec, list(s['joints']))}<p class='legend'>{legend}</p>")
+            f"low-pass cutoff {cut} Hz. Content above the cutoff is removed before the fit.</p>"
+            f"{_spectrum_svg(spec, list(s['joints']), _one([units[j]['position'] for j in s['joints']]))}"
+            f"<p class='legend'>{legend}</p>")
 
 
 def _torque_blocks(ident) -> str:
+    units = joint_units(ident)
     blocks = []
     for part in ("train", "validation"):
         s = (ident.series or {}).get(part)
@@ -500,11 +605,116 @@ def _torque_blocks(ident) -> str:
             continue
         for k, joint in enumerate(s["joints"]):
             e = s["tau"][:, k] - s["tau_hat"][:, k]
+            unit = units[joint]["force"]
+            quantity = "force" if unit == "N" else "torque"
             blocks.append(f"<div class='joint' data-part='{part}' data-joint='{html.escape(joint)}'><b>{part}: "
-                          f"{html.escape(joint)}</b> (RMS {np.sqrt(np.mean(e**2)):.4g})<br>"
-                          f"{_series_svg(s['t'], [s['tau'][:, k], s['tau_hat'][:, k]], f'{part}-{k}')}"
-                          f"{_histogram(e)}</div>")
+                          f"{html.escape(joint)}</b> (RMS {_num(np.sqrt(np.mean(e**2)), '.4g')} {unit})<br>"
+                          + _series_svg(s["t"], [s["tau"][:, k], s["tau_hat"][:, k]], f"{part}-{k}",
+                                        f"{quantity} [{unit}]") +
+                          f"{_histogram(e, unit)}</div>")
     return "".join(blocks)
+
+
+def _parameter_unit(name: str, convention: str) -> str:
+    """SI unit of a (regrouped) base parameter from its name's suffix (``link2.XXR`` -> ``kg m^2``)."""
+    from ..model import inertia
+
+    names = list(inertia.NAMES.get(convention, ()))
+    suffix = name.rsplit(".", 1)[-1]
+    for stem in (suffix, suffix[:-1] if suffix.endswith("R") else None):
+        if stem in names:
+            return {0: "kg", 1: "kg m", 2: "kg m^2"}[int(inertia.LENGTH_POWER[convention][names.index(stem)])]
+    return "SI"
+
+
+def _pct_cell(b: dict) -> str:
+    """``%sigma``, or ``n/a`` with the reason when it is not a number."""
+    p = b["pct_sigma"]
+    if np.isfinite(p):
+        return f"<td>{_num(p, '.3g')}</td>"
+    why = "the value is 0" if b["value"] == 0 else "the standard deviation is not finite (a direction not excited)"
+    return f"<td class='na' title='{html.escape(why)}'>n/a</td>"
+
+
+def _values_table(j: dict) -> str:
+    """Base parameters: name, value, unit, std, %sigma (and a bar), expression."""
+    pct = [b["pct_sigma"] for b in j["base_parameters"]]
+    top = max([p for p in pct if np.isfinite(p)] + [1.0])
+    rows = []
+    for b in j["base_parameters"]:
+        width = min(200.0, 200 * b["pct_sigma"] / top) if np.isfinite(b["pct_sigma"]) else 0.0
+        rows.append(f"<tr><td>{html.escape(b['name'])}</td><td>{_num(b['value'])}</td>"
+                    f"<td class='unit'>{_parameter_unit(b['name'], j['convention'])}</td>"
+                    f"<td>{_num(b['std'], '.3g', 'n/a')}</td>"
+                    f"{_pct_cell(b)}<td><svg width='200' height='10'><rect class='pct' width='{width:.1f}' "
+                    f"height='10' fill='#1f5fbf'/></svg></td><td class='expr'>{html.escape(b['expression'])}</td></tr>")
+    return (f"<h2>Base parameters ({html.escape(j['convention'])} convention, SI units)</h2><table id='values'>"
+            f"<tr><th>name</th><th>value</th><th>unit</th><th>std</th><th>%sigma</th><th>%sigma (bar)</th>"
+            f"<th>expression</th></tr>{''.join(rows)}</table>")
+
+
+#: the drive terms of the reports: kind -> description
+DRIVE_TERMS = {"Ia": "rotor inertia", "Fv": "viscous friction", "Fc": "Coulomb friction", "Fo": "torque offset",
+               "Iam": "coupled rotor inertia", "Fvm": "coupled viscous friction", "Fcm": "coupled Coulomb friction"}
+
+
+def _drive_row(ident, owner: str, kind: str, value, unit: str, extra: str = "") -> str:
+    """One drive parameter's row: value, std, %sigma, unit, or where it was regrouped."""
+    est = ident.fit.estimate
+    pos = {name: k for k, name in enumerate(ident.model.names)}
+    k = pos.get(f"{kind}_{owner}")
+    attrs = f"class='drive' data-owner='{html.escape(owner)}' data-kind='{kind}'"
+    head = f"<td>{html.escape(owner)}</td>{extra}<td>{kind} ({DRIVE_TERMS[kind]})</td>"
+    if isinstance(value, str):  # regrouped into a base parameter
+        return (f"<tr {attrs}>{head}<td>-</td><td>-</td><td>-</td><td class='unit'>{unit}</td>"
+                f"<td>{html.escape(value)} (its value includes this term)</td></tr>")
+    std = est.std[k] if k is not None else None
+    pct = 100 * std / abs(value) if std is not None and value else None
+    return (f"<tr {attrs}>{head}<td>{_num(value)}</td><td>{_num(std, '.3g', 'n/a')}</td>"
+            f"<td>{_num(pct, '.3g', 'n/a')}</td><td class='unit'>{unit}</td><td></td></tr>")
+
+
+def _drives_table(ident) -> str:
+    """Drive terms per joint and coupled motor (those modelled): value, std, %sigma, unit."""
+    units = joint_units(ident)
+    couplings = ident.couplings()
+    pad = "<td>-</td>" if couplings else ""
+    rows = [_drive_row(ident, d["joint"], kind, d[kind], units[d["joint"]][kind], pad)
+            for d in ident.drives() for kind in ("Ia", "Fv", "Fc", "Fo") if d[kind] is not None]
+    coupled = {"Iam": "kg m^2", "Fvm": "N m s/rad", "Fcm": "N m"}
+    for c in couplings:
+        joints = ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
+        rows += [_drive_row(ident, c["name"], kind, c[kind], coupled[kind], f"<td>{html.escape(joints)}</td>")
+                 for kind in ("Iam", "Fvm", "Fcm") if c[kind] is not None]
+    if not rows:
+        return ("<h2>Drive terms</h2><p id='drives'>None modelled (<code>--friction none</code>, no "
+                "<code>--rotor</code>).</p>")
+    return ("<h2>Drive terms</h2><table id='drives'><tr><th>joint or motor</th>"
+            + ("<th>joints</th>" if couplings else "")
+            + "<th>term</th><th>value</th><th>std</th><th>%sigma</th><th>unit</th><th>note</th></tr>"
+            + "".join(rows) + "</table>")
+
+
+def _rms_table(ident, j: dict) -> str:
+    """Residual RMS per joint, training and validation, with units."""
+    units = joint_units(ident)
+    val = j["validation"]
+    rows = "".join(f"<tr><td>{html.escape(name)}</td><td>{_num(v, '.4g')}</td>"
+                   f"<td>{_num(val['rms'].get(name), '.4g') if val else '-'}</td><td>{units[name]['force']}</td></tr>"
+                   for name, v in j["train"]["rms"].items())
+    note = "" if val else " (no validation: <code>--holdout SECONDS</code> or <code>--validate FILE</code>)"
+    return (f"<h2>Residual RMS per joint{note}</h2><table id='rms'><tr><th>joint</th><th>train RMS</th>"
+            f"<th>validation RMS</th><th>unit</th></tr>{rows}</table>")
+
+
+def _physical_table(ident, j: dict) -> str:
+    if j["physical"] is None:
+        return ""
+    phys = j["physical"]
+    rows = "".join(f"<tr><td>{html.escape(b)}</td><td>{_num(m, '.4g')}</td><td>{_num(e, '.3g')}</td></tr>"
+                   for b, m, e in zip(phys["masses"], phys["masses"].values(), ident.fit.physical.min_eigenvalues))
+    return (f"<h2>Physical consistency: feasible {j['physical']['feasible']}</h2><table id='physical'>"
+            f"<tr><th>body</th><th>mass [kg]</th><th>smallest eigenvalue of N_i [kg m^2]</th></tr>{rows}</table>")
 
 
 def identification_html(ident) -> str:
@@ -518,29 +728,21 @@ def identification_html(ident) -> str:
     Returns
     -------
     str
-        The page.
+        The page: torques and residuals on labelled axes (time [s], torque [N m] or force [N]),
+        the excitation spectrum (frequency [Hz]), tables with column headers of the base
+        parameters (value, unit, std, %sigma, expression), the drive terms (rotor inertia,
+        friction, offsets, coupled motors: value, std, %sigma, unit), the residual RMS per joint
+        and the physical check; a missing number reads ``-`` or ``n/a`` (with the reason), never
+        ``nan``.
     """
     j = ident.to_json()
-    pct = [b["pct_sigma"] for b in j["base_parameters"]]
-    top = max([p for p in pct if np.isfinite(p)] + [1.0])
-    bars = "".join(f"<tr><td>{html.escape(b['name'])}</td><td>{b['value']:.6g}</td><td>{b['pct_sigma']:.3g}</td>"
-                   f"<td><svg width='200' height='10'><rect class='pct' "
-                   f"width='{min(200, 200 * b['pct_sigma'] / top):.1f}' height='10' fill='#1f5fbf'/></svg></td></tr>"
-                   for b in j["base_parameters"])
-    phys = ""
-    if j["physical"] is not None:
-        rows = "".join(f"<tr><td>{html.escape(b)}</td><td>{m:.4g}</td><td>{e:.3g}</td></tr>" for b, m, e in
-                       zip(j["physical"]["masses"], j["physical"]["masses"].values(),
-                           ident.fit.physical.min_eigenvalues))
-        phys = (f"<h2>Physical consistency: feasible {j['physical']['feasible']}</h2><table id='physical'>"
-                f"<tr><th>body</th><th>mass [kg]</th><th>smallest eigenvalue of N_i</th></tr>{rows}</table>")
     val = j["validation"]
+    unit = _one([u["force"] for u in joint_units(ident).values()])
     body = (f"<h1>{html.escape(j['model'])}: identification ({html.escape(j['method'])})</h1>"
             f"<p>{j['n_samples']['used']} samples used of {j['n_samples']['read']}; condition number "
-            f"{j['condition_number']:.4g}; train RMS {j['train']['rms_total']:.4g}"
-            + (f"; validation RMS {val['rms_total']:.4g}" if val else "") + "</p>"
+            f"{_num(j['condition_number'], '.4g')}; train RMS {_num(j['train']['rms_total'], '.4g')} {unit}"
+            + (f"; validation RMS {_num(val['rms_total'], '.4g')} {unit}" if val else "") + "</p>"
             f"<h2>Measured (grey) and predicted (blue) torques, residual histograms</h2>"
             f"<div id='torques'>{_torque_blocks(ident)}</div>{_spectrum_section(ident)}"
-            f"<h2>Base parameters and %sigma</h2><table id='values'><tr><th>name</th><th>value</th><th>%sigma</th>"
-            f"<th></th></tr>{bars}</table>{phys}")
+            f"{_values_table(j)}{_drives_table(ident)}{_rms_table(ident, j)}{_physical_table(ident, j)}")
     return _page(f"{j['model']}: identification", body, _DONE)

@@ -24,7 +24,7 @@ def _pyplot():
     return plt
 
 
-def trajectory_plot(excitation, path) -> Path:
+def trajectory_plot(excitation, path, robot=None) -> Path:
     """An excitation trajectory: position, velocity and acceleration per joint, with the limits.
 
     Parameters
@@ -33,6 +33,10 @@ def trajectory_plot(excitation, path) -> Path:
         The design.
     path : str or Path
         Output file; the format from its suffix (``.png``, ``.svg``, ``.pdf``).
+    robot : Robot, optional
+        The robot designed for: its joint types give the units (``rad``, ``rad/s``, ``rad/s^2``
+        for a revolute joint, ``m``, ``m/s``, ``m/s^2`` for a prismatic one); without it the
+        axes read ``rad or m``.
 
     Returns
     -------
@@ -46,19 +50,22 @@ def trajectory_plot(excitation, path) -> Path:
     """
     plt = _pyplot()
     e = excitation
+    kinds = dict(zip(robot.joint_names, robot.jtype)) if robot is not None else {}
     fig, axes = plt.subplots(len(e.joints), 3, figsize=(12, 1.6 * len(e.joints) + 0.8), sharex=True, squeeze=False)
     for j, name in enumerate(e.joints):
         lo, hi, v, a, _ = e.limits[j]
-        for col, (y, bounds, label) in enumerate(((e.q[:, j], (lo, hi), "q"), (e.dq[:, j], (-v, v), "dq"),
-                                                 (e.ddq[:, j], (-a, a), "ddq"))):
+        u = {"P": "m", "R": "rad"}.get(kinds.get(name), "rad or m")
+        series = ((e.q[:, j], (lo, hi), f"q [{u}]"), (e.dq[:, j], (-v, v), f"dq [{u}/s]"),
+                  (e.ddq[:, j], (-a, a), f"ddq [{u}/s^2]"))
+        for col, (y, bounds, label) in enumerate(series):
             ax = axes[j, col]
             ax.plot(e.t, y, lw=0.8, color="C0")
             for b in bounds:
                 if b == b:  # not NaN: a limit
                     ax.axhline(b, lw=0.6, ls="--", color="C3")
-            ax.set_ylabel(f"{label} {name}", fontsize=7)
+            ax.set_ylabel(f"{name}\n{label}", fontsize=7)
     for col in range(3):
-        axes[-1, col].set_xlabel("t [s]")
+        axes[-1, col].set_xlabel("time [s]")
     fig.suptitle(f"{e.robot}: {e.harmonics} harmonics, period {e.period:.4g} s, {e.criterion} {e.value:.4g} "
                  f"(condition number {e.condition_number:.4g}); dashed: limits", fontsize=9)
     fig.tight_layout()
@@ -101,6 +108,8 @@ def torque_plot(result, path) -> Path:
         raise BaseparamsError("this identification kept no torque series to plot")
     parts = [(k, v) for k, v in (("train", result.series["train"]), ("validation", result.series["validation"])) if v]
     joints = parts[0][1]["joints"]
+    robot = result.model.robot
+    kinds = dict(zip(robot.joint_names, robot.jtype))
     fig, axes = plt.subplots(len(joints), 1, figsize=(10, 1.8 * len(joints) + 0.6), sharex=True, squeeze=False)
     for j, ax in enumerate(axes[:, 0]):
         for label, s in parts:
@@ -108,12 +117,14 @@ def torque_plot(result, path) -> Path:
                     label=f"measured ({label})")
             ax.plot(s["t"], s["tau_hat"][:, j], lw=0.8, color="C0" if label == "train" else "C1",
                     label=f"predicted ({label})")
-        ax.set_ylabel(joints[j], fontsize=8)
+        ax.set_ylabel(f"{joints[j]}\n" + ("force [N]" if kinds.get(joints[j]) == "P" else "torque [N m]"), fontsize=8)
     axes[0, 0].legend(fontsize=7, ncol=4, loc="upper right")
-    axes[-1, 0].set_xlabel("t [s]")
+    axes[-1, 0].set_xlabel("time [s]")
     j = result.to_json()
-    fig.suptitle(f"{j['model']}: {j['method']}, train RMS {j['train']['rms_total']:.3g}"
-                 + (f", validation RMS {j['validation']['rms_total']:.3g}" if j["validation"] else ""), fontsize=9)
+    unit = " or ".join(dict.fromkeys("N" if kinds.get(n) == "P" else "N m" for n in joints))
+    fig.suptitle(f"{j['model']}: {j['method']}, train RMS {j['train']['rms_total']:.3g} {unit}"
+                 + (f", validation RMS {j['validation']['rms_total']:.3g} {unit}" if j["validation"] else ""),
+                 fontsize=9)
     fig.tight_layout()
     return _save(plt, fig, Path(path))
 
@@ -146,6 +157,8 @@ def _robot_axes(ax, robot) -> None:
     for k, setter in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
         setter(center[k] - 0.55 * span, center[k] + 0.55 * span)
     ax.set_box_aspect((1, 1, 1))
+    for setter, label in ((ax.set_xlabel, "x [m]"), (ax.set_ylabel, "y [m]"), (ax.set_zlabel, "z [m]")):
+        setter(label, fontsize=7)
     ax.set_title(f"{robot.name} at q = 0", fontsize=9)
     ax.tick_params(labelsize=6)
 
@@ -169,6 +182,8 @@ def _grid_axes(ax, result, classes: dict[str, str]) -> None:
                   rotation=90)
     ax.set_yticks([i + 0.5 for i in range(n)], list(result.robot.names), fontsize=max(4, min(8, 300 // max(n, 1))))
     ax.tick_params(length=0)
+    ax.set_xlabel(f"parameter ({result.convention} convention)", fontsize=7)
+    ax.set_ylabel("body", fontsize=7)
     ax.set_title(f"{result.n_base} base parameters, nullity {result.nullity} ({result.status})", fontsize=9)
     ax.legend(handles=[Patch(facecolor=c, label=k) for k, c in CLASS_COLORS.items()], fontsize=6,
               loc="upper center", bbox_to_anchor=(0.5, -0.06 if n < 20 else -0.02), ncol=3, frameon=False)
@@ -188,7 +203,8 @@ def _singular_axes(ax, result) -> None:
     if 0 < num.rank < len(sv):
         ax.axvline(num.rank + 0.5, ls=":", lw=0.8, color="C0", label=f"rank {num.rank}, gap {num.gap:.2g}")
     ax.legend(fontsize=6)
-    ax.set_xlabel("index", fontsize=7)
+    ax.set_xlabel("index (largest first)", fontsize=7)
+    ax.set_ylabel("singular value (sampled regressor)", fontsize=7)
     ax.set_title(f"singular values ({num.samples} samples)", fontsize=9)
     ax.tick_params(labelsize=6)
 

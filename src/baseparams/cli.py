@@ -831,6 +831,13 @@ def _symbolic_args(s) -> None:
                    help="without --symbolic: numbers for the table's symbols (default: its 'values' line)")
 
 
+def _linalg_message(args, exc: Exception) -> str:
+    """One line for a numerical failure (an SVD that did not converge...): the input's numbers are to blame."""
+    what = getattr(args, "model", None) or getattr(args, "command", "baseparams")
+    return (f"{what}: the linear algebra failed ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
+            "the model's or the log's numbers are beyond what floating point handles (huge, tiny or badly scaled)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``baseparams`` command line.
 
@@ -865,6 +872,9 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except BaseparamsError as exc:
         print(f"baseparams: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except np.linalg.LinAlgError as exc:
+        print(f"baseparams: error: {_linalg_message(args, exc)}", file=sys.stderr)
         return EXIT_INPUT
     except BrokenPipeError:  # e.g. piped into head
         sys.stderr.close()

@@ -74,6 +74,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError
+from ..files import SMALL_MAX_BYTES, check_input, read_input_bytes
 from ..ident.data import JointLog
 from ..model.robot import Robot
 
@@ -163,9 +164,7 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         One line naming the file, the column and the row, for any problem listed in the module
         docstring (and a missing optional package: the extra to install).
     """
-    p = Path(path)
-    if not p.exists():
-        raise DataError(f"{p}: no such file")
+    p = check_input(path, folder_ok=True, error=DataError)  # a file or a bag folder, never a device or FIFO
     spec = _mapping(columns)
     kind = _kind(p)
     if kind == "bag":
@@ -205,10 +204,9 @@ def _mapping(columns) -> dict:
         raw: dict = {}
     elif isinstance(columns, (str, Path)) and Path(columns).suffix.lower() == ".toml":
         label = str(columns)
+        data = read_input_bytes(columns, SMALL_MAX_BYTES, error=DataError)
         try:
-            raw = tomllib.loads(Path(columns).read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise DataError(f"{columns}: cannot read the mapping file ({exc.strerror or exc})") from None
+            raw = tomllib.loads(data.decode("utf-8"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise DataError(f"{columns}: not a valid TOML mapping ({str(exc).splitlines()[0]})") from None
     elif isinstance(columns, str):

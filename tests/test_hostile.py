@@ -265,3 +265,52 @@ def test_mjcf_errors_are_one_line_with_their_reason(text, words, tmp_path, capsy
         assert "Line number=2" in err or "line 2" in err.lower(), err
     if "unrecognized" in words:
         assert "bogus" in err, err
+
+
+# ---------------------------------------------------------------- the environment: Dask, numba's cache
+@pytest.fixture(scope="module")
+def two_logs(tmp_path_factory):
+    pytest.importorskip("distributed")
+    import baseparams
+    from baseparams.fleet import simulate_fleet
+
+    folder = tmp_path_factory.mktemp("logs")
+    simulate_fleet(baseparams.load("puma560"), folder, robots=2, duration=2.0, rate=200.0, seed=3)
+    return folder
+
+
+@pytest.mark.parametrize("address, env", [("tcp://127.0.0.1:1", False), ("tcp://no-such-host.invalid:8786", False),
+                                          ("garbage", False), ("garbage", True), ("tcp://[::1", False)])
+def test_an_unreachable_or_malformed_scheduler_is_one_line_in_seconds(address, env, two_logs, capsys, monkeypatch):
+    argv = ["identify", "puma560", two_logs / "*.npz", "--per-file"]
+    if env:
+        monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", address)
+    else:
+        argv += ["--scheduler", address]
+    t0 = time.perf_counter()
+    err = _one_line_error(argv, capsys, seconds=30)
+    assert address in err and "cannot connect to a Dask scheduler" in err, err
+    assert ("DASK_SCHEDULER_ADDRESS" in err) == env and time.perf_counter() - t0 < 15
+
+
+def test_numba_without_a_writable_cache_compiles_in_memory_with_a_note(tmp_path):
+    """A read-only install, HOME and NUMBA_CACHE_DIR unwritable (paths under a regular file: root ignores modes)."""
+    pytest.importorskip("numba")
+    import shutil
+
+    import baseparams
+
+    src = tmp_path / "src"
+    shutil.copytree(os.path.dirname(baseparams.__file__), src / "baseparams",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (src / "baseparams" / "regressor" / "__pycache__").write_text("")  # no cache beside the code
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    env = {**os.environ, "PYTHONPATH": str(src), "HOME": str(blocker), "NUMBA_CACHE_DIR": str(blocker / "cache"),
+           "PYTHONDONTWRITEBYTECODE": "1"}
+    code = ("import warnings\nfrom baseparams.cli import _one_line_notes\n_one_line_notes()\n"
+            "from baseparams.regressor import compiled\nk = compiled._kernels()\nprint(k.CACHE)\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+    assert r.returncode == 0 and r.stdout.strip() == "False" and "Traceback" not in r.stderr, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("baseparams: note: numba cannot cache"), lines

@@ -314,3 +314,24 @@ def test_numba_without_a_writable_cache_compiles_in_memory_with_a_note(tmp_path)
     assert r.returncode == 0 and r.stdout.strip() == "False" and "Traceback" not in r.stderr, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("baseparams: note: numba cannot cache"), lines
+
+
+# ---------------------------------------------------------------- a text column the layout does not read
+def test_a_text_column_the_layout_does_not_read_is_ignored_with_a_note(tmp_path):
+    import baseparams
+    from baseparams.errors import DataError
+    from baseparams.io.logs import read_log
+
+    robot = baseparams.load("puma560")
+    names = [f"{k}_{j}" for k in ("q", "tau") for j in robot.joint_names]
+    rows = [",".join(["t"] + names + ["comment"])]
+    rows += [",".join([f"{0.01 * i}"] + ["0.1"] * len(names) + ["warm-up" if i % 2 else "ok, fine"[:2]])
+             for i in range(20)]
+    f = tmp_path / "log.csv"
+    f.write_text("\n".join(rows) + "\n")
+    log = read_log(f, robot)
+    assert log.n_samples == 20 and any("comment (text)" in n for n in log.notes), log.notes
+    bad = rows[:4] + [rows[4].replace("0.1", "oops", 1)] + rows[5:]
+    f.write_text("\n".join(bad) + "\n")
+    with pytest.raises(DataError, match=r"column 'q_joint1', line 5 \(data row 4\): 'oops' is not a number"):
+        read_log(f, robot)

@@ -95,3 +95,48 @@ def test_a_million_samples_chunked_on_dask_equal_in_memory(client):
     whole = fit(model, synthetic_factors(model, theta, 0, 10**6, seed=5), "ols").theta
     assert np.abs(chunked - whole).max() <= 1e-10 * np.abs(whole).max()
     assert np.abs(whole - theta).max() <= 1e-2 * np.abs(theta).max()  # and it is the truth, to the noise
+
+
+# ---------------------------------------------------------------- bad logs in a fleet (issue 24)
+@pytest.fixture(scope="module")
+def mixed_fleet(tmp_path_factory):
+    """Two good logs and three bad ones (binary in a CSV, no rows, a pickle in an .npz)."""
+    folder = tmp_path_factory.mktemp("mixed")
+    good = simulate_fleet(baseparams.load("puma560"), folder, robots=2, duration=3.0, rate=500.0, seed=1)
+    (folder / "bad-binary.csv").write_bytes(good[0].read_bytes())
+    (folder / "bad-empty.csv").write_text("t,q_joint1\n")
+    (folder / "bad-archive.npz").write_bytes(b"garbage")
+    return folder
+
+
+def _fleet_cli(folder, capsys, *extra):
+    from baseparams.cli import main
+
+    code = main(["identify", "puma560", str(folder / "*.[cn][sp][vz]"), "--per-file", "--workers", "1", *extra])
+    out = capsys.readouterr()
+    return code, out.out, [ln for ln in out.err.splitlines() if "error" in ln or "skipped" in ln]
+
+
+def test_one_bad_log_does_not_stop_the_fleet(mixed_fleet, capsys):
+    code, out, err = _fleet_cli(mixed_fleet, capsys, "--json")
+    import json
+
+    res = json.loads(out)
+    assert code == 0 and res["logs"] == {"given": 5, "used": 2, "skipped": 3}
+    assert sorted(s["path"].rsplit("/", 1)[1] for s in res["skipped"]) == ["bad-archive.npz", "bad-binary.csv",
+                                                                          "bad-empty.csv"]
+    assert len(res["per_file"]) == 2 and "Traceback" not in "".join(err)
+    assert len([ln for ln in err if "skipped" in ln]) == 3  # one stderr line per bad log, naming it
+    code, out, _ = _fleet_cli(mixed_fleet, capsys)
+    assert code == 0 and "5 logs, 2 used, 3 skipped" in out and out.count("skipped: ") == 3
+
+
+def test_strict_fleet_and_a_fleet_of_only_bad_logs_exit_2(mixed_fleet, capsys, tmp_path):
+    code, _, err = _fleet_cli(mixed_fleet, capsys, "--strict")
+    assert code == 2 and [ln for ln in err if "error" in ln] == [
+        ln for ln in err if ln.startswith("baseparams: error: --strict: 3 of 5 logs skipped")]
+    for p in mixed_fleet.glob("bad-*"):
+        (tmp_path / p.name).write_bytes(p.read_bytes())
+    code, _, err = _fleet_cli(tmp_path, capsys)
+    errors = [ln for ln in err if "error:" in ln]
+    assert code == 2 and len(errors) == 1 and "no usable log: all 3 skipped" in errors[0]

@@ -672,9 +672,11 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
                          progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
     if args.json:
         _emit(args, json.dumps(res.to_json(), indent=2))
-        return EXIT_OK
-    lines = [f"{robot.name}: {len(files)} logs, {sum(f['used'] for f in res.files)} samples used "
-             f"({args.method}); {model.n_params} model parameters"]
+        return _fleet_exit(args, res, files)
+    skipped = [s for s in res.skipped if s["stage"] == "read"]
+    lines = [f"{robot.name}: {len(files)} logs, {len(res.files)} used, {len(skipped)} skipped; "
+             f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
+    lines += [f"skipped: {s['error']}" for s in res.skipped]
     if res.spread is not None:
         rel = res.spread["std"] / np.maximum(np.abs(res.spread["mean"]), 1e-300)
         worst = np.argsort(rel)[::-1][:5]
@@ -685,6 +687,15 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
         lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in
                   zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
     _emit(args, "\n".join(lines))
+    return _fleet_exit(args, res, files)
+
+
+def _fleet_exit(args, res, files: list[str]) -> int:
+    """``--strict``: a fleet with a skipped log is an error (one line); otherwise the skips are reported only."""
+    if args.strict and res.skipped:
+        print(f"baseparams: error: --strict: {len(res.skipped)} of {len(files)} logs skipped "
+              f"(first: {res.skipped[0]['error']})", file=sys.stderr)
+        return EXIT_INPUT
     return EXIT_OK
 
 
@@ -926,6 +937,8 @@ def _identify_parser(sub, model_args) -> None:
                    help="several logs (a glob such as 'logs/robot-*/*.parquet'): one estimate per log and the "
                         "spread across them, on Dask")
     s.add_argument("--pooled", action="store_true", help="several logs: one estimate from all of them, on Dask")
+    s.add_argument("--strict", action="store_true",
+                   help="several logs: exit 2 when any log was skipped (default: report it, go on with the rest)")
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="a Dask scheduler (default DASK_SCHEDULER_ADDRESS, else a local cluster for this run)")
     s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
@@ -1283,6 +1296,32 @@ def _symbolic_args(s) -> None:
                    help="without --symbolic: numbers for the table's symbols (default: its 'values' line)")
 
 
+def _one_line_notes() -> None:
+    """A library note raised as a warning (numba cannot cache) reaches stderr as ``baseparams: note: ...``."""
+    import warnings
+
+    from .regressor.compiled import CompileCacheWarning
+
+    default = warnings.formatwarning
+    if getattr(default, "baseparams", False):
+        return
+
+    def fmt(message, category, filename, lineno, line=None):
+        if issubclass(category, CompileCacheWarning):
+            return f"baseparams: note: {message}\n"
+        return default(message, category, filename, lineno, line)
+
+    fmt.baseparams = True
+    warnings.formatwarning = fmt
+
+
+def _linalg_message(args, exc: Exception) -> str:
+    """One line for a numerical failure (an SVD that did not converge...): the input's numbers are to blame."""
+    what = getattr(args, "model", None) or getattr(args, "command", "baseparams")
+    return (f"{what}: the linear algebra failed ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
+            "the model's or the log's numbers are beyond what floating point handles (huge, tiny or badly scaled)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``baseparams`` command line.
 
@@ -1304,6 +1343,7 @@ def main(argv: list[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    _one_line_notes()
     if getattr(args, "samples", None) is not None and args.samples < 1:
         parser.error("--samples must be at least 1")
     if getattr(args, "seed", 0) < 0:
@@ -1313,6 +1353,9 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except BaseparamsError as exc:
         print(f"baseparams: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except np.linalg.LinAlgError as exc:
+        print(f"baseparams: error: {_linalg_message(args, exc)}", file=sys.stderr)
         return EXIT_INPUT
     except BrokenPipeError:  # e.g. piped into head
         sys.stderr.close()

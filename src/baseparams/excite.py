@@ -46,6 +46,7 @@ import numpy as np
 from .analysis import Analysis, analyze
 from .display import clip, format_number
 from .errors import BaseparamsError
+from .files import check_input
 from .ident.model import IdentModel, ident_model
 from .model.robot import Robot
 
@@ -1308,9 +1309,7 @@ def read_trajectory(path, robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndar
     BaseparamsError
         A missing or unreadable file, a missing column, non-numeric values.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise BaseparamsError(f"{p}: no such file")
+    p = check_input(path)
     delim = "\t" if p.suffix.lower() == ".tsv" else ","
     try:
         with open(p) as fh:

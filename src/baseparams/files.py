@@ -6,17 +6,117 @@ the target and renamed over it only when complete, so an interrupted run (SIGINT
 full disk, an exception) never leaves a partial file under the final name, and concurrent
 writers of one file leave one writer's complete content. :func:`refuse_inputs` refuses an
 output path that names one of the run's input files.
+
+Every reader of a user path goes through :func:`check_input` (or :func:`read_input_bytes`): a
+path that is not a regular file (a folder, ``/dev/zero``, a FIFO, a socket) is refused at once,
+in one line, and a robot file larger than :data:`MODEL_MAX_BYTES` is refused before it is read.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from .errors import BaseparamsError
+
+#: the largest robot file (URDF, MJCF, DH table) read, in bytes: 64 MB; the largest robot
+#: descriptions in use are a few MB, so a larger file is refused before it is read
+MODEL_MAX_BYTES = 64 * 2**20
+#: the largest small side file (a ``--columns`` TOML mapping) read, in bytes: 1 MB
+SMALL_MAX_BYTES = 2**20
+
+
+def _mb(n: int) -> str:
+    return f"{n / 2**20:.3g} MB"
+
+
+def check_input(path, max_bytes: int | None = None, folder_ok: bool = False, error=BaseparamsError) -> Path:
+    """Refuse an input path that is missing, not a regular file, or larger than ``max_bytes``.
+
+    The check is a ``stat`` (symbolic links followed): nothing is opened, so a FIFO or a device
+    never blocks and is refused at once.
+
+    Parameters
+    ----------
+    path : str or path
+        The input.
+    max_bytes : int, optional
+        The largest size accepted (default: no bound), e.g. :data:`MODEL_MAX_BYTES`.
+    folder_ok : bool
+        A folder is accepted too (a ROS 2 bag is a folder).
+    error : type
+        The exception class raised (a :class:`~baseparams.errors.BaseparamsError`).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    BaseparamsError
+        ``PATH: no such file``, ``PATH: not a regular file`` or ``PATH: N MB, larger than ...``.
+    """
+    p = Path(path)
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
+        raise error(f"{p}: no such file") from None
+    except OSError as exc:
+        raise error(f"{p}: cannot read ({exc.strerror or exc})") from None
+    if folder_ok and stat.S_ISDIR(st.st_mode):
+        return p
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"{p}: not a regular file")
+    if max_bytes is not None and st.st_size > max_bytes:
+        raise error(f"{p}: {_mb(st.st_size)}, larger than the {_mb(max_bytes)} such a file may have")
+    return p
+
+
+def read_input_bytes(path, max_bytes: int | None = MODEL_MAX_BYTES, error=BaseparamsError) -> bytes:
+    """The content of a regular file of at most ``max_bytes``, checked on the open file.
+
+    The file is opened without blocking and checked with ``fstat`` (so a path swapped for a FIFO
+    or a device after a check is still refused), then read up to ``max_bytes``.
+
+    Parameters
+    ----------
+    path : str or path
+        The input.
+    max_bytes : int or None
+        The largest size accepted (default :data:`MODEL_MAX_BYTES`; None: no bound).
+    error : type
+        The exception class raised.
+
+    Returns
+    -------
+    bytes
+        The content.
+
+    Raises
+    ------
+    BaseparamsError
+        As :func:`check_input`.
+    """
+    p = check_input(path, max_bytes, error=error)
+    try:
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise error(f"{p}: cannot read ({exc.strerror or exc})") from None
+    with os.fdopen(fd, "rb") as fh:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise error(f"{p}: not a regular file")
+        try:
+            data = fh.read(max_bytes + 1) if max_bytes is not None else fh.read()
+        except OSError as exc:
+            raise error(f"{p}: cannot read ({exc.strerror or exc})") from None
+    if max_bytes is not None and len(data) > max_bytes:
+        raise error(f"{p}: larger than the {_mb(max_bytes)} such a file may have")
+    return data
 
 
 def _same_file(a: Path, b: Path) -> bool:

@@ -9,8 +9,12 @@ per log (one robot each) and the spread across the fleet; ``pooled`` one estimat
 
 The cluster: ``client`` if given, else ``scheduler`` (an address, or Dask's own
 ``DASK_SCHEDULER_ADDRESS``), else a local cluster sized to the machine (one single-threaded worker
-process per core), started and stopped here. A worker that dies mid-run loses nothing: the
-scheduler runs its tasks again elsewhere.
+process per core), started and stopped here. A scheduler that does not answer within
+:data:`SCHEDULER_TIMEOUT_S` seconds (no listener, an unresolvable host) or a malformed address is
+one line naming the address. A worker that dies mid-run loses nothing: the
+scheduler runs its tasks again elsewhere. A bad log (unreadable, a wrong layout, too little
+motion to identify alone) does not stop the fleet: it is listed in :attr:`FleetResult.skipped`
+with its one-line reason and the others go on; only a fleet with no usable log is an error.
 
 Synthetic fleets for tests and benchmarks: :func:`simulate_fleet` writes one log per robot (a
 known parameter vector each), file by file, never holding the fleet; :func:`synthetic_factors` is
@@ -21,7 +25,7 @@ from __future__ import annotations
 
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +34,9 @@ from .display import clip
 from .errors import BaseparamsError
 from .ident.model import IdentModel
 from .ident.pipeline import Fit, fit
+
+#: seconds to wait for a scheduler given by address (``--scheduler``, ``DASK_SCHEDULER_ADDRESS``)
+SCHEDULER_TIMEOUT_S = 5.0
 
 
 def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff: float | None = None,
@@ -100,9 +107,13 @@ class FleetResult:
     pooled : Fit, optional
         One estimate from all logs (``None`` unless asked).
     files : list of dict
-        Per log: ``{"path", "read", "used", "removed"}``.
+        Per log used: ``{"path", "read", "used", "removed"}``.
     spread : dict, optional
         Across the per-file estimates: ``{"mean", "std"}`` per model parameter, ``(p,)`` each.
+    skipped : list of dict
+        Per log skipped: ``{"path", "error", "stage"}``: ``stage`` ``"read"`` (the log is not used at
+        all) or ``"fit"`` (read, but not identifiable alone: not in ``per_file``; its rows are in
+        the pooled estimate when one is asked for).
     """
 
     model: IdentModel
@@ -110,6 +121,7 @@ class FleetResult:
     pooled: Fit | None
     files: list[dict]
     spread: dict | None
+    skipped: list[dict] = field(default_factory=list)
 
     def __repr__(self) -> str:
         what = [f"{len(self.per_file)} per-file fits"] if self.per_file else []
@@ -123,11 +135,14 @@ class FleetResult:
         Returns
         -------
         dict
-            ``model, names, files, per_file{path: values}, pooled{values, std} | null,
-            spread{mean, std} | null``.
+            ``model, names, logs{given, used, skipped}, files, skipped, per_file{path: values},
+            pooled{values, std} | null, spread{mean, std} | null``.
         """
         names = self.model.names
-        return {"model": self.model.robot.name, "names": names, "files": self.files,
+        given = len(self.files) + sum(s["stage"] == "read" for s in self.skipped)
+        return {"model": self.model.robot.name, "names": names,
+                "logs": {"given": given, "used": len(self.files), "skipped": len(self.skipped)},
+                "files": self.files, "skipped": self.skipped,
                 "per_file": {k: f.theta.tolist() for k, f in self.per_file.items()},
                 "pooled": None if self.pooled is None else {"values": self.pooled.theta.tolist(),
                                                              "std": self.pooled.estimate.std.tolist()},
@@ -173,7 +188,8 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
     Raises
     ------
     BaseparamsError
-        No file, neither ``per_file`` nor ``pooled``, or dask missing (names the extra).
+        No file, no usable log (every one skipped), neither ``per_file`` nor ``pooled``, or dask
+        missing (names the extra).
     """
     paths = [str(p) for p in paths]
     if not paths:
@@ -181,29 +197,59 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
     if not (per_file or pooled):
         raise BaseparamsError("ask for per_file and/or pooled estimates")
     with _client(client, scheduler, workers) as cl:
-        futures = cl.map(file_factors, paths, model=model, memory_mb=memory_mb, cutoff=cutoff, min_speed=min_speed,
+        futures = cl.map(_file_task, paths, model=model, memory_mb=memory_mb, cutoff=cutoff, min_speed=min_speed,
                          pure=False)
         results = _gather(cl, futures, progress)
+    skipped = [i for a, i in results if a is None]
+    results = [(a, i) for a, i in results if a is not None]
+    if not results:
+        raise BaseparamsError(f"no usable log: all {len(paths)} skipped (first: {skipped[0]['error']})")
     accs = [a for a, _ in results]
     files = [i for _, i in results]
-    fits = {i["path"]: fit(model, a, method) for a, i in zip(accs, files)} if per_file else {}
+    fits = _per_file_fits(model, accs, files, method, skipped, progress) if per_file else {}
     spread = None
     if len(fits) > 1:
         thetas = np.array([f.theta for f in fits.values()])
         spread = {"mean": thetas.mean(axis=0), "std": thetas.std(axis=0, ddof=1)}
     pooled_fit = fit(model, _tree(accs), method) if pooled else None
-    return FleetResult(model, fits, pooled_fit, files, spread)
+    return FleetResult(model, fits, pooled_fit, files, spread, skipped)
+
+
+def _file_task(path: str, model: IdentModel, **kw):
+    """:func:`file_factors`, or ``(None, {"path", "error"})`` for a bad log (one line, the fleet goes on)."""
+    try:
+        return file_factors(path, model, **kw)
+    except (BaseparamsError, np.linalg.LinAlgError) as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        return None, {"path": str(path), "error": msg if str(path) in msg else f"{path}: {msg}", "stage": "read"}
+
+
+def _per_file_fits(model, accs, files, method, skipped, progress) -> dict:
+    """One fit per log; a log that cannot be identified alone is skipped (its rows stay in the pool)."""
+    fits = {}
+    for a, i in zip(accs, files):
+        try:
+            fits[i["path"]] = fit(model, a, method)
+        except (BaseparamsError, np.linalg.LinAlgError) as exc:
+            skipped.append({"path": i["path"], "error": f"{i['path']}: not identifiable alone: {exc}", "stage": "fit"})
+            if progress is not None:
+                progress(f"skipped {skipped[-1]['error']}")
+    return fits
 
 
 def _gather(cl, futures, progress):
-    """Results in submission order, reporting each as it finishes."""
+    """Results in submission order, reporting each as it finishes (a skipped log: one line saying why)."""
     from distributed import as_completed
 
     done = {}
     for k, fut in enumerate(as_completed(futures)):
         acc, info = fut.result()
         done[fut.key] = (acc, info)
-        if progress is not None:
+        if progress is None:
+            continue
+        if acc is None:
+            progress(f"[{k + 1}/{len(futures)}] skipped {info['error']}")
+        else:
             progress(f"[{k + 1}/{len(futures)}] {info['path']}: {info['used']} samples used of {info['read']}")
     return [done[f.key] for f in futures]
 
@@ -215,6 +261,15 @@ def _tree(accs):
         level = [combine_pair(level[k], level[k + 1]) if k + 1 < len(level) else level[k]
                  for k in range(0, len(level), 2)]
     return level[0]
+
+
+def _connect(client_class, address: str, source: str):
+    """A client of the scheduler at ``address``, or one line naming it (fails within the timeout)."""
+    try:
+        return client_class(address, timeout=SCHEDULER_TIMEOUT_S)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise BaseparamsError(f"{source} {address}: cannot connect to a Dask scheduler ({reason})") from None
 
 
 class _client:
@@ -233,7 +288,7 @@ class _client:
             raise BaseparamsError("fleet identification needs Dask: pip install 'baseparams[fleet]'") from None
         address = self.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
         if address:
-            cl = Client(address)
+            cl = _connect(Client, address, "--scheduler" if self.scheduler else "DASK_SCHEDULER_ADDRESS")
         else:
             n = self.workers or os.cpu_count() or 1
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)

@@ -6,6 +6,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import BaseparamsError
+from ..files import MODEL_MAX_BYTES, check_input
 from ..kinematics.loops import assemble
 from ..model.robot import Robot
 from .mjcf import load_mjcf
@@ -46,12 +47,11 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     Raises
     ------
     BaseparamsError
-        A missing file or an unknown suffix; :class:`~baseparams.errors.ModelError` (a
+        A missing file, not a regular file (a folder, a device, a FIFO), larger than
+        :data:`~baseparams.files.MODEL_MAX_BYTES`, or an unknown suffix; :class:`~baseparams.errors.ModelError` (a
         subclass) for an invalid model.
     """
-    p = Path(path)
-    if not p.exists():
-        raise BaseparamsError(f"{p}: no such file")
+    p = check_input(path, MODEL_MAX_BYTES)  # a regular file of at most 64 MB, refused before reading
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         suffix = p.suffix.lower()

@@ -74,6 +74,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError
+from ..files import SMALL_MAX_BYTES, check_input, read_input_bytes
 from ..ident.data import JointLog
 from ..model.robot import Robot
 
@@ -105,6 +106,7 @@ class _Table:
     removed: dict[str, int] = field(default_factory=dict)
     is_bag: bool = False
     booleans: set = field(default_factory=set)  # columns stored as true/false (refused when used)
+    text: dict[str, str] = field(default_factory=dict)  # columns that are not numbers -> the error if one is read
 
     def row(self, i: int) -> str:
         return self.row_fmt.format(int(self.rows[i]), i + 1)
@@ -172,9 +174,7 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         One line naming the file, the column and the row, for any problem listed in the module
         docstring (and a missing optional package: the extra to install).
     """
-    p = Path(path)
-    if not p.exists():
-        raise DataError(f"{p}: no such file")
+    p = check_input(path, folder_ok=True, error=DataError)  # a file or a bag folder, never a device or FIFO
     spec = _mapping(columns)
     kind = _kind(p)
     if kind == "bag":
@@ -214,10 +214,9 @@ def _mapping(columns) -> dict:
         raw: dict = {}
     elif isinstance(columns, (str, Path)) and Path(columns).suffix.lower() == ".toml":
         label = str(columns)
+        data = read_input_bytes(columns, SMALL_MAX_BYTES, error=DataError)
         try:
-            raw = tomllib.loads(Path(columns).read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise DataError(f"{columns}: cannot read the mapping file ({exc.strerror or exc})") from None
+            raw = tomllib.loads(data.decode("utf-8"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise DataError(f"{columns}: not a valid TOML mapping ({str(exc).splitlines()[0]})") from None
     elif isinstance(columns, str):
@@ -303,9 +302,9 @@ def _read_text(path: Path) -> _Table:
         i = int(np.argmax(bad))
         raise DataError(f"{path}: line {numbers[i + 1]} (data row {i + 1}): {counts[i]} fields, the header has "
                         f"{len(names)} (columns of different lengths; {_plural(bad.sum(), 'such row')})")
-    values = _parse_numbers(path, data, delim, names, numbers[1:])
+    values, text_columns = _parse_numbers(path, data, delim, names, numbers[1:])
     table = _Table(str(path), {n: values[:, k] for k, n in enumerate(names)}, numbers[1:],
-                   "line {0} (data row {1})")
+                   "line {0} (data row {1})", text=text_columns)
     skipped = len(lines) - len(numbers)
     table.notes.append(f"{path.name}: {len(data)} rows, delimiter {_delim_name(delim)}"
                        + (f"; {_plural(skipped, 'blank or comment line')} skipped" if skipped else ""))
@@ -345,16 +344,24 @@ def _check_header(path: Path, names: list[str], line: int) -> None:
         seen[n] = k
 
 
-def _parse_numbers(path: Path, data: list[str], delim: str, names: list[str], numbers: np.ndarray) -> np.ndarray:
-    """``(S, columns)`` floats; a cell that is not a number is one line naming it."""
+def _parse_numbers(path: Path, data: list[str], delim: str, names: list[str], numbers: np.ndarray
+                   ) -> tuple[np.ndarray, dict[str, str]]:
+    """``(S, columns)`` floats and ``{column: message}`` for columns that are not all numbers.
+
+    Such a column (a ``comment`` column) is NaN here; its message (naming the first cell that is
+    not a number) is the error only if the layout reads the column.
+    """
     try:
-        return np.loadtxt(data, delimiter=delim, dtype=float, comments=None, ndmin=2, encoding=None)
+        return np.loadtxt(data, delimiter=delim, dtype=float, comments=None, ndmin=2, encoding=None), {}
     except ValueError:
         pass
     cells = np.loadtxt(data, delimiter=delim, dtype=str, comments=None, ndmin=2, encoding=None)
+    values = np.full(cells.shape, np.nan)
+    text: dict[str, str] = {}
     for k, n in enumerate(names):  # a loop over columns; bisection over rows
         col = np.char.strip(cells[:, k])
         if _floats_ok(col):
+            values[:, k] = col.astype(float)
             continue
         lo, hi = 0, len(col)
         while hi - lo > 1:
@@ -363,8 +370,8 @@ def _parse_numbers(path: Path, data: list[str], delim: str, names: list[str], nu
         value = str(col[lo])
         hint = " (decimal comma?)" if "," in value and delim != "," else ""
         what = "an empty field" if not value else f"{value!r} is not a number{hint}"
-        raise DataError(f"{path}: column {n!r}, line {numbers[lo]} (data row {lo + 1}): {what}")
-    raise DataError(f"{path}: cannot read the numbers")  # pragma: no cover - loadtxt and astype agree
+        text[n] = f"{path}: column {n!r}, line {numbers[lo]} (data row {lo + 1}): {what}"
+    return values, text
 
 
 def _floats_ok(col: np.ndarray) -> bool:
@@ -651,6 +658,9 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_tr
     if tcol not in table.columns and not untimed:
         raise DataError(f"{table.source}: no time column {tcol!r} (columns: {', '.join(list(table.columns)[:12])})")
     used = ([] if untimed else [tcol]) + [c for x in joints for c in x.cols.values() if c is not None]
+    for c in used:
+        if c in table.text:
+            raise DataError(table.text[c])
     _check_finite(table, used)
     if untimed:
         t = np.arange(len(table.columns[joints[0].cols["q"]]), dtype=float)
@@ -671,7 +681,7 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_tr
         else:
             arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
     _check_plausible(table, joints, arrays["q"], max_angle, max_travel)
-    unused = [c for c in table.columns if c not in used]
+    unused = [c + (" (text)" if c in table.text else "") for c in table.columns if c not in used]
     notes = list(table.notes) + _conversion_notes(joints, spec)
     if unused:
         notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"

@@ -39,7 +39,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from ..files import MODEL_MAX_BYTES, check_input
 from ..kinematics.loops import choose_independent
+from ..model.bounds import check_magnitude
 from ..model.builder import RobotBuilder, quat_pose
 from ..model.inertia import Inertia, check_inertia
 from ..model.robot import Coupling, Robot, compound_screw
@@ -49,9 +51,14 @@ class MJCFWarning(UserWarning):
     """Something in an MJCF file read with a caveat (stripped assets, ignored weld options...)."""
 
 
-def _first_line(exc: BaseException) -> str:
+def _one_line(exc: BaseException) -> str:
+    """MuJoCo's whole message on one line (its reason is often on the second: ``XML parse error 18:``)."""
     text = str(exc).strip() or type(exc).__name__
-    return text.splitlines()[0].strip()
+    out = ""
+    for line in (x.strip() for x in text.splitlines()):
+        if line:
+            out += ("" if not out else " " if out.endswith(":") else "; ") + line
+    return out
 
 
 def _import_mujoco():
@@ -116,13 +123,13 @@ def _compile(mj, path: Path):
     try:
         spec = mj.MjSpec.from_file(str(path))
     except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others
-        raise ModelError(f"{path}: {_first_line(exc)}") from None
+        raise ModelError(f"{path}: {_one_line(exc)}") from None
     try:
         return spec.compile(), [], set()
     except Exception as exc:  # noqa: BLE001
         first = exc
     if not _ASSET_ERROR.search(str(first)):
-        raise ModelError(f"{path}: {_first_line(first)}")
+        raise ModelError(f"{path}: {_one_line(first)}")
     base = path.parent
     spec = mj.MjSpec.from_file(str(path))
     lost = _strip_assets(mj, spec, base, everything=False)
@@ -144,8 +151,8 @@ def _compile(mj, path: Path):
             hit = re.search(r"mass and inertia of moving bodies.*?Element name '([^']*)'", msg, re.DOTALL)
             body = spec.body(hit.group(1)) if hit and hit.group(1) else None
             if body is None or body.name not in lost or body.explicitinertial:
-                raise ModelError(f"{path}: {_first_line(exc)} (after stripping missing asset files: "
-                                 f"{_first_line(first)})") from None
+                raise ModelError(f"{path}: {_one_line(exc)} (after stripping missing asset files: "
+                                 f"{_one_line(first)})") from None
             body.explicitinertial = True  # this body only: its inertia came from stripped geoms
             body.mass, body.ipos, body.iquat, body.inertia = 1e-3, [0, 0, 0], [1, 0, 0, 0], [1e-6] * 3
             placeholders.append(body.name)
@@ -154,7 +161,7 @@ def _compile(mj, path: Path):
     never = fromgeom == mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
     affected = sorted(b for b in lost if not never and (always or not spec.body(b).explicitinertial
                                                         or b in placeholders))
-    notes.append(f"{path}: missing asset files ({_first_line(first)}): stripped them and the geoms using them")
+    notes.append(f"{path}: missing asset files ({_one_line(first)}): stripped them and the geoms using them")
     for b in affected:
         what = "a placeholder inertia (mass 1e-3)" if b in placeholders else "the remaining geoms"
         notes.append(f"{path}: body {b!r}: its inertia came from stripped geoms; {what} used instead "
@@ -208,18 +215,39 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
     InertiaWarning
         Physically infeasible inertias of moving bodies (without ``strict_inertia``).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise ModelError(f"{path}: no such file")
+    path = check_input(path, MODEL_MAX_BYTES, error=ModelError)
     mj = _import_mujoco()
     out = _compile(mj, path)
     model, notes = out[0], out[1]
     for note in notes:
         warnings.warn(note, MJCFWarning, stacklevel=2)
+    _check_model(model, path)
     data = mj.MjData(model)
     data.qpos[:] = model.qpos0
     mj.mj_kinematics(model, data)
     return _robot(mj, model, data, path, name, gravity, floating, strict_inertia)
+
+
+def _check_model(model, path: Path) -> None:
+    """Refuse names that are not UTF-8 and absurd numbers (:mod:`baseparams.model.bounds`), naming the element."""
+    for raw in bytes(model.names).split(b"\0"):
+        try:
+            raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ModelError(f"{path}: the name '{raw.decode('utf-8', 'backslashreplace')}' is not UTF-8 text "
+                             f"(byte 0x{raw[exc.start]:02x}); names must be UTF-8") from None
+    checks = [("body", "pos", model.body_pos, "length"), ("body", "inertial pos", model.body_ipos, "length"),
+              ("body", "mass", model.body_mass, "mass"), ("body", "inertia", model.body_inertia, "inertia"),
+              ("jnt", "pos", model.jnt_pos, "length")]
+    for kind, attr, values, bound in checks:
+        for i in range(1 if kind == "body" else 0, len(values)):  # body 0: the world
+            label = "body" if kind == "body" else "joint"
+            check_magnitude(values[i], bound, f"{path}: <{label} name={_name(model, kind, i, f'{label}{i}')!r}> {attr}")
+    for i in range(model.njnt):
+        if not np.all(np.isfinite(model.jnt_axis[i])) or np.linalg.norm(model.jnt_axis[i]) < 0.5:
+            name = _name(model, "jnt", i, f"joint{i}")
+            raise ModelError(f"{path}: <joint name={name!r}> axis: zero or not finite after normalisation "
+                             "(components beyond 1e154?)")
 
 
 def _name(model, kind, i: int, fallback: str) -> str:

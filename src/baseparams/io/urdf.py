@@ -28,6 +28,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import ModelError, NoMovingBodiesError
+from ..files import MODEL_MAX_BYTES, read_input_bytes
+from ..model.bounds import check_magnitude
 from ..model.builder import RobotBuilder, pose
 from ..model.inertia import Inertia, check_inertia
 from ..model.robot import Coupling, Robot
@@ -42,7 +44,8 @@ class URDFWarning(UserWarning):
     """A tolerated irregularity in a URDF+ file (e.g. the ``sucessor`` spelling)."""
 
 
-def _floats(text: str | None, n: int, what: str, default) -> np.ndarray:
+def _floats(text: str | None, n: int, what: str, default, kind: str | None = None) -> np.ndarray:
+    """``n`` finite numbers from an attribute (``default`` when absent); ``kind``: bounded (model.bounds)."""
     if text is None:
         return np.asarray(default, dtype=float)
     hint = ("; unexpanded xacro/roslaunch substitution; run xacro first"
@@ -53,6 +56,8 @@ def _floats(text: str | None, n: int, what: str, default) -> np.ndarray:
         raise ModelError(f"{what}: expected {n} numbers, got {text!r}{hint}") from None
     if v.shape != (n,) or not np.all(np.isfinite(v)):
         raise ModelError(f"{what}: expected {n} finite numbers, got {text!r}")
+    if kind is not None:
+        check_magnitude(v, kind, what)
     return v
 
 
@@ -62,10 +67,7 @@ def _parse(path: Path) -> ET.Element:
     That is a UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after
     the root element. Anything else malformed is a one-line error naming the file.
     """
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    data = read_input_bytes(path, MODEL_MAX_BYTES, error=ModelError)
     if data.startswith(b"\xef\xbb\xbf"):
         data = data[3:]
     body = data.lstrip(b" \t\r\n")
@@ -82,8 +84,8 @@ def _parse(path: Path) -> ET.Element:
 def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
     if elem is None:
         return np.eye(4)
-    return pose(_floats(elem.get("xyz"), 3, f"{what} <origin xyz>", (0, 0, 0)),
-                _floats(elem.get("rpy"), 3, f"{what} <origin rpy>", (0, 0, 0)))
+    return pose(_floats(elem.get("xyz"), 3, f"{what} <origin xyz>", (0, 0, 0), "length"),
+                _floats(elem.get("rpy"), 3, f"{what} <origin rpy>", (0, 0, 0), "angle"))
 
 
 def _inertial(link: ET.Element, what: str, check: bool = True, strict: bool = False) -> Inertia | None:
@@ -96,14 +98,14 @@ def _inertial(link: ET.Element, what: str, check: bool = True, strict: bool = Fa
     if inl is None:
         return None
     m = inl.find("mass")
-    mass = float(_floats(m.get("value") if m is not None else None, 1, f"{what} <mass value>", (0.0,))[0])
+    mass = float(_floats(m.get("value") if m is not None else None, 1, f"{what} <mass value>", (0.0,), "mass")[0])
     it = inl.find("inertia")
     if it is None:
         j = np.zeros((3, 3))
     else:
         v = {}
         for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
-            v[k] = float(_floats(it.get(k), 1, f"{what} <inertia {k}>", (0.0,))[0])
+            v[k] = float(_floats(it.get(k), 1, f"{what} <inertia {k}>", (0.0,), "inertia")[0])
         j = np.array([[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]], [v["ixz"], v["iyz"], v["izz"]]])
     if check:
         check_inertia(mass, j, what, strict=strict)
@@ -260,8 +262,8 @@ def _mimic(mim: ET.Element, what: str) -> tuple[str, float, float]:
     leader = mim.get("joint")
     if not leader:
         raise ModelError(f"{what}: <mimic> needs a joint attribute")
-    mult = float(_floats(mim.get("multiplier"), 1, f"{what} <mimic multiplier>", (1.0,))[0])
-    off = float(_floats(mim.get("offset"), 1, f"{what} <mimic offset>", (0.0,))[0])
+    mult = float(_floats(mim.get("multiplier"), 1, f"{what} <mimic multiplier>", (1.0,), "axis")[0])
+    off = float(_floats(mim.get("offset"), 1, f"{what} <mimic offset>", (0.0,), "length")[0])
     return leader, mult, off
 
 
@@ -348,10 +350,10 @@ def _add_tree(b: RobotBuilder, ix: _Index, base: str, floating: bool, limits: li
 def _joint_axes(jt: ET.Element, t: str, what: str) -> tuple[np.ndarray, np.ndarray | None]:
     """``(axis, axis2)`` of a joint of type ``t`` (``axis2`` only for U, which needs it)."""
     axis_el = jt.find("axis")
-    axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0))
+    axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0), "axis")
     axis2_el = jt.find("axis2")
     axis2 = _floats(axis2_el.get("xyz") if axis2_el is not None else None, 3, f"{what} <axis2 xyz>",
-                    (0, 1, 0)) if t == "U" else None
+                    (0, 1, 0), "axis") if t == "U" else None
     if t in ("R", "P", "U") and np.linalg.norm(axis) < 1e-12:
         raise ModelError(f"{what}: zero joint axis")
     if t == "U" and axis2_el is None:
@@ -437,9 +439,10 @@ def _add_loops(b: RobotBuilder, root: ET.Element, links: dict[str, ET.Element], 
             if ref not in links:
                 raise ModelError(f"{what}: unknown link {ref!r}")
         axis_el = lp.find("axis")
-        axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0))
+        axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0), "axis")
         axis2_el = lp.find("axis2")
-        axis2 = _floats(axis2_el.get("xyz") if axis2_el is not None else None, 3, f"{what} <axis2 xyz>", (0, 1, 0))
+        axis2 = _floats(axis2_el.get("xyz") if axis2_el is not None else None, 3, f"{what} <axis2 xyz>", (0, 1, 0),
+                        "axis")
         b.add_loop(lname, _LOOP_TYPES[t], parent=pl, child=sl, origin=_origin(pred.find("origin"), what),
                    axis=axis, axis2=axis2 if _LOOP_TYPES[t] == "U" else None,
                    child_origin=_origin(succ.find("origin"), what))
@@ -455,7 +458,7 @@ def _read_couplings(root: ET.Element, path: Path) -> list[tuple[str, str, str, f
         pred, succ = _pred_succ(cp, what, f"<coupling name={cname!r}>", path)
         ratio_el = cp.find("ratio")
         ratio = float(_floats(ratio_el.get("value") if ratio_el is not None else None, 1, f"{what} <ratio value>",
-                              (1.0,))[0])
+                              (1.0,), "axis")[0])
         couplings.append((cname, _link_ref(pred, f"{what} <predecessor>", path, stacklevel=5),
                           _link_ref(succ, f"{what} <successor>", path, stacklevel=5), ratio, 0.0))
     return couplings
@@ -683,11 +686,22 @@ def _exact_inertial(n: np.ndarray, what: str, rot: np.ndarray | None = None) -> 
         frame[:3, 3] = [float(v) for v in vals["xyz"].split()]
         back = Inertia(float(vals["mass"]), com=(0.0, 0.0, 0.0), inertia=jj, frame=frame).pseudo()
         err = float(np.abs(back - n).max()) if np.all(np.isfinite(back)) else np.inf
+        if not _within_bounds(float(vals["mass"]), frame[:3, 3], jj):
+            err = np.inf  # beyond the reader's bounds (model.bounds): the written file would be refused
+            break
         if err <= 1e-9 * scale:
             return vals
     raise ModelError(f"{what}: mass {m:.6g} with first moment |m c| = {hn:.3g} puts the centre of mass "
                      f"{np.linalg.norm(c):.3g} m from the link frame; a URDF <inertial> re-reads it with "
                      f"relative error {err / max(scale, np.finfo(float).tiny):.2g} (> 1e-9): not representable")
+
+
+def _within_bounds(m: float, c: np.ndarray, j: np.ndarray) -> bool:
+    """Whether the reader would accept these values (:mod:`baseparams.model.bounds`)."""
+    from ..model import bounds
+
+    return (abs(m) <= bounds.MAX_MASS and bool(np.all(np.abs(c) <= bounds.MAX_LENGTH))
+            and bool(np.all(np.abs(j) <= bounds.MAX_INERTIA)))
 
 
 def _edit_inertial(edit, link, vals: dict) -> None:

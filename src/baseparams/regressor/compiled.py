@@ -12,13 +12,16 @@ the cached machine code costs ~0.3-0.5 s per process, so :func:`baseparams.regre
 loads the kernels only for batches of at least :data:`MIN_WORK` (samples x rows x bodies), or
 when they are already loaded. The first call on a
 machine compiles (~10-20 s) and caches the result next to this file (or in
-``NUMBA_CACHE_DIR``); later processes load it.
+``NUMBA_CACHE_DIR``); later processes load it. Where nothing can be cached (a read-only install
+with an unwritable HOME / ``NUMBA_CACHE_DIR``) the kernels are compiled in memory in each process
+and a :class:`CompileCacheWarning` says so once.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import sys
+import warnings
 from functools import lru_cache
 
 import numpy as np
@@ -53,11 +56,19 @@ def loaded() -> bool:
     return "baseparams.regressor.kernels" in sys.modules
 
 
+class CompileCacheWarning(UserWarning):
+    """numba cannot cache the compiled kernels on disk: they are compiled in memory in each process."""
+
+
 @lru_cache(maxsize=1)
 def _kernels():
     """Compile (or load from the on-disk cache) the kernels; imported lazily."""
     from . import kernels as k
 
+    if not k.CACHE:
+        warnings.warn("numba cannot cache its compiled code here (a read-only install, an unwritable HOME or "
+                      "NUMBA_CACHE_DIR): the regressor kernels are compiled in memory in each run (~10-20 s); "
+                      "set NUMBA_CACHE_DIR to a writable folder to keep them", CompileCacheWarning, stacklevel=2)
     return k
 
 

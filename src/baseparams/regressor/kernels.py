@@ -18,12 +18,34 @@ from numba import njit, prange
 _BLOCK = 64
 
 
-@njit(cache=True, inline="always")
+def _cache_usable() -> bool:
+    """Whether numba can cache these kernels on disk.
+
+    A read-only install with an unwritable HOME or ``NUMBA_CACHE_DIR`` has no cache locator:
+    ``njit(cache=True)`` then raises at decoration. Without one, the kernels are compiled in
+    memory, once per process (:func:`baseparams.regressor.compiled._kernels` says so).
+    """
+    try:
+        njit(cache=True)(_probe)
+    except RuntimeError:  # "cannot cache function ...: no locator available"
+        return False
+    return True
+
+
+def _probe():  # pragma: no cover - never compiled: only its cache locator is looked up
+    return 0
+
+
+#: the kernels are cached on disk (False: compiled in memory in each process)
+CACHE = _cache_usable()
+
+
+@njit(cache=CACHE, inline="always")
 def _cross(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _exp_screw(sw, theta, er, et):
     """``exp(screw^ theta)``: rotation ``er (3, 3)``, translation ``et (3,)`` (|omega| = 1 or 0).
 
@@ -53,7 +75,7 @@ def _exp_screw(sw, theta, er, et):
     et[2] = theta * v2 + c * x2 + ts * y2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _exp_twist(q, smp, j0, rot, pos, i):
     """``exp(xi^)`` of the twist ``xi = q[smp, j0:j0 + 6]`` into ``rot[i], pos[i]`` (series near 0)."""
     w0, w1, w2 = q[smp, j0], q[smp, j0 + 1], q[smp, j0 + 2]
@@ -82,7 +104,7 @@ def _exp_twist(q, smp, j0, rot, pos, i):
     pos[i, 2] = v2 + b * x2 + c * y2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _body(i, smp, parent, q_index, ndofs, floating, screws, q, dq, ddq, rot, pos, vel, acc, lines, er, et):
     """Kinematics of body ``i`` for sample ``smp``: pose, twist, acceleration, its joint lines."""
     p = parent[i]
@@ -145,7 +167,7 @@ def _body(i, smp, parent, q_index, ndofs, floating, screws, q, dq, ddq, rot, pos
                 rot[i, x, y] = r0 * er[0, y] + r1 * er[1, y] + r2 * er[2, y]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _bar(i, rot, pos, vel, acc, gravity, pair_m, pair_n, pts, pacc, xs):
     """Swapped bar lines ``xs[i] (6, 10)`` of body ``i`` (component first) from its motion.
 
@@ -181,7 +203,7 @@ def _bar(i, rot, pos, vel, acc, gravity, pair_m, pair_n, pts, pacc, xs):
         xs[i, 0, k], xs[i, 1, k], xs[i, 2, k], xs[i, 3, k], xs[i, 4, k], xs[i, 5, k] = c0, c1, c2, d0, d1, d2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _sample(smp, parent, q_index, ndofs, floating, screws, gravity, pair_m, pair_n, q, dq, ddq,
             rot, pos, vel, acc, lines, xs, er, et, pts, pacc):
     """Phase 1 for sample ``smp``: every body's kinematics and swapped bar lines."""
@@ -190,7 +212,7 @@ def _sample(smp, parent, q_index, ndofs, floating, screws, gravity, pair_m, pair
         _bar(i, rot, pos, vel, acc, gravity, pair_m, pair_n, pts, pacc, xs)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _dot_block(out, smp, r, i, l0, l1, l2, l3, l4, l5, xs):
     """``out[smp, r, 10 i + k] = (l0..l5) . xs[i, :, k]`` for the ten columns of body ``i``."""
     base = 10 * i
@@ -199,7 +221,7 @@ def _dot_block(out, smp, r, i, l0, l1, l2, l3, l4, l5, xs):
                                  + l3 * xs[i, 3, k] + l4 * xs[i, 4, k] + l5 * xs[i, 5, k])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _zero_block(out, smp, r, i):
     """Zero the ten columns of body ``i``, reading first: a zero stays unwritten (no store)."""
     for k in range(10 * i, 10 * i + 10):
@@ -207,7 +229,7 @@ def _zero_block(out, smp, r, i):
             out[smp, r, k] = 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _copy_block(out, smp, r, i, c, xs):
     """``out[smp, r, 10 i + k] = xs[i, c, k]``: a floating root's basis line ``e_c``."""
     base = 10 * i
@@ -215,7 +237,7 @@ def _copy_block(out, smp, r, i, c, xs):
         out[smp, r, base + k] = xs[i, c, k]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _unit(floating, q_index, dof):
     """``(dof,)``: for a floating root's coordinates the index of their basis line ``e_c``, else -1."""
     unit = np.full(dof, -1, dtype=np.int64)
@@ -226,7 +248,7 @@ def _unit(floating, q_index, dof):
     return unit
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _moves(n, dof, anc_ptr, anc):
     """Dense ``(dof, n)`` mask: coordinate ``j`` moves body ``i``."""
     moves = np.zeros((dof, n), dtype=np.bool_)
@@ -236,7 +258,7 @@ def _moves(n, dof, anc_ptr, anc):
     return moves
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _scratch(n, dof):
     """One thread's work arrays, carved from one allocation padded by 1 KiB on both sides.
 
@@ -266,7 +288,7 @@ def _scratch(n, dof):
     return rot, pos, vel, acc, lines, xs, er, et, pts, pacc
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def tree(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n, q, dq, ddq, out):
     """TP regressor of a tree into ``out (S, dof, 10 n)`` (every entry right, zeros read before written)."""
     n, dof, s = parent.shape[0], screws.shape[0], q.shape[0]
@@ -290,7 +312,7 @@ def tree(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m
                         _dot_block(out, smp, j, i, l0, l1, l2, l3, l4, l5, xs)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def closed(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n, q, dq, ddq, G,
            out):
     """Closed-loop TP regressor into ``out (S, na, 10 n)``: lines ``L~_a^i = sum_k L_k^i G[k, a]``."""
@@ -313,7 +335,7 @@ def closed(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair
                     _dot_block(out, smp, a, i, lt[0], lt[1], lt[2], lt[3], lt[4], lt[5], xs)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _emit_projected(out, smp, r, i, l0, l1, l2, l3, l4, l5, c, xs, y10, cptr, ccol, cmat):
     """``out[smp, r, ccol[t]] += (L . xs[i])[k] cmat[t, k]`` over the projected columns of body ``i``."""
     for k in range(10):
@@ -329,7 +351,7 @@ def _emit_projected(out, smp, r, i, l0, l1, l2, l3, l4, l5, c, xs, y10, cptr, cc
         out[smp, r, ccol[t]] += v
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def tree_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n, q, dq, ddq,
                    rowsel, cptr, ccol, cmat, out):
     """``out (S, len(rowsel), m) = Y[:, rowsel] @ P`` without forming ``Y``.
@@ -356,7 +378,7 @@ def tree_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, a
                         _emit_projected(out, smp, r, i, l0, l1, l2, l3, l4, l5, unit[j], xs, y10, cptr, ccol, cmat)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def closed_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n, q, dq, ddq,
                      G, cptr, ccol, cmat, out):
     """``out (S, na, m) = Y_closed @ P`` without forming the closed-loop regressor.

@@ -34,6 +34,7 @@ from pathlib import Path
 import sympy as sp
 
 from ..errors import ModelError
+from ..files import MODEL_MAX_BYTES, read_input_bytes
 from .angles import cos_sin
 from .expr import ExpressionError, parse
 from .geometry import SymbolicBuilder, SymbolicRobot, exact, rot, trans
@@ -157,6 +158,15 @@ def _values(words: list[str], where: str) -> dict:
     return out
 
 
+def _read_text(path: Path) -> str:
+    """A table file's text: a regular UTF-8 file of at most 64 MB (:func:`baseparams.files.read_input_bytes`)."""
+    data = read_input_bytes(path, MODEL_MAX_BYTES, error=ModelError)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ModelError(f"{path}: not a UTF-8 text file (byte {e.start})") from None
+
+
 def read_table(path: str | Path, text: str | None = None) -> SymbolicRobot:
     """Read a DH table file (module docstring for the format).
 
@@ -179,10 +189,7 @@ def read_table(path: str | Path, text: str | None = None) -> SymbolicRobot:
     """
     path = Path(path)
     if text is None:
-        try:
-            text = path.read_text()
-        except OSError as e:
-            raise ModelError(f"{path}: cannot read ({e.strerror})") from None
+        text = _read_text(path)
     meta = {"name": path.stem, "convention": "modified", "gravity": (0, 0, -9.81), "values": {}, "description": ""}
     header, rows = None, []
     for no, raw in enumerate(text.splitlines(), start=1):
@@ -282,7 +289,7 @@ def load_symbolic(model: str) -> SymbolicRobot:
     from .examples import EXAMPLES
 
     p = Path(model)
-    if p.is_file():
+    if p.exists() or model.lower().endswith(".dh"):  # read_table refuses a folder, a device, a FIFO
         return read_table(p)
     key = model.lower()
     if key in EXAMPLES:

@@ -183,7 +183,8 @@ READERS = {  # argv with {p} the hostile path
 
 
 # a folder given as a log is read as a ROS 2 bag (refused for its missing metadata.yaml: tests/test_logs.py)
-CASES = [(r, k) for r in READERS for k in ("device", "fifo", "folder") if not (k == "folder" and r in ("log", "bag file"))]
+CASES = [(r, k) for r in READERS for k in ("device", "fifo", "folder")
+         if not (k == "folder" and r in ("log", "bag file"))]
 
 
 @pytest.mark.parametrize("reader, kind", CASES)

@@ -196,10 +196,12 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         raise BaseparamsError("no log file to identify")
     if not (per_file or pooled):
         raise BaseparamsError("ask for per_file and/or pooled estimates")
+    # workers of an existing cluster run elsewhere: they get absolute paths, reports the ones given
+    given = {os.path.abspath(p): p for p in paths}
     with _client(client, scheduler, workers) as cl:
-        futures = cl.map(_file_task, paths, model=model, memory_mb=memory_mb, cutoff=cutoff, min_speed=min_speed,
-                         pure=False)
-        results = _gather(cl, futures, progress)
+        futures = cl.map(_file_task, [os.path.abspath(p) for p in paths], model=model, memory_mb=memory_mb,
+                         cutoff=cutoff, min_speed=min_speed, pure=False)
+        results = _gather(cl, futures, progress, given)
     skipped = [i for a, i in results if a is None]
     results = [(a, i) for a, i in results if a is not None]
     if not results:
@@ -213,6 +215,14 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         spread = {"mean": thetas.mean(axis=0), "std": thetas.std(axis=0, ddof=1)}
     pooled_fit = fit(model, _tree(accs), method) if pooled else None
     return FleetResult(model, fits, pooled_fit, files, spread, skipped)
+
+
+def _as_given(info: dict, given: dict[str, str]) -> dict:
+    """A task's report with the path as the user gave it (tasks see absolute paths)."""
+    if not isinstance(info, dict) or info.get("path") not in given:
+        return info
+    shown, absolute = given[info["path"]], info["path"]
+    return {k: (v.replace(absolute, shown) if isinstance(v, str) else v) for k, v in info.items()}
 
 
 def _file_task(path: str, model: IdentModel, **kw):
@@ -237,13 +247,14 @@ def _per_file_fits(model, accs, files, method, skipped, progress) -> dict:
     return fits
 
 
-def _gather(cl, futures, progress):
+def _gather(cl, futures, progress, given=None):
     """Results in submission order, reporting each as it finishes (a skipped log: one line saying why)."""
     from distributed import as_completed
 
     done = {}
     for k, fut in enumerate(as_completed(futures)):
         acc, info = fut.result()
+        info = _as_given(info, given or {})
         done[fut.key] = (acc, info)
         if progress is None:
             continue
@@ -515,7 +526,7 @@ def analyze_fleet(paths, *, client=None, scheduler: str | None = None, workers: 
     """
     from distributed import as_completed
 
-    paths = [str(p) for p in paths]
+    paths = [str(p) if "://" in str(p) or not Path(p).exists() else os.path.abspath(p) for p in paths]
     with _client(client, scheduler, workers) as cl:
         futures = cl.map(analyze_file, paths, floating=floating, convention=convention, rows=rows, pure=False)
         done = {}

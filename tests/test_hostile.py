@@ -337,3 +337,23 @@ def test_a_text_column_the_layout_does_not_read_is_ignored_with_a_note(tmp_path)
     f.write_text("\n".join(bad) + "\n")
     with pytest.raises(DataError, match=r"column 'q_joint1', line 5 \(data row 4\): 'oops' is not a number"):
         read_log(f, robot)
+
+
+def test_a_model_beyond_the_memory_available_is_refused_before_allocating(monkeypatch):
+    """A 10 000-link chain asked for 22 GB inside DRNG; now one line before any allocation."""
+    import time
+
+    import numpy as np
+
+    import baseparams
+    from baseparams import analysis
+    from baseparams.errors import BaseparamsError
+    from baseparams.robots.random import random_robot
+
+    robot = random_robot(np.random.default_rng(0), n=60, joint_types="R", branching=0.0)
+    monkeypatch.setattr(analysis, "_available_bytes", lambda: 50e6)  # a small machine: 50 MB free
+    t0 = time.perf_counter()
+    with pytest.raises(BaseparamsError, match=r"60 bodies: the certified analysis needs about 0\.09 GB .* --no-verify"):
+        baseparams.analyze(robot)
+    assert time.perf_counter() - t0 < 1.0
+    assert baseparams.analyze(robot, verify=False).nullity > 0  # 0.029 GB: fits

@@ -512,6 +512,7 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
 
     from .numerics import blas_threads
 
+    _check_memory(robot, verify)
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
     with blas_threads():  # small dense factorizations: one BLAS thread (numerics.blas_threads)
         res = drng(robot, extended=extended, rows=rows)
@@ -528,6 +529,37 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
         base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended)
+
+
+#: measured peak memory per squared body count [bytes]: certified analysis, and DRNG + regrouping
+#: alone (random serial chains of 50-800 bodies on the benchmark machine; the dense factors of
+#: the 10 n parameter columns dominate)
+BYTES_PER_N2 = {True: 25e3, False: 8e3}
+
+
+def _available_bytes() -> float | None:
+    """Memory available to this process [bytes] (Linux ``MemAvailable``), or None when unknown."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def _check_memory(robot: Robot, verify: bool) -> None:
+    """Refuse, before allocating, a model whose analysis needs more memory than is available."""
+    need = BYTES_PER_N2[bool(verify)] * robot.n**2
+    have = _available_bytes()
+    if have is None or need <= have:
+        return
+    hint = ("; --no-verify gives DRNG's geometric answer without the numerical certificate "
+            f"(about {BYTES_PER_N2[False] * robot.n**2 / 1e9:.2g} GB)" if verify else "")
+    raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the {'certified ' if verify else ''}analysis "
+                          f"needs about {need / 1e9:.2g} GB (it grows with the square of the body count) and "
+                          f"{have / 1e9:.2g} GB are available{hint}")
 
 
 def format_report(a: Analysis) -> str:

@@ -233,6 +233,53 @@ def _pulled_covariance(f: Fit) -> Fit:
     return replace(f, estimate=with_covariance(est, f.theta, m @ est.cov @ m.T, label))
 
 
+#: a term is poorly determined when its std exceeds this percentage of its value ...
+POORLY_DETERMINED_PCT = 100.0
+#: ... and collinearity with the other terms inflates its std more than this factor
+POORLY_DETERMINED_INFLATION = 10.0
+
+
+def poorly_determined(est, names: list[str]) -> list[str]:
+    """The terms the data do not determine: std above their value, inflated by collinearity.
+
+    A term's inflation is ``std_k ||A_k|| / (sqrt(n_obs) rho)`` (``A_k`` its weighted regressor
+    column, ``rho`` the weighted residual RMS): about ``sqrt(VIF_k)``, 1 for a column orthogonal
+    to the others. A term whose value is near zero but known to within the noise (inflation
+    near 1) is determined, whatever its %sigma.
+
+    Parameters
+    ----------
+    est : Estimate
+        The estimate (``std``, ``pct_sigma``, ``R11``, ``weights``, ``rms``, ``samples``).
+    names : list of str, shape ``(p,)``
+        The terms' names.
+
+    Returns
+    -------
+    list of str
+        The poorly determined terms, in model order.
+    """
+    w = np.asarray(est.weights, dtype=float)
+    rho = float(np.sqrt(np.sum((np.asarray(est.rms) * w) ** 2) / max(len(w), 1)))
+    n_obs = max(int(est.samples) * len(w), 1)
+    infl = np.asarray(est.std) * np.linalg.norm(est.R11, axis=0) / np.sqrt(n_obs) / max(rho, np.finfo(float).tiny)
+    pct = np.asarray(est.pct_sigma, dtype=float)
+    return [n for n, s, i in zip(names, pct, infl)
+            if not s <= POORLY_DETERMINED_PCT and not i <= POORLY_DETERMINED_INFLATION]
+#: a body's identified mass "moved far" from the model file's beyond this factor either way
+MASS_FACTOR = 2.0
+
+
+def _masses_moved(robot: Robot, masses: np.ndarray) -> dict:
+    """Bodies whose physically consistent mass is beyond :data:`MASS_FACTOR` of the model file's."""
+    prior = robot.N_body[:, 3, 3]
+    out = {}
+    for name, m0, m in zip(robot.names, prior, masses):
+        if m0 > 0 and not (m0 / MASS_FACTOR <= m <= m0 * MASS_FACTOR):
+            out[name] = {"file": float(m0), "identified": float(m)}
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class Identification:
     """The result of :func:`identify`: values, statistics, validation, what was done to the data.
@@ -624,7 +671,8 @@ class Identification:
         -------
         dict
             ``method, covariance, model, convention, n_samples{read, used, removed}, condition_number,
-            excitation{condition_number, weak, all_excited}, base_parameters, drives, couplings,
+            excitation{condition_number, weak, poorly_determined, all_excited}, base_parameters,
+            drives, couplings,
             train, validation, physical, notes``; ``weak`` names the parameters carrying
             directions whose singular value is below 1e-3 of the largest (column-scaled regressor);
             ``covariance`` says how every ``std`` was computed.
@@ -639,11 +687,14 @@ class Identification:
         from .estimate import excitation
 
         cond, weak = excitation(f.estimate.R11, self.model.names)
+        loose = poorly_determined(f.estimate, self.model.names)
+        if phys is not None:
+            phys["masses_moved"] = _masses_moved(self.model.robot, f.physical.masses)
         return {"method": f.method, "covariance": f.estimate.covariance, "model": self.model.robot.name,
                 "convention": self.model.analysis.convention,
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
-                "excitation": {"condition_number": cond, "weak": weak,
-                               "all_excited": not weak},
+                "excitation": {"condition_number": cond, "weak": weak, "poorly_determined": loose,
+                               "all_excited": not weak and not loose},
                 "base_parameters": self.base_parameters(), "drives": self.drives(),
                 "couplings": self.couplings(), "train": self.train,
                 "validation": self.validation, "physical": phys, "notes": list(self.notes)}

@@ -24,11 +24,9 @@ def format_identification(result: Identification) -> str:
     j = result.to_json()
     n = j["n_samples"]
     removed = ", ".join(f"{v} {k}" for k, v in n["removed"].items()) or "none"
-    weak = j["excitation"]["weak"]
     lines = [f"{j['model']}: identification ({j['method']}), {n['used']} samples used of {n['read']} read "
              f"(removed: {removed}); condition number {j['condition_number']:.4g}",
-             "excitation: every model parameter excited" if not weak else
-             f"excitation: POORLY EXCITED (singular values below 1e-3 of the largest): {', '.join(weak)}",
+             _excitation_line(j["excitation"]),
              f"standard deviations: {j['covariance']}",
              f"base parameters ({j['convention']} convention, SI units):",
              f"  {'name':<16s} {'value':>14s} {'std':>11s} {'%sigma':>8s}  expression"]
@@ -68,8 +66,24 @@ def format_identification(result: Identification) -> str:
                          f"at {part['score_cutoff']:g} Hz (--score-cutoff; per joint: {per})")
     if j["physical"] is not None:
         p = j["physical"]
+        for body, m in p.get("masses_moved", {}).items():
+            lines.append(f"physical: body {body} has {m['identified']:.4g} kg, the model file {m['file']:.4g} kg "
+                         f"(more than a factor 2 apart): check the file or the excitation")
         lines.append(f"physical: feasible {p['feasible']}, smallest eigenvalue of the N_i {p['min_eigenvalue']:.3g}, "
                      f"solver {p['solver_status']}")
     lines += [f"note: {x}" for x in j["notes"]]
     return "\n".join(lines)
 
+
+def _excitation_line(e: dict) -> str:
+    """``all excited`` only when no direction is weak and every term is well determined."""
+    parts = []
+    if e["weak"]:
+        parts.append(f"POORLY EXCITED (singular values below 1e-3 of the largest): {', '.join(e['weak'])}")
+    loose = e.get("poorly_determined") or []
+    if loose:
+        shown = ", ".join(loose[:12]) + (f" and {len(loose) - 12} more" if len(loose) > 12 else "")
+        parts.append(f"{len(loose)} term(s) poorly determined (std above their value, inflated by collinearity): "
+                     f"{shown}; a richer trajectory (baseparams excite) or the default estimate's pull towards the "
+                     "model file helps")
+    return "excitation: " + ("; ".join(parts) if parts else "every model parameter excited and determined")

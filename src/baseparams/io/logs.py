@@ -74,7 +74,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError
-from ..files import SMALL_MAX_BYTES, check_input, read_input_bytes
+from ..files import SMALL_MAX_BYTES, atomic_path, check_input, read_input_bytes
 from ..ident.data import JointLog
 from ..model.robot import Robot
 
@@ -797,7 +797,8 @@ def write_log(path, log: JointLog) -> Path:
     cols = log_columns_of(log)
     if p.suffix.lower() == ".npz":
         try:
-            np.savez(p, **cols)
+            with atomic_path(p, what="log") as tmp:  # never a partial file under the final name
+                np.savez(tmp, **cols)
         except OSError as exc:
             raise DataError(f"{p}: cannot write ({exc.strerror or exc})") from None
     else:
@@ -832,7 +833,7 @@ def write_table(path, cols: dict[str, np.ndarray], what: str = "a table as .csv 
         raise DataError(f"{p}: write {what}, not {p.suffix or 'no suffix'}")
     delim = "\t" if p.suffix.lower() == ".tsv" else ","
     try:
-        with open(p, "w", newline="") as fh:
+        with atomic_path(p, what="table") as tmp, open(tmp, "w", newline="") as fh:
             fh.write(delim.join(cols) + "\n")
             np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=delim, fmt="%.17g")
     except OSError as exc:

@@ -2,6 +2,7 @@
 --analysis-samples; the --floating hint; baseparams.regressor(backend=, out=)."""
 
 import importlib.metadata
+import json
 import sys
 import time
 from pathlib import Path
@@ -171,3 +172,43 @@ def test_all_extra_names_every_extra():
     assert set(named) == set(extras) - {"all", "test"}
     assert not any(d.startswith("mujoco>") or d == "mujoco" for d in meta["dependencies"])  # no GUI packages
     assert any(d.startswith("mujoco-core") for d in meta["dependencies"])
+
+
+# ---------------------------------------------------------------- found by a newcomer's review
+def test_a_loop_robot_simulated_on_the_command_line_identifies_from_its_actuated_joints(tmp_path, capsys):
+    log = tmp_path / "fb.csv"
+    assert main(["simulate", "four-bar", str(log), "--duration", "10", "--rate", "200"]) == 0
+    capsys.readouterr()
+    assert main(["identify", "four-bar", str(log), "--holdout", "2", "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert list(j["validation"]["rms"]) == ["crank_joint"] and j["validation"]["rms_total"] < 1e-2
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--holdout", "5", "--predictions", "{d}/p.csv", "--save", "{d}/p.csv"], "name the same file"),
+    (["--joints", ","], "--joints needs joint names"),
+    (["--prior-weight", "1"], "--prior-weight applies to --method physical"),
+    (["--holdout", "5", "--score-cutoff", "1000"], "--score-cutoff 1000 Hz"),
+])
+def test_identify_flags_that_cannot_be_honoured_are_one_line(argv, words, tmp_path, capsys):
+    log = tmp_path / "sim.csv"
+    assert main(["simulate", "puma560", str(log), "--duration", "10", "--rate", "100"]) == 0
+    capsys.readouterr()
+    assert main(["identify", "puma560", str(log), *[a.format(d=tmp_path) for a in argv]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len([e for e in err if e.startswith("baseparams: error")]) == 1 and words in err[-1]
+    assert not (tmp_path / "p.csv").exists()
+
+
+def test_simulate_refuses_a_negative_noise(tmp_path, capsys):
+    assert main(["simulate", "puma560", str(tmp_path / "s.csv"), "--noise", "-1"]) == 2
+    assert "--noise" in capsys.readouterr().err and not (tmp_path / "s.csv").exists()
+
+
+def test_regressor_states_derive_the_rates_a_file_lacks(tmp_path, capsys):
+    log = tmp_path / "sim.csv"
+    assert main(["simulate", "puma560", str(log), "--duration", "5", "--rate", "200"]) == 0  # q, dq; no ddq
+    out = tmp_path / "Y.npz"
+    assert main(["regressor", "puma560", "--states", str(log), "--out", str(out)]) == 0
+    y = np.load(out)["Y"]
+    assert y.shape == (1000, 6, 60) and np.all(np.isfinite(y))

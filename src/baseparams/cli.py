@@ -592,13 +592,23 @@ def _regressor_states(args, robot) -> int:
     joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
     log = read_log(args.states, robot, allow_subset=True, require_tau=False, require_time=False)
     missing = [j for j in joints if j not in log.joints]
-    if missing or log.dq is None or log.ddq is None:
-        what = f"no q_ columns for {missing}" if missing else "no dq_ and ddq_ columns"
-        raise BaseparamsError(f"--states {args.states}: {what} (states need q_, dq_, ddq_<joint> for the "
-                              f"{'actuated ' if robot.has_loops else ''}joints {joints})")
+    if missing:
+        raise BaseparamsError(f"--states {args.states}: no q_ columns for {missing} (states need q_<joint>, and "
+                              f"dq_, ddq_ or a time column t, for the {'actuated ' if robot.has_loops else ''}joints "
+                              f"{joints})")
+    q, dq, ddq = log.q, log.dq, log.ddq
+    if dq is None or ddq is None:  # rates the file lacks: derived as identify derives them (needs time)
+        from .ident.results import log_states
+
+        if log.t is None or not np.all(np.isfinite(log.t)):
+            raise BaseparamsError(f"--states {args.states}: no {'dq_ and ' if dq is None else ''}ddq_ columns and no "
+                                  "time column t to derive them from")
+        q, dq, ddq, notes = log_states(log, None)
+        for note in notes[1:]:
+            print(f"baseparams: note: {note}", file=sys.stderr)
     cols = [log.joints.index(j) for j in joints]
     t0 = time.perf_counter()
-    y = regressor(robot, log.q[:, cols], log.dq[:, cols], log.ddq[:, cols])
+    y = regressor(robot, q[:, cols], dq[:, cols], ddq[:, cols])
     dt = time.perf_counter() - t0
     names = parameter_names(robot, "paper")
     if args.out:
@@ -1101,6 +1111,7 @@ def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
            ("--codegen", getattr(args, "codegen", None), None)]
     if cmd == "identify":
         out.append(("--predictions", args.predictions, (".csv", ".tsv", ".parquet", ".pq")))
+        out.append(("--save", args.save, None))
     if cmd == "excite":
         out.append(("--out", args.out, (".csv", ".tsv")))
     if cmd == "simulate" and not args.robots:
@@ -1156,6 +1167,13 @@ def _check_flags(args) -> None:
               f"of the base-parameter analysis, not log samples)", file=sys.stderr)
         if args.samples is None:
             args.samples = args.old_samples
+    if args.command == "simulate" and not args.noise >= 0:
+        raise BaseparamsError(f"--noise is a standard deviation [N m], >= 0; got {args.noise}")
+    if args.command == "identify" and args.joints is not None and not [j for j in args.joints.split(",") if j.strip()]:
+        raise BaseparamsError("--joints needs joint names: --joints A,B,... (the joints to identify)")
+    if args.command == "identify" and args.prior_weight is not None and args.method != "physical":
+        raise BaseparamsError(f"--prior-weight applies to --method physical, not {args.method} (the default estimate "
+                              "chooses its own pull by cross-validation)")
     if args.command == "identify" and (args.predictions or args.score_cutoff is not None):
         if args.holdout is None and args.validate is None:
             raise BaseparamsError("--predictions and --score-cutoff are about validation data: give --holdout SECONDS "

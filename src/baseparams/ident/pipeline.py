@@ -201,14 +201,14 @@ def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
     """WLS, pulled towards the model file's parameters as far as blocked cross-validation asks."""
     from dataclasses import replace
 
-    from .select import ridge, select, split_blocks
+    from .select import pull_scale, ridge, select, split_blocks
 
     theta0 = model.theta(model.robot.parameters("paper"))
-    sel = select(split_blocks(blocks), est.weights, theta0) if len(blocks) >= 2 else None
+    pulled = np.arange(model.n_params) < model.analysis.n_base  # base parameters; drive terms are free
+    sel = select(split_blocks(blocks), est.weights, theta0, pulled=pulled) if len(blocks) >= 2 else None
     if sel is None or sel.lam == 0:
         return Fit(model, "auto", est.theta, est, selection=sel)
-    scale = np.linalg.norm(est.R11, axis=0)
-    theta = ridge(est.R11, est.r12, theta0, scale, sel.lam)
+    theta = ridge(est.R11, est.r12, theta0, pull_scale(est.R11, pulled), sel.lam)
     res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
     # the least-squares statistics stay: _pulled_covariance maps the covariance once it is chosen
     return Fit(model, "auto", theta, replace(est, method="auto", theta=theta, rms=res), selection=sel)
@@ -221,12 +221,13 @@ def _pulled_covariance(f: Fit) -> Fit:
     """
     from dataclasses import replace
 
+    from .select import pull_scale
     from .uncertainty import with_covariance
 
     sel, est = f.selection, f.estimate
     if sel is None or sel.lam == 0 or getattr(est, "cov", None) is None:
         return f
-    scale = np.linalg.norm(est.R11, axis=0)
+    scale = pull_scale(est.R11, np.arange(f.model.n_params) < f.model.analysis.n_base)
     gram = est.R11.T @ est.R11
     m = np.linalg.solve(gram + sel.lam * np.diag(scale**2), gram)
     label = f"{est.covariance}, mapped through the pull towards the model file (weight {sel.lam:g})"
@@ -1151,7 +1152,11 @@ def validation_scores(log, pred: np.ndarray, names: list[str], mask=None, score_
            "t_start": float(log.t[mask][0]), "t_end": float(log.t[mask][-1]), "source": log.source,
            "measure": "RMS of predicted minus raw measured torques at every held-out sample"}
     if score_cutoff is not None:
-        lp = lowpass_at(log.t[mask], measured, float(score_cutoff))
+        try:
+            lp = lowpass_at(log.t[mask], measured, float(score_cutoff))
+        except BaseparamsError as exc:
+            raise BaseparamsError(f"--score-cutoff {score_cutoff:g} Hz on {log.source}'s held-out samples: "
+                                  f"{exc}") from None
         e2 = pred[mask] - lp
         out.update({"score_cutoff": float(score_cutoff),
                     "rms_lowpassed": dict(zip(names, np.sqrt(np.mean(e2**2, axis=0)).tolist())),

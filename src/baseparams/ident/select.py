@@ -7,12 +7,13 @@ weighted least-squares fit towards the model file's own parameters ``theta_0``::
     min  ||R11 theta - r12||^2 + lam * sum_k s_k^2 (theta_k - theta0_k)^2
 
 with ``s_k`` the norm of column ``k`` of ``R11`` (so ``lam`` is relative to the information the
-data hold on each parameter) and ``lam`` chosen by **blocked cross-validation on the training
-data**: the training rows are cut into ``K`` contiguous time blocks (serially correlated samples
-stay together), each block is predicted from the others, and the ``lam`` of the smallest pooled
-held-out RMS is kept (``lam = 0``, plain weighted least squares, is a candidate). Only the
-training data are used; the factors are the streamed ``(p + 1, p + 1)`` triangles of each block,
-so memory does not grow with the log.
+data hold on each parameter) for the base parameters and 0 for the drive terms (a model file has
+no friction or offsets: pulling them to 0 would bias them) and ``lam`` chosen by **blocked
+cross-validation on the training data**: the training rows are cut into ``K`` contiguous time
+blocks (serially correlated samples stay together), each block is predicted from the others,
+and the ``lam`` of the smallest pooled held-out RMS is kept (``lam = 0``, plain weighted least
+squares, is a candidate). Only the training data are used; the factors are the streamed
+``(p + 1, p + 1)`` triangles of each block, so memory does not grow with the log.
 """
 
 from __future__ import annotations
@@ -118,7 +119,7 @@ def _sse(block: RowAccumulator, theta: np.ndarray) -> float:
 
 
 def select(blocks: list[RowAccumulator], weights: np.ndarray, theta0: np.ndarray,
-           lambdas=LAMBDAS) -> Selection | None:
+           lambdas=LAMBDAS, pulled: np.ndarray | None = None) -> Selection | None:
     """Choose the pull's weight by blocked cross-validation.
 
     Parameters
@@ -131,6 +132,9 @@ def select(blocks: list[RowAccumulator], weights: np.ndarray, theta0: np.ndarray
         The prior.
     lambdas : sequence of float
         Candidates, 0 first.
+    pulled : ndarray of bool, shape ``(p,)``, optional
+        The parameters pulled (default all): the file's inertial parameters are a prior, its
+        absent friction and offsets are not.
 
     Returns
     -------
@@ -141,7 +145,7 @@ def select(blocks: list[RowAccumulator], weights: np.ndarray, theta0: np.ndarray
     if len(blocks) < 2:
         return None
     r11, _ = _system(blocks, weights)
-    scale = np.linalg.norm(r11, axis=0)
+    scale = pull_scale(r11, pulled)
     sse = np.zeros(len(lambdas))
     count = 0
     for k, held in enumerate(blocks):
@@ -152,6 +156,25 @@ def select(blocks: list[RowAccumulator], weights: np.ndarray, theta0: np.ndarray
     rms = np.sqrt(sse / max(count, 1))
     best = int(np.argmin(np.where(np.isfinite(rms), rms, np.inf)))
     return Selection(float(lambdas[best]), tuple(float(x) for x in lambdas), tuple(float(x) for x in rms), len(blocks))
+
+
+def pull_scale(r11: np.ndarray, pulled: np.ndarray | None = None) -> np.ndarray:
+    """``s_k``: column norms of ``R11`` for the pulled parameters, 0 for the others.
+
+    Parameters
+    ----------
+    r11 : ndarray, shape ``(p, p)``
+        Triangular factor of the (weighted) training regressor.
+    pulled : ndarray of bool, shape ``(p,)``, optional
+        The parameters pulled (default all).
+
+    Returns
+    -------
+    ndarray, shape ``(p,)``
+        The scale of each parameter's pull.
+    """
+    scale = np.linalg.norm(r11, axis=0)
+    return scale if pulled is None else np.where(pulled, scale, 0.0)
 
 
 def split_blocks(acc_parts: list[RowAccumulator], folds: int = FOLDS) -> list[RowAccumulator]:

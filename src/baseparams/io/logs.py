@@ -601,7 +601,12 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
                             f"{_names(loggable)})")
         if jtypes[j] not in LOGGABLE:
             raise DataError(f"{spec['label']}: joints.{j}: a {jtypes[j]} joint; only 1-dof R and P joints are logged")
-    missing = [j for j in loggable if j not in entries]
+    required = loggable
+    if robot.has_loops or robot.couplings:  # the measured joints are the independent (actuated) ones
+        ind = robot.independent if robot.independent is not None else range(robot.dof)
+        actuated = {robot.joint_names[robot.dof_body[k]] for k in ind}
+        required = [j for j in loggable if j in actuated]
+    missing = [j for j in required if j not in entries]
     if missing and not allow_subset:
         where = (f"not in the mapping {spec['label']}" if spec["joints"] else
                  "no columns (expected q_<joint> and tau_<joint> each)")

@@ -351,3 +351,16 @@ def test_symbolic_twist_angle_condition_and_count(tmp_path):
     cond = [c for c in sa.conditions if "alpha2" in c.equation()]
     assert cond and f"{planar} base parameters there" in cond[0].effect, [str(c) for c in sa.conditions]
     assert cond[0].equation() == "sin(alpha2) = 0"
+
+
+def test_symbols_vanishing_together_are_probed():
+    """SCARA with D2 = D3 = 0 has 4 base parameters: not implied by D2 = 0 (6) nor D3 = 0 alone."""
+    import baseparams
+    from baseparams.symbolic import load_symbolic, symbolic_analysis
+    from baseparams.symbolic.check import probe
+
+    sa = symbolic_analysis(load_symbolic("scara-symbolic"))
+    conds = {c.equation(): c for c in probe(sa)}
+    assert "D2 = D3 = 0" in conds and conds["D2 = D3 = 0"].effect.startswith("4 base parameters there, not 8")
+    point = conds["D2 = D3 = 0"].point
+    assert baseparams.analyze(sa.robot.to_robot(point)).n_base == 4  # the certified numerical analysis agrees

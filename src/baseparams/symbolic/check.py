@@ -125,6 +125,8 @@ def check(sa: SymbolicAnalysis, seeds=(101, 202)) -> list[dict]:
 def _on_condition(sa: SymbolicAnalysis, polys: list, seed: int) -> dict | None:
     """A random point where all ``polys`` vanish (solving the first for a symbol it has at degree 1)."""
     point = random_point(sa.robot, seed)
+    if len(polys) > 1 and all(isinstance(p, sp.Symbol) for p in polys):  # symbols at zero together
+        return {**point, **{p: sp.Integer(0) for p in polys}}
     first = sp.expand(polys[0])
     for s in sorted(first.free_symbols, key=lambda x: x.name):
         if sp.degree(first, s) == 1:
@@ -182,4 +184,46 @@ def probe(sa: SymbolicAnalysis, seed: int = 7) -> list:
         else:
             c.effect = f"same count ({num.n_base})" + (", other formulas" if "pivot" in c.reason else "")
     sa.conditions += [c for c in extra if "base parameters there" in c.effect]
+    sa.conditions += _pairs(sa, seed)
     return sa.conditions
+
+
+#: most symbols whose pairs are probed (n (n - 1) / 2 numerical analyses)
+MAX_PAIR_SYMBOLS = 10
+
+
+def _count(effect: str, generic: int) -> int:
+    """The base-parameter count a probe found (``generic`` when it found the same)."""
+    head = effect.split(" base parameters there")[0]
+    return int(head) if head.isdigit() else generic
+
+
+def _pairs(sa: SymbolicAnalysis, seed: int) -> list:
+    """Pairs of length symbols at zero together, kept where the count differs from each alone.
+
+    A condition such as ``D2 = D3 = 0`` (a SCARA with both links of zero length) is not implied by
+    ``D2 = 0`` or ``D3 = 0`` alone: each pair is probed with the certified numerical analysis and
+    reported when its count differs from the generic one and from both symbols' own.
+    """
+    lengths = [s for s in sa.robot.symbols if angle_of(s) is None]
+    if len(lengths) > MAX_PAIR_SYMBOLS:
+        return []
+    alone = {c.polynomials[0]: _count(c.effect, sa.n_base) for c in sa.conditions
+             if len(c.polynomials) == 1 and isinstance(c.polynomials[0], sp.Symbol)}
+    found = []
+    for i, a in enumerate(lengths):
+        for b in lengths[i + 1:]:
+            c = Condition([a, b], "the symbols at zero together",
+                          text=f"{sa.robot.display(a)} = {sa.robot.display(b)} = 0")
+            point = _on_condition(sa, c.polynomials, seed)
+            try:
+                num = analyze(sa.robot.to_robot(point))
+            except BaseparamsError:
+                continue
+            if num.n_base in (sa.n_base, alone.get(a, sa.n_base), alone.get(b, sa.n_base)):
+                continue
+            c.point = point
+            at = ", ".join(f"{sa.robot.display(k)}={_shown_value(k, v):.4g}" for k, v in point.items())
+            c.effect = f"{num.n_base} base parameters there, not {sa.n_base} (certified numerically at {at})"
+            found.append(c)
+    return found

@@ -100,7 +100,7 @@ def format_symbolic(sa: SymbolicAnalysis) -> str:
         lines += ["", f"unidentifiable (no effect on any measurement): {', '.join(p.name for p in un)}"]
     lines += ["", "these hold for generic values of the symbols; they change where:"]
     lines += [f"  {c}" for c in sa.conditions] or ["  (no condition found: every pivot is a constant and no symbol "
-                                                   "at zero changes the count)"]
+                                                   "or pair of symbols at zero changes the count)"]
     lines.append(f"({sa.seconds:.2f} s)")
     return "\n".join(lines)
 

@@ -175,13 +175,24 @@ def test_all_extra_names_every_extra():
 
 
 # ---------------------------------------------------------------- found by a newcomer's review
-def test_a_loop_robot_simulated_on_the_command_line_identifies_from_its_actuated_joints(tmp_path, capsys):
-    log = tmp_path / "fb.csv"
-    assert main(["simulate", "four-bar", str(log), "--duration", "10", "--rate", "200"]) == 0
+@pytest.mark.parametrize("name", ["four-bar", "pkm-2rru-1rrs"])
+def test_a_loop_robot_simulated_on_the_command_line_identifies_from_its_actuated_joints(name, tmp_path, capsys):
+    log = tmp_path / "loop.csv"
+    assert main(["simulate", name, str(log), "--duration", "10", "--rate", "200"]) == 0  # default amplitude
     capsys.readouterr()
-    assert main(["identify", "four-bar", str(log), "--holdout", "2", "--json"]) == 0
+    assert main(["identify", name, str(log), "--holdout", "2", "--json"]) == 0
     j = json.loads(capsys.readouterr().out)
-    assert list(j["validation"]["rms"]) == ["crank_joint"] and j["validation"]["rms_total"] < 1e-2
+    robot = baseparams.load(name)
+    actuated = [robot.joint_names[robot.dof_body[k]] for k in robot.actuated]
+    assert list(j["validation"]["rms"]) == actuated and j["validation"]["rms_total"] < 1e-2
+
+
+def test_the_symbolic_package_without_sympy_says_which_extra(tmp_path):
+    import subprocess
+
+    code = "import sys; sys.modules['sympy'] = None\nimport baseparams.symbolic"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode != 0 and "pip install 'baseparams[symbolic]'" in r.stderr
 
 
 @pytest.mark.parametrize("argv, words", [

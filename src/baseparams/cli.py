@@ -724,6 +724,18 @@ def _write_identified_urdf(args, robot, result) -> None:
     print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
 
 
+def _amplitude(args, robot) -> float:
+    """``--amplitude``, or its default: 0.5 rad, within a loop robot's sampling box (its loops close there)."""
+    if args.amplitude is not None:
+        if not args.amplitude > 0:
+            raise BaseparamsError(f"--amplitude must be > 0 rad, got {args.amplitude}")
+        return args.amplitude
+    if robot.has_loops and robot.q_box is not None:
+        half = 0.5 * (np.asarray(robot.q_box)[:, 1] - np.asarray(robot.q_box)[:, 0])
+        return float(min(0.5, 0.2 * half.min()))
+    return 0.5
+
+
 def cmd_simulate(args) -> int:
     """``baseparams simulate MODEL OUT``: a synthetic joint log with known parameters and noise.
 
@@ -765,7 +777,7 @@ def cmd_simulate(args) -> int:
         from .excite import read_trajectory
 
         trajectory = read_trajectory(args.trajectory, robot)
-    log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=args.amplitude,
+    log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=_amplitude(args, robot),
                               noise=args.noise, seed=args.seed, rotor=args.rotor, friction=_friction(args.friction),
                               convention=args.convention, trajectory=trajectory, samples=args.samples)
     from .files import write_text
@@ -972,7 +984,8 @@ def _simulate_parser(sub, model_args) -> None:
     s.add_argument("out", help="output log (.csv or .npz); the true parameters go to OUT.truth.json")
     s.add_argument("--duration", type=float, default=20.0, help="seconds (default 20)")
     s.add_argument("--rate", type=float, default=500.0, help="sampling rate in Hz (default 500)")
-    s.add_argument("--amplitude", type=float, default=0.5, help="joint excursion in rad (default 0.5)")
+    s.add_argument("--amplitude", type=float, default=None,
+                   help="joint excursion in rad (default 0.5; for a robot with loops, within its sampling box)")
     s.add_argument("--noise", type=float, default=0.0, help="torque noise standard deviation (default 0)")
     s.add_argument("--robots", type=int, metavar="N",
                    help="a fleet: N logs in the folder OUT, one robot each with its own inertias (10 %% spread)")

@@ -9,6 +9,12 @@ optional extra ``symbolic`` (SymPy).
 
 from __future__ import annotations
 
+try:
+    import sympy  # noqa: F401  (the symbolic geometry is SymPy's)
+except ImportError:  # pragma: no cover - exercised without the extra
+    raise ImportError("baseparams.symbolic needs SymPy: pip install 'baseparams[symbolic]' "
+                      "(from a clone: pip install '.[symbolic]')") from None
+
 from .analyze import base_regressor, symbolic_analysis
 from .check import check, probe
 from .geometry import SymbolicBuilder, SymbolicRobot, rot, trans, transform

@@ -508,7 +508,7 @@ def cmd_predict(args) -> int:
     ----------
     args : argparse.Namespace
         The parsed command line: the model options and ``result``, ``log``, ``columns``, ``out``,
-        ``filtered``.
+        ``raw_states``, ``score_cutoff``, ``json``.
 
     Returns
     -------

@@ -155,6 +155,38 @@ def refuse_inputs(output, inputs: Iterable, what: str = "output") -> None:
             raise BaseparamsError(f"{what} {output} would overwrite the input {inp}; choose another file name")
 
 
+def check_output(path, inputs: Iterable = (), what: str = "output") -> Path:
+    """Refuse an output that cannot be written, before any work: returns its folder.
+
+    Parameters
+    ----------
+    path : str or path
+        The output file.
+    inputs : iterable of str or path
+        Input files the output must not overwrite (:func:`refuse_inputs`).
+    what : str
+        The output's role, for messages.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder the file will be written in.
+
+    Raises
+    ------
+    BaseparamsError
+        An output onto an input, a non-regular target, a missing folder.
+    """
+    final = Path(path)
+    refuse_inputs(final, inputs, what)
+    if final.exists() and not final.is_file():
+        raise BaseparamsError(f"{what} {final}: exists and is not a regular file")
+    folder = final.parent if str(final.parent) else Path(".")
+    if not folder.is_dir():
+        raise BaseparamsError(f"{what} {final}: the folder {folder} does not exist")
+    return folder
+
+
 @contextlib.contextmanager
 def atomic_path(path, inputs: Iterable = (), what: str = "output") -> Iterator[Path]:
     """A temporary path beside ``path``, renamed to ``path`` when the block ends without error.
@@ -182,12 +214,7 @@ def atomic_path(path, inputs: Iterable = (), what: str = "output") -> Iterator[P
         An output onto an input, a missing folder, a non-regular target.
     """
     final = Path(path)
-    refuse_inputs(final, inputs, what)
-    if final.exists() and not final.is_file():
-        raise BaseparamsError(f"{what} {final}: exists and is not a regular file")
-    folder = final.parent if str(final.parent) else Path(".")
-    if not folder.is_dir():
-        raise BaseparamsError(f"{what} {final}: the folder {folder} does not exist")
+    folder = check_output(final, inputs, what)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=f".tmp{final.suffix}", dir=folder)
     except OSError as e:

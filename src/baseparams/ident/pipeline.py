@@ -612,27 +612,8 @@ class Identification:
             standard deviation of each identified value (``{kind: float}``).
         """
         m = self.model
-        pos = {name: k for k, name in enumerate(m.names)}
-        absorbed = {}
-        for row, i in enumerate(m.regrouping.independent):
-            for col, d in enumerate(m.regrouping.dependent):
-                if m.regrouping.K[row, col] != 0:
-                    absorbed[m.regrouping.names[d]] = m.regrouping.names[i]
-        out = []
-        std = self.fit.estimate.std
-        for joint in m.drives.joints:
-            entry = {"joint": joint, "std": {}}
-            for kind in ("Ia", "Fv", "Fc", "Fo"):
-                name = f"{kind}_{joint}"
-                if kind not in m.drives.kinds:
-                    entry[kind] = None
-                elif name in pos:
-                    entry[kind] = float(self.fit.theta[pos[name]])
-                    entry["std"][kind] = float(std[pos[name]])
-                else:
-                    entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
-            out.append(entry)
-        return out
+        return [self._terms({"joint": joint}, joint, ("Ia", "Fv", "Fc", "Fo"), m.drives.kinds)
+                for joint in m.drives.joints]
 
     def couplings(self) -> list[dict]:
         """Coupled-motor parameters (:class:`~baseparams.ident.drives.MotorCoupling`).
@@ -645,25 +626,31 @@ class Identification:
             standard deviation of each identified value.
         """
         m = self.model
+        return [self._terms({"name": c.name, "joints": dict(zip(c.joints, c.weights))}, c.name,
+                            ("Iam", "Fvm", "Fcm"), m.drives.coupled_kinds) for c in m.drives.couplings]
+
+    def _terms(self, entry: dict, owner: str, kinds, modelled) -> dict:
+        """``entry`` with each drive term ``KIND_owner``: value and std, None or regrouped.
+
+        ``None`` when the kind is not modelled, ``"regrouped into <base parameter>"`` when the
+        data cannot separate it.
+        """
+        m = self.model
         pos = {name: k for k, name in enumerate(m.names)}
         absorbed = {m.regrouping.names[d]: m.regrouping.names[i]
                     for row, i in enumerate(m.regrouping.independent)
                     for col, d in enumerate(m.regrouping.dependent) if m.regrouping.K[row, col] != 0}
-        out = []
-        std = self.fit.estimate.std
-        for c in m.drives.couplings:
-            entry = {"name": c.name, "joints": dict(zip(c.joints, c.weights)), "std": {}}
-            for kind in ("Iam", "Fvm", "Fcm"):
-                name = f"{kind}_{c.name}"
-                if kind not in m.drives.coupled_kinds:
-                    entry[kind] = None
-                elif name in pos:
-                    entry[kind] = float(self.fit.theta[pos[name]])
-                    entry["std"][kind] = float(std[pos[name]])
-                else:
-                    entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
-            out.append(entry)
-        return out
+        entry["std"] = {}
+        for kind in kinds:
+            name = f"{kind}_{owner}"
+            if kind not in modelled:
+                entry[kind] = None
+            elif name in pos:
+                entry[kind] = float(self.fit.theta[pos[name]])
+                entry["std"][kind] = float(self.fit.estimate.std[pos[name]])
+            else:
+                entry[kind] = f"regrouped into {absorbed.get(name, '?')}"
+        return entry
 
     def to_json(self) -> dict:
         """One JSON-able object (schema in the README's identification section).

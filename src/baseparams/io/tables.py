@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BaseparamsError
-from ..files import atomic_path, refuse_inputs
+from ..files import atomic_path, check_output
 
 #: suffixes :func:`write_columns` writes
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq", ".npz")
@@ -72,13 +72,7 @@ def check_output_path(path, inputs=(), what: str = "output") -> None:
     """
     if path is None:
         return
-    p = Path(path)
-    refuse_inputs(p, inputs, what)
-    if p.exists() and not p.is_file():
-        raise BaseparamsError(f"{what} {p}: exists and is not a regular file")
-    folder = p.parent if str(p.parent) else Path(".")
-    if not folder.is_dir():
-        raise BaseparamsError(f"{what} {p}: the folder {folder} does not exist")
+    check_output(path, inputs, what)
 
 
 def write_columns(path, cols: dict, inputs=(), what: str = "--out") -> Path:

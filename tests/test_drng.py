@@ -135,7 +135,7 @@ def test_certification_rejects_a_wrong_column():
         dense[10 * p:10 * p + 10, k] *= -1
     w = stacked_regressor(robot, 50, 0)
     wrong = np.linalg.norm(w @ dense, axis=0) > 1e-6 * np.linalg.norm(w, 2)
-    # PAPER_NOTES E1: with the printed sign, many columns leave the nullspace (notes: 10 of 24 for
+    # docs/paper-corrections.md, E1: with the printed sign, many columns leave the nullspace (notes: 10 of 24 for
     # their point choice; 13 for ours) -- and only columns that have a parent block
     assert wrong.sum() >= 10 and np.all(has_parent[wrong])
     # certify() on the printed algorithm's columns fails with a reason naming a column

@@ -200,7 +200,7 @@ def test_loop_shared_vectors_of_a_spherical_closure():
     paper, ext = drng(robot, extended=False), drng(robot)
     c = certify(robot, samples=3000, result=ext)
     # +1 from the shared normal; the four-bar on a moving link keeps one 4-body direction that
-    # no rule finds (the open problem of EXTENDED_PRINCIPLES.md), completed numerically
+    # no rule finds (an open problem, docs/extended-rules.md), completed numerically
     assert c.certified and ext.rank == paper.rank + 1 and c.completed == 1
     k = int(np.flatnonzero(ext.columns.joint >= robot.n)[-1])
     assert "shared across loop joint 'closure'" in ext.provenance(k)
@@ -293,7 +293,7 @@ def test_loop_level_spaces_are_level_on_the_closed_robot(make):
 
 
 def test_rl2_symmetric_2prs_completes():
-    """Mirror-symmetric 2PRS-1PSR (PAPER_NOTES gap 6): nullity 48, the paper's principles give 47,
+    """Mirror-symmetric 2PRS-1PSR (docs/paper-corrections.md, case 6): nullity 48, the paper's principles give 47,
     R-L2 the platform's level R axis (two-body chain link c - platform)."""
     robot = pkm_2prs_1psr(symmetric=True)
     cols = level_chain_columns(robot)

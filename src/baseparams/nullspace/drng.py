@@ -34,7 +34,7 @@ class DRNGResult:
     Returned by :func:`drng`. The columns span (part of) the nullspace of the TP regressor in the
     ``paper`` convention (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of
     each body, world frame at q = 0); they are redundant, so their rank, not their number, is
-    the dimension found (``../shared/PAPER_NOTES.md``: never certify by counting columns).
+    the dimension found (``docs/paper-corrections.md``: never certify by counting columns).
 
     Parameters
     ----------

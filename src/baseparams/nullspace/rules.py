@@ -1,4 +1,4 @@
-"""Extended principles: the rules that close the paper's gaps (``../shared/EXTENDED_PRINCIPLES.md``).
+"""Extended principles: the rules that close the paper's gaps (``docs/extended-rules.md``).
 
 One mechanism: a change ``dN`` of pseudo-inertias is in the regressor nullspace iff its kinetic
 term ``T = 1/2 tr(dg dN dg^T)`` vanishes on every motion and its potential
@@ -127,10 +127,10 @@ def _padded(vectors: list[np.ndarray]) -> np.ndarray:
 def fixed_vector_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     """R-A: ``sym(f, v)`` on every body ``i`` with ``f`` fixed (``∩ ker S_j`` on its path), gravity filtered.
 
-    Principle 2 applied beyond the first body (``../shared/EXTENDED_PRINCIPLES.md``, R-A).
+    Principle 2 applied beyond the first body (``docs/extended-rules.md``, R-A).
     Closes gravity zero (Puma560's axis-1/axis-2 intersection: +2), translation stages (every
     direction fixed) and a U joint at the base with its first axis along gravity
-    (``../shared/PAPER_NOTES.md``, gaps 1, 3, 4). Batched over bodies; single-body columns.
+    (``docs/paper-corrections.md``, cases 1, 3, 4). Batched over bodies; single-body columns.
 
     Parameters
     ----------
@@ -227,9 +227,9 @@ def sliding_columns(robot: Robot, ms: MotionSpans | None = None) -> Columns:
     """R-B: ``sym(a, b)`` with ``a`` sliding along ``d`` and ``b`` level in ``d``, gravity filtered.
 
     Velocity of ``a`` always along ``d``, of ``b`` always ``⟂ d``; ``d`` from
-    :func:`slide_directions` (``../shared/EXTENDED_PRINCIPLES.md``, R-B). Closes a fixed axis
+    :func:`slide_directions` (``docs/extended-rules.md``, R-B). Closes a fixed axis
     beyond the base (a lift followed by coaxial R joints along gravity: +2 per turning body;
-    ``../shared/PAPER_NOTES.md``, gap 2). Batched over bodies; single-body columns, only on
+    ``docs/paper-corrections.md``, case 2). Batched over bodies; single-body columns, only on
     bodies where something slides that is not fixed.
 
     Parameters
@@ -363,7 +363,7 @@ def parallelogram_columns(robot: Robot) -> Columns:
     ``-T^-1 dN T^-T`` on ``L1``, ``T`` the translation by ``P3 - P0``: ``g_3 = T g_1 T^-1``).
     With a moving ``L0``: the direction transfers ``sym(f_a, f_b)`` between opposite links, and
     a three-body rocker-to-crank transfer compensated on the root (:func:`_moving_root_transfer`).
-    Closes ``../shared/PAPER_NOTES.md`` gap 5 (a parallelogram four-bar: 27 of 30).
+    Closes ``docs/paper-corrections.md`` case 5 (a parallelogram four-bar: 27 of 30).
 
     Parameters
     ----------
@@ -567,7 +567,7 @@ def loop_level_spaces(robot: Robot, e: np.ndarray, ms: MotionSpans | None = None
 
     The open tree's (exact for the tree, a subset for the closed robot), enlarged to a fixpoint
     by propagation across every tree and loop joint: a vector both bodies move alike that keeps
-    its ``e``-coordinate in one body keeps it in the other (``../shared/EXTENDED_PRINCIPLES.md``,
+    its ``e``-coordinate in one body keeps it in the other (``docs/extended-rules.md``,
     R-L2). Safe: everything returned is level on the closed robot.
 
     Parameters
@@ -630,7 +630,7 @@ def level_chain_columns(robot: Robot, ms: MotionSpans | None = None, tol: float 
     gives ``sym(x, x × d)``), pairs and triples are emitted; ``e`` runs over the joint axes and
     gravity, all candidates batched. Loop robots only: on trees the level spaces are exact and
     the rule adds nothing beyond R-A and R-B (the special-robot survey). Closes
-    ``../shared/PAPER_NOTES.md`` gap 6 (the symmetric 2PRS-1PSR: +1).
+    ``docs/paper-corrections.md`` case 6 (the symmetric 2PRS-1PSR: +1).
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """Exact q0 subspaces of every body's motion, from the joint screws, base-first (no sampling).
 
 Body ``i`` moves by the 4x4 displacement ``g_i(q) = exp(S_1 q_1) ... exp(S_k q_k)`` (product of
-exponentials of the world joint screws at q = 0 on its path, ``../shared/EXTENDED_PRINCIPLES.md``).
+exponentials of the world joint screws at q = 0 on its path, ``docs/extended-rules.md``).
 Everything here derives from the *motion span*
 
     M_i = span{ (g_i(q) - I)[:3, :] : q }  (a subspace of the 3x4 matrices, dimension <= 12),
@@ -41,7 +41,7 @@ SATURATED = 12
 class MotionSpans:
     """Every body's motion span ``M_i`` and fixed vectors, as built by :func:`motion_spans`.
 
-    ``M_i = span{(g_i(q) - I)[:3, :] : q}`` (module docstring; ``../shared/EXTENDED_PRINCIPLES.md``),
+    ``M_i = span{(g_i(q) - I)[:3, :] : q}`` (module docstring; ``docs/extended-rules.md``),
     built exactly from the joint screws, world frame at q = 0.
 
     Parameters

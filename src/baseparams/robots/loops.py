@@ -27,7 +27,7 @@ Tree: slider a - link a - platform (S); slider b - link b; slider c - link c (S)
 the mirror-symmetric layout with equal dimensions: the two PRS limbs opposite each other (base
 angles 0 and 180 deg, their R axes parallel) and the PSR limb at 90 deg. Both sphere centres
 then keep their y coordinate, the platform's R axis stays level, and the nullity is 48, not 47
-(``../shared/PAPER_NOTES.md`` gap 6; closed by rule R-L2, level chains).
+(``docs/paper-corrections.md`` case 6; closed by rule R-L2, level chains).
 """
 
 from __future__ import annotations

@@ -141,7 +141,8 @@ class Grid:
         return np.arange(first, min(c.stop, self.n - self.pad), self.factor)
 
 
-def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int):
+def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int,
+                  keep: list | None = None):
     """The row factors of one chunk (the task a worker runs).
 
     Parameters
@@ -159,6 +160,9 @@ def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.n
         Log column of each state column.
     nparams : int
         ``p``.
+    keep : list, optional
+        When given, the chunk's fitted rows ``(A, tau)`` are appended to it (for a second pass
+        that would otherwise recompute them: :mod:`baseparams.ident.uncertainty`).
 
     Returns
     -------
@@ -170,10 +174,11 @@ def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.n
     sl = slice(c.lo, c.hi)
     rates = {k: None if getattr(log, k) is None else getattr(log, k)[sl] for k in ("dq", "ddq")}
     part = replace(log, t=log.t[sl], q=log.q[sl], tau=log.tau[sl], **rates)
-    return chunk_factors_of_slice(part, c, grid, regressor, cols, nparams)
+    return chunk_factors_of_slice(part, c, grid, regressor, cols, nparams, keep)
 
 
-def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int):
+def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int,
+                           keep: list | None = None):
     """:func:`chunk_factors` on the slice ``[c.lo, c.hi)`` of the log alone.
 
     Parameters
@@ -190,6 +195,8 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
         Log column of each state column.
     nparams : int
         ``p``.
+    keep : list, optional
+        As for :func:`chunk_factors`.
 
     Returns
     -------
@@ -202,6 +209,8 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
     a, tau, removed = chunk_rows(part, c, grid, regressor, cols)
     if a is not None:
         acc.add(a, tau)
+        if keep is not None:
+            keep.append((a, tau))
     return acc, removed
 
 

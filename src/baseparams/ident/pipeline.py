@@ -1007,9 +1007,10 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
         When given, receives time-ordered pieces of the rows (RowAccumulator each; their
         combination is ``acc``), for the blocked cross-validation of the default estimate.
     keep : list, optional
-        When given and the regressor is formed at once, ``(A, tau)`` of the fitted samples are
-        appended to it (no longer than the regressor formed: the covariance's second pass,
-        :mod:`baseparams.ident.uncertainty`, then needs no second regressor).
+        When given, ``(A, tau)`` of the fitted samples are appended to it, in time order, when
+        they fit in ``memory_mb`` (always on the at-once path; per chunk on the chunked path): the
+        covariance's second pass (:mod:`baseparams.ident.uncertainty`) then needs no second
+        regressor.
 
     Returns
     -------
@@ -1046,7 +1047,11 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     per_sample_mb = len(model.coords) * model.n_params * 8 * 4 / 1e6  # the filter's copies: ~4x
     size = max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
     uniform = resample(log)  # the grid prepare() filtered on (it resamples with the same default)
-    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params)[0]
+    # the fitted (decimated) rows are kept for the covariance's second pass when they fit in memory_mb
+    # (a fraction 1 / factor of the full-rate regressor); else that pass recomputes them
+    fitted_mb = full.n_samples / max(prep.factor, 1) * len(model.coords) * (model.n_params + 1) * 8 / 1e6
+    held = keep if keep is not None and fitted_mb <= memory_mb else None
+    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params, held)[0]
              for c in chunks.plan(full.n_samples, size, margin)]
     if parts_out is not None:
         parts_out.extend(parts)

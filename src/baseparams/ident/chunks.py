@@ -214,7 +214,7 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
     return acc, removed
 
 
-def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray):
+def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, index_out: list | None = None):
     """The fitted rows one chunk owns, in time order (what :func:`chunk_factors_of_slice` reduces).
 
     Parameters
@@ -229,6 +229,9 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
         ``regressor(q, dq, ddq) -> (S, m, p)``.
     cols : ndarray of int
         Log column of each state column.
+    index_out : list, optional
+        When given, the kept samples' global indices ``(k,)`` are appended to it (an empty
+        array when the chunk keeps none).
 
     Returns
     -------
@@ -243,6 +246,8 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
 
     idx = grid.owned(c) - c.lo
     if not len(idx):
+        if index_out is not None:
+            index_out.append(idx + c.lo)
         return None, None, {}
     prep = prepare(part, cutoff=grid.cutoff, decimate=1)
     f = prep.full
@@ -251,6 +256,8 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
     if grid.min_speed is not None:
         keep, removed = remove_slow(dq[idx], grid.min_speed)
         idx = idx[keep]
+    if index_out is not None:
+        index_out.append(idx + c.lo)
     a = zero_phase(regressor(q, dq, ddq), prep.design)[idx]
     return a, f.tau[idx][:, cols], removed
 

@@ -107,9 +107,10 @@ class _Table:
     is_bag: bool = False
     booleans: set = field(default_factory=set)  # columns stored as true/false (refused when used)
     text: dict[str, str] = field(default_factory=dict)  # columns that are not numbers -> the error if one is read
+    offset: int = 0  # samples before this table's first (a block of a streamed log: row numbers stay global)
 
     def row(self, i: int) -> str:
-        return self.row_fmt.format(int(self.rows[i]), i + 1)
+        return self.row_fmt.format(int(self.rows[i]), i + 1 + self.offset)
 
     def label(self, col: str) -> str:
         return self.labels.get(col, f"column {col!r}")
@@ -344,12 +345,13 @@ def _check_header(path: Path, names: list[str], line: int) -> None:
         seen[n] = k
 
 
-def _parse_numbers(path: Path, data: list[str], delim: str, names: list[str], numbers: np.ndarray
-                   ) -> tuple[np.ndarray, dict[str, str]]:
+def _parse_numbers(path: Path, data: list[str], delim: str, names: list[str], numbers: np.ndarray,
+                   first_row: int = 1) -> tuple[np.ndarray, dict[str, str]]:
     """``(S, columns)`` floats and ``{column: message}`` for columns that are not all numbers.
 
     Such a column (a ``comment`` column) is NaN here; its message (naming the first cell that is
-    not a number) is the error only if the layout reads the column.
+    not a number) is the error only if the layout reads the column. ``first_row``: the data row
+    number of ``data[0]`` (a block of a streamed file).
     """
     try:
         return np.loadtxt(data, delimiter=delim, dtype=float, comments=None, ndmin=2, encoding=None), {}
@@ -370,7 +372,7 @@ def _parse_numbers(path: Path, data: list[str], delim: str, names: list[str], nu
         value = str(col[lo])
         hint = " (decimal comma?)" if "," in value and delim != "," else ""
         what = "an empty field" if not value else f"{value!r} is not a number{hint}"
-        text[n] = f"{path}: column {n!r}, line {numbers[lo]} (data row {lo + 1}): {what}"
+        text[n] = f"{path}: column {n!r}, line {numbers[lo]} (data row {lo + first_row}): {what}"
     return values, text
 
 

@@ -1,0 +1,748 @@
+"""Identification from a log streamed from its file: memory independent of the log's length.
+
+:func:`identify_stream` gives what :func:`baseparams.ident.pipeline.identify` gives on the whole
+log (the same estimate to rounding, the same standard deviations, the same validation RMS) while
+holding at most a few blocks of samples, one chunk's regressor and a bounded subsample. It reads
+the file several times, each pass block by block (a *block source*: any object with ``source``,
+``joints``, ``has_dq``, ``has_ddq`` and ``blocks()`` yielding consecutive
+:class:`~baseparams.ident.data.JointLog` blocks, e.g. :class:`baseparams.io.logstream.LogStream`):
+
+1. **scan**: samples, first and last time, the time steps' range (uniform or not), the first
+   :data:`HEAD_ROWS` samples (the unit checks of :mod:`baseparams.ident.plausibility` run on them);
+2. **training statistics**: the hold-out split (``t >= t_end - holdout``, known after the scan), the
+   training rate, and the positions subsampled for the cutoff choice and the excitation spectrum:
+   every sample while the training part has at most :data:`SUBSAMPLE_MAX` samples (the in-memory
+   choice exactly), else means of ``P = ceil(S / SUBSAMPLE_MAX)`` consecutive samples (the
+   bandwidth is then resolved up to ``fs / 2P``);
+3. **accumulation**: windows of the training part with overlaps of
+   :func:`~baseparams.ident.chunks.overlap` samples on both sides (12 cutoff periods: the
+   zero-phase filter's edge transient below ~1e-12), each filtered, differentiated, turned into the
+   regressor, filtered again and reduced to the row factors of the samples it owns
+   (:func:`~baseparams.ident.chunks.chunk_rows`), split into the blocked cross-validation's folds
+   by the whole log's sample count;
+4. **covariance**: the HAC second pass recomputes the fitted rows window by window (kept from pass 3
+   when they fit in ``memory_mb``), and collects the report's series (at most :data:`SERIES_MAX`
+   fitted samples, evenly thinned);
+5. **validation**: the held-out samples predicted from states filtered over the whole log (windows
+   again), scored against the raw measured torques, optionally written out block by block.
+
+Logs with non-uniform time stamps are not streamed (:class:`NotStreamable`): their resampling grid
+needs the median step of the whole log.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import BaseparamsError, DataError
+from . import chunks
+from . import preprocess as pp
+from .data import JointLog
+
+#: training samples up to which the cutoff is chosen from every sample (as in memory)
+SUBSAMPLE_MAX = 1 << 19
+#: first samples kept for the unit checks and the rate notes
+HEAD_ROWS = 1 << 17
+#: most fitted samples in the report's series
+SERIES_MAX = 1 << 16
+#: held-out samples up to which the validation series (plots) is computed
+HELD_SERIES_MAX = 1 << 18
+#: samples owned by one validation window
+VALIDATION_ROWS = 1 << 15
+
+
+class NotStreamable(BaseparamsError):
+    """A log the streamed path does not take (non-uniform time stamps): read it whole instead."""
+
+
+@dataclass(frozen=True)
+class Scan:
+    """What one pass over a log found.
+
+    Parameters
+    ----------
+    n : int
+        Samples.
+    t0, t_end : float
+        First and last time stamp [s].
+    head : JointLog
+        The first :data:`HEAD_ROWS` samples (all of a shorter log).
+    notes : tuple of str
+        How the file was read (the first block's notes).
+    """
+
+    n: int
+    t0: float
+    t_end: float
+    head: JointLog
+    notes: tuple[str, ...]
+
+
+def concat(parts: list[JointLog]) -> JointLog:
+    """Consecutive blocks of one log as one log.
+
+    Parameters
+    ----------
+    parts : list of JointLog
+        Blocks in time order (at least one).
+
+    Returns
+    -------
+    JointLog
+        Their samples, the first block's source and notes.
+    """
+    if len(parts) == 1:
+        return parts[0]
+    cat = {k: None if getattr(parts[0], k) is None else np.concatenate([getattr(p, k) for p in parts])
+           for k in ("t", "q", "tau", "dq", "ddq")}
+    return replace(parts[0], **cat)
+
+
+def rows(log: JointLog, lo: int, hi: int) -> JointLog:
+    """Samples ``[lo, hi)`` of a log.
+
+    Parameters
+    ----------
+    log : JointLog
+        The log.
+    lo, hi : int
+        The sample range.
+
+    Returns
+    -------
+    JointLog
+        The slice (views).
+    """
+    sl = slice(lo, hi)
+    return replace(log, **{k: None if getattr(log, k) is None else getattr(log, k)[sl]
+                           for k in ("t", "q", "tau", "dq", "ddq")})
+
+
+def windows(blocks, plans):
+    """The samples each chunk reads, from consecutive blocks (only a few held at a time).
+
+    Parameters
+    ----------
+    blocks : iterable of JointLog
+        The log, block by block (``stream.blocks()``).
+    plans : iterable of ChunkPlan
+        Chunks with non-decreasing ``lo`` and ``hi``.
+
+    Yields
+    ------
+    tuple of (ChunkPlan, JointLog)
+        Each chunk and its samples ``[c.lo, c.hi)``.
+
+    Raises
+    ------
+    DataError
+        The blocks end before a chunk's samples.
+    """
+    it = iter(blocks)
+    buf: list[JointLog] = []
+    b0 = b1 = 0
+    try:
+        for c in plans:
+            while b1 < c.hi:
+                blk = next(it, None)
+                if blk is None:
+                    raise DataError(f"log ended after {b1} samples; sample {c.hi - 1} was expected "
+                                    f"(changed while read?)")
+                buf.append(blk)
+                b1 += blk.n_samples
+            while buf and b0 + buf[0].n_samples <= c.lo:
+                b0 += buf.pop(0).n_samples
+            whole = concat(buf)
+            if len(buf) > 1:
+                buf = [whole]
+            yield c, rows(whole, c.lo - b0, c.hi - b0)
+    finally:
+        close = getattr(it, "close", None)
+        if close is not None:
+            close()
+
+
+def scan(stream) -> Scan:
+    """The first pass: samples, time span, the first samples; every block checked by the reader.
+
+    Parameters
+    ----------
+    stream : block source
+        The log (module docstring).
+
+    Returns
+    -------
+    Scan
+        Counts, span, head and reading notes.
+
+    Raises
+    ------
+    DataError
+        Bad values (the reader's message: file, column, row).
+    """
+    n, head, notes, t0, t_end = 0, [], (), None, None
+    for blk in stream.blocks():
+        if t0 is None:
+            t0, notes = float(blk.t[0]), blk.notes
+        if n < HEAD_ROWS:
+            head.append(rows(blk, 0, HEAD_ROWS - n))
+        n += blk.n_samples
+        t_end = float(blk.t[-1])
+    return Scan(n, t0, t_end, concat(head), tuple(notes))
+
+
+@dataclass(frozen=True, eq=False)
+class Training:
+    """The training part's statistics (the second pass).
+
+    Parameters
+    ----------
+    n : int
+        Training samples (those before the hold-out).
+    rate : float
+        Their mean rate [Hz] (``(n - 1) / (t_last - t0)``, the in-memory path's).
+    sub : JointLog
+        Positions subsampled (every sample, or means of ``step`` samples) for the cutoff choice
+        and the excitation spectrum (``q (k, m)``; ``tau`` zeros).
+    step : int
+        Samples per subsample point.
+    dt : tuple of float
+        Smallest, largest and median step [s] (median of the first :data:`SUBSAMPLE_MAX` steps).
+    """
+
+    n: int
+    rate: float
+    sub: JointLog
+    step: int
+    dt: tuple[float, float, float]
+
+
+def training(stream, sc: Scan, end_time: float | None) -> Training:
+    """The second pass: the training samples (``t < end_time``), their rate, steps and a subsample.
+
+    Parameters
+    ----------
+    stream : block source
+        The log.
+    sc : Scan
+        The first pass.
+    end_time : float or None
+        First held-out time (``t_end - holdout``), or None (every sample trains).
+
+    Returns
+    -------
+    Training
+        The statistics.
+
+    Raises
+    ------
+    NotStreamable
+        Non-uniform time stamps.
+    """
+    step = max(1, math.ceil(sc.n / SUBSAMPLE_MAX))
+    n, last, dts, lo, hi, means, times = 0, None, [], np.inf, -np.inf, [], []
+    carry_t, carry_q = np.empty(0), np.empty((0, len(stream.joints)))
+    for blk in stream.blocks():
+        k = blk.n_samples if end_time is None else int(np.searchsorted(blk.t, end_time))
+        t = blk.t[:k]
+        if k:
+            d = np.diff(t if last is None else np.r_[last, t])
+            if len(d):
+                lo, hi = min(lo, float(d.min())), max(hi, float(d.max()))
+                if sum(map(len, dts)) < SUBSAMPLE_MAX:
+                    dts.append(d)
+            tt, q = np.r_[carry_t, t], np.concatenate([carry_q, blk.q[:k]])
+            g = len(q) // step
+            means.append(q[:g * step].reshape(g, step, -1).mean(axis=1))
+            times.append(tt[:g * step:step])
+            carry_t, carry_q = tt[g * step:], q[g * step:]
+            n, last = n + k, float(t[-1])
+        if k < blk.n_samples:
+            break
+    med = float(np.median(np.concatenate(dts)[:SUBSAMPLE_MAX])) if dts else 1.0
+    if not (lo >= med * (1 - pp.UNIFORM_RTOL) and hi <= med * (1 + pp.UNIFORM_RTOL)):
+        raise NotStreamable(f"{stream.source}: non-uniform time stamps (steps {lo:.6g}-{hi:.6g} s): the log is "
+                            f"resampled in memory, not streamed")
+    q = np.concatenate(means)
+    sub = JointLog(np.concatenate(times), tuple(stream.joints), q, np.zeros_like(q), source=stream.source)
+    return Training(n, (n - 1) / (last - sc.t0) if n > 1 else 1.0, sub, step, (lo, hi, med))
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """How the training part is filtered, cut into windows and decimated.
+
+    Parameters
+    ----------
+    design : LowPass
+        The zero-phase low-pass at the training rate.
+    factor : int
+        Decimation factor.
+    grid : Grid
+        The kept samples (:class:`~baseparams.ident.chunks.Grid`).
+    margin, size : int
+        Overlap on each side and owned samples per window.
+    notes : tuple of str
+        The preprocessing's notes (as :func:`~baseparams.ident.preprocess.prepare` words them).
+    """
+
+    design: pp.LowPass
+    factor: int
+    grid: chunks.Grid
+    margin: int
+    size: int
+    notes: tuple[str, ...]
+
+    def windows(self):
+        """The training windows (:func:`~baseparams.ident.chunks.plan`)."""
+        return chunks.plan(self.grid.n, self.size, self.margin)
+
+    def fitted_count(self) -> int:
+        """Samples kept before slow-sample removal (on the decimation grid, past the filter edges)."""
+        return len(range(self.grid.pad, self.grid.n - self.grid.pad, self.factor))
+
+
+def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_speed, memory_mb: float) -> Plan:
+    """The filter, decimation, kept-sample grid and windows of the training part (and their notes).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model (its regressor's size sets the window).
+    stream : block source
+        The log.
+    sc : Scan
+        The first pass.
+    tr : Training
+        The second pass.
+    cutoff : float or None
+        Given cutoff [Hz], or None: from the excitation (the subsample).
+    decimate : int or None
+        Given decimation factor.
+    min_speed : float or None
+        Slow-sample threshold.
+    memory_mb : float
+        Largest regressor formed at once (the window's size).
+
+    Returns
+    -------
+    Plan
+        The plan.
+
+    Raises
+    ------
+    DataError
+        Too few samples for the filter edges, a bad cutoff or factor.
+    """
+    lo, hi, med = tr.dt
+    notes = [*sc.notes,
+             f"time: uniform (dt {lo * 1e3:.4g}-{hi * 1e3:.4g} ms, median {med * 1e3:.4g} ms), not resampled"]
+    if cutoff is None:
+        band = pp.excitation_bandwidth(tr.sub.q, tr.rate / tr.step)
+        cutoff = float(np.clip(pp.BANDWIDTH_FACTOR * band, pp.CUTOFF_FLOOR,
+                               min(tr.rate / pp.CUTOFF_DIVISOR, pp.CUTOFF_CAP)))
+        sub = "" if tr.step == 1 else f"; from means of {tr.step} samples (more than {SUBSAMPLE_MAX} samples)"
+        notes.append(f"cutoff {cutoff:.4g} Hz: {pp.BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
+                     f"(99.5 % of the motion's energy{sub}), within [{pp.CUTOFF_FLOOR:g} Hz, "
+                     f"min(fs/{pp.CUTOFF_DIVISOR:g}, {pp.CUTOFF_CAP:g} Hz)]")
+    design = pp.lowpass_design(tr.rate, cutoff)
+    if tr.n <= 2 * design.pad + 1:
+        raise DataError(f"{stream.source}: {tr.n} samples at {tr.rate:.6g} Hz; the filter edges alone take 2 x "
+                        f"{design.pad} (a longer log, or a higher cutoff)")
+    k, k_note = pp._factor(decimate, tr.rate, design)
+    head = rows(sc.head, 0, min(sc.head.n_samples, tr.n))
+    rate_notes = pp._rates(head, pp.zero_phase(head.q, design), tr.rate, design)[2] if head.n_samples > 2 * design.pad \
+        else []
+    if head.n_samples < tr.n and stream.has_dq:
+        rate_notes = [f"{x} (over the first {head.n_samples} samples)" if x.startswith("dq: measured") else x
+                      for x in rate_notes]
+    margin = chunks.overlap(design)
+    per_sample_mb = len(model.coords) * model.n_params * 8 * 4 / 1e6  # the filter's copies: ~4x
+    size = max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
+    notes += [design.note, *rate_notes, k_note]
+    return Plan(design, k, chunks.Grid(tr.n, design.pad, k, design.cutoff, min_speed), margin, size, tuple(notes))
+
+
+def fitted(stream, plan: Plan, model, cols: np.ndarray):
+    """The fitted samples' rows, window by window in time order (one pass over the file).
+
+    Parameters
+    ----------
+    stream : block source
+        The log.
+    plan : Plan
+        The training plan.
+    model : IdentModel
+        The model.
+    cols : ndarray of int
+        Log column of each state column.
+
+    Yields
+    ------
+    tuple
+        ``(t (k,), A (k, m, p), tau (k, m), removed dict, index (k,))`` per window: the kept
+        samples' times, parallel-filtered regressor, filtered torques, slow samples removed, global
+        sample indices.
+    """
+    for c, part in windows(stream.blocks(), plan.windows()):
+        idx: list = []
+        a, tau, removed = chunks.chunk_rows(part, c, plan.grid, model.regressor, cols, idx)
+        if a is not None and len(a):
+            yield part.t[idx[0] - c.lo], a, tau, removed, idx[0]
+        elif removed:
+            yield np.empty(0), None, None, removed, idx[0]
+
+
+def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float):
+    """Pass 3: the row factors, in the blocked cross-validation's folds, and the fitted rows if they fit.
+
+    Parameters
+    ----------
+    stream : block source
+        The log.
+    plan : Plan
+        The training plan.
+    model : IdentModel
+        The model.
+    cols : ndarray of int
+        Log column of each state column.
+    memory_mb : float
+        The fitted rows are kept (for the covariance's pass) when they fit in this.
+
+    Returns
+    -------
+    parts : list of RowAccumulator
+        :data:`~baseparams.ident.select.FOLDS` consecutive pieces of the fitted samples, split by
+        count as the in-memory path splits them (by the count before slow-sample removal).
+    kept : list of tuple, or None
+        ``(t, A, tau)`` per window, or None when they do not fit.
+    slow : int
+        Slow samples removed.
+    """
+    from .estimate import RowAccumulator
+    from .select import FOLDS
+
+    count = plan.fitted_count()
+    edges = np.cumsum([0] + [len(x) for x in np.array_split(np.arange(count), FOLDS)])
+    parts = [RowAccumulator(len(model.coords), model.n_params) for _ in range(FOLDS)]
+    fitted_mb = count * len(model.coords) * (model.n_params + 1) * 8 / 1e6
+    kept = [] if fitted_mb <= memory_mb else None
+    slow = 0
+    for t, a, tau, removed, idx in fitted(stream, plan, model, cols):
+        slow += sum(removed.values())
+        if a is None:
+            continue
+        fold = np.searchsorted(edges, (idx - plan.grid.pad) // plan.factor, side="right") - 1
+        for j in np.unique(fold):
+            sel = fold == j
+            parts[j].add(a[sel], tau[sel])
+        if kept is not None:
+            kept.append((t, a, tau))
+    return parts, kept, slow
+
+
+class _Scores:
+    """Sums of squared validation errors, accumulated window by window."""
+
+    def __init__(self, m: int):
+        self.sq, self.sq_lp, self.count, self.t = np.zeros(m), np.zeros(m), 0, [None, None]
+
+    def add(self, t, err, err_lp=None):
+        self.sq += np.sum(err**2, axis=0)
+        if err_lp is not None:
+            self.sq_lp += np.sum(err_lp**2, axis=0)
+        self.count += len(err)
+        self.t = [self.t[0] if self.t[0] is not None else float(t[0]), float(t[-1])]
+
+    def result(self, names, source, score_cutoff) -> dict:
+        rms = np.sqrt(self.sq / self.count)
+        out = {"rms": dict(zip(names, rms.tolist())), "rms_total": float(np.sqrt(np.mean(self.sq / self.count))),
+               "samples": int(self.count), "t_start": self.t[0], "t_end": self.t[1], "source": source,
+               "measure": "RMS of predicted minus raw measured torques at every held-out sample"}
+        if score_cutoff is not None:
+            out.update({"score_cutoff": float(score_cutoff),
+                        "rms_lowpassed": dict(zip(names, np.sqrt(self.sq_lp / self.count).tolist())),
+                        "rms_lowpassed_total": float(np.sqrt(np.mean(self.sq_lp / self.count)))})
+        return out
+
+
+def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, score_cutoff=None, sink=None,
+             held_out: list | None = None, source: str | None = None) -> dict:
+    """Pass 5: every sample ``[first, n)`` predicted and scored against the raw measured torques.
+
+    The states are those of :func:`~baseparams.ident.pipeline.predict_log` on the whole log
+    (:func:`~baseparams.ident.results.log_states`, filtered over samples ``[0, n)``): each window
+    reads :func:`~baseparams.ident.chunks.overlap` samples more on both sides. With
+    ``score_cutoff``, the measured torques are low-passed over ``[first, n)`` alone, as
+    :func:`~baseparams.ident.pipeline.validation_scores` does.
+
+    Parameters
+    ----------
+    f : Fit
+        The identified values.
+    stream : block source
+        The log (uniform time stamps).
+    first, n : int
+        The scored samples; ``n`` the log's length.
+    cutoff : float
+        The identification's cutoff [Hz].
+    rate : float
+        The log's rate [Hz] (sets the overlap).
+    names : list of str, shape ``(m,)``
+        The measured joints, in the model's order.
+    score_cutoff : float, optional
+        Also score against the measured torques low-passed at this cutoff [Hz].
+    sink : callable, optional
+        ``sink(t (k,), tau (k, m))``: the predictions, window by window in time order.
+    held_out : list, optional
+        When given, the scored samples' blocks are appended to it (the validation series).
+    source : str, optional
+        The validation's source for the report (default the stream's).
+
+    Returns
+    -------
+    dict
+        :func:`~baseparams.ident.pipeline.validation_scores`'s result.
+    """
+    from .pipeline import log_columns
+    from .results import log_states, lowpass_at
+
+    margin = math.ceil(chunks.OVERLAP_PERIODS * rate / min(cutoff, score_cutoff or cutoff))
+    plans = [chunks.ChunkPlan(s, min(s + VALIDATION_ROWS, n), max(0, s - margin), min(n, s + VALIDATION_ROWS + margin))
+             for s in range(first, n, VALIDATION_ROWS)]
+    where = {j: k for k, j in enumerate(stream.joints)}
+    meas_cols = [where[j] for j in names]
+    scores = _Scores(len(names))
+    for c, part in windows(stream.blocks(), plans):
+        cols = log_columns(f.model, part)
+        q, dq, ddq, _ = log_states(part, cutoff, True)
+        own = slice(c.start - c.lo, c.stop - c.lo)
+        pred = np.concatenate([f.predict(q[own][k:k + 20000][:, cols], dq[own][k:k + 20000][:, cols],
+                                         ddq[own][k:k + 20000][:, cols]) for k in range(0, c.stop - c.start, 20000)])
+        meas = part.tau[own][:, meas_cols]
+        err_lp = None
+        if score_cutoff is not None:
+            lo = max(first, c.lo) - c.lo
+            try:
+                lp = lowpass_at(part.t[lo:], part.tau[lo:][:, meas_cols], float(score_cutoff))
+            except BaseparamsError as exc:
+                raise BaseparamsError(f"--score-cutoff {score_cutoff:g} Hz on {source or stream.source}'s held-out "
+                                      f"samples: {exc}") from None
+            err_lp = pred - lp[c.start - c.lo - lo:c.stop - c.lo - lo]
+        scores.add(part.t[own], pred - meas, err_lp)
+        if sink is not None:
+            sink(part.t[own], pred)
+        if held_out is not None:
+            held_out.append(rows(part, own.start, own.stop))
+    return scores.result(names, source or stream.source, score_cutoff)
+
+
+def _series_of(kept, theta, names, limit: int = SERIES_MAX) -> dict:
+    """The report's training series from fitted rows ``(t, A, tau)`` (evenly thinned to ``limit``)."""
+    t = np.concatenate([k[0] for k in kept]) if kept else np.empty(0)
+    step = max(1, math.ceil(len(t) / limit))
+    tau = np.concatenate([k[2] for k in kept])[::step] if kept else np.empty((0, len(names)))
+    hat = np.concatenate([k[1][::1] @ theta for k in kept])[::step] if kept else np.empty((0, len(names)))
+    return {"t": t[::step], "tau": tau, "tau_hat": hat, "joints": names}
+
+
+def _thinned(gen, every: int, out: list):
+    """``(A, tau)`` of :func:`fitted`'s windows, keeping every ``every``-th row's ``(t, A, tau)`` in ``out``."""
+    seen = 0
+    for t, a, tau, _, _ in gen:
+        if a is None:
+            continue
+        sel = (seen + np.arange(len(t))) % every == 0
+        out.append((t[sel], a[sel], tau[sel]))
+        seen += len(t)
+        yield a, tau
+
+
+def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
+    """Pass 4: the fit's standard deviations (HAC: the fitted rows again) and the report's series.
+
+    Parameters
+    ----------
+    f : Fit
+        The fit.
+    acc : RowAccumulator
+        The accumulated rows.
+    covariance : {"hac", "white"}
+        The covariance.
+    kept : list or None
+        The fitted rows ``(t, A, tau)`` from pass 3, or None (recomputed from the file).
+    stream, plan, model, cols
+        As for :func:`fitted`.
+    say : callable
+        Progress.
+
+    Returns
+    -------
+    fit : Fit
+        With its standard deviations.
+    note : str
+        The covariance's note.
+    series : dict or None
+        ``{"t", "tau", "tau_hat", "joints"}`` of (at most :data:`SERIES_MAX`) fitted samples.
+    """
+    from .uncertainty import apply_covariance
+
+    names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
+    rate = plan.design.fs / plan.factor
+    if kept is not None or covariance != "hac":
+        f, note = apply_covariance(f, acc, [(a, tau) for _, a, tau in kept or ()], covariance, rate)
+        return f, note, (_series_of(kept, f.theta, names) if kept is not None else None)
+    say("covariance (HAC: a second pass over the file, window by window)")
+    thin: list = []
+    every = max(1, math.ceil(plan.fitted_count() / SERIES_MAX))
+    f, note = apply_covariance(f, acc, _thinned(fitted(stream, plan, model, cols), every, thin), covariance, rate)
+    return f, note, _series_of(thin, f.theta, names)
+
+
+def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
+                    friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
+                    holdout: float | None = None, validation=None, cutoff: float | None = None,
+                    decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
+                    convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
+                    samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
+                    allow_units: bool = False, predictions=None):
+    """:func:`~baseparams.ident.pipeline.identify` on a log streamed from its file (module docstring).
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (fixed base).
+    stream : block source
+        The log, e.g. :class:`baseparams.io.logstream.LogStream`.
+    method, rotor, friction, coulomb_width, holdout, cutoff, decimate, min_speed, prior_weight, convention, \
+memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units
+        As for :func:`~baseparams.ident.pipeline.identify` (``memory_mb``: the window's regressor).
+    validation : block source, optional
+        Another log to validate on (exclusive with ``holdout``).
+    predictions : callable, optional
+        ``predictions(t (k,), tau (k, m))`` receives the predicted torques of every validation sample,
+        window by window in time order (``identify --predictions``).
+
+    Returns
+    -------
+    Identification
+        As :func:`~baseparams.ident.pipeline.identify` returns (the series thinned to
+        :data:`SERIES_MAX` samples; no validation series beyond :data:`HELD_SERIES_MAX` held-out
+        samples).
+
+    Raises
+    ------
+    NotStreamable
+        Non-uniform time stamps (read the log whole).
+    BaseparamsError
+        As :func:`~baseparams.ident.pipeline.identify`.
+    """
+    from ..numerics import blas_threads
+
+    if robot.floating:
+        raise BaseparamsError(f"robot {robot.name!r}: identification from a joint log needs a fixed base (a floating "
+                              f"base's motion and wrench are not in a joint log); use the Python API with states")
+    if holdout is not None and validation is not None:
+        raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    opts = dict(method=method, rotor=rotor, friction=tuple(friction), coulomb_width=coulomb_width, holdout=holdout,
+                cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
+                convention=convention, memory_mb=memory_mb, couplings=tuple(couplings), samples=samples,
+                score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units)
+    with blas_threads():
+        return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
+
+
+def _passes(robot, stream, o: dict, say):
+    """Passes 1-3: the model, the scan, the training statistics, the plan and the accumulated rows."""
+    from ..analysis import analyze
+    from .model import ident_model
+    from .pipeline import _units, log_columns
+
+    say(f"scanning {stream.source} (pass 1: samples, time span, checks)")
+    sc = scan(stream)
+    end_time = None
+    if o["holdout"] is not None:
+        if not 0 < o["holdout"] < sc.t_end - sc.t0:
+            raise BaseparamsError(f"{stream.source}: holdout {o['holdout']} s must be inside the log's "
+                                  f"{sc.t_end - sc.t0:.6g} s")
+        end_time = sc.t_end - o["holdout"]
+    say(f"analysing {robot.name} (base parameters, drive model)")
+    model = ident_model(analyze(robot, samples=o["samples"], convention=o["convention"]), o["rotor"], o["friction"],
+                        o["coulomb_width"], couplings=o["couplings"])
+    cols = log_columns(model, sc.head)
+    say(f"training statistics of {sc.n} samples (pass 2: hold-out split, rate, cutoff subsample)")
+    tr = training(stream, sc, end_time)
+    unit_notes = _units(model, rows(sc.head, 0, min(sc.head.n_samples, tr.n)), cols, o["allow_units"])
+    if sc.head.n_samples < tr.n:
+        unit_notes = [f"{x} (on the first {sc.head.n_samples} samples)" for x in unit_notes]
+    plan = plan_training(model, stream, sc, tr, o["cutoff"], o["decimate"], o["min_speed"], o["memory_mb"])
+    say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
+        f"windows of {plan.size} + 2 x {plan.margin} samples)")
+    parts, kept, slow = accumulate(stream, plan, model, cols, o["memory_mb"])
+    return sc, tr, model, cols, unit_notes, plan, parts, kept, slow
+
+
+def _identify_stream(robot, stream, validation, predictions, say, o: dict):
+    """:func:`identify_stream`'s steps."""
+    from .pipeline import Identification, _model_notes, _pulled_covariance, fit, position_spectrum
+
+    sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, say)
+    acc = chunks.combine(parts)
+    say(f"fitting ({o['method']})")
+    f = fit(model, acc, o["method"], o["prior_weight"], blocks=parts)
+    f, cov_note, train_series = covariance_pass(f, acc, o["covariance"], kept, stream, plan, model, cols, say)
+    f = _pulled_covariance(f)
+    names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
+    res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
+    train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
+    if train_series is not None:
+        train_series["spectrum"] = position_spectrum(tr.sub, cols, tr.rate / tr.step, plan.design.cutoff)
+    series = {"train": train_series, "validation": None}
+    val = _validation(f, stream, validation, sc, tr, plan, names, o, predictions, series, say)
+    removed = {"filter edges": 2 * plan.design.pad}
+    inner = tr.n - 2 * plan.design.pad
+    if plan.factor > 1:
+        removed[f"decimation by {plan.factor}"] = inner - plan.fitted_count()
+    slow_note = ["slow samples: kept (min_speed not given)"]
+    if o["min_speed"] is not None:
+        slow_note = [f"slow samples: {slow} with |dq| below {o['min_speed']} on a joint removed"]
+        if slow:
+            removed["slow (|dq| < min_speed on a joint)"] = slow
+    acc_note = (f"parallel filtering in {len(plan.windows())} windows of {plan.size} samples with {plan.margin}-sample "
+                f"overlaps, the log streamed from its file (equal to the whole log's to rounding)")
+    notes = (*plan.notes, *slow_note, acc_note, *_model_notes(model),
+             *(f.physical.notes if f.physical is not None else ()),
+             *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
+    options = {"method": o["method"], "convention": o["convention"], "rows": str(model.analysis.rows),
+               "rotor": bool(o["rotor"]), "friction": tuple(o["friction"]), "coulomb_width": o["coulomb_width"],
+               "couplings": tuple(o["couplings"]), "cutoff": float(plan.design.cutoff), "decimate": int(plan.factor),
+               "min_speed": o["min_speed"]}
+    samples = {"read": int(tr.n), "used": int(acc.samples), "removed": removed}
+    return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+
+
+def _validation(f, stream, other, sc: Scan, tr: Training, plan: Plan, names, o: dict, predictions, series, say):
+    """Pass 5 on the held-out tail or on another log (None without either); the validation series when small."""
+    from .pipeline import _series, log_columns
+
+    if o["holdout"] is None and other is None:
+        return None
+    if other is None:
+        src, first, n, rate = stream, tr.n, sc.n, tr.rate
+        source = f"{stream.source} (last {o['holdout']:g} s)"
+        say(f"validating on {n - first} held-out samples (pass 5: every one, against the raw measured torques)")
+    else:
+        osc = scan(other)
+        otr = training(other, osc, None)  # the rate, and refuses non-uniform time
+        src, first, n, rate, source = other, 0, osc.n, otr.rate, other.source
+        say(f"validating on {n} samples of {other.source} (every one, against the raw measured torques)")
+    held: list | None = [] if n - first <= HELD_SERIES_MAX else None
+    val = validate(f, src, first, n, plan.design.cutoff, rate, names, o["score_cutoff"], predictions, held, source)
+    if held:
+        h = replace(concat(held), source=source)
+        vprep = pp.prepare(h, cutoff=plan.design.cutoff, decimate=plan.factor)
+        series["validation"] = _series(f.model, vprep, log_columns(f.model, h), f.theta, names, o["memory_mb"])
+    return val

@@ -415,19 +415,17 @@ def cmd_identify(args) -> int:
             raise BaseparamsError("--joints applies to one log, not to a fleet of logs")
         return _identify_fleet(args, robot, files)
     with Progress(args.verbose) as progress:
-        progress(f"reading {args.data}")
-        log, val, robot = _read_identification_logs(args, robot, files[0])
-        progress(f"identifying ({args.method}) on {log.n_samples} samples")
         t0 = time.perf_counter()
-        result = identify(robot, log, method=args.method, rotor=args.rotor, friction=_friction(args.friction),
-                          coulomb_width=args.coulomb_width, holdout=args.holdout, validation=val, cutoff=args.cutoff,
-                          decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
-                          convention=args.convention, couplings=couplings, progress=progress,
-                          samples=args.samples, covariance=args.covariance, allow_units=args.allow_units,
-                          score_cutoff=args.score_cutoff)
+        result = _identify_streamed(args, robot, files, couplings, progress)
+        if result is None:
+            progress(f"reading {args.data}")
+            log, val, robot = _read_identification_logs(args, robot, files[0])
+            progress(f"identifying ({args.method}) on {log.n_samples} samples")
+            t0 = time.perf_counter()
+            result = identify(robot, log, validation=val, progress=progress, **_identify_kwargs(args, couplings))
+            if args.predictions:
+                _write_predictions(args, result, log, val, files)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
-        if args.predictions:
-            _write_predictions(args, result, log, val, files)
         if args.save:
             result.save(args.save, inputs=[args.model, *files, args.validate, args.columns, args.truth], what="--save")
             progress(f"result saved to {args.save}")
@@ -444,6 +442,74 @@ def cmd_identify(args) -> int:
             _write_html(args.html, identification_html(result), _inputs(args))
     _emit(args, _with_truth(args, result, truth, format_identification))
     return EXIT_OK
+
+
+#: logs larger than this [MB] are streamed from their file by default (``identify --stream auto``)
+STREAM_MIN_MB = 64.0
+
+
+def _identify_kwargs(args, couplings) -> dict:
+    """The options :func:`~baseparams.ident.pipeline.identify` and ``identify_stream`` share."""
+    return dict(method=args.method, rotor=args.rotor, friction=_friction(args.friction),
+                coulomb_width=args.coulomb_width, holdout=args.holdout, cutoff=args.cutoff, decimate=args.decimate,
+                min_speed=args.min_speed, prior_weight=args.prior_weight, convention=args.convention,
+                couplings=couplings, samples=args.samples, covariance=args.covariance, allow_units=args.allow_units,
+                score_cutoff=args.score_cutoff)
+
+
+def _stream_reason(args, path: str) -> str | None:
+    """Why ``identify`` streams the log from its file (a line for ``-v``), or None: read it whole."""
+    from .io.logstream import STREAM_SUFFIXES, streamable
+
+    mode = getattr(args, "stream", "auto")
+    if mode == "off":
+        return None
+    ok = streamable(path) and (not args.validate or streamable(args.validate))
+    if mode == "on":
+        if not ok:
+            raise BaseparamsError(f"--stream on: only {', '.join(STREAM_SUFFIXES)} logs are streamed, not {path}"
+                                  + (f" / {args.validate}" if args.validate else ""))
+        if args.joints:
+            raise BaseparamsError("--stream on with --joints: a sub-chain's log is read whole (--stream auto)")
+        return "--stream on"
+    if not ok or args.joints:
+        return None
+    size = Path(path).stat().st_size / 1e6
+    return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
+
+
+def _identify_streamed(args, robot, files, couplings, progress):
+    """``identify`` on a log streamed from its file (``--stream``), or None when it is read whole.
+
+    A log with non-uniform time stamps is read whole after all (said with ``-v``).
+    """
+    why = _stream_reason(args, files[0])
+    if why is None:
+        return None
+    from .ident.stream import NotStreamable, identify_stream
+    from .io.logstream import LogStream
+
+    progress(f"streaming {files[0]} block by block ({why}): memory independent of the log's length")
+    stream = LogStream(files[0], robot, columns=args.columns)
+    other = LogStream(args.validate, robot, columns=args.columns) if args.validate else None
+    kwargs = _identify_kwargs(args, couplings)
+    try:
+        if not args.predictions:
+            return identify_stream(robot, stream, validation=other, progress=progress, **kwargs)
+        from .io.tables import column_writer
+
+        coords = robot.actuated if robot.has_loops else range(robot.dof)
+        names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
+        inputs = [args.model, *files, args.validate, args.columns]
+        with column_writer(args.predictions, names, inputs, "--predictions") as write:
+            result = identify_stream(robot, stream, validation=other, progress=progress,
+                                     predictions=lambda t, tau: write(np.column_stack([t, tau])), **kwargs)
+        print(f"baseparams: predictions of {result.validation['samples']} validation samples written to "
+              f"{args.predictions}", file=sys.stderr)
+        return result
+    except NotStreamable as exc:
+        progress(f"{exc}")
+        return None
 
 
 def _write_predictions(args, result, log, val, files) -> None:
@@ -925,6 +991,9 @@ def _identify_parser(sub, model_args) -> None:
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
     held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
+    s.add_argument("--stream", choices=("auto", "on", "off"), default="auto",
+                   help="read a CSV/TSV/Parquet log block by block, in memory independent of its length, with the "
+                        "same result: auto (default) above 64 MB, on, off (read it whole)")
     s.add_argument("--method", choices=("auto", "ols", "wls", "physical"), default="auto",
                    help="auto (default): weighted least squares pulled towards the model file's parameters as far "
                         "as blocked cross-validation on the training data asks; ols, wls (per-joint noise) or "

@@ -258,8 +258,39 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
         idx = idx[keep]
     if index_out is not None:
         index_out.append(idx + c.lo)
-    a = zero_phase(regressor(q, dq, ddq), prep.design)[idx]
+    a = filtered_rows(regressor(q, dq, ddq), prep.design, idx)
     return a, f.tau[idx][:, cols], removed
+
+
+#: regressor columns filtered at once by :func:`filtered_rows` (bounds the filter's copies)
+FILTER_COLUMNS = 64
+
+
+def filtered_rows(x: np.ndarray, design: LowPass, idx: np.ndarray) -> np.ndarray:
+    """``zero_phase(x, design)[idx]``, filtering :data:`FILTER_COLUMNS` columns at a time.
+
+    Each column is filtered on its own, so the result is the whole array's; the filter's padded
+    and intermediate copies are those of a few columns, not of the whole regressor.
+
+    Parameters
+    ----------
+    x : ndarray, shape ``(S, ...)``
+        Full-rate signals (a regressor ``(S, m, p)``).
+    design : LowPass
+        The low-pass.
+    idx : ndarray of int, shape ``(k,)``
+        The samples kept.
+
+    Returns
+    -------
+    ndarray, shape ``(k, ...)``
+        The filtered signals at the kept samples.
+    """
+    flat = x.reshape(len(x), -1)
+    out = np.empty((len(idx), flat.shape[1]))
+    for k in range(0, flat.shape[1], FILTER_COLUMNS):
+        out[:, k:k + FILTER_COLUMNS] = zero_phase(flat[:, k:k + FILTER_COLUMNS], design)[idx]
+    return out.reshape((len(idx),) + x.shape[1:])
 
 
 def combine(parts) -> RowAccumulator:

@@ -154,8 +154,8 @@ class LogStream:
             raise DataError(f"{self.source}: no data rows")
 
     # ------------------------------------------------------------ text
-    def _lines(self) -> Iterator[tuple[int, list[str]]]:
-        """``(first line number, lines)`` per block of about ``block_bytes``, cut at line ends."""
+    def _chunks(self) -> Iterator[tuple[int, bytes, str]]:
+        """``(first line number, bytes, text)`` per block of about ``block_bytes``, cut at line ends."""
         first, rest, offset = 1, b"", 0
         with open(self.path, "rb") as fh:
             while True:
@@ -171,12 +171,17 @@ class LogStream:
                 except UnicodeDecodeError as exc:
                     raise DataError(f"{self.path}: not a UTF-8 text file (byte {offset + exc.start})") from None
                 offset += len(body)
-                lines = text.splitlines()
-                if lines:
-                    yield first, lines
-                first += len(lines)
+                if body:
+                    yield first, body, text
+                first += len(text.splitlines()) if _odd_breaks(body) else body.count(b"\n") + (
+                    not body.endswith(b"\n"))
                 if not chunk:
                     return
+
+    def _lines(self) -> Iterator[tuple[int, list[str]]]:
+        """``(first line number, lines)`` per block (``str.splitlines``: the line numbers ``read_log`` gives)."""
+        for first, _, text in self._chunks():
+            yield first, text.splitlines()
 
     def _text_header(self) -> tuple[list[str], str, int]:
         """The header row: ``(names, delimiter, line number)`` (delimiter ``" "``: runs of blanks)."""
@@ -196,30 +201,46 @@ class LogStream:
     def _text_tables(self) -> Iterator[L._Table]:
         """One checked table per block of data lines (global line numbers and data rows)."""
         names, delim, header = self.names, self._delim, self._header_line
-        blanks = re.compile(r"[ \t]+")
         rows_before = 0
-        for first, lines in self._lines():
-            stripped = [s.strip() for s in lines]
-            numbers = np.array([first + k for k, s in enumerate(stripped)
-                                if s and not s.startswith("#") and first + k > header], dtype=np.int64)
-            kept = [stripped[n - first] for n in numbers]
-            if not kept:
-                continue
-            if delim == " ":
-                kept = [blanks.sub(" ", s) for s in kept]
-            counts = np.fromiter(map(str.count, kept, [delim] * len(kept)), int, len(kept)) + 1
-            if np.any(bad := counts != len(names)):
-                i = int(np.argmax(bad))
-                raise DataError(f"{self.path}: line {numbers[i]} (data row {rows_before + i + 1}): {counts[i]} fields, "
-                                f"the header has {len(names)} (columns of different lengths)")
-            values, text = _parse_block(self.path, kept, delim, names, numbers, rows_before + 1)
+        for first, body, text in self._chunks():
+            values = _fast_block(body, delim, names) if first > header and not _odd_breaks(body) else None
+            if values is not None:
+                numbers, text_cols = np.arange(first, first + len(values)), {}
+            else:
+                numbers, values, text_cols = self._slow_block(first, text, rows_before)
+                if numbers is None:
+                    continue
             table = L._Table(self.source, {n: values[:, k] for k, n in enumerate(names)}, numbers,
-                             "line {0} (data row {1})", text=text, offset=rows_before)
+                             "line {0} (data row {1})", text=text_cols, offset=rows_before)
             if rows_before == 0:
                 table.notes.append(f"{self.path.name}: read in blocks of {self.block_bytes} bytes, delimiter "
                                    f"{L._delim_name(delim)}")
-            rows_before += len(kept)
+            rows_before += len(values)
             yield table
+
+    def _slow_block(self, first: int, text: str, rows_before: int):
+        """``read_log``'s line rules on one block: blank and ``#`` lines skipped, field counts checked.
+
+        Returns ``(line numbers, values, text columns)``, or ``(None, None, None)`` for a block
+        without data lines.
+        """
+        names, delim, header = self.names, self._delim, self._header_line
+        stripped = [s.strip() for s in text.splitlines()]
+        numbers = np.array([first + k for k, s in enumerate(stripped)
+                            if s and not s.startswith("#") and first + k > header], dtype=np.int64)
+        kept = [stripped[n - first] for n in numbers]
+        if not kept:
+            return None, None, None
+        if delim == " ":
+            blanks = re.compile(r"[ \t]+")
+            kept = [blanks.sub(" ", s) for s in kept]
+        counts = np.fromiter(map(str.count, kept, [delim] * len(kept)), int, len(kept)) + 1
+        if np.any(bad := counts != len(names)):
+            i = int(np.argmax(bad))
+            raise DataError(f"{self.path}: line {numbers[i]} (data row {rows_before + i + 1}): {counts[i]} fields, "
+                            f"the header has {len(names)} (columns of different lengths)")
+        values, text_cols = _parse_block(self.path, kept, delim, names, numbers, rows_before + 1)
+        return numbers, values, text_cols
 
     # ------------------------------------------------------------ Parquet
     def _parquet_file(self):
@@ -257,6 +278,54 @@ class LogStream:
             f.close()
 
 
+#: bytes that may start a line break ``str.splitlines`` counts besides ``\n`` (and ``\r\n``); the
+#: last two lead U+0085, U+2028 and U+2029 (and other non-ASCII text, read line by line too)
+_ODD_BYTES = (b"\r", b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e", b"\xc2", b"\xe2")
+
+
+def _odd_breaks(body: bytes) -> bool:
+    """Whether a block may have line breaks other than newlines (``str.splitlines`` counts them too)."""
+    return any(b in body for b in _ODD_BYTES)
+
+
+def _fast_block(body: bytes, delim: str, names: list[str]) -> np.ndarray | None:
+    """``(k, columns)`` floats of a block in which every line is a row of plain numbers, or None.
+
+    pyarrow parses the bytes as they are; a blank, comment or malformed line, a text cell, or
+    pyarrow missing gives None (the block is then read line by line).
+    """
+    if delim == " ":
+        return None
+    try:
+        import pyarrow as pa
+        import pyarrow.csv as pcsv
+    except ImportError:
+        return None
+    try:
+        table = pcsv.read_csv(io.BytesIO(body),
+                              read_options=pcsv.ReadOptions(column_names=names, use_threads=False),
+                              parse_options=pcsv.ParseOptions(delimiter=delim, quote_char=False,
+                                                              ignore_empty_lines=False),
+                              convert_options=pcsv.ConvertOptions(column_types={n: pa.float64() for n in names},
+                                                                  null_values=[], strings_can_be_null=False))
+    except (pa.ArrowInvalid, pa.ArrowTypeError, ValueError):
+        return None
+    if table.num_rows != body.count(b"\n") + (not body.endswith(b"\n")):
+        return None
+    return _numbers(table, names)
+
+
+def _numbers(table, names: list[str]) -> np.ndarray:
+    """``(k, columns)`` floats of a pyarrow table of float64 columns (without pandas)."""
+    out = np.empty((table.num_rows, len(names)))
+    for k, n in enumerate(names):
+        start = 0
+        for chunk in table.column(n).chunks:
+            out[start:start + len(chunk), k] = chunk.to_numpy(zero_copy_only=False)
+            start += len(chunk)
+    return out
+
+
 def _parse_block(path: Path, kept: list[str], delim: str, names: list[str], numbers: np.ndarray, first_row: int):
     """``(k, columns)`` floats of a block of data lines and ``{column: message}`` for text cells.
 
@@ -278,7 +347,7 @@ def _parse_block(path: Path, kept: list[str], delim: str, names: list[str], numb
         return L._parse_numbers(path, kept, delim, names, numbers, first_row)
     if table.num_rows != len(kept):
         return L._parse_numbers(path, kept, delim, names, numbers, first_row)
-    return np.column_stack([table.column(n).to_numpy() for n in names]), {}
+    return _numbers(table, names), {}
 
 
 def _arrow_columns(path: Path, batch, start: int):

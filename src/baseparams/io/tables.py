@@ -8,6 +8,7 @@ Every write goes through :func:`baseparams.files.atomic_path`.
 
 from __future__ import annotations
 
+import contextlib
 import io
 from pathlib import Path
 
@@ -124,3 +125,57 @@ def write_columns(path, cols: dict, inputs=(), what: str = "--out") -> Path:
                     buf.write(delim.join(str(x) if isinstance(x, str) else f"{float(x):.17g}" for x in row) + "\n")
             tmp.write_text(buf.getvalue(), encoding="utf-8")
     return Path(path)
+
+
+@contextlib.contextmanager
+def column_writer(path, names: list[str], inputs=(), what: str = "--out"):
+    """Write columns block by block (a streamed run's predictions), atomically.
+
+    CSV/TSV rows are appended as they come (``%.17g``, the header first), Parquet by row groups
+    (``pyarrow.parquet.ParquetWriter``, float64); NPZ cannot be appended to: its blocks are held
+    and written at the end. The file appears under ``path`` only when the block ends without
+    error (:func:`baseparams.files.atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path
+        The file (suffix as for :func:`write_columns`).
+    names : list of str
+        The column names, in order.
+    inputs : iterable of str or path
+        The run's input files.
+    what : str
+        The option, for messages.
+
+    Yields
+    ------
+    callable
+        ``write(block)``: ``block`` an ``(k, len(names))`` array of numbers, the next ``k`` rows.
+
+    Raises
+    ------
+    BaseparamsError
+        As :func:`check_table_path`.
+    """
+    check_table_path(path, inputs, what)
+    suffix = Path(path).suffix.lower()
+    with atomic_path(path, inputs, what) as tmp:
+        held: list = []
+        if suffix in (".parquet", ".pq"):
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            schema = pa.schema([(n, pa.float64()) for n in names])
+            with pq.ParquetWriter(tmp, schema) as pw:
+                yield lambda block: pw.write_table(pa.table({n: np.asarray(block, float)[:, k]
+                                                             for k, n in enumerate(names)}, schema=schema))
+        elif suffix == ".npz":
+            yield lambda block: held.append(np.asarray(block, float))
+            cat = np.concatenate(held) if held else np.empty((0, len(names)))
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **{n: cat[:, k] for k, n in enumerate(names)})
+        else:
+            delim = "\t" if suffix == ".tsv" else ","
+            with open(tmp, "w", encoding="utf-8", newline="") as fh:
+                fh.write(delim.join(names) + "\n")
+                yield lambda block: np.savetxt(fh, np.asarray(block, float), delimiter=delim, fmt="%.17g")

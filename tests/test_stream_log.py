@@ -1,0 +1,208 @@
+"""A log identified block by block from its file (issue 24): the whole log's answer, bounded memory.
+
+The oracle is the in-memory path (:func:`baseparams.ident.pipeline.identify` on
+:func:`baseparams.io.logs.read_log`), independent of the streamed one in everything but the shared
+preprocessing functions: the streamed run must give its estimate, standard deviations (HAC over
+the streamed rows) and validation RMS, with windows and blocks far smaller than the log.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from baseparams import load
+from baseparams.errors import DataError
+from baseparams.ident.data import JointLog
+from baseparams.ident.pipeline import identify
+from baseparams.ident.simulate import simulate_log
+from baseparams.ident.stream import NotStreamable, identify_stream, scan
+from baseparams.io.logs import read_log, write_log
+from baseparams.io.logstream import LogStream
+from baseparams.io.tables import column_writer
+
+
+@pytest.fixture(scope="module")
+def puma():
+    return load("puma560")
+
+
+@pytest.fixture(scope="module")
+def sim(puma, tmp_path_factory):
+    """A simulated Puma560 log (40 s at 200 Hz, torque noise), as CSV and Parquet."""
+    log, _ = simulate_log(puma, duration=40, rate=200, noise=0.2, rotor=True, seed=3)
+    folder = tmp_path_factory.mktemp("stream")
+    csv = folder / "sim.csv"
+    write_log(csv, log)
+    pq = pytest.importorskip("pyarrow.parquet")
+    import pyarrow as pa
+
+    table = pa.table({k: np.asarray(v) for k, v in
+                      zip(["t", *[f"{kind}_{j}" for kind in ("q", "dq", "tau") for j in log.joints]],
+                          [log.t, *log.q.T, *log.dq.T, *log.tau.T])})
+    pq.write_table(table, folder / "sim.parquet", row_group_size=1000)
+    return csv, folder / "sim.parquet"
+
+
+def _compare(a, b, what):
+    rel = np.abs(a.values - b.values) / np.maximum(np.abs(a.values), 1e-6 * np.abs(a.values).max())
+    assert rel.max() <= 1e-8, f"{what}: estimate differs by {rel.max():.3g} relative"
+    assert np.allclose(a.std, b.std, rtol=1e-8, atol=0), what
+    assert a.samples == b.samples, what
+    assert np.isclose(a.train["rms_total"], b.train["rms_total"], rtol=1e-10)
+    if a.validation is not None:
+        for key in ("rms_total", "rms_lowpassed_total"):
+            if key in a.validation:
+                assert np.isclose(a.validation[key], b.validation[key], rtol=1e-10), (what, key)
+        assert a.validation["samples"] == b.validation["samples"]
+    assert a.fit.estimate.covariance == b.fit.estimate.covariance
+
+
+@pytest.mark.parametrize("method", ["auto", "ols"])
+def test_streamed_equals_in_memory_on_a_small_log(puma, sim, method):
+    """Windows of ~1800 samples, blocks of 64 kB and the HAC pass streamed: the whole log's answer."""
+    csv, _ = sim
+    kw = dict(method=method, rotor=True, holdout=8, score_cutoff=5.0)
+    whole = identify(puma, read_log(csv, puma), **kw)
+    got = []
+    streamed = identify_stream(puma, LogStream(csv, puma, block_bytes=1 << 16), memory_mb=1.0,
+                               predictions=lambda t, tau: got.append(np.column_stack([t, tau])), **kw)
+    assert "windows" in " ".join(streamed.notes)
+    _compare(whole, streamed, method)
+    log = read_log(csv, puma)
+    held = log.t >= log.t[-1] - 8
+    pred = np.concatenate(got)
+    assert np.array_equal(pred[:, 0], log.t[held])
+    assert np.abs(pred[:, 1:] - whole.predict(log)[held]).max() <= 1e-9
+
+
+def test_parquet_is_streamed_by_batches_with_the_same_answer(puma, sim):
+    csv, pq = sim
+    whole = identify(puma, read_log(csv, puma), method="wls", rotor=True, covariance="white")
+    streamed = identify_stream(puma, LogStream(pq, puma), method="wls", rotor=True, covariance="white",
+                               memory_mb=1.0)
+    _compare(whole, streamed, "parquet")
+
+
+def test_validation_on_another_streamed_log(puma, sim, tmp_path):
+    csv, _ = sim
+    other_log, _ = simulate_log(puma, duration=10, rate=200, noise=0.2, rotor=True, seed=4)
+    other = tmp_path / "other.csv"
+    write_log(other, other_log)
+    whole = identify(puma, read_log(csv, puma), method="ols", rotor=True, validation=read_log(other, puma))
+    streamed = identify_stream(puma, LogStream(csv, puma), method="ols", rotor=True,
+                               validation=LogStream(other, puma, block_bytes=1 << 15), memory_mb=2.0)
+    _compare(whole, streamed, "--validate")
+    assert streamed.validation["source"] == str(other)
+
+
+def _bad_copy(src, dest, line: int, old_new):
+    lines = src.read_text().splitlines(keepends=True)
+    lines[line - 1] = old_new(lines[line - 1])
+    dest.write_text("".join(lines))
+
+
+def test_a_bad_value_names_its_global_line_and_row_as_read_log_does(puma, sim, tmp_path):
+    """A NaN, a word and a time going back, far past the first block: the whole file's line numbers."""
+    csv, _ = sim
+    bad = tmp_path / "bad.csv"
+    cases = [(6001, lambda s: s[:s.index(",") + 1] + "nan" + s[s.index(",", s.index(",") + 1):]),
+             (5003, lambda s: s[:s.rindex(",") + 1] + "oops\n"),
+             (7000, lambda s: "0.5" + s[s.index(","):])]
+    for line, edit in cases:
+        _bad_copy(csv, bad, line, edit)
+        with pytest.raises(DataError) as whole:
+            read_log(bad, puma)
+        with pytest.raises(DataError) as streamed:
+            scan(LogStream(bad, puma, block_bytes=1 << 14))
+        expect = str(whole.value).split(" (not finite")[0].split("; time must")[0]
+        assert str(streamed.value).startswith(expect), (str(whole.value), str(streamed.value))
+        assert f"line {line} (data row {line - 1})" in str(streamed.value)
+
+
+def test_blank_and_comment_lines_keep_line_numbers_global(puma, sim, tmp_path):
+    csv, _ = sim
+    text = csv.read_text().splitlines(keepends=True)
+    text[2000:2000] = ["\n", "# a comment\n", "   \n"]
+    text[5000] = "nan" + text[5000][text[5000].index(","):]
+    f = tmp_path / "commented.csv"
+    f.write_text("".join(text))
+    with pytest.raises(DataError) as whole:
+        read_log(f, puma)
+    with pytest.raises(DataError) as streamed:
+        scan(LogStream(f, puma, block_bytes=1 << 13))
+    assert str(streamed.value).split(" (not finite")[0] == str(whole.value).split(" (not finite")[0]
+    assert "line 5001 (data row 4997)" in str(streamed.value)
+
+
+def test_non_uniform_time_is_not_streamed(puma, sim, tmp_path):
+    csv, _ = sim
+    log = read_log(csv, puma)
+    t = log.t.copy()
+    t[100:] += 0.001  # one long step
+    odd = tmp_path / "odd.csv"
+    write_log(odd, JointLog(t, log.joints, log.q, log.tau, log.dq))
+    with pytest.raises(NotStreamable, match="non-uniform"):
+        identify_stream(puma, LogStream(odd, puma), method="ols")
+
+
+def _peak_mb(puma, path) -> float:
+    tracemalloc.start()
+    identify_stream(puma, LogStream(path, puma, block_bytes=1 << 16), method="ols", covariance="hac",
+                    memory_mb=2.0, holdout=5)
+    peak = tracemalloc.get_traced_memory()[1] / 1e6
+    tracemalloc.stop()
+    return peak
+
+
+@pytest.mark.slow
+def test_memory_does_not_grow_with_the_log(puma, tmp_path):
+    """4x the samples, the same peak of Python/NumPy allocations (the in-memory path's grows 4x)."""
+    peaks = []
+    for duration in (60, 240):
+        log, _ = simulate_log(puma, duration=duration, rate=250, noise=0.1, seed=5)
+        f = tmp_path / f"log{duration}.csv"
+        write_log(f, log)
+        del log
+        peaks.append(_peak_mb(puma, f))
+    assert peaks[1] <= 1.25 * peaks[0] + 2, peaks
+
+
+def test_column_writer_is_atomic_and_appends(tmp_path):
+    out = tmp_path / "pred.csv"
+    with column_writer(out, ["t", "tau_a"]) as write:
+        write(np.array([[0.0, 1.0], [0.1, 2.0]]))
+        write(np.array([[0.2, 3.0]]))
+        assert not out.exists()
+    assert out.read_text().splitlines() == ["t,tau_a", "0,1", "0.10000000000000001,2", "0.20000000000000001,3"]
+    with pytest.raises(RuntimeError), column_writer(tmp_path / "gone.csv", ["t"]) as write:
+        write(np.zeros((1, 1)))
+        raise RuntimeError("interrupted")
+    assert not (tmp_path / "gone.csv").exists()
+    pq = pytest.importorskip("pyarrow.parquet")
+    with column_writer(tmp_path / "pred.parquet", ["t", "x"]) as write:
+        write(np.ones((3, 2)))
+        write(np.zeros((2, 2)))
+    assert pq.read_table(tmp_path / "pred.parquet").num_rows == 5
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "baseparams", *map(str, args)], capture_output=True, text=True)
+
+
+def test_cli_streams_on_request_and_says_so(sim, tmp_path):
+    csv, _ = sim
+    pred = tmp_path / "pred.csv"
+    r = _cli("identify", "puma560", csv, "--rotor", "--holdout", "8", "--stream", "on", "-v", "--method", "ols",
+             "--predictions", pred)
+    assert r.returncode == 0, r.stderr
+    assert "streaming" in r.stderr and "block by block" in r.stderr
+    assert len(pred.read_text().splitlines()) == 1 + 1601
+    npz = tmp_path / "log.npz"
+    write_log(npz, read_log(csv, load("puma560")))
+    r = _cli("identify", "puma560", npz, "--stream", "on")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--stream on" in r.stderr

@@ -43,11 +43,11 @@ from . import preprocess as pp
 from .data import JointLog
 
 #: training samples up to which the cutoff is chosen from every sample (as in memory)
-SUBSAMPLE_MAX = 1 << 19
+SUBSAMPLE_MAX = 1 << 18
 #: first samples kept for the unit checks and the rate notes
-HEAD_ROWS = 1 << 17
+HEAD_ROWS = 1 << 16
 #: most fitted samples in the report's series
-SERIES_MAX = 1 << 16
+SERIES_MAX = 1 << 15
 #: held-out samples up to which the validation series (plots) is computed
 HELD_SERIES_MAX = 1 << 18
 #: samples owned by one validation window
@@ -121,6 +121,23 @@ def rows(log: JointLog, lo: int, hi: int) -> JointLog:
                            for k in ("t", "q", "tau", "dq", "ddq")})
 
 
+def copy(log: JointLog) -> JointLog:
+    """A log whose arrays are its own (not views holding a larger block alive).
+
+    Parameters
+    ----------
+    log : JointLog
+        The log.
+
+    Returns
+    -------
+    JointLog
+        The same samples in fresh arrays.
+    """
+    return replace(log, **{k: None if getattr(log, k) is None else np.array(getattr(log, k))
+                           for k in ("t", "q", "tau", "dq", "ddq")})
+
+
 def windows(blocks, plans):
     """The samples each chunk reads, from consecutive blocks (only a few held at a time).
 
@@ -156,9 +173,9 @@ def windows(blocks, plans):
             while buf and b0 + buf[0].n_samples <= c.lo:
                 b0 += buf.pop(0).n_samples
             whole = concat(buf)
-            if len(buf) > 1:
-                buf = [whole]
-            yield c, rows(whole, c.lo - b0, c.hi - b0)
+            whole = rows(whole, c.lo - b0, whole.n_samples)  # later chunks start at or after c.lo
+            buf, b0 = [whole], c.lo
+            yield c, rows(whole, 0, c.hi - c.lo)
     finally:
         close = getattr(it, "close", None)
         if close is not None:
@@ -188,7 +205,7 @@ def scan(stream) -> Scan:
         if t0 is None:
             t0, notes = float(blk.t[0]), blk.notes
         if n < HEAD_ROWS:
-            head.append(rows(blk, 0, HEAD_ROWS - n))
+            head.append(copy(rows(blk, 0, HEAD_ROWS - n)))
         n += blk.n_samples
         t_end = float(blk.t[-1])
     return Scan(n, t0, t_end, concat(head), tuple(notes))
@@ -257,7 +274,7 @@ def training(stream, sc: Scan, end_time: float | None) -> Training:
             tt, q = np.r_[carry_t, t], np.concatenate([carry_q, blk.q[:k]])
             g = len(q) // step
             means.append(q[:g * step].reshape(g, step, -1).mean(axis=1))
-            times.append(tt[:g * step:step])
+            times.append(tt[:g * step:step].copy())  # not a view holding the block
             carry_t, carry_q = tt[g * step:], q[g * step:]
             n, last = n + k, float(t[-1])
         if k < blk.n_samples:
@@ -536,27 +553,28 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
         if sink is not None:
             sink(part.t[own], pred)
         if held_out is not None:
-            held_out.append(rows(part, own.start, own.stop))
+            held_out.append(copy(rows(part, own.start, own.stop)))
     return scores.result(names, source or stream.source, score_cutoff)
 
 
 def _series_of(kept, theta, names, limit: int = SERIES_MAX) -> dict:
-    """The report's training series from fitted rows ``(t, A, tau)`` (evenly thinned to ``limit``)."""
+    """The report's training series from fitted rows ``(t, A or A @ theta, tau)`` (evenly thinned to ``limit``)."""
     t = np.concatenate([k[0] for k in kept]) if kept else np.empty(0)
     step = max(1, math.ceil(len(t) / limit))
     tau = np.concatenate([k[2] for k in kept])[::step] if kept else np.empty((0, len(names)))
-    hat = np.concatenate([k[1][::1] @ theta for k in kept])[::step] if kept else np.empty((0, len(names)))
+    hat = (np.concatenate([k[1] if k[1].ndim == 2 else k[1] @ theta for k in kept])[::step] if kept
+           else np.empty((0, len(names))))
     return {"t": t[::step], "tau": tau, "tau_hat": hat, "joints": names}
 
 
-def _thinned(gen, every: int, out: list):
-    """``(A, tau)`` of :func:`fitted`'s windows, keeping every ``every``-th row's ``(t, A, tau)`` in ``out``."""
+def _thinned(gen, every: int, theta: np.ndarray, out: list):
+    """``(A, tau)`` of :func:`fitted`'s windows; every ``every``-th row's ``(t, A @ theta, tau)`` into ``out``."""
     seen = 0
     for t, a, tau, _, _ in gen:
         if a is None:
             continue
         sel = (seen + np.arange(len(t))) % every == 0
-        out.append((t[sel], a[sel], tau[sel]))
+        out.append((t[sel], a[sel] @ theta, tau[sel]))
         seen += len(t)
         yield a, tau
 
@@ -598,7 +616,8 @@ def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
     say("covariance (HAC: a second pass over the file, window by window)")
     thin: list = []
     every = max(1, math.ceil(plan.fitted_count() / SERIES_MAX))
-    f, note = apply_covariance(f, acc, _thinned(fitted(stream, plan, model, cols), every, thin), covariance, rate)
+    f, note = apply_covariance(f, acc, _thinned(fitted(stream, plan, model, cols), every, f.theta, thin), covariance,
+                               rate)
     return f, note, _series_of(thin, f.theta, names)
 
 

@@ -21,8 +21,7 @@ from baseparams.ident.data import JointLog
 from baseparams.ident.pipeline import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.ident.stream import NotStreamable, identify_stream, scan
-from baseparams.io.logs import read_log, write_log
-from baseparams.io.logstream import LogStream
+from baseparams.io.logs import LogStream, read_log, write_log
 from baseparams.io.tables import column_writer
 
 

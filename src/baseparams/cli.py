@@ -459,7 +459,7 @@ def _identify_kwargs(args, couplings) -> dict:
 
 def _stream_reason(args, path: str) -> str | None:
     """Why ``identify`` streams the log from its file (a line for ``-v``), or None: read it whole."""
-    from .io.logstream import STREAM_SUFFIXES, streamable
+    from .io.logs import STREAM_SUFFIXES, streamable
 
     mode = getattr(args, "stream", "auto")
     if mode == "off":
@@ -487,7 +487,7 @@ def _identify_streamed(args, robot, files, couplings, progress):
     if why is None:
         return None
     from .ident.stream import NotStreamable, identify_stream
-    from .io.logstream import LogStream
+    from .io.logs import LogStream
 
     progress(f"streaming {files[0]} block by block ({why}): memory independent of the log's length")
     stream = LogStream(files[0], robot, columns=args.columns)
@@ -991,9 +991,6 @@ def _identify_parser(sub, model_args) -> None:
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
     held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
-    s.add_argument("--stream", choices=("auto", "on", "off"), default="auto",
-                   help="read a CSV/TSV/Parquet log block by block, in memory independent of its length, with the "
-                        "same result: auto (default) above 64 MB, on, off (read it whole)")
     s.add_argument("--method", choices=("auto", "ols", "wls", "physical"), default="auto",
                    help="auto (default): weighted least squares pulled towards the model file's parameters as far "
                         "as blocked cross-validation on the training data asks; ols, wls (per-joint noise) or "
@@ -1024,15 +1021,7 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--predictions", metavar="FILE",
                    help="write the predicted torques at every validation sample (t, tau_<joint>; .csv, .tsv or "
                         ".parquet)")
-    s.add_argument("--per-file", action="store_true",
-                   help="several logs (a glob such as 'logs/robot-*/*.parquet'): one estimate per log and the "
-                        "spread across them, on Dask")
-    s.add_argument("--pooled", action="store_true", help="several logs: one estimate from all of them, on Dask")
-    s.add_argument("--strict", action="store_true",
-                   help="several logs: exit 2 when any log was skipped (default: report it, go on with the rest)")
-    s.add_argument("--scheduler", metavar="ADDRESS",
-                   help="a Dask scheduler (default DASK_SCHEDULER_ADDRESS, else a local cluster for this run)")
-    s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
+    _log_size_args(s)
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
     s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
@@ -1044,6 +1033,22 @@ def _identify_parser(sub, model_args) -> None:
                    help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.set_defaults(func=cmd_identify)
+
+
+def _log_size_args(s) -> None:
+    """``identify``'s options for long logs (streamed) and many logs (a fleet on Dask)."""
+    s.add_argument("--stream", choices=("auto", "on", "off"), default="auto",
+                   help="read a CSV/TSV/Parquet log block by block, in memory independent of its length, with the "
+                        "same result: auto (default) above 64 MB, on, off (read it whole)")
+    s.add_argument("--per-file", action="store_true",
+                   help="several logs (a glob such as 'logs/robot-*/*.parquet'): one estimate per log and the "
+                        "spread across them, on Dask")
+    s.add_argument("--pooled", action="store_true", help="several logs: one estimate from all of them, on Dask")
+    s.add_argument("--strict", action="store_true",
+                   help="several logs: exit 2 when any log was skipped (default: report it, go on with the rest)")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a Dask scheduler (default DASK_SCHEDULER_ADDRESS, else a local cluster for this run)")
+    s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
 
 
 def _simulate_parser(sub, model_args) -> None:

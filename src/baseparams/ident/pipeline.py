@@ -210,14 +210,24 @@ def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
         return Fit(model, "auto", est.theta, est, selection=sel)
     theta = ridge(est.R11, est.r12, theta0, pull_scale(est.R11, pulled), sel.lam)
     res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
-    # the least-squares statistics stay: _pulled_covariance maps the covariance once it is chosen
+    # the least-squares statistics stay: pulled_covariance maps the covariance once it is chosen
     return Fit(model, "auto", theta, replace(est, method="auto", theta=theta, rms=res), selection=sel)
 
 
-def _pulled_covariance(f: Fit) -> Fit:
+def pulled_covariance(f: Fit) -> Fit:
     """The covariance of the pulled estimate: ``theta = M theta_ls + const``, ``M = H^-1 R11^T R11``.
 
     No term for the pull's bias (the prior is taken as exact); a pull of weight 0 changes nothing.
+
+    Parameters
+    ----------
+    f : Fit
+        The fit (``auto``: its selection's pull weight; others are returned as they are).
+
+    Returns
+    -------
+    Fit
+        The fit with the covariance ``M cov M^T`` ``(p, p)`` and its label.
     """
     from dataclasses import replace
 
@@ -788,7 +798,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction), coulomb_width,
                         couplings=couplings)
     cols = log_columns(model, log)
-    unit_notes = _units(model, train, cols, allow_units)
+    unit_notes = check_log_units(model, train, cols, allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
@@ -799,12 +809,12 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     say(f"fitting ({method})")
     f = fit(model, acc, method, prior_weight, blocks=parts)
     f, cov_note = _uncertainty(f, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say)
-    f = _pulled_covariance(f)
+    f = pulled_covariance(f)
     say("predicted torques and excitation spectrum for the report")
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
     train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
-    val, series = None, {"train": _series(model, prep, cols, f.theta, names, memory_mb), "validation": None}
+    val, series = None, {"train": report_series(model, prep, cols, f.theta, names, memory_mb), "validation": None}
     series["train"]["spectrum"] = position_spectrum(train, cols, prep.design.fs, prep.design.cutoff, prep.full.t)
     if held is not None:
         say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
@@ -812,9 +822,9 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         pred = predict_log(f, whole, float(prep.design.cutoff))
         val = validation_scores(whole, pred, names, mask, score_cutoff)
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
-        series["validation"] = _series(model, vprep, log_columns(model, held), f.theta, names, memory_mb)
+        series["validation"] = report_series(model, vprep, log_columns(model, held), f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *_model_notes(model), *(f.physical.notes if f.physical is not None else ()),
+    notes = (*prep.notes, acc_note, *model_notes(model), *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
@@ -822,8 +832,30 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
 
 
-def _units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:
-    """Units and plausibility of the log before any fit (:func:`~baseparams.ident.plausibility.check_units`)."""
+def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:
+    """Units and plausibility of the log before any fit (:func:`~baseparams.ident.plausibility.check_units`).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model (its robot's own torques are the comparison).
+    log : JointLog
+        The (training) log.
+    cols : ndarray of int, shape ``(state_columns,)``
+        Log column of each state column.
+    allow_units : bool
+        Go on with a warning note instead of refusing.
+
+    Returns
+    -------
+    list of str
+        Notes for the report.
+
+    Raises
+    ------
+    DataError
+        Units that look wrong, unless ``allow_units``.
+    """
     from ..analysis import regressor
     from ..errors import DataError
     from .plausibility import check_units
@@ -850,8 +882,29 @@ def _uncertainty(f: Fit, acc, covariance, kept, model, prep, cols, memory_mb, tr
     return apply_covariance(f, acc, rows, covariance, prep.design.fs / prep.factor)
 
 
-def _series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names: list[str], memory_mb: float):
-    """Measured and predicted torques of a prepared log, as they were compared (filtered)."""
+def report_series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names: list[str], memory_mb: float):
+    """Measured and predicted torques of a prepared log, as they were compared (filtered).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    prep : Prepared
+        The prepared log.
+    cols : ndarray of int, shape ``(state_columns,)``
+        Log column of each state column.
+    theta : ndarray, shape ``(p,)``
+        The identified values.
+    names : list of str, shape ``(m,)``
+        The measured joints.
+    memory_mb : float
+        Largest regressor formed at once (beyond, the predicted torques are not parallel-filtered).
+
+    Returns
+    -------
+    dict
+        ``{"t" (S',), "tau" (S', m), "tau_hat" (S', m), "joints" (m,)}`` at the kept samples.
+    """
     full = prep.full
     q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
@@ -1074,8 +1127,19 @@ def _plain(x):
     return x
 
 
-def _model_notes(model: IdentModel) -> list[str]:
-    """One line per drive parameter regrouped into a base parameter."""
+def model_notes(model: IdentModel) -> list[str]:
+    """One line per drive parameter regrouped into a base parameter.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+
+    Returns
+    -------
+    list of str
+        ``regrouped: <expression>`` lines.
+    """
     return [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]
 
 

@@ -510,8 +510,8 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         raise DataError(f"{log.source}: {n} samples at {rate:.6g} Hz; the filter edges alone take 2 x {design.pad} "
                         f"(a longer log, or a higher cutoff)")
     qf, tauf = zero_phase(u.q, design), zero_phase(u.tau, design)
-    dq, ddq, rate_notes = _rates(u, qf, rate, design)
-    k, k_note = _factor(decimate, rate, design)
+    dq, ddq, rate_notes = filtered_rates(u, qf, rate, design)
+    k, k_note = decimation_factor(decimate, rate, design)
     removed = dict(u.removed)
     inner = np.arange(design.pad, n - design.pad)
     index = inner[::k]
@@ -557,8 +557,28 @@ def _check_log(log: JointLog) -> None:
         raise DataError(f"{log.source}: t, sample {i} (0-based): {t[i]:.9g} s not after {t[i - 1]:.9g} s")
 
 
-def _rates(u: JointLog, qf: np.ndarray, rate: float, design: LowPass) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """``dq, ddq``: measured ones low-passed with the same filter, or derived from the filtered q."""
+def filtered_rates(u: JointLog, qf: np.ndarray, rate: float,
+                   design: LowPass) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``dq, ddq``: measured ones low-passed with the same filter, or derived from the filtered q.
+
+    Parameters
+    ----------
+    u : JointLog
+        The uniform log (``S`` samples; its ``dq``, ``ddq`` when logged).
+    qf : ndarray, shape ``(S, m)``
+        The low-passed positions.
+    rate : float
+        The sampling rate [Hz].
+    design : LowPass
+        The low-pass.
+
+    Returns
+    -------
+    dq, ddq : ndarray, shape ``(S, m)``
+        Velocities and accelerations.
+    notes : list of str
+        How each was obtained (a measured ``dq``: its RMS difference to d/dt of the filtered q).
+    """
     derived, dderived = derivatives(qf, rate)
     notes = []
     if u.dq is not None:
@@ -580,8 +600,30 @@ def _rates(u: JointLog, qf: np.ndarray, rate: float, design: LowPass) -> tuple[n
     return dq, ddq, notes
 
 
-def _factor(decimate: int | None, rate: float, design: LowPass) -> tuple[int, str]:
-    """The decimation factor (given or default) and its note; a factor that aliases is an error."""
+def decimation_factor(decimate: int | None, rate: float, design: LowPass) -> tuple[int, str]:
+    """The decimation factor (given or default) and its note; a factor that aliases is an error.
+
+    Parameters
+    ----------
+    decimate : int or None
+        The factor given, or None: the largest ``k`` with ``rate / k >= 5 cutoff``.
+    rate : float
+        The sampling rate [Hz].
+    design : LowPass
+        The low-pass.
+
+    Returns
+    -------
+    factor : int
+        The factor.
+    note : str
+        One line for the report.
+
+    Raises
+    ------
+    DataError
+        A factor that is not a positive integer or whose Nyquist rate is not above the cutoff.
+    """
     if decimate is None:
         k = max(1, int(np.floor(rate / (DECIMATE_MARGIN * design.cutoff) * (1 + 1e-3))))  # 0.1 %: a jittered rate
         why = f"default: largest k with fs/k >= {DECIMATE_MARGIN:g} x cutoff"

@@ -5,7 +5,7 @@ log (the same estimate to rounding, the same standard deviations, the same valid
 holding at most a few blocks of samples, one chunk's regressor and a bounded subsample. It reads
 the file several times, each pass block by block (a *block source*: any object with ``source``,
 ``joints``, ``has_dq``, ``has_ddq`` and ``blocks()`` yielding consecutive
-:class:`~baseparams.ident.data.JointLog` blocks, e.g. :class:`baseparams.io.logstream.LogStream`):
+:class:`~baseparams.ident.data.JointLog` blocks, e.g. :class:`baseparams.io.logs.LogStream`):
 
 1. **scan**: samples, first and last time, the time steps' range (uniform or not), the first
    :data:`HEAD_ROWS` samples (the unit checks of :mod:`baseparams.ident.plausibility` run on them);
@@ -314,11 +314,23 @@ class Plan:
     notes: tuple[str, ...]
 
     def windows(self):
-        """The training windows (:func:`~baseparams.ident.chunks.plan`)."""
+        """The training windows (:func:`~baseparams.ident.chunks.plan`).
+
+        Returns
+        -------
+        list of ChunkPlan
+            Owned samples ``size`` each, ``margin`` read on both sides.
+        """
         return chunks.plan(self.grid.n, self.size, self.margin)
 
     def fitted_count(self) -> int:
-        """Samples kept before slow-sample removal (on the decimation grid, past the filter edges)."""
+        """Samples kept before slow-sample removal (on the decimation grid, past the filter edges).
+
+        Returns
+        -------
+        int
+            Their number.
+        """
         return len(range(self.grid.pad, self.grid.n - self.grid.pad, self.factor))
 
 
@@ -369,10 +381,10 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     if tr.n <= 2 * design.pad + 1:
         raise DataError(f"{stream.source}: {tr.n} samples at {tr.rate:.6g} Hz; the filter edges alone take 2 x "
                         f"{design.pad} (a longer log, or a higher cutoff)")
-    k, k_note = pp._factor(decimate, tr.rate, design)
+    k, k_note = pp.decimation_factor(decimate, tr.rate, design)
     head = rows(sc.head, 0, min(sc.head.n_samples, tr.n))
-    rate_notes = pp._rates(head, pp.zero_phase(head.q, design), tr.rate, design)[2] if head.n_samples > 2 * design.pad \
-        else []
+    rate_notes = (pp.filtered_rates(head, pp.zero_phase(head.q, design), tr.rate, design)[2]
+                  if head.n_samples > 2 * design.pad else [])
     if head.n_samples < tr.n and stream.has_dq:
         rate_notes = [f"{x} (over the first {head.n_samples} samples)" if x.startswith("dq: measured") else x
                       for x in rate_notes]
@@ -635,7 +647,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
     robot : Robot
         The model (fixed base).
     stream : block source
-        The log, e.g. :class:`baseparams.io.logstream.LogStream`.
+        The log, e.g. :class:`baseparams.io.logs.LogStream`.
     method, rotor, friction, coulomb_width, holdout, cutoff, decimate, min_speed, prior_weight, convention, \
 memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units
         As for :func:`~baseparams.ident.pipeline.identify` (``memory_mb``: the window's regressor).
@@ -678,7 +690,7 @@ def _passes(robot, stream, o: dict, say):
     """Passes 1-3: the model, the scan, the training statistics, the plan and the accumulated rows."""
     from ..analysis import analyze
     from .model import ident_model
-    from .pipeline import _units, log_columns
+    from .pipeline import check_log_units, log_columns
 
     say(f"scanning {stream.source} (pass 1: samples, time span, checks)")
     sc = scan(stream)
@@ -694,7 +706,7 @@ def _passes(robot, stream, o: dict, say):
     cols = log_columns(model, sc.head)
     say(f"training statistics of {sc.n} samples (pass 2: hold-out split, rate, cutoff subsample)")
     tr = training(stream, sc, end_time)
-    unit_notes = _units(model, rows(sc.head, 0, min(sc.head.n_samples, tr.n)), cols, o["allow_units"])
+    unit_notes = check_log_units(model, rows(sc.head, 0, min(sc.head.n_samples, tr.n)), cols, o["allow_units"])
     if sc.head.n_samples < tr.n:
         unit_notes = [f"{x} (on the first {sc.head.n_samples} samples)" for x in unit_notes]
     plan = plan_training(model, stream, sc, tr, o["cutoff"], o["decimate"], o["min_speed"], o["memory_mb"])
@@ -706,14 +718,14 @@ def _passes(robot, stream, o: dict, say):
 
 def _identify_stream(robot, stream, validation, predictions, say, o: dict):
     """:func:`identify_stream`'s steps."""
-    from .pipeline import Identification, _model_notes, _pulled_covariance, fit, position_spectrum
+    from .pipeline import Identification, fit, model_notes, position_spectrum, pulled_covariance
 
     sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, say)
     acc = chunks.combine(parts)
     say(f"fitting ({o['method']})")
     f = fit(model, acc, o["method"], o["prior_weight"], blocks=parts)
     f, cov_note, train_series = covariance_pass(f, acc, o["covariance"], kept, stream, plan, model, cols, say)
-    f = _pulled_covariance(f)
+    f = pulled_covariance(f)
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
     train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
@@ -732,7 +744,7 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
             removed["slow (|dq| < min_speed on a joint)"] = slow
     acc_note = (f"parallel filtering in {len(plan.windows())} windows of {plan.size} samples with {plan.margin}-sample "
                 f"overlaps, the log streamed from its file (equal to the whole log's to rounding)")
-    notes = (*plan.notes, *slow_note, acc_note, *_model_notes(model),
+    notes = (*plan.notes, *slow_note, acc_note, *model_notes(model),
              *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": o["method"], "convention": o["convention"], "rows": str(model.analysis.rows),
@@ -745,7 +757,7 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
 
 def _validation(f, stream, other, sc: Scan, tr: Training, plan: Plan, names, o: dict, predictions, series, say):
     """Pass 5 on the held-out tail or on another log (None without either); the validation series when small."""
-    from .pipeline import _series, log_columns
+    from .pipeline import log_columns, report_series
 
     if o["holdout"] is None and other is None:
         return None
@@ -763,5 +775,5 @@ def _validation(f, stream, other, sc: Scan, tr: Training, plan: Plan, names, o: 
     if held:
         h = replace(concat(held), source=source)
         vprep = pp.prepare(h, cutoff=plan.design.cutoff, decimate=plan.factor)
-        series["validation"] = _series(f.model, vprep, log_columns(f.model, h), f.theta, names, o["memory_mb"])
+        series["validation"] = report_series(f.model, vprep, log_columns(f.model, h), f.theta, names, o["memory_mb"])
     return val

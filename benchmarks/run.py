@@ -19,6 +19,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``analyze_cli``   ``baseparams analyze`` end to end in fresh processes.
 * ``identify``      ``identify`` on 10^6 simulated Puma560 samples end to end; the physical solve
                     on the Panda and on a 32-body humanoid.
+* ``stream``        ``baseparams identify puma560 LOG.csv`` on generated 10^6- and 10^7-row CSV logs, streamed
+                    (``--stream on``) and read whole (10^6 rows): wall time and peak resident memory.
 * ``scale``         Dask: 10^8 synthetic Puma560 samples, throughput with 1 and 2 workers, peak memory.
 * ``excite``        excitation design time and condition number (Puma560, Panda, pkm-2rru-1rrs).
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
@@ -381,6 +383,60 @@ def bench_identify(out: dict, quick: bool) -> None:
         out[f"physical_solve_{name}_s"] = t
         out[f"physical_solve_{name}_s_repeats"] = n
         out[f"physical_solve_{name}_bodies"] = model.robot.n
+
+
+def _repeated_csv(path: Path, rows: int, block: int = 10**5, rate: float = 500.0) -> None:
+    """A simulated Puma560 log of ``rows`` rows (CSV, default layout, noise 0.2 N m): one simulated
+    ``block``-row piece (a whole number of the 10 s excitation periods) repeated with shifted time."""
+    import baseparams
+    from baseparams.ident.simulate import simulate_log
+    from baseparams.io.logs import log_columns_of
+
+    robot = baseparams.load("puma560")
+    sim, _ = simulate_log(robot, duration=block / rate, rate=rate, noise=0.2, rotor=True, seed=0)
+    cols = log_columns_of(sim)
+    data = np.column_stack(list(cols.values()))
+    with open(path, "w") as fh:
+        fh.write(",".join(cols) + "\n")
+        for k in range(0, rows, block):
+            part = data[: min(block, rows - k)].copy()
+            part[:, 0] += k / rate
+            np.savetxt(fh, part, delimiter=",", fmt="%.17g")
+
+
+def bench_stream(out: dict, quick: bool) -> None:
+    """``baseparams identify puma560 LOG.csv`` in a fresh process on generated CSV logs (issue 24):
+    10^6 and 10^7 rows (10^5 and 10^6 with --quick) streamed block by block (``--stream on``), and
+    10^6 rows (10^5) read whole (``--stream off``): wall time and peak resident memory (sampled every
+    0.1 s, imports included). The files are written to a temporary folder, not kept."""
+    import subprocess
+    import tempfile
+
+    sizes = (10**5, 10**6) if quick else (10**6, 10**7)
+    env = dict(os.environ, PYTHONPATH=str(_SRC))
+    with tempfile.TemporaryDirectory() as d:
+        for rows, mode in ((sizes[0], "off"), (sizes[0], "on"), (sizes[1], "on")):
+            path = Path(d) / f"puma560_{rows}.csv"
+            if not path.exists():
+                log(f"  writing a {rows}-row CSV log ...")
+                _repeated_csv(path, rows)
+            log(f"  identify puma560 {rows}-row CSV, --stream {mode} ...")
+            t0 = time.perf_counter()
+            proc = subprocess.Popen([sys.executable, "-m", "baseparams", "identify", "puma560", str(path), "--stream",
+                                     mode], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
+            with _RssPeak([proc.pid], period=0.1) as rss:
+                err = proc.communicate()[1]
+            wall = time.perf_counter() - t0
+            key = f"identify_csv_{rows:.0e}".replace("+0", "").replace("+", "") + ("_streamed" if mode == "on" else
+                                                                                   "_whole")
+            if proc.returncode:
+                log(f"    failed: {err.strip()[-300:]}")
+                out[f"{key}_s"] = out[f"{key}_peak_mb"] = None
+                continue
+            out[f"{key}_s"] = wall
+            out[f"{key}_s_repeats"] = 1
+            out[f"{key}_peak_mb"] = rss.largest_mb * 2**20 / 1e6  # sampled every 0.1 s (psutil)
+            out[f"{key}_mb_file"] = path.stat().st_size / 1e6
 
 
 def bench_scale(out: dict, quick: bool) -> None:
@@ -781,6 +837,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "base_streaming": bench_base_streaming,
     "analyze_cli": bench_analyze_cli,
     "identify": bench_identify,
+    "stream": bench_stream,
     "scale": bench_scale,
     "excite": bench_excite,
     "drng_vs_numerical": bench_drng_vs_numerical,

@@ -88,7 +88,7 @@ python benchmarks/report.py RESULT.json     # rewrites this README from a --json
 
 Default: a table on stdout; `--json`: exactly one JSON object (named figures,
 `<figure>_repeats`, `machine`); progress on stderr; `--quick` < 60 s; `--only` selects groups
-(`regressor`, `base_streaming`, `analyze_cli`, `identify`, `drng_vs_numerical`, `drng_scaling`,
+(`regressor`, `base_streaming`, `analyze_cli`, `identify`, `stream`, `drng_vs_numerical`, `drng_scaling`,
 `loops`, `files`, `special`). Every timing is the
 **median** of `time.perf_counter` over the stated repeats after one warm-up call. BLAS is
 pinned to one thread by default (`--blas-threads 0` leaves it alone): with OpenBLAS's two
@@ -152,6 +152,13 @@ the physical solve (cvxpy + Clarabel on the compressed system, independent of th
 Panda ({g('physical_solve_panda_bodies', '{}')} bodies) {g('physical_solve_panda_s', '{:.2f}')} s, talos_reduced
 ({g('physical_solve_talos_reduced_bodies', '{}')} bodies, fixed base, viscous friction, prior = the file's inertias)
 {g('physical_solve_talos_reduced_s', '{:.2f}')} s.
+
+Long logs streamed from their file (issue 24; group `stream`: `baseparams identify puma560 LOG.csv` in a
+fresh process on generated 500 Hz CSV logs, peak resident memory sampled every 0.1 s, imports included):
+10^6 rows read whole (`--stream off`) **{g('identify_csv_1e6_whole_s', '{:.0f}')} s, {g('identify_csv_1e6_whole_peak_mb', '{:.0f}')} MB**;
+streamed (`--stream on`, the default above 64 MB) 10^6 rows **{g('identify_csv_1e6_streamed_s', '{:.0f}')} s,
+{g('identify_csv_1e6_streamed_peak_mb', '{:.0f}')} MB**, 10^7 rows ({g('identify_csv_1e7_streamed_mb_file', '{:.0f}')} MB of CSV)
+**{g('identify_csv_1e7_streamed_s', '{:.0f}')} s, {g('identify_csv_1e7_streamed_peak_mb', '{:.0f}')} MB**.
 
 Fleet scale (Dask, local cluster, one single-threaded worker process per core; synthetic Puma560
 samples generated inside the tasks in chunks of 10^5, reduced by TSQR on the workers, OLS):

@@ -218,3 +218,24 @@ def test_cli_streams_on_request_and_says_so(sim, tmp_path):
     write_log(npz, read_log(csv, load("puma560")))
     r = _cli("identify", "puma560", npz, "--stream", "on")
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--stream on" in r.stderr
+
+
+def test_cli_streams_automatically_above_the_size_and_falls_back_on_odd_time(sim, tmp_path, monkeypatch, capsys):
+    """Above STREAM_MIN_MB the log is streamed (said with -v); non-uniform time is read whole (said too)."""
+    import baseparams.cli as cli
+
+    csv, _ = sim
+    monkeypatch.setattr(cli, "STREAM_MIN_MB", 0.5)  # the 1.5 MB test log counts as large
+    assert cli.main(["identify", "puma560", str(csv), "--method", "ols", "--rotor", "-v", "--json"]) == 0
+    out = capsys.readouterr()
+    assert "streaming" in out.err and "MB > 0.5 MB" in out.err
+    assert "the log streamed from its file" in out.out
+    log = read_log(csv, load("puma560"))
+    t = log.t.copy()
+    t[100:] += 0.001
+    odd = tmp_path / "odd.csv"
+    write_log(odd, JointLog(t, log.joints, log.q, log.tau, log.dq))
+    assert cli.main(["identify", "puma560", str(odd), "--method", "ols", "--rotor", "-v", "--json"]) == 0
+    out = capsys.readouterr()
+    assert "non-uniform time stamps" in out.err and "resampled in memory" in out.err
+    assert "the log streamed from its file" not in out.out

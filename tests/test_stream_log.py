@@ -239,3 +239,23 @@ def test_cli_streams_automatically_above_the_size_and_falls_back_on_odd_time(sim
     out = capsys.readouterr()
     assert "non-uniform time stamps" in out.err and "resampled in memory" in out.err
     assert "the log streamed from its file" not in out.out
+
+
+def test_parquet_null_names_its_global_row(puma, sim, tmp_path, monkeypatch):
+    import baseparams.io.logs as logs
+
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    _, good = sim
+    table = pq.read_table(good)
+    col = table.column("tau_joint3").to_pylist()
+    col[4321] = None
+    bad = tmp_path / "null.parquet"
+    pq.write_table(table.set_column(table.schema.get_field_index("tau_joint3"), "tau_joint3", pa.array(col)), bad)
+    monkeypatch.setattr(logs, "BATCH_ROWS", 1000)
+    with pytest.raises(DataError) as streamed:
+        scan(LogStream(bad, puma))
+    with pytest.raises(DataError) as whole:
+        read_log(bad, puma)
+    assert str(streamed.value) == str(whole.value)
+    assert "row 4321 (0-based)" in str(streamed.value)

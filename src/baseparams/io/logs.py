@@ -58,6 +58,12 @@ different lengths, unknown or missing joints, an empty file, and a revolute join
 ``max_travel`` (10 m: millimetres?). Rows are named as the file counts them: text files by file
 line (1-based) and data row (1-based, the first row after the header is 1); NPZ and Parquet by
 0-based index; bags by the 1-based message number on the topic.
+
+Streamed logs
+-------------
+:class:`LogStream` reads CSV/TSV and Parquet logs block by block (the same layouts, conversions
+and checks, row numbers counted over the whole file), for identification in memory independent of
+the log's length (:mod:`baseparams.ident.stream`).
 """
 
 from __future__ import annotations

@@ -138,15 +138,24 @@ def test_blank_and_comment_lines_keep_line_numbers_global(puma, sim, tmp_path):
     assert "line 5001 (data row 4997)" in str(streamed.value)
 
 
-def test_non_uniform_time_is_not_streamed(puma, sim, tmp_path):
-    csv, _ = sim
+def _jittered(puma, csv, path):
     log = read_log(csv, puma)
-    t = log.t.copy()
-    t[100:] += 0.001  # one long step
-    odd = tmp_path / "odd.csv"
-    write_log(odd, JointLog(t, log.joints, log.q, log.tau, log.dq))
-    with pytest.raises(NotStreamable, match="non-uniform"):
-        identify_stream(puma, LogStream(odd, puma), method="ols")
+    t = log.t + np.random.default_rng(0).uniform(-0.3, 0.3, len(log.t)) / 200  # stamps off by up to 30 %
+    write_log(path, JointLog(t, log.joints, log.q, log.tau, log.dq))
+    return path
+
+
+def test_non_uniform_time_is_resampled_block_by_block(puma, sim, tmp_path):
+    """Jittered stamps: the grid, the interpolation and the estimate of the in-memory resampling."""
+    odd = _jittered(puma, sim[0], tmp_path / "odd.csv")
+    whole = identify(puma, read_log(odd, puma), method="wls", rotor=True)
+    streamed = identify_stream(puma, LogStream(odd, puma, block_bytes=1 << 15), method="wls", rotor=True,
+                               memory_mb=1.0)
+    _compare(whole, streamed, "resampled")
+    assert any(n.startswith("time: resampled 8000 non-uniform samples") and "block by block" in n
+               for n in streamed.notes)
+    with pytest.raises(NotStreamable, match="non-uniform"):  # a hold-out's states need the whole log's grid
+        identify_stream(puma, LogStream(odd, puma), method="ols", holdout=5)
 
 
 def _peak_mb(puma, path) -> float:
@@ -221,7 +230,7 @@ def test_cli_streams_on_request_and_says_so(sim, tmp_path):
 
 
 def test_cli_streams_automatically_above_the_size_and_falls_back_on_odd_time(sim, tmp_path, monkeypatch, capsys):
-    """Above STREAM_MIN_MB the log is streamed (said with -v); non-uniform time is read whole (said too)."""
+    """Above STREAM_MIN_MB the log is streamed (said with -v); non-uniform time with a hold-out is read whole."""
     import baseparams.cli as cli
 
     csv, _ = sim
@@ -230,12 +239,9 @@ def test_cli_streams_automatically_above_the_size_and_falls_back_on_odd_time(sim
     out = capsys.readouterr()
     assert "streaming" in out.err and "MB > 0.5 MB" in out.err
     assert "the log streamed from its file" in out.out
-    log = read_log(csv, load("puma560"))
-    t = log.t.copy()
-    t[100:] += 0.001
-    odd = tmp_path / "odd.csv"
-    write_log(odd, JointLog(t, log.joints, log.q, log.tau, log.dq))
-    assert cli.main(["identify", "puma560", str(odd), "--method", "ols", "--rotor", "-v", "--json"]) == 0
+    odd = _jittered(load("puma560"), csv, tmp_path / "odd.csv")
+    assert cli.main(["identify", "puma560", str(odd), "--method", "ols", "--rotor", "-v", "--json", "--holdout",
+                     "5"]) == 0
     out = capsys.readouterr()
     assert "non-uniform time stamps" in out.err and "resampled in memory" in out.err
     assert "the log streamed from its file" not in out.out

@@ -26,8 +26,11 @@ the file several times, each pass block by block (a *block source*: any object w
 5. **validation**: the held-out samples predicted from states filtered over the whole log (windows
    again), scored against the raw measured torques, optionally written out block by block.
 
-Logs with non-uniform time stamps are not streamed (:class:`NotStreamable`): their resampling grid
-needs the median step of the whole log.
+Non-uniform time stamps are resampled block by block (:class:`Resampled`: the grid of
+:func:`~baseparams.ident.preprocess.resample`, its median step from the first :data:`SUBSAMPLE_MAX`
+steps) when every sample trains; with a hold-out or a validation log they are not streamed
+(:class:`NotStreamable`): the validation's states are filtered on the whole log's grid and
+interpolated back to its time stamps.
 """
 
 from __future__ import annotations
@@ -55,7 +58,7 @@ VALIDATION_ROWS = 1 << 15
 
 
 class NotStreamable(BaseparamsError):
-    """A log the streamed path does not take (non-uniform time stamps): read it whole instead."""
+    """A log the streamed path does not take (non-uniform time stamps with a validation): read it whole."""
 
 
 @dataclass(frozen=True)
@@ -234,6 +237,10 @@ class Training:
         Samples per subsample point.
     dt : tuple of float
         Smallest, largest and median step [s] (median of the first :data:`SUBSAMPLE_MAX` steps).
+    t_last : float
+        The last training time stamp [s].
+    uniform : bool
+        Whether the training samples are uniform (within ``UNIFORM_RTOL`` of the median step).
     """
 
     n: int
@@ -241,9 +248,11 @@ class Training:
     sub: JointLog
     step: int
     dt: tuple[float, float, float]
+    t_last: float = float("nan")
+    uniform: bool = True
 
 
-def training(stream, sc: Scan, end_time: float | None) -> Training:
+def training(stream, sc: Scan, end_time: float | None, resample_ok: bool = False) -> Training:
     """The second pass: the training samples (``t < end_time``), their rate, steps and a subsample.
 
     Parameters
@@ -254,6 +263,9 @@ def training(stream, sc: Scan, end_time: float | None) -> Training:
         The first pass.
     end_time : float or None
         First held-out time (``t_end - holdout``), or None (every sample trains).
+    resample_ok : bool
+        Non-uniform training samples are resampled block by block (:class:`Resampled`): no
+        validation on the same log, whose states would be filtered on the whole log's grid.
 
     Returns
     -------
@@ -263,7 +275,7 @@ def training(stream, sc: Scan, end_time: float | None) -> Training:
     Raises
     ------
     NotStreamable
-        Non-uniform time stamps.
+        Non-uniform time stamps where they cannot be resampled block by block.
     """
     step = max(1, math.ceil(sc.n / SUBSAMPLE_MAX))
     n, last, dts, lo, hi, means, times = 0, None, [], np.inf, -np.inf, [], []
@@ -287,12 +299,88 @@ def training(stream, sc: Scan, end_time: float | None) -> Training:
             break
     med = float(np.median(np.concatenate(dts)[:SUBSAMPLE_MAX])) if dts else 1.0
     every = (min(lo, sc.dt[0]), max(hi, sc.dt[1]))  # the held-out part too: its states are filtered on one grid
-    if not (every[0] >= med * (1 - pp.UNIFORM_RTOL) and every[1] <= med * (1 + pp.UNIFORM_RTOL)):
-        raise NotStreamable(f"{stream.source}: non-uniform time stamps (steps {every[0]:.6g}-{every[1]:.6g} s): the "
-                            f"log is resampled in memory, not streamed")
+    uniform = lo >= med * (1 - pp.UNIFORM_RTOL) and hi <= med * (1 + pp.UNIFORM_RTOL)
+    if not (uniform or resample_ok) or not (every[0] >= med * (1 - pp.UNIFORM_RTOL)
+                                            and every[1] <= med * (1 + pp.UNIFORM_RTOL)) and not resample_ok:
+        raise NotStreamable(f"{stream.source}: non-uniform time stamps (steps {every[0]:.6g}-{every[1]:.6g} s) with a "
+                            f"validation: the log is resampled in memory, not streamed")
     q = np.concatenate(means)
     sub = JointLog(np.concatenate(times), tuple(stream.joints), q, np.zeros_like(q), source=stream.source)
-    return Training(n, (n - 1) / (last - sc.t0) if n > 1 else 1.0, sub, step, (lo, hi, med))
+    return Training(n, (n - 1) / (last - sc.t0) if n > 1 else 1.0, sub, step, (lo, hi, med), last, bool(uniform))
+
+
+class Resampled:
+    """A block source on the uniform grid :func:`~baseparams.ident.preprocess.resample` makes, block by block.
+
+    The grid starts at the first time stamp with the median step (of the first
+    :data:`SUBSAMPLE_MAX` steps: the whole log's median up to that length) and ends at or before
+    the last training stamp; every signal is interpolated linearly between the raw samples around
+    each grid point (the previous block's last sample carried over), with the arithmetic of
+    ``resample``: the same values as resampling the whole log.
+
+    Parameters
+    ----------
+    stream : block source
+        The raw log.
+    t0 : float
+        Its first time stamp [s].
+    tr : Training
+        Its training statistics (median step, last training stamp, raw sample count).
+    end_time : float or None
+        First time not read (None: every sample).
+    """
+
+    def __init__(self, stream, t0: float, tr: Training, end_time: float | None = None):
+        self.raw, self.t0, self.step, self.end_time = stream, float(t0), tr.dt[2], end_time
+        self.source, self.joints = stream.source, tuple(stream.joints)
+        self.has_dq, self.has_ddq = stream.has_dq, stream.has_ddq
+        self.n = int(np.floor((tr.t_last - self.t0) / self.step * (1 + 1e-12))) + 1
+        lo, hi, med = tr.dt
+        self.note = (f"time: resampled {tr.n} non-uniform samples (dt {lo * 1e3:.4g}-{hi * 1e3:.4g} ms, median "
+                     f"{med * 1e3:.4g} ms) to {self.n} at {1 / self.step:.6g} Hz (the median rate), linear "
+                     f"interpolation, block by block")
+        self.removed, self.raw_n = max(tr.n - self.n, 0), tr.n
+
+    def blocks(self):
+        """The resampled samples, block after block.
+
+        Yields
+        ------
+        JointLog
+            Grid samples (``t (k,)``, signals ``(k, m)``) in time order.
+        """
+        k, prev = 0, None
+        for blk in self.raw.blocks():
+            cut = blk.n_samples if self.end_time is None else int(np.searchsorted(blk.t, self.end_time))
+            done = cut < blk.n_samples
+            cat = rows(blk, 0, cut) if prev is None else concat([prev, rows(blk, 0, cut)])
+            if cat.n_samples >= 2:
+                tn = self.t0 + self.step * np.arange(k, self.n)
+                stop = k + (self.n - k if done else int(np.searchsorted(tn, cat.t[-1], side="right")))
+                if stop > k:
+                    yield self._interp(cat, tn[:stop - k])
+                k, prev = stop, copy(rows(cat, cat.n_samples - 2, cat.n_samples))
+            else:
+                prev = cat
+            if done:
+                return
+        if k < self.n and prev is not None and prev.n_samples >= 2:  # past the last stamp (rounding): its value
+            yield self._interp(prev, self.t0 + self.step * np.arange(k, self.n))
+
+    def _interp(self, cat: JointLog, tn: np.ndarray) -> JointLog:
+        """``resample``'s linear interpolation of ``cat`` at the grid times ``tn``."""
+        t = cat.t
+        dt = np.diff(t)
+        i = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 2)
+        w = np.clip((tn - t[i]) / dt[i], 0.0, 1.0)
+
+        def interp(y):
+            if y is None:
+                return None
+            ww = w.reshape((-1,) + (1,) * (y.ndim - 1))
+            return y[i] * (1.0 - ww) + y[i + 1] * ww
+
+        return JointLog(tn, self.joints, interp(cat.q), interp(cat.tau), interp(cat.dq), interp(cat.ddq), self.source)
 
 
 @dataclass(frozen=True, eq=False)
@@ -374,8 +462,9 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
         Too few samples for the filter edges, a bad cutoff or factor.
     """
     lo, hi, med = tr.dt
-    notes = [*sc.notes,
-             f"time: uniform (dt {lo * 1e3:.4g}-{hi * 1e3:.4g} ms, median {med * 1e3:.4g} ms), not resampled"]
+    notes = [*sc.notes]
+    if not any(x.startswith("time: resampled") for x in notes):
+        notes.append(f"time: uniform (dt {lo * 1e3:.4g}-{hi * 1e3:.4g} ms, median {med * 1e3:.4g} ms), not resampled")
     if cutoff is None:
         band = pp.excitation_bandwidth(tr.sub.q, tr.rate / tr.step)
         cutoff = float(np.clip(pp.BANDWIDTH_FACTOR * band, pp.CUTOFF_FLOOR,
@@ -685,7 +774,8 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units
                               f"base's motion and wrench are not in a joint log); use the Python API with states")
     if holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
-    opts = dict(method=method, rotor=rotor, friction=tuple(friction), coulomb_width=coulomb_width, holdout=holdout,
+    opts = dict(validating=validation is not None, method=method, rotor=rotor, friction=tuple(friction),
+                coulomb_width=coulomb_width, holdout=holdout,
                 cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
                 convention=convention, memory_mb=memory_mb, couplings=tuple(couplings), samples=samples,
                 score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units)
@@ -712,26 +802,31 @@ def _passes(robot, stream, o: dict, say):
                         o["coulomb_width"], couplings=o["couplings"])
     cols = log_columns(model, sc.head)
     say(f"training statistics of {sc.n} samples (pass 2: hold-out split, rate, cutoff subsample)")
-    tr = training(stream, sc, end_time)
+    tr = training(stream, sc, end_time, resample_ok=end_time is None and not o["validating"])
     unit_notes = check_log_units(model, rows(sc.head, 0, min(sc.head.n_samples, tr.n)), cols, o["allow_units"])
     if sc.head.n_samples < tr.n:
         unit_notes = [f"{x} (on the first {sc.head.n_samples} samples)" for x in unit_notes]
+    if not tr.uniform:  # resampled block by block; the passes read the grid
+        stream = Resampled(stream, sc.t0, tr, end_time)
+        say(f"resampling {tr.n} non-uniform samples to {stream.n} block by block (pass 2b: the grid's statistics)")
+        sc = Scan(stream.n, sc.t0, sc.t0 + stream.step * (stream.n - 1), sc.head, (*sc.notes, stream.note))
+        tr = training(stream, sc, None)
     plan = plan_training(model, stream, sc, tr, o["cutoff"], o["decimate"], o["min_speed"], o["memory_mb"])
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
     parts, kept, slow = accumulate(stream, plan, model, cols, o["memory_mb"])
-    return sc, tr, model, cols, unit_notes, plan, parts, kept, slow
+    return stream, sc, tr, model, cols, unit_notes, plan, parts, kept, slow
 
 
 def _identify_stream(robot, stream, validation, predictions, say, o: dict):
     """:func:`identify_stream`'s steps."""
     from .pipeline import Identification, fit, model_notes, position_spectrum, pulled_covariance
 
-    sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, say)
+    train, sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, say)
     acc = chunks.combine(parts)
     say(f"fitting ({o['method']})")
     f = fit(model, acc, o["method"], o["prior_weight"], blocks=parts)
-    f, cov_note, train_series = covariance_pass(f, acc, o["covariance"], kept, stream, plan, model, cols, say)
+    f, cov_note, train_series = covariance_pass(f, acc, o["covariance"], kept, train, plan, model, cols, say)
     f = pulled_covariance(f)
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
@@ -740,7 +835,8 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
         train_series["spectrum"] = position_spectrum(tr.sub, cols, tr.rate / tr.step, plan.design.cutoff)
     series = {"train": train_series, "validation": None}
     val = _validation(f, stream, validation, sc, tr, plan, names, o, predictions, series, say)
-    removed = {"filter edges": 2 * plan.design.pad}
+    removed = {"resampling to fewer samples": train.removed} if getattr(train, "removed", 0) else {}
+    removed["filter edges"] = 2 * plan.design.pad
     inner = tr.n - 2 * plan.design.pad
     if plan.factor > 1:
         removed[f"decimation by {plan.factor}"] = inner - plan.fitted_count()
@@ -758,7 +854,7 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
                "rotor": bool(o["rotor"]), "friction": tuple(o["friction"]), "coulomb_width": o["coulomb_width"],
                "couplings": tuple(o["couplings"]), "cutoff": float(plan.design.cutoff), "decimate": int(plan.factor),
                "min_speed": o["min_speed"]}
-    samples = {"read": int(tr.n), "used": int(acc.samples), "removed": removed}
+    samples = {"read": int(getattr(train, "raw_n", tr.n)), "used": int(acc.samples), "removed": removed}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
 
 

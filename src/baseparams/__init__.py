@@ -73,7 +73,7 @@ __all__ = [
 ]
 
 #: the documented subpackages, imported on first use (``dir(baseparams)`` shows these and ``__all__``)
-_SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "excite", "fleet", "ident", "io", "kinematics", "model",
+_SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "excitation", "fleet", "ident", "io", "kinematics", "model",
                "nullspace", "numerics", "pga", "robots", "symbolic")
 
 

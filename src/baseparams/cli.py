@@ -774,7 +774,7 @@ def cmd_simulate(args) -> int:
         return EXIT_OK
     trajectory = None
     if args.trajectory:
-        from .excite import read_trajectory
+        from .excitation import read_trajectory
 
         trajectory = read_trajectory(args.trajectory, robot)
     log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=_amplitude(args, robot),
@@ -1031,7 +1031,7 @@ def cmd_excite(args) -> int:
         Bad input: the model (no actuated coordinate, a singular reference), infeasible limits,
         options, unwritable outputs.
     """
-    from .excite import design_excitation
+    from .excitation import design_excitation
 
     try:
         robot = _robot(args)

@@ -115,7 +115,7 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         Convention of the true base parameters written out.
     trajectory : tuple of ndarray, optional
         ``(t (S,), q, dq, ddq (S, state_columns))``: the motion to simulate (e.g. a designed
-        excitation, :func:`baseparams.excite.read_trajectory`) instead of a random Fourier series
+        excitation, :func:`baseparams.excitation.read_trajectory`) instead of a random Fourier series
         (``duration``, ``rate`` and ``amplitude`` are then ignored).
     samples : int, optional
         Random states of the base-parameter analysis (default: the analysis's own).

@@ -29,7 +29,7 @@ def trajectory_plot(excitation, path, robot=None) -> Path:
 
     Parameters
     ----------
-    excitation : baseparams.excite.Excitation
+    excitation : baseparams.excitation.Excitation
         The design.
     path : str or Path
         Output file; the format from its suffix (``.png``, ``.svg``, ``.pdf``).

@@ -730,10 +730,9 @@ def _amplitude(args, robot) -> float:
         if not args.amplitude > 0:
             raise BaseparamsError(f"--amplitude must be > 0 rad, got {args.amplitude}")
         return args.amplitude
-    if robot.has_loops and robot.q_box is not None:
-        half = 0.5 * (np.asarray(robot.q_box)[:, 1] - np.asarray(robot.q_box)[:, 0])
-        return float(min(0.5, 0.2 * half.min()))
-    return 0.5
+    from .ident.simulate import default_amplitude
+
+    return default_amplitude(robot)
 
 
 def cmd_simulate(args) -> int:

@@ -25,7 +25,7 @@ sample's derivative at once; at ``|dq| < 2e-6`` the velocity derivative is dropp
 friction's ``sign(dq)`` jumps there).
 
 Constraints, on the same grid: position, velocity and acceleration limits (linear in the
-coefficients; every :data:`~baseparams.excitation.problem.LIMIT_STRIDE`-th sample), optionally the torques of the model's own
+coefficients; every :data:`.problem.LIMIT_STRIDE`-th sample), optionally the torques of the model's own
 (prior) parameters within the effort limits and, for loops, ``cond(J_p) <= cond_max`` at every
 sample (which keeps the motion inside the workspace, away from singularities, and on the
 reference assembly mode reached by continuation from q = 0). SLSQP from several seeded random

@@ -137,6 +137,45 @@ class Excitation:
             cols.update({f"{kind}_{j}": arr[:, k] for k, j in enumerate(self.joints)})
         return write_table(path, cols, "a trajectory as .csv or .tsv")
 
+    def save(self, path, inputs=(), what: str = "output") -> Path:
+        """Write the trajectory atomically, never onto an input (:func:`baseparams.files.atomic_path`).
+
+        The file :meth:`to_csv` writes (``t, q_<joint>, dq_<joint>, ddq_<joint>``): what a robot
+        controller, ``baseparams simulate --trajectory`` and :func:`baseparams.simulate` read.
+
+        Parameters
+        ----------
+        path : str or Path
+            ``.csv`` or ``.tsv``.
+        inputs : iterable of str or Path
+            The run's input files, which the output must not overwrite.
+        what : str
+            The output's role, for messages (``--out``).
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        BaseparamsError
+            Another suffix, an output onto an input, a missing folder, a non-regular target.
+        """
+        from ..files import atomic_path
+
+        if Path(path).suffix.lower() not in (".csv", ".tsv"):
+            raise BaseparamsError(f"{what} {path}: a trajectory is written as .csv or .tsv, not "
+                                  f"{Path(path).suffix or 'no suffix'}")
+        with atomic_path(path, inputs, what) as tmp:
+            self.to_csv(tmp)
+        return Path(path)
+
+    @property
+    def trajectory(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(t (S,), q, dq, ddq (S, m))``: the samples, as :func:`read_trajectory` returns them from the file."""
+        return self.t, self.q, self.dq, self.ddq
+
     def to_json(self) -> dict:
         """The design as one JSON-able object (no sampled arrays: :meth:`to_csv` writes those).
 

@@ -18,6 +18,14 @@ class Evaluator:
 
     Values and gradients are computed on demand (a line search needs values only). Keeps the best
     feasible point seen (``best``: value, x).
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+    lin : tuple of ndarray
+        ``(C (r, m k), c (r,))``: the linear constraints ``C x + c >= 0`` (:func:`linear_constraints`),
+        for the feasibility of the best point.
     """
 
     def __init__(self, prob: Problem, lin: tuple[np.ndarray, np.ndarray]):
@@ -56,7 +64,18 @@ class Evaluator:
 
 
 def n_nonlinear(prob: Problem) -> int:
-    """Number of nonlinear constraint rows: torques (two per grid sample and limited joint), loops."""
+    """Number of nonlinear constraint rows: torques (two per grid sample and limited joint), loops, keep-out.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+
+    Returns
+    -------
+    int
+        The rows of :func:`_nonlinear_values`.
+    """
     n = 0 if prob.theta is None else 2 * prob.t.size * int(np.isfinite(prob.limits[:, 4]).sum())
     return n + (prob.t.size if prob.cond_max is not None else 0) + (prob.t.size if prob.keepout is not None else 0)
 
@@ -100,13 +119,41 @@ def linear_constraints(prob: Problem) -> tuple[np.ndarray, np.ndarray]:
     Each row is divided by its limit (the range's width for positions): values are fractions. Every
     ``LIMIT_STRIDE``-th grid sample only: the rows cost SLSQP more than the criterion does, and the
     controller-rate check closes the gaps.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+
+    Returns
+    -------
+    C : ndarray, shape ``(r, m k)``
+        The rows, over the variables ``x`` (:meth:`Problem.states`).
+    c : ndarray, shape ``(r,)``
+        The constants.
     """
     c, rhs, _ = linear_rows(prob)
     return c, rhs
 
 
 def linear_rows(prob: Problem) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
-    """:func:`linear_constraints` and, per row, ``(kind, joint)`` (kind 0, 1, 2: position, velocity, acceleration)."""
+    """:func:`linear_constraints` and, per row, what it limits.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+
+    Returns
+    -------
+    C : ndarray, shape ``(r, m k)``
+        The rows.
+    c : ndarray, shape ``(r,)``
+        The constants.
+    labels : list of tuple of (int, int), length ``r``
+        ``(kind, joint)`` per row: kind 0, 1, 2 position, velocity, acceleration; ``joint`` the
+        designed coordinate.
+    """
     m, k = prob.m, prob.k
     bases = [b[::LIMIT_STRIDE] for b in prob.bases]
     g = len(bases[0])
@@ -130,7 +177,19 @@ def linear_rows(prob: Problem) -> tuple[np.ndarray, np.ndarray, list[tuple[int, 
 
 
 def nonlinear_labels(prob: Problem) -> list[tuple[int, int]]:
-    """Per row of :func:`_nonlinear_values`: ``(kind, joint)``, kind 3 torque, 4 loops, 5 keep-out (joint -1)."""
+    """What each row of :func:`_nonlinear_values` limits.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+
+    Returns
+    -------
+    list of tuple of (int, int)
+        ``(kind, joint)`` per row: kind 3 torque (``joint`` the designed coordinate), 4 loops, 5
+        keep-out (``joint`` -1).
+    """
     g = prob.t.size
     out = []
     if prob.theta is not None:

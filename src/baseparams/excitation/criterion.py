@@ -103,10 +103,22 @@ def _perturbed(q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> tuple[np.ndarr
 
 
 def grid_values(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> dict | None:
-    """The criterion and the nonlinear constraints' data at grid states ``(G, m)``.
+    """The criterion and the nonlinear constraints' data at grid states.
 
-    ``{"a" (G, m, p), "value", "gamma" (p, p), "tau" (G, m) or None, "logc" (G,) or None}``; ``None``
-    when a sample does not close the loops from the reference (outside the workspace).
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+    q, dq, ddq : ndarray, shape ``(G, m)``
+        States of the designed coordinates on the grid.
+
+    Returns
+    -------
+    dict or None
+        ``{"a" (G, m, p): the model regressor, "value", "gamma" (p, p) (:func:`criterion_terms`),
+        "tau" (G, m) or None: the prior model's torques, "logc" (G,) or None: log cond(J_p) (loops),
+        "z" (G,) or None: the keep-out height [m]}``; ``None`` when a sample does not close the loops
+        from the reference (outside the workspace).
     """
     from ..kinematics.loops import close_loops
 
@@ -125,8 +137,20 @@ def grid_values(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -
 def grid_gradients(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, val: dict) -> dict | None:
     """Derivatives per grid sample and state column, by batched finite differences.
 
-    ``{"g" (3, m, G): d value / d (q, dq, ddq), "dtau" (3, m, G, m) or None, "dlogc" (m, G) or None}``;
-    ``None`` when a perturbed sample does not close the loops.
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+    q, dq, ddq : ndarray, shape ``(G, m)``
+        States of the designed coordinates on the grid.
+    val : dict
+        :func:`grid_values` at these states.
+
+    Returns
+    -------
+    dict or None
+        ``{"g" (3, m, G): d value / d (q, dq, ddq), "dtau" (3, m, G, m) or None, "dlogc" (m, G) or
+        None, "dz" (m, G) or None}``; ``None`` when a perturbed sample does not close the loops.
     """
     from ..kinematics.loops import close_loops
 

@@ -36,10 +36,25 @@ def _constraint_text(prob: Problem, kind: int, joint: int) -> tuple[str, str]:
 
 
 def binding(prob: Problem, x: np.ndarray, at_rest: bool = False) -> str:
-    """Why ``x (m k,)`` is not a usable design, with what would help.
+    """Why ``x`` is not a usable design, with what would help.
 
     The most violated constraint; else the ones that bind and the parameters the motion leaves
     unexcited.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+    x : ndarray, shape ``(m k,)``
+        The variables (:meth:`Problem.states`).
+    at_rest : bool
+        Only the constraints that bind at rest (torques, loops, keep-out): a start that fails before
+        any motion.
+
+    Returns
+    -------
+    str
+        One sentence for an error message: the binding constraint and what would loosen it.
     """
     c, rhs, labels = linear_rows(prob)
     ev = Evaluator(prob, (c, rhs))
@@ -94,7 +109,20 @@ def _limiting(prob: Problem, xm: np.ndarray) -> list[tuple[int, int]]:
 
 
 def violation(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> str:
-    """What a sampled trajectory violates among the loop and torque limits ('' when nothing)."""
+    """What a trajectory sampled at the controller's rate violates among the loop, keep-out and torque limits.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+    q, dq, ddq : ndarray, shape ``(S, m)``
+        The sampled states of the designed coordinates.
+
+    Returns
+    -------
+    str
+        The violation and what would help; ``''`` when nothing is violated.
+    """
     robot = prob.model.robot
     if prob.cond_max is not None:
         from ..kinematics.loops import close_loops

@@ -44,7 +44,31 @@ KEEPOUT_MARGIN = 0.01
 
 @dataclass(frozen=True, eq=False)
 class Problem:
-    """One design: the model, the grid and its bases, the limits and the constraints' data."""
+    """One design: the model, the grid and its bases, the limits and the constraints' data.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The identification model (the criterion's columns).
+    criterion : str
+        ``cond`` or ``logdet``.
+    harmonics : int
+        ``L``.
+    omega : float
+        ``w = 2 pi f`` [rad/s].
+    t : ndarray, shape ``(G,)``
+        The design grid [s].
+    bases : tuple of ndarray, each shape ``(G, k)``
+        ``Bq, Bv, Ba`` (:func:`~baseparams.excitation.fourier.fourier_basis`), ``k = 2 L - 1``.
+    limits : ndarray, shape ``(m, 5)``
+        ``lower, upper, velocity, acceleration, effort`` (NaN: none).
+    theta : ndarray, shape ``(p,)``, or None
+        The prior model parameters whose torques stay within the effort limits, or None.
+    cond_max : float or None
+        Loops: the bound on ``cond(J_p)``; None for a tree.
+    keepout : tuple of (int, float), optional
+        ``(body, lowest height of its frame origin [m])``, or None.
+    """
 
     model: IdentModel
     criterion: str
@@ -68,19 +92,54 @@ class Problem:
         return 2 * self.harmonics - 1
 
     def states(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``q, dq, ddq (G, m)`` on the grid of the variables ``x (m * k,)``."""
+        """The states on the grid of the variables.
+
+        Parameters
+        ----------
+        x : ndarray, shape ``(m k,)``
+            Per coordinate ``[q0, a_2..a_L, b_2..b_L]``, concatenated.
+
+        Returns
+        -------
+        q, dq, ddq : ndarray, shape ``(G, m)``
+            Positions, velocities, accelerations.
+        """
         xm = x.reshape(self.m, self.k)
         return tuple(b @ xm.T for b in self.bases)
 
 
 def shrunk_range(lim: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The position range used while optimising: ``MARGIN`` of the width, centred."""
+    """The position range used while optimising: ``MARGIN`` of the width, centred.
+
+    Parameters
+    ----------
+    lim : ndarray, shape ``(m, 5)``
+        The limits (:attr:`Problem.limits`).
+
+    Returns
+    -------
+    lo, hi : ndarray, shape ``(m,)``
+        Lower and upper positions [rad or m].
+    """
     pad = 0.5 * (1 - MARGIN) * (lim[:, 1] - lim[:, 0])
     return lim[:, 0] + pad, lim[:, 1] - pad
 
 
 def keepout_height(prob: Problem, q: np.ndarray) -> np.ndarray:
-    """Height ``(S,)`` [m] of the keep-out body's frame origin (world z) at tree states ``q (S, dof)``."""
+    """Height of the keep-out body's frame origin (world z) at tree states.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem (with a keep-out).
+    q : ndarray, shape ``(S, dof)``
+        Tree positions.
+
+    Returns
+    -------
+    ndarray, shape ``(S,)``
+        The height [m].
+    """
     from ..kinematics.tree import forward_kinematics
 
     body = prob.keepout[0]
@@ -89,7 +148,26 @@ def keepout_height(prob: Problem, q: np.ndarray) -> np.ndarray:
 
 
 def check_options(harmonics, base_frequency, rate, criterion, starts, grid) -> None:
-    """Raise on options that cannot give a design."""
+    """Raise on options that cannot give a design.
+
+    Parameters
+    ----------
+    harmonics : int
+        ``L >= 2``.
+    base_frequency, rate : float
+        ``f`` and the controller's rate [Hz]; ``rate >= 4 L f``.
+    criterion : str
+        One of :data:`CRITERIA`.
+    starts : int
+        Random starts, ``>= 1``.
+    grid : int
+        Design-grid samples, ``>= 8 L``.
+
+    Raises
+    ------
+    BaseparamsError
+        The first option that cannot give a design, named.
+    """
     if criterion not in CRITERIA:
         raise BaseparamsError(f"unknown criterion {criterion!r}; choose {' or '.join(CRITERIA)}")
     if int(harmonics) != harmonics or harmonics < 2:
@@ -106,7 +184,38 @@ def check_options(harmonics, base_frequency, rate, criterion, starts, grid) -> N
 
 def make_problem(model: IdentModel, criterion, harmonics, base_frequency, rate, grid, limits, acceleration,
              torque, margin=0.0) -> tuple[Problem, list[str]]:
-    """The design problem and the notes of its defaults."""
+    """The design problem and the notes of its defaults.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The identification model.
+    criterion : str
+        ``cond`` or ``logdet``.
+    harmonics : int
+        ``L``.
+    base_frequency, rate : float
+        ``f`` (rounded to a whole number of controller samples per period) and the controller's rate [Hz].
+    grid : int
+        Design-grid samples per period.
+    limits, acceleration, margin
+        As :func:`~baseparams.excitation.limits.excitation_limits`.
+    torque : bool
+        Keep the model's own torques within the effort limits.
+
+    Returns
+    -------
+    prob : Problem
+        The problem.
+    notes : list of str
+        The defaults taken, the rounding, the loops' bound.
+
+    Raises
+    ------
+    BaseparamsError
+        A loop robot whose reference is outside its limits, torque limits asked without an effort
+        limit, limits that leave no room.
+    """
     robot = model.robot
     lim, notes = excitation_limits(robot, limits, acceleration, margin)
     if robot.has_loops and not np.all((lim[:, 0] < 0) & (lim[:, 1] > 0)):
@@ -132,7 +241,27 @@ def make_problem(model: IdentModel, criterion, harmonics, base_frequency, rate, 
 
 
 def with_keepout(prob: Problem, keepout) -> tuple[Problem, str]:
-    """The problem with a keep-out height for a named link, checked at the start (q = offsets)."""
+    """The problem with a keep-out height for a named link, checked at q = 0.
+
+    Parameters
+    ----------
+    prob : Problem
+        The design problem.
+    keepout : tuple of (str, float)
+        ``(link name, lowest height of its frame origin [m, world z])``.
+
+    Returns
+    -------
+    prob : Problem
+        The problem with ``keepout`` set.
+    note : str
+        The line the design's notes carry.
+
+    Raises
+    ------
+    BaseparamsError
+        Not a pair, a loop robot, an unknown link, a link already below the height at q = 0.
+    """
     from dataclasses import replace
 
     robot = prob.model.robot

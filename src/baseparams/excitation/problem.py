@@ -81,6 +81,11 @@ class Problem:
     cond_max: float | None  # loops: the bound on cond(J_p), else None
     keepout: tuple[int, float] | None = None  # (body, lowest height of its origin [m]), or None
 
+    def __repr__(self) -> str:
+        loops = "" if self.cond_max is None else f", cond(J_p) <= {self.cond_max:.3g}"
+        return (f"<Problem {self.model.robot.name}: {self.m} coordinates, {self.harmonics} harmonics, "
+                f"{self.t.size}-sample grid, {self.criterion}, {self.model.n_params} parameters{loops}>")
+
     @property
     def m(self) -> int:
         """Designed coordinates."""

@@ -194,13 +194,33 @@ def _friction_of(friction) -> tuple[str, ...]:
     return tuple(friction)
 
 
-def _log_of(log, robot: Robot, columns, require_tau: bool = True):
+def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False):
     """``log`` as a JointLog: a JointLog, or a log file read for ``robot`` (:func:`baseparams.io.logs.read_log`)."""
     if isinstance(log, (str, _os.PathLike)):
         from .io.logs import read_log
 
-        return read_log(log, robot, columns=columns, allow_subset=not require_tau, require_tau=require_tau)
+        return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau)
     return log
+
+
+def _identification_logs(robot: Robot, log, validate, columns, joints, weld):
+    """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
+    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None)
+    log = _log_of(log, robot, columns, subset=joints is not None)
+    if joints is None:
+        if weld:
+            raise BaseparamsError("identify: weld applies with joints (the joints to identify; the others are welded)")
+        return log, val, robot
+    from .ident.subchain import parse_welds, subchain
+
+    names = [j.strip() for j in joints.split(",") if j.strip()] if isinstance(joints, str) else list(joints)
+    welds = parse_welds(list(weld or ())) if not isinstance(weld, dict) else {k: float(v) for k, v in weld.items()}
+    small, log, notes = subchain(robot, log, names, welds)
+    if val is not None:
+        val = subchain(robot, val, names, welds)[1]
+    for note in notes:
+        _warnings.warn(note, ModelWarning, stacklevel=3)
+    return log, val, small
 
 
 def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequency: float | None = None,
@@ -356,7 +376,7 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
              friction=_FRICTION, rotor: bool = False, coulomb_width: float | None = None, couplings=(),
              cutoff: float | None = None, decimate: int | None = None, min_speed: float | None = None,
              prior_weight: float | None = None, convention: str = "khalil", covariance: str = "hac",
-             score_cutoff: float | None = None, allow_units: bool = False, columns=None,
+             score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None, weld=None,
              analysis_samples: int | None = None, save=None, progress=None):
     """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
 
@@ -390,6 +410,11 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
         Go on when the units look wrong.
     columns : str, path or dict, optional
         A layout mapping for log files (TOML; README "Log layout").
+    joints : str or sequence of str, optional
+        Identify these joints only (``"A,B"``); every other joint is welded
+        (:func:`baseparams.ident.subchain.subchain`; where, said as :class:`ModelWarning` warnings).
+    weld : dict or sequence of str, optional
+        With ``joints``: where to weld others (``{"joint": value}`` or ``["JOINT=VALUE"]``, rad or m).
     analysis_samples : int, optional
         Random states of the base-parameter analysis.
     save : str or path, optional
@@ -418,9 +443,9 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
 
         check_output(save, inputs, "save")
     couplings = tuple(c if isinstance(c, MotorCoupling) else MotorCoupling.parse(c) for c in couplings)
-    result = run(robot, _log_of(log, robot, columns), method=method, rotor=rotor, friction=_friction_of(friction),
-                 coulomb_width=coulomb_width, holdout=holdout,
-                 validation=None if validate is None else _log_of(validate, robot, columns), cutoff=cutoff,
+    log, val, robot = _identification_logs(robot, log, validate, columns, joints, weld)
+    result = run(robot, log, method=method, rotor=rotor, friction=_friction_of(friction),
+                 coulomb_width=coulomb_width, holdout=holdout, validation=val, cutoff=cutoff,
                  decimate=decimate, min_speed=min_speed, prior_weight=prior_weight, convention=convention,
                  couplings=couplings, progress=progress, samples=analysis_samples, covariance=covariance,
                  allow_units=allow_units, score_cutoff=score_cutoff)

@@ -351,6 +351,7 @@ def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: flo
     import json
     from dataclasses import replace
 
+    from .files import write_text
     from .ident.simulate import simulate_log
     from .io.logs import write_log
 
@@ -365,7 +366,7 @@ def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: flo
                                   friction=friction)
         path = out / f"robot{k:04d}{suffix}"
         write_log(path, log)
-        path.with_name(path.name + ".truth.json").write_text(json.dumps(truth))
+        write_text(path.with_name(path.name + ".truth.json"), json.dumps(truth), what="truth")
         paths.append(path)
         print(f"{path}: {log.n_samples} samples", file=sys.stderr)
     return paths

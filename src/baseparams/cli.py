@@ -679,7 +679,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
     per_file = args.per_file or not args.pooled
     res = identify_fleet(model, files, per_file=per_file, pooled=args.pooled or len(files) == 1, method=args.method,
                          scheduler=args.scheduler, workers=args.workers, cutoff=args.cutoff, min_speed=args.min_speed,
-                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
+                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr),
+                         covariance=args.covariance)
     if args.json:
         _emit(args, json.dumps(res.to_json(), indent=2))
         return _fleet_exit(args, res, files)
@@ -693,7 +694,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
         lines.append("largest spread across the fleet (std / |mean|): "
                      + ", ".join(f"{model.names[k]} {rel[k]:.3g}" for k in worst))
     if res.pooled is not None:
-        lines += ["pooled estimate:", f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
+        lines += [f"pooled estimate (std: {res.pooled.estimate.covariance}):",
+                  f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
         lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in
                   zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
     _emit(args, "\n".join(lines))

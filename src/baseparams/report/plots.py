@@ -73,9 +73,12 @@ def trajectory_plot(excitation, path, robot=None) -> Path:
 
 
 def _save(plt, fig, path: Path) -> Path:
-    """Save and close the figure; an unwritable path is one line."""
+    """Save and close the figure, atomically (:func:`baseparams.files.atomic_path`); an unwritable path is one line."""
+    from ..files import atomic_path
+
     try:
-        fig.savefig(path)
+        with atomic_path(path, what="--plot") as tmp:
+            fig.savefig(tmp, format=path.suffix.lstrip(".").lower() or None)
     except OSError as exc:
         raise BaseparamsError(f"--plot {path}: cannot write ({exc.strerror or exc})") from None
     finally:

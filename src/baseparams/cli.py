@@ -1008,7 +1008,7 @@ def _keepout(text: str | None):
 
 
 def cmd_excite(args) -> int:
-    """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excite`).
+    """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excitation`).
 
     Progress lines go to stderr; the summary (or ``--json``) to stdout or ``--output``; the
     trajectory to ``--out`` (CSV ``t, q_<joint>, dq_<joint>, ddq_<joint>``, what ``baseparams

@@ -101,7 +101,7 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     source, dest = Path(source), Path(dest)
     _check_robot(robot, source)
     spec, model, notes = compiled_spec(source)
-    notes = [f"--mjcf: {n}" for n in notes]
+    notes = [f"--mjcf: {n}; the copy is written without them (MuJoCo's writer compiles the model)" for n in notes]
     ids = _moving_ids(model, robot, source)
     n_body = _body_frame_inertias(mj, model, robot, params, convention, ids)
     drives = drives or {}
@@ -418,3 +418,75 @@ def mjcf_inverse(path: str | Path, robot: Robot, q, dq, ddq, *, frictionloss: bo
         mj.mj_inverse(model, data)
         out[k] = data.qfrc_inverse
     return out
+
+
+def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=(),
+                    max_samples: int = 20000) -> list[str]:
+    """Write a physical identification into a copy of its MJCF model, checked on the log's samples.
+
+    :func:`write_mjcf` with the physical fit's inertias and drive terms
+    (:func:`~baseparams.io.urdf.identified_drives`), checked at the log's states (filtered as
+    :meth:`~baseparams.ident.pipeline.Identification.predict` filters them; at most
+    ``max_samples``, evenly spaced). After writing, the file is reloaded and its ``mj_inverse``
+    (``frictionloss`` on) compared with the identification's own prediction and with the log's
+    measured torques; both relative RMS differences are in the notes.
+
+    Parameters
+    ----------
+    ident : Identification
+        A ``method="physical"`` identification of every joint of the robot read from ``source``.
+    source : str or Path
+        The MJCF file the robot was read from.
+    dest : str or Path
+        The file written.
+    log : JointLog
+        The log identified (``S`` samples; ``tau`` used for the last comparison when present).
+    inputs : iterable of str or Path
+        Further input files ``dest`` must not overwrite.
+    max_samples : int
+        Most samples checked.
+
+    Returns
+    -------
+    list of str
+        Notes (:func:`write_mjcf`'s, then the two comparisons).
+
+    Raises
+    ------
+    BaseparamsError
+        Not a physical identification, a sub-chain, coupled motors, or anything
+        :func:`write_mjcf` refuses (nothing is written then).
+    """
+    from ..ident.results import log_states
+    from .urdf import identified_drives
+
+    if ident.fit.physical is None:
+        raise BaseparamsError("--mjcf needs --method physical: least squares gives base parameters, not bodies")
+    robot = ident.model.robot
+    if list(ident.model.coords) != list(range(robot.dof)):
+        raise BaseparamsError("--mjcf: every joint of the robot must be identified (a sub-chain's values are not "
+                              "the whole model's)")
+    drives, couplings = identified_drives(ident)
+    if any(c.get(k) is not None for c in couplings for k in ("Iam", "Fvm", "Fcm")):
+        raise BaseparamsError("--mjcf: coupled motors (--coupling) have no MJCF joint attribute; --urdf keeps "
+                              "their values in comments")
+    q, dq, ddq, _ = log_states(log, (ident.options or {}).get("cutoff"), True)
+    cols = [list(log.joints).index(j) for j in ident.joints]
+    rows = np.unique(np.linspace(0, len(q) - 1, min(len(q), max_samples)).astype(int))
+    q, dq, ddq = (x[rows][:, cols] for x in (q, dq, ddq))
+    notes = write_mjcf(source, dest, robot, ident.fit.physical.pi, "paper", drives=drives, states=(q, dq, ddq),
+                       inputs=inputs)
+    got = mjcf_inverse(dest, robot, q, dq, ddq, frictionloss=True)
+    pred = ident.fit.predict(q, dq, ddq) - _drive_vectors(robot, drives)["Fo"]  # Fo: not in MJCF
+
+    def rel(a, b):
+        return float(np.sqrt(np.mean((a - b) ** 2)) / (np.sqrt(np.mean(b**2)) or 1.0))
+
+    notes.append(f"--mjcf: {dest} reloaded: MuJoCo's mj_inverse (frictionloss on; contacts, limits off) vs the "
+                 f"identification's own prediction{' (without Fo)' if any(d.get('Fo') for d in drives.values()) else ''}"
+                 f" on {len(q)} log samples: relative RMS difference {rel(got, pred):.2g}")
+    if log.tau is not None:
+        tau = np.asarray(log.tau, dtype=float)[rows][:, cols]
+        notes.append(f"--mjcf: MuJoCo's mj_inverse of {dest} vs the log's measured torques: relative RMS "
+                     f"difference {rel(got, tau):.3g}")
+    return notes

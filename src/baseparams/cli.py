@@ -365,8 +365,8 @@ def _read_identification_logs(args, robot, path):
     if args.weld and not subset:
         raise BaseparamsError("--weld applies with --joints (the joints to identify; the others are welded)")
     if subset and (args.urdf or args.mjcf):
-        raise BaseparamsError(f"{'--urdf' if args.urdf else '--mjcf'} with --joints: writing a sub-chain's values into the whole robot's file is "
-                              "not supported; identify every moving joint to export")
+        raise BaseparamsError(f"{'--urdf' if args.urdf else '--mjcf'} with --joints: writing a sub-chain's values "
+                              "into the whole robot's file is not supported; identify every moving joint to export")
     if not subset:
         return log, val, robot
     from .ident.subchain import parse_welds, subchain
@@ -977,10 +977,7 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
-    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
-    s.add_argument("--mjcf", metavar="FILE", help="physical, MJCF model: write a copy of it (through MuJoCo's MjSpec) "
-                                                  "with the identified inertias, armature, damping and frictionloss, "
-                                                  "checked by MuJoCo's inverse dynamics")
+    _export_args(s)
     s.add_argument("--save", metavar="RESULT.json", help="save the result (values, std, options, the model's "
                                                          "fingerprint) for 'baseparams predict'")
     s.add_argument("--truth", metavar="TRUTH.json", help="compare with the true parameters of 'baseparams simulate' "
@@ -989,6 +986,14 @@ def _identify_parser(sub, model_args) -> None:
                    help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.set_defaults(func=cmd_identify)
+
+
+def _export_args(s) -> None:
+    """``identify --urdf`` and ``--mjcf``: the model file written back with the identified values."""
+    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    s.add_argument("--mjcf", metavar="FILE", help="physical, MJCF model: write a copy of it (through MuJoCo's MjSpec) "
+                                                  "with the identified inertias, armature, damping and frictionloss, "
+                                                  "checked by MuJoCo's inverse dynamics")
 
 
 def _simulate_parser(sub, model_args) -> None:

@@ -482,9 +482,10 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
     def rel(a, b):
         return float(np.sqrt(np.mean((a - b) ** 2)) / (np.sqrt(np.mean(b**2)) or 1.0))
 
+    without = " (without Fo)" if any(d.get("Fo") for d in drives.values()) else ""
     notes.append(f"--mjcf: {dest} reloaded: MuJoCo's mj_inverse (frictionloss on; contacts, limits off) vs the "
-                 f"identification's own prediction{' (without Fo)' if any(d.get('Fo') for d in drives.values()) else ''}"
-                 f" on {len(q)} log samples: relative RMS difference {rel(got, pred):.2g}")
+                 f"identification's own prediction{without} on {len(q)} log samples: relative RMS difference "
+                 f"{rel(got, pred):.2g}")
     if log.tau is not None:
         tau = np.asarray(log.tau, dtype=float)[rows][:, cols]
         notes.append(f"--mjcf: MuJoCo's mj_inverse of {dest} vs the log's measured torques: relative RMS "

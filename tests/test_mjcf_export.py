@@ -134,7 +134,7 @@ def test_coulomb_friction_goes_to_frictionloss_and_missing_kinds_are_cleared(tmp
     assert np.allclose(model.dof_frictionloss, [0.7, 0.4, 0, 0])
     assert not model.dof_damping.any()  # the source's class damping 0.3: not in the identified model
     text = " ".join(notes)
-    assert "damping of j1, j2, j3, j4 set to 0" in text
+    assert "damping of j1, j2, j3, j4 set to 0 (nonzero in the source" in text
     assert "Fo left out (j1 0.2)" in text
     assert "frictionloss, a soft constraint bounded by Fc" in text
 

@@ -262,12 +262,12 @@ def _set_joints(by_id: dict, robot: Robot, ids: list[int], drives: dict, source:
             offsets.append(f"{jname} {terms['Fo']:.6g}")
     notes = []
     if set_:
-        notes.append("--mjcf: " + "; ".join(f"{attr} of {len(j)} joints" for attr, j in set_.items())
+        notes.append("--mjcf: " + "; ".join(f"{attr} of {len(j)} joint{'s' * (len(j) > 1)}" for attr, j in set_.items())
                      + " set to the identified values")
     if cleared:
         notes.append("--mjcf: " + "; ".join(f"{attr} of {', '.join(j)}" for attr, j in cleared.items())
-                     + " set to 0 (the source's value; the identified model has no such term: identify it with "
-                       "--rotor or --friction to estimate it)")
+                     + " set to 0 (nonzero in the source; the identified model has no such term: --rotor, --friction "
+                       "estimate it)")
     if offsets:
         notes.append("--mjcf: MJCF has no joint torque offset: Fo left out (" + ", ".join(offsets) + ")")
     return notes

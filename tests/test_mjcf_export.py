@@ -278,3 +278,12 @@ def test_iiwa14_acceptance(tmp_path):
         got[k] = data.qfrc_inverse
     assert _rel(got, log.tau) < 0.005  # the acceptance bound; measured: 1e-6
     assert _rel(got, log.tau) < 1e-4
+
+
+def test_identified_mjcf_needs_a_physical_fit_of_every_joint(tmp_path):
+    src, robot = _fixture(tmp_path)
+    log, _ = simulate_log(robot, duration=6.0, rate=250.0, amplitude=0.3, friction=("viscous",), seed=4)
+    ident = identify(robot, log, method="ols", friction=("viscous",))
+    with pytest.raises(BaseparamsError, match="--mjcf needs --method physical"):
+        identified_mjcf(ident, src, tmp_path / "out.xml", log)
+    assert not (tmp_path / "out.xml").exists()

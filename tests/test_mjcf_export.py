@@ -246,7 +246,9 @@ def test_cli_refusals(flags, model, message, tmp_path, capsys):
         (tmp_path / model).write_text("<robot name='r'><link name='a'/></robot>")
         model = str(tmp_path / model)
     code = main(["identify", model or str(src), str(csv), "--mjcf", str(tmp_path / "o.xml"), *flags])
-    assert code != 0 and message in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+    assert "--joints" in flags or "nothing was fitted" in err  # refused by the preflight
     assert not (tmp_path / "o.xml").exists()
 
 
@@ -286,4 +288,18 @@ def test_identified_mjcf_needs_a_physical_fit_of_every_joint(tmp_path):
     ident = identify(robot, log, method="ols", friction=("viscous",))
     with pytest.raises(BaseparamsError, match="--mjcf needs --method physical"):
         identified_mjcf(ident, src, tmp_path / "out.xml", log)
+    assert not (tmp_path / "out.xml").exists()
+
+
+def test_a_body_mujoco_refuses_is_named_and_nothing_written(tmp_path):
+    """A point mass (no rotational inertia) is consistent but MuJoCo refuses it for a moving body."""
+    from baseparams.model import inertia as I
+
+    src, robot = _fixture(tmp_path)
+    n = I.from_convention(robot.parameters("khalil").reshape(robot.n, 10), "khalil")
+    c = np.array([0.1, 0.02, -0.03, 1.0])
+    n[1] = 2.0 * np.outer(c, c)
+    with pytest.raises(ModelError, match=r"out.xml: MuJoCo refuses the identified model \(Error: .*Element name "
+                                         r"'fore'.*\); not written"):
+        write_mjcf(src, tmp_path / "out.xml", robot, to_convention(n, "khalil").ravel(), "khalil")
     assert not (tmp_path / "out.xml").exists()

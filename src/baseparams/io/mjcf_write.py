@@ -171,7 +171,7 @@ def _body_frame_inertias(mj, model, robot: Robot, params, convention: str, ids: 
 def _principal(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
     """``(mass, centre of mass (3,), quat (4,), principal moments (3,))`` of a pseudo-inertia in the body frame.
 
-    Refused: not finite, mass <= 0, a negative principal moment beyond rounding (1e-9 of the largest).
+    Refused: not finite, mass <= 0, a negative principal moment beyond rounding (1e-9 of the largest entry of ``n``).
     """
     if not np.all(np.isfinite(n)):
         raise ModelError(f"{what}: cannot write a pseudo-inertia with NaN or inf")
@@ -183,7 +183,7 @@ def _principal(n: np.ndarray, what: str) -> tuple[float, np.ndarray, np.ndarray,
     c = h / m
     j_c = j_o - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
     d, r = np.linalg.eigh(0.5 * (j_c + j_c.T))
-    if d[0] < -1e-9 * max(abs(d[-1]), np.finfo(float).tiny):
+    if d[0] < -1e-9 * max(float(np.abs(n).max()), np.finfo(float).tiny):  # beyond rounding of the body's scale
         raise ModelError(f"{what}: principal moment of inertia {d[0]:.6g} < 0 about the centre of mass: not "
                          f"physically consistent, no MJCF <inertial diaginertia>; not representable")
     if np.linalg.det(r) < 0:
@@ -342,7 +342,10 @@ def _check(path: Path, dest: Path, robot: Robot, params, convention: str, drives
     pi = np.asarray(params, dtype=float).ravel() if convention == "paper" else _to_paper(robot, params, convention)
     d = _drive_vectors(robot, drives)
     want = regressor(robot, q, dq, ddq) @ pi + d["Ia"] * ddq + d["Fv"] * dq
-    got = mjcf_inverse(path, robot, q, dq, ddq, frictionloss=False, what=str(dest))
+    try:
+        got = mjcf_inverse(path, robot, q, dq, ddq, frictionloss=False, what=f"{dest} (as written)")
+    except ModelError as exc:
+        raise ModelError(f"{exc}; not written") from None
     scale = float(np.sqrt(np.mean(want**2))) or 1.0
     err = float(np.sqrt(np.mean((got - want) ** 2))) / scale
     if not err <= tolerance:
@@ -403,7 +406,7 @@ def mjcf_inverse(path: str | Path, robot: Robot, q, dq, ddq, *, frictionloss: bo
     try:
         model = mj.MjModel.from_xml_path(str(path))
     except Exception as exc:  # noqa: BLE001
-        raise ModelError(f"{what}: MuJoCo cannot reload the written model ({one_line(exc)}); not written") from None
+        raise ModelError(f"{what}: MuJoCo cannot load it ({one_line(exc)})") from None
     if model.nv != robot.dof or model.nq != robot.dof:
         raise ModelError(f"{what}: {model.nv} MuJoCo dofs, robot {robot.name!r} has {robot.dof}")
     dis = mj.mjtDisableBit

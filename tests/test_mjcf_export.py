@@ -103,7 +103,7 @@ def test_random_inertias_and_drive_terms_are_what_mujoco_computes(seed, tmp_path
     out = tmp_path / "sub" / "out.xml"
     out.parent.mkdir()
     notes = write_mjcf(src, out, robot, p, "khalil", drives=drives)
-    assert any("mj_inverse reproduces" in n for n in notes)
+    assert any("mj_inverse reproduces the parameters' own rigid-body" in n for n in notes)
     assert any('inertiafromgeom="auto"' in n for n in notes) and any("boundmass" in n for n in notes)
     # MuJoCo, an independent oracle: the written model's inverse dynamics is the parameters'
     q, dq, ddq = _states(robot, seed)
@@ -163,7 +163,8 @@ def test_simulated_log_identified_and_exported_reproduces_the_log(tmp_path):
     ident = identify(robot, log, method="physical", rotor=True, friction=("viscous",))
     out = tmp_path / "out.xml"
     notes = identified_mjcf(ident, src, out, log)
-    assert any("identification's own prediction" in n for n in notes)
+    assert any("reproduces the identification's own predicted rigid-body" in n for n in notes)
+    assert any("identification's own prediction on" in n for n in notes)
     rng = np.random.default_rng(3)  # simulate_log's trajectory: its first draws
     _, q, dq, ddq = fourier_trajectory(robot.dof, 12.0, 250.0, rng, amplitude=0.5)
     assert np.array_equal(q, log.q)

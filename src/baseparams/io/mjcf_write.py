@@ -54,7 +54,8 @@ _JOINT_ATTRS = {"Ia": ("armature", "rotor inertia"), "Fv": ("damping", "viscous 
 
 
 def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str, *,
-               drives: dict | None = None, states=None, inputs=(), tolerance: float = TOLERANCE) -> list[str]:
+               drives: dict | None = None, states=None, expected=None, inputs=(),
+               tolerance: float = TOLERANCE) -> list[str]:
     """Write ``source`` to ``dest`` with the identified inertias and drive terms (module doc).
 
     Parameters
@@ -78,6 +79,10 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     states : tuple of ndarray, optional
         ``(q, dq, ddq)``, each ``(S, robot.dof)`` in the robot's coordinates (``q`` from
         ``qpos0``): where the written model is checked. Default: 64 seeded random states.
+    expected : array_like, shape ``(S, robot.dof)``, optional
+        The generalized forces the written model must give at ``states`` without dry friction
+        and offsets (e.g. an identification's own prediction of its rigid-body, rotor-inertia and
+        viscous terms). Default: the TP regressor times ``params`` plus ``Ia ddq + Fv dq``.
     inputs : iterable of str or Path
         Further input files ``dest`` must not overwrite (the log, ...).
     tolerance : float
@@ -117,7 +122,7 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     text = _relocate_assets(_to_xml(spec, dest), spec, source, dest)
     with atomic_path(dest, inputs=[source, *inputs], what="--mjcf") as tmp:
         tmp.write_text(text, encoding="utf-8")
-        notes += _check(tmp, dest, robot, params, convention, drives, states, tolerance)
+        notes += _check(tmp, dest, robot, (params, convention, drives), states, expected, tolerance)
     return notes
 
 
@@ -330,18 +335,26 @@ def _drive_vectors(robot: Robot, drives: dict) -> dict[str, np.ndarray]:
             for k in ("Ia", "Fv", "Fc", "Fo")}
 
 
-def _check(path: Path, dest: Path, robot: Robot, params, convention: str, drives: dict, states,
-           tolerance: float) -> list[str]:
-    """Reload the written file; its ``mj_inverse`` against the parameters' own forces (module doc)."""
+def _check(path: Path, dest: Path, robot: Robot, values: tuple, states, expected, tolerance: float) -> list[str]:
+    """Reload the written file; its ``mj_inverse`` against ``expected`` or the parameters' own forces (module doc).
+
+    ``values`` is ``(params, convention, drives)`` as :func:`write_mjcf` takes them.
+    """
     from ..regressor.tp import regressor
 
     q, dq, ddq = (np.asarray(x, dtype=float) for x in (states if states is not None else _random_states(robot)))
     if q.ndim != 2 or q.shape[1] != robot.dof or not q.shape == dq.shape == ddq.shape:
         raise BaseparamsError(f"--mjcf: states must be three (S, {robot.dof}) arrays, got {q.shape}, {dq.shape}, "
                               f"{ddq.shape}")
+    params, convention, drives = values
     pi = np.asarray(params, dtype=float).ravel() if convention == "paper" else _to_paper(robot, params, convention)
     d = _drive_vectors(robot, drives)
     want = regressor(robot, q, dq, ddq) @ pi + d["Ia"] * ddq + d["Fv"] * dq
+    source = "parameters' own"
+    if expected is not None:
+        want, source = np.asarray(expected, dtype=float), "identification's own predicted"
+        if want.shape != q.shape:
+            raise BaseparamsError(f"--mjcf: expected forces of shape {q.shape}, got {want.shape}")
     try:
         got = mjcf_inverse(path, robot, q, dq, ddq, frictionloss=False, what=f"{dest} (as written)")
     except ModelError as exc:
@@ -349,9 +362,10 @@ def _check(path: Path, dest: Path, robot: Robot, params, convention: str, drives
     scale = float(np.sqrt(np.mean(want**2))) or 1.0
     err = float(np.sqrt(np.mean((got - want) ** 2))) / scale
     if not err <= tolerance:
-        raise ModelError(f"{dest}: MuJoCo's inverse dynamics of the written model differs from the identified "
-                         f"parameters' by {err:.3g} of their RMS (> {tolerance:g}) on {len(q)} states; not written")
-    notes = [f"--mjcf: reloaded by MuJoCo: mj_inverse reproduces the identified rigid-body, armature and damping "
+        raise ModelError(f"{dest}: MuJoCo's inverse dynamics of the written model differs from the {source} "
+                         f"rigid-body, armature and damping forces by {err:.3g} of their RMS (> {tolerance:g}) on "
+                         f"{len(q)} states; not written")
+    notes = [f"--mjcf: reloaded by MuJoCo: mj_inverse reproduces the {source} rigid-body, armature and damping "
              f"torques to {err:.2g} of their RMS on {len(q)} states (tolerance {tolerance:g})"]
     if np.any(d["Fc"]):
         with_fc = want + d["Fc"] * np.sign(dq)
@@ -478,7 +492,7 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
     rows = np.unique(np.linspace(0, len(q) - 1, min(len(q), max_samples)).astype(int))
     q, dq, ddq = (x[rows][:, cols] for x in (q, dq, ddq))
     notes = write_mjcf(source, dest, robot, ident.fit.physical.pi, "paper", drives=drives, states=(q, dq, ddq),
-                       inputs=inputs)
+                       expected=_held_prediction(ident, q, dq, ddq), inputs=inputs)
     got = mjcf_inverse(dest, robot, q, dq, ddq, frictionloss=True)
     pred = ident.fit.predict(q, dq, ddq) - _drive_vectors(robot, drives)["Fo"]  # Fo: not in MJCF
 
@@ -494,3 +508,18 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
         notes.append(f"--mjcf: MuJoCo's mj_inverse of {dest} vs the log's measured torques: relative RMS "
                      f"difference {rel(got, tau):.3g}")
     return notes
+
+
+def _held_prediction(ident, q, dq, ddq) -> np.ndarray:
+    """The identification's own prediction ``(S, m)`` of the terms MJCF holds exactly: rigid body, ``Ia``, ``Fv``.
+
+    Its model regressor times ``theta = G [pi; delta]`` with the other drive kinds (``Fc``, ``Fo``)
+    zeroed; computed in chunks of 5000 samples.
+    """
+    phys = ident.fit.physical
+    kinds = np.array(ident.model.drives.param_kinds, dtype=object)
+    held = np.where(np.isin(kinds, ["Ia", "Fv"]), np.asarray(phys.delta, dtype=float), 0.0) if kinds.size else \
+        np.zeros(0)
+    theta = ident.model.full_map() @ np.concatenate([np.asarray(phys.pi, dtype=float), held])
+    return np.concatenate([ident.model.regressor(q[k:k + 5000], dq[k:k + 5000], ddq[k:k + 5000]) @ theta
+                           for k in range(0, len(q), 5000)])

@@ -270,7 +270,7 @@ def test_iiwa14_acceptance(tmp_path):
     ident = identify(robot, log, method="physical", rotor=True, friction=("viscous",))
     out = tmp_path / "OUT.xml"
     notes = identified_mjcf(ident, IIWA, out, log)
-    assert any("the copy is written without them" in n for n in notes)
+    assert any("the copy is written without the stripped asset files" in n for n in notes)
     _, q, dq, ddq = fourier_trajectory(robot.dof, 20.0, 500.0, np.random.default_rng(1), amplitude=0.5)
     model = mujoco.MjModel.from_xml_path(str(out))  # loads as written: default options, contacts included
     data = mujoco.MjData(model)

@@ -16,7 +16,8 @@ expressed in the MuJoCo body frame (``body_xpos``, ``body_xmat`` at ``qpos0``) b
 Nothing is written unchecked: the written text is reloaded by MuJoCo and its inverse dynamics
 (``mj_inverse``; contacts, joint limits, equalities and springs disabled, which are not part of the
 identified model) must reproduce the parameters' own generalized forces (rigid body, armature,
-damping) to :data:`TOLERANCE` relative RMS, or nothing is written. MuJoCo's writer prints six
+damping; :func:`identified_mjcf`: the identification's own prediction of them, its base-parameter
+regressor times its ``theta``) to :data:`TOLERANCE` relative RMS, or nothing is written. MuJoCo's writer prints six
 significant digits (``%g``), so the file's numbers (poses too, which MuJoCo rewrites as it
 compiled them) carry relative rounding up to ``5e-7``; the torques they give differ from the
 parameters' at ~1e-6 of their RMS on the test robots. A wrong frame, sign or unit errs by
@@ -106,7 +107,8 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     source, dest = Path(source), Path(dest)
     _check_robot(robot, source)
     spec, model, notes = compiled_spec(source)
-    notes = [f"--mjcf: {n}; the copy is written without them (MuJoCo's writer compiles the model)" for n in notes]
+    notes = [f"--mjcf: {n}" for n in notes] + (["--mjcf: the copy is written without the stripped asset files and "
+                                                 "geoms (MuJoCo's writer compiles the model)"] if notes else [])
     ids = _moving_ids(model, robot, source)
     n_body = _body_frame_inertias(mj, model, robot, params, convention, ids)
     drives = drives or {}

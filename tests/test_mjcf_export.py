@@ -237,14 +237,14 @@ def test_cli_identify_writes_the_mjcf(tmp_path, capsys):
 
 @pytest.mark.parametrize("flags, model, message", [
     (["--method", "wls"], None, "--mjcf needs --method physical"),
-    (["--method", "physical"], "robot.urdf", "is a URDF; --urdf writes it"),
-    (["--method", "physical"], "puma560", "it needs an MJCF model file (.xml)"),
+    (["--method", "physical"], "puma560", "it needs an MJCF (.xml) or URDF (.urdf) model file"),
+    (["--method", "physical"], "robot.txt", "it needs an MJCF (.xml) or URDF (.urdf) model file"),
     (["--method", "physical", "--joints", "j1,j2"], None, "--mjcf with --joints"),
 ])
 def test_cli_refusals(flags, model, message, tmp_path, capsys):
     src, csv = _cli_log(tmp_path)
-    if model == "robot.urdf":
-        (tmp_path / model).write_text("<robot name='r'><link name='a'/></robot>")
+    if model == "robot.txt":
+        (tmp_path / model).write_text(FIXTURE)
         model = str(tmp_path / model)
     code = main(["identify", model or str(src), str(csv), "--mjcf", str(tmp_path / "o.xml"), *flags])
     err = capsys.readouterr().err
@@ -304,3 +304,72 @@ def test_a_body_mujoco_refuses_is_named_and_nothing_written(tmp_path):
                                          r"'fore'.*\); not written"):
         write_mjcf(src, tmp_path / "out.xml", robot, to_convention(n, "khalil").ravel(), "khalil")
     assert not (tmp_path / "out.xml").exists()
+
+
+#: a URDF: a tool link fixed to the last moving link, a link without <inertial> fixed to the base
+URDF = """<?xml version="1.0"?>
+<robot name="urdfarm">
+  <link name="base"/>
+  <link name="plate"/>
+  <joint name="plate_fix" type="fixed"><parent link="base"/><child link="plate"/></joint>
+  <joint name="j1" type="revolute">
+    <parent link="plate"/><child link="a"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0.2"/><axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" effort="50" velocity="2"/>
+    <dynamics damping="0.5" friction="0.1"/>
+  </joint>
+  <link name="a">
+    <inertial><origin xyz="0.2 0 0" rpy="0.1 0 0"/><mass value="2"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.05" iyz="0" izz="0.05"/></inertial>
+  </link>
+  <joint name="j2" type="continuous">
+    <parent link="a"/><child link="b"/>
+    <origin xyz="0.4 0 0" rpy="0.3 0.1 0"/><axis xyz="0 1 0"/>
+  </joint>
+  <link name="b">
+    <inertial><origin xyz="0.15 0.01 0"/><mass value="1"/>
+      <inertia ixx="0.005" ixy="0.001" ixz="0" iyy="0.02" iyz="0" izz="0.02"/></inertial>
+  </link>
+  <joint name="tool_fix" type="fixed">
+    <parent link="b"/><child link="tool"/><origin xyz="0.3 0 0" rpy="0 1.2 0"/>
+  </joint>
+  <link name="tool">
+    <inertial><origin xyz="0 0 0.05"/><mass value="0.4"/>
+      <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial>
+  </link>
+</robot>
+"""
+
+
+def test_a_urdf_is_written_as_mjcf_through_mujocos_import(tmp_path):
+    from baseparams.io.urdf import load_urdf
+
+    src = tmp_path / "arm.urdf"
+    src.write_text(URDF)
+    robot = load_urdf(src)
+    p = _random_params(robot, 7)
+    out = tmp_path / "arm.xml"
+    notes = write_mjcf(src, out, robot, p, "khalil", drives={"j1": {"Ia": 0.02, "Fv": 0.3, "Fc": 0.2},
+                                                              "j2": {"Ia": 0.01, "Fv": 0.1, "Fc": None}})
+    assert any("arm.urdf is a URDF: written as MuJoCo imports it" in n for n in notes)
+    model = mujoco.MjModel.from_xml_path(str(out))
+    assert np.allclose(model.dof_armature, [0.02, 0.01]) and np.allclose(model.dof_frictionloss, [0.2, 0])
+    q, dq, ddq = _states(robot, 7)
+    want = regressor(robot, q, dq, ddq) @ _paper(robot, p) + [0.02, 0.01] * ddq + [0.3, 0.1] * dq
+    assert _rel(mjcf_inverse(out, robot, q, dq, ddq, frictionloss=False), want) < 1e-5
+    back = load_mjcf(out)  # the MJCF re-read: the URDF's bodies (the tool fused into b), the identified values
+    assert back.names == robot.names and np.allclose(back.parameters("khalil"), p, rtol=1e-5, atol=1e-6)
+
+
+def test_cli_identify_writes_a_urdf_model_as_mjcf(tmp_path, capsys):
+    src = tmp_path / "arm.urdf"
+    src.write_text(URDF)
+    csv = tmp_path / "log.csv"
+    assert main(["simulate", str(src), str(csv), "--duration", "8", "--rate", "250", "--rotor", "--friction",
+                 "viscous"]) == 0
+    out = tmp_path / "arm.xml"
+    capsys.readouterr()
+    assert main(["identify", str(src), str(csv), "--method", "physical", "--rotor", "--friction", "viscous",
+                 "--mjcf", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "is a URDF: written as MuJoCo imports it" in err and f"MJCF written to {out}" in err

@@ -902,7 +902,7 @@ MODEL_HELP = {
     "analyze": f"{_MODEL_FILES}, or a DH table (.dh, '*-symbolic'); a glob pattern ('models/*.urdf') runs a sweep "
                "over many files on Dask",
     "regressor": f"{_MODEL_FILES}: the robot whose TP regressor is computed",
-    "identify": f"{_MODEL_FILES}: the robot the log was recorded on (--urdf needs a .urdf file, --mjcf an .xml)",
+    "identify": f"{_MODEL_FILES}: the robot the log was recorded on (--urdf needs a .urdf file, --mjcf a file)",
     "predict": f"{_MODEL_FILES}: the robot the saved identification belongs to (its fingerprint is checked)",
     "simulate": f"{_MODEL_FILES}: the robot simulated (its own inertias are the true parameters)",
     "excite": f"{_MODEL_FILES}: the robot (its joint limits are read from the file)",
@@ -991,9 +991,9 @@ def _identify_parser(sub, model_args) -> None:
 def _export_args(s) -> None:
     """``identify --urdf`` and ``--mjcf``: the model file written back with the identified values."""
     s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
-    s.add_argument("--mjcf", metavar="FILE", help="physical, MJCF model: write a copy of it (through MuJoCo's MjSpec) "
-                                                  "with the identified inertias, armature, damping and frictionloss, "
-                                                  "checked by MuJoCo's inverse dynamics")
+    s.add_argument("--mjcf", metavar="FILE", help="physical: write the MJCF or URDF model as MJCF (through MuJoCo's "
+                                                  "MjSpec) with the identified inertias, armature, damping and "
+                                                  "frictionloss, checked by MuJoCo's inverse dynamics")
 
 
 def _simulate_parser(sub, model_args) -> None:
@@ -1232,16 +1232,13 @@ def _check_flags(args) -> None:
 
 
 def _check_mjcf_flags(args) -> None:
-    """``identify --mjcf``: a physical fit of an MJCF model file (a URDF's way out is ``--urdf``)."""
+    """``identify --mjcf``: a physical fit of an MJCF or URDF model file (a URDF through MuJoCo's import)."""
     if args.method != "physical":
         raise BaseparamsError("--mjcf needs --method physical: least squares gives base parameters, not bodies "
                               "(nothing was fitted)")
-    if Path(args.model).suffix.lower() == ".urdf":
-        raise BaseparamsError(f"--mjcf writes a copy of an MJCF model: {args.model} is a URDF; --urdf writes it with "
-                              f"the identified values (MuJoCo loads URDF too) (nothing was fitted)")
-    if Path(args.model).suffix.lower() != ".xml" or not Path(args.model).is_file():
-        raise BaseparamsError(f"--mjcf writes a copy of the MJCF model with the identified values: it needs an MJCF "
-                              f"model file (.xml), got {args.model} (nothing was fitted)")
+    if Path(args.model).suffix.lower() not in (".xml", ".urdf") or not Path(args.model).is_file():
+        raise BaseparamsError(f"--mjcf writes the model file as MJCF with the identified values: it needs an MJCF "
+                              f"(.xml) or URDF (.urdf) model file, got {args.model} (nothing was fitted)")
 
 
 def preflight(args) -> None:

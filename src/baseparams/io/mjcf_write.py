@@ -7,7 +7,9 @@ reads it), sets every moving body's ``<inertial>`` (mass, centre of mass ``pos``
 MuJoCo's own writer (``MjSpec.to_xml``). Bodies welded to a moving body (no joint of their own:
 the reader merges their inertia into it) get zero mass, as :func:`~baseparams.io.urdf.write_urdf`
 does for links merged by fixed joints: the moving body carries the identified inertia of the
-whole rigid group. Bodies welded to the world keep their values.
+whole rigid group. Bodies welded to the world keep their values. A URDF source is read by MuJoCo's
+URDF import (links fixed to their parent fused into it, visual geoms dropped, as MuJoCo imports
+URDF) and written as MJCF.
 
 Frames: the identified parameters are in the world frame at ``qpos0`` (``paper`` convention) or in
 each body's link frame (baseparams: the MuJoCo body frame moved to its joint's anchor); they are
@@ -62,11 +64,12 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     Parameters
     ----------
     source : str or Path
-        The MJCF file ``robot`` was read from.
+        The MJCF file ``robot`` was read from, or a URDF file (read by MuJoCo's URDF import; the
+        output is MJCF).
     dest : str or Path
         The file written (atomically; never one of ``source`` and ``inputs``).
     robot : Robot
-        The robot :func:`~baseparams.io.mjcf.load_mjcf` read from ``source`` (``n`` moving bodies,
+        The robot :func:`~baseparams.io.mjcf.load_mjcf` (or ``load_urdf``) read from ``source`` (``n`` moving bodies,
         each on one hinge or slide joint; fixed base, no loops).
     params : array_like, shape ``(10 n,)``
         The inertial parameters, ten per body, in ``convention``.
@@ -106,7 +109,12 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
 
     source, dest = Path(source), Path(dest)
     _check_robot(robot, source)
-    spec, model, notes = compiled_spec(source)
+    urdf = source.suffix.lower() == ".urdf"
+    try:
+        spec, model, notes = compiled_spec(source)
+    except ModelError as exc:
+        raise ModelError(f"{exc}{' (MuJoCo imports this URDF; --urdf writes the URDF itself)' if urdf else ''}") \
+            from None
     notes = [f"--mjcf: {n}" for n in notes] + (["--mjcf: the copy is written without the stripped asset files and "
                                                  "geoms (MuJoCo's writer compiles the model)"] if notes else [])
     ids = _moving_ids(model, robot, source)
@@ -115,6 +123,9 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     unknown = sorted(set(drives) - set(robot.joint_names))
     if unknown:
         raise ModelError(f"{source}: drive terms of joints {unknown[:5]} that are not in the robot")
+    if urdf:
+        notes.append(f"--mjcf: {source.name} is a URDF: written as MuJoCo imports it (links fixed to their parent "
+                     f"fused into it, visual geoms dropped)")
     notes += _compiler_options(mj, spec)
     by_id = {b.id: b for b in spec.bodies}
     for i, name in enumerate(robot.names):
@@ -455,7 +466,7 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
     ident : Identification
         A ``method="physical"`` identification of every joint of the robot read from ``source``.
     source : str or Path
-        The MJCF file the robot was read from.
+        The MJCF (or URDF) file the robot was read from.
     dest : str or Path
         The file written.
     log : JointLog

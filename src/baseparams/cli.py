@@ -364,9 +364,9 @@ def _read_identification_logs(args, robot, path):
     val = read_log(args.validate, robot, columns=args.columns, allow_subset=subset) if args.validate else None
     if args.weld and not subset:
         raise BaseparamsError("--weld applies with --joints (the joints to identify; the others are welded)")
-    if subset and args.urdf:
-        raise BaseparamsError("--urdf with --joints: writing a sub-chain's values into the whole robot's file is "
-                              "not supported; identify every moving joint to export")
+    if subset and (args.urdf or args.mjcf):
+        raise BaseparamsError(f"{'--urdf' if args.urdf else '--mjcf'} with --joints: writing a sub-chain's values "
+                              "into the whole robot's file is not supported; identify every moving joint to export")
     if not subset:
         return log, val, robot
     from .ident.subchain import parse_welds, subchain
@@ -433,6 +433,8 @@ def cmd_identify(args) -> int:
             progress(f"result saved to {args.save}")
         if args.urdf:
             _write_identified_urdf(args, robot, result)
+        if args.mjcf:
+            _write_identified_mjcf(args, result, log)
         if args.plot:
             from .report.plots import torque_plot
 
@@ -669,7 +671,7 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
     from .fleet import identify_fleet
     from .ident.model import ident_model
 
-    for opt in ("validate", "holdout", "plot", "urdf", "columns"):
+    for opt in ("validate", "holdout", "plot", "urdf", "mjcf", "columns"):
         if getattr(args, opt):
             raise BaseparamsError(f"--{opt} applies to one log; with several (a fleet) use --per-file / --pooled")
     from .analysis import analyze
@@ -724,6 +726,15 @@ def _write_identified_urdf(args, robot, result) -> None:
                            couplings=couplings, inputs=[args.data, args.validate]):
         print(f"baseparams: note: {note}", file=sys.stderr)
     print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
+
+
+def _write_identified_mjcf(args, result, log) -> None:
+    """``--mjcf FILE``: a copy of the MJCF model with the identified inertias and drive terms, checked by MuJoCo."""
+    from .io.mjcf_write import identified_mjcf
+
+    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=[args.data, args.validate]):
+        print(f"baseparams: note: {note}", file=sys.stderr)
+    print(f"baseparams: MJCF written to {args.mjcf}", file=sys.stderr)
 
 
 def _amplitude(args, robot) -> float:
@@ -892,7 +903,7 @@ MODEL_HELP = {
     "analyze": f"{_MODEL_FILES}, or a DH table (.dh, '*-symbolic'); a glob pattern ('models/*.urdf') runs a sweep "
                "over many files on Dask",
     "regressor": f"{_MODEL_FILES}: the robot whose TP regressor is computed",
-    "identify": f"{_MODEL_FILES}: the robot the log was recorded on (--urdf needs a .urdf file)",
+    "identify": f"{_MODEL_FILES}: the robot the log was recorded on (--urdf needs a .urdf file, --mjcf a file)",
     "predict": f"{_MODEL_FILES}: the robot the saved identification belongs to (its fingerprint is checked)",
     "simulate": f"{_MODEL_FILES}: the robot simulated (its own inertias are the true parameters)",
     "excite": f"{_MODEL_FILES}: the robot (its joint limits are read from the file)",
@@ -967,7 +978,7 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
-    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    _export_args(s)
     s.add_argument("--save", metavar="RESULT.json", help="save the result (values, std, options, the model's "
                                                          "fingerprint) for 'baseparams predict'")
     s.add_argument("--truth", metavar="TRUTH.json", help="compare with the true parameters of 'baseparams simulate' "
@@ -976,6 +987,14 @@ def _identify_parser(sub, model_args) -> None:
                    help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.set_defaults(func=cmd_identify)
+
+
+def _export_args(s) -> None:
+    """``identify --urdf`` and ``--mjcf``: the model file written back with the identified values."""
+    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    s.add_argument("--mjcf", metavar="FILE", help="physical: write the MJCF or URDF model as MJCF (through MuJoCo's "
+                                                  "MjSpec) with the identified inertias, armature, damping and "
+                                                  "frictionloss, checked by MuJoCo's inverse dynamics")
 
 
 def _simulate_parser(sub, model_args) -> None:
@@ -1122,7 +1141,7 @@ def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
     cmd = args.command
     out = [("--output", getattr(args, "output", None), None), ("--html", getattr(args, "html", None), None),
            ("--plot", getattr(args, "plot", None), PLOT_SUFFIXES), ("--urdf", getattr(args, "urdf", None), None),
-           ("--codegen", getattr(args, "codegen", None), None)]
+           ("--mjcf", getattr(args, "mjcf", None), (".xml",)), ("--codegen", getattr(args, "codegen", None), None)]
     if cmd == "identify":
         out.append(("--predictions", args.predictions, (".csv", ".tsv", ".parquet", ".pq")))
         out.append(("--save", args.save, None))
@@ -1201,6 +1220,8 @@ def _check_flags(args) -> None:
         if Path(args.model).suffix.lower() != ".urdf" or not Path(args.model).is_file():
             raise BaseparamsError(f"--urdf writes the model file with the identified inertias: it needs a URDF "
                                   f"model file, got {args.model} (nothing was fitted)")
+    if args.command == "identify" and args.mjcf:
+        _check_mjcf_flags(args)
     if args.command == "excite":
         _keepout(args.keepout)
         _acceleration(args.acceleration)
@@ -1209,6 +1230,16 @@ def _check_flags(args) -> None:
         if not 0.0 <= args.margin < 0.5:
             raise BaseparamsError(f"--margin is a fraction of each position range kept free at both ends, in "
                                   f"[0, 0.5); got {args.margin}")
+
+
+def _check_mjcf_flags(args) -> None:
+    """``identify --mjcf``: a physical fit of an MJCF or URDF model file (a URDF through MuJoCo's import)."""
+    if args.method != "physical":
+        raise BaseparamsError("--mjcf needs --method physical: least squares gives base parameters, not bodies "
+                              "(nothing was fitted)")
+    if Path(args.model).suffix.lower() not in (".xml", ".urdf") or not Path(args.model).is_file():
+        raise BaseparamsError(f"--mjcf writes the model file as MJCF with the identified values: it needs an MJCF "
+                              f"(.xml) or URDF (.urdf) model file, got {args.model} (nothing was fitted)")
 
 
 def preflight(args) -> None:

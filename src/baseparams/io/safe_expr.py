@@ -70,17 +70,19 @@ class Budget:
     Parameters
     ----------
     max_steps : int, optional
-        Evaluation steps (:data:`MAX_STEPS`).
+        Evaluation steps (default :data:`MAX_STEPS`, read when the budget is made).
     max_chars : int, optional
-        Characters of strings and elements of containers produced (:data:`MAX_CHARS`).
+        Characters of strings and elements of containers produced (default :data:`MAX_CHARS`).
     seconds : float, optional
-        Wall-clock seconds from now (:data:`MAX_SECONDS`).
+        Wall-clock seconds from now (default :data:`MAX_SECONDS`).
     """
 
-    def __init__(self, max_steps: int = MAX_STEPS, max_chars: int = MAX_CHARS, seconds: float = MAX_SECONDS):
-        self.max_steps, self.max_chars, self.seconds = max_steps, max_chars, seconds
+    def __init__(self, max_steps: int | None = None, max_chars: int | None = None, seconds: float | None = None):
+        self.max_steps = MAX_STEPS if max_steps is None else max_steps
+        self.max_chars = MAX_CHARS if max_chars is None else max_chars
+        self.seconds = MAX_SECONDS if seconds is None else seconds
         self.steps = self.chars = 0
-        self.deadline = time.monotonic() + seconds
+        self.deadline = time.monotonic() + self.seconds
 
     def step(self, n: int = 1) -> None:
         """Count ``n`` steps; past the step budget or the deadline, raise.

@@ -19,7 +19,8 @@ is expanded (one at a time, under a lock) these parts of ``xacro`` are replaced:
 - ``$(env VAR)`` is refused and ``$(optenv VAR DEFAULT)`` is ``DEFAULT`` (a model file does not
   read the environment: give values with ``--xacro-arg``); ``$(cwd)`` is refused.
 - A :class:`~baseparams.io.safe_expr.Budget` bounds steps (expressions, expanded elements),
-  seconds and characters produced; xacro's own messages become notes.
+  seconds and characters produced, and at most :data:`MAX_ELEMENTS` elements are expanded;
+  xacro's own messages become notes.
 
 Errors are one line naming the file (the included file where it happened) and, when the failing
 text is found in it, the line.
@@ -41,6 +42,8 @@ from .safe_expr import Budget, Evaluator, ExpressionError, bounded_range, numeri
 PACKAGE_PATH_ENV = "BASEPARAMS_PACKAGE_PATH"
 #: the most files one expansion reads (includes and YAML files)
 MAX_INCLUDES = 1000
+#: the most elements one expansion visits (macro bodies and included files included)
+MAX_ELEMENTS = 20_000
 #: Python builtins an expression may call (xacro exposes them, directly and as ``python.NAME``)
 _BUILTINS = ("list", "dict", "len", "str", "float", "int", "bool", "min", "max", "round", "abs", "all", "any",
              "divmod", "enumerate", "frozenset", "ord", "repr", "reversed", "set", "sorted", "tuple", "zip",
@@ -198,7 +201,7 @@ class _Session:
         self.budget = Budget()
         self.notes: list[str] = []
         self.texts: dict[str, bytes] = {}
-        self.reads = 0
+        self.reads = self.elements = 0
         self.evaluator = Evaluator(self._callables(), (xacro.NameSpace, xacro.YamlDictWrapper), self.budget)
 
     def _callables(self) -> list[tuple[object, object]]:
@@ -360,8 +363,15 @@ class _Session:
         return self.budget.charge(self.original["eval_text"](text, symbols))
 
     def eval_all(self, node, macros, symbols):
-        """``xacro.eval_all``, counted: each element expanded is a step (exponential macros stop)."""
+        """``xacro.eval_all``, counted: at most :data:`MAX_ELEMENTS` elements expanded (exponential macros stop).
+
+        minidom inserts a node in O(siblings), so a flat expansion of n elements costs O(n^2): the
+        bound keeps that below seconds (real robots expand to a few thousand elements).
+        """
         self.budget.step()
+        self.elements += 1
+        if self.elements > MAX_ELEMENTS:
+            raise ExpressionError(f"more than {MAX_ELEMENTS} elements expanded (a model file's limit)")
         return self.original["eval_all"](node, macros, symbols)
 
     # ---- patching -------------------------------------------------------------------------------
@@ -432,11 +442,11 @@ def expand_xacro(path, args=None, package_path=None) -> tuple[bytes, list[str]]:
 
 
 #: the text to look for in a file, for the line of an error, from xacro's messages
-_NEEDLES = ((re.compile(r"when evaluating expression '(.*)'", re.S), "${{{}"),
-            (re.compile(r"unknown macro name: (\S+)"), "<{}"),
-            (re.compile(r"undefined xacro argument '([^']*)'"), "{}"),
-            (re.compile(r"\$\((find \S+?)\)"), "$({}"),
-            (re.compile(r"^(\S+): outside the model's folder"), "{}"),
+_NEEDLES = ((re.compile(r"unknown macro name: (\S+)"), "<{}"),
+            (re.compile(r"undefined xacro argument '([^']*)'"), "$(arg {}"),
+            (re.compile(r"\$\(find (\S+?)\)"), "$(find {}"),
+            (re.compile(r"\$\(find (\S+?)\)"), "package://{}/"),
+            (re.compile(r"^(?:\S*/)?([^/\s]+): (?:outside the model's folder|no such file|not a regular)"), "{}"),
             (re.compile(r"^\$\((.*?)\):"), "$({}"))
 
 
@@ -456,7 +466,7 @@ def _message(sess: _Session, exc: Exception) -> str:
         text = "out of memory"
     elif isinstance(exc, x.XacroException | ExpressionError | BaseparamsError):
         raw = str(exc)
-        text = " ".join(raw.split())
+        text = _short(raw)
         files = [m.history[-1][-1] for m in reversed(x.macrostack or []) if m.history and m.history[-1]]
         where, line = _locate(sess, raw, [where, *files], where)
     else:
@@ -466,13 +476,24 @@ def _message(sess: _Session, exc: Exception) -> str:
     return f"{where}{'' if line is None else f':{line}'}: xacro: {text}{origin}"
 
 
+_EVALUATING = re.compile(r"\s*when evaluating expression '(.*?)'(?=\s*when evaluating|\s*$)", re.S)
+
+
+def _short(raw: str) -> str:
+    """xacro's message on one line: the innermost expression named once, shortened to 100 characters."""
+    exprs = _EVALUATING.findall(raw)
+    text = " ".join(_EVALUATING.sub("", raw).split())
+    if exprs:
+        e = " ".join(exprs[0].split())
+        text += f" (evaluating '{e[:100]}{'...' if len(e) > 100 else ''}')"
+    return text
+
+
 def _locate(sess: _Session, raw: str, files: list[str], default: str) -> tuple[str, int | None]:
     """``(file, line)`` of the first line holding the failing text (xacro gives no line numbers)."""
-    for pattern, fmt in _NEEDLES:
-        m = pattern.search(raw)
-        if not m:
-            continue
-        needle = fmt.format(m.group(1)).encode()
+    needles = ["${" + e for e in _EVALUATING.findall(raw)]
+    needles += [fmt.format(m.group(1)) for pattern, fmt in _NEEDLES if (m := pattern.search(raw))]
+    for needle in (n.encode() for n in needles):
         for f in files:
             data = sess.texts.get(f)
             if data is not None and needle in data:

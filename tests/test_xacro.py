@@ -402,3 +402,102 @@ def test_xacro_module_restored_after_expansion(tmp_path):
     expand_xacro(ARM)
     assert before == {k: getattr(xacro, k) for k in before}
     assert xacro.substitution_args_context["arg"] == {} and not xacro.all_includes
+
+
+def test_external_entities_not_read(tmp_path):
+    (tmp_path / "secret.txt").write_text("SECRET")
+    p = tmp_path / "xxe.urdf.xacro"
+    p.write_text(f'<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY x SYSTEM "file://{tmp_path}/secret.txt">]>'
+                 f'<robot name="r" {NS}><link name="a&x;"/></robot>')
+    try:
+        data = expand_xacro(p)[0]
+    except ModelError:
+        return  # refused: fine too
+    assert b"SECRET" not in data
+
+
+def test_wildcard_includes_confined(tmp_path):
+    d = tmp_path / "model"
+    (d / "parts").mkdir(parents=True)
+    for k in range(3):
+        (d / "parts" / f"p{k}.xacro").write_text(f'<robot {NS}><link name="p{k}"/></robot>')
+    p = _xacro(d, '<link name="a"/>\n<xacro:include filename="parts/*.xacro"/>')
+    assert expand_xacro(p)[0].count(b"<link") == 4
+    for spec in ("/etc/*", "parts/*/../../../*"):
+        p = _xacro(d, f'<link name="a"/>\n<xacro:include filename="{spec}"/>')
+        with pytest.raises(ModelError, match="wildcard include outside"):
+            expand_xacro(p)
+
+
+# ---- the evaluator itself: Python's semantics where allowed ----------------------------------------------------
+def _evaluator():
+    import math
+
+    allowed = [(f, f) for f in (math.sin, math.sqrt, math.radians, float, int, abs, min, max, round, len, str)]
+    allowed.append((range, safe_expr.bounded_range))
+    return safe_expr.Evaluator(allowed, budget=safe_expr.Budget())
+
+
+@pytest.mark.parametrize("expr", [
+    "1 + 2 * 3 - 4 / 5", "2 ** 10 // 3 % 7", "-(3.5) ** 2", "1 < 2 <= 2 != 3", "not (1 and 0) or 5",
+    "'a' if 1 > 2 else 'b'", "'abc'[1:] + 'x' * 3", "[i * i for i in range(5) if i % 2]",
+    "{k: v for k, v in [(1, 2), (3, 4)]}", "sqrt(2) * sin(radians(30))", "max([3, 1, 2], key=abs)",
+    "'a,b;c'.split(',')", "round(3.14159, 2)", "len({1, 2, 2})", "' x '.strip().upper()", "(1, 2) + (3,)",
+    "str(12) + 'mm'", "min(abs(-3), int('7'), float('2.5'))", "[x for x in 'ab' for y in range(2)]",
+    "'%s=%.3f' % ('m', 1 / 3)", "5 & 3 | 8 ^ 1", "1 << 8 >> 2", "{'a': [1, 2]}['a'][-1]", "1 in [1, 2]",
+])
+def test_evaluator_agrees_with_python(expr):
+    import math
+
+    names = {"sqrt": math.sqrt, "sin": math.sin, "radians": math.radians, "float": float, "int": int,
+             "abs": abs, "min": min, "max": max, "round": round, "len": len, "str": str, "range": range}
+    assert _evaluator().evaluate(expr, names.__getitem__) == eval(expr, {"__builtins__": {}, **names})  # noqa: S307
+
+
+def test_evaluator_random_arithmetic_agrees_with_python():
+    rng = np.random.default_rng(11)
+    ops = ["+", "-", "*", "/", "**", "%", "//"]
+    for _ in range(300):
+        expr = str(round(float(rng.uniform(0.5, 3)), 3))
+        for _ in range(int(rng.integers(1, 6))):
+            op = ops[int(rng.integers(len(ops)))]
+            right = str(round(float(rng.uniform(0.5, 3)), 3))
+            expr = f"({expr} {op} {right})" if rng.random() < 0.5 else f"({right} {op} {expr})"
+        try:
+            want = eval(expr, {"__builtins__": {}})  # noqa: S307  (our own generated text)
+        except (ZeroDivisionError, OverflowError) as exc:
+            with pytest.raises(type(exc)):
+                _evaluator().evaluate(expr, {}.__getitem__)
+            continue
+        got = _evaluator().evaluate(expr, {}.__getitem__)
+        assert got == want or (isinstance(want, complex) and np.isclose(got, want))
+
+
+@pytest.mark.parametrize("expr, pattern", [
+    ("f'{1:>1000000000}'", "at most 3 digits"),
+    ("(lambda: 1)()", "lambda"),
+    ("(x := 1)", "':='"),
+    ("[*range(3)]", "unpacking"),
+    ("abs(*[1])", "'\\*' and '\\*\\*' arguments"),
+    ("range.__mro__", "names starting with '_'"),
+    ("str.upper('a')", "attribute 'upper' of a type is not allowed"),
+    ("'a'.zfill(10**9)", "attribute 'zfill' of a str"),
+    ("undefined_name", "name 'undefined_name' is not defined"),
+    ("1 +", "invalid expression"),
+    ("(" * 500 + "1" + ")" * 500, "nested too deeply|invalid expression"),
+])
+def test_evaluator_refusals(expr, pattern):
+    with pytest.raises(safe_expr.ExpressionError, match=pattern):
+        _evaluator().evaluate(expr, {"range": range, "str": str, "abs": abs}.__getitem__)
+
+
+def test_evaluator_refuses_handing_out_callables():
+    import math
+
+    ns = {"vars": vars, "type": type, "sqrt": math.sqrt}
+    ev = safe_expr.Evaluator([(math.sqrt, math.sqrt), (dict, dict), (list, list)])
+    lookup = {"ns": ns, "dict": dict, "list": list, "sqrt": math.sqrt}.__getitem__
+    assert ev.evaluate("sqrt(4)", lookup) == 2
+    for expr in ("ns['vars']", "list(ns.values())", "dict(ns)", "ns.get('type')", "[v for v in ns.values()]"):
+        with pytest.raises(safe_expr.ExpressionError, match="may not use"):
+            ev.evaluate(expr, lookup)

@@ -850,11 +850,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--allow-infeasible-inertia", action="store_true", help=argparse.SUPPRESS)
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
-        s.add_argument("--xacro-arg", action="append", dest="xacro_args", metavar="NAME:=VALUE",
-                       help="an argument of a .xacro model (repeatable)")
-        s.add_argument("--package-path", action="append", metavar="DIR",
-                       help="a folder of ROS packages for a .xacro model's $(find PKG) and package:// (repeatable; "
-                            "then BASEPARAMS_PACKAGE_PATH and ROS_PACKAGE_PATH, os.pathsep-separated)")
+        _xacro_args(s)
         _samples_args(s)
         s.add_argument("--seed", type=int, default=0, help="random seed")
         s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -907,6 +903,15 @@ MODEL_HELP = {
 
 #: the subcommands whose ``--samples`` was renamed ``--analysis-samples`` (it reads as log samples there)
 RENAMED_SAMPLES = ("identify", "predict", "simulate", "excite")
+
+
+def _xacro_args(s) -> None:
+    """``--xacro-arg`` and ``--package-path``: a .xacro model's arguments and ROS packages."""
+    s.add_argument("--xacro-arg", action="append", dest="xacro_args", metavar="NAME:=VALUE",
+                   help="an argument of a .xacro model (repeatable)")
+    s.add_argument("--package-path", action="append", metavar="DIR",
+                   help="a folder of ROS packages for a .xacro model's $(find PKG) and package:// (repeatable; "
+                        "then BASEPARAMS_PACKAGE_PATH and ROS_PACKAGE_PATH, os.pathsep-separated)")
 
 
 def _samples_args(s) -> None:

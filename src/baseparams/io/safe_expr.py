@@ -37,6 +37,8 @@ MAX_SECONDS = 30.0
 MAX_INT_BITS = 10_000
 #: the longest ``range`` (elements)
 MAX_RANGE = 10**6
+#: what one element of a container counts against :data:`MAX_CHARS` (a pointer's bytes)
+ITEM_CHARS = 8
 
 _BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
            ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod, ast.Pow: operator.pow,
@@ -144,8 +146,9 @@ class Budget:
             if value.bit_length() > MAX_INT_BITS:
                 raise ExpressionError(f"an integer of more than {MAX_INT_BITS} bits")
         elif isinstance(value, str | bytes | list | tuple | dict | set | frozenset):
-            self.room(len(value))
-            self.chars += len(value)
+            n = len(value) * (1 if isinstance(value, str | bytes) else ITEM_CHARS)
+            self.room(n)
+            self.chars += n
         return value
 
 
@@ -320,9 +323,9 @@ class Evaluator:
 
         if op is ast.Mult and (isinstance(a, seq) and ints(b) or isinstance(b, seq) and ints(a)):
             s, n = (a, b) if isinstance(a, seq) else (b, a)
-            self.budget.room(len(s) * max(n, 0), "a repetition")
+            self.budget.room(len(s) * max(n, 0) * (1 if isinstance(s, str | bytes) else ITEM_CHARS), "a repetition")
         elif op is ast.Add and isinstance(a, seq) and isinstance(b, seq):
-            self.budget.room(len(a) + len(b), "a concatenation")
+            self.budget.room((len(a) + len(b)) * (1 if isinstance(a, str | bytes) else ITEM_CHARS), "a concatenation")
         elif op is ast.Mult and ints(a, b) and a.bit_length() + b.bit_length() > MAX_INT_BITS:
             raise ExpressionError(f"a product of more than {MAX_INT_BITS} bits")
         elif op is ast.Pow and ints(a, b) and abs(a) > 1 and b > 0 and a.bit_length() * b > MAX_INT_BITS + b:
@@ -366,7 +369,7 @@ class Evaluator:
         args = [self._guard(self._eval(a, scope)) for a in node.args]
         kwargs = {k.arg: self._guard(self._eval(k.value, scope)) for k in node.keywords}
         if isinstance(f, _Method):
-            return self.budget.charge(self._method(f, args, kwargs))
+            return self._contents_allowed(self.budget.charge(self._method(f, args, kwargs)))  # ns.get('vars')
         return self._invoke(f, args, kwargs)
 
     def _invoke(self, f, args, kwargs):
@@ -377,7 +380,26 @@ class Evaluator:
         self.budget.step()
         if called in (str, repr, ascii) and args:
             self.budget.room(text_size(args[0], self.budget), f"{called.__name__}()")
-        return self.budget.charge(self._allowed(called(*args, **kwargs), "a call's result"))
+        return self._contents_allowed(self.budget.charge(called(*args, **kwargs)))
+
+    def _contents_allowed(self, value):
+        """A call's result with its elements checked: ``dict(ns)`` or ``ns.values()`` must not hand out a callable.
+
+        Containers built by expressions were checked element by element when built; a call can copy
+        a namespace's values (xacro's ``python`` namespace holds ``vars`` and ``type``).
+        """
+        value = self._allowed(value, "a call's result")
+        if isinstance(value, dict):
+            items = list(value.values())
+        elif isinstance(value, list | tuple | set | frozenset | type({}.values()) | type({}.items())):
+            items = list(value)
+        else:
+            return value
+        self.budget.step(len(items))
+        for v in items:
+            for x in (v if isinstance(v, tuple) else (v,)):
+                self._allowed(x, "an element of a call's result")
+        return value
 
     def _guard(self, value):
         """A callable passed as an argument (``sorted(v, key=float)``) is called through :meth:`_invoke`."""
@@ -445,8 +467,8 @@ class Evaluator:
                 out.append((self._eval(node.key, inner), self._eval(node.value, inner)))
             else:
                 out.append(self._eval(node.elt, inner))
-            self.budget.room(1, "a comprehension")
-            self.budget.chars += 1
+            self.budget.room(ITEM_CHARS, "a comprehension")
+            self.budget.chars += ITEM_CHARS
         if isinstance(node, ast.DictComp):
             return dict(out)
         return set(out) if isinstance(node, ast.SetComp) else out

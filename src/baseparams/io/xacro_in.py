@@ -177,6 +177,12 @@ def find_package(name: str, dirs: list[Path]) -> Path | None:
     return None
 
 
+def _tokenize(s, sep=",; ", skip_empty=True):
+    """``xacro.tokenize`` with the separators escaped (xacro puts them into a regular expression)."""
+    parts = re.split(f"[{re.escape(str(sep))}]", str(s))
+    return [p for p in parts if p] if skip_empty else parts
+
+
 def _package_root(path: Path) -> tuple[Path, str | None]:
     """``(folder, name)`` of the ROS package holding ``path`` (a ``package.xml`` up to 3 levels above).
 
@@ -215,7 +221,7 @@ class _Session:
             called = repl.get(name, py.get(name))
             pairs += [(obj, called) for obj in (py.get(name), gs.get(name)) if obj is not None]
         pairs += [(math_ns[n], math_ns[n]) for n in _MATH if n in math_ns]
-        for name, called in (("arg", xns["arg"]), ("fatal", xns["fatal"]), ("tokenize", xns["tokenize"]),
+        for name, called in (("arg", xns["arg"]), ("fatal", xns["fatal"]), ("tokenize", _tokenize),
                              ("dotify", x.YamlDictWrapper), ("abs_filename", self.abs_filename),
                              ("load_yaml", self.load_yaml), ("message", self.say), ("warning", self.say),
                              ("error", self.say), ("print_location", self.say)):
@@ -284,6 +290,19 @@ class _Session:
         except yaml.YAMLError as exc:
             raise self.xacro.XacroException(f"{name}: invalid YAML ({' '.join(str(exc).split())})") from None
         return self.xacro.YamlListWrapper.wrap(data)
+
+    def glob(self, pattern: str) -> list[str]:
+        """``glob.glob`` for xacro's wildcard includes: only inside the allowed folders, no ``..`` after a wildcard."""
+        import glob as _glob
+
+        head = re.split(r"[*?\[]", pattern, maxsplit=1)[0]
+        if ".." in pattern[len(head):].replace("\\", "/").split("/") or not self.allowed(os.path.dirname(head) or "."):
+            raise self.xacro.XacroException(f"{pattern}: a wildcard include outside the model's folder and the "
+                                            f"package path")
+        found = sorted(_glob.glob(pattern))
+        if len(found) > MAX_INCLUDES:
+            raise self.xacro.XacroException(f"{pattern}: more than {MAX_INCLUDES} files")
+        return found
 
     # ---- substitutions and expressions ----------------------------------------------------------
     def say(self, *args, **kwargs) -> str:
@@ -379,7 +398,7 @@ class _Session:
     def patched(self):
         """Replace xacro's evaluation, file reading and messages by this session's, then restore them."""
         x = self.xacro
-        new = {"safe_eval": self.safe_eval, "eval_extension": self.extension, "parse": self.parse,
+        new = {"safe_eval": self.safe_eval, "eval_extension": self.extension, "parse": self.parse, "glob": self,
                "abs_filename_spec": self.abs_filename, "eval_text": self.eval_text, "eval_all": self.eval_all,
                "warning": self.say, "message": lambda *a, **k: None, "error": self.say,
                "print_location": lambda *a, **k: None}
@@ -480,7 +499,7 @@ _EVALUATING = re.compile(r"\s*when evaluating expression '(.*?)'(?=\s*when evalu
 
 
 def _short(raw: str) -> str:
-    """xacro's message on one line: the innermost expression named once, shortened to 100 characters."""
+    """Xacro's message on one line: the innermost expression named once, shortened to 100 characters."""
     exprs = _EVALUATING.findall(raw)
     text = " ".join(_EVALUATING.sub("", raw).split())
     if exprs:

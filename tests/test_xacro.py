@@ -501,3 +501,55 @@ def test_evaluator_refuses_handing_out_callables():
     for expr in ("ns['vars']", "list(ns.values())", "dict(ns)", "ns.get('type')", "[v for v in ns.values()]"):
         with pytest.raises(safe_expr.ExpressionError, match="may not use"):
             ev.evaluate(expr, lookup)
+
+
+FEATURES = """
+<xacro:arg name="side" default="left"/>
+<xacro:arg name="n" default="3"/>
+<xacro:property name="cfg" value="${xacro.load_yaml('cfg.yaml')}"/>
+<xacro:property name="sizes" value="${[0.1 * (i + 1) for i in python.range(int(xacro.arg('n')))]}"/>
+<xacro:property name="table" value="${dict(a=1, b=2)}"/>
+<xacro:include filename="parts.xacro" ns="parts"/>
+<xacro:macro name="box" params="name *origin **extra size:=${sizes[0]} mass:=^|1.5">
+  <link name="${name}">
+    <inertial><xacro:insert_block name="origin"/><mass value="${mass}"/>
+      <inertia ixx="${mass * size**2 / 6}" ixy="0" ixz="0" iyy="${mass * size**2 / 6}" iyz="0" izz="${mass * size**2 / 6}"/>
+    </inertial>
+    <xacro:insert_block name="extra"/>
+  </link>
+  <xacro:property name="last" value="${name}" scope="parent"/>
+</xacro:macro>
+<link name="base"/>
+<xacro:property name="mass" value="2.5"/>
+<xacro:box name="$(arg side)_a"><origin xyz="0 0 ${cfg.offset}"/><visual><geometry><box size="1 1 1"/></geometry></visual>
+</xacro:box>
+<xacro:box name="b_${last}" size="${max(sizes)}"><origin xyz="${' '.join(str(v) for v in cfg['xyz'])}"/><x/></xacro:box>
+<xacro:parts.hinge name="j1" parent="base" child="$(arg side)_a"/>
+<xacro:parts.hinge name="j2" parent="$(arg side)_a" child="b_$(arg side)_a"/>
+<xacro:if value="$(eval side == 'left' and n > 2)"><xacro:element xacro:name="gazebo" reference="${last}"/></xacro:if>
+<xacro:unless value="${table['a'] == 1}"><link name="never"/></xacro:unless>
+<joint name="extra" type="fixed"><xacro:attribute name="note" value="${'%.3f' % radians(cfg.angle)}"/>
+  <parent link="base"/><child link="tool${len(sizes)}"/></joint>
+<link name="tool${len(sizes)}"/>
+"""
+
+
+def test_feature_rich_file_expands_as_stock_xacro(tmp_path, monkeypatch):
+    import xacro
+
+    (tmp_path / "cfg.yaml").write_text("offset: 0.25\nxyz: [0.1, 0, -0.2]\nangle: !degrees 30\n")
+    (tmp_path / "parts.xacro").write_text(
+        f'<robot {NS}><xacro:macro name="hinge" params="name parent child">'
+        '<joint name="${name}" type="revolute"><parent link="${parent}"/><child link="${child}"/>'
+        '<axis xyz="0 1 0"/><limit lower="${-pi/2}" upper="${pi/2}" effort="1" velocity="1"/></joint>'
+        "</xacro:macro></robot>")
+    p = _xacro(tmp_path, FEATURES)
+    for args in ({}, {"side": "right", "n": "4"}):
+        monkeypatch.chdir(tmp_path)
+        stock = ET.fromstring(xacro.process(str(p), mappings=dict(args)))
+        ours = ET.fromstring(expand_xacro(p, args)[0])
+        assert [(e.tag, sorted(e.attrib.items())) for e in ours.iter()] == \
+               [(e.tag, sorted(e.attrib.items())) for e in stock.iter()]
+        assert len(list(ours.iter())) > 20
+    robot = bp.load(p, xacro_args={"n": "4"})
+    assert robot.names == ("left_a", "b_left_a") and robot.dof == 2

@@ -317,6 +317,19 @@ def test_yaml_is_safe_and_confined(tmp_path):
     assert not (tmp_path / "pwned").exists()
 
 
+def test_yaml_aliases_bounded(tmp_path):
+    (tmp_path / "loop.yaml").write_text("a: &x [1, *x]\n")
+    laughs = "l0: &l0 [" + ", ".join(["lol"] * 10) + "]\n"
+    laughs += "".join(f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 10) + "]\n" for i in range(1, 9))
+    (tmp_path / "laughs.yaml").write_text(laughs)
+    for f, pattern in (("loop.yaml", "nested too deeply"), ("laughs.yaml", "more than .* (steps|characters)")):
+        p = _xacro(tmp_path, f'<link name="${{xacro.load_yaml(\'{f}\')}}"/>')
+        t0 = time.perf_counter()
+        with pytest.raises(ModelError, match=pattern):
+            expand_xacro(p)
+        assert time.perf_counter() - t0 < 15
+
+
 @pytest.mark.parametrize("expr, pattern", [
     ("${'a' * 10**12}", "a repetition would produce more than"),
     ("${[0] * 10**12}", "a repetition would produce more than"),

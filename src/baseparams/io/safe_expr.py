@@ -241,10 +241,10 @@ class Evaluator:
             raise ExpressionError("expression nested too deeply") from None
         try:
             value = self._eval(tree.body, _Scope(lookup))
+            if not isinstance(value, str | int | float | bool) and value is not None:
+                self.budget.room(text_size(value, self.budget), "the text of a value")
         except RecursionError:
-            raise ExpressionError("expression nested too deeply") from None
-        if not isinstance(value, str | int | float | bool) and value is not None:
-            self.budget.room(text_size(value, self.budget), "the text of a value")
+            raise ExpressionError("expression or value nested too deeply") from None
         return value
 
     # ---- dispatch -------------------------------------------------------------------------------

@@ -526,7 +526,8 @@ FEATURES = """
 <xacro:macro name="box" params="name *origin **extra size:=${sizes[0]} mass:=^|1.5">
   <link name="${name}">
     <inertial><xacro:insert_block name="origin"/><mass value="${mass}"/>
-      <inertia ixx="${mass * size**2 / 6}" ixy="0" ixz="0" iyy="${mass * size**2 / 6}" iyz="0" izz="${mass * size**2 / 6}"/>
+      <inertia ixx="${mass * size**2 / 6}" ixy="0" ixz="0" iyy="${mass * size**2 / 6}" iyz="0"
+               izz="${mass * size**2 / 6}"/>
     </inertial>
     <xacro:insert_block name="extra"/>
   </link>
@@ -534,8 +535,8 @@ FEATURES = """
 </xacro:macro>
 <link name="base"/>
 <xacro:property name="mass" value="2.5"/>
-<xacro:box name="$(arg side)_a"><origin xyz="0 0 ${cfg.offset}"/><visual><geometry><box size="1 1 1"/></geometry></visual>
-</xacro:box>
+<xacro:box name="$(arg side)_a"><origin xyz="0 0 ${cfg.offset}"/>
+  <visual><geometry><box size="1 1 1"/></geometry></visual></xacro:box>
 <xacro:box name="b_${last}" size="${max(sizes)}"><origin xyz="${' '.join(str(v) for v in cfg['xyz'])}"/><x/></xacro:box>
 <xacro:parts.hinge name="j1" parent="base" child="$(arg side)_a"/>
 <xacro:parts.hinge name="j2" parent="$(arg side)_a" child="b_$(arg side)_a"/>

@@ -67,22 +67,6 @@ def _xacro():
     return xacro
 
 
-def is_xacro(path) -> bool:
-    """Whether ``path`` names a xacro file (suffix ``.xacro``, case-insensitive).
-
-    Parameters
-    ----------
-    path : str or path
-        A model file's path.
-
-    Returns
-    -------
-    bool
-        True for ``robot.xacro``, ``robot.urdf.xacro``.
-    """
-    return Path(path).suffix.lower() == ".xacro"
-
-
 def parse_xacro_args(items) -> dict[str, str]:
     """Xacro arguments from ``NAME:=VALUE`` strings (or a mapping, returned as strings).
 

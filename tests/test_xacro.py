@@ -489,6 +489,8 @@ def test_evaluator_random_arithmetic_agrees_with_python():
 @pytest.mark.parametrize("expr, pattern", [
     ("f'{1:>1000000000}'", "at most 3 digits"),
     ("(lambda: 1)()", "lambda"),
+    ("b'%1000000000d' % 1", "width or precision of more than 3 digits"),
+    ("'%*d' % (10**9, 1)", "width or precision of more than 3 digits"),
     ("(x := 1)", "':='"),
     ("[*range(3)]", "unpacking"),
     ("abs(*[1])", "'\\*' and '\\*\\*' arguments"),

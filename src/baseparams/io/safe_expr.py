@@ -332,8 +332,8 @@ class Evaluator:
             raise ExpressionError(f"a power of more than {MAX_INT_BITS} bits")
         elif op is ast.LShift and ints(a, b) and a and b > 0 and a.bit_length() + b > MAX_INT_BITS:
             raise ExpressionError(f"a shift to more than {MAX_INT_BITS} bits")
-        elif op is ast.Mod and isinstance(a, str):
-            for width, prec in _PERCENT.findall(a):
+        elif op is ast.Mod and isinstance(a, str | bytes):
+            for width, prec in _PERCENT.findall(a if isinstance(a, str) else a.decode("latin-1")):
                 if "*" in (width, prec) or len(width) > 3 or len(prec) > 3:
                     raise ExpressionError("a '%' format with a width or precision of more than 3 digits")
             self.budget.room(len(a) + text_size(b, self.budget), "a '%' format")

@@ -111,7 +111,8 @@ class ModelWarning(UserWarning):
     """
 
 
-def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False) -> Robot:
+def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False,
+         xacro_args=None, package_path=None) -> Robot:
     """A robot from a built-in name or a file.
 
     Parameters
@@ -119,7 +120,8 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     model : str or path
         A built-in name (``baseparams.robots.BUILTINS``: ``puma560``, ``go2``,
         ``four-bar``, ...) or a file: URDF / URDF+ (``.urdf``, loop joints and couplings
-        included) or MJCF (``.xml``, ``.mjcf``, read through MuJoCo).
+        included), a ROS xacro file (``.xacro``, e.g. ``robot.urdf.xacro``: expanded safely
+        first, extra ``baseparams[xacro]``) or MJCF (``.xml``, ``.mjcf``, read through MuJoCo).
     floating : bool
         Attach the file's root link to the world by a floating (free) joint (files only).
     gravity : array_like, shape ``(3,)``, optional
@@ -127,6 +129,11 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     strict_inertia : bool
         Refuse physically infeasible inertias of moving links (:class:`ModelError`) instead of
         warning.
+    xacro_args : mapping or iterable of str, optional
+        A xacro file's arguments: ``{"NAME": "VALUE"}`` or ``["NAME:=VALUE", ...]``.
+    package_path : str, path or list of them, optional
+        Folders where a xacro file's ``$(find PKG)`` and ``package://PKG`` are looked up, before
+        the ``BASEPARAMS_PACKAGE_PATH`` and ``ROS_PACKAGE_PATH`` variables.
 
     Returns
     -------
@@ -156,7 +163,8 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     """
     from .loading import load_model
 
-    robot, notes = load_model(_os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia)
+    robot, notes = load_model(_os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia,
+                              xacro_args=xacro_args, package_path=package_path)
     for note in notes:
         _warnings.warn(note, ModelWarning, stacklevel=2)
     return robot

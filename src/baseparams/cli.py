@@ -116,7 +116,9 @@ def _robot(args) -> Robot:  # noqa: F821
     if _is_symbolic(args.model):  # a DH table with symbols: analysed numerically at its values
         return _symbolic_robot(args)
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
-                              strict_inertia=getattr(args, "strict_inertia", False))
+                              strict_inertia=getattr(args, "strict_inertia", False),
+                              xacro_args=getattr(args, "xacro_args", None),
+                              package_path=getattr(args, "package_path", None))
     for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
     hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""
@@ -860,6 +862,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--allow-infeasible-inertia", action="store_true", help=argparse.SUPPRESS)
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
+        _xacro_args(s)
         _samples_args(s)
         s.add_argument("--seed", type=int, default=0, help="random seed")
         s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -898,7 +901,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: each subcommand's help for its MODEL argument
-_MODEL_FILES = "built-in robot name (see 'baseparams robots') or a robot file: URDF / URDF+ (.urdf) or MJCF (.xml)"
+_MODEL_FILES = ("built-in robot name (see 'baseparams robots') or a robot file: URDF / URDF+ (.urdf), ROS xacro "
+                "(.xacro) or MJCF (.xml)")
 MODEL_HELP = {
     "analyze": f"{_MODEL_FILES}, or a DH table (.dh, '*-symbolic'); a glob pattern ('models/*.urdf') runs a sweep "
                "over many files on Dask",
@@ -911,6 +915,15 @@ MODEL_HELP = {
 
 #: the subcommands whose ``--samples`` was renamed ``--analysis-samples`` (it reads as log samples there)
 RENAMED_SAMPLES = ("identify", "predict", "simulate", "excite")
+
+
+def _xacro_args(s) -> None:
+    """``--xacro-arg`` and ``--package-path``: a .xacro model's arguments and ROS packages."""
+    s.add_argument("--xacro-arg", action="append", dest="xacro_args", metavar="NAME:=VALUE",
+                   help="an argument of a .xacro model (repeatable)")
+    s.add_argument("--package-path", action="append", metavar="DIR",
+                   help="a folder of ROS packages for a .xacro model's $(find PKG) and package:// (repeatable; "
+                        "then BASEPARAMS_PACKAGE_PATH and ROS_PACKAGE_PATH, os.pathsep-separated)")
 
 
 def _samples_args(s) -> None:
@@ -1112,7 +1125,7 @@ def _excite_parser(sub, model_args) -> None:
 
 #: the optional modules a flag needs, and the extra that installs each
 EXTRAS = {"matplotlib": "plot", "cvxpy": "ident", "clarabel": "ident", "pyarrow": "parquet", "rosbags": "ros",
-          "dask": "fleet", "distributed": "fleet", "sympy": "symbolic"}
+          "dask": "fleet", "distributed": "fleet", "sympy": "symbolic", "xacro": "xacro"}
 #: the figure formats ``--plot`` writes (matplotlib's, by suffix)
 PLOT_SUFFIXES = (".png", ".svg", ".svgz", ".pdf", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff", ".webp", ".pgf")
 
@@ -1175,6 +1188,8 @@ def _check_extras(args) -> None:
     model = getattr(args, "model", None)
     if model and _is_symbolic(model) or getattr(args, "symbolic", False):
         _need("sympy", "a symbolic robot (DH table)")
+    if model and Path(model).suffix.lower() == ".xacro":
+        _need("xacro", f"{model}: a xacro model")
     if cmd == "analyze" and model and any(ch in model for ch in "*?["):
         _need("distributed", "a sweep over files (a glob MODEL)")
     if cmd != "identify":

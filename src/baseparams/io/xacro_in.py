@@ -430,7 +430,12 @@ def expand_xacro(path, args=None, package_path=None) -> tuple[bytes, list[str]]:
     """
     x = _xacro()
     p = check_input(path, MODEL_MAX_BYTES, error=ModelError)
-    sess = _Session(x, p, parse_xacro_args(args), package_dirs(package_path))
+    try:  # the safe session replaces parts of xacro's module (written against xacro 2.1)
+        sess = _Session(x, p, parse_xacro_args(args), package_dirs(package_path))
+    except (AttributeError, KeyError, TypeError) as exc:
+        raise BaseparamsError(f"xacro {getattr(x, '__version__', '(unknown version)')} is not supported: its "
+                              f"internals differ ({type(exc).__name__}: {exc}); "
+                              "pip install 'xacro>=2.1,<2.2'") from None
     with _LOCK, sess.patched():
         try:
             x.init_stacks(str(p))

@@ -1,0 +1,437 @@
+"""R-M: the nullspace directions that linear joint couplings (``<mimic>``) add.
+
+A coupling ``q_f = m q_l + o`` makes the bodies it drives move as functions of one coordinate.
+Group the 1-dof joints driven by the same independent coordinate ``q_l`` (chains of mimics
+composed); a **coupled group** is a set of bodies ``G`` whose joints all belong to that group,
+hanging from one **anchor** body ``A`` (the first body up the tree whose joint does not), so that
+body ``k`` of ``G`` moves by
+
+    g_k(t) = g_A(t) h_k(q_l(t)),        h_k(q) = prod_j exp(S_j (m_j q + o_j))
+
+(the product over the joints from ``A`` to ``k``, world screws ``S_j`` at the reference). The
+extended rules' one criterion (``docs/extended-rules.md``) then reads, for changes ``dN_A`` and
+``dN_k`` of their pseudo-inertias: the kinetic term
+
+    2 T = K(V, V; dN_A) + sum_k K(xi_k, xi_k; dN_k),   xi_k = Ad(h_k^-1) V + (h_k^-1 h_k') qdot_l,
+
+(``K(a, b; N) = tr(a^ N b^T)`` over the top three rows, ``V`` the anchor's body twist) vanishes for
+every ``V`` in the anchor's twist span and every ``qdot_l``, and the potential term's vector
+``dN_A e4 + sum_k h_k(q) dN_k e4`` is zero, for every ``q``. Treating ``V`` and ``qdot_l`` as
+independent only makes the conditions stronger, so every solution is a nullspace direction.
+
+Each condition is a trigonometric polynomial in the one variable ``q`` (frequencies
+``sum_j m_j s_j``, ``|s_j| <= 2``, over the group's R joints; polynomial degree up to twice the
+number of P joints on a path), so it holds identically exactly when it holds on a set of angles on
+which those functions are linearly independent (unisolvent: the collocation matrix has full column
+rank, which is checked). The conditions are then a finite linear system per group, solved
+exactly (SVD); its solutions supported on at most three bodies of ``G ∪ {A}`` are emitted as
+columns (``Source.R_M``). Cost: one small system per group, linear in the number of groups.
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import numpy as np
+
+from ..enums import Source
+from ..model.inertia import HAT_INDEX
+from ..model.robot import Robot
+from ..pga.core import hat, screw_exp
+from .columns import Columns
+
+RM = Source.R_M
+
+#: largest number of frequency combinations a group's conditions may have; beyond it the group
+#: is skipped (fewer directions found, never a wrong one)
+MAX_FREQUENCIES = 4096
+
+
+def coupled_coordinates(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each coordinate as a function of its leader: ``q[j] = ratio[j] q[lead[j]] + offset[j]``.
+
+    Chains of couplings are composed. Coordinates driven by several coordinates (a coupling with
+    :attr:`~baseparams.model.robot.Coupling.more` terms) get ``lead = -1``, as do the ones they
+    drive, and coordinates of multi-dof joints.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates, :attr:`~baseparams.model.robot.Robot.couplings`).
+
+    Returns
+    -------
+    lead : ndarray of int, shape ``(dof,)``
+        The driving coordinate (``j`` itself for an independent coordinate; ``-1``: not grouped).
+    ratio : ndarray, shape ``(dof,)``
+        Multiplier (dimensionless for R-R or P-P, rad/m or m/rad otherwise).
+    offset : ndarray, shape ``(dof,)``
+        Constant term (rad or m).
+    """
+    dof = robot.dof
+    drive = {c.succ: c for c in robot.couplings}
+    lead, ratio, offset = np.arange(dof), np.ones(dof), np.zeros(dof)
+    one = np.ones(dof, dtype=bool)
+    one[robot.q_index[robot.ndofs != 1]] = False  # coordinates of multi-dof joints
+    for j in range(dof):
+        k, r, o, seen = j, 1.0, 0.0, {j}
+        while k in drive and lead[j] >= 0:
+            c = drive[k]
+            if c.more or c.pred in seen or not one[c.pred]:
+                lead[j] = -1
+                break
+            r, o, k = r * c.ratio, o + r * c.offset, c.pred
+            seen.add(k)
+        if lead[j] >= 0:
+            lead[j], ratio[j], offset[j] = k, r, o
+        if not one[j]:
+            lead[j] = -1
+    return lead, ratio, offset
+
+
+def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
+    """The coupled groups: ``(anchor, bodies)`` with the bodies base-first.
+
+    A body belongs to the group of its 1-dof joint's leading coordinate when that coordinate
+    drives at least one other joint; the anchor is the first body up the tree outside the group
+    (``-1``: the world).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+
+    Returns
+    -------
+    list of (int, list of int)
+        Anchor body and the group's bodies (increasing indices, so parents first).
+    """
+    if not robot.couplings:
+        return []
+    lead, _, _ = coupled_coordinates(robot)
+    qi = robot.q_index
+    driven = np.bincount(lead[lead >= 0], minlength=robot.dof)
+    key = {}
+    for i in range(robot.n):
+        if robot.ndofs[i] == 1 and lead[qi[i]] >= 0 and driven[lead[qi[i]]] > 1:
+            key[i] = int(lead[qi[i]])
+    groups: dict[tuple[int, int], list[int]] = {}
+    anchor = {}
+    for i in sorted(key):
+        p = int(robot.parent[i])
+        anchor[i] = anchor[p] if p in key and key[p] == key[i] else p
+        groups.setdefault((key[i], anchor[i]), []).append(i)
+    return [(a, bodies) for (_, a), bodies in groups.items()]
+
+
+def twist_span(robot: Robot, body: int, tol: float = 1e-9) -> np.ndarray:
+    """Orthonormal basis ``(r, 6)`` of the body twists ``g^-1 dg`` a body takes, over all motions.
+
+    The body Jacobian's column of joint ``j`` is ``Ad((e^{S_{j+1} q} ... e^{S_p q})^-1) S_j``;
+    over all ``q`` it spans the closure of ``S_j`` under ``ad`` of the later screws on the path.
+    Coupled coordinates are treated as independent (a larger span: stronger conditions).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    body : int
+        The body (``-1``: the world, no motion).
+    tol : float, default 1e-9
+        Rank threshold.
+
+    Returns
+    -------
+    ndarray, shape ``(r, 6)``
+        Twists ``(omega, v)`` in world coordinates at the reference, orthonormal rows.
+    """
+    path = []
+    while body >= 0:
+        path.append(body)
+        body = int(robot.parent[body])
+    dofs = np.flatnonzero(np.isin(robot.dof_body, path))  # base-first along the path
+    s = robot.screws
+    parts = [_closure(s[j][None], s[dofs[k + 1:]], tol) for k, j in enumerate(dofs)]
+    return _orth(np.vstack([np.zeros((0, 6)), *parts]), tol)
+
+
+def _ad(s: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``ad_s x`` of twists ``(omega, v)``: ``(6,), (m, 6) -> (m, 6)``."""
+    w, v = s[:3], s[3:]
+    return np.hstack([np.cross(w, x[:, :3]), np.cross(w, x[:, 3:]) + np.cross(v, x[:, :3])])
+
+
+def _closure(span: np.ndarray, gens: np.ndarray, tol: float) -> np.ndarray:
+    """Orthonormal basis of the smallest ``ad_{gens}``-invariant subspace containing ``span``."""
+    basis = _orth(span, tol)
+    while True:
+        grown = _orth(np.vstack([basis] + [_ad(s, basis) for s in gens]), tol)
+        if len(grown) == len(basis):
+            return grown
+        basis = grown
+
+
+def _orth(a: np.ndarray, tol: float) -> np.ndarray:
+    if len(a) == 0:
+        return np.zeros((0, a.shape[1]))
+    _, s, vt = np.linalg.svd(a, full_matrices=False)
+    return vt[: int(np.sum(s > tol * max(1.0, s[0])))]
+
+
+def _frequencies(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float) -> tuple[np.ndarray, int] | None:
+    """Frequencies ``(F,) >= 0`` and polynomial degree of every condition of a group (None: too many).
+
+    Body ``k``'s conditions are products of at most four factors ``h_k``, ``h_k^-1`` or ``h_k'``:
+    frequencies ``sum_j f_j s_j`` (``|s_j| <= 2``, ``f_j = |omega_j| m_j`` over the R or helical
+    joints of its path), degree up to twice its path's P or helical joints.
+    """
+    qi, grp = robot.q_index, set(bodies)
+    freqs, deg = {0.0}, 0
+    path_f: dict[int, set] = {}
+    path_d: dict[int, int] = {}
+    for k in bodies:
+        s = robot.screws[qi[k]]
+        w = float(np.linalg.norm(s[:3]))
+        p = int(robot.parent[k])
+        fs, d = (path_f[p], path_d[p]) if p in grp else ({0.0}, 0)
+        if w > tol:
+            f = w * abs(float(ratio[qi[k]]))
+            fs = {round(abs(a + t * f), 9) for a in fs for t in (-2, -1, 0, 1, 2)}
+        if w <= tol or abs(float(s[:3] @ s[3:])) > tol * max(1.0, float(np.linalg.norm(s[3:]))):
+            d += 2
+        if len(fs) > MAX_FREQUENCIES:
+            return None
+        path_f[k], path_d[k] = fs, d
+        freqs |= fs
+        deg = max(deg, d)
+    return np.array(sorted(freqs)), deg
+
+
+def unisolvent_angles(freqs: np.ndarray, deg: int, tol: float = 1e-9) -> np.ndarray | None:
+    """Values of the leading coordinate on which the conditions' functions are independent.
+
+    The functions ``q^a cos(f q)``, ``q^a sin(f q)`` (``a <= deg``, ``f`` in ``freqs``; only the
+    cosines for ``f = 0``): a trigonometric polynomial of them vanishing at the returned values
+    vanishes identically, because the collocation matrix has full column rank (checked).
+
+    Parameters
+    ----------
+    freqs : ndarray, shape ``(F,)``
+        Distinct frequencies ``>= 0`` (rad per unit of the coordinate).
+    deg : int
+        Largest polynomial degree.
+    tol : float, default 1e-9
+        Relative singular-value threshold of the rank check.
+
+    Returns
+    -------
+    ndarray, shape ``(M,)`` or None
+        The values (rad or m), or None when no tried set is unisolvent.
+    """
+    nb = (deg + 1) * (2 * len(freqs) - int(freqs[0] == 0))
+    for m in (nb + 4, 2 * nb + 8, 4 * nb + 16):
+        q = np.pi * (2 * ((np.arange(m) * 0.6180339887498949 + 0.1234) % 1.0) - 1)
+        cols = [q**a * f(w * q) for a in range(deg + 1) for w in freqs for f in (np.cos, np.sin) if w or f is np.cos]
+        c = np.array(cols).T
+        c /= np.linalg.norm(c, axis=0)
+        s = np.linalg.svd(c, compute_uv=False)
+        if s[-1] > tol * s[0] and len(s) == nb:
+            return q
+    return None
+
+
+def _motions(robot: Robot, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
+             q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``h_k(q)`` and ``dh_k/dq`` of the group's bodies relative to the anchor: ``(M, G, 4, 4)`` each."""
+    from ..pga.core import se3_exp
+
+    qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
+    h = np.zeros((len(q), len(bodies), 4, 4))
+    dh = np.zeros_like(h)
+    for i, k in enumerate(bodies):
+        s, r = robot.screws[qi[k]], float(ratio[qi[k]])
+        e = se3_exp((r * q + float(offset[qi[k]]))[:, None] * s)  # (M, 4, 4)
+        es = e @ hat(s) * r
+        p = pos.get(int(robot.parent[k]))
+        if p is None:
+            h[:, i], dh[:, i] = e, es
+        else:
+            h[:, i], dh[:, i] = h[:, p] @ e, dh[:, p] @ e + h[:, p] @ es
+    return h, dh
+
+
+def _functional(c: np.ndarray) -> np.ndarray:
+    """Coefficients ``(*, 10)`` of ``dN -> tr(dN c)`` on the ``hat`` entries of a symmetric ``dN``: ``(*, 4, 4)``."""
+    s = c + np.swapaxes(c, -1, -2)
+    out = np.stack([s[..., i, j] for i, j in HAT_INDEX], axis=-1)
+    out[..., [0, 3, 5, 9]] *= 0.5
+    return out
+
+
+def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
+                 q: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """The criterion's conditions on a coupled group: ``(rows, 10 (G + 1))`` (anchor block first).
+
+    Rows: the kinetic form's entries ``K(a, b)`` for ``a <= b`` among ``qdot_l`` and a basis of
+    the anchor's twist span (:func:`twist_span`), at every value of ``q``; then, with gravity,
+    the potential vector ``dN_A e4 + sum_k h_k(q) dN_k e4`` at every value. Each row is
+    normalised (zero rows dropped).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    anchor : int
+        The group's anchor (``-1``: the world, whose block the caller drops).
+    bodies : list of int
+        The group's bodies, parents first.
+    ratio, offset : ndarray, shape ``(dof,)``
+        From :func:`coupled_coordinates`.
+    q : ndarray, shape ``(M,)``
+        Values of the leading coordinate (:func:`unisolvent_angles`).
+    tol : float, default 1e-9
+        Geometric tolerance.
+
+    Returns
+    -------
+    ndarray, shape ``(rows, 10 (G + 1))``
+        Linear conditions on the ``paper``-convention parameter changes (``hat`` order, world
+        frame at q = 0) of the anchor then of each body.
+    """
+    h, dh = _motions(robot, bodies, ratio, offset, q)
+    w = twist_span(robot, anchor, tol) if anchor >= 0 else np.zeros((0, 6))
+    gens = hat(w)  # (r, 4, 4)
+    hinv = np.linalg.inv(h)
+    xk = np.concatenate([(hinv @ dh)[:, :, None], hinv[:, :, None] @ gens[None, None] @ h[:, :, None]], axis=2)
+    xa = np.concatenate([np.zeros((1, 4, 4)), gens])  # the anchor does not see qdot_l
+    a, b = np.triu_indices(len(w) + 1)
+    fk = _functional(np.swapaxes(xk[:, :, b, :3], -1, -2) @ xk[:, :, a, :3])  # (M, G, P, 10)
+    fa = _functional(np.swapaxes(xa[b, :3], -1, -2) @ xa[a, :3])  # (P, 10)
+    m, g, npair = fk.shape[0], len(bodies), len(a)
+    kin = np.concatenate([np.broadcast_to(fa, (m, npair, 10)), np.moveaxis(fk, 1, 2).reshape(m, npair, 10 * g)], axis=2)
+    rows = [kin.reshape(m * npair, 10 * (g + 1))]
+    if np.linalg.norm(robot.gravity) > tol:
+        pot = np.zeros((m, 4, g + 1, 10))
+        pot[:, :, 0, 6:] = np.eye(4)
+        pot[:, :, 1:, 6:] = np.moveaxis(h, 1, 2)  # h_k(q) dN_k e4
+        rows.append(pot.reshape(4 * m, 10 * (g + 1)))
+    out = np.concatenate(rows)
+    norm = np.linalg.norm(out, axis=1)
+    keep = norm > tol * max(1.0, float(norm.max()))
+    return out[keep] / norm[keep, None]
+
+
+def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1e-9):
+    """The conditions of a coupled group reduced to a square triangular factor, or None.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    anchor : int
+        The anchor body (``-1``: the world).
+    bodies : list of int
+        The group's bodies, parents first (:func:`coupled_groups`).
+    tol : float, default 1e-9
+        Geometric tolerance.
+
+    Returns
+    -------
+    (ndarray, list of int) or None
+        ``R (10 u, 10 u)``, upper triangular with ``R x = 0`` exactly for the solutions ``x`` of
+        :func:`group_system`, and the ``u`` bodies its blocks belong to (the anchor first unless it
+        is the world); None when the group's conditions are too many to check
+        (:data:`MAX_FREQUENCIES`) or no unisolvent set is found (the group is then skipped).
+    """
+    lead, ratio, offset = coupled_coordinates(robot)
+    fd = _frequencies(robot, bodies, ratio, tol)
+    q = None if fd is None else unisolvent_angles(*fd)
+    if q is None:
+        return None
+    a = group_system(robot, anchor, bodies, ratio, offset, q, tol)
+    who = [anchor, *bodies]
+    if anchor < 0:
+        a, who = a[:, 10:], who[1:]
+    r = np.linalg.qr(a, mode="r") if len(a) >= a.shape[1] else np.vstack([a, np.zeros((a.shape[1] - len(a), a.shape[1]))])
+    return r, who
+
+
+def _sparse_solutions(r: np.ndarray, u: int, tol: float) -> list[tuple[tuple[int, ...], np.ndarray]]:
+    """Solutions of ``r x = 0`` supported on at most three of the ``u`` blocks, spanning what they can.
+
+    Subsets of blocks by size (1, 2, 3), each kept only for the directions it adds to the ones
+    before: ``[(blocks, X (d, 10 len(blocks)))]``.
+    """
+    scale = max(float(np.abs(r).max()), 1e-300)
+    full = int(10 * u - np.sum(np.linalg.svd(r, compute_uv=False) > tol * scale))
+    found = np.zeros((0, 10 * u))
+    out = []
+    for size in (1, 2, 3):
+        for sub in combinations(range(u), size):
+            idx = np.concatenate([np.arange(10 * b, 10 * b + 10) for b in sub])
+            _, s, vt = np.linalg.svd(r[:, idx], full_matrices=True)
+            x = vt[int(np.sum(s > tol * scale)):]
+            if not len(x):
+                continue
+            emb = np.zeros((len(x), 10 * u))
+            emb[:, idx] = x
+            ru, rs, rvt = np.linalg.svd(emb - (emb @ found.T) @ found, full_matrices=False)
+            k = int(np.sum(rs > 1e-6))
+            if k:
+                out.append((sub, ru[:, :k].T @ x))
+                found = np.vstack([found, rvt[:k]])
+            if len(found) >= full:
+                return out
+    return out
+    return out
+
+
+def _group_label(names: list[str], anchor: int, bodies: list[int]) -> str:
+    top = names[anchor] if anchor >= 0 else "the world"
+    return f"coupled group on {top}: {', '.join(names[b] for b in bodies)}"
+
+
+def coupled_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+    """R-M: the columns the coupled groups add, each on at most three bodies.
+
+    For every coupled group (:func:`coupled_groups`) the criterion's conditions
+    (:func:`group_system`) are solved exactly (:func:`group_nullspace`), and the solutions
+    supported on one, two or three of its bodies (the anchor included) are emitted until they
+    span all solutions or no such subset adds one.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Geometric tolerance (relative singular-value threshold of the group systems).
+
+    Returns
+    -------
+    Columns
+        Columns in the ``paper`` convention (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ
+        MX MY MZ M`` of each body, world frame at q = 0), provenance ``R-M coupled joints``; the
+        highest body carries ``h``, the others ``hp`` and ``he``.
+    """
+    parts = []
+    for anchor, bodies in coupled_groups(robot):
+        red = group_nullspace(robot, anchor, bodies, tol)
+        if red is None:
+            continue
+        r, who = red
+        label = _group_label(robot.names, anchor, bodies)
+        for sub, x in _sparse_solutions(r, len(who), tol):
+            parts.append(_as_columns([who[b] for b in sub], x, label))
+    return Columns.concat(parts)
+
+
+def _as_columns(bodies: list[int], x: np.ndarray, label: str) -> Columns:
+    """Solutions ``x (d, 10 len(bodies))`` on up to three bodies as columns (highest body first)."""
+    order = np.argsort(bodies)[::-1]
+    d = len(x)
+    blk = [x[:, 10 * i: 10 * i + 10] for i in order]
+    bs = [int(bodies[i]) for i in order]
+    none, zero = np.full(d, -1), np.zeros((d, 10))
+    return Columns(blk[0], np.full(d, bs[0]), np.full(d, bs[1]) if len(bs) > 1 else none, np.full(d, RM),
+                   np.full(d, bs[0]), np.full(d, label, dtype=object), hp=blk[1] if len(bs) > 1 else zero,
+                   extra=np.full(d, bs[2]) if len(bs) > 2 else none, he=blk[2] if len(bs) > 2 else zero)

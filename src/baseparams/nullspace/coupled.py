@@ -45,6 +45,13 @@ RM = Source.R_M
 #: largest number of frequency combinations a group's conditions may have; beyond it the group
 #: is skipped (fewer directions found, never a wrong one)
 MAX_FREQUENCIES = 4096
+#: singular values of a group's conditions must be below ``tol`` or above ``GAP * tol`` (relative)
+GAP = 1e4
+#: smallest component (of a unit solution) outside the directions already found that counts as new
+NEW = 1e-6
+#: largest group (anchor included) whose solutions on three bodies are searched; larger groups
+#: search one and two bodies and give the rest as wider columns
+MAX_TRIPLES_BLOCKS = 10
 
 
 def coupled_coordinates(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -356,34 +363,72 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
     return r, who
 
 
-def _sparse_solutions(r: np.ndarray, u: int, tol: float) -> list[tuple[tuple[int, ...], np.ndarray]]:
-    """Solutions of ``r x = 0`` supported on at most three of the ``u`` blocks, spanning what they can.
+def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
+    """Orthonormal rows spanning the nullspace of ``a``; None when a singular value is ambiguous.
 
-    Subsets of blocks by size (1, 2, 3), each kept only for the directions it adds to the ones
-    before: ``[(blocks, X (d, 10 len(blocks)))]``.
+    Ambiguous: between ``tol * scale`` and ``GAP * tol * scale`` (neither clearly zero nor clearly
+    not): the subset or group is then skipped (fewer directions, never a wrong one).
+    """
+    _, s, vt = np.linalg.svd(a)
+    s = np.r_[s, np.zeros(a.shape[1] - len(s))]
+    if np.any((s > tol * scale) & (s < GAP * tol * scale)):
+        return None
+    return vt[int(np.sum(s > tol * scale)):]
+
+
+def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
+    """A basis of the solutions of ``r x = 0`` beyond ``prior``, each on as few of the ``u`` blocks as found.
+
+    Subsets of blocks by size (1, 2, then 3 when ``u <= MAX_TRIPLES_BLOCKS``), each kept for the
+    directions it adds to ``prior (p, 10 u)`` (orthonormal rows) and the ones before; what they
+    leave is returned on all the blocks it touches: ``[(blocks, X (d, 10 len(blocks)))]``.
     """
     scale = max(float(np.abs(r).max()), 1e-300)
-    full = int(10 * u - np.sum(np.linalg.svd(r, compute_uv=False) > tol * scale))
-    found = np.zeros((0, 10 * u))
-    out = []
-    for size in (1, 2, 3):
-        for sub in combinations(range(u), size):
-            idx = np.concatenate([np.arange(10 * b, 10 * b + 10) for b in sub])
-            _, s, vt = np.linalg.svd(r[:, idx], full_matrices=True)
-            x = vt[int(np.sum(s > tol * scale)):]
-            if not len(x):
-                continue
-            emb = np.zeros((len(x), 10 * u))
-            emb[:, idx] = x
-            ru, rs, rvt = np.linalg.svd(emb - (emb @ found.T) @ found, full_matrices=False)
-            k = int(np.sum(rs > 1e-6))
-            if k:
-                out.append((sub, ru[:, :k].T @ x))
-                found = np.vstack([found, rvt[:k]])
-            if len(found) >= full:
-                return out
+    null = _null(r, tol, scale)
+    if null is None:
+        return []
+    found, out = prior, []
+    sizes = (1, 2, 3) if u <= MAX_TRIPLES_BLOCKS else (1, 2)
+    for sub in (sub for size in sizes for sub in combinations(range(u), size)):
+        if len(found) >= len(null):
+            return out
+        idx = np.concatenate([np.arange(10 * b, 10 * b + 10) for b in sub])
+        x = _null(r[:, idx], tol, scale)
+        if x is None or not len(x):
+            continue
+        emb = np.zeros((len(x), 10 * u))
+        emb[:, idx] = x
+        ru, rs, rvt = np.linalg.svd(emb - (emb @ found.T) @ found, full_matrices=False)
+        k = int(np.sum(rs > NEW))
+        if k:
+            out.append((sub, ru[:, :k].T @ x))
+            found = np.vstack([found, rvt[:k]])
+    ru, rs, _ = np.linalg.svd(null - (null @ found.T) @ found, full_matrices=False)
+    rest = (ru[:, : int(np.sum(rs > NEW))].T @ null).reshape(-1, u, 10)
+    if len(rest):
+        sub = tuple(int(b) for b in np.flatnonzero(np.abs(rest).max(axis=(0, 2)) > 0))
+        out.append((sub, rest[:, sub].reshape(len(rest), -1)))
     return out
-    return out
+
+
+def _prior_rows(prior: Columns, who: list[int]) -> np.ndarray:
+    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns that lie on the blocks ``who``."""
+    pos = {b: i for i, b in enumerate(who)}
+    inside = np.isin(prior.child, who) & ((prior.parent < 0) | np.isin(prior.parent, who))
+    inside &= ((prior.extra < 0) | np.isin(prior.extra, who)) & ~prior.has_more()
+    sel = prior.subset(inside)
+    v = np.zeros((len(sel), len(who), 10))
+    k = np.arange(len(sel))
+    v[k, [pos[int(b)] for b in sel.child]] += sel.h
+    for body, h in ((sel.parent, sel.hp), (sel.extra, sel.he)):
+        m = body >= 0
+        v[k[m], [pos[int(b)] for b in body[m]]] += h[m]
+    v = v.reshape(len(sel), -1)
+    if not len(v):
+        return v
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    _, s, vt = np.linalg.svd(v, full_matrices=False)
+    return vt[: int(np.sum(s > 1e-9 * s[0]))]
 
 
 def _group_label(names: list[str], anchor: int, bodies: list[int]) -> str:
@@ -391,13 +436,14 @@ def _group_label(names: list[str], anchor: int, bodies: list[int]) -> str:
     return f"coupled group on {top}: {', '.join(names[b] for b in bodies)}"
 
 
-def coupled_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = None) -> Columns:
     """R-M: the columns the coupled groups add, each on at most three bodies.
 
     For every coupled group (:func:`coupled_groups`) the criterion's conditions
     (:func:`group_system`) are solved exactly (:func:`group_nullspace`), and the solutions
-    supported on one, two or three of its bodies (the anchor included) are emitted until they
-    span all solutions or no such subset adds one.
+    supported on one, two or three of its bodies (the anchor included) are emitted, each only
+    for the directions it adds to ``prior`` and to the ones before, until they span all
+    solutions; what no such subset gives is emitted on all the group's bodies it touches.
 
     Parameters
     ----------
@@ -405,6 +451,9 @@ def coupled_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         The robot (``n`` moving bodies).
     tol : float, default 1e-9
         Geometric tolerance (relative singular-value threshold of the group systems).
+    prior : Columns, optional
+        Columns found before (the principles and the other rules): only new directions are
+        emitted, so that no column repeats a known one up to rounding.
 
     Returns
     -------
@@ -420,18 +469,23 @@ def coupled_columns(robot: Robot, tol: float = 1e-9) -> Columns:
             continue
         r, who = red
         label = _group_label(robot.names, anchor, bodies)
-        for sub, x in _sparse_solutions(r, len(who), tol):
+        seed = _prior_rows(prior, who) if prior is not None else np.zeros((0, 10 * len(who)))
+        for sub, x in _sparse_solutions(r, len(who), tol, seed):
             parts.append(_as_columns([who[b] for b in sub], x, label))
     return Columns.concat(parts)
 
 
 def _as_columns(bodies: list[int], x: np.ndarray, label: str) -> Columns:
-    """Solutions ``x (d, 10 len(bodies))`` on up to three bodies as columns (highest body first)."""
+    """Solutions ``x (d, 10 len(bodies))`` as columns: the highest body's block is ``h``, then ``hp``, ``he``, ``more``."""
     order = np.argsort(bodies)[::-1]
     d = len(x)
     blk = [x[:, 10 * i: 10 * i + 10] for i in order]
     bs = [int(bodies[i]) for i in order]
     none, zero = np.full(d, -1), np.zeros((d, 10))
+    more = None
+    if len(bs) > 3:
+        rest = np.array(bs[3:])
+        more = np.array([(rest, np.stack([b[c] for b in blk[3:]])) for c in range(d)] + [None], dtype=object)[:-1]
     return Columns(blk[0], np.full(d, bs[0]), np.full(d, bs[1]) if len(bs) > 1 else none, np.full(d, RM),
                    np.full(d, bs[0]), np.full(d, label, dtype=object), hp=blk[1] if len(bs) > 1 else zero,
-                   extra=np.full(d, bs[2]) if len(bs) > 2 else none, he=blk[2] if len(bs) > 2 else zero)
+                   extra=np.full(d, bs[2]) if len(bs) > 2 else none, he=blk[2] if len(bs) > 2 else zero, more=more)

@@ -37,7 +37,6 @@ from ..model.robot import Robot
 from ..pga.core import hat
 from ..pga.linalg import cross3, null_rows, nullspace, rowspace, span_rows, sym
 from .columns import Columns, sym_params
-from .coupled import coupled_columns
 from .principles import compound_shared, world_axes
 from .subspaces import MotionSpans, motion_spans
 
@@ -768,12 +767,11 @@ def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, ha
 
 
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """All extended-rule columns (R-A, R-B, R-L1, R-L2, R-M) for ``robot``.
+    """The extended-rule columns R-A, R-B, R-L1, R-L2 for ``robot`` (R-M: :mod:`.coupled`).
 
     In order: R-A on every body (:func:`fixed_vector_columns`) and across loop joints
     (:func:`loop_shared_columns`), R-B (:func:`sliding_columns`), R-L1
-    (:func:`parallelogram_columns`), R-L2 (:func:`level_chain_columns`), R-M
-    (:func:`.coupled.coupled_columns`: joint couplings such as ``<mimic>``), sharing one
+    (:func:`parallelogram_columns`), R-L2 (:func:`level_chain_columns`), sharing one
     :func:`.subspaces.motion_spans`. The columns are redundant with each other and with the
     paper's principles: :func:`.rank.block_rank` decides the rank.
 
@@ -788,11 +786,11 @@ def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     -------
     Columns
         The columns with provenance (R-A fixed vectors, R-B sliding points, R-L1
-        parallelograms, R-L2 level chains, R-M coupled joints), blocks in the ``paper`` convention (spatial
+        parallelograms, R-L2 level chains), blocks in the ``paper`` convention (spatial
         pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
         q = 0).
     """
     ms = motion_spans(robot, tol)
     return Columns.concat([fixed_vector_columns(robot, ms), loop_shared_columns(robot, tol),
                            sliding_columns(robot, ms), parallelogram_columns(robot),
-                           level_chain_columns(robot, ms, tol), coupled_columns(robot, tol)])
+                           level_chain_columns(robot, ms, tol)])

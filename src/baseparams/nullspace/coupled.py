@@ -42,9 +42,12 @@ from .columns import Columns
 
 RM = Source.R_M
 
-#: largest number of frequency combinations a group's conditions may have; beyond it the group
-#: is skipped (fewer directions found, never a wrong one)
-MAX_FREQUENCIES = 4096
+#: largest denominator of a rotation rate (``|omega| m``) taken as rational; a group with another
+#: rate is skipped (fewer directions found, never a wrong one)
+MAX_DENOMINATOR = 64
+#: largest harmonic ``K`` of a group's conditions (samples per period ``2 K + 1``); beyond it the
+#: group is skipped
+MAX_HARMONIC = 256
 #: singular values of a group's conditions must be below ``tol`` or above ``GAP * tol`` (relative)
 GAP = 1e4
 #: smallest component (of a unit solution) outside the directions already found that counts as new
@@ -185,66 +188,74 @@ def _orth(a: np.ndarray, tol: float) -> np.ndarray:
     return vt[: int(np.sum(s > tol * max(1.0, s[0])))]
 
 
-def _frequencies(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float) -> tuple[np.ndarray, int] | None:
-    """Frequencies ``(F,) >= 0`` and polynomial degree of every condition of a group (None: too many).
+def _rates(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float) -> tuple[list[float], list[int]]:
+    """Per body: the sum of its path's rotation rates ``|omega_j m_j|`` and its number of slides.
 
-    Body ``k``'s conditions are products of at most four factors ``h_k``, ``h_k^-1`` or ``h_k'``:
-    frequencies ``sum_j f_j s_j`` (``|s_j| <= 2``, ``f_j = |omega_j| m_j`` over the R or helical
-    joints of its path), degree up to twice its path's P or helical joints.
+    A slide is a P joint or a helical one (its translation grows with the coordinate).
     """
-    qi, grp = robot.q_index, set(bodies)
-    freqs, deg = {0.0}, 0
-    path_f: dict[int, set] = {}
-    path_d: dict[int, int] = {}
+    qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
+    rates, slides = [], []
     for k in bodies:
         s = robot.screws[qi[k]]
         w = float(np.linalg.norm(s[:3]))
-        p = int(robot.parent[k])
-        fs, d = (path_f[p], path_d[p]) if p in grp else ({0.0}, 0)
-        if w > tol:
-            f = w * abs(float(ratio[qi[k]]))
-            fs = {round(abs(a + t * f), 9) for a in fs for t in (-2, -1, 0, 1, 2)}
-        if w <= tol or abs(float(s[:3] @ s[3:])) > tol * max(1.0, float(np.linalg.norm(s[3:]))):
-            d += 2
-        if len(fs) > MAX_FREQUENCIES:
-            return None
-        path_f[k], path_d[k] = fs, d
-        freqs |= fs
-        deg = max(deg, d)
-    return np.array(sorted(freqs)), deg
+        p = pos.get(int(robot.parent[k]))
+        rate, sl = (0.0, 0) if p is None else (rates[p], slides[p])
+        rates.append(rate + w * abs(float(ratio[qi[k]])))
+        slides.append(sl + int(w <= tol or abs(float(s[:3] @ s[3:])) > tol * max(1.0, float(np.linalg.norm(s[3:])))))
+    return rates, slides
 
 
-def unisolvent_angles(freqs: np.ndarray, deg: int, tol: float = 1e-9) -> np.ndarray | None:
-    """Values of the leading coordinate on which the conditions' functions are independent.
+def sample_values(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float = 1e-9) -> np.ndarray | None:
+    """Values of the leading coordinate on which a group's conditions hold iff they hold for all.
 
-    The functions ``q^a cos(f q)``, ``q^a sin(f q)`` (``a <= deg``, ``f`` in ``freqs``; only the
-    cosines for ``f = 0``): a trigonometric polynomial of them vanishing at the returned values
-    vanishes identically, because the collocation matrix has full column rank (checked).
+    Every condition is ``sum_a q^a P_a(q)`` with ``a <= D`` (``D`` twice the most slides on a
+    path) and ``P_a`` trigonometric polynomials whose frequencies are sums of ``s_j f_j``,
+    ``|s_j| <= 2``, over the rates ``f_j = |omega_j m_j|`` of a path's rotations. With rational
+    rates (denominator at most :data:`MAX_DENOMINATOR`) these are integer multiples ``k f0``,
+    ``|k| <= K``, of their greatest common divisor ``f0``. The values are ``N = 2 K + 1``
+    equally spaced points in each of ``D + 1`` consecutive periods ``T = 2 pi / f0``: at each
+    point the ``D + 1`` values ``q + m T`` make every ``P_a`` vanish there, and a trigonometric
+    polynomial of degree ``K`` vanishing at ``N`` equally spaced points of a period is zero.
 
     Parameters
     ----------
-    freqs : ndarray, shape ``(F,)``
-        Distinct frequencies ``>= 0`` (rad per unit of the coordinate).
-    deg : int
-        Largest polynomial degree.
+    robot : Robot
+        The robot.
+    bodies : list of int
+        The group's bodies, parents first.
+    ratio : ndarray, shape ``(dof,)``
+        Multipliers from :func:`coupled_coordinates`.
     tol : float, default 1e-9
-        Relative singular-value threshold of the rank check.
+        Tolerance of a rate's rational approximation (relative) and of a slide.
 
     Returns
     -------
-    ndarray, shape ``(M,)`` or None
-        The values (rad or m), or None when no tried set is unisolvent.
+    ndarray, shape ``(N (D + 1),)`` or None
+        The values (rad or m); None when a rate is not rational enough or ``K`` exceeds
+        :data:`MAX_HARMONIC` (the group is then skipped).
     """
-    nb = (deg + 1) * (2 * len(freqs) - int(freqs[0] == 0))
-    for m in (nb + 4, 2 * nb + 8, 4 * nb + 16):
-        q = np.pi * (2 * ((np.arange(m) * 0.6180339887498949 + 0.1234) % 1.0) - 1)
-        cols = [q**a * f(w * q) for a in range(deg + 1) for w in freqs for f in (np.cos, np.sin) if w or f is np.cos]
-        c = np.array(cols).T
-        c /= np.linalg.norm(c, axis=0)
-        s = np.linalg.svd(c, compute_uv=False)
-        if s[-1] > tol * s[0] and len(s) == nb:
-            return q
-    return None
+    from fractions import Fraction
+    from math import gcd, lcm
+
+    rates, slides = _rates(robot, bodies, ratio, tol)
+    qi = robot.q_index
+    fr = []
+    for k in bodies:
+        w = float(np.linalg.norm(robot.screws[qi[k]][:3])) * abs(float(ratio[qi[k]]))
+        if w > tol:
+            f = Fraction(w).limit_denominator(MAX_DENOMINATOR)
+            if abs(float(f) - w) > tol * max(1.0, w):
+                return None
+            fr.append(f)
+    f0, harmonic = Fraction(1), 0
+    if fr:
+        f0 = Fraction(gcd(*(f.numerator for f in fr)), lcm(*(f.denominator for f in fr)))
+        harmonic = int(round(2 * max(rates) / float(f0)))
+    if harmonic > MAX_HARMONIC:
+        return None
+    n, period, deg = 2 * harmonic + 1, 2 * np.pi / float(f0), 2 * max(slides)
+    base = (np.arange(n) + 0.5) * period / n
+    return (base[None, :] + period * (np.arange(deg + 1)[:, None] - 0.5 * (deg + 1))).ravel()
 
 
 def _motions(robot: Robot, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
@@ -276,13 +287,12 @@ def _functional(c: np.ndarray) -> np.ndarray:
 
 
 def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
-                 q: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+                 q: np.ndarray, level: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
     """The criterion's conditions on a coupled group: ``(rows, 10 (G + 1))`` (anchor block first).
 
     Rows: the kinetic form's entries ``K(a, b)`` for ``a <= b`` among ``qdot_l`` and a basis of
     the anchor's twist span (:func:`twist_span`), at every value of ``q``; then, with gravity,
-    the potential vector ``dN_A e4 + sum_k h_k(q) dN_k e4`` at every value. Each row is
-    normalised (zero rows dropped).
+    the potential (:func:`_potential_rows`). Each row is normalised (zero rows dropped).
 
     Parameters
     ----------
@@ -295,7 +305,11 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray
     ratio, offset : ndarray, shape ``(dof,)``
         From :func:`coupled_coordinates`.
     q : ndarray, shape ``(M,)``
-        Values of the leading coordinate (:func:`unisolvent_angles`).
+        Values of the leading coordinate (:func:`sample_values`).
+    level : ndarray, shape ``(L, 4)``, optional
+        Rows ``gbar^T X`` over a basis ``X`` of the anchor's motion span
+        (:mod:`.subspaces`): a vector ``c`` of the anchor keeps its height iff ``level c = 0``;
+        default none known (only ``c = 0``).
     tol : float, default 1e-9
         Geometric tolerance.
 
@@ -318,17 +332,32 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray
     kin = np.concatenate([np.broadcast_to(fa, (m, npair, 10)), np.moveaxis(fk, 1, 2).reshape(m, npair, 10 * g)], axis=2)
     rows = [kin.reshape(m * npair, 10 * (g + 1))]
     if np.linalg.norm(robot.gravity) > tol:
-        pot = np.zeros((m, 4, g + 1, 10))
-        pot[:, :, 0, 6:] = np.eye(4)
-        pot[:, :, 1:, 6:] = np.moveaxis(h, 1, 2)  # h_k(q) dN_k e4
-        rows.append(pot.reshape(4 * m, 10 * (g + 1)))
+        rows.append(_potential_rows(robot, anchor, h, level))
     out = np.concatenate(rows)
     norm = np.linalg.norm(out, axis=1)
     keep = norm > tol * max(1.0, float(norm.max()))
     return out[keep] / norm[keep, None]
 
 
-def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1e-9):
+def _potential_rows(robot: Robot, anchor: int, h: np.ndarray, level: np.ndarray | None) -> np.ndarray:
+    """The potential's conditions ``(rows, 10 (G + 1))``: ``c(q) = dN_A e4 + sum_k h_k(q) dN_k e4``.
+
+    Under the world (fixed) the height ``gbar^T c(q)`` must not change with ``q``; under a
+    moving anchor ``c(q)`` must not change and keep its height as the anchor moves
+    (``level c = 0``).
+    """
+    m, g = h.shape[0], h.shape[1]
+    pot = np.zeros((m, 4, g + 1, 10))
+    pot[:, :, 0, 6:] = np.eye(4)
+    pot[:, :, 1:, 6:] = np.moveaxis(h, 1, 2)  # h_k(q) dN_k e4
+    diff = (pot[1:] - pot[:1]).reshape(m - 1, 4, -1)
+    if anchor < 0:
+        return np.einsum("a,mab->mb", np.r_[robot.gravity, 0.0], diff)
+    lv = np.zeros((0, 4)) if level is None else level
+    return np.concatenate([diff.reshape(4 * (m - 1), -1), np.einsum("la,ab->lb", lv, pot[0].reshape(4, -1))])
+
+
+def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1e-9, level: np.ndarray | None = None):
     """The conditions of a coupled group reduced to a square triangular factor, or None.
 
     Parameters
@@ -341,6 +370,8 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
         The group's bodies, parents first (:func:`coupled_groups`).
     tol : float, default 1e-9
         Geometric tolerance.
+    level : ndarray, shape ``(L, 4)``, optional
+        The anchor's level rows (:func:`group_system`).
 
     Returns
     -------
@@ -350,12 +381,11 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
         is the world); None when the group's conditions are too many to check
         (:data:`MAX_FREQUENCIES`) or no unisolvent set is found (the group is then skipped).
     """
-    lead, ratio, offset = coupled_coordinates(robot)
-    fd = _frequencies(robot, bodies, ratio, tol)
-    q = None if fd is None else unisolvent_angles(*fd)
+    _, ratio, offset = coupled_coordinates(robot)
+    q = sample_values(robot, bodies, ratio, tol)
     if q is None:
         return None
-    a = group_system(robot, anchor, bodies, ratio, offset, q, tol)
+    a = group_system(robot, anchor, bodies, ratio, offset, q, level, tol)
     who = [anchor, *bodies]
     if anchor < 0:
         a, who = a[:, 10:], who[1:]
@@ -431,6 +461,18 @@ def _prior_rows(prior: Columns, who: list[int]) -> np.ndarray:
     return vt[: int(np.sum(s > 1e-9 * s[0]))]
 
 
+def _levels(robot: Robot, anchors: list[int], tol: float) -> dict[int, np.ndarray]:
+    """Per moving anchor, the rows ``gbar^T X ((L, 4))`` over its motion span's basis (:mod:`.subspaces`)."""
+    moving = sorted({a for a in anchors if a >= 0})
+    if not moving or np.linalg.norm(robot.gravity) <= tol:
+        return {}
+    from .subspaces import motion_spans
+
+    ms = motion_spans(robot, tol)
+    g = robot.gravity / np.linalg.norm(robot.gravity)
+    return {a: np.einsum("a,kab->kb", g, ms.padded[a]) for a in moving}
+
+
 def _group_label(names: list[str], anchor: int, bodies: list[int]) -> str:
     top = names[anchor] if anchor >= 0 else "the world"
     return f"coupled group on {top}: {', '.join(names[b] for b in bodies)}"
@@ -462,9 +504,10 @@ def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = Non
         MX MY MZ M`` of each body, world frame at q = 0), provenance ``R-M coupled joints``; the
         highest body carries ``h``, the others ``hp`` and ``he``.
     """
-    parts = []
-    for anchor, bodies in coupled_groups(robot):
-        red = group_nullspace(robot, anchor, bodies, tol)
+    parts, groups = [], coupled_groups(robot)
+    levels = _levels(robot, [a for a, _ in groups], tol)
+    for anchor, bodies in groups:
+        red = group_nullspace(robot, anchor, bodies, tol, levels.get(anchor))
         if red is None:
             continue
         r, who = red

@@ -31,7 +31,7 @@ def _origin(rng, keep_axes: bool) -> np.ndarray:
 
 
 def mimic_hand(rng, offsets: bool = False):
-    """A random arm (fixed, or floating) carrying a hand of 2-4 fingers of 1-3 links on R or P
+    """A random arm (fixed, or floating) carrying a hand of 2-3 fingers of 1-2 links on R or P
     joints, every finger joint coupled to the first one or to an earlier follower (chains of
     mimics), with axes often parallel (lockstep fingers) and ratios from :data:`RATIOS`."""
     b = RobotBuilder("hand", gravity=(0.0, 0.0, -9.81) if rng.random() < 0.8 else (0.0, 0.0, 0.0))
@@ -43,9 +43,9 @@ def mimic_hand(rng, offsets: bool = False):
         parent = f"arm{i}"
     axis = rng.normal(size=3)
     finger_links = []
-    for f in range(int(rng.integers(2, 5))):
+    for f in range(int(rng.integers(2, 4))):
         up = parent
-        for k in range(int(rng.integers(1, 4))):
+        for k in range(int(rng.integers(1, 3))):
             keep = rng.random() < 0.7
             jt = "P" if rng.random() < 0.3 else "R"
             name = f"f{f}l{k}"
@@ -62,7 +62,7 @@ def mimic_hand(rng, offsets: bool = False):
         couplings.append(Coupling(f"mimic{j}", pred, qi[j], float(rng.choice(RATIOS)), off))
     independent = tuple(k for k in range(robot.dof) if k not in qi[1:])
     return replace(robot, couplings=tuple(couplings), independent=independent,
-                   q_box=np.tile([-0.8, 0.8], (len(independent), 1)))
+                   q_box=np.tile([-3.0, 3.0], (len(independent), 1)))
 
 
 def test_coupled_coordinates_compose_chains_and_skip_multi_term_couplings():

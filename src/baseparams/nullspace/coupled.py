@@ -37,7 +37,8 @@ import numpy as np
 from ..enums import Source
 from ..model.inertia import HAT_INDEX
 from ..model.robot import Robot
-from ..pga.core import hat, screw_exp
+from ..pga.core import hat
+from ..pga.linalg import cross3
 from .columns import Columns
 
 RM = Source.R_M
@@ -53,8 +54,10 @@ GAP = 1e4
 #: smallest component (of a unit solution) outside the directions already found that counts as new
 NEW = 1e-6
 #: largest group (anchor included) whose solutions on three bodies are searched; larger groups
-#: search one and two bodies and give the rest as wider columns
+#: search fewer and give the rest as wider columns
 MAX_TRIPLES_BLOCKS = 10
+#: largest group (anchor included) whose solutions on two bodies are searched
+MAX_PAIRS_BLOCKS = 24
 
 
 def coupled_coordinates(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -160,25 +163,29 @@ def twist_span(robot: Robot, body: int, tol: float = 1e-9) -> np.ndarray:
         path.append(body)
         body = int(robot.parent[body])
     dofs = np.flatnonzero(np.isin(robot.dof_body, path))  # base-first along the path
-    s = robot.screws
-    parts = [_closure(s[j][None], s[dofs[k + 1:]], tol) for k, j in enumerate(dofs)]
-    return _orth(np.vstack([np.zeros((0, 6)), *parts]), tol)
+    s, span = robot.screws, np.zeros((0, 6))
+    for k, j in enumerate(dofs):  # root first: a floating root saturates the span at once
+        span = _orth(np.vstack([span, _closure(s[j][None], s[dofs[k + 1:]], tol)]), tol)
+        if len(span) == 6:
+            break
+    return span
 
 
 def _ad(s: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``ad_s x`` of twists ``(omega, v)``: ``(6,), (m, 6) -> (m, 6)``."""
     w, v = s[:3], s[3:]
-    return np.hstack([np.cross(w, x[:, :3]), np.cross(w, x[:, 3:]) + np.cross(v, x[:, :3])])
+    return np.hstack([cross3(w, x[:, :3]), cross3(w, x[:, 3:]) + cross3(v, x[:, :3])])
 
 
 def _closure(span: np.ndarray, gens: np.ndarray, tol: float) -> np.ndarray:
     """Orthonormal basis of the smallest ``ad_{gens}``-invariant subspace containing ``span``."""
     basis = _orth(span, tol)
-    while True:
+    while len(basis) < 6:
         grown = _orth(np.vstack([basis] + [_ad(s, basis) for s in gens]), tol)
         if len(grown) == len(basis):
             return grown
         basis = grown
+    return basis
 
 
 def _orth(a: np.ndarray, tol: float) -> np.ndarray:
@@ -399,7 +406,7 @@ def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
     Ambiguous: between ``tol * scale`` and ``GAP * tol * scale`` (neither clearly zero nor clearly
     not): the subset or group is then skipped (fewer directions, never a wrong one).
     """
-    _, s, vt = np.linalg.svd(a)
+    _, s, vt = np.linalg.svd(a, full_matrices=a.shape[0] < a.shape[1])
     s = np.r_[s, np.zeros(a.shape[1] - len(s))]
     if np.any((s > tol * scale) & (s < GAP * tol * scale)):
         return None
@@ -409,7 +416,8 @@ def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
 def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
     """A basis of the solutions of ``r x = 0`` beyond ``prior``, each on as few of the ``u`` blocks as found.
 
-    Subsets of blocks by size (1, 2, then 3 when ``u <= MAX_TRIPLES_BLOCKS``), each kept for the
+    Subsets of blocks by size (1; 2 when ``u <= MAX_PAIRS_BLOCKS``; 3 when
+    ``u <= MAX_TRIPLES_BLOCKS``: the cost stays bounded per group), each kept for the
     directions it adds to ``prior (p, 10 u)`` (orthonormal rows) and the ones before; what they
     leave is returned on all the blocks it touches: ``[(blocks, X (d, 10 len(blocks)))]``.
     """
@@ -418,7 +426,7 @@ def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> l
     if null is None:
         return []
     found, out = prior, []
-    sizes = (1, 2, 3) if u <= MAX_TRIPLES_BLOCKS else (1, 2)
+    sizes = [k for k, most in ((1, u), (2, MAX_PAIRS_BLOCKS), (3, MAX_TRIPLES_BLOCKS)) if u <= most]
     for sub in (sub for size in sizes for sub in combinations(range(u), size)):
         if len(found) >= len(null):
             return out

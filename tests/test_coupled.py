@@ -72,8 +72,9 @@ def test_coupled_coordinates_compose_chains_and_skip_multi_term_couplings():
     lead, ratio, offset = coupled_coordinates(robot)
     assert list(lead) == [0, 1, 0, 0, -1]
     assert np.allclose(ratio[:4], [1, 1, 2, -1]) and np.allclose(offset[:4], [0, 0, 0.1, -0.5 * 0.1 + 0.2])
-    # the chain b0-b1-b2-b3-b4: b0 hangs from the world, b2 and b3 (one group) from b1; b4 not grouped
-    assert coupled_groups(robot) == [(-1, [0]), (1, [2, 3])]
+    # the chain b0-b1-b2-b3-b4: b2 and b3 (one group) hang from b1; b0 alone under the world is a
+    # plain tree joint; b4 is not grouped
+    assert coupled_groups(robot) == [(1, [2, 3])]
 
 
 def test_sample_values_determine_the_conditions():
@@ -150,3 +151,32 @@ def test_parallel_lockstep_fingers_share_rotational_inertia():
     cert = certify(robot, seed=0, result=res)
     assert cert.certified and cert.completed == 0
     assert "coupled group on hand" in res.provenance(int(np.flatnonzero(res.columns.principle == Source.R_M)[0]))
+
+
+def test_wide_columns_rank_and_expand_consistently():
+    """Columns with blocks on further bodies (``Columns.more``, R-M's widest): the O(n) block rank
+    equals the dense rank, with dependent columns among them, and the scaled copy keeps it."""
+    from baseparams.nullspace.columns import Columns
+    from baseparams.nullspace.rank import block_rank
+
+    rng = np.random.default_rng(5)
+    n, k = 9, 7
+    h, hp, he = rng.normal(size=(3, k, 10))
+    more = np.array([(np.array([2, 0]), rng.normal(size=(2, 10))) for _ in range(k)] + [None], dtype=object)[:-1]
+    z = np.zeros(k, dtype=int)
+    wide = Columns(h, z + 8, z + 6, z + int(Source.R_M), z + 8, np.full(k, "", dtype=object), hp=hp,
+                   extra=z + 4, he=he, more=more)
+    # three more columns: combinations of the first three (dependent), and one narrow column
+    c = rng.normal(size=(3, 3))
+    dep = Columns(c @ h[:3], z[:3] + 8, z[:3] + 6, z[:3], z[:3] + 8, np.full(3, "", dtype=object), hp=c @ hp[:3],
+                  extra=z[:3] + 4, he=c @ he[:3],
+                  more=np.array([(np.array([2, 0]), np.einsum("j,jab->ab", c[i], np.stack([m[1] for m in more[:3]])))
+                                 for i in range(3)] + [None], dtype=object)[:-1])
+    narrow = Columns(rng.normal(size=(1, 10)), np.array([3]), np.array([-1]), np.array([0]), np.array([3]),
+                     np.array([""], dtype=object))
+    cols = Columns.concat([wide, dep, narrow])
+    dense = to_dense(cols, n)
+    assert cols.has_more().sum() == k + 3
+    assert np.allclose(dense[[20, 0], 0], [more[0][1][0, 0], more[0][1][1, 0]])  # body 2's XX, body 0's XX
+    assert block_rank(cols, n) == np.linalg.matrix_rank(dense) == k + 1
+    assert block_rank(cols.scaled(np.linspace(1, 2, 10)), n) == k + 1

@@ -15,17 +15,19 @@ extended rules' one criterion (``docs/extended-rules.md``) then reads, for chang
     2 T = K(V, V; dN_A) + sum_k K(xi_k, xi_k; dN_k),   xi_k = Ad(h_k^-1) V + (h_k^-1 h_k') qdot_l,
 
 (``K(a, b; N) = tr(a^ N b^T)`` over the top three rows, ``V`` the anchor's body twist) vanishes for
-every ``V`` in the anchor's twist span and every ``qdot_l``, and the potential term's vector
-``dN_A e4 + sum_k h_k(q) dN_k e4`` is zero, for every ``q``. Treating ``V`` and ``qdot_l`` as
+every ``V`` in the anchor's twist span and every ``qdot_l``, and the potential's vector
+``c(q) = dN_A e4 + sum_k h_k(q) dN_k e4`` does not change with ``q`` and keeps its height as the
+anchor moves (under the world: its height does not change). Treating ``V`` and ``qdot_l`` as
 independent only makes the conditions stronger, so every solution is a nullspace direction.
 
-Each condition is a trigonometric polynomial in the one variable ``q`` (frequencies
-``sum_j m_j s_j``, ``|s_j| <= 2``, over the group's R joints; polynomial degree up to twice the
-number of P joints on a path), so it holds identically exactly when it holds on a set of angles on
-which those functions are linearly independent (unisolvent: the collocation matrix has full column
-rank, which is checked). The conditions are then a finite linear system per group, solved
-exactly (SVD); its solutions supported on at most three bodies of ``G ∪ {A}`` are emitted as
-columns (``Source.R_M``). Cost: one small system per group, linear in the number of groups.
+Each condition is ``sum_a q^a P_a(q)`` with ``P_a`` trigonometric polynomials whose frequencies
+are integer multiples of the group's common frequency (rational rotation rates), degree ``a`` up
+to twice the P joints on a path; it holds identically iff it holds at ``2 K + 1`` equally spaced
+values in each of ``D + 1`` consecutive periods (:func:`sample_values`). The conditions are
+then one finite linear system per group, solved exactly (SVD); the solutions new to the columns
+found before are emitted on as few bodies as possible (one, two, three, then the rest), with
+provenance ``Source.R_M``. Cost: one small system per group (a hand), independent of the rest of
+the robot but for the anchor's twist and motion spans.
 """
 
 from __future__ import annotations
@@ -107,7 +109,8 @@ def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
 
     A body belongs to the group of its 1-dof joint's leading coordinate when that coordinate
     drives at least one other joint; the anchor is the first body up the tree outside the group
-    (``-1``: the world).
+    (``-1``: the world). A group of one body under its anchor is a tree joint (the other rules'
+    business) and is left out.
 
     Parameters
     ----------
@@ -134,7 +137,7 @@ def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
         p = int(robot.parent[i])
         anchor[i] = anchor[p] if p in key and key[p] == key[i] else p
         groups.setdefault((key[i], anchor[i]), []).append(i)
-    return [(a, bodies) for (_, a), bodies in groups.items()]
+    return [(a, bodies) for (_, a), bodies in groups.items() if len(bodies) > 1]
 
 
 def twist_span(robot: Robot, body: int, tol: float = 1e-9) -> np.ndarray:
@@ -385,8 +388,8 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
     (ndarray, list of int) or None
         ``R (10 u, 10 u)``, upper triangular with ``R x = 0`` exactly for the solutions ``x`` of
         :func:`group_system`, and the ``u`` bodies its blocks belong to (the anchor first unless it
-        is the world); None when the group's conditions are too many to check
-        (:data:`MAX_FREQUENCIES`) or no unisolvent set is found (the group is then skipped).
+        is the world); None when :func:`sample_values` finds no exact set of values (the group
+        is then skipped).
     """
     _, ratio, offset = coupled_coordinates(robot)
     q = sample_values(robot, bodies, ratio, tol)
@@ -396,7 +399,9 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
     who = [anchor, *bodies]
     if anchor < 0:
         a, who = a[:, 10:], who[1:]
-    r = np.linalg.qr(a, mode="r") if len(a) >= a.shape[1] else np.vstack([a, np.zeros((a.shape[1] - len(a), a.shape[1]))])
+    if len(a) < a.shape[1]:  # pad to square: the same solutions
+        a = np.vstack([a, np.zeros((a.shape[1] - len(a), a.shape[1]))])
+    r = np.linalg.qr(a, mode="r")
     return r, who
 
 
@@ -527,7 +532,7 @@ def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = Non
 
 
 def _as_columns(bodies: list[int], x: np.ndarray, label: str) -> Columns:
-    """Solutions ``x (d, 10 len(bodies))`` as columns: the highest body's block is ``h``, then ``hp``, ``he``, ``more``."""
+    """Solutions ``x (d, 10 len(bodies))`` as columns: the highest body's block ``h``, then ``hp``, ``he``, ``more``."""
     order = np.argsort(bodies)[::-1]
     d = len(x)
     blk = [x[:, 10 * i: 10 * i + 10] for i in order]

@@ -20,9 +20,9 @@ from ..model.scale import decision_scale, ordinary_size
 from ..numerics import row_mask
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_dense, to_sparse
+from .coupled import coupled_columns
 from .principles import drng_columns
 from .rank import block_rank
-from .coupled import coupled_columns
 from .rules import rule_columns
 
 __all__ = ["DRNGResult", "drng", "unmeasured_columns", "PAPER", "EXTENDED", "UNMEASURED", "PRINCIPLES"]

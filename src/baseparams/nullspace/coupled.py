@@ -418,6 +418,22 @@ def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
     return vt[int(np.sum(s > tol * scale)):]
 
 
+def _subset_nulls(r: np.ndarray, u: int, size: int, tol: float, scale: float):
+    """Nullspaces of ``r`` restricted to every ``size``-subset of the ``u`` blocks, batched.
+
+    Yields ``(subset, column indices, X (d, 10 size))`` for the subsets with a nullspace and no
+    ambiguous singular value (:func:`_null`), one batched SVD for all subsets of the size.
+    """
+    subs = list(combinations(range(u), size))
+    idx = (10 * np.array(subs)[:, :, None] + np.arange(10)).reshape(len(subs), -1)
+    a = r[:, idx].transpose(1, 0, 2)  # (subsets, 10 u, 10 size)
+    _, sv, vt = np.linalg.svd(a, full_matrices=a.shape[1] < a.shape[2])
+    sv = np.concatenate([sv, np.zeros((len(subs), a.shape[2] - sv.shape[1]))], axis=1)
+    zero, clear = sv <= tol * scale, sv >= GAP * tol * scale
+    for k in np.flatnonzero(zero.any(axis=1) & (zero | clear).all(axis=1)):
+        yield subs[k], idx[k], vt[k, int(np.sum(~zero[k])):]
+
+
 def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
     """A basis of the solutions of ``r x = 0`` beyond ``prior``, each on as few of the ``u`` blocks as found.
 
@@ -431,21 +447,17 @@ def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> l
     if null is None:
         return []
     found, out = prior, []
-    sizes = [k for k, most in ((1, u), (2, MAX_PAIRS_BLOCKS), (3, MAX_TRIPLES_BLOCKS)) if u <= most]
-    for sub in (sub for size in sizes for sub in combinations(range(u), size)):
+    for size in [k for k, most in ((1, u), (2, MAX_PAIRS_BLOCKS), (3, MAX_TRIPLES_BLOCKS)) if u <= most]:
         if len(found) >= len(null):
             return out
-        idx = np.concatenate([np.arange(10 * b, 10 * b + 10) for b in sub])
-        x = _null(r[:, idx], tol, scale)
-        if x is None or not len(x):
-            continue
-        emb = np.zeros((len(x), 10 * u))
-        emb[:, idx] = x
-        ru, rs, rvt = np.linalg.svd(emb - (emb @ found.T) @ found, full_matrices=False)
-        k = int(np.sum(rs > NEW))
-        if k:
-            out.append((sub, ru[:, :k].T @ x))
-            found = np.vstack([found, rvt[:k]])
+        for sub, idx, x in _subset_nulls(r, u, size, tol, scale):
+            emb = np.zeros((len(x), 10 * u))
+            emb[:, idx] = x
+            ru, rs, rvt = np.linalg.svd(emb - (emb @ found.T) @ found, full_matrices=False)
+            k = int(np.sum(rs > NEW))
+            if k:
+                out.append((sub, ru[:, :k].T @ x))
+                found = np.vstack([found, rvt[:k]])
     ru, rs, _ = np.linalg.svd(null - (null @ found.T) @ found, full_matrices=False)
     rest = (ru[:, : int(np.sum(rs > NEW))].T @ null).reshape(-1, u, 10)
     if len(rest):

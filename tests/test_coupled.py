@@ -30,7 +30,7 @@ def _origin(rng, keep_axes: bool) -> np.ndarray:
     return t
 
 
-def mimic_hand(rng, offsets: bool = False):
+def mimic_hand(rng, offsets: bool = False, prismatic: float = 0.3):
     """A random arm (fixed, or floating) carrying a hand of 2-3 fingers of 1-2 links on R or P
     joints, every finger joint coupled to the first one or to an earlier follower (chains of
     mimics), with axes often parallel (lockstep fingers) and ratios from :data:`RATIOS`."""
@@ -47,7 +47,7 @@ def mimic_hand(rng, offsets: bool = False):
         up = parent
         for k in range(int(rng.integers(1, 3))):
             keep = rng.random() < 0.7
-            jt = "P" if rng.random() < 0.3 else "R"
+            jt = "P" if rng.random() < prismatic else "R"
             name = f"f{f}l{k}"
             b.add_link(name, parent=up, joint=jt, origin=_origin(rng, keep),
                        axis=axis if keep else rng.normal(size=3), inertia=random_inertia(rng))
@@ -180,3 +180,19 @@ def test_wide_columns_rank_and_expand_consistently():
     assert np.allclose(dense[[20, 0], 0], [more[0][1][0, 0], more[0][1][1, 0]])  # body 2's XX, body 0's XX
     assert block_rank(cols, n) == np.linalg.matrix_rank(dense) == k + 1
     assert block_rank(cols.scaled(np.linspace(1, 2, 10)), n) == k + 1
+
+
+@pytest.mark.parametrize("s", [1e-3, 1e3])
+def test_rule_does_not_depend_on_the_unit_of_length(s):
+    """The same hands drawn with every length times 1e-3 or 1e3 (revolute fingers: a change of
+    unit changes nothing else): R-M finds the same number of directions and DRNG stays complete."""
+    from test_regroup_scale import scaled
+
+    for seed in range(6):
+        robot = mimic_hand(np.random.default_rng(seed), offsets=seed % 2 == 1, prismatic=0.0)
+        big = scaled(robot, s)
+        ref, res = drng(robot), drng(big)
+        assert res.rank == ref.rank
+        assert res.by_principle()[Source.R_M.label] == ref.by_principle()[Source.R_M.label]
+        cert = certify(big, seed=seed, result=res)
+        assert cert.certified and cert.completed == 0, cert.message

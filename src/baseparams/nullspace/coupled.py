@@ -39,6 +39,7 @@ import numpy as np
 from ..enums import Source
 from ..model.inertia import HAT_INDEX
 from ..model.robot import Robot
+from ..model.scale import decision_scale
 from ..pga.core import hat
 from ..pga.linalg import cross3
 from .columns import Columns
@@ -367,7 +368,8 @@ def _potential_rows(robot: Robot, anchor: int, h: np.ndarray, level: np.ndarray 
     return np.concatenate([diff.reshape(4 * (m - 1), -1), np.einsum("la,ab->lb", lv, pot[0].reshape(4, -1))])
 
 
-def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1e-9, level: np.ndarray | None = None):
+def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1e-9, level: np.ndarray | None = None,
+                    unit: np.ndarray | None = None):
     """The conditions of a coupled group reduced to a square triangular factor, or None.
 
     Parameters
@@ -382,12 +384,16 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
         Geometric tolerance.
     level : ndarray, shape ``(L, 4)``, optional
         The anchor's level rows (:func:`group_system`).
+    unit : ndarray, shape ``(10,)``, optional
+        Per-entry factors ``d`` of a body block (:func:`baseparams.model.scale.decision_scale`;
+        default ones): the system is solved for ``y = x / d``, an ordinary-sized equivalent, so
+        that its rank decisions do not depend on the unit of length.
 
     Returns
     -------
     (ndarray, list of int) or None
-        ``R (10 u, 10 u)``, upper triangular with ``R x = 0`` exactly for the solutions ``x`` of
-        :func:`group_system`, and the ``u`` bodies its blocks belong to (the anchor first unless it
+        ``R (10 u, 10 u)``, upper triangular with ``R y = 0`` exactly for the solutions
+        ``x = d y`` of :func:`group_system`, and the ``u`` bodies its blocks belong to (the anchor first unless it
         is the world); None when :func:`sample_values` finds no exact set of values (the group
         is then skipped).
     """
@@ -396,6 +402,9 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
     if q is None:
         return None
     a = group_system(robot, anchor, bodies, ratio, offset, q, level, tol)
+    if unit is not None:
+        a = a * np.tile(unit, len(bodies) + 1)
+        a /= np.linalg.norm(a, axis=1, keepdims=True)
     who = [anchor, *bodies]
     if anchor < 0:
         a, who = a[:, 10:], who[1:]
@@ -466,8 +475,8 @@ def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> l
     return out
 
 
-def _prior_rows(prior: Columns, who: list[int]) -> np.ndarray:
-    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns that lie on the blocks ``who``."""
+def _prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
+    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns on the blocks ``who``, for parameters ``pi / unit``."""
     pos = {b: i for i, b in enumerate(who)}
     inside = np.isin(prior.child, who) & ((prior.parent < 0) | np.isin(prior.parent, who))
     inside &= ((prior.extra < 0) | np.isin(prior.extra, who)) & ~prior.has_more()
@@ -478,7 +487,7 @@ def _prior_rows(prior: Columns, who: list[int]) -> np.ndarray:
     for body, h in ((sel.parent, sel.hp), (sel.extra, sel.he)):
         m = body >= 0
         v[k[m], [pos[int(b)] for b in body[m]]] += h[m]
-    v = v.reshape(len(sel), -1)
+    v = (v / unit).reshape(len(sel), -1)
     if not len(v):
         return v
     v /= np.linalg.norm(v, axis=1, keepdims=True)
@@ -530,16 +539,19 @@ def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = Non
         highest body carries ``h``, the others ``hp`` and ``he``.
     """
     parts, groups = [], coupled_groups(robot)
+    if not groups:
+        return Columns.empty()
     levels = _levels(robot, [a for a, _ in groups], tol)
+    unit = decision_scale(robot, "paper")[:10]
     for anchor, bodies in groups:
-        red = group_nullspace(robot, anchor, bodies, tol, levels.get(anchor))
+        red = group_nullspace(robot, anchor, bodies, tol, levels.get(anchor), unit)
         if red is None:
             continue
         r, who = red
         label = _group_label(robot.names, anchor, bodies)
-        seed = _prior_rows(prior, who) if prior is not None else np.zeros((0, 10 * len(who)))
-        for sub, x in _sparse_solutions(r, len(who), tol, seed):
-            parts.append(_as_columns([who[b] for b in sub], x, label))
+        seed = _prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
+        for sub, y in _sparse_solutions(r, len(who), tol, seed):
+            parts.append(_as_columns([who[b] for b in sub], y * np.tile(unit, len(sub)), label))
     return Columns.concat(parts)
 
 

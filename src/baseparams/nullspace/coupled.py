@@ -476,7 +476,7 @@ def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> l
 
 
 def _prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
-    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns on the blocks ``who`` (parameters ``pi / unit``)."""
+    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns on the blocks ``who`` (for ``pi / unit``)."""
     pos = {b: i for i, b in enumerate(who)}
     inside = np.isin(prior.child, who) & ((prior.parent < 0) | np.isin(prior.parent, who))
     inside &= ((prior.extra < 0) | np.isin(prior.extra, who)) & ~prior.has_more()

@@ -196,3 +196,45 @@ def test_rule_does_not_depend_on_the_unit_of_length(s):
         assert res.by_principle()[Source.R_M.label] == ref.by_principle()[Source.R_M.label]
         cert = certify(big, seed=seed, result=res)
         assert cert.certified and cert.completed == 0, cert.message
+
+
+GRIPPER_MJCF = """<mujoco model="gripper">
+  <worldbody>
+    <body name="arm" pos="0 0 0.5">
+      <joint name="a1" type="hinge" axis="0 0 1"/>
+      <inertial pos="0.1 0 0" mass="2" diaginertia="0.01 0.02 0.03"/>
+      <body name="hand" pos="0.3 0 0">
+        <joint name="a2" type="hinge" axis="0 1 0"/>
+        <inertial pos="0.05 0.01 0" mass="1" diaginertia="0.004 0.003 0.002"/>
+        <body name="left" pos="0.1 0.03 0">
+          <joint name="fl" type="slide" axis="0 1 0"/>
+          <inertial pos="0.02 0 0.01" mass="0.1" diaginertia="0.0002 0.0003 0.0001"/>
+        </body>
+        <body name="right" pos="0.1 -0.03 0">
+          <joint name="fr" type="slide" axis="0 -1 0"/>
+          <inertial pos="0.02 0 -0.01" mass="0.12" diaginertia="0.0002 0.0001 0.0003"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <joint name="mimic" joint1="fr" joint2="fl" polycoef="0 1 0 0 0"/>
+  </equality>
+</mujoco>"""
+
+
+def test_mjcf_equality_joint_gripper_completes_geometrically(tmp_path):
+    """An MJCF parallel gripper whose fingers slide in opposite directions tied by
+    ``<equality><joint polycoef>``: R-M finds the three first-moment directions (each finger's
+    ``b``, ``-2 b`` on the hand) that were completed numerically; the certified nullity is the
+    numerical method's."""
+    from baseparams.loading import load_model
+
+    path = tmp_path / "gripper.xml"
+    path.write_text(GRIPPER_MJCF)
+    robot, _ = load_model(str(path))
+    assert len(robot.couplings) == 1
+    res = drng(robot)
+    cert = certify(robot, seed=0, result=res)
+    assert cert.certified and cert.completed == 0, cert.message
+    assert cert.nullity == 27 and res.by_principle()[Source.R_M.label] == 3

@@ -871,7 +871,7 @@ def build_parser() -> argparse.ArgumentParser:
     model_args(s)
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
     s.add_argument("--paper-only", action="store_true",
-                   help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2)")
+                   help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2, R-M)")
     s.add_argument("--rows", choices=values(Rows), default=str(Rows.ALL),
                    help="measured generalized forces: all (default), joint torques only, or the "
                         "floating base's wrench only")

@@ -209,9 +209,10 @@ workspace of the reference assembly mode or too close to a singularity.
 
 ### 5. Real files (example-robot-data)
 {g('files_analysed', '{}')} URDFs analysed, {g('files_certified', '{}')} certified; **DRNG alone was complete on
-{g('files_drng_complete', '{}')} of {g('files_analysed', '{}')}**. Where it was not, every missing direction comes from
-`<mimic>` couplings (grippers and hands moving in lockstep), completed numerically:
-{d.get('files_drng_incomplete') or 'none'}.
+{g('files_drng_complete', '{}')} of {g('files_analysed', '{}')}**; completed numerically:
+{d.get('files_drng_incomplete') or 'none'}. The `<mimic>` couplings (grippers and hands moving in lockstep) are closed
+by R-M (`docs/extended-rules.md`); before it 8 files were completed numerically (Talos +58, PR2 and TIAGo Pro +44,
+Romeo +10, Baxter +6, Panda +3).
 
 `talos_full_v2` ({g('talos_full_v2_bodies', '{}')} bodies after merging fixed links, free flyer, 12 mimic couplings):
 loading {g('talos_full_v2_load_ms')} ms, **DRNG {g('talos_full_v2_drng_ms')} ms**, certification {g('talos_full_v2_certify_ms', '{:.0f}')} ms; the
@@ -245,7 +246,7 @@ of the extended DRNG, the certified nullity, and what numerical completion had t
 {rows_loops}
 Known cases no rule closes (numerical completion remains the safety net, listed with their
 cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-body directions;
-`cassie.xml`: 1 per leg, its foot linkage on the tarsus) and `<mimic>` couplings (section 5).
+`cassie.xml`: 1 per leg, its foot linkage on the tarsus).
 
 {reports_and_symbolic(d, g)}
 ## Targets
@@ -282,11 +283,11 @@ cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-bo
 * **DRNG vs the PKM validation.** The ratio fell from ~1000x to ~150x because the validation
   got faster (loop closure 6x faster this session: 0.13 s instead of ~1 s for 5 000 samples),
   not because DRNG got slower (~1 ms).
-* **talos_full_v2 end to end.** Its 12 mimic couplings make it a loop robot, DRNG finds 132 of
-  190 directions and the rest are completed numerically: certification needs two stacked
-  regressors (7 600 and 15 200 rows x 450 columns; the saturation check) and their QR factors,
-  ~0.2 s, plus ~0.1 s of loop closure and regressor and ~0.25 s of imports and loading. Without
-  the completion (a rule for mimic couplings) the second factor would go.
+* **talos_full_v2 end to end.** Its 12 mimic couplings make it a loop robot; DRNG finds all 190
+  directions (R-M: 58 of them, one small exact system per gripper, ~10 ms each, which is most of
+  DRNG's time on it; before R-M, 132 and ~0.8 ms). Certification no longer completes, so the
+  second stacked regressor of the saturation check (15 200 rows x 450 columns) is not built:
+  one regressor (7 600 rows) and its QR factor, plus loop closure, imports and loading.
 * **DRNG vs the numerical method on Puma560.** Our numerical baseline is ~15x faster than the
   paper's (4-6 ms vs 74 ms: a vectorised regressor and an economy SVD), and DRNG's ~0.7 ms is
   the overhead of ~250 small numpy calls (one batch per joint type and principle); against the

@@ -530,7 +530,7 @@ def bench_excite(out: dict, quick: bool) -> None:
     number for Puma560 (+-1 rad), the Panda (its limits, 0.075 Hz) and pkm-2rru-1rrs; the Panda's
     recorded trajectory's condition number by the same code."""
     import baseparams
-    from baseparams.excite import design_excitation, random_excitation
+    from baseparams.excitation import design_excitation, random_excitation
 
     panda = Path(__file__).resolve().parents[2] / "shared" / "ident" / "panda_gaz2019" / "panda_mdh_gaz2019.urdf"
     cases = [("puma560", "puma560", 0.1), ("pkm_2rru_1rrs", "pkm-2rru-1rrs", 0.1)]

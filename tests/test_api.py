@@ -1,4 +1,5 @@
-"""The front door: ``import baseparams``; ``load``, ``analyze``, ``regressor`` and ``Analysis``'s maps."""
+"""The front door: ``import baseparams``; ``load``, ``analyze``, ``regressor`` and ``Analysis``'s maps; the whole
+loop ``excite`` -> ``simulate`` -> ``identify`` -> ``predict`` with the command line's names (issue 26)."""
 
 import doctest
 import json
@@ -21,7 +22,11 @@ from paths import SHARED
 
 SRC = str(Path(baseparams.__file__).resolve().parents[1])
 PUBLIC = {"Analysis", "BaseparamsError", "CONVENTIONS", "Inertia", "ModelError", "ModelWarning", "Robot",
-          "RobotBuilder", "analyze", "load", "pose", "regressor", "__version__"}
+          "RobotBuilder", "analyze", "load", "pose", "regressor", "__version__",
+          "Excitation", "Identification", "analyze_symbolic", "excite", "identify", "predict", "simulate"}
+#: what ``import baseparams`` must not import (the functions that need them do)
+HEAVY = ("scipy", "mujoco", "pinocchio", "cvxpy", "clarabel", "sympy", "matplotlib", "dask", "distributed", "numba",
+         "pyarrow", "pandas")
 
 
 def _env():
@@ -66,11 +71,17 @@ def test_public_names_importable():
 
 
 def test_import_is_light():
-    """``import baseparams`` loads numpy and the model, not scipy.sparse, MuJoCo or Pinocchio."""
-    code = ("import sys, baseparams; print(sorted(m for m in sys.modules if m.split('.')[0] in "
-            "('scipy', 'mujoco', 'pinocchio')))")
+    """``import baseparams`` (and reaching the loop's functions) loads numpy and the model: not SciPy, MuJoCo,
+    Pinocchio, cvxpy, SymPy, matplotlib or Dask."""
+    code = ("import sys, baseparams as bp; fs = [bp.excite, bp.simulate, bp.identify, bp.predict, "
+            "bp.analyze_symbolic]; d = dir(bp); "
+            f"print(sorted(m for m in sys.modules if m.split('.')[0] in {HEAVY!r}))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), check=True)
     assert out.stdout.strip() == "[]"
+    # the check itself sees a heavy import
+    code = code.replace("d = dir(bp)", "import scipy.optimize")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), check=True)
+    assert "scipy" in out.stdout
 
 
 def test_package_docstring_examples():
@@ -273,3 +284,142 @@ def test_regressor_loops_unreachable_state_is_an_error():
     robot = baseparams.load("pkm-2rru-1rrs")
     with pytest.raises(baseparams.BaseparamsError, match="do not close the loops"):
         baseparams.regressor(robot, np.full((2, len(robot.actuated)), 50.0))
+
+
+# ---------------------------------------------------------------- the whole loop at the front door (issue 26)
+#: keywords of the front door with no flag of the same name on the command line (Python objects, or ``-v``)
+PYTHON_ONLY = {"limits", "max_iter", "progress", "verify", "couplings"}
+#: the CLI subcommands and the front door's function of the same name
+LOOP = ("analyze", "regressor", "excite", "simulate", "identify", "predict")
+
+
+def _cli_names(command: str) -> set[str]:
+    """The flags (``--min-speed`` as ``min_speed``) and positional arguments of a subcommand."""
+    from baseparams.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")  # noqa: SLF001  (argparse's own)
+    out = set()
+    for action in sub.choices[command]._actions:  # noqa: SLF001
+        out |= {s.lstrip("-").replace("-", "_") for s in action.option_strings if s.startswith("--")}
+        if not action.option_strings:
+            out.add(action.dest)
+    return out
+
+
+def test_every_subcommand_has_its_function():
+    from baseparams.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")  # noqa: SLF001
+    assert set(sub.choices) == {"robots", *LOOP}
+    for name in LOOP:
+        assert callable(getattr(baseparams, name)) and name in baseparams.__all__ and name in dir(baseparams)
+    assert "puma560" in baseparams.robots.BUILTINS  # ``baseparams robots``
+    assert baseparams.Excitation is baseparams.excitation.Excitation
+    assert baseparams.Identification is sys.modules["baseparams.ident.pipeline"].Identification
+
+
+@pytest.mark.parametrize("name", ["excite", "simulate", "identify", "predict", "analyze_symbolic"])
+def test_keywords_are_the_cli_flags(name):
+    """Every keyword of the front door's loop is a flag (or argument) of the subcommand of the same name."""
+    import inspect
+
+    command = "analyze" if name == "analyze_symbolic" else name
+    params = inspect.signature(getattr(baseparams, name)).parameters
+    keywords = {p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY} - PYTHON_ONLY
+    assert keywords and keywords <= _cli_names(command), keywords - _cli_names(command)
+    if name == "identify":
+        assert "coupling" in _cli_names(command)  # couplings=: the repeatable --coupling
+    if name == "analyze_symbolic":
+        assert {"symbolic", "no_verify"} <= _cli_names(command)
+
+
+@pytest.fixture(scope="module")
+def loop(tmp_path_factory):
+    """design -> record (simulated) -> identify -> export, as the README's first screen, in a scratch folder."""
+    folder = tmp_path_factory.mktemp("loop")
+    robot = baseparams.load("puma560")
+    traj = baseparams.excite(robot, period=5, rate=100, harmonics=3, grid=24, starts=1, out=folder / "traj.csv")
+    log, truth = baseparams.simulate(robot, traj, noise=0.05, out=folder / "log.csv")
+    ident = baseparams.identify(robot, log, save=folder / "result.json")
+    return {"folder": folder, "robot": robot, "traj": traj, "log": log, "truth": truth, "ident": ident}
+
+
+def test_loop_end_to_end(loop):
+    robot, traj, log, truth, ident = (loop[k] for k in ("robot", "traj", "log", "truth", "ident"))
+    folder = loop["folder"]
+    assert isinstance(traj, baseparams.Excitation) and isinstance(ident, baseparams.Identification)
+    assert traj.joints == tuple(robot.joint_names) and traj.q.shape == (501, 6) and traj.condition_number < 20
+    # record: the log is the designed motion, at rest at both ends
+    assert np.array_equal(log.t, traj.t) and np.array_equal(log.q, traj.q) and np.abs(log.dq[[0, -1]]).max() < 1e-9
+    # identify: the truth comes back (noise 0.05 N m), within the reported uncertainty
+    cmp = ident.compare_truth(truth)
+    assert cmp["rel_error"] < 0.02 and cmp["rms_z"] < 3
+    # export and check: the saved result, loaded back, predicts what the object does
+    back = baseparams.Identification.load(folder / "result.json", robot)
+    assert np.array_equal(back.values, ident.values)
+    tau = baseparams.predict(robot, folder / "result.json", log)
+    assert tau.shape == (501, 6) and np.allclose(tau, ident.predict(log), rtol=0, atol=1e-12)
+    assert np.sqrt(np.mean((tau - log.tau) ** 2)) < 0.2  # the noise (0.05) and the filter's edge transients
+    # the files are the CLI's: the trajectory and the log read back exactly
+    from baseparams.excitation import read_trajectory
+    from baseparams.io.logs import read_log
+
+    for got, want in zip(read_trajectory(folder / "traj.csv", robot), traj.trajectory):
+        assert np.array_equal(got, want)
+    assert np.array_equal(read_log(folder / "log.csv", robot).tau, log.tau)
+    assert json.loads((folder / "log.csv.truth.json").read_text()) == truth
+
+
+def test_loop_from_files_equals_the_cli(loop, capsys):
+    """``bp.identify(model, "log.csv")`` and ``baseparams identify MODEL log.csv --save`` give the same values; the
+    trajectory file simulates as the object does."""
+    folder = loop["folder"]
+    ident = baseparams.identify("puma560", str(folder / "log.csv"))
+    assert np.array_equal(ident.values, loop["ident"].values)
+    assert main(["identify", "puma560", str(folder / "log.csv"), "--save", str(folder / "cli.json")]) == 0
+    capsys.readouterr()
+    cli = baseparams.Identification.load(folder / "cli.json", loop["robot"])
+    assert np.array_equal(cli.values, ident.values)
+    log, truth = baseparams.simulate("puma560", folder / "traj.csv", noise=0.05)
+    assert np.array_equal(log.tau, loop["log"].tau) and truth == loop["truth"]
+    # a predicted trajectory (no torques): the torques to expect on the robot
+    assert baseparams.predict(loop["robot"], loop["ident"], folder / "traj.csv").shape == (501, 6)
+
+
+def test_loop_refuses_bad_input_in_one_line(loop, tmp_path):
+    robot, folder = loop["robot"], loop["folder"]
+    with pytest.raises(baseparams.BaseparamsError, match="period or base_frequency"):
+        baseparams.excite(robot, period=5, base_frequency=0.2)
+    with pytest.raises(baseparams.BaseparamsError, match="model must be"):
+        baseparams.identify(np.zeros(3), loop["log"])
+    with pytest.raises(baseparams.BaseparamsError, match="noise"):
+        baseparams.simulate(robot, loop["traj"], noise=-1)
+    with pytest.raises(baseparams.BaseparamsError, match="does not exist"):  # checked before the design
+        baseparams.excite(robot, out=tmp_path / "no" / "traj.csv")
+    with pytest.raises(baseparams.BaseparamsError, match="input"):  # never onto an input, checked before the fit
+        baseparams.identify(robot, folder / "log.csv", save=folder / "log.csv")
+    with pytest.raises(baseparams.BaseparamsError, match=".csv or .tsv"):
+        loop["traj"].save(tmp_path / "traj.npz")
+    with pytest.raises(baseparams.BaseparamsError, match="input"):
+        loop["traj"].save(folder / "log.csv", inputs=[folder / "log.csv"], what="--out")
+    with pytest.raises(baseparams.BaseparamsError, match="not this robot .four-bar."):
+        baseparams.predict("four-bar", folder / "result.json", loop["log"])
+
+
+def test_loop_accepts_an_analysis_and_cli_strings(loop):
+    """An Analysis as the model (its robot); ``friction="viscous"`` and ``couplings=["m:joint5=1,joint6=1"]`` as
+    the CLI writes them."""
+    a = baseparams.analyze(loop["robot"])
+    ident = baseparams.identify(a, loop["log"], friction="viscous,coulomb,offset", method="ols")
+    assert ident.model.n_drive == loop["ident"].model.n_drive
+    few = baseparams.identify(a, loop["log"], friction="viscous", couplings=["m:joint5=1,joint6=1"], method="ols")
+    assert few.model.n_drive < ident.model.n_drive and any(n.endswith("_m") for n in few.names)
+
+
+def test_analyze_symbolic_equals_cli_json(capsys):
+    pytest.importorskip("sympy")
+    sa = baseparams.analyze_symbolic("scara-symbolic")
+    assert main(["analyze", "scara-symbolic", "--symbolic", "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    assert sa.n_base == cli["n_base"]
+    assert any(c.effect for c in sa.conditions)  # probed, as the CLI does

@@ -32,7 +32,7 @@ def _no_work(monkeypatch):
     def boom(*a, **k):
         raise AssertionError("the long work started")
 
-    monkeypatch.setattr("baseparams.excite.design_excitation", boom)
+    monkeypatch.setattr("baseparams.excitation.design_excitation", boom)
     monkeypatch.setattr("baseparams.ident.pipeline.identify", boom)
 
 

@@ -42,7 +42,8 @@ def test_public_tuples_are_plain_strings():
 
 def test_sources_keep_their_printed_names():
     assert PAPER == ("shared points", "fixed points", "planar rotations")
-    assert EXTENDED == ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains")
+    assert EXTENDED == ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
+                        "R-M coupled joints")
     assert UNMEASURED == "unmeasured root"
     assert PRINCIPLES == PAPER + EXTENDED + (UNMEASURED, "numerical")
     assert [int(s) for s in Source] == list(range(len(PRINCIPLES)))

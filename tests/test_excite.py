@@ -17,7 +17,7 @@ import pytest
 import baseparams
 from baseparams.cli import main
 from baseparams.errors import BaseparamsError, ModelError
-from baseparams.excite import (
+from baseparams.excitation import (
     design_excitation,
     excitation_limits,
     fourier_basis,

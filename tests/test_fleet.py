@@ -54,6 +54,48 @@ def test_fleet_equals_serial_per_file_and_pooled(fleet, client):
     assert res.spread is not None and np.max(res.spread["std"] / np.abs(res.spread["mean"])) > 0.01
 
 
+def _serial_meat(model, path, f):
+    """One log's HAC meat at ``f``'s estimate, computed in this process (the single-log path's functions)."""
+    from baseparams.ident.pipeline import accumulate_prepared, log_columns
+    from baseparams.ident.preprocess import prepare
+    from baseparams.ident.uncertainty import hac_meat
+    from baseparams.io.logs import read_log
+
+    log = read_log(str(path), model.robot)
+    prep = prepare(log)
+    cols = log_columns(model, log)
+    kept = []
+    acc, _ = accumulate_prepared(model, prep, cols, 128.0, log, None, keep=kept)
+    inv = np.linalg.inv(f.estimate.R11)
+    return hac_meat(kept, inv @ inv.T, f.theta, f.estimate.weights, acc.samples), acc
+
+
+def test_pooled_standard_deviations_are_hac_over_the_logs(fleet, client):
+    from baseparams.ident.uncertainty import apply_covariance, sandwich
+
+    robot, model, paths = fleet
+    # one log: the fleet's pooled HAC equals the single-log path's HAC
+    one = identify_fleet(model, paths[:1], per_file=False, pooled=True, method="wls", client=client)
+    meat, acc = _serial_meat(model, paths[0], one.pooled)
+    ref = apply_covariance(fit(model, acc, "wls"), acc, lambda: [], "white")[0]  # white, for comparison
+    hac = sandwich([meat], np.linalg.inv(one.pooled.estimate.R11) @ np.linalg.inv(one.pooled.estimate.R11).T,
+                   acc.samples * acc.nrows)
+    assert one.pooled.estimate.covariance.startswith("HAC")
+    assert np.allclose(one.pooled.estimate.std, np.sqrt(np.diag(hac)), rtol=1e-8, atol=0)
+    # the simulated noise is correlated: HAC's sigmas are not the white formula's
+    assert np.median(one.pooled.estimate.std / ref.estimate.std) > 1.2
+    # several logs: independent, so their meats add, each with its own bandwidth
+    res = identify_fleet(model, paths, per_file=False, pooled=True, method="wls", client=client)
+    h = np.linalg.inv(res.pooled.estimate.R11)
+    pairs = [_serial_meat(model, p, res.pooled) for p in paths]
+    cov = sandwich([m for m, _ in pairs], h @ h.T, sum(a.samples * a.nrows for _, a in pairs))
+    assert np.allclose(res.pooled.estimate.std, np.sqrt(np.diag(cov)), rtol=1e-8, atol=0)
+    white = identify_fleet(model, paths, per_file=False, pooled=True, method="wls", client=client,
+                           covariance="white")
+    assert white.pooled.estimate.covariance.startswith("white")
+    assert res.to_json()["pooled"]["covariance"] == res.pooled.estimate.covariance
+
+
 def test_a_worker_killed_mid_run_loses_nothing(fleet):
     """Kill one of two worker processes while the fleet runs: Dask reruns its tasks elsewhere."""
     robot, model, paths = fleet

@@ -31,7 +31,7 @@ LAYERS = {
     # estimators) below the readers
     "ident.model": 10.2, "ident.pipeline": 10.4, "ident.stream": 10.5, "ident.simulate": 10.4, "ident.report": 10.6,
     "symbolic": 11,
-    "report": 12, "fleet": 12, "excite": 12,
+    "report": 12, "fleet": 12, "excitation": 12,
     "cli": 13,
     "__main__": 14, "__init__": 14,
 }

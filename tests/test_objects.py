@@ -90,7 +90,7 @@ def test_identification_reprs(ident):
 
 
 def test_excitation_and_fleet_reprs(ident):
-    from baseparams.excite import random_excitation
+    from baseparams.excitation import random_excitation
     from baseparams.fleet import FleetResult
 
     exc = random_excitation(baseparams.load("puma560"), rate=50.0)

@@ -84,3 +84,24 @@ def test_cli_refuses_to_weld_a_joint_that_moves(tmp_path, capsys):
     assert main(["identify", "puma560", str(path), "--joints", ",".join(robot.joint_names[:4])]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and f"joint '{robot.joint_names[4]}' moves in the log" in err
+
+
+def test_front_door_identifies_the_same_sub_chain_as_the_cli(tmp_path, capsys):
+    """``baseparams.identify(..., joints=..., weld=...)`` is ``identify --joints ... --weld ...``: same values, the
+    welds said as ModelWarning warnings."""
+    import json
+
+    from baseparams.cli import main
+
+    path, robot = _still_wrist_log(tmp_path, wrist_moves=False)
+    arm = robot.joint_names[:4]
+    with pytest.warns(baseparams.ModelWarning) as notes:
+        ident = baseparams.identify("puma560", path, joints=arm, friction="none", method="ols")
+    assert any("welded at their logged (still) positions" in str(n.message) for n in notes)
+    assert ident.joints == list(arm) and ident.train["rms_total"] < 1e-3
+    assert main(["identify", "puma560", str(path), "--joints", ",".join(arm), "--friction", "none", "--method", "ols",
+                 "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    assert [e["value"] for e in cli["base_parameters"]] == [e["value"] for e in ident.to_json()["base_parameters"]]
+    with pytest.raises(baseparams.BaseparamsError, match="weld applies with joints"):
+        baseparams.identify("puma560", path, weld={"joint5": 0.3})

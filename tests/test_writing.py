@@ -1,13 +1,16 @@
 """Safe output (``baseparams.files``): atomic writes, never onto an input, never a partial file."""
 
+import ast
 import os
 import signal
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
+import baseparams
 from baseparams.errors import BaseparamsError
 from baseparams.files import atomic_path, refuse_inputs, write_text
 
@@ -72,3 +75,50 @@ def test_a_killed_writer_never_leaves_a_partial_file(tmp_path):
     p.send_signal(signal.SIGTERM)
     p.wait(timeout=20)
     assert f.read_text() == "complete old content\n"
+
+
+_WRITERS = {"write_text", "write_bytes", "savefig", "to_parquet", "to_csv", "savez", "savez_compressed",
+            "write_table", "tofile"}
+
+
+def _temporary(node) -> bool:
+    """The written target is a temporary of ``files.atomic_path`` (by the project's naming) or an open handle."""
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "str" and node.args:
+        return _temporary(node.args[0])
+    return isinstance(node, ast.Name) and (node.id.startswith("tmp") or node.id in ("fh", "buf"))
+
+
+def _direct_writes(path: Path) -> list[str]:
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(node, ast.Call):
+            continue
+        f, first = node.func, (node.args[0] if node.args else None)
+        if isinstance(f, ast.Attribute) and f.attr in _WRITERS:
+            ok = _temporary(f.value) or any(_temporary(a) for a in node.args[:2])
+        elif isinstance(f, ast.Name) and f.id == "open":
+            mode = node.args[1] if len(node.args) > 1 else next((k.value for k in node.keywords if k.arg == "mode"),
+                                                                  None)
+            writes = isinstance(mode, ast.Constant) and any(c in str(mode.value) for c in "wax+")
+            ok = not writes or (first is not None and _temporary(first))
+        else:
+            continue
+        if not ok:
+            found.append(f"{path.name}:{node.lineno}: {ast.unparse(node)[:90]}")
+    return found
+
+
+def test_every_writer_of_the_package_goes_through_the_atomic_writer():
+    # the class of problem, not one input: a file is written only to a temporary of files.atomic_path
+    # (then renamed), so no writer can leave a partial file under the final name or write onto an input
+    src = Path(baseparams.__file__).parent
+    offenders = [w for p in sorted(src.rglob("*.py")) if p.name != "files.py" for w in _direct_writes(p)]
+    assert offenders == []
+
+
+def test_the_scan_finds_a_direct_write(tmp_path):
+    # the scan above is not vacuous
+    bad = tmp_path / "bad.py"
+    bad.write_text("import json\nfrom pathlib import Path\nPath('x').write_text('y')\nopen(out, 'w')\n"
+                   "fig.savefig(path)\nwith open(tmp, 'w') as fh: fh.write('ok')\n")
+    assert [w.split(":")[1] for w in _direct_writes(bad)] == ["3", "4", "5"]

@@ -17,8 +17,9 @@ n_base                 number of base parameters = n_params - nullity
 drng                   {columns, rank, seconds, extended, by_principle{shared points, fixed
                        points, planar rotations}, by_rule{shared points, fixed points, planar
                        rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
-                       R-L2 level chains, numerical}, complete}: rank added by each source in that order (the
-                       paper's principles, the extended rules, numerical completion); complete:
+                       R-L2 level chains, R-M coupled joints, numerical}, complete}: rank added
+                       by each source in that order (the paper's principles, the extended
+                       rules, numerical completion); complete:
                        the geometric span equals the certified nullspace (null if unverified)
 numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
                        requested, kept, and for loops not_converged, branch_jumps,

@@ -116,7 +116,9 @@ def _robot(args) -> Robot:  # noqa: F821
     if _is_symbolic(args.model):  # a DH table with symbols: analysed numerically at its values
         return _symbolic_robot(args)
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
-                              strict_inertia=getattr(args, "strict_inertia", False))
+                              strict_inertia=getattr(args, "strict_inertia", False),
+                              xacro_args=getattr(args, "xacro_args", None),
+                              package_path=getattr(args, "package_path", None))
     for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
     hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""
@@ -364,9 +366,9 @@ def _read_identification_logs(args, robot, path):
     val = read_log(args.validate, robot, columns=args.columns, allow_subset=subset) if args.validate else None
     if args.weld and not subset:
         raise BaseparamsError("--weld applies with --joints (the joints to identify; the others are welded)")
-    if subset and args.urdf:
-        raise BaseparamsError("--urdf with --joints: writing a sub-chain's values into the whole robot's file is "
-                              "not supported; identify every moving joint to export")
+    if subset and (args.urdf or args.mjcf):
+        raise BaseparamsError(f"{'--urdf' if args.urdf else '--mjcf'} with --joints: writing a sub-chain's values "
+                              "into the whole robot's file is not supported; identify every moving joint to export")
     if not subset:
         return log, val, robot
     from .ident.subchain import parse_welds, subchain
@@ -431,6 +433,8 @@ def cmd_identify(args) -> int:
             progress(f"result saved to {args.save}")
         if args.urdf:
             _write_identified_urdf(args, robot, result)
+        if args.mjcf:
+            _write_identified_mjcf(args, result, log)
         if args.plot:
             from .report.plots import torque_plot
 
@@ -469,10 +473,11 @@ def _stream_reason(args, path: str) -> str | None:
         if not ok:
             raise BaseparamsError(f"--stream on: only {', '.join(STREAM_SUFFIXES)} logs are streamed, not {path}"
                                   + (f" / {args.validate}" if args.validate else ""))
-        if args.joints:
-            raise BaseparamsError("--stream on with --joints: a sub-chain's log is read whole (--stream auto)")
+        if args.joints or getattr(args, "mjcf", None):
+            raise BaseparamsError(f"--stream on with {'--joints' if args.joints else '--mjcf'}: the log is read whole "
+                                  f"for it (--stream auto)")
         return "--stream on"
-    if not ok or args.joints:
+    if not ok or args.joints or getattr(args, "mjcf", None):  # --mjcf checks the model on the log's states
         return None
     size = Path(path).stat().st_size / 1e6
     return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
@@ -735,7 +740,7 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
     from .fleet import identify_fleet
     from .ident.model import ident_model
 
-    for opt in ("validate", "holdout", "plot", "urdf", "columns"):
+    for opt in ("validate", "holdout", "plot", "urdf", "mjcf", "columns"):
         if getattr(args, opt):
             raise BaseparamsError(f"--{opt} applies to one log; with several (a fleet) use --per-file / --pooled")
     from .analysis import analyze
@@ -745,7 +750,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
     per_file = args.per_file or not args.pooled
     res = identify_fleet(model, files, per_file=per_file, pooled=args.pooled or len(files) == 1, method=args.method,
                          scheduler=args.scheduler, workers=args.workers, cutoff=args.cutoff, min_speed=args.min_speed,
-                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
+                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr),
+                         covariance=args.covariance)
     if args.json:
         _emit(args, json.dumps(res.to_json(), indent=2))
         return _fleet_exit(args, res, files)
@@ -759,7 +765,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
         lines.append("largest spread across the fleet (std / |mean|): "
                      + ", ".join(f"{model.names[k]} {rel[k]:.3g}" for k in worst))
     if res.pooled is not None:
-        lines += ["pooled estimate:", f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
+        lines += [f"pooled estimate (std: {res.pooled.estimate.covariance}):",
+                  f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
         lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in
                   zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
     _emit(args, "\n".join(lines))
@@ -790,16 +797,24 @@ def _write_identified_urdf(args, robot, result) -> None:
     print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
 
 
+def _write_identified_mjcf(args, result, log) -> None:
+    """``--mjcf FILE``: a copy of the MJCF model with the identified inertias and drive terms, checked by MuJoCo."""
+    from .io.mjcf_write import identified_mjcf
+
+    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=[args.data, args.validate]):
+        print(f"baseparams: note: {note}", file=sys.stderr)
+    print(f"baseparams: MJCF written to {args.mjcf}", file=sys.stderr)
+
+
 def _amplitude(args, robot) -> float:
     """``--amplitude``, or its default: 0.5 rad, within a loop robot's sampling box (its loops close there)."""
     if args.amplitude is not None:
         if not args.amplitude > 0:
             raise BaseparamsError(f"--amplitude must be > 0 rad, got {args.amplitude}")
         return args.amplitude
-    if robot.has_loops and robot.q_box is not None:
-        half = 0.5 * (np.asarray(robot.q_box)[:, 1] - np.asarray(robot.q_box)[:, 0])
-        return float(min(0.5, 0.2 * half.min()))
-    return 0.5
+    from .ident.simulate import default_amplitude
+
+    return default_amplitude(robot)
 
 
 def cmd_simulate(args) -> int:
@@ -840,7 +855,7 @@ def cmd_simulate(args) -> int:
         return EXIT_OK
     trajectory = None
     if args.trajectory:
-        from .excite import read_trajectory
+        from .excitation import read_trajectory
 
         trajectory = read_trajectory(args.trajectory, robot)
     log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=_amplitude(args, robot),
@@ -914,6 +929,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--allow-infeasible-inertia", action="store_true", help=argparse.SUPPRESS)
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
+        _xacro_args(s)
         _samples_args(s)
         s.add_argument("--seed", type=int, default=0, help="random seed")
         s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -922,7 +938,7 @@ def build_parser() -> argparse.ArgumentParser:
     model_args(s)
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
     s.add_argument("--paper-only", action="store_true",
-                   help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2)")
+                   help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2, R-M)")
     s.add_argument("--rows", choices=values(Rows), default=str(Rows.ALL),
                    help="measured generalized forces: all (default), joint torques only, or the "
                         "floating base's wrench only")
@@ -952,12 +968,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: each subcommand's help for its MODEL argument
-_MODEL_FILES = "built-in robot name (see 'baseparams robots') or a robot file: URDF / URDF+ (.urdf) or MJCF (.xml)"
+_MODEL_FILES = ("built-in robot name (see 'baseparams robots') or a robot file: URDF / URDF+ (.urdf), ROS xacro "
+                "(.xacro) or MJCF (.xml)")
 MODEL_HELP = {
     "analyze": f"{_MODEL_FILES}, or a DH table (.dh, '*-symbolic'); a glob pattern ('models/*.urdf') runs a sweep "
                "over many files on Dask",
     "regressor": f"{_MODEL_FILES}: the robot whose TP regressor is computed",
-    "identify": f"{_MODEL_FILES}: the robot the log was recorded on (--urdf needs a .urdf file)",
+    "identify": f"{_MODEL_FILES}: the robot the log was recorded on (--urdf needs a .urdf file, --mjcf a file)",
     "predict": f"{_MODEL_FILES}: the robot the saved identification belongs to (its fingerprint is checked)",
     "simulate": f"{_MODEL_FILES}: the robot simulated (its own inertias are the true parameters)",
     "excite": f"{_MODEL_FILES}: the robot (its joint limits are read from the file)",
@@ -965,6 +982,15 @@ MODEL_HELP = {
 
 #: the subcommands whose ``--samples`` was renamed ``--analysis-samples`` (it reads as log samples there)
 RENAMED_SAMPLES = ("identify", "predict", "simulate", "excite")
+
+
+def _xacro_args(s) -> None:
+    """``--xacro-arg`` and ``--package-path``: a .xacro model's arguments and ROS packages."""
+    s.add_argument("--xacro-arg", action="append", dest="xacro_args", metavar="NAME:=VALUE",
+                   help="an argument of a .xacro model (repeatable)")
+    s.add_argument("--package-path", action="append", metavar="DIR",
+                   help="a folder of ROS packages for a .xacro model's $(find PKG) and package:// (repeatable; "
+                        "then BASEPARAMS_PACKAGE_PATH and ROS_PACKAGE_PATH, os.pathsep-separated)")
 
 
 def _samples_args(s) -> None:
@@ -1024,7 +1050,7 @@ def _identify_parser(sub, model_args) -> None:
     _log_size_args(s)
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
-    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    _export_args(s)
     s.add_argument("--save", metavar="RESULT.json", help="save the result (values, std, options, the model's "
                                                          "fingerprint) for 'baseparams predict'")
     s.add_argument("--truth", metavar="TRUTH.json", help="compare with the true parameters of 'baseparams simulate' "
@@ -1049,6 +1075,14 @@ def _log_size_args(s) -> None:
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="a Dask scheduler (default DASK_SCHEDULER_ADDRESS, else a local cluster for this run)")
     s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
+
+
+def _export_args(s) -> None:
+    """``identify --urdf`` and ``--mjcf``: the model file written back with the identified values."""
+    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    s.add_argument("--mjcf", metavar="FILE", help="physical: write the MJCF or URDF model as MJCF (through MuJoCo's "
+                                                  "MjSpec) with the identified inertias, armature, damping and "
+                                                  "frictionloss, checked by MuJoCo's inverse dynamics")
 
 
 def _simulate_parser(sub, model_args) -> None:
@@ -1081,7 +1115,7 @@ def _keepout(text: str | None):
 
 
 def cmd_excite(args) -> int:
-    """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excite`).
+    """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excitation`).
 
     Progress lines go to stderr; the summary (or ``--json``) to stdout or ``--output``; the
     trajectory to ``--out`` (CSV ``t, q_<joint>, dq_<joint>, ddq_<joint>``, what ``baseparams
@@ -1105,7 +1139,7 @@ def cmd_excite(args) -> int:
         Bad input: the model (no actuated coordinate, a singular reference), infeasible limits,
         options, unwritable outputs.
     """
-    from .excite import design_excitation
+    from .excitation import design_excitation
 
     try:
         robot = _robot(args)
@@ -1166,7 +1200,7 @@ def _excite_parser(sub, model_args) -> None:
 
 #: the optional modules a flag needs, and the extra that installs each
 EXTRAS = {"matplotlib": "plot", "cvxpy": "ident", "clarabel": "ident", "pyarrow": "parquet", "rosbags": "ros",
-          "dask": "fleet", "distributed": "fleet", "sympy": "symbolic"}
+          "dask": "fleet", "distributed": "fleet", "sympy": "symbolic", "xacro": "xacro"}
 #: the figure formats ``--plot`` writes (matplotlib's, by suffix)
 PLOT_SUFFIXES = (".png", ".svg", ".svgz", ".pdf", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff", ".webp", ".pgf")
 
@@ -1195,7 +1229,7 @@ def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
     cmd = args.command
     out = [("--output", getattr(args, "output", None), None), ("--html", getattr(args, "html", None), None),
            ("--plot", getattr(args, "plot", None), PLOT_SUFFIXES), ("--urdf", getattr(args, "urdf", None), None),
-           ("--codegen", getattr(args, "codegen", None), None)]
+           ("--mjcf", getattr(args, "mjcf", None), (".xml",)), ("--codegen", getattr(args, "codegen", None), None)]
     if cmd == "identify":
         out.append(("--predictions", args.predictions, (".csv", ".tsv", ".parquet", ".pq")))
         out.append(("--save", args.save, None))
@@ -1229,6 +1263,8 @@ def _check_extras(args) -> None:
     model = getattr(args, "model", None)
     if model and _is_symbolic(model) or getattr(args, "symbolic", False):
         _need("sympy", "a symbolic robot (DH table)")
+    if model and Path(model).suffix.lower() == ".xacro":
+        _need("xacro", f"{model}: a xacro model")
     if cmd == "analyze" and model and any(ch in model for ch in "*?["):
         _need("distributed", "a sweep over files (a glob MODEL)")
     if cmd != "identify":
@@ -1274,6 +1310,8 @@ def _check_flags(args) -> None:
         if Path(args.model).suffix.lower() != ".urdf" or not Path(args.model).is_file():
             raise BaseparamsError(f"--urdf writes the model file with the identified inertias: it needs a URDF "
                                   f"model file, got {args.model} (nothing was fitted)")
+    if args.command == "identify" and args.mjcf:
+        _check_mjcf_flags(args)
     if args.command == "excite":
         _keepout(args.keepout)
         _acceleration(args.acceleration)
@@ -1282,6 +1320,16 @@ def _check_flags(args) -> None:
         if not 0.0 <= args.margin < 0.5:
             raise BaseparamsError(f"--margin is a fraction of each position range kept free at both ends, in "
                                   f"[0, 0.5); got {args.margin}")
+
+
+def _check_mjcf_flags(args) -> None:
+    """``identify --mjcf``: a physical fit of an MJCF or URDF model file (a URDF through MuJoCo's import)."""
+    if args.method != "physical":
+        raise BaseparamsError("--mjcf needs --method physical: least squares gives base parameters, not bodies "
+                              "(nothing was fitted)")
+    if Path(args.model).suffix.lower() not in (".xml", ".urdf") or not Path(args.model).is_file():
+        raise BaseparamsError(f"--mjcf writes the model file as MJCF with the identified values: it needs an MJCF "
+                              f"(.xml) or URDF (.urdf) model file, got {args.model} (nothing was fitted)")
 
 
 def preflight(args) -> None:

@@ -135,8 +135,9 @@ class Source(IntEnum):  # numpydoc ignore=PR01
     R_B = 4
     R_L1 = 5
     R_L2 = 6
-    UNMEASURED = 7
-    NUMERICAL = 8
+    R_M = 7
+    UNMEASURED = 8
+    NUMERICAL = 9
 
     @property
     def label(self) -> str:
@@ -150,13 +151,13 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
     @property
     def is_extended(self) -> bool:
-        """One of the extended rules R-A, R-B, R-L1, R-L2."""
-        return Source.R_A <= self <= Source.R_L2
+        """One of the extended rules R-A, R-B, R-L1, R-L2, R-M."""
+        return Source.R_A <= self <= Source.R_M
 
 
 _LABELS = ("shared points", "fixed points", "planar rotations",
            "R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-           "unmeasured root", "numerical")
+           "R-M coupled joints", "unmeasured root", "numerical")
 
 
 def values(members) -> tuple[str, ...]:

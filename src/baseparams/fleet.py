@@ -136,7 +136,7 @@ class FleetResult:
         -------
         dict
             ``model, names, logs{given, used, skipped}, files, skipped, per_file{path: values},
-            pooled{values, std} | null, spread{mean, std} | null``.
+            pooled{values, std, covariance} | null, spread{mean, std} | null``.
         """
         names = self.model.names
         given = len(self.files) + sum(s["stage"] == "read" for s in self.skipped)
@@ -145,13 +145,15 @@ class FleetResult:
                 "files": self.files, "skipped": self.skipped,
                 "per_file": {k: f.theta.tolist() for k, f in self.per_file.items()},
                 "pooled": None if self.pooled is None else {"values": self.pooled.theta.tolist(),
-                                                             "std": self.pooled.estimate.std.tolist()},
+                                                             "std": self.pooled.estimate.std.tolist(),
+                                                             "covariance": self.pooled.estimate.covariance},
                 "spread": None if self.spread is None else {k: v.tolist() for k, v in self.spread.items()}}
 
 
 def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: bool = False, method: str = "wls",
                    client=None, scheduler: str | None = None, workers: int | None = None, memory_mb: float = 128.0,
-                   cutoff: float | None = None, min_speed: float | None = None, progress=None) -> FleetResult:
+                   cutoff: float | None = None, min_speed: float | None = None, progress=None,
+                   covariance: str = "hac") -> FleetResult:
     """Identify over many logs on Dask.
 
     Parameters
@@ -179,6 +181,10 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         As for :func:`baseparams.ident.pipeline.identify`.
     progress : callable, optional
         Called with one line per finished log.
+    covariance : {"hac", "white"}
+        The pooled estimate's standard deviations: ``hac`` (a second pass over the logs at the
+        pooled estimate, each log's Newey-West meat summed: logs are independent), or the
+        white-noise formula.
 
     Returns
     -------
@@ -198,23 +204,79 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         raise BaseparamsError("ask for per_file and/or pooled estimates")
     # workers of an existing cluster run elsewhere: they get absolute paths, reports the ones given
     given = {os.path.abspath(p): p for p in paths}
+    from .ident.uncertainty import COVARIANCES
+
+    if covariance not in COVARIANCES:
+        raise BaseparamsError(f"unknown covariance {covariance!r}; choose {' or '.join(COVARIANCES)}")
+    kw = {"model": model, "memory_mb": memory_mb, "cutoff": cutoff, "min_speed": min_speed}
     with _client(client, scheduler, workers) as cl:
-        futures = cl.map(_file_task, [os.path.abspath(p) for p in paths], model=model, memory_mb=memory_mb,
-                         cutoff=cutoff, min_speed=min_speed, pure=False)
+        futures = cl.map(_file_task, [os.path.abspath(p) for p in paths], **kw, pure=False)
         results = _gather(cl, futures, progress, given)
-    skipped = [i for a, i in results if a is None]
-    results = [(a, i) for a, i in results if a is not None]
-    if not results:
-        raise BaseparamsError(f"no usable log: all {len(paths)} skipped (first: {skipped[0]['error']})")
-    accs = [a for a, _ in results]
-    files = [i for _, i in results]
-    fits = _per_file_fits(model, accs, files, method, skipped, progress) if per_file else {}
-    spread = None
-    if len(fits) > 1:
-        thetas = np.array([f.theta for f in fits.values()])
-        spread = {"mean": thetas.mean(axis=0), "std": thetas.std(axis=0, ddof=1)}
-    pooled_fit = fit(model, _tree(accs), method) if pooled else None
+        skipped = [i for a, i in results if a is None]
+        results = [(a, i) for a, i in results if a is not None]
+        if not results:
+            raise BaseparamsError(f"no usable log: all {len(paths)} skipped (first: {skipped[0]['error']})")
+        accs = [a for a, _ in results]
+        files = [i for _, i in results]
+        fits = _per_file_fits(model, accs, files, method, skipped, progress) if per_file else {}
+        spread = None
+        if len(fits) > 1:
+            thetas = np.array([f.theta for f in fits.values()])
+            spread = {"mean": thetas.mean(axis=0), "std": thetas.std(axis=0, ddof=1)}
+        pooled_fit = None
+        if pooled:
+            acc = _tree(accs)
+            pooled_fit = fit(model, acc, method)
+            pooled_fit = _pooled_covariance(cl, pooled_fit, acc, covariance, files, kw, progress)
     return FleetResult(model, fits, pooled_fit, files, spread, skipped)
+
+
+def _pooled_covariance(cl, f, acc, covariance: str, files: list[dict], kw: dict, progress):
+    """The pooled fit with its covariance: HAC from a second pass over the logs used, or white."""
+    from dataclasses import replace
+
+    from .ident.uncertainty import apply_covariance, describe, sandwich, with_covariance
+
+    if covariance == "white":
+        return apply_covariance(f, acc, (), "white")[0]
+    est = f.estimate
+    inv = np.linalg.inv(est.R11)
+    h_inv = inv @ inv.T
+    paths = [os.path.abspath(i["path"]) for i in files]
+    if progress is not None:
+        progress(f"covariance (HAC): a second pass over {len(paths)} logs at the pooled estimate")
+    futures = cl.map(_meat_task, paths, theta=f.theta, h_inv=h_inv, weights=est.weights, **kw, pure=False)
+    meats = cl.gather(futures)
+    cov = sandwich([(m, q) for m, q, _ in meats], h_inv, acc.samples * acc.nrows)
+    widths = sorted({b for _, _, b in meats})
+    label = describe("hac", widths[-1]) + (f" (per log, {widths[0]} to {widths[-1]})" if len(widths) > 1 else "")
+    return replace(f, estimate=with_covariance(est, f.theta, cov, label))
+
+
+def _meat_task(path: str, model: IdentModel, theta, h_inv, weights, memory_mb: float = 128.0,
+               cutoff: float | None = None, min_speed: float | None = None):
+    """One log's HAC meat at the pooled estimate (the covariance's second pass, on a worker).
+
+    Returns ``(S (p, p), Q (p, p), bandwidth)`` of :class:`~baseparams.ident.uncertainty.HacMeat`.
+    """
+    from .ident.pipeline import accumulate_prepared, log_columns
+    from .ident.preprocess import prepare
+    from .ident.uncertainty import hac_meat
+    from .io.logs import read_log
+    from .numerics import blas_threads
+
+    with blas_threads():
+        log = read_log(path, model.robot)
+        prep = prepare(log, cutoff=cutoff, min_speed=min_speed)
+        cols = log_columns(model, log)
+        kept: list = []
+        acc, _ = accumulate_prepared(model, prep, cols, memory_mb, log, min_speed, keep=kept)
+        if not kept:
+            from .ident.uncertainty import fitted_rows
+
+            kept = fitted_rows(model, prep, cols, memory_mb, log, min_speed)
+        meat = hac_meat(kept, h_inv, theta, weights, acc.samples)
+    return meat.meat(), meat.bias(), meat.b
 
 
 def _as_given(info: dict, given: dict[str, str]) -> dict:
@@ -351,6 +413,7 @@ def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: flo
     import json
     from dataclasses import replace
 
+    from .files import write_text
     from .ident.simulate import simulate_log
     from .io.logs import write_log
 
@@ -365,7 +428,7 @@ def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: flo
                                   friction=friction)
         path = out / f"robot{k:04d}{suffix}"
         write_log(path, log)
-        path.with_name(path.name + ".truth.json").write_text(json.dumps(truth))
+        write_text(path.with_name(path.name + ".truth.json"), json.dumps(truth), what="truth")
         paths.append(path)
         print(f"{path}: {log.n_samples} samples", file=sys.stderr)
     return paths

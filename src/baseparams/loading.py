@@ -14,9 +14,9 @@ from .model.robot import Robot
 from .robots import BUILTINS, get
 
 
-def load_model(model: str, floating: bool = False, gravity=None, strict_inertia: bool = False
-               ) -> tuple[Robot, list[str]]:
-    """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xml``/``.mjcf``).
+def load_model(model: str, floating: bool = False, gravity=None, strict_inertia: bool = False,
+               xacro_args=None, package_path=None) -> tuple[Robot, list[str]]:
+    """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xacro``, ``.xml``/``.mjcf``).
 
     Files are read by :func:`.io.load.load_file` (gravity, inertia checks and loop assembly are
     described there); ``floating`` applies to files only.
@@ -33,6 +33,10 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
         URDF files, the model's own for MJCF.
     strict_inertia : bool, optional
         Physically infeasible inertias in a file are errors instead of notes.
+    xacro_args : mapping or iterable of str, optional
+        Arguments of a ``.xacro`` file (``{"NAME": "VALUE"}`` or ``["NAME:=VALUE", ...]``).
+    package_path : str, path or list of them, optional
+        Folders searched for a xacro file's ``$(find PKG)`` and ``package://PKG``.
 
     Returns
     -------
@@ -51,7 +55,10 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
     if model.lower() in BUILTINS and not p.exists():
         if floating:
             raise BaseparamsError("a floating base applies to robot files, not to built-in robots")
+        if xacro_args or package_path:
+            raise BaseparamsError("xacro arguments and a package path apply to .xacro files, not to built-in robots")
         return get(model, gravity=gravity), []
     if not p.exists():
         raise BaseparamsError(f"{model}: no such file, and not a built-in robot (see 'baseparams robots')")
-    return load_file(p, floating=floating, gravity=gravity, strict_inertia=strict_inertia)
+    return load_file(p, floating=floating, gravity=gravity, strict_inertia=strict_inertia, xacro_args=xacro_args,
+                     package_path=package_path)

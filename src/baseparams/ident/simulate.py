@@ -90,7 +90,27 @@ def add_noise(tau: np.ndarray, std, rng: np.random.Generator) -> np.ndarray:
     return tau + rng.normal(size=tau.shape) * np.broadcast_to(np.asarray(std, dtype=float), tau.shape[1:])
 
 
-def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float = 0.5,
+def default_amplitude(robot: Robot) -> float:
+    """The default joint excursion of a simulated log: 0.5, within a loop robot's sampling box.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    float
+        0.5 [rad or m]; for a robot with loops at most a fifth of its sampling box's narrowest
+        half-width (``q_box``), where its loops close.
+    """
+    if robot.has_loops and robot.q_box is not None:
+        half = 0.5 * (np.asarray(robot.q_box)[:, 1] - np.asarray(robot.q_box)[:, 0])
+        return float(min(0.5, 0.2 * half.min()))
+    return 0.5
+
+
+def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
                  noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
                  convention: str = "khalil", trajectory=None, samples: int | None = None):
     """A synthetic joint log of a fixed-base robot, with its true model parameters.
@@ -101,8 +121,8 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         The model (fixed base; loops closed by the actuated joints).
     duration, rate : float
         Length [s] and sampling rate [Hz].
-    amplitude : float
-        Joint excursion of the Fourier excitation [rad or m].
+    amplitude : float, optional
+        Joint excursion of the Fourier excitation [rad or m] (default :func:`default_amplitude`).
     noise : float
         Standard deviation of the Gaussian torque noise [N m or N].
     seed : int
@@ -115,7 +135,7 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         Convention of the true base parameters written out.
     trajectory : tuple of ndarray, optional
         ``(t (S,), q, dq, ddq (S, state_columns))``: the motion to simulate (e.g. a designed
-        excitation, :func:`baseparams.excite.read_trajectory`) instead of a random Fourier series
+        excitation, :func:`baseparams.excitation.read_trajectory`) instead of a random Fourier series
         (``duration``, ``rate`` and ``amplitude`` are then ignored).
     samples : int, optional
         Random states of the base-parameter analysis (default: the analysis's own).
@@ -139,6 +159,10 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
     rng = np.random.default_rng(seed)
     model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction))
+    if amplitude is None:
+        amplitude = default_amplitude(robot)
+    elif not amplitude > 0:
+        raise BaseparamsError(f"amplitude must be > 0 rad, got {amplitude}")
     if trajectory is None:
         t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
     else:

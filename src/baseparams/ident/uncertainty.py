@@ -239,10 +239,46 @@ def hac_covariance(blocks, r11: np.ndarray, theta: np.ndarray, weights: np.ndarr
     bandwidth : int
         The bandwidth used.
     """
-    p = len(theta)
-    w = np.asarray(weights, dtype=float)
     inv = np.linalg.inv(r11)
     h_inv = inv @ inv.T
+    meat = hac_meat(blocks, h_inv, theta, weights, samples, bandwidth, corrected)
+    return sandwich([meat], h_inv, n_obs, corrected), meat.b
+
+
+def hac_meat(blocks, h_inv: np.ndarray, theta: np.ndarray, weights: np.ndarray, samples: int,
+             bandwidth: int | None = None, corrected: bool = True) -> HacMeat:
+    """The HAC meat of one stream of fitted rows (one log), in one pass.
+
+    Parameters
+    ----------
+    blocks : iterable of (ndarray, ndarray)
+        ``(A (n, m, p), tau (n, m))`` of the fitted samples, in time order.
+    h_inv : ndarray, shape ``(p, p)``
+        ``H^-1 = (A^T W A)^-1`` of the fit.
+    theta : ndarray, shape ``(p,)``
+        The estimate the residuals are taken at.
+    weights : ndarray, shape ``(m,)``
+        Row weights of the fit.
+    samples : int
+        Samples of this stream (the plug-in bandwidth grows with it).
+    bandwidth : int, optional
+        Bartlett bandwidth [samples] (default: Andrews' AR(1) plug-in on the first
+        :data:`PILOT` samples).
+    corrected : bool
+        Also accumulate the projection bias ``Q`` (:class:`HacMeat`).
+
+    Returns
+    -------
+    HacMeat
+        The fed meat (``meat()``, ``bias()``, bandwidth ``b``).
+
+    Raises
+    ------
+    BaseparamsError
+        No fitted sample.
+    """
+    p = len(theta)
+    w = np.asarray(weights, dtype=float)
     meat, pilot = None, []
 
     def feed(s, a):
@@ -270,16 +306,41 @@ def hac_covariance(blocks, r11: np.ndarray, theta: np.ndarray, weights: np.ndarr
             feed(x, y)
     if meat is None:
         raise BaseparamsError("no fitted sample to estimate the covariance from")
-    raw = meat.meat()
+    return meat
+
+
+def sandwich(meats, h_inv: np.ndarray, n_obs: int, corrected: bool = True) -> np.ndarray:
+    """The HAC covariance from the meats of independent streams (one per log: their sums add).
+
+    Parameters
+    ----------
+    meats : sequence of HacMeat or of (ndarray, ndarray)
+        Per stream, the meat (or its ``(meat(), bias())``, ``(p, p)`` each), all at the same estimate.
+    h_inv : ndarray, shape ``(p, p)``
+        ``H^-1`` of the fit.
+    n_obs : int
+        Observations ``N`` (samples x rows) of all streams, for the uncorrected ``N / (N - p)``.
+    corrected : bool
+        Add back the meat the fit's projection removes (``kappa Q``,
+        ``kappa = tr(H^-1 S) / (p - tr(H^-1 Q))``); else scale by ``N / (N - p)``.
+
+    Returns
+    -------
+    ndarray, shape ``(p, p)``
+        ``H^-1 (S + kappa Q) H^-1`` (symmetrised).
+    """
+    p = len(h_inv)
+    pairs = [(m.meat(), m.bias()) if isinstance(m, HacMeat) else m for m in meats]
+    raw = sum(s for s, _ in pairs)
     if corrected:
-        q = meat.bias()
+        q = sum(b for _, b in pairs)
         free = p - float(np.trace(h_inv @ q))
         kappa = float(np.trace(h_inv @ raw)) / max(free, 0.25 * p)
         raw = raw + kappa * q
     else:
         raw = raw * (n_obs / max(n_obs - p, 1))
     cov = h_inv @ raw @ h_inv
-    return (cov + cov.T) / 2, meat.b
+    return (cov + cov.T) / 2
 
 
 def describe(covariance: str, bandwidth: int | None = None, rate: float | None = None) -> str:

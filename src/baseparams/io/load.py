@@ -1,4 +1,4 @@
-"""Read a robot file by its suffix (URDF/URDF+, MJCF), assembling closed loops if needed."""
+"""Read a robot file by its suffix (URDF/URDF+, xacro, MJCF), assembling closed loops if needed."""
 
 from __future__ import annotations
 
@@ -11,11 +11,12 @@ from ..kinematics.loops import assemble
 from ..model.robot import Robot
 from .mjcf import load_mjcf
 from .urdf import load_urdf
+from .xacro_in import expand_xacro
 
 
-def load_file(path: str | Path, floating: bool = False, gravity=None, strict_inertia: bool = False
-              ) -> tuple[Robot, list[str]]:
-    """``(robot, notes)`` from a ``.urdf`` or ``.xml``/``.mjcf`` file.
+def load_file(path: str | Path, floating: bool = False, gravity=None, strict_inertia: bool = False,
+              xacro_args=None, package_path=None) -> tuple[Robot, list[str]]:
+    """``(robot, notes)`` from a ``.urdf``, ``.xacro`` or ``.xml``/``.mjcf`` file.
 
     Gravity defaults to ``(0, 0, -9.81)`` for URDF files and to the model's own for MJCF. Physically
     infeasible inertias are notes (one per link), or errors with ``strict_inertia``. Loop robots whose
@@ -26,8 +27,9 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     ----------
     path : str or Path
         The robot file; its suffix (case-insensitive) picks the reader: ``.urdf``
-        (:func:`~baseparams.io.urdf.load_urdf`) or ``.xml``/``.mjcf``
-        (:func:`~baseparams.io.mjcf.load_mjcf`).
+        (:func:`~baseparams.io.urdf.load_urdf`), ``.xacro`` (``robot.urdf.xacro``: expanded by
+        :func:`~baseparams.io.xacro_in.expand_xacro`, then read as URDF; messages name the xacro
+        file) or ``.xml``/``.mjcf`` (:func:`~baseparams.io.mjcf.load_mjcf`).
     floating : bool, optional
         Attach the root link (MJCF: a top-level body without a joint) to the world by a floating
         (F) joint.
@@ -35,6 +37,11 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
         Gravity in the world frame (m/s^2); the defaults are above.
     strict_inertia : bool, optional
         Physically infeasible inertias are errors instead of notes.
+    xacro_args : mapping or iterable of str, optional
+        Arguments of a xacro file: ``{"NAME": "VALUE"}`` or ``["NAME:=VALUE", ...]``.
+    package_path : str, path or list of them, optional
+        Folders searched for a xacro file's ``$(find PKG)`` and ``package://PKG`` (before
+        ``BASEPARAMS_PACKAGE_PATH`` and ``ROS_PACKAGE_PATH``).
 
     Returns
     -------
@@ -48,21 +55,30 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     ------
     BaseparamsError
         A missing file, not a regular file (a folder, a device, a FIFO), larger than
-        :data:`~baseparams.files.MODEL_MAX_BYTES`, or an unknown suffix; :class:`~baseparams.errors.ModelError` (a
-        subclass) for an invalid model.
+        :data:`~baseparams.files.MODEL_MAX_BYTES`, or an unknown suffix; xacro arguments or a package
+        path for a file that is not xacro; the ``xacro`` package missing for a xacro file (naming the
+        extra); :class:`~baseparams.errors.ModelError` (a subclass) for an invalid model or a failed
+        expansion.
     """
     p = check_input(path, MODEL_MAX_BYTES)  # a regular file of at most 64 MB, refused before reading
+    suffix = p.suffix.lower()
+    if suffix != ".xacro" and (xacro_args or package_path):
+        raise BaseparamsError(f"{p}: xacro arguments and a package path apply to .xacro files, not {suffix or 'this'}")
+    notes = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        suffix = p.suffix.lower()
-        if suffix == ".urdf":
+        if suffix == ".xacro":
+            data, notes = expand_xacro(p, xacro_args, package_path)
+            g = (0.0, 0.0, -9.81) if gravity is None else gravity
+            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, data=data)
+        elif suffix == ".urdf":
             g = (0.0, 0.0, -9.81) if gravity is None else gravity
             robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia)
         elif suffix in (".xml", ".mjcf"):
             robot = load_mjcf(p, gravity=gravity, floating=floating, strict_inertia=strict_inertia)
         else:
-            raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xml or .mjcf")
-    notes = [str(w.message) for w in caught]
+            raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xacro, .xml or .mjcf")
+    notes += [str(w.message) for w in caught]
     robot, _, note = assemble(robot)
     if note:
         notes.append(f"{p}: {note}")

@@ -119,13 +119,13 @@ def _strip_assets(mj, spec, base: Path, everything: bool) -> dict[str, str]:
 
 
 def _compile(mj, path: Path):
-    """``(model, notes, affected bodies)``: parse and compile, stripping missing asset files if needed."""
+    """``(model, notes, affected bodies, spec)``: parse and compile, stripping missing asset files if needed."""
     try:
         spec = mj.MjSpec.from_file(str(path))
     except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others
         raise ModelError(f"{path}: {_one_line(exc)}") from None
     try:
-        return spec.compile(), [], set()
+        return spec.compile(), [], set(), spec
     except Exception as exc:  # noqa: BLE001
         first = exc
     if not _ASSET_ERROR.search(str(first)):
@@ -166,7 +166,52 @@ def _compile(mj, path: Path):
         what = "a placeholder inertia (mass 1e-3)" if b in placeholders else "the remaining geoms"
         notes.append(f"{path}: body {b!r}: its inertia came from stripped geoms; {what} used instead "
                      f"(placeholder values; the base-parameter structure does not depend on them)")
-    return model, notes, set(affected)
+    return model, notes, set(affected), spec
+
+
+def compiled_spec(path: str | Path):
+    """The file's ``MjSpec`` and ``MjModel``, as :func:`load_mjcf` reads them.
+
+    Parameters
+    ----------
+    path : str or Path
+        The MJCF file.
+
+    Returns
+    -------
+    spec : mujoco.MjSpec
+        The parsed file, compiled (missing mesh, texture, height-field and skin files stripped
+        with the geoms using them; static bodies fused when the file asks ``fusestatic``); its
+        bodies' ``id`` are the model's body indices.
+    model : mujoco.MjModel
+        The compiled model.
+    notes : list of str
+        What was stripped, one line each.
+
+    Raises
+    ------
+    ModelError
+        A missing file or anything MuJoCo rejects (``path: <MuJoCo's message>``).
+    """
+    path = check_input(path, MODEL_MAX_BYTES, error=ModelError)
+    model, notes, _, spec = _compile(_import_mujoco(), path)
+    return spec, model, notes
+
+
+def one_line(exc: BaseException) -> str:
+    """MuJoCo's message on one line (its reason is often on a second line).
+
+    Parameters
+    ----------
+    exc : BaseException
+        What MuJoCo raised.
+
+    Returns
+    -------
+    str
+        The message's lines joined.
+    """
+    return _one_line(exc)
 
 
 def _pose(pos, rot) -> np.ndarray:

@@ -48,8 +48,8 @@ def _floats(text: str | None, n: int, what: str, default, kind: str | None = Non
     """``n`` finite numbers from an attribute (``default`` when absent); ``kind``: bounded (model.bounds)."""
     if text is None:
         return np.asarray(default, dtype=float)
-    hint = ("; unexpanded xacro/roslaunch substitution; run xacro first"
-            if "$(" in text or "${" in text else "")
+    hint = ("; unexpanded xacro/roslaunch substitution; run xacro first, or read the .xacro file itself "
+            "(pip install 'baseparams[xacro]')" if "$(" in text or "${" in text else "")
     try:
         v = np.array([float(x) for x in text.split()])
     except ValueError:
@@ -61,13 +61,15 @@ def _floats(text: str | None, n: int, what: str, default, kind: str | None = Non
     return v
 
 
-def _parse(path: Path) -> ET.Element:
+def _parse(path: Path, data: bytes | None = None) -> ET.Element:
     """The file's root element, tolerating what urdfdom, Pinocchio and pybullet tolerate.
 
     That is a UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after
-    the root element. Anything else malformed is a one-line error naming the file.
+    the root element. Anything else malformed is a one-line error naming the file. ``data``: the
+    document already read (an expanded xacro file), else the file is read.
     """
-    data = read_input_bytes(path, MODEL_MAX_BYTES, error=ModelError)
+    if data is None:
+        data = read_input_bytes(path, MODEL_MAX_BYTES, error=ModelError)
     if data.startswith(b"\xef\xbb\xbf"):
         data = data[3:]
     body = data.lstrip(b" \t\r\n")
@@ -134,7 +136,7 @@ class _Index(NamedTuple):
 
 
 def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81),
-              name: str | None = None, strict_inertia: bool = False) -> Robot:
+              name: str | None = None, strict_inertia: bool = False, data: bytes | None = None) -> Robot:
     """Read a URDF / URDF+ file into a :class:`Robot` (see the module doc).
 
     Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
@@ -153,6 +155,9 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         The robot's name; default the ``<robot name>`` attribute, else the file's stem.
     strict_inertia : bool, optional
         Physically infeasible inertias of moving links are errors instead of warnings.
+    data : bytes, optional
+        The document, already read (a xacro file expanded by :mod:`baseparams.io.xacro_in`);
+        messages still name ``path``. Default: read ``path``.
 
     Returns
     -------
@@ -175,7 +180,7 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         Physically infeasible inertias of moving links (without ``strict_inertia``).
     """
     path = Path(path)
-    root = _parse(path)
+    root = _parse(path, data)
     if root.tag != "robot":
         raise ModelError(f"{path}: root element is <{root.tag}>, expected <robot>")
     links = _index_links(root, path)

@@ -31,7 +31,7 @@ N m or N), NaN where the file does not say (``None``: nothing known). URDF ``<li
 revolute and prismatic joints (continuous joints: no position limits), MJCF ``range`` of limited
 joints and actuator force ranges. Position limits are in the robot's coordinates: they shift with
 the reference (:func:`~baseparams.kinematics.tree.re_reference`: ``lower - q0, upper - q0``). The
-analysis does not use them; the excitation designer (:mod:`baseparams.excite`) does.
+analysis does not use them; the excitation designer (:mod:`baseparams.excitation`) does.
 """
 
 from __future__ import annotations

@@ -1,13 +1,14 @@
 """Nullspace columns in compact form: blocks on at most three bodies, with provenance.
 
 A column is ``+h`` on one body's ten parameters and, usually, ``-h`` (or ``hp``) on another's
-(paper convention: spatial pseudo-inertia at q = 0, ``hat`` order per body). :class:`Columns`
+(paper convention: spatial pseudo-inertia at q = 0, ``hat`` order per body); a few (the coupled
+groups of R-M) carry blocks on further bodies (``more``). :class:`Columns`
 holds many at once; :func:`to_sparse` expands them to ``B (10 n, k)``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -63,7 +64,7 @@ def outer_params(a: np.ndarray) -> np.ndarray:
     return hat10(outer(a))
 
 
-FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp", "extra", "he")
+FIELDS = ("h", "child", "parent", "principle", "joint", "label", "hp", "extra", "he", "more")
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,6 +99,9 @@ class Columns:
         An optional third body (``-1``: none, lower than ``child``); default all ``-1``.
     he : ndarray, shape ``(k, 10)``, optional
         The block on ``extra``; default zeros.
+    more : ndarray of object, shape ``(k,)``, optional
+        Blocks on further bodies: ``None`` (the default, every column but R-M's widest) or a
+        pair ``(bodies (m,) int, blocks (m, 10))``, each body lower than ``child``.
     """
 
     h: np.ndarray
@@ -109,6 +113,7 @@ class Columns:
     hp: np.ndarray | None = None
     extra: np.ndarray | None = None
     he: np.ndarray | None = None
+    more: np.ndarray | None = None
 
     __repr__ = summary_repr
 
@@ -119,6 +124,34 @@ class Columns:
             object.__setattr__(self, "extra", -np.ones(len(self.child), dtype=int))
         if self.he is None:
             object.__setattr__(self, "he", np.zeros_like(np.asarray(self.h)))
+        if self.more is None:
+            object.__setattr__(self, "more", np.full(len(self.child), None, dtype=object))
+
+    def has_more(self) -> np.ndarray:
+        """Which columns carry blocks beyond ``child``, ``parent`` and ``extra``.
+
+        Returns
+        -------
+        ndarray of bool, shape ``(k,)``
+            True where :attr:`more` is not ``None``.
+        """
+        return ~np.equal(self.more, None)
+
+    def scaled(self, inv: np.ndarray) -> Columns:
+        """The columns for parameters ``pi / d``: every block multiplied by ``inv = 1 / d``.
+
+        Parameters
+        ----------
+        inv : ndarray, shape ``(10,)``
+            Per-entry factors of a body block (``paper`` ``hat`` order), the same for all bodies.
+
+        Returns
+        -------
+        Columns
+            Same bodies and provenance, blocks scaled.
+        """
+        more = np.array([None if m is None else (m[0], m[1] * inv) for m in self.more] + [None], dtype=object)[:-1]
+        return replace(self, h=self.h * inv, hp=self.hp * inv, he=self.he * inv, more=more)
 
     @staticmethod
     def empty() -> Columns:
@@ -171,7 +204,7 @@ class Columns:
 
 
 def _triplets(cols: Columns) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(rows, column indices, values)`` of the entries of ``B``: child, parent and extra blocks."""
+    """``(rows, column indices, values)`` of the entries of ``B``: child, parent, extra and further blocks."""
     k = len(cols)
     rows_c = (10 * cols.child[:, None] + np.arange(10)).ravel()
     cidx = np.repeat(np.arange(k), 10)
@@ -185,6 +218,11 @@ def _triplets(cols: Columns) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rows_p = np.r_[rows_p, (10 * cols.extra[has_e][:, None] + np.arange(10)).ravel()]
         cidx_p = np.r_[cidx_p, np.repeat(np.flatnonzero(has_e), 10)]
         vals_p = np.r_[vals_p, cols.he[has_e].ravel()]
+    for j in np.flatnonzero(cols.has_more()):
+        bodies, blocks = cols.more[j]
+        rows_p = np.r_[rows_p, (10 * np.asarray(bodies)[:, None] + np.arange(10)).ravel()]
+        cidx_p = np.r_[cidx_p, np.full(10 * len(bodies), j)]
+        vals_p = np.r_[vals_p, np.asarray(blocks).ravel()]
     return np.r_[rows_c, rows_p], np.r_[cidx, cidx_p], np.r_[vals_c, vals_p]
 
 

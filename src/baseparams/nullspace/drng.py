@@ -20,6 +20,7 @@ from ..model.scale import decision_scale, ordinary_size
 from ..numerics import row_mask
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_dense, to_sparse
+from .coupled import coupled_columns
 from .principles import drng_columns
 from .rank import block_rank
 from .rules import rule_columns
@@ -47,7 +48,7 @@ class DRNGResult:
     seconds : float
         Wall-clock time DRNG took.
     extended : bool, default True
-        Whether the extended rules (R-A, R-B, R-L1, R-L2) ran besides the paper's principles.
+        Whether the extended rules (R-A, R-B, R-L1, R-L2, R-M) ran besides the paper's principles.
     rows : str, default "all"
         The measured rows the columns were computed for (``joints`` adds the floating root's
         unmeasured columns); :func:`~baseparams.nullspace.certify.certify` checks it.
@@ -109,7 +110,7 @@ class DRNGResult:
         """Rank contributed by each source, taken in order.
 
         The order is the paper's principles 1, 2, 3, then the extended rules R-A, R-B, R-L1,
-        R-L2 (those run), then the unmeasured root's own parameters (joint-torque rows only).
+        R-L2, R-M (those run), then the unmeasured root's own parameters (joint-torque rows only).
         Each source's share is the rank it adds to the sources before it (:func:`scaled_rank`
         of the cumulative set), so the values sum to :attr:`rank`.
 
@@ -190,12 +191,10 @@ def scaled_rank(cols: Columns, robot: Robot) -> int:
     int
         The rank of ``B (10 n, k)`` after scaling.
     """
-    from dataclasses import replace
-
     if ordinary_size(robot):  # d = 1: the columns as they are
         return block_rank(cols, robot.n)
     inv = 1.0 / decision_scale(robot, "paper")[:10]
-    return block_rank(replace(cols, h=cols.h * inv, hp=cols.hp * inv, he=cols.he * inv), robot.n)
+    return block_rank(cols.scaled(inv), robot.n)
 
 
 def unmeasured_columns(robot: Robot, rows: str) -> Columns:
@@ -243,7 +242,8 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
     The paper's Algorithm "DRNG" with slips E1-E5 fixed (:func:`.principles.drng_columns`), then
-    the extended rules (:func:`.rules.rule_columns`), then :func:`unmeasured_columns`; the rank
+    the extended rules (:func:`.rules.rule_columns`, then :func:`.coupled.coupled_columns` for
+    joint couplings, given the columns before), then :func:`unmeasured_columns`; the rank
     is decided by :func:`scaled_rank`.
 
     Parameters
@@ -253,7 +253,8 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     tol : float, default 1e-9
         Geometric tolerance of the principles and rules (parallel axes, zero gravity, ...).
     extended : bool, default True
-        Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2);
+        Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2;
+        :mod:`.coupled`: R-M);
         ``False`` gives the paper's three principles alone.
     rows : {"all", "joints", "base"}, default "all"
         The measured generalized forces (see :func:`unmeasured_columns`).
@@ -274,6 +275,7 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     cols = drng_columns(robot, tol)
     if extended:
         cols = Columns.concat([cols, rule_columns(robot, tol)])
+        cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
     extra = unmeasured_columns(robot, rows)
     if len(extra):
         cols = Columns.concat([cols, extra])

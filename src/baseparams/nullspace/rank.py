@@ -67,7 +67,7 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
     new pure column of ``p``. Without this a translation chain's redundant pure columns cascade
     through the elimination (quadratic in the depth).
     """
-    pure_mask = (cols.parent < 0) & (cols.extra < 0)
+    pure_mask = (cols.parent < 0) & (cols.extra < 0) & ~cols.has_more()
     if not pure_mask.any():
         return cols
     tol = rtol * max(float(np.abs(cols.h).max()), 1e-300)
@@ -123,7 +123,7 @@ def _pure_bases(cols: Columns, pure_mask: np.ndarray, tol: float) -> dict[int, l
 
 def _two_block_groups(cols: Columns, pure_mask: np.ndarray) -> tuple[np.ndarray, dict[int, tuple[int, int]]]:
     """The two-block columns sorted by child body, and body -> its ``[start, stop)`` in them."""
-    two = np.flatnonzero(~pure_mask & (cols.extra < 0))
+    two = np.flatnonzero(~pure_mask & (cols.extra < 0) & ~cols.has_more())
     order = two[np.argsort(cols.child[two], kind="stable")]
     bodies, first = np.unique(cols.child[order], return_index=True)
     span_of = {int(bb): (int(i), int(j)) for bb, i, j in zip(bodies, first, np.r_[first[1:], len(order)])}
@@ -179,6 +179,9 @@ def _column_dict(cols: Columns, k: int) -> dict[int, np.ndarray]:
     v = {int(cols.child[k]): cols.h[k]}
     for body, h in ((cols.parent[k], cols.hp[k]), (cols.extra[k], cols.he[k])):
         if body >= 0:
+            v[int(body)] = v.get(int(body), 0) + h
+    if cols.more[k] is not None:
+        for body, h in zip(*cols.more[k]):
             v[int(body)] = v.get(int(body), 0) + h
     return v
 

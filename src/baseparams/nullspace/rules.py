@@ -767,7 +767,7 @@ def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, ha
 
 
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """All extended-rule columns (R-A, R-B, R-L1, R-L2) for ``robot``.
+    """The extended-rule columns R-A, R-B, R-L1, R-L2 for ``robot`` (R-M: :mod:`.coupled`).
 
     In order: R-A on every body (:func:`fixed_vector_columns`) and across loop joints
     (:func:`loop_shared_columns`), R-B (:func:`sliding_columns`), R-L1

@@ -241,6 +241,8 @@ def provenance_groups(result) -> tuple[object, list[dict]]:
         if str(c.label[k]) not in g["labels"]:
             g["labels"].append(str(c.label[k]))
         g["bodies"] |= {int(b) for b in (c.child[k], c.parent[k], c.extra[k]) if b >= 0}
+        if c.more[k] is not None:
+            g["bodies"] |= {int(b) for b in c.more[k][0]}
     out = []
     for (s, j), g in sorted(groups.items()):
         place, point, axis = _joint_place(robot, Source(s), j)

@@ -29,7 +29,7 @@ def trajectory_plot(excitation, path, robot=None) -> Path:
 
     Parameters
     ----------
-    excitation : baseparams.excite.Excitation
+    excitation : baseparams.excitation.Excitation
         The design.
     path : str or Path
         Output file; the format from its suffix (``.png``, ``.svg``, ``.pdf``).
@@ -73,9 +73,12 @@ def trajectory_plot(excitation, path, robot=None) -> Path:
 
 
 def _save(plt, fig, path: Path) -> Path:
-    """Save and close the figure; an unwritable path is one line."""
+    """Save and close the figure, atomically (:func:`baseparams.files.atomic_path`); an unwritable path is one line."""
+    from ..files import atomic_path
+
     try:
-        fig.savefig(path)
+        with atomic_path(path, what="--plot") as tmp:
+            fig.savefig(tmp, format=path.suffix.lstrip(".").lower() or None)
     except OSError as exc:
         raise BaseparamsError(f"--plot {path}: cannot write ({exc.strerror or exc})") from None
     finally:

@@ -1,0 +1,571 @@
+"""R-M: the nullspace directions that linear joint couplings (``<mimic>``) add.
+
+A coupling ``q_f = m q_l + o`` makes the bodies it drives move as functions of one coordinate.
+Group the 1-dof joints driven by the same independent coordinate ``q_l`` (chains of mimics
+composed); a **coupled group** is a set of bodies ``G`` whose joints all belong to that group,
+hanging from one **anchor** body ``A`` (the first body up the tree whose joint does not), so that
+body ``k`` of ``G`` moves by
+
+    g_k(t) = g_A(t) h_k(q_l(t)),        h_k(q) = prod_j exp(S_j (m_j q + o_j))
+
+(the product over the joints from ``A`` to ``k``, world screws ``S_j`` at the reference). The
+extended rules' one criterion (``docs/extended-rules.md``) then reads, for changes ``dN_A`` and
+``dN_k`` of their pseudo-inertias: the kinetic term
+
+    2 T = K(V, V; dN_A) + sum_k K(xi_k, xi_k; dN_k),   xi_k = Ad(h_k^-1) V + (h_k^-1 h_k') qdot_l,
+
+(``K(a, b; N) = tr(a^ N b^T)`` over the top three rows, ``V`` the anchor's body twist) vanishes for
+every ``V`` in the anchor's twist span and every ``qdot_l``, and the potential's vector
+``c(q) = dN_A e4 + sum_k h_k(q) dN_k e4`` does not change with ``q`` and keeps its height as the
+anchor moves (under the world: its height does not change). Treating ``V`` and ``qdot_l`` as
+independent only makes the conditions stronger, so every solution is a nullspace direction.
+
+Each condition is ``sum_a q^a P_a(q)`` with ``P_a`` trigonometric polynomials whose frequencies
+are integer multiples of the group's common frequency (rational rotation rates), degree ``a`` up
+to twice the P joints on a path; it holds identically iff it holds at ``2 K + 1`` equally spaced
+values in each of ``D + 1`` consecutive periods (:func:`sample_values`). The conditions are
+then one finite linear system per group, solved exactly (SVD); the solutions new to the columns
+found before are emitted on as few bodies as possible (one, two, three, then the rest), with
+provenance ``Source.R_M``. Cost: one small system per group (a hand), independent of the rest of
+the robot but for the anchor's twist and motion spans.
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import numpy as np
+
+from ..enums import Source
+from ..model.inertia import HAT_INDEX
+from ..model.robot import Robot
+from ..model.scale import decision_scale
+from ..pga.core import hat
+from ..pga.linalg import cross3
+from .columns import Columns
+
+RM = Source.R_M
+
+#: largest denominator of a rotation rate (``|omega| m``) taken as rational; a group with another
+#: rate is skipped (fewer directions found, never a wrong one)
+MAX_DENOMINATOR = 64
+#: largest harmonic ``K`` of a group's conditions (samples per period ``2 K + 1``); beyond it the
+#: group is skipped
+MAX_HARMONIC = 256
+#: singular values of a group's conditions must be below ``tol`` or above ``GAP * tol`` (relative)
+GAP = 1e4
+#: smallest component (of a unit solution) outside the directions already found that counts as new
+NEW = 1e-6
+#: largest group (anchor included) whose solutions on three bodies are searched; larger groups
+#: search fewer and give the rest as wider columns
+MAX_TRIPLES_BLOCKS = 10
+#: largest group (anchor included) whose solutions on two bodies are searched
+MAX_PAIRS_BLOCKS = 24
+
+
+def coupled_coordinates(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each coordinate as a function of its leader: ``q[j] = ratio[j] q[lead[j]] + offset[j]``.
+
+    Chains of couplings are composed. Coordinates driven by several coordinates (a coupling with
+    :attr:`~baseparams.model.robot.Coupling.more` terms) get ``lead = -1``, as do the ones they
+    drive, and coordinates of multi-dof joints.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates, :attr:`~baseparams.model.robot.Robot.couplings`).
+
+    Returns
+    -------
+    lead : ndarray of int, shape ``(dof,)``
+        The driving coordinate (``j`` itself for an independent coordinate; ``-1``: not grouped).
+    ratio : ndarray, shape ``(dof,)``
+        Multiplier (dimensionless for R-R or P-P, rad/m or m/rad otherwise).
+    offset : ndarray, shape ``(dof,)``
+        Constant term (rad or m).
+    """
+    dof = robot.dof
+    drive = {c.succ: c for c in robot.couplings}
+    lead, ratio, offset = np.arange(dof), np.ones(dof), np.zeros(dof)
+    one = np.ones(dof, dtype=bool)
+    one[robot.q_index[robot.ndofs != 1]] = False  # coordinates of multi-dof joints
+    for j in range(dof):
+        k, r, o, seen = j, 1.0, 0.0, {j}
+        while k in drive and lead[j] >= 0:
+            c = drive[k]
+            if c.more or c.pred in seen or not one[c.pred]:
+                lead[j] = -1
+                break
+            r, o, k = r * c.ratio, o + r * c.offset, c.pred
+            seen.add(k)
+        if lead[j] >= 0:
+            lead[j], ratio[j], offset[j] = k, r, o
+        if not one[j]:
+            lead[j] = -1
+    return lead, ratio, offset
+
+
+def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
+    """The coupled groups: ``(anchor, bodies)`` with the bodies base-first.
+
+    A body belongs to the group of its 1-dof joint's leading coordinate when that coordinate
+    drives at least one other joint; the anchor is the first body up the tree outside the group
+    (``-1``: the world). A group of one body under its anchor is a tree joint (the other rules'
+    business) and is left out.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+
+    Returns
+    -------
+    list of (int, list of int)
+        Anchor body and the group's bodies (increasing indices, so parents first).
+    """
+    if not robot.couplings:
+        return []
+    lead, _, _ = coupled_coordinates(robot)
+    qi = robot.q_index
+    driven = np.bincount(lead[lead >= 0], minlength=robot.dof)
+    key = {}
+    for i in range(robot.n):
+        if robot.ndofs[i] == 1 and lead[qi[i]] >= 0 and driven[lead[qi[i]]] > 1:
+            key[i] = int(lead[qi[i]])
+    groups: dict[tuple[int, int], list[int]] = {}
+    anchor = {}
+    for i in sorted(key):
+        p = int(robot.parent[i])
+        anchor[i] = anchor[p] if p in key and key[p] == key[i] else p
+        groups.setdefault((key[i], anchor[i]), []).append(i)
+    return [(a, bodies) for (_, a), bodies in groups.items() if len(bodies) > 1]
+
+
+def twist_span(robot: Robot, body: int, tol: float = 1e-9) -> np.ndarray:
+    """Orthonormal basis ``(r, 6)`` of the body twists ``g^-1 dg`` a body takes, over all motions.
+
+    The body Jacobian's column of joint ``j`` is ``Ad((e^{S_{j+1} q} ... e^{S_p q})^-1) S_j``;
+    over all ``q`` it spans the closure of ``S_j`` under ``ad`` of the later screws on the path.
+    Coupled coordinates are treated as independent (a larger span: stronger conditions).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    body : int
+        The body (``-1``: the world, no motion).
+    tol : float, default 1e-9
+        Rank threshold.
+
+    Returns
+    -------
+    ndarray, shape ``(r, 6)``
+        Twists ``(omega, v)`` in world coordinates at the reference, orthonormal rows.
+    """
+    path = []
+    while body >= 0:
+        path.append(body)
+        body = int(robot.parent[body])
+    dofs = np.flatnonzero(np.isin(robot.dof_body, path))  # base-first along the path
+    s, span = robot.screws, np.zeros((0, 6))
+    for k, j in enumerate(dofs):  # root first: a floating root saturates the span at once
+        span = _orth(np.vstack([span, _closure(s[j][None], s[dofs[k + 1:]], tol)]), tol)
+        if len(span) == 6:
+            break
+    return span
+
+
+def _ad(s: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``ad_s x`` of twists ``(omega, v)``: ``(6,), (m, 6) -> (m, 6)``."""
+    w, v = s[:3], s[3:]
+    return np.hstack([cross3(w, x[:, :3]), cross3(w, x[:, 3:]) + cross3(v, x[:, :3])])
+
+
+def _closure(span: np.ndarray, gens: np.ndarray, tol: float) -> np.ndarray:
+    """Orthonormal basis of the smallest ``ad_{gens}``-invariant subspace containing ``span``."""
+    basis = _orth(span, tol)
+    while len(basis) < 6:
+        grown = _orth(np.vstack([basis] + [_ad(s, basis) for s in gens]), tol)
+        if len(grown) == len(basis):
+            return grown
+        basis = grown
+    return basis
+
+
+def _orth(a: np.ndarray, tol: float) -> np.ndarray:
+    if len(a) == 0:
+        return np.zeros((0, a.shape[1]))
+    _, s, vt = np.linalg.svd(a, full_matrices=False)
+    return vt[: int(np.sum(s > tol * max(1.0, s[0])))]
+
+
+def _rates(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float) -> tuple[list[float], list[int]]:
+    """Per body: the sum of its path's rotation rates ``|omega_j m_j|`` and its number of slides.
+
+    A slide is a P joint or a helical one (its translation grows with the coordinate).
+    """
+    qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
+    rates, slides = [], []
+    for k in bodies:
+        s = robot.screws[qi[k]]
+        w = float(np.linalg.norm(s[:3]))
+        p = pos.get(int(robot.parent[k]))
+        rate, sl = (0.0, 0) if p is None else (rates[p], slides[p])
+        rates.append(rate + w * abs(float(ratio[qi[k]])))
+        slides.append(sl + int(w <= tol or abs(float(s[:3] @ s[3:])) > tol * max(1.0, float(np.linalg.norm(s[3:])))))
+    return rates, slides
+
+
+def sample_values(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float = 1e-9) -> np.ndarray | None:
+    """Values of the leading coordinate on which a group's conditions hold iff they hold for all.
+
+    Every condition is ``sum_a q^a P_a(q)`` with ``a <= D`` (``D`` twice the most slides on a
+    path) and ``P_a`` trigonometric polynomials whose frequencies are sums of ``s_j f_j``,
+    ``|s_j| <= 2``, over the rates ``f_j = |omega_j m_j|`` of a path's rotations. With rational
+    rates (denominator at most :data:`MAX_DENOMINATOR`) these are integer multiples ``k f0``,
+    ``|k| <= K``, of their greatest common divisor ``f0``. The values are ``N = 2 K + 1``
+    equally spaced points in each of ``D + 1`` consecutive periods ``T = 2 pi / f0``: at each
+    point the ``D + 1`` values ``q + m T`` make every ``P_a`` vanish there, and a trigonometric
+    polynomial of degree ``K`` vanishing at ``N`` equally spaced points of a period is zero.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    bodies : list of int
+        The group's bodies, parents first.
+    ratio : ndarray, shape ``(dof,)``
+        Multipliers from :func:`coupled_coordinates`.
+    tol : float, default 1e-9
+        Tolerance of a rate's rational approximation (relative) and of a slide.
+
+    Returns
+    -------
+    ndarray, shape ``(N (D + 1),)`` or None
+        The values (rad or m); None when a rate is not rational enough or ``K`` exceeds
+        :data:`MAX_HARMONIC` (the group is then skipped).
+    """
+    from fractions import Fraction
+    from math import gcd, lcm
+
+    rates, slides = _rates(robot, bodies, ratio, tol)
+    qi = robot.q_index
+    fr = []
+    for k in bodies:
+        w = float(np.linalg.norm(robot.screws[qi[k]][:3])) * abs(float(ratio[qi[k]]))
+        if w > tol:
+            f = Fraction(w).limit_denominator(MAX_DENOMINATOR)
+            if abs(float(f) - w) > tol * max(1.0, w):
+                return None
+            fr.append(f)
+    f0, harmonic = Fraction(1), 0
+    if fr:
+        f0 = Fraction(gcd(*(f.numerator for f in fr)), lcm(*(f.denominator for f in fr)))
+        harmonic = int(round(2 * max(rates) / float(f0)))
+    if harmonic > MAX_HARMONIC:
+        return None
+    n, period, deg = 2 * harmonic + 1, 2 * np.pi / float(f0), 2 * max(slides)
+    base = (np.arange(n) + 0.5) * period / n
+    return (base[None, :] + period * (np.arange(deg + 1)[:, None] - 0.5 * (deg + 1))).ravel()
+
+
+def _motions(robot: Robot, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
+             q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``h_k(q)`` and ``dh_k/dq`` of the group's bodies relative to the anchor: ``(M, G, 4, 4)`` each."""
+    from ..pga.core import se3_exp
+
+    qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
+    h = np.zeros((len(q), len(bodies), 4, 4))
+    dh = np.zeros_like(h)
+    for i, k in enumerate(bodies):
+        s, r = robot.screws[qi[k]], float(ratio[qi[k]])
+        e = se3_exp((r * q + float(offset[qi[k]]))[:, None] * s)  # (M, 4, 4)
+        es = e @ hat(s) * r
+        p = pos.get(int(robot.parent[k]))
+        if p is None:
+            h[:, i], dh[:, i] = e, es
+        else:
+            h[:, i], dh[:, i] = h[:, p] @ e, dh[:, p] @ e + h[:, p] @ es
+    return h, dh
+
+
+def _functional(c: np.ndarray) -> np.ndarray:
+    """Coefficients ``(*, 10)`` of ``dN -> tr(dN c)`` on the ``hat`` entries of a symmetric ``dN``: ``(*, 4, 4)``."""
+    s = c + np.swapaxes(c, -1, -2)
+    out = np.stack([s[..., i, j] for i, j in HAT_INDEX], axis=-1)
+    out[..., [0, 3, 5, 9]] *= 0.5
+    return out
+
+
+def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
+                 q: np.ndarray, level: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
+    """The criterion's conditions on a coupled group: ``(rows, 10 (G + 1))`` (anchor block first).
+
+    Rows: the kinetic form's entries ``K(a, b)`` for ``a <= b`` among ``qdot_l`` and a basis of
+    the anchor's twist span (:func:`twist_span`), at every value of ``q``; then, with gravity,
+    the potential (:func:`_potential_rows`). Each row is normalised (zero rows dropped).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    anchor : int
+        The group's anchor (``-1``: the world, whose block the caller drops).
+    bodies : list of int
+        The group's bodies, parents first.
+    ratio, offset : ndarray, shape ``(dof,)``
+        From :func:`coupled_coordinates`.
+    q : ndarray, shape ``(M,)``
+        Values of the leading coordinate (:func:`sample_values`).
+    level : ndarray, shape ``(L, 4)``, optional
+        Rows ``gbar^T X`` over a basis ``X`` of the anchor's motion span
+        (:mod:`.subspaces`): a vector ``c`` of the anchor keeps its height iff ``level c = 0``;
+        default none known (only ``c = 0``).
+    tol : float, default 1e-9
+        Geometric tolerance.
+
+    Returns
+    -------
+    ndarray, shape ``(rows, 10 (G + 1))``
+        Linear conditions on the ``paper``-convention parameter changes (``hat`` order, world
+        frame at q = 0) of the anchor then of each body.
+    """
+    h, dh = _motions(robot, bodies, ratio, offset, q)
+    w = twist_span(robot, anchor, tol) if anchor >= 0 else np.zeros((0, 6))
+    gens = hat(w)  # (r, 4, 4)
+    hinv = np.linalg.inv(h)
+    xk = np.concatenate([(hinv @ dh)[:, :, None], hinv[:, :, None] @ gens[None, None] @ h[:, :, None]], axis=2)
+    xa = np.concatenate([np.zeros((1, 4, 4)), gens])  # the anchor does not see qdot_l
+    a, b = np.triu_indices(len(w) + 1)
+    fk = _functional(np.swapaxes(xk[:, :, b, :3], -1, -2) @ xk[:, :, a, :3])  # (M, G, P, 10)
+    fa = _functional(np.swapaxes(xa[b, :3], -1, -2) @ xa[a, :3])  # (P, 10)
+    m, g, npair = fk.shape[0], len(bodies), len(a)
+    kin = np.concatenate([np.broadcast_to(fa, (m, npair, 10)), np.moveaxis(fk, 1, 2).reshape(m, npair, 10 * g)], axis=2)
+    rows = [kin.reshape(m * npair, 10 * (g + 1))]
+    if np.linalg.norm(robot.gravity) > tol:
+        rows.append(_potential_rows(robot, anchor, h, level))
+    out = np.concatenate(rows)
+    norm = np.linalg.norm(out, axis=1)
+    keep = norm > tol * max(1.0, float(norm.max()))
+    return out[keep] / norm[keep, None]
+
+
+def _potential_rows(robot: Robot, anchor: int, h: np.ndarray, level: np.ndarray | None) -> np.ndarray:
+    """The potential's conditions ``(rows, 10 (G + 1))``: ``c(q) = dN_A e4 + sum_k h_k(q) dN_k e4``.
+
+    Under the world (fixed) the height ``gbar^T c(q)`` must not change with ``q``; under a
+    moving anchor ``c(q)`` must not change and keep its height as the anchor moves
+    (``level c = 0``).
+    """
+    m, g = h.shape[0], h.shape[1]
+    pot = np.zeros((m, 4, g + 1, 10))
+    pot[:, :, 0, 6:] = np.eye(4)
+    pot[:, :, 1:, 6:] = np.moveaxis(h, 1, 2)  # h_k(q) dN_k e4
+    diff = (pot[1:] - pot[:1]).reshape(m - 1, 4, -1)
+    if anchor < 0:
+        return np.einsum("a,mab->mb", np.r_[robot.gravity, 0.0], diff)
+    lv = np.zeros((0, 4)) if level is None else level
+    return np.concatenate([diff.reshape(4 * (m - 1), -1), np.einsum("la,ab->lb", lv, pot[0].reshape(4, -1))])
+
+
+def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1e-9, level: np.ndarray | None = None,
+                    unit: np.ndarray | None = None):
+    """The conditions of a coupled group reduced to a square triangular factor, or None.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    anchor : int
+        The anchor body (``-1``: the world).
+    bodies : list of int
+        The group's bodies, parents first (:func:`coupled_groups`).
+    tol : float, default 1e-9
+        Geometric tolerance.
+    level : ndarray, shape ``(L, 4)``, optional
+        The anchor's level rows (:func:`group_system`).
+    unit : ndarray, shape ``(10,)``, optional
+        Per-entry factors ``d`` of a body block (:func:`baseparams.model.scale.decision_scale`;
+        default ones): the system is solved for ``y = x / d``, an ordinary-sized equivalent, so
+        that its rank decisions do not depend on the unit of length.
+
+    Returns
+    -------
+    (ndarray, list of int) or None
+        ``R (10 u, 10 u)``, upper triangular with ``R y = 0`` exactly for the solutions
+        ``x = d y`` of :func:`group_system`, and the ``u`` bodies its blocks belong to (the anchor first unless it
+        is the world); None when :func:`sample_values` finds no exact set of values (the group
+        is then skipped).
+    """
+    _, ratio, offset = coupled_coordinates(robot)
+    q = sample_values(robot, bodies, ratio, tol)
+    if q is None:
+        return None
+    a = group_system(robot, anchor, bodies, ratio, offset, q, level, tol)
+    if unit is not None:
+        a = a * np.tile(unit, len(bodies) + 1)
+        a /= np.linalg.norm(a, axis=1, keepdims=True)
+    who = [anchor, *bodies]
+    if anchor < 0:
+        a, who = a[:, 10:], who[1:]
+    if len(a) < a.shape[1]:  # pad to square: the same solutions
+        a = np.vstack([a, np.zeros((a.shape[1] - len(a), a.shape[1]))])
+    r = np.linalg.qr(a, mode="r")
+    return r, who
+
+
+def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
+    """Orthonormal rows spanning the nullspace of ``a``; None when a singular value is ambiguous.
+
+    Ambiguous: between ``tol * scale`` and ``GAP * tol * scale`` (neither clearly zero nor clearly
+    not): the subset or group is then skipped (fewer directions, never a wrong one).
+    """
+    _, s, vt = np.linalg.svd(a, full_matrices=a.shape[0] < a.shape[1])
+    s = np.r_[s, np.zeros(a.shape[1] - len(s))]
+    if np.any((s > tol * scale) & (s < GAP * tol * scale)):
+        return None
+    return vt[int(np.sum(s > tol * scale)):]
+
+
+def _subset_nulls(r: np.ndarray, u: int, size: int, tol: float, scale: float):
+    """Nullspaces of ``r`` restricted to every ``size``-subset of the ``u`` blocks, batched.
+
+    Yields ``(subset, column indices, X (d, 10 size))`` for the subsets with a nullspace and no
+    ambiguous singular value (:func:`_null`), one batched SVD for all subsets of the size.
+    """
+    subs = list(combinations(range(u), size))
+    idx = (10 * np.array(subs)[:, :, None] + np.arange(10)).reshape(len(subs), -1)
+    a = r[:, idx].transpose(1, 0, 2)  # (subsets, 10 u, 10 size)
+    _, sv, vt = np.linalg.svd(a, full_matrices=a.shape[1] < a.shape[2])
+    sv = np.concatenate([sv, np.zeros((len(subs), a.shape[2] - sv.shape[1]))], axis=1)
+    zero, clear = sv <= tol * scale, sv >= GAP * tol * scale
+    for k in np.flatnonzero(zero.any(axis=1) & (zero | clear).all(axis=1)):
+        yield subs[k], idx[k], vt[k, int(np.sum(~zero[k])):]
+
+
+def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
+    """A basis of the solutions of ``r x = 0`` beyond ``prior``, each on as few of the ``u`` blocks as found.
+
+    Subsets of blocks by size (1; 2 when ``u <= MAX_PAIRS_BLOCKS``; 3 when
+    ``u <= MAX_TRIPLES_BLOCKS``: the cost stays bounded per group), each kept for the
+    directions it adds to ``prior (p, 10 u)`` (orthonormal rows) and the ones before; what they
+    leave is returned on all the blocks it touches: ``[(blocks, X (d, 10 len(blocks)))]``.
+    """
+    scale = max(float(np.abs(r).max()), 1e-300)
+    null = _null(r, tol, scale)
+    if null is None:
+        return []
+    found, out = prior, []
+    for size in [k for k, most in ((1, u), (2, MAX_PAIRS_BLOCKS), (3, MAX_TRIPLES_BLOCKS)) if u <= most]:
+        if len(found) >= len(null):
+            return out
+        for sub, idx, x in _subset_nulls(r, u, size, tol, scale):
+            emb = np.zeros((len(x), 10 * u))
+            emb[:, idx] = x
+            ru, rs, rvt = np.linalg.svd(emb - (emb @ found.T) @ found, full_matrices=False)
+            k = int(np.sum(rs > NEW))
+            if k:
+                out.append((sub, ru[:, :k].T @ x))
+                found = np.vstack([found, rvt[:k]])
+    ru, rs, _ = np.linalg.svd(null - (null @ found.T) @ found, full_matrices=False)
+    rest = (ru[:, : int(np.sum(rs > NEW))].T @ null).reshape(-1, u, 10)
+    if len(rest):
+        sub = tuple(int(b) for b in np.flatnonzero(np.abs(rest).max(axis=(0, 2)) > 0))
+        out.append((sub, rest[:, sub].reshape(len(rest), -1)))
+    return out
+
+
+def _prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
+    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns on the blocks ``who`` (for ``pi / unit``)."""
+    pos = {b: i for i, b in enumerate(who)}
+    inside = np.isin(prior.child, who) & ((prior.parent < 0) | np.isin(prior.parent, who))
+    inside &= ((prior.extra < 0) | np.isin(prior.extra, who)) & ~prior.has_more()
+    sel = prior.subset(inside)
+    v = np.zeros((len(sel), len(who), 10))
+    k = np.arange(len(sel))
+    v[k, [pos[int(b)] for b in sel.child]] += sel.h
+    for body, h in ((sel.parent, sel.hp), (sel.extra, sel.he)):
+        m = body >= 0
+        v[k[m], [pos[int(b)] for b in body[m]]] += h[m]
+    v = (v / unit).reshape(len(sel), -1)
+    if not len(v):
+        return v
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    _, s, vt = np.linalg.svd(v, full_matrices=False)
+    return vt[: int(np.sum(s > 1e-9 * s[0]))]
+
+
+def _levels(robot: Robot, anchors: list[int], tol: float) -> dict[int, np.ndarray]:
+    """Per moving anchor, the rows ``gbar^T X ((L, 4))`` over its motion span's basis (:mod:`.subspaces`)."""
+    moving = sorted({a for a in anchors if a >= 0})
+    if not moving or np.linalg.norm(robot.gravity) <= tol:
+        return {}
+    from .subspaces import motion_spans
+
+    ms = motion_spans(robot, tol)
+    g = robot.gravity / np.linalg.norm(robot.gravity)
+    return {a: np.einsum("a,kab->kb", g, ms.padded[a]) for a in moving}
+
+
+def _group_label(names: list[str], anchor: int, bodies: list[int]) -> str:
+    top = names[anchor] if anchor >= 0 else "the world"
+    return f"coupled group on {top}: {', '.join(names[b] for b in bodies)}"
+
+
+def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = None) -> Columns:
+    """R-M: the columns the coupled groups add, each on at most three bodies.
+
+    For every coupled group (:func:`coupled_groups`) the criterion's conditions
+    (:func:`group_system`) are solved exactly (:func:`group_nullspace`), and the solutions
+    supported on one, two or three of its bodies (the anchor included) are emitted, each only
+    for the directions it adds to ``prior`` and to the ones before, until they span all
+    solutions; what no such subset gives is emitted on all the group's bodies it touches.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Geometric tolerance (relative singular-value threshold of the group systems).
+    prior : Columns, optional
+        Columns found before (the principles and the other rules): only new directions are
+        emitted, so that no column repeats a known one up to rounding.
+
+    Returns
+    -------
+    Columns
+        Columns in the ``paper`` convention (spatial pseudo-inertia entries ``XX XY XZ YY YZ ZZ
+        MX MY MZ M`` of each body, world frame at q = 0), provenance ``R-M coupled joints``; the
+        highest body carries ``h``, the others ``hp`` and ``he``.
+    """
+    parts, groups = [], coupled_groups(robot)
+    if not groups:
+        return Columns.empty()
+    levels = _levels(robot, [a for a, _ in groups], tol)
+    unit = decision_scale(robot, "paper")[:10]
+    for anchor, bodies in groups:
+        red = group_nullspace(robot, anchor, bodies, tol, levels.get(anchor), unit)
+        if red is None:
+            continue
+        r, who = red
+        label = _group_label(robot.names, anchor, bodies)
+        seed = _prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
+        for sub, y in _sparse_solutions(r, len(who), tol, seed):
+            parts.append(_as_columns([who[b] for b in sub], y * np.tile(unit, len(sub)), label))
+    return Columns.concat(parts)
+
+
+def _as_columns(bodies: list[int], x: np.ndarray, label: str) -> Columns:
+    """Solutions ``x (d, 10 len(bodies))`` as columns: the highest body's block ``h``, then ``hp``, ``he``, ``more``."""
+    order = np.argsort(bodies)[::-1]
+    d = len(x)
+    blk = [x[:, 10 * i: 10 * i + 10] for i in order]
+    bs = [int(bodies[i]) for i in order]
+    none, zero = np.full(d, -1), np.zeros((d, 10))
+    more = None
+    if len(bs) > 3:
+        rest = np.array(bs[3:])
+        more = np.array([(rest, np.stack([b[c] for b in blk[3:]])) for c in range(d)] + [None], dtype=object)[:-1]
+    return Columns(blk[0], np.full(d, bs[0]), np.full(d, bs[1]) if len(bs) > 1 else none, np.full(d, RM),
+                   np.full(d, bs[0]), np.full(d, label, dtype=object), hp=blk[1] if len(bs) > 1 else zero,
+                   extra=np.full(d, bs[2]) if len(bs) > 2 else none, he=blk[2] if len(bs) > 2 else zero, more=more)

@@ -512,7 +512,7 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
 
     from .numerics import blas_threads
 
-    _check_memory(robot, verify)
+    _check_memory(robot, verify, rows)
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
     with blas_threads():  # small dense factorizations: one BLAS thread (numerics.blas_threads)
         res = drng(robot, extended=extended, rows=rows)
@@ -549,9 +549,15 @@ def _available_bytes() -> float | None:
     return None
 
 
-def _check_memory(robot: Robot, verify: bool) -> None:
-    """Refuse, before allocating, a model whose analysis needs more memory than is available."""
-    need = BYTES_PER_N2[bool(verify)] * robot.n**2
+def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:
+    """Refuse, before allocating, a model whose analysis needs more memory than is available.
+
+    A tree certified body by body (``certify``'s structured path) needs no more than the
+    regrouping.
+    """
+    from .nullspace.certify import uses_structured
+
+    need = BYTES_PER_N2[bool(verify) and not uses_structured(robot, rows)] * robot.n**2
     have = _available_bytes()
     if have is None or need <= have:
         return

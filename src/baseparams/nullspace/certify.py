@@ -21,7 +21,12 @@ from ..model.robot import Robot
 from ..model.scale import decision_scale
 from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, stacked_regressor
 from ..pga.linalg import column_basis
+from .columns import to_dense
 from .drng import DRNGResult, drng
+from .structured import STRUCTURED_MIN_BODIES, applicable, dense_fits, structured_check
+
+#: how :func:`certify` decides the rank
+METHODS = ("auto", "dense", "structured")
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,6 +45,10 @@ class Certificate:
         The DRNG result that was checked.
     numerical : NumericalResult
         The numerical method's rank decision on ``W`` (:func:`baseparams.numerics.numerical_nullspace`).
+        From the structured check (:mod:`.structured`, large trees): ``rank`` is the rank proven
+        block by block, no singular values or bases (empty arrays), ``tol`` the ``rtol`` of the
+        magnitude-normalised blocks and ``gap`` the smallest singular value kept over the
+        blocks divided by the worst column residual.
     basis : ndarray, shape ``(10 n, nullity)``
         Orthonormal nullspace basis (paper convention: spatial pseudo-inertia entries ``XX XY
         XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at q = 0; SI units), DRNG's span
@@ -49,9 +58,11 @@ class Certificate:
     completed : int
         Number of directions added from the numerical nullspace (marked ``numerical``).
     residual : float
-        ``||W B_drng||_F / ||W||_F`` with orthonormal ``B_drng``.
+        ``||W B_drng||_F / ||W||_F`` with orthonormal ``B_drng`` (structured check: the root mean
+        square of the column residuals, each relative to the size of its terms).
     max_column_residual : float
-        The worst single DRNG column (unit norm): ``||W b|| / ||W||_2``.
+        The worst single DRNG column (unit norm): ``||W b|| / ||W||_2`` (structured check:
+        relative to the size of its terms, :func:`.structured.column_residuals`).
     status : Status or str
         ``certified``, ``completed``, ``undecided`` or ``failed`` (a
         :class:`~baseparams.enums.Status`; a string given is converted, an unknown one refused).
@@ -104,7 +115,7 @@ class Certificate:
 
 def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
             result: DRNGResult | None = None, rtol: float = 1e-9, min_gap: float = 1e4,
-            residual_tol: float = 1e-8) -> Certificate:
+            residual_tol: float = 1e-8, method: str = "auto") -> Certificate:
     """Certify (and if needed complete) DRNG's nullspace with ``samples`` random states.
 
     Steps: the stacked regressor ``W`` and its numerical nullspace; every DRNG column checked
@@ -135,6 +146,13 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     residual_tol : float, default 1e-8
         Largest relative residual ``||W b|| / ||W||_2`` of a DRNG column (unit norm) in the
         nullspace; a worse column fails the check.
+    method : {"auto", "dense", "structured"}, default "auto"
+        ``dense``: the stacked regressor and its SVD (memory quadratic in ``n``). ``structured``:
+        for a tree whose joint rows are measured, rank decided body by body
+        (:func:`.structured.structured_check`, memory linear in ``n``); where it cannot decide
+        (a deficiency no merge explains) the dense check runs if it fits in memory, else the
+        result is ``undecided``. ``auto``: structured for such trees of at least
+        :data:`.structured.STRUCTURED_MIN_BODIES` bodies, dense otherwise.
 
     Returns
     -------
@@ -146,8 +164,9 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     Raises
     ------
     BaseparamsError
-        Unknown ``rows``, ``rows`` other than ``"all"`` on a loop robot, or no sample closing the
-        loops (from :func:`baseparams.numerics.stacked_regressor`).
+        Unknown ``rows`` or ``method``, ``rows`` other than ``"all"`` on a loop robot, no sample
+        closing the loops (from :func:`baseparams.numerics.stacked_regressor`), or ``structured``
+        where it does not apply.
     """
     t0 = time.perf_counter()
     res = drng(robot, rows=rows) if result is None else result
@@ -155,6 +174,10 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         raise BaseparamsError(f"robot {robot.name!r}: the DRNG result was computed for rows {res.rows!r}, "
                               f"certification asked for {rows!r}")
     samples = default_samples(robot) if samples is None else samples
+    if uses_structured(robot, rows, method):
+        cert = _structured(robot, res, samples, seed, rows, rtol, min_gap, residual_tol, t0)
+        if cert is not None:
+            return cert
     sampling: dict = {}
     # ranks are decided on pi / d (model.scale.decision_scale): d = 1 for a robot of ordinary
     # size; a robot drawn in millimetres or kilometres is brought to an ordinary-sized equivalent
@@ -243,3 +266,57 @@ def _complete(bd: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, int, fl
     u, s, _ = np.linalg.svd(rest, full_matrices=False)
     missing = num.nullity - r_d
     return np.concatenate([bd, u[:, :missing]], axis=1), missing, float(s[missing - 1])
+
+
+def uses_structured(robot: Robot, rows: str, method: str = "auto") -> bool:
+    """Whether :func:`certify` takes the structured (body-by-body) path first.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    rows : str
+        The measured generalized forces.
+    method : {"auto", "dense", "structured"}
+        As for :func:`certify`.
+
+    Returns
+    -------
+    bool
+        ``structured``: always (an error later if it does not apply); ``auto``: for a tree whose
+        joint rows are measured with at least :data:`.structured.STRUCTURED_MIN_BODIES` bodies.
+
+    Raises
+    ------
+    BaseparamsError
+        An unknown ``method``.
+    """
+    if method not in METHODS:
+        raise BaseparamsError(f"unknown certification method {method!r}; expected one of {METHODS}")
+    if method == "structured":
+        return True
+    return method == "auto" and applicable(robot, rows) and robot.n >= STRUCTURED_MIN_BODIES
+
+
+def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: str, rtol: float, min_gap: float,
+                residual_tol: float, t0: float) -> Certificate | None:
+    """The structured check as a :class:`Certificate`, or ``None`` when the dense check should decide."""
+    chk = structured_check(robot, res, samples, seed, rows, rtol, residual_tol)
+    n10 = 10 * robot.n
+    if chk.status == Status.UNDECIDED and dense_fits(robot, samples, rows):
+        return None  # the dense check decides, and completes what DRNG missed
+    d = decision_scale(robot, "paper")
+    if chk.independent is not None:
+        span = to_dense(chk.independent, robot.n)
+    else:
+        span = d[:, None] * column_basis(res.dense() / d[:, None])
+    gap = chk.smallest_sv / chk.worst if chk.worst > 0 else np.inf
+    num = NumericalResult(chk.rank_w, n10 - chk.rank_w, np.zeros(0), rtol, rtol, float(gap), np.zeros((n10, 0)),
+                          np.zeros((n10, 0)), samples, chk.seconds, min_gap)
+    message = chk.message
+    if chk.status == Status.UNDECIDED:
+        message += "; the dense check does not fit in memory"
+    basis = np.linalg.qr(span)[0] if span.shape[1] else np.zeros((n10, 0))
+    rms = float(np.sqrt(np.mean(chk.column_residuals ** 2))) if len(chk.column_residuals) else 0.0
+    return Certificate(res, num, basis, chk.rank_b, 0, rms, chk.worst, chk.status, message,
+                       time.perf_counter() - t0, {"requested": samples, "kept": samples}, span)

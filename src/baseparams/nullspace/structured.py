@@ -213,7 +213,6 @@ def wrench_maps(robot: Robot, samples: int, seed: int, d10: np.ndarray) -> tuple
         xs = swap(bar_lines(g[:, a:b], pa))  # (S, nb, 10, 6): row entry = line . xs
         x[a:b] = np.transpose(xs, (1, 0, 3, 2)) * d10
     return x, np.ascontiguousarray(np.transpose(ln, (1, 0, 2)))
-    return x, lines
 
 
 def _measured_dofs(robot: Robot, rows: str) -> list[np.ndarray]:
@@ -552,3 +551,40 @@ def _structured_verdict(result: DRNGResult, out: dict, rtol: float, residual_tol
                                   f"rows of their subtree (DRNG may be incomplete); {how}")
     return Status.CERTIFIED, (f"DRNG is complete: rank(B) {out['rank_b']} + rank(W) {out['rank_w']} = {ncols} "
                               f"(rank(W) bounded below block by block); {how}")
+
+
+def _available_bytes() -> float | None:
+    """Memory available to this process [bytes] (Linux ``MemAvailable``), or None when unknown."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def dense_fits(robot: Robot, samples: int, rows: str = "all") -> bool:
+    """Whether the dense check (stacked regressor, its factor, SVD) fits in the memory available.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, ``dof`` coordinates).
+    samples : int
+        Random states of the check.
+    rows : str, default "all"
+        The measured generalized forces.
+
+    Returns
+    -------
+    bool
+        ``8 (S rows (10 n) + 6 (10 n)^2)`` bytes (the stacked regressor, twice for the saturation
+        check, and the square factors of the SVD and the completion) against Linux's
+        ``MemAvailable``; True when that is unknown.
+    """
+    n10 = 10 * robot.n
+    need = 8.0 * (2 * samples * int(row_mask(robot, rows).sum()) * n10 + 6 * n10 ** 2)
+    have = _available_bytes()
+    return have is None or need <= have

@@ -192,9 +192,10 @@ class Analysis:
         :attr:`~baseparams.enums.Source.label`).
     certificate : Certificate or None
         The numerical check (``None`` with ``verify=False``).
-    basis : ndarray, shape ``(10 n, nullity)``
+    basis : ndarray, shape ``(10 n, nullity)``, or None
         Orthonormal nullspace basis in the ``paper`` convention, DRNG's span first, then the
-        numerically completed directions.
+        numerically completed directions; ``None`` for a large tree certified body by body
+        (``certificate.columns`` spans the nullspace, and ``base`` is regrouped from it).
     base, base_paper : BaseParameters
         The regrouping in :attr:`convention` and in ``paper``.
     seconds : float
@@ -224,7 +225,7 @@ class Analysis:
     @property
     def nullity(self) -> int:
         """Dimension of the (certified) nullspace; DRNG's rank when unverified."""
-        return self.basis.shape[1]
+        return self.basis.shape[1] if self.basis is not None else 10 * self.robot.n - self.base.n_base
 
     @property
     def n_base(self) -> int:
@@ -399,7 +400,8 @@ class Analysis:
         """
         p = self.__dict__.get("_base_map")
         if p is None:
-            p = np.ascontiguousarray(self.base.T[:, self.base.independent])
+            t = self.base.T[:, self.base.independent]
+            p = np.ascontiguousarray(t.toarray() if hasattr(t, "toarray") else t)
             p.flags.writeable = False
             object.__setattr__(self, "_base_map", p)
         return p
@@ -525,8 +527,14 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
         else:
             basis = span = res.orthonormal()
         say("regrouping base parameters")
-        base = base_parameters(robot, span, convention)
-        base_paper = base_parameters(robot, span, "paper")
+        if cert is not None and cert.columns is not None and cert.certified:  # a tree, body by body
+            from .base.sparse import tree_base_parameters
+
+            base = tree_base_parameters(robot, cert.columns, convention)
+            base_paper = tree_base_parameters(robot, cert.columns, "paper")
+        else:
+            base = base_parameters(robot, span, convention)
+            base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended)
 

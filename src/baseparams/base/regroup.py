@@ -164,15 +164,16 @@ class BaseParameters:
         Indices of ``pi_I``.
     dependent : ndarray of int, shape ``(k,)``
         Indices of ``pi_D``.
-    K : ndarray, shape ``(nb, k)``
-        Regrouping coefficients.
-    E : ndarray, shape ``(nb, 10 n)``
+    K : ndarray or scipy.sparse.csr_matrix, shape ``(nb, k)``
+        Regrouping coefficients (sparse from :func:`baseparams.base.sparse.tree_base_parameters`).
+    E : ndarray or scipy.sparse.csr_matrix, shape ``(nb, 10 n)``
         ``beta = E @ pi`` (convention coordinates).
     unidentifiable : ndarray of int
         Indices of parameters that no base parameter sees.
-    base_basis : ndarray, shape ``(10 n, nb)``
-        Orthonormal basis of ``Null^perp`` in the paper convention.
-    T : ndarray, shape ``(10 n, 10 n)``
+    base_basis : ndarray, shape ``(10 n, nb)``, or None
+        Orthonormal basis of ``Null^perp`` in the paper convention (``None`` from the sparse
+        regrouping of a large tree: it would be dense).
+    T : ndarray or scipy.sparse.csr_matrix, shape ``(10 n, 10 n)``
         :func:`paper_from`: paper parameters = ``T @`` convention parameters.
     """
 
@@ -203,7 +204,11 @@ class BaseParameters:
         list of str, length ``nb``
             ``NAMER`` when the parameter absorbs others (Khalil's suffix), else ``NAME``.
         """
-        return [self.names[i] + ("R" if np.any(self.K[r] != 0) else "") for r, i in enumerate(self.independent)]
+        if _is_sparse(self.K):
+            absorbs = np.diff(self.K.indptr) > 0
+        else:
+            absorbs = np.any(self.K != 0, axis=1) if self.K.shape[1] else np.zeros(len(self.independent), bool)
+        return [self.names[i] + ("R" if a else "") for i, a in zip(self.independent, absorbs)]
 
     def expressions(self) -> list[dict[str, str]]:
         """Each base parameter as a combination of standard ones.
@@ -216,10 +221,18 @@ class BaseParameters:
         """
         out = []
         order = np.argsort(self.dependent, kind="stable")  # terms in parameter order
+        sparse = _is_sparse(self.K)
         for r, (i, bname) in enumerate(zip(self.independent, self.base_names())):
             terms = [self.names[i]]
-            for col in order[self.K[r, order] != 0]:
-                c, d = self.K[r, col], self.dependent[col]
+            if sparse:
+                cols = self.K.indices[self.K.indptr[r]:self.K.indptr[r + 1]]
+                vals = self.K.data[self.K.indptr[r]:self.K.indptr[r + 1]]
+                srt = np.argsort(self.dependent[cols], kind="stable")
+                pairs = zip(vals[srt].tolist(), self.dependent[cols[srt]].tolist())
+            else:
+                nz = order[self.K[r, order] != 0]
+                pairs = zip(self.K[r, nz].tolist(), self.dependent[nz].tolist())
+            for c, d in pairs:
                 sign = "-" if c < 0 else "+"
                 mag = abs(c)
                 coef = "" if mag == 1 else f"{format_coefficient(mag)}*"
@@ -283,7 +296,16 @@ class BaseParameters:
         beta = np.asarray(beta, dtype=float)
         if beta.shape != (self.E.shape[0],):
             raise BaseparamsError(f"expected {self.E.shape[0]} base parameters, got shape {beta.shape}")
+        if _is_sparse(self.E):  # E has full row rank: the minimum-norm solution E^T (E E^T)^-1 beta
+            from scipy.sparse.linalg import spsolve
+
+            return self.E.T @ np.atleast_1d(spsolve((self.E @ self.E.T).tocsc(), beta))
         return np.linalg.pinv(self.E) @ beta
+
+
+def _is_sparse(a) -> bool:
+    """True for a scipy.sparse matrix (without importing scipy)."""
+    return hasattr(a, "tocsr")
 
 
 def choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> np.ndarray:

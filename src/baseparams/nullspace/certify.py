@@ -21,12 +21,14 @@ from ..model.robot import Robot
 from ..model.scale import decision_scale
 from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, stacked_regressor
 from ..pga.linalg import column_basis
-from .columns import to_dense
+from .columns import Columns, to_dense
 from .drng import DRNGResult, drng
 from .structured import STRUCTURED_MIN_BODIES, applicable, dense_fits, structured_check
 
 #: how :func:`certify` decides the rank
 METHODS = ("auto", "dense", "structured")
+#: the structured check forms the dense orthonormal basis only up to this many entries (10 n x nullity)
+DENSE_BASIS_MAX = 4_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,10 +51,11 @@ class Certificate:
         block by block, no singular values or bases (empty arrays), ``tol`` the ``rtol`` of the
         magnitude-normalised blocks and ``gap`` the smallest singular value kept over the
         blocks divided by the worst column residual.
-    basis : ndarray, shape ``(10 n, nullity)``
+    basis : ndarray, shape ``(10 n, nullity)``, or None
         Orthonormal nullspace basis (paper convention: spatial pseudo-inertia entries ``XX XY
         XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at q = 0; SI units), DRNG's span
-        first, then the ``completed`` numerical directions.
+        first, then the ``completed`` numerical directions. ``None`` from the structured check
+        when it would exceed :data:`DENSE_BASIS_MAX` entries (``columns`` spans the nullspace).
     drng_rank : int
         Dimension of DRNG's span (rank of its columns on ``pi / d``).
     completed : int
@@ -76,7 +79,11 @@ class Certificate:
     span : ndarray, shape ``(10 n, nullity)``, optional
         The same nullspace, SI units, each entry exact to its own scale (columns not
         orthonormal): what regrouping should be given, since an SI-orthonormal basis carries
-        only absolute precision in its small (millimetre-scale) entries.
+        only absolute precision in its small (millimetre-scale) entries. ``None`` with ``basis``.
+    columns : Columns, optional
+        From the structured check: ``nullity`` linearly independent columns in compact form
+        spanning the nullspace (SI ``paper`` convention), what
+        :func:`baseparams.base.sparse.tree_base_parameters` regroups.
 
     Raises
     ------
@@ -96,6 +103,7 @@ class Certificate:
     seconds: float
     sampling: dict | None = None
     span: np.ndarray | None = None
+    columns: Columns | None = None
 
     __repr__ = summary_repr
 
@@ -109,8 +117,8 @@ class Certificate:
 
     @property
     def nullity(self) -> int:
-        """Dimension of the (certified or completed) nullspace: ``basis.shape[1]``."""
-        return self.basis.shape[1]
+        """Dimension of the (certified or completed) nullspace: ``drng_rank + completed``."""
+        return self.drng_rank + self.completed
 
 
 def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
@@ -306,7 +314,9 @@ def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: st
     if chk.status == Status.UNDECIDED and dense_fits(robot, samples, rows):
         return None  # the dense check decides, and completes what DRNG missed
     d = decision_scale(robot, "paper")
-    if chk.independent is not None:
+    if chk.independent is not None and n10 * chk.rank_b > DENSE_BASIS_MAX:
+        span = None  # the regrouping takes the columns; a dense basis would be quadratic
+    elif chk.independent is not None:
         span = to_dense(chk.independent, robot.n)
     else:
         span = d[:, None] * column_basis(res.dense() / d[:, None])
@@ -316,7 +326,7 @@ def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: st
     message = chk.message
     if chk.status == Status.UNDECIDED:
         message += "; the dense check does not fit in memory"
-    basis = np.linalg.qr(span)[0] if span.shape[1] else np.zeros((n10, 0))
+    basis = None if span is None else np.linalg.qr(span)[0] if span.shape[1] else np.zeros((n10, 0))
     rms = float(np.sqrt(np.mean(chk.column_residuals ** 2))) if len(chk.column_residuals) else 0.0
     return Certificate(res, num, basis, chk.rank_b, 0, rms, chk.worst, chk.status, message,
-                       time.perf_counter() - t0, {"requested": samples, "kept": samples}, span)
+                       time.perf_counter() - t0, {"requested": samples, "kept": samples}, span, chk.independent)

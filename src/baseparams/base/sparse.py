@@ -1,0 +1,195 @@
+"""Regrouping a tree's base parameters from a block-sparse nullspace basis, in memory ``O(nnz K)``.
+
+:func:`~.regroup.base_parameters` orthonormalises a dense ``(10 n, k)`` basis and factors it:
+cubic time and quadratic memory. For a basis in compact form whose columns are linearly
+independent and whose highest body ``c`` carries a block ``H_c`` of full column rank (what
+:func:`baseparams.nullspace.rank.leading_spans` returns for a tree), the same regrouping is
+computed body by body:
+
+* the dependent parameters: the dense greedy choice (last body first, each body in the
+  convention's regrouping order) takes a row when a nullspace vector vanishing on the rows taken
+  so far is nonzero there. Every column touches only its highest body ``c`` and lower ones, so
+  when body ``c`` is reached the vectors vanishing on the higher bodies' choices are spanned by
+  the columns whose highest body is ``c`` or lower, and on ``c``'s rows only ``H_c`` is nonzero:
+  the choice is the greedy one on ``H_c``'s rows (dimensionless, orthonormalised);
+* ``K = -B_I B_D^-1 = -Z_I`` with ``Z = B B_D^-1`` the dual basis (1 on its own dependent
+  parameter, 0 on the others), built from the root up: body ``c``'s columns times
+  ``H_c[D_c]^-1``, minus the lower bodies' dual vectors times their entries on those bodies'
+  dependent parameters. ``Z_c`` lives on the path from ``c`` to the root: ``K`` has
+  ``O(sum of depths)`` nonzeros, the size of the regrouped expressions themselves.
+
+The tolerances, zeroing and snapping are those of :func:`~.regroup.base_parameters`, with the
+rank decision of the choice made on each body's own block. ``K``, ``E`` and ``T`` are
+``scipy.sparse`` CSR matrices and ``base_basis`` is ``None`` (it would be dense).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model import inertia as _inertia
+from ..model.inertia import LENGTH_POWER
+from ..model.robot import Robot
+from ..model.scale import length_scale
+from ..nullspace.columns import Columns
+from .regroup import NOISE_FACTOR, ZERO_TOL, BaseParameters, clean, parameter_names
+
+
+def body_transforms(robot: Robot, convention: str) -> np.ndarray:
+    """Per body, the block ``T_i (10, 10)`` with paper parameters ``= T_i @`` convention parameters.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies; ``M0`` maps body frames to the world frame at q = 0).
+    convention : str
+        The convention of the parameters ``T_i`` multiplies.
+
+    Returns
+    -------
+    ndarray, shape ``(n, 10, 10)``
+        The diagonal blocks of :func:`~.regroup.paper_from` (identities for ``paper``).
+    """
+    if convention == "paper":
+        return np.tile(np.eye(10), (robot.n, 1, 1))
+    per = _inertia.from_convention(np.eye(10), convention)  # (10, 4, 4)
+    return np.swapaxes(_inertia.hat(_inertia.transform(per[None], robot.M0[:, None])), -1, -2)
+
+
+def _choose(q: np.ndarray, within: tuple[int, ...], tol: float) -> list[int]:
+    """Greedy rows of ``q (10, l)`` in ``within`` order spanning ``R^l`` (as :func:`~.regroup.choose_dependent`)."""
+    k = q.shape[1]
+    basis = np.zeros((0, k))
+    chosen: list[int] = []
+    scale = max(float(np.linalg.norm(q, axis=1).max()), 1e-300)
+    for r in within:
+        v = q[r].copy()
+        for _ in range(2):
+            if len(basis):
+                v -= basis.T @ (basis @ v)
+        nv = np.linalg.norm(v)
+        if nv > tol * scale:
+            basis = np.vstack([basis, v / nv])
+            chosen.append(r)
+            if len(chosen) == k:
+                break
+    return chosen
+
+
+def _scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndarray, ...]:
+    """Each column's blocks in dimensionless convention coordinates, and the noise level."""
+    t = body_transforms(robot, convention)
+    tinv = np.linalg.inv(t)
+    power = LENGTH_POWER[convention].astype(float)
+    sc = length_scale(robot) ** -power
+    st = sc[:, None] * tinv  # (n, 10, 10)
+    sv = np.linalg.svd(st, compute_uv=False)
+    noise = NOISE_FACTOR * np.finfo(float).eps * sv.max() / max(sv.min(), 1e-300)
+
+    def blk(bodies: np.ndarray, h: np.ndarray) -> np.ndarray:
+        return np.einsum("kij,kj->ki", st[np.maximum(bodies, 0)], h) * (bodies >= 0)[:, None]
+
+    return blk(cols.child, cols.h), blk(cols.parent, cols.hp), blk(cols.extra, cols.he), t, noise
+
+
+def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray,
+                within: tuple[int, ...], tol: float) -> tuple[list[list[int]], list[dict[int, np.ndarray]]]:
+    """Per body, its dependent parameters (local indices) and dual vectors ``Z_c`` (body -> ``(10, l_c)``)."""
+    n = robot.n
+    order = np.argsort(cols.child, kind="stable")
+    bounds = np.searchsorted(cols.child[order], np.arange(n + 1))
+    dep: list[list[int]] = [[] for _ in range(n)]
+    z: list[dict[int, np.ndarray]] = [{} for _ in range(n)]
+    for c in range(n):  # parents first: their dual vectors are final when a child needs them
+        idx = order[bounds[c]:bounds[c + 1]]
+        if not len(idx):
+            continue
+        h = hc[idx].T  # (10, l)
+        u, s, _ = np.linalg.svd(h, full_matrices=False)
+        picked = _choose(u, within, tol)
+        if len(picked) < len(idx):
+            raise RuntimeError(f"body {c}: the nullspace columns are not independent on their highest body")
+        ainv = np.linalg.inv(h[picked])
+        dep[c] = picked
+        zh: dict[int, np.ndarray] = {c: h @ ainv}
+        for bodies, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
+            for j in np.unique(bodies[bodies >= 0]):
+                m = bodies == j
+                add = np.zeros((10, len(idx)))
+                add[:, m] = part[m].T
+                zh[int(j)] = zh.get(int(j), 0) + add @ ainv
+        zc = dict(zh)
+        for j, blk in zh.items():
+            if j == c or not dep[j]:
+                continue
+            coef = blk[dep[j]]  # (l_j, l): entries on body j's dependent parameters
+            for m, zj in z[j].items():
+                zc[m] = zc.get(m, 0) - zj @ coef
+        z[c] = zc
+    return dep, z
+
+
+def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BaseParameters:
+    """Regroup into base parameters from independent nullspace columns in compact form (module doc).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    cols : Columns
+        ``k`` linearly independent columns spanning the nullspace, SI ``paper`` convention,
+        each with a highest body (``child``) whose blocks are linearly independent there
+        (:attr:`baseparams.nullspace.structured.StructuredCheck.independent`).
+    convention : str
+        The parameter convention to regroup in.
+
+    Returns
+    -------
+    BaseParameters
+        ``10 n - k`` base parameters: ``K (nb, k)``, ``E (nb, 10 n)`` and ``T (10 n, 10 n)`` as
+        ``scipy.sparse`` CSR matrices, ``base_basis`` ``None``; the same names, dependent set and
+        coefficients as :func:`~.regroup.base_parameters` on the dense span (up to decisions within
+        the tolerances).
+
+    Raises
+    ------
+    RuntimeError
+        The columns are not independent on their highest bodies.
+    """
+    import scipy.sparse as sp
+
+    n, n10 = robot.n, 10 * robot.n
+    hc, hp, he, t, noise = _scaled_blocks(robot, cols, convention)
+    tol = max(1e-8, noise)
+    dep_local, z = _dual_basis(robot, cols, hc, hp, he, _inertia.SPECS[convention].regroup_order, tol)
+    dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
+    ind = np.setdiff1d(np.arange(n10), dep)
+    pos_i = np.full(n10, -1)
+    pos_i[ind] = np.arange(len(ind))
+    pos_d = np.full(n10, -1)
+    pos_d[dep] = np.arange(len(dep))
+    rows, cls, vals = [], [], []
+    for c in range(n):
+        dcols = pos_d[10 * c + np.array(dep_local[c], dtype=int)]
+        for m, zm in z[c].items():
+            p = pos_i[10 * m + np.arange(10)]
+            keep = p >= 0
+            rows.append(np.repeat(p[keep], len(dcols)))
+            cls.append(np.tile(dcols, int(keep.sum())))
+            vals.append(-zm[keep].ravel())
+    rows, cls, vals = (np.concatenate(a) if a else np.zeros(0) for a in (rows, cls, vals))
+    rows, cls = rows.astype(int), cls.astype(int)
+    rowmax = np.ones(len(ind))
+    np.maximum.at(rowmax, rows, np.abs(vals))
+    keep = np.abs(vals) > max(ZERO_TOL, noise) * rowmax[rows]
+    rows, cls, vals = rows[keep], cls[keep], vals[keep]
+    power = np.tile(LENGTH_POWER[convention], n).astype(float)
+    vals = clean(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]))
+    kmat = sp.csr_matrix((vals, (rows, cls)), shape=(len(ind), len(dep)))
+    kmat.eliminate_zeros()
+    kmat.sort_indices()
+    e = sp.csr_matrix((np.r_[np.ones(len(ind)), vals], (np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]])),
+                      shape=(len(ind), n10))
+    unid = np.sort(dep[np.diff(kmat.tocsc().indptr) == 0]) if len(dep) else np.zeros(0, dtype=int)
+    return BaseParameters(convention, parameter_names(robot, convention), ind, dep, kmat, e, unid, None,
+                          sp.block_diag(list(t), format="csr"))

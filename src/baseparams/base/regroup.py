@@ -121,7 +121,9 @@ def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
                 break
             ok = np.abs(np.round(mant[todo], p - 1) - mant[todo]) <= rtol * np.abs(mant[todo])
             digits[np.flatnonzero(todo)[ok]] = p
-    snapped = np.array([float(f"{c:.{k - 1}e}") for c, k in zip(v.tolist(), digits.tolist())])
+    short = np.flatnonzero(digits < 17)  # 17 significant digits: the value as it is
+    snapped = v.copy()
+    snapped[short] = [float(f"{c:.{k - 1}e}") for c, k in zip(v[short].tolist(), digits[short].tolist())]
     bad = np.abs(snapped - v) > rtol * a  # the decimal string decides; never lose more than rtol
     snapped[bad] = v[bad]
     flat[nz] = snapped
@@ -219,26 +221,39 @@ class BaseParameters:
             ``[{"name": ..., "expression": ...}]``, e.g. ``link1.ZZR`` and
             ``link1.ZZ + link2.YY + ...`` (coefficients written only when not 1).
         """
+        if _is_sparse(self.K):
+            return self._sparse_expressions()
         out = []
         order = np.argsort(self.dependent, kind="stable")  # terms in parameter order
-        sparse = _is_sparse(self.K)
         for r, (i, bname) in enumerate(zip(self.independent, self.base_names())):
             terms = [self.names[i]]
-            if sparse:
-                cols = self.K.indices[self.K.indptr[r]:self.K.indptr[r + 1]]
-                vals = self.K.data[self.K.indptr[r]:self.K.indptr[r + 1]]
-                srt = np.argsort(self.dependent[cols], kind="stable")
-                pairs = zip(vals[srt].tolist(), self.dependent[cols[srt]].tolist())
-            else:
-                nz = order[self.K[r, order] != 0]
-                pairs = zip(self.K[r, nz].tolist(), self.dependent[nz].tolist())
-            for c, d in pairs:
+            nz = order[self.K[r, order] != 0]
+            for c, d in zip(self.K[r, nz].tolist(), self.dependent[nz].tolist()):
                 sign = "-" if c < 0 else "+"
                 mag = abs(c)
                 coef = "" if mag == 1 else f"{format_coefficient(mag)}*"
                 terms.append(f"{sign} {coef}{self.names[d]}")
             out.append({"name": bname, "expression": " ".join(terms)})
         return out
+
+    def _sparse_expressions(self) -> list[dict[str, str]]:
+        """:meth:`expressions` of a sparse ``K``: every term formatted once, rows joined."""
+        k, names = self.K, self.names
+        rows = np.repeat(np.arange(k.shape[0]), np.diff(k.indptr))
+        dparam = self.dependent[k.indices]
+        order = np.lexsort((dparam, rows))  # row by row, terms in parameter order
+        vals = k.data[order]
+        mags = np.abs(vals)
+        # '%.12g' is format_coefficient's text where it writes positional numbers (1e-4 <= c < 1e6;
+        # a margin below 1e6, where rounding could reach it)
+        fast = (mags >= 1e-4) & (mags < 9e5)
+        coef = ["" if m == 1 else (f"{m:.12g}*" if f else f"{format_coefficient(m)}*")
+                for m, f in zip(mags.tolist(), fast.tolist())]
+        terms = [f"{'-' if c < 0 else '+'} {t}{names[d]}"
+                 for c, t, d in zip(vals.tolist(), coef, dparam[order].tolist())]
+        ptr = k.indptr
+        return [{"name": bname, "expression": " ".join([names[i]] + terms[ptr[r]:ptr[r + 1]])}
+                for r, (i, bname) in enumerate(zip(self.independent.tolist(), self.base_names()))]
 
     def _check(self, convention: str) -> None:
         _inertia.check_convention(convention)

@@ -56,26 +56,6 @@ def body_transforms(robot: Robot, convention: str) -> np.ndarray:
     return np.swapaxes(_inertia.hat(_inertia.transform(per[None], robot.M0[:, None])), -1, -2)
 
 
-def _choose(q: np.ndarray, within: tuple[int, ...], tol: float) -> list[int]:
-    """Greedy rows of ``q (10, l)`` in ``within`` order spanning ``R^l`` (as :func:`~.regroup.choose_dependent`)."""
-    k = q.shape[1]
-    basis = np.zeros((0, k))
-    chosen: list[int] = []
-    scale = max(float(np.linalg.norm(q, axis=1).max()), 1e-300)
-    for r in within:
-        v = q[r].copy()
-        for _ in range(2):
-            if len(basis):
-                v -= basis.T @ (basis @ v)
-        nv = np.linalg.norm(v)
-        if nv > tol * scale:
-            basis = np.vstack([basis, v / nv])
-            chosen.append(r)
-            if len(chosen) == k:
-                break
-    return chosen
-
-
 def _scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndarray, ...]:
     """Each column's blocks in dimensionless convention coordinates, and the noise level."""
     t = body_transforms(robot, convention)
@@ -92,41 +72,102 @@ def _scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.nda
     return blk(cols.child, cols.h), blk(cols.parent, cols.hp), blk(cols.extra, cols.he), t, noise
 
 
-def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray,
-                within: tuple[int, ...], tol: float) -> tuple[list[list[int]], list[dict[int, np.ndarray]]]:
-    """Per body, its dependent parameters (local indices) and dual vectors ``Z_c`` (body -> ``(10, l_c)``)."""
-    n = robot.n
-    order = np.argsort(cols.child, kind="stable")
-    bounds = np.searchsorted(cols.child[order], np.arange(n + 1))
+def _choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...], tol: float):
+    """Every body's dependent parameters and ``H_c[D_c]^-1``, bodies batched by their column count.
+
+    Returns ``(order, bounds, dep, ainv)``: the columns sorted by body (``order[bounds[c]:bounds[c +
+    1]]`` are body ``c``'s), the chosen local rows per body (the greedy choice, as :func:`~.regroup.choose_dependent`) and the inverses of the
+    chosen rows.
+    """
+    order = np.argsort(child, kind="stable")
+    bounds = np.searchsorted(child[order], np.arange(n + 1))
+    counts = np.diff(bounds)
     dep: list[list[int]] = [[] for _ in range(n)]
-    z: list[dict[int, np.ndarray]] = [{} for _ in range(n)]
+    ainv: list[np.ndarray | None] = [None] * n
+    for ell in np.unique(counts[counts > 0]):
+        bodies = np.flatnonzero(counts == ell)
+        idx = order[bounds[bodies][:, None] + np.arange(ell)]  # (nb, l)
+        h = np.swapaxes(hc[idx], 1, 2)  # (nb, 10, l)
+        q = np.linalg.svd(h, full_matrices=False)[0]
+        scale = np.maximum(np.linalg.norm(q, axis=2).max(axis=1), 1e-300)
+        basis = np.zeros((len(bodies), ell, ell))
+        count = np.zeros(len(bodies), dtype=int)
+        chosen = np.full((len(bodies), ell), -1)
+        for r in within:  # Gram-Schmidt twice against the rows taken so far, as _choose
+            v = q[:, r, :].copy()
+            for _ in range(2):
+                v -= np.einsum("bkl,bk->bl", basis, np.einsum("bkl,bl->bk", basis, v))
+            nv = np.linalg.norm(v, axis=1)
+            take = np.flatnonzero((nv > tol * scale) & (count < ell))
+            basis[take, count[take]] = v[take] / nv[take, None]
+            chosen[take, count[take]] = r
+            count[take] += 1
+        if np.any(count < ell):
+            raise RuntimeError(f"body {int(bodies[np.argmin(count)])}: the nullspace columns are not independent on "
+                               f"their highest body")
+        inv = np.linalg.inv(np.take_along_axis(h, chosen[:, :, None], axis=1))
+        for k, c in enumerate(bodies.tolist()):
+            dep[c], ainv[c] = chosen[k].tolist(), inv[k]
+    return order, bounds, dep, ainv
+
+
+def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray,
+                within: tuple[int, ...], tol: float) -> tuple[list[list[int]], list[tuple[np.ndarray, np.ndarray]]]:
+    """Per body, its dependent parameters (local indices) and dual vectors ``Z_c``.
+
+    ``Z_c`` is ``(bodies (m,), blocks (m, 10, l_c))``: its blocks on the bodies it touches, ``c``
+    first, then the bodies on its way to the root.
+    """
+    n = robot.n
+    order, bounds, dep, ainv = _choose_all(hc, cols.child, n, within, tol)
+    empty = (np.zeros(0, dtype=int), np.zeros((0, 10, 0)))
+    z: list[tuple[np.ndarray, np.ndarray]] = [empty] * n
     for c in range(n):  # parents first: their dual vectors are final when a child needs them
-        idx = order[bounds[c]:bounds[c + 1]]
-        if not len(idx):
+        if not dep[c]:
             continue
-        h = hc[idx].T  # (10, l)
-        u, s, _ = np.linalg.svd(h, full_matrices=False)
-        picked = _choose(u, within, tol)
-        if len(picked) < len(idx):
-            raise RuntimeError(f"body {c}: the nullspace columns are not independent on their highest body")
-        ainv = np.linalg.inv(h[picked])
-        dep[c] = picked
-        zh: dict[int, np.ndarray] = {c: h @ ainv}
-        for bodies, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
-            for j in np.unique(bodies[bodies >= 0]):
-                m = bodies == j
-                add = np.zeros((10, len(idx)))
-                add[:, m] = part[m].T
-                zh[int(j)] = zh.get(int(j), 0) + add @ ainv
-        zc = dict(zh)
-        for j, blk in zh.items():
-            if j == c or not dep[j]:
-                continue
-            coef = blk[dep[j]]  # (l_j, l): entries on body j's dependent parameters
-            for m, zj in z[j].items():
-                zc[m] = zc.get(m, 0) - zj @ coef
-        z[c] = zc
+        idx = order[bounds[c]:bounds[c + 1]]
+        a = ainv[c]
+        parts = []  # (bodies, blocks) of the columns' lower blocks, with the dual vectors cancelling them
+        for low, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
+            for j in np.unique(low[low >= 0]).tolist():
+                m = low == j
+                zj = part[m].T @ a[m]  # (10, l): the columns' blocks on body j
+                if dep[j]:  # cancel the entries on body j's dependent parameters (Z_j starts with j)
+                    bj, vj = z[j]
+                    blocks = -np.einsum("bik,kl->bil", vj, zj[dep[j]])
+                    blocks[0] += zj
+                    parts.append((bj, blocks))
+                else:
+                    parts.append((np.array([j]), zj[None]))
+        own = (np.array([c]), (hc[idx].T @ a)[None])
+        if len(parts) == 1:
+            z[c] = (np.concatenate([own[0], parts[0][0]]), np.concatenate([own[1], parts[0][1]]))
+            continue
+        b_all = np.concatenate([own[0]] + [p[0] for p in parts])
+        v_all = np.concatenate([own[1]] + [p[1] for p in parts])
+        uniq, inv = np.unique(b_all[1:], return_inverse=True)
+        acc = np.zeros((len(uniq), 10, len(idx)))
+        np.add.at(acc, inv, v_all[1:])
+        z[c] = (np.r_[c, uniq], np.concatenate([own[1], acc]))
     return dep, z
+
+
+def _k_entries(n: int, dep_local: list[list[int]], z: list, pos_i: np.ndarray, pos_d: np.ndarray):
+    """``(rows, cols, values)`` of ``-Z_I``: the dual vectors' entries on the independent parameters."""
+    rows, cls, vals = [], [], []
+    for c in range(n):
+        if not dep_local[c]:
+            continue
+        dcols = pos_d[10 * c + np.array(dep_local[c], dtype=int)]
+        bodies, blocks = z[c]
+        p = pos_i[10 * bodies[:, None] + np.arange(10)]  # (m, 10)
+        keep = p >= 0
+        rows.append(np.repeat(p[keep], len(dcols)))
+        cls.append(np.tile(dcols, int(keep.sum())))
+        vals.append(-blocks[keep].ravel())
+    if not rows:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0)
+    return np.concatenate(rows).astype(int), np.concatenate(cls).astype(int), np.concatenate(vals)
 
 
 def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BaseParameters:
@@ -168,17 +209,7 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     pos_i[ind] = np.arange(len(ind))
     pos_d = np.full(n10, -1)
     pos_d[dep] = np.arange(len(dep))
-    rows, cls, vals = [], [], []
-    for c in range(n):
-        dcols = pos_d[10 * c + np.array(dep_local[c], dtype=int)]
-        for m, zm in z[c].items():
-            p = pos_i[10 * m + np.arange(10)]
-            keep = p >= 0
-            rows.append(np.repeat(p[keep], len(dcols)))
-            cls.append(np.tile(dcols, int(keep.sum())))
-            vals.append(-zm[keep].ravel())
-    rows, cls, vals = (np.concatenate(a) if a else np.zeros(0) for a in (rows, cls, vals))
-    rows, cls = rows.astype(int), cls.astype(int)
+    rows, cls, vals = _k_entries(n, dep_local, z, pos_i, pos_d)
     rowmax = np.ones(len(ind))
     np.maximum.at(rowmax, rows, np.abs(vals))
     keep = np.abs(vals) > max(ZERO_TOL, noise) * rowmax[rows]

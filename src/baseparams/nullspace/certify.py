@@ -23,7 +23,7 @@ from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_
 from ..pga.linalg import column_basis
 from .columns import Columns, to_dense
 from .drng import DRNGResult, drng
-from .structured import STRUCTURED_MIN_BODIES, applicable, dense_fits, structured_check
+from .structured import STRUCTURED_MIN_BODIES, STRUCTURED_SAMPLES, applicable, dense_fits, structured_check
 
 #: how :func:`certify` decides the rank
 METHODS = ("auto", "dense", "structured")
@@ -140,7 +140,9 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         The robot (``n`` moving bodies, ``10 n`` parameters).
     samples : int, optional
         Random states; default :func:`baseparams.numerics.default_samples` (100 for trees, the
-        paper's 5 000 actuated samples for small loop robots).
+        paper's 5 000 actuated samples for small loop robots); the structured check's default is
+        :data:`.structured.STRUCTURED_SAMPLES` (each diagonal block still has far more rows than
+        its at most ten columns).
     seed : int, default 0
         Seed of the random states (the saturation check draws a second set with another seed).
     rows : {"all", "joints", "base"}, default "all"
@@ -181,11 +183,12 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     if res.rows != rows:
         raise BaseparamsError(f"robot {robot.name!r}: the DRNG result was computed for rows {res.rows!r}, "
                               f"certification asked for {rows!r}")
-    samples = default_samples(robot) if samples is None else samples
     if uses_structured(robot, rows, method):
-        cert = _structured(robot, res, samples, seed, rows, rtol, min_gap, residual_tol, t0)
+        cert = _structured(robot, res, STRUCTURED_SAMPLES if samples is None else samples, seed, rows, rtol,
+                           min_gap, residual_tol, t0)
         if cert is not None:
             return cert
+    samples = default_samples(robot) if samples is None else samples
     sampling: dict = {}
     # ranks are decided on pi / d (model.scale.decision_scale): d = 1 for a robot of ordinary
     # size; a robot drawn in millimetres or kilometres is brought to an ordinary-sized equivalent

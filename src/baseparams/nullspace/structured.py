@@ -41,7 +41,7 @@ from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..model.scale import decision_scale
-from ..numerics import default_samples, row_mask, sample_states
+from ..numerics import row_mask, sample_states
 from ..pga import adjoint, commutator, hat, se3_exp, swap
 from ..pga.core import screw_exp
 from ..regressor.tp import bar_lines
@@ -51,6 +51,9 @@ from .rank import leading_spans
 
 #: trees with at least this many bodies are certified by the structured check (``method="auto"``)
 STRUCTURED_MIN_BODIES = 40
+#: default random states of the structured check: a joint's diagonal block then has ``30 x dofs``
+#: rows for at most ten columns, and each DRNG column is checked on 30 generic states
+STRUCTURED_SAMPLES = 30
 #: numbers per work chunk (bounds the temporaries of the batched products)
 CHUNK = 4_000_000
 
@@ -482,7 +485,7 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
     result : DRNGResult
         DRNG's columns for ``rows``.
     samples : int, optional
-        Random states (default :func:`baseparams.numerics.default_samples`: 100).
+        Random states (default :data:`STRUCTURED_SAMPLES`).
     seed : int, default 0
         Seed of the states (the same states as the dense check's first set).
     rows : {"all", "joints"}, default "all"
@@ -509,7 +512,7 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
         raise BaseparamsError(f"robot {robot.name!r}: the structured certificate needs a tree whose joint rows are "
                               f"measured (rows 'all' or 'joints'), got rows {rows!r}"
                               f"{' and loops' if robot.has_loops else ''}")
-    samples = default_samples(robot) if samples is None else samples
+    samples = STRUCTURED_SAMPLES if samples is None else samples
     n, d10 = robot.n, decision_scale(robot, "paper")[:10]
     cols = result.columns
     raw = replace(cols, h=cols.h / d10, hp=cols.hp / d10, he=cols.he / d10)

@@ -557,18 +557,36 @@ def _available_bytes() -> float | None:
     return None
 
 
-def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:
-    """Refuse, before allocating, a model whose analysis needs more memory than is available.
+#: a tree certified body by body and regrouped sparsely (``certify``'s structured path): bytes per
+#: body (the sampled wrench maps, the columns) and per unit of depth summed over the bodies (the
+#: dual vectors, ``K`` and the expressions grow with each body's distance to the root)
+BYTES_PER_BODY, BYTES_PER_DEPTH = 200e3, 2e3
 
-    A tree certified body by body (``certify``'s structured path) needs no more than the
-    regrouping.
-    """
+
+def _depth_sum(robot: Robot) -> int:
+    """Sum over the bodies of their number of ancestors (``O(n)``; parents precede children)."""
+    depth = np.zeros(robot.n, dtype=np.int64)
+    for i, p in enumerate(robot.parent):
+        depth[i] = depth[p] + 1 if p >= 0 else 0
+    return int(depth.sum())
+
+
+def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:
+    """Refuse, before allocating, a model whose analysis needs more memory than is available."""
     from .nullspace.certify import uses_structured
 
-    need = BYTES_PER_N2[bool(verify) and not uses_structured(robot, rows)] * robot.n**2
+    structured = bool(verify) and uses_structured(robot, rows)
+    if structured:
+        need = BYTES_PER_BODY * robot.n + BYTES_PER_DEPTH * _depth_sum(robot)
+    else:
+        need = BYTES_PER_N2[bool(verify)] * robot.n**2
     have = _available_bytes()
     if have is None or need <= have:
         return
+    if structured:
+        raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the certified analysis needs about "
+                              f"{need / 1e9:.2g} GB (its regrouped expressions grow with each body's depth in the "
+                              f"tree) and {have / 1e9:.2g} GB are available")
     hint = ("; --no-verify gives DRNG's geometric answer without the numerical certificate "
             f"(about {BYTES_PER_N2[False] * robot.n**2 / 1e9:.2g} GB)" if verify else "")
     raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the {'certified ' if verify else ''}analysis "

@@ -76,8 +76,8 @@ def _choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ..
     """Every body's dependent parameters and ``H_c[D_c]^-1``, bodies batched by their column count.
 
     Returns ``(order, bounds, dep, ainv)``: the columns sorted by body (``order[bounds[c]:bounds[c +
-    1]]`` are body ``c``'s), the chosen local rows per body (the greedy choice, as :func:`~.regroup.choose_dependent`) and the inverses of the
-    chosen rows.
+    1]]`` are body ``c``'s), the chosen local rows per body (the greedy choice, as
+    :func:`~.regroup.choose_dependent`) and the inverses of the chosen rows.
     """
     order = np.argsort(child, kind="stable")
     bounds = np.searchsorted(child[order], np.arange(n + 1))

@@ -147,3 +147,79 @@ def test_medium_tree_n300():
     chk = structured_check(robot, res)
     assert chk.status == "certified" and chk.rank_b == 3 * 299
     assert chk.blocks == 300 and chk.largest == 1
+
+
+def _regroupings(robot, conv):
+    from baseparams.base import base_parameters
+    from baseparams.base.sparse import tree_base_parameters
+    from baseparams.nullspace.columns import to_dense
+
+    chk = structured_check(robot, drng(robot))
+    assert chk.status == "certified" and chk.independent is not None
+    return base_parameters(robot, to_dense(chk.independent, robot.n), conv), \
+        tree_base_parameters(robot, chk.independent, conv)
+
+
+def _aligned_k(dense, sparse):
+    """Sparse K as dense, its columns in the dense K's dependent order."""
+    pos = {int(d): k for k, d in enumerate(sparse.dependent)}
+    return sparse.K.toarray()[:, [pos[int(d)] for d in dense.dependent]]
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("conv", ["khalil", "paper", "pinocchio"])
+def test_sparse_regrouping_equals_dense(seed, conv):
+    robot = _tree(seed, 12 + seed)
+    dense, sparse = _regroupings(robot, conv)
+    assert set(dense.dependent.tolist()) == set(sparse.dependent.tolist())
+    assert np.array_equal(dense.independent, sparse.independent)
+    assert dense.base_names() == sparse.base_names()
+    assert np.array_equal(dense.unidentifiable, sparse.unidentifiable)
+    kd, ks = dense.K, _aligned_k(dense, sparse)
+    row = np.maximum(1.0, np.abs(kd).max(axis=1, keepdims=True))
+    assert np.all(np.abs(kd - ks) <= 1e-9 * row)
+    assert np.array_equal(kd != 0, ks != 0)
+    pi = robot.parameters(conv)
+    beta = sparse.to_base(pi, conv)
+    assert np.allclose(beta, dense.to_base(pi, conv), rtol=1e-8, atol=1e-9 * np.abs(beta).max())
+    back = sparse.from_base(beta)  # the minimum-norm vector: unique, the dense pinv's
+    ref = dense.from_base(beta)
+    assert np.linalg.norm(back - ref) <= 1e-7 * np.linalg.norm(ref)
+    assert np.allclose(sparse.to_base(back, conv), beta, rtol=1e-7, atol=1e-9 * np.abs(beta).max())
+
+
+@pytest.mark.parametrize("seed", range(0, 40, 4))
+def test_sparse_regrouping_on_special_geometry(seed):
+    robot = special_robot(np.random.default_rng(seed))
+    if robot.has_loops:
+        pytest.skip("loops")
+    dense, sparse = _regroupings(robot, "khalil")
+    assert set(dense.dependent.tolist()) == set(sparse.dependent.tolist())
+    kd, ks = dense.K, _aligned_k(dense, sparse)
+    assert np.all(np.abs(kd - ks) <= 1e-8 * np.maximum(1.0, np.abs(kd).max(axis=1, keepdims=True)))
+
+
+def test_analysis_of_a_large_tree_is_sparse_and_consistent():
+    robot = random_robot(np.random.default_rng(9), STRUCTURED_MIN_BODIES + 5, "RP", True)
+    a = analyze(robot)
+    assert hasattr(a.base.K, "tocsr") and a.base.base_basis is None
+    assert a.nullity == a.certificate.nullity == 10 * robot.n - a.n_base
+    rng = np.random.default_rng(0)
+    q, dq, ddq = rng.uniform(-1, 1, (3, 4, robot.dof))
+    from baseparams.analysis import regressor
+
+    tau = regressor(robot, q, dq, ddq) @ robot.parameters("paper")
+    tau_b = a.base_regressor(q, dq, ddq) @ a.base_values
+    assert np.allclose(tau_b, tau, rtol=1e-9, atol=1e-9 * np.abs(tau).max())
+    names = [e["name"] for e in a.expressions()]
+    assert names == a.base_names and len(names) == a.n_base
+
+
+def test_deep_chain_is_refused_before_allocating(monkeypatch):
+    from baseparams import analysis
+    from baseparams.errors import BaseparamsError
+
+    robot = random_robot(np.random.default_rng(1), 60, "R", True, branching=0.0)
+    monkeypatch.setattr(analysis, "_available_bytes", lambda: 1e6)
+    with pytest.raises(BaseparamsError, match="depth"):
+        analyze(robot)

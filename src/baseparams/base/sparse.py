@@ -18,8 +18,9 @@ computed body by body:
   dependent parameters. ``Z_c`` lives on the path from ``c`` to the root: ``K`` has
   ``O(sum of depths)`` nonzeros, the size of the regrouped expressions themselves.
 
-The tolerances, zeroing and snapping are those of :func:`~.regroup.base_parameters`, with the
-rank decision of the choice made on each body's own block. ``K``, ``E`` and ``T`` are
+The tolerances and zeroing are those of :func:`~.regroup.base_parameters`, with the rank
+decision of the choice made on each body's own block; coefficients snap to decimals of at most 12
+significant digits only (:func:`snap_short`: what the expressions print). ``K``, ``E`` and ``T`` are
 ``scipy.sparse`` CSR matrices and ``base_basis`` is ``None`` (it would be dense).
 """
 
@@ -32,7 +33,7 @@ from ..model.inertia import LENGTH_POWER
 from ..model.robot import Robot
 from ..model.scale import length_scale
 from ..nullspace.columns import Columns
-from .regroup import NOISE_FACTOR, ZERO_TOL, BaseParameters, clean, parameter_names
+from .regroup import NOISE_FACTOR, SNAP_RTOL, ZERO_TOL, BaseParameters, parameter_names
 
 
 def body_transforms(robot: Robot, convention: str) -> np.ndarray:
@@ -54,6 +55,54 @@ def body_transforms(robot: Robot, convention: str) -> np.ndarray:
         return np.tile(np.eye(10), (robot.n, 1, 1))
     per = _inertia.from_convention(np.eye(10), convention)  # (10, 4, 4)
     return np.swapaxes(_inertia.hat(_inertia.transform(per[None], robot.M0[:, None])), -1, -2)
+
+
+#: coefficients snap to a decimal of at most this many significant digits (what the expressions print)
+SNAP_DIGITS = 12
+
+
+def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS) -> np.ndarray:
+    """:func:`~.regroup.clean` restricted to decimals of at most ``digits`` significant digits, vectorised.
+
+    An entry within ``rtol`` relative of a decimal of ``k <= digits`` significant digits becomes
+    the double nearest that decimal (computed as ``D / 10^s`` or ``D * 10^-s``, one correctly
+    rounded operation on exact operands, so the same double as parsing the decimal); other
+    entries (``clean`` would move them by less than ``rtol``, to 13-17 digits) stay as they are.
+
+    Parameters
+    ----------
+    x : ndarray
+        Numbers, any shape.
+    rtol : float
+        The largest relative move (:data:`~.regroup.SNAP_RTOL`).
+    digits : int
+        The most significant digits of a snapped value (at most 15).
+
+    Returns
+    -------
+    ndarray
+        A snapped copy, same shape.
+    """
+    x = np.array(x, dtype=float)
+    flat = x.reshape(-1)
+    nz = np.flatnonzero(np.isfinite(flat) & (flat != 0))
+    v, a = flat[nz], np.abs(flat[nz])
+    with np.errstate(all="ignore"):
+        mag = np.floor(np.log10(a))
+        out = v.copy()
+        todo = np.ones(len(v), dtype=bool)
+        for p in range(1, digits + 1):
+            s = (p - 1 - mag).astype(int)  # the decimal is D * 10^-s, D an integer of p digits
+            idx = np.flatnonzero(todo & (np.abs(s) <= 22))
+            if not len(idx):
+                break
+            d = np.rint(v[idx] * 10.0 ** s[idx])
+            snapped = np.where(s[idx] >= 0, d / 10.0 ** np.maximum(s[idx], 0), d * 10.0 ** np.maximum(-s[idx], 0))
+            ok = np.abs(snapped - v[idx]) <= rtol * a[idx]
+            out[idx[ok]] = snapped[ok]
+            todo[idx[ok]] = False
+    flat[nz] = out
+    return x
 
 
 def _scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndarray, ...]:
@@ -215,7 +264,7 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     keep = np.abs(vals) > max(ZERO_TOL, noise) * rowmax[rows]
     rows, cls, vals = rows[keep], cls[keep], vals[keep]
     power = np.tile(LENGTH_POWER[convention], n).astype(float)
-    vals = clean(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]))
+    vals = snap_short(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]))
     kmat = sp.csr_matrix((vals, (rows, cls)), shape=(len(ind), len(dep)))
     kmat.eliminate_zeros()
     kmat.sort_indices()

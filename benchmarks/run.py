@@ -23,6 +23,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``excite``        excitation design time and condition number (Puma560, Panda, pkm-2rru-1rrs).
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
+* ``size_sweep``    ``baseparams analyze FILE --floating --json`` on random floating trees (URDF) of
+                    N = 10 .. 10000 links: wall time, peak memory, status, nullity.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
 * ``files``         every example-robot-data URDF: certified, DRNG complete?; talos_full_v2 times.
 * ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the

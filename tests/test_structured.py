@@ -223,3 +223,18 @@ def test_deep_chain_is_refused_before_allocating(monkeypatch):
     monkeypatch.setattr(analysis, "_available_bytes", lambda: 1e6)
     with pytest.raises(BaseparamsError, match="depth"):
         analyze(robot)
+
+
+def test_undecided_when_the_dense_check_does_not_fit(monkeypatch):
+    from baseparams.base.sparse import tree_base_parameters
+    from baseparams.nullspace import certify as cert_mod
+
+    robot = _tree(2, 12)
+    res = drng(robot)
+    sub = res.columns.subset(res.columns.child != res.columns.child[len(res.columns) // 2])
+    short = DRNGResult(robot, sub, block_rank(sub, robot.n), 0.0)
+    monkeypatch.setattr(cert_mod, "dense_fits", lambda *a, **k: False)
+    cert = certify(robot, result=short, method="structured")
+    assert cert.status == "undecided" and "does not fit in memory" in cert.message
+    assert cert.nullity == short.rank and cert.columns is not None
+    assert tree_base_parameters(robot, cert.columns, "khalil").n_base == 10 * robot.n - short.rank

@@ -246,9 +246,13 @@ class BaseParameters:
         mags = np.abs(vals)
         # '%.12g' is format_coefficient's text where it writes positional numbers (1e-4 <= c < 1e6;
         # a margin below 1e6, where rounding could reach it)
-        fast = (mags >= 1e-4) & (mags < 9e5)
-        coef = ["" if m == 1 else (f"{m:.12g}*" if f else f"{format_coefficient(m)}*")
-                for m, f in zip(mags.tolist(), fast.tolist())]
+        uniq, inv = np.unique(mags, return_inverse=True)
+        shared = len(uniq) < len(mags) // 2  # many repeated magnitudes: format each distinct one once
+        each = uniq if shared else mags
+        fast = (each >= 1e-4) & (each < 9e5)
+        text = ["" if m == 1 else (f"{m:.12g}*" if f else f"{format_coefficient(m)}*")
+                for m, f in zip(each.tolist(), fast.tolist())]
+        coef = [text[j] for j in inv.tolist()] if shared else text
         terms = [f"{'-' if c < 0 else '+'} {t}{names[d]}"
                  for c, t, d in zip(vals.tolist(), coef, dparam[order].tolist())]
         ptr = k.indptr

@@ -59,11 +59,12 @@ def test_structured_on_builtin_trees(name, gravity):
     assert (cert.status, cert.nullity) == (dense.status, dense.nullity)
 
 
-def test_nullity_matches_pinocchio_rank():
+@pytest.mark.parametrize("seed, floating", [(5, True), (6, False), (8, True)])
+def test_nullity_matches_pinocchio_rank(seed, floating):
     pin = pytest.importorskip("pinocchio")
     from baseparams.io.pinocchio import forces_from_pinocchio, state_to_pinocchio, to_pinocchio
 
-    robot = random_robot(np.random.default_rng(5), 9, "RP", True, branching=0.4)
+    robot = random_robot(np.random.default_rng(seed), 9, "RP", floating, branching=0.4)
     model = to_pinocchio(robot)
     data = model.createData()
     rng = np.random.default_rng(2)

@@ -184,8 +184,9 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         raise BaseparamsError(f"robot {robot.name!r}: the DRNG result was computed for rows {res.rows!r}, "
                               f"certification asked for {rows!r}")
     if uses_structured(robot, rows, method):
+        dense_samples = default_samples(robot) if samples is None else samples
         cert = _structured(robot, res, STRUCTURED_SAMPLES if samples is None else samples, seed, rows, rtol,
-                           min_gap, residual_tol, t0)
+                           min_gap, residual_tol, t0, dense_samples)
         if cert is not None:
             return cert
     samples = default_samples(robot) if samples is None else samples
@@ -310,11 +311,11 @@ def uses_structured(robot: Robot, rows: str, method: str = "auto") -> bool:
 
 
 def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: str, rtol: float, min_gap: float,
-                residual_tol: float, t0: float) -> Certificate | None:
+                residual_tol: float, t0: float, dense_samples: int) -> Certificate | None:
     """The structured check as a :class:`Certificate`, or ``None`` when the dense check should decide."""
     chk = structured_check(robot, res, samples, seed, rows, rtol, residual_tol)
     n10 = 10 * robot.n
-    if chk.status == Status.UNDECIDED and dense_fits(robot, samples, rows):
+    if chk.status == Status.UNDECIDED and dense_fits(robot, dense_samples, rows):
         return None  # the dense check decides, and completes what DRNG missed
     d = decision_scale(robot, "paper")
     if chk.independent is not None and n10 * chk.rank_b > DENSE_BASIS_MAX:

@@ -22,7 +22,9 @@ drng                   {columns, rank, seconds, extended, by_principle{shared po
                        the geometric span equals the certified nullspace (null if unverified)
 numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
                        requested, kept, and for loops not_converged, branch_jumps,
-                       ill_conditioned, max_loop_residual}} or null
+                       ill_conditioned, max_loop_residual}} or null; for a tree checked
+                       body by body (40 bodies or more): rank proven block by block, sv_gap
+                       the smallest kept block singular value over the worst column residual
 certified              true when the numerics confirm the (completed) nullspace
 status, message        certified | completed | undecided | failed | unverified, and why
 completed              directions added from the numerical nullspace (marked numerical)

@@ -196,8 +196,9 @@ fixed ~0.8 ms per call is spread over more bodies; the cost per body is flat fro
 `baseparams analyze FILE --floating --json` in a fresh process (imports, URDF loading, DRNG,
 certification, regrouping in two conventions, JSON) on random floating-base trees written as
 URDF (generic revolute joints, each link on the previous one or, with probability 0.3, on a
-random earlier one); wall time and the process's own peak RSS (`os.wait4`). Trees of 40 bodies
-or more are certified body by body and regrouped sparsely (linear memory).
+random earlier one); median wall time of fresh runs (3 up to N = 1 000, 2 above) and the largest
+peak RSS of the process itself (`os.wait4`). Trees of 40 bodies or more are certified body by
+body and regrouped sparsely (linear memory).
 
 | N | wall | peak memory | status | nullity | expected 3 (N - 1) |
 |---:|---:|---:|---|---:|---:|

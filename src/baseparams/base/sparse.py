@@ -61,6 +61,20 @@ def body_transforms(robot: Robot, convention: str) -> np.ndarray:
 SNAP_DIGITS = 12
 
 
+#: exact powers of ten 10^-22 .. 10^22 (every one a double)
+_POW10 = 10.0 ** np.arange(-22, 23)
+
+
+def _snap_at(v: np.ndarray, mag: np.ndarray, p: int, rtol: float) -> tuple[np.ndarray, np.ndarray]:
+    """``v`` rounded to ``p`` significant digits (``mag``: decimal exponents), and where that is within ``rtol``."""
+    sc = p - 1 - mag  # the decimal is D * 10^-sc, D an integer of p digits
+    ok = np.abs(sc) <= 22
+    e = _POW10[np.clip(sc, -22, 22) + 22]
+    d = np.rint(v * e)
+    snapped = np.where(sc >= 0, d / e, d * _POW10[np.clip(-sc, -22, 22) + 22])
+    return snapped, ok & (np.abs(snapped - v) <= rtol * np.abs(v))
+
+
 def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS) -> np.ndarray:
     """:func:`~.regroup.clean` restricted to decimals of at most ``digits`` significant digits, vectorised.
 
@@ -86,21 +100,18 @@ def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS
     x = np.array(x, dtype=float)
     flat = x.reshape(-1)
     nz = np.flatnonzero(np.isfinite(flat) & (flat != 0))
-    v, a = flat[nz], np.abs(flat[nz])
+    v = flat[nz]
     with np.errstate(all="ignore"):
-        mag = np.floor(np.log10(a))
-        out = v.copy()
-        todo = np.ones(len(v), dtype=bool)
-        for p in range(1, digits + 1):
-            s = (p - 1 - mag).astype(int)  # the decimal is D * 10^-s, D an integer of p digits
-            idx = np.flatnonzero(todo & (np.abs(s) <= 22))
-            if not len(idx):
-                break
-            d = np.rint(v[idx] * 10.0 ** s[idx])
-            snapped = np.where(s[idx] >= 0, d / 10.0 ** np.maximum(s[idx], 0), d * 10.0 ** np.maximum(-s[idx], 0))
-            ok = np.abs(snapped - v[idx]) <= rtol * a[idx]
-            out[idx[ok]] = snapped[ok]
-            todo[idx[ok]] = False
+        mag = np.floor(np.log10(np.abs(v))).astype(int)
+    out = v.copy()
+    # a decimal of k <= digits digits is also one of ``digits`` digits: test that first, once for all
+    idx = np.flatnonzero(_snap_at(v, mag, digits, rtol)[1])
+    for p in range(1, digits + 1):  # the shortest: fewest digits first
+        if not len(idx):
+            break
+        snapped, ok = _snap_at(v[idx], mag[idx], p, rtol)
+        out[idx[ok]] = snapped[ok]
+        idx = idx[~ok]
     flat[nz] = out
     return x
 

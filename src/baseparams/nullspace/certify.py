@@ -23,7 +23,7 @@ from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_
 from ..pga.linalg import column_basis
 from .columns import Columns, to_dense
 from .drng import DRNGResult, drng
-from .structured import STRUCTURED_MIN_BODIES, STRUCTURED_SAMPLES, applicable, dense_fits, structured_check
+from .structured import STRUCTURED_MIN_BODIES, STRUCTURED_SAMPLES, applicable, dense_bytes, dense_fits, structured_check
 
 #: how :func:`certify` decides the rank
 METHODS = ("auto", "dense", "structured")
@@ -329,7 +329,9 @@ def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: st
                           np.zeros((n10, 0)), samples, chk.seconds, min_gap)
     message = chk.message
     if chk.status == Status.UNDECIDED:
-        message += "; the dense check does not fit in memory"
+        message += (f"; the dense check, which would decide and complete the missing directions, does not fit in "
+                    f"memory (about {dense_bytes(robot, dense_samples, rows) / 1e9:.2g} GB); --no-verify gives "
+                    f"DRNG's span alone")
     basis = None if span is None else np.linalg.qr(span)[0] if span.shape[1] else np.zeros((n10, 0))
     rms = float(np.sqrt(np.mean(chk.column_residuals ** 2))) if len(chk.column_residuals) else 0.0
     return Certificate(res, num, basis, chk.rank_b, 0, rms, chk.worst, chk.status, message,

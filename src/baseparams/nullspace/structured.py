@@ -568,8 +568,30 @@ def _available_bytes() -> float | None:
     return None
 
 
+def dense_bytes(robot: Robot, samples: int, rows: str = "all") -> float:
+    """Memory the dense check needs: the stacked regressor and the square factors [bytes].
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, ``dof`` coordinates).
+    samples : int
+        Random states of the check.
+    rows : str, default "all"
+        The measured generalized forces.
+
+    Returns
+    -------
+    float
+        ``8 (2 S rows (10 n) + 6 (10 n)^2)``: the stacked regressor (twice for the saturation
+        check) and the square factors of the SVD and the completion.
+    """
+    n10 = 10 * robot.n
+    return 8.0 * (2 * samples * int(row_mask(robot, rows).sum()) * n10 + 6 * n10 ** 2)
+
+
 def dense_fits(robot: Robot, samples: int, rows: str = "all") -> bool:
-    """Whether the dense check (stacked regressor, its factor, SVD) fits in the memory available.
+    """Whether the dense check fits in the memory available (:func:`dense_bytes` vs Linux's ``MemAvailable``).
 
     Parameters
     ----------
@@ -583,11 +605,7 @@ def dense_fits(robot: Robot, samples: int, rows: str = "all") -> bool:
     Returns
     -------
     bool
-        ``8 (S rows (10 n) + 6 (10 n)^2)`` bytes (the stacked regressor, twice for the saturation
-        check, and the square factors of the SVD and the completion) against Linux's
-        ``MemAvailable``; True when that is unknown.
+        True when it fits, or when the memory available is unknown.
     """
-    n10 = 10 * robot.n
-    need = 8.0 * (2 * samples * int(row_mask(robot, rows).sum()) * n10 + 6 * n10 ** 2)
     have = _available_bytes()
-    return have is None or need <= have
+    return have is None or dense_bytes(robot, samples, rows) <= have

@@ -239,3 +239,10 @@ def test_undecided_when_the_dense_check_does_not_fit(monkeypatch):
     assert cert.status == "undecided" and "does not fit in memory" in cert.message
     assert cert.nullity == short.rank and cert.columns is not None
     assert tree_base_parameters(robot, cert.columns, "khalil").n_base == 10 * robot.n - short.rank
+
+
+def test_no_verify_on_a_large_tree_regroups_sparsely_the_same():
+    robot = random_robot(np.random.default_rng(4), STRUCTURED_MIN_BODIES + 3, "RP", True)
+    a, b = analyze(robot), analyze(robot, verify=False)
+    assert b.status == "unverified" and b.basis is None and hasattr(b.base.K, "tocsr")
+    assert b.nullity == a.nullity and b.expressions() == a.expressions()

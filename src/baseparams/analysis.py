@@ -521,24 +521,33 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     with blas_threads():  # small dense factorizations: one BLAS thread (numerics.blas_threads)
         res = drng(robot, extended=extended, rows=rows)
         by = res.by_principle()
-        cert = None
+        cert, columns = None, None
         if verify:
             say(f"certifying with {samples or 'the default number of'} random samples (seed {seed}, rows: {rows})")
             cert = certify(robot, samples, seed, rows, result=res)
-            basis, span = cert.basis, cert.span
+            basis, span, columns = cert.basis, cert.span, cert.columns
         else:
-            basis = span = res.orthonormal()
+            columns = _large_tree_columns(robot, rows, res)
+            basis = span = res.orthonormal() if columns is None else None
         say("regrouping base parameters")
-        if cert is not None and cert.columns is not None:  # a tree checked body by body: its compact columns
+        if columns is not None:  # a large tree: regrouped from compact columns, sparsely
             from .base.sparse import tree_base_parameters
 
-            base = tree_base_parameters(robot, cert.columns, convention)
-            base_paper = tree_base_parameters(robot, cert.columns, "paper")
+            base = tree_base_parameters(robot, columns, convention)
+            base_paper = tree_base_parameters(robot, columns, "paper")
         else:
             base = base_parameters(robot, span, convention)
             base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended)
+
+
+def _large_tree_columns(robot: Robot, rows: str, res):
+    """Without certification, DRNG's span of a large tree as independent compact columns (or None)."""
+    from .nullspace.certify import uses_structured
+    from .nullspace.structured import independent_columns
+
+    return independent_columns(robot, res) if uses_structured(robot, rows) else None
 
 
 #: measured peak memory per squared body count [bytes]: certified analysis, and DRNG + regrouping
@@ -577,7 +586,7 @@ def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:
     """Refuse, before allocating, a model whose analysis needs more memory than is available."""
     from .nullspace.certify import uses_structured
 
-    structured = bool(verify) and uses_structured(robot, rows)
+    structured = uses_structured(robot, rows)  # certified body by body (or not), regrouped sparsely
     if structured:
         need = BYTES_PER_BODY * robot.n + BYTES_PER_DEPTH * _depth_sum(robot)
     else:
@@ -586,7 +595,7 @@ def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:
     if have is None or need <= have:
         return
     if structured:
-        raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the certified analysis needs about "
+        raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the analysis needs about "
                               f"{need / 1e9:.2g} GB (its regrouped expressions grow with each body's depth in the "
                               f"tree) and {have / 1e9:.2g} GB are available")
     hint = ("; --no-verify gives DRNG's geometric answer without the numerical certificate "

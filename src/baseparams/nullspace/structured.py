@@ -522,12 +522,12 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
     worst = float(res.max()) if len(res) else 0.0
     q, lead, indep = leading_spans(raw, n)
     rank_b = int(lead.sum())
+    if indep is not None:
+        indep = replace(indep, h=indep.h * d10, hp=indep.hp * d10, he=indep.he * d10)
     par = np.asarray(robot.parent, dtype=int)
     bad, small = diagonal_blocks(q, lead, x, lines, dofs, rtol)
     missing, merged, small2 = merge_blocks(bad, par, q, lead, x, lines, dofs, rtol)
     nblocks, largest = _largest_group(merged, n)
-    if indep is not None:
-        indep = replace(indep, h=indep.h * d10, hp=indep.hp * d10, he=indep.he * d10)
     out = dict(rank_b=rank_b, rank_w=10 * n - rank_b - missing, missing=missing, blocks=nblocks, largest=largest,
                smallest_sv=min(small, small2), column_residuals=res, worst=worst, samples=samples, independent=indep)
     status, message = _structured_verdict(result, out, rtol, residual_tol)
@@ -554,6 +554,32 @@ def _structured_verdict(result: DRNGResult, out: dict, rtol: float, residual_tol
                                   f"rows of their subtree (DRNG may be incomplete); {how}")
     return Status.CERTIFIED, (f"DRNG is complete: rank(B) {out['rank_b']} + rank(W) {out['rank_w']} = {ncols} "
                               f"(rank(W) bounded below block by block); {how}")
+
+
+def independent_columns(robot: Robot, result: DRNGResult) -> Columns | None:
+    """A basis of DRNG's span in compact form (SI ``paper`` convention), without numerics.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    result : DRNGResult
+        DRNG's columns.
+
+    Returns
+    -------
+    Columns or None
+        ``result.rank`` linearly independent columns spanning the same space, each independent
+        on its highest body (:func:`.rank.leading_spans` on ``pi / d``): what
+        :func:`baseparams.base.sparse.tree_base_parameters` regroups; ``None`` when the echelon
+        form needed eliminations or does not reproduce DRNG's rank.
+    """
+    d10 = decision_scale(robot, "paper")[:10]
+    cols = result.columns
+    _, lead, indep = leading_spans(replace(cols, h=cols.h / d10, hp=cols.hp / d10, he=cols.he / d10), robot.n)
+    if indep is None or int(lead.sum()) != result.rank:
+        return None
+    return replace(indep, h=indep.h * d10, hp=indep.hp * d10, he=indep.he * d10)
 
 
 def _available_bytes() -> float | None:

@@ -57,6 +57,9 @@ def main(argv: list[str]) -> int:
     rows_scal = "".join(
         f"| {N} | {g(f'drng_chain_N{N}_ms')} ms | {g(f'drng_chain_N{N}_us_per_body')} us | {g(f'drng_tree_N{N}_ms')} ms "
         f"| {g(f'drng_tree_N{N}_us_per_body')} us |\n" for N in (10, 100, 1000, 10000))
+    rows_sweep = "".join(
+        f"| {N} | {g(f'sweep_N{N}_s', '{:.2f}')} s | {g(f'sweep_N{N}_peak_mb', '{:.0f}')} MB | {g(f'sweep_N{N}_status', '{}')} "
+        f"| {g(f'sweep_N{N}_nullity', '{}')} | {3 * (N - 1)} |\n" for N in (10, 100, 1000, 3000, 10000))
     rows_ext = "".join(
         f"| {N} | {g(f'drng_chain_N{N}_ms')} ms | {g(f'drng_chain_N{N}_extended_ms')} ms "
         f"| {g(f'drng_chain_N{N}_extended_ratio', '{:.1f}')}x | {g(f'drng_tree_N{N}_ms')} ms "
@@ -89,7 +92,7 @@ python benchmarks/report.py RESULT.json     # rewrites this README from a --json
 Default: a table on stdout; `--json`: exactly one JSON object (named figures,
 `<figure>_repeats`, `machine`); progress on stderr; `--quick` < 60 s; `--only` selects groups
 (`regressor`, `base_streaming`, `analyze_cli`, `identify`, `stream`, `drng_vs_numerical`, `drng_scaling`,
-`loops`, `files`, `special`). Every timing is the
+`size_sweep`, `loops`, `files`, `special`). Every timing is the
 **median** of `time.perf_counter` over the stated repeats after one warm-up call. BLAS is
 pinned to one thread by default (`--blas-threads 0` leaves it alone): with OpenBLAS's two
 threads the numerical method's SVD was 10-140x slower in 4 of 7 runs on this noisy 2-core VM,
@@ -110,7 +113,8 @@ Groups:
 2. **drng_vs_numerical**: `drng(robot)` vs `numerical_nullspace(robot, samples=100)` (the
    paper's numerical method), and `certify(robot)` separately.
 3. **drng_scaling**: `drng` on random RP chains (`branching=0`) and trees (`branching=0.5`)
-   of N = 10 ... 10 000 bodies (build time excluded).
+   of N = 10 ... 10 000 bodies (build time excluded). **size_sweep**: the whole `analyze` CLI
+   on random floating-base trees of N = 10 ... 10 000 links (URDF), fresh processes.
 4. **loops**: `drng` on the two PKMs vs the paper's numerical validation (5 000 actuated
    samples in the model's box, exact loop closure, `cond(J_p) < 30` filter, stacked regressor,
    SVD).
@@ -194,6 +198,18 @@ section 6 (the product's default).
 {rows_scal}
 `drng_chain_linearity` (us per body at N = 10 000 / at N = 100) = {g('drng_chain_linearity', '{:.2f}')}: a
 fixed ~0.8 ms per call is spread over more bodies; the cost per body is flat from 1 000 on.
+
+### 3b. Analysis size sweep
+`baseparams analyze FILE --floating --json` in a fresh process (imports, URDF loading, DRNG,
+certification, regrouping in two conventions, JSON) on random floating-base trees written as
+URDF (generic revolute joints, each link on the previous one or, with probability 0.3, on a
+random earlier one); median wall time of fresh runs (3 up to N = 1 000, 2 above) and the largest
+peak RSS of the process itself (`os.wait4`). Trees of 40 bodies or more are certified body by
+body and regrouped sparsely (linear memory).
+
+| N | wall | peak memory | status | nullity | expected 3 (N - 1) |
+|---:|---:|---:|---|---:|---:|
+{rows_sweep}
 
 ### 4. Closed loops: DRNG vs the 5 000-sample numerical validation
 DRNG with the paper's principles (as the paper times it) and with the extended rules (R-A,

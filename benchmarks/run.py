@@ -25,6 +25,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``excite``        excitation design time and condition number (Puma560, Panda, pkm-2rru-1rrs).
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
+* ``size_sweep``    ``baseparams analyze FILE --floating --json`` on random floating trees (URDF) of
+                    N = 10 .. 10000 links: wall time, peak memory, status, nullity.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
 * ``files``         every example-robot-data URDF: certified, DRNG complete?; talos_full_v2 times.
 * ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the
@@ -640,6 +642,75 @@ def bench_drng_scaling(out: dict, quick: bool) -> None:
         out["drng_chain_linearity"] = None
 
 
+def random_tree_urdf(n: int, seed: int = 0, branching: float = 0.3) -> str:
+    """A random tree of ``n`` links as URDF text: generic revolute joints (random origin, rotation
+    and axis), random inertias; each link hangs from the previous one, or with probability
+    ``branching`` from a random earlier one. Loaded with ``--floating``: nullity 3 (N - 1)."""
+    rng = np.random.default_rng(seed)
+    out = ['<?xml version="1.0"?>', f'<robot name="tree{n}">']
+    for i in range(n):
+        m, c, d = rng.uniform(0.5, 2.0), rng.uniform(-0.1, 0.1, 3), rng.uniform(0.01, 0.05, 3)
+        out.append(f'<link name="b{i}"><inertial><origin xyz="{c[0]:.6f} {c[1]:.6f} {c[2]:.6f}"/>'
+                   f'<mass value="{m:.6f}"/><inertia ixx="{d[1] + d[2]:.6f}" ixy="0.001" ixz="-0.002" '
+                   f'iyy="{d[0] + d[2]:.6f}" iyz="0.0015" izz="{d[0] + d[1]:.6f}"/></inertial></link>')
+        if i:
+            p = int(rng.integers(0, i)) if rng.random() < branching else i - 1
+            xyz, rpy, ax = rng.uniform(-0.3, 0.3, 3), rng.uniform(-np.pi, np.pi, 3), rng.normal(size=3)
+            ax /= np.linalg.norm(ax)
+            out.append(f'<joint name="j{i}" type="continuous"><parent link="b{p}"/><child link="b{i}"/>'
+                       f'<origin xyz="{xyz[0]:.6f} {xyz[1]:.6f} {xyz[2]:.6f}" '
+                       f'rpy="{rpy[0]:.6f} {rpy[1]:.6f} {rpy[2]:.6f}"/>'
+                       f'<axis xyz="{ax[0]:.6f} {ax[1]:.6f} {ax[2]:.6f}"/></joint>')
+    out.append("</robot>")
+    return "\n".join(out)
+
+
+def run_measured(cmd: list[str]) -> tuple[float, float, int, str]:
+    """``(wall s, peak RSS MB, exit code, stdout)`` of one subprocess (``os.wait4``: its own
+    ``ru_maxrss``, not the maximum over every child so far)."""
+    import subprocess
+    import tempfile
+
+    with tempfile.TemporaryFile() as fo, tempfile.TemporaryFile() as fe:
+        t0 = time.perf_counter()
+        proc = subprocess.Popen(cmd, stdout=fo, stderr=fe)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - t0
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        fo.seek(0)
+        return wall, usage.ru_maxrss / 1024, proc.returncode, fo.read().decode()
+
+
+def bench_size_sweep(out: dict, quick: bool) -> None:
+    """``baseparams analyze FILE --floating --json`` in fresh processes on random floating-base trees
+    (:func:`random_tree_urdf`) of N = 10 ... 10 000 links: median wall time (3 runs up to N = 1 000,
+    2 above), the largest peak memory, status, nullity."""
+    import tempfile
+
+    from baseparams.files import write_text
+
+    sizes = (10, 100, 1000) if quick else (10, 100, 1000, 3000, 10000)
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            path = Path(tmp) / f"tree{n}.urdf"
+            write_text(path, random_tree_urdf(n, seed=n))
+            reps = 1 if quick else {10: 3, 100: 3, 1000: 3}.get(n, 2)
+            log(f"  analyze tree{n} (--floating, {reps} fresh processes) ...")
+            cmd = [sys.executable, "-m", "baseparams", "analyze", str(path), "--floating", "--json"]
+            runs = [run_measured(cmd) for _ in range(reps)]
+            wall, mb = statistics.median(r[0] for r in runs), max(r[1] for r in runs)
+            code, text = runs[-1][2], runs[-1][3]
+            key = f"sweep_N{n}"
+            out[f"{key}_s"], out[f"{key}_peak_mb"], out[f"{key}_exit"] = wall, mb, code
+            out[f"{key}_s_repeats"], out[f"{key}_s_all"] = reps, [r[0] for r in runs]
+            res = json.loads(text) if code in (0, 1) and text.strip() else {}
+            out[f"{key}_status"] = res.get("status")
+            out[f"{key}_nullity"] = res.get("nullity")
+            out[f"{key}_nullity_expected"] = 3 * (n - 1)
+            log(f"  tree{n}: {wall:.2f} s, {mb:.0f} MB, exit {code}, {res.get('status')}, nullity "
+                f"{res.get('nullity')} (expected {3 * (n - 1)})")
+
+
 LOOP_BUILTINS = ("four-bar", "parallelogram", "pkm-2rru-1rrs", "pkm-2prs-1psr", "pkm-2prs-1psr-symmetric")
 
 
@@ -842,6 +913,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "excite": bench_excite,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
+    "size_sweep": bench_size_sweep,
     "loops": bench_loops,
     "symbolic": bench_symbolic,
     "report": bench_report,

@@ -23,7 +23,9 @@ drng                   {columns, rank, seconds, extended, by_principle{shared po
                        the geometric span equals the certified nullspace (null if unverified)
 numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
                        requested, kept, and for loops not_converged, branch_jumps,
-                       ill_conditioned, max_loop_residual}} or null
+                       ill_conditioned, max_loop_residual}} or null; for a tree checked
+                       body by body (40 bodies or more): rank proven block by block, sv_gap
+                       the smallest kept block singular value over the worst column residual
 certified              true when the numerics confirm the (completed) nullspace
 status, message        certified | completed | undecided | failed | unverified, and why
 completed              directions added from the numerical nullspace (marked numerical)
@@ -193,9 +195,10 @@ class Analysis:
         :attr:`~baseparams.enums.Source.label`).
     certificate : Certificate or None
         The numerical check (``None`` with ``verify=False``).
-    basis : ndarray, shape ``(10 n, nullity)``
+    basis : ndarray, shape ``(10 n, nullity)``, or None
         Orthonormal nullspace basis in the ``paper`` convention, DRNG's span first, then the
-        numerically completed directions.
+        numerically completed directions; ``None`` for a large tree certified body by body
+        (``certificate.columns`` spans the nullspace, and ``base`` is regrouped from it).
     base, base_paper : BaseParameters
         The regrouping in :attr:`convention` and in ``paper``.
     seconds : float
@@ -225,7 +228,7 @@ class Analysis:
     @property
     def nullity(self) -> int:
         """Dimension of the (certified) nullspace; DRNG's rank when unverified."""
-        return self.basis.shape[1]
+        return self.basis.shape[1] if self.basis is not None else 10 * self.robot.n - self.base.n_base
 
     @property
     def n_base(self) -> int:
@@ -400,7 +403,8 @@ class Analysis:
         """
         p = self.__dict__.get("_base_map")
         if p is None:
-            p = np.ascontiguousarray(self.base.T[:, self.base.independent])
+            t = self.base.T[:, self.base.independent]
+            p = np.ascontiguousarray(t.toarray() if hasattr(t, "toarray") else t)
             p.flags.writeable = False
             object.__setattr__(self, "_base_map", p)
         return p
@@ -513,23 +517,38 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
 
     from .numerics import blas_threads
 
-    _check_memory(robot, verify)
+    _check_memory(robot, verify, rows)
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
     with blas_threads():  # small dense factorizations: one BLAS thread (numerics.blas_threads)
         res = drng(robot, extended=extended, rows=rows)
         by = res.by_principle()
-        cert = None
+        cert, columns = None, None
         if verify:
             say(f"certifying with {samples or 'the default number of'} random samples (seed {seed}, rows: {rows})")
             cert = certify(robot, samples, seed, rows, result=res)
-            basis, span = cert.basis, cert.span
+            basis, span, columns = cert.basis, cert.span, cert.columns
         else:
-            basis = span = res.orthonormal()
+            columns = _large_tree_columns(robot, rows, res)
+            basis = span = res.orthonormal() if columns is None else None
         say("regrouping base parameters")
-        base = base_parameters(robot, span, convention)
-        base_paper = base_parameters(robot, span, "paper")
+        if columns is not None:  # a large tree: regrouped from compact columns, sparsely
+            from .base.sparse import tree_base_parameters
+
+            base = tree_base_parameters(robot, columns, convention)
+            base_paper = tree_base_parameters(robot, columns, "paper")
+        else:
+            base = base_parameters(robot, span, convention)
+            base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended)
+
+
+def _large_tree_columns(robot: Robot, rows: str, res):
+    """Without certification, DRNG's span of a large tree as independent compact columns (or None)."""
+    from .nullspace.certify import uses_structured
+    from .nullspace.structured import independent_columns
+
+    return independent_columns(robot, res) if uses_structured(robot, rows) else None
 
 
 #: measured peak memory per squared body count [bytes]: certified analysis, and DRNG + regrouping
@@ -550,12 +569,36 @@ def _available_bytes() -> float | None:
     return None
 
 
-def _check_memory(robot: Robot, verify: bool) -> None:
+#: a tree certified body by body and regrouped sparsely (``certify``'s structured path): bytes per
+#: body (the sampled wrench maps, the columns) and per unit of depth summed over the bodies (the
+#: dual vectors, ``K`` and the expressions grow with each body's distance to the root)
+BYTES_PER_BODY, BYTES_PER_DEPTH = 200e3, 2e3
+
+
+def _depth_sum(robot: Robot) -> int:
+    """Sum over the bodies of their number of ancestors (``O(n)``; parents precede children)."""
+    depth = np.zeros(robot.n, dtype=np.int64)
+    for i, p in enumerate(robot.parent):
+        depth[i] = depth[p] + 1 if p >= 0 else 0
+    return int(depth.sum())
+
+
+def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:
     """Refuse, before allocating, a model whose analysis needs more memory than is available."""
-    need = BYTES_PER_N2[bool(verify)] * robot.n**2
+    from .nullspace.certify import uses_structured
+
+    structured = uses_structured(robot, rows)  # certified body by body (or not), regrouped sparsely
+    if structured:
+        need = BYTES_PER_BODY * robot.n + BYTES_PER_DEPTH * _depth_sum(robot)
+    else:
+        need = BYTES_PER_N2[bool(verify)] * robot.n**2
     have = _available_bytes()
     if have is None or need <= have:
         return
+    if structured:
+        raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the analysis needs about "
+                              f"{need / 1e9:.2g} GB (its regrouped expressions grow with each body's depth in the "
+                              f"tree) and {have / 1e9:.2g} GB are available")
     hint = ("; --no-verify gives DRNG's geometric answer without the numerical certificate "
             f"(about {BYTES_PER_N2[False] * robot.n**2 / 1e9:.2g} GB)" if verify else "")
     raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the {'certified ' if verify else ''}analysis "

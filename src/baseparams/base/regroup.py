@@ -121,7 +121,9 @@ def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
                 break
             ok = np.abs(np.round(mant[todo], p - 1) - mant[todo]) <= rtol * np.abs(mant[todo])
             digits[np.flatnonzero(todo)[ok]] = p
-    snapped = np.array([float(f"{c:.{k - 1}e}") for c, k in zip(v.tolist(), digits.tolist())])
+    short = np.flatnonzero(digits < 17)  # 17 significant digits: the value as it is
+    snapped = v.copy()
+    snapped[short] = [float(f"{c:.{k - 1}e}") for c, k in zip(v[short].tolist(), digits[short].tolist())]
     bad = np.abs(snapped - v) > rtol * a  # the decimal string decides; never lose more than rtol
     snapped[bad] = v[bad]
     flat[nz] = snapped
@@ -164,15 +166,16 @@ class BaseParameters:
         Indices of ``pi_I``.
     dependent : ndarray of int, shape ``(k,)``
         Indices of ``pi_D``.
-    K : ndarray, shape ``(nb, k)``
-        Regrouping coefficients.
-    E : ndarray, shape ``(nb, 10 n)``
+    K : ndarray or scipy.sparse.csr_matrix, shape ``(nb, k)``
+        Regrouping coefficients (sparse from :func:`baseparams.base.sparse.tree_base_parameters`).
+    E : ndarray or scipy.sparse.csr_matrix, shape ``(nb, 10 n)``
         ``beta = E @ pi`` (convention coordinates).
     unidentifiable : ndarray of int
         Indices of parameters that no base parameter sees.
-    base_basis : ndarray, shape ``(10 n, nb)``
-        Orthonormal basis of ``Null^perp`` in the paper convention.
-    T : ndarray, shape ``(10 n, 10 n)``
+    base_basis : ndarray, shape ``(10 n, nb)``, or None
+        Orthonormal basis of ``Null^perp`` in the paper convention (``None`` from the sparse
+        regrouping of a large tree: it would be dense).
+    T : ndarray or scipy.sparse.csr_matrix, shape ``(10 n, 10 n)``
         :func:`paper_from`: paper parameters = ``T @`` convention parameters.
     """
 
@@ -203,7 +206,11 @@ class BaseParameters:
         list of str, length ``nb``
             ``NAMER`` when the parameter absorbs others (Khalil's suffix), else ``NAME``.
         """
-        return [self.names[i] + ("R" if np.any(self.K[r] != 0) else "") for r, i in enumerate(self.independent)]
+        if _is_sparse(self.K):
+            absorbs = np.diff(self.K.indptr) > 0
+        else:
+            absorbs = np.any(self.K != 0, axis=1) if self.K.shape[1] else np.zeros(len(self.independent), bool)
+        return [self.names[i] + ("R" if a else "") for i, a in zip(self.independent, absorbs)]
 
     def expressions(self) -> list[dict[str, str]]:
         """Each base parameter as a combination of standard ones.
@@ -214,18 +221,43 @@ class BaseParameters:
             ``[{"name": ..., "expression": ...}]``, e.g. ``link1.ZZR`` and
             ``link1.ZZ + link2.YY + ...`` (coefficients written only when not 1).
         """
+        if _is_sparse(self.K):
+            return self._sparse_expressions()
         out = []
         order = np.argsort(self.dependent, kind="stable")  # terms in parameter order
         for r, (i, bname) in enumerate(zip(self.independent, self.base_names())):
             terms = [self.names[i]]
-            for col in order[self.K[r, order] != 0]:
-                c, d = self.K[r, col], self.dependent[col]
+            nz = order[self.K[r, order] != 0]
+            for c, d in zip(self.K[r, nz].tolist(), self.dependent[nz].tolist()):
                 sign = "-" if c < 0 else "+"
                 mag = abs(c)
                 coef = "" if mag == 1 else f"{format_coefficient(mag)}*"
                 terms.append(f"{sign} {coef}{self.names[d]}")
             out.append({"name": bname, "expression": " ".join(terms)})
         return out
+
+    def _sparse_expressions(self) -> list[dict[str, str]]:
+        """:meth:`expressions` of a sparse ``K``: every term formatted once, rows joined."""
+        k, names = self.K, self.names
+        rows = np.repeat(np.arange(k.shape[0]), np.diff(k.indptr))
+        dparam = self.dependent[k.indices]
+        order = np.lexsort((dparam, rows))  # row by row, terms in parameter order
+        vals = k.data[order]
+        mags = np.abs(vals)
+        # '%.12g' is format_coefficient's text where it writes positional numbers (1e-4 <= c < 1e6;
+        # a margin below 1e6, where rounding could reach it)
+        uniq, inv = np.unique(mags, return_inverse=True)
+        shared = len(uniq) < len(mags) // 2  # many repeated magnitudes: format each distinct one once
+        each = uniq if shared else mags
+        fast = (each >= 1e-4) & (each < 9e5)
+        text = ["" if m == 1 else (f"{m:.12g}*" if f else f"{format_coefficient(m)}*")
+                for m, f in zip(each.tolist(), fast.tolist())]
+        coef = [text[j] for j in inv.tolist()] if shared else text
+        terms = [f"{'-' if c < 0 else '+'} {t}{names[d]}"
+                 for c, t, d in zip(vals.tolist(), coef, dparam[order].tolist())]
+        ptr = k.indptr
+        return [{"name": bname, "expression": " ".join([names[i]] + terms[ptr[r]:ptr[r + 1]])}
+                for r, (i, bname) in enumerate(zip(self.independent.tolist(), self.base_names()))]
 
     def _check(self, convention: str) -> None:
         _inertia.check_convention(convention)
@@ -283,7 +315,16 @@ class BaseParameters:
         beta = np.asarray(beta, dtype=float)
         if beta.shape != (self.E.shape[0],):
             raise BaseparamsError(f"expected {self.E.shape[0]} base parameters, got shape {beta.shape}")
+        if _is_sparse(self.E):  # E has full row rank: the minimum-norm solution E^T (E E^T)^-1 beta
+            from scipy.sparse.linalg import spsolve
+
+            return self.E.T @ np.atleast_1d(spsolve((self.E @ self.E.T).tocsc(), beta))
         return np.linalg.pinv(self.E) @ beta
+
+
+def _is_sparse(a) -> bool:
+    """True for a scipy.sparse matrix (without importing scipy)."""
+    return hasattr(a, "tocsr")
 
 
 def choose_dependent(b: np.ndarray, order: np.ndarray, rtol: float = 1e-8) -> np.ndarray:

@@ -21,7 +21,14 @@ from ..model.robot import Robot
 from ..model.scale import decision_scale
 from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, stacked_regressor
 from ..pga.linalg import column_basis
+from .columns import Columns, to_dense
 from .drng import DRNGResult, drng
+from .structured import STRUCTURED_MIN_BODIES, STRUCTURED_SAMPLES, applicable, dense_bytes, dense_fits, structured_check
+
+#: how :func:`certify` decides the rank
+METHODS = ("auto", "dense", "structured")
+#: the structured check forms the dense orthonormal basis only up to this many entries (10 n x nullity)
+DENSE_BASIS_MAX = 4_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,18 +47,25 @@ class Certificate:
         The DRNG result that was checked.
     numerical : NumericalResult
         The numerical method's rank decision on ``W`` (:func:`baseparams.numerics.numerical_nullspace`).
-    basis : ndarray, shape ``(10 n, nullity)``
+        From the structured check (:mod:`.structured`, large trees): ``rank`` is the rank proven
+        block by block, no singular values or bases (empty arrays), ``tol`` the ``rtol`` of the
+        magnitude-normalised blocks and ``gap`` the smallest singular value kept over the
+        blocks divided by the worst column residual.
+    basis : ndarray, shape ``(10 n, nullity)``, or None
         Orthonormal nullspace basis (paper convention: spatial pseudo-inertia entries ``XX XY
         XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at q = 0; SI units), DRNG's span
-        first, then the ``completed`` numerical directions.
+        first, then the ``completed`` numerical directions. ``None`` from the structured check
+        when it would exceed :data:`DENSE_BASIS_MAX` entries (``columns`` spans the nullspace).
     drng_rank : int
         Dimension of DRNG's span (rank of its columns on ``pi / d``).
     completed : int
         Number of directions added from the numerical nullspace (marked ``numerical``).
     residual : float
-        ``||W B_drng||_F / ||W||_F`` with orthonormal ``B_drng``.
+        ``||W B_drng||_F / ||W||_F`` with orthonormal ``B_drng`` (structured check: the root mean
+        square of the column residuals, each relative to the size of its terms).
     max_column_residual : float
-        The worst single DRNG column (unit norm): ``||W b|| / ||W||_2``.
+        The worst single DRNG column (unit norm): ``||W b|| / ||W||_2`` (structured check:
+        relative to the size of its terms, :func:`.structured.column_residuals`).
     status : Status or str
         ``certified``, ``completed``, ``undecided`` or ``failed`` (a
         :class:`~baseparams.enums.Status`; a string given is converted, an unknown one refused).
@@ -65,7 +79,11 @@ class Certificate:
     span : ndarray, shape ``(10 n, nullity)``, optional
         The same nullspace, SI units, each entry exact to its own scale (columns not
         orthonormal): what regrouping should be given, since an SI-orthonormal basis carries
-        only absolute precision in its small (millimetre-scale) entries.
+        only absolute precision in its small (millimetre-scale) entries. ``None`` with ``basis``.
+    columns : Columns, optional
+        From the structured check: ``nullity`` linearly independent columns in compact form
+        spanning the nullspace (SI ``paper`` convention), what
+        :func:`baseparams.base.sparse.tree_base_parameters` regroups.
 
     Raises
     ------
@@ -85,6 +103,7 @@ class Certificate:
     seconds: float
     sampling: dict | None = None
     span: np.ndarray | None = None
+    columns: Columns | None = None
 
     __repr__ = summary_repr
 
@@ -98,13 +117,13 @@ class Certificate:
 
     @property
     def nullity(self) -> int:
-        """Dimension of the (certified or completed) nullspace: ``basis.shape[1]``."""
-        return self.basis.shape[1]
+        """Dimension of the (certified or completed) nullspace: ``drng_rank + completed``."""
+        return self.drng_rank + self.completed
 
 
 def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
             result: DRNGResult | None = None, rtol: float = 1e-9, min_gap: float = 1e4,
-            residual_tol: float = 1e-8) -> Certificate:
+            residual_tol: float = 1e-8, method: str = "auto") -> Certificate:
     """Certify (and if needed complete) DRNG's nullspace with ``samples`` random states.
 
     Steps: the stacked regressor ``W`` and its numerical nullspace; every DRNG column checked
@@ -121,7 +140,9 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         The robot (``n`` moving bodies, ``10 n`` parameters).
     samples : int, optional
         Random states; default :func:`baseparams.numerics.default_samples` (100 for trees, the
-        paper's 5 000 actuated samples for small loop robots).
+        paper's 5 000 actuated samples for small loop robots); the structured check's default is
+        :data:`.structured.STRUCTURED_SAMPLES` (each diagonal block still has far more rows than
+        its at most ten columns).
     seed : int, default 0
         Seed of the random states (the saturation check draws a second set with another seed).
     rows : {"all", "joints", "base"}, default "all"
@@ -135,6 +156,13 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     residual_tol : float, default 1e-8
         Largest relative residual ``||W b|| / ||W||_2`` of a DRNG column (unit norm) in the
         nullspace; a worse column fails the check.
+    method : {"auto", "dense", "structured"}, default "auto"
+        ``dense``: the stacked regressor and its SVD (memory quadratic in ``n``). ``structured``:
+        for a tree whose joint rows are measured, rank decided body by body
+        (:func:`.structured.structured_check`, memory linear in ``n``); where it cannot decide
+        (a deficiency no merge explains) the dense check runs if it fits in memory, else the
+        result is ``undecided``. ``auto``: structured for such trees of at least
+        :data:`.structured.STRUCTURED_MIN_BODIES` bodies, dense otherwise.
 
     Returns
     -------
@@ -146,14 +174,21 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     Raises
     ------
     BaseparamsError
-        Unknown ``rows``, ``rows`` other than ``"all"`` on a loop robot, or no sample closing the
-        loops (from :func:`baseparams.numerics.stacked_regressor`).
+        Unknown ``rows`` or ``method``, ``rows`` other than ``"all"`` on a loop robot, no sample
+        closing the loops (from :func:`baseparams.numerics.stacked_regressor`), or ``structured``
+        where it does not apply.
     """
     t0 = time.perf_counter()
     res = drng(robot, rows=rows) if result is None else result
     if res.rows != rows:
         raise BaseparamsError(f"robot {robot.name!r}: the DRNG result was computed for rows {res.rows!r}, "
                               f"certification asked for {rows!r}")
+    if uses_structured(robot, rows, method):
+        dense_samples = default_samples(robot) if samples is None else samples
+        cert = _structured(robot, res, STRUCTURED_SAMPLES if samples is None else samples, seed, rows, rtol,
+                           min_gap, residual_tol, t0, dense_samples)
+        if cert is not None:
+            return cert
     samples = default_samples(robot) if samples is None else samples
     sampling: dict = {}
     # ranks are decided on pi / d (model.scale.decision_scale): d = 1 for a robot of ordinary
@@ -243,3 +278,61 @@ def _complete(bd: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, int, fl
     u, s, _ = np.linalg.svd(rest, full_matrices=False)
     missing = num.nullity - r_d
     return np.concatenate([bd, u[:, :missing]], axis=1), missing, float(s[missing - 1])
+
+
+def uses_structured(robot: Robot, rows: str, method: str = "auto") -> bool:
+    """Whether :func:`certify` takes the structured (body-by-body) path first.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    rows : str
+        The measured generalized forces.
+    method : {"auto", "dense", "structured"}
+        As for :func:`certify`.
+
+    Returns
+    -------
+    bool
+        ``structured``: always (an error later if it does not apply); ``auto``: for a tree whose
+        joint rows are measured with at least :data:`.structured.STRUCTURED_MIN_BODIES` bodies.
+
+    Raises
+    ------
+    BaseparamsError
+        An unknown ``method``.
+    """
+    if method not in METHODS:
+        raise BaseparamsError(f"unknown certification method {method!r}; expected one of {METHODS}")
+    if method == "structured":
+        return True
+    return method == "auto" and applicable(robot, rows) and robot.n >= STRUCTURED_MIN_BODIES
+
+
+def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: str, rtol: float, min_gap: float,
+                residual_tol: float, t0: float, dense_samples: int) -> Certificate | None:
+    """The structured check as a :class:`Certificate`, or ``None`` when the dense check should decide."""
+    chk = structured_check(robot, res, samples, seed, rows, rtol, residual_tol)
+    n10 = 10 * robot.n
+    if chk.status == Status.UNDECIDED and dense_fits(robot, dense_samples, rows):
+        return None  # the dense check decides, and completes what DRNG missed
+    d = decision_scale(robot, "paper")
+    if chk.independent is not None and n10 * chk.rank_b > DENSE_BASIS_MAX:
+        span = None  # the regrouping takes the columns; a dense basis would be quadratic
+    elif chk.independent is not None:
+        span = to_dense(chk.independent, robot.n)
+    else:
+        span = d[:, None] * column_basis(res.dense() / d[:, None])
+    gap = chk.smallest_sv / chk.worst if chk.worst > 0 else np.inf
+    num = NumericalResult(chk.rank_w, n10 - chk.rank_w, np.zeros(0), rtol, rtol, float(gap), np.zeros((n10, 0)),
+                          np.zeros((n10, 0)), samples, chk.seconds, min_gap)
+    message = chk.message
+    if chk.status == Status.UNDECIDED:
+        message += (f"; the dense check, which would decide and complete the missing directions, does not fit in "
+                    f"memory (about {dense_bytes(robot, dense_samples, rows) / 1e9:.2g} GB); --no-verify gives "
+                    f"DRNG's span alone")
+    basis = None if span is None else np.linalg.qr(span)[0] if span.shape[1] else np.zeros((n10, 0))
+    rms = float(np.sqrt(np.mean(chk.column_residuals ** 2))) if len(chk.column_residuals) else 0.0
+    return Certificate(res, num, basis, chk.rank_b, 0, rms, chk.worst, chk.status, message,
+                       time.perf_counter() - t0, {"requested": samples, "kept": samples}, span, chk.independent)

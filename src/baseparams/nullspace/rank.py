@@ -186,8 +186,58 @@ def _column_dict(cols: Columns, k: int) -> dict[int, np.ndarray]:
     return v
 
 
+def leading_spans(cols: Columns, n: int, rtol: float = 1e-10) -> tuple[np.ndarray, np.ndarray, Columns | None]:
+    """Per body, the span of the columns' leading parts in an echelon form, and its complement.
+
+    The same elimination as :func:`block_rank` (leaves to root, same thresholds), keeping each
+    body's diagonal-block basis: with ``Q[b] = [L_b | U_b]`` and ``l_b`` leading directions, ``B``
+    has a column echelon form whose parts on body ``b`` at its highest body span ``L_b``, so
+    ``sum(l) = rank(B)`` and the block-diagonal ``U = diag(U_b)`` spans a complement of
+    ``span(B)`` in ``R^(10 n)`` (``[B_echelon | U]`` is block triangular with invertible diagonal
+    blocks).
+
+    Parameters
+    ----------
+    cols : Columns
+        ``k`` columns in compact form (``paper`` convention, or any per-parameter scaling of it).
+    n : int
+        Number of moving bodies.
+    rtol : float, default 1e-10
+        Singular-value threshold, as in :func:`block_rank`.
+
+    Returns
+    -------
+    Q : ndarray, shape ``(n, 10, 10)``
+        Orthonormal per body: the first ``lead[b]`` columns span ``L_b``, the others ``U_b``.
+    lead : ndarray of int, shape ``(n,)``
+        ``l_b``; ``lead.sum()`` equals ``block_rank(cols, n, rtol)``.
+    independent : Columns or None
+        When no elimination was needed (every diagonal block of full column rank), a column set
+        of the same span with exactly ``rank`` linearly independent columns; else ``None``.
+    """
+    cols = _reduce_pure(cols, rtol)
+    k = len(cols)
+    if k == 0:
+        return np.tile(np.eye(10), (n, 1, 1)), np.zeros(n, dtype=int), cols
+    order = np.argsort(cols.child, kind="stable")
+    child = cols.child[order]
+    counts = np.bincount(child, minlength=n)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    slot = np.arange(k) - np.repeat(starts, counts)
+    blocks = np.zeros((n, 10, counts.max()))
+    blocks[child, :, slot] = cols.h[order]
+    scale = np.linalg.norm(blocks, axis=(1, 2))
+    q, sv, _ = np.linalg.svd(blocks, full_matrices=True)  # q (n, 10, 10)
+    ranks = np.sum(sv > rtol * np.maximum(scale, 1e-300)[:, None], axis=1)
+    if np.all(ranks == counts):
+        return q, ranks, cols
+    lead = ranks.copy()
+    _elimination_rank(cols, n, rtol, ranks, counts, order, starts, spans=(q, lead))
+    return q, lead, None
+
+
 def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, counts: np.ndarray,
-                      order: np.ndarray, starts: np.ndarray) -> int:
+                      order: np.ndarray, starts: np.ndarray, spans: tuple | None = None) -> int:
     """Exact rank when some diagonal blocks are rank-deficient.
 
     Eliminate block by block from the highest body down, visiting only the deficient bodies and
@@ -196,6 +246,8 @@ def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, cou
     Vectors are sparse over bodies; at body b, the parts on block b of every vector whose highest
     block is b are ranked, and combinations vanishing there move down to their next highest
     block. A body with a full-rank diagonal block that receives nothing keeps its batched rank.
+    ``spans``: ``(Q (n, 10, 10), lead (n,))`` updated in place for the bodies visited
+    (:func:`leading_spans`).
     """
     scale = max(float(np.abs(cols.h).max()), 1e-300)
     total = int(ranks.sum())
@@ -209,9 +261,11 @@ def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, cou
         vecs = [_column_dict(cols, int(k)) for k in own] + pending.pop(b, [])
         total -= int(ranks[b])
         mat = np.stack([v[b] for v in vecs], axis=1)  # (10, m)
-        _, sv, vt = np.linalg.svd(mat, full_matrices=True)
+        u, sv, vt = np.linalg.svd(mat, full_matrices=True)
         r = int(np.sum(sv > rtol * scale))
         total += r
+        if spans is not None:  # leading_spans: body b's diagonal-block basis and leading count
+            spans[0][b], spans[1][b] = u, r
         for c in vt[r:]:
             new: dict[int, np.ndarray] = {}
             for coef, v in zip(c, vecs):

@@ -153,6 +153,9 @@ def regrouped_into(result) -> dict[str, list[str]]:
     """
     base = result.base
     names = base.base_names()
+    if hasattr(base.E, "tocsc"):  # sparse regrouping of a large tree
+        e = base.E.tocsc()
+        return {name: [names[r] for r in e.indices[e.indptr[k]:e.indptr[k + 1]]] for k, name in enumerate(base.names)}
     return {name: [names[r] for r in np.flatnonzero(base.E[:, k] != 0)] for k, name in enumerate(base.names)}
 
 

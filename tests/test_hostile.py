@@ -350,10 +350,17 @@ def test_a_model_beyond_the_memory_available_is_refused_before_allocating(monkey
     from baseparams.errors import BaseparamsError
     from baseparams.robots.random import random_robot
 
-    robot = random_robot(np.random.default_rng(0), n=60, joint_types="R", branching=0.0)
-    monkeypatch.setattr(analysis, "_available_bytes", lambda: 50e6)  # a small machine: 50 MB free
+    # 30 bodies: below the structured certificate's size, the dense check's memory grows as n^2
+    robot = random_robot(np.random.default_rng(0), n=30, joint_types="R", branching=0.0)
+    monkeypatch.setattr(analysis, "_available_bytes", lambda: 10e6)  # a small machine: 10 MB free
     t0 = time.perf_counter()
-    with pytest.raises(BaseparamsError, match=r"60 bodies: the certified analysis needs about 0\.09 GB .* --no-verify"):
+    refused = r"30 bodies: the certified analysis needs about 0\.022 GB .* --no-verify"
+    with pytest.raises(BaseparamsError, match=refused):
         baseparams.analyze(robot)
     assert time.perf_counter() - t0 < 1.0
-    assert baseparams.analyze(robot, verify=False).nullity > 0  # 0.029 GB: fits
+    assert baseparams.analyze(robot, verify=False).nullity > 0  # 0.0072 GB: fits
+    # a large tree is certified body by body: its need grows with the bodies' depths, refused the same way
+    chain = random_robot(np.random.default_rng(0), n=200, joint_types="R", branching=0.0)
+    monkeypatch.setattr(analysis, "_available_bytes", lambda: 1e6)
+    with pytest.raises(BaseparamsError, match=r"200 bodies: the analysis needs about .* depth"):
+        baseparams.analyze(chain)

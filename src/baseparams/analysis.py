@@ -50,6 +50,7 @@ from .display import data_frame, text_table
 from .enums import Source, Status, values
 from .errors import BaseparamsError
 from .model.robot import Robot
+from .numerics import available_bytes as _available_bytes
 
 if TYPE_CHECKING:  # the heavy modules (DRNG imports scipy.sparse) load when analyze() runs
     from .base import BaseParameters
@@ -555,18 +556,6 @@ def _large_tree_columns(robot: Robot, rows: str, res):
 #: alone (random serial chains of 50-800 bodies on the benchmark machine; the dense factors of
 #: the 10 n parameter columns dominate)
 BYTES_PER_N2 = {True: 25e3, False: 8e3}
-
-
-def _available_bytes() -> float | None:
-    """Memory available to this process [bytes] (Linux ``MemAvailable``), or None when unknown."""
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024
-    except OSError:
-        return None
-    return None
 
 
 #: a tree certified body by body and regrouped sparsely (``certify``'s structured path): bytes per

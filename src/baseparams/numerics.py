@@ -493,3 +493,21 @@ def numerical_nullspace(robot: Robot, samples: int | None = None, seed: int = 0,
         w = stacked_regressor(robot, samples, seed, rows, info)
     res = rank_decision(w, rtol, min_gap, samples)
     return NumericalResult(**{**res.__dict__, "seconds": time.perf_counter() - t0})
+
+
+def available_bytes() -> float | None:
+    """Memory available to this process [bytes] (Linux ``MemAvailable``), or None when unknown.
+
+    Returns
+    -------
+    float or None
+        ``MemAvailable`` of ``/proc/meminfo`` in bytes; None where it cannot be read.
+    """
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None

@@ -41,6 +41,7 @@ from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..model.scale import decision_scale
+from ..numerics import available_bytes as _available_bytes
 from ..numerics import row_mask, sample_states
 from ..pga import adjoint, commutator, hat, se3_exp, swap
 from ..pga.core import screw_exp
@@ -580,18 +581,6 @@ def independent_columns(robot: Robot, result: DRNGResult) -> Columns | None:
     if indep is None or int(lead.sum()) != result.rank:
         return None
     return replace(indep, h=indep.h * d10, hp=indep.hp * d10, he=indep.he * d10)
-
-
-def _available_bytes() -> float | None:
-    """Memory available to this process [bytes] (Linux ``MemAvailable``), or None when unknown."""
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024
-    except OSError:
-        return None
-    return None
 
 
 def dense_bytes(robot: Robot, samples: int, rows: str = "all") -> float:

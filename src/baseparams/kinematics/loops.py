@@ -495,6 +495,30 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
                         float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
 
 
+def restrict(cs: ClosedStates, cond_max: float) -> ClosedStates:
+    """The samples of ``cs`` with ``cond(K_p) < cond_max`` (the others counted as ill-conditioned).
+
+    Parameters
+    ----------
+    cs : ClosedStates
+        Closed samples (:func:`close_loops`), usually with a looser ``cond_max``.
+    cond_max : float
+        The new threshold (no looser than ``cs.cond_max``: the smaller is kept).
+
+    Returns
+    -------
+    ClosedStates
+        Same fields, kept samples only; ``max_residual`` of those.
+    """
+    cond_max = min(float(cond_max), cs.cond_max)
+    keep = cs.cond < cond_max
+    if keep.all():
+        return ClosedStates(**{**cs.__dict__, "cond_max": cond_max})
+    err = float(cs.max_residual) if keep.any() else float("nan")  # an upper bound for the subset
+    return ClosedStates(cs.q[keep], cs.dq[keep], cs.ddq[keep], cs.G[keep], cs.cond[keep], cs.requested,
+                        cs.not_converged, cs.branch_jumps, cs.ill_conditioned + int((~keep).sum()), err, cond_max)
+
+
 def _conditioning(kp: np.ndarray, npas: int) -> np.ndarray:
     """Condition number ``(S,)`` of ``K_p (S, m, npas)`` (singular values only)."""
     s = kp.shape[0]
@@ -557,7 +581,55 @@ def _continuation(plan: _Plan, q: np.ndarray, qa: np.ndarray, act: np.ndarray, p
         failed[_damped_newton(plan, q, live, pas, tol, max_iter, err, k_all)] = True
         moved = np.abs(q[live][:, pas] - start).max(axis=1, initial=0.0)
         jumped[live[(moved > max_step) & ~failed[live]]] = True
+        # k: the Jacobian where the step started (a copy), k_all: where it converged
+        jumped[live[_crossed(k[:, pas], k_all[:, pas[:, None], live]) & ~failed[live]]] = True
+    _polish(plan, q, np.flatnonzero(~failed & ~jumped), pas, err, k_all)
     return failed, jumped, err, k_all
+
+
+def _crossed(kp_before: np.ndarray, kp_after: np.ndarray) -> np.ndarray:
+    """Whether each continuation step crossed a singular configuration ``(S,)``.
+
+    ``kp_before``, ``kp_after``: the passive Jacobians ``K_p (m, npas, S)`` at the ends of a step
+    (``kp_before`` may be ``(m, npas, 1)``: one start for all). ``det(K_p,before^T K_p,after)``
+    is positive for a step that stays on one side of every singularity (it is ``det(K_p^T K_p) > 0`` for a zero step);
+    where a singular value of ``K_p`` passes through zero on the way it changes sign. Past such a
+    point two assembly branches may meet (a parallelogram and its anti-parallelogram at the flat
+    configuration), so the branch of the sample is not known: the caller discards it.
+    """
+    npas, s = kp_after.shape[1], kp_after.shape[2]
+    if not npas:
+        return np.zeros(s, dtype=bool)
+    if kp_before.shape[2] not in (1, s):
+        raise ValueError("kp_before must have one sample or as many as kp_after")
+    m = np.einsum("mis,mjs->sij", np.broadcast_to(kp_before, kp_after.shape), kp_after)
+    return ~(np.linalg.det(m) > 0)
+
+
+def _polish(plan: _Plan, q: np.ndarray, idx: np.ndarray, pas: np.ndarray, err: np.ndarray, k_out: np.ndarray,
+            iters: int = 3) -> None:
+    """Newton steps past the tolerance on the converged samples ``idx`` of ``q (S, dof)``, in place.
+
+    Near a singular configuration the rates amplify the closure error (``dq`` by ``cond(K_p)``,
+    ``ddq`` by about its square): each sample is refined to the rounding floor of its residual.
+    A step is kept only where it lowers the sample's largest residual; ``err (S,)`` and the
+    Jacobian ``k_out (m, dof, S)`` follow.
+    """
+    cols = np.arange(q.shape[1])
+    for _ in range(iters):
+        if not len(idx) or not len(pas):
+            return
+        r, k, _ = _eval(plan, q[idx], cols)
+        trial = q[idx].copy()
+        st = -_lstsq(k[:, pas[:, None], np.arange(len(idx))], r).T
+        trial[:, pas] += np.where(np.isfinite(st), st, 0.0)
+        r2, k2, _ = _eval(plan, trial, cols)
+        e2 = np.abs(r2).max(axis=0) if len(r2) else np.zeros(len(idx))
+        better = e2 < err[idx]
+        q[idx[better]] = trial[better]
+        err[idx[better]] = e2[better]
+        k_out[:, :, idx[better]] = k2[:, :, better]
+        idx = idx[better & (e2 > 0)]
 
 
 def _damped_newton(plan: _Plan, q: np.ndarray, live: np.ndarray, pas: np.ndarray, tol: float,

@@ -24,14 +24,20 @@ from ..display import clip, summary_repr
 from ..enums import Source
 from ..errors import BaseparamsError
 from ..model.inertia import SPECS, check_convention
+from . import ring
 from .angles import angle_of, to_trig
 from .columns import SymColumn, symbolic_columns
 from .geometry import SymbolicRobot, at_point, inverse
 from .rules import rule_columns
 
 
-def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention: str) -> list:
+def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention: str,
+                    cache: dict | None = None) -> list:
     """Body ``i``'s ten parameters (``convention``'s order) of a pseudo-inertia given in the world at q = 0.
+
+    Computed fraction-free over ``ZZ[symbols]`` (:func:`.ring.body_parameters`), each parameter
+    then cancelled once; geometry outside that ring (e.g. ``sqrt(2)`` of an angle ``pi/4``) falls
+    back to expanded expressions.
 
     Parameters
     ----------
@@ -44,12 +50,23 @@ def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention
     convention : str
         ``paper`` (the pseudo-inertia's entries in the world frame) or a link-frame convention
         (expressed in :attr:`SymbolicRobot.link_frames` ``[i]``, inertia about its origin).
+    cache : dict, optional
+        Reused across calls for one robot (the ring and each body's inverse frame).
 
     Returns
     -------
     list of sympy.Expr, length 10
-        The parameters, expanded.
+        The parameters (polynomials expanded; rational functions as one cancelled fraction).
     """
+    cache = {} if cache is None else cache
+    rg = cache.setdefault("ring", ring.ring_of(robot))
+    got = ring.body_parameters(robot, i, n_world, convention, rg, cache)
+    if got is not None:
+        vals, den = got
+        if rg == sp.QQ:
+            return [rg.to_sympy(v) for v in vals]
+        field = rg.get_field()
+        return [field.to_sympy(field.field.new(v, den)) for v in vals]
     if convention == "paper":
         nl = n_world
     else:
@@ -111,9 +128,10 @@ def column_matrix(robot: SymbolicRobot, cols: list[SymColumn], convention: str) 
         One column per :class:`SymColumn`.
     """
     a = sp.zeros(10 * robot.n, len(cols))
+    cache: dict = {}
     for k, c in enumerate(cols):
         for i, blk in c.blocks.items():
-            a[10 * i:10 * i + 10, k] = sp.Matrix(body_parameters(robot, i, blk, convention))
+            a[10 * i:10 * i + 10, k] = sp.Matrix(body_parameters(robot, i, blk, convention, cache))
     return a
 
 
@@ -302,9 +320,13 @@ class SymbolicAnalysis:
         return self.K_rational.subs(self.robot.complete_values(values))
 
 
-def _choose(a: sp.Matrix, robot: SymbolicRobot, convention: str, seed: int) -> tuple[list, list]:
-    """A basis of the columns and the dependent parameters, decided at a random rational point."""
-    num = at_point(a, random_point(robot, seed))
+def _choose(a, robot: SymbolicRobot, convention: str, seed: int) -> tuple[list, list]:
+    """A basis of the columns and the dependent parameters, decided at a random rational point.
+
+    ``a``: a ``sympy.Matrix`` or a ``DomainMatrix`` over :func:`.ring.ring_of` the robot.
+    """
+    point = random_point(robot, seed)
+    num = at_point(a, point) if isinstance(a, sp.Matrix) else ring.at_point(a, point)
     basis = list(num.rref()[1])
     within = SPECS[check_convention(convention)].regroup_order
     order = [10 * i + w for i in reversed(range(robot.n)) for w in within]
@@ -333,6 +355,29 @@ def _solve(a: sp.Matrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, 
     return k, sp.factor(dom.to_sympy(adt.det()))
 
 
+def _solve_ring(a: DomainMatrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, sp.Expr]:
+    """:func:`_solve` on polynomial columns over ``ZZ[symbols]`` (:func:`.ring.column_matrix`).
+
+    ``A_D^T X = den A_I^T`` by fraction-free elimination, then each ``K`` entry cancelled once in
+    the field of fractions.
+    """
+    if not len(dep):
+        return sp.zeros(len(ind), 0), sp.S.One
+    dom = a.domain
+    field = dom.get_field() if dom != sp.QQ else sp.QQ
+    adt, ait = a.extract(dep, basis).transpose(), a.extract(ind, basis).transpose()
+    blocks = ring.block_solve(adt, ait)  # A_D^T X = A_I^T, body by body
+    if blocks is None:
+        x, den = adt.solve_den(ait)  # A_D^T X = A_I^T den
+        d = field.convert_from(den, dom)
+        x = [[field.convert_from(e, dom) / d for e in row] for row in x.to_list()]
+        dets = [field.convert_from(adt.det(), dom)]
+    else:
+        x, dets = blocks
+    k = sp.Matrix([[field.to_sympy(-e) for e in row] for row in x]).T
+    return k, sp.Mul(*[sp.factor(field.to_sympy(d)) for d in dets])
+
+
 def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> SymbolicAnalysis:
     """The regrouping of ``robot`` as formulas in its symbols, unchecked (:func:`.analyze.symbolic_analysis` checks).
 
@@ -358,10 +403,12 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> 
     probe = random_point(robot, seed + 1)
     cols, dec = symbolic_columns(robot, probe)
     cols = cols + rule_columns(robot, probe)
-    a = column_matrix(robot, cols, convention)
+    a = ring.column_matrix(robot, cols, convention)  # fraction-free; None: not rational in the symbols
+    if a is None:
+        a = column_matrix(robot, cols, convention)
     basis, dep = _choose(a, robot, convention, seed)
     ind = [i for i in range(10 * robot.n) if i not in set(dep)]
-    k, det = _solve(a, basis, dep, ind)
+    k, det = _solve(a, basis, dep, ind) if isinstance(a, sp.Matrix) else _solve_ring(a, basis, dep, ind)
     params, regrouped = parameter_symbols(robot, convention)
     names = [regrouped[i] if any(e != 0 for e in k.row(r)) else params[i].name for r, i in enumerate(ind)]
     conditions = [Condition(p, r) for p, r in dec.conditions]

@@ -1293,14 +1293,14 @@ def _analyze_symbolic(args) -> int:
     from .symbolic import probe, symbolic_analysis
     from .symbolic.report import codegen, format_symbolic, symbolic_json, symbolic_latex
 
-    if args.verbose:
-        print(f"baseparams: {robot.name}: DRNG on the symbolic geometry, exact regrouping"
-              + ("" if args.no_verify else ", checks against the numerical analysis"), file=sys.stderr)
-    result = symbolic_analysis(robot, convention=args.convention, seed=args.seed, check=not args.no_verify)
-    if not args.no_verify:
-        if args.verbose:
-            print(f"baseparams: probing {len(result.conditions) + len(robot.symbols)} conditions", file=sys.stderr)
-        probe(result)
+    with Progress(args.verbose) as progress:
+        progress(f"{robot.name}: DRNG on the symbolic geometry, exact regrouping"
+                 + ("" if args.no_verify else ", checks against the numerical analysis"))
+        result = symbolic_analysis(robot, convention=args.convention, seed=args.seed, check=not args.no_verify,
+                                   progress=progress)
+        if not args.no_verify:
+            progress(f"probing {len(result.conditions) + len(robot.symbols)} conditions")
+            probe(result)
     if args.codegen:
         from .files import write_text
 

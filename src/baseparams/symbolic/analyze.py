@@ -14,7 +14,7 @@ from .solve import SymbolicAnalysis, regroup
 
 
 def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0,
-                      check: bool = True) -> SymbolicAnalysis:
+                      check: bool = True, progress=None) -> SymbolicAnalysis:
     """Base parameters of ``robot`` as formulas in its symbols (DRNG on the symbolic geometry).
 
     Parameters
@@ -31,6 +31,8 @@ def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: in
     check : bool, default True
         Compare with the certified numerical analysis at two random points and refuse a result
         whose count or formulas differ (:func:`.check.check`).
+    progress : callable, optional
+        Called with one line per step (``progress(str)``; the CLI prints them on stderr).
 
     Returns
     -------
@@ -44,8 +46,10 @@ def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: in
         or the formulas disagree with it.
     """
     t0 = time.perf_counter()
-    out = regroup(robot, convention, seed)
+    out = regroup(robot, convention, seed, progress)
     if check:
+        if progress is not None:
+            progress("checking against the certified numerical analysis at 2 random points")
         run_check(out)
     out.seconds = time.perf_counter() - t0
     return out

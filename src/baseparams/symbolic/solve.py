@@ -378,7 +378,7 @@ def _solve_ring(a: DomainMatrix, basis: list, dep: list, ind: list) -> tuple[sp.
     return k, sp.Mul(*[sp.factor(field.to_sympy(d)) for d in dets])
 
 
-def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> SymbolicAnalysis:
+def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, progress=None) -> SymbolicAnalysis:
     """The regrouping of ``robot`` as formulas in its symbols, unchecked (:func:`.analyze.symbolic_analysis` checks).
 
     Parameters
@@ -392,6 +392,8 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> 
     seed : int
         Seed of the random rational point that decides the column basis and the dependent
         parameters.
+    progress : callable, optional
+        Called with one line per step (``progress(str)``), e.g. the CLI's progress lines.
 
     Returns
     -------
@@ -399,15 +401,19 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> 
         The formulas and the conditions under which they hold (no checks yet).
     """
     t0 = time.perf_counter()
+    say = progress or (lambda msg: None)
     convention = str(check_convention(convention))
     probe = random_point(robot, seed + 1)
+    say(f"DRNG's columns on the symbolic geometry ({len(robot.symbols)} symbols)")
     cols, dec = symbolic_columns(robot, probe)
     cols = cols + rule_columns(robot, probe)
+    say(f"{len(cols)} columns in the {convention} parameters (fraction-free, per body)")
     a = ring.column_matrix(robot, cols, convention)  # fraction-free; None: not rational in the symbols
     if a is None:
         a = column_matrix(robot, cols, convention)
     basis, dep = _choose(a, robot, convention, seed)
     ind = [i for i in range(10 * robot.n) if i not in set(dep)]
+    say(f"eliminating {len(dep)} dependent parameters (block by block)")
     k, det = _solve(a, basis, dep, ind) if isinstance(a, sp.Matrix) else _solve_ring(a, basis, dep, ind)
     params, regrouped = parameter_symbols(robot, convention)
     names = [regrouped[i] if any(e != 0 for e in k.row(r)) else params[i].name for r, i in enumerate(ind)]

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.polyerrors import CoercionFailed, GeneratorsError
 
 from ..display import clip, summary_repr
 from ..enums import Source
@@ -27,7 +28,7 @@ from ..model.inertia import SPECS, check_convention
 from . import ring
 from .angles import angle_of, to_trig
 from .columns import SymColumn, symbolic_columns
-from .geometry import SymbolicRobot, at_point, inverse
+from .geometry import SymbolicRobot, at_point, inverse, to_fraction
 from .rules import rule_columns
 
 
@@ -403,6 +404,7 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, pro
     t0 = time.perf_counter()
     say = progress or (lambda msg: None)
     convention = str(check_convention(convention))
+    _check_rational(robot)
     probe = random_point(robot, seed + 1)
     say(f"DRNG's columns on the symbolic geometry ({len(robot.symbols)} symbols)")
     cols, dec = symbolic_columns(robot, probe)
@@ -432,6 +434,23 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, pro
                            conditions, 0.0, by_source, K_rational=k)
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def _check_rational(robot: SymbolicRobot) -> None:
+    """Refuse geometry that is not rational in the symbols (a fixed angle ``pi/3``: ``sqrt(3)/2``)."""
+    rg = ring.ring_of(robot)
+    if rg == sp.QQ:
+        rg = sp.ZZ[sp.Dummy("x")]
+    mats = (*robot.origins, *robot.param_frames, *(lp.frame for lp in robot.loops))
+    for m in mats:
+        for e in m:
+            try:
+                to_fraction(e, rg)
+            except (CoercionFailed, GeneratorsError):
+                raise BaseparamsError(
+                    f"{robot.name}: the geometry has {sp.sstr(e)}, not rational in the symbols: a fixed angle must "
+                    f"have a rational cosine and sine (0, pi/2, pi, -pi/2); give any other angle as a symbol "
+                    f"(its number in 'values'), or analyse the robot in numbers") from None
 
 
 def _reorder(k: sp.Matrix, dep: list) -> sp.Matrix:

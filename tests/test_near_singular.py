@@ -67,3 +67,25 @@ def test_symbolic_flat_condition_claims_no_count():
     flat = [c for c in sa.conditions if sp.Symbol("BY", real=True) in c.polynomials]
     assert flat and all("base parameters there" not in c.effect for c in flat)
     assert "singular" in flat[0].effect
+
+
+def test_residual_within_the_conditioning_is_undecided_not_failed():
+    """A DRNG column off the numerical nullspace by what rounding in ill-conditioned loop samples
+    can cause is UNDECIDED (with what would help); beyond it, or with well-conditioned samples,
+    FAILED as before."""
+    from baseparams.nullspace import certify as cert_mod
+
+    cert = cert_mod.certify(_robot(1e-2))
+    res, num = cert.drng, cert.numerical
+    ncol = res.dense().shape[1]
+
+    def verdict(worst, cond_max):
+        col = np.full(ncol, worst)
+        return cert_mod._verdict(res, num, 10**6, cert.drng_rank, col, worst, 1e-9, 1e4, 1e-8,
+                                 {"cond_max": cond_max})
+
+    status, msg = verdict(1e-6, 1000.0)  # tolerance 1e-8 (1000 / 30)^3 = 3.7e-4
+    assert status == "undecided" and "move it away" in msg
+    assert verdict(1e-6, 30.0)[0] == "failed"
+    assert verdict(1e-2, 1000.0)[0] == "failed"
+    assert verdict(1e-12, 1000.0)[0] == "certified"

@@ -392,7 +392,8 @@ class ClosedStates:
     not_converged : int
         Discarded as outside the workspace (Newton did not converge).
     branch_jumps : int
-        Discarded as branch jumps (left the reference assembly mode).
+        Discarded as branch jumps: left the reference assembly mode, or crossed a singular
+        configuration on the way (where branches may meet, so the branch is not known).
     ill_conditioned : int
         Discarded with ``cond(K_p) >= cond_max``.
     max_residual : float
@@ -429,9 +430,12 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     Continuation from q = 0 (the reference assembly) in ``steps`` steps -- a tangent
     predictor, then damped Newton on the passive coordinates -- keeps every sample on the
     reference assembly mode; a sample whose corrected passive coordinates land more than
-    ``max_step`` away from the prediction is discarded as a branch jump, one that does not
-    converge to ``tol`` is discarded as outside the workspace, and one with
-    ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
+    ``max_step`` away from the prediction, or whose path crosses a singular configuration
+    (``det(K_p^T K_p')`` between the ends of a step changes sign, :func:`_crossed`), is
+    discarded as a branch jump, one that does not converge to ``tol`` is discarded as outside
+    the workspace, and one with ``cond(K_p) > cond_max`` as ill-conditioned. The kept samples
+    are refined by Newton to the rounding floor of their residual (:func:`_polish`): near a
+    singularity the rates amplify the closure error. Velocities and accelerations are exact.
 
     Parameters
     ----------

@@ -482,7 +482,9 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     q = np.zeros((s, robot.dof))
     if q_start is not None:  # initial guess of the passive coordinates (assembly search)
         q[:, pas] = np.asarray(q_start, dtype=float)[pas]
-    failed, jumped, err, k = _continuation(plan, q, qa, act, pas, steps, tol, max_iter, max_step)
+    # an assembly search (q_start) starts off the loops: no branch to keep, no crossing checked
+    failed, jumped, err, k = _continuation(plan, q, qa, act, pas, steps, tol, max_iter, max_step,
+                                           crossing=q_start is None)
     converged = (err < max(tol * 100, 1e-9)) & ~failed
     ok = np.flatnonzero(converged & ~jumped)  # conditioning of these
     k = np.ascontiguousarray(k[:, :, ok].transpose(2, 0, 1))  # (S', m, dof)
@@ -554,11 +556,12 @@ def _passive_pinv(kp: np.ndarray, cond: np.ndarray) -> np.ndarray:
 
 
 def _continuation(plan: _Plan, q: np.ndarray, qa: np.ndarray, act: np.ndarray, pas: np.ndarray,
-                  steps: int, tol: float, max_iter: int, max_step: float):
+                  steps: int, tol: float, max_iter: int, max_step: float, crossing: bool = True):
     """Move ``q (S, dof)`` in place from its start to the actuated targets ``qa``.
 
     In ``steps`` predictor-corrector steps. Returns ``(failed, jumped, err, K)``: flags ``(S,)``
-    (no convergence, branch jump), and the largest residual ``(S,)`` and Jacobian
+    (no convergence, branch jump; with ``crossing``, a step across a singular configuration
+    counts as one, :func:`_crossed`), and the largest residual ``(S,)`` and Jacobian
     ``(m, dof, S)`` at the final ``q`` of the samples that converged (inf and zero elsewhere).
     """
     s, dof = q.shape
@@ -586,7 +589,8 @@ def _continuation(plan: _Plan, q: np.ndarray, qa: np.ndarray, act: np.ndarray, p
         moved = np.abs(q[live][:, pas] - start).max(axis=1, initial=0.0)
         jumped[live[(moved > max_step) & ~failed[live]]] = True
         # k: the Jacobian where the step started (a copy), k_all: where it converged
-        jumped[live[_crossed(k[:, pas], k_all[:, pas[:, None], live]) & ~failed[live]]] = True
+        if crossing:
+            jumped[live[_crossed(k[:, pas], k_all[:, pas[:, None], live]) & ~failed[live]]] = True
     _polish(plan, q, np.flatnonzero(~failed & ~jumped), pas, err, k_all)
     return failed, jumped, err, k_all
 

@@ -115,3 +115,8 @@ def test_geometry_not_rational_in_the_symbols_is_refused_in_one_line():
             {"j": 3, "sigma": 0, "alpha": -sp.pi / 2, "d": 0, "theta": 0, "r": r3}]
     with pytest.raises(BaseparamsError, match=r"sqrt\(3\)/2, not rational in the symbols.*as a symbol"):
         symbolic_analysis(from_dh(rows, name="third-twist"))
+
+
+def test_time_limit_gives_one_line_saying_what_would_help():
+    with pytest.raises(BaseparamsError, match=r"did not finish in 0 s \(9 symbols, 3 of them angles.*fewer angles"):
+        symbolic_analysis(load_symbolic("panda-offsets-symbolic"), max_seconds=0.0)

@@ -1291,13 +1291,14 @@ def _analyze_symbolic(args) -> int:
     """``analyze TABLE --symbolic [--json | --latex] [--codegen FILE]``: base parameters as formulas."""
     robot = _load_symbolic(args)
     from .symbolic import probe, symbolic_analysis
+    from .symbolic.analyze import TIME_LIMIT_S
     from .symbolic.report import codegen, format_symbolic, symbolic_json, symbolic_latex
 
     with Progress(args.verbose) as progress:
         progress(f"{robot.name}: DRNG on the symbolic geometry, exact regrouping"
                  + ("" if args.no_verify else ", checks against the numerical analysis"))
         result = symbolic_analysis(robot, convention=args.convention, seed=args.seed, check=not args.no_verify,
-                                   progress=progress)
+                                   progress=progress, max_seconds=TIME_LIMIT_S)
         if not args.no_verify:
             progress(f"probing {len(result.conditions) + len(robot.symbols)} conditions")
             probe(result)

@@ -13,6 +13,8 @@ scale does not change ``K = -A_I A_D^-1``). Geometry outside that ring (``sqrt(2
 
 from __future__ import annotations
 
+import time
+
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.polyerrors import CoercionFailed, GeneratorsError
@@ -118,7 +120,29 @@ def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention
     return [vals[f] for f in SPECS[check_convention(convention)].fields], dn
 
 
-def column_matrix(robot: SymbolicRobot, cols: list, convention: str) -> DomainMatrix | None:
+class TimeLimit(Exception):
+    """The exact computation passed its deadline (:func:`check_deadline`)."""
+
+
+def check_deadline(deadline: float | None) -> None:
+    """Raise :class:`TimeLimit` once ``time.perf_counter()`` is past ``deadline`` (None: never).
+
+    Parameters
+    ----------
+    deadline : float or None
+        A ``time.perf_counter()`` value.
+
+    Raises
+    ------
+    TimeLimit
+        Past the deadline.
+    """
+    if deadline is not None and time.perf_counter() > deadline:
+        raise TimeLimit
+
+
+def column_matrix(robot: SymbolicRobot, cols: list, convention: str,
+                  deadline: float | None = None) -> DomainMatrix | None:
     """DRNG's columns ``A (10 n, c)`` in ``convention``'s parameters, each scaled to polynomial entries.
 
     Parameters
@@ -129,6 +153,8 @@ def column_matrix(robot: SymbolicRobot, cols: list, convention: str) -> DomainMa
         The columns (pseudo-inertia changes per body, world frame at q = 0).
     convention : str
         The parameter convention.
+    deadline : float, optional
+        ``time.perf_counter()`` after which :class:`TimeLimit` is raised (checked per column).
 
     Returns
     -------
@@ -141,6 +167,7 @@ def column_matrix(robot: SymbolicRobot, cols: list, convention: str) -> DomainMa
     cache: dict = {}
     out = [[ring.zero] * len(cols) for _ in range(10 * robot.n)]
     for k, c in enumerate(cols):
+        check_deadline(deadline)
         parts = {}
         for i, blk in c.blocks.items():
             p = body_parameters(robot, i, blk, convention, ring, cache)
@@ -219,7 +246,7 @@ def _blocks(pattern) -> list[tuple[list, list]] | None:
             for b in order]
 
 
-def block_solve(s: DomainMatrix, b: DomainMatrix) -> tuple[list, list] | None:
+def block_solve(s: DomainMatrix, b: DomainMatrix, deadline: float | None = None) -> tuple[list, list] | None:
     """``Y = S^-1 B`` over the field of fractions, block by block (block-triangular ``S``).
 
     DRNG's columns touch one body or a child and its parent, so ``A_D`` is block triangular in
@@ -232,6 +259,8 @@ def block_solve(s: DomainMatrix, b: DomainMatrix) -> tuple[list, list] | None:
         Over ``ZZ[symbols]`` (or ``QQ``), generically nonsingular.
     b : DomainMatrix, shape ``(n, k)``
         Same domain.
+    deadline : float, optional
+        ``time.perf_counter()`` after which :class:`TimeLimit` is raised (checked per block).
 
     Returns
     -------
@@ -252,6 +281,7 @@ def block_solve(s: DomainMatrix, b: DomainMatrix) -> tuple[list, list] | None:
     done: list = []
     dets = []
     for rows, cols in order:
+        check_deadline(deadline)
         rhs = []
         for r in rows:
             acc = list(bl[r])

@@ -356,7 +356,8 @@ def _solve(a: sp.Matrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, 
     return k, sp.factor(dom.to_sympy(adt.det()))
 
 
-def _solve_ring(a: DomainMatrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, sp.Expr]:
+def _solve_ring(a: DomainMatrix, basis: list, dep: list, ind: list,
+                deadline: float | None = None) -> tuple[sp.Matrix, sp.Expr]:
     """:func:`_solve` on polynomial columns over ``ZZ[symbols]`` (:func:`.ring.column_matrix`).
 
     ``A_D^T X = den A_I^T`` by fraction-free elimination, then each ``K`` entry cancelled once in
@@ -367,7 +368,7 @@ def _solve_ring(a: DomainMatrix, basis: list, dep: list, ind: list) -> tuple[sp.
     dom = a.domain
     field = dom.get_field() if dom != sp.QQ else sp.QQ
     adt, ait = a.extract(dep, basis).transpose(), a.extract(ind, basis).transpose()
-    blocks = ring.block_solve(adt, ait)  # A_D^T X = A_I^T, body by body
+    blocks = ring.block_solve(adt, ait, deadline)  # A_D^T X = A_I^T, body by body
     if blocks is None:
         x, den = adt.solve_den(ait)  # A_D^T X = A_I^T den
         d = field.convert_from(den, dom)
@@ -379,7 +380,8 @@ def _solve_ring(a: DomainMatrix, basis: list, dep: list, ind: list) -> tuple[sp.
     return k, sp.Mul(*[sp.factor(field.to_sympy(d)) for d in dets])
 
 
-def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, progress=None) -> SymbolicAnalysis:
+def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, progress=None,
+            max_seconds: float | None = None) -> SymbolicAnalysis:
     """The regrouping of ``robot`` as formulas in its symbols, unchecked (:func:`.analyze.symbolic_analysis` checks).
 
     Parameters
@@ -395,12 +397,34 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, pro
         parameters.
     progress : callable, optional
         Called with one line per step (``progress(str)``), e.g. the CLI's progress lines.
+    max_seconds : float, optional
+        Give up after this long (checked per column and per eliminated block); default no limit.
 
     Returns
     -------
     SymbolicAnalysis
         The formulas and the conditions under which they hold (no checks yet).
+
+    Raises
+    ------
+    BaseparamsError
+        Geometry not rational in the symbols, or ``max_seconds`` passed (saying where and what
+        would help).
     """
+    try:
+        return _regroup(robot, convention, seed, progress,
+                        None if max_seconds is None else time.perf_counter() + max_seconds)
+    except ring.TimeLimit:
+        n_ang = sum(1 for s in robot.symbols if angle_of(s) is not None)
+        raise BaseparamsError(
+            f"{robot.name}: the exact regrouping did not finish in {max_seconds:g} s ({len(robot.symbols)} symbols, "
+            f"{n_ang} of them angles; the formulas grow with every symbolic angle): give fewer angles as symbols "
+            f"(numbers in the table), or analyse at numbers ('baseparams analyze TABLE --values ...' without "
+            f"--symbolic)") from None
+
+
+def _regroup(robot: SymbolicRobot, convention: str, seed: int, progress, deadline: float | None) -> SymbolicAnalysis:
+    """:func:`regroup` with a deadline (a ``time.perf_counter()`` value or None)."""
     t0 = time.perf_counter()
     say = progress or (lambda msg: None)
     convention = str(check_convention(convention))
@@ -410,13 +434,13 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, pro
     cols, dec = symbolic_columns(robot, probe)
     cols = cols + rule_columns(robot, probe)
     say(f"{len(cols)} columns in the {convention} parameters (fraction-free, per body)")
-    a = ring.column_matrix(robot, cols, convention)  # fraction-free; None: not rational in the symbols
+    a = ring.column_matrix(robot, cols, convention, deadline)  # fraction-free; None: not rational
     if a is None:
         a = column_matrix(robot, cols, convention)
     basis, dep = _choose(a, robot, convention, seed)
     ind = [i for i in range(10 * robot.n) if i not in set(dep)]
     say(f"eliminating {len(dep)} dependent parameters (block by block)")
-    k, det = _solve(a, basis, dep, ind) if isinstance(a, sp.Matrix) else _solve_ring(a, basis, dep, ind)
+    k, det = _solve(a, basis, dep, ind) if isinstance(a, sp.Matrix) else _solve_ring(a, basis, dep, ind, deadline)
     params, regrouped = parameter_symbols(robot, convention)
     names = [regrouped[i] if any(e != 0 for e in k.row(r)) else params[i].name for r, i in enumerate(ind)]
     conditions = [Condition(p, r) for p, r in dec.conditions]

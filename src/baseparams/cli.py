@@ -267,7 +267,8 @@ def cmd_regressor(args) -> int:
         y = closed_regressor(robot, cs)
         kept = cs.kept
         extra = (f"; loops closed: {kept} of {args.samples} samples kept ({cs.not_converged} outside the "
-                 f"workspace, {cs.branch_jumps} left the assembly mode, {cs.ill_conditioned} ill-conditioned)")
+                 f"workspace, {cs.branch_jumps} off the reference branch or past a singular configuration, "
+                 f"{cs.ill_conditioned} ill-conditioned)")
         rows = f"{len(robot.actuated)} actuated coordinates"
     else:
         q, dq, ddq = sample_states(robot, args.samples, rng)

@@ -843,7 +843,8 @@ def bench_symbolic(out: dict, quick: bool) -> None:
     from baseparams.symbolic import load_symbolic, symbolic_analysis
 
     names = ["puma560-symbolic"] if quick else ["puma560-symbolic", "6r-wrist-symbolic", "stanford-symbolic",
-                                                 "scara-symbolic", "parallelogram-symbolic", "pkm-2rru-1rrs-symbolic"]
+                                                 "scara-symbolic", "parallelogram-symbolic", "pkm-2rru-1rrs-symbolic",
+                                                 "panda-symbolic", "panda-offsets-symbolic"]
     for name in names:
         robot = load_symbolic(name)
         log(f"  symbolic {name} ...")
@@ -858,6 +859,31 @@ def bench_symbolic(out: dict, quick: bool) -> None:
     t, n = measure(lambda: subprocess.run(cmd, capture_output=True, check=True), 1 if quick else 3, warmup=0)
     out["symbolic_cli_puma560_s"] = t
     out["symbolic_cli_puma560_s_repeats"] = n
+    for name in ([] if quick else ["panda-symbolic", "panda-offsets-symbolic"]):  # issue 30: 6 and 9 symbols
+        cmd = [sys.executable, "-m", "baseparams", "analyze", name, "--symbolic", "--json"]
+        log(f"  analyze {name} --symbolic (fresh process) ...")
+        t, n = measure(lambda: subprocess.run(cmd, capture_output=True, check=True), 1, warmup=0)
+        key = name.replace("-symbolic", "").replace("-", "_")
+        out[f"symbolic_cli_{key}_s"] = t
+    _bench_near_singular(out, quick)
+
+
+def _bench_near_singular(out: dict, quick: bool) -> None:
+    """Issue 30: the parallelogram near its flat configuration, certified count and loop sampling."""
+    import baseparams
+    from baseparams.symbolic import load_symbolic
+
+    for by in ([0.01] if quick else [0.05, 0.01, 1e-3, 1e-4, 1e-6]):
+        log(f"  parallelogram BY={by:g} ...")
+        robot = load_symbolic("parallelogram-symbolic").to_robot({"BY": by})
+        t, _ = measure(lambda: baseparams.analyze(robot), 1, warmup=0)
+        a = baseparams.analyze(robot)
+        key = f"near_singular_{by:g}".replace("-", "m").replace(".", "p")
+        out[f"{key}_status"] = str(a.status)
+        out[f"{key}_n_base"] = a.n_base
+        out[f"{key}_s"] = t
+        out[f"{key}_kept"] = a.certificate.sampling["kept"]
+        out[f"{key}_cond_max"] = a.certificate.sampling["cond_max"]
 
 def _render_ms(page: str) -> float | None:
     """The page's own render time in headless Chromium: its ``data-render-ms`` (navigation start to

@@ -80,17 +80,6 @@ def test_generic_count_changes_when_a_symbol_is_zero_and_the_tool_says_so():
     assert any(c["condition"] == "D2 = 0" and str(at_zero) in c["effect"] for c in j["conditions"])
 
 
-def test_parallelogram_flattened_is_a_condition_with_its_count():
-    sa = symbolic_analysis(load_symbolic("parallelogram-symbolic"))
-    probe(sa)
-    flat = [c for c in sa.conditions if "base parameters there" in c.effect]
-    assert flat, [str(c) for c in sa.conditions]
-    for c in flat:  # on the condition the numerical count is what the tool says
-        assert c.point[c.polynomials[0]] == 0
-        n = baseparams.analyze(sa.robot.to_robot(c.point)).n_base
-        assert c.effect.startswith(f"{n} base parameters there")
-
-
 def _random_table(rng: random.Random, n: int) -> list[dict]:
     rows = []
     for j in range(1, n + 1):

@@ -635,8 +635,9 @@ def format_report(a: Analysis) -> str:
         if r.has_loops and c.sampling:
             sm = c.sampling
             out.append(f"  loop sampling: {sm['kept']} of {sm['requested']} actuated samples kept "
-                       f"({sm['not_converged']} outside the workspace, {sm['branch_jumps']} left the assembly "
-                       f"mode, {sm['ill_conditioned']} with cond(J_p) >= {sm['cond_max']:.3g}); max loop residual "
+                       f"({sm['not_converged']} outside the workspace, {sm['branch_jumps']} off the reference branch "
+                       f"or past a singular configuration, {sm['ill_conditioned']} with cond(J_p) >= "
+                       f"{sm['cond_max']:.3g}); max loop residual "
                        f"{sm['max_loop_residual']:.1e}")
         out.append(f"certification: {c.status.upper()} - {c.message}")
         out.append(f"  residual ||W B||/||W|| = {c.residual:.2e}, worst column {c.max_column_residual:.2e}")

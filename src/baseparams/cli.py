@@ -269,7 +269,8 @@ def cmd_regressor(args) -> int:
         y = closed_regressor(robot, cs)
         kept = cs.kept
         extra = (f"; loops closed: {kept} of {args.samples} samples kept ({cs.not_converged} outside the "
-                 f"workspace, {cs.branch_jumps} left the assembly mode, {cs.ill_conditioned} ill-conditioned)")
+                 f"workspace, {cs.branch_jumps} off the reference branch or past a singular configuration, "
+                 f"{cs.ill_conditioned} ill-conditioned)")
         rows = f"{len(robot.actuated)} actuated coordinates"
     else:
         q, dq, ddq = sample_states(robot, args.samples, rng)
@@ -1413,16 +1414,17 @@ def _analyze_symbolic(args) -> int:
     """``analyze TABLE --symbolic [--json | --latex] [--codegen FILE]``: base parameters as formulas."""
     robot = _load_symbolic(args)
     from .symbolic import probe, symbolic_analysis
+    from .symbolic.analyze import TIME_LIMIT_S
     from .symbolic.report import codegen, format_symbolic, symbolic_json, symbolic_latex
 
-    if args.verbose:
-        print(f"baseparams: {robot.name}: DRNG on the symbolic geometry, exact regrouping"
-              + ("" if args.no_verify else ", checks against the numerical analysis"), file=sys.stderr)
-    result = symbolic_analysis(robot, convention=args.convention, seed=args.seed, check=not args.no_verify)
-    if not args.no_verify:
-        if args.verbose:
-            print(f"baseparams: probing {len(result.conditions) + len(robot.symbols)} conditions", file=sys.stderr)
-        probe(result)
+    with Progress(args.verbose) as progress:
+        progress(f"{robot.name}: DRNG on the symbolic geometry, exact regrouping"
+                 + ("" if args.no_verify else ", checks against the numerical analysis"))
+        result = symbolic_analysis(robot, convention=args.convention, seed=args.seed, check=not args.no_verify,
+                                   progress=progress, max_seconds=TIME_LIMIT_S)
+        if not args.no_verify:
+            progress(f"probing {len(result.conditions) + len(robot.symbols)} conditions")
+            probe(result)
     if args.codegen:
         from .files import write_text
 

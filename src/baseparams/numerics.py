@@ -343,6 +343,10 @@ COND_MAX = 30.0
 COND_FACTOR = 3.0
 
 
+#: a reference configuration with cond(J_p) above this is singular: its assembly branch is not defined
+SINGULAR_COND = 1e12
+
+
 def reference_cond(robot: Robot) -> float:
     """cond(J_p) at the reference configuration q = 0.
 
@@ -378,24 +382,44 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
     cond_max : float, optional
         Samples with ``cond(J_p) > cond_max`` are discarded. Default: 30 (the paper); when
         cond(J_p) at the reference is already above 30 (coordinates mixing metres and radians
-        with millimetre lever arms, e.g. Cassie's rods), 3x the reference's.
+        with millimetre lever arms, e.g. Cassie's rods; or a reference near a singular
+        configuration), 3x the median of the samples' (at least 30, at most 3x the reference's):
+        near a singularity the rates lose about ``cond^2`` of their precision.
 
     Returns
     -------
     ClosedStates
         The kept samples in full tree coordinates and the counts of discarded ones
-        (:func:`baseparams.kinematics.loops.close_loops`).
+        (:func:`baseparams.kinematics.loops.close_loops`): every kept sample is reached from the
+        reference by continuation without crossing a singular configuration (its assembly branch).
+
+    Raises
+    ------
+    BaseparamsError
+        The reference configuration is singular (cond(J_p) >= :data:`SINGULAR_COND`).
     """
-    from .kinematics.loops import close_loops
+    from .kinematics.loops import close_loops, restrict
 
     na = len(robot.actuated)
     box = robot.q_box if robot.q_box is not None else np.tile([-DEFAULT_HALF_WIDTH, DEFAULT_HALF_WIDTH], (na, 1))
-    if cond_max is None:
+    auto = cond_max is None
+    if auto:
         ref = reference_cond(robot)
+        if not ref < SINGULAR_COND:
+            raise BaseparamsError(
+                f"robot {robot.name!r}: the reference configuration (actuated q = 0) is singular (cond(J_p) = "
+                f"{ref:.3g}): assembly branches may meet there (a parallelogram and its anti-parallelogram at the "
+                f"flat configuration), so the branch to sample is not defined; give the model at a regular "
+                f"configuration of the branch meant (e.g. move the reference off the singular one)")
         cond_max = COND_MAX if ref < COND_MAX else COND_FACTOR * ref
     qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
-    return close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
-                       cond_max=cond_max)
+    cs = close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
+                     cond_max=cond_max)
+    if auto and cond_max > COND_MAX and cs.kept:
+        # an ill-conditioned reference (near a singular configuration): the samples' rates lose
+        # about cond^2 of their precision, so keep the better-conditioned part of the box
+        cs = restrict(cs, max(COND_MAX, COND_FACTOR * float(np.median(cs.cond))))
+    return cs
 
 
 def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",

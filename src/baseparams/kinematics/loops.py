@@ -392,7 +392,8 @@ class ClosedStates:
     not_converged : int
         Discarded as outside the workspace (Newton did not converge).
     branch_jumps : int
-        Discarded as branch jumps (left the reference assembly mode).
+        Discarded as branch jumps: left the reference assembly mode, or crossed a singular
+        configuration on the way (where branches may meet, so the branch is not known).
     ill_conditioned : int
         Discarded with ``cond(K_p) >= cond_max``.
     max_residual : float
@@ -429,9 +430,12 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     Continuation from q = 0 (the reference assembly) in ``steps`` steps -- a tangent
     predictor, then damped Newton on the passive coordinates -- keeps every sample on the
     reference assembly mode; a sample whose corrected passive coordinates land more than
-    ``max_step`` away from the prediction is discarded as a branch jump, one that does not
-    converge to ``tol`` is discarded as outside the workspace, and one with
-    ``cond(K_p) > cond_max`` as ill-conditioned. Velocities and accelerations are exact.
+    ``max_step`` away from the prediction, or whose path crosses a singular configuration
+    (``det(K_p^T K_p')`` between the ends of a step changes sign, :func:`_crossed`), is
+    discarded as a branch jump, one that does not converge to ``tol`` is discarded as outside
+    the workspace, and one with ``cond(K_p) > cond_max`` as ill-conditioned. The kept samples
+    are refined by Newton to the rounding floor of their residual (:func:`_polish`): near a
+    singularity the rates amplify the closure error. Velocities and accelerations are exact.
 
     Parameters
     ----------
@@ -478,7 +482,9 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     q = np.zeros((s, robot.dof))
     if q_start is not None:  # initial guess of the passive coordinates (assembly search)
         q[:, pas] = np.asarray(q_start, dtype=float)[pas]
-    failed, jumped, err, k = _continuation(plan, q, qa, act, pas, steps, tol, max_iter, max_step)
+    # an assembly search (q_start) starts off the loops: no branch to keep, no crossing checked
+    failed, jumped, err, k = _continuation(plan, q, qa, act, pas, steps, tol, max_iter, max_step,
+                                           crossing=q_start is None)
     converged = (err < max(tol * 100, 1e-9)) & ~failed
     ok = np.flatnonzero(converged & ~jumped)  # conditioning of these
     k = np.ascontiguousarray(k[:, :, ok].transpose(2, 0, 1))  # (S', m, dof)
@@ -493,6 +499,30 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
                         int((~converged).sum()), int((converged & jumped).sum()),
                         int((converged & ~jumped & ~good_cond).sum()),
                         float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
+
+
+def restrict(cs: ClosedStates, cond_max: float) -> ClosedStates:
+    """The samples of ``cs`` with ``cond(K_p) < cond_max`` (the others counted as ill-conditioned).
+
+    Parameters
+    ----------
+    cs : ClosedStates
+        Closed samples (:func:`close_loops`), usually with a looser ``cond_max``.
+    cond_max : float
+        The new threshold (no looser than ``cs.cond_max``: the smaller is kept).
+
+    Returns
+    -------
+    ClosedStates
+        Same fields, kept samples only; ``max_residual`` of those.
+    """
+    cond_max = min(float(cond_max), cs.cond_max)
+    keep = cs.cond < cond_max
+    if keep.all():
+        return ClosedStates(**{**cs.__dict__, "cond_max": cond_max})
+    err = float(cs.max_residual) if keep.any() else float("nan")  # an upper bound for the subset
+    return ClosedStates(cs.q[keep], cs.dq[keep], cs.ddq[keep], cs.G[keep], cs.cond[keep], cs.requested,
+                        cs.not_converged, cs.branch_jumps, cs.ill_conditioned + int((~keep).sum()), err, cond_max)
 
 
 def _conditioning(kp: np.ndarray, npas: int) -> np.ndarray:
@@ -526,11 +556,12 @@ def _passive_pinv(kp: np.ndarray, cond: np.ndarray) -> np.ndarray:
 
 
 def _continuation(plan: _Plan, q: np.ndarray, qa: np.ndarray, act: np.ndarray, pas: np.ndarray,
-                  steps: int, tol: float, max_iter: int, max_step: float):
+                  steps: int, tol: float, max_iter: int, max_step: float, crossing: bool = True):
     """Move ``q (S, dof)`` in place from its start to the actuated targets ``qa``.
 
     In ``steps`` predictor-corrector steps. Returns ``(failed, jumped, err, K)``: flags ``(S,)``
-    (no convergence, branch jump), and the largest residual ``(S,)`` and Jacobian
+    (no convergence, branch jump; with ``crossing``, a step across a singular configuration
+    counts as one, :func:`_crossed`), and the largest residual ``(S,)`` and Jacobian
     ``(m, dof, S)`` at the final ``q`` of the samples that converged (inf and zero elsewhere).
     """
     s, dof = q.shape
@@ -557,7 +588,56 @@ def _continuation(plan: _Plan, q: np.ndarray, qa: np.ndarray, act: np.ndarray, p
         failed[_damped_newton(plan, q, live, pas, tol, max_iter, err, k_all)] = True
         moved = np.abs(q[live][:, pas] - start).max(axis=1, initial=0.0)
         jumped[live[(moved > max_step) & ~failed[live]]] = True
+        # k: the Jacobian where the step started (a copy), k_all: where it converged
+        if crossing:
+            jumped[live[_crossed(k[:, pas], k_all[:, pas[:, None], live]) & ~failed[live]]] = True
+    _polish(plan, q, np.flatnonzero(~failed & ~jumped), pas, err, k_all)
     return failed, jumped, err, k_all
+
+
+def _crossed(kp_before: np.ndarray, kp_after: np.ndarray) -> np.ndarray:
+    """Whether each continuation step crossed a singular configuration ``(S,)``.
+
+    ``kp_before``, ``kp_after``: the passive Jacobians ``K_p (m, npas, S)`` at the ends of a step
+    (``kp_before`` may be ``(m, npas, 1)``: one start for all). ``det(K_p,before^T K_p,after)``
+    is positive for a step that stays on one side of every singularity (it is ``det(K_p^T K_p) > 0`` for a zero step);
+    where a singular value of ``K_p`` passes through zero on the way it changes sign. Past such a
+    point two assembly branches may meet (a parallelogram and its anti-parallelogram at the flat
+    configuration), so the branch of the sample is not known: the caller discards it.
+    """
+    npas, s = kp_after.shape[1], kp_after.shape[2]
+    if not npas:
+        return np.zeros(s, dtype=bool)
+    if kp_before.shape[2] not in (1, s):
+        raise ValueError("kp_before must have one sample or as many as kp_after")
+    m = np.einsum("mis,mjs->sij", np.broadcast_to(kp_before, kp_after.shape), kp_after)
+    return ~(np.linalg.det(m) > 0)
+
+
+def _polish(plan: _Plan, q: np.ndarray, idx: np.ndarray, pas: np.ndarray, err: np.ndarray, k_out: np.ndarray,
+            iters: int = 3) -> None:
+    """Newton steps past the tolerance on the converged samples ``idx`` of ``q (S, dof)``, in place.
+
+    Near a singular configuration the rates amplify the closure error (``dq`` by ``cond(K_p)``,
+    ``ddq`` by about its square): each sample is refined to the rounding floor of its residual.
+    A step is kept only where it lowers the sample's largest residual; ``err (S,)`` and the
+    Jacobian ``k_out (m, dof, S)`` follow.
+    """
+    cols = np.arange(q.shape[1])
+    for _ in range(iters):
+        if not len(idx) or not len(pas):
+            return
+        r, k, _ = _eval(plan, q[idx], cols)
+        trial = q[idx].copy()
+        st = -_lstsq(k[:, pas[:, None], np.arange(len(idx))], r).T
+        trial[:, pas] += np.where(np.isfinite(st), st, 0.0)
+        r2, k2, _ = _eval(plan, trial, cols)
+        e2 = np.abs(r2).max(axis=0) if len(r2) else np.zeros(len(idx))
+        better = e2 < err[idx]
+        q[idx[better]] = trial[better]
+        err[idx[better]] = e2[better]
+        k_out[:, :, idx[better]] = k2[:, :, better]
+        idx = idx[better & (e2 > 0)]
 
 
 def _damped_newton(plan: _Plan, q: np.ndarray, live: np.ndarray, pas: np.ndarray, tol: float,

@@ -391,7 +391,8 @@ def _certification(result) -> str:
     s = cert.sampling or {}
     sampling = f"{s.get('kept', num.samples)} of {s.get('requested', num.samples)} random samples kept"
     if "not_converged" in s:
-        sampling += (f" ({s['not_converged']} outside the workspace, {s['branch_jumps']} left the assembly mode, "
+        sampling += (f" ({s['not_converged']} outside the workspace, {s['branch_jumps']} off the reference branch "
+                     f"or past a singular configuration, "
                      f"{s['ill_conditioned']} ill-conditioned; max loop residual {s['max_loop_residual']:.1e})")
     return (f"<h2>Certification: {html.escape(str(cert.status))}</h2><p>{html.escape(cert.message)}</p>"
             f"<p>Singular values of the sampled regressor (log scale); dashed red: the tolerance "

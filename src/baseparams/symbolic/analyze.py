@@ -12,9 +12,12 @@ from .check import conversion, floats
 from .geometry import SymbolicRobot
 from .solve import SymbolicAnalysis, regroup
 
+#: the command line's limit on the exact regrouping [s] (a 7-DoF arm with 9 symbols takes ~10 s)
+TIME_LIMIT_S = 600.0
+
 
 def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0,
-                      check: bool = True) -> SymbolicAnalysis:
+                      check: bool = True, progress=None, max_seconds: float | None = None) -> SymbolicAnalysis:
     """Base parameters of ``robot`` as formulas in its symbols (DRNG on the symbolic geometry).
 
     Parameters
@@ -31,6 +34,11 @@ def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: in
     check : bool, default True
         Compare with the certified numerical analysis at two random points and refuse a result
         whose count or formulas differ (:func:`.check.check`).
+    progress : callable, optional
+        Called with one line per step (``progress(str)``; the CLI prints them on stderr).
+    max_seconds : float, optional
+        Give up on the exact regrouping after this long, with a message saying what would help
+        (the CLI: :data:`TIME_LIMIT_S`); default no limit.
 
     Returns
     -------
@@ -44,8 +52,10 @@ def symbolic_analysis(robot: SymbolicRobot, convention: str = "khalil", seed: in
         or the formulas disagree with it.
     """
     t0 = time.perf_counter()
-    out = regroup(robot, convention, seed)
+    out = regroup(robot, convention, seed, progress, max_seconds)
     if check:
+        if progress is not None:
+            progress("checking against the certified numerical analysis at 2 random points")
         run_check(out)
     out.seconds = time.perf_counter() - t0
     return out

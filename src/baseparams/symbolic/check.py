@@ -42,9 +42,10 @@ def conversion(sa: SymbolicAnalysis) -> sp.Matrix:
         m = sp.zeros(4, 4)
         m[a, b] = m[b, a] = 1
         units.append(m)
+    cache: dict = {}
     for i in range(n):
         for k, m in enumerate(units):
-            c[10 * i:10 * i + 10, 10 * i + k] = sp.Matrix(body_parameters(sa.robot, i, m, sa.convention))
+            c[10 * i:10 * i + 10, 10 * i + k] = sp.Matrix(body_parameters(sa.robot, i, m, sa.convention, cache))
     return c
 
 
@@ -106,9 +107,9 @@ def check(sa: SymbolicAnalysis, seeds=(101, 202)) -> list[dict]:
         if num.nullity < sa.nullity or not num.certified:
             raise BaseparamsError(f"{sa.robot.name}: the symbolic rules give {sa.nullity} nullspace directions, the "
                                   f"numerical analysis {num.nullity} ({num.status}) at {point}")
-        kmat = floats(sa.K_rational.subs(point))
+        kmat = floats(sa.K_rational.xreplace(point))  # xreplace: exact numbers in, no pattern matching
         p = _p_matrix(sa, kmat)
-        n_conv = floats(conv.subs(point)) @ num.basis
+        n_conv = floats(conv.xreplace(point)) @ num.basis
         residual = float(np.linalg.norm(p @ n_conv) / (np.linalg.norm(p) * np.linalg.norm(n_conv)))
         same = sorted(num.base.dependent) == list(sa.dependent) and num.convention == sa.convention
         k_num = num.base.K[:, np.argsort(num.base.dependent)] if same else None
@@ -178,7 +179,10 @@ def probe(sa: SymbolicAnalysis, seed: int = 7) -> list:
         except BaseparamsError as e:
             c.effect = f"the numerical analysis refuses that geometry ({e})"
             continue
-        if num.n_base != sa.n_base:
+        if not num.certified:  # a count that is not certified is not claimed
+            c.effect = (f"not decided there: the numerical analysis is {num.status} "
+                        f"({num.certificate.message if num.certificate else 'not verified'})")
+        elif num.n_base != sa.n_base:
             at = ", ".join(f"{sa.robot.display(k)}={_shown_value(k, v):.4g}" for k, v in point.items())
             c.effect = f"{num.n_base} base parameters there, not {sa.n_base} (certified numerically at {at})"
         else:
@@ -220,7 +224,7 @@ def _pairs(sa: SymbolicAnalysis, seed: int) -> list:
                 num = analyze(sa.robot.to_robot(point))
             except BaseparamsError:
                 continue
-            if num.n_base in (sa.n_base, alone.get(a, sa.n_base), alone.get(b, sa.n_base)):
+            if not num.certified or num.n_base in (sa.n_base, alone.get(a, sa.n_base), alone.get(b, sa.n_base)):
                 continue
             c.point = point
             at = ", ".join(f"{sa.robot.display(k)}={_shown_value(k, v):.4g}" for k, v in point.items())

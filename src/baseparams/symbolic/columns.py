@@ -19,7 +19,7 @@ import sympy as sp
 
 from ..display import summary_repr
 from ..enums import Source
-from .geometry import SymbolicRobot
+from .geometry import SymbolicRobot, normal
 
 #: the homogeneous unit 4-vectors ``e1 e2 e3`` (directions) and ``e4`` (the origin)
 UNIT = [sp.Matrix([1 if k == i else 0 for k in range(4)]) for i in range(4)]
@@ -144,8 +144,8 @@ def perp_pair(z: sp.Matrix, probe: dict) -> tuple[sp.Matrix, sp.Matrix]:
     """
     k = min(range(3), key=lambda i: abs(float(z[i].subs(probe))))
     e = sp.Matrix([1 if i == k else 0 for i in range(3)])
-    x = z.cross(e).applyfunc(sp.expand)
-    return x, z.cross(x).applyfunc(sp.expand)
+    x = normal(z.cross(e))
+    return x, normal(z.cross(x))
 
 
 def _pairs(vectors: list, names: list) -> list[tuple[sp.Matrix, str]]:

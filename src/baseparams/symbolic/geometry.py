@@ -19,6 +19,7 @@ from functools import cached_property
 
 import numpy as np
 import sympy as sp
+from sympy.polys.polyerrors import CoercionFailed, GeneratorsError
 
 from ..display import summary_repr
 from ..errors import ModelError
@@ -106,7 +107,125 @@ def inverse(m: sp.Matrix) -> sp.Matrix:
         Its inverse, polynomial when ``m`` is.
     """
     r = m[:3, :3].T
-    return transform(r, -r * m[:3, 3])
+    return transform(r, matmul(-r, m[:3, 3]))
+
+
+def _field_of(*mats: sp.Matrix):
+    """``ZZ(symbols)`` of the matrices' symbols (``QQ`` without any)."""
+    syms = sorted(set().union(*(m.free_symbols for m in mats)), key=lambda x: x.name)
+    return sp.ZZ.frac_field(*syms) if syms else sp.QQ
+
+
+def _in_field(m: sp.Matrix, dom):
+    """``m`` as a ``DomainMatrix`` over ``dom``, or None outside it (e.g. ``sqrt(2)``)."""
+    from sympy.polys.matrices import DomainMatrix
+
+    try:
+        if dom == sp.QQ:
+            rows = [[dom.from_sympy(e) for e in m.row(r)] for r in range(m.rows)]
+        else:
+            ring, new = dom.get_ring(), dom.field.raw_new
+            rows = [[new(*to_fraction(e, ring)) for e in m.row(r)] for r in range(m.rows)]
+        return DomainMatrix(rows, m.shape, dom)
+    except (CoercionFailed, GeneratorsError):
+        return None
+
+
+def to_fraction(e: sp.Expr, ring) -> tuple:
+    """``e = num / den`` over ``ring`` (``ZZ[symbols]``), built term by term without cancelling.
+
+    Denominators are combined by their lcm (small: products of ``1 + t^2``), numerators are never
+    divided by a gcd (the expensive step of field arithmetic on large numerators).
+
+    Parameters
+    ----------
+    e : sympy.Expr
+        Rational in the ring's symbols, rational coefficients.
+    ring : sympy.polys.domains.Domain
+        A polynomial ring ``ZZ[symbols]``.
+
+    Returns
+    -------
+    tuple
+        ``(num, den)`` ring elements.
+
+    Raises
+    ------
+    sympy.polys.polyerrors.CoercionFailed
+        ``e`` is not rational in the ring's symbols (e.g. ``sqrt(2)``, an unknown symbol).
+    """
+    one = ring.one
+    if e.is_Rational:
+        return ring.convert(e.p), ring.convert(e.q)
+    if e.is_Symbol:
+        return ring.from_sympy(e), one
+    if e.is_Add:
+        terms = [to_fraction(a, ring) for a in e.args]
+        den = one
+        for _, d in terms:
+            den = den if d in (den, one) else (d if den == one else den.lcm(d))
+        return sum((n * (den if d == one else den.exquo(d)) for n, d in terms), ring.zero), den
+    if e.is_Mul:
+        num, den = one, one
+        for a in e.args:
+            n, d = to_fraction(a, ring)
+            num, den = num * n, den * d
+        return num, den
+    if e.is_Pow and e.exp.is_Integer:
+        n, d = to_fraction(e.base, ring)
+        k = int(e.exp)
+        return (n**k, d**k) if k >= 0 else (d**-k, n**-k)
+    raise CoercionFailed(f"not rational in the symbols: {e}")
+
+
+def normal(m: sp.Matrix) -> sp.Matrix:
+    """``m`` with every entry in a canonical form: an expanded polynomial or one cancelled fraction.
+
+    Computed over the field of rational functions of the symbols (sparse polynomials, gcds
+    cancelled as they arise), which keeps the size of the entries in check where symbolic angles
+    bring their half-angle denominators (expanding sums of fractions does not cancel them);
+    entries outside that field (``sqrt(2)`` of an angle ``pi/4``) are expanded.
+
+    Parameters
+    ----------
+    m : sympy.Matrix
+        Any shape, entries rational in the symbols.
+
+    Returns
+    -------
+    sympy.Matrix
+        Same shape and values.
+    """
+    if not m.free_symbols:
+        return m.applyfunc(sp.expand)
+    dm = _in_field(m, _field_of(m))
+    return m.applyfunc(sp.expand) if dm is None else dm.to_Matrix()
+
+
+def matmul(*mats: sp.Matrix) -> sp.Matrix:
+    """The product of the matrices, entries in :func:`normal` form (multiplied in the field).
+
+    Parameters
+    ----------
+    *mats : sympy.Matrix
+        Conformable matrices, entries rational in the symbols.
+
+    Returns
+    -------
+    sympy.Matrix
+        Their product.
+    """
+    dom = _field_of(*mats)
+    dms = [_in_field(m, dom) for m in mats]
+    if any(d is None for d in dms):
+        out = mats[0]
+        for m in mats[1:]:
+            out = out * m
+        return out.applyfunc(sp.expand)
+    out = dms[0]
+    for d in dms[1:]:
+        out = out * d
+    return out.to_Matrix()
 
 
 def at_point(m: sp.Matrix, point: dict):
@@ -126,7 +245,7 @@ def at_point(m: sp.Matrix, point: dict):
     """
     from sympy.polys.matrices import DomainMatrix
 
-    return DomainMatrix.from_Matrix(m.subs(point)).convert_to(sp.QQ)
+    return DomainMatrix.from_Matrix(m.xreplace(point)).convert_to(sp.QQ)  # exact numbers: no pattern matching
 
 
 def exact(x) -> sp.Expr:
@@ -285,18 +404,17 @@ class SymbolicRobot:
 
     @cached_property
     def M0(self) -> tuple:
-        """World pose ``(4, 4)`` of every body (joint) frame at q = 0, expanded polynomials."""
+        """World pose ``(4, 4)`` of every body (joint) frame at q = 0, entries in :func:`normal` form."""
         out = []
         for i in range(self.n):
             p = self.parent[i]
-            m = self.origins[i] if p < 0 else out[p] * self.origins[i]
-            out.append(m.applyfunc(sp.expand))
+            out.append(normal(self.origins[i]) if p < 0 else matmul(out[p], self.origins[i]))
         return tuple(out)
 
     @cached_property
     def link_frames(self) -> tuple:
         """World pose ``(4, 4)`` at q = 0 of each body's parameter (link) frame."""
-        return tuple((m * f).applyfunc(sp.expand) for m, f in zip(self.M0, self.param_frames))
+        return tuple(matmul(m, f) for m, f in zip(self.M0, self.param_frames))
 
     def world_axes(self, i: int) -> list:
         """Body ``i``'s joint axes ``(3, 1)`` in the world frame at q = 0.
@@ -312,7 +430,7 @@ class SymbolicRobot:
             One per axis of the joint (none for S).
         """
         r = self.M0[i][:3, :3]
-        return [(r * a).applyfunc(sp.expand) for a in self.axes[i]]
+        return [matmul(r, a) for a in self.axes[i]]
 
     def complete_values(self, values: dict | None) -> dict:
         """``values`` (symbol or name -> number) completed by the table's defaults; every symbol needed.
@@ -554,7 +672,7 @@ class SymbolicBuilder:
         loops = []
         for name, jt, p, c, origin, axes, in_world in self._loops:
             pm = sp.eye(4) if p < 0 or in_world else robot.M0[p]
-            frame = (pm * origin).applyfunc(sp.expand)
+            frame = matmul(pm, origin)
             if p > c:
                 p, c = c, p
                 axes = axes[::-1]

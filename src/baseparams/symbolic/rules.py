@@ -17,7 +17,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from ..enums import Source
 from .columns import UNIT, SymColumn, sym
-from .geometry import SymbolicRobot, at_point
+from .geometry import SymbolicRobot, at_point, matmul, normal
 
 
 def _skew(w: sp.Matrix) -> sp.Matrix:
@@ -49,7 +49,7 @@ def screw(robot: SymbolicRobot, i: int, k: int) -> sp.Matrix:
         return s
     w = robot.world_axes(i)[k] if robot.jtype[i] != "S" else sp.Matrix([1 if j == k else 0 for j in range(3)])
     s[:3, :3] = _skew(w)
-    s[:3, 3] = (-_skew(w) * o).applyfunc(sp.expand)
+    s[:3, 3] = matmul(-_skew(w), o)
     return s
 
 
@@ -89,7 +89,7 @@ def motion_spans(robot: SymbolicRobot, point: dict) -> list:
             continue
         for k in range(_n_axes(robot, i)):
             s = screw(robot, i, k)
-            s2 = (s * s).applyfunc(sp.expand)
+            s2 = matmul(s, s)
             cand = [_mul(x, s) for x in cur] + [_mul(x, s2) for x in cur] + [s[:3, :], s2[:3, :]]
             cur = _select(cur + cand, point)
         spans.append(None if len(cur) >= 12 else cur)
@@ -97,8 +97,8 @@ def motion_spans(robot: SymbolicRobot, point: dict) -> list:
 
 
 def _mul(x: sp.Matrix, s: sp.Matrix) -> sp.Matrix:
-    """``x (3, 4) @ s (4, 4)``, expanded."""
-    return (x * s).applyfunc(sp.expand)
+    """``x (3, 4) @ s (4, 4)``, entries in :func:`~.geometry.normal` form."""
+    return matmul(x, s)
 
 
 def kernel(rows: sp.Matrix) -> list:
@@ -129,7 +129,7 @@ def kernel(rows: sp.Matrix) -> list:
 
 def _stack(span: list, left: sp.Matrix | None = None) -> sp.Matrix:
     """Rows ``[left @ X for X in span]`` stacked (``left`` default identity)."""
-    mats = [x if left is None else (left * x).applyfunc(sp.expand) for x in span]
+    mats = [x if left is None else matmul(left, x) for x in span]
     return sp.Matrix.vstack(*mats) if mats else sp.zeros(0, 4)
 
 
@@ -138,10 +138,9 @@ def _gravity_filtered(robot: SymbolicRobot, span: list, blocks: list) -> list:
     g = robot.gravity
     if not blocks or all(e == 0 for e in g) or not span:
         return blocks
-    rows = sp.Matrix([[sp.expand((g.T * x * b[:, 3])[0]) for b in blocks] for x in span])
+    rows = normal(sp.Matrix([[(g.T * x * b[:, 3])[0] for b in blocks] for x in span]))
     coefs = kernel(rows)
-    return [sum((c[m] * blocks[m] for m in range(len(blocks))), sp.zeros(4, 4)).applyfunc(sp.expand)
-            for c in coefs]
+    return [normal(sum((c[m] * blocks[m] for m in range(len(blocks))), sp.zeros(4, 4))) for c in coefs]
 
 
 def _slide_direction(robot: SymbolicRobot, i: int) -> sp.Matrix | None:
@@ -187,7 +186,7 @@ def rule_columns(robot: SymbolicRobot, point: dict) -> list[SymColumn]:
         d = _slide_direction(robot, i)
         if d is None:
             continue
-        proj = (d.dot(d) * sp.eye(3) - d * d.T).applyfunc(sp.expand)
+        proj = normal(d.dot(d) * sp.eye(3) - d * d.T)
         sliding = kernel(_stack(span, proj))
         if len(sliding) <= len(fixed):
             continue

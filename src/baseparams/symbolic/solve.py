@@ -19,19 +19,26 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.polyerrors import CoercionFailed, GeneratorsError
 
 from ..display import clip, summary_repr
 from ..enums import Source
 from ..errors import BaseparamsError
 from ..model.inertia import SPECS, check_convention
+from . import ring
 from .angles import angle_of, to_trig
 from .columns import SymColumn, symbolic_columns
-from .geometry import SymbolicRobot, at_point, inverse
+from .geometry import SymbolicRobot, at_point, inverse, to_fraction
 from .rules import rule_columns
 
 
-def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention: str) -> list:
+def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention: str,
+                    cache: dict | None = None) -> list:
     """Body ``i``'s ten parameters (``convention``'s order) of a pseudo-inertia given in the world at q = 0.
+
+    Computed fraction-free over ``ZZ[symbols]`` (:func:`.ring.body_parameters`), each parameter
+    then cancelled once; geometry outside that ring (e.g. ``sqrt(2)`` of an angle ``pi/4``) falls
+    back to expanded expressions.
 
     Parameters
     ----------
@@ -44,12 +51,23 @@ def body_parameters(robot: SymbolicRobot, i: int, n_world: sp.Matrix, convention
     convention : str
         ``paper`` (the pseudo-inertia's entries in the world frame) or a link-frame convention
         (expressed in :attr:`SymbolicRobot.link_frames` ``[i]``, inertia about its origin).
+    cache : dict, optional
+        Reused across calls for one robot (the ring and each body's inverse frame).
 
     Returns
     -------
     list of sympy.Expr, length 10
-        The parameters, expanded.
+        The parameters (polynomials expanded; rational functions as one cancelled fraction).
     """
+    cache = {} if cache is None else cache
+    rg = cache.setdefault("ring", ring.ring_of(robot))
+    got = ring.body_parameters(robot, i, n_world, convention, rg, cache)
+    if got is not None:
+        vals, den = got
+        if rg == sp.QQ:
+            return [rg.to_sympy(v) for v in vals]
+        field = rg.get_field()
+        return [field.to_sympy(field.field.new(v, den)) for v in vals]
     if convention == "paper":
         nl = n_world
     else:
@@ -111,9 +129,10 @@ def column_matrix(robot: SymbolicRobot, cols: list[SymColumn], convention: str) 
         One column per :class:`SymColumn`.
     """
     a = sp.zeros(10 * robot.n, len(cols))
+    cache: dict = {}
     for k, c in enumerate(cols):
         for i, blk in c.blocks.items():
-            a[10 * i:10 * i + 10, k] = sp.Matrix(body_parameters(robot, i, blk, convention))
+            a[10 * i:10 * i + 10, k] = sp.Matrix(body_parameters(robot, i, blk, convention, cache))
     return a
 
 
@@ -302,9 +321,13 @@ class SymbolicAnalysis:
         return self.K_rational.subs(self.robot.complete_values(values))
 
 
-def _choose(a: sp.Matrix, robot: SymbolicRobot, convention: str, seed: int) -> tuple[list, list]:
-    """A basis of the columns and the dependent parameters, decided at a random rational point."""
-    num = at_point(a, random_point(robot, seed))
+def _choose(a, robot: SymbolicRobot, convention: str, seed: int) -> tuple[list, list]:
+    """A basis of the columns and the dependent parameters, decided at a random rational point.
+
+    ``a``: a ``sympy.Matrix`` or a ``DomainMatrix`` over :func:`.ring.ring_of` the robot.
+    """
+    point = random_point(robot, seed)
+    num = at_point(a, point) if isinstance(a, sp.Matrix) else ring.at_point(a, point)
     basis = list(num.rref()[1])
     within = SPECS[check_convention(convention)].regroup_order
     order = [10 * i + w for i in reversed(range(robot.n)) for w in within]
@@ -333,7 +356,32 @@ def _solve(a: sp.Matrix, basis: list, dep: list, ind: list) -> tuple[sp.Matrix, 
     return k, sp.factor(dom.to_sympy(adt.det()))
 
 
-def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> SymbolicAnalysis:
+def _solve_ring(a: DomainMatrix, basis: list, dep: list, ind: list,
+                deadline: float | None = None) -> tuple[sp.Matrix, sp.Expr]:
+    """:func:`_solve` on polynomial columns over ``ZZ[symbols]`` (:func:`.ring.column_matrix`).
+
+    ``A_D^T X = den A_I^T`` by fraction-free elimination, then each ``K`` entry cancelled once in
+    the field of fractions.
+    """
+    if not len(dep):
+        return sp.zeros(len(ind), 0), sp.S.One
+    dom = a.domain
+    field = dom.get_field() if dom != sp.QQ else sp.QQ
+    adt, ait = a.extract(dep, basis).transpose(), a.extract(ind, basis).transpose()
+    blocks = ring.block_solve(adt, ait, deadline)  # A_D^T X = A_I^T, body by body
+    if blocks is None:
+        x, den = adt.solve_den(ait)  # A_D^T X = A_I^T den
+        d = field.convert_from(den, dom)
+        x = [[field.convert_from(e, dom) / d for e in row] for row in x.to_list()]
+        dets = [field.convert_from(adt.det(), dom)]
+    else:
+        x, dets = blocks
+    k = sp.Matrix([[field.to_sympy(-e) for e in row] for row in x]).T
+    return k, sp.Mul(*[sp.factor(field.to_sympy(d)) for d in dets])
+
+
+def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0, progress=None,
+            max_seconds: float | None = None) -> SymbolicAnalysis:
     """The regrouping of ``robot`` as formulas in its symbols, unchecked (:func:`.analyze.symbolic_analysis` checks).
 
     Parameters
@@ -347,21 +395,52 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> 
     seed : int
         Seed of the random rational point that decides the column basis and the dependent
         parameters.
+    progress : callable, optional
+        Called with one line per step (``progress(str)``), e.g. the CLI's progress lines.
+    max_seconds : float, optional
+        Give up after this long (checked per column and per eliminated block); default no limit.
 
     Returns
     -------
     SymbolicAnalysis
         The formulas and the conditions under which they hold (no checks yet).
+
+    Raises
+    ------
+    BaseparamsError
+        Geometry not rational in the symbols, or ``max_seconds`` passed (saying where and what
+        would help).
     """
+    try:
+        return _regroup(robot, convention, seed, progress,
+                        None if max_seconds is None else time.perf_counter() + max_seconds)
+    except ring.TimeLimit:
+        n_ang = sum(1 for s in robot.symbols if angle_of(s) is not None)
+        raise BaseparamsError(
+            f"{robot.name}: the exact regrouping did not finish in {max_seconds:g} s ({len(robot.symbols)} symbols, "
+            f"{n_ang} of them angles; the formulas grow with every symbolic angle): give fewer angles as symbols "
+            f"(numbers in the table), or analyse at numbers ('baseparams analyze TABLE --values ...' without "
+            f"--symbolic)") from None
+
+
+def _regroup(robot: SymbolicRobot, convention: str, seed: int, progress, deadline: float | None) -> SymbolicAnalysis:
+    """:func:`regroup` with a deadline (a ``time.perf_counter()`` value or None)."""
     t0 = time.perf_counter()
+    say = progress or (lambda msg: None)
     convention = str(check_convention(convention))
+    _check_rational(robot)
     probe = random_point(robot, seed + 1)
+    say(f"DRNG's columns on the symbolic geometry ({len(robot.symbols)} symbols)")
     cols, dec = symbolic_columns(robot, probe)
     cols = cols + rule_columns(robot, probe)
-    a = column_matrix(robot, cols, convention)
+    say(f"{len(cols)} columns in the {convention} parameters (fraction-free, per body)")
+    a = ring.column_matrix(robot, cols, convention, deadline)  # fraction-free; None: not rational
+    if a is None:
+        a = column_matrix(robot, cols, convention)
     basis, dep = _choose(a, robot, convention, seed)
     ind = [i for i in range(10 * robot.n) if i not in set(dep)]
-    k, det = _solve(a, basis, dep, ind)
+    say(f"eliminating {len(dep)} dependent parameters (block by block)")
+    k, det = _solve(a, basis, dep, ind) if isinstance(a, sp.Matrix) else _solve_ring(a, basis, dep, ind, deadline)
     params, regrouped = parameter_symbols(robot, convention)
     names = [regrouped[i] if any(e != 0 for e in k.row(r)) else params[i].name for r, i in enumerate(ind)]
     conditions = [Condition(p, r) for p, r in dec.conditions]
@@ -379,6 +458,23 @@ def regroup(robot: SymbolicRobot, convention: str = "khalil", seed: int = 0) -> 
                            conditions, 0.0, by_source, K_rational=k)
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def _check_rational(robot: SymbolicRobot) -> None:
+    """Refuse geometry that is not rational in the symbols (a fixed angle ``pi/3``: ``sqrt(3)/2``)."""
+    rg = ring.ring_of(robot)
+    if rg == sp.QQ:
+        rg = sp.ZZ[sp.Dummy("x")]
+    mats = (*robot.origins, *robot.param_frames, *(lp.frame for lp in robot.loops))
+    for m in mats:
+        for e in m:
+            try:
+                to_fraction(e, rg)
+            except (CoercionFailed, GeneratorsError):
+                raise BaseparamsError(
+                    f"{robot.name}: the geometry has {sp.sstr(e)}, not rational in the symbols: a fixed angle must "
+                    f"have a rational cosine and sine (0, pi/2, pi, -pi/2); give any other angle as a symbol "
+                    f"(its number in 'values'), or analyse the robot in numbers") from None
 
 
 def _reorder(k: sp.Matrix, dep: list) -> sp.Matrix:

@@ -23,7 +23,9 @@ the antecedent (0: the base; optional, default ``j - 1``), ``sigma`` 0 revolute 
 adds to ``theta``), 1 prismatic (``q`` adds to ``r``, or ``d`` for standard DH). Lengths are
 numbers or names (SymPy symbols, real); angles are exact numbers (``pi/2``, ``-pi/2``, ``0``,
 ``pi/3``...) or a name, possibly signed and plus a constant (``alpha2``, ``-a + pi/2``), handled
-through its half-angle tangent (:mod:`.angles`).
+through its half-angle tangent (:mod:`.angles`). The symbolic analysis needs the geometry rational
+in the symbols: a fixed angle with an irrational cosine (``pi/3``) is analysed in numbers only
+(give it as a name to have formulas).
 """
 
 from __future__ import annotations

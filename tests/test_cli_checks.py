@@ -200,6 +200,7 @@ def test_the_symbolic_package_without_sympy_says_which_extra(tmp_path):
     (["--joints", ","], "--joints needs joint names"),
     (["--prior-weight", "1"], "--prior-weight applies to --method physical"),
     (["--holdout", "5", "--score-cutoff", "1000"], "--score-cutoff 1000 Hz"),
+    (["--holdout", "9.9"], "--holdout 9.9 s leaves 0.08 s to train on"),  # too little left to train on
 ])
 def test_identify_flags_that_cannot_be_honoured_are_one_line(argv, words, tmp_path, capsys):
     log = tmp_path / "sim.csv"

@@ -800,7 +800,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     cols = log_columns(model, log)
     unit_notes = check_log_units(model, train, cols, allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
-    prep = prepare(train, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
+    prep = _prepare_training(train, holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
     parts: list = []
     kept: list = []
@@ -830,6 +830,21 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+
+
+def _prepare_training(train, holdout, **kw):
+    """:func:`~baseparams.ident.preprocess.prepare` of the training part; a too short one names ``--holdout``."""
+    from ..errors import DataError
+    from .preprocess import prepare
+
+    try:
+        return prepare(train, **kw)
+    except DataError as exc:
+        if holdout is None:
+            raise
+        span = float(train.t[-1] - train.t[0]) if train.n_samples else 0.0
+        raise DataError(f"{exc}; --holdout {holdout:g} s leaves {span:.3g} s to train on "
+                        "(a shorter --holdout)") from None
 
 
 def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:

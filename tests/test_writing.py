@@ -85,7 +85,7 @@ def _temporary(node) -> bool:
     """The written target is a temporary of ``files.atomic_path`` (by the project's naming) or an open handle."""
     if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "str" and node.args:
         return _temporary(node.args[0])
-    return isinstance(node, ast.Name) and (node.id.startswith("tmp") or node.id in ("fh", "buf"))
+    return isinstance(node, ast.Name) and (node.id.startswith("tmp") or node.id in ("fh", "buf", "pw"))
 
 
 def _direct_writes(path: Path) -> list[str]:

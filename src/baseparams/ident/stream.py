@@ -86,6 +86,9 @@ class Scan:
     notes: tuple[str, ...]
     dt: tuple[float, float] = (np.inf, -np.inf)
 
+    def __repr__(self) -> str:
+        return f"<Scan {self.n} samples, t {self.t0:.6g} to {self.t_end:.6g} s>"
+
 
 def concat(parts: list[JointLog]) -> JointLog:
     """Consecutive blocks of one log as one log.
@@ -251,6 +254,10 @@ class Training:
     t_last: float = float("nan")
     uniform: bool = True
 
+    def __repr__(self) -> str:
+        grid = "uniform" if self.uniform else "non-uniform"
+        return f"<Training {self.n} samples at {self.rate:.6g} Hz ({grid}), subsample step {self.step}>"
+
 
 def training(stream, sc: Scan, end_time: float | None, resample_ok: bool = False) -> Training:
     """The second pass: the training samples (``t < end_time``), their rate, steps and a subsample.
@@ -407,6 +414,10 @@ class Plan:
     margin: int
     size: int
     notes: tuple[str, ...]
+
+    def __repr__(self) -> str:
+        return (f"<Plan cutoff {self.design.cutoff:.4g} Hz, 1 in {self.factor} kept, windows of {self.size} + 2 x "
+                f"{self.margin} samples>")
 
     def windows(self):
         """The training windows (:func:`~baseparams.ident.chunks.plan`).

@@ -7,6 +7,7 @@ written here (a clone without ../shared tests the export); the Menagerie iiwa14 
 the shared file where it is.
 """
 
+import re
 import warnings
 
 import mujoco
@@ -393,3 +394,28 @@ def test_real_panda_log_exported_as_mjcf(tmp_path, capsys):
     measured = float(re.search(r"vs the log's measured torques: relative RMS difference (\S+)", err).group(1))
     assert exact < 1e-5 and measured < 0.05
     assert mujoco.MjModel.from_xml_path(str(out)).dof_frictionloss.min() > 0
+
+
+def test_front_door_identify_writes_the_mjcf_like_the_cli(tmp_path, capsys):
+    """``bp.identify(..., mjcf=OUT)``: the CLI's ``--mjcf`` from Python, the same file, checked first."""
+    import baseparams as bp
+
+    src, csv = _cli_log(tmp_path)
+    cli_out, api_out = tmp_path / "cli.xml", tmp_path / "api.xml"
+    flags = {"method": "physical", "rotor": True, "friction": "viscous"}
+    assert main(["identify", str(src), str(csv), "--method", "physical", "--rotor", "--friction", "viscous",
+                 "--mjcf", str(cli_out)]) == 0
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        bp.identify(str(src), str(csv), mjcf=api_out, **flags)
+    assert any("vs the log's measured torques" in str(w.message) for w in caught)
+    a, b = (mujoco.MjModel.from_xml_path(str(p)) for p in (cli_out, api_out))
+    assert np.allclose(a.body_mass, b.body_mass) and np.allclose(a.dof_armature, b.dof_armature)
+    assert np.allclose(a.body_inertia, b.body_inertia) and a.dof_armature.min() > 0
+    # refused before the fit, nothing written: a least-squares method, a built-in model, another suffix
+    for model, kw, words in ((str(src), {"method": "wls"}, 'mjcf= needs method="physical"'),
+                             ("puma560", flags, "needs an MJCF (.xml) or URDF (.urdf) model file"),
+                             (str(src), {**flags, "mjcf": tmp_path / "o.urdf"}, "must end in .xml")):
+        with pytest.raises(BaseparamsError, match=re.escape(words)):
+            bp.identify(model, str(csv), **{"mjcf": tmp_path / "o.xml", **kw})
+    assert not (tmp_path / "o.xml").exists() and not (tmp_path / "o.urdf").exists()

@@ -385,7 +385,7 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
              cutoff: float | None = None, decimate: int | None = None, min_speed: float | None = None,
              prior_weight: float | None = None, convention: str = "khalil", covariance: str = "hac",
              score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None, weld=None,
-             analysis_samples: int | None = None, save=None, progress=None):
+             analysis_samples: int | None = None, save=None, mjcf=None, progress=None):
     """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
 
     Parameters
@@ -427,6 +427,10 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
         Random states of the base-parameter analysis.
     save : str or path, optional
         Also save the result there (``Identification.save``: versioned JSON; checked before the fit).
+    mjcf : str or path, optional
+        Also write the identified bodies and drive terms into a copy of the model file as MJCF
+        (``--mjcf``: ``method="physical"`` and ``model`` an MJCF or URDF file; checked before the fit;
+        :func:`baseparams.io.mjcf_write.identified_mjcf`, its notes as :class:`ModelWarning` warnings).
     progress : callable, optional
         Called with one line of text per step.
 
@@ -450,6 +454,12 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
         from .files import check_output
 
         check_output(save, inputs, "save")
+    if mjcf is not None:
+        from .files import check_output
+        from .io.mjcf_write import check_mjcf_request
+
+        check_mjcf_request(model, method, mjcf, "mjcf=")
+        check_output(mjcf, inputs, "mjcf")
     couplings = tuple(c if isinstance(c, MotorCoupling) else MotorCoupling.parse(c) for c in couplings)
     log, val, robot = _identification_logs(robot, log, validate, columns, joints, weld)
     result = run(robot, log, method=method, rotor=rotor, friction=_friction_of(friction),
@@ -459,6 +469,11 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
                  allow_units=allow_units, score_cutoff=score_cutoff)
     if save is not None:
         result.save(save, inputs, "save")
+    if mjcf is not None:
+        from .io.mjcf_write import identified_mjcf
+
+        for note in identified_mjcf(result, _os.fspath(model), mjcf, log, inputs=inputs):
+            _warnings.warn(note, ModelWarning, stacklevel=2)
     return result
 
 

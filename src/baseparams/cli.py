@@ -1325,12 +1325,9 @@ def _check_flags(args) -> None:
 
 def _check_mjcf_flags(args) -> None:
     """``identify --mjcf``: a physical fit of an MJCF or URDF model file (a URDF through MuJoCo's import)."""
-    if args.method != "physical":
-        raise BaseparamsError("--mjcf needs --method physical: least squares gives base parameters, not bodies "
-                              "(nothing was fitted)")
-    if Path(args.model).suffix.lower() not in (".xml", ".urdf") or not Path(args.model).is_file():
-        raise BaseparamsError(f"--mjcf writes the model file as MJCF with the identified values: it needs an MJCF "
-                              f"(.xml) or URDF (.urdf) model file, got {args.model} (nothing was fitted)")
+    from .io.mjcf_write import check_mjcf_request
+
+    check_mjcf_request(args.model, args.method, args.mjcf)
 
 
 def preflight(args) -> None:

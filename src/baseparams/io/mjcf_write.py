@@ -450,6 +450,39 @@ def mjcf_inverse(path: str | Path, robot: Robot, q, dq, ddq, *, frictionloss: bo
     return out
 
 
+def check_mjcf_request(model, method: str, dest, what: str = "--mjcf") -> None:
+    """Refuse, before any fit, an MJCF export that cannot be honoured (the CLI's and ``bp.identify``'s check).
+
+    Parameters
+    ----------
+    model : object
+        The model as given: it must be an MJCF (``.xml``) or URDF (``.urdf``) file.
+    method : str
+        The identification method: it must be ``physical`` (full, physically consistent bodies).
+    dest : str or Path
+        The file to write: it must end in ``.xml``.
+    what : str
+        The option's name in messages (``--mjcf`` or ``mjcf=``).
+
+    Raises
+    ------
+    BaseparamsError
+        Another method, a model that is not such a file, another suffix (each one line, saying
+        nothing was fitted).
+    """
+    if method != "physical":
+        flag = "--method physical" if what.startswith("--") else 'method="physical"'
+        raise BaseparamsError(f"{what} needs {flag}: least squares gives base parameters, not bodies "
+                              f"(nothing was fitted)")
+    path = Path(os.fspath(model)) if isinstance(model, (str, os.PathLike)) else None
+    if path is None or path.suffix.lower() not in (".xml", ".urdf") or not path.is_file():
+        shown = model if path is not None else type(model).__name__
+        raise BaseparamsError(f"{what} writes the model file as MJCF with the identified values: it needs an MJCF "
+                              f"(.xml) or URDF (.urdf) model file, got {shown} (nothing was fitted)")
+    if Path(os.fspath(dest)).suffix.lower() != ".xml":
+        raise BaseparamsError(f"{what} {dest}: an MJCF file must end in .xml (nothing was fitted)")
+
+
 def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=(),
                     max_samples: int = 20000) -> list[str]:
     """Write a physical identification into a copy of its MJCF model, checked on the log's samples.

@@ -823,9 +823,6 @@ def _passes(robot, stream, o: dict, say):
         sc = Scan(stream.n, sc.t0, sc.t0 + stream.step * (stream.n - 1), sc.head, (*sc.notes, stream.note))
         tr = training(stream, sc, None)
     plan = plan_training(model, stream, sc, tr, o["cutoff"], o["decimate"], o["min_speed"], o["memory_mb"])
-    from ..regressor import compiled
-
-    compiled.preload(sc.n * len(model.coords) * robot.n)  # windows are small, the run is not
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
     parts, kept, slow = accumulate(stream, plan, model, cols, o["memory_mb"])

@@ -56,31 +56,6 @@ def loaded() -> bool:
     return "baseparams.regressor.kernels" in sys.modules
 
 
-def preload(work: int) -> bool:
-    """Load the kernels now when a run's total work calls for them (a log streamed in small windows).
-
-    :func:`baseparams.regressor.tp.use_compiled` decides per batch; a streamed log's windows are
-    each below :data:`MIN_WORK` although the whole run is far above it: loaded here, every window
-    then uses them.
-
-    Parameters
-    ----------
-    work : int
-        The run's total samples x rows x bodies.
-
-    Returns
-    -------
-    bool
-        Whether the kernels are loaded (numba installed and ``work >= MIN_WORK``, or loaded before).
-    """
-    if loaded():
-        return True
-    if not available() or work < MIN_WORK:
-        return False
-    _kernels()
-    return True
-
-
 class CompileCacheWarning(UserWarning):
     """numba cannot cache the compiled kernels on disk: they are compiled in memory in each process."""
 

@@ -1019,9 +1019,10 @@ def _identify_parser(sub, model_args) -> None:
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
     held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
     s.add_argument("--method", choices=("auto", "ols", "wls", "physical"), default="auto",
-                   help="auto (default): weighted least squares pulled towards the model file's parameters as far "
-                        "as blocked cross-validation on the training data asks; ols, wls (per-joint noise) or "
-                        "physical (physically consistent) least squares")
+                   help="auto (default): least squares with the model file's parameters as a prior (terms the data "
+                        "determine keep their fitted values), the weighting and the prior's weight chosen by blocked "
+                        "cross-validation on the training data; ols, wls (per-joint noise) or physical (physically "
+                        "consistent) least squares")
     _ident_args(s)
     s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
     s.add_argument("--coupling", action="append", metavar="NAME:JOINT=W,JOINT=W",

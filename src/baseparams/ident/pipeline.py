@@ -156,9 +156,10 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     acc : RowAccumulator
         The data (:func:`accumulate`).
     method : {"auto", "ols", "wls", "physical"}
-        The estimator. ``auto``: WLS pulled towards the model file's parameters with a weight
-        chosen by blocked cross-validation on ``blocks`` (:mod:`baseparams.ident.select`; plain
-        WLS when it does not predict better, or without blocks). ``physical``: full parameters
+        The estimator. ``auto``: OLS or WLS with the model file's parameters as a prior
+        (maximum a posteriori; terms the data determine keep their fitted values), the weighting
+        and the prior's weight chosen by blocked cross-validation on ``blocks``
+        (:mod:`baseparams.ident.select`; plain WLS without blocks). ``physical``: full parameters
         with every ``N_i`` positive semidefinite, rotor inertia and friction non-negative,
         pulled towards the model file's inertias (log-det divergence, weight ``prior_weight``),
         on the WLS-weighted compressed system.
@@ -198,31 +199,39 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
 
 
 def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
-    """WLS, pulled towards the model file's parameters as far as blocked cross-validation asks."""
+    """OLS or WLS with the model file as a prior, as far as blocked cross-validation asks."""
     from dataclasses import replace
 
-    from .select import pull_scale, ridge, select, split_blocks
+    from .estimate import ols
+    from .select import prior_precision, ridge, select, split_blocks
 
+    if len(blocks) < 2:
+        return Fit(model, "auto", est.theta, est)
+    first = ols(acc, model.names)
     theta0 = model.theta(model.robot.parameters("paper"))
-    pulled = np.arange(model.n_params) < model.analysis.n_base  # base parameters; drive terms are free
-    sel = select(split_blocks(blocks), est.weights, theta0, pulled=pulled) if len(blocks) >= 2 else None
-    if sel is None or sel.lam == 0:
-        return Fit(model, "auto", est.theta, est, selection=sel)
-    theta = ridge(est.R11, est.r12, theta0, pull_scale(est.R11, pulled), sel.lam)
+    sel = select(split_blocks(blocks), {"ols": first.weights, "wls": est.weights}, theta0, prior_precision(model))
+    if sel is None:
+        return Fit(model, "auto", est.theta, est)
+    base = first if sel.weighting == "ols" else est
+    if sel.lam == 0:
+        return Fit(model, "auto", base.theta, base, selection=sel)
+    theta = ridge(base.R11, base.r12, theta0, sel.penalty)
     res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
     # the least-squares statistics stay: pulled_covariance maps the covariance once it is chosen
-    return Fit(model, "auto", theta, replace(est, method="auto", theta=theta, rms=res), selection=sel)
+    return Fit(model, "auto", theta, replace(base, method="auto", theta=theta, rms=res), selection=sel)
 
 
 def pulled_covariance(f: Fit) -> Fit:
-    """The covariance of the pulled estimate: ``theta = M theta_ls + const``, ``M = H^-1 R11^T R11``.
+    """The covariance of the pulled estimate: ``theta = M theta_ls + const``, ``M = (H + P)^-1 H``.
 
-    No term for the pull's bias (the prior is taken as exact); a pull of weight 0 changes nothing.
+    ``H = R11^T R11`` of the chosen weighting, ``P`` the prior's penalty
+    (:class:`~baseparams.ident.select.Selection`). No term for the prior's own error (the prior is
+    taken as exact); no prior changes nothing.
 
     Parameters
     ----------
     f : Fit
-        The fit (``auto``: its selection's pull weight; others are returned as they are).
+        The fit (``auto``: its selection's prior; others are returned as they are).
 
     Returns
     -------
@@ -231,16 +240,14 @@ def pulled_covariance(f: Fit) -> Fit:
     """
     from dataclasses import replace
 
-    from .select import pull_scale
     from .uncertainty import with_covariance
 
     sel, est = f.selection, f.estimate
-    if sel is None or sel.lam == 0 or getattr(est, "cov", None) is None:
+    if sel is None or sel.penalty is None or getattr(est, "cov", None) is None:
         return f
-    scale = pull_scale(est.R11, np.arange(f.model.n_params) < f.model.analysis.n_base)
     gram = est.R11.T @ est.R11
-    m = np.linalg.solve(gram + sel.lam * np.diag(scale**2), gram)
-    label = f"{est.covariance}, mapped through the pull towards the model file (weight {sel.lam:g})"
+    m = np.linalg.solve(gram + sel.penalty, gram)
+    label = f"{est.covariance}, mapped through the model file's prior (weight {sel.lam:g})"
     return replace(f, estimate=with_covariance(est, f.theta, m @ est.cov @ m.T, label))
 
 

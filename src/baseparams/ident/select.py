@@ -1,58 +1,78 @@
 """The default estimate: least squares pulled towards the model file, as much as the data ask.
 
 A log that excites some directions poorly lets least squares fit noise along them: the fit is
-good on the recording and poor on another one. The default (``method="auto"``) regularises the
-weighted least-squares fit towards the model file's own parameters ``theta_0``::
+good on the recording and poor on another one. The default (``method="auto"``) is the Bayesian
+(maximum a posteriori) estimate with the model file's parameters ``theta_0`` as the prior::
 
-    min  ||R11 theta - r12||^2 + lam * sum_k s_k^2 (theta_k - theta0_k)^2
+    min  ||R11 theta - r12||^2 + lam * s2 * (theta - theta_0)^T S^-1 (theta - theta_0)
 
-with ``s_k`` the norm of column ``k`` of ``R11`` (so ``lam`` is relative to the information the
-data hold on each parameter) for the base parameters and 0 for the drive terms (a model file has
-no friction or offsets: pulling them to 0 would bias them) and ``lam`` chosen by **blocked
-cross-validation on the training data**: the training rows are cut into ``K`` contiguous time
-blocks (serially correlated samples stay together), each block is predicted from the others,
-and the ``lam`` of the smallest pooled held-out RMS is kept (``lam = 0``, plain weighted least
-squares, is a candidate). Only the training data are used; the factors are the streamed
+``S`` is the prior covariance of the base parameters: each body's ten inertial parameters in its
+link frame (``khalil`` order) get standard deviations ``m``, ``m L`` and ``m L^2`` for its mass,
+first and second moments (``m`` the file's mass, ``L`` the body's radius of gyration about its
+frame, both floored), mapped to the base parameters through the regrouping
+(``S = G J D J^T G^T``, :func:`prior_covariance`). ``s2`` is the residual variance of the
+(weighted) least-squares fit and ``lam = 1 / alpha^2``: the file is trusted to within ``alpha``
+times those scales. A parameter the data determine to well within the prior's scale keeps its
+least-squares value (its shrink is ``var_LS / (var_LS + alpha^2 var_prior)``), a direction the
+data leave undetermined takes the file's value: unlike a pull proportional to each column's
+information, well-excited logs are not biased towards a file that may be poor. Drive terms
+(friction, offsets, rotor) have no prior: the file has none.
+
+The row weighting (OLS, or WLS with per-joint noise) and ``lam`` (0 = no pull is a candidate)
+are chosen by **blocked cross-validation on the training data**: the training rows are cut
+into ``K`` contiguous time blocks (serially correlated samples stay together), each block is
+predicted from the others, and the pair with the smallest pooled held-out RMS (unweighted, the
+measure a user checks) is kept. Only the training data are used; the factors are the streamed
 ``(p + 1, p + 1)`` triangles of each block, so memory does not grow with the log.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .estimate import RowAccumulator, stacked_factor
 
-#: candidate weights (relative to each column's information); 0 = no pull
-LAMBDAS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
+#: candidate weights ``lam = 1 / alpha^2`` of the prior (module docstring); 0 = no pull
+LAMBDAS = (0.0, 0.01, 0.1, 1.0, 10.0, 100.0)
 #: number of contiguous blocks of the cross-validation
 FOLDS = 5
+#: the row weightings tried
+WEIGHTINGS = ("ols", "wls")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Selection:
     """The outcome of the cross-validation.
 
     Parameters
     ----------
+    weighting : str
+        The rows' weighting chosen: ``ols`` or ``wls``.
     lam : float
-        The chosen weight (0: none).
+        The chosen weight of the prior (0: none).
     lambdas : tuple of float
-        The candidates.
-    cv_rms : tuple of float
-        Pooled held-out RMS of each candidate [N m or N, unweighted].
+        The candidate weights.
+    cv_rms : dict of str to tuple of float
+        Pooled held-out RMS of each candidate weight, per weighting [N m or N, unweighted].
     folds : int
         Number of contiguous blocks.
+    penalty : ndarray, shape ``(p, p)``, optional
+        ``lam * s2 * S^-1`` (zero rows and columns for the drive terms) of the chosen pair, in the
+        chosen weighting's units; ``None`` when ``lam = 0``.
     """
 
+    weighting: str
     lam: float
     lambdas: tuple[float, ...]
-    cv_rms: tuple[float, ...]
+    cv_rms: dict
     folds: int
+    penalty: np.ndarray | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
-        return f"<Selection: weight {self.lam:g} of {len(self.lambdas)} by {self.folds}-fold blocked cross-validation>"
+        return (f"<Selection: {self.weighting.upper()}, prior weight {self.lam:g} of {len(self.lambdas)} by "
+                f"{self.folds}-fold blocked cross-validation>")
 
     def note(self) -> str:
         """One line for the report: what was chosen and why.
@@ -60,21 +80,27 @@ class Selection:
         Returns
         -------
         str
-            The chosen weight, the number of blocks and the held-out RMS with and without it.
+            The weighting, the prior's weight, the number of blocks and the held-out RMS with
+            and without the prior.
         """
-        best = self.cv_rms[self.lambdas.index(self.lam)]
-        plain = self.cv_rms[0]
+        rms = self.cv_rms[self.weighting]
+        best, plain = rms[self.lambdas.index(self.lam)], rms[0]
+        other = [w for w in self.cv_rms if w != self.weighting]
+        alt = "".join(f", {w.upper()} {min(self.cv_rms[w]):.4g}" for w in other)
+        how = "weighted (per joint)" if self.weighting == "wls" else "ordinary"
         if self.lam == 0:
-            return (f"default estimate: weighted least squares; a pull towards the model file's parameters did not "
-                    f"predict better in {self.folds}-fold blocked cross-validation on the training data "
-                    f"(held-out RMS {plain:.4g})")
-        return (f"default estimate: weighted least squares pulled towards the model file's parameters, weight "
-                f"{self.lam:g} chosen by {self.folds}-fold blocked cross-validation on the training data (held-out "
-                f"RMS {best:.4g}, without the pull {plain:.4g})")
+            return (f"default estimate: {how} least squares, chosen by {self.folds}-fold blocked cross-validation "
+                    f"on the training data (held-out RMS {plain:.4g}{alt}); the model file's parameters as a prior "
+                    f"did not predict better")
+        return (f"default estimate: {how} least squares with the model file's parameters as a prior, trusted to "
+                f"within {1 / np.sqrt(self.lam):.3g} x each body's mass and size scales (weight {self.lam:g}): "
+                f"terms the data determine keep their fitted values, the others move towards the file; chosen by "
+                f"{self.folds}-fold blocked cross-validation on the training data (held-out RMS {best:.4g}, without "
+                f"the prior {plain:.4g}{alt})")
 
 
-def ridge(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, scale: np.ndarray, lam: float) -> np.ndarray:
-    """The regularised solution (module docstring).
+def ridge(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndarray | None) -> np.ndarray:
+    """The regularised solution ``(R11^T R11 + P)^-1 (R11^T r12 + P theta0)`` (module docstring).
 
     Parameters
     ----------
@@ -84,25 +110,90 @@ def ridge(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, scale: np.ndarra
         Its right-hand side.
     theta0 : ndarray, shape ``(p,)``
         The prior (the model file's parameters in the model's parameterisation).
-    scale : ndarray, shape ``(p,)``
-        ``s_k``, the column norms of the whole training factor.
-    lam : float
-        The weight (0: least squares).
+    penalty : ndarray, shape ``(p, p)``, optional
+        ``P``, symmetric positive semidefinite (``None``: least squares).
 
     Returns
     -------
     ndarray, shape ``(p,)``
         The estimate.
     """
-    h = r11.T @ r11 + lam * np.diag(scale**2)
-    g = r11.T @ r12 + lam * scale**2 * theta0
+    h = r11.T @ r11
+    g = r11.T @ r12
+    if penalty is not None:
+        h = h + penalty
+        g = g + penalty @ theta0
     try:
         return np.linalg.solve(h, g)
     except np.linalg.LinAlgError:
         return np.linalg.lstsq(h, g, rcond=None)[0]
 
 
-def _system(blocks: list[RowAccumulator], weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def prior_covariance(model) -> np.ndarray:
+    """``S``: the prior covariance of the base parameters at ``alpha = 1`` (module docstring).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model: its robot's file parameters and the regrouping ``G``
+        (:meth:`~baseparams.ident.model.IdentModel.full_map`).
+
+    Returns
+    -------
+    ndarray, shape ``(n_base, n_base)``
+        Symmetric positive definite; base parameters in the model's order and convention.
+    """
+    robot = model.robot
+    n = robot.n
+    kh = robot.parameters("khalil").reshape(n, 10)  # XX XY XZ YY YZ ZZ MX MY MZ M, link frame
+    mass = np.abs(kh[:, 9])
+    moving = mass[mass > 0]
+    m_floor = 0.05 * (float(np.median(moving)) if moving.size else 1.0)
+    m = np.maximum(mass, m_floor)
+    gyr = np.sqrt(np.maximum(kh[:, 0] + kh[:, 3] + kh[:, 5], 0.0) / (2.0 * m))
+    sizes = gyr[gyr > 0]
+    length = np.maximum(gyr, 0.25 * (float(np.median(sizes)) if sizes.size else 0.1))
+    std = np.column_stack([np.repeat((m * length**2)[:, None], 6, axis=1),
+                           np.repeat((m * length)[:, None], 3, axis=1), m]).reshape(-1)
+    # J: khalil (link frames) -> paper (world frame at q = 0), block diagonal: one column per slot
+    jac = np.zeros((n, 10, 10))
+    for k in range(10):
+        unit = np.zeros((n, 10))
+        unit[:, k] = 1.0
+        jac[:, :, k] = robot.with_parameters(unit.reshape(-1), "khalil").parameters("paper").reshape(n, 10)
+    g = model.full_map()[: model.n_base, : 10 * n]
+    gj = np.einsum("pbi,bij->pbj", g.reshape(-1, n, 10), jac).reshape(g.shape[0], 10 * n)
+    s = (gj * std**2) @ gj.T
+    s = 0.5 * (s + s.T)
+    return s + 1e-12 * max(float(np.trace(s)) / max(len(s), 1), 1e-300) * np.eye(len(s))
+
+
+def prior_precision(model) -> np.ndarray:
+    """``S^-1`` on the base parameters, zero on the drive terms.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+
+    Returns
+    -------
+    ndarray, shape ``(p, p)``
+        Symmetric positive semidefinite.
+    """
+    nb = model.n_base
+    out = np.zeros((model.n_params, model.n_params))
+    s = prior_covariance(model)
+    try:
+        c = np.linalg.cholesky(s)
+        inv = np.linalg.solve(c.T, np.linalg.solve(c, np.eye(nb)))
+    except np.linalg.LinAlgError:
+        inv = np.linalg.pinv(s, hermitian=True)
+    out[:nb, :nb] = 0.5 * (inv + inv.T)
+    return out
+
+
+def _system(blocks: list[RowAccumulator], weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:
     p = blocks[0].nparams
     acc = RowAccumulator(blocks[0].nrows, p)
     for b in blocks:
@@ -111,30 +202,50 @@ def _system(blocks: list[RowAccumulator], weights: np.ndarray) -> tuple[np.ndarr
         acc.samples += b.samples
     r = stacked_factor(acc, weights)
     r = np.vstack([r, np.zeros((max(p + 1 - r.shape[0], 0), p + 1))])
-    return r[:p, :p], r[:p, p]
+    return r[:p, :p], r[:p, p], float(r[p, p] ** 2), acc.samples * acc.nrows
 
 
 def _sse(block: RowAccumulator, theta: np.ndarray) -> float:
     return float(sum(np.linalg.norm(f.r @ np.r_[theta, -1.0]) ** 2 for f in block.factors))
 
 
-def select(blocks: list[RowAccumulator], weights: np.ndarray, theta0: np.ndarray,
-           lambdas=LAMBDAS, pulled: np.ndarray | None = None) -> Selection | None:
-    """Choose the pull's weight by blocked cross-validation.
+def noise_variance(r11: np.ndarray, rho2: float, n_obs: int) -> float:
+    """``s2``: the residual variance of the (weighted) least-squares fit.
+
+    Parameters
+    ----------
+    r11 : ndarray, shape ``(p, p)``
+        Triangular factor.
+    rho2 : float
+        Residual sum of squares of the least-squares fit.
+    n_obs : int
+        Number of observations.
+
+    Returns
+    -------
+    float
+        ``rho2 / (n_obs - p)`` (``rho2 / n_obs`` when not positive).
+    """
+    dof = n_obs - r11.shape[0]
+    return rho2 / dof if dof > 0 else rho2 / max(n_obs, 1)
+
+
+def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, precision: np.ndarray,
+           lambdas=LAMBDAS) -> Selection | None:
+    """Choose the rows' weighting and the prior's weight by blocked cross-validation.
 
     Parameters
     ----------
     blocks : list of RowAccumulator
         The training rows of each contiguous time block, in time order.
-    weights : ndarray, shape ``(m,)``
-        Row weights of the fit (WLS).
+    weightings : dict of str to ndarray, shape ``(m,)``
+        Row weights of each candidate weighting (``ols``: ones; ``wls``: ``1 / sigma_r``).
     theta0 : ndarray, shape ``(p,)``
         The prior.
+    precision : ndarray, shape ``(p, p)``
+        ``S^-1`` (:func:`prior_precision`): zero for the terms without a prior.
     lambdas : sequence of float
-        Candidates, 0 first.
-    pulled : ndarray of bool, shape ``(p,)``, optional
-        The parameters pulled (default all): the file's inertial parameters are a prior, its
-        absent friction and offsets are not.
+        Candidate weights, 0 first.
 
     Returns
     -------
@@ -144,37 +255,23 @@ def select(blocks: list[RowAccumulator], weights: np.ndarray, theta0: np.ndarray
     blocks = [b for b in blocks if b.samples > 0]
     if len(blocks) < 2:
         return None
-    r11, _ = _system(blocks, weights)
-    scale = pull_scale(r11, pulled)
-    sse = np.zeros(len(lambdas))
-    count = 0
-    for k, held in enumerate(blocks):
-        a11, a12 = _system(blocks[:k] + blocks[k + 1:], weights)
-        for i, lam in enumerate(lambdas):
-            sse[i] += _sse(held, ridge(a11, a12, theta0, scale, lam))
-        count += held.samples * held.nrows
-    rms = np.sqrt(sse / max(count, 1))
-    best = int(np.argmin(np.where(np.isfinite(rms), rms, np.inf)))
-    return Selection(float(lambdas[best]), tuple(float(x) for x in lambdas), tuple(float(x) for x in rms), len(blocks))
-
-
-def pull_scale(r11: np.ndarray, pulled: np.ndarray | None = None) -> np.ndarray:
-    """``s_k``: column norms of ``R11`` for the pulled parameters, 0 for the others.
-
-    Parameters
-    ----------
-    r11 : ndarray, shape ``(p, p)``
-        Triangular factor of the (weighted) training regressor.
-    pulled : ndarray of bool, shape ``(p,)``, optional
-        The parameters pulled (default all).
-
-    Returns
-    -------
-    ndarray, shape ``(p,)``
-        The scale of each parameter's pull.
-    """
-    scale = np.linalg.norm(r11, axis=0)
-    return scale if pulled is None else np.where(pulled, scale, 0.0)
+    count = sum(b.samples * b.nrows for b in blocks)
+    cv, s2 = {}, {}
+    for name, w in weightings.items():
+        r11, _, rho2, n_obs = _system(blocks, w)
+        s2[name] = noise_variance(r11, rho2, n_obs)
+        sse = np.zeros(len(lambdas))
+        for k, held in enumerate(blocks):
+            a11, a12, _, _ = _system(blocks[:k] + blocks[k + 1:], w)
+            for i, lam in enumerate(lambdas):
+                pen = lam * s2[name] * precision if lam else None
+                sse[i] += _sse(held, ridge(a11, a12, theta0, pen))
+        cv[name] = tuple(float(x) for x in np.sqrt(sse / max(count, 1)))
+    scores = [(v if np.isfinite(v) else np.inf, name, i) for name in cv for i, v in enumerate(cv[name])]
+    _, name, i = min(scores, key=lambda s: (s[0], s[2]))  # ties: the weaker prior
+    lam = float(lambdas[i])
+    return Selection(name, lam, tuple(float(x) for x in lambdas), cv, len(blocks),
+                     lam * s2[name] * precision if lam else None)
 
 
 def split_blocks(acc_parts: list[RowAccumulator], folds: int = FOLDS) -> list[RowAccumulator]:

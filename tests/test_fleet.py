@@ -96,6 +96,21 @@ def test_pooled_standard_deviations_are_hac_over_the_logs(fleet, client):
     assert res.to_json()["pooled"]["covariance"] == res.pooled.estimate.covariance
 
 
+def test_pooled_default_cross_validates_over_the_logs(fleet, client):
+    """``auto`` pooled: the prior's weight by cross-validation whose blocks are whole logs (= the serial fit)."""
+    robot, model, paths = fleet
+    res = identify_fleet(model, paths, per_file=False, pooled=True, method="auto", client=client)
+    accs = [file_factors(str(p), model)[0] for p in paths]
+    ref = fit(model, combine(accs), "auto", blocks=accs)
+    assert ref.selection is not None and res.pooled.selection is not None
+    assert res.pooled.selection.weighting == ref.selection.weighting and res.pooled.selection.lam == ref.selection.lam
+    assert np.abs(res.pooled.theta - ref.theta).max() <= 1e-10 * np.abs(ref.theta).max()
+    note = res.to_json()["pooled"]["estimate"]
+    assert note.startswith("default estimate: ") and "over the logs" in note
+    if ref.selection.lam > 0:  # the covariance is mapped through the prior
+        assert "prior" in res.pooled.estimate.covariance
+
+
 def test_a_worker_killed_mid_run_loses_nothing(fleet):
     """Kill one of two worker processes while the fleet runs: Dask reruns its tasks elsewhere."""
     robot, model, paths = fleet

@@ -766,6 +766,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
         lines.append("largest spread across the fleet (std / |mean|): "
                      + ", ".join(f"{model.names[k]} {rel[k]:.3g}" for k in worst))
     if res.pooled is not None:
+        if res.pooled_note() is not None:
+            lines.append(f"note: {res.pooled_note()}")
         lines += [f"pooled estimate (std: {res.pooled.estimate.covariance}):",
                   f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
         lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in

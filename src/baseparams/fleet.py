@@ -33,7 +33,7 @@ import numpy as np
 from .display import clip
 from .errors import BaseparamsError
 from .ident.model import IdentModel
-from .ident.pipeline import Fit, fit
+from .ident.pipeline import Fit, fit, pulled_covariance
 
 #: seconds to wait for a scheduler given by address (``--scheduler``, ``DASK_SCHEDULER_ADDRESS``)
 SCHEDULER_TIMEOUT_S = 5.0
@@ -129,6 +129,20 @@ class FleetResult:
         return clip(f"<FleetResult {self.model.robot.name}: {len(self.files)} logs, {self.model.n_params} terms, "
                     f"{', '.join(what) or 'no fits'}>")
 
+    def pooled_note(self) -> str | None:
+        """What the pooled default estimate chose (``auto``: cross-validated over the logs), or ``None``.
+
+        Returns
+        -------
+        str or None
+            The :class:`~baseparams.ident.select.Selection`'s line, blocks being groups of logs.
+        """
+        sel = None if self.pooled is None else self.pooled.selection
+        if sel is None:
+            return None
+        return sel.note().replace("blocked cross-validation on the training data",
+                                  "cross-validation over the logs (each block whole logs)")
+
     def to_json(self) -> dict:
         """One JSON-able object.
 
@@ -136,7 +150,8 @@ class FleetResult:
         -------
         dict
             ``model, names, logs{given, used, skipped}, files, skipped, per_file{path: values},
-            pooled{values, std, covariance} | null, spread{mean, std} | null``.
+            pooled{values, std, covariance, estimate} | null, spread{mean, std} | null``
+            (``estimate``: :meth:`pooled_note`).
         """
         names = self.model.names
         given = len(self.files) + sum(s["stage"] == "read" for s in self.skipped)
@@ -146,7 +161,8 @@ class FleetResult:
                 "per_file": {k: f.theta.tolist() for k, f in self.per_file.items()},
                 "pooled": None if self.pooled is None else {"values": self.pooled.theta.tolist(),
                                                              "std": self.pooled.estimate.std.tolist(),
-                                                             "covariance": self.pooled.estimate.covariance},
+                                                             "covariance": self.pooled.estimate.covariance,
+                                                             "estimate": self.pooled_note()},
                 "spread": None if self.spread is None else {k: v.tolist() for k, v in self.spread.items()}}
 
 
@@ -226,8 +242,9 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         pooled_fit = None
         if pooled:
             acc = _tree(accs)
-            pooled_fit = fit(model, acc, method)
-            pooled_fit = _pooled_covariance(cl, pooled_fit, acc, covariance, files, kw, progress)
+            # auto: the prior's weight by cross-validation over the logs (each block a group of whole logs)
+            pooled_fit = fit(model, acc, method, blocks=accs if len(accs) > 1 else None)
+            pooled_fit = pulled_covariance(_pooled_covariance(cl, pooled_fit, acc, covariance, files, kw, progress))
     return FleetResult(model, fits, pooled_fit, files, spread, skipped)
 
 

@@ -675,7 +675,7 @@ class Identification:
         Returns
         -------
         dict
-            ``method, covariance, model, convention, n_samples{read, used, removed}, condition_number,
+            ``method, estimator, covariance, model, convention, n_samples{read, used, removed}, condition_number,
             excitation{condition_number, weak, poorly_determined, all_excited}, base_parameters,
             drives, couplings,
             train, validation, physical, notes``; ``weak`` names the parameters carrying
@@ -695,8 +695,11 @@ class Identification:
         loose = poorly_determined(f.estimate, self.model.names)
         if phys is not None:
             phys["masses_moved"] = _masses_moved(self.model.robot, f.physical.masses)
-        return {"method": f.method, "covariance": f.estimate.covariance, "model": self.model.robot.name,
-                "convention": self.model.analysis.convention,
+        sel = f.selection
+        estimator = f.method if sel is None else (f"{f.method}: {sel.weighting.upper()}" + (
+            f" with the model file's prior, weight {sel.lam:g}" if sel.lam else ""))
+        return {"method": f.method, "estimator": estimator, "covariance": f.estimate.covariance,
+                "model": self.model.robot.name, "convention": self.model.analysis.convention,
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
                 "excitation": {"condition_number": cond, "weak": weak, "poorly_determined": loose,
                                "all_excited": not weak and not loose},

@@ -24,7 +24,8 @@ def format_identification(result: Identification) -> str:
     j = result.to_json()
     n = j["n_samples"]
     removed = ", ".join(f"{v} {k}" for k, v in n["removed"].items()) or "none"
-    lines = [f"{j['model']}: identification ({j['method']}), {n['used']} samples used of {n['read']} read "
+    how = j.get("estimator", j["method"])
+    lines = [f"{j['model']}: identification ({how}), {n['used']} samples used of {n['read']} read "
              f"(removed: {removed}); condition number {j['condition_number']:.4g}",
              _excitation_line(j["excitation"]),
              f"standard deviations: {j['covariance']}",

@@ -744,7 +744,7 @@ def identification_html(ident) -> str:
     j = ident.to_json()
     val = j["validation"]
     unit = _one([u["force"] for u in joint_units(ident).values()])
-    body = (f"<h1>{html.escape(j['model'])}: identification ({html.escape(j['method'])})</h1>"
+    body = (f"<h1>{html.escape(j['model'])}: identification ({html.escape(j.get('estimator', j['method']))})</h1>"
             f"<p>{j['n_samples']['used']} samples used of {j['n_samples']['read']}; condition number "
             f"{_num(j['condition_number'], '.4g')}; train RMS {_num(j['train']['rms_total'], '.4g')} {unit}"
             + (f"; validation RMS {_num(val['rms_total'], '.4g')} {unit}" if val else "") + "</p>"

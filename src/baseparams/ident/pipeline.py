@@ -203,18 +203,23 @@ def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
     from dataclasses import replace
 
     from .estimate import ols
-    from .select import prior_precision, ridge, select, split_blocks
+    from .select import prior_covariance, prior_precision, ridge, select, split_blocks
 
     if len(blocks) < 2:
         return Fit(model, "auto", est.theta, est)
     first = ols(acc, model.names)
     theta0 = model.theta(model.robot.parameters("paper"))
-    sel = select(split_blocks(blocks), {"ols": first.weights, "wls": est.weights}, theta0, prior_precision(model))
+    s = prior_covariance(model)
+    sel = select(split_blocks(blocks), {"ols": first.weights, "wls": est.weights}, theta0, prior_precision(model, s))
     if sel is None:
         return Fit(model, "auto", est.theta, est)
     base = first if sel.weighting == "ols" else est
     if sel.lam == 0:
         return Fit(model, "auto", base.theta, base, selection=sel)
+    nb = model.n_base
+    prior_cov = np.zeros((model.n_params, model.n_params))
+    prior_cov[:nb, :nb] = s / sel.lam
+    sel = replace(sel, theta0=theta0, prior_cov=prior_cov)
     theta = ridge(base.R11, base.r12, theta0, sel.penalty)
     res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
     # the least-squares statistics stay: pulled_covariance maps the covariance once it is chosen
@@ -222,24 +227,31 @@ def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
 
 
 def pulled_covariance(f: Fit) -> Fit:
-    """The covariance of the pulled estimate: ``theta = M theta_ls + const``, ``M = (H + P)^-1 H``.
+    """The covariance of the estimate with the model file's prior: its noise and the file's error.
 
-    ``H = R11^T R11`` of the chosen weighting, ``P`` the prior's penalty
-    (:class:`~baseparams.ident.select.Selection`). No term for the prior's own error (the prior is
-    taken as exact); no prior changes nothing.
+    The estimate is ``theta = M theta_LS + (I - M) theta0`` with ``M = (H + P)^-1 H`` (``H =
+    R11^T R11`` of the chosen weighting, ``P`` the prior's penalty,
+    :class:`~baseparams.ident.select.Selection`), so its error is ``M (theta_LS - theta) + (I -
+    M) (theta0 - theta)``: covariance ``M C M^T + (I - M) kappa Sigma0 (I - M)^T`` with ``C`` the
+    least-squares covariance (HAC or white), ``Sigma0`` the prior's stated covariance and
+    ``kappa >= 0`` its scale estimated from the file's distance to the least-squares estimate
+    (maximum likelihood, :func:`~baseparams.ident.select.prior_error_scale`): a term taken from a
+    file the data contradict is as uncertain as that file, not as certain as the prior's weight
+    alone would say.
 
     Parameters
     ----------
     f : Fit
-        The fit (``auto``: its selection's prior; others are returned as they are).
+        The fit (``auto`` with a prior; others are returned as they are).
 
     Returns
     -------
     Fit
-        The fit with the covariance ``M cov M^T`` ``(p, p)`` and its label.
+        The fit with the covariance ``(p, p)`` and its label.
     """
     from dataclasses import replace
 
+    from .select import prior_error_scale
     from .uncertainty import with_covariance
 
     sel, est = f.selection, f.estimate
@@ -247,8 +259,19 @@ def pulled_covariance(f: Fit) -> Fit:
         return f
     gram = est.R11.T @ est.R11
     m = np.linalg.solve(gram + sel.penalty, gram)
-    label = f"{est.covariance}, mapped through the model file's prior (weight {sel.lam:g})"
-    return replace(f, estimate=with_covariance(est, f.theta, m @ est.cov @ m.T, label))
+    nb = f.model.analysis.n_base
+    cov = est.cov
+    kappa = 1.0
+    if sel.prior_cov is not None and sel.theta0 is not None:
+        d = np.linalg.solve(est.R11, est.r12)[:nb] - sel.theta0[:nb]
+        kappa = prior_error_scale(d, cov[:nb, :nb], sel.prior_cov[:nb, :nb])
+        rest = np.eye(len(m)) - m
+        cov = m @ cov @ m.T + kappa * rest @ sel.prior_cov @ rest.T
+    else:
+        cov = m @ cov @ m.T
+    label = (f"{est.covariance}, with the model file's prior (weight {sel.lam:g}; the file's error as the data "
+             f"show it: {np.sqrt(kappa):.3g} x the prior's stated scale)")
+    return replace(f, estimate=with_covariance(est, f.theta, cov, label))
 
 
 #: a term is poorly determined when its std exceeds this percentage of its value ...

@@ -61,6 +61,10 @@ class Selection:
     penalty : ndarray, shape ``(p, p)``, optional
         ``lam * s2 * S^-1`` (zero rows and columns for the drive terms) of the chosen pair, in the
         chosen weighting's units; ``None`` when ``lam = 0``.
+    theta0 : ndarray, shape ``(p,)``, optional
+        The prior's values (the model file's parameters).
+    prior_cov : ndarray, shape ``(p, p)``, optional
+        The prior's covariance ``S / lam`` as the penalty states it (zero for the drive terms).
     """
 
     weighting: str
@@ -69,6 +73,8 @@ class Selection:
     cv_rms: dict
     folds: int
     penalty: np.ndarray | None = field(default=None, repr=False)
+    theta0: np.ndarray | None = field(default=None, repr=False)
+    prior_cov: np.ndarray | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
         return (f"<Selection: {self.weighting.upper()}, prior weight {self.lam:g} of {len(self.lambdas)} by "
@@ -168,13 +174,15 @@ def prior_covariance(model) -> np.ndarray:
     return s + 1e-12 * max(float(np.trace(s)) / max(len(s), 1), 1e-300) * np.eye(len(s))
 
 
-def prior_precision(model) -> np.ndarray:
+def prior_precision(model, s: np.ndarray | None = None) -> np.ndarray:
     """``S^-1`` on the base parameters, zero on the drive terms.
 
     Parameters
     ----------
     model : IdentModel
         The model.
+    s : ndarray, shape ``(n_base, n_base)``, optional
+        ``S`` when already computed (:func:`prior_covariance`).
 
     Returns
     -------
@@ -183,7 +191,7 @@ def prior_precision(model) -> np.ndarray:
     """
     nb = model.n_base
     out = np.zeros((model.n_params, model.n_params))
-    s = prior_covariance(model)
+    s = prior_covariance(model) if s is None else s
     try:
         c = np.linalg.cholesky(s)
         inv = np.linalg.solve(c.T, np.linalg.solve(c, np.eye(nb)))
@@ -300,3 +308,53 @@ def split_blocks(acc_parts: list[RowAccumulator], folds: int = FOLDS) -> list[Ro
             acc.samples += acc_parts[i].samples
         out.append(acc)
     return out
+
+
+def prior_error_scale(d: np.ndarray, cov_ls: np.ndarray, prior_cov: np.ndarray) -> float:
+    """``kappa >= 0``: the file's error in units of the prior's stated covariance, from the data.
+
+    Under the prior, ``d = theta_LS - theta0 ~ N(0, C + kappa Sigma0)`` on the base parameters;
+    ``kappa`` is its maximum-likelihood value (empirical Bayes): in ``C``-whitened coordinates
+    where ``Sigma0`` is ``diag(g)``, it maximises ``-sum log(1 + kappa g_i) - sum d_i^2 / (1 +
+    kappa g_i)``, so the directions the data determine well (large ``g_i``) say how far the file
+    is from the truth. 0 when the data agree with the file to within their own noise; large when
+    the file is further off than the cross-validated weight states.
+
+    Parameters
+    ----------
+    d : ndarray, shape ``(nb,)``
+        Least-squares estimate minus the prior, base parameters.
+    cov_ls : ndarray, shape ``(nb, nb)``
+        Covariance ``C`` of the least-squares estimate (positive definite).
+    prior_cov : ndarray, shape ``(nb, nb)``
+        ``Sigma0``, the prior's stated covariance.
+
+    Returns
+    -------
+    float
+        ``kappa`` in ``[0, 1e8]``.
+    """
+    try:
+        low = np.linalg.cholesky(0.5 * (cov_ls + cov_ls.T))
+    except np.linalg.LinAlgError:
+        w, v = np.linalg.eigh(0.5 * (cov_ls + cov_ls.T))
+        low = v * np.sqrt(np.maximum(w, w.max() * 1e-14))
+    inv_l = np.linalg.inv(low)
+    g, u = np.linalg.eigh(inv_l @ (0.5 * (prior_cov + prior_cov.T)) @ inv_l.T)
+    g = np.maximum(g, 0.0)
+    dt2 = (u.T @ (inv_l @ d)) ** 2
+
+    def loglik(kappa: float) -> float:
+        a = 1.0 + kappa * g
+        return float(-np.sum(np.log(a)) - np.sum(dt2 / a))
+
+    grid = np.r_[0.0, np.logspace(-4, 8, 121)]
+    vals = np.array([loglik(k) for k in grid])
+    i = int(np.argmax(vals))
+    if i == 0 or i == len(grid) - 1:
+        return float(grid[i])
+    lo, hi = np.log10(grid[i - 1]) if i > 1 else -4.0, np.log10(grid[i + 1])
+    for _ in range(40):  # golden-section refinement in log kappa
+        m1, m2 = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
+        lo, hi = (m1, hi) if loglik(10.0**m1) < loglik(10.0**m2) else (lo, m2)
+    return float(10.0 ** (0.5 * (lo + hi)))

@@ -316,8 +316,9 @@ def prior_error_scale(d: np.ndarray, cov_ls: np.ndarray, prior_cov: np.ndarray) 
     Under the prior, ``d = theta_LS - theta0 ~ N(0, C + kappa Sigma0)`` on the base parameters;
     ``kappa`` is its maximum-likelihood value (empirical Bayes): in ``C``-whitened coordinates
     where ``Sigma0`` is ``diag(g)``, it maximises ``-sum log(1 + kappa g_i) - sum d_i^2 / (1 +
-    kappa g_i)``, so the directions the data determine well (large ``g_i``) say how far the file
-    is from the truth. 0 when the data agree with the file to within their own noise; large when
+    kappa g_i)`` (the first zero of its derivative; 0 when the derivative is not positive at 0),
+    so the directions the data determine well (large ``g_i``) say how far the file is from the
+    truth. 0 when the data agree with the file to within their own noise; large when
     the file is further off than the cross-validated weight states.
 
     Parameters
@@ -344,17 +345,20 @@ def prior_error_scale(d: np.ndarray, cov_ls: np.ndarray, prior_cov: np.ndarray) 
     g = np.maximum(g, 0.0)
     dt2 = (u.T @ (inv_l @ d)) ** 2
 
-    def loglik(kappa: float) -> float:
+    def score(kappa: float) -> float:  # d loglik / d kappa (times 2)
         a = 1.0 + kappa * g
-        return float(-np.sum(np.log(a)) - np.sum(dt2 / a))
+        return float(np.sum(g * (dt2 / a**2 - 1.0 / a)))
 
-    grid = np.r_[0.0, np.logspace(-4, 8, 121)]
-    vals = np.array([loglik(k) for k in grid])
-    i = int(np.argmax(vals))
-    if i == 0 or i == len(grid) - 1:
-        return float(grid[i])
-    lo, hi = np.log10(grid[i - 1]) if i > 1 else -4.0, np.log10(grid[i + 1])
-    for _ in range(40):  # golden-section refinement in log kappa
-        m1, m2 = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
-        lo, hi = (m1, hi) if loglik(10.0**m1) < loglik(10.0**m2) else (lo, m2)
+    if score(0.0) <= 0:
+        return 0.0  # the data agree with the file to within their own noise
+    grid = np.logspace(-6, 8, 57)
+    signs = np.array([score(k) for k in grid])
+    down = np.flatnonzero(signs <= 0)
+    if not down.size:
+        return float(grid[-1])
+    k = int(down[0])
+    lo, hi = (np.log10(grid[k - 1]) if k else -12.0), np.log10(grid[k])
+    for _ in range(60):  # bisection on the first stationary point (continuous in the data)
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if score(10.0**mid) > 0 else (lo, mid)
     return float(10.0 ** (0.5 * (lo + hi)))

@@ -15,11 +15,12 @@ import numpy as np
 from ..display import summary_repr
 from ..enums import Source
 from ..model.inertia import PAPER_NAMES
+from ..model.inertia import hat as hat10
 from ..model.robot import Robot
 from ..model.scale import decision_scale, ordinary_size
-from ..numerics import row_mask
+from ..numerics import measured_joints, row_mask, rows_spec
 from ..pga.linalg import column_basis
-from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, to_dense, to_sparse
+from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, sym_params, to_dense, to_sparse
 from .coupled import coupled_columns
 from .principles import drng_columns
 from .rank import block_rank
@@ -51,7 +52,9 @@ class DRNGResult:
         Whether the extended rules (R-A, R-B, R-L1, R-L2, R-M) ran besides the paper's principles.
     rows : str, default "all"
         The measured rows the columns were computed for (``joints`` adds the floating root's
-        unmeasured columns); :func:`~baseparams.nullspace.certify.certify` checks it.
+        unmeasured columns, a set of joints those of :func:`unmeasured_columns`; the string form
+        of :func:`baseparams.numerics.rows_spec`); :func:`~baseparams.nullspace.certify.certify`
+        checks it.
     """
 
     robot: Robot
@@ -110,7 +113,8 @@ class DRNGResult:
         """Rank contributed by each source, taken in order.
 
         The order is the paper's principles 1, 2, 3, then the extended rules R-A, R-B, R-L1,
-        R-L2, R-M (those run), then the unmeasured root's own parameters (joint-torque rows only).
+        R-L2, R-M (those run), then the measured rows' own (unmeasured root, unmeasured body,
+        passive joint; present only when some rows are not measured).
         Each source's share is the rank it adds to the sources before it (:func:`scaled_rank`
         of the cumulative set), so the values sum to :attr:`rank`.
 
@@ -122,8 +126,7 @@ class DRNGResult:
         """
         out, prev = {}, 0
         sources = [s for s in Source if s.is_paper or (self.extended and s.is_extended)]
-        if np.any(self.columns.principle == Source.UNMEASURED):
-            sources.append(Source.UNMEASURED)
+        sources += [s for s in Source if s.is_rows and np.any(self.columns.principle == s)]
         for s in sources:
             keep = self.columns.principle <= s
             if np.any(self.columns.principle == s):
@@ -167,6 +170,10 @@ class DRNGResult:
         src = Source(int(c.principle[k]))
         if src is Source.UNMEASURED:
             return f"{src.label}: body {body}, {c.label[k]} (no measured row sees the floating root's own parameters)"
+        if src is Source.UNSEEN:
+            return f"{src.label}: body {body}, {c.label[k]} (no joint on its path to the root is measured)"
+        if src is Source.PASSIVE:
+            return f"{src.label}: bodies {body}{par}, {c.label[k]}"
         if not src.is_paper:
             return f"{src.label}: bodies {body}{par}, {c.label[k]}"
         return f"{src.label}: {joint}, bodies {body}{par}, points {c.label[k]}"
@@ -197,45 +204,353 @@ def scaled_rank(cols: Columns, robot: Robot) -> int:
     return block_rank(cols.scaled(inv), robot.n)
 
 
-def unmeasured_columns(robot: Robot, rows: str) -> Columns:
+def unseen_bodies(robot: Robot, rows) -> np.ndarray:
+    """Bodies that no measured row sees: every joint on the path to the root unmeasured.
+
+    Joint ``j``'s generalized forces are its line against the summed wrenches of the bodies it
+    carries (its subtree), and a floating root's base wrench is the sum of every body's; so
+    body ``i`` enters only the rows of the joints on its path to the root, its own included.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    rows : str or sequence of str
+        The measured rows (:func:`baseparams.numerics.row_mask`).
+
+    Returns
+    -------
+    ndarray of bool, shape ``(n,)``
+        True for a body none of whose path joints (nor, floating, the base wrench) is measured.
+    """
+    _, measured = measured_joints(robot, rows)
+    seen = np.zeros(robot.n, dtype=bool)
+    for i in range(robot.n):  # parents come first
+        p = int(robot.parent[i])
+        seen[i] = measured[i] or (p >= 0 and seen[p])
+    return ~seen
+
+
+def unmeasured_columns(robot: Robot, rows, tol: float = 1e-9) -> Columns:
     """Columns that the measured rows add.
 
-    With joint torques alone (``rows="joints"``) on a floating robot, no row sees the floating
-    root's own ten parameters (joint ``j``'s torque is its line against the wrenches of the bodies
-    it carries, and no joint carries the root), so each is a nullspace direction on its own. With
-    the base wrench alone (``"base"``) nothing is added: it sees every direction the full
-    dynamics see (Ayusawa et al. 2014, the paper's remark; certification checks it).
+    Rule U (:func:`unseen_bodies`): a body none of whose path joints is measured enters no
+    measured row, so each of its ten parameters is a nullspace direction on its own (with joint
+    torques alone, ``rows="joints"``, that is a floating root: ``unmeasured root``; with passive
+    joints, any body above the first measured joint of its path: ``unmeasured body``). Rule P
+    (:func:`passive_columns`): what a passive joint loses besides. With the base wrench measured
+    nothing is added: it sees every direction the full dynamics see (Ayusawa et al. 2014, the
+    paper's remark; certification checks it).
 
     Parameters
     ----------
     robot : Robot
         The robot (``n`` moving bodies).
-    rows : {"all", "joints", "base"}
+    rows : str or sequence of str
         The measured generalized forces (:func:`baseparams.numerics.row_mask`).
+    tol : float, default 1e-9
+        Geometric tolerance of the passive-joint rules (:func:`passive_columns`).
 
     Returns
     -------
     Columns
-        Ten single-body unit columns per floating (``F``) root, labelled with the parameter names
-        and marked ``unmeasured root``, when ``rows="joints"``; otherwise none.
+        Ten single-body unit columns per unseen body, labelled with the parameter names and
+        marked ``unmeasured root`` (a floating root) or ``unmeasured body``, then the passive
+        joints' columns; none when every row is measured.
 
     Raises
     ------
     BaseparamsError
-        ``rows`` is not one of the three (checked unless it is ``"all"``).
+        Unknown ``rows`` (checked unless it is ``"all"``).
     """
-    if rows == "all":
+    if isinstance(rows, str) and rows == "all":
         return Columns.empty()
-    mask = row_mask(robot, rows)
-    roots = [i for i in range(robot.n) if robot.jtype[i] == "F"]
-    if rows != "joints" or not roots or mask.all():
+    if row_mask(robot, rows).all():
         return Columns.empty()
-    k = 10 * len(roots)
-    child = np.repeat(np.array(roots, dtype=int), 10)
-    z = np.zeros(k, dtype=int)
-    labels = np.array(list(PAPER_NAMES) * len(roots), dtype=object)
-    return Columns(np.tile(np.eye(10), (len(roots), 1)), child, z - 1, np.full(k, Source.UNMEASURED),
-                   child.copy(), labels, hp=np.zeros((k, 10)))
+    unseen = np.flatnonzero(unseen_bodies(robot, rows))
+    parts = []
+    if len(unseen):
+        k = 10 * len(unseen)
+        child = np.repeat(unseen, 10)
+        z = np.zeros(k, dtype=int)
+        labels = np.array(list(PAPER_NAMES) * len(unseen), dtype=object)
+        src = np.array([Source.UNMEASURED if robot.jtype[i] == "F" else Source.UNSEEN for i in child])
+        parts.append(Columns(np.tile(np.eye(10), (len(unseen), 1)), child, z - 1, src, child.copy(), labels,
+                             hp=np.zeros((k, 10))))
+    extra = passive_columns(robot, rows, tol)
+    if len(extra):
+        parts.append(extra)
+    return Columns.concat(parts) if parts else Columns.empty()
+
+
+def _slides(robot: Robot) -> np.ndarray:
+    """Per body, whether its joint only translates: prismatic, or compound of slides alone."""
+    sc = robot.screws
+    out = np.zeros(robot.n, dtype=bool)
+    for i in range(robot.n):
+        qi, nd = robot.q_index[i], robot.ndofs[i]
+        out[i] = robot.jtype[i] in ("P", "C") and nd > 0 and not np.any(sc[qi:qi + nd, :3])
+    return out
+
+
+def force_only_bodies(robot: Robot, rows) -> np.ndarray:
+    """Bodies seen only by pure-force rows: every measured joint on the path to the root prismatic.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    rows : str or sequence of str
+        The measured rows (:func:`baseparams.numerics.row_mask`).
+
+    Returns
+    -------
+    ndarray of bool, shape ``(n,)``
+        True for a body that some measured row sees and every such row is a prismatic joint's (or
+        a compound joint's made of slides alone).
+    """
+    _, measured = measured_joints(robot, rows)
+    slides = _slides(robot)
+    seen = np.zeros(robot.n, dtype=bool)
+    moment = np.zeros(robot.n, dtype=bool)  # some measured row on the path carries a moment
+    for i in range(robot.n):
+        p = int(robot.parent[i])
+        seen[i] = measured[i] or (p >= 0 and seen[p])
+        moment[i] = (measured[i] and not slides[i]) or (p >= 0 and moment[p])
+    return seen & ~moment
+
+
+def passive_columns(robot: Robot, rows, tol: float = 1e-9) -> Columns:
+    """Rules P1-P6: what the unmeasured joints lose besides the unseen bodies (rule U).
+
+    Joint ``k``'s row is its line against the summed wrench of its subtree; a body's wrench is
+    ``(d/dt L - c x m g, d/dt(m v_c) - m g)``. Each rule names a parameter change whose wrench no
+    measured row sees, at any state (``docs/extended-rules.md``, "Measured rows"):
+
+    * P1: a body seen only by slides' rows (every measured joint on its path prismatic, or
+      compound of slides) is seen through its force alone, which holds no second moment: its six
+      second moments.
+    * P2: an unmeasured slide (hinge) whose parent is seen only by slides' rows: the force of a
+      first moment ``h`` (no mass) is ``d^2/dt^2 (R h)``, the same on the body and its parent for
+      every ``h`` (``h`` along the hinge): moved to the parent.
+    * P3: a body seen only by slides' rows, whose rotation axes and measured slides all have one
+      direction ``a``: a first moment normal to ``a`` stays normal to it and to the rows.
+    * P4: a body turning about a fixed point ``O`` (fixed base; R, U, S joints whose axes meet at
+      ``O``) seen only by vertical revolute rows through ``O`` (or without gravity): a first
+      moment at ``O`` has no angular momentum about ``O``, and its gravity moment is horizontal.
+    * P5: an unmeasured hinge ``a``: the inertia about ``a`` (second moments ``1 - 2 a a^T``)
+      makes the couple ``d/dt(c a)``, normal to the measured hinges above when ``a`` is normal to
+      them and everything above turns about them.
+    * P6: an unmeasured slide ``d`` under hinges along ``d`` only: measured slides normal to
+      ``d`` and measured hinges along ``d`` (moments about a line along ``d`` do not change when a
+      body slides along it) do not see the slide: the whole body moved to the parent.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    rows : str or sequence of str
+        The measured rows (:func:`baseparams.numerics.row_mask`).
+    tol : float, default 1e-9
+        Geometric tolerance (parallel and normal directions, meeting axes).
+
+    Returns
+    -------
+    Columns
+        The columns, marked ``passive joint``, each labelled with its rule; ``joint`` is the
+        body's own (P1, P3, P4) or the unmeasured joint's (P2, P5, P6).
+    """
+    force = force_only_bodies(robot, rows)
+    _, measured = measured_joints(robot, rows)
+    slides = _slides(robot)
+    h, child, par, labels = [], [], [], []
+
+    def add(body: int, parent: int, block: np.ndarray, label: str) -> None:
+        h.append(block)
+        child.append(body)
+        par.append(parent)
+        labels.append(label)
+
+    def first_moment(v: np.ndarray) -> np.ndarray:
+        blk = np.zeros(10)
+        blk[6:9] = v
+        return blk
+
+    for j in range(robot.n):
+        p = int(robot.parent[j])
+        if force[j]:  # P1
+            for e, nm in zip(np.eye(10)[:6], PAPER_NAMES[:6]):
+                add(j, -1, e, f"P1 {nm} (seen by slides' rows only)")
+        if not measured[j] and p >= 0 and force[p] and (slides[j] or robot.jtype[j] == "R"):  # P2
+            if slides[j]:
+                for v, nm in zip(np.eye(3), PAPER_NAMES[6:9]):
+                    add(j, p, first_moment(v), f"P2 {nm} moved to the parent (unmeasured slide)")
+            else:
+                a = robot.screws[robot.q_index[j], :3]
+                add(j, p, first_moment(a / np.linalg.norm(a)), "P2 first moment along the unmeasured hinge moved "
+                                                                "to the parent")
+        a = _level_axis(robot, j, measured, tol) if force[j] else None
+        if a is not None:  # P3
+            for v in np.linalg.svd(a[None])[2][1:]:  # the plane normal to a
+                add(j, -1, first_moment(v), "P3 first moment normal to the rotation axes and measured slides")
+        o = _vertical_pivot(robot, j, measured, tol)
+        if o is not None:  # P4
+            for k, v in enumerate(np.eye(3)):
+                add(j, -1, sym_params(np.r_[v, 0.0], np.r_[o, 1.0]),
+                    f"P4 first moment {'xyz'[k]} at the fixed point {np.round(o, 6).tolist()}")
+        if not measured[j] and robot.jtype[j] == "R" and _normal_moment_rows(robot, j, measured, tol):  # P5
+            a = robot.screws[robot.q_index[j], :3]
+            a = a / np.linalg.norm(a)
+            blk = np.zeros(10)
+            blk[:6] = _second_moments(np.eye(3) - 2.0 * np.outer(a, a))
+            add(j, -1, blk, "P5 inertia about the unmeasured hinge")
+        if not measured[j] and p >= 0 and robot.jtype[j] == "P" and _sliding_unseen(robot, j, measured, tol):  # P6
+            for e, nm in zip(np.eye(10), PAPER_NAMES):
+                add(j, p, e, f"P6 {nm} moved to the parent (unmeasured slide)")
+    if not h:
+        return Columns.empty()
+    k = len(h)
+    hp = np.array([np.zeros(10) if q < 0 else -b for b, q in zip(h, par)])
+    return Columns(np.array(h), np.array(child), np.array(par), np.full(k, Source.PASSIVE), np.array(child),
+                   np.array(labels, dtype=object), hp=hp)
+
+
+def _vertical_pivot(robot: Robot, j: int, measured: np.ndarray, tol: float) -> np.ndarray | None:
+    """The fixed point ``O`` body ``j`` turns about when only vertical lines through it see it, or None.
+
+    Body ``j`` turns about ``O``: fixed base, every joint from the root to ``j`` revolute,
+    universal or spherical, all their axes through one point ``O`` (at least two of them not
+    parallel). Every measured joint on the path is revolute and vertical (parallel to gravity)
+    with vertical axes only above it (so it stays vertical), or gravity is zero.
+    """
+    path = []
+    i = j
+    while i >= 0:
+        if robot.jtype[i] not in ("R", "U", "S"):
+            return None
+        path.append(i)
+        i = int(robot.parent[i])
+    if not any(measured[i] for i in path):
+        return None  # unseen: rule U
+    if any(measured[i] and robot.jtype[i] != "R" for i in path) and np.any(robot.gravity):
+        return None  # a measured U or S joint sees the gravity moment in every direction
+    coords = [robot.q_index[i] + c for i in path for c in range(robot.ndofs[i])]
+    sc = robot.screws[coords]
+    w = sc[:, :3] / np.linalg.norm(sc[:, :3], axis=1)[:, None]
+    p = np.cross(w, sc[:, 3:] / np.linalg.norm(sc[:, :3], axis=1)[:, None])  # a point of each axis
+    if np.linalg.matrix_rank(w, tol=1e-6) < 2:
+        return None
+    proj = np.eye(3)[None] - w[:, :, None] * w[:, None, :]
+    o = np.linalg.lstsq(proj.sum(0), np.einsum("kab,kb->a", proj, p), rcond=None)[0]
+    scale = max(1.0, float(np.abs(p).max()))
+    if np.abs(np.cross(w, o - p)).max() > tol * scale:
+        return None
+    g = robot.gravity
+    gn = float(np.linalg.norm(g))
+    if gn > 0:
+        up = g / gn
+        vertical = [bool(np.linalg.norm(np.cross(w[k], up)) <= tol) for k in range(len(coords))]
+        start = np.cumsum([0] + [robot.ndofs[i] for i in path])
+        for m, i in enumerate(path):  # path runs from j up to the root
+            if measured[i] and not all(vertical[start[m]:]):
+                return None
+    return o
+
+
+def _second_moments(s: np.ndarray) -> np.ndarray:
+    """The ``XX XY XZ YY YZ ZZ`` entries of a symmetric ``(3, 3)`` second-moment block."""
+    m = np.zeros((4, 4))
+    m[:3, :3] = s
+    return hat10(m)[:6]
+
+
+def _normal_moment_rows(robot: Robot, j: int, measured: np.ndarray, tol: float) -> bool:
+    """Whether no measured row above revolute joint ``j`` sees a couple along ``j``'s axis, at any q.
+
+    The couple is ``d/dt(c a)``, ``a`` the axis (fixed in ``j``'s parent). A measured prismatic
+    joint sees forces only. A measured revolute joint ``k`` sees ``u_k . d/dt(c a) = c' u_k . a
+    + c omega . (a x u_k)`` (``omega`` the parent of ``j``'s angular velocity): both vanish when
+    ``a`` is normal to ``u_k`` and every joint above ``j`` is prismatic or revolute about ``u_k``
+    (then ``omega`` is along ``u_k``). Any other measured joint (U, S, C, a floating base's
+    wrench) sees every couple; without a measured revolute joint above, nothing is asked.
+    """
+    a = robot.screws[robot.q_index[j], :3]
+    a = a / np.linalg.norm(a)
+    path = []
+    k = int(robot.parent[j])
+    while k >= 0:
+        path.append(k)
+        k = int(robot.parent[k])
+    seen = [k for k in path if measured[k]]
+    if any(robot.jtype[k] not in ("R", "P") for k in seen):
+        return False
+    turns = [k for k in seen if robot.jtype[k] == "R"]
+    if not turns:
+        return True
+    u = robot.screws[robot.q_index[turns[0]], :3]
+    u = u / np.linalg.norm(u)
+    if abs(u @ a) > tol:
+        return False
+    for k in path:
+        if robot.jtype[k] == "P":
+            continue
+        if robot.jtype[k] != "R":
+            return False
+        w = robot.screws[robot.q_index[k], :3]
+        if np.linalg.norm(np.cross(u, w / np.linalg.norm(w))) > tol:
+            return False
+    return True
+
+
+def _sliding_unseen(robot: Robot, j: int, measured: np.ndarray, tol: float) -> bool:
+    """Whether no measured row above prismatic joint ``j`` sees its slide ``d``, at any q.
+
+    Every revolute joint above ``j`` turns about ``d`` and no other joint turns (so ``d`` keeps
+    its direction and the parent turns about it); every measured prismatic joint above slides
+    normal to ``d`` (its force line does not see the slide), every measured revolute one is
+    parallel to ``d`` (moments about a line along ``d`` do not change when a body slides along
+    it). Any other measured joint (U, S, C, a floating base's wrench) sees the slide.
+    """
+    d = robot.screws[robot.q_index[j], 3:]
+    d = d / np.linalg.norm(d)
+    k = int(robot.parent[j])
+    while k >= 0:
+        jt = robot.jtype[k]
+        sc = robot.screws[robot.q_index[k]]
+        if jt == "R":
+            if np.linalg.norm(np.cross(d, sc[:3] / np.linalg.norm(sc[:3]))) > tol:
+                return False
+        elif jt == "P":
+            if measured[k] and abs(d @ sc[3:]) > tol * np.linalg.norm(sc[3:]):
+                return False
+        else:
+            return False
+        k = int(robot.parent[k])
+    return True
+
+
+def _level_axis(robot: Robot, j: int, measured: np.ndarray, tol: float) -> np.ndarray | None:
+    """The one direction ``a`` of every rotation axis and every measured slide on body ``j``'s path, or None.
+
+    Only R and P joints on the path; the axes and slides taken at q = 0 (world frame) stay
+    parallel to ``a`` in every configuration, since every rotation above them is about ``a``.
+    """
+    screws, a = robot.screws, None
+    i = j
+    while i >= 0:
+        jt = robot.jtype[i]
+        if jt not in ("R", "P"):
+            return None
+        sc = screws[robot.q_index[i]]
+        if jt == "R" or measured[i]:
+            v = sc[:3] if jt == "R" else sc[3:]
+            v = v / np.linalg.norm(v)
+            if a is None:
+                a = v
+            elif np.linalg.norm(np.cross(a, v)) > tol:
+                return None
+        i = int(robot.parent[i])
+    return a
 
 
 def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "all") -> DRNGResult:
@@ -256,8 +571,9 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
         Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2;
         :mod:`.coupled`: R-M);
         ``False`` gives the paper's three principles alone.
-    rows : {"all", "joints", "base"}, default "all"
-        The measured generalized forces (see :func:`unmeasured_columns`).
+    rows : str or sequence of str, default "all"
+        The measured generalized forces (``all``, ``joints``, ``base``, or a set of joints:
+        :func:`baseparams.numerics.row_mask`; see :func:`unmeasured_columns`).
 
     Returns
     -------
@@ -272,11 +588,12 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
         Unknown ``rows`` (see :func:`unmeasured_columns`).
     """
     t0 = time.perf_counter()
+    rows = rows_spec(rows)
     cols = drng_columns(robot, tol)
     if extended:
         cols = Columns.concat([cols, rule_columns(robot, tol)])
         cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
-    extra = unmeasured_columns(robot, rows)
+    extra = unmeasured_columns(robot, rows, tol)
     if len(extra):
         cols = Columns.concat([cols, extra])
     rank = scaled_rank(cols, robot)

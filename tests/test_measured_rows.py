@@ -1,8 +1,8 @@
-"""Measured joint sets (passive joints, some joints logged): rules U and P1-P6 against the numerics.
+"""Measured joint sets (passive joints, some joints logged): rules U and P1-P7 against the numerics.
 
 A set of measured joints is ``joints:NAME,...``, ``base+joints:NAME,...``, ``passive:NAME,...`` or a
 list of names (:func:`baseparams.numerics.row_mask`). DRNG adds rule U (a body no measured row
-sees) and P1-P6 (``docs/extended-rules.md``, "Measured rows"); the certificate is the regressor
+sees) and P1-P7 (``docs/extended-rules.md``, "Measured rows"); the certificate is the regressor
 restricted to the measured rows, dense or body by body, and never takes DRNG's word.
 """
 
@@ -130,10 +130,32 @@ def test_prismatic_stage_under_a_passive_hinge():
     assert res.by_principle()["passive joint"] > 0
 
 
+def test_lift_turn_reach_with_only_the_lift_measured():
+    """A vertical lift (measured), a hinge about the lift and a horizontal slide (both passive):
+    the lift's force sees no horizontal motion, so the hinge's and the slide's bodies move to
+    their parents whole (P7), and DRNG alone is the nullspace."""
+    b = bp.RobotBuilder("lift-turn-reach")
+    pose = np.eye(4)
+    pose[:3, 3] = (0.2, 0.1, 0.3)
+    b.add_link("lift", joint="P", axis=(0, 0, 1), inertia=bp.Inertia(3.0, com=(0.1, 0.0, 0.1)))
+    b.add_link("turn", parent="lift", joint="R", origin=pose, axis=(0, 0, 1),
+               inertia=bp.Inertia(2.0, com=(0.2, 0.1, 0.0), inertia=np.diag([0.02, 0.03, 0.04])))
+    b.add_link("reach", parent="turn", joint="P", origin=pose, axis=(1, 0, 0),
+               inertia=bp.Inertia(1.0, com=(0.3, 0.0, 0.1), inertia=np.diag([0.01, 0.02, 0.02])))
+    robot = b.build()
+    rows = [robot.joint_names[0]]
+    res = drng(robot, rows=rows)
+    c = certify(robot, rows=rows, result=res)
+    assert c.status == "certified" and c.completed == 0, c.message
+    assert c.nullity == 29  # only the total mass is seen: the lift's force is M (q'' + g)
+    labels = [str(x) for x in res.columns.label[res.columns.principle == Source.PASSIVE]]
+    assert any(x.startswith("P7") for x in labels)
+
+
 # ---------------------------------------------------------------- properties over random robots
 @pytest.mark.parametrize("types, floating", [("RP", False), ("RPUS", False), ("RPUS", True), ("RPUSC", False)])
 def test_random_subsets_are_complete_by_drng(types, floating):
-    """DRNG + U + P1-P6 alone is the nullspace of the restricted regressor on generic random trees
+    """DRNG + U + P1-P7 alone is the nullspace of the restricted regressor on generic random trees
     (compound joints: as complete as with every row measured)."""
     for seed in range(30):
         robot, rows = _case(seed, types, floating)

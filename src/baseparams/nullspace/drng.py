@@ -237,8 +237,8 @@ def unmeasured_columns(robot: Robot, rows, tol: float = 1e-9) -> Columns:
     Rule U (:func:`unseen_bodies`): a body none of whose path joints is measured enters no
     measured row, so each of its ten parameters is a nullspace direction on its own (with joint
     torques alone, ``rows="joints"``, that is a floating root: ``unmeasured root``; with passive
-    joints, any body above the first measured joint of its path: ``unmeasured body``). Rule P
-    (:func:`passive_columns`): what a passive joint loses besides. With the base wrench measured
+    joints, any body above the first measured joint of its path: ``unmeasured body``). Rules
+    P1-P7 (:func:`passive_columns`): what an unmeasured joint loses besides. With the base wrench measured
     nothing is added: it sees every direction the full dynamics see (Ayusawa et al. 2014, the
     paper's remark; certification checks it).
 
@@ -321,7 +321,7 @@ def force_only_bodies(robot: Robot, rows) -> np.ndarray:
 
 
 def passive_columns(robot: Robot, rows, tol: float = 1e-9) -> Columns:
-    """Rules P1-P6: what the unmeasured joints lose besides the unseen bodies (rule U).
+    """Rules P1-P7: what the unmeasured joints lose besides the unseen bodies (rule U).
 
     Joint ``k``'s row is its line against the summed wrench of its subtree; a body's wrench is
     ``(d/dt L - c x m g, d/dt(m v_c) - m g)``. Each rule names a parameter change whose wrench no
@@ -358,103 +358,136 @@ def passive_columns(robot: Robot, rows, tol: float = 1e-9) -> Columns:
     -------
     Columns
         The columns, marked ``passive joint``, each labelled with its rule; ``joint`` is the
-        body's own (P1, P3, P4) or the unmeasured joint's (P2, P5, P6).
+        body's own (P1, P3, P4) or the unmeasured joint's (P2, P5, P6, P7).
     """
     force = force_only_bodies(robot, rows)
     _, measured = measured_joints(robot, rows)
-    slides = _slides(robot)
-    h, child, par, labels = [], [], [], []
-
-    def add(body: int, parent: int, block: np.ndarray, label: str) -> None:
-        h.append(block)
-        child.append(body)
-        par.append(parent)
-        labels.append(label)
-
-    def first_moment(v: np.ndarray) -> np.ndarray:
-        blk = np.zeros(10)
-        blk[6:9] = v
-        return blk
-
+    slides, pivots = _slides(robot), _pivot_points(robot, tol)
+    out: list[tuple[int, int, np.ndarray, str]] = []  # (body, parent or -1, block, label)
     for j in range(robot.n):
-        p = int(robot.parent[j])
-        if force[j]:  # P1
-            for e, nm in zip(np.eye(10)[:6], PAPER_NAMES[:6]):
-                add(j, -1, e, f"P1 {nm} (seen by slides' rows only)")
-        if not measured[j] and p >= 0 and force[p] and (slides[j] or robot.jtype[j] == "R"):  # P2
-            if slides[j]:
-                for v, nm in zip(np.eye(3), PAPER_NAMES[6:9]):
-                    add(j, p, first_moment(v), f"P2 {nm} moved to the parent (unmeasured slide)")
-            else:
-                a = robot.screws[robot.q_index[j], :3]
-                add(j, p, first_moment(a / np.linalg.norm(a)), "P2 first moment along the unmeasured hinge moved "
-                                                                "to the parent")
-        a = _level_axis(robot, j, measured, tol) if force[j] else None
-        if a is not None:  # P3
-            for v in np.linalg.svd(a[None])[2][1:]:  # the plane normal to a
-                add(j, -1, first_moment(v), "P3 first moment normal to the rotation axes and measured slides")
-        o = _vertical_pivot(robot, j, measured, tol)
-        if o is not None:  # P4
-            for k, v in enumerate(np.eye(3)):
-                add(j, -1, sym_params(np.r_[v, 0.0], np.r_[o, 1.0]),
-                    f"P4 first moment {'xyz'[k]} at the fixed point {np.round(o, 6).tolist()}")
-        if not measured[j] and robot.jtype[j] == "R" and _normal_moment_rows(robot, j, measured, tol):  # P5
-            a = robot.screws[robot.q_index[j], :3]
-            a = a / np.linalg.norm(a)
-            blk = np.zeros(10)
-            blk[:6] = _second_moments(np.eye(3) - 2.0 * np.outer(a, a))
-            add(j, -1, blk, "P5 inertia about the unmeasured hinge")
-        if not measured[j] and p >= 0 and robot.jtype[j] == "P" and _sliding_unseen(robot, j, measured, tol):  # P6
-            for e, nm in zip(np.eye(10), PAPER_NAMES):
-                add(j, p, e, f"P6 {nm} moved to the parent (unmeasured slide)")
-    if not h:
+        out += _body_rules(robot, j, force, measured, pivots[j], tol)
+        if not measured[j] and robot.parent[j] >= 0:
+            out += _joint_rules(robot, j, force, measured, slides, tol)
+    if not out:
         return Columns.empty()
-    k = len(h)
-    hp = np.array([np.zeros(10) if q < 0 else -b for b, q in zip(h, par)])
-    return Columns(np.array(h), np.array(child), np.array(par), np.full(k, Source.PASSIVE), np.array(child),
-                   np.array(labels, dtype=object), hp=hp)
+    child, par = np.array([c[0] for c in out]), np.array([c[1] for c in out])
+    h = np.array([c[2] for c in out])
+    hp = np.where((par >= 0)[:, None], -h, 0.0)
+    return Columns(h, child, par, np.full(len(out), Source.PASSIVE), child.copy(),
+                   np.array([c[3] for c in out], dtype=object), hp=hp)
 
 
-def _vertical_pivot(robot: Robot, j: int, measured: np.ndarray, tol: float) -> np.ndarray | None:
-    """The fixed point ``O`` body ``j`` turns about when only vertical lines through it see it, or None.
+def _first_moment(v: np.ndarray) -> np.ndarray:
+    """A parameter block holding the first moment ``v`` alone (``MX MY MZ``)."""
+    blk = np.zeros(10)
+    blk[6:9] = v
+    return blk
 
-    Body ``j`` turns about ``O``: fixed base, every joint from the root to ``j`` revolute,
-    universal or spherical, all their axes through one point ``O`` (at least two of them not
-    parallel). Every measured joint on the path is revolute and vertical (parallel to gravity)
-    with vertical axes only above it (so it stays vertical), or gravity is zero.
+
+def _body_rules(robot: Robot, j: int, force: np.ndarray, measured: np.ndarray, pivot, tol: float) -> list:
+    """P1, P3, P4 on body ``j`` alone: ``[(j, -1, block, label)]``."""
+    out = []
+    if force[j]:  # P1
+        out += [(j, -1, e, f"P1 {nm} (seen by slides' rows only)") for e, nm in zip(np.eye(10)[:6], PAPER_NAMES[:6])]
+        a = _level_axis(robot, j, measured, tol)
+        if a is not None:  # P3: the plane normal to a
+            out += [(j, -1, _first_moment(v), "P3 first moment normal to the rotation axes and measured slides")
+                    for v in np.linalg.svd(a[None])[2][1:]]
+    if _vertical_pivot(robot, j, measured, pivot, tol):  # P4
+        out += [(j, -1, sym_params(np.r_[v, 0.0], np.r_[pivot, 1.0]),
+                 f"P4 first moment {'xyz'[k]} at the fixed point {np.round(pivot, 6).tolist()}")
+                for k, v in enumerate(np.eye(3))]
+    return out
+
+
+def _joint_rules(robot: Robot, j: int, force: np.ndarray, measured: np.ndarray, slides: np.ndarray,
+                 tol: float) -> list:
+    """P2, P5, P6, P7 of the unmeasured joint ``j`` (a parent ``p``): ``[(j, p or -1, block, label)]``."""
+    p, jt, out = int(robot.parent[j]), robot.jtype[j], []
+    sc = robot.screws[robot.q_index[j]]
+    v = sc[:3] if jt == "R" else sc[3:]
+    v = v / max(np.linalg.norm(v), 1e-300)
+    if force[p] and slides[j]:  # P2
+        out += [(j, p, _first_moment(e), f"P2 {nm} moved to the parent (unmeasured slide)")
+                for e, nm in zip(np.eye(3), PAPER_NAMES[6:9])]
+    elif force[p] and jt == "R":
+        out.append((j, p, _first_moment(v), "P2 first moment along the unmeasured hinge moved to the parent"))
+    if jt == "R" and _normal_moment_rows(robot, j, measured, tol):  # P5
+        blk = np.zeros(10)
+        blk[:6] = _second_moments(np.eye(3) - 2.0 * np.outer(v, v))
+        out.append((j, -1, blk, "P5 inertia about the unmeasured hinge"))
+    if jt == "P" and _sliding_unseen(robot, j, measured, tol):  # P6
+        out += [(j, p, e, f"P6 {nm} moved to the parent (unmeasured slide)") for e, nm in zip(np.eye(10), PAPER_NAMES)]
+    elif force[j] and jt in ("R", "P"):  # P7
+        a = _level_axis(robot, j, measured, tol)
+        if a is not None and (abs(a @ v) <= tol if jt == "P" else np.linalg.norm(np.cross(a, v)) <= tol):
+            out += [(j, p, e, f"P7 {nm} moved to the parent (unmeasured joint moving normal to the force rows)")
+                    for e, nm in zip(np.eye(10), PAPER_NAMES)]
+    return out
+
+
+def _pivot_points(robot: Robot, tol: float) -> list:
+    """Per body, the fixed point ``O`` it turns about, or None (geometry only, parents first).
+
+    Fixed base, every joint from the root to the body revolute, universal or spherical, all
+    their axes through one point ``O`` (at least two of them not parallel). A body whose path
+    axes have no common point passes that on to its subtree, so each body's own axes are
+    checked once.
     """
+    out: list = [None] * robot.n
+    lines: list = [None] * robot.n  # parallel axes so far (no point decided yet), or None when dead
+    for i in range(robot.n):
+        p = int(robot.parent[i])
+        if robot.jtype[i] not in ("R", "U", "S") or (p >= 0 and out[p] is None and lines[p] is None):
+            continue
+        qi = robot.q_index[i]
+        sc = robot.screws[qi:qi + robot.ndofs[i]]
+        nw = np.linalg.norm(sc[:, :3], axis=1)[:, None]
+        w, pt = sc[:, :3] / nw, np.cross(sc[:, :3] / nw, sc[:, 3:] / nw)  # direction, a point of each axis
+        if p >= 0 and out[p] is not None:
+            o = out[p]
+            scale = max(1.0, float(np.abs(pt).max()), float(np.abs(o).max()))
+            out[i] = o if np.abs(np.cross(w, o - pt)).max() <= tol * scale else None
+            continue
+        if p >= 0:
+            w, pt = np.vstack([lines[p][0], w]), np.vstack([lines[p][1], pt])
+        if np.linalg.matrix_rank(w, tol=1e-6) < 2:
+            lines[i] = (w, pt)
+            continue
+        proj = np.eye(3)[None] - w[:, :, None] * w[:, None, :]
+        o = np.linalg.lstsq(proj.sum(0), np.einsum("kab,kb->a", proj, pt), rcond=None)[0]
+        scale = max(1.0, float(np.abs(pt).max()))
+        out[i] = o if np.abs(np.cross(w, o - pt)).max() <= tol * scale else None
+    return out
+
+
+def _vertical_pivot(robot: Robot, j: int, measured: np.ndarray, o, tol: float) -> bool:
+    """Whether only vertical lines through body ``j``'s fixed point ``o`` see it (P4).
+
+    ``o`` from :func:`_pivot_points` (None: no fixed point). Some joint on the path is measured,
+    and every measured one is revolute and vertical (parallel to gravity) with vertical axes
+    only above it (so it stays vertical), or gravity is zero.
+    """
+    if o is None:
+        return False
     path = []
     i = j
     while i >= 0:
-        if robot.jtype[i] not in ("R", "U", "S"):
-            return None
         path.append(i)
         i = int(robot.parent[i])
     if not any(measured[i] for i in path):
-        return None  # unseen: rule U
-    if any(measured[i] and robot.jtype[i] != "R" for i in path) and np.any(robot.gravity):
-        return None  # a measured U or S joint sees the gravity moment in every direction
-    coords = [robot.q_index[i] + c for i in path for c in range(robot.ndofs[i])]
-    sc = robot.screws[coords]
-    w = sc[:, :3] / np.linalg.norm(sc[:, :3], axis=1)[:, None]
-    p = np.cross(w, sc[:, 3:] / np.linalg.norm(sc[:, :3], axis=1)[:, None])  # a point of each axis
-    if np.linalg.matrix_rank(w, tol=1e-6) < 2:
-        return None
-    proj = np.eye(3)[None] - w[:, :, None] * w[:, None, :]
-    o = np.linalg.lstsq(proj.sum(0), np.einsum("kab,kb->a", proj, p), rcond=None)[0]
-    scale = max(1.0, float(np.abs(p).max()))
-    if np.abs(np.cross(w, o - p)).max() > tol * scale:
-        return None
+        return False  # unseen: rule U
     g = robot.gravity
     gn = float(np.linalg.norm(g))
-    if gn > 0:
-        up = g / gn
-        vertical = [bool(np.linalg.norm(np.cross(w[k], up)) <= tol) for k in range(len(coords))]
-        start = np.cumsum([0] + [robot.ndofs[i] for i in path])
-        for m, i in enumerate(path):  # path runs from j up to the root
-            if measured[i] and not all(vertical[start[m]:]):
-                return None
-    return o
+    if gn == 0:
+        return True
+    if any(measured[i] and robot.jtype[i] != "R" for i in path):
+        return False  # a measured U or S joint sees the gravity moment in every direction
+    coords = [robot.q_index[i] + c for i in path for c in range(robot.ndofs[i])]
+    w = robot.screws[coords][:, :3]
+    vertical = np.linalg.norm(np.cross(w / np.linalg.norm(w, axis=1)[:, None], g / gn), axis=1) <= tol
+    start = np.cumsum([0] + [robot.ndofs[i] for i in path])
+    return not any(measured[i] and not vertical[start[m]:].all() for m, i in enumerate(path))
 
 
 def _second_moments(s: np.ndarray) -> np.ndarray:

@@ -45,7 +45,9 @@ def test_sources_keep_their_printed_names():
     assert EXTENDED == ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
                         "R-M coupled joints")
     assert UNMEASURED == "unmeasured root"
-    assert PRINCIPLES == PAPER + EXTENDED + (UNMEASURED, "numerical")
+    # the measured rows' own sources follow the extended rules (added labels; the old ones kept)
+    assert PRINCIPLES == PAPER + EXTENDED + (UNMEASURED, "unmeasured body", "passive joint", "numerical")
+    assert [s for s in Source if s.is_rows] == [Source.UNMEASURED, Source.UNSEEN, Source.PASSIVE]
     assert [int(s) for s in Source] == list(range(len(PRINCIPLES)))
     assert [s.label for s in Source] == list(PRINCIPLES)
     assert [s for s in Source if s.is_paper] == [Source.SHARED_POINTS, Source.FIXED_POINTS, Source.PLANAR_ROTATIONS]

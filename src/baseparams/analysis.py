@@ -11,7 +11,8 @@ model                  robot name
 n_bodies, n_params     moving bodies, 10 x bodies
 gravity                [gx, gy, gz] m/s^2, world frame
 floating               true for a floating (F) root
-rows                   measured generalized forces: all | joints | base
+rows                   measured generalized forces: all | joints | base | a set of joints
+                       (joints:NAME,... | base+joints:NAME,... | passive:NAME,...)
 nullity                certified nullspace dimension (DRNG's rank when --no-verify)
 n_base                 number of base parameters = n_params - nullity
 drng                   {columns, rank, seconds, extended, by_principle{shared points, fixed
@@ -19,7 +20,9 @@ drng                   {columns, rank, seconds, extended, by_principle{shared po
                        rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
                        R-L2 level chains, R-M coupled joints, numerical}, complete}: rank added
                        by each source in that order (the paper's principles, the extended
-                       rules, numerical completion); complete:
+                       rules, then, when some rows are not measured, unmeasured root,
+                       unmeasured body and passive joint (those present), numerical
+                       completion); complete:
                        the geometric span equals the certified nullspace (null if unverified)
 numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
                        requested, kept, and for loops not_converged, branch_jumps,
@@ -184,7 +187,9 @@ class Analysis:
     robot : Robot
         The analysed robot (``n`` moving bodies, ``10 n`` standard parameters).
     rows : str
-        Measured generalized forces: ``all``, ``joints`` or ``base``.
+        Measured generalized forces: ``all``, ``joints``, ``base`` or a set of joints
+        (``joints:NAME,...``, ``base+joints:NAME,...``, ``passive:NAME,...``;
+        :func:`baseparams.numerics.row_mask`).
     drng_seconds : float
         DRNG's wall time [s].
     drng_columns : int
@@ -454,7 +459,7 @@ class Analysis:
         }
 
 
-def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: bool = True, rows: str = "all",
+def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: bool = True, rows="all",
             convention: str = "khalil", extended: bool = True, progress: TextIO | None = None) -> Analysis:
     """Base parameters of ``robot``: DRNG, then certification (and completion), then regrouping.
 
@@ -470,9 +475,12 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     verify : bool
         Certify with the numerical method; ``False`` keeps DRNG's span unverified (status
         ``unverified``).
-    rows : {"all", "joints", "base"}
-        Measured generalized forces: all, the joint torques only, or a floating base's wrench
-        only (robots with loops: ``all``, the actuated forces).
+    rows : str or sequence of str
+        Measured generalized forces: ``all``, the joint torques only (``joints``), a floating
+        base's wrench only (``base``), or a set of joints: a list of the measured joints' names,
+        ``"joints:NAME,NAME"`` (the same), ``"base+joints:NAME,..."`` (and the base wrench),
+        ``"passive:NAME,..."`` (every row but these joints': an under-actuated robot). Robots
+        with loops: ``all``, the actuated forces. See :func:`baseparams.numerics.row_mask`.
     convention : {"khalil", "paper", "pinocchio", "idyntree", "rpna"}
         Convention of the regrouped expressions and of ``to_base`` / ``from_base``
         (``baseparams.CONVENTIONS``; ``paper``: world frame at q = 0, the others link frames).
@@ -491,8 +499,8 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     Raises
     ------
     BaseparamsError
-        Bad input (unknown convention or rows, ``rows="base"`` without a floating base, loops
-        that no sample closes).
+        Bad input (unknown convention, rows or joint name, ``rows="base"`` without a floating
+        base, loops that no sample closes).
 
     Examples
     --------
@@ -516,8 +524,10 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
         if progress is not None:
             print(f"[baseparams] {msg}", file=progress, flush=True)
 
-    from .numerics import blas_threads
+    from .numerics import blas_threads, row_mask, rows_spec
 
+    rows = rows_spec(rows)
+    row_mask(robot, rows)  # a bad name or form is refused before any work
     _check_memory(robot, verify, rows)
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
     with blas_threads():  # small dense factorizations: one BLAS thread (numerics.blas_threads)
@@ -619,7 +629,7 @@ def format_report(a: Analysis) -> str:
     for src in Source:
         if src is not Source.NUMERICAL and src.label in a.by_principle:
             kind = ("paper" if src.is_paper else "measured rows: joint torques only" if src is Source.UNMEASURED
-                    else "extended rule")
+                    else "measured rows: unmeasured joints" if src.is_rows else "extended rule")
             out.append(f"  {src.label:<22s} {a.by_principle[src.label]:4d}  ({kind})")
     if c is None:
         out.append("certification: skipped (--no-verify); the nullity above is DRNG's rank, unverified")

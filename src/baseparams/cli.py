@@ -942,9 +942,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
     s.add_argument("--paper-only", action="store_true",
                    help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2, R-M)")
-    s.add_argument("--rows", choices=values(Rows), default=str(Rows.ALL),
-                   help="measured generalized forces: all (default), joint torques only, or the "
-                        "floating base's wrench only")
+    s.add_argument("--rows", default=str(Rows.ALL), metavar="ROWS",
+                   help="measured generalized forces: all (default); joints (joint torques only); base (the "
+                        "floating base's wrench only); joints:NAME,NAME (only these joints' torques); "
+                        "base+joints:NAME,... (the base wrench and these); passive:NAME,... (every row but "
+                        "these joints': an under-actuated robot)")
     s.add_argument("--convention", choices=values(Convention),
                    default=str(Convention.KHALIL), help="convention of the regrouped expressions (default khalil)")
     s.add_argument("-v", "--verbose", action="store_true",

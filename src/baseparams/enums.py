@@ -56,7 +56,10 @@ class Rows(_Choice):  # numpydoc ignore=PR01
     """Which generalized forces are measured.
 
     ``all``; ``joints`` (every coordinate but a floating base's 6); ``base`` (only the floating
-    base's wrench). The mask of a robot's rows is :func:`baseparams.numerics.row_mask`.
+    base's wrench). A set of measured joints is given by the forms of
+    :data:`baseparams.numerics.ROW_FORMS` (``joints:NAME,...``, ``base+joints:NAME,...``,
+    ``passive:NAME,...``) or a list of joint names. The mask of a robot's rows is
+    :func:`baseparams.numerics.row_mask`.
 
     Notes
     -----
@@ -117,7 +120,8 @@ class Source(IntEnum):  # numpydoc ignore=PR01
     """Provenance of a DRNG column (``Columns.principle``).
 
     The paper's three principles, the extended rules (:mod:`baseparams.nullspace.rules`),
-    unmeasured roots, numerical completion.
+    unmeasured roots, the measured rows' own rules (bodies no measured row sees, passive joints),
+    numerical completion.
 
     Integer-valued (columns store them in integer arrays); the order is the order in which
     :meth:`baseparams.nullspace.drng.DRNGResult.by_principle` takes them, and :attr:`label` is
@@ -137,7 +141,9 @@ class Source(IntEnum):  # numpydoc ignore=PR01
     R_L2 = 6
     R_M = 7
     UNMEASURED = 8
-    NUMERICAL = 9
+    UNSEEN = 9
+    PASSIVE = 10
+    NUMERICAL = 11
 
     @property
     def label(self) -> str:
@@ -154,10 +160,15 @@ class Source(IntEnum):  # numpydoc ignore=PR01
         """One of the extended rules R-A, R-B, R-L1, R-L2, R-M."""
         return Source.R_A <= self <= Source.R_M
 
+    @property
+    def is_rows(self) -> bool:
+        """A column that comes from which rows are measured: unmeasured root or body, passive joint."""
+        return Source.UNMEASURED <= self <= Source.PASSIVE
+
 
 _LABELS = ("shared points", "fixed points", "planar rotations",
            "R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-           "R-M coupled joints", "unmeasured root", "numerical")
+           "R-M coupled joints", "unmeasured root", "unmeasured body", "passive joint", "numerical")
 
 
 def values(members) -> tuple[str, ...]:

@@ -48,16 +48,87 @@ def sample_states(robot: Robot, samples: int, rng: np.random.Generator, low: flo
     return rng.uniform(low, high, shape), rng.uniform(low, high, shape), rng.uniform(low, high, shape)
 
 
-def row_mask(robot: Robot, rows: str) -> np.ndarray:
+#: the forms naming measured joints (:func:`row_mask`): only these joints' torques; the base wrench
+#: and these joints' torques; every row but these (passive) joints'
+ROW_FORMS = ("joints:", "base+joints:", "passive:")
+
+
+def rows_spec(rows) -> str:
+    """The measured rows as one string: a :class:`~baseparams.enums.Rows` or a joint-set form.
+
+    Parameters
+    ----------
+    rows : str or sequence of str
+        ``all``, ``joints``, ``base``, a form of :data:`ROW_FORMS` (``joints:NAME,NAME``,
+        ``base+joints:NAME,...``, ``passive:NAME,...``), or a list of joint names (the measured
+        joints: ``joints:`` with those names).
+
+    Returns
+    -------
+    str
+        The string form (a list becomes ``"joints:" + ",".join(names)``); not checked against a
+        robot (:func:`row_mask` does).
+
+    Raises
+    ------
+    BaseparamsError
+        Neither a string nor a sequence of strings.
+    """
+    if isinstance(rows, str):
+        return str(rows)
+    try:
+        names = [str(x) if isinstance(x, str) else None for x in rows]
+    except TypeError:
+        names = [None]
+    if None in names:
+        raise BaseparamsError(f"measured rows {rows!r}: expected one of {ROWS}, a form "
+                              f"{', '.join(f + 'NAME,...' for f in ROW_FORMS)}, or a list of joint names")
+    return "joints:" + ",".join(names)
+
+
+def measured_joints(robot: Robot, rows) -> tuple[bool, np.ndarray]:
+    """The base wrench and the joints whose generalized forces are measured.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies, one joint each).
+    rows : str or sequence of str
+        As for :func:`row_mask`.
+
+    Returns
+    -------
+    base : bool
+        Whether a floating root's wrench is measured (False without a floating base).
+    joints : ndarray of bool, shape ``(n,)``
+        Per body, whether its joint's coordinates are measured (a floating root's: its wrench).
+
+    Raises
+    ------
+    BaseparamsError
+        As for :func:`row_mask`.
+    """
+    mask = row_mask(robot, rows)
+    per = np.zeros(robot.n, dtype=bool)
+    np.logical_or.at(per, np.asarray(robot.dof_body, dtype=int), mask)
+    base = bool(any(per[i] for i in range(robot.n) if robot.jtype[i] == "F"))
+    return base, per
+
+
+def row_mask(robot: Robot, rows) -> np.ndarray:
     """Which generalized forces are measured, as a boolean mask ``(dof,)``.
 
     Parameters
     ----------
     robot : Robot
         The robot (``dof`` coordinates).
-    rows : {'all', 'joints', 'base'}
+    rows : str or sequence of str
         A :class:`~baseparams.enums.Rows`: ``all``; ``joints`` (every coordinate but the
-        floating base's 6); ``base`` (only the floating base's wrench).
+        floating base's 6); ``base`` (only the floating base's wrench). Or a set of joints
+        (every coordinate of each; a floating root's joint is its base wrench):
+        ``joints:NAME,NAME`` (only these), ``base+joints:NAME,...`` (the floating base's wrench
+        and these), ``passive:NAME,...`` (every row but these: under-actuated robots), or a
+        list of joint names (as ``joints:``).
 
     Returns
     -------
@@ -67,18 +138,45 @@ def row_mask(robot: Robot, rows: str) -> np.ndarray:
     Raises
     ------
     BaseparamsError
-        Unknown ``rows``, or ``base`` for a robot without a floating base.
+        Unknown ``rows`` or joint name (the message lists the robot's joints), no name after a
+        form's colon, ``base`` (``base+joints:``) for a robot without a floating base, or a
+        joint-set form for a robot with loops or couplings.
     """
-    if rows not in ROWS:
-        raise BaseparamsError(f"unknown measured rows {rows!r}; expected one of {ROWS}")
-    is_base = np.array([robot.jtype[b] == "F" for b in robot.dof_body])
-    if rows == "all":
-        return np.ones(robot.dof, dtype=bool)
-    if not is_base.any():
-        if rows == "base":
-            raise BaseparamsError(f"robot {robot.name!r} has no floating base: no base-wrench rows")
-        return np.ones(robot.dof, dtype=bool)
-    return ~is_base if rows == "joints" else is_base
+    rows = rows_spec(rows)
+    is_base = np.array([robot.jtype[b] == "F" for b in robot.dof_body], dtype=bool)
+    if rows in ROWS:
+        if rows == "all":
+            return np.ones(robot.dof, dtype=bool)
+        if not is_base.any():
+            if rows == "base":
+                raise BaseparamsError(f"robot {robot.name!r} has no floating base: no base-wrench rows")
+            return np.ones(robot.dof, dtype=bool)
+        return ~is_base if rows == "joints" else is_base
+    form = next((f for f in ROW_FORMS if rows.startswith(f)), None)
+    if form is None:
+        raise BaseparamsError(f"unknown measured rows {rows!r}; expected one of {ROWS} or "
+                              f"{', '.join(f + 'NAME,...' for f in ROW_FORMS)}")
+    if robot.has_loops:
+        raise BaseparamsError(f"robot {robot.name!r}: measured rows {rows!r} are not defined with loops or "
+                              f"couplings; the generalized forces are the actuated ones (rows 'all')")
+    names = [x.strip() for x in rows[len(form):].split(",") if x.strip()]
+    if not names:
+        raise BaseparamsError(f"measured rows {rows!r}: no joint named after {form!r}; "
+                              f"the robot's joints: {', '.join(robot.joint_names)}")
+    index = {nm: i for i, nm in enumerate(robot.joint_names)}
+    for nm in names:
+        if nm not in index:
+            raise BaseparamsError(f"measured rows {rows!r}: robot {robot.name!r} has no joint {nm!r}; "
+                                  f"its joints: {', '.join(robot.joint_names)}")
+    named = np.isin(np.asarray(robot.dof_body, dtype=int), [index[nm] for nm in names])
+    if form == "passive:":
+        return ~named
+    if form == "base+joints:":
+        if not is_base.any():
+            raise BaseparamsError(f"measured rows {rows!r}: robot {robot.name!r} has no floating base: "
+                                  f"no base-wrench rows")
+        return named | is_base
+    return named
 
 
 @dataclass(frozen=True, eq=False)
@@ -438,9 +536,9 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
         Number of random states (or actuated samples); default :func:`default_samples`.
     seed : int, optional
         Seed of :func:`numpy.random.default_rng`.
-    rows : {'all', 'joints', 'base'}, optional
-        Measured generalized forces (:func:`row_mask`); only ``all`` with loops (the rows are
-        then the actuated generalized forces).
+    rows : str, optional
+        Measured generalized forces (:func:`row_mask`: ``all``, ``joints``, ``base`` or a set of
+        joints); only ``all`` with loops (the rows are then the actuated generalized forces).
     info : dict, optional
         Filled in place with ``requested`` and ``kept``, and for loops ``cond_max``,
         ``not_converged``, ``branch_jumps``, ``ill_conditioned`` and ``max_loop_residual``.
@@ -460,7 +558,7 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
     samples = default_samples(robot) if samples is None else samples
     rng = np.random.default_rng(seed)
     if robot.has_loops:
-        if rows != "all":
+        if rows_spec(rows) != "all":
             raise BaseparamsError(f"robot {robot.name!r}: measured rows {rows!r} are not defined with loops; "
                                   f"the generalized forces are the actuated ones")
         cs = closed_samples(robot, samples, rng)
@@ -494,7 +592,7 @@ def numerical_nullspace(robot: Robot, samples: int | None = None, seed: int = 0,
         Number of random states (or actuated samples); default :func:`default_samples`.
     seed : int, optional
         Seed of the random states.
-    rows : {'all', 'joints', 'base'}, optional
+    rows : str, optional
         Measured generalized forces (:func:`row_mask`).
     rtol : float, optional
         Relative singular-value tolerance (:func:`rank_decision`).

@@ -19,7 +19,7 @@ from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..model.scale import decision_scale
-from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, stacked_regressor
+from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, rows_spec, stacked_regressor
 from ..pga.linalg import column_basis
 from .columns import Columns, to_dense
 from .drng import DRNGResult, drng
@@ -145,8 +145,10 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         its at most ten columns).
     seed : int, default 0
         Seed of the random states (the saturation check draws a second set with another seed).
-    rows : {"all", "joints", "base"}, default "all"
-        The measured generalized forces (loop robots: ``"all"`` only).
+    rows : str or sequence of str, default "all"
+        The measured generalized forces: ``all``, ``joints``, ``base`` or a set of joints
+        (:func:`baseparams.numerics.row_mask`; loop robots: ``"all"`` only). The check is the
+        regressor restricted to those rows, whatever DRNG's rules for them.
     result : DRNGResult, optional
         DRNG's result to check; default ``drng(robot, rows=rows)``.
     rtol : float, default 1e-9
@@ -158,7 +160,7 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         nullspace; a worse column fails the check.
     method : {"auto", "dense", "structured"}, default "auto"
         ``dense``: the stacked regressor and its SVD (memory quadratic in ``n``). ``structured``:
-        for a tree whose joint rows are measured, rank decided body by body
+        for a tree whose joint rows are measured (all or some of them), rank decided body by body
         (:func:`.structured.structured_check`, memory linear in ``n``); where it cannot decide
         (a deficiency no merge explains) the dense check runs if it fits in memory, else the
         result is ``undecided``. ``auto``: structured for such trees of at least
@@ -179,6 +181,7 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         where it does not apply.
     """
     t0 = time.perf_counter()
+    rows = rows_spec(rows)
     res = drng(robot, rows=rows) if result is None else result
     if res.rows != rows:
         raise BaseparamsError(f"robot {robot.name!r}: the DRNG result was computed for rows {res.rows!r}, "

@@ -1,6 +1,7 @@
 """A certificate that scales: the regressor's rank on a tree, decided body by body.
 
-For a tree (no loops) whose measured rows include the joints' (``rows`` ``all`` or ``joints``),
+For a tree (no loops) whose measured rows include joints' (``rows`` other than ``base``; an
+unmeasured joint's diagonal block has no rows and is merged into its parent's, below),
 the stacked regressor ``W`` (parameters ``pi / d`` as in :func:`~.certify.certify`) is block
 triangular in the body order: joint ``j``'s rows see only the bodies of its subtree, and body
 ``i``'s columns appear only in the rows of the joints on its path to the root (a floating root's
@@ -42,7 +43,7 @@ from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..model.scale import decision_scale
 from ..numerics import available_bytes as _available_bytes
-from ..numerics import row_mask, sample_states
+from ..numerics import row_mask, rows_spec, sample_states
 from ..pga import adjoint, commutator, hat, se3_exp, swap
 from ..pga.core import screw_exp
 from ..regressor.tp import bar_lines
@@ -120,16 +121,19 @@ def applicable(robot: Robot, rows: str) -> bool:
     ----------
     robot : Robot
         The robot.
-    rows : str
-        The measured generalized forces (``all``, ``joints`` or ``base``).
+    rows : str or sequence of str
+        The measured generalized forces (``all``, ``joints``, ``base`` or a set of joints,
+        :func:`baseparams.numerics.row_mask`).
 
     Returns
     -------
     bool
-        True for a robot without loops or couplings and ``rows`` ``all`` or ``joints`` (with the
-        base wrench alone every body is in one block: the dense check is that).
+        True for a robot without loops or couplings and ``rows`` other than ``base`` (with the
+        base wrench alone every body is in one block: the dense check is that). An unmeasured
+        joint's block has no rows of its own: it is merged into its parent's, so the check
+        holds for any set of measured joints.
     """
-    return not robot.has_loops and rows in ("all", "joints") and robot.n > 0
+    return not robot.has_loops and robot.n > 0 and rows_spec(rows) != "base"
 
 
 def tree_kinematics(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray):
@@ -489,8 +493,8 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
         Random states (default :data:`STRUCTURED_SAMPLES`).
     seed : int, default 0
         Seed of the states (the same states as the dense check's first set).
-    rows : {"all", "joints"}, default "all"
-        The measured generalized forces.
+    rows : str, default "all"
+        The measured generalized forces (any but ``base``, :func:`applicable`).
     rtol : float, default 1e-9
         Singular values of magnitude-normalised blocks at most this are null.
     residual_tol : float, default 1e-8
@@ -511,7 +515,7 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
     t0 = time.perf_counter()
     if not applicable(robot, rows):
         raise BaseparamsError(f"robot {robot.name!r}: the structured certificate needs a tree whose joint rows are "
-                              f"measured (rows 'all' or 'joints'), got rows {rows!r}"
+                              f"measured (rows other than 'base'), got rows {rows!r}"
                               f"{' and loops' if robot.has_loops else ''}")
     samples = STRUCTURED_SAMPLES if samples is None else samples
     n, d10 = robot.n, decision_scale(robot, "paper")[:10]

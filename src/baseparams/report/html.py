@@ -304,7 +304,8 @@ def _grid(result) -> str:
 
 def _source_kind(source) -> str:
     return ("paper principle" if source.is_paper else "extended rule" if source.is_extended
-            else "measured rows: joint torques only")
+            else "measured rows: joint torques only" if source.label == "unmeasured root"
+            else "measured rows: unmeasured joints")
 
 
 def _provenance_list(result, groups: list[dict]) -> str:

@@ -118,7 +118,8 @@ def test_analyze_imports_only_what_it_needs():
     """A built-in tree: no file readers, loop closure or structured certificate; no scipy."""
     mods = _modules_after(["analyze", "puma560", "--json"])
     assert not _heavy(mods, NOT_FOR_ANALYZE + ("baseparams.io", "baseparams.kinematics.loops",
-                                               "baseparams.nullspace.structured", "baseparams.robots.random",
+                                               "baseparams.nullspace.structured", "baseparams.nullspace.coupled",
+                                               "baseparams.robots.random",
                                                "baseparams.ident", "baseparams.symbolic"))
 
 

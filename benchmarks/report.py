@@ -354,7 +354,8 @@ cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-bo
   every start compiles the ~12 000 lines of the package an `analyze` imports (~16 000 for a
   URDF with couplings: the URDF reader, loop closure, the structured certificate): ~45-60 ms that
   the Pinocchio script, a few lines over compiled extensions, does not pay. An installed package
-  has its caches (the `pyc` figures).
+  has its caches (the `pyc` figures). A next step would be to split the CLI module (~8-12 ms to
+  compile, most of it the other commands' code).
 * **DRNG vs the numerical method on Puma560.** Our numerical baseline is ~15x faster than the
   paper's (4-6 ms vs 74 ms: a vectorised regressor and an economy SVD), and DRNG's ~0.7 ms is
   the overhead of ~250 small numpy calls (one batch per joint type and principle); against the

@@ -17,6 +17,10 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
                     one write pass over the output.
 * ``base_streaming``  base regressor + streaming QR over 10^6 Puma560 samples.
 * ``analyze_cli``   ``baseparams analyze`` end to end in fresh processes.
+* ``vs_pinocchio``  ``baseparams analyze`` end to end (fresh process) against the bare Pinocchio
+                    numerical rank (fresh process: import, URDF, 100 random states, stacked
+                    ``computeJointTorqueRegressor``, SVD rank), talos_full_v2 (free flyer) and Puma560
+                    (a URDF written from the built-in), with and without the package's bytecode caches.
 * ``identify``      ``identify`` on 10^6 simulated Puma560 samples end to end; the physical solve
                     on the Panda and on a 32-body humanoid.
 * ``stream``        ``baseparams identify puma560 LOG.csv`` on generated 10^6- and 10^7-row CSV logs, streamed
@@ -575,6 +579,125 @@ def bench_analyze_cli(out: dict, quick: bool) -> None:
         out[f"analyze_cli_{name}_status"] = status
 
 
+#: the bare Pinocchio numerical rank (issue 25's yardstick), run as a script in a fresh process
+PIN_RANK = """\
+import sys
+import numpy as np
+import pinocchio as pin
+path, floating = sys.argv[1], sys.argv[2] == "1"
+model = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(path)
+data = model.createData()
+rng = np.random.default_rng(0)
+rows = []
+for _ in range(100):
+    q = pin.integrate(model, pin.neutral(model), rng.uniform(-1, 1, model.nv))
+    v, a = rng.uniform(-1, 1, model.nv), rng.uniform(-1, 1, model.nv)
+    rows.append(pin.computeJointTorqueRegressor(model, data, q, v, a).copy())
+s = np.linalg.svd(np.concatenate(rows), compute_uv=False)
+print(int(np.sum(s > 1e-9 * s[0])))
+"""
+
+
+def puma560_urdf() -> str:
+    """The built-in Puma560 (standard DH, Corke's inertias) as URDF text, for Pinocchio."""
+    from scipy.spatial.transform import Rotation
+
+    from baseparams.robots.puma560 import DH, LINKS, dh_offset
+
+    def xyz_rpy(t):
+        return (" ".join(f"{v:.17g}" for v in t[:3, 3]),
+                " ".join(f"{v:.17g}" for v in Rotation.from_matrix(t[:3, :3]).as_euler("xyz")))
+
+    out = ['<?xml version="1.0"?>', '<robot name="puma560">', '  <link name="base"/>']
+    parent, origin = "base", np.eye(4)
+    for i, ((a, alpha, d), (m, r, inertia)) in enumerate(zip(DH, LINKS), start=1):
+        off = dh_offset(a, alpha, d)
+        com = off.copy()
+        com[:3, 3] = off[:3, :3] @ np.asarray(r) + off[:3, 3]
+        (x, rpy), (cx, crpy) = xyz_rpy(origin), xyz_rpy(com)
+        out += [f'  <joint name="joint{i}" type="revolute"><parent link="{parent}"/><child link="link{i}"/>',
+                f'    <origin xyz="{x}" rpy="{rpy}"/><axis xyz="0 0 1"/>'
+                f'<limit lower="-3.2" upper="3.2" effort="100" velocity="10"/></joint>',
+                f'  <link name="link{i}"><inertial><origin xyz="{cx}" rpy="{crpy}"/><mass value="{m}"/>',
+                f'    <inertia ixx="{inertia[0]}" ixy="0" ixz="0" iyy="{inertia[1]}" iyz="0" izz="{inertia[2]}"/>'
+                f'</inertial></link>']
+        parent, origin = f"link{i}", off
+    return "\n".join(out + ["</robot>"]) + "\n"
+
+
+def bench_vs_pinocchio(out: dict, quick: bool) -> None:
+    """``baseparams analyze`` end to end vs the bare Pinocchio numerical rank, fresh processes.
+
+    Interleaved runs (the two commands alternate), medians of the wall time and of the process's
+    CPU time (user + system: less sensitive to other jobs on a shared machine); BLAS threads as set
+    for the whole run (one by default) for both. Two bytecode settings: ``pyc``, the package's ``__pycache__`` written
+    by a warm-up run (what an installed package has), and ``nopyc``, ``PYTHONDONTWRITEBYTECODE=1``
+    on a copy of the package without caches (every baseparams module compiled at each start;
+    third-party packages keep their installed caches either way).
+    """
+    import shutil
+    import subprocess
+    import tempfile
+
+    import baseparams
+
+    talos = _talos_path()
+    reps = 3 if quick else 9
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        (tmp / "pin_rank.py").write_text(PIN_RANK)
+        (tmp / "puma560.urdf").write_text(puma560_urdf())
+        pkg = Path(baseparams.__file__).resolve().parent
+        shutil.copytree(pkg, tmp / "src" / "baseparams", ignore=shutil.ignore_patterns("__pycache__"))
+        cases = [("puma560", ["puma560"], str(tmp / "puma560.urdf"), "0")]
+        if talos:
+            cases.append(("talos_full_v2", [talos, "--floating"], talos, "1"))
+        base_env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONDONTWRITEBYTECODE")}
+        envs = {"pyc": dict(base_env, PYTHONPATH=str(tmp / "src")),
+                "nopyc": dict(base_env, PYTHONPATH=str(tmp / "src"), PYTHONDONTWRITEBYTECODE="1")}
+
+        def run(cmd, env):
+            """``(wall s, CPU s of the process: user + system, stdout)``."""
+            with tempfile.TemporaryFile() as fo, tempfile.TemporaryFile() as fe:
+                t0 = time.perf_counter()
+                proc = subprocess.Popen(cmd, env=env, stdout=fo, stderr=fe)
+                _, status, usage = os.wait4(proc.pid, 0)
+                wall = time.perf_counter() - t0
+                fo.seek(0)
+                fe.seek(0)
+                if os.waitstatus_to_exitcode(status) != 0:
+                    raise RuntimeError(f"{' '.join(cmd)}: exit {status}: {fe.read().decode()[-300:]}")
+                return wall, usage.ru_utime + usage.ru_stime, fo.read().decode()
+
+        for name, argv, urdf, floating in cases:
+            ours = [sys.executable, "-m", "baseparams", "analyze", *argv, "--json"]
+            pin_cmd = [sys.executable, str(tmp / "pin_rank.py"), urdf, floating]
+            text = run(ours, envs["pyc"])[2]  # warm-up: writes the copy's caches for "pyc"
+            res = json.loads(text)
+            rank = run(pin_cmd, base_env)[2]
+            out[f"vs_pinocchio_{name}_status"] = res["status"]
+            out[f"vs_pinocchio_{name}_n_base"] = res["n_base"]
+            out[f"vs_pinocchio_{name}_pinocchio_rank"] = int(rank)
+            for mode, env in envs.items():
+                log(f"  {name}, {mode}: analyze vs Pinocchio rank, {reps} interleaved fresh runs ...")
+                ours_runs, pin_runs = [], []
+                for _ in range(reps):
+                    if mode == "nopyc":  # the pyc runs write them; nothing is written with the flag set
+                        for d in (tmp / "src").rglob("__pycache__"):
+                            shutil.rmtree(d)
+                    ours_runs.append(run(ours, env)[:2])
+                    pin_runs.append(run(pin_cmd, base_env if mode == "pyc" else dict(base_env,
+                                                                                      PYTHONDONTWRITEBYTECODE="1"))[:2])
+                key = f"vs_pinocchio_{name}_{mode}"
+                for k, what in ((0, "s"), (1, "cpu_s")):
+                    a = statistics.median(r[k] for r in ours_runs)
+                    p = statistics.median(r[k] for r in pin_runs)
+                    out[f"{key}_analyze_{what}"], out[f"{key}_analyze_{what}_repeats"] = a, reps
+                    out[f"{key}_pinocchio_{what}"], out[f"{key}_pinocchio_{what}_repeats"] = p, reps
+                    out[f"{key}_{'ratio' if what == 's' else 'cpu_ratio'}"] = a / p
+            out["vs_pinocchio_load_average"] = os.getloadavg()[0]
+
+
 def bench_drng_vs_numerical(out: dict, quick: bool) -> None:
     from baseparams.nullspace import drng
     from baseparams.nullspace.certify import certify
@@ -933,6 +1056,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "regressor": bench_regressor,
     "base_streaming": bench_base_streaming,
     "analyze_cli": bench_analyze_cli,
+    "vs_pinocchio": bench_vs_pinocchio,
     "identify": bench_identify,
     "stream": bench_stream,
     "scale": bench_scale,

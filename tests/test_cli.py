@@ -94,3 +94,42 @@ def test_analyze_loop_model_json(capsys):
 def test_loop_model_rejects_rows(capsys):
     code, out, err = run(["analyze", "four-bar", "--rows", "joints"], capsys)
     assert code == 2 and "rows" in err and "Traceback" not in err
+
+
+#: modules ``analyze`` must not import (issue 25: start-up time; each costs 10-80 ms)
+NOT_FOR_ANALYZE = ("scipy", "numpy.ma", "sympy", "numba", "pinocchio", "matplotlib")
+
+
+def _modules_after(argv: list[str]) -> set[str]:
+    """The modules loaded by a fresh ``baseparams`` process running ``argv`` (its JSON checked)."""
+    code = ("import json, sys, contextlib, io\nfrom baseparams.cli import main\nbuf = io.StringIO()\n"
+            f"with contextlib.redirect_stdout(buf):\n    rc = main({argv!r})\n"
+            "assert rc == 0 and json.loads(buf.getvalue())['status'] == 'certified'\nprint(' '.join(sys.modules))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-500:]
+    return set(r.stdout.split())
+
+
+def _heavy(mods: set[str], heavy) -> list[str]:
+    return sorted(m for m in mods if any(m == h or m.startswith(h + ".") for h in heavy))
+
+
+def test_analyze_imports_only_what_it_needs():
+    """A built-in tree: no file readers, loop closure or structured certificate; no scipy."""
+    mods = _modules_after(["analyze", "puma560", "--json"])
+    assert not _heavy(mods, NOT_FOR_ANALYZE + ("baseparams.io", "baseparams.kinematics.loops",
+                                               "baseparams.nullspace.structured", "baseparams.nullspace.coupled",
+                                               "baseparams.robots.random",
+                                               "baseparams.ident", "baseparams.symbolic"))
+
+
+def test_analyze_of_a_coupled_urdf_imports_no_scipy():
+    """talos_full_v2 (URDF, 12 ``<mimic>``): the structured certificate and regrouping, still no scipy."""
+    from erd import urdf_files
+
+    found = [f for f in urdf_files() if f.name == "talos_full_v2.urdf"]
+    if not found:
+        pytest.skip("example-robot-data not installed")
+    mods = _modules_after(["analyze", str(found[0]), "--floating", "--json"])
+    assert not _heavy(mods, NOT_FOR_ANALYZE + ("baseparams.io.mjcf", "baseparams.ident", "baseparams.symbolic"))
+    assert "baseparams.nullspace.structured" in mods

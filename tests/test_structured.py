@@ -164,7 +164,8 @@ def _regroupings(robot, conv):
 def _aligned_k(dense, sparse):
     """Sparse K as dense, its columns in the dense K's dependent order."""
     pos = {int(d): k for k, d in enumerate(sparse.dependent)}
-    return sparse.K.toarray()[:, [pos[int(d)] for d in dense.dependent]]
+    k = sparse.K.toarray() if hasattr(sparse.K, "toarray") else sparse.K  # dense arrays for small models
+    return k[:, [pos[int(d)] for d in dense.dependent]]
 
 
 @pytest.mark.parametrize("seed", range(8))
@@ -200,10 +201,15 @@ def test_sparse_regrouping_on_special_geometry(seed):
     assert np.all(np.abs(kd - ks) <= 1e-8 * np.maximum(1.0, np.abs(kd).max(axis=1, keepdims=True)))
 
 
-def test_analysis_of_a_large_tree_is_sparse_and_consistent():
+@pytest.mark.parametrize("csr", [False, True])
+def test_analysis_of_a_large_tree_is_sparse_and_consistent(csr, monkeypatch):
+    from baseparams.base import sparse
+
+    if csr:  # scipy.sparse matrices, as above sparse.DENSE_MAX_PARAMS parameters
+        monkeypatch.setattr(sparse, "DENSE_MAX_PARAMS", 0)
     robot = random_robot(np.random.default_rng(9), STRUCTURED_MIN_BODIES + 5, "RP", True)
     a = analyze(robot)
-    assert hasattr(a.base.K, "tocsr") and a.base.base_basis is None
+    assert hasattr(a.base.K, "tocsr") == csr and a.base.base_basis is None  # regrouped from compact columns
     assert a.nullity == a.certificate.nullity == 10 * robot.n - a.n_base
     rng = np.random.default_rng(0)
     q, dq, ddq = rng.uniform(-1, 1, (3, 4, robot.dof))
@@ -228,21 +234,71 @@ def test_deep_chain_is_refused_before_allocating(monkeypatch):
 
 def test_undecided_when_the_dense_check_does_not_fit(monkeypatch):
     from baseparams.base.sparse import tree_base_parameters
-    from baseparams.nullspace import certify as cert_mod
+    from baseparams.nullspace import structured as structured_mod
 
     robot = _tree(2, 12)
     res = drng(robot)
     sub = res.columns.subset(res.columns.child != res.columns.child[len(res.columns) // 2])
     short = DRNGResult(robot, sub, block_rank(sub, robot.n), 0.0)
-    monkeypatch.setattr(cert_mod, "dense_fits", lambda *a, **k: False)
+    monkeypatch.setattr(structured_mod, "dense_fits", lambda *a, **k: False)
     cert = certify(robot, result=short, method="structured")
     assert cert.status == "undecided" and "does not fit in memory" in cert.message
     assert cert.nullity == short.rank and cert.columns is not None
     assert tree_base_parameters(robot, cert.columns, "khalil").n_base == 10 * robot.n - short.rank
 
 
-def test_no_verify_on_a_large_tree_regroups_sparsely_the_same():
+def test_no_verify_on_a_large_tree_regroups_sparsely_the_same(monkeypatch):
+    from baseparams.base import sparse
+
+    monkeypatch.setattr(sparse, "DENSE_MAX_PARAMS", 0)  # scipy.sparse matrices, as for larger models
     robot = random_robot(np.random.default_rng(4), STRUCTURED_MIN_BODIES + 3, "RP", True)
     a, b = analyze(robot), analyze(robot, verify=False)
     assert b.status == "unverified" and b.basis is None and hasattr(b.base.K, "tocsr")
     assert b.nullity == a.nullity and b.expressions() == a.expressions()
+
+
+@pytest.mark.parametrize("seed", range(0, 60, 3))
+def test_structured_on_coupled_trees_agrees_with_dense(seed):
+    """Mimic hands (chains of couplings, R and P, ratios +-1, 2, -0.5): a structured certificate is
+    the dense one's, and DRNG short of one body's columns is never certified."""
+    from test_coupled import mimic_hand
+
+    robot = mimic_hand(np.random.default_rng(seed), offsets=bool(seed % 2))
+    res = drng(robot)
+    dense = certify(robot, result=res, method="dense")
+    chk = structured_check(robot, res)
+    assert chk.status in ("certified", "undecided"), chk.message
+    if chk.status == "certified":
+        assert dense.status == "certified" and chk.rank_b == dense.nullity
+        assert chk.rank_w == 10 * robot.n - dense.nullity
+    cert = certify(robot, result=res, method="structured")  # undecided: the dense check decides
+    assert (cert.status, cert.nullity) == (dense.status, dense.nullity)
+    assert np.linalg.svd(cert.basis.T @ dense.basis, compute_uv=False).min() > 1 - 1e-8
+    cols = res.columns
+    keep = cols.child != cols.child[len(cols) // 2]
+    short = DRNGResult(robot, cols.subset(keep), block_rank(cols.subset(keep), robot.n), 0.0)
+    assert structured_check(robot, short).status == "undecided"
+
+
+def test_talos_mimic_couplings_take_the_structured_path():
+    """talos_full_v2 (45 bodies, 12 ``<mimic>`` couplings): certified body by body, the dense
+    check's nullity and span; without R-M's 58 directions the check says what is missing."""
+    from baseparams.loading import load_model
+
+    from erd import urdf_files
+
+    found = [f for f in urdf_files() if f.name == "talos_full_v2.urdf"]
+    if not found:
+        pytest.skip("example-robot-data not installed")
+    robot = load_model(str(found[0]), floating=True)[0]
+    assert robot.couplings and uses_structured(robot, "all")
+    res = drng(robot)
+    auto, dense = certify(robot, result=res), certify(robot, result=res, method="dense")
+    assert "structured certificate" in auto.message
+    assert (auto.status, auto.nullity) == (dense.status, dense.nullity) == ("certified", 190)
+    assert auto.sampling["kept"] == auto.sampling["requested"] and "cond_max" in auto.sampling
+    assert np.linalg.svd(auto.basis.T @ dense.basis, compute_uv=False).min() > 1 - 1e-8
+    rm = np.array([p.startswith("R-M") for p in (res.provenance(k) for k in range(len(res.columns)))])
+    short = DRNGResult(robot, res.columns.subset(~rm), block_rank(res.columns.subset(~rm), robot.n), 0.0)
+    chk = structured_check(robot, short)
+    assert chk.status == "undecided" and chk.missing == res.rank - short.rank == 58

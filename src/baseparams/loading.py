@@ -9,7 +9,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from .errors import BaseparamsError
-from .io.load import load_file
 from .model.robot import Robot
 from .robots import BUILTINS, get
 
@@ -60,5 +59,7 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
         return get(model, gravity=gravity), []
     if not p.exists():
         raise BaseparamsError(f"{model}: no such file, and not a built-in robot (see 'baseparams robots')")
+    from .io.load import load_file  # the readers (and their XML, loop and xacro code) for files only
+
     return load_file(p, floating=floating, gravity=gravity, strict_inertia=strict_inertia, xacro_args=xacro_args,
                      package_path=package_path)

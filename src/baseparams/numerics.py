@@ -403,6 +403,9 @@ def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, sampl
                            samples, seconds, min_gap)
 
 
+#: trees (couplings allowed) of at least this many bodies are certified body by body
+#: (:mod:`baseparams.nullspace.structured`, ``certify(method="auto")``)
+STRUCTURED_MIN_BODIES = 40
 #: default number of random samples: the paper's 100 for trees, 5000 actuated samples for loops
 DEFAULT_SAMPLES_TREE = 100
 DEFAULT_SAMPLES_LOOPS = 5000

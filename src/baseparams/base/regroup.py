@@ -221,28 +221,23 @@ class BaseParameters:
             ``[{"name": ..., "expression": ...}]``, e.g. ``link1.ZZR`` and
             ``link1.ZZ + link2.YY + ...`` (coefficients written only when not 1).
         """
-        if _is_sparse(self.K):
-            return self._sparse_expressions()
-        out = []
-        order = np.argsort(self.dependent, kind="stable")  # terms in parameter order
-        for r, (i, bname) in enumerate(zip(self.independent, self.base_names())):
-            terms = [self.names[i]]
-            nz = order[self.K[r, order] != 0]
-            for c, d in zip(self.K[r, nz].tolist(), self.dependent[nz].tolist()):
-                sign = "-" if c < 0 else "+"
-                mag = abs(c)
-                coef = "" if mag == 1 else f"{format_coefficient(mag)}*"
-                terms.append(f"{sign} {coef}{self.names[d]}")
-            out.append({"name": bname, "expression": " ".join(terms)})
-        return out
+        return self._expressions(*self._terms())
 
-    def _sparse_expressions(self) -> list[dict[str, str]]:
-        """:meth:`expressions` of a sparse ``K``: every term formatted once, rows joined."""
-        k, names = self.K, self.names
-        rows = np.repeat(np.arange(k.shape[0]), np.diff(k.indptr))
-        dparam = self.dependent[k.indices]
+    def _terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``K``'s nonzeros row by row: ``(indptr (nb + 1,), column indices, values)``, dense or sparse."""
+        if _is_sparse(self.K):
+            return self.K.indptr, self.K.indices, self.K.data
+        rows, cols = np.nonzero(self.K)  # row-major: row by row
+        indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=self.K.shape[0]))]
+        return indptr, cols, self.K[rows, cols]
+
+    def _expressions(self, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> list[dict[str, str]]:
+        """:meth:`expressions` from ``K``'s nonzeros: every term formatted once, rows joined."""
+        names = self.names
+        rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+        dparam = self.dependent[indices]
         order = np.lexsort((dparam, rows))  # row by row, terms in parameter order
-        vals = k.data[order]
+        vals = data[order]
         mags = np.abs(vals)
         # '%.12g' is format_coefficient's text where it writes positional numbers (1e-4 <= c < 1e6;
         # a margin below 1e6, where rounding could reach it)
@@ -255,8 +250,7 @@ class BaseParameters:
         coef = [text[j] for j in inv.tolist()] if shared else text
         terms = [f"{'-' if c < 0 else '+'} {t}{names[d]}"
                  for c, t, d in zip(vals.tolist(), coef, dparam[order].tolist())]
-        ptr = k.indptr
-        return [{"name": bname, "expression": " ".join([names[i]] + terms[ptr[r]:ptr[r + 1]])}
+        return [{"name": bname, "expression": " ".join([names[i]] + terms[indptr[r]:indptr[r + 1]])}
                 for r, (i, bname) in enumerate(zip(self.independent.tolist(), self.base_names()))]
 
     def _check(self, convention: str) -> None:
@@ -423,7 +417,9 @@ def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str) -> Ba
     dep = choose_dependent(q, order, max(1e-8, noise)) if k else np.zeros(0, dtype=int)
     if len(dep) < k:
         raise RuntimeError("nullspace basis is rank-deficient; orthonormalise it first")
-    ind = np.setdiff1d(np.arange(n10), dep)
+    keep = np.ones(n10, dtype=bool)  # not np.setdiff1d: it imports numpy.ma (start-up time)
+    keep[dep] = False
+    ind = np.flatnonzero(keep)
     if k:
         kdim = -np.linalg.solve(q[dep].T, q[ind].T).T  # dimensionless K
         row = np.maximum(1.0, np.abs(kdim).max(axis=1, keepdims=True))

@@ -21,7 +21,9 @@ computed body by body:
 The tolerances and zeroing are those of :func:`~.regroup.base_parameters`, with the rank
 decision of the choice made on each body's own block; coefficients snap to decimals of at most 12
 significant digits only (:func:`snap_short`: what the expressions print). ``K``, ``E`` and ``T`` are
-``scipy.sparse`` CSR matrices and ``base_basis`` is ``None`` (it would be dense).
+``scipy.sparse`` CSR matrices (dense arrays for models of at most :data:`DENSE_MAX_PARAMS`
+parameters, where importing scipy.sparse costs more than they do) and ``base_basis`` is ``None``
+(it would be dense).
 """
 
 from __future__ import annotations
@@ -144,7 +146,7 @@ def _choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ..
     counts = np.diff(bounds)
     dep: list[list[int]] = [[] for _ in range(n)]
     ainv: list[np.ndarray | None] = [None] * n
-    for ell in np.unique(counts[counts > 0]):
+    for ell in sorted(set(counts[counts > 0].tolist())):  # not np.unique: it imports numpy.ma
         bodies = np.flatnonzero(counts == ell)
         idx = order[bounds[bodies][:, None] + np.arange(ell)]  # (nb, l)
         h = np.swapaxes(hc[idx], 1, 2)  # (nb, 10, l)
@@ -189,7 +191,7 @@ def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he:
         a = ainv[c]
         parts = []  # (bodies, blocks) of the columns' lower blocks, with the dual vectors cancelling them
         for low, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
-            for j in np.unique(low[low >= 0]).tolist():
+            for j in sorted(set(low[low >= 0].tolist())):
                 m = low == j
                 zj = part[m].T @ a[m]  # (10, l): the columns' blocks on body j
                 if dep[j]:  # cancel the entries on body j's dependent parameters (Z_j starts with j)
@@ -248,7 +250,8 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     -------
     BaseParameters
         ``10 n - k`` base parameters: ``K (nb, k)``, ``E (nb, 10 n)`` and ``T (10 n, 10 n)`` as
-        ``scipy.sparse`` CSR matrices, ``base_basis`` ``None``; the same names, dependent set and
+        ``scipy.sparse`` CSR matrices (dense arrays up to :data:`DENSE_MAX_PARAMS` parameters),
+        ``base_basis`` ``None``; the same names, dependent set and
         coefficients as :func:`~.regroup.base_parameters` on the dense span (up to decisions within
         the tolerances).
 
@@ -257,14 +260,14 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     RuntimeError
         The columns are not independent on their highest bodies.
     """
-    import scipy.sparse as sp
-
     n, n10 = robot.n, 10 * robot.n
     hc, hp, he, t, noise = _scaled_blocks(robot, cols, convention)
     tol = max(1e-8, noise)
     dep_local, z = _dual_basis(robot, cols, hc, hp, he, _inertia.SPECS[convention].regroup_order, tol)
     dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
-    ind = np.setdiff1d(np.arange(n10), dep)
+    keep = np.ones(n10, dtype=bool)  # not np.setdiff1d: it imports numpy.ma (start-up time)
+    keep[dep] = False
+    ind = np.flatnonzero(keep)
     pos_i = np.full(n10, -1)
     pos_i[ind] = np.arange(len(ind))
     pos_d = np.full(n10, -1)
@@ -276,11 +279,34 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     rows, cls, vals = rows[keep], cls[keep], vals[keep]
     power = np.tile(LENGTH_POWER[convention], n).astype(float)
     vals = snap_short(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]))
-    kmat = sp.csr_matrix((vals, (rows, cls)), shape=(len(ind), len(dep)))
-    kmat.eliminate_zeros()
-    kmat.sort_indices()
-    e = sp.csr_matrix((np.r_[np.ones(len(ind)), vals], (np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]])),
-                      shape=(len(ind), n10))
-    unid = np.sort(dep[np.diff(kmat.tocsc().indptr) == 0]) if len(dep) else np.zeros(0, dtype=int)
-    return BaseParameters(convention, parameter_names(robot, convention), ind, dep, kmat, e, unid, None,
-                          sp.block_diag(list(t), format="csr"))
+    kmat = _matrix(vals, rows, cls, (len(ind), len(dep)))
+    e = _matrix(np.r_[np.ones(len(ind)), vals], np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]],
+                (len(ind), n10))
+    if isinstance(kmat, np.ndarray):
+        unseen = ~np.any(kmat != 0, axis=0)
+    else:
+        unseen = np.diff(kmat.tocsc().indptr) == 0
+    unid = np.sort(dep[unseen]) if len(dep) else np.zeros(0, dtype=int)
+    tb = np.asarray(t, dtype=float).reshape(n, 10, 10)
+    tr = (10 * np.arange(n)[:, None, None] + np.arange(10)[None, :, None]) + np.zeros((1, 1, 10), dtype=int)
+    tmat = _matrix(tb.ravel(), tr.ravel(), np.transpose(tr, (0, 2, 1)).ravel(), (n10, n10))
+    return BaseParameters(convention, parameter_names(robot, convention), ind, dep, kmat, e, unid, None, tmat)
+
+
+#: below this many parameters the regrouping's matrices are dense arrays: scipy.sparse's import
+#: (~50-80 ms) would cost more than the arrays (at most 8 MB for ``T``)
+DENSE_MAX_PARAMS = 1000
+
+
+def _matrix(vals: np.ndarray, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]):
+    """The matrix of triplets (duplicates summed): a CSR matrix, or a dense array for small models."""
+    if shape[1] > DENSE_MAX_PARAMS or shape[0] > DENSE_MAX_PARAMS:
+        import scipy.sparse as sp
+
+        out = sp.csr_matrix((vals, (rows, cols)), shape=shape)
+        out.eliminate_zeros()
+        out.sort_indices()
+        return out
+    out = np.zeros(shape)
+    np.add.at(out, (rows, cols), vals)
+    return out

@@ -7,11 +7,7 @@ from pathlib import Path
 
 from ..errors import BaseparamsError
 from ..files import MODEL_MAX_BYTES, check_input
-from ..kinematics.loops import assemble
 from ..model.robot import Robot
-from .mjcf import load_mjcf
-from .urdf import load_urdf
-from .xacro_in import expand_xacro
 
 
 def load_file(path: str | Path, floating: bool = False, gravity=None, strict_inertia: bool = False,
@@ -65,21 +61,32 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     if suffix != ".xacro" and (xacro_args or package_path):
         raise BaseparamsError(f"{p}: xacro arguments and a package path apply to .xacro files, not {suffix or 'this'}")
     notes = []
+    # each reader is imported for its own suffix only (start-up time of a one-shot command)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if suffix == ".xacro":
+            from .urdf import load_urdf
+            from .xacro_in import expand_xacro
+
             data, notes = expand_xacro(p, xacro_args, package_path)
             g = (0.0, 0.0, -9.81) if gravity is None else gravity
             robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, data=data)
         elif suffix == ".urdf":
+            from .urdf import load_urdf
+
             g = (0.0, 0.0, -9.81) if gravity is None else gravity
             robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia)
         elif suffix in (".xml", ".mjcf"):
+            from .mjcf import load_mjcf
+
             robot = load_mjcf(p, gravity=gravity, floating=floating, strict_inertia=strict_inertia)
         else:
             raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xacro, .xml or .mjcf")
     notes += [str(w.message) for w in caught]
-    robot, _, note = assemble(robot)
-    if note:
-        notes.append(f"{p}: {note}")
+    if robot.has_loops:  # a tree is returned unchanged by the assembly
+        from ..kinematics.loops import assemble
+
+        robot, _, note = assemble(robot)
+        if note:
+            notes.append(f"{p}: {note}")
     return robot, notes

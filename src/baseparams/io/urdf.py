@@ -54,7 +54,7 @@ def _floats(text: str | None, n: int, what: str, default, kind: str | None = Non
         v = np.array([float(x) for x in text.split()])
     except ValueError:
         raise ModelError(f"{what}: expected {n} numbers, got {text!r}{hint}") from None
-    if v.shape != (n,) or not np.all(np.isfinite(v)):
+    if v.shape != (n,) or not np.isfinite(v).all():  # ndarray methods: thousands of tiny arrays per file
         raise ModelError(f"{what}: expected {n} finite numbers, got {text!r}")
     if kind is not None:
         check_magnitude(v, kind, what)

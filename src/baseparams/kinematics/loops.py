@@ -373,6 +373,13 @@ def _solve_normal(k: np.ndarray, r: np.ndarray) -> np.ndarray:
     return x
 
 
+def _passive(dof: int, act) -> np.ndarray:
+    """The coordinates not in ``act``, sorted (not np.setdiff1d: it imports numpy.ma, start-up time)."""
+    keep = np.ones(dof, dtype=bool)
+    keep[np.asarray(act, dtype=int)] = False
+    return np.flatnonzero(keep)
+
+
 @dataclass(frozen=True, eq=False)
 class ClosedStates:
     """Loop-closed samples, as returned by :func:`close_loops`.
@@ -471,7 +478,7 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
         ``qa`` with a number of columns other than ``na``.
     """
     act = np.asarray(robot.actuated, dtype=int)
-    pas = np.setdiff1d(np.arange(robot.dof), act)
+    pas = _passive(robot.dof, act)
     qa = np.atleast_2d(np.asarray(qa, dtype=float))
     s = qa.shape[0]
     if qa.shape[1] != len(act):
@@ -743,7 +750,7 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     if not robot.has_loops:
         return robot, np.zeros(robot.dof), ""
     act = robot.actuated
-    pas = np.setdiff1d(np.arange(robot.dof), act)
+    pas = _passive(robot.dof, act)
     ev = evaluate(robot, np.zeros((1, robot.dof)))
     res0 = float(np.abs(ev.r).max()) if ev.r.size else 0.0
     sv = np.linalg.svd(ev.K[0][:, pas], compute_uv=False) if len(pas) else np.ones(1)

@@ -49,7 +49,7 @@ def check_magnitude(values, kind: str, what: str) -> None:
     """
     bound, unit = _BOUNDS[kind]
     v = np.abs(np.asarray(values, dtype=float))
-    if v.size and not np.all(v <= bound):  # NaN too
+    if v.size and not (v <= bound).all():  # NaN too (the ndarray method: called for every number read)
         worst = float(np.nanmax(v)) if np.any(np.isfinite(v) | np.isinf(v)) else float("nan")
         raise ModelError(f"{what}: |value| = {worst:.3g} exceeds the bound {bound:g}{' ' + unit if unit else ''} "
                          f"for {'an' if kind[0] in 'ai' else 'a'} {kind}; not a robot's number")

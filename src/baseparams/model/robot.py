@@ -189,7 +189,7 @@ def _check_frame(t: np.ndarray, what: str) -> np.ndarray:
     t = np.asarray(t, dtype=float)
     if t.shape != (4, 4):
         raise ModelError(f"{what}: frame must be a 4x4 homogeneous matrix, got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
+    if not np.isfinite(t).all():
         raise ModelError(f"{what}: frame contains NaN or inf")
     r = t[:3, :3]
     if (np.abs(r.T @ r - np.eye(3)).max() > 1e-8 or abs(np.linalg.det(r) - 1) > 1e-8

@@ -19,11 +19,18 @@ from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..model.scale import decision_scale
-from ..numerics import NumericalResult, StreamingQR, default_samples, numerical_nullspace, rows_spec, stacked_regressor
+from ..numerics import (
+    STRUCTURED_MIN_BODIES,
+    NumericalResult,
+    StreamingQR,
+    default_samples,
+    numerical_nullspace,
+    rows_spec,
+    stacked_regressor,
+)
 from ..pga.linalg import column_basis
 from .columns import Columns, to_dense
 from .drng import DRNGResult, drng
-from .structured import STRUCTURED_MIN_BODIES, STRUCTURED_SAMPLES, applicable, dense_bytes, dense_fits, structured_check
 
 #: how :func:`certify` decides the rank
 METHODS = ("auto", "dense", "structured")
@@ -187,6 +194,8 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         raise BaseparamsError(f"robot {robot.name!r}: the DRNG result was computed for rows {res.rows!r}, "
                               f"certification asked for {rows!r}")
     if uses_structured(robot, rows, method):
+        from .structured import STRUCTURED_SAMPLES
+
         dense_samples = default_samples(robot) if samples is None else samples
         cert = _structured(robot, res, STRUCTURED_SAMPLES if samples is None else samples, seed, rows, rtol,
                            min_gap, residual_tol, t0, dense_samples)
@@ -332,15 +341,21 @@ def uses_structured(robot: Robot, rows: str, method: str = "auto") -> bool:
         raise BaseparamsError(f"unknown certification method {method!r}; expected one of {METHODS}")
     if method == "structured":
         return True
-    return method == "auto" and applicable(robot, rows) and robot.n >= STRUCTURED_MIN_BODIES
+    if method != "auto" or robot.n < STRUCTURED_MIN_BODIES:
+        return False
+    from .structured import applicable  # imported only for robots that may take the path (start-up time)
+
+    return applicable(robot, rows)
 
 
 def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: str, rtol: float, min_gap: float,
                 residual_tol: float, t0: float, dense_samples: int) -> Certificate | None:
     """The structured check as a :class:`Certificate`, or ``None`` when the dense check should decide."""
-    chk = structured_check(robot, res, samples, seed, rows, rtol, residual_tol)
+    from . import structured  # imported for robots that take this path only (start-up time)
+
+    chk = structured.structured_check(robot, res, samples, seed, rows, rtol, residual_tol)
     n10 = 10 * robot.n
-    if chk.status == Status.UNDECIDED and dense_fits(robot, dense_samples, rows):
+    if chk.status == Status.UNDECIDED and structured.dense_fits(robot, dense_samples, rows):
         return None  # the dense check decides, and completes what DRNG missed
     d = decision_scale(robot, "paper")
     if chk.independent is not None and n10 * chk.rank_b > DENSE_BASIS_MAX:
@@ -354,10 +369,10 @@ def _structured(robot: Robot, res: DRNGResult, samples: int, seed: int, rows: st
                           np.zeros((n10, 0)), samples, chk.seconds, min_gap)
     message = chk.message
     if chk.status == Status.UNDECIDED:
+        need = structured.dense_bytes(robot, dense_samples, rows)
         message += (f"; the dense check, which would decide and complete the missing directions, does not fit in "
-                    f"memory (about {dense_bytes(robot, dense_samples, rows) / 1e9:.2g} GB); --no-verify gives "
-                    f"DRNG's span alone")
+                    f"memory (about {need / 1e9:.2g} GB); --no-verify gives DRNG's span alone")
     basis = None if span is None else np.linalg.qr(span)[0] if span.shape[1] else np.zeros((n10, 0))
     rms = float(np.sqrt(np.mean(chk.column_residuals ** 2))) if len(chk.column_residuals) else 0.0
     return Certificate(res, num, basis, chk.rank_b, 0, rms, chk.worst, chk.status, message,
-                       time.perf_counter() - t0, {"requested": samples, "kept": samples}, span, chk.independent)
+                       time.perf_counter() - t0, chk.sampling, span, chk.independent)

@@ -21,7 +21,6 @@ from ..model.scale import decision_scale, ordinary_size
 from ..numerics import measured_joints, row_mask, rows_spec
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, sym_params, to_dense, to_sparse
-from .coupled import coupled_columns
 from .principles import drng_columns
 from .rank import block_rank
 from .rules import rule_columns
@@ -625,7 +624,10 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     cols = drng_columns(robot, tol)
     if extended:
         cols = Columns.concat([cols, rule_columns(robot, tol)])
-        cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
+        if robot.couplings:  # R-M (its module imported for robots with couplings only: start-up time)
+            from .coupled import coupled_columns
+
+            cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
     extra = unmeasured_columns(robot, rows, tol)
     if len(extra):
         cols = Columns.concat([cols, extra])

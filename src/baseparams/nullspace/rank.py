@@ -90,7 +90,7 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
         if bb not in span_of or basis.shape[1] == 0:
             continue
         idx = order[span_of[bb][0]: span_of[bb][1]]
-        for p in np.unique(cols.parent[idx]):
+        for p in sorted(set(cols.parent[idx].tolist())):  # not np.unique: it imports numpy.ma
             grp = idx[cols.parent[idx] == p]
             split = _split_off_span(cols, grp, basis, tol)
             if split is None:

@@ -27,13 +27,24 @@ column entering a rank decision is divided by the norm it would have without can
 it is not: a full-rank block is full rank for the exact ``W`` of these samples, hence for the
 regressor. Memory and time are linear in the number of bodies (``S x n x 60`` numbers for the
 bodies' wrench maps); no ``(S rows, 10 n)`` matrix is formed.
+
+Coupled coordinates (URDF ``<mimic>``, linear couplings without loop joints): the states are
+drawn in the actuated coordinates (:func:`baseparams.numerics.closed_samples`, as the dense
+check) and an actuated coordinate moving several tree coordinates ``k`` (``dq_k = G[k, a]
+dq_a``) has one row ``sum_k G[k, a] L_k . sum_{i in subtree(k)} X_i pi_i`` (a *coupled row*),
+which sees the union of its coordinates' subtrees. (a) checks coupled rows directly; in (b) a
+coupled row enters the block of its *anchor*, the lowest common ancestor of its coordinates'
+bodies, where every column of that union is present, and each column carries the row's value
+accumulated over the coupled coordinates it has passed (a column at body ``b`` lives in
+``subtree(b)``, so ``b``'s coordinates see all of it). A coupled coordinate has no row of its
+own: its body's directions are carried up to the anchor.
 """
 
 from __future__ import annotations
 
 import heapq
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -42,8 +53,9 @@ from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..model.scale import decision_scale
+from ..numerics import STRUCTURED_MIN_BODIES as STRUCTURED_MIN_BODIES  # re-exported: where the path is described
 from ..numerics import available_bytes as _available_bytes
-from ..numerics import row_mask, rows_spec, sample_states
+from ..numerics import closed_samples, row_mask, rows_spec, sample_states
 from ..pga import adjoint, commutator, hat, se3_exp, swap
 from ..pga.core import screw_exp
 from ..regressor.tp import bar_lines
@@ -51,8 +63,6 @@ from .columns import Columns
 from .drng import DRNGResult
 from .rank import leading_spans
 
-#: trees with at least this many bodies are certified by the structured check (``method="auto"``)
-STRUCTURED_MIN_BODIES = 40
 #: default random states of the structured check: a joint's diagonal block then has ``30 x dofs``
 #: rows for at most ten columns, and each DRNG column is checked on 30 generic states
 STRUCTURED_SAMPLES = 30
@@ -95,6 +105,9 @@ class StructuredCheck:
     independent : Columns or None
         A basis of ``span(B)`` in compact form, SI ``paper`` convention (``rank_b`` linearly
         independent columns), when the echelon form needed no elimination; else ``None``.
+    sampling : dict or None
+        What the sampling did (``requested``, ``kept``; with couplings also ``cond_max``,
+        ``not_converged``, ``branch_jumps``, ``ill_conditioned``, ``max_loop_residual``).
     """
 
     status: Status
@@ -110,6 +123,7 @@ class StructuredCheck:
     samples: int
     seconds: float
     independent: Columns | None = None
+    sampling: dict | None = None
 
     __repr__ = summary_repr
 
@@ -128,12 +142,54 @@ def applicable(robot: Robot, rows: str) -> bool:
     Returns
     -------
     bool
-        True for a robot without loops or couplings and ``rows`` other than ``base`` (with the
-        base wrench alone every body is in one block: the dense check is that). An unmeasured
-        joint's block has no rows of its own: it is merged into its parent's, so the check
-        holds for any set of measured joints.
+        True for a robot without loop joints and ``rows`` other than ``base`` (with the base
+        wrench alone every body is in one block: the dense check is that); with couplings
+        (``<mimic>``) ``rows`` ``all`` only, the actuated generalized forces. An unmeasured
+        joint's block has no rows of its own: it is merged into its parent's, so the check holds
+        for any set of measured joints.
     """
-    return not robot.has_loops and robot.n > 0 and rows_spec(rows) != "base"
+    if robot.loops or robot.n == 0:
+        return False
+    spec = rows_spec(rows)
+    return spec == "all" if robot.couplings else spec != "base"
+
+
+def sampled_states(robot: Robot, samples: int, seed: int):
+    """The random states of the dense check's first set: tree states, or coupled ones.
+
+    Parameters
+    ----------
+    robot : Robot
+        A tree, possibly with couplings (no loop joints).
+    samples : int
+        Number of random states (actuated samples with couplings).
+    seed : int
+        Seed of :func:`numpy.random.default_rng`.
+
+    Returns
+    -------
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Tree coordinates, velocities and accelerations (``S`` kept samples).
+    G : ndarray, shape ``(S, dof, na)``, or None
+        ``dq / dq_a`` with couplings, else None.
+    info : dict
+        ``requested``, ``kept`` and with couplings the loop sampling counts.
+
+    Raises
+    ------
+    BaseparamsError
+        No sample satisfies the couplings.
+    """
+    rng = np.random.default_rng(seed)
+    if not robot.couplings:
+        q, dq, ddq = sample_states(robot, samples, rng)
+        return q, dq, ddq, None, {"requested": samples, "kept": samples}
+    cs = closed_samples(robot, samples, rng)
+    if cs.kept == 0:
+        raise BaseparamsError(f"robot {robot.name!r}: none of {samples} samples satisfied the couplings")
+    info = dict(requested=cs.requested, kept=cs.kept, cond_max=cs.cond_max, not_converged=cs.not_converged,
+                branch_jumps=cs.branch_jumps, ill_conditioned=cs.ill_conditioned, max_loop_residual=cs.max_residual)
+    return cs.q, cs.dq, cs.ddq, cs.G, info
 
 
 def tree_kinematics(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray):
@@ -182,7 +238,8 @@ def tree_kinematics(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray
     return g, v, a, lines
 
 
-def wrench_maps(robot: Robot, samples: int, seed: int, d10: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def wrench_maps(robot: Robot, samples: int, seed: int, d10: np.ndarray,
+                states: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Each body's wrench map and each joint's line on the random states of the dense check.
 
     Parameters
@@ -197,6 +254,9 @@ def wrench_maps(robot: Robot, samples: int, seed: int, d10: np.ndarray) -> tuple
     d10 : ndarray, shape ``(10,)``
         Per-parameter scale (:func:`baseparams.model.scale.decision_scale` of one body): the
         maps act on ``pi / d``.
+    states : tuple of ndarray, optional
+        ``(q, dq, ddq)`` to use instead of drawing them (e.g. coupled states,
+        :func:`sampled_states`); ``samples`` and ``seed`` are then unused.
 
     Returns
     -------
@@ -207,9 +267,8 @@ def wrench_maps(robot: Robot, samples: int, seed: int, d10: np.ndarray) -> tuple
     lines : ndarray, shape ``(dof, S, 6)``
         The joint lines (a floating root's: the basis ``e_k``).
     """
-    rng = np.random.default_rng(seed)
-    q, dq, ddq = sample_states(robot, samples, rng)
-    n = robot.n
+    q, dq, ddq = sample_states(robot, samples, np.random.default_rng(seed)) if states is None else states
+    samples, n = q.shape[0], robot.n
     g, v, acc, ln = tree_kinematics(robot, q, dq, ddq)  # one pass: the loop over bodies is the cost
     x = np.empty((n, samples, 6, 10))
     step = max(1, CHUNK // (40 * samples))
@@ -228,6 +287,102 @@ def _measured_dofs(robot: Robot, rows: str) -> list[np.ndarray]:
     mask = row_mask(robot, rows)
     qi, nd = robot.q_index, robot.ndofs
     return [np.arange(qi[i], qi[i] + nd[i])[mask[qi[i]:qi[i] + nd[i]]] for i in range(robot.n)]
+
+
+@dataclass(frozen=True, eq=False)
+class CoupledRow:
+    """The row of an actuated coordinate that moves several tree coordinates (a coupling).
+
+    Parameters
+    ----------
+    coords : ndarray of int, shape ``(m,)``
+        The tree coordinates it moves.
+    coef : ndarray, shape ``(S, m)``
+        ``G[s, coords, a]``: ``dq_k = coef dq_a``.
+    bodies : ndarray of int, shape ``(m,)``
+        The body of each coordinate.
+    anchor : int
+        Lowest common ancestor of ``bodies`` (-1: none, the row is not used for ranks).
+    """
+
+    coords: np.ndarray
+    coef: np.ndarray
+    bodies: np.ndarray
+    anchor: int
+
+    __repr__ = summary_repr
+
+
+def row_groups(robot: Robot, rows: str, big_g: np.ndarray | None) -> tuple[list[np.ndarray], list[CoupledRow]]:
+    """Per body its plain rows (tree coordinates measured alone), and the coupled rows.
+
+    Parameters
+    ----------
+    robot : Robot
+        The tree (``dof`` coordinates, ``n`` bodies).
+    rows : str
+        The measured generalized forces.
+    big_g : ndarray, shape ``(S, dof, na)``, or None
+        ``dq / dq_a`` with couplings (:func:`sampled_states`), else None.
+
+    Returns
+    -------
+    dofs : list of ndarray
+        Per body, the coordinates whose row is an actuated coordinate's alone (``G`` column
+        ``e_k``).
+    coupled : list of CoupledRow
+        The other actuated coordinates' rows.
+    """
+    if big_g is None:
+        return _measured_dofs(robot, rows), []
+    moves = np.any(big_g != 0, axis=0)  # (dof, na)
+    plain = np.zeros(robot.dof, dtype=bool)
+    coupled = []
+    for a in range(big_g.shape[2]):
+        ks = np.flatnonzero(moves[:, a])
+        if len(ks) == 1 and np.all(big_g[:, ks[0], a] == 1.0):
+            plain[ks[0]] = True
+        elif len(ks):
+            bodies = robot.dof_body[ks]
+            coupled.append(CoupledRow(ks, big_g[:, ks, a], bodies, _common_ancestor(robot.parent, bodies)))
+    qi, nd = robot.q_index, robot.ndofs
+    return [np.arange(qi[i], qi[i] + nd[i])[plain[qi[i]:qi[i] + nd[i]]] for i in range(robot.n)], coupled
+
+
+def _common_ancestor(parent, bodies: np.ndarray) -> int:
+    """Lowest common ancestor (or self) of ``bodies`` (-1 when they are under different roots)."""
+    chains = []
+    for b in bodies:
+        chain = []
+        while b >= 0:
+            chain.append(int(b))
+            b = parent[b]
+        chains.append(chain[::-1])
+    k = 0
+    while all(len(c) > k for c in chains) and len({c[k] for c in chains}) == 1:
+        k += 1
+    return chains[0][k - 1] if k else -1
+
+
+def _subtree_intervals(parent) -> tuple[np.ndarray, np.ndarray]:
+    """``tin, tout``: body ``i`` is in ``subtree(b)`` iff ``tin[b] <= tin[i] < tout[b]`` (preorder)."""
+    n = len(parent)
+    children: list[list[int]] = [[] for _ in range(n)]
+    roots = []
+    for i, p in enumerate(parent):
+        (children[p] if p >= 0 else roots).append(i)
+    tin, tout = np.zeros(n, dtype=int), np.zeros(n, dtype=int)
+    clock, stack = 0, [(r, False) for r in reversed(roots)]
+    while stack:
+        b, done = stack.pop()
+        if done:
+            tout[b] = clock
+            continue
+        tin[b] = clock
+        clock += 1
+        stack.append((b, True))
+        stack.extend((c, False) for c in reversed(children[b]))
+    return tin, tout
 
 
 def _ratio(num2: np.ndarray, den2: np.ndarray) -> np.ndarray:
@@ -273,7 +428,7 @@ def _wrenches(x: np.ndarray, bodies: np.ndarray, h: np.ndarray) -> np.ndarray:
 
 
 def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarray,
-                     dofs: list[np.ndarray], tol: float) -> np.ndarray:
+                     dofs: list[np.ndarray], tol: float, coupled: list[CoupledRow] | tuple = ()) -> np.ndarray:
     """Per column ``b`` (normalised), its worst row group's ``||W b||`` relative to its terms' size.
 
     Parameters
@@ -291,6 +446,8 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
         Per body, its measured coordinates.
     tol : float
         Residuals above it fail; a column whose total wrench is above it is walked up the tree.
+    coupled : list of CoupledRow, optional
+        Coupled rows (:func:`row_groups`), each checked on every column.
 
     Returns
     -------
@@ -300,14 +457,18 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
         cancellation); the worst, or the total wrench's when it clears every row above.
     """
     par = np.asarray(robot.parent, dtype=int)
-    norm = np.sqrt(np.sum(cols.h ** 2, 1) + np.sum(cols.hp ** 2 * (cols.parent >= 0)[:, None], 1)
-                   + np.sum(cols.he ** 2 * (cols.extra >= 0)[:, None], 1))
-    norm = np.where(norm > 0, norm, 1.0)[:, None]
+    norm2 = (np.sum(cols.h ** 2, 1) + np.sum(cols.hp ** 2 * (cols.parent >= 0)[:, None], 1)
+             + np.sum(cols.he ** 2 * (cols.extra >= 0)[:, None], 1))
+    more = cols.has_more()
+    for j in np.flatnonzero(more):
+        norm2[j] += float(np.sum(np.asarray(cols.more[j][1], dtype=float) ** 2))
+    flat_norm = np.where(norm2 > 0, np.sqrt(norm2), 1.0)
+    norm = flat_norm[:, None]
     h, hp, he = cols.h / norm, cols.hp / norm, cols.he / norm
     x2 = np.sum(x * x, axis=(2, 3))  # (n, S)
     l2 = np.sum(lines * lines, axis=2)  # (dof, S)
     out = np.zeros(len(cols))
-    common = (cols.extra < 0) & ((cols.parent < 0) | (cols.parent == par[cols.child]))
+    common = (cols.extra < 0) & ~more & ((cols.parent < 0) | (cols.parent == par[cols.child]))
     walk = ~common
     ptr = np.r_[0, np.cumsum([len(d) for d in dofs])]
     flat = np.concatenate(dofs) if dofs else np.zeros(0, dtype=int)
@@ -333,11 +494,56 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
         walk[k[r_tot > tol]] = True
     for j in np.flatnonzero(walk):
         parts: dict[int, list] = {}
-        for body, blk in ((cols.child[j], h[j]), (cols.parent[j], hp[j]), (cols.extra[j], he[j])):
+        extra_blocks = zip(cols.more[j][0], np.asarray(cols.more[j][1], dtype=float) / flat_norm[j]) if more[j] else ()
+        for body, blk in ((cols.child[j], h[j]), (cols.parent[j], hp[j]), (cols.extra[j], he[j]), *extra_blocks):
             if body >= 0:
                 w, d2 = x[body] @ blk, x2[body] * float(blk @ blk)
                 parts[int(body)] = [parts[int(body)][0] + w, parts[int(body)][1] + d2] if body in parts else [w, d2]
         out[j] = _walk(parts, par, lines, l2, dofs, tol)
+    if coupled:
+        out = np.maximum(out, _coupled_residuals(cols, flat_norm, x, x2, lines, l2, coupled, par))
+    return out
+
+
+def _blocks(cols: Columns, norm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every block of every column: ``(column, body, block / norm[column])``, ``more`` included."""
+    idx, bodies, blocks = [np.arange(len(cols))], [cols.child], [cols.h]
+    for body, hh in ((cols.parent, cols.hp), (cols.extra, cols.he)):
+        ok = np.flatnonzero(body >= 0)
+        idx.append(ok)
+        bodies.append(body[ok])
+        blocks.append(hh[ok])
+    for j in np.flatnonzero(cols.has_more()):
+        mb, mh = cols.more[j]
+        idx.append(np.full(len(mb), j))
+        bodies.append(np.asarray(mb, dtype=int))
+        blocks.append(np.asarray(mh, dtype=float).reshape(-1, 10))
+    idx = np.concatenate(idx)
+    return idx, np.concatenate(bodies), np.concatenate(blocks) / norm[idx][:, None]
+
+
+def _coupled_residuals(cols: Columns, norm: np.ndarray, x: np.ndarray, x2: np.ndarray, lines: np.ndarray,
+                       l2: np.ndarray, coupled: list[CoupledRow], par: np.ndarray) -> np.ndarray:
+    """Per column, the worst coupled row's ``||row @ b||`` relative to the size of its terms.
+
+    Coupled coordinate ``k`` sees the column's blocks on bodies of its subtree.
+    """
+    tin, tout = _subtree_intervals(par)
+    idx, bodies, blocks = _blocks(cols, norm)
+    w = np.einsum("ksce,ke->ksc", x[bodies], blocks)  # (blocks, S, 6)
+    d2 = x2[bodies] * np.sum(blocks ** 2, 1)[:, None]
+    tb = tin[bodies]
+    k, s = len(cols), x.shape[1]
+    out = np.zeros(k)
+    for row in coupled:
+        val, den = np.zeros((k, s)), np.zeros(k)
+        for m, (kk, bk) in enumerate(zip(row.coords, row.bodies)):
+            g = row.coef[:, m]
+            inside = np.flatnonzero((tb >= tin[bk]) & (tb < tout[bk]))
+            if len(inside):
+                np.add.at(val, idx[inside], g * np.einsum("sc,ksc->ks", lines[kk], w[inside]))
+                np.add.at(den, idx[inside], np.sum(g ** 2 * l2[kk] * d2[inside], 1))
+        out = np.maximum(out, _ratio(np.sum(val ** 2, 1), den))
     return out
 
 
@@ -372,7 +578,7 @@ def diagonal_blocks(q: np.ndarray, lead: np.ndarray, x: np.ndarray, lines: np.nd
     x2 = np.sum(x * x, axis=(2, 3))
     l2 = np.sum(lines * lines, axis=2)
     bad, smallest = [], np.inf
-    for mj in np.unique(m):
+    for mj in sorted(set(m.tolist())):  # not np.unique: it imports numpy.ma (start-up time)
         group = np.flatnonzero(m == mj)
         step = max(1, CHUNK // (max(mj, 1) * s * 20))
         for a in range(0, len(group), step):
@@ -384,7 +590,7 @@ def diagonal_blocks(q: np.ndarray, lead: np.ndarray, x: np.ndarray, lines: np.nd
             blk = np.einsum("bmsc,bsce->bmse", lines[li], x[bodies]).reshape(len(bodies), mj * s, 10)
             mag = np.sqrt(np.einsum("bms,bs->b", l2[li], x2[bodies]))
             blk = (blk @ q[bodies]) / np.where(mag > 0, mag, 1.0)[:, None, None]
-            for lj in np.unique(lead[bodies]):
+            for lj in sorted(set(lead[bodies].tolist())):
                 sub = np.flatnonzero(lead[bodies] == lj)
                 if lj == 10:
                     continue
@@ -400,7 +606,8 @@ def diagonal_blocks(q: np.ndarray, lead: np.ndarray, x: np.ndarray, lines: np.nd
 
 
 def merge_blocks(deficient: np.ndarray, par: np.ndarray, q: np.ndarray, lead: np.ndarray, x: np.ndarray,
-                 lines: np.ndarray, dofs: list[np.ndarray], rtol: float) -> tuple[int, dict[int, int], float]:
+                 lines: np.ndarray, dofs: list[np.ndarray], rtol: float,
+                 coupled: list[CoupledRow] | tuple = ()) -> tuple[int, dict[int, int], float]:
     """Carry the rank-deficient blocks' null combinations into their parents' blocks, leaves first.
 
     Parameters
@@ -411,6 +618,9 @@ def merge_blocks(deficient: np.ndarray, par: np.ndarray, q: np.ndarray, lead: np
         Parent of each body (``-1``: a root).
     q, lead, x, lines, dofs, rtol
         As for :func:`diagonal_blocks`.
+    coupled : list of CoupledRow, optional
+        Coupled rows (:func:`row_groups`): each column carries their values accumulated over
+        the coupled coordinates it has passed; a row enters its anchor's block.
 
     Returns
     -------
@@ -424,21 +634,29 @@ def merge_blocks(deficient: np.ndarray, par: np.ndarray, q: np.ndarray, lead: np
     """
     x2 = np.sum(x * x, axis=(2, 3))
     l2 = np.sum(lines * lines, axis=2)
-    pending: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
+    at_body: dict[int, list] = {}
+    for r, row in enumerate(coupled):
+        for m, (kk, bk) in enumerate(zip(row.coords, row.bodies)):
+            at_body.setdefault(int(bk), []).append((r, int(kk), row.coef[:, m]))
+    pending: dict[int, list[tuple]] = {}
     heap = [-int(b) for b in deficient]
     heapq.heapify(heap)
     queued = set(int(b) for b in deficient)
     missing, merged, smallest = 0, {}, np.inf
     while heap:
         b = -heapq.heappop(heap)
-        u = q[b][:, lead[b]:]
-        own = np.moveaxis(x[b] @ u, -1, 0)  # (c, S, 6)
-        wr = np.concatenate([own] + [w[None] for w, _ in pending.get(b, [])])
-        mg = np.concatenate([np.broadcast_to(np.sqrt(x2[b]), (len(own), x2.shape[1]))]
-                            + [g[None] for _, g in pending.pop(b, [])])
+        wr, mg, acc, am = _block_columns(x[b] @ q[b][:, lead[b]:], np.sqrt(x2[b]), pending.pop(b, []), len(coupled))
+        for r, kk, g in at_body.get(b, ()):  # every column here lives in subtree(b): b's coordinates see it whole
+            acc[:, r] += g * np.einsum("sc,ksc->ks", lines[kk], wr)
+            am[:, r] += np.abs(g) * np.sqrt(l2[kk]) * mg
+        here = [r for r, row in enumerate(coupled) if row.anchor == b]
         li = dofs[b]
         mat = np.einsum("msc,ksc->msk", lines[li], wr).reshape(-1, len(wr))
-        mag = np.sqrt(np.einsum("ms,ks->k", l2[li], mg ** 2))
+        mag2 = np.einsum("ms,ks->k", l2[li], mg ** 2)
+        if here:
+            mat = np.concatenate([mat, acc[:, here].reshape(len(wr), -1).T])
+            mag2 = mag2 + np.sum(am[:, here] ** 2, axis=(1, 2))
+        mag = np.sqrt(mag2)
         mag = np.where(mag > 0, mag, 1.0)
         if mat.shape[0]:
             _, sv, vt = np.linalg.svd(mat / mag, full_matrices=mat.shape[0] < mat.shape[1])
@@ -455,13 +673,28 @@ def merge_blocks(deficient: np.ndarray, par: np.ndarray, q: np.ndarray, lead: np
             missing += len(coef)
             continue
         merged[b] = p
-        new_w = np.einsum("nk,ksc->nsc", coef, wr)
-        new_g = np.abs(coef) @ mg
-        pending.setdefault(p, []).extend(zip(new_w, new_g))
+        pending.setdefault(p, []).extend(zip(np.einsum("nk,ksc->nsc", coef, wr), np.abs(coef) @ mg,
+                                             np.einsum("nk,krs->nrs", coef, acc),
+                                             np.einsum("nk,krs->nrs", np.abs(coef), am)))
         if p not in queued:
             queued.add(p)
             heapq.heappush(heap, -p)
     return missing, merged, smallest
+
+
+def _block_columns(own: np.ndarray, mag: np.ndarray, pending: list[tuple], rows: int):
+    """A block's columns: its own ``x_b U_b`` ``(S, 6, c)`` and the combinations carried into it.
+
+    Returns ``wrenches (k, S, 6)``, ``magnitudes (k, S)``, and the coupled rows' accumulated
+    values and magnitudes ``(k, rows, S)`` (zero for the own columns).
+    """
+    own = np.moveaxis(own, -1, 0)
+    s = own.shape[1]
+    wr = np.concatenate([own] + [w[None] for w, _, _, _ in pending])
+    mg = np.concatenate([np.broadcast_to(mag, (len(own), s))] + [g[None] for _, g, _, _ in pending])
+    acc = np.concatenate([np.zeros((len(own), rows, s))] + [a[None] for _, _, a, _ in pending])
+    am = np.concatenate([np.zeros((len(own), rows, s))] + [a[None] for _, _, _, a in pending])
+    return wr, mg, acc, am
 
 
 def _largest_group(merged: dict[int, int], n: int) -> tuple[int, int]:
@@ -486,7 +719,7 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
     Parameters
     ----------
     robot : Robot
-        A tree (:func:`applicable`), ``n`` bodies.
+        A tree, possibly with couplings (:func:`applicable`), ``n`` bodies.
     result : DRNGResult
         DRNG's columns for ``rows``.
     samples : int, optional
@@ -510,31 +743,34 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
     Raises
     ------
     BaseparamsError
-        The check does not apply (loops, or the base wrench alone measured).
+        The check does not apply (loop joints, the base wrench alone measured, or couplings with
+        rows other than ``all``), or no sample satisfies the couplings.
     """
     t0 = time.perf_counter()
     if not applicable(robot, rows):
         raise BaseparamsError(f"robot {robot.name!r}: the structured certificate needs a tree whose joint rows are "
-                              f"measured (rows other than 'base'), got rows {rows!r}"
-                              f"{' and loops' if robot.has_loops else ''}")
+                              f"measured (rows other than 'base'; with couplings 'all'), got rows {rows!r}"
+                              f"{' and loop joints' if robot.loops else ''}")
     samples = STRUCTURED_SAMPLES if samples is None else samples
     n, d10 = robot.n, decision_scale(robot, "paper")[:10]
     cols = result.columns
-    raw = replace(cols, h=cols.h / d10, hp=cols.hp / d10, he=cols.he / d10)
-    x, lines = wrench_maps(robot, samples, seed, d10)
-    dofs = _measured_dofs(robot, rows)
-    res = column_residuals(raw, robot, x, lines, dofs, residual_tol) if len(cols) else np.zeros(0)
+    raw = cols.scaled(1.0 / d10)
+    *states, big_g, sampling = sampled_states(robot, samples, seed)
+    x, lines = wrench_maps(robot, samples, seed, d10, states=tuple(states))
+    dofs, coupled = row_groups(robot, rows, big_g)
+    res = column_residuals(raw, robot, x, lines, dofs, residual_tol, coupled) if len(cols) else np.zeros(0)
     worst = float(res.max()) if len(res) else 0.0
     q, lead, indep = leading_spans(raw, n)
     rank_b = int(lead.sum())
     if indep is not None:
-        indep = replace(indep, h=indep.h * d10, hp=indep.hp * d10, he=indep.he * d10)
+        indep = indep.scaled(d10)
     par = np.asarray(robot.parent, dtype=int)
     bad, small = diagonal_blocks(q, lead, x, lines, dofs, rtol)
-    missing, merged, small2 = merge_blocks(bad, par, q, lead, x, lines, dofs, rtol)
+    missing, merged, small2 = merge_blocks(bad, par, q, lead, x, lines, dofs, rtol, coupled)
     nblocks, largest = _largest_group(merged, n)
     out = dict(rank_b=rank_b, rank_w=10 * n - rank_b - missing, missing=missing, blocks=nblocks, largest=largest,
-               smallest_sv=min(small, small2), column_residuals=res, worst=worst, samples=samples, independent=indep)
+               smallest_sv=min(small, small2), column_residuals=res, worst=worst, samples=sampling["kept"],
+               independent=indep, sampling=sampling)
     status, message = _structured_verdict(result, out, rtol, residual_tol)
     return StructuredCheck(status, message, seconds=time.perf_counter() - t0, **out)
 
@@ -581,10 +817,10 @@ def independent_columns(robot: Robot, result: DRNGResult) -> Columns | None:
     """
     d10 = decision_scale(robot, "paper")[:10]
     cols = result.columns
-    _, lead, indep = leading_spans(replace(cols, h=cols.h / d10, hp=cols.hp / d10, he=cols.he / d10), robot.n)
+    _, lead, indep = leading_spans(cols.scaled(1.0 / d10), robot.n)
     if indep is None or int(lead.sum()) != result.rank:
         return None
-    return replace(indep, h=indep.h * d10, hp=indep.hp * d10, he=indep.he * d10)
+    return indep.scaled(d10)
 
 
 def dense_bytes(robot: Robot, samples: int, rows: str = "all") -> float:

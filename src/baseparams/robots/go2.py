@@ -7,9 +7,7 @@ licence beside the file in ``data/unitree_go2``). 13 bodies, 130 parameters, 18 
 from __future__ import annotations
 
 import warnings
-from importlib import resources
 
-from ..io.mjcf import MJCFWarning, load_mjcf
 from ..model import Robot
 
 
@@ -26,6 +24,10 @@ def go2(gravity=(0.0, 0.0, -9.81)) -> Robot:
     Robot
         13 bodies, 130 parameters, 18 dofs.
     """
+    from importlib import resources
+
+    from ..io.mjcf import MJCFWarning, load_mjcf  # the MJCF reader for this robot only (start-up time)
+
     with resources.as_file(resources.files(__package__) / "data" / "unitree_go2" / "go2.xml") as p, \
             warnings.catch_warnings():
         # the shipped file has no meshes on purpose: its inertias are explicit

@@ -137,9 +137,14 @@ class FleetResult:
         str or None
             The :class:`~baseparams.ident.select.Selection`'s line, blocks being groups of logs.
         """
-        sel = None if self.pooled is None else self.pooled.selection
-        if sel is None:
+        if self.pooled is None:
             return None
+        sel = self.pooled.selection
+        if sel is None:
+            if self.pooled.method != "auto":
+                return None
+            return ("default estimate: weighted least squares; one log, nothing to cross-validate over the logs: "
+                    "identify it alone for the model file's prior")
         return sel.note().replace("blocked cross-validation on the training data",
                                   "cross-validation over the logs (each block whole logs)")
 

@@ -219,7 +219,10 @@ def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
     nb = model.n_base
     prior_cov = np.zeros((model.n_params, model.n_params))
     prior_cov[:nb, :nb] = s / sel.lam
-    sel = replace(sel, theta0=theta0, prior_cov=prior_cov)
+    from .select import no_prior_bodies
+
+    names = tuple(n for n, x in zip(model.robot.names, no_prior_bodies(model.robot)) if x)
+    sel = replace(sel, theta0=theta0, prior_cov=prior_cov, no_prior=names)
     theta = ridge(base.R11, base.r12, theta0, sel.penalty)
     res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
     # the least-squares statistics stay: pulled_covariance maps the covariance once it is chosen
@@ -251,7 +254,7 @@ def pulled_covariance(f: Fit) -> Fit:
     """
     from dataclasses import replace
 
-    from .select import prior_error_scale
+    from .select import prior_error_scale, psd
     from .uncertainty import with_covariance
 
     sel, est = f.selection, f.estimate
@@ -260,18 +263,20 @@ def pulled_covariance(f: Fit) -> Fit:
     gram = est.R11.T @ est.R11
     m = np.linalg.solve(gram + sel.penalty, gram)
     nb = f.model.analysis.n_base
-    cov = est.cov
-    kappa = 1.0
+    cov = psd(est.cov)  # rounding on an ill-conditioned fit can make the sandwich indefinite
+    kappa = float("nan")
     if sel.prior_cov is not None and sel.theta0 is not None:
         d = np.linalg.solve(est.R11, est.r12)[:nb] - sel.theta0[:nb]
         kappa = prior_error_scale(d, cov[:nb, :nb], sel.prior_cov[:nb, :nb])
-        rest = np.eye(len(m)) - m
-        cov = m @ cov @ m.T + kappa * rest @ sel.prior_cov @ rest.T
+    rest = np.eye(len(m)) - m
+    if np.isfinite(kappa):
+        how = f"the file's error as the data show it: about {np.sqrt(kappa / sel.lam):.2g} x each body's scales"
     else:
-        cov = m @ cov @ m.T
-    label = (f"{est.covariance}, with the model file's prior (weight {sel.lam:g}; the file's error as the data "
-             f"show it: {np.sqrt(kappa):.3g} x the prior's stated scale)")
-    return replace(f, estimate=with_covariance(est, f.theta, cov, label))
+        how = "the file's error as the prior states it: the data are too ill-conditioned to measure it"
+    prior_cov = sel.prior_cov if sel.prior_cov is not None else np.zeros_like(cov)
+    cov = psd(m @ cov @ m.T + (kappa if np.isfinite(kappa) else 1.0) * rest @ prior_cov @ rest.T)
+    label = f"{est.covariance}, with the model file's prior (weight {sel.lam:g}; {how})"
+    return replace(f, estimate=with_covariance(est, f.theta, cov, label), selection=replace(sel, kappa=kappa))
 
 
 #: a term is poorly determined when its std exceeds this percentage of its value ...
@@ -698,7 +703,8 @@ class Identification:
         Returns
         -------
         dict
-            ``method, estimator, covariance, model, convention, n_samples{read, used, removed}, condition_number,
+            ``method, estimator, selection, covariance, model, convention, n_samples{read, used, removed},
+            condition_number,
             excitation{condition_number, weak, poorly_determined, all_excited}, base_parameters,
             drives, couplings,
             train, validation, physical, notes``; ``weak`` names the parameters carrying
@@ -721,7 +727,8 @@ class Identification:
         sel = f.selection
         estimator = f.method if sel is None else (f"{f.method}: {sel.weighting.upper()}" + (
             f" with the model file's prior, weight {sel.lam:g}" if sel.lam else ""))
-        return {"method": f.method, "estimator": estimator, "covariance": f.estimate.covariance,
+        return {"method": f.method, "estimator": estimator, "selection": None if sel is None else sel.to_json(),
+                "covariance": f.estimate.covariance,
                 "model": self.model.robot.name, "convention": self.model.analysis.convention,
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
                 "excitation": {"condition_number": cond, "weak": weak, "poorly_determined": loose,
@@ -1154,8 +1161,16 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     held = keep if keep is not None and fitted_mb <= memory_mb else None
     parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params, held)[0]
              for c in chunks.plan(full.n_samples, size, margin)]
-    if parts_out is not None:
-        parts_out.extend(parts)
+    if parts_out is not None and held:
+        # the cross-validation's blocks from the fitted rows, split as the at-once path splits them
+        from .estimate import RowAccumulator
+        from .select import FOLDS
+
+        a_all, t_all = np.concatenate([x for x, _ in held]), np.concatenate([y for _, y in held])
+        for idx in np.array_split(np.arange(len(a_all)), FOLDS):
+            parts_out.append(RowAccumulator(len(model.coords), model.n_params).add(a_all[idx], t_all[idx]))
+    elif parts_out is not None:
+        parts_out.extend(parts)  # blocks at chunk boundaries (the fitted rows do not fit in memory_mb)
     return chunks.combine(parts), (f"parallel filtering in {len(parts)} chunks of {size} samples with "
                                    f"{margin}-sample overlaps (equal to the whole log's to rounding)")
 

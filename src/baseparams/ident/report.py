@@ -85,6 +85,6 @@ def _excitation_line(e: dict) -> str:
     if loose:
         shown = ", ".join(loose[:12]) + (f" and {len(loose) - 12} more" if len(loose) > 12 else "")
         parts.append(f"{len(loose)} term(s) poorly determined (std above their value, inflated by collinearity): "
-                     f"{shown}; a richer trajectory (baseparams excite) or the default estimate's pull towards the "
-                     "model file helps")
+                     f"{shown}; a richer trajectory (baseparams excite) helps, or a model file whose inertias "
+                     "the default estimate can take as its prior")
     return "excitation: " + ("; ".join(parts) if parts else "every model parameter excited and determined")

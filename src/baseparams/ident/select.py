@@ -10,7 +10,8 @@ good on the recording and poor on another one. The default (``method="auto"``) i
 link frame (``khalil`` order) get standard deviations ``m``, ``m L`` and ``m L^2`` for its mass,
 first and second moments (``m`` the file's mass, ``L`` the body's radius of gyration about its
 frame, both floored), mapped to the base parameters through the regrouping
-(``S = G J D J^T G^T``, :func:`prior_covariance`). ``s2`` is the residual variance of the
+(``S = G J D J^T G^T``, :func:`prior_covariance`; a body whose file mass or inertia is zero
+gets no prior). ``s2`` is the residual variance of the
 (weighted) least-squares fit and ``lam = 1 / alpha^2``: the file is trusted to within ``alpha``
 times those scales. A parameter the data determine to well within the prior's scale keeps its
 least-squares value (its shrink is ``var_LS / (var_LS + alpha^2 var_prior)``), a direction the
@@ -21,9 +22,12 @@ information, well-excited logs are not biased towards a file that may be poor. D
 The row weighting (OLS, or WLS with per-joint noise) and ``lam`` (0 = no pull is a candidate)
 are chosen by **blocked cross-validation on the training data**: the training rows are cut
 into ``K`` contiguous time blocks (serially correlated samples stay together), each block is
-predicted from the others, and the pair with the smallest pooled held-out RMS (unweighted, the
-measure a user checks) is kept. Only the training data are used; the factors are the streamed
-``(p + 1, p + 1)`` triangles of each block, so memory does not grow with the log.
+predicted from the others (unweighted RMS, the measure a user checks), and the pair with the
+smallest median RMS over the folds is kept: a fold whose held-out block brings what the others
+lack (a short log's only reversal of a joint, extrapolated through its Coulomb and offset
+columns, can be off by 1e5) cannot decide alone. Only the training
+data are used; the factors are the streamed ``(p + 1, p + 1)`` triangles of each block, so
+memory does not grow with the log.
 """
 
 from __future__ import annotations
@@ -55,7 +59,8 @@ class Selection:
     lambdas : tuple of float
         The candidate weights.
     cv_rms : dict of str to tuple of float
-        Pooled held-out RMS of each candidate weight, per weighting [N m or N, unweighted].
+        Median over the folds of each candidate weight's held-out RMS, per weighting [N m or N,
+        unweighted].
     folds : int
         Number of contiguous blocks.
     penalty : ndarray, shape ``(p, p)``, optional
@@ -65,6 +70,11 @@ class Selection:
         The prior's values (the model file's parameters).
     prior_cov : ndarray, shape ``(p, p)``, optional
         The prior's covariance ``S / lam`` as the penalty states it (zero for the drive terms).
+    kappa : float, optional
+        The file's error in units of ``prior_cov`` as the data show it
+        (:func:`prior_error_scale`; NaN: not measurable), once the covariance is computed.
+    no_prior : tuple of str
+        Bodies the file gives no mass or inertia: left to the data (:func:`no_prior_bodies`).
     """
 
     weighting: str
@@ -75,10 +85,25 @@ class Selection:
     penalty: np.ndarray | None = field(default=None, repr=False)
     theta0: np.ndarray | None = field(default=None, repr=False)
     prior_cov: np.ndarray | None = field(default=None, repr=False)
+    kappa: float | None = None
+    no_prior: tuple = ()
 
     def __repr__(self) -> str:
         return (f"<Selection: {self.weighting.upper()}, prior weight {self.lam:g} of {len(self.lambdas)} by "
                 f"{self.folds}-fold blocked cross-validation>")
+
+    def to_json(self) -> dict:
+        """The choice, machine-readable.
+
+        Returns
+        -------
+        dict
+            ``weighting, lam, lambdas, cv_rms{weighting: [...]}, folds, kappa, no_prior``.
+        """
+        k = self.kappa
+        return {"weighting": self.weighting, "lam": self.lam, "lambdas": list(self.lambdas),
+                "cv_rms": {w: list(v) for w, v in self.cv_rms.items()}, "folds": self.folds,
+                "kappa": None if k is None or not np.isfinite(k) else float(k), "no_prior": list(self.no_prior)}
 
     def note(self) -> str:
         """One line for the report: what was chosen and why.
@@ -94,6 +119,8 @@ class Selection:
         other = [w for w in self.cv_rms if w != self.weighting]
         alt = "".join(f", {w.upper()} {min(self.cv_rms[w]):.4g}" for w in other)
         how = "weighted (per joint)" if self.weighting == "wls" else "ordinary"
+        if self.no_prior:
+            alt += f"; no prior for {', '.join(self.no_prior)} (no mass or inertia in the file)"
         if self.lam == 0:
             return (f"default estimate: {how} least squares, chosen by {self.folds}-fold blocked cross-validation "
                     f"on the training data (held-out RMS {plain:.4g}{alt}); the model file's parameters as a prior "
@@ -153,12 +180,18 @@ def prior_covariance(model) -> np.ndarray:
     n = robot.n
     kh = robot.parameters("khalil").reshape(n, 10)  # XX XY XZ YY YZ ZZ MX MY MZ M, link frame
     mass = np.abs(kh[:, 9])
-    moving = mass[mass > 0]
+    second = kh[:, 0] + kh[:, 3] + kh[:, 5]
+    given = no_prior_bodies(robot) == 0
+    moving = mass[given]
     m_floor = 0.05 * (float(np.median(moving)) if moving.size else 1.0)
     m = np.maximum(mass, m_floor)
-    gyr = np.sqrt(np.maximum(kh[:, 0] + kh[:, 3] + kh[:, 5], 0.0) / (2.0 * m))
-    sizes = gyr[gyr > 0]
+    gyr = np.sqrt(np.maximum(second, 0.0) / (2.0 * m))
+    sizes = gyr[given & (gyr > 0)]
     length = np.maximum(gyr, 0.25 * (float(np.median(sizes)) if sizes.size else 0.1))
+    # a body the file gives no mass or no inertia: practically no prior (30 x the robot's largest
+    # mass, 3 x its largest size: its directions are the data's)
+    m = np.where(given, m, 30.0 * float(m[given].max() if given.any() else 1.0))
+    length = np.where(given, length, 3.0 * float(length[given].max() if given.any() else 0.1))
     std = np.column_stack([np.repeat((m * length**2)[:, None], 6, axis=1),
                            np.repeat((m * length)[:, None], 3, axis=1), m]).reshape(-1)
     # J: khalil (link frames) -> paper (world frame at q = 0), block diagonal: one column per slot
@@ -172,6 +205,24 @@ def prior_covariance(model) -> np.ndarray:
     s = (gj * std**2) @ gj.T
     s = 0.5 * (s + s.T)
     return s + 1e-12 * max(float(np.trace(s)) / max(len(s), 1), 1e-300) * np.eye(len(s))
+
+
+def no_prior_bodies(robot) -> np.ndarray:
+    """Bodies the model file gives no inertia: zero mass or zero rotational inertia.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    ndarray of bool, shape ``(n,)``
+        True where the file's mass or the trace of its second moments is zero: the prior
+        leaves those bodies to the data (:func:`prior_covariance`).
+    """
+    kh = robot.parameters("khalil").reshape(robot.n, 10)
+    return (np.abs(kh[:, 9]) <= 0) | (kh[:, 0] + kh[:, 3] + kh[:, 5] <= 0)
 
 
 def prior_precision(model, s: np.ndarray | None = None) -> np.ndarray:
@@ -263,20 +314,28 @@ def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, p
     blocks = [b for b in blocks if b.samples > 0]
     if len(blocks) < 2:
         return None
-    count = sum(b.samples * b.nrows for b in blocks)
-    cv, s2 = {}, {}
+    cands, fold_rms, s2 = [], [], {}
+    counts = np.array([b.samples * b.nrows for b in blocks], dtype=float)
     for name, w in weightings.items():
         r11, _, rho2, n_obs = _system(blocks, w)
         s2[name] = noise_variance(r11, rho2, n_obs)
-        sse = np.zeros(len(lambdas))
+        sse = np.zeros((len(lambdas), len(blocks)))
         for k, held in enumerate(blocks):
             a11, a12, _, _ = _system(blocks[:k] + blocks[k + 1:], w)
             for i, lam in enumerate(lambdas):
                 pen = lam * s2[name] * precision if lam else None
-                sse[i] += _sse(held, ridge(a11, a12, theta0, pen))
-        cv[name] = tuple(float(x) for x in np.sqrt(sse / max(count, 1)))
-    scores = [(v if np.isfinite(v) else np.inf, name, i) for name in cv for i, v in enumerate(cv[name])]
-    _, name, i = min(scores, key=lambda s: (s[0], s[2]))  # ties: the weaker prior
+                sse[i, k] = _sse(held, ridge(a11, a12, theta0, pen))
+        for i in range(len(lambdas)):
+            cands.append((name, i))
+            fold_rms.append(np.sqrt(sse[i] / np.maximum(counts, 1)))
+    rms = np.array(fold_rms)  # (candidates, folds)
+    # the median over the folds: one fold whose held-out block brings what the others lack (a
+    # short log's only reversal of a joint, extrapolated through its Coulomb and offset columns)
+    # cannot decide alone
+    med = np.median(np.where(np.isfinite(rms), rms, np.inf), axis=1)
+    best = min(range(len(cands)), key=lambda c: (med[c], cands[c][1]))  # ties: the weaker prior
+    name, i = cands[best]
+    cv = {w: tuple(float(med[c]) for c in range(len(cands)) if cands[c][0] == w) for w in weightings}
     lam = float(lambdas[i])
     return Selection(name, lam, tuple(float(x) for x in lambdas), cv, len(blocks),
                      lam * s2[name] * precision if lam else None)
@@ -333,15 +392,14 @@ def prior_error_scale(d: np.ndarray, cov_ls: np.ndarray, prior_cov: np.ndarray) 
     Returns
     -------
     float
-        ``kappa`` in ``[0, 1e8]``.
+        ``kappa`` in ``[0, 1e8]``; NaN when it cannot be estimated (``C`` not positive, or no
+        stationary point below 1e8: an ill-conditioned fit).
     """
-    try:
-        low = np.linalg.cholesky(0.5 * (cov_ls + cov_ls.T))
-    except np.linalg.LinAlgError:
-        w, v = np.linalg.eigh(0.5 * (cov_ls + cov_ls.T))
-        low = v * np.sqrt(np.maximum(w, w.max() * 1e-14))
-    inv_l = np.linalg.inv(low)
-    g, u = np.linalg.eigh(inv_l @ (0.5 * (prior_cov + prior_cov.T)) @ inv_l.T)
+    w, v = np.linalg.eigh(psd(cov_ls))
+    if not np.all(np.isfinite(w)) or w.max() <= 0:
+        return float("nan")
+    inv_l = (v / np.sqrt(np.maximum(w, w.max() * 1e-12))).T  # C^-1/2 on the numerically positive part
+    g, u = np.linalg.eigh(inv_l @ psd(prior_cov) @ inv_l.T)
     g = np.maximum(g, 0.0)
     dt2 = (u.T @ (inv_l @ d)) ** 2
 
@@ -355,10 +413,32 @@ def prior_error_scale(d: np.ndarray, cov_ls: np.ndarray, prior_cov: np.ndarray) 
     signs = np.array([score(k) for k in grid])
     down = np.flatnonzero(signs <= 0)
     if not down.size:
-        return float(grid[-1])
+        return float("nan")  # beyond any plausible scale: the data cannot say
     k = int(down[0])
     lo, hi = (np.log10(grid[k - 1]) if k else -12.0), np.log10(grid[k])
     for _ in range(60):  # bisection on the first stationary point (continuous in the data)
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if score(10.0**mid) > 0 else (lo, mid)
     return float(10.0 ** (0.5 * (lo + hi)))
+
+
+def psd(a: np.ndarray) -> np.ndarray:
+    """The nearest symmetric positive semidefinite matrix (negative eigenvalues set to 0).
+
+    Parameters
+    ----------
+    a : ndarray, shape ``(p, p)``
+        A covariance that rounding on an ill-conditioned fit may have made indefinite.
+
+    Returns
+    -------
+    ndarray, shape ``(p, p)``
+        ``V max(w, 0) V^T`` of ``(a + a^T) / 2``.
+    """
+    a = 0.5 * (a + a.T)
+    if not np.all(np.isfinite(a)):
+        return a
+    w, v = np.linalg.eigh(a)
+    if w.min() >= 0:
+        return a
+    return (v * np.maximum(w, 0.0)) @ v.T

@@ -477,6 +477,12 @@ def apply_covariance(f, acc, blocks, covariance: str = "hac", rate: float | None
     n_obs = acc.samples * acc.nrows
     cov, b = hac_covariance(rows, est.R11, f.theta, est.weights, n_obs, acc.samples)
     label = describe("hac", b, rate)
+    w = np.linalg.eigvalsh(0.5 * (cov + cov.T)) if np.all(np.isfinite(cov)) else np.array([-1.0, 1.0])
+    if w.min() < -1e-6 * max(float(w.max()), 0.0):  # rounding on an ill-conditioned fit: say so
+        label += (f" - INACCURATE: rounding made it indefinite (condition number "
+                  f"{est.condition_number:.3g}), negative part dropped; --covariance white, or a richer log")
+        vals, vecs = np.linalg.eigh(0.5 * (cov + cov.T))
+        cov = (vecs * np.maximum(vals, 0.0)) @ vecs.T
     where = (" at the physical values with the weighted least-squares bread (a first-order sandwich: active "
              "constraints and the prior's pull are not credited, so constrained terms are not understated)"
              if f.physical is not None else "")

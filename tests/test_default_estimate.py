@@ -78,6 +78,12 @@ def test_rich_log_the_prior_does_not_bias(seed):
     auto = identify(nominal, log, validation=val)
     assert auto.validation["rms_total"] <= 1.05 * ols  # measured: 0.5-0.9 x
     assert any(n.startswith("default estimate: ") and "cross-validation" in n for n in auto.notes)
+    j = auto.to_json()
+    assert j["selection"]["weighting"] in ("ols", "wls") and j["estimator"].startswith("auto: ")
+    from baseparams.report.html import identification_html
+
+    page = identification_html(auto)  # the HTML report says how it was computed too
+    assert "How it was computed" in page and "default estimate: " in page and j["covariance"][:20] in page
 
 
 def test_prior_covariance_is_the_regrouped_body_scales():

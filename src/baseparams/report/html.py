@@ -739,8 +739,9 @@ def identification_html(ident) -> str:
         the excitation spectrum (frequency [Hz]), tables with column headers of the base
         parameters (value, unit, std, %sigma, expression), the drive terms (rotor inertia,
         friction, offsets, coupled motors: value, std, %sigma, unit), the residual RMS per joint
-        and the physical check; a missing number reads ``-`` or ``n/a`` (with the reason), never
-        ``nan``.
+        and the physical check, then how it was computed (the standard deviations' covariance,
+        the default estimate's choice and every note of the run); a missing number reads ``-`` or
+        ``n/a`` (with the reason), never ``nan``.
     """
     j = ident.to_json()
     val = j["validation"]
@@ -751,5 +752,12 @@ def identification_html(ident) -> str:
             + (f"; validation RMS {_num(val['rms_total'], '.4g')} {unit}" if val else "") + "</p>"
             f"<h2>Measured (grey) and predicted (blue) torques, residual histograms</h2>"
             f"<div id='torques'>{_torque_blocks(ident)}</div>{_spectrum_section(ident)}"
-            f"{_values_table(j)}{_drives_table(ident)}{_rms_table(ident, j)}{_physical_table(ident, j)}")
+            f"{_values_table(j)}{_drives_table(ident)}{_rms_table(ident, j)}{_physical_table(ident, j)}"
+            f"{_notes_section(j)}")
     return _page(f"{j['model']}: identification", body, _DONE)
+
+
+def _notes_section(j: dict) -> str:
+    """How the estimate and its standard deviations were obtained, and every note of the run."""
+    items = [f"standard deviations: {j['covariance']}", *j.get("notes", ())]
+    return "<h2>How it was computed</h2><ul>" + "".join(f"<li>{html.escape(str(n))}</li>" for n in items) + "</ul>"

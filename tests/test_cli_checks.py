@@ -187,6 +187,21 @@ def test_a_loop_robot_simulated_on_the_command_line_identifies_from_its_actuated
     assert list(j["validation"]["rms"]) == actuated and j["validation"]["rms_total"] < 1e-2
 
 
+def test_a_loop_robot_s_default_excursion_is_the_largest_whose_loops_close(tmp_path, capsys):
+    """four-bar: 0.8 of its box's half-width (a fifth gave condition numbers near 1e8); pkm-2rru-1rrs falls back."""
+    from baseparams.ident.simulate import amplitude_ladder
+
+    four, pkm = baseparams.load("four-bar"), baseparams.load("pkm-2rru-1rrs")
+    assert amplitude_ladder(four)[0] == pytest.approx(0.24)
+    assert main(["simulate", "four-bar", str(tmp_path / "f.csv"), "--duration", "10", "--rate", "200"]) == 0
+    assert "excursion 0.24" in capsys.readouterr().out
+    assert main(["identify", "four-bar", str(tmp_path / "f.csv"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["condition_number"] < 1e6
+    assert main(["simulate", "pkm-2rru-1rrs", str(tmp_path / "p.csv"), "--duration", "5", "--rate", "200"]) == 0
+    truth = json.loads((tmp_path / "p.csv.truth.json").read_text())
+    assert truth["amplitude"] < amplitude_ladder(pkm)[0]  # its workspace is narrower than its box
+
+
 def test_the_symbolic_package_without_sympy_says_which_extra(tmp_path):
     import subprocess
 

@@ -809,15 +809,13 @@ def _write_identified_mjcf(args, result, log) -> None:
     print(f"baseparams: MJCF written to {args.mjcf}", file=sys.stderr)
 
 
-def _amplitude(args, robot) -> float:
-    """``--amplitude``, or its default: 0.5 rad, within a loop robot's sampling box (its loops close there)."""
+def _amplitude(args, robot) -> float | None:
+    """``--amplitude``, or ``None``: the default (0.5 rad; a loop robot's largest excursion whose loops close)."""
     if args.amplitude is not None:
         if not args.amplitude > 0:
             raise BaseparamsError(f"--amplitude must be > 0 rad, got {args.amplitude}")
         return args.amplitude
-    from .ident.simulate import default_amplitude
-
-    return default_amplitude(robot)
+    return None
 
 
 def cmd_simulate(args) -> int:
@@ -868,7 +866,9 @@ def cmd_simulate(args) -> int:
 
     _write(args.out, lambda tmp: write_log(tmp, log), args, "OUT")
     truth_path = write_text(str(args.out) + ".truth.json", json.dumps(truth, indent=2) + "\n", _inputs(args), "OUT")
-    print(f"{args.out}: {log.n_samples} samples of {len(log.joints)} joints; true parameters in {truth_path}")
+    amp = (f", excursion {truth['amplitude']:.3g} (the largest of the defaults whose loops close)"
+           if robot.has_loops and "amplitude" in truth and args.amplitude is None else "")
+    print(f"{args.out}: {log.n_samples} samples of {len(log.joints)} joints{amp}; true parameters in {truth_path}")
     return EXIT_OK
 
 
@@ -1099,7 +1099,8 @@ def _simulate_parser(sub, model_args) -> None:
     s.add_argument("--duration", type=float, default=20.0, help="seconds (default 20)")
     s.add_argument("--rate", type=float, default=500.0, help="sampling rate in Hz (default 500)")
     s.add_argument("--amplitude", type=float, default=None,
-                   help="joint excursion in rad (default 0.5; for a robot with loops, within its sampling box)")
+                   help="joint excursion in rad (default 0.5; for a robot with loops the largest of 0.8, 0.4, 0.2, "
+                        "0.1 x its sampling box's half-width whose loops close)")
     s.add_argument("--noise", type=float, default=0.0, help="torque noise standard deviation (default 0)")
     s.add_argument("--robots", type=int, metavar="N",
                    help="a fleet: N logs in the folder OUT, one robot each with its own inertias (10 %% spread)")

@@ -101,13 +101,32 @@ def default_amplitude(robot: Robot) -> float:
     Returns
     -------
     float
-        0.5 [rad or m]; for a robot with loops at most a fifth of its sampling box's narrowest
-        half-width (``q_box``), where its loops close.
+        0.5 [rad or m]; for a robot with loops the largest of :func:`amplitude_ladder`.
+    """
+    return amplitude_ladder(robot)[0]
+
+
+def amplitude_ladder(robot: Robot) -> list[float]:
+    """Default excursions to try, largest first: a loop robot's loops may not close on the first.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    list of float
+        ``[0.5]`` [rad or m] for a tree; for a robot with loops ``a, a/2, a/4, a/8`` with ``a``
+        0.8 of its sampling box's narrowest half-width (``q_box``), at most 0.5: the largest
+        motion excites best (a four-bar's crank at a fifth of its box gave condition numbers near
+        1e8, at 0.8 near 3e5), the smaller ones for workspaces narrower than the box.
     """
     if robot.has_loops and robot.q_box is not None:
         half = 0.5 * (np.asarray(robot.q_box)[:, 1] - np.asarray(robot.q_box)[:, 0])
-        return float(min(0.5, 0.2 * half.min()))
-    return 0.5
+        top = float(min(0.5, 0.8 * half.min()))
+        return [top, top / 2, top / 4, top / 8]
+    return [0.5]
 
 
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
@@ -157,25 +176,33 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
 
     if robot.floating:
         raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
-    rng = np.random.default_rng(seed)
     model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction))
-    if amplitude is None:
-        amplitude = default_amplitude(robot)
-    elif not amplitude > 0:
+    if amplitude is not None and not amplitude > 0:
         raise BaseparamsError(f"amplitude must be > 0 rad, got {amplitude}")
-    if trajectory is None:
-        t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amplitude)
-    else:
-        t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
-    delta = _draw_drives(model, rng)
+    ladder = [amplitude] if amplitude is not None or trajectory is not None else amplitude_ladder(robot)
+    for k, amp in enumerate(ladder):
+        rng = np.random.default_rng(seed)
+        if trajectory is None:
+            t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amp)
+        else:
+            t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
+        delta = _draw_drives(model, rng)
+        try:
+            y = regressor_of(robot, q, dq, ddq)
+        except BaseparamsError as exc:
+            if k + 1 == len(ladder) or "close the loops" not in str(exc):
+                raise
+            continue  # the loops do not close that far: a smaller default excursion
+        break
     sel = np.arange(len(model.coords))
-    tau = (regressor_of(robot, q, dq, ddq) @ robot.parameters("paper")
+    tau = (y @ robot.parameters("paper")
            + model.drives.regressor(dq[:, sel], ddq[:, sel], len(model.coords)) @ delta)
     tau = add_noise(tau, noise, rng) if noise > 0 else tau
     joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
     log = JointLog(t, joints, q, tau, dq=dq, source=f"simulated {robot.name}")
     theta = model.theta(robot.parameters("paper"), delta)
     truth = {"model": robot.name, "convention": convention, "noise": noise,
+             **({"amplitude": float(amp)} if trajectory is None else {}),
              "parameters": [{"name": n, "value": float(v)} for n, v in zip(model.names, theta)],
              "drives": dict(zip(model.drives.names, delta.tolist()))}
     return log, truth

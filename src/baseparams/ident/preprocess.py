@@ -76,7 +76,7 @@ class LowPass:
     __repr__ = summary_repr
 
 
-def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4) -> LowPass:
+def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4, why: str = "given") -> LowPass:
     """Design the zero-phase Butterworth low-pass used on ``q``, ``tau`` and regressor columns.
 
     Default cutoff: ``min(fs / 20, 20 Hz)``. Arm excitation trajectories have their content below
@@ -99,6 +99,8 @@ def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4) -> Lo
         Cutoff frequency [Hz], below ``fs / 2``. Default above.
     order : int, optional
         Butterworth order of one pass (default 4: -80 dB/decade, twice that forward and backward).
+    why : str, optional
+        Where a given ``cutoff`` came from, for the note (default ``given``).
 
     Returns
     -------
@@ -117,8 +119,6 @@ def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4) -> Lo
     if cutoff is None:
         cutoff = min(fs / CUTOFF_DIVISOR, CUTOFF_CAP)
         why = f"default min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz) at fs = {fs:.6g} Hz"
-    else:
-        why = "given"
     if not (np.isfinite(cutoff) and 0 < cutoff < fs / 2):
         raise DataError(f"low-pass: cutoff must be between 0 and fs/2 = {fs / 2:.6g} Hz, got {cutoff!r}")
     sos = signal.butter(int(order), cutoff, btype="low", fs=fs, output="sos")
@@ -497,6 +497,7 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     _check_log(log)
     u = resample(log, fs)
     rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])  # the mean rate: the grid's, or a uniform log's
+    given_cutoff = cutoff is not None
     if cutoff is None:  # from the excitation: 10x its bandwidth, within [1 Hz, min(fs/20, 20 Hz)]
         band = excitation_bandwidth(u.q, rate)
         cutoff = float(np.clip(BANDWIDTH_FACTOR * band, CUTOFF_FLOOR, min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)))
@@ -504,7 +505,7 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
                     f"(99.5 % of the motion's energy), within [{CUTOFF_FLOOR:g} Hz, "
                     f"min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz)]")
         u = replace(u, notes=u.notes + (log_note,))
-    design = lowpass_design(rate, cutoff)
+    design = lowpass_design(rate, cutoff, why="given" if given_cutoff else "from the excitation bandwidth")
     n = u.n_samples
     if n <= 2 * design.pad + 1:
         raise DataError(f"{log.source}: {n} samples at {rate:.6g} Hz; the filter edges alone take 2 x {design.pad} "

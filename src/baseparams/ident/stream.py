@@ -476,6 +476,7 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     notes = [*sc.notes]
     if not any(x.startswith("time: resampled") for x in notes):
         notes.append(f"time: uniform (dt {lo * 1e3:.4g}-{hi * 1e3:.4g} ms, median {med * 1e3:.4g} ms), not resampled")
+    given_cutoff = cutoff is not None
     if cutoff is None:
         band = pp.excitation_bandwidth(tr.sub.q, tr.rate / tr.step)
         cutoff = float(np.clip(pp.BANDWIDTH_FACTOR * band, pp.CUTOFF_FLOOR,
@@ -484,7 +485,7 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
         notes.append(f"cutoff {cutoff:.4g} Hz: {pp.BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
                      f"(99.5 % of the motion's energy{sub}), within [{pp.CUTOFF_FLOOR:g} Hz, "
                      f"min(fs/{pp.CUTOFF_DIVISOR:g}, {pp.CUTOFF_CAP:g} Hz)]")
-    design = pp.lowpass_design(tr.rate, cutoff)
+    design = pp.lowpass_design(tr.rate, cutoff, why="given" if given_cutoff else "from the excitation bandwidth")
     if tr.n <= 2 * design.pad + 1:
         raise DataError(f"{stream.source}: {tr.n} samples at {tr.rate:.6g} Hz; the filter edges alone take 2 x "
                         f"{design.pad} (a longer log, or a higher cutoff)")

@@ -241,11 +241,11 @@ def test_a_hanging_magnitude_ends_in_a_subprocess_in_seconds(tmp_path):
 def test_a_linear_algebra_failure_is_one_line(monkeypatch, capsys):
     import numpy as np
 
-    import baseparams.cli as cli
+    from baseparams.cli import common
 
     def fail(args):
         raise np.linalg.LinAlgError("SVD did not converge")
-    monkeypatch.setattr(cli, "_robot", fail)
+    monkeypatch.setattr(common, "load_robot", fail)
     err = _one_line_error(["analyze", "puma560"], capsys)
     assert "puma560" in err and "SVD did not converge" in err
 

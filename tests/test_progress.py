@@ -5,7 +5,7 @@ import time
 import pytest
 
 from baseparams import cli
-from baseparams.cli import main
+from baseparams.cli import common, main
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +21,7 @@ def _progress_lines(err: str) -> list[str]:
 
 def test_identify_shows_its_steps_once_the_run_is_long(small_log, monkeypatch, capsys):
     """A run past the threshold (0 s here) prints each step of the identification on stderr."""
-    monkeypatch.setattr(cli, "PROGRESS_AFTER_S", 0.0)
+    monkeypatch.setattr(common, "PROGRESS_AFTER_S", 0.0)
     assert main(["identify", "puma560", str(small_log), "--json"]) == 0
     lines = _progress_lines(capsys.readouterr().err)
     steps = ["reading", "analysing", "preprocessing", "accumulating", "fitting", "identified in"]
@@ -32,7 +32,7 @@ def test_identify_shows_its_steps_once_the_run_is_long(small_log, monkeypatch, c
 
 
 def test_short_runs_stay_quiet_and_verbose_shows_all(small_log, monkeypatch, capsys):
-    monkeypatch.setattr(cli, "PROGRESS_AFTER_S", 1e6)
+    monkeypatch.setattr(common, "PROGRESS_AFTER_S", 1e6)
     assert main(["identify", "puma560", str(small_log), "--json"]) == 0
     assert _progress_lines(capsys.readouterr().err) == []
     assert main(["identify", "puma560", str(small_log), "--json", "-v"]) == 0

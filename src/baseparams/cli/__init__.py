@@ -11,150 +11,36 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
-from . import __version__
-from .enums import Convention, Rows, Status, values
-from .errors import BaseparamsError, NoMovingBodiesError
+from .. import __version__
+from ..enums import Convention, Rows, Status, values
+from ..errors import BaseparamsError, NoMovingBodiesError
+from . import common
+from .common import (
+    EXIT_FAILED,
+    EXIT_INPUT,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_UNDECIDED,
+    STATUS_EXIT,
+    Progress,
+    data_files,
+    emit,
+    floating_hint,
+    input_files,
+    is_symbolic,
+    no_moving_bodies,
+    write_html,
+    write_output,
+)
 
-#: exit codes (see the module doc)
-EXIT_OK, EXIT_INPUT, EXIT_UNDECIDED, EXIT_FAILED, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
-_STATUS_EXIT = {Status.CERTIFIED: EXIT_OK, Status.COMPLETED: EXIT_OK, Status.UNVERIFIED: EXIT_OK,
-                Status.UNDECIDED: EXIT_UNDECIDED, Status.FAILED: EXIT_FAILED}
-
-#: seconds after which a run without ``-v`` starts showing its progress lines on stderr
-PROGRESS_AFTER_S = 2.0
-
-
-class Progress:
-    """Progress lines on stderr (``baseparams: STEP [elapsed]``) for long runs.
-
-    With ``verbose`` every line is printed. Otherwise the lines are held back until the run has
-    taken :data:`PROGRESS_AFTER_S` seconds: then the current step is printed (a timer thread, so a
-    long step shows even before the next line) and every later line as it comes; a short run stays
-    quiet. Callable with one line, or usable as the text stream that
-    :func:`baseparams.analysis.analyze` writes to (``write``, ``flush``). A context manager: leaving
-    it stops the timer.
-
-    Parameters
-    ----------
-    verbose : bool
-        Print every line from the start (``-v``).
-    after : float, optional
-        Seconds before the lines show without ``verbose`` (default :data:`PROGRESS_AFTER_S`).
-    """
-
-    def __init__(self, verbose: bool, after: float | None = None):
-        self.t0 = time.perf_counter()
-        self.shown = bool(verbose)
-        self.last: str | None = None
-        self.lock = threading.Lock()
-        self.timer = None
-        if not verbose:
-            self.timer = threading.Timer(PROGRESS_AFTER_S if after is None else after, self._late)
-            self.timer.daemon = True
-            self.timer.start()
-
-    def _print(self, msg: str) -> None:
-        print(f"baseparams: {msg} [{time.perf_counter() - self.t0:.1f} s]", file=sys.stderr, flush=True)
-
-    def _late(self) -> None:
-        with self.lock:
-            self.shown = True
-            if self.last is not None:
-                self._print(f"{self.last} ...")
-
-    def __call__(self, msg: str) -> None:
-        """One progress line: printed now if lines show, else held as the current step."""
-        with self.lock:
-            self.last = msg
-            if self.shown:
-                self._print(msg)
-
-    def write(self, text: str) -> int:
-        """Take text written as to a stream: each non-empty line is a progress line.
-
-        Parameters
-        ----------
-        text : str
-            The text (``[baseparams]`` prefixes dropped).
-
-        Returns
-        -------
-        int
-            ``len(text)``, as a stream's ``write``.
-        """
-        for line in text.splitlines():
-            if line.strip():
-                self(line.removeprefix("[baseparams] ").strip())
-        return len(text)
-
-    def flush(self) -> None:
-        """Nothing to flush: lines are printed as they come."""
-
-    def close(self) -> None:
-        """Stop the timer (no line is printed after this)."""
-        with self.lock:
-            self.shown = False
-        if self.timer is not None:
-            self.timer.cancel()
-
-    def __enter__(self) -> Progress:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-
-def _robot(args) -> Robot:  # noqa: F821
-    from .loading import load_model
-
-    if _is_symbolic(args.model):  # a DH table with symbols: analysed numerically at its values
-        return _symbolic_robot(args)
-    robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
-                              strict_inertia=getattr(args, "strict_inertia", False),
-                              xacro_args=getattr(args, "xacro_args", None),
-                              package_path=getattr(args, "package_path", None))
-    for note in notes:
-        print(f"baseparams: note: {note}", file=sys.stderr)
-    hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""
-    if hint:
-        print(f"baseparams: note: {hint}", file=sys.stderr)
-    return robot
-
-
-#: names of joints on a fixed root that suggest the base moves (a leg's hip, a wheel)
-_MOBILE_WORDS = ("wheel", "leg", "hip", "haa", "hfe", "foot", "caster")
-
-
-def floating_hint(robot) -> str:
-    """A hint to pass ``--floating`` when a fixed root carries legs or wheels ('' when not).
-
-    Parameters
-    ----------
-    robot : Robot
-        A robot read with a fixed base.
-
-    Returns
-    -------
-    str
-        One line when the root link carries three or more chains, or chains whose joints are
-        named like legs or wheels; else ''.
-    """
-    if robot.floating or robot.n == 0:
-        return ""
-    roots = [k for k in range(robot.n) if robot.parent[k] < 0]
-    names = [robot.joint_names[k].lower() for k in roots]
-    mobile = [n for n in names if any(w in n for w in _MOBILE_WORDS)]
-    if len(roots) < 3 and not mobile:
-        return ""
-    return (f"the fixed root link carries {len(roots)} chains ({', '.join(robot.joint_names[k] for k in roots[:4])}"
-            f"{', ...' if len(roots) > 4 else ''}): if they are legs or wheels the base moves: pass --floating to "
-            f"attach it by a free joint")
+__all__ = ["EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_UNDECIDED", "Progress", "build_parser",
+           "cmd_analyze", "cmd_excite", "cmd_identify", "cmd_predict", "cmd_regressor", "cmd_robots", "cmd_simulate",
+           "floating_hint", "main", "preflight"]
 
 
 def cmd_robots(args) -> int:
@@ -170,13 +56,13 @@ def cmd_robots(args) -> int:
     int
         The exit code, 0.
     """
-    from .robots import BUILTINS
+    from ..robots import BUILTINS
 
     for name, (factory, text) in BUILTINS.items():
         r = factory()
         print(f"{name:<10s} {r.n:3d} bodies {r.dof:3d} dofs  {text}")
     try:
-        from .symbolic import builtin_tables, load_symbolic
+        from ..symbolic import builtin_tables, load_symbolic
     except ImportError:
         print("(symbolic robots: install the extra 'symbolic' (SymPy) to list them)")
         return 0
@@ -185,36 +71,6 @@ def cmd_robots(args) -> int:
         r = load_symbolic(name)
         print(f"{name:<24s} {r.n:3d} bodies  {text}")
     return 0
-
-
-def _no_moving_bodies(args, exc: NoMovingBodiesError) -> int:
-    """A model whose links are all welded to the world: an empty, trivially certified result."""
-    name = Path(args.model).stem
-    hint = "" if getattr(args, "floating", False) else "; --floating attaches the root link by a free joint"
-    msg = (f"{exc}: every link is welded to the world, so no measurement sees any inertial parameter "
-           f"(0 standard, 0 base parameters){hint}")
-    if args.json:
-        _emit(args, json.dumps({"model": name, "n_bodies": 0, "n_params": 0, "nullity": 0, "n_base": 0,
-                                "certified": True, "status": Status.CERTIFIED, "message": msg,
-                                "base_parameters": [], "unidentifiable": []}, indent=2))
-    else:
-        _emit(args, f"{name}: {msg}")
-    return EXIT_OK
-
-
-def _emit(args, text: str) -> None:
-    out = getattr(args, "output", None)
-    if not out:
-        print(text)
-        return
-    from .files import write_text
-
-    try:
-        write_text(out, text + "\n", _inputs(args), "--output")
-    except OSError as exc:
-        raise BaseparamsError(f"--output {out}: cannot write ({exc.strerror or exc})") from None
-    if not args.json:
-        print(f"report written to {out}")
 
 
 def cmd_regressor(args) -> int:
@@ -246,15 +102,15 @@ def cmd_regressor(args) -> int:
     BaseparamsError
         Bad input, or no sample closes the loops.
     """
-    from .numerics import closed_samples, sample_states
-    from .regressor import closed_regressor, regressor
+    from ..numerics import closed_samples, sample_states
+    from ..regressor import closed_regressor, regressor
 
     if args.out and not args.states:
         raise BaseparamsError("--out saves the regressor of --states FILE; give the states")
     try:
-        robot = _robot(args)
+        robot = common.load_robot(args)
     except NoMovingBodiesError as exc:
-        return _no_moving_bodies(args, exc)
+        return no_moving_bodies(args, exc)
     if args.states:
         return _regressor_states(args, robot)
     rng = np.random.default_rng(args.seed)
@@ -312,7 +168,7 @@ def cmd_analyze(args) -> int:
     BaseparamsError
         Bad input (the model, the options, an unwritable ``--output``).
     """
-    from .analysis import analyze, format_report
+    from ..analysis import analyze, format_report
 
     if any(ch in args.model for ch in "*?["):
         for opt in ("plot", "html", "symbolic"):
@@ -326,310 +182,61 @@ def cmd_analyze(args) -> int:
                                       f"(the table at its values)")
         if (args.latex or args.codegen) and not args.symbolic:
             raise BaseparamsError("--latex and --codegen need --symbolic")
-        return _analyze_symbolic(args)
+        from .symbolic import analyze_symbolic
+
+        return analyze_symbolic(args)
     try:
-        robot = _robot(args)
+        robot = common.load_robot(args)
     except NoMovingBodiesError as exc:
-        return _no_moving_bodies(args, exc)
+        return no_moving_bodies(args, exc)
     with Progress(args.verbose) as progress:
         result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
                          extended=not args.paper_only, rows=args.rows, convention=args.convention, progress=progress)
         text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
         if args.html:
-            from .report.html import analysis_html
+            from ..report.html import analysis_html
 
             progress("writing the HTML report")
-            _write_html(args.html, analysis_html(result), _inputs(args))
+            write_html(args.html, analysis_html(result), input_files(args))
         if args.plot:
-            from .report.plots import analysis_plot
+            from ..report.plots import analysis_plot
 
             progress("drawing the figure")
-            _write(args.plot, lambda tmp: analysis_plot(result, tmp), args, "--plot")
+            write_output(args.plot, lambda tmp: analysis_plot(result, tmp), args, "--plot")
             print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
-    _emit(args, text)
+    emit(args, text)
     status = result.status
     if status in (Status.UNDECIDED, Status.FAILED):
         print(f"baseparams: certification {status.upper()}: {result.certificate.message}", file=sys.stderr)
-    return _STATUS_EXIT[status]
-
-
-def _friction(text: str) -> tuple[str, ...]:
-    """``--friction viscous,coulomb,offset`` (or ``none``) as a tuple."""
-    return () if text.strip().lower() in ("", "none") else tuple(x.strip() for x in text.split(",") if x.strip())
-
-
-def _read_identification_logs(args, robot, path):
-    """The training log, the validation log (or None) and the robot (a sub-chain with ``--joints``)."""
-    from .io.logs import read_log
-
-    subset = bool(args.joints)
-    log = read_log(path, robot, columns=args.columns, allow_subset=subset)
-    val = read_log(args.validate, robot, columns=args.columns, allow_subset=subset) if args.validate else None
-    if args.weld and not subset:
-        raise BaseparamsError("--weld applies with --joints (the joints to identify; the others are welded)")
-    if subset and (args.urdf or args.mjcf):
-        raise BaseparamsError(f"{'--urdf' if args.urdf else '--mjcf'} with --joints: writing a sub-chain's values "
-                              "into the whole robot's file is not supported; identify every moving joint to export")
-    if not subset:
-        return log, val, robot
-    from .ident.subchain import parse_welds, subchain
-
-    joints = [j.strip() for j in args.joints.split(",") if j.strip()]
-    welds = parse_welds(args.weld)
-    small, log, notes = subchain(robot, log, joints, welds)
-    if val is not None:
-        val = subchain(robot, val, joints, welds)[1]
-    for note in notes:
-        print(f"baseparams: note: {note}", file=sys.stderr)
-    return log, val, small
+    return STATUS_EXIT[status]
 
 
 def cmd_identify(args) -> int:
-    """``baseparams identify MODEL DATA``: base-parameter and drive values from a joint log.
+    """``baseparams identify MODEL DATA``: :func:`baseparams.cli.identify.cmd_identify`, imported when it runs."""
+    from .identify import cmd_identify as run
 
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line: the model options and ``data``, ``columns``, ``validate``,
-        ``holdout``, ``method``, ``friction``, ``rotor``, ``coulomb_width``, ``coupling``,
-        ``cutoff``, ``decimate``, ``min_speed``, ``prior_weight``, ``convention``, ``plot``,
-        ``urdf``, ``output``.
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-
-    Raises
-    ------
-    BaseparamsError
-        Bad input (model, data, options).
-    """
-    from .ident.drives import MotorCoupling
-    from .ident.pipeline import identify
-    from .ident.report import format_identification
-
-    couplings = tuple(MotorCoupling.parse(text) for text in args.coupling or ())
-    robot = _robot(args)
-    files = _data_files(args.data)
-    truth = _results_check(args, files)  # --save, --truth: checked before the fit
-    if len(files) > 1 or args.per_file or args.pooled:
-        if args.joints:
-            raise BaseparamsError("--joints applies to one log, not to a fleet of logs")
-        return _identify_fleet(args, robot, files)
-    with Progress(args.verbose) as progress:
-        t0 = time.perf_counter()
-        result = _identify_streamed(args, robot, files, couplings, progress)
-        if result is None:
-            progress(f"reading {args.data}")
-            log, val, robot = _read_identification_logs(args, robot, files[0])
-            progress(f"identifying ({args.method}) on {log.n_samples} samples")
-            t0 = time.perf_counter()
-            result = identify(robot, log, validation=val, progress=progress, **_identify_kwargs(args, couplings))
-            if args.predictions:
-                _write_predictions(args, result, log, val, files)
-        progress(f"identified in {time.perf_counter() - t0:.2f} s")
-        if args.save:
-            result.save(args.save, inputs=[args.model, *files, args.validate, args.columns, args.truth], what="--save")
-            progress(f"result saved to {args.save}")
-        if args.urdf:
-            _write_identified_urdf(args, robot, result)
-        if args.mjcf:
-            _write_identified_mjcf(args, result, log)
-        if args.plot:
-            from .report.plots import torque_plot
-
-            _write(args.plot, lambda tmp: torque_plot(result, tmp), args, "--plot")
-            progress(f"plot written to {args.plot}")
-        if args.html:
-            from .report.html import identification_html
-
-            _write_html(args.html, identification_html(result), _inputs(args))
-    _emit(args, _with_truth(args, result, truth, format_identification))
-    return EXIT_OK
-
-
-#: logs larger than this [MB] are streamed from their file by default (``identify --stream auto``)
-STREAM_MIN_MB = 64.0
-
-
-def _identify_kwargs(args, couplings) -> dict:
-    """The options :func:`~baseparams.ident.pipeline.identify` and ``identify_stream`` share."""
-    return dict(method=args.method, rotor=args.rotor, friction=_friction(args.friction),
-                coulomb_width=args.coulomb_width, holdout=args.holdout, cutoff=args.cutoff, decimate=args.decimate,
-                min_speed=args.min_speed, prior_weight=args.prior_weight, convention=args.convention,
-                couplings=couplings, samples=args.samples, covariance=args.covariance, allow_units=args.allow_units,
-                score_cutoff=args.score_cutoff)
-
-
-def _stream_reason(args, path: str) -> str | None:
-    """Why ``identify`` streams the log from its file (a line for ``-v``), or None: read it whole."""
-    from .io.logs import STREAM_SUFFIXES, streamable
-
-    mode = getattr(args, "stream", "auto")
-    if mode == "off":
-        return None
-    ok = streamable(path) and (not args.validate or streamable(args.validate))
-    if mode == "on":
-        if not ok:
-            raise BaseparamsError(f"--stream on: only {', '.join(STREAM_SUFFIXES)} logs are streamed, not {path}"
-                                  + (f" / {args.validate}" if args.validate else ""))
-        if args.joints or getattr(args, "mjcf", None):
-            raise BaseparamsError(f"--stream on with {'--joints' if args.joints else '--mjcf'}: the log is read whole "
-                                  f"for it (--stream auto)")
-        return "--stream on"
-    if not ok or args.joints or getattr(args, "mjcf", None):  # --mjcf checks the model on the log's states
-        return None
-    size = Path(path).stat().st_size / 1e6
-    return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
-
-
-def _identify_streamed(args, robot, files, couplings, progress):
-    """``identify`` on a log streamed from its file (``--stream``), or None when it is read whole.
-
-    A log with non-uniform time stamps is read whole after all (said with ``-v``).
-    """
-    why = _stream_reason(args, files[0])
-    if why is None:
-        return None
-    from .ident.stream import NotStreamable, identify_stream
-    from .io.logs import LogStream
-
-    progress(f"streaming {files[0]} block by block ({why}): memory independent of the log's length")
-    stream = LogStream(files[0], robot, columns=args.columns)
-    other = LogStream(args.validate, robot, columns=args.columns) if args.validate else None
-    kwargs = _identify_kwargs(args, couplings)
-    try:
-        if not args.predictions:
-            return identify_stream(robot, stream, validation=other, progress=progress, **kwargs)
-        from .io.tables import column_writer
-
-        coords = robot.actuated if robot.has_loops else range(robot.dof)
-        names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
-        inputs = [args.model, *files, args.validate, args.columns]
-        with column_writer(args.predictions, names, inputs, "--predictions") as write:
-            result = identify_stream(robot, stream, validation=other, progress=progress,
-                                     predictions=lambda t, tau: write(np.column_stack([t, tau])), **kwargs)
-        print(f"baseparams: predictions of {result.validation['samples']} validation samples written to "
-              f"{args.predictions}", file=sys.stderr)
-        return result
-    except NotStreamable as exc:
-        progress(f"{exc}")
-        return None
-
-
-def _write_predictions(args, result, log, val, files) -> None:
-    """``identify --predictions FILE``: predicted torques at every validation sample, the log's own times."""
-    from .io.tables import write_columns
-
-    whole = val if val is not None else log
-    tau = result.predict(whole)
-    keep = np.ones(whole.n_samples, dtype=bool) if val is not None else whole.t >= whole.t[-1] - args.holdout
-    cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
-    write_columns(args.predictions, cols, [args.model, *files, args.validate, args.columns], "--predictions")
-    print(f"baseparams: predictions of {int(keep.sum())} validation samples written to {args.predictions}",
-          file=sys.stderr)
-
-
-def _results_check(args, files: list[str]) -> dict | None:
-    """``identify --save/--truth``: refused with several logs; the save path and the truth read now."""
-    from .io.tables import check_output_path
-
-    if not (args.save or args.truth):
-        return None
-    if len(files) > 1 or args.per_file or args.pooled:
-        raise BaseparamsError("--save and --truth apply to one log, not to a fleet (--per-file / --pooled)")
-    check_output_path(args.save, [args.model, *files, args.validate, args.columns, args.truth], "--save")
-    if not args.truth:
-        return None
-    try:
-        truth = json.loads(Path(args.truth).read_text())
-    except FileNotFoundError:
-        raise BaseparamsError(f"--truth {args.truth}: no such file") from None
-    except (OSError, ValueError) as exc:
-        raise BaseparamsError(f"--truth {args.truth}: not a JSON truth file ({exc})") from None
-    if not isinstance(truth, dict) or not isinstance(truth.get("parameters"), list):
-        raise BaseparamsError(f"--truth {args.truth}: no 'parameters' list (write one with 'baseparams simulate': "
-                              f"OUT.truth.json)")
-    return truth
-
-
-def _with_truth(args, result, truth: dict | None, text_report) -> str:
-    """The report (text or JSON), with the comparison to ``--truth`` when given."""
-    from .ident.results import format_truth
-
-    cmp = None if truth is None else result.compare_truth(truth, args.truth)
-    if args.json:
-        out = result.to_json()
-        if cmp is not None:
-            out["truth"] = cmp
-        return json.dumps(out, indent=2)
-    return text_report(result) + ("" if cmp is None else "\n\n" + format_truth(cmp))
+    return run(args)
 
 
 def cmd_predict(args) -> int:
-    """``baseparams predict MODEL RESULT LOG --out PRED``: torques of a log from a saved identification.
+    """``baseparams predict MODEL RESULT LOG``: :func:`baseparams.cli.identify.cmd_predict`, imported when it runs."""
+    from .identify import cmd_predict as run
 
-    Writes ``t, tau_<joint>`` (one row per log sample, the log's time stamps; CSV/TSV, or Parquet
-    by the suffix) and prints the RMS against the log's measured torques when it has them:
-    predicted and measured torques both low-passed with the identification's zero-phase filter
-    (parallel filtering, what identify's train and validation RMS compare; ``rms`` in JSON), and
-    unfiltered (``rms_raw``, which also holds the sensor noise above the cutoff).
+    return run(args)
 
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line: the model options and ``result``, ``log``, ``columns``, ``out``,
-        ``raw_states``, ``score_cutoff``, ``json``.
 
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
+def cmd_simulate(args) -> int:
+    """``baseparams simulate MODEL OUT``: :func:`baseparams.cli.simulate.cmd_simulate`, imported when it runs."""
+    from .simulate import cmd_simulate as run
 
-    Raises
-    ------
-    BaseparamsError
-        Another robot than the result's, a bad result file, log or output.
-    """
-    from .ident.pipeline import Identification
-    from .io.logs import read_log
-    from .io.tables import check_table_path, write_columns
+    return run(args)
 
-    inputs = [args.model, args.result, args.log, args.columns]
-    check_table_path(args.out, inputs, "--out")
-    if args.out and Path(args.out).suffix.lower() == ".npz":
-        raise BaseparamsError(f"--out {args.out}: predictions are written as .csv, .tsv or .parquet")
-    robot = _robot(args)
-    ident = Identification.load(args.result, robot)
-    log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False)
-    tau = ident.predict(log, smooth=not args.raw_states)
-    joints = ident.joints
-    if args.out:
-        write_columns(args.out, {"t": log.t, **{f"tau_{j}": tau[:, k] for k, j in enumerate(joints)}}, inputs, "--out")
-    out = {"model": robot.name, "result": args.result, "log": args.log, "samples": log.n_samples, "joints": joints,
-           "out": args.out, "prediction": "raw states" if args.raw_states else "smooth", "rms": None}
-    if log.tau is not None:
-        from .ident.pipeline import validation_scores
 
-        s = validation_scores(log, tau, joints, score_cutoff=args.score_cutoff)
-        out["rms"] = {"total": s["rms_total"], **s["rms"]}
-        if "score_cutoff" in s:
-            out["score_cutoff"] = s["score_cutoff"]
-            out["rms_lowpassed"] = {"total": s["rms_lowpassed_total"], **s["rms_lowpassed"]}
-    if args.json:
-        print(json.dumps(out, indent=2))
-        return EXIT_OK
-    lines = [f"{robot.name}: predicted {len(joints)} joint torques at {log.n_samples} samples"
-             + (f", written to {args.out}" if args.out else "")]
-    if out["rms"] is not None:
-        lines.append(f"RMS vs the raw measured torques at every sample: {out['rms']['total']:.4g} (all joints); "
-                     + ", ".join(f"{j} {out['rms'][j]:.3g}" for j in joints))
-        if "rms_lowpassed" in out:
-            lines.append(f"RMS vs the measured torques low-passed at {out['score_cutoff']:g} Hz (--score-cutoff): "
-                         f"{out['rms_lowpassed']['total']:.4g}")
-    print("\n".join(lines))
-    return EXIT_OK
+def cmd_excite(args) -> int:
+    """``baseparams excite MODEL``: :func:`baseparams.cli.excite.cmd_excite`, imported when it runs."""
+    from .excite import cmd_excite as run
+
+    return run(args)
 
 
 def _predict_parser(sub, model_args) -> None:
@@ -651,10 +258,10 @@ def _predict_parser(sub, model_args) -> None:
 
 def _regressor_states(args, robot) -> int:
     """``regressor MODEL --states FILE [--out FILE]``: the TP regressor of given states, saved."""
-    from .analysis import regressor
-    from .base.regroup import parameter_names
-    from .io.logs import read_log
-    from .io.tables import check_table_path, write_columns
+    from ..analysis import regressor
+    from ..base.regroup import parameter_names
+    from ..io.logs import read_log
+    from ..io.tables import check_table_path, write_columns
 
     check_table_path(args.out, [args.model, args.states], "--out")
     if robot.floating:
@@ -670,7 +277,7 @@ def _regressor_states(args, robot) -> int:
                               f"{joints})")
     q, dq, ddq = log.q, log.dq, log.ddq
     if dq is None or ddq is None:  # rates the file lacks: derived as identify derives them (needs time)
-        from .ident.results import log_states
+        from ..ident.results import log_states
 
         if log.t is None or not np.all(np.isfinite(log.t)):
             raise BaseparamsError(f"--states {args.states}: no {'dq_ and ' if dq is None else ''}ddq_ columns and no "
@@ -713,165 +320,6 @@ def _regressor_args(s) -> None:
                                                  "sample, joint, one column per parameter)")
 
 
-def _write_html(path: str, page: str, inputs=()) -> None:
-    """``--html FILE``: write a self-contained report (atomically, never onto an input), or one line saying why not."""
-    from .files import write_text
-
-    try:
-        write_text(path, page, inputs, "--html")
-    except OSError as exc:
-        raise BaseparamsError(f"--html {path}: cannot write ({exc.strerror or exc})") from None
-    print(f"baseparams: HTML report written to {path}", file=sys.stderr)
-
-
-def _data_files(pattern: str) -> list[str]:
-    """``DATA``: a file, a folder (a ROS 2 bag), or a glob pattern (``**`` recursive), sorted."""
-    import glob
-
-    if any(ch in pattern for ch in "*?["):
-        files = sorted(glob.glob(pattern, recursive=True))
-        if not files:
-            raise BaseparamsError(f"no file matches {pattern!r}")
-        return files
-    return [pattern]
-
-
-def _identify_fleet(args, robot, files: list[str]) -> int:
-    """``identify`` over many logs on Dask (``--per-file`` / ``--pooled``)."""
-    from .fleet import identify_fleet
-    from .ident.model import ident_model
-
-    for opt in ("validate", "holdout", "plot", "urdf", "mjcf", "columns"):
-        if getattr(args, opt):
-            raise BaseparamsError(f"--{opt} applies to one log; with several (a fleet) use --per-file / --pooled")
-    from .analysis import analyze
-
-    model = ident_model(analyze(robot, convention=args.convention), args.rotor, _friction(args.friction),
-                        args.coulomb_width)
-    per_file = args.per_file or not args.pooled
-    res = identify_fleet(model, files, per_file=per_file, pooled=args.pooled or len(files) == 1, method=args.method,
-                         scheduler=args.scheduler, workers=args.workers, cutoff=args.cutoff, min_speed=args.min_speed,
-                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr),
-                         covariance=args.covariance)
-    if args.json:
-        _emit(args, json.dumps(res.to_json(), indent=2))
-        return _fleet_exit(args, res, files)
-    skipped = [s for s in res.skipped if s["stage"] == "read"]
-    lines = [f"{robot.name}: {len(files)} logs, {len(res.files)} used, {len(skipped)} skipped; "
-             f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
-    lines += [f"skipped: {s['error']}" for s in res.skipped]
-    if res.spread is not None:
-        rel = res.spread["std"] / np.maximum(np.abs(res.spread["mean"]), 1e-300)
-        worst = np.argsort(rel)[::-1][:5]
-        lines.append("largest spread across the fleet (std / |mean|): "
-                     + ", ".join(f"{model.names[k]} {rel[k]:.3g}" for k in worst))
-    if res.pooled is not None:
-        if res.pooled_note() is not None:
-            lines.append(f"note: {res.pooled_note()}")
-        lines += [f"pooled estimate (std: {res.pooled.estimate.covariance}):",
-                  f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
-        lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in
-                  zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
-    _emit(args, "\n".join(lines))
-    return _fleet_exit(args, res, files)
-
-
-def _fleet_exit(args, res, files: list[str]) -> int:
-    """``--strict``: a fleet with a skipped log is an error (one line); otherwise the skips are reported only."""
-    if args.strict and res.skipped:
-        print(f"baseparams: error: --strict: {len(res.skipped)} of {len(files)} logs skipped "
-              f"(first: {res.skipped[0]['error']})", file=sys.stderr)
-        return EXIT_INPUT
-    return EXIT_OK
-
-
-def _write_identified_urdf(args, robot, result) -> None:
-    """``--urdf FILE``: the model file with the physically consistent inertias."""
-    from .io.urdf import identified_drives, write_urdf
-
-    if result.fit.physical is None:
-        raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies")
-    if Path(args.model).suffix.lower() != ".urdf":
-        raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
-    drives, couplings = identified_drives(result)
-    for note in write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
-                           couplings=couplings, inputs=[args.data, args.validate]):
-        print(f"baseparams: note: {note}", file=sys.stderr)
-    print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
-
-
-def _write_identified_mjcf(args, result, log) -> None:
-    """``--mjcf FILE``: a copy of the MJCF model with the identified inertias and drive terms, checked by MuJoCo."""
-    from .io.mjcf_write import identified_mjcf
-
-    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=[args.data, args.validate]):
-        print(f"baseparams: note: {note}", file=sys.stderr)
-    print(f"baseparams: MJCF written to {args.mjcf}", file=sys.stderr)
-
-
-def _amplitude(args, robot) -> float | None:
-    """``--amplitude``, or ``None``: the default (0.5 rad; a loop robot's largest excursion whose loops close)."""
-    if args.amplitude is not None:
-        if not args.amplitude > 0:
-            raise BaseparamsError(f"--amplitude must be > 0 rad, got {args.amplitude}")
-        return args.amplitude
-    return None
-
-
-def cmd_simulate(args) -> int:
-    """``baseparams simulate MODEL OUT``: a synthetic joint log with known parameters and noise.
-
-    The excitation is a random finite Fourier series per joint (``--duration``, ``--rate``,
-    ``--amplitude``, ``--seed``), or the trajectory of ``--trajectory FILE`` (``baseparams excite
-    --out``: ``t, q_, dq_, ddq_`` columns); the torques are the model's own inertias plus drive terms
-    (rotor inertia: the model's armature, else drawn; friction drawn), plus Gaussian noise
-    (``--noise``). ``OUT`` (``.csv`` or ``.npz``, the default layout) and ``OUT.truth.json``:
-    the true model parameters under their names, to compare an identification with.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-
-    Raises
-    ------
-    BaseparamsError
-        Bad options, or an output that cannot be written.
-    """
-    from .ident.simulate import simulate_log
-    from .io.logs import write_log
-
-    robot = _robot(args)
-    if args.robots:
-        from .fleet import simulate_fleet
-
-        paths = simulate_fleet(robot, args.out, args.robots, duration=args.duration, rate=args.rate, noise=args.noise,
-                               seed=args.seed, friction=_friction(args.friction))
-        print(f"{args.out}: {len(paths)} logs, one robot each (true parameters beside each log)")
-        return EXIT_OK
-    trajectory = None
-    if args.trajectory:
-        from .excitation import read_trajectory
-
-        trajectory = read_trajectory(args.trajectory, robot)
-    log, truth = simulate_log(robot, duration=args.duration, rate=args.rate, amplitude=_amplitude(args, robot),
-                              noise=args.noise, seed=args.seed, rotor=args.rotor, friction=_friction(args.friction),
-                              convention=args.convention, trajectory=trajectory, samples=args.samples)
-    from .files import write_text
-
-    _write(args.out, lambda tmp: write_log(tmp, log), args, "OUT")
-    truth_path = write_text(str(args.out) + ".truth.json", json.dumps(truth, indent=2) + "\n", _inputs(args), "OUT")
-    amp = (f", excursion {truth['amplitude']:.3g} (the largest of the defaults whose loops close)"
-           if robot.has_loops and "amplitude" in truth and args.amplitude is None else "")
-    print(f"{args.out}: {log.n_samples} samples of {len(log.joints)} joints{amp}; true parameters in {truth_path}")
-    return EXIT_OK
-
-
 def _ident_args(s) -> None:
     """Options shared by ``identify`` and ``simulate``."""
     s.add_argument("--friction", default="viscous,coulomb,offset",
@@ -884,23 +332,23 @@ def _ident_args(s) -> None:
 
 def _analyze_sweep(args) -> int:
     """``analyze 'models/*.urdf'``: every matching file on Dask, one line (or JSON object) each."""
-    from .fleet import analyze_fleet
+    from ..fleet import analyze_fleet
 
-    files = _data_files(args.model)
+    files = data_files(args.model)
     results = analyze_fleet(files, scheduler=getattr(args, "scheduler", None), workers=getattr(args, "workers", None),
                             floating=args.floating, convention=args.convention, rows=args.rows,
                             progress=(lambda line: print(f"baseparams: {line}", file=sys.stderr)) if args.verbose
                             else None)
     if args.json:
-        _emit(args, json.dumps(results, indent=2))
+        emit(args, json.dumps(results, indent=2))
     else:
-        _emit(args, "\n".join(f"{r['path']}: error: {r['error']}" if "error" in r else
+        emit(args, "\n".join(f"{r['path']}: error: {r['error']}" if "error" in r else
                               f"{r['path']}: {r['status']}, nullity {r['nullity']}, {r['n_base']} base parameters"
                               for r in results))
     statuses = [Status(r["status"]) for r in results if "error" not in r]
     if any("error" in r for r in results):
         return EXIT_INPUT
-    return max((_STATUS_EXIT[s] for s in statuses), default=EXIT_OK)
+    return max((STATUS_EXIT[s] for s in statuses), default=EXIT_OK)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -975,6 +423,8 @@ def build_parser() -> argparse.ArgumentParser:
 #: each subcommand's help for its MODEL argument
 _MODEL_FILES = ("built-in robot name (see 'baseparams robots') or a robot file: URDF / URDF+ (.urdf), ROS xacro "
                 "(.xacro) or MJCF (.xml)")
+
+
 MODEL_HELP = {
     "analyze": f"{_MODEL_FILES}, or a DH table (.dh, '*-symbolic'); a glob pattern ('models/*.urdf') runs a sweep "
                "over many files on Dask",
@@ -984,6 +434,7 @@ MODEL_HELP = {
     "simulate": f"{_MODEL_FILES}: the robot simulated (its own inertias are the true parameters)",
     "excite": f"{_MODEL_FILES}: the robot (its joint limits are read from the file)",
 }
+
 
 #: the subcommands whose ``--samples`` was renamed ``--analysis-samples`` (it reads as log samples there)
 RENAMED_SAMPLES = ("identify", "predict", "simulate", "excite")
@@ -1110,71 +561,6 @@ def _simulate_parser(sub, model_args) -> None:
     s.set_defaults(func=cmd_simulate)
 
 
-def _keepout(text: str | None):
-    """``--keepout LINK:Z`` as ``(link, z)``, or None."""
-    if not text:
-        return None
-    link, sep, z = text.rpartition(":")
-    try:
-        return (link, float(z)) if sep and link else float("x")
-    except ValueError:
-        raise BaseparamsError(f"--keepout expects LINK:Z (e.g. panda_link7:0.3), got {text!r}") from None
-
-
-def cmd_excite(args) -> int:
-    """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excitation`).
-
-    Progress lines go to stderr; the summary (or ``--json``) to stdout or ``--output``; the
-    trajectory to ``--out`` (CSV ``t, q_<joint>, dq_<joint>, ddq_<joint>``, what ``baseparams
-    simulate --trajectory`` and a controller read) and a plot to ``--plot``.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line: the model options and ``harmonics``, ``period`` or
-        ``base_frequency``, ``rate``, ``criterion``, ``drives``, ``rotor``, ``acceleration``,
-        ``torque``, ``starts``, ``grid``, ``out``, ``plot``, ``output``.
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-
-    Raises
-    ------
-    BaseparamsError
-        Bad input: the model (no actuated coordinate, a singular reference), infeasible limits,
-        options, unwritable outputs.
-    """
-    from .excitation import design_excitation
-
-    try:
-        robot = _robot(args)
-    except NoMovingBodiesError as exc:
-        raise BaseparamsError(f"{exc}: no actuated coordinate to excite") from None
-    f = 1.0 / args.period if args.period else (args.base_frequency or 0.1)
-    target = robot
-    if args.samples is not None:
-        from .analysis import analyze
-
-        target = analyze(robot, samples=args.samples, seed=args.seed)
-    result = design_excitation(target, harmonics=args.harmonics, base_frequency=f, rate=args.rate,
-                               criterion=args.criterion, drives=args.drives, rotor=args.rotor,
-                               acceleration=_acceleration(args.acceleration), torque=args.torque, starts=args.starts,
-                               seed=args.seed, grid=args.grid, keepout=_keepout(args.keepout), margin=args.margin,
-                               progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
-    if args.out:
-        _write(args.out, result.to_csv, args, "--out")
-        print(f"baseparams: trajectory written to {args.out}", file=sys.stderr)
-    if args.plot:
-        from .report.plots import trajectory_plot
-
-        _write(args.plot, lambda tmp: trajectory_plot(result, tmp, robot), args, "--plot")
-        print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
-    _emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
-    return EXIT_OK
-
-
 def _excite_parser(sub, model_args) -> None:
     """The ``excite`` subcommand's arguments."""
     s = sub.add_parser("excite", help="design an excitation trajectory (Fourier series within the joint limits)")
@@ -1208,6 +594,8 @@ def _excite_parser(sub, model_args) -> None:
 #: the optional modules a flag needs, and the extra that installs each
 EXTRAS = {"matplotlib": "plot", "cvxpy": "ident", "clarabel": "ident", "pyarrow": "parquet", "rosbags": "ros",
           "dask": "fleet", "distributed": "fleet", "sympy": "symbolic", "xacro": "xacro"}
+
+
 #: the figure formats ``--plot`` writes (matplotlib's, by suffix)
 PLOT_SUFFIXES = (".png", ".svg", ".svgz", ".pdf", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff", ".webp", ".pgf")
 
@@ -1220,15 +608,6 @@ def _need(module: str, why: str) -> None:
         importlib.import_module(module)
     except ImportError:
         raise BaseparamsError(f"{why} needs {module}: pip install 'baseparams[{EXTRAS[module]}]'") from None
-
-
-def _inputs(args) -> list[str]:
-    """The run's input files (model, logs, mapping, trajectory): outputs must not overwrite them."""
-    out = [args.model] if getattr(args, "model", None) and Path(args.model).exists() else []
-    if getattr(args, "data", None):
-        out += _data_files(args.data)
-    out += [getattr(args, k) for k in ("validate", "columns", "trajectory") if getattr(args, k, None)]
-    return out
 
 
 def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
@@ -1249,7 +628,7 @@ def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
 
 def _check_output(flag: str, path: str, suffixes, inputs: list[str]) -> None:
     """One output path: a known suffix, an existing folder, not a folder itself, not an input."""
-    from .files import refuse_inputs
+    from ..files import refuse_inputs
 
     p = Path(path)
     if suffixes and p.suffix.lower() not in suffixes:
@@ -1268,7 +647,7 @@ def _check_extras(args) -> None:
     if getattr(args, "plot", None):
         _need("matplotlib", "--plot")
     model = getattr(args, "model", None)
-    if model and _is_symbolic(model) or getattr(args, "symbolic", False):
+    if model and is_symbolic(model) or getattr(args, "symbolic", False):
         _need("sympy", "a symbolic robot (DH table)")
     if model and Path(model).suffix.lower() == ".xacro":
         _need("xacro", f"{model}: a xacro model")
@@ -1279,7 +658,7 @@ def _check_extras(args) -> None:
     if args.method == "physical":
         _need("cvxpy", "--method physical")
         _need("clarabel", "--method physical")
-    files = _data_files(args.data) + ([args.validate] if args.validate else [])
+    files = data_files(args.data) + ([args.validate] if args.validate else [])
     if len(files) > 1 + bool(args.validate) or args.per_file or args.pooled:
         _need("distributed", "identification over several logs (a fleet)")
     for f in files:
@@ -1320,8 +699,10 @@ def _check_flags(args) -> None:
     if args.command == "identify" and args.mjcf:
         _check_mjcf_flags(args)
     if args.command == "excite":
-        _keepout(args.keepout)
-        _acceleration(args.acceleration)
+        from .excite import parse_acceleration, parse_keepout
+
+        parse_keepout(args.keepout)
+        parse_acceleration(args.acceleration)
         if args.period is not None and not args.period > 0:
             raise BaseparamsError(f"--period must be > 0 seconds, got {args.period}")
         if not 0.0 <= args.margin < 0.5:
@@ -1331,7 +712,7 @@ def _check_flags(args) -> None:
 
 def _check_mjcf_flags(args) -> None:
     """``identify --mjcf``: a physical fit of an MJCF or URDF model file (a URDF through MuJoCo's import)."""
-    from .io.mjcf_write import check_mjcf_request
+    from ..io.mjcf_write import check_mjcf_request
 
     check_mjcf_request(args.model, args.method, args.mjcf)
 
@@ -1353,7 +734,7 @@ def preflight(args) -> None:
     """
     _check_flags(args)
     _check_extras(args)
-    inputs = _inputs(args)
+    inputs = input_files(args)
     seen: dict[Path, str] = {}
     for flag, path, suffixes in _outputs(args):
         _check_output(flag, path, suffixes, inputs)
@@ -1361,86 +742,6 @@ def preflight(args) -> None:
         if key in seen:
             raise BaseparamsError(f"{flag} and {seen[key]} name the same file {path}")
         seen[key] = flag
-
-
-def _write(path, writer, args, what: str):
-    """Write an output atomically, never onto an input: ``writer(tmp_path)`` (:func:`baseparams.files.atomic_path`)."""
-    from .files import atomic_path
-
-    with atomic_path(path, _inputs(args), what) as tmp:
-        writer(tmp)
-    return Path(path)
-
-
-def _acceleration(text: str | None):
-    """``--acceleration A[,A...]`` as a float, a list, or None."""
-    if not text:
-        return None
-    try:
-        acc = [float(x) for x in text.split(",")]
-    except ValueError:
-        raise BaseparamsError(f"--acceleration expects A or A,A,... in rad/s^2, got {text!r}") from None
-    return acc[0] if len(acc) == 1 else acc
-
-
-def _is_symbolic(model: str) -> bool:
-    """A DH table file or a built-in symbolic robot's name (``*-symbolic``)."""
-    return model.endswith(".dh") or (model.lower().endswith("-symbolic") and not Path(model).exists())
-
-
-def _load_symbolic(args):
-    try:
-        from .symbolic import load_symbolic
-    except ImportError:
-        raise BaseparamsError("symbolic robots need SymPy: pip install 'baseparams[symbolic]'") from None
-    robot = load_symbolic(args.model)
-    if args.gravity is not None:
-        raise BaseparamsError(f"{args.model}: a symbolic robot's gravity is in its table (the 'gravity' line)")
-    return robot
-
-
-def _symbolic_robot(args):
-    """The numeric robot of a symbolic table at its ``values`` (``--values`` overrides)."""
-    vals = dict(v.split("=", 1) for v in (args.values or []) if "=" in v)
-    bad = [v for v in (args.values or []) if "=" not in v]
-    if bad:
-        raise BaseparamsError(f"--values {bad[0]}: expected NAME=NUMBER")
-    robot = _load_symbolic(args)
-    try:
-        vals = {k: float(v) for k, v in vals.items()}
-    except ValueError as exc:
-        raise BaseparamsError(f"--values: {exc}") from None
-    return robot.to_robot(vals)
-
-
-def _analyze_symbolic(args) -> int:
-    """``analyze TABLE --symbolic [--json | --latex] [--codegen FILE]``: base parameters as formulas."""
-    robot = _load_symbolic(args)
-    from .symbolic import probe, symbolic_analysis
-    from .symbolic.analyze import TIME_LIMIT_S
-    from .symbolic.report import codegen, format_symbolic, symbolic_json, symbolic_latex
-
-    with Progress(args.verbose) as progress:
-        progress(f"{robot.name}: DRNG on the symbolic geometry, exact regrouping"
-                 + ("" if args.no_verify else ", checks against the numerical analysis"))
-        result = symbolic_analysis(robot, convention=args.convention, seed=args.seed, check=not args.no_verify,
-                                   progress=progress, max_seconds=TIME_LIMIT_S)
-        if not args.no_verify:
-            progress(f"probing {len(result.conditions) + len(robot.symbols)} conditions")
-            probe(result)
-    if args.codegen:
-        from .files import write_text
-
-        try:
-            write_text(args.codegen, codegen(result), _inputs(args), "--codegen")
-        except OSError as exc:
-            raise BaseparamsError(f"--codegen {args.codegen}: cannot write ({exc.strerror or exc})") from None
-        print(f"baseparams: regrouping code written to {args.codegen}", file=sys.stderr)
-    if args.json:
-        _emit(args, json.dumps(symbolic_json(result), indent=2))
-    else:
-        _emit(args, symbolic_latex(result) if args.latex else format_symbolic(result))
-    return EXIT_OK
 
 
 def _symbolic_args(s) -> None:
@@ -1458,7 +759,7 @@ def _one_line_notes() -> None:
     """A library note raised as a warning (numba cannot cache) reaches stderr as ``baseparams: note: ...``."""
     import warnings
 
-    from .regressor.compiled import CompileCacheWarning
+    from ..regressor.compiled import CompileCacheWarning
 
     default = warnings.formatwarning
     if getattr(default, "baseparams", False):
@@ -1521,7 +822,3 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("baseparams: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -212,28 +212,72 @@ def cmd_analyze(args) -> int:
 
 
 def cmd_identify(args) -> int:
-    """``baseparams identify MODEL DATA``: :func:`baseparams.cli.identify.cmd_identify`, imported when it runs."""
+    """``baseparams identify MODEL DATA``: :func:`baseparams.cli.identify.cmd_identify`, imported when it runs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit code (:data:`EXIT_OK`, or :data:`EXIT_INPUT` for a fleet with ``--strict``).
+    """
     from .identify import cmd_identify as run
 
     return run(args)
 
 
 def cmd_predict(args) -> int:
-    """``baseparams predict MODEL RESULT LOG``: :func:`baseparams.cli.identify.cmd_predict`, imported when it runs."""
+    """``baseparams predict MODEL RESULT LOG``: :func:`baseparams.cli.identify.cmd_predict`, imported when it runs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+    """
     from .identify import cmd_predict as run
 
     return run(args)
 
 
 def cmd_simulate(args) -> int:
-    """``baseparams simulate MODEL OUT``: :func:`baseparams.cli.simulate.cmd_simulate`, imported when it runs."""
+    """``baseparams simulate MODEL OUT``: :func:`baseparams.cli.simulate.cmd_simulate`, imported when it runs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+    """
     from .simulate import cmd_simulate as run
 
     return run(args)
 
 
 def cmd_excite(args) -> int:
-    """``baseparams excite MODEL``: :func:`baseparams.cli.excite.cmd_excite`, imported when it runs."""
+    """``baseparams excite MODEL``: :func:`baseparams.cli.excite.cmd_excite`, imported when it runs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+    """
     from .excite import cmd_excite as run
 
     return run(args)

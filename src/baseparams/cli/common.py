@@ -108,7 +108,18 @@ class Progress:
 
 
 def load_robot(args) -> Robot:  # noqa: F821
-    """The command's robot (``MODEL`` and its options), the loader's notes and a ``--floating`` hint on stderr."""
+    """The command's robot (``MODEL`` and its options), the loader's notes and a ``--floating`` hint on stderr.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    Robot
+        The robot (a symbolic table's at its values).
+    """
     from ..loading import load_model
 
     if is_symbolic(args.model):  # a DH table with symbols: analysed numerically at its values
@@ -156,7 +167,20 @@ def floating_hint(robot) -> str:
 
 
 def no_moving_bodies(args, exc: NoMovingBodiesError) -> int:
-    """A model whose links are all welded to the world: an empty, trivially certified result."""
+    """A model whose links are all welded to the world: an empty, trivially certified result.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    exc : NoMovingBodiesError
+        The loader's error.
+
+    Returns
+    -------
+    int
+        :data:`EXIT_OK`.
+    """
     name = Path(args.model).stem
     hint = "" if getattr(args, "floating", False) else "; --floating attaches the root link by a free joint"
     msg = (f"{exc}: every link is welded to the world, so no measurement sees any inertial parameter "
@@ -171,7 +195,15 @@ def no_moving_bodies(args, exc: NoMovingBodiesError) -> int:
 
 
 def emit(args, text: str) -> None:
-    """The report: on stdout, or written to ``--output`` (atomically, never onto an input)."""
+    """The report: on stdout, or written to ``--output`` (atomically, never onto an input).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    text : str
+        The report.
+    """
     out = getattr(args, "output", None)
     if not out:
         print(text)
@@ -187,12 +219,33 @@ def emit(args, text: str) -> None:
 
 
 def friction_terms(text: str) -> tuple[str, ...]:
-    """``--friction viscous,coulomb,offset`` (or ``none``) as a tuple."""
+    """``--friction viscous,coulomb,offset`` (or ``none``) as a tuple.
+
+    Parameters
+    ----------
+    text : str
+        The option's value.
+
+    Returns
+    -------
+    tuple of str
+        The friction terms (empty for ``none``).
+    """
     return () if text.strip().lower() in ("", "none") else tuple(x.strip() for x in text.split(",") if x.strip())
 
 
 def write_html(path: str, page: str, inputs=()) -> None:
-    """``--html FILE``: write a self-contained report (atomically, never onto an input), or one line saying why not."""
+    """``--html FILE``: write a self-contained report (atomically, never onto an input), or one line saying why not.
+
+    Parameters
+    ----------
+    path : str
+        The output file.
+    page : str
+        The HTML page.
+    inputs : sequence of str, optional
+        The run's input files (never overwritten).
+    """
     from ..files import write_text
 
     try:
@@ -203,7 +256,18 @@ def write_html(path: str, page: str, inputs=()) -> None:
 
 
 def data_files(pattern: str) -> list[str]:
-    """``DATA``: a file, a folder (a ROS 2 bag), or a glob pattern (``**`` recursive), sorted."""
+    """``DATA``: a file, a folder (a ROS 2 bag), or a glob pattern (``**`` recursive), sorted.
+
+    Parameters
+    ----------
+    pattern : str
+        The ``DATA`` argument.
+
+    Returns
+    -------
+    list of str
+        The files.
+    """
     import glob
 
     if any(ch in pattern for ch in "*?["):
@@ -215,7 +279,18 @@ def data_files(pattern: str) -> list[str]:
 
 
 def input_files(args) -> list[str]:
-    """The run's input files (model, logs, mapping, trajectory): outputs must not overwrite them."""
+    """The run's input files (model, logs, mapping, trajectory): outputs must not overwrite them.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    list of str
+        The input files.
+    """
     out = [args.model] if getattr(args, "model", None) and Path(args.model).exists() else []
     if getattr(args, "data", None):
         out += data_files(args.data)
@@ -224,7 +299,24 @@ def input_files(args) -> list[str]:
 
 
 def write_output(path, writer, args, what: str):
-    """Write an output atomically, never onto an input: ``writer(tmp_path)`` (:func:`baseparams.files.atomic_path`)."""
+    """Write an output atomically, never onto an input: ``writer(tmp_path)`` (:func:`baseparams.files.atomic_path`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The output file.
+    writer : callable
+        Writes the output to the path it is given.
+    args : argparse.Namespace
+        The parsed command line.
+    what : str
+        The option or argument, for messages.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     from ..files import atomic_path
 
     with atomic_path(path, input_files(args), what) as tmp:
@@ -233,12 +325,34 @@ def write_output(path, writer, args, what: str):
 
 
 def is_symbolic(model: str) -> bool:
-    """A DH table file or a built-in symbolic robot's name (``*-symbolic``)."""
+    """A DH table file or a built-in symbolic robot's name (``*-symbolic``).
+
+    Parameters
+    ----------
+    model : str
+        The ``MODEL`` argument.
+
+    Returns
+    -------
+    bool
+        Whether it is a symbolic robot.
+    """
     return model.endswith(".dh") or (model.lower().endswith("-symbolic") and not Path(model).exists())
 
 
 def load_symbolic_table(args):
-    """The symbolic robot of ``MODEL`` (a DH table or a ``*-symbolic`` built-in), or one line saying why not."""
+    """The symbolic robot of ``MODEL`` (a DH table or a ``*-symbolic`` built-in), or one line saying why not.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    SymbolicRobot
+        The symbolic robot.
+    """
     try:
         from ..symbolic import load_symbolic
     except ImportError:
@@ -250,7 +364,18 @@ def load_symbolic_table(args):
 
 
 def symbolic_robot(args):
-    """The numeric robot of a symbolic table at its ``values`` (``--values`` overrides)."""
+    """The numeric robot of a symbolic table at its ``values`` (``--values`` overrides).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    Robot
+        The numeric robot.
+    """
     vals = dict(v.split("=", 1) for v in (args.values or []) if "=" in v)
     bad = [v for v in (args.values or []) if "=" not in v]
     if bad:

@@ -14,7 +14,18 @@ from .common import EXIT_OK, emit, write_output
 
 
 def parse_keepout(text: str | None):
-    """``--keepout LINK:Z`` as ``(link, z)``, or None."""
+    """``--keepout LINK:Z`` as ``(link, z)``, or None.
+
+    Parameters
+    ----------
+    text : str or None
+        The option's value.
+
+    Returns
+    -------
+    tuple or None
+        ``(link, z)``, or None without the option.
+    """
     if not text:
         return None
     link, sep, z = text.rpartition(":")
@@ -25,7 +36,18 @@ def parse_keepout(text: str | None):
 
 
 def parse_acceleration(text: str | None):
-    """``--acceleration A[,A...]`` as a float, a list, or None."""
+    """``--acceleration A[,A...]`` as a float, a list, or None.
+
+    Parameters
+    ----------
+    text : str or None
+        The option's value.
+
+    Returns
+    -------
+    float, list of float or None
+        The limit(s), or None without the option.
+    """
     if not text:
         return None
     try:

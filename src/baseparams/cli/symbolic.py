@@ -13,7 +13,18 @@ from .common import EXIT_OK, Progress, emit, input_files, load_symbolic_table
 
 
 def analyze_symbolic(args) -> int:
-    """``analyze TABLE --symbolic [--json | --latex] [--codegen FILE]``: base parameters as formulas."""
+    """``analyze TABLE --symbolic [--json | --latex] [--codegen FILE]``: base parameters as formulas.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        :data:`~baseparams.cli.common.EXIT_OK`.
+    """
     robot = load_symbolic_table(args)
     from ..symbolic import probe, symbolic_analysis
     from ..symbolic.analyze import TIME_LIMIT_S

@@ -9,6 +9,7 @@ help); 4 certification FAILED (a DRNG column is not in the numerical nullspace);
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 import time
@@ -211,76 +212,38 @@ def cmd_analyze(args) -> int:
     return STATUS_EXIT[status]
 
 
-def cmd_identify(args) -> int:
-    """``baseparams identify MODEL DATA``: :func:`baseparams.cli.identify.cmd_identify`, imported when it runs.
+def lazy_command(module: str, name: str, usage: str):
+    """A command's handler that imports ``baseparams.cli.<module>`` only when the command runs.
 
     Parameters
     ----------
-    args : argparse.Namespace
-        The parsed command line.
+    module : str
+        The submodule holding the handler (``identify``, ``simulate``, ``excite``).
+    name : str
+        The handler's name there.
+    usage : str
+        The command line it serves, for its docstring.
 
     Returns
     -------
-    int
-        The exit code (:data:`EXIT_OK`, or :data:`EXIT_INPUT` for a fleet with ``--strict``).
+    callable
+        ``run(args: argparse.Namespace) -> int``: the handler's exit code.
     """
-    from .identify import cmd_identify as run
 
-    return run(args)
+    def run(args) -> int:
+        return getattr(importlib.import_module(f"{__name__}.{module}"), name)(args)
 
-
-def cmd_predict(args) -> int:
-    """``baseparams predict MODEL RESULT LOG``: :func:`baseparams.cli.identify.cmd_predict`, imported when it runs.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-    """
-    from .identify import cmd_predict as run
-
-    return run(args)
+    run.__name__ = run.__qualname__ = name
+    run.__doc__ = (f"``{usage}``: :func:`{__name__}.{module}.{name}`, imported when it runs.\n\n"
+                   "    Parameters\n    ----------\n    args : argparse.Namespace\n        The parsed command line.\n\n"
+                   "    Returns\n    -------\n    int\n        The exit code.\n    ")
+    return run
 
 
-def cmd_simulate(args) -> int:
-    """``baseparams simulate MODEL OUT``: :func:`baseparams.cli.simulate.cmd_simulate`, imported when it runs.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-    """
-    from .simulate import cmd_simulate as run
-
-    return run(args)
-
-
-def cmd_excite(args) -> int:
-    """``baseparams excite MODEL``: :func:`baseparams.cli.excite.cmd_excite`, imported when it runs.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-    """
-    from .excite import cmd_excite as run
-
-    return run(args)
+cmd_identify = lazy_command("identify", "cmd_identify", "baseparams identify MODEL DATA")
+cmd_predict = lazy_command("identify", "cmd_predict", "baseparams predict MODEL RESULT LOG")
+cmd_simulate = lazy_command("simulate", "cmd_simulate", "baseparams simulate MODEL OUT")
+cmd_excite = lazy_command("excite", "cmd_excite", "baseparams excite MODEL")
 
 
 def _predict_parser(sub, model_args) -> None:

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import os
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -145,8 +145,7 @@ class FleetResult:
                 return None
             return ("default estimate: weighted least squares; one log, nothing to cross-validate over the logs: "
                     "identify it alone for the model file's prior")
-        return sel.note().replace("blocked cross-validation on the training data",
-                                  "cross-validation over the logs (each block whole logs)")
+        return replace(sel, scope="cross-validation over the logs (each block whole logs)").note()
 
     def to_json(self) -> dict:
         """One JSON-able object.

@@ -208,7 +208,7 @@ def ols(acc: RowAccumulator, names: list[str]) -> Estimate:
     return least_squares(acc, names)
 
 
-def wls(acc: RowAccumulator, names: list[str]) -> Estimate:
+def wls(acc: RowAccumulator, names: list[str], first: Estimate | None = None) -> Estimate:
     """Weighted least squares with per-row noise from the OLS residuals (Gautier 1997).
 
     ``sigma_r^2 = ||e_r||^2 / (S - p / m)``; rows weighted by ``1 / sigma_r``.
@@ -219,13 +219,15 @@ def wls(acc: RowAccumulator, names: list[str]) -> Estimate:
         The accumulated rows.
     names : list of str
         Parameter names.
+    first : Estimate, optional
+        The OLS estimate of ``acc`` when already computed.
 
     Returns
     -------
     Estimate
         ``method = "wls"``; its ``rms`` are the unweighted per-row residuals.
     """
-    first = ols(acc, names)
+    first = ols(acc, names) if first is None else first
     dof = max(acc.samples - acc.nparams / acc.nrows, 1.0)
     sig = first.rms * np.sqrt(acc.samples / dof)
     floor = max(float(sig.max()) * 1e-6, np.finfo(float).tiny)

@@ -185,9 +185,10 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
 
     if method not in ("auto", "ols", "wls", "physical"):
         raise BaseparamsError(f"unknown identification method {method!r}; choose auto, ols, wls or physical")
-    est = ols(acc, model.names) if method == "ols" else wls(acc, model.names)
+    first = ols(acc, model.names)
+    est = first if method == "ols" else wls(acc, model.names, first)
     if method == "auto":
-        return _auto(model, est, acc, blocks or [])
+        return _auto(model, first, est, acc, blocks or [])
     if method != "physical":
         return Fit(model, method, est.theta, est)
     from .physical import physical_fit
@@ -198,16 +199,14 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     return Fit(model, method, phys.theta, est, phys)
 
 
-def _auto(model: IdentModel, est, acc, blocks: list) -> Fit:
+def _auto(model: IdentModel, first, est, acc, blocks: list) -> Fit:
     """OLS or WLS with the model file as a prior, as far as blocked cross-validation asks."""
     from dataclasses import replace
 
-    from .estimate import ols
     from .select import prior_covariance, prior_precision, ridge, select, split_blocks
 
     if len(blocks) < 2:
         return Fit(model, "auto", est.theta, est)
-    first = ols(acc, model.names)
     theta0 = model.theta(model.robot.parameters("paper"))
     s = prior_covariance(model)
     sel = select(split_blocks(blocks), {"ols": first.weights, "wls": est.weights}, theta0, prior_precision(model, s))
@@ -254,8 +253,8 @@ def pulled_covariance(f: Fit) -> Fit:
     """
     from dataclasses import replace
 
-    from .select import prior_error_scale, psd
-    from .uncertainty import with_covariance
+    from .select import prior_error_scale
+    from .uncertainty import psd, with_covariance
 
     sel, est = f.selection, f.estimate
     if sel is None or sel.penalty is None or getattr(est, "cov", None) is None:
@@ -1138,10 +1137,9 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
             acc = RowAccumulator(len(model.coords), model.n_params).add(a, tau)
         else:
             from . import chunks
-            from .select import FOLDS
+            from .select import fold_parts
 
-            for idx in np.array_split(np.arange(len(a)), FOLDS):
-                parts_out.append(RowAccumulator(len(model.coords), model.n_params).add(a[idx], tau[idx]))
+            parts_out.extend(fold_parts(a, tau))
             acc = chunks.combine(parts_out)
         if keep is not None:
             keep.append((a, tau))
@@ -1163,12 +1161,9 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
              for c in chunks.plan(full.n_samples, size, margin)]
     if parts_out is not None and held:
         # the cross-validation's blocks from the fitted rows, split as the at-once path splits them
-        from .estimate import RowAccumulator
-        from .select import FOLDS
+        from .select import fold_parts
 
-        a_all, t_all = np.concatenate([x for x, _ in held]), np.concatenate([y for _, y in held])
-        for idx in np.array_split(np.arange(len(a_all)), FOLDS):
-            parts_out.append(RowAccumulator(len(model.coords), model.n_params).add(a_all[idx], t_all[idx]))
+        parts_out.extend(fold_parts(np.concatenate([x for x, _ in held]), np.concatenate([y for _, y in held])))
     elif parts_out is not None:
         parts_out.extend(parts)  # blocks at chunk boundaries (the fitted rows do not fit in memory_mb)
     return chunks.combine(parts), (f"parallel filtering in {len(parts)} chunks of {size} samples with "

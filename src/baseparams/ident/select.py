@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .estimate import RowAccumulator, stacked_factor
+from .uncertainty import psd
 
 #: candidate weights ``lam = 1 / alpha^2`` of the prior (module docstring); 0 = no pull
 LAMBDAS = (0.0, 0.01, 0.1, 1.0, 10.0, 100.0)
@@ -75,6 +76,8 @@ class Selection:
         (:func:`prior_error_scale`; NaN: not measurable), once the covariance is computed.
     no_prior : tuple of str
         Bodies the file gives no mass or inertia: left to the data (:func:`no_prior_bodies`).
+    scope : str
+        What was cross-validated, for the note (a fleet's blocks are whole logs).
     """
 
     weighting: str
@@ -87,6 +90,7 @@ class Selection:
     prior_cov: np.ndarray | None = field(default=None, repr=False)
     kappa: float | None = None
     no_prior: tuple = ()
+    scope: str = "blocked cross-validation on the training data"
 
     def __repr__(self) -> str:
         return (f"<Selection: {self.weighting.upper()}, prior weight {self.lam:g} of {len(self.lambdas)} by "
@@ -122,14 +126,12 @@ class Selection:
         if self.no_prior:
             alt += f"; no prior for {', '.join(self.no_prior)} (no mass or inertia in the file)"
         if self.lam == 0:
-            return (f"default estimate: {how} least squares, chosen by {self.folds}-fold blocked cross-validation "
-                    f"on the training data (held-out RMS {plain:.4g}{alt}); the model file's parameters as a prior "
-                    f"did not predict better")
+            return (f"default estimate: {how} least squares, chosen by {self.folds}-fold {self.scope} "
+                    f"(held-out RMS {plain:.4g}{alt}); the model file's parameters as a prior did not predict better")
         return (f"default estimate: {how} least squares with the model file's parameters as a prior, trusted to "
                 f"within {1 / np.sqrt(self.lam):.3g} x each body's mass and size scales (weight {self.lam:g}): "
                 f"terms the data determine keep their fitted values, the others move towards the file; chosen by "
-                f"{self.folds}-fold blocked cross-validation on the training data (held-out RMS {best:.4g}, without "
-                f"the prior {plain:.4g}{alt})")
+                f"{self.folds}-fold {self.scope} (held-out RMS {best:.4g}, without the prior {plain:.4g}{alt})")
 
 
 def ridge(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndarray | None) -> np.ndarray:
@@ -341,6 +343,27 @@ def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, p
                      lam * s2[name] * precision if lam else None)
 
 
+def fold_parts(a: np.ndarray, tau: np.ndarray, folds: int = FOLDS) -> list[RowAccumulator]:
+    """The cross-validation's blocks of fitted rows: ``folds`` consecutive pieces, split by count.
+
+    Parameters
+    ----------
+    a : ndarray, shape ``(S, m, p)``
+        Fitted (filtered, decimated) regressor rows, in time order.
+    tau : ndarray, shape ``(S, m)``
+        Their torques.
+    folds : int
+        Number of blocks.
+
+    Returns
+    -------
+    list of RowAccumulator
+        One accumulator per block.
+    """
+    return [RowAccumulator(a.shape[1], a.shape[2]).add(a[idx], tau[idx])
+            for idx in np.array_split(np.arange(len(a)), folds)]
+
+
 def split_blocks(acc_parts: list[RowAccumulator], folds: int = FOLDS) -> list[RowAccumulator]:
     """Group consecutive accumulators (time-ordered chunks) into at most ``folds`` blocks.
 
@@ -421,24 +444,3 @@ def prior_error_scale(d: np.ndarray, cov_ls: np.ndarray, prior_cov: np.ndarray) 
         lo, hi = (mid, hi) if score(10.0**mid) > 0 else (lo, mid)
     return float(10.0 ** (0.5 * (lo + hi)))
 
-
-def psd(a: np.ndarray) -> np.ndarray:
-    """The nearest symmetric positive semidefinite matrix (negative eigenvalues set to 0).
-
-    Parameters
-    ----------
-    a : ndarray, shape ``(p, p)``
-        A covariance that rounding on an ill-conditioned fit may have made indefinite.
-
-    Returns
-    -------
-    ndarray, shape ``(p, p)``
-        ``V max(w, 0) V^T`` of ``(a + a^T) / 2``.
-    """
-    a = 0.5 * (a + a.T)
-    if not np.all(np.isfinite(a)):
-        return a
-    w, v = np.linalg.eigh(a)
-    if w.min() >= 0:
-        return a
-    return (v * np.maximum(w, 0.0)) @ v.T

@@ -481,8 +481,7 @@ def apply_covariance(f, acc, blocks, covariance: str = "hac", rate: float | None
     if w.min() < -1e-6 * max(float(w.max()), 0.0):  # rounding on an ill-conditioned fit: say so
         label += (f" - INACCURATE: rounding made it indefinite (condition number "
                   f"{est.condition_number:.3g}), negative part dropped; --covariance white, or a richer log")
-        vals, vecs = np.linalg.eigh(0.5 * (cov + cov.T))
-        cov = (vecs * np.maximum(vals, 0.0)) @ vecs.T
+        cov = psd(cov)
     where = (" at the physical values with the weighted least-squares bread (a first-order sandwich: active "
              "constraints and the prior's pull are not credited, so constrained terms are not understated)"
              if f.physical is not None else "")
@@ -490,3 +489,25 @@ def apply_covariance(f, acc, blocks, covariance: str = "hac", rate: float | None
             f"(per sample, the sum over its joints' rows), the meat the fit's projection removes added back"
             f"{where}; the white-noise formula: --covariance white")
     return replace(f, estimate=with_covariance(est, f.theta, cov, label)), note
+
+
+def psd(a: np.ndarray) -> np.ndarray:
+    """The nearest symmetric positive semidefinite matrix (negative eigenvalues set to 0).
+
+    Parameters
+    ----------
+    a : ndarray, shape ``(p, p)``
+        A covariance that rounding on an ill-conditioned fit may have made indefinite.
+
+    Returns
+    -------
+    ndarray, shape ``(p, p)``
+        ``V max(w, 0) V^T`` of ``(a + a^T) / 2``.
+    """
+    a = 0.5 * (a + a.T)
+    if not np.all(np.isfinite(a)):
+        return a
+    w, v = np.linalg.eigh(a)
+    if w.min() >= 0:
+        return a
+    return (v * np.maximum(w, 0.0)) @ v.T

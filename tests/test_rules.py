@@ -15,12 +15,15 @@ from baseparams.nullspace.rules import (
     RB,
     RL1,
     RL2,
+    RL3,
     fixed_vector_columns,
     level_chain_columns,
     loop_level_spaces,
     loop_shared_columns,
     parallelogram_columns,
     parallelograms,
+    planar_loop_columns,
+    planar_loops,
     sliding_columns,
 )
 from baseparams.nullspace.subspaces import motion_spans
@@ -200,9 +203,10 @@ def test_loop_shared_vectors_of_a_spherical_closure():
     paper, ext = drng(robot, extended=False), drng(robot)
     c = certify(robot, samples=3000, result=ext)
     # +1 from the shared normal; the four-bar on a moving link keeps one 4-body direction that
-    # no rule finds (an open problem, docs/extended-rules.md), completed numerically
-    assert c.certified and ext.rank == paper.rank + 1 and c.completed == 1
-    k = int(np.flatnonzero(ext.columns.joint >= robot.n)[-1])
+    # R-L3 (planar loops) finds: DRNG alone is complete
+    assert c.certified and ext.rank == paper.rank + 2 and c.completed == 0
+    assert ext.by_principle()["R-L3 planar loops"] == 1
+    k = int(np.flatnonzero((ext.columns.joint >= robot.n) & (ext.columns.principle == RA))[-1])
     assert "shared across loop joint 'closure'" in ext.provenance(k)
 
 
@@ -327,3 +331,106 @@ def test_rl2_three_body_chain():
 def test_rl2_needs_loops():
     robot = random_robot(np.random.default_rng(0), 6)
     assert len(level_chain_columns(robot)) == 0
+
+
+# ------------------------------------------------------------------------------ R-L3, R-L1 as coupled joints
+def _planar_loop(seed: int, slider: bool = False):
+    """A random planar loop of ``m + 1`` links (the root included), every joint's axis along z.
+
+    Root: the fixed base, a hip turning about z, or a hip turning about a tilted axis (the
+    cycle then moves in planes that turn); joint points at random heights; a parallelogram for
+    some seeds; the loop closed by an R or an S joint; gravity in the plane, along the axes,
+    oblique or zero; ``slider``: the joint of link ``L_m`` on the root is a P joint in the plane."""
+    rng = np.random.default_rng(seed)
+    root_kind = ("world", "parallel", "tilted")[seed % 3]
+    m = 3 + (seed // 3) % 3
+    par = m == 3 and seed % 2 == 0
+    gravity = [(0, -9.81, 0), (0, 0, -9.81), (3.0, -4.0, -8.0), (0, 0, 0)][(seed // 2) % 4]
+    b = RobotBuilder(f"planar-loop-{seed}", gravity=gravity)
+    root, actuated = None, 0
+    if root_kind != "world":
+        axis = (0, 0, 1) if root_kind == "parallel" else (1.0, 0.3, 0.2)
+        b.add_link("hip", joint="R", origin=pose((0, 0, 0)), axis=axis, inertia=random_inertia(rng))
+        root, actuated = "hip", 1
+    pts = np.c_[rng.uniform(-1, 1, (m + 1, 2)), rng.uniform(-0.3, 0.3, m + 1)]
+    if par:  # A, B, C, D with C = B + D - A (in the plane)
+        pts[2, :2] = pts[1, :2] + pts[3, :2] - pts[0, :2]
+    k = (m + 1) // 2  # links L1..Lk down from the root, L_m..L_{k+1} up to it
+    prev = np.zeros(3)
+    for j in range(1, k + 1):
+        b.add_link(f"L{j}", parent=root if j == 1 else f"L{j - 1}", joint="R", origin=pose(pts[j - 1] - prev),
+                   inertia=random_inertia(rng), actuated=j <= m - 2)
+        prev = pts[j - 1]
+    actuated += m - 2
+    nxt = np.zeros(3)
+    for j in range(m, k, -1):
+        p_joint = slider and j == m
+        b.add_link(f"L{j}", parent=root if j == m else f"L{j + 1}", joint="P" if p_joint else "R",
+                   origin=pose(pts[j] - nxt), axis=(*_unit2(rng), 0) if p_joint else (0, 0, 1),
+                   inertia=random_inertia(rng), actuated=False)
+        nxt = pts[j]
+    b.add_loop("closure", "RS"[seed % 2 if not par else 0], parent=f"L{k}", child=f"L{k + 1}",
+               origin=pose(pts[k] - pts[k - 1]), axis=(0, 0, 1))
+    b.q_box = np.array([[-0.3, 0.3]] * actuated)
+    return b.build()
+
+
+def _unit2(rng):
+    a = rng.uniform(0, 2 * np.pi)
+    return np.cos(a), np.sin(a)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_planar_slider_loops(seed):
+    """Planar loops with a slider: R-L3's slider column (``∫ y`` moved across the P joint) is
+    null; on the fixed base or a hip turning about the axes DRNG alone is complete. (A slider
+    loop on a tilted hip keeps one direction mixing in- and out-of-plane parts that no rule
+    finds: completed numerically, docs/extended-rules.md.)"""
+    robot = _planar_loop(seed, slider=True)
+    (lp,) = planar_loops(robot)
+    assert lp["slides"].sum() == 1
+    cols = planar_loop_columns(robot)
+    assert len(cols) == 1 and np.max(_in_nullspace(robot, cols)) < 1e-9
+    c = certify(robot, samples=3000, result=drng(robot))
+    assert c.status in ("certified", "completed"), c.message
+    if seed % 3 != 2:
+        assert c.completed == 0, c.message
+
+
+@pytest.mark.parametrize("seed", range(18))
+def test_planar_loops_complete(seed):
+    """DRNG alone spans the nullspace of random planar loops (R-L3 and R-L1's coupled-joint
+    completion), certified by the numerical method; every R-L3 column is null."""
+    robot = _planar_loop(seed)
+    cols = planar_loop_columns(robot)
+    assert len(cols) == 2 * len(planar_loops(robot)) == 2
+    assert np.max(_in_nullspace(robot, cols)) < 1e-9
+    res = drng(robot)
+    c = certify(robot, samples=3000, result=res)
+    assert c.certified and c.completed == 0, (c.status, c.message)
+    if parallelograms(robot):
+        assert res.by_principle()["R-L1 parallelograms"] > 0
+
+
+@pytest.mark.parametrize(("seed", "module", "name", "missing"), [
+    (5, "rules", "planar_loop_columns", 1),  # a five-link loop on a tilted hip
+    (17, "rules", "planar_loop_columns", 1),
+    (10, "coupled", "parallelogram_group_columns", 3),  # a horizontal parallelogram on a hip (planar_leg_linkage)
+    (2, "coupled", "parallelogram_group_columns", 1),  # a parallelogram on a tilted hip
+])
+def test_each_new_rule_closes_what_the_others_miss(monkeypatch, seed, module, name, missing):
+    """Without R-L3 (or without R-L1's coupled-joint completion) the numerical method completes
+    ``missing`` directions; with it, none; the columns carry their provenance."""
+    import importlib
+
+    from baseparams.nullspace.columns import Columns
+
+    robot = _planar_loop(seed)
+    res = drng(robot)
+    assert certify(robot, samples=3000, result=res).completed == 0
+    src = RL3 if name == "planar_loop_columns" else RL1
+    k = int(np.flatnonzero(res.columns.principle == src)[-1])
+    assert ("planar loop 'closure'" if src == RL3 else "parallelogram (loop 'closure')") in res.provenance(k)
+    monkeypatch.setattr(importlib.import_module(f"baseparams.nullspace.{module}"), name,
+                        lambda *a, **k: Columns.empty())
+    assert certify(robot, samples=3000, result=drng(robot)).completed == missing

@@ -18,7 +18,8 @@ n_base                 number of base parameters = n_params - nullity
 drng                   {columns, rank, seconds, extended, by_principle{shared points, fixed
                        points, planar rotations}, by_rule{shared points, fixed points, planar
                        rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
-                       R-L2 level chains, R-M coupled joints, numerical}, complete}: rank added
+                       R-L2 level chains, R-L3 planar loops, R-M coupled joints, numerical},
+                       complete}: rank added
                        by each source in that order (the paper's principles, the extended
                        rules, then, when some rows are not measured, unmeasured root,
                        unmeasured body and passive joint (those present), numerical

@@ -139,11 +139,12 @@ class Source(IntEnum):  # numpydoc ignore=PR01
     R_B = 4
     R_L1 = 5
     R_L2 = 6
-    R_M = 7
-    UNMEASURED = 8
-    UNSEEN = 9
-    PASSIVE = 10
-    NUMERICAL = 11
+    R_L3 = 7
+    R_M = 8
+    UNMEASURED = 9
+    UNSEEN = 10
+    PASSIVE = 11
+    NUMERICAL = 12
 
     @property
     def label(self) -> str:
@@ -157,7 +158,7 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
     @property
     def is_extended(self) -> bool:
-        """One of the extended rules R-A, R-B, R-L1, R-L2, R-M."""
+        """One of the extended rules R-A, R-B, R-L1, R-L2, R-L3, R-M."""
         return Source.R_A <= self <= Source.R_M
 
     @property
@@ -168,7 +169,7 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
 _LABELS = ("shared points", "fixed points", "planar rotations",
            "R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-           "R-M coupled joints", "unmeasured root", "unmeasured body", "passive joint", "numerical")
+           "R-L3 planar loops", "R-M coupled joints", "unmeasured root", "unmeasured body", "passive joint", "numerical")
 
 
 def values(members) -> tuple[str, ...]:

@@ -203,6 +203,40 @@ class Columns:
         return len(self.child)
 
 
+def on_bodies(bodies: list[int], x: np.ndarray, principle: int, label) -> Columns:
+    """Columns ``x (d, 10 len(bodies))`` on several bodies each: the highest body's block ``h``, then ``hp``, ``he``, ``more``.
+
+    Parameters
+    ----------
+    bodies : list of int, shape ``(b,)``
+        Distinct bodies (``>= 0``) whose blocks ``x`` holds, in that order.
+    x : ndarray, shape ``(d, 10 b)``
+        The columns, body ``bodies[i]``'s block in ``x[:, 10 i: 10 i + 10]`` (``paper``
+        convention).
+    principle : int
+        Provenance (a :class:`~baseparams.enums.Source`).
+    label : str or object
+        Provenance label, shared by the ``d`` columns.
+
+    Returns
+    -------
+    Columns
+        ``d`` columns, ``joint`` their highest body.
+    """
+    order = np.argsort(bodies)[::-1]
+    d = len(x)
+    blk = [x[:, 10 * i: 10 * i + 10] for i in order]
+    bs = [int(bodies[i]) for i in order]
+    none, zero = np.full(d, -1), np.zeros((d, 10))
+    more = None
+    if len(bs) > 3:
+        rest = np.array(bs[3:])
+        more = np.array([(rest, np.stack([b[c] for b in blk[3:]])) for c in range(d)] + [None], dtype=object)[:-1]
+    return Columns(blk[0], np.full(d, bs[0]), np.full(d, bs[1]) if len(bs) > 1 else none, np.full(d, principle),
+                   np.full(d, bs[0]), np.full(d, label, dtype=object), hp=blk[1] if len(bs) > 1 else zero,
+                   extra=np.full(d, bs[2]) if len(bs) > 2 else none, he=blk[2] if len(bs) > 2 else zero, more=more)
+
+
 def _triplets(cols: Columns) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(rows, column indices, values)`` of the entries of ``B``: child, parent, extra and further blocks."""
     k = len(cols)

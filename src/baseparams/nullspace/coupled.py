@@ -38,11 +38,13 @@ import numpy as np
 
 from ..enums import Source
 from ..model.inertia import HAT_INDEX
-from ..model.robot import Robot
+from ..model.robot import Coupling, Robot
 from ..model.scale import decision_scale
 from ..pga.core import hat
 from ..pga.linalg import cross3
-from .columns import Columns
+from .columns import Columns, on_bodies
+from .principles import world_axes
+from .rules import parallelograms
 
 RM = Source.R_M
 
@@ -63,7 +65,7 @@ MAX_TRIPLES_BLOCKS = 10
 MAX_PAIRS_BLOCKS = 24
 
 
-def coupled_coordinates(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def coupled_coordinates(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each coordinate as a function of its leader: ``q[j] = ratio[j] q[lead[j]] + offset[j]``.
 
     Chains of couplings are composed. Coordinates driven by several coordinates (a coupling with
@@ -74,6 +76,8 @@ def coupled_coordinates(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarra
     ----------
     robot : Robot
         The robot (``dof`` coordinates, :attr:`~baseparams.model.robot.Robot.couplings`).
+    extra : tuple of Coupling, optional
+        Couplings implied by the geometry (:func:`parallelogram_couplings`) besides the robot's.
 
     Returns
     -------
@@ -85,7 +89,7 @@ def coupled_coordinates(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarra
         Constant term (rad or m).
     """
     dof = robot.dof
-    drive = {c.succ: c for c in robot.couplings}
+    drive = {c.succ: c for c in (*robot.couplings, *extra)}
     lead, ratio, offset = np.arange(dof), np.ones(dof), np.zeros(dof)
     one = np.ones(dof, dtype=bool)
     one[robot.q_index[robot.ndofs != 1]] = False  # coordinates of multi-dof joints
@@ -354,8 +358,9 @@ def _potential_rows(robot: Robot, anchor: int, h: np.ndarray, level: np.ndarray 
     """The potential's conditions ``(rows, 10 (G + 1))``: ``c(q) = dN_A e4 + sum_k h_k(q) dN_k e4``.
 
     Under the world (fixed) the height ``gbar^T c(q)`` must not change with ``q``; under a
-    moving anchor ``c(q)`` must not change and keep its height as the anchor moves
-    (``level c = 0``).
+    moving anchor, with ``g_A = I + sum_i a_i X_i`` over its motion span, neither may
+    ``gbar^T c(q)`` nor ``level c(q)`` (``level = gbar^T X``), and ``level c(q0) = 0``; without
+    level rows, ``c(q)`` must not change.
     """
     m, g = h.shape[0], h.shape[1]
     pot = np.zeros((m, 4, g + 1, 10))
@@ -364,12 +369,19 @@ def _potential_rows(robot: Robot, anchor: int, h: np.ndarray, level: np.ndarray 
     diff = (pot[1:] - pot[:1]).reshape(m - 1, 4, -1)
     if anchor < 0:
         return np.einsum("a,mab->mb", np.r_[robot.gravity, 0.0], diff)
-    lv = np.zeros((0, 4)) if level is None else level
-    return np.concatenate([diff.reshape(4 * (m - 1), -1), np.einsum("la,ab->lb", lv, pot[0].reshape(4, -1))])
+    if level is None:
+        return diff.reshape(4 * (m - 1), -1)
+    # the potential is -gbar^T g_A c(q) with g_A = I + sum_i a_i X_i (X_i spanning g_A - I): it
+    # stays constant when gbar^T c(q) and every level row's l_i c(q) = gbar^T X_i c(q) do not
+    # change with q and l_i c(q0) = 0 (a part of c(q) none of them sees may move freely: an
+    # in-plane first moment of a horizontal mechanism)
+    see = np.vstack([np.r_[robot.gravity, 0.0], level])
+    return np.concatenate([np.einsum("la,mab->mlb", see, diff).reshape(len(see) * (m - 1), -1),
+                           np.einsum("la,ab->lb", level, pot[0].reshape(4, -1))])
 
 
 def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1e-9, level: np.ndarray | None = None,
-                    unit: np.ndarray | None = None):
+                    unit: np.ndarray | None = None, extra: tuple[Coupling, ...] = ()):
     """The conditions of a coupled group reduced to a square triangular factor, or None.
 
     Parameters
@@ -388,6 +400,8 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
         Per-entry factors ``d`` of a body block (:func:`baseparams.model.scale.decision_scale`;
         default ones): the system is solved for ``y = x / d``, an ordinary-sized equivalent, so
         that its rank decisions do not depend on the unit of length.
+    extra : tuple of Coupling, optional
+        Couplings implied by the geometry (:func:`coupled_coordinates`).
 
     Returns
     -------
@@ -397,7 +411,7 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
         is the world); None when :func:`sample_values` finds no exact set of values (the group
         is then skipped).
     """
-    _, ratio, offset = coupled_coordinates(robot)
+    _, ratio, offset = coupled_coordinates(robot, extra)
     q = sample_values(robot, bodies, ratio, tol)
     if q is None:
         return None
@@ -488,9 +502,10 @@ def _prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
         m = body >= 0
         v[k[m], [pos[int(b)] for b in body[m]]] += h[m]
     v = (v / unit).reshape(len(sel), -1)
+    norm = np.linalg.norm(v, axis=1)
+    v = v[norm > 0] / norm[norm > 0, None]  # a zero column (a rule's degenerate case) spans nothing
     if not len(v):
         return v
-    v /= np.linalg.norm(v, axis=1, keepdims=True)
     _, s, vt = np.linalg.svd(v, full_matrices=False)
     return vt[: int(np.sum(s > 1e-9 * s[0]))]
 
@@ -538,34 +553,95 @@ def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = Non
         MX MY MZ M`` of each body, world frame at q = 0), provenance ``R-M coupled joints``; the
         highest body carries ``h``, the others ``hp`` and ``he``.
     """
-    parts, groups = [], coupled_groups(robot)
+    return _group_columns(robot, coupled_groups(robot), tol, prior, RM)
+
+
+def _group_columns(robot: Robot, groups: list, tol: float, prior: Columns | None, source: int,
+                   labels: list[str] | None = None, extra: tuple[Coupling, ...] = ()) -> Columns:
+    """The columns of ``groups [(anchor, bodies)]``, new to ``prior``, with provenance ``source``."""
     if not groups:
         return Columns.empty()
+    parts = []
     levels = _levels(robot, [a for a, _ in groups], tol)
     unit = decision_scale(robot, "paper")[:10]
-    for anchor, bodies in groups:
-        red = group_nullspace(robot, anchor, bodies, tol, levels.get(anchor), unit)
+    for i, (anchor, bodies) in enumerate(groups):
+        red = group_nullspace(robot, anchor, bodies, tol, levels.get(anchor), unit, extra)
         if red is None:
             continue
         r, who = red
-        label = _group_label(robot.names, anchor, bodies)
+        label = labels[i] if labels else _group_label(robot.names, anchor, bodies)
         seed = _prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
         for sub, y in _sparse_solutions(r, len(who), tol, seed):
-            parts.append(_as_columns([who[b] for b in sub], y * np.tile(unit, len(sub)), label))
+            parts.append(on_bodies([who[b] for b in sub], y * np.tile(unit, len(sub)), source, label))
     return Columns.concat(parts)
 
 
-def _as_columns(bodies: list[int], x: np.ndarray, label: str) -> Columns:
-    """Solutions ``x (d, 10 len(bodies))`` as columns: the highest body's block ``h``, then ``hp``, ``he``, ``more``."""
-    order = np.argsort(bodies)[::-1]
-    d = len(x)
-    blk = [x[:, 10 * i: 10 * i + 10] for i in order]
-    bs = [int(bodies[i]) for i in order]
-    none, zero = np.full(d, -1), np.zeros((d, 10))
-    more = None
-    if len(bs) > 3:
-        rest = np.array(bs[3:])
-        more = np.array([(rest, np.stack([b[c] for b in blk[3:]])) for c in range(d)] + [None], dtype=object)[:-1]
-    return Columns(blk[0], np.full(d, bs[0]), np.full(d, bs[1]) if len(bs) > 1 else none, np.full(d, RM),
-                   np.full(d, bs[0]), np.full(d, label, dtype=object), hp=blk[1] if len(bs) > 1 else zero,
-                   extra=np.full(d, bs[2]) if len(bs) > 2 else none, he=blk[2] if len(bs) > 2 else zero, more=more)
+def parallelogram_couplings(robot: Robot) -> list[tuple[int, list[int], tuple[Coupling, ...], str]]:
+    """The couplings a parallelogram's assembly mode implies: ``(anchor, bodies, couplings, loop)`` each.
+
+    On the parallelogram mode (:func:`.rules.parallelograms`) the crank ``L1`` and the rocker
+    ``L3`` turn by the same angle relative to the root ``L0`` and the coupler ``L2`` keeps the
+    root's orientation, so every tree joint of the cycle is ``+-`` the crank joint's coordinate:
+    the cycle's three moving links are a coupled group on ``L0``, whose criterion
+    (:func:`group_system`) is exact where R-L1's closed forms are not complete (a horizontal
+    linkage, a moving root). Cycles whose joints are already coupled are left to R-M.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+
+    Returns
+    -------
+    list of (int, list of int, tuple of Coupling, str)
+        The root ``L0`` (``-1``: the world), the links ``L1, L2, L3`` (increasing indices), the
+        implied couplings (driving coordinate: the first link's tree joint) and the loop
+        joint's name.
+    """
+    pars = parallelograms(robot)
+    if not pars:
+        return []
+    coupled = {c.succ for c in robot.couplings} | {k for c in robot.couplings for k, _ in c.terms()}
+    axw, qi = world_axes(robot), robot.q_index
+    out = []
+    for par in pars:
+        l0, l1, l2, l3 = par["links"]
+        links = sorted((l1, l2, l3))
+        if any(robot.ndofs[b] != 1 or int(qi[b]) in coupled for b in links):
+            continue
+        turn = {l0: 0, l1: 1, l2: 0, l3: 1}  # each link's rotation relative to the root, in crank angles
+        lead = links[0]  # a child of the root: its parent is outside the cycle
+        if int(robot.parent[lead]) != l0:
+            continue
+        axis = par["axis"]
+        sign = {b: float(np.sign(axw[b] @ axis)) for b in links}
+        cps = tuple(Coupling(f"parallelogram {par['loop']}", int(qi[lead]), int(qi[b]),
+                             sign[b] * sign[lead] * (turn[b] - turn[int(robot.parent[b])]))
+                    for b in links[1:])
+        out.append((l0, links, cps, par["loop"]))
+    return out
+
+
+def parallelogram_group_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = None) -> Columns:
+    """R-L1 completed: each parallelogram's links as the coupled group they are (:func:`parallelogram_couplings`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Geometric tolerance.
+    prior : Columns, optional
+        Columns found before: only new directions are emitted.
+
+    Returns
+    -------
+    Columns
+        Columns in the ``paper`` convention, provenance ``R-L1 parallelograms``.
+    """
+    parts = []
+    for anchor, links, cps, loop in parallelogram_couplings(robot):
+        label = (f"parallelogram (loop {loop!r}): its links as joints coupled to "
+                 f"{robot.names[links[0]]!r} (exact criterion of R-M)")
+        parts.append(_group_columns(robot, [(anchor, links)], tol, prior, Source.R_L1, [label], cps))
+    return Columns.concat(parts)

@@ -48,7 +48,7 @@ class DRNGResult:
     seconds : float
         Wall-clock time DRNG took.
     extended : bool, default True
-        Whether the extended rules (R-A, R-B, R-L1, R-L2, R-M) ran besides the paper's principles.
+        Whether the extended rules (R-A, R-B, R-L1, R-L2, R-L3, R-M) ran besides the paper's principles.
     rows : str, default "all"
         The measured rows the columns were computed for (``joints`` adds the floating root's
         unmeasured columns, a set of joints those of :func:`unmeasured_columns`; the string form
@@ -112,7 +112,7 @@ class DRNGResult:
         """Rank contributed by each source, taken in order.
 
         The order is the paper's principles 1, 2, 3, then the extended rules R-A, R-B, R-L1,
-        R-L2, R-M (those run), then the measured rows' own (unmeasured root, unmeasured body,
+        R-L2, R-L3, R-M (those run), then the measured rows' own (unmeasured root, unmeasured body,
         passive joint; present only when some rows are not measured).
         Each source's share is the rank it adds to the sources before it (:func:`scaled_rank`
         of the cumulative set), so the values sum to :attr:`rank`.
@@ -589,8 +589,9 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
     The paper's Algorithm "DRNG" with slips E1-E5 fixed (:func:`.principles.drng_columns`), then
-    the extended rules (:func:`.rules.rule_columns`, then :func:`.coupled.coupled_columns` for
-    joint couplings, given the columns before), then :func:`unmeasured_columns`; the rank
+    the extended rules (:func:`.rules.rule_columns`, then
+    :func:`.coupled.parallelogram_group_columns` for parallelograms and
+    :func:`.coupled.coupled_columns` for joint couplings, given the columns before), then :func:`unmeasured_columns`; the rank
     is decided by :func:`scaled_rank`.
 
     Parameters
@@ -600,7 +601,7 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     tol : float, default 1e-9
         Geometric tolerance of the principles and rules (parallel axes, zero gravity, ...).
     extended : bool, default True
-        Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2;
+        Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2, R-L3;
         :mod:`.coupled`: R-M);
         ``False`` gives the paper's three principles alone.
     rows : str or sequence of str, default "all"
@@ -624,10 +625,13 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     cols = drng_columns(robot, tol)
     if extended:
         cols = Columns.concat([cols, rule_columns(robot, tol)])
-        if robot.couplings:  # R-M (its module imported for robots with couplings only: start-up time)
-            from .coupled import coupled_columns
+        if robot.couplings or robot.loops:  # R-M (imported for robots with couplings or loops only: start-up time)
+            from .coupled import coupled_columns, parallelogram_group_columns
 
-            cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
+            if robot.loops:  # R-L1 completed: parallelograms as the coupled groups they are
+                cols = Columns.concat([cols, parallelogram_group_columns(robot, tol, prior=cols)])
+            if robot.couplings:
+                cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
     extra = unmeasured_columns(robot, rows, tol)
     if len(extra):
         cols = Columns.concat([cols, extra])

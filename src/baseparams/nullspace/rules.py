@@ -26,6 +26,7 @@ paper's principles, so :func:`.rank.block_rank` decides the rank.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -36,11 +37,11 @@ from ..model.inertia import unhat
 from ..model.robot import Robot
 from ..pga.core import hat
 from ..pga.linalg import cross3, null_rows, nullspace, rowspace, span_rows, sym
-from .columns import Columns, sym_params
+from .columns import Columns, on_bodies, sym_params
 from .principles import compound_shared, world_axes
 from .subspaces import MotionSpans, motion_spans
 
-RA, RB, RL1, RL2 = Source.R_A, Source.R_B, Source.R_L1, Source.R_L2  # provenance of the rules' columns
+RA, RB, RL1, RL2, RL3 = Source.R_A, Source.R_B, Source.R_L1, Source.R_L2, Source.R_L3  # provenance of the rules' columns
 
 
 def _independent(syms: np.ndarray, tol: float) -> np.ndarray:
@@ -766,12 +767,132 @@ def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, ha
     return parts
 
 
+# ------------------------------------------------------------------------------ loops: R-L3
+def planar_loops(robot: Robot, tol: float = 1e-9) -> list[dict]:
+    """Loops whose cycle moves in planes ``⟂ u`` relative to its root link.
+
+    Every tree joint of the cycle is a 1-dof R joint with axis ``∥ u`` or a P joint ``⟂ u`` (at
+    least one R), and the loop joint is an R joint ``∥ u`` or closes at a point (S, U): each link
+    of the cycle then moves relative to the root link ``L0`` by a rotation about ``u`` and a
+    translation ``⟂ u``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Axes are parallel (perpendicular) when the norm of the cross (dot) product of the unit
+        axes is at most ``tol``.
+
+    Returns
+    -------
+    list of dict
+        Per loop, ``links [L0, L1, ..., Lm]`` (``L0`` the cycle's root, ``-1`` for the fixed
+        base), ``points (m + 1, 3)`` with ``points[j]`` the joint between ``L_j`` and
+        ``L_{j+1}`` (cyclically; world frame at q = 0), ``slides (m + 1,)`` (True where that
+        joint is a P joint), the unit ``axis (3,)``, ``loop`` (the loop joint's name) and
+        ``index`` (its index in ``robot.loops``).
+    """
+    out = []
+    axw = world_axes(robot)
+    org = robot.M0[:, :3, 3]
+    for k, lj in enumerate(robot.loops):
+        if lj.type not in ("R", "S", "U"):
+            continue
+        anc_c, anc_p = _ancestors(robot, lj.child), _ancestors(robot, lj.parent)
+        lca = next(a for a in anc_c if a in anc_p)
+        down = _path_to(robot, lj.child, lca)[::-1]
+        up = _path_to(robot, lj.parent, lca)
+        tree = down + up
+        if not tree or any(robot.jtype[b] not in ("R", "P") or robot.ndofs[b] != 1 for b in tree):
+            continue
+        unit = {b: axw[b] / max(np.linalg.norm(axw[b]), 1e-300) for b in tree}
+        turns = [unit[b] for b in tree if robot.jtype[b] == "R"]
+        if lj.type == "R":
+            turns.append(_loop_axis(lj) / max(np.linalg.norm(_loop_axis(lj)), 1e-300))
+        if not turns:
+            continue
+        axis = turns[0]
+        if any(np.linalg.norm(np.cross(axis, a)) > tol for a in turns) or \
+                any(abs(axis @ unit[b]) > tol for b in tree if robot.jtype[b] == "P"):
+            continue
+        points = [org[b] for b in down] + [lj.M[:3, 3]] + [org[b] for b in up]
+        slides = [robot.jtype[b] == "P" for b in down] + [False] + [robot.jtype[b] == "P" for b in up]
+        out.append({"links": [lca] + tree, "points": np.array(points), "slides": np.array(slides),
+                    "axis": axis, "loop": lj.name, "index": k})
+    return out
+
+
+def planar_loop_columns(robot: Robot, tol: float = 1e-9) -> Columns:
+    """R-L3: a planar loop's closure moves the out-of-plane products of inertia around the cycle.
+
+    Relative to the root ``L0`` link ``k`` of a loop of :func:`planar_loops` moves by
+    ``x -> R_k x + p_k`` in the plane ``⟂ u``. The out-of-plane part of a link's pseudo-inertia
+    (the products ``P = (∫ x_i y)`` of in-plane ``x`` and ``y = u . x``, the moment ``∫ y`` and
+    ``∫ y^2``) enters the energy only through ``C = sum_k R_k P_k + p_k ∫ y_k``, ``sum ∫ y`` and
+    ``sum ∫ y^2`` (whatever the root does). Around the cycle, joint ``e`` between links ``a``
+    and ``b`` gives ``p_b - p_a = (R_a - R_b) r_e`` (R, S, U at the point ``r_e``) or leaves
+    ``p_b - p_a`` as it is (P), and these differences sum to zero: so ``+r_e`` on ``P_a`` and
+    ``-r_e`` on ``P_b`` for every turning joint, ``+1`` on ``∫ y_b`` and ``-1`` on ``∫ y_a``
+    for every sliding one, keep ``C`` and ``sum ∫ y`` (a nullspace direction); without sliding
+    joints the same with every ``P`` turned by 90 degrees (``u x r_e``) is a second one. Written
+    ``sym(r, u)`` and ``sym(e4, u)`` (the root's block dropped when it is the fixed base, which
+    makes every out-of-plane part invisible). Derivation: ``docs/extended-rules.md`` (R-L3).
+    Closes Cassie's plantar-rod loops (one direction each) and slider-cranks on a tilted hip.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` moving bodies).
+    tol : float, default 1e-9
+        Parallel-axis tolerance (:func:`planar_loops`).
+
+    Returns
+    -------
+    Columns
+        One or two columns per planar loop over the cycle's links (provenance R-L3 planar
+        loops, ``joint`` the loop joint: ``n + l``), blocks in the ``paper`` convention (spatial
+        pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
+        q = 0).
+    """
+    parts = []
+    e4 = np.array([0.0, 0.0, 0.0, 1.0])
+    for lp in planar_loops(robot, tol):
+        u = np.r_[lp["axis"], 0.0]
+        links, m = lp["links"], len(lp["links"])
+        r = lp["points"] - np.outer(lp["points"] @ u[:3], u[:3])  # joint points projected to the plane
+        turned = [r, np.cross(u[:3], r)] if not lp["slides"].any() else [r]
+        x = np.zeros((len(turned), m, 10))
+        for c, rr in enumerate(turned):
+            for e in range(m):  # joint e between links e and e + 1 (cyclically)
+                a, b = e, (e + 1) % m
+                if lp["slides"][e]:
+                    x[c, b] += sym_params(e4, u)
+                    x[c, a] -= sym_params(e4, u)
+                else:
+                    v = np.r_[rr[e], 0.0]
+                    x[c, a] += sym_params(v, u)
+                    x[c, b] -= sym_params(v, u)
+        keep = [i for i, b in enumerate(links) if b >= 0]
+        x = x[:, keep]
+        x = x[np.linalg.norm(x.reshape(len(x), -1), axis=1) > 0]
+        if not len(x):
+            continue
+        kind = "slider" if lp["slides"].any() else "closure sum R_k L_k = 0"
+        label = (f"planar loop {lp['loop']!r} (axes ∥ {_describe(u)}, {kind}): out-of-plane products "
+                 "moved around the cycle")
+        cols = on_bodies([links[i] for i in keep], x.reshape(len(x), -1), RL3, label)
+        parts.append(replace(cols, joint=np.full(len(cols), robot.n + lp["index"])))  # the loop joint
+    return Columns.concat(parts)
+
+
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """The extended-rule columns R-A, R-B, R-L1, R-L2 for ``robot`` (R-M: :mod:`.coupled`).
+    """The extended-rule columns R-A, R-B, R-L1, R-L2, R-L3 for ``robot`` (R-M: :mod:`.coupled`).
 
     In order: R-A on every body (:func:`fixed_vector_columns`) and across loop joints
     (:func:`loop_shared_columns`), R-B (:func:`sliding_columns`), R-L1
-    (:func:`parallelogram_columns`), R-L2 (:func:`level_chain_columns`), sharing one
+    (:func:`parallelogram_columns`), R-L2 (:func:`level_chain_columns`), R-L3
+    (:func:`planar_loop_columns`), sharing one
     :func:`.subspaces.motion_spans`. The columns are redundant with each other and with the
     paper's principles: :func:`.rank.block_rank` decides the rank.
 
@@ -786,11 +907,11 @@ def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     -------
     Columns
         The columns with provenance (R-A fixed vectors, R-B sliding points, R-L1
-        parallelograms, R-L2 level chains), blocks in the ``paper`` convention (spatial
+        parallelograms, R-L2 level chains, R-L3 planar loops), blocks in the ``paper`` convention (spatial
         pseudo-inertia entries ``XX XY XZ YY YZ ZZ MX MY MZ M`` of each body, world frame at
         q = 0).
     """
     ms = motion_spans(robot, tol)
     return Columns.concat([fixed_vector_columns(robot, ms), loop_shared_columns(robot, tol),
                            sliding_columns(robot, ms), parallelogram_columns(robot),
-                           level_chain_columns(robot, ms, tol)])
+                           level_chain_columns(robot, ms, tol), planar_loop_columns(robot, tol)])

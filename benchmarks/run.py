@@ -32,7 +32,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``size_sweep``    ``baseparams analyze FILE --floating --json`` on random floating trees (URDF) of
                     N = 10 .. 10000 links: wall time, peak memory, status, nullity.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
-* ``files``         every example-robot-data URDF: certified, DRNG complete?; talos_full_v2 times.
+* ``files``         every example-robot-data URDF and every ``../shared/models`` file: certified, DRNG
+                    complete?; talos_full_v2 times.
 * ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the
                     page's own render time in headless Chromium (``data-render-ms``).
 
@@ -917,6 +918,21 @@ def bench_files(out: dict, quick: bool) -> None:
     out["files_certified"] = certified
     out["files_drng_complete"] = complete
     out["files_drng_incomplete"] = ", ".join(incomplete)
+    shared = Path(__file__).resolve().parent.parent.parent / "shared" / "models"
+    if shared.is_dir():  # the shared corpus: URDF+ linkages and MJCF (loops: Cassie, a leg linkage)
+        done, left = 0, []
+        models = sorted(shared.glob("urdfplus/*.urdf")) + sorted(shared.glob("mjcf/*/*.xml"))
+        for f in models:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                robot, _ = load_model(str(f), strict_inertia=False)
+            c = certify(robot, seed=0)
+            done += bool(c.certified and c.completed == 0)
+            if not (c.certified and c.completed == 0):
+                left.append(f"{f.name} ({c.status}, +{c.completed})")
+        out["shared_models_analysed"] = len(models)
+        out["shared_models_drng_complete"] = done
+        out["shared_models_drng_incomplete"] = ", ".join(left)
     talos = [f for f in urdf_files() if f.name == "talos_full_v2.urdf"]
     if talos:
         path = str(talos[0])

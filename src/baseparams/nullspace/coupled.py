@@ -589,7 +589,7 @@ def parallelogram_couplings(robot: Robot) -> list[tuple[int, list[int], tuple[Co
     Parameters
     ----------
     robot : Robot
-        The robot.
+        The robot (its ``loops`` and ``couplings``).
 
     Returns
     -------

@@ -169,7 +169,8 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
 _LABELS = ("shared points", "fixed points", "planar rotations",
            "R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-           "R-L3 planar loops", "R-M coupled joints", "unmeasured root", "unmeasured body", "passive joint", "numerical")
+           "R-L3 planar loops", "R-M coupled joints", "unmeasured root", "unmeasured body", "passive joint",
+           "numerical")
 
 
 def values(members) -> tuple[str, ...]:

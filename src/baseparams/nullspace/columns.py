@@ -204,7 +204,7 @@ class Columns:
 
 
 def on_bodies(bodies: list[int], x: np.ndarray, principle: int, label) -> Columns:
-    """Columns ``x (d, 10 len(bodies))`` on several bodies each: the highest body's block ``h``, then ``hp``, ``he``, ``more``.
+    """Columns ``x (d, 10 len(bodies))`` over several bodies: the highest body's ``h``, then ``hp``, ``he``, ``more``.
 
     Parameters
     ----------

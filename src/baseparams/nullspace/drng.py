@@ -591,8 +591,8 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     The paper's Algorithm "DRNG" with slips E1-E5 fixed (:func:`.principles.drng_columns`), then
     the extended rules (:func:`.rules.rule_columns`, then
     :func:`.coupled.parallelogram_group_columns` for parallelograms and
-    :func:`.coupled.coupled_columns` for joint couplings, given the columns before), then :func:`unmeasured_columns`; the rank
-    is decided by :func:`scaled_rank`.
+    :func:`.coupled.coupled_columns` for joint couplings, given the columns before), then
+    :func:`unmeasured_columns`; the rank is decided by :func:`scaled_rank`.
 
     Parameters
     ----------

@@ -41,7 +41,8 @@ from .columns import Columns, on_bodies, sym_params
 from .principles import compound_shared, world_axes
 from .subspaces import MotionSpans, motion_spans
 
-RA, RB, RL1, RL2, RL3 = Source.R_A, Source.R_B, Source.R_L1, Source.R_L2, Source.R_L3  # provenance of the rules' columns
+#: provenance of the rules' columns
+RA, RB, RL1, RL2, RL3 = Source.R_A, Source.R_B, Source.R_L1, Source.R_L2, Source.R_L3
 
 
 def _independent(syms: np.ndarray, tol: float) -> np.ndarray:

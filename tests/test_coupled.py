@@ -121,6 +121,18 @@ def test_random_mimic_hands_complete_geometrically(seed):
         assert np.max(np.linalg.norm(w @ b, axis=0)) < 1e-9 * np.linalg.norm(w, 2)
 
 
+def test_a_rank_decided_by_its_gap():
+    """A five-body group (zero gravity, ratios 1, -0.5, 0.5) whose conditions have singular values
+    at 3e-6 .. 5e-5 of the largest above its 35 zeros (~1e-17): the rank is decided by the gap
+    (GAP times the largest zero), not by a fixed window, so the group is solved (11 directions
+    that were completed numerically)."""
+    robot = mimic_hand(np.random.default_rng(119), offsets=False)
+    res = drng(robot)
+    cert = certify(robot, result=res)
+    assert cert.certified and cert.completed == 0, cert.message
+    assert res.by_principle()["R-M coupled joints"] == 11
+
+
 def test_mimic_hands_need_the_rule():
     """Without R-M the same hands are incomplete: the rule closes a real gap (lockstep fingers)."""
     gaps = 0

@@ -54,7 +54,7 @@ MAX_DENOMINATOR = 64
 #: largest harmonic ``K`` of a group's conditions (samples per period ``2 K + 1``); beyond it the
 #: group is skipped
 MAX_HARMONIC = 256
-#: singular values of a group's conditions must be below ``tol`` or above ``GAP * tol`` (relative)
+#: singular values of a group's conditions: below ``tol`` or at least ``GAP`` times the largest below (relative)
 GAP = 1e4
 #: smallest component (of a unit solution) outside the directions already found that counts as new
 NEW = 1e-6
@@ -431,14 +431,29 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
 def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
     """Orthonormal rows spanning the nullspace of ``a``; None when a singular value is ambiguous.
 
-    Ambiguous: between ``tol * scale`` and ``GAP * tol * scale`` (neither clearly zero nor clearly
-    not): the subset or group is then skipped (fewer directions, never a wrong one).
+    Ambiguous: neither clearly zero nor clearly not (:func:`_split`): the subset or group is then
+    skipped (fewer directions, never a wrong one).
     """
     _, s, vt = np.linalg.svd(a, full_matrices=a.shape[0] < a.shape[1])
     s = np.r_[s, np.zeros(a.shape[1] - len(s))]
-    if np.any((s > tol * scale) & (s < GAP * tol * scale)):
+    zero, clear = _split(s[None], tol, scale)
+    if not (zero | clear).all():
         return None
-    return vt[int(np.sum(s > tol * scale)):]
+    return vt[int(np.sum(~zero)):]
+
+
+def _split(sv: np.ndarray, tol: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values ``(k, m)`` that are clearly zero and clearly not, per row.
+
+    Zero: at most ``tol * scale``. Not zero: at least ``GAP`` times the largest zero (floored at
+    ``1e-15 * scale``, rounding) and above ``tol * scale``: the rank sits in a gap of ``GAP`` or
+    more. A value in between leaves the rank undecided (the caller skips the system: fewer
+    directions, never a wrong one).
+    """
+    zero = sv <= tol * scale
+    top = np.max(np.where(zero, sv, 0.0), axis=1, keepdims=True)
+    clear = ~zero & (sv >= GAP * np.maximum(top, 1e-15 * scale))
+    return zero, clear
 
 
 def _subset_nulls(r: np.ndarray, u: int, size: int, tol: float, scale: float):
@@ -452,7 +467,7 @@ def _subset_nulls(r: np.ndarray, u: int, size: int, tol: float, scale: float):
     a = r[:, idx].transpose(1, 0, 2)  # (subsets, 10 u, 10 size)
     _, sv, vt = np.linalg.svd(a, full_matrices=a.shape[1] < a.shape[2])
     sv = np.concatenate([sv, np.zeros((len(subs), a.shape[2] - sv.shape[1]))], axis=1)
-    zero, clear = sv <= tol * scale, sv >= GAP * tol * scale
+    zero, clear = _split(sv, tol, scale)
     for k in np.flatnonzero(zero.any(axis=1) & (zero | clear).all(axis=1)):
         yield subs[k], idx[k], vt[k, int(np.sum(~zero[k])):]
 

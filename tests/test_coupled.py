@@ -121,6 +121,17 @@ def test_random_mimic_hands_complete_geometrically(seed):
         assert np.max(np.linalg.norm(w @ b, axis=0)) < 1e-9 * np.linalg.norm(w, 2)
 
 
+@pytest.mark.parametrize("seed", [34, 87, 206, 221])
+def test_mimic_offsets_are_sampled_from_the_coupled_reference(seed):
+    """Couplings with offsets: at q = 0 the driven joints sit at their offsets, not at 0. The
+    samples start from that reference (it was taken for a singular loop reference: a refusal
+    naming parallelograms, on a plain mimic chain)."""
+    robot = mimic_hand(np.random.default_rng(seed), offsets=True)
+    assert any(c.offset != 0 for c in robot.couplings)
+    cert = certify(robot, result=drng(robot))
+    assert cert.certified and cert.completed == 0, cert.message
+
+
 def test_a_rank_decided_by_its_gap():
     """A five-body group (zero gravity, ratios 1, -0.5, 0.5) whose conditions have singular values
     at 3e-6 .. 5e-5 of the largest above its 35 zeros (~1e-17): the rank is decided by the gap

@@ -489,6 +489,12 @@ def close_loops(robot: Robot, qa: np.ndarray, dqa: np.ndarray | None = None, ddq
     q = np.zeros((s, robot.dof))
     if q_start is not None:  # initial guess of the passive coordinates (assembly search)
         q[:, pas] = np.asarray(q_start, dtype=float)[pas]
+    elif len(pas):  # the reference's passive coordinates: 0, unless a coupling's offset moves them
+        ref = np.zeros((1, robot.dof))
+        f0, _, e0, _ = _continuation(plan, ref, np.zeros((1, len(act))), act, pas, 1, tol, max_iter, np.inf,
+                                     crossing=False)
+        if not f0[0] and e0[0] < max(tol * 100, 1e-9):
+            q[:, pas] = ref[0, pas]
     # an assembly search (q_start) starts off the loops: no branch to keep, no crossing checked
     failed, jumped, err, k = _continuation(plan, q, qa, act, pas, steps, tol, max_iter, max_step,
                                            crossing=q_start is None)

@@ -75,3 +75,23 @@ def test_a_chunk_whose_samples_are_all_too_slow_is_skipped_not_a_traceback():
     assert any("chunks" in n for n in res.notes)
     assert res.samples["removed"] and sum(res.samples["removed"].values()) > 0
     assert np.all(np.isfinite(res.fit.theta))
+
+
+def test_rank_decision_survives_an_svd_that_does_not_converge(monkeypatch):
+    """LAPACK's divide-and-conquer SVD fails on rare inputs (a 60x60 R factor of a mimic hand):
+    the decision falls back to the QR-iteration driver and decides the same rank."""
+    import baseparams.numerics as nm
+
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(200, 8)) @ np.diag([1, 1, 1, 1, 1, 1, 0, 0]) @ rng.normal(size=(8, 8))
+    ref = nm.rank_decision(w)
+    real = np.linalg.svd
+
+    def failing(*a, **k):
+        raise np.linalg.LinAlgError("SVD did not converge")
+
+    monkeypatch.setattr(nm.np.linalg, "svd", failing)
+    got = nm.rank_decision(w)
+    monkeypatch.setattr(nm.np.linalg, "svd", real)
+    assert got.rank == ref.rank == 6 and got.nullity == 2
+    np.testing.assert_allclose(got.singular_values, ref.singular_values, rtol=1e-10, atol=1e-12)

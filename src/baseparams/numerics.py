@@ -388,7 +388,12 @@ def rank_decision(w: np.ndarray, rtol: float = 1e-9, min_gap: float = 1e4, sampl
     if w.shape[0] > w.shape[1]:  # same singular values and V, without U (a 15000-row U is 1.8 GB)
         w = StreamingQR(w.shape[1]).add(w).r
     with blas_threads():
-        _, s, vt = np.linalg.svd(w, full_matrices=w.shape[0] < w.shape[1])
+        try:
+            _, s, vt = np.linalg.svd(w, full_matrices=w.shape[0] < w.shape[1])
+        except np.linalg.LinAlgError:  # LAPACK's divide-and-conquer (gesdd) fails on rare inputs
+            from scipy.linalg import svd
+
+            _, s, vt = svd(w, full_matrices=w.shape[0] < w.shape[1], lapack_driver="gesvd")
     ncol = w.shape[1]
     sv = np.zeros(ncol)
     sv[: len(s)] = s

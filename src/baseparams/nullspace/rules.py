@@ -290,6 +290,17 @@ def _ancestors(robot: Robot, b: int) -> list[int]:
     return out
 
 
+def _cycle(robot: Robot, lj) -> tuple[int, list[int], list[int]]:
+    """A loop joint's cycle: ``(root, down, up)``.
+
+    ``root`` the lowest common ancestor of its two bodies (``-1``: the base), ``down`` the bodies
+    from below the root to the successor, ``up`` from the predecessor up to below the root.
+    """
+    anc_c, anc_p = _ancestors(robot, lj.child), _ancestors(robot, lj.parent)
+    lca = next(a for a in anc_c if a in anc_p)
+    return lca, _path_to(robot, lj.child, lca)[::-1], _path_to(robot, lj.parent, lca)
+
+
 def parallelograms(robot: Robot, tol: float = 1e-7) -> list[dict]:
     """Loop 4-cycles of parallel R joints whose joint points form a parallelogram at q = 0.
 
@@ -319,10 +330,7 @@ def parallelograms(robot: Robot, tol: float = 1e-7) -> list[dict]:
     for lj in robot.loops:
         if lj.type != "R":
             continue
-        anc_c, anc_p = _ancestors(robot, lj.child), _ancestors(robot, lj.parent)
-        lca = next(a for a in anc_c if a in anc_p)
-        down = _path_to(robot, lj.child, lca)[::-1]  # from below the root to the successor
-        up = _path_to(robot, lj.parent, lca)  # from the predecessor up to below the root
+        lca, down, up = _cycle(robot, lj)
         if len(down) + len(up) != 3 or any(robot.jtype[b] != "R" for b in down + up):
             continue
         links = [lca] + down + up
@@ -461,9 +469,8 @@ def loop_shared_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     e = np.eye(4)
     parts = []
     for k, lj in enumerate(robot.loops):
-        anc_c, anc_p = _ancestors(robot, lj.child), _ancestors(robot, lj.parent)
-        lca = next(a for a in anc_c if a in anc_p)
-        bodies = _path_to(robot, lj.child, lca) + _path_to(robot, lj.parent, lca)
+        _, down, up = _cycle(robot, lj)
+        bodies = down[::-1] + up
         js = [j for b in bodies for j in range(qi[b], qi[b] + nd[b])]
         fix = nullspace(screws[js].reshape(-1, 4), tol) if js else e
         own = _shared_vectors(lj.type, lj.M[:3, 3], _loop_axis(lj))
@@ -800,10 +807,7 @@ def planar_loops(robot: Robot, tol: float = 1e-9) -> list[dict]:
     for k, lj in enumerate(robot.loops):
         if lj.type not in ("R", "S", "U"):
             continue
-        anc_c, anc_p = _ancestors(robot, lj.child), _ancestors(robot, lj.parent)
-        lca = next(a for a in anc_c if a in anc_p)
-        down = _path_to(robot, lj.child, lca)[::-1]
-        up = _path_to(robot, lj.parent, lca)
+        lca, down, up = _cycle(robot, lj)
         tree = down + up
         if not tree or any(robot.jtype[b] not in ("R", "P") or robot.ndofs[b] != 1 for b in tree):
             continue

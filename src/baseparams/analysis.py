@@ -38,6 +38,11 @@ convention             parameter convention of base_parameters (khalil: link fra
 base_parameters        [{name, expression}] regrouped base parameters
 base_parameters_paper  the same in the paper's spatial convention (world frame at q = 0)
 unidentifiable         standard parameters that no base parameter sees
+practical              null, or {literal_n_base, counted_out, tolerance, size, snaps[{joint,
+                       what, component, literal, special, deviation}], note}: geometry the file
+                       states to within rounding of a right angle or zero, taken as that value
+                       because the directions it adds are not identifiable in practice
+                       (``literal=True`` / ``--literal``: the file as stated)
 =====================  ===================================================================
 """
 
@@ -212,6 +217,11 @@ class Analysis:
         The whole analysis' wall time [s].
     extended : bool
         Whether the extended geometric rules were used as well as the paper's three principles.
+    practical : Practical, optional
+        Directions counted out as not identifiable in practice: the model file states some
+        geometry to within rounding of a special value and the analysis is that of the model with
+        the special value (:mod:`baseparams.model.snap`); ``robot`` is then that model and
+        ``practical.source`` the file's. ``None``: the literal model was analysed.
 
     Notes
     -----
@@ -231,11 +241,17 @@ class Analysis:
     base_paper: BaseParameters
     seconds: float
     extended: bool = True
+    practical: Practical | None = None
 
     @property
     def nullity(self) -> int:
         """Dimension of the (certified) nullspace; DRNG's rank when unverified."""
         return self.basis.shape[1] if self.basis is not None else 10 * self.robot.n - self.base.n_base
+
+    @property
+    def source_robot(self) -> Robot:
+        """The model as given (:attr:`robot` unless geometry was snapped, :attr:`practical`)."""
+        return self.robot if self.practical is None else self.practical.source
 
     @property
     def n_base(self) -> int:
@@ -457,11 +473,13 @@ class Analysis:
             "base_parameters": self.base.expressions(),
             "base_parameters_paper": self.base_paper.expressions(),
             "unidentifiable": [self.base.names[i] for i in self.base.unidentifiable],
+            "practical": None if self.practical is None else self.practical.to_json(self.n_base),
         }
 
 
 def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: bool = True, rows="all",
-            convention: str = "khalil", extended: bool = True, progress: TextIO | None = None) -> Analysis:
+            convention: str = "khalil", extended: bool = True, progress: TextIO | None = None,
+            literal: bool = False) -> Analysis:
     """Base parameters of ``robot``: DRNG, then certification (and completion), then regrouping.
 
     Parameters
@@ -489,6 +507,14 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
         The extended geometric rules as well as the paper's three principles.
     progress : file-like, optional
         A stream for progress lines (e.g. ``sys.stderr``).
+    literal : bool
+        Analyse the model exactly as the file states it. By default (``False``) geometry the file
+        states to within rounding of a special value (an angle within 1e-3 rad of a multiple of
+        pi/2, an offset or axis component within 1e-3 of zero relative to the robot's size;
+        :mod:`baseparams.model.snap`) is taken as that value **when** it changes the count: the
+        directions it adds move the torques by less than 1e-3 of their scale and are not
+        identifiable in practice. Such an analysis says so (``.practical``, a note in the
+        report and JSON, the literal count); exact files are unaffected.
 
     Returns
     -------
@@ -512,12 +538,23 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     >>> a.expressions()[0]["name"]
     'link1.ZZR'
     """
-    from .model.inertia import check_convention
-
-    drng, certify, base_parameters = _step("drng"), _step("certify"), _step("base_parameters")
     if not isinstance(robot, Robot):
         raise BaseparamsError(f"analyze() takes a Robot (baseparams.load({robot!r}) makes one), "
                               f"not {type(robot).__name__}")
+    kw = {"samples": samples, "seed": seed, "verify": verify, "rows": rows, "convention": convention,
+          "extended": extended, "progress": progress}
+    lit = _analyze(robot, **kw)
+    if literal:
+        return lit
+    return practical_analysis(lit, kw)
+
+
+def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows, convention: str, extended: bool,
+             progress: TextIO | None) -> Analysis:
+    """:func:`analyze` of the model as given (arguments as there)."""
+    from .model.inertia import check_convention
+
+    drng, certify, base_parameters = _step("drng"), _step("certify"), _step("base_parameters")
     check_convention(convention)
     t0 = time.perf_counter()
 
@@ -553,6 +590,144 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
             base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended)
+
+
+@dataclass(frozen=True, eq=False)
+class Practical:
+    """Directions counted out of the base parameters as not identifiable in practice.
+
+    The model file states some geometry to within rounding of a special value
+    (:mod:`baseparams.model.snap`); taken literally it adds directions whose torques are below
+    :data:`~baseparams.model.snap.SNAP_TOL` of the others' at the file's own scales. The analysis
+    is that of the model with the special values.
+
+    Parameters
+    ----------
+    literal_n_base : int
+        The count of the model exactly as the file states it (``analyze(..., literal=True)``).
+    snaps : tuple of Snap
+        The values that change the count (each one's joint, literal and special value).
+    candidates : int
+        How many values within the tolerance were found (those that do not change the count
+        are taken as the file states them).
+    tol : float
+        The tolerance (rad, or relative to the robot's size).
+    size : float
+        The robot's size the offsets are relative to [m].
+    source : Robot
+        The model as the file states it.
+    """
+
+    literal_n_base: int
+    snaps: tuple
+    candidates: int
+    tol: float
+    size: float
+    source: Robot
+
+    def counted_out(self, n_base: int) -> int:
+        """Directions counted out: ``literal_n_base - n_base``."""
+        return self.literal_n_base - n_base
+
+    def note(self, n_base: int) -> str:
+        """One line: how many directions, which joints, why, and the flag for the literal count.
+
+        Parameters
+        ----------
+        n_base : int
+            The practical count.
+
+        Returns
+        -------
+        str
+            The note.
+        """
+        k = self.counted_out(n_base)
+        what = "; ".join(s.describe() for s in self.snaps)
+        return (f"practical identifiability: {k} direction{'s' if k != 1 else ''} counted out "
+                f"({self.literal_n_base} -> {n_base} base parameters): {what}; geometry within {self.tol:g} "
+                f"(rad, or of the robot's {self.size:.3g} m size) of a right angle or zero is taken as that value, "
+                f"the directions it adds moving the torques by less than {self.tol:g} of their scale "
+                f"(not identifiable in practice); the literal count: --literal")
+
+    def to_json(self, n_base: int) -> dict:
+        """The decision, machine-readable.
+
+        Parameters
+        ----------
+        n_base : int
+            The practical count.
+
+        Returns
+        -------
+        dict
+            ``literal_n_base, counted_out, tolerance, size, snaps[{joint, what, component,
+            literal, special, deviation}], note``.
+        """
+        return {"literal_n_base": self.literal_n_base, "counted_out": self.counted_out(n_base),
+                "tolerance": self.tol, "size": self.size,
+                "snaps": [{"joint": s.joint, "what": s.what, "component": s.index, "literal": s.literal,
+                           "special": s.snapped, "deviation": s.deviation} for s in self.snaps],
+                "note": self.note(n_base)}
+
+
+def practical_analysis(lit: Analysis, kw: dict) -> Analysis:
+    """The analysis with geometry stated to within rounding of a special value taken as that value.
+
+    When the model with every such value snapped (:func:`baseparams.model.snap.near_special`)
+    has fewer base parameters than the literal one, the values responsible are found by
+    bisection over the joints (snapping all but a group: the count rises when the group holds
+    one) and the snapped model's analysis is returned with :class:`Practical`; otherwise the
+    literal analysis.
+
+    Parameters
+    ----------
+    lit : Analysis
+        The literal analysis.
+    kw : dict
+        :func:`analyze`'s keywords (as the literal analysis ran).
+
+    Returns
+    -------
+    Analysis
+        ``lit`` or the snapped model's analysis.
+    """
+    from .model.snap import SNAP_TOL, near_special, robot_size, snapped
+
+    robot = lit.robot
+    found = near_special(robot)
+    if not found:
+        return lit
+    snap_all = _analyze(snapped(robot, found), **kw)
+    if snap_all.n_base >= lit.n_base or not (snap_all.status.ok or snap_all.status == Status.UNVERIFIED):
+        return lit
+    joints = sorted({s.body for s in found})
+
+    def raises(group: list[int]) -> bool:  # un-snapping these joints brings directions back
+        keep = [s for s in found if s.body not in group]
+        return _analyze(snapped(robot, keep), **kw).n_base > snap_all.n_base
+
+    responsible: list[int] = []
+
+    def bisect(group: list[int]) -> None:
+        if not raises(group):
+            return
+        if len(group) == 1:
+            responsible.append(group[0])
+            return
+        half = len(group) // 2
+        bisect(group[:half])
+        bisect(group[half:])
+
+    bisect(joints)
+    snaps = tuple(s for s in found if s.body in responsible) or tuple(found)
+    # the analysis of the model with only the responsible values snapped (the others as stated)
+    final = _analyze(snapped(robot, snaps), **kw) if len(snaps) < len(found) else snap_all
+    if final.n_base != snap_all.n_base:
+        final, snaps = snap_all, tuple(found)
+    from dataclasses import replace
+
+    return replace(final, practical=Practical(lit.n_base, snaps, len(found), SNAP_TOL, robot_size(robot), robot))
 
 
 def _large_tree_columns(robot: Robot, rows: str, res):
@@ -626,6 +801,7 @@ def format_report(a: Analysis) -> str:
     out = [(f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
             f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
+           *([a.practical.note(a.n_base)] if a.practical is not None else []),
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
     for src in Source:
         if src is not Source.NUMERICAL and src.label in a.by_principle:

@@ -192,7 +192,8 @@ def cmd_analyze(args) -> int:
         return no_moving_bodies(args, exc)
     with Progress(args.verbose) as progress:
         result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
-                         extended=not args.paper_only, rows=args.rows, convention=args.convention, progress=progress)
+                         extended=not args.paper_only, rows=args.rows, convention=args.convention, progress=progress,
+                         literal=args.literal)
         text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
         if args.html:
             from ..report.html import analysis_html
@@ -397,6 +398,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
     s.add_argument("--paper-only", action="store_true",
                    help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2, R-M)")
+    s.add_argument("--literal", action="store_true",
+                   help="the model exactly as the file states it: by default geometry within 1e-3 of a right angle "
+                        "or zero (rpy 3.1416, an axis 0 1e-5 1) is taken as that value when it changes the count "
+                        "(the directions it adds are not identifiable in practice; the report names the joint)")
     s.add_argument("--rows", default=str(Rows.ALL), metavar="ROWS",
                    help="measured generalized forces: all (default); joints (joint torques only); base (the "
                         "floating base's wrench only); joints:NAME,NAME (only these joints' torques); "
@@ -495,6 +500,10 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
     s.add_argument("--prior-weight", type=float, metavar="W", help="physical: weight of the file's inertias")
+    s.add_argument("--literal", action="store_true",
+                   help="the model exactly as the file states it (analyze --literal): by default geometry within "
+                        "1e-3 of a right angle or zero is taken as that value when the directions it adds are not "
+                        "identifiable in practice, and those directions are not fitted")
     s.add_argument("--joints", metavar="A,B,...",
                    help="identify only these joints; every other joint is welded (at its logged position if it "
                         "does not move, at --weld, or at 0)")

@@ -200,29 +200,44 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
 
 
 def _auto(model: IdentModel, first, est, acc, blocks: list) -> Fit:
-    """OLS or WLS with the model file as a prior, as far as blocked cross-validation asks."""
+    """OLS or WLS with the model file as a prior, as far as blocked cross-validation asks.
+
+    Drive terms get a weak prior towards zero (:func:`~baseparams.ident.select.drive_precision`)
+    and rotor inertia, viscous and Coulomb friction stay non-negative, in every candidate.
+    """
     from dataclasses import replace
 
-    from .select import prior_covariance, prior_precision, ridge, select, split_blocks
+    from .select import (
+        drive_precision,
+        no_prior_bodies,
+        nonnegative_terms,
+        prior_covariance,
+        prior_precision,
+        select,
+        solve,
+        split_blocks,
+    )
 
-    if len(blocks) < 2:
-        return Fit(model, "auto", est.theta, est)
     theta0 = model.theta(model.robot.parameters("paper"))
+    nonneg = nonnegative_terms(model)
+    if len(blocks) < 2:
+        return Fit(model, "auto", solve(est.R11, est.r12, theta0, None, nonneg), est)
     s = prior_covariance(model)
-    sel = select(split_blocks(blocks), {"ols": first.weights, "wls": est.weights}, theta0, prior_precision(model, s))
+    sel = select(split_blocks(blocks), {"ols": first.weights, "wls": est.weights}, theta0, prior_precision(model, s),
+                 drive_prec=drive_precision(model, acc), nonneg=nonneg)
     if sel is None:
-        return Fit(model, "auto", est.theta, est)
+        return Fit(model, "auto", solve(est.R11, est.r12, theta0, None, nonneg), est)
     base = first if sel.weighting == "ols" else est
-    if sel.lam == 0:
-        return Fit(model, "auto", base.theta, base, selection=sel)
     nb = model.n_base
     prior_cov = np.zeros((model.n_params, model.n_params))
-    prior_cov[:nb, :nb] = s / sel.lam
-    from .select import no_prior_bodies
-
+    if sel.lam:
+        prior_cov[:nb, :nb] = s / sel.lam
     names = tuple(n for n, x in zip(model.robot.names, no_prior_bodies(model.robot)) if x)
-    sel = replace(sel, theta0=theta0, prior_cov=prior_cov, no_prior=names)
-    theta = ridge(base.R11, base.r12, theta0, sel.penalty)
+    dprec = np.diag(drive_precision(model, acc))
+    drive_cov = np.diag(np.where(dprec > 0, 1.0 / np.where(dprec > 0, dprec, 1.0), 0.0))
+    sel = replace(sel, theta0=theta0, prior_cov=prior_cov if sel.lam else None, no_prior=names if sel.lam else (),
+                  drive_cov=drive_cov)
+    theta = solve(base.R11, base.r12, theta0, sel.penalty, nonneg)
     res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
     # the least-squares statistics stay: pulled_covariance maps the covariance once it is chosen
     return Fit(model, "auto", theta, replace(base, method="auto", theta=theta, rms=res), selection=sel)
@@ -273,8 +288,14 @@ def pulled_covariance(f: Fit) -> Fit:
     else:
         how = "the file's error as the prior states it: the data are too ill-conditioned to measure it"
     prior_cov = sel.prior_cov if sel.prior_cov is not None else np.zeros_like(cov)
-    cov = psd(m @ cov @ m.T + (kappa if np.isfinite(kappa) else 1.0) * rest @ prior_cov @ rest.T)
-    label = f"{est.covariance}, with the model file's prior (weight {sel.lam:g}; {how})"
+    prior_cov = (kappa if np.isfinite(kappa) else 1.0) * prior_cov
+    if sel.drive_cov is not None:
+        prior_cov = prior_cov + sel.drive_cov
+    cov = psd(m @ cov @ m.T + rest @ prior_cov @ rest.T)
+    label = (f"{est.covariance}, with the model file's prior (weight {sel.lam:g}; {how})" if sel.lam else
+             f"{est.covariance}")
+    if sel.drive_cov is not None and np.any(sel.drive_cov):
+        label += "; drive terms with a weak prior towards zero (std: the torque each could explain alone)"
     return replace(f, estimate=with_covariance(est, f.theta, cov, label), selection=replace(sel, kappa=kappa))
 
 
@@ -435,7 +456,7 @@ class Identification:
         from .. import __version__
         from .results import FORMAT, VERSION, numbers, robot_fingerprint
 
-        r = self.model.robot
+        r = self.model.analysis.source_robot
         opts = dict(self.options or {})
         opts["friction"] = list(opts.get("friction", ()))
         opts["couplings"] = [{"name": c.name, "joints": list(c.joints), "weights": list(c.weights)}
@@ -525,7 +546,8 @@ class Identification:
         o["friction"] = tuple(o.get("friction", ()))
         o["couplings"] = tuple(MotorCoupling(c["name"], tuple(c["joints"]), tuple(c["weights"]))
                                for c in o.get("couplings", ()))
-        model = ident_model(analyze(robot, convention=o["convention"], rows=o.get("rows", "all")), o["rotor"],
+        model = ident_model(analyze(robot, convention=o["convention"], rows=o.get("rows", "all"),
+                                    literal=bool(o.get("literal", False))), o["rotor"],
                             o["friction"], o.get("coulomb_width"), couplings=o["couplings"])
         names = doc["parameters"]["names"]
         if list(model.names) != list(names):
@@ -743,7 +765,7 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
              convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
              samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-             allow_units: bool = False) -> Identification:
+             allow_units: bool = False, literal: bool = False) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -801,6 +823,11 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     allow_units : bool
         Go on when the units look wrong (:mod:`baseparams.ident.plausibility`: velocities,
         time base, torques against the model file's, absurd samples), which otherwise refuses.
+    literal : bool
+        Identify the model exactly as the file states it; by default geometry stated to within
+        rounding of a right angle or zero is taken as that value when the directions it adds
+        are not identifiable in practice (:func:`baseparams.analyze`'s ``literal``, said in the
+        notes): those directions are not fitted.
 
     Returns
     -------
@@ -822,20 +849,20 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
                          min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,
-                         score_cutoff, covariance, allow_units)
+                         score_cutoff, covariance, allow_units, literal)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
               prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
-              score_cutoff=None, covariance="hac", allow_units=False) -> Identification:
+              score_cutoff=None, covariance="hac", allow_units=False, literal=False) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .preprocess import prepare
 
     say = progress or (lambda msg: None)
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction), coulomb_width,
-                        couplings=couplings)
+    model = ident_model(analyze(robot, samples=samples, convention=convention, literal=literal), rotor,
+                        tuple(friction), coulomb_width, couplings=couplings)
     cols = log_columns(model, log)
     unit_notes = check_log_units(model, train, cols, allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
@@ -867,7 +894,8 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
-               "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed}
+               "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed,
+               "literal": bool(literal)}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
 
 
@@ -1198,7 +1226,10 @@ def model_notes(model: IdentModel) -> list[str]:
     list of str
         ``regrouped: <expression>`` lines.
     """
-    return [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]
+    a = model.analysis
+    practical = [] if a.practical is None else [a.practical.note(a.n_base).replace(
+        "; the literal count: --literal", "; these directions are not fitted (identify --literal fits them)")]
+    return practical + [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]
 
 
 def predict_log(f: Fit, log, cutoff: float | None, smooth: bool = True) -> np.ndarray:

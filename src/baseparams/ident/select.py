@@ -78,6 +78,9 @@ class Selection:
         Bodies the file gives no mass or inertia: left to the data (:func:`no_prior_bodies`).
     scope : str
         What was cross-validated, for the note (a fleet's blocks are whole logs).
+    drive_cov : ndarray, shape ``(p, p)``, optional
+        The drive terms' weak prior as a covariance (diagonal ``sigma_k^2``,
+        :func:`drive_precision`; zero elsewhere).
     """
 
     weighting: str
@@ -91,6 +94,7 @@ class Selection:
     kappa: float | None = None
     no_prior: tuple = ()
     scope: str = "blocked cross-validation on the training data"
+    drive_cov: np.ndarray | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
         return (f"<Selection: {self.weighting.upper()}, prior weight {self.lam:g} of {len(self.lambdas)} by "
@@ -162,6 +166,119 @@ def ridge(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndar
         return np.linalg.solve(h, g)
     except np.linalg.LinAlgError:
         return np.linalg.lstsq(h, g, rcond=None)[0]
+
+
+def solve(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndarray | None,
+          nonneg: np.ndarray | None = None) -> np.ndarray:
+    """:func:`ridge` with some terms kept non-negative (friction, rotor inertia).
+
+    ``min ||R11 theta - r12||^2 + (theta - theta0)^T P (theta - theta0)`` subject to
+    ``theta[nonneg] >= 0``: the unconstrained solution when it is admissible, else a bounded
+    least squares on the stacked system ``[R11; P^(1/2)]`` (SciPy's ``lsq_linear``, BVLS).
+
+    Parameters
+    ----------
+    r11 : ndarray, shape ``(p, p)``
+        Triangular factor of the (weighted) regressor.
+    r12 : ndarray, shape ``(p,)``
+        Its right-hand side.
+    theta0 : ndarray, shape ``(p,)``
+        The prior's values.
+    penalty : ndarray, shape ``(p, p)``, optional
+        ``P``, symmetric positive semidefinite.
+    nonneg : ndarray of bool, shape ``(p,)``, optional
+        The terms kept ``>= 0``.
+
+    Returns
+    -------
+    ndarray, shape ``(p,)``
+        The estimate.
+    """
+    theta = ridge(r11, r12, theta0, penalty)
+    if nonneg is None or not np.any(nonneg) or np.all(theta[nonneg] >= 0):
+        return theta
+    from scipy.optimize import lsq_linear
+
+    a, b = r11, r12
+    if penalty is not None:
+        w, v = np.linalg.eigh(0.5 * (penalty + penalty.T))
+        half = (v * np.sqrt(np.maximum(w, 0.0))).T
+        a, b = np.vstack([r11, half]), np.r_[r12, half @ theta0]
+    lo = np.where(nonneg, 0.0, -np.inf)
+    # column scaling: BVLS's tolerances are absolute
+    norms = np.linalg.norm(a, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
+    res = lsq_linear(a / norms, b, bounds=(lo * norms, np.full(len(lo), np.inf)), method="bvls", tol=1e-12)
+    out = res.x / norms
+    out[nonneg] = np.maximum(out[nonneg], 0.0)
+    return out
+
+
+def nonnegative_terms(model) -> np.ndarray:
+    """The model parameters kept ``>= 0``: rotor inertia, viscous and Coulomb friction not regrouped.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+
+    Returns
+    -------
+    ndarray of bool, shape ``(p,)``
+        True for a drive parameter of kind ``Ia``, ``Fv``, ``Fc`` (or a coupled motor's) that
+        stands alone (a regrouped one is part of a base parameter, which has any sign).
+    """
+    from .physical import NONNEGATIVE_KINDS
+
+    nb = len(model.analysis.base_names)
+    kinds = model.drives.param_kinds
+    return np.array([i >= nb and kinds[i - nb] in NONNEGATIVE_KINDS for i in model.regrouping.independent],
+                    dtype=bool)
+
+
+def drive_precision(model, acc: RowAccumulator, weights: np.ndarray | None = None) -> np.ndarray:
+    """A weak prior on the drive terms: zero, within the torque they could explain alone.
+
+    Drive parameter ``k`` (a column ``a_k`` on its rows) gets the prior ``N(0, sigma_k^2)`` with
+    ``sigma_k = ||tau|| / ||a_k||`` over its rows: the value at which it would explain the whole
+    measured torque alone (a Coulomb term: the torque's RMS). A term the data determine (its
+    least-squares variance far below ``sigma_k^2``) keeps its fitted value; a pair the log cannot
+    separate (Coulomb friction and offset of a joint that never reverses, an offset and a gravity
+    term of a joint that hardly moves) takes the smallest values that fit instead of large
+    opposite ones. Returned as precisions ``1 / sigma_k^2``, to be multiplied by the residual
+    variance like the file's prior (:func:`select`).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    acc : RowAccumulator
+        The training rows (their factors give every column's and torque's norm per row).
+    weights : ndarray, shape ``(m,)``, optional
+        Row weights (``sigma_k`` is a ratio: the same weighted or not, for one-row terms).
+
+    Returns
+    -------
+    ndarray, shape ``(p, p)``
+        Diagonal, zero for the base parameters.
+    """
+    p = model.n_params
+    w = np.ones(acc.nrows) if weights is None else np.asarray(weights, dtype=float)
+    col2 = np.zeros((acc.nrows, p))
+    tau2 = np.zeros(acc.nrows)
+    for r, f in enumerate(acc.factors):
+        norms2 = np.sum(f.r**2, axis=0) * w[r] ** 2
+        col2[r], tau2[r] = norms2[:p], norms2[p]
+    nb = len(model.analysis.base_names)
+    out = np.zeros((p, p))
+    for k, i in enumerate(model.regrouping.independent):
+        if i < nb:
+            continue
+        rows = col2[:, k] > 0
+        a2, t2 = float(col2[rows, k].sum()), float(tau2[rows].sum())
+        if a2 > 0 and t2 > 0:
+            out[k, k] = a2 / t2
+    return out
 
 
 def prior_covariance(model) -> np.ndarray:
@@ -292,7 +409,8 @@ def noise_variance(r11: np.ndarray, rho2: float, n_obs: int) -> float:
 
 
 def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, precision: np.ndarray,
-           lambdas=LAMBDAS) -> Selection | None:
+           lambdas=LAMBDAS, drive_prec: np.ndarray | None = None, nonneg: np.ndarray | None = None
+           ) -> Selection | None:
     """Choose the rows' weighting and the prior's weight by blocked cross-validation.
 
     Parameters
@@ -307,6 +425,10 @@ def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, p
         ``S^-1`` (:func:`prior_precision`): zero for the terms without a prior.
     lambdas : sequence of float
         Candidate weights, 0 first.
+    drive_prec : ndarray, shape ``(p, p)``, optional
+        The drive terms' weak prior (:func:`drive_precision`), in every candidate.
+    nonneg : ndarray of bool, shape ``(p,)``, optional
+        Terms kept ``>= 0`` (:func:`nonnegative_terms`).
 
     Returns
     -------
@@ -325,8 +447,8 @@ def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, p
         for k, held in enumerate(blocks):
             a11, a12, _, _ = _system(blocks[:k] + blocks[k + 1:], w)
             for i, lam in enumerate(lambdas):
-                pen = lam * s2[name] * precision if lam else None
-                sse[i, k] = _sse(held, ridge(a11, a12, theta0, pen))
+                pen = penalty_of(lam, s2[name], precision, drive_prec)
+                sse[i, k] = _sse(held, solve(a11, a12, theta0, pen, nonneg))
         for i in range(len(lambdas)):
             cands.append((name, i))
             fold_rms.append(np.sqrt(sse[i] / np.maximum(counts, 1)))
@@ -340,7 +462,33 @@ def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, p
     cv = {w: tuple(float(med[c]) for c in range(len(cands)) if cands[c][0] == w) for w in weightings}
     lam = float(lambdas[i])
     return Selection(name, lam, tuple(float(x) for x in lambdas), cv, len(blocks),
-                     lam * s2[name] * precision if lam else None)
+                     penalty_of(lam, s2[name], precision, drive_prec))
+
+
+def penalty_of(lam: float, s2: float, precision: np.ndarray, drive_prec: np.ndarray | None = None
+               ) -> np.ndarray | None:
+    """The penalty ``s2 (lam S^-1 + D)`` of a candidate: the file's prior and the drive terms' weak one.
+
+    Parameters
+    ----------
+    lam : float
+        The file prior's weight (0: none).
+    s2 : float
+        The residual variance.
+    precision : ndarray, shape ``(p, p)``
+        ``S^-1`` (:func:`prior_precision`).
+    drive_prec : ndarray, shape ``(p, p)``, optional
+        ``D`` (:func:`drive_precision`).
+
+    Returns
+    -------
+    ndarray, shape ``(p, p)``, or None
+        None when both are absent.
+    """
+    pen = lam * precision if lam else None
+    if drive_prec is not None and np.any(drive_prec):
+        pen = drive_prec if pen is None else pen + drive_prec
+    return None if pen is None else s2 * pen
 
 
 def fold_parts(a: np.ndarray, tau: np.ndarray, folds: int = FOLDS) -> list[RowAccumulator]:

@@ -747,7 +747,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
                     decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
                     convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
                     samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-                    allow_units: bool = False, predictions=None):
+                    allow_units: bool = False, predictions=None, literal: bool = False):
     """:func:`~baseparams.ident.pipeline.identify` on a log streamed from its file (module docstring).
 
     Parameters
@@ -757,7 +757,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
     stream : block source
         The log, e.g. :class:`baseparams.io.logs.LogStream`.
     method, rotor, friction, coulomb_width, holdout, cutoff, decimate, min_speed, prior_weight, convention, \
-memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units
+memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, literal
         As for :func:`~baseparams.ident.pipeline.identify` (``memory_mb``: the window's regressor).
     validation : block source, optional
         Another log to validate on (exclusive with ``holdout``).
@@ -790,7 +790,7 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units
                 coulomb_width=coulomb_width, holdout=holdout,
                 cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
                 convention=convention, memory_mb=memory_mb, couplings=tuple(couplings), samples=samples,
-                score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units)
+                score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units, literal=literal)
     with blas_threads():
         return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
 
@@ -810,7 +810,8 @@ def _passes(robot, stream, o: dict, say):
                                   f"{sc.t_end - sc.t0:.6g} s")
         end_time = sc.t_end - o["holdout"]
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=o["samples"], convention=o["convention"]), o["rotor"], o["friction"],
+    model = ident_model(analyze(robot, samples=o["samples"], convention=o["convention"], literal=o["literal"]),
+                        o["rotor"], o["friction"],
                         o["coulomb_width"], couplings=o["couplings"])
     cols = log_columns(model, sc.head)
     say(f"training statistics of {sc.n} samples (pass 2: hold-out split, rate, cutoff subsample)")
@@ -865,7 +866,7 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
     options = {"method": o["method"], "convention": o["convention"], "rows": str(model.analysis.rows),
                "rotor": bool(o["rotor"]), "friction": tuple(o["friction"]), "coulomb_width": o["coulomb_width"],
                "couplings": tuple(o["couplings"]), "cutoff": float(plan.design.cutoff), "decimate": int(plan.factor),
-               "min_speed": o["min_speed"]}
+               "min_speed": o["min_speed"], "literal": bool(o["literal"])}
     samples = {"read": int(getattr(train, "raw_n", tr.n)), "used": int(acc.samples), "removed": removed}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
 

@@ -1,0 +1,271 @@
+"""Geometry a model file states to within rounding of a special value: a right angle, zero.
+
+Real files carry ``rpy="3.1416"`` or ``"1.5708"`` (pi and pi/2 to 5 digits), an axis ``0
+0.00001 1`` or an offset of a micrometre left by a CAD export. Taken literally, such a value
+breaks a symmetry: a first joint tilted 7.3e-6 rad from gravity makes two first moments of its
+link "identifiable", with regressor columns about 1e-5 of the others. No measurement resolves
+them; least squares fits them to absurd values that explode on another recording.
+
+This module finds those values (:func:`near_special`) and builds the model with them set to
+the special value (:func:`snapped`). Each joint frame relative to its parent's (the URDF
+``<origin>``) is read as roll-pitch-yaw angles and an offset, each joint axis by its components:
+
+* an angle within :data:`SNAP_TOL` rad of a multiple of pi/2 is that multiple;
+* an offset component, or an axis component, within :data:`SNAP_TOL` of zero (offsets relative
+  to the robot's size, :func:`robot_size`) is zero.
+
+Why 1e-3: a geometric feature of relative size ``e`` creates directions whose regressor columns
+are about ``e`` times the others' at the file's own mass and size scales; ``e = 1e-3`` (0.06
+degree, or 1 mm on a 1 m robot) moves the torques by 0.1 % of their scale, below what joint
+torque sensors or motor-current models resolve (0.5-2 % is typical). A deviation below
+:data:`EXACT_TOL` is rounding of an exact value (``1.9e-17`` from a DH conversion) and is left as
+it is: the numerics treat it as exact already. Values exactly special are not touched, so exact
+files are unaffected. The decision whether a snapped value changes the count is the analysis's
+(:func:`baseparams.analyze`, ``literal=False``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .robot import Robot
+
+#: geometry within this of a special value (rad; offsets: relative to the robot's size) is that value
+SNAP_TOL = 1e-3
+#: deviations below this (same units) are rounding of an exact value: left as they are
+EXACT_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Snap:
+    """One value of the model within :data:`SNAP_TOL` of a special value.
+
+    Parameters
+    ----------
+    body : int
+        The body whose joint frame or axis holds it.
+    joint : str
+        That body's joint name.
+    what : str
+        ``"rpy"`` (an origin angle), ``"xyz"`` (an origin offset) or ``"axis"``.
+    index : int
+        The component (0, 1, 2 = roll, pitch, yaw or x, y, z).
+    literal : float
+        The model's value [rad, m or unit-vector component].
+    snapped : float
+        The special value taken instead.
+    deviation : float
+        ``|literal - snapped|``, relative (rad; offsets divided by the robot's size).
+    """
+
+    body: int
+    joint: str
+    what: str
+    index: int
+    literal: float
+    snapped: float
+    deviation: float
+
+    def describe(self) -> str:
+        """One phrase, e.g. ``panda_joint1 origin rpy 3.1416 = pi to 5 digits``.
+
+        Returns
+        -------
+        str
+            The joint, the value and what it is close to.
+        """
+        comp = "xyz"[self.index] if self.what != "rpy" else ("roll", "pitch", "yaw")[self.index]
+        where = f"{self.joint} {'axis' if self.what == 'axis' else 'origin ' + self.what} {comp}"
+        unit = "decimal places" if self.snapped == 0 else "digits"
+        return f"{where} {self.literal:.6g} = {_special_name(self.snapped, self.what)} to {_digits(self)} {unit}"
+
+
+def _special_name(v: float, what: str) -> str:
+    if what != "rpy" or v == 0:
+        return "0" if v == 0 else f"{v:g}"
+    k = int(round(v / (np.pi / 2)))
+    names = {1: "pi/2", -1: "-pi/2", 2: "pi", -2: "-pi", 3: "3pi/2", -3: "-3pi/2", 4: "2pi", -4: "-2pi"}
+    return names.get(k, f"{k}pi/2")
+
+
+def _digits(s: Snap) -> int:
+    """Significant digits (after the point, for a zero) to which the literal equals the special value."""
+    scale = max(abs(s.snapped), 1.0) if s.what == "rpy" else 1.0
+    return max(1, int(np.floor(-np.log10(max(s.deviation / scale, 1e-300)))))
+
+
+def robot_size(robot: Robot) -> float:
+    """The length offsets are measured against: the largest distance between two joint frames at q = 0.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+
+    Returns
+    -------
+    float
+        [m], at least 1e-3 (a robot of one body at the origin).
+    """
+    p = np.vstack([np.zeros((1, 3)), robot.M0[:, :3, 3]])
+    span = float(np.max(np.linalg.norm(p[:, None, :] - p[None, :, :], axis=2)))
+    return max(span, 1e-3)
+
+
+def relative_frames(robot: Robot) -> np.ndarray:
+    """Each body's joint frame in its parent's frame at q = 0 (the URDF ``<origin>``).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+
+    Returns
+    -------
+    ndarray, shape ``(n, 4, 4)``
+        ``M0[parent]^-1 M0[i]`` (the world for a root).
+    """
+    out = np.empty_like(robot.M0)
+    for i, p in enumerate(robot.parent):
+        out[i] = robot.M0[i] if p < 0 else np.linalg.solve(robot.M0[p], robot.M0[i])
+    return out
+
+
+def rpy(r: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw of a rotation, URDF's convention ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
+
+    Parameters
+    ----------
+    r : ndarray, shape ``(3, 3)``
+        The rotation.
+
+    Returns
+    -------
+    ndarray, shape ``(3,)``
+        [rad]; at pitch ``+-pi/2`` the roll takes the whole remaining angle (yaw 0).
+    """
+    pitch = float(np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0])))  # accurate near +-pi/2 (arcsin is not)
+    if np.hypot(r[0, 0], r[1, 0]) < 1e-12:  # gimbal lock
+        return np.array([float(np.arctan2(-r[1, 2], r[1, 1])), pitch, 0.0])
+    return np.array([float(np.arctan2(r[2, 1], r[2, 2])), pitch, float(np.arctan2(r[1, 0], r[0, 0]))])
+
+
+def rotation(angles) -> np.ndarray:
+    """``Rz(yaw) Ry(pitch) Rx(roll)`` of roll, pitch, yaw.
+
+    Parameters
+    ----------
+    angles : array_like, shape ``(3,)``
+        Roll, pitch, yaw [rad].
+
+    Returns
+    -------
+    ndarray, shape ``(3, 3)``
+        The rotation.
+    """
+    r, p, y = (float(a) for a in angles)
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def _snap_value(v: float, step: float, tol: float, exact: float) -> float | None:
+    """The nearest multiple of ``step`` (``step`` 0: zero) when ``exact < |v - it| <= tol``, else None."""
+    target = 0.0 if step == 0 else float(np.round(v / step) * step)
+    d = abs(v - target)
+    return target if exact < d <= tol else None
+
+
+def near_special(robot: Robot, tol: float = SNAP_TOL, exact: float = EXACT_TOL) -> list[Snap]:
+    """The values of the model within ``tol`` of a special value, but not within ``exact`` of it.
+
+    Robots with loops are not examined (changing a frame could open a loop): an empty list.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    tol : float
+        The snapping tolerance (module docstring): rad, or relative to :func:`robot_size`.
+    exact : float
+        Below this a value counts as exact already.
+
+    Returns
+    -------
+    list of Snap
+        In body order, origins' angles, then offsets, then axes.
+    """
+    if robot.has_loops:
+        return []
+    size = robot_size(robot)
+    out: list[Snap] = []
+    for i, t in enumerate(relative_frames(robot)):
+        if robot.jtype[i] == "F":
+            continue
+        name = robot.joint_names[i]
+        for k, a in enumerate(rpy(t[:3, :3])):
+            s = _snap_value(a, np.pi / 2, tol, exact)
+            if s is not None:
+                out.append(Snap(i, name, "rpy", k, float(a), s, abs(a - s)))
+        for k, x in enumerate(t[:3, 3]):
+            s = _snap_value(x / size, 0.0, tol, exact)
+            if s is not None:
+                out.append(Snap(i, name, "xyz", k, float(x), 0.0, abs(x) / size))
+        if robot.jtype[i] in ("R", "P", "U"):
+            for row in robot.axes[i]:
+                for k, c in enumerate(row):
+                    s = _snap_value(c, 0.0, tol, exact)
+                    if s is not None:
+                        out.append(Snap(i, name, "axis", k, float(c), 0.0, abs(c)))
+    return out
+
+
+def snapped(robot: Robot, snaps) -> Robot:
+    """The robot with the given values set to their special values.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (without loops).
+    snaps : iterable of Snap
+        Values to set (:func:`near_special`).
+
+    Returns
+    -------
+    Robot
+        Same bodies, inertias (in their own frames), limits and couplings; each snapped joint
+        frame recomposed from its angles and offset, world poses recomputed down the tree, axes
+        renormalised.
+    """
+    snaps = list(snaps)
+    if not snaps:
+        return robot
+    rel = relative_frames(robot)
+    axes = [np.array(a, dtype=float) for a in robot.axes]
+    by_body: dict[int, list[Snap]] = {}
+    for s in snaps:
+        by_body.setdefault(s.body, []).append(s)
+    for i, group in by_body.items():
+        ang, off = rpy(rel[i][:3, :3]), rel[i][:3, 3].copy()
+        frame = False
+        for s in group:
+            if s.what == "rpy":
+                ang[s.index], frame = s.snapped, True
+            elif s.what == "xyz":
+                off[s.index], frame = s.snapped, True
+            else:
+                for row in axes[i]:
+                    if abs(row[s.index] - s.literal) < 1e-15:
+                        row[s.index] = s.snapped
+                axes[i] = axes[i] / np.linalg.norm(axes[i], axis=1, keepdims=True)
+        if frame:
+            rel[i][:3, :3] = rotation(ang)
+            rel[i][:3, 3] = off
+    m0 = np.empty_like(robot.M0)
+    for i, p in enumerate(robot.parent):
+        m0[i] = rel[i] if p < 0 else m0[p] @ rel[i]
+    return replace(robot, M0=m0, axes=tuple(axes))

@@ -149,7 +149,8 @@ def _table(rows) -> str:
 def ols(tx40):
     robot, log, _ = tx40
     lim = _config()[2]
-    return identify(robot, log, method="ols", rotor=True, couplings=(M6,), cutoff=CUTOFF, min_speed=lim)
+    return identify(robot, log, method="ols", rotor=True, couplings=(M6,), cutoff=CUTOFF, min_speed=lim,
+                    terms="none")
 
 
 def test_coupling_basis_matches_figaroh():
@@ -190,7 +191,8 @@ def test_tx40_matches_figaroh_ols(ols):
 
 def test_tx40_matches_figaroh_wls(tx40):
     robot, log, _ = tx40
-    wls = identify(robot, log, method="wls", rotor=True, couplings=(M6,), cutoff=CUTOFF, min_speed=_config()[2])
+    wls = identify(robot, log, method="wls", rotor=True, couplings=(M6,), cutoff=CUTOFF, min_speed=_config()[2],
+                   terms="none")
     rows = _comparison(wls, 3)
     outside = [r[0] for r in rows if not abs(r[5]) <= 3]
     assert len(rows) == 60 and not outside, f"outside 3 sigma: {outside}\n{_table(rows)}"
@@ -199,7 +201,7 @@ def test_tx40_matches_figaroh_wls(tx40):
 def test_the_coupled_motor_explains_the_wrist_torques(tx40, ols):
     """Without the coupled motor, joints 5 and 6 keep most of motor 6's torque in the residual."""
     robot, log, _ = tx40
-    alone = identify(robot, log, method="ols", rotor=True, cutoff=CUTOFF, min_speed=_config()[2])
+    alone = identify(robot, log, method="ols", rotor=True, cutoff=CUTOFF, min_speed=_config()[2], terms="none")
     assert alone.model.n_params == 58
     for joint in ("joint_5", "joint_6"):
         assert ols.train["rms"][joint] < 0.35 * alone.train["rms"][joint]

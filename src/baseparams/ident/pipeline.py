@@ -56,6 +56,11 @@ class Fit:
     selection : object, optional
         ``auto``: the cross-validated pull towards the model file
         (:class:`baseparams.ident.select.Selection`), or ``None``.
+    terms : tuple of Term
+        The model terms kept beyond the linear core (:mod:`baseparams.ident.terms`: pre-sliding
+        friction, tilt, delays, scales), with their values.
+    term_choices : tuple of Choice
+        Every term tried: kept or rejected and why (:func:`baseparams.ident.terms.fit.select_terms`).
     """
 
     model: IdentModel
@@ -64,6 +69,8 @@ class Fit:
     estimate: object
     physical: object = None
     selection: object = None
+    terms: tuple = ()
+    term_choices: tuple = ()
 
     def __repr__(self) -> str:
         m = self.model
@@ -477,7 +484,10 @@ class Identification:
                    f.name: (numbers(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), np.ndarray)
                             else list(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), tuple)
                             else getattr(phys, f.name)) for f in fields(phys)},
-               "samples": self.samples, "train": self.train, "validation": self.validation, "notes": list(self.notes)}
+               "samples": self.samples, "train": self.train, "validation": self.validation, "notes": list(self.notes),
+               "terms": [t.to_json(self.joints) for t in self.fit.terms],
+               "term_choices": [{"name": c.name, "kept": c.kept, "why": c.why, "cv_rms": c.cv_rms}
+                                for c in self.fit.term_choices]}
         return _plain(doc)
 
     def save(self, path, inputs=(), what: str = "output"):
@@ -571,7 +581,20 @@ class Identification:
             p = doc["physical"]
             phys = PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
                                       tuple(v) if k == "notes" else v) for k, v in p.items()})
-        f = Fit(model, o.get("method", e["method"]), theta, est, phys)
+        from .terms.base import make_term
+        from .terms.fit import Choice
+
+        joints = [robot.joint_names[robot.dof_body[c]] for c in model.coords]
+        terms = []
+        for t in doc.get("terms") or ():
+            term = make_term(t["name"], bool(t.get("forced", False)))
+            term.load(t, joints, model)
+            term.std = dict(t.get("std") or {})
+            terms.append(term)
+        choices = tuple(Choice(c["name"], bool(c["kept"]), str(c["why"]),
+                               float("nan") if c.get("cv_rms") is None else float(c["cv_rms"]))
+                        for c in doc.get("term_choices") or ())
+        f = Fit(model, o.get("method", e["method"]), theta, est, phys, terms=tuple(terms), term_choices=choices)
         return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o)
 
     @property
@@ -728,7 +751,7 @@ class Identification:
             condition_number,
             excitation{condition_number, weak, poorly_determined, all_excited}, base_parameters,
             drives, couplings,
-            train, validation, physical, notes``; ``weak`` names the parameters carrying
+            train, validation, physical, notes, terms``; ``weak`` names the parameters carrying
             directions whose singular value is below 1e-3 of the largest (column-scaled regressor);
             ``covariance`` says how every ``std`` was computed.
         """
@@ -756,7 +779,28 @@ class Identification:
                                "all_excited": not weak and not loose},
                 "base_parameters": self.base_parameters(), "drives": self.drives(),
                 "couplings": self.couplings(), "train": self.train,
-                "validation": self.validation, "physical": phys, "notes": list(self.notes)}
+                "validation": self.validation, "physical": phys, "notes": list(self.notes),
+                "terms": self.terms_json()}
+
+    def terms_json(self) -> list[dict]:
+        """Every model term tried: kept or rejected, why, its cross-validated figure, values and std.
+
+        Returns
+        -------
+        list of dict
+            ``{"name", "kept", "why", "cv_rms", "values", "std", "description"}`` per term tried
+            (``values``, ``std`` and ``description`` for the kept ones), in the order tried.
+        """
+        kept = {t.name: t for t in self.fit.terms}
+        out = []
+        for c in self.fit.term_choices:
+            entry = {"name": c.name, "kept": c.kept, "why": c.why,
+                     "cv_rms": None if not np.isfinite(c.cv_rms) else float(c.cv_rms)}
+            t = kept.get(c.name)
+            if t is not None:
+                entry.update(values=t.values(self.joints), std=t.std, description=t.describe(self.joints))
+            out.append(entry)
+        return out
 
 
 def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
@@ -765,7 +809,7 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
              convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
              samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-             allow_units: bool = False, literal: bool = False) -> Identification:
+             allow_units: bool = False, literal: bool = False, terms="auto") -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -828,6 +872,12 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
         rounding of a right angle or zero is taken as that value when the directions it adds
         are not identifiable in practice (:func:`baseparams.analyze`'s ``literal``, said in the
         notes): those directions are not fitted.
+    terms : str or iterable of str
+        Model terms beyond the linear core (:mod:`baseparams.ident.terms`): ``"auto"``
+        (default) tries pre-sliding friction, a mounting tilt, delays and torque scales and keeps
+        each one that blocked cross-validation on the training data asks for; ``"none"``: the
+        linear core alone; names (``"dahl,tilt"``) force those (with ``auto``: and try the rest).
+        Every term tried is in :attr:`Fit.term_choices` and the notes.
 
     Returns
     -------
@@ -849,12 +899,12 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
                          min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,
-                         score_cutoff, covariance, allow_units, literal)
+                         score_cutoff, covariance, allow_units, literal, terms)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
               prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
-              score_cutoff=None, covariance="hac", allow_units=False, literal=False) -> Identification:
+              score_cutoff=None, covariance="hac", allow_units=False, literal=False, terms="auto") -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .preprocess import prepare
 
@@ -874,13 +924,14 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
                                         keep=kept)
     say(f"fitting ({method})")
     f = fit(model, acc, method, prior_weight, blocks=parts)
+    f, acc, kept, term_notes, raw_q = _with_terms(f, acc, kept, prep, train, cols, method, prior_weight, terms, say)
     f, cov_note = _uncertainty(f, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say)
     f = pulled_covariance(f)
     say("predicted torques and excitation spectrum for the report")
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
     train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
-    val, series = None, {"train": report_series(model, prep, cols, f.theta, names, memory_mb), "validation": None}
+    val, series = None, {"train": report_series(model, prep, cols, f, names, memory_mb, raw_q), "validation": None}
     series["train"]["spectrum"] = position_spectrum(train, cols, prep.design.fs, prep.design.cutoff, prep.full.t)
     if held is not None:
         say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
@@ -888,15 +939,114 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         pred = predict_log(f, whole, float(prep.design.cutoff))
         val = validation_scores(whole, pred, names, mask, score_cutoff)
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
-        series["validation"] = report_series(model, vprep, log_columns(model, held), f.theta, names, memory_mb)
+        vcols = log_columns(model, held)
+        series["validation"] = report_series(model, vprep, vcols, f, names, memory_mb,
+                                             _raw_positions(held, vcols) if f.terms else None)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *model_notes(model), *(f.physical.notes if f.physical is not None else ()),
+    notes = (*prep.notes, acc_note, *model_notes(model), *term_notes,
+             *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed,
-               "literal": bool(literal)}
+               "literal": bool(literal), "terms": terms if isinstance(terms, str) else ",".join(terms)}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+
+
+def _raw_positions(log, cols: np.ndarray) -> np.ndarray:
+    """The measured coordinates' unfiltered positions on the log's uniform grid (what ``prepare`` filters)."""
+    from .preprocess import resample
+
+    return resample(log).q[:, cols]
+
+
+def _inner(f: Fit, model: IdentModel, acc, method: str):
+    """The linear estimator the model terms are fitted with, for each method.
+
+    ``auto``: its own weighting, prior and bounds; ``ols``, ``wls``: plain; ``physical``: WLS with
+    the drive terms' weak prior and the sign bounds (the physical fit itself runs once the terms
+    are fixed).
+    """
+    from .select import drive_precision, nonnegative_terms
+    from .terms.fit import Inner
+
+    theta0 = model.theta(model.robot.parameters("paper"))
+    w = np.asarray(f.estimate.weights, dtype=float)
+    if method == "auto":
+        pen = None if f.selection is None else f.selection.penalty
+        return Inner(w, theta0, pen, nonnegative_terms(model))
+    if method == "physical":
+        est = f.estimate
+        n_obs = max(est.samples * len(w), 1)
+        s2 = float(np.sum((np.asarray(est.rms) * w) ** 2)) / n_obs * max(est.samples, 1) / max(n_obs / len(w), 1)
+        return Inner(w, theta0, s2 * drive_precision(model, acc, w), nonnegative_terms(model))
+    return Inner(w, theta0)
+
+
+def _with_terms(f: Fit, acc, kept: list, prep, train, cols, method: str, prior_weight, terms, say):
+    """Model terms selected on the training rows and the core refitted with them (:mod:`.terms`).
+
+    Returns the fit, the accumulated rows and kept rows the covariance uses, the notes, and the
+    unfiltered positions on the training grid (None without terms).
+    """
+    from dataclasses import replace
+
+    from . import chunks
+    from .select import FOLDS, fold_parts
+    from .terms.base import TermContext
+    from .terms.fit import core_rows, parse_terms, select_terms
+
+    candidates, forced = parse_terms(terms)
+    if not candidates:
+        return f, acc, kept, [], None
+    model = f.model
+    total = sum(len(a) for a, _ in kept)
+    if not kept or total != len(prep.index):
+        return f, acc, kept, ["model terms: not considered (the fitted rows do not fit in memory_mb; the linear core "
+                              "alone)"], None
+    a = np.concatenate([x for x, _ in kept])
+    raw_q = _raw_positions(train, cols)
+    if raw_q.shape[0] != prep.full.n_samples:
+        return f, acc, kept, ["model terms: not considered (the training grid is not the filter's)"], None
+    folds = [np.asarray(i) for i in np.array_split(np.arange(len(a)), FOLDS)]
+    ctx = TermContext(model, a, prep, raw_q, cols, folds)
+    say(f"model terms: {', '.join(candidates)} by {FOLDS}-fold blocked cross-validation on the training data")
+    tf = select_terms(ctx, _inner(f, model, acc, method), candidates, forced, progress=say)
+    notes = [term_note(tf, ctx.joints)]
+    if not tf.terms:
+        return replace(f, term_choices=tf.choices), acc, kept, notes, None
+    x, y = core_rows(ctx, tf.state)
+    parts = fold_parts(x, y)
+    acc2 = chunks.combine(parts)
+    say(f"refitting the core ({method}) with the model terms")
+    f2 = fit(model, acc2, method, prior_weight, blocks=parts)
+    return replace(f2, terms=tuple(tf.terms), term_choices=tf.choices), acc2, [(x, y)], notes, raw_q
+
+
+def term_note(tf, joints: list[str]) -> str:
+    """One line: every model term tried, kept or rejected, with its cross-validated figure and values.
+
+    Parameters
+    ----------
+    tf : TermsFit
+        :func:`~baseparams.ident.terms.fit.select_terms`'s outcome.
+    joints : list of str
+        The measured joints.
+
+    Returns
+    -------
+    str
+        The note.
+    """
+    kept = {t.name: t for t in tf.terms}
+    parts = []
+    for c in tf.choices:
+        if c.kept:
+            parts.append(f"{c.name} KEPT ({c.why}): {kept[c.name].describe(joints)}")
+        else:
+            parts.append(f"{c.name} rejected ({c.why})")
+    return (f"model terms (blocked cross-validation on the training data, linear core alone {tf.cv_rms:.4g}): "
+            + "; ".join(parts))
 
 
 def _prepare_training(train, holdout, **kw):
@@ -964,7 +1114,8 @@ def _uncertainty(f: Fit, acc, covariance, kept, model, prep, cols, memory_mb, tr
     return apply_covariance(f, acc, rows, covariance, prep.design.fs / prep.factor)
 
 
-def report_series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, names: list[str], memory_mb: float):
+def report_series(model: IdentModel, prep, cols: np.ndarray, theta, names: list[str], memory_mb: float,
+                  raw_q: np.ndarray | None = None):
     """Measured and predicted torques of a prepared log, as they were compared (filtered).
 
     Parameters
@@ -975,12 +1126,15 @@ def report_series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, 
         The prepared log.
     cols : ndarray of int, shape ``(state_columns,)``
         Log column of each state column.
-    theta : ndarray, shape ``(p,)``
-        The identified values.
+    theta : ndarray, shape ``(p,)``, or Fit
+        The identified values, or the fit (with its model terms; ``raw_q`` then gives the
+        unfiltered positions on ``prep.full``'s grid for Dahl's state).
     names : list of str, shape ``(m,)``
         The measured joints.
     memory_mb : float
         Largest regressor formed at once (beyond, the predicted torques are not parallel-filtered).
+    raw_q : ndarray, shape ``(S, m)``, optional
+        With a fit whose terms need them: the measured coordinates' unfiltered positions.
 
     Returns
     -------
@@ -989,6 +1143,12 @@ def report_series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, 
     """
     full = prep.full
     q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
+    fit_ = theta if isinstance(theta, Fit) else None
+    if fit_ is not None and fit_.terms:
+        raw = q if raw_q is None else raw_q
+        tau_hat = prep.apply(model_torques(fit_, full.t, raw, q, dq, ddq))
+        return {"t": prep.t, "tau": prep.tau[:, cols], "tau_hat": tau_hat, "joints": names}
+    theta = fit_.theta if fit_ is not None else theta
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb:
         tau_hat = prep.apply(model.regressor(q, dq, ddq)) @ theta
@@ -1238,7 +1398,7 @@ def predict_log(f: Fit, log, cutoff: float | None, smooth: bool = True) -> np.nd
     Parameters
     ----------
     f : Fit
-        The identified values.
+        The identified values (and model terms).
     log : JointLog
         ``S`` samples of the measured joints.
     cutoff : float or None
@@ -1255,10 +1415,42 @@ def predict_log(f: Fit, log, cutoff: float | None, smooth: bool = True) -> np.nd
 
     cols = log_columns(f.model, log)
     q, dq, ddq, _ = log_states(log, cutoff, smooth)
-    q, dq, ddq = q[:, cols], dq[:, cols], ddq[:, cols]
+    return model_torques(f, log.t, log.q[:, cols], q[:, cols], dq[:, cols], ddq[:, cols])
+
+
+def model_torques(f: Fit, t: np.ndarray, q_raw: np.ndarray, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray,
+                  chunk: int = 20000) -> np.ndarray:
+    """The fitted model's torques as the sensors measure them, the model terms included.
+
+    The core ``A(q, dq, ddq) theta`` (in chunks), each term's contribution (Dahl's state along
+    ``q_raw``, the tilt's gravity torque), then the sensors' scales and delays
+    (:mod:`baseparams.ident.terms`).
+
+    Parameters
+    ----------
+    f : Fit
+        The fit.
+    t : ndarray, shape ``(S,)``
+        Time stamps [s] (the delays shift along them).
+    q_raw : ndarray, shape ``(S, m)``
+        Positions of the measured coordinates as logged (unfiltered).
+    q, dq, ddq : ndarray, shape ``(S, state_columns)``
+        The states.
+    chunk : int
+        Samples per core block.
+
+    Returns
+    -------
+    ndarray, shape ``(S, m)``
+        Predicted measured torques.
+    """
     with blas_threads():
-        tau = np.concatenate([f.predict(q[k:k + 20000], dq[k:k + 20000], ddq[k:k + 20000])
-                              for k in range(0, max(len(q), 1), 20000)])
+        tau = np.concatenate([f.predict(q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk])
+                              for k in range(0, max(len(q), 1), chunk)])
+    for term in f.terms:
+        tau = term.adjust_model(f, q_raw, q, dq, ddq, tau)
+    for term in f.terms:
+        tau = term.adjust_measured(np.asarray(t, dtype=float), tau)
     return tau
 
 

@@ -173,8 +173,8 @@ def solve(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndar
     """:func:`ridge` with some terms kept non-negative (friction, rotor inertia).
 
     ``min ||R11 theta - r12||^2 + (theta - theta0)^T P (theta - theta0)`` subject to
-    ``theta[nonneg] >= 0``: the unconstrained solution when it is admissible, else a bounded
-    least squares on the stacked system ``[R11; P^(1/2)]`` (SciPy's ``lsq_linear``, BVLS).
+    ``theta[nonneg] >= 0``: the unconstrained solution when it is admissible, else the active-set
+    solution of the normal equations (:func:`bounded_quadratic`).
 
     Parameters
     ----------
@@ -194,24 +194,62 @@ def solve(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndar
     ndarray, shape ``(p,)``
         The estimate.
     """
-    theta = ridge(r11, r12, theta0, penalty)
-    if nonneg is None or not np.any(nonneg) or np.all(theta[nonneg] >= 0):
-        return theta
-    from scipy.optimize import lsq_linear
-
-    a, b = r11, r12
+    h = r11.T @ r11
+    g = r11.T @ r12
     if penalty is not None:
-        w, v = np.linalg.eigh(0.5 * (penalty + penalty.T))
-        half = (v * np.sqrt(np.maximum(w, 0.0))).T
-        a, b = np.vstack([r11, half]), np.r_[r12, half @ theta0]
-    lo = np.where(nonneg, 0.0, -np.inf)
-    # column scaling: BVLS's tolerances are absolute
-    norms = np.linalg.norm(a, axis=0)
-    norms = np.where(norms > 0, norms, 1.0)
-    res = lsq_linear(a / norms, b, bounds=(lo * norms, np.full(len(lo), np.inf)), method="bvls", tol=1e-12)
-    out = res.x / norms
-    out[nonneg] = np.maximum(out[nonneg], 0.0)
-    return out
+        h = h + penalty
+        g = g + penalty @ theta0
+    return bounded_quadratic(h, g, nonneg)
+
+
+def bounded_quadratic(h: np.ndarray, g: np.ndarray, nonneg: np.ndarray | None = None) -> np.ndarray:
+    """``argmin 1/2 x^T h x - g^T x`` subject to ``x[nonneg] >= 0`` (an active-set method).
+
+    Lawson and Hanson's active set on the normal equations: variables that come out negative are
+    held at 0, one that the gradient would move up is released, until both hold. ``h`` is small
+    (the model's parameters), so each step is one dense solve.
+
+    Parameters
+    ----------
+    h : ndarray, shape ``(p, p)``
+        Symmetric positive (semi)definite.
+    g : ndarray, shape ``(p,)``
+        The linear term.
+    nonneg : ndarray of bool, shape ``(p,)``, optional
+        The variables kept ``>= 0``.
+
+    Returns
+    -------
+    ndarray, shape ``(p,)``
+        The minimiser.
+    """
+
+    def lin(a, b):
+        try:
+            return np.linalg.solve(a, b)
+        except np.linalg.LinAlgError:
+            return np.linalg.lstsq(a, b, rcond=None)[0]
+
+    x = lin(h, g)
+    if nonneg is None or not np.any(nonneg) or np.all(x[nonneg] >= 0):
+        return x
+    scale = max(float(np.max(np.abs(g))), 1e-300)
+    active = np.asarray(nonneg, dtype=bool) & (x < 0)
+    for _ in range(4 * len(g) + 10):
+        free = ~active
+        x = np.zeros_like(g)
+        x[free] = lin(h[np.ix_(free, free)], g[free])
+        bad = nonneg & free & (x < 0)
+        if bad.any():
+            active |= bad
+            continue
+        grad = h @ x - g
+        release = active & (grad < -1e-10 * scale)
+        if not release.any():
+            return x
+        active[int(np.argmin(np.where(release, grad, np.inf)))] = False
+    x[nonneg] = np.maximum(x[nonneg], 0.0)
+    return x
 
 
 def nonnegative_terms(model) -> np.ndarray:
@@ -281,21 +319,21 @@ def drive_precision(model, acc: RowAccumulator, weights: np.ndarray | None = Non
     return out
 
 
-def prior_covariance(model) -> np.ndarray:
-    """``S``: the prior covariance of the base parameters at ``alpha = 1`` (module docstring).
+def full_prior_covariance(robot) -> np.ndarray:
+    """The prior covariance of the standard parameters at ``alpha = 1`` (module docstring).
 
     Parameters
     ----------
-    model : IdentModel
-        The model: its robot's file parameters and the regrouping ``G``
-        (:meth:`~baseparams.ident.model.IdentModel.full_map`).
+    robot : Robot
+        The model file's robot (``n`` bodies).
 
     Returns
     -------
-    ndarray, shape ``(n_base, n_base)``
-        Symmetric positive definite; base parameters in the model's order and convention.
+    ndarray, shape ``(10 n, 10 n)``
+        Block diagonal, one ``(10, 10)`` block per body: ``J D^2 J^T`` with ``D`` the standard
+        deviations ``m L^2`` (second moments), ``m L`` (first moments), ``m`` (mass) in the body's
+        link frame and ``J`` the map to the ``paper`` convention (world frame at q = 0).
     """
-    robot = model.robot
     n = robot.n
     kh = robot.parameters("khalil").reshape(n, 10)  # XX XY XZ YY YZ ZZ MX MY MZ M, link frame
     mass = np.abs(kh[:, 9])
@@ -312,18 +350,71 @@ def prior_covariance(model) -> np.ndarray:
     m = np.where(given, m, 30.0 * float(m[given].max() if given.any() else 1.0))
     length = np.where(given, length, 3.0 * float(length[given].max() if given.any() else 0.1))
     std = np.column_stack([np.repeat((m * length**2)[:, None], 6, axis=1),
-                           np.repeat((m * length)[:, None], 3, axis=1), m]).reshape(-1)
+                           np.repeat((m * length)[:, None], 3, axis=1), m]).reshape(n, 10)
     # J: khalil (link frames) -> paper (world frame at q = 0), block diagonal: one column per slot
     jac = np.zeros((n, 10, 10))
     for k in range(10):
         unit = np.zeros((n, 10))
         unit[:, k] = 1.0
         jac[:, :, k] = robot.with_parameters(unit.reshape(-1), "khalil").parameters("paper").reshape(n, 10)
+    blocks = np.einsum("bij,bj,bkj->bik", jac, std**2, jac)
+    out = np.zeros((10 * n, 10 * n))
+    for b in range(n):
+        out[10 * b:10 * b + 10, 10 * b:10 * b + 10] = blocks[b]
+    return out
+
+
+def prior_covariance(model) -> np.ndarray:
+    """``S``: the prior covariance of the base parameters at ``alpha = 1`` (module docstring).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model: its robot's file parameters and the regrouping ``G``
+        (:meth:`~baseparams.ident.model.IdentModel.full_map`).
+
+    Returns
+    -------
+    ndarray, shape ``(n_base, n_base)``
+        Symmetric positive definite; base parameters in the model's order and convention.
+    """
+    n = model.robot.n
     g = model.full_map()[: model.n_base, : 10 * n]
-    gj = np.einsum("pbi,bij->pbj", g.reshape(-1, n, 10), jac).reshape(g.shape[0], 10 * n)
-    s = (gj * std**2) @ gj.T
+    s = g @ full_prior_covariance(model.robot) @ g.T
     s = 0.5 * (s + s.T)
     return s + 1e-12 * max(float(np.trace(s)) / max(len(s), 1), 1e-300) * np.eye(len(s))
+
+
+def complete(model, theta: np.ndarray) -> np.ndarray:
+    """Standard parameters with the given base parameters, the closest to the model file's.
+
+    The maximum a posteriori ``pi`` given ``G pi = theta_base`` under the prior
+    ``N(pi_0, Sigma)`` (:func:`full_prior_covariance`): ``pi_0 + Sigma G^T (G Sigma G^T)^-1
+    (theta_base - G pi_0)``. Directions the base parameters do not see keep the file's values.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    theta : ndarray, shape ``(p,)``
+        Model parameters (only the base ones are used; a drive term regrouped into a base
+        parameter is lumped into the bodies' parameters).
+
+    Returns
+    -------
+    ndarray, shape ``(10 n,)``
+        ``paper`` convention (world frame at q = 0).
+    """
+    nb = model.n_base
+    cache = model.__dict__.get("_completion")
+    if cache is None:
+        g = model.full_map()[:nb, : 10 * model.robot.n]
+        pi0 = model.robot.parameters("paper")
+        gs = g @ full_prior_covariance(model.robot)
+        cache = (g @ pi0, pi0, gs.T @ np.linalg.pinv(gs @ g.T, hermitian=True))
+        model.__dict__["_completion"] = cache  # IdentModel is frozen: cached like its column map
+    g_pi0, pi0, gain = cache
+    return pi0 + gain @ (np.asarray(theta, dtype=float)[:nb] - g_pi0)
 
 
 def no_prior_bodies(robot) -> np.ndarray:

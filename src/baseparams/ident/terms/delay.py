@@ -1,0 +1,83 @@
+"""A delay per joint between the state channels and the torque channel.
+
+A torque sensor read through another bus, a filter in the drive or a time stamp taken at the
+wrong moment makes the measured torque of joint ``j`` the model's torque ``d_j`` seconds late:
+``y_j(t) = M_j(t - d_j)``. The fit shifts the measured rows instead (``y_j(t + d_j)``, by linear
+interpolation of the filtered full-rate torque, exact up to the interpolation) and takes
+Gauss-Newton steps in ``d_j``: the linearised column of joint ``j`` is ``-dy_j/dt`` on its own
+row. Predictions shift the model's torque: ``M_j(t - d_j)`` at the log's own time stamps.
+Delays are bounded by :data:`MAX_DELAY` and by a quarter of the filter's edge.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Term, TermContext
+
+#: the largest delay considered [s]
+MAX_DELAY = 0.05
+
+
+class Delay(Term):
+    """A delay per measured joint [s] (module docstring)."""
+
+    name = "delay"
+    label = "torque channel delay"
+
+    def __init__(self, forced: bool = False, seconds=None):
+        super().__init__(forced)
+        self.seconds = None if seconds is None else np.asarray(seconds, dtype=float)
+        self._limit = MAX_DELAY
+
+    def reset(self, ctx: TermContext) -> None:
+        """No delay; the bound from the filter's edge."""
+        self.seconds = np.zeros(len(ctx.joints))
+        d = ctx.prep.design
+        self._limit = min(MAX_DELAY, 0.25 * d.pad / d.fs)
+
+    def delays(self, m: int) -> np.ndarray:
+        """The delays ``(m,)`` [s]."""
+        return self.seconds
+
+    def columns(self, ctx: TermContext, state: dict) -> tuple[np.ndarray, list[str]]:
+        """``-dy_j/dt`` on joint ``j``'s row, one column per joint."""
+        dy = state["dy"]
+        m = dy.shape[1]
+        out = np.zeros(dy.shape + (m,))
+        out[:, np.arange(m), np.arange(m)] = -dy
+        return out, [f"delay_{j}" for j in ctx.joints]
+
+    def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
+        """A Gauss-Newton step, bounded."""
+        new = np.clip(self.seconds + coefs, -self._limit, self._limit)
+        change = float(np.max(np.abs(new - self.seconds))) / 1e-4
+        self.seconds = new
+        if std is not None:
+            self.std = {"seconds": [float(s) for s in std]}
+        return change
+
+    def adjust_measured(self, t: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """``M_j(t - d_j)``, linear interpolation at the log's time stamps (held at the ends)."""
+        out = tau.copy()
+        for j, d in enumerate(self.seconds):
+            if d:
+                out[:, j] = np.interp(t - d, t, tau[:, j])
+        return out
+
+    def values(self, joints: list[str]) -> dict:
+        """``{"seconds": {joint: delay}}``."""
+        return {"seconds": {j: float(d) for j, d in zip(joints, self.seconds)}}
+
+    def describe(self, joints: list[str]) -> str:
+        """E.g. ``panda_joint1 +1.2 ms, ...``."""
+        return ", ".join(f"{j} {1e3 * d:+.2g} ms" for j, d in zip(joints, self.seconds))
+
+    def export(self) -> dict:
+        """Not representable in a model file."""
+        return {"not": ["torque channel delays (a property of the data acquisition, not of the robot)"]}
+
+    def load(self, doc: dict, joints: list[str], model) -> None:
+        """The delays of a saved result."""
+        d = doc.get("values", {}).get("seconds", {})
+        self.seconds = np.array([float(d.get(j, 0.0)) for j in joints])

@@ -1,0 +1,187 @@
+"""A mounting tilt: the direction of gravity in the robot's base frame, as two small angles.
+
+A robot bolted to a table that is not quite level feels gravity a few tenths of a degree off its
+file's direction. The torques are linear in gravity, so with ``g' = R(phi) g`` (``phi = alpha u1
++ beta u2`` a rotation vector, ``u1, u2`` perpendicular to ``g``) the model's torque becomes
+``A theta + Y(q, 0, 0; g' - g) pi`` exactly: ``Y(q, 0, 0; v)`` the regressor with gravity ``v``
+and no motion, ``pi`` the standard parameters. First order in the angles::
+
+    tau = A theta + alpha Y(q, 0, 0; u1 x g) pi + beta Y(q, 0, 0; u2 x g) pi
+
+``pi`` is not identified: its base part is (``theta``), the rest is taken from the model file
+(:func:`~baseparams.ident.select.complete`: the standard parameters closest to the file's with the
+identified base parameters). A tilt makes directions visible that the level robot does not see
+(the first moments of a vertical first joint's link): they stay at the file's values. The
+angles come from Gauss-Newton steps around the linear fit; predictions use the exact rotation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .base import Term, TermContext
+
+
+def perpendicular_basis(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors ``u1, u2`` with ``(u1, u2, g / |g|)`` right-handed.
+
+    Parameters
+    ----------
+    g : ndarray, shape ``(3,)``
+        Gravity [m/s^2], non-zero.
+
+    Returns
+    -------
+    u1, u2 : ndarray, shape ``(3,)``
+        For ``g = (0, 0, -9.81)``: ``u1 = (0, -1, 0)`` ... (a rotation about ``u1`` by ``alpha``
+        tips gravity towards ``u2``).
+    """
+    gh = g / np.linalg.norm(g)
+    e = np.eye(3)[int(np.argmin(np.abs(gh)))]
+    u1 = np.cross(gh, e)
+    u1 /= np.linalg.norm(u1)
+    return u1, np.cross(gh, u1)
+
+
+def rotation_vector(v: np.ndarray) -> np.ndarray:
+    """The rotation matrix of a rotation vector (Rodrigues).
+
+    Parameters
+    ----------
+    v : ndarray, shape ``(3,)``
+        Axis times angle [rad].
+
+    Returns
+    -------
+    ndarray, shape ``(3, 3)``
+        The rotation.
+    """
+    th = float(np.linalg.norm(v))
+    if th < 1e-15:
+        return np.eye(3)
+    k = v / th
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(th) * kx + (1 - np.cos(th)) * kx @ kx
+
+
+def gravity_regressor(robot, coords, q: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """``Y(q, 0, 0; g)`` of the measured rows: the torques of gravity ``g`` alone, per standard parameter.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree).
+    coords : array_like of int, shape ``(m,)``
+        The measured coordinates.
+    q : ndarray, shape ``(S, dof)``
+        Positions.
+    g : ndarray, shape ``(3,)``
+        The gravity vector [m/s^2], world frame.
+
+    Returns
+    -------
+    ndarray, shape ``(S, m, 10 n)``
+        ``paper`` convention columns.
+    """
+    from ...analysis import regressor
+
+    z = np.zeros_like(q)
+    return regressor(replace(robot, gravity=np.asarray(g, dtype=float)), q, z, z)[:, np.asarray(coords)]
+
+
+class Tilt(Term):
+    """A mounting tilt (module docstring): two angles [rad]."""
+
+    name = "tilt"
+    label = "mounting tilt"
+
+    def __init__(self, forced: bool = False, angles=(0.0, 0.0), pi=None):
+        super().__init__(forced)
+        self.angles = np.asarray(angles, dtype=float)
+        self.pi = None if pi is None else np.asarray(pi, dtype=float)
+
+    def available(self, ctx: TermContext) -> str | None:
+        """Trees only (with loops, not implemented), and gravity must be given."""
+        r = ctx.model.robot
+        if r.has_loops:
+            return "robots with loops: not implemented"
+        if not np.linalg.norm(r.gravity) > 0:
+            return "no gravity in the model"
+        return None
+
+    def prepare(self, ctx: TermContext) -> None:
+        """The two gravity regressors at the full rate, filtered and decimated ``(S', m, 10 n)``."""
+        r = ctx.model.robot
+        self._u = perpendicular_basis(r.gravity)
+        q = ctx.prep.full.q[:, ctx.cols]
+        self._g = [ctx.apply(gravity_regressor(r, ctx.model.coords, q, np.cross(u, r.gravity))) for u in self._u]
+
+    def reset(self, ctx: TermContext) -> None:
+        """A level mounting."""
+        self.angles = np.zeros(2)
+
+    def columns(self, ctx: TermContext, state: dict) -> tuple[np.ndarray, list[str]]:
+        """``Y(q, 0, 0; u_k x g) pi``, filtered and decimated, for ``k = 1, 2``."""
+        self.pi = state["pi"]
+        return np.stack([g @ self.pi for g in self._g], axis=2), ["tilt_1", "tilt_2"]
+
+    def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
+        """The angles are the coefficients (a total, not a step)."""
+        change = float(np.max(np.abs(coefs - self.angles))) / 1e-3
+        self.angles = np.asarray(coefs, dtype=float)
+        if std is not None:
+            self.std = {"angles": [float(s) for s in std]}
+        return change
+
+    def gravity(self, robot) -> np.ndarray:
+        """The tilted gravity ``R(alpha u1 + beta u2) g`` [m/s^2], world frame."""
+        u1, u2 = perpendicular_basis(robot.gravity)
+        return rotation_vector(self.angles[0] * u1 + self.angles[1] * u2) @ robot.gravity
+
+    def adjust_model(self, fit, q_raw, q, dq, ddq, tau: np.ndarray) -> np.ndarray:
+        """``+ Y(q, 0, 0; g' - g) pi``, exact in the angles."""
+        r = fit.model.robot
+        dg = self.gravity(r) - r.gravity
+        if self.pi is None or not np.any(dg):
+            return tau
+        return tau + gravity_regressor(r, fit.model.coords, q, dg) @ self.pi
+
+    def tilt_degrees(self) -> float:
+        """The tilt's magnitude [degree]."""
+        return float(np.degrees(np.linalg.norm(self.angles)))
+
+    def values(self, joints: list[str]) -> dict:
+        """Angles [rad], magnitude [degree] and the standard parameters it acted on."""
+        return {"angles": [float(a) for a in self.angles], "degrees": self.tilt_degrees(),
+                "pi": None if self.pi is None else [float(v) for v in self.pi]}
+
+    def describe(self, joints: list[str]) -> str:
+        """E.g. ``0.25 degree``."""
+        s = self.std.get("angles")
+        tail = "" if not s else f" (std {np.degrees(np.linalg.norm(s)):.2g} degree)"
+        return f"{self.tilt_degrees():.3g} degree from the file's gravity{tail}"
+
+    def export(self) -> dict:
+        """The tilt as the base's orientation: the rotation to apply to the robot in the world."""
+        return {"base_rotation": [[float(v) for v in row] for row in self.base_rotation()]}
+
+    def base_rotation(self) -> np.ndarray:
+        """``R^T``: rotating the robot by it in a world with the file's gravity gives the tilted gravity."""
+        return np.eye(3) if self._basis is None else self._rot().T
+
+    @property
+    def _basis(self):
+        return getattr(self, "_u", None)
+
+    def _rot(self) -> np.ndarray:
+        u1, u2 = self._u
+        return rotation_vector(self.angles[0] * u1 + self.angles[1] * u2)
+
+    def load(self, doc: dict, joints: list[str], model) -> None:
+        """The angles and parameters of a saved result."""
+        v = doc.get("values", {})
+        self.angles = np.asarray(v.get("angles", (0.0, 0.0)), dtype=float)
+        self.pi = None if v.get("pi") is None else np.asarray(v["pi"], dtype=float)
+        self._u = perpendicular_basis(model.robot.gravity)

@@ -492,6 +492,12 @@ def _identify_parser(sub, model_args) -> None:
                         "consistent) least squares")
     _ident_args(s)
     s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
+    s.add_argument("--terms", default="auto", metavar="TERMS",
+                   help="model terms beyond rigid bodies and linear friction: auto (default: pre-sliding friction "
+                        "'dahl', mounting 'tilt', per-joint 'delay', torque-sensor 'scale', each kept when blocked "
+                        "cross-validation on the training data says so; the report lists every one kept or "
+                        "rejected and why), none (the linear model alone), or names to force (dahl,tilt; add auto "
+                        "to also try the others)")
     s.add_argument("--coupling", action="append", metavar="NAME:JOINT=W,JOINT=W",
                    help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "
                         "reaches each JOINT times W; adds Iam_NAME, Fvm_NAME, Fcm_NAME (with --rotor, viscous, "

@@ -128,7 +128,7 @@ def _identify_kwargs(args, couplings) -> dict:
                 coulomb_width=args.coulomb_width, holdout=args.holdout, cutoff=args.cutoff, decimate=args.decimate,
                 min_speed=args.min_speed, prior_weight=args.prior_weight, convention=args.convention,
                 couplings=couplings, samples=args.samples, covariance=args.covariance, allow_units=args.allow_units,
-                score_cutoff=args.score_cutoff, literal=args.literal)
+                score_cutoff=args.score_cutoff, literal=args.literal, terms=args.terms)
 
 
 def _stream_reason(args, path: str) -> str | None:

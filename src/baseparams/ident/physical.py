@@ -169,7 +169,7 @@ def feasibility(pi: np.ndarray, n: int, rtol: float = FEASIBILITY_RTOL) -> tuple
 
 def physical_fit(R11, r12, G, robot, drive_kinds: Sequence[str] = (), *, prior=None,
                  prior_weight: float = DEFAULT_PRIOR_WEIGHT, mass_bounds=None, drive_prior=None,
-                 solver: str = "CLARABEL", min_eig: float = 0.0) -> PhysicalFit:
+                 solver: str = "CLARABEL", min_eig: float = 0.0, drive_precision=None) -> PhysicalFit:
     """Least squares over physically consistent parameters, with a log-det prior.
 
     Solves the program of the module docstring: the fit ``||R11 G phi - r12||^2 / ||r12||^2``
@@ -211,6 +211,11 @@ def physical_fit(R11, r12, G, robot, drive_kinds: Sequence[str] = (), *, prior=N
         cones with a quadratic objective.
     min_eig : float
         Lower bound on every ``N_i``'s eigenvalues (``N_i >= min_eig * 1``; 0: PSD).
+    drive_precision : array_like, shape ``(nd,)``, optional
+        A weak prior of the drive parameters towards zero, in the fit's own units: adds
+        ``sum_k drive_precision_k delta_k^2 / s`` (:func:`baseparams.ident.select.drive_precision`
+        times the residual variance): a pair of drive terms the data cannot separate takes the
+        smallest values that fit.
 
     Returns
     -------
@@ -237,9 +242,12 @@ def physical_fit(R11, r12, G, robot, drive_kinds: Sequence[str] = (), *, prior=N
     if float(r @ r) == 0:
         notes.append("r12 is zero (no torque seen by the fit): the fit is not scaled (s = 1)")
     d0 = None if drive_prior is None else _check_vector(drive_prior, len(kinds), "drive_prior")
-    prob, nts, delta = _build(cp, A, r, s, n0, kinds, bounds, w, d0, min_eig)
+    dp = None if drive_precision is None else _check_vector(drive_precision, len(kinds), "drive_precision")
+    if dp is not None and not (np.all(np.isfinite(dp)) and np.all(dp >= 0)):
+        raise BaseparamsError("physical_fit: drive_precision must be finite and >= 0")
+    prob, nts, delta = _build(cp, A, r, s, n0, kinds, bounds, w, d0, min_eig, dp)
     status = _solve(cp, prob, solver)
-    if delta.size and d0 is None and w > 0:
+    if delta.size and d0 is None and w > 0 and (dp is None or not np.any(dp)):
         notes.append("drive parameters: no drive_prior, no pull on delta (only the data and the signs)")
     if status != "optimal":
         notes.append(f"solver status {status}: the solution is less accurate than the tolerances")
@@ -359,7 +367,7 @@ def _whitening(n0: np.ndarray) -> np.ndarray:
     return T
 
 
-def _build(cp, A, r, s, n0, kinds, bounds, w, d0, min_eig):
+def _build(cp, A, r, s, n0, kinds, bounds, w, d0, min_eig, dp=None):
     """The cvxpy problem, the whitened body variables ``Nt_i`` and ``delta``."""
     n, nd = len(n0), len(kinds)
     T = _whitening(n0)
@@ -385,6 +393,8 @@ def _build(cp, A, r, s, n0, kinds, bounds, w, d0, min_eig):
         c = np.einsum("ij,ij->j", A[:, 10 * n:], A[:, 10 * n:]) / s
         c = np.where(c > 0, c, 1.0)
         obj = obj + w * cp.sum(cp.multiply(c, cp.square(delta - d0)))
+    if dp is not None and nd and np.any(dp):
+        obj = obj + cp.sum(cp.multiply(dp / s, cp.square(delta)))
     cons += _mass_constraints(pi, bounds)
     return cp.Problem(cp.Minimize(obj), cons), nts, delta
 

@@ -201,9 +201,31 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     from .physical import physical_fit
 
     kwargs = {} if prior_weight is None else {"prior_weight": prior_weight}
+    kwargs["drive_precision"] = _drive_precision_delta(model, acc, est)
     phys = physical_fit(est.R11, est.r12, model.full_map(), model.robot, model.drives.param_kinds,
                         mass_bounds=mass_bounds, **kwargs)
     return Fit(model, method, phys.theta, est, phys)
+
+
+def _drive_precision_delta(model: IdentModel, acc, est) -> np.ndarray:
+    """The drive terms' weak prior (:func:`~baseparams.ident.select.drive_precision`) per drive parameter.
+
+    In the weighted fit's units (``s2 / sigma_k^2``, ``s2`` the weighted residual variance), on the
+    drive parameters ``delta`` the physical fit solves for; 0 for a drive parameter regrouped into a
+    base parameter (it has no column of its own).
+    """
+    from .select import drive_precision
+
+    w = np.asarray(est.weights, dtype=float)
+    n_obs = max(acc.samples * acc.nrows, 1)
+    s2 = float(np.sum((np.asarray(est.rms) * w) ** 2)) * acc.samples / n_obs
+    prec = np.diag(drive_precision(model, acc, w))
+    nb = len(model.analysis.base_names)
+    out = np.zeros(model.drives.n_params)
+    for k, i in enumerate(model.regrouping.independent):
+        if i >= nb:
+            out[i - nb] = s2 * prec[k]
+    return out
 
 
 def _auto(model: IdentModel, first, est, acc, blocks: list) -> Fit:
@@ -749,7 +771,7 @@ class Identification:
         dict
             ``method, estimator, selection, covariance, model, convention, n_samples{read, used, removed},
             condition_number,
-            excitation{condition_number, weak, poorly_determined, all_excited}, base_parameters,
+            excitation{condition_number, weak, poorly_determined, above_100, all_excited}, base_parameters,
             drives, couplings,
             train, validation, physical, notes, terms``; ``weak`` names the parameters carrying
             directions whose singular value is below 1e-3 of the largest (column-scaled regressor);
@@ -766,6 +788,8 @@ class Identification:
 
         cond, weak = excitation(f.estimate.R11, self.model.names)
         loose = poorly_determined(f.estimate, self.model.names)
+        pct = np.asarray(f.estimate.pct_sigma, dtype=float)
+        above = [n for n, x in zip(self.model.names, pct) if not x <= POORLY_DETERMINED_PCT]
         if phys is not None:
             phys["masses_moved"] = _masses_moved(self.model.robot, f.physical.masses)
         sel = f.selection
@@ -776,7 +800,8 @@ class Identification:
                 "model": self.model.robot.name, "convention": self.model.analysis.convention,
                 "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
                 "excitation": {"condition_number": cond, "weak": weak, "poorly_determined": loose,
-                               "all_excited": not weak and not loose},
+                               "above_100": above,
+                               "all_excited": not weak and not loose and not above},
                 "base_parameters": self.base_parameters(), "drives": self.drives(),
                 "couplings": self.couplings(), "train": self.train,
                 "validation": self.validation, "physical": phys, "notes": list(self.notes),
@@ -943,7 +968,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         series["validation"] = report_series(model, vprep, vcols, f, names, memory_mb,
                                              _raw_positions(held, vcols) if f.terms else None)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *model_notes(model), *term_notes,
+    notes = (*prep.notes, acc_note, *model_notes(model), *term_notes, *drive_notes(f, acc),
              *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
@@ -951,6 +976,63 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed,
                "literal": bool(literal), "terms": terms if isinstance(terms, str) else ",".join(terms)}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+
+
+#: two drive columns of one joint whose cosine exceeds this cannot be told apart by the log
+COLLINEAR_COS = 0.99
+
+
+def drive_notes(f: Fit, acc) -> list[str]:
+    """Drive terms to say something about: negative friction or rotor inertia, pairs the log cannot separate.
+
+    A pair of one joint's drive terms whose columns on its rows have a cosine above
+    :data:`COLLINEAR_COS` (Coulomb friction and offset of a joint that hardly reverses) is named,
+    with how it was resolved: by the drive terms' weak prior (the default and physical
+    estimates: the smallest values that fit) or not at all (plain least squares). Negative
+    viscous or Coulomb friction or rotor inertia (only plain least squares can give them) is named.
+
+    Parameters
+    ----------
+    f : Fit
+        The fit.
+    acc : RowAccumulator
+        Its rows.
+
+    Returns
+    -------
+    list of str
+        Notes, one line each.
+    """
+    from .physical import NONNEGATIVE_KINDS
+
+    model = f.model
+    nb = len(model.analysis.base_names)
+    kinds = model.drives.param_kinds
+    plain = f.method in ("ols", "wls")
+    drive = {k: kinds[i - nb] for k, i in enumerate(model.regrouping.independent) if i >= nb}
+    notes = []
+    negative = [f"{model.names[k]} = {f.theta[k]:.3g}" for k, kind in drive.items()
+                if kind in NONNEGATIVE_KINDS and f.theta[k] < 0]
+    if negative:
+        notes.append(f"NEGATIVE drive terms ({', '.join(negative)}): friction and rotor inertia cannot be negative; "
+                     f"plain least squares (--method {f.method}) fits what the log shows (a poorly excited joint or "
+                     f"a model error); the default and physical estimates keep them >= 0")
+    seen = set()
+    for fr in acc.factors:
+        g = fr.r.T @ fr.r
+        ks = [k for k in drive if g[k, k] > 0]
+        for a_i, a in enumerate(ks):
+            for b in ks[a_i + 1:]:
+                cos = abs(g[a, b]) / np.sqrt(g[a, a] * g[b, b])
+                if cos <= COLLINEAR_COS or (a, b) in seen:
+                    continue
+                seen.add((a, b))
+                how = ("plain least squares: their separate values are not meaningful, only their sum on this motion"
+                       if plain else f"resolved by the drive terms' weak prior: {model.names[a]} = {f.theta[a]:.3g}, "
+                       f"{model.names[b]} = {f.theta[b]:.3g}")
+                notes.append(f"{model.names[a]} and {model.names[b]} cannot be told apart by this log (their columns' "
+                             f"cosine {cos:.4f}: the joint hardly reverses or hardly moves); {how}")
+    return notes
 
 
 def _raw_positions(log, cols: np.ndarray) -> np.ndarray:

@@ -48,6 +48,7 @@ def format_identification(result: Identification) -> str:
                           for k in ("Iam", "Fvm", "Fcm"))
         lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
                      + f"): {cells}")
+    lines += _terms_lines(j.get("terms") or [])
     for label in ("train", "validation"):
         part = j[label]
         if part is None:
@@ -81,10 +82,31 @@ def _excitation_line(e: dict) -> str:
     parts = []
     if e["weak"]:
         parts.append(f"POORLY EXCITED (singular values below 1e-3 of the largest): {', '.join(e['weak'])}")
+    above = e.get("above_100") or []
     loose = e.get("poorly_determined") or []
     if loose:
         shown = ", ".join(loose[:12]) + (f" and {len(loose) - 12} more" if len(loose) > 12 else "")
         parts.append(f"{len(loose)} term(s) poorly determined (std above their value, inflated by collinearity): "
                      f"{shown}; a richer trajectory (baseparams excite) helps, or a model file whose inertias "
                      "the default estimate can take as its prior")
-    return "excitation: " + ("; ".join(parts) if parts else "every model parameter excited and determined")
+    if above and not loose and not e["weak"]:
+        shown = ", ".join(above[:12]) + (f" and {len(above) - 12} more" if len(above) > 12 else "")
+        parts.append(f"{len(above)} term(s) with %sigma above 100 (their std exceeds their value; small terms "
+                     f"known to within the noise): {shown}")
+    elif above:
+        parts.append(f"{len(above)} term(s) in all with %sigma above 100")
+    return "excitation: " + ("; ".join(parts) if parts else "every model parameter excited and determined "
+                             "(every %sigma at most 100)")
+
+
+def _terms_lines(terms: list[dict]) -> list[str]:
+    """The model terms tried: kept (values) or rejected, with the cross-validated figures."""
+    if not terms:
+        return []
+    out = ["model terms (blocked cross-validation on the training data):"]
+    for t in terms:
+        if t["kept"]:
+            out.append(f"  {t['name']:<8s} KEPT      {t['description']} ({t['why']})")
+        else:
+            out.append(f"  {t['name']:<8s} rejected  {t['why']}")
+    return out

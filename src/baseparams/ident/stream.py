@@ -747,7 +747,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
                     decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
                     convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
                     samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-                    allow_units: bool = False, predictions=None, literal: bool = False):
+                    allow_units: bool = False, predictions=None, literal: bool = False, terms="auto"):
     """:func:`~baseparams.ident.pipeline.identify` on a log streamed from its file (module docstring).
 
     Parameters
@@ -757,7 +757,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
     stream : block source
         The log, e.g. :class:`baseparams.io.logs.LogStream`.
     method, rotor, friction, coulomb_width, holdout, cutoff, decimate, min_speed, prior_weight, convention, \
-memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, literal
+memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, literal, terms
         As for :func:`~baseparams.ident.pipeline.identify` (``memory_mb``: the window's regressor).
     validation : block source, optional
         Another log to validate on (exclusive with ``holdout``).
@@ -790,7 +790,8 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
                 coulomb_width=coulomb_width, holdout=holdout,
                 cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
                 convention=convention, memory_mb=memory_mb, couplings=tuple(couplings), samples=samples,
-                score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units, literal=literal)
+                score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units, literal=literal,
+                terms=terms)
     with blas_threads():
         return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
 
@@ -833,7 +834,7 @@ def _passes(robot, stream, o: dict, say):
 
 def _identify_stream(robot, stream, validation, predictions, say, o: dict):
     """:func:`identify_stream`'s steps."""
-    from .pipeline import Identification, fit, model_notes, position_spectrum, pulled_covariance
+    from .pipeline import Identification, drive_notes, fit, model_notes, position_spectrum, pulled_covariance
 
     train, sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, say)
     acc = chunks.combine(parts)
@@ -860,7 +861,12 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
             removed["slow (|dq| < min_speed on a joint)"] = slow
     acc_note = (f"parallel filtering in {len(plan.windows())} windows of {plan.size} samples with {plan.margin}-sample "
                 f"overlaps, the log streamed from its file (equal to the whole log's to rounding)")
-    notes = (*plan.notes, *slow_note, acc_note, *model_notes(model),
+    from .terms.fit import parse_terms
+
+    no_terms = (["model terms: not considered for a log streamed from its file (the linear model alone; read the log "
+                 "whole with --stream off for pre-sliding friction, tilt, delays and scales)"]
+                if parse_terms(o["terms"])[0] else [])
+    notes = (*plan.notes, *slow_note, acc_note, *model_notes(model), *no_terms, *drive_notes(f, acc),
              *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": o["method"], "convention": o["convention"], "rows": str(model.analysis.rows),

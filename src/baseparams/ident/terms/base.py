@@ -143,6 +143,15 @@ class Term:
         """
         return np.zeros(ctx.a.shape[:2] + (0,)), []
 
+    def prior(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """A weak prior on the coefficients of :meth:`columns`: ``(precision, target)`` or None.
+
+        In the coefficients' units; the fit multiplies the precision by the residual variance
+        (like every prior of the default estimate), so a term the data determine keeps its fitted
+        value and one they do not stays near the target.
+        """
+        return None
+
     def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
         """Take a step's coefficients of :meth:`columns`; return its largest relative change."""
         return 0.0

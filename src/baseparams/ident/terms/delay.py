@@ -17,6 +17,8 @@ from .base import Term, TermContext
 
 #: the largest delay considered [s]
 MAX_DELAY = 0.05
+#: a delay's weak prior: 0 to within this [s]
+PRIOR_STD = 0.01
 
 
 class Delay(Term):
@@ -47,6 +49,10 @@ class Delay(Term):
         out = np.zeros(dy.shape + (m,))
         out[:, np.arange(m), np.arange(m)] = -dy
         return out, [f"delay_{j}" for j in ctx.joints]
+
+    def prior(self) -> tuple[np.ndarray, np.ndarray]:
+        """``d_j ~ N(0, PRIOR_STD^2)`` on the step ``c_j`` (target ``-d_j``)."""
+        return np.full(len(self.seconds), 1.0 / PRIOR_STD**2), -self.seconds
 
     def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
         """A Gauss-Newton step, bounded."""

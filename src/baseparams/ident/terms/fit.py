@@ -144,8 +144,13 @@ class _Grams:
         return np.block([[self.xx, xr], [xr.T, rest.T @ rest]])
 
 
-def _solve_gram(gram: np.ndarray, p: int, inner: Inner, n_obs: int = 0, want_cov: bool = False):
-    """The regularised, bounded least squares of a Gram matrix (:func:`_gram`); its SSE and covariance."""
+def _solve_gram(gram: np.ndarray, p: int, inner: Inner, n_obs: int = 0, want_cov: bool = False,
+                prior: tuple | None = None):
+    """The regularised, bounded least squares of a Gram matrix (:func:`_gram`); its SSE and covariance.
+
+    ``prior``: ``(precision (k,), target (k,))`` of the terms' coefficients, already multiplied by
+    the residual variance.
+    """
     from ..select import bounded_quadratic
 
     big = gram.shape[0] - 1
@@ -156,7 +161,11 @@ def _solve_gram(gram: np.ndarray, p: int, inner: Inner, n_obs: int = 0, want_cov
         h[:p, :p] += inner.penalty
         g[:p] += inner.penalty @ inner.theta0
     diag = np.diag(gram)[p:big]
-    h[p:big, p:big] += np.diag(1e-10 * np.maximum(diag, 1e-300))  # the terms' columns: no prior, a floor
+    h[p:big, p:big] += np.diag(1e-10 * np.maximum(diag, 1e-300))  # a numerical floor
+    if prior is not None and k:
+        prec, target = prior
+        h[p:big, p:big] += np.diag(prec)
+        g[p:big] += prec * target
     nonneg = None if inner.nonneg is None else np.r_[inner.nonneg, np.zeros(k, dtype=bool)]
     coef = bounded_quadratic(h, g, nonneg)
     sse = float(gram[big, big] - 2 * coef @ gram[:big, big] + coef @ gram[:big, :big] @ coef)
@@ -226,14 +235,15 @@ def fit_terms(ctx: TermContext, terms: list[Term], inner: Inner, rows: np.ndarra
     n_obs = len(rows) * ctx.a.shape[1]
     grams = _Grams(rows, w)
     x, extra, y, _, pi, owners = _step_system(ctx, terms, theta)
-    coef, _, _ = _solve_gram(grams(x, extra[:, :, :0], y, terms), p, inner)
+    coef, sse, _ = _solve_gram(grams(x, extra[:, :, :0], y, terms), p, inner)
+    s2 = sse / max(n_obs - p, 1)  # the residual variance the terms' priors are scaled by
     theta = coef[:p]
     searched = not search or not any(t.name == "dahl" for t in terms)
     cov = None
     for it in range(MAX_STEPS):
         x, extra, y, _, pi, owners = _step_system(ctx, terms, theta)
         last = it == MAX_STEPS - 1
-        coef, _, cov = _solve_gram(grams(x, extra, y, terms), p, inner, n_obs, want_cov)
+        coef, _, cov = _solve_gram(grams(x, extra, y, terms), p, inner, n_obs, want_cov, _priors(terms, owners, s2))
         theta = coef[:p]
         change = 0.0
         k = p
@@ -249,6 +259,25 @@ def fit_terms(ctx: TermContext, terms: list[Term], inner: Inner, rows: np.ndarra
             _dahl_search(ctx, terms, inner, theta, rows)
             searched = True
     return State(theta, pi, [t for t in terms], coef[p:], cov)
+
+
+def _priors(terms: list[Term], owners: list, s2: float) -> tuple[np.ndarray, np.ndarray]:
+    """The terms' weak priors on their columns' coefficients, times the residual variance."""
+    prec, target = [], []
+    for t in terms:
+        n = sum(1 for o in owners if o is t)
+        if not n:
+            continue
+        pr = t.prior()
+        if pr is None:
+            prec.append(np.zeros(n))
+            target.append(np.zeros(n))
+        else:
+            prec.append(s2 * np.asarray(pr[0], dtype=float))
+            target.append(np.asarray(pr[1], dtype=float))
+    if not prec:
+        return np.zeros(0), np.zeros(0)
+    return np.concatenate(prec), np.concatenate(target)
 
 
 def _dahl_search(ctx: TermContext, terms: list[Term], inner: Inner, theta: np.ndarray, rows: np.ndarray) -> None:

@@ -5,8 +5,9 @@ few percent; the model's parameters then absorb a common scale but not one joint
 joint by the same factor is indistinguishable from scaling every parameter, so the joint with the
 largest torque (the best-determined gain) is the reference, ``s = 1``; the others are fitted
 relative to it by Gauss-Newton steps: the linearised column of joint ``j`` is the model's torque
-``M_j`` on its own row (``y_j / s_j = M_j`` with the measured rows divided exactly). Scales are
-bounded to [:data:`LOWEST`, :data:`HIGHEST`].
+``M_j`` on its own row (``y_j / s_j = M_j`` with the measured rows divided exactly). A weak prior
+keeps a scale the log cannot determine near 1 (:data:`PRIOR_STD`); scales are bounded to
+[:data:`LOWEST`, :data:`HIGHEST`].
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ from .base import Term, TermContext
 
 #: bounds of a scale
 LOWEST, HIGHEST = 0.5, 2.0
+#: a scale's weak prior: 1 to within this (a sensor's gain is known to a few percent)
+PRIOR_STD = 0.1
 
 
 class Scale(Term):
@@ -53,6 +56,11 @@ class Scale(Term):
         out = np.zeros(model.shape + (len(free),))
         out[:, free, np.arange(len(free))] = model[:, free]
         return out, [f"scale_{ctx.joints[j]}" for j in free]
+
+    def prior(self) -> tuple[np.ndarray, np.ndarray]:
+        """``s_j (1 + c_j) ~ N(1, PRIOR_STD^2)``: precision ``s_j^2 / PRIOR_STD^2``, target ``1 / s_j - 1``."""
+        s = self.factors[self._free()]
+        return s**2 / PRIOR_STD**2, 1.0 / s - 1.0
 
     def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
         """A Gauss-Newton step ``s_j <- s_j (1 + c_j)``, bounded."""

@@ -23,6 +23,9 @@ import numpy as np
 
 from .base import Term, TermContext
 
+#: the tilt's weak prior: level to within this per angle [rad] (1 degree)
+PRIOR_STD = np.radians(1.0)
+
 
 def perpendicular_basis(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors ``u1, u2`` with ``(u1, u2, g / |g|)`` right-handed.
@@ -126,6 +129,10 @@ class Tilt(Term):
         """``Y(q, 0, 0; u_k x g) pi``, filtered and decimated, for ``k = 1, 2``."""
         self.pi = state["pi"]
         return np.stack([g @ self.pi for g in self._g], axis=2), ["tilt_1", "tilt_2"]
+
+    def prior(self) -> tuple[np.ndarray, np.ndarray]:
+        """Level to within :data:`PRIOR_STD` [rad] per angle."""
+        return np.full(2, 1.0 / PRIOR_STD**2), np.zeros(2)
 
     def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
         """The angles are the coefficients (a total, not a step)."""

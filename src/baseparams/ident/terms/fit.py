@@ -7,7 +7,8 @@ distances. :func:`cross_validate` scores a set of terms by blocked cross-validat
 training rows (each block predicted from the others, every term refitted without it), in the
 measured torques' own units. :func:`select_terms` adds the terms one by one in the order of
 :data:`~baseparams.ident.terms.base.TERMS` and keeps each one whose cross-validated RMS is lower by
-more than :data:`KEEP_GAIN` (or that the user forced), then fits the kept set on every training row.
+more than :data:`KEEP_GAIN` (or that the user forced), then drops again each kept term the others
+make unnecessary (backward), and fits the kept set on every training row.
 """
 
 from __future__ import annotations
@@ -504,6 +505,18 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
             current = score
         else:
             choices.append(Choice(name, False, f"{figures}: not more than {100 * KEEP_GAIN:g} % lower", score))
+    # backward: a term kept early may have taken up what a later one models better (a delay standing in
+    # for a scale): drop each kept term whose removal does not raise the cross-validated RMS by KEEP_GAIN
+    for name in [n for n in kept if n not in forced] if len(kept) > 1 else []:
+        rest = [n for n in kept if n != name]
+        say(f"model terms: cross-validating {'+'.join(rest) or 'the core alone'} (without {name})")
+        score = cross_validate(ctx, rest, inner, cache)
+        if score < current * (1.0 + KEEP_GAIN):
+            kept = rest
+            k = next(i for i, c in enumerate(choices) if c.name == name)
+            choices[k] = Choice(name, False, f"dropped: cross-validated RMS {score:.4g} without it once the others are "
+                                f"in, {current:.4g} with it (not more than {100 * KEEP_GAIN:g} % lower)", score)
+            current = min(current, score)
     terms = [_fresh(ctx, name) for name in kept]
     for t in terms:
         t.forced = t.name in forced

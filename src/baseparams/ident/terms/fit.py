@@ -7,8 +7,9 @@ distances. :func:`cross_validate` scores a set of terms by blocked cross-validat
 training rows (each block predicted from the others, every term refitted without it), in the
 measured torques' own units. :func:`select_terms` adds the terms one by one in the order of
 :data:`~baseparams.ident.terms.base.TERMS` and keeps each one whose cross-validated RMS is lower by
-more than :data:`KEEP_GAIN` (or that the user forced), then drops again each kept term the others
-make unnecessary (backward), and fits the kept set on every training row.
+more than :data:`KEEP_GAIN` and in at least :data:`KEEP_FOLDS` of the blocks (or that the user
+forced), then drops again each kept term the others make unnecessary (backward), and fits the kept
+set on every training row.
 """
 
 from __future__ import annotations
@@ -19,8 +20,11 @@ import numpy as np
 
 from .base import TERMS, Term, TermContext, make_term
 
-#: a term is kept when it lowers the cross-validated RMS by more than this fraction
+#: a term is kept when it lowers the cross-validated RMS by more than this fraction ...
 KEEP_GAIN = 0.01
+#: ... and lowers the held-out error of at least this fraction of the blocks (a term that helps one
+#: block of a short log and hurts the others is not kept)
+KEEP_FOLDS = 0.6
 #: Gauss-Newton steps at most
 MAX_STEPS = 8
 
@@ -338,7 +342,8 @@ def residuals(ctx: TermContext, state: State, rows: np.ndarray) -> np.ndarray:
     return (y[rows] - pred) * s
 
 
-def cross_validate(ctx: TermContext, names: list[str], inner: Inner, cache: dict | None = None) -> float:
+def cross_validate(ctx: TermContext, names: list[str], inner: Inner, cache: dict | None = None,
+                   per_fold: list | None = None) -> float:
     """Blocked cross-validated RMS of a set of terms on the training rows, measured units.
 
     Parameters
@@ -351,6 +356,8 @@ def cross_validate(ctx: TermContext, names: list[str], inner: Inner, cache: dict
         The linear estimator.
     cache : dict, optional
         Dahl's distances per block from an earlier call (searched once per block).
+    per_fold : list, optional
+        Receives each block's sum of squared errors.
 
     Returns
     -------
@@ -373,6 +380,8 @@ def cross_validate(ctx: TermContext, names: list[str], inner: Inner, cache: dict
         e = residuals(ctx, state, held)
         sse += float(np.sum(e**2))
         count += e.size
+        if per_fold is not None:
+            per_fold.append(float(np.sum(e**2)))
     return float(np.sqrt(sse / max(count, 1)))
 
 
@@ -485,26 +494,32 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
     wanted = forced + [n for n in TERMS if n in set(candidates) and n not in forced]
     missing = prepare_terms(ctx, wanted)
     cache: dict = {}
-    base = cross_validate(ctx, [], inner)
+    folds: list = []
+    base = cross_validate(ctx, [], inner, per_fold=folds)
     current, kept, choices = base, [], []
+    need = int(np.ceil(KEEP_FOLDS * len(folds)))
     for name in wanted:
         if name in missing:
             choices.append(Choice(name, False, f"not available: {missing[name]}"))
             continue
         say(f"model terms: cross-validating {'+'.join(kept + [name])}")
-        score = cross_validate(ctx, kept + [name], inner, cache)
+        trial: list = []
+        score = cross_validate(ctx, kept + [name], inner, cache, per_fold=trial)
         gain = 1.0 - score / current if current > 0 else 0.0
-        figures = f"cross-validated RMS {score:.4g} with it, {current:.4g} without ({100 * gain:+.1f} %)"
+        better = int(np.sum(np.asarray(trial) < np.asarray(folds)))
+        figures = (f"cross-validated RMS {score:.4g} with it, {current:.4g} without ({100 * gain:+.1f} %; lower in "
+                   f"{better} of {len(folds)} blocks)")
         if name in forced:
             kept.append(name)
             choices.append(Choice(name, True, f"forced; {figures}", score))
-            current = score
-        elif gain > KEEP_GAIN:
+            current, folds = score, trial
+        elif gain > KEEP_GAIN and better >= need:
             kept.append(name)
             choices.append(Choice(name, True, figures, score))
-            current = score
+            current, folds = score, trial
         else:
-            choices.append(Choice(name, False, f"{figures}: not more than {100 * KEEP_GAIN:g} % lower", score))
+            choices.append(Choice(name, False, f"{figures}: not {100 * KEEP_GAIN:g} % lower in at least {need} "
+                                  f"blocks", score))
     # backward: a term kept early may have taken up what a later one models better (a delay standing in
     # for a scale): drop each kept term whose removal does not raise the cross-validated RMS by KEEP_GAIN
     for name in [n for n in kept if n not in forced] if len(kept) > 1 else []:

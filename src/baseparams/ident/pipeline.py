@@ -221,10 +221,10 @@ def _plain_refusal(model: IdentModel, exc: BaseparamsError, method: str) -> Base
     weak = text.split("weakest: ")[-1].split(".")[0].split(", ") if "weakest: " in text else []
     drive = set(model.drives.names)
     if weak and all(w in drive for w in weak):
-        return BaseparamsError(f"{text.split('; weakest')[0]}: the log cannot separate the drive terms {weak} (a joint "
-                               f"that never reverses makes its Coulomb friction and offset one column). Plain least "
-                               f"squares (--method {method}) cannot fit them; the default estimate holds such a pair "
-                               f"with a weak prior, or drop a term (--friction)")
+        return BaseparamsError(f"{text.rstrip('.')}; these are drive terms the log cannot separate (a joint that "
+                               f"hardly moves, or never reverses: its Coulomb friction and offset are one column): "
+                               f"plain least squares (--method {method}) cannot fit them; the default estimate holds "
+                               f"them with a weak prior, or drop a term (--friction)")
     return exc
 
 

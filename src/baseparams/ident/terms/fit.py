@@ -22,6 +22,8 @@ from .base import TERMS, Term, TermContext, make_term
 
 #: a term is kept when it lowers the cross-validated RMS by more than this fraction ...
 KEEP_GAIN = 0.01
+#: ... by more than this fraction of the measured torques' RMS (a noise-free log's residual is rounding) ...
+KEEP_FLOOR = 1e-4
 #: ... and lowers the held-out error of at least this fraction of the blocks (a term that helps one
 #: block of a short log and hurts the others is not kept)
 KEEP_FOLDS = 0.6
@@ -498,6 +500,7 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
     base = cross_validate(ctx, [], inner, per_fold=folds)
     current, kept, choices = base, [], []
     need = int(np.ceil(KEEP_FOLDS * len(folds)))
+    floor = KEEP_FLOOR * float(np.sqrt(np.mean(ctx.tau**2)))  # below this a term changes nothing that matters
     for name in wanted:
         if name in missing:
             choices.append(Choice(name, False, f"not available: {missing[name]}"))
@@ -513,13 +516,13 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
             kept.append(name)
             choices.append(Choice(name, True, f"forced; {figures}", score))
             current, folds = score, trial
-        elif gain > KEEP_GAIN and better >= need:
+        elif gain > KEEP_GAIN and better >= need and current - score > floor:
             kept.append(name)
             choices.append(Choice(name, True, figures, score))
             current, folds = score, trial
         else:
             choices.append(Choice(name, False, f"{figures}: not {100 * KEEP_GAIN:g} % lower in at least {need} "
-                                  f"blocks", score))
+                                  f"blocks and by {KEEP_FLOOR:g} of the torques' RMS", score))
     # backward: a term kept early may have taken up what a later one models better (a delay standing in
     # for a scale): drop each kept term whose removal does not raise the cross-validated RMS by KEEP_GAIN
     for name in [n for n in kept if n not in forced] if len(kept) > 1 else []:

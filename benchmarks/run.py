@@ -34,6 +34,11 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
 * ``files``         every example-robot-data URDF and every ``../shared/models`` file: certified, DRNG
                     complete?; talos_full_v2 times.
+* ``cross_recording``  identify on one recording, the raw RMS on another (simulated recordings with the
+                    defects real logs have, the Panda and TX40 logs split by time): default vs plain OLS,
+                    WLS, physical (``benchmarks/cross_recording.py``).
+* ``model_terms``   the Panda's held-out 5 Hz figure per model class: linear, + pre-sliding friction,
+                    + tilt, + delay, + scale, and the terms cross-validation keeps.
 * ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the
                     page's own render time in headless Chromium (``data-render-ms``).
 
@@ -65,6 +70,7 @@ from pathlib import Path
 _SRC = Path(__file__).resolve().parent.parent / "src"
 if _SRC.is_dir() and str(_SRC) not in sys.path:
     sys.path.insert(0, str(_SRC))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 np = None  # numpy, imported in main() after --blas-threads has set the environment
 
@@ -1066,7 +1072,41 @@ def bench_report(out: dict, quick: bool) -> None:
         out[f"report_{key}_render_ms_repeats"] = browser_reps
 
 
+def bench_cross_recording(out: dict, quick: bool) -> None:
+    """Cross-recording suite (``benchmarks/cross_recording.py``): identify on one recording, the raw RMS
+    on another, per estimator; the worst ratio of the default to the better of plain OLS and physical."""
+    import cross_recording as cr
+
+    results = [cr.run_case(c) for c in cr.cases(quick)]
+    log("\n" + cr.table(results))
+    for r in results:
+        key = "cross_" + "".join(ch if ch.isalnum() else "_" for ch in r["name"].split(":")[0].split("(")[0]).strip("_")
+        out[f"{key}_default_vs_best"] = r["default_vs_best"]
+    out["cross_recording_worst_default_vs_best"] = max(r["default_vs_best"] for r in results)
+    out["cross_recording_cases"] = len(results)
+
+
+def bench_model_terms(out: dict, quick: bool) -> None:
+    """The Panda (real log, last 6 s held out): the 5 Hz held-out figure per model class, terms added one by
+    one, then as cross-validation keeps them (default and physical)."""
+    import cross_recording as cr
+
+    rows = cr.panda_terms_table()
+    if not rows:
+        log("  model_terms: no ../shared/ident (skipped)")
+        return
+    log("\n" + cr.panda_table(rows))
+    for r in rows:
+        key = "".join(ch if ch.isalnum() else "_" for ch in r["label"]).strip("_").lower()
+        while "__" in key:
+            key = key.replace("__", "_")
+        out[f"panda_lp5_{key}"] = r["lp5"]
+    out["panda_default_seconds"] = next(r["seconds"] for r in rows if r["label"].startswith("default (terms"))
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
+    "cross_recording": bench_cross_recording,
+    "model_terms": bench_model_terms,
     "files": bench_files,
     "special": bench_special,
     "regressor": bench_regressor,

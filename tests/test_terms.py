@@ -7,6 +7,7 @@ noise. Each test identifies on one recording (default flags) and validates on an
 """
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -144,3 +145,62 @@ def test_dahl_state_is_the_odes_solution(delta):
     ode = dahl_ode(q, delta, substeps=100)
     assert np.max(np.abs(exact - ode)) < 0.02
     assert np.all(np.abs(exact) <= 1)
+
+
+TILT = np.radians([0.4, -0.3, 0.0])
+
+
+def _tilted(robot, seed=21, tilt=TILT):
+    rng = np.random.default_rng(seed)
+    plant = Plant(robot, **friction_of(robot, rng, scale=0.2), noise=0.002, ar=0.5, tilt=tilt)
+    plant.Fo = np.zeros(robot.dof)
+    return record(plant, *motion(robot.dof, 20.0, 250.0, rng, amplitude=0.6), rng, "tilted")
+
+
+def test_a_tilt_is_written_into_mjcf_as_the_base_orientation(tmp_path):
+    pytest.importorskip("cvxpy")
+    from baseparams.io.mjcf_write import identified_mjcf, mjcf_inverse
+    from test_mjcf_export import _fixture, _rel
+
+    src, robot = _fixture(tmp_path)
+    log = _tilted(robot)
+    res = identify(robot, log, method="physical", friction=("viscous", "coulomb"), terms="tilt")
+    out = tmp_path / "out.xml"
+    notes = identified_mjcf(res, src, out, log)
+    assert any("mounting tilt" in n for n in notes)
+    fc = dict(zip(res.model.names, res.fit.theta))
+    got = mjcf_inverse(out, robot, log.q, log.dq, _acc(log), frictionloss=False)
+    level = tmp_path / "level.xml"
+    identified_mjcf(identify(robot, log, method="physical", friction=("viscous", "coulomb"), terms="none"),
+                    src, level, log)
+    got_level = mjcf_inverse(level, robot, log.q, log.dq, _acc(log), frictionloss=False)
+    coul = np.sign(log.dq) * np.array([fc[f"Fc_{j}"] for j in robot.joint_names])
+    assert _rel(got + coul, log.tau) < 0.5 * _rel(got_level + coul, log.tau)
+
+
+def _acc(log):
+    return np.gradient(log.dq, log.t, axis=0)
+
+
+def test_a_tilt_is_written_into_urdf_as_the_root_joints_rotation(tmp_path):
+    pytest.importorskip("cvxpy")
+    from baseparams.io.urdf import identified_drives, write_urdf
+    from test_practical import chain_urdf
+
+    text, _ = chain_urdf(np.random.default_rng(4), 4)
+    src = tmp_path / "arm.urdf"
+    src.write_text(text)
+    robot = baseparams.load(str(src))
+    log = _tilted(robot)
+    res = identify(robot, log, method="physical", terms="tilt")
+    tilt = res.fit.terms[0]
+    drives, couplings = identified_drives(res)
+    out = tmp_path / "out.urdf"
+    notes = write_urdf(src, out, robot, res.fit.physical.pi, "paper", drives=drives, base_rotation=tilt.base_rotation())
+    assert any("mounting tilt" in n for n in notes)
+    back = baseparams.load(str(out))
+    q, dq, ddq = log.q, log.dq, _acc(log)
+    ours = baseparams.regressor(back, q, dq, ddq) @ back.parameters("paper")
+    truth_robot = replace(robot, gravity=tilt.gravity(robot))
+    want = baseparams.regressor(truth_robot, q, dq, ddq) @ res.fit.physical.pi
+    assert np.sqrt(np.mean((ours - want) ** 2)) < 1e-6 * np.sqrt(np.mean(want**2))

@@ -359,8 +359,12 @@ def _write_identified_urdf(args, robot, result) -> None:
     if Path(args.model).suffix.lower() != ".urdf":
         raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
     drives, couplings = identified_drives(result)
-    for note in write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
-                           couplings=couplings, inputs=[args.data, args.validate]):
+    tilt = next((t for t in result.fit.terms if t.name == "tilt"), None)
+    notes = write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
+                       couplings=couplings, inputs=[args.data, args.validate],
+                       base_rotation=None if tilt is None else tilt.base_rotation())
+    notes += [f"--urdf: not written: {x}" for t in result.fit.terms for x in t.export().get("not", [])]
+    for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
     print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
 

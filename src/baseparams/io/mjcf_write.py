@@ -36,6 +36,7 @@ left out and named in the notes.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -58,7 +59,7 @@ _JOINT_ATTRS = {"Ia": ("armature", "rotor inertia"), "Fv": ("damping", "viscous 
 
 def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str, *,
                drives: dict | None = None, states=None, expected=None, inputs=(),
-               tolerance: float = TOLERANCE) -> list[str]:
+               tolerance: float = TOLERANCE, base_rotation=None) -> list[str]:
     """Write ``source`` to ``dest`` with the identified inertias and drive terms (module doc).
 
     Parameters
@@ -91,6 +92,10 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         Further input files ``dest`` must not overwrite (the log, ...).
     tolerance : float
         Largest relative RMS difference accepted by the check (:data:`TOLERANCE`).
+    base_rotation : array_like, shape ``(3, 3)``, optional
+        A rotation of the robot in the world (a mounting tilt,
+        :meth:`baseparams.ident.terms.tilt.Tilt.base_rotation`): every body on the world body is
+        rotated about the world's origin (``expected`` must include the tilted gravity's torques).
 
     Returns
     -------
@@ -132,10 +137,15 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         _set_inertial(by_id[ids[i]], n_body[i], f"{dest}: <body name={name!r}>")
     notes += _zero_welded(by_id, set(ids))
     notes += _set_joints(by_id, robot, ids, drives, source)
+    check_robot = robot
+    if base_rotation is not None:
+        rot = np.asarray(base_rotation, dtype=float)
+        notes += _rotate_base(mj, spec, rot)
+        check_robot = replace(robot, gravity=rot.T @ robot.gravity)
     text = _relocate_assets(_to_xml(spec, dest), spec, source, dest)
     with atomic_path(dest, inputs=[source, *inputs], what="--mjcf") as tmp:
         tmp.write_text(text, encoding="utf-8")
-        notes += _check(tmp, dest, robot, (params, convention, drives), states, expected, tolerance)
+        notes += _check(tmp, dest, robot, (params, convention, drives), states, expected, tolerance, check_robot)
     return notes
 
 
@@ -348,10 +358,29 @@ def _drive_vectors(robot: Robot, drives: dict) -> dict[str, np.ndarray]:
             for k in ("Ia", "Fv", "Fc", "Fo")}
 
 
-def _check(path: Path, dest: Path, robot: Robot, values: tuple, states, expected, tolerance: float) -> list[str]:
+def _rotate_base(mj, spec, rot: np.ndarray) -> list[str]:
+    """Rotate every body on the world body by ``rot`` about the world's origin."""
+    quat = np.zeros(4)
+    mj.mju_mat2Quat(quat, rot.reshape(-1))
+    names = []
+    for body in spec.worldbody.bodies:
+        old = np.asarray(body.quat, dtype=float)
+        new = np.zeros(4)
+        mj.mju_mulQuat(new, quat, old / np.linalg.norm(old))
+        body.pos = rot @ np.asarray(body.pos, dtype=float)
+        body.quat = new
+        names.append(repr(body.name))
+    angle = float(np.degrees(np.arccos(np.clip((np.trace(rot) - 1) / 2, -1.0, 1.0))))
+    return [f"--mjcf: the mounting tilt ({angle:.3g} degree) written as the orientation of the bodies on the world "
+            f"body ({', '.join(names)})"]
+
+
+def _check(path: Path, dest: Path, robot: Robot, values: tuple, states, expected, tolerance: float,
+           check_robot: Robot | None = None) -> list[str]:
     """Reload the written file; its ``mj_inverse`` against ``expected`` or the parameters' own forces (module doc).
 
-    ``values`` is ``(params, convention, drives)`` as :func:`write_mjcf` takes them.
+    ``values`` is ``(params, convention, drives)`` as :func:`write_mjcf` takes them; ``check_robot``
+    the robot whose gravity the written file has (a mounting tilt), for the parameters' own forces.
     """
     from ..regressor.tp import regressor
 
@@ -362,7 +391,7 @@ def _check(path: Path, dest: Path, robot: Robot, values: tuple, states, expected
     params, convention, drives = values
     pi = np.asarray(params, dtype=float).ravel() if convention == "paper" else _to_paper(robot, params, convention)
     d = _drive_vectors(robot, drives)
-    want = regressor(robot, q, dq, ddq) @ pi + d["Ia"] * ddq + d["Fv"] * dq
+    want = regressor(check_robot or robot, q, dq, ddq) @ pi + d["Ia"] * ddq + d["Fv"] * dq
     source = "parameters' own"
     if expected is not None:
         want, source = np.asarray(expected, dtype=float), "identification's own predicted"
@@ -537,10 +566,14 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
     cols = [list(log.joints).index(j) for j in ident.joints]
     rows = np.unique(np.linspace(0, len(q) - 1, min(len(q), max_samples)).astype(int))
     q, dq, ddq = (x[rows][:, cols] for x in (q, dq, ddq))
+    tilt = next((t for t in ident.fit.terms if t.name == "tilt"), None)
+    extra = 0.0 if tilt is None else tilt.adjust_model(ident.fit, q, q, dq, ddq, np.zeros_like(q))
     notes = write_mjcf(source, dest, robot, ident.fit.physical.pi, "paper", drives=drives, states=(q, dq, ddq),
-                       expected=_held_prediction(ident, q, dq, ddq), inputs=inputs)
+                       expected=_held_prediction(ident, q, dq, ddq) + extra, inputs=inputs,
+                       base_rotation=None if tilt is None else tilt.base_rotation())
+    notes += [f"--mjcf: not written: {x}" for t in ident.fit.terms for x in t.export().get("not", [])]
     got = mjcf_inverse(dest, robot, q, dq, ddq, frictionloss=True)
-    pred = ident.fit.predict(q, dq, ddq) - _drive_vectors(robot, drives)["Fo"]  # Fo: not in MJCF
+    pred = ident.fit.predict(q, dq, ddq) + extra - _drive_vectors(robot, drives)["Fo"]  # Fo: not in MJCF
 
     def rel(a, b):
         return float(np.sqrt(np.mean((a - b) ** 2)) / (np.sqrt(np.mean(b**2)) or 1.0))

@@ -520,7 +520,7 @@ def _num(v: float, digits: int = 10) -> str:
 
 
 def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, convention: str, *,
-               drives: dict | None = None, couplings=(), inputs=()) -> list[str]:
+               drives: dict | None = None, couplings=(), inputs=(), base_rotation=None) -> list[str]:
     """Write ``source`` to ``dest`` with every moving body's ``<inertial>`` set to ``params``.
 
     Only values change: the file is edited in place (:mod:`baseparams.io.xmledit`), so the
@@ -567,6 +567,11 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         :meth:`baseparams.ident.pipeline.Identification.couplings`): noted in each joint's comment.
     inputs : iterable of str or Path
         Further input files ``dest`` must not overwrite (the log, ...).
+    base_rotation : array_like, shape ``(3, 3)``, optional
+        A rotation of the robot in the world (a mounting tilt,
+        :meth:`baseparams.ident.terms.tilt.Tilt.base_rotation`): a URDF's root link is fixed, so
+        every joint hanging from it has its ``<origin>`` rotated about the root's frame (the root
+        link's own inertia does not move the joints).
 
     Returns
     -------
@@ -628,6 +633,8 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
                                                                           "0")}
             _edit_inertial(edit, nodes[name], zero)
     notes = _edit_drives(edit, doc, source, drives or {}, list(couplings))
+    if base_rotation is not None:
+        notes += _rotate_base(edit, doc, root, np.asarray(base_rotation, dtype=float), dest)
     out = edit.text()
     back = ET.fromstring(out.lstrip("\ufeff \t\r\n").rstrip(" \t\r\n\x00").encode("utf-8"))
     back_links = {ln.get("name"): ln for ln in back.findall("link")}
@@ -639,6 +646,33 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
                              f"not written")  # pragma: no cover - a bug of the editor
     write_text(dest, out, inputs=[source, *inputs], what="--urdf")
     return notes
+
+
+def _rotate_base(edit, doc, root: ET.Element, rot: np.ndarray, dest) -> list[str]:
+    """Rotate the ``<origin>`` of every joint whose parent is the root link by ``rot`` (about the root's frame)."""
+    from ..model.snap import rpy
+
+    children = {jt.find("child").get("link") for jt in root.findall("joint") if jt.find("child") is not None}
+    roots = [ln.get("name") for ln in root.findall("link") if ln.get("name") not in children]
+    if len(roots) != 1:
+        raise ModelError(f"{dest}: the mounting tilt needs one root link, found {roots[:5]}")
+    joints = [(el, node) for el, node in zip(root.findall("joint"), doc.findall("joint"))
+              if el.find("parent") is not None and el.find("parent").get("link") == roots[0]]
+    for el, node in joints:
+        t = _origin(el.find("origin"), f"{dest}: <joint name={el.get('name')!r}>")
+        rot4 = np.eye(4)
+        rot4[:3, :3] = rot
+        new = rot4 @ t
+        xyz = " ".join(f"{v:.12g}" for v in new[:3, 3])
+        ang = " ".join(f"{v:.12g}" for v in rpy(new[:3, :3]))
+        origin = node.find("origin")
+        if origin is not None:
+            edit.set(origin, xyz=xyz, rpy=ang)
+        else:
+            edit.append(node, [f'<origin xyz="{xyz}" rpy="{ang}"/>'])
+    angle = float(np.degrees(np.arccos(np.clip((np.trace(rot) - 1) / 2, -1.0, 1.0))))
+    return [f"--urdf: the mounting tilt ({angle:.3g} degree) written as the rotation of the joints on the root link "
+            f"{roots[0]!r} ({', '.join(repr(e.get('name')) for e, _ in joints)}): a URDF's gravity is the world's"]
 
 
 def _inertial_rotation(link: ET.Element, what: str) -> np.ndarray:

@@ -106,7 +106,14 @@ def test_cli_predict_csv_and_parquet(tmp_path, capsys):
     out = tmp_path / "pred.csv"
     assert main(["predict", "puma560", str(res), str(sim), "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "RMS vs the raw measured torques at every sample" in text
+    assert "RMS vs the raw measured torques:" in text and "edge transient" in text
+    assert main(["predict", "puma560", str(res), str(sim), "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    edge = j["edge_samples"]
+    mid = slice(edge, log.n_samples - edge)
+    interior = Identification.load(res, robot).predict(log)[mid] - log.tau[mid]
+    assert j["rms_interior"]["total"] == pytest.approx(np.sqrt(np.mean(interior**2)), rel=1e-9)
+    assert j["rms_interior"]["total"] < j["rms"]["total"]  # the filter's edges are what the headline leaves out
     rows = out.read_text().splitlines()
     assert rows[0].split(",") == names and len(rows) == 1 + log.n_samples
     table = np.loadtxt(out, delimiter=",", skiprows=1)

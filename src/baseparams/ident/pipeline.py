@@ -463,7 +463,10 @@ class Identification:
     samples : dict
         ``{"read": int, "used": int, "removed": {reason: count}}`` for the training data.
     train : dict
-        ``{"rms": {joint: float}, "rms_total": float}`` on the training samples (filtered).
+        ``{"rms": {joint: float}, "rms_total": float, "samples", "t_start", "t_end", "source",
+        "measure"}``: predicted minus raw measured torques at every training sample (the
+        validation's measure); ``fit_rms``, ``fit_rms_total``: the same on the fit's own rows
+        (filtered and decimated as fitted), when computed.
     validation : dict, optional
         The same on held-out data, or ``None``.
     notes : tuple of str
@@ -1035,13 +1038,18 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     say("predicted torques and excitation spectrum for the report")
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
-    train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
+    # one measure for training and validation: predictions at every sample against the raw measured torques
+    pred_log = predict_log(f, log, float(prep.design.cutoff))
+    tmask = log.t < log.t[-1] - holdout if holdout is not None else None
+    train_rms = validation_scores(log, pred_log, names, tmask)
+    train_rms["measure"] = "RMS of predicted minus raw measured torques at every training sample"
+    train_rms.update(fit_rms=dict(zip(names, res.tolist())), fit_rms_total=float(np.sqrt(np.mean(res**2))))
     val, series = None, {"train": report_series(model, prep, cols, f, names, memory_mb, raw_q), "validation": None}
     series["train"]["spectrum"] = position_spectrum(train, cols, prep.design.fs, prep.design.cutoff, prep.full.t)
     if held is not None:
         say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
         whole, mask = (log, log.t >= log.t[-1] - holdout) if holdout is not None else (held, None)
-        pred = predict_log(f, whole, float(prep.design.cutoff))
+        pred = pred_log if holdout is not None else predict_log(f, whole, float(prep.design.cutoff))
         val = validation_scores(whole, pred, names, mask, score_cutoff)
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
         vcols = log_columns(model, held)

@@ -56,8 +56,14 @@ def format_identification(result: Identification) -> str:
             continue
         per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms"].items())
         if label == "train":
-            lines.append(f"train RMS {part['rms_total']:.4g} (the fit's own rows: filtered and decimated as fitted; "
-                         f"per joint: {per})")
+            if "samples" in part:
+                fit = (f"; on the fit's own rows, filtered and decimated: {part['fit_rms_total']:.4g}"
+                       if "fit_rms_total" in part else "")
+                lines.append(f"train RMS {part['rms_total']:.4g} against the raw measured torques at every training "
+                             f"sample ({part['samples']} samples; per joint: {per}{fit})")
+            else:
+                lines.append(f"train RMS {part['rms_total']:.4g} (the fit's own rows: filtered and decimated as "
+                             f"fitted, not the validation's measure; per joint: {per})")
             continue
         lines.append(f"validation RMS {part['rms_total']:.4g} against the raw measured torques at every held-out "
                      f"sample ({part['samples']} samples, t {part['t_start']:.6g} to {part['t_end']:.6g} s of "

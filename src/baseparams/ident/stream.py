@@ -844,7 +844,9 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
     f = pulled_covariance(f)
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
-    train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
+    train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2))),
+                 "measure": "RMS on the fit's own rows (filtered and decimated as fitted; a streamed log is not "
+                            "predicted again at every training sample)"}
     if train_series is not None:
         train_series["spectrum"] = position_spectrum(tr.sub, cols, tr.rate / tr.step, plan.design.cutoff)
     series = {"train": train_series, "validation": None}

@@ -615,7 +615,8 @@ def _torque_blocks(ident) -> str:
             unit = units[joint]["force"]
             quantity = "force" if unit == "N" else "torque"
             blocks.append(f"<div class='joint' data-part='{part}' data-joint='{html.escape(joint)}'><b>{part}: "
-                          f"{html.escape(joint)}</b> (RMS {_num(np.sqrt(np.mean(e**2)), '.4g')} {unit})<br>"
+                          f"{html.escape(joint)}</b> (as plotted, both low-passed and decimated: RMS "
+                          f"{_num(np.sqrt(np.mean(e**2)), '.4g')} {unit}; against the raw torques: the table)<br>"
                           + _series_svg(s["t"], [s["tau"][:, k], s["tau_hat"][:, k]], f"{part}-{k}",
                                         f"{quantity} [{unit}]") +
                           f"{_histogram(e, unit)}</div>")
@@ -710,7 +711,9 @@ def _rms_table(ident, j: dict) -> str:
                    f"<td>{_num(val['rms'].get(name), '.4g') if val else '-'}</td><td>{units[name]['force']}</td></tr>"
                    for name, v in j["train"]["rms"].items())
     note = "" if val else " (no validation: <code>--holdout SECONDS</code> or <code>--validate FILE</code>)"
-    return (f"<h2>Residual RMS per joint{note}</h2><table id='rms'><tr><th>joint</th><th>train RMS</th>"
+    how = ("predicted minus raw measured torques at every sample" if "samples" in j["train"] else
+           "train: the fit's own rows (filtered, decimated); validation: against the raw torques at every sample")
+    return (f"<h2>Residual RMS per joint{note}</h2><p>{how}</p><table id='rms'><tr><th>joint</th><th>train RMS</th>"
             f"<th>validation RMS</th><th>unit</th></tr>{rows}</table>")
 
 

@@ -204,3 +204,19 @@ def test_a_tilt_is_written_into_urdf_as_the_root_joints_rotation(tmp_path):
     truth_robot = replace(robot, gravity=tilt.gravity(robot))
     want = baseparams.regressor(truth_robot, q, dq, ddq) @ res.fit.physical.pi
     assert np.sqrt(np.mean((ours - want) ** 2)) < 1e-6 * np.sqrt(np.mean(want**2))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_gravity_torques_equal_the_regressors(seed):
+    """The tilt's gravity torques (kinematics and a wrench sum) equal the TP regressor's, on random trees."""
+    from baseparams.ident.terms.tilt import gravity_regressor, gravity_torques
+    from baseparams.robots.random import random_robot
+
+    rng = np.random.default_rng(seed)
+    robot = random_robot(rng, n=int(rng.integers(2, 7)), joint_types="RP")
+    q = rng.uniform(-2, 2, (50, robot.dof))
+    g = rng.normal(size=3)
+    pi = robot.parameters("paper")
+    coords = np.arange(robot.dof)
+    want = gravity_regressor(robot, coords, q, g) @ pi
+    np.testing.assert_allclose(gravity_torques(robot, coords, q, g, pi), want, atol=1e-10 * np.abs(want).max())

@@ -153,7 +153,7 @@ def accumulate(model: IdentModel, q, dq, ddq, tau, chunk: int = 20000, transform
 
 
 def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None = None,
-        mass_bounds=None, blocks=None) -> Fit:
+        mass_bounds=None, blocks=None, estimator: str | None = None) -> Fit:
     """Estimate the model parameters from accumulated data.
 
     Parameters
@@ -177,6 +177,9 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
         Mass bounds per body [kg] (``physical`` only).
     blocks : list of RowAccumulator, optional
         Time-ordered pieces of ``acc``'s rows (``auto`` only).
+    estimator : {"least squares", "physical"}, optional
+        ``auto`` only: take this estimator instead of cross-validating least squares against the
+        physical fit (a refit on rows the model terms transformed keeps the first choice).
 
     Returns
     -------
@@ -203,7 +206,7 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
         first = ols(acc, model.names)
     est = first if method == "ols" else wls(acc, model.names, first)
     if method == "auto":
-        return _auto(model, first, est, acc, blocks or [], prior_weight)
+        return _auto(model, first, est, acc, blocks or [], prior_weight, estimator)
     if method != "physical":
         return Fit(model, method, est.theta, est)
     from .physical import physical_fit
@@ -286,7 +289,7 @@ def _drive_precision_delta(model: IdentModel, acc, est) -> np.ndarray:
 PHYSICAL_MARGIN = 0.05
 
 
-def _auto(model: IdentModel, first, est, acc, blocks: list, prior_weight=None) -> Fit:
+def _auto(model: IdentModel, first, est, acc, blocks: list, prior_weight=None, estimator=None) -> Fit:
     """OLS or WLS with the model file as a prior, or the physical estimate, as blocked cross-validation asks.
 
     Drive terms get a weak prior towards zero (:func:`~baseparams.ident.select.drive_precision`)
@@ -333,10 +336,14 @@ def _auto(model: IdentModel, first, est, acc, blocks: list, prior_weight=None) -
 
     cv_blocks = split_blocks(blocks)
     dp = _drive_precision_delta(model, acc, est)
-    phys_cv = physical_cv(model, cv_blocks, est.weights, dp, prior_weight)
     ls_cv = sel.cv_rms[sel.weighting][sel.lambdas.index(sel.lam)]
+    if estimator is None:
+        phys_cv = physical_cv(model, cv_blocks, est.weights, dp, prior_weight)
+        take_physical = phys_cv is not None and phys_cv < (1.0 - PHYSICAL_MARGIN) * ls_cv
+    else:
+        phys_cv, take_physical = None, estimator == "physical"
     sel = replace(sel, physical_cv=phys_cv)
-    if phys_cv is not None and phys_cv < (1.0 - PHYSICAL_MARGIN) * ls_cv:
+    if take_physical:
         from .physical import physical_fit
 
         kw = {} if prior_weight is None else {"prior_weight": prior_weight}
@@ -1209,7 +1216,10 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, method: str, prior_w
     parts = fold_parts(x, y)
     acc2 = chunks.combine(parts)
     say(f"refitting the core ({method}) with the model terms")
-    f2 = fit(model, acc2, method, prior_weight, blocks=parts)
+    chosen = None if f.selection is None else f.selection.estimator
+    f2 = fit(model, acc2, method, prior_weight, blocks=parts, estimator=chosen)
+    if f2.selection is not None and f.selection is not None:  # the choice and its figures are the first fit's
+        f2 = replace(f2, selection=replace(f2.selection, physical_cv=f.selection.physical_cv))
     return replace(f2, terms=tuple(tf.terms), term_choices=tf.choices), acc2, [(x, y)], notes, raw_q
 
 

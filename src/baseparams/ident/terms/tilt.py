@@ -94,6 +94,53 @@ def gravity_regressor(robot, coords, q: np.ndarray, g: np.ndarray) -> np.ndarray
     return regressor(replace(robot, gravity=np.asarray(g, dtype=float)), q, z, z)[:, np.asarray(coords)]
 
 
+def gravity_torques(robot, coords, q: np.ndarray | None, g: np.ndarray, pi: np.ndarray, state=None) -> np.ndarray:
+    """``Y(q, 0, 0; g) pi`` without forming the regressor: the generalized forces holding the bodies against ``g``.
+
+    Each body's first moment ``h = m c`` (``paper`` convention: world frame at q = 0) moved by its
+    displacement, the gravity wrench ``(h x g, m g)`` about the world origin summed up the tree,
+    paired with each joint's current line ``(omega, v)``: ``tau_k = -(omega . M + v . F)``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree).
+    coords : array_like of int, shape ``(m,)``
+        The measured coordinates.
+    q : ndarray, shape ``(S, dof)``
+        Positions.
+    g : ndarray, shape ``(3,)``
+        Gravity [m/s^2], world frame.
+    pi : ndarray, shape ``(10 n,)``
+        Standard parameters, ``paper`` convention.
+    state : TreeState, optional
+        ``forward_kinematics(robot, q)`` when already computed (``q`` is then not used).
+
+    Returns
+    -------
+    ndarray, shape ``(S, m)``
+        Equal to ``gravity_regressor(robot, coords, q, g) @ pi`` (tested).
+    """
+    from ...kinematics.tree import forward_kinematics
+
+    st = forward_kinematics(robot, q) if state is None else state
+    p = np.asarray(pi, dtype=float).reshape(robot.n, 10)
+    mass, h0 = p[:, 9], p[:, 6:9]
+    g = np.asarray(g, dtype=float)
+    rot, tr = st.g[:, :, :3, :3], st.g[:, :, :3, 3]
+    h = np.einsum("snij,nj->sni", rot, h0) + tr * mass[None, :, None]  # (S, n, 3) world first moments
+    moment = np.cross(h, g)
+    force = mass[None, :, None] * g[None, None, :]
+    w = np.concatenate([moment, np.broadcast_to(force, moment.shape)], axis=2).copy()  # (S, n, 6)
+    for i in range(robot.n - 1, -1, -1):  # subtree sums, children after parents
+        par = robot.parent[i]
+        if par >= 0:
+            w[:, par] += w[:, i]
+    body = np.asarray(robot.dof_body)[np.asarray(coords)]
+    lines = st.lines[:, np.asarray(coords)]
+    return -np.einsum("smk,smk->sm", lines, w[:, body])
+
+
 class Tilt(Term):
     """A mounting tilt (module docstring): two angles [rad]."""
 
@@ -115,11 +162,13 @@ class Tilt(Term):
         return None
 
     def prepare(self, ctx: TermContext) -> None:
-        """The two gravity regressors at the full rate, filtered and decimated ``(S', m, 10 n)``."""
+        """The full-rate kinematics the gravity torques are computed from (:func:`gravity_torques`)."""
+        from ...kinematics.tree import forward_kinematics
+
         r = ctx.model.robot
         self._u = perpendicular_basis(r.gravity)
-        q = ctx.prep.full.q[:, ctx.cols]
-        self._g = [ctx.apply(gravity_regressor(r, ctx.model.coords, q, np.cross(u, r.gravity))) for u in self._u]
+        self._fk = forward_kinematics(r, ctx.prep.full.q[:, ctx.cols])
+        self._cache = (None, None)
 
     def reset(self, ctx: TermContext) -> None:
         """A level mounting."""
@@ -127,8 +176,15 @@ class Tilt(Term):
 
     def columns(self, ctx: TermContext, state: dict) -> tuple[np.ndarray, list[str]]:
         """``Y(q, 0, 0; u_k x g) pi``, filtered and decimated, for ``k = 1, 2``."""
-        self.pi = state["pi"]
-        return np.stack([g @ self.pi for g in self._g], axis=2), ["tilt_1", "tilt_2"]
+        self.pi = np.asarray(state["pi"], dtype=float)
+        key, cols = self._cache
+        if key is None or not np.array_equal(key, self.pi):
+            r = ctx.model.robot
+            full = np.stack([gravity_torques(r, ctx.model.coords, None, np.cross(u, r.gravity), self.pi,
+                                             state=self._fk) for u in self._u], axis=2)
+            cols = ctx.apply(full)
+            self._cache = (self.pi.copy(), cols)
+        return cols, ["tilt_1", "tilt_2"]
 
     def prior(self) -> tuple[np.ndarray, np.ndarray]:
         """Level to within :data:`PRIOR_STD` [rad] per angle."""
@@ -153,7 +209,7 @@ class Tilt(Term):
         dg = self.gravity(r) - r.gravity
         if self.pi is None or not np.any(dg):
             return tau
-        return tau + gravity_regressor(r, fit.model.coords, q, dg) @ self.pi
+        return tau + gravity_torques(r, fit.model.coords, q, dg, self.pi)
 
     def tilt_degrees(self) -> float:
         """The tilt's magnitude [degree]."""

@@ -53,9 +53,10 @@ imported on first use: ``baseparams.robots``, ``baseparams.io`` (readers, URDF e
 Pinocchio interop), ``baseparams.nullspace`` (DRNG, certification), ``baseparams.base``
 (regrouping), ``baseparams.numerics``, ``baseparams.pga``, ``baseparams.kinematics``,
 ``baseparams.model``, ``baseparams.symbolic`` (``SymbolicBuilder``, DH tables),
-``baseparams.ident`` (the identification's building blocks: ``ident_model``, ``accumulate``,
-``fit``), ``baseparams.excitation`` (the excitation designer's parts), ``baseparams.fleet``
-(many logs on Dask). ``dir(baseparams)`` lists these and the names above. The name
+``baseparams.ident`` (the identification's building blocks:
+``baseparams.ident.model.ident_model``, ``baseparams.ident.pipeline.accumulate`` and ``fit``),
+``baseparams.excitation`` (the excitation designer's parts), ``baseparams.fleet`` (many logs on
+Dask). ``dir(baseparams)`` lists these and the names above. The name
 ``baseparams.regressor`` is the function above; the subpackage of the same name is imported as
 usual (``from baseparams.regressor import regressor_tensor``).
 """
@@ -312,7 +313,8 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     Parameters
     ----------
     model : Robot, Analysis, str or path
-        The robot (fixed base); its own inertias are the true parameters.
+        The robot (a tree, fixed or floating base: README "Log layout"); its own inertias are the
+        true parameters.
     trajectory : Excitation, str, path or tuple, optional
         The motion: a designed :class:`Excitation`, its file (``excite --out``) or ``(t (S,), q,
         dq, ddq (S, m))``; default a random Fourier series (``duration``, ``rate``, ``amplitude``).
@@ -348,7 +350,7 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     Raises
     ------
     BaseparamsError
-        A floating base, bad options, loops the trajectory does not close, an unwritable output.
+        Bad options (a trajectory for a floating base), loops the trajectory does not close, an unwritable output.
     """
     from .ident.simulate import simulate_log
 
@@ -391,7 +393,8 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     Parameters
     ----------
     model : Robot, Analysis, str or path
-        The robot the log was recorded on (fixed base; loops closed by the actuated joints).
+        The robot the log was recorded on (a floating base's pose in the log; loops closed by the
+        actuated joints).
     log : JointLog, str or path
         The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
     validate : JointLog, str or path, optional
@@ -443,7 +446,7 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     Raises
     ------
     BaseparamsError
-        A floating base, bad data, options or output, data that do not excite the model.
+        Bad data (a floating base without its pose), options or output, data that do not excite the model.
     """
     from .ident.drives import MotorCoupling
     from .ident.pipeline import identify as run

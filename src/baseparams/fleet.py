@@ -214,9 +214,12 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
     Raises
     ------
     BaseparamsError
-        No file, no usable log (every one skipped), neither ``per_file`` nor ``pooled``, or dask
-        missing (names the extra).
+        No file, no usable log (every one skipped), neither ``per_file`` nor ``pooled``, dask
+        missing (names the extra), or a floating base.
     """
+    if model.robot.floating:
+        raise BaseparamsError(f"robot {model.robot.name!r}: fleets of a floating base are not supported yet; identify "
+                              "each log on its own (baseparams identify MODEL LOG)")
     paths = [str(p) for p in paths]
     if not paths:
         raise BaseparamsError("no log file to identify")

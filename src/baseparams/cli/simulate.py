@@ -72,5 +72,6 @@ def cmd_simulate(args) -> int:
     truth_path = write_text(str(args.out) + ".truth.json", json.dumps(truth, indent=2) + "\n", input_files(args), "OUT")
     amp = (f", excursion {truth['amplitude']:.3g} (the largest of the defaults whose loops close)"
            if robot.has_loops and "amplitude" in truth and args.amplitude is None else "")
-    print(f"{args.out}: {log.n_samples} samples of {len(log.joints)} joints{amp}; true parameters in {truth_path}")
+    base = " and the floating base" if log.floating else ""
+    print(f"{args.out}: {log.n_samples} samples of {log.n_joints} joints{base}{amp}; true parameters in {truth_path}")
     return EXIT_OK

@@ -526,7 +526,7 @@ class Identification:
         o["couplings"] = tuple(MotorCoupling(c["name"], tuple(c["joints"]), tuple(c["weights"]))
                                for c in o.get("couplings", ()))
         model = ident_model(analyze(robot, convention=o["convention"], rows=o.get("rows", "all")), o["rotor"],
-                            o["friction"], o.get("coulomb_width"), couplings=o["couplings"])
+                            o["friction"], o.get("coulomb_width"), couplings=o["couplings"], log_base=robot.floating)
         names = doc["parameters"]["names"]
         if list(model.names) != list(names):
             diff = next((f"{a} vs {b}" for a, b in zip(model.names, names) if a != b),
@@ -814,9 +814,6 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
         data (:class:`~baseparams.errors.DataError`), a bad coupling or data that do not excite
         the model.
     """
-    if robot.floating:
-        raise BaseparamsError(f"robot {robot.name!r}: identification from a joint log needs a fixed base (a floating "
-                              f"base's motion and wrench are not in a joint log); use the Python API with states")
     if holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
@@ -834,8 +831,8 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     say = progress or (lambda msg: None)
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction), coulomb_width,
-                        couplings=couplings)
+    model = ident_model(analyze(robot, samples=samples, convention=convention, rows=log_rows(robot)), rotor,
+                        tuple(friction), coulomb_width, couplings=couplings, log_base=robot.floating)
     cols = log_columns(model, log)
     unit_notes = check_log_units(model, train, cols, allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
@@ -854,7 +851,8 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
     train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2)))}
     val, series = None, {"train": report_series(model, prep, cols, f.theta, names, memory_mb), "validation": None}
-    series["train"]["spectrum"] = position_spectrum(train, cols, prep.design.fs, prep.design.cutoff, prep.full.t)
+    series["train"]["spectrum"] = position_spectrum(train, cols[model.row_states], prep.design.fs, prep.design.cutoff,
+                                                    prep.full.t)
     if held is not None:
         say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
         whole, mask = (log, log.t >= log.t[-1] - holdout) if holdout is not None else (held, None)
@@ -863,12 +861,49 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
         series["validation"] = report_series(model, vprep, log_columns(model, held), f.theta, names, memory_mb)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *model_notes(model), *(f.physical.notes if f.physical is not None else ()),
+    notes = (*prep.notes, acc_note, *model_notes(model), *floating_notes(robot),
+             *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed}
     return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+
+
+def log_rows(robot: Robot) -> str:
+    """The generalized forces a joint log measures: ``"joints"`` with a floating base (no base wrench), else all.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    str
+        ``"joints"`` or ``"all"``.
+    """
+    return "joints" if robot.floating else "all"
+
+
+def floating_notes(robot: Robot) -> list[str]:
+    """What a floating base's identification from a joint log assumes (one line), else nothing.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    list of str
+        Notes for the report.
+    """
+    if not robot.floating:
+        return []
+    return ["floating base: the base's motion is the log's pose and twist; the joint torques are modelled with no "
+            "external force on any other link (a foot on the ground pushes: measured contact wrenches belong on the "
+            "measured side, baseparams.kinematics.wrench_forces in Python), the base wrench is not measured"]
 
 
 def _prepare_training(train, holdout, **kw):
@@ -917,9 +952,19 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     robot = model.robot
     params = robot.parameters("paper")
     coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
-    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" for c in coords])
+    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" or (model.log_base and 3 <= c < 6) for c in coords])
+
+    def torques(q, dq, ddq):
+        if not model.log_base:
+            return regressor(robot, q, dq, ddq) @ params
+        from ..kinematics.floating import robot_states
+
+        tau = regressor(robot, *robot_states(robot, q, dq, ddq)) @ params
+        tau[:, :6] = 0.0  # the base wrench is not measured (the log's zeros)
+        return tau
+
     try:
-        return check_units(log, cols, lambda q, dq, ddq: regressor(robot, q, dq, ddq) @ params, revolute)
+        return check_units(log, cols, torques, revolute)
     except DataError as exc:
         if not allow_units:
             raise
@@ -968,7 +1013,7 @@ def report_series(model: IdentModel, prep, cols: np.ndarray, theta: np.ndarray, 
         idx = prep.index
         tau_hat = np.concatenate([model.regressor(q[idx[k:k + 20000]], dq[idx[k:k + 20000]],
                                                   ddq[idx[k:k + 20000]]) @ theta for k in range(0, len(idx), 20000)])
-    return {"t": prep.t, "tau": prep.tau[:, cols], "tau_hat": tau_hat, "joints": names}
+    return {"t": prep.t, "tau": prep.tau[:, cols[model.row_states]], "tau_hat": tau_hat, "joints": names}
 
 
 def position_spectrum(log, cols, fs: float, cutoff: float | None = None, t=None, bands: int = 300,
@@ -1078,11 +1123,17 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     BaseparamsError
         A state coordinate whose joint is not in the log (naming the joints).
     """
+    from ..kinematics.floating import BASE_COORDINATES
+
     r = model.robot
     coords = np.asarray(r.actuated, dtype=int) if r.has_loops else np.arange(r.dof)
-    wanted = [r.joint_names[r.dof_body[c]] for c in coords]
+    wanted = [BASE_COORDINATES[c] if r.jtype[r.dof_body[c]] == "F" else r.joint_names[r.dof_body[c]] for c in coords]
     where = {j: k for k, j in enumerate(log.joints)}
     missing = [j for j in wanted if j not in where]
+    if missing and r.floating and missing[0] == BASE_COORDINATES[0]:
+        raise BaseparamsError(f"{log.source}: robot {r.name!r} has a floating base and the log has no base pose "
+                              "(columns base_x, base_y, base_z, base_qw, base_qx, base_qy, base_qz: README, "
+                              "Log layout)")
     if missing:
         what = "actuated joints" if r.has_loops else "joints"
         raise BaseparamsError(f"{log.source}: the log has no column for the {what} {missing} of {r.name!r}")
@@ -1132,7 +1183,7 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb or log is None:
         q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
-        a, tau = prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols]
+        a, tau = prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols[model.row_states]]
         if parts_out is None:
             acc = RowAccumulator(len(model.coords), model.n_params).add(a, tau)
         else:
@@ -1157,7 +1208,7 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     # (a fraction 1 / factor of the full-rate regressor); else that pass recomputes them
     fitted_mb = full.n_samples / max(prep.factor, 1) * len(model.coords) * (model.n_params + 1) * 8 / 1e6
     held = keep if keep is not None and fitted_mb <= memory_mb else None
-    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params, held)[0]
+    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params, held, model.row_states)[0]
              for c in chunks.plan(full.n_samples, size, margin)]
     if parts_out is not None and held:
         # the cross-validation's blocks from the fitted rows, split as the at-once path splits them

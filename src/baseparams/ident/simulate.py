@@ -132,12 +132,17 @@ def amplitude_ladder(robot: Robot) -> list[float]:
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
                  noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
                  convention: str = "khalil", trajectory=None, samples: int | None = None):
-    """A synthetic joint log of a fixed-base robot, with its true model parameters.
+    """A synthetic joint log, with its true model parameters.
+
+    A floating base moves too: its position [m] and Z-Y-X angles [rad] follow Fourier series like
+    the joints (``amplitude`` each); the log holds its pose and twist (README "Log layout") and
+    the torques of the joints alone (the base wrench that carries it is not measured), the
+    truth the base parameters those torques determine.
 
     Parameters
     ----------
     robot : Robot
-        The model (fixed base; loops closed by the actuated joints).
+        The model (a tree, fixed or floating base; loops closed by the actuated joints).
     duration, rate : float
         Length [s] and sampling rate [Hz].
     amplitude : float, optional
@@ -170,13 +175,17 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     Raises
     ------
     BaseparamsError
-        A floating base, or loops the trajectory does not close (lower ``amplitude``).
+        Loops the trajectory does not close (lower ``amplitude``); a trajectory for a floating base.
     """
+    from ..kinematics.floating import BASE_COORDINATES, robot_states
     from .data import JointLog
 
-    if robot.floating:
-        raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
-    model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction))
+    if robot.floating and trajectory is not None:
+        raise BaseparamsError(f"robot {robot.name!r}: a floating base's motion is not in a trajectory file; simulate "
+                              "draws it (without a trajectory)")
+    rows = "joints" if robot.floating else "all"
+    model = ident_model(analyze(robot, samples=samples, convention=convention, rows=rows), rotor, tuple(friction),
+                        log_base=robot.floating)
     if amplitude is not None and not amplitude > 0:
         raise BaseparamsError(f"amplitude must be > 0 rad, got {amplitude}")
     ladder = [amplitude] if amplitude is not None or trajectory is not None else amplitude_ladder(robot)
@@ -188,17 +197,19 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
             t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
         delta = _draw_drives(model, rng)
         try:
-            y = regressor_of(robot, q, dq, ddq)
+            y = regressor_of(robot, *robot_states(robot, q, dq, ddq))
         except BaseparamsError as exc:
             if k + 1 == len(ladder) or "close the loops" not in str(exc):
                 raise
             continue  # the loops do not close that far: a smaller default excursion
         break
-    sel = np.arange(len(model.coords))
-    tau = (y @ robot.parameters("paper")
+    sel = model.row_states
+    tau = ((y if robot.has_loops else y[:, model.coords]) @ robot.parameters("paper")
            + model.drives.regressor(dq[:, sel], ddq[:, sel], len(model.coords)) @ delta)
     tau = add_noise(tau, noise, rng) if noise > 0 else tau
     joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
+    if robot.floating:  # the base's coordinates first, its wrench not measured
+        joints, tau = BASE_COORDINATES + joints, np.concatenate([np.zeros((len(t), 6)), tau], axis=1)
     log = JointLog(t, joints, q, tau, dq=dq, source=f"simulated {robot.name}")
     theta = model.theta(robot.parameters("paper"), delta)
     truth = {"model": robot.name, "convention": convention, "noise": noise,

@@ -512,7 +512,7 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
         from .ident.pipeline import Identification
 
         result = Identification.load(result, robot)
-    return result.predict(_log_of(log, robot, columns, require_tau=False), smooth=not raw_states)
+    return result.predict(log, smooth=not raw_states, columns=columns)
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):

@@ -361,7 +361,7 @@ class Identification:
     series: dict | None = None
     options: dict | None = None
 
-    def predict(self, log, smooth: bool = True) -> np.ndarray:
+    def predict(self, log, smooth: bool = True, columns=None) -> np.ndarray:
         """Predicted joint torques at every sample of a log (its own time stamps).
 
         ``smooth`` (default): the model's torques on the log's states low-passed with the
@@ -376,11 +376,14 @@ class Identification:
 
         Parameters
         ----------
-        log : JointLog
-            ``S`` samples of the model's measured joints (``tau`` may be ``None``), e.g.
-            :func:`baseparams.io.logs.read_log` with ``require_tau=False``.
+        log : JointLog, str or path
+            ``S`` samples of the model's measured joints (``tau`` may be ``None``), or a log or
+            trajectory file (read for this robot by :func:`baseparams.io.logs.read_log`, ``tau``
+            columns optional).
         smooth : bool
             Filtered states (default), or the states as logged.
+        columns : str, path or dict, optional
+            A layout mapping for a log file (README "Log layout").
 
         Returns
         -------
@@ -393,6 +396,12 @@ class Identification:
         BaseparamsError
             A log missing a measured joint, too short or too slowly sampled for the cutoff.
         """
+        import os
+
+        if isinstance(log, (str, os.PathLike)):
+            from ..io.logs import read_log
+
+            log = read_log(log, self.model.robot, columns=columns, allow_subset=True, require_tau=False)
         return predict_log(self.fit, log, (self.options or {}).get("cutoff"), smooth)
 
     @property

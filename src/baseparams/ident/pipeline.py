@@ -351,6 +351,11 @@ class Identification:
         :meth:`load` rebuilds the model from: ``{"method", "convention", "rows", "rotor",
         "friction" (tuple), "coulomb_width", "couplings" (tuple of MotorCoupling), "cutoff" [Hz],
         "decimate", "min_speed"}``.
+    motion : dict, optional
+        ``{"condition_number", "samples"}``: the condition number of the training motion's model
+        regressor at the log's (filtered) states, unweighted, every sample, column-scaled: the
+        measure ``excite`` reports for a design (:func:`baseparams.ident.estimate.motion_factor`);
+        None when not computed (a streamed log).
     """
 
     fit: Fit
@@ -360,6 +365,7 @@ class Identification:
     notes: tuple[str, ...]
     series: dict | None = None
     options: dict | None = None
+    motion: dict | None = None
 
     def predict(self, log, smooth: bool = True, columns=None) -> np.ndarray:
         """Predicted joint torques at every sample of a log (its own time stamps).
@@ -465,7 +471,8 @@ class Identification:
                    f.name: (numbers(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), np.ndarray)
                             else list(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), tuple)
                             else getattr(phys, f.name)) for f in fields(phys)},
-               "samples": self.samples, "train": self.train, "validation": self.validation, "notes": list(self.notes)}
+               "samples": self.samples, "train": self.train, "validation": self.validation, "notes": list(self.notes),
+               "motion": self.motion}
         return _plain(doc)
 
     def save(self, path, inputs=(), what: str = "output"):
@@ -559,7 +566,7 @@ class Identification:
             phys = PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
                                       tuple(v) if k == "notes" else v) for k, v in p.items()})
         f = Fit(model, o.get("method", e["method"]), theta, est, phys)
-        return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o)
+        return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o, doc.get("motion"))
 
     @property
     def model(self) -> IdentModel:
@@ -713,11 +720,14 @@ class Identification:
         dict
             ``method, estimator, selection, covariance, model, convention, n_samples{read, used, removed},
             condition_number,
-            excitation{condition_number, weak, poorly_determined, all_excited}, base_parameters,
-            drives, couplings,
-            train, validation, physical, notes``; ``weak`` names the parameters carrying
-            directions whose singular value is below 1e-3 of the largest (column-scaled regressor);
-            ``covariance`` says how every ``std`` was computed.
+            excitation{condition_number, of, fitted_condition_number, weak, poorly_determined,
+            all_excited}, base_parameters, drives, couplings,
+            train, validation, physical, notes``; ``condition_number`` is the training motion's
+            (:attr:`motion`: the measure ``excite`` reports, ``of`` says ``"motion"``; ``"fitted
+            rows"`` when not computed), ``fitted_condition_number`` the fitted rows' (filtered,
+            decimated, weighted as fitted); ``weak`` names the parameters carrying directions whose
+            singular value is below 1e-3 of the largest (column-scaled fitted rows); ``covariance``
+            says how every ``std`` was computed.
         """
         f = self.fit
         phys = None
@@ -728,7 +738,8 @@ class Identification:
                     "solver_status": str(p.solver_status)}
         from .estimate import excitation
 
-        cond, weak = excitation(f.estimate.R11, self.model.names)
+        fitted, weak = excitation(f.estimate.R11, self.model.names)
+        cond = fitted if self.motion is None else float(self.motion["condition_number"])
         loose = poorly_determined(f.estimate, self.model.names)
         if phys is not None:
             phys["masses_moved"] = _masses_moved(self.model.robot, f.physical.masses)
@@ -738,8 +749,9 @@ class Identification:
         return {"method": f.method, "estimator": estimator, "selection": None if sel is None else sel.to_json(),
                 "covariance": f.estimate.covariance,
                 "model": self.model.robot.name, "convention": self.model.analysis.convention,
-                "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
-                "excitation": {"condition_number": cond, "weak": weak, "poorly_determined": loose,
+                "n_samples": self.samples, "condition_number": cond,
+                "excitation": {"condition_number": cond, "of": "fitted rows" if self.motion is None else "motion",
+                               "fitted_condition_number": fitted, "weak": weak, "poorly_determined": loose,
                                "all_excited": not weak and not loose},
                 "base_parameters": self.base_parameters(), "drives": self.drives(),
                 "couplings": self.couplings(), "train": self.train,
@@ -835,6 +847,7 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
               prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
               score_cutoff=None, covariance="hac", allow_units=False) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
+    from .estimate import excitation, motion_factor
     from .preprocess import prepare
 
     say = progress or (lambda msg: None)
@@ -876,7 +889,10 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed}
-    return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+    motion = {"condition_number": excitation(motion_factor(model, prep.full.q[:, cols], prep.full.dq[:, cols],
+                                                           prep.full.ddq[:, cols]), model.names)[0],
+              "samples": int(prep.full.n_samples)}
+    return Identification(f, samples, train_rms, val, tuple(notes), series, options, motion)
 
 
 def log_rows(robot: Robot) -> str:

@@ -150,7 +150,8 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     noise : float
         Standard deviation of the Gaussian torque noise [N m or N].
     seed : int
-        Seed of the trajectory, the drive parameters and the noise.
+        Seed of the drive parameters (drawn first: the same robot with or without ``trajectory``),
+        then of the trajectory and the noise.
     rotor : bool
         Include rotor inertias (the model's armature where it has one, else drawn in 0.01-0.1).
     friction : iterable of str
@@ -191,11 +192,11 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     ladder = [amplitude] if amplitude is not None or trajectory is not None else amplitude_ladder(robot)
     for k, amp in enumerate(ladder):
         rng = np.random.default_rng(seed)
+        delta = _draw_drives(model, rng)  # first: the same drives (the same robot) with or without a trajectory
         if trajectory is None:
             t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amp)
         else:
             t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
-        delta = _draw_drives(model, rng)
         try:
             y = regressor_of(robot, *robot_states(robot, q, dq, ddq))
         except BaseparamsError as exc:

@@ -202,6 +202,7 @@ def test_round_trip_design_gives_smaller_standard_deviations(panda):
 
 
 # ---------------------------------------------------------------- acceptance: a PKM
+@pytest.mark.slow  # 8-9 s on a quiet machine
 def test_pkm_stays_in_the_workspace_and_identifies_its_base_parameters():
     robot = baseparams.load("pkm-2rru-1rrs")
     analysis = baseparams.analyze(robot)
@@ -322,6 +323,7 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys):
 
 
 @pytest.mark.shared
+@pytest.mark.slow  # 8-44 s (two Panda designs); the UR5 keep-out tests below run by default
 def test_keepout_keeps_a_link_above_the_floor():
     """A floor plane for the Panda's last link: the free design dips lower; with the keep-out every
     sample at the controller's rate stays above it, and the criterion stays good."""

@@ -126,8 +126,9 @@ def test_base_columns_bad_input_is_one_line(tmp_path):
     no_base = JointLog(log.t, log.joints[6:], log.q[:, 6:], log.tau[:, 6:], dq=log.dq[:, 6:])
     with pytest.raises(BaseparamsError, match=r"has a floating base and the log has no base pose"):
         bp.identify(robot, no_base)
-    with pytest.raises(BaseparamsError, match=r"floating base's motion is not in a trajectory file"):
-        bp.simulate(robot, (log.t, log.q, log.dq, log.dq))
+    for trajectory in ((log.t, log.q, log.dq, log.dq), tmp_path / "log.csv"):
+        with pytest.raises(BaseparamsError, match=r"floating base's motion is not in a trajectory file"):
+            bp.simulate(robot, trajectory)
     with pytest.raises(BaseparamsError, match=r"sub-chains \(--joints\) of a floating base"):
         bp.identify(robot, log, joints="FL_hip_joint")
 

@@ -210,8 +210,8 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     noise : float
         Standard deviation of the Gaussian torque noise [N m], ``>= 0``.
     seed : int
-        Seed of the drive parameters (drawn first: the same with and without ``trajectory``), then
-        of the trajectory and the noise.
+        Seed of the trajectory, the drive parameters (the same with and without ``trajectory``) and
+        the noise.
     rotor : bool
         Rotor inertias (the model's armature, else drawn).
     friction : str or iterable of str
@@ -269,6 +269,9 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
 
 def _trajectory_of(robot: Robot, trajectory):
     """A trajectory given as a file, an Excitation or arrays, as ``(t, q, dq, ddq)`` arrays (or None)."""
+    from .ident.simulate import check_trajectory
+
+    check_trajectory(robot, trajectory)
     if isinstance(trajectory, (str, os.PathLike)):
         from .excitation import read_trajectory
 

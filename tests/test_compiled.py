@@ -181,3 +181,37 @@ def test_base_regressor_predicts_the_torques(name, rows, rng):
         yb = result.base_regressor(q, dq, ddq, backend=backend)
         assert yb.shape == (q.shape[0], int(mask.sum()), result.n_base)
         assert np.abs(yb @ beta - tau).max() <= 1e-9 * np.abs(tau).max()
+
+
+def test_will_compile_reads_numbas_disk_cache(tmp_path):
+    """A fresh cached kernel will compile; once compiled (in memory, or on disk for a new process) it will not."""
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "tiny_kernel.py").write_text("from numba import njit\n\n@njit(cache=True)\ndef f(x):\n"
+                                             "    return x + 1\n")
+    script = (f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import tiny_kernel as t\n"
+              "from baseparams.regressor.compiled import will_compile\n"
+              "before = will_compile(t.f); t.f(1.0); print(before, will_compile(t.f))\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    first = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True)
+    again = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True)
+    assert first.stdout.split() == ["True", "False"]  # nothing cached; then compiled in memory
+    assert again.stdout.split() == ["False", "False"]  # the disk cache holds it now
+
+
+def test_a_kernel_that_will_compile_is_announced_once(monkeypatch, capsys):
+    """The first-run compile (~20 s) is said in one line on stderr, once per kernel and process."""
+    calls = []
+    monkeypatch.setattr(compiled, "_kernels", lambda: type("K", (), {"tree": staticmethod(calls.append)}))
+    monkeypatch.setattr(compiled, "_announced", set())
+    monkeypatch.setattr(compiled, "will_compile", lambda fn: True)
+    compiled._kernel("tree")(1)
+    compiled._kernel("tree")(2)
+    err = capsys.readouterr().err
+    assert err.count("compiling the regressor kernel tree once (about 20 s)") == 1 and calls == [1, 2]
+    monkeypatch.setattr(compiled, "_announced", set())
+    monkeypatch.setattr(compiled, "will_compile", lambda fn: False)
+    compiled._kernel("tree")(3)
+    assert capsys.readouterr().err == ""

@@ -261,3 +261,47 @@ def test_mjcf_equality_joint_gripper_completes_geometrically(tmp_path):
     cert = certify(robot, seed=0, result=res)
     assert cert.certified and cert.completed == 0, cert.message
     assert cert.nullity == 27 and res.by_principle()[Source.R_M.label] == 3
+
+
+MIMIC_ARM = """<?xml version="1.0"?>
+<robot name="mimic_arm">
+  <link name="base"/>
+  <link name="upper"><inertial><mass value="2"/><origin xyz="0.2 0 0"/>
+    <inertia ixx="0.01" iyy="0.05" izz="0.05" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="lower"><inertial><mass value="1"/><origin xyz="0.15 0 0"/>
+    <inertia ixx="0.01" iyy="0.03" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="finger_a"><inertial><mass value="0.1"/><origin xyz="0.02 0.01 0"/>
+    <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="finger_b"><inertial><mass value="0.1"/><origin xyz="0.02 -0.01 0"/>
+    <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" velocity="2" effort="50"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="lower"/><origin xyz="0.4 0 0"/>
+    <axis xyz="0 1 0"/><limit lower="0.3" upper="2.5" velocity="2" effort="30"/></joint>
+  <joint name="grip_a" type="prismatic"><parent link="lower"/><child link="finger_a"/><origin xyz="0.3 0 0"/>
+    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" velocity="0.2" effort="20"/></joint>
+  <joint name="grip_b" type="prismatic"><parent link="lower"/><child link="finger_b"/><origin xyz="0.3 0 0"/>
+    <axis xyz="0 -1 0"/><limit lower="0" upper="0.04" velocity="0.2" effort="20"/>
+    <mimic joint="grip_a" multiplier="1" offset="0"/></joint>
+</robot>
+"""
+
+
+def test_a_mimic_only_robot_is_not_described_with_loop_words(tmp_path, capsys):
+    """A gripper's <mimic> (no loop joint): the reports say coupled joints, never loops; ``excite`` designs it
+    although q = 0 is outside the elbow's range (a loop robot's reference must be inside; a linear coupling
+    holds anywhere), and the fingers are excited (offsets inside the finger's range, not at its edge)."""
+    from baseparams.cli import main
+
+    urdf = tmp_path / "mimic_arm.urdf"
+    urdf.write_text(MIMIC_ARM)
+    assert main(["analyze", str(urdf)]) == 0
+    out = capsys.readouterr().out
+    assert "1 coupled joints (linear couplings), 3 actuated" in out and "coupled joints: " in out
+    assert "loop joints" not in out and "loop sampling" not in out and "loop residual" not in out
+    assert main(["excite", str(urdf), "--starts", "1", "--harmonics", "3", "--grid", "60", "--rate", "100"]) == 0
+    out = capsys.readouterr().out
+    assert "coupled joints: designed in the actuated coordinates" in out and "loop" not in out.lower()
+    assert main(["simulate", str(urdf), str(tmp_path / "log.csv"), "--duration", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "coupled joints' sampling box" in out and "loops" not in out

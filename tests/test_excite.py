@@ -202,6 +202,7 @@ def test_round_trip_design_gives_smaller_standard_deviations(panda):
 
 
 # ---------------------------------------------------------------- acceptance: a PKM
+@pytest.mark.slow  # 8-9 s on a quiet machine
 def test_pkm_stays_in_the_workspace_and_identifies_its_base_parameters():
     robot = baseparams.load("pkm-2rru-1rrs")
     analysis = baseparams.analyze(robot)
@@ -322,6 +323,7 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys):
 
 
 @pytest.mark.shared
+@pytest.mark.slow  # 8-44 s (two Panda designs); the UR5 keep-out tests below run by default
 def test_keepout_keeps_a_link_above_the_floor():
     """A floor plane for the Panda's last link: the free design dips lower; with the keep-out every
     sample at the controller's rate stays above it, and the criterion stays good."""
@@ -338,10 +340,86 @@ def test_keepout_keeps_a_link_above_the_floor():
     ex = design_excitation(robot, base_frequency=PANDA_F, starts=1, seed=0, keepout=(link, floor))
     assert lowest(ex) >= floor - 1e-9 and ex.condition_number < 10
     assert any("keep-out" in n for n in ex.notes)
-    with pytest.raises(BaseparamsError, match="already below the keep-out height"):
+    with pytest.raises(BaseparamsError, match=rf"the keep-out binds: at rest anywhere .*{link}.* below z = 5 m"):
         design_excitation(robot, starts=1, keepout=(link, 5.0))
     with pytest.raises(BaseparamsError, match="no link 'nope'"):
         design_excitation(robot, starts=1, keepout=("nope", 0.0))
+
+
+def _ur5():
+    from erd import ROOT
+
+    path = ROOT / "ur_description" / "urdf" / "ur5_robot.urdf"
+    if not path.is_file():
+        pytest.skip("example-robot-data's UR5 is not installed")
+    return path
+
+
+def _pinocchio_heights(urdf, q, frames):
+    """World z of each frame's origin at every sample ``q (S, nq)``, by Pinocchio's own forward kinematics."""
+    import pinocchio as pin
+
+    model = pin.buildModelFromUrdf(str(urdf))
+    data = model.createData()
+    out = np.empty((len(q), len(frames)))
+    ids = [model.getFrameId(f) for f in frames]
+    for k, qq in enumerate(q):
+        pin.framesForwardKinematics(model, data, qq)
+        out[k] = [data.oMf[i].translation[2] for i in ids]
+    return out
+
+
+def test_ur5_keepout_holds_at_every_sample_where_q_0_is_below(tmp_path, capsys):
+    """Issue 38's acceptance: the UR5 lies flat at q = 0 with its wrist 5 mm below the table's 5 cm, so the
+    keep-out is not decided there; ``excite --keepout wrist_3_link:0.05`` exits 0 and the link's origin stays
+    at or above 0.05 m at every sample of the trajectory written, by Pinocchio's forward kinematics."""
+    urdf = _ur5()
+    assert _pinocchio_heights(urdf, np.zeros((1, 6)), ["wrist_3_link"])[0, 0] < 0.05
+    out = tmp_path / "traj.csv"
+    code = main(["excite", str(urdf), "--keepout", "wrist_3_link:0.05", "--starts", "1", "--harmonics", "3",
+                 "--grid", "100", "--rate", "200", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "self-collision are not checked" in captured.out
+    _, q, _, _ = read_trajectory(out, baseparams.load(str(urdf)))
+    assert len(q) == 2001 and _pinocchio_heights(urdf, q, ["wrist_3_link"]).min() >= 0.05 - 1e-9
+
+
+def test_several_links_kept_out_and_limits_from_the_command_line(tmp_path, capsys):
+    """``--keepout`` repeated holds for every link named (the elbow too, which a wrist-only keep-out let
+    dip under the table); ``--position``/``--velocity``/``--acceleration`` per joint or for all are the
+    limits every sample keeps."""
+    urdf = _ur5()
+    links = ["forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link"]
+    out = tmp_path / "traj.csv"
+    argv = ["excite", str(urdf), *(x for f in links for x in ("--keepout", f"{f}:0.05")), "--starts", "1",
+            "--harmonics", "3", "--grid", "100", "--rate", "200", "--out", str(out), "--json",
+            "--position=shoulder_pan_joint=-0.5:0.5,elbow_joint=-2:2", "--velocity", "2.5",
+            "--acceleration", "8,8,8,9,9,9"]
+    code = main(argv)
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    doc = json.loads(captured.out)
+    _, q, dq, ddq = read_trajectory(out, baseparams.load(str(urdf)))
+    assert _pinocchio_heights(urdf, q, links).min() >= 0.05 - 1e-9
+    assert q[:, 0].min() >= -0.5 - 1e-9 and q[:, 0].max() <= 0.5 + 1e-9 and np.abs(q[:, 2]).max() <= 2 + 1e-9
+    assert np.abs(dq).max() <= 2.5 + 1e-9 and np.all(np.abs(ddq).max(axis=0) <= np.array([8, 8, 8, 9, 9, 9]) + 1e-9)
+    assert doc["condition_number"] < 1e3
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--velocity", "fast"], "--velocity: expected a number per item, got 'fast'"),
+    (["--position", "1"], "--position: expected LO:HI per item"),
+    (["--velocity", "joint1=1,2"], "--velocity: give every item as JOINT=VALUE or none"),
+    (["--velocity", "nope=1"], "velocity limit for 'nope': not a designed joint of 'puma560'"),
+    (["--acceleration", "1,2"], "acceleration limit: expected a number for every joint or one per designed joint (6"),
+    (["--keepout", "link6"], "--keepout expects LINK:Z"),
+    (["--keepout", "link6:0.1", "--keepout", "link6:0.2"], "a link named twice"),
+])
+def test_excite_limit_flags_bad_input_is_one_line(argv, words, capsys):
+    assert main(["excite", "puma560", "--starts", "1", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err
 
 
 # ---------------------------------------------------------------- issue 29: the README example, binding constraints

@@ -111,6 +111,7 @@ def test_pooled_default_cross_validates_over_the_logs(fleet, client):
         assert "prior" in res.pooled.estimate.covariance
 
 
+@pytest.mark.slow  # 9-25 s: a Dask worker started and killed
 def test_a_worker_killed_mid_run_loses_nothing(fleet):
     """Kill one of two worker processes while the fleet runs: Dask reruns its tasks elsewhere."""
     robot, model, paths = fleet

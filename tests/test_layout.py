@@ -32,6 +32,7 @@ LAYERS = {
     "ident.model": 10.2, "ident.pipeline": 10.4, "ident.stream": 10.5, "ident.simulate": 10.4, "ident.report": 10.6,
     "symbolic": 11,
     "report": 12, "fleet": 12, "excitation": 12,
+    "workflow": 12.5,
     "cli": 13,
     "__main__": 14, "__init__": 14,
 }

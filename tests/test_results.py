@@ -49,6 +49,20 @@ def test_round_trip_gives_identical_predictions(puma, exact, ident, tmp_path):
     assert back.to_json() == ident.to_json()  # every table, statistic and note read back
 
 
+@pytest.mark.parametrize("name", ["puma560", "go2"])
+def test_a_loaded_result_predicts_a_log_file_as_bp_predict_does(name, tmp_path):
+    """``Identification.load(f, robot).predict("log.csv")``: a path, as ``bp.predict`` takes (floating base too)."""
+    robot = baseparams.load(name)
+    log, _ = baseparams.simulate(robot, duration=6, rate=200, seed=2, out=tmp_path / "log.csv")
+    baseparams.identify(robot, log, method="ols", save=tmp_path / "res.json")
+    back = Identification.load(tmp_path / "res.json", robot)
+    by_path = back.predict(str(tmp_path / "log.csv"))
+    assert by_path.shape == (log.n_samples, log.n_joints)
+    assert np.array_equal(by_path, back.predict(read_log(tmp_path / "log.csv", robot)))
+    assert np.array_equal(by_path, baseparams.predict(robot, tmp_path / "res.json", tmp_path / "log.csv"))
+    assert np.sqrt(np.mean((by_path - log.tau[:, -log.n_joints:]) ** 2)) < 1e-2 * np.sqrt(np.mean(log.tau**2))
+
+
 def test_load_refuses_another_robot_and_another_version(ident, tmp_path):
     path = ident.save(tmp_path / "res.json")
     other = baseparams.load("go2")

@@ -188,6 +188,19 @@ def test_missing_values_are_named():
         r.to_robot()
 
 
+@pytest.mark.parametrize("suffix", [".urdf", ".xml", ".xacro"])
+def test_a_robot_file_is_not_read_as_a_dh_table(suffix, tmp_path, capsys):
+    """``analyze robot.urdf --symbolic``: one line saying what --symbolic takes, not a DH-table parse error."""
+    f = tmp_path / f"robot{suffix}"
+    f.write_text("<?xml version='1.0'?>\n<robot name='r'><link name='a'/></robot>\n")
+    assert main(["analyze", str(f), "--symbolic"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a robot file has numbers, not symbols" in err[0]
+    assert "DH table (.dh" in err[0] and "puma560-symbolic" in err[0] and "without --symbolic" in err[0]
+    with pytest.raises(ModelError, match="a robot file has numbers, not symbols"):
+        baseparams.analyze_symbolic(f)
+
+
 def test_cli_symbolic_json_latex_and_codegen(tmp_path, capsys):
     assert main(["analyze", "puma560-symbolic", "--symbolic", "--json"]) == 0
     j = json.loads(capsys.readouterr().out)

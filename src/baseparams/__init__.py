@@ -53,9 +53,10 @@ imported on first use: ``baseparams.robots``, ``baseparams.io`` (readers, URDF e
 Pinocchio interop), ``baseparams.nullspace`` (DRNG, certification), ``baseparams.base``
 (regrouping), ``baseparams.numerics``, ``baseparams.pga``, ``baseparams.kinematics``,
 ``baseparams.model``, ``baseparams.symbolic`` (``SymbolicBuilder``, DH tables),
-``baseparams.ident`` (the identification's building blocks: ``ident_model``, ``accumulate``,
-``fit``), ``baseparams.excitation`` (the excitation designer's parts), ``baseparams.fleet``
-(many logs on Dask). ``dir(baseparams)`` lists these and the names above. The name
+``baseparams.ident`` (the identification's building blocks:
+``baseparams.ident.model.ident_model``, ``baseparams.ident.pipeline.accumulate`` and ``fit``),
+``baseparams.excitation`` (the excitation designer's parts), ``baseparams.fleet`` (many logs on
+Dask). ``dir(baseparams)`` lists these and the names above. The name
 ``baseparams.regressor`` is the function above; the subpackage of the same name is imported as
 usual (``from baseparams.regressor import regressor_tensor``).
 """
@@ -71,8 +72,16 @@ __version__ = "0.1.0"
 # the subpackage first: importing it later would rebind ``baseparams.regressor`` to the module
 from . import regressor as _regressor_pkg  # noqa: F401  (numpy only)
 from .analysis import Analysis, analyze, regressor
-from .errors import BaseparamsError, ModelError
+from .errors import BaseparamsError, ModelError, ModelWarning
 from .model import CONVENTIONS, Inertia, Robot, RobotBuilder, pose
+
+# excite and simulate (and the helpers identify and predict share with them) have one
+# implementation, baseparams.workflow: also the CLI's
+from .workflow import FRICTION as _FRICTION
+from .workflow import excite, simulate
+from .workflow import friction_of as _friction_of
+from .workflow import input_files as _files
+from .workflow import robot_of as _robot_of
 
 __all__ = [
     "CONVENTIONS",
@@ -100,15 +109,6 @@ __all__ = [
 #: the documented subpackages, imported on first use (``dir(baseparams)`` shows these and ``__all__``)
 _SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "excitation", "fleet", "ident", "io", "kinematics",
                "model", "nullspace", "numerics", "pga", "robots", "symbolic")
-
-
-class ModelWarning(UserWarning):
-    """A note about a loaded model that does not stop the analysis.
-
-    A physically infeasible inertia (the base-parameter structure does not depend on the
-    values), a loop robot assembled or re-referenced because the file's q = 0 is not assembled
-    (or is singular), or a warning of the file's reader.
-    """
 
 
 def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False,
@@ -173,33 +173,6 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
 # ---------------------------------------------------------------- the whole loop: excite, simulate, identify, predict
 #: the classes of the loop's results, imported on first use (``baseparams.Identification``)
 _LAZY = {"Excitation": "excitation.result", "Identification": "ident.pipeline"}
-#: the default friction terms of ``simulate`` and ``identify`` (the CLI's ``--friction``)
-_FRICTION = ("viscous", "coulomb", "offset")
-
-
-def _robot_of(model, what: str) -> Robot:
-    """``model`` as a Robot: a Robot, an Analysis's robot, or a built-in name / robot file (:func:`load`)."""
-    if isinstance(model, Robot):
-        return model
-    if isinstance(model, Analysis):
-        return model.robot
-    if isinstance(model, (str, _os.PathLike)):
-        return load(model)
-    raise BaseparamsError(f"{what}: model must be a Robot, an Analysis, a built-in name or a robot file, "
-                          f"got {type(model).__name__}")
-
-
-def _files(*items) -> list[str]:
-    """The items that are existing files (the run's inputs, which outputs must not overwrite)."""
-    return [_os.fspath(x) for x in items if isinstance(x, (str, _os.PathLike)) and _os.path.isfile(x)]
-
-
-def _friction_of(friction) -> tuple[str, ...]:
-    """``"viscous,coulomb"``, ``"none"`` or an iterable of names, as a tuple."""
-    if isinstance(friction, str):
-        return () if friction.strip().lower() in ("", "none") else tuple(x.strip() for x in friction.split(",")
-                                                                         if x.strip())
-    return tuple(friction)
 
 
 def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False):
@@ -231,155 +204,6 @@ def _identification_logs(robot: Robot, log, validate, columns, joints, weld):
     return log, val, small
 
 
-def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequency: float | None = None,
-           rate: float = 1000.0, criterion: str = "cond", drives: bool = False, rotor: bool = False,
-           acceleration=None, torque: bool = False, keepout: tuple[str, float] | None = None, margin: float = 0.0,
-           starts: int = 4, grid: int = 200, seed: int = 0, analysis_samples: int | None = None, limits=None,
-           max_iter: int = 150, out=None, progress=None):
-    """Design an excitation trajectory: ``baseparams excite`` (:mod:`baseparams.excitation`).
-
-    A finite Fourier series per designed coordinate, at rest at both ends, within the model's joint
-    limits, optimised for the condition number of the identification regressor (or D-optimality).
-
-    Parameters
-    ----------
-    model : Robot, Analysis, str or path
-        The robot (a built-in name or a robot file is loaded; its joint limits are the file's).
-    harmonics, rate, criterion, drives, rotor, torque, margin, starts, grid, seed
-        As the CLI's flags (:func:`baseparams.excitation.design_excitation`): harmonics per joint,
-        the controller's rate [Hz], ``cond`` or ``logdet``, friction (and rotor) columns, the
-        model's own torques within the effort limits, the fraction of each position range kept
-        free, random starts, design-grid samples per period, the starts' seed.
-    period, base_frequency : float, optional
-        The period [s] or its inverse [Hz] (one of them; default 10 s).
-    acceleration : float or array_like, shape ``(m,)``, optional
-        Acceleration limit(s) [rad/s^2].
-    keepout : tuple of (str, float), optional
-        ``(link, z_min)``: the link's frame origin stays at or above ``z_min`` [m, world z].
-    analysis_samples : int, optional
-        Random states of the base-parameter analysis the model is built on.
-    limits : array_like, shape ``(m, 4)``, optional
-        ``[lower, upper, velocity, effort]`` per designed coordinate, overriding the model's.
-    max_iter : int
-        SLSQP iterations per start (Python only).
-    out : str or path, optional
-        Also write the trajectory there (``.csv``/``.tsv``: ``t, q_, dq_, ddq_``; checked before the
-        design, written atomically).
-    progress : callable, optional
-        Called with one line of text per start.
-
-    Returns
-    -------
-    Excitation
-        The trajectory at ``rate`` over one period (``.trajectory``, ``.save(path)``, ``.summary()``):
-        what :func:`simulate` and a robot controller take.
-
-    Raises
-    ------
-    BaseparamsError
-        Bad options or model, infeasible limits (naming the constraint that binds), an output
-        that cannot be written.
-    """
-    from .excitation import design_excitation
-
-    if period is not None and base_frequency is not None:
-        raise BaseparamsError("excite: give period or base_frequency, not both")
-    if period is not None and not period > 0:
-        raise BaseparamsError(f"excite: period must be > 0 seconds, got {period}")
-    robot = _robot_of(model, "excite")
-    if out is not None:
-        from .files import check_output
-
-        check_output(out, _files(model), "out")
-    target = model if isinstance(model, Analysis) and analysis_samples is None else robot
-    if analysis_samples is not None:
-        target = analyze(robot, samples=analysis_samples, seed=seed)
-    f = 1.0 / period if period is not None else (0.1 if base_frequency is None else base_frequency)
-    result = design_excitation(target, harmonics=harmonics, base_frequency=f, rate=rate, criterion=criterion,
-                               drives=drives, rotor=rotor, limits=limits, acceleration=acceleration, torque=torque,
-                               starts=starts, seed=seed, grid=grid, max_iter=max_iter, keepout=keepout, margin=margin,
-                               progress=progress)
-    if out is not None:
-        result.save(out, _files(model), "out")
-    return result
-
-
-def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
-             noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=_FRICTION, convention: str = "khalil",
-             analysis_samples: int | None = None, out=None):
-    """A synthetic joint log with known parameters: ``baseparams simulate`` (record, without a robot).
-
-    Parameters
-    ----------
-    model : Robot, Analysis, str or path
-        The robot (fixed base); its own inertias are the true parameters.
-    trajectory : Excitation, str, path or tuple, optional
-        The motion: a designed :class:`Excitation`, its file (``excite --out``) or ``(t (S,), q,
-        dq, ddq (S, m))``; default a random Fourier series (``duration``, ``rate``, ``amplitude``).
-    duration, rate : float
-        Without ``trajectory``: length [s] and sampling rate [Hz].
-    amplitude : float, optional
-        Without ``trajectory``: joint excursion [rad or m] (default 0.5, within a loop robot's
-        sampling box).
-    noise : float
-        Standard deviation of the Gaussian torque noise [N m], ``>= 0``.
-    seed : int
-        Seed of the trajectory, the drive parameters and the noise.
-    rotor : bool
-        Rotor inertias (the model's armature, else drawn).
-    friction : str or iterable of str
-        ``"viscous,coulomb,offset"`` (default), any of them, or ``"none"``.
-    convention : str
-        Convention of the true base parameters.
-    analysis_samples : int, optional
-        Random states of the base-parameter analysis.
-    out : str or path, optional
-        Also write the log there (``.csv``, ``.tsv`` or ``.npz``) and the truth to ``OUT.truth.json``,
-        as the CLI does (atomically, never onto an input).
-
-    Returns
-    -------
-    log : JointLog
-        ``t``, ``q``, ``dq``, ``tau`` of the measured joints (what :func:`identify` takes).
-    truth : dict
-        ``{"model", "convention", "noise", "parameters": [{"name", "value"}], "drives"}``
-        (``Identification.compare_truth(truth)``).
-
-    Raises
-    ------
-    BaseparamsError
-        A floating base, bad options, loops the trajectory does not close, an unwritable output.
-    """
-    from .ident.simulate import simulate_log
-
-    robot = _robot_of(model, "simulate")
-    if not noise >= 0:
-        raise BaseparamsError(f"simulate: noise is a standard deviation [N m], >= 0; got {noise}")
-    inputs = _files(model, trajectory)
-    if out is not None:
-        from .files import check_output
-
-        check_output(out, inputs, "out")
-    if isinstance(trajectory, (str, _os.PathLike)):
-        from .excitation import read_trajectory
-
-        trajectory = read_trajectory(trajectory, robot)
-    trajectory = getattr(trajectory, "trajectory", trajectory)  # an Excitation's samples
-    log, truth = simulate_log(robot, duration=duration, rate=rate, amplitude=amplitude, noise=noise, seed=seed,
-                              rotor=rotor, friction=_friction_of(friction), convention=convention,
-                              trajectory=trajectory, samples=analysis_samples)
-    if out is not None:
-        import json
-
-        from .files import atomic_path, write_text
-        from .io.logs import write_log
-
-        with atomic_path(out, inputs, "out") as tmp:
-            write_log(tmp, log)
-        write_text(_os.fspath(out) + ".truth.json", json.dumps(truth, indent=2) + "\n", inputs, "out")
-    return log, truth
-
-
 def identify(model, log, *, validate=None, holdout: float | None = None, method: str = "auto",
              friction=_FRICTION, rotor: bool = False, coulomb_width: float | None = None, couplings=(),
              cutoff: float | None = None, decimate: int | None = None, min_speed: float | None = None,
@@ -391,7 +215,8 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     Parameters
     ----------
     model : Robot, Analysis, str or path
-        The robot the log was recorded on (fixed base; loops closed by the actuated joints).
+        The robot the log was recorded on (a floating base's pose in the log; loops closed by the
+        actuated joints).
     log : JointLog, str or path
         The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
     validate : JointLog, str or path, optional
@@ -443,7 +268,7 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     Raises
     ------
     BaseparamsError
-        A floating base, bad data, options or output, data that do not excite the model.
+        Bad data (a floating base without its pose), options or output, data that do not excite the model.
     """
     from .ident.drives import MotorCoupling
     from .ident.pipeline import identify as run
@@ -509,7 +334,7 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
         from .ident.pipeline import Identification
 
         result = Identification.load(result, robot)
-    return result.predict(_log_of(log, robot, columns, require_tau=False), smooth=not raw_states)
+    return result.predict(log, smooth=not raw_states, columns=columns)
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):

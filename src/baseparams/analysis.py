@@ -797,7 +797,8 @@ def format_report(a: Analysis) -> str:
     from .model import inertia as _inertia
 
     r, c, j = a.robot, a.certificate, a.to_json()
-    loops = f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else ""
+    loops = (f", {len(r.couplings)} coupled joints (linear couplings), {len(r.actuated)} actuated" if r.only_couplings
+             else f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else "")
     out = [(f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
             f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
@@ -819,7 +820,10 @@ def format_report(a: Analysis) -> str:
         out.append("  geometric span complete: " + ("yes" if c.status == Status.CERTIFIED else "no"))
         out.append(f"numerical method: {nm.samples} samples, rank {nm.rank}, nullity {nm.nullity}, "
                    f"tolerance {nm.tol:.3g}, singular-value gap {nm.gap:.3g}, {nm.seconds * 1e3:.1f} ms")
-        if r.has_loops and c.sampling:
+        if r.only_couplings and c.sampling:
+            out.append(f"  coupled joints: {c.sampling['requested']} samples of the actuated coordinates, the coupled "
+                       f"ones set by their couplings (linear: none discarded)")
+        elif r.has_loops and c.sampling:
             sm = c.sampling
             out.append(f"  loop sampling: {sm['kept']} of {sm['requested']} actuated samples kept "
                        f"({sm['not_converged']} outside the workspace, {sm['branch_jumps']} off the reference branch "

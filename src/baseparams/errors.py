@@ -19,3 +19,12 @@ class NoMovingBodiesError(ModelError):
 
 class DataError(BaseparamsError, ValueError):
     """Bad measured data: a log file or array (names the file, column, row and the problem)."""
+
+
+class ModelWarning(UserWarning):
+    """A note about a loaded model that does not stop the analysis.
+
+    A physically infeasible inertia (the base-parameter structure does not depend on the
+    values), a loop robot assembled or re-referenced because the file's q = 0 is not assembled
+    (or is singular), or a warning of the file's reader.
+    """

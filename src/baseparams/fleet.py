@@ -214,9 +214,12 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
     Raises
     ------
     BaseparamsError
-        No file, no usable log (every one skipped), neither ``per_file`` nor ``pooled``, or dask
-        missing (names the extra).
+        No file, no usable log (every one skipped), neither ``per_file`` nor ``pooled``, dask
+        missing (names the extra), or a floating base.
     """
+    if model.robot.floating:
+        raise BaseparamsError(f"robot {model.robot.name!r}: fleets of a floating base are not supported yet; identify "
+                              "each log on its own (baseparams identify MODEL LOG)")
     paths = [str(p) for p in paths]
     if not paths:
         raise BaseparamsError("no log file to identify")
@@ -399,7 +402,7 @@ class _client:
 
 def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: float = 1000.0, noise: float = 0.05,
                    spread: float = 0.1, seed: int = 0, friction=("viscous", "coulomb", "offset"),
-                   suffix: str = ".npz") -> list[Path]:
+                   suffix: str = ".npz", **simulate) -> list[Path]:
     """Write one synthetic log per robot of a fleet, each with its own known parameters.
 
     Robot ``k``'s bodies have their masses and inertias scaled by ``1 + spread u`` (``u``
@@ -425,6 +428,9 @@ def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: flo
         Friction terms simulated.
     suffix : str
         ``.npz`` or ``.csv``.
+    **simulate
+        Passed to :func:`~baseparams.ident.simulate.simulate_log` for every robot (``amplitude``,
+        ``rotor``, ``convention``, ``trajectory``, ``samples``).
 
     Returns
     -------
@@ -446,7 +452,7 @@ def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: flo
         scale = 1.0 + spread * rng.uniform(-1.0, 1.0, robot.n)
         variant = replace(robot, N_body=robot.N_body * scale[:, None, None])  # a positive scale keeps N_i PSD
         log, truth = simulate_log(variant, duration=duration, rate=rate, noise=noise, seed=seed * 100003 + k,
-                                  friction=friction)
+                                  friction=friction, **simulate)
         path = out / f"robot{k:04d}{suffix}"
         write_log(path, log)
         write_text(path.with_name(path.name + ".truth.json"), json.dumps(truth), what="truth")

@@ -597,11 +597,17 @@ def _excite_parser(sub, model_args) -> None:
                         "log det of the information matrix (D-optimal: smaller standard deviations under noise)")
     s.add_argument("--drives", action="store_true", help="include the friction columns (viscous, Coulomb, offset)")
     s.add_argument("--rotor", action="store_true", help="with --drives: the rotor inertia columns too")
-    s.add_argument("--acceleration", metavar="A[,A...]",
-                   help="acceleration limit(s) in rad/s^2 (one for all joints, or one per designed joint)")
+    lim = s.add_argument_group("limits (each: one value for every joint, one per designed joint in order, or "
+                               "JOINT=VALUE,...; the model file's where not given)")
+    lim.add_argument("--position", metavar="LO:HI[,...]",
+                     help="position limits in rad or m (a value starting with '-' after '=': --position=-1.5:1.5)")
+    lim.add_argument("--velocity", metavar="V[,...]", help="velocity limits in rad/s or m/s")
+    lim.add_argument("--acceleration", metavar="A[,...]", help="acceleration limits in rad/s^2 or m/s^2 (default none)")
+    lim.add_argument("--effort", metavar="E[,...]", help="effort limits in N m or N (with --torque)")
     s.add_argument("--torque", action="store_true", help="keep the model's own torques within the effort limits")
-    s.add_argument("--keepout", metavar="LINK:Z", help="keep LINK's frame origin at or above the height Z [m, world z] "
-                                                        "(a floor or a table)")
+    s.add_argument("--keepout", metavar="LINK:Z", action="append",
+                   help="keep LINK's frame origin at or above the height Z [m, world z] at every sample (a floor or a "
+                        "table; repeatable, one per link; link geometry and self-collision are not checked)")
     s.add_argument("--margin", type=float, default=0.0, metavar="FRACTION",
                    help="keep this fraction of each joint's position range free at both ends (0.05: 5 %% of the "
                         "range from each limit; default 0)")
@@ -721,10 +727,9 @@ def _check_flags(args) -> None:
     if args.command == "identify" and args.mjcf:
         _check_mjcf_flags(args)
     if args.command == "excite":
-        from .excite import parse_acceleration, parse_keepout
+        from .excite import limit_flags
 
-        parse_keepout(args.keepout)
-        parse_acceleration(args.acceleration)
+        limit_flags(args)  # the syntax of the limit flags, before the model is loaded
         if args.period is not None and not args.period > 0:
             raise BaseparamsError(f"--period must be > 0 seconds, got {args.period}")
         if not 0.0 <= args.margin < 0.5:

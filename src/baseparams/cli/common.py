@@ -231,7 +231,9 @@ def friction_terms(text: str) -> tuple[str, ...]:
     tuple of str
         The friction terms (empty for ``none``).
     """
-    return () if text.strip().lower() in ("", "none") else tuple(x.strip() for x in text.split(",") if x.strip())
+    from ..workflow import friction_of
+
+    return friction_of(text)
 
 
 def write_html(path: str, page: str, inputs=()) -> None:

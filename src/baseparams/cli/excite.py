@@ -1,4 +1,4 @@
-"""``baseparams excite``: design an excitation trajectory, and its options' parsers.
+"""``baseparams excite``: its flags parsed into :func:`baseparams.workflow.excite`'s keywords, the summary printed.
 
 Imported by :func:`baseparams.cli.main` only when the command runs.
 """
@@ -10,55 +10,107 @@ import sys
 
 from ..errors import BaseparamsError, NoMovingBodiesError
 from . import common
-from .common import EXIT_OK, emit, write_output
+from .common import EXIT_OK, emit
 
 
-def parse_keepout(text: str | None):
-    """``--keepout LINK:Z`` as ``(link, z)``, or None.
+def parse_keepout(texts):
+    """``--keepout LINK:Z`` (repeatable) as a list of ``(link, z)``, or None.
+
+    Parameters
+    ----------
+    texts : str, list of str or None
+        The option's values.
+
+    Returns
+    -------
+    list of tuple or None
+        ``[(link, z), ...]``, or None without the option.
+    """
+    if not texts:
+        return None
+    out = []
+    for text in [texts] if isinstance(texts, str) else texts:
+        link, sep, z = text.rpartition(":")
+        try:
+            out.append((link, float(z)) if sep and link else float("x"))
+        except ValueError:
+            raise BaseparamsError(f"--keepout expects LINK:Z (e.g. panda_link7:0.3), got {text!r}") from None
+    return out
+
+
+def _number(text: str, flag: str, pair: bool):
+    """One value of a limit flag: a number, or with ``pair`` ``LO:HI``."""
+    try:
+        if not pair:
+            return float(text)
+        lo, sep, hi = text.partition(":")
+        if not sep:
+            raise ValueError
+        return float(lo), float(hi)
+    except ValueError:
+        what = "LO:HI" if pair else "a number"
+        raise BaseparamsError(f"{flag}: expected {what} per item, got {text!r}") from None
+
+
+def parse_joint_limit(text: str | None, flag: str, pair: bool = False):
+    """A limit flag's value: ``V`` (every joint), ``V,V,...`` (one per designed joint) or ``JOINT=V,...``.
+
+    ``--position`` takes ``LO:HI`` for each ``V`` (``--position=-1:1``: a value starting with ``-``
+    follows ``=``).
 
     Parameters
     ----------
     text : str or None
         The option's value.
+    flag : str
+        The option, for messages.
+    pair : bool
+        Values are ``LO:HI`` pairs.
 
     Returns
     -------
-    tuple or None
-        ``(link, z)``, or None without the option.
+    float, tuple, list, dict or None
+        What :func:`baseparams.excitation.limits.joint_values` takes: one value, a list (one per
+        joint, in order), ``{joint: value}``; None without the option.
     """
     if not text:
         return None
-    link, sep, z = text.rpartition(":")
-    try:
-        return (link, float(z)) if sep and link else float("x")
-    except ValueError:
-        raise BaseparamsError(f"--keepout expects LINK:Z (e.g. panda_link7:0.3), got {text!r}") from None
+    items = [x.strip() for x in text.split(",") if x.strip()]
+    named = ["=" in x for x in items]
+    if any(named) and not all(named):
+        raise BaseparamsError(f"{flag}: give every item as JOINT=VALUE or none (one value, or one per joint in "
+                              f"order), got {text!r}")
+    if all(named) and items:
+        pairs = [x.split("=", 1) for x in items]
+        return {name.strip(): _number(v.strip(), flag, pair) for name, v in pairs}
+    values = [_number(x, flag, pair) for x in items]
+    if not values:
+        raise BaseparamsError(f"{flag}: no value in {text!r}")
+    return values[0] if len(values) == 1 else values
 
 
-def parse_acceleration(text: str | None):
-    """``--acceleration A[,A...]`` as a float, a list, or None.
+def limit_flags(args) -> dict:
+    """The excite flags that set limits, as :func:`baseparams.workflow.excite`'s keywords.
 
     Parameters
     ----------
-    text : str or None
-        The option's value.
+    args : argparse.Namespace
+        The parsed command line.
 
     Returns
     -------
-    float, list of float or None
-        The limit(s), or None without the option.
+    dict
+        ``position``, ``velocity``, ``acceleration``, ``effort`` and ``keepout`` (None when not given).
     """
-    if not text:
-        return None
-    try:
-        acc = [float(x) for x in text.split(",")]
-    except ValueError:
-        raise BaseparamsError(f"--acceleration expects A or A,A,... in rad/s^2, got {text!r}") from None
-    return acc[0] if len(acc) == 1 else acc
+    return {"position": parse_joint_limit(args.position, "--position", pair=True),
+            "velocity": parse_joint_limit(args.velocity, "--velocity"),
+            "acceleration": parse_joint_limit(args.acceleration, "--acceleration"),
+            "effort": parse_joint_limit(args.effort, "--effort"),
+            "keepout": parse_keepout(args.keepout)}
 
 
 def cmd_excite(args) -> int:
-    """``baseparams excite MODEL``: design an excitation trajectory (:mod:`baseparams.excitation`).
+    """``baseparams excite MODEL``: design an excitation trajectory (:func:`baseparams.workflow.excite`).
 
     Progress lines go to stderr; the summary (or ``--json``) to stdout or ``--output``; the
     trajectory to ``--out`` (CSV ``t, q_<joint>, dq_<joint>, ddq_<joint>``, what ``baseparams
@@ -67,9 +119,8 @@ def cmd_excite(args) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The parsed command line: the model options and ``harmonics``, ``period`` or
-        ``base_frequency``, ``rate``, ``criterion``, ``drives``, ``rotor``, ``acceleration``,
-        ``torque``, ``starts``, ``grid``, ``out``, ``plot``, ``output``.
+        The parsed command line: the model options and one flag per keyword of
+        :func:`baseparams.workflow.excite`, ``--json``, ``--output``.
 
     Returns
     -------
@@ -82,31 +133,19 @@ def cmd_excite(args) -> int:
         Bad input: the model (no actuated coordinate, a singular reference), infeasible limits,
         options, unwritable outputs.
     """
-    from ..excitation import design_excitation
+    from ..workflow import excite
 
     try:
         robot = common.load_robot(args)
     except NoMovingBodiesError as exc:
         raise BaseparamsError(f"{exc}: no actuated coordinate to excite") from None
-    f = 1.0 / args.period if args.period else (args.base_frequency or 0.1)
-    target = robot
-    if args.samples is not None:
-        from ..analysis import analyze
-
-        target = analyze(robot, samples=args.samples, seed=args.seed)
-    result = design_excitation(target, harmonics=args.harmonics, base_frequency=f, rate=args.rate,
-                               criterion=args.criterion, drives=args.drives, rotor=args.rotor,
-                               acceleration=parse_acceleration(args.acceleration), torque=args.torque,
-                               starts=args.starts, seed=args.seed, grid=args.grid, keepout=parse_keepout(args.keepout),
-                               margin=args.margin,
-                               progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
-    if args.out:
-        write_output(args.out, result.to_csv, args, "--out")
-        print(f"baseparams: trajectory written to {args.out}", file=sys.stderr)
-    if args.plot:
-        from ..report.plots import trajectory_plot
-
-        write_output(args.plot, lambda tmp: trajectory_plot(result, tmp, robot), args, "--plot")
-        print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
+    result = excite(robot, harmonics=args.harmonics, period=args.period, base_frequency=args.base_frequency,
+                    rate=args.rate, criterion=args.criterion, drives=args.drives, rotor=args.rotor,
+                    torque=args.torque, margin=args.margin, starts=args.starts, grid=args.grid, seed=args.seed,
+                    analysis_samples=args.samples, out=args.out, plot=args.plot, **limit_flags(args),
+                    progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
+    for path, what in ((args.out, "trajectory"), (args.plot, "plot")):
+        if path:
+            print(f"baseparams: {what} written to {path}", file=sys.stderr)
     emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
     return EXIT_OK

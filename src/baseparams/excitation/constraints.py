@@ -77,7 +77,7 @@ def n_nonlinear(prob: Problem) -> int:
         The rows of :func:`_nonlinear_values`.
     """
     n = 0 if prob.theta is None else 2 * prob.t.size * int(np.isfinite(prob.limits[:, 4]).sum())
-    return n + (prob.t.size if prob.cond_max is not None else 0) + (prob.t.size if prob.keepout is not None else 0)
+    return n + (prob.t.size if prob.cond_max is not None else 0) + prob.t.size * len(prob.keepout or ())
 
 
 def _nonlinear_values(prob: Problem, val: dict) -> np.ndarray:
@@ -90,8 +90,8 @@ def _nonlinear_values(prob: Problem, val: dict) -> np.ndarray:
         out += [(MARGIN - frac).reshape(-1), (MARGIN + frac).reshape(-1)]
     if val["logc"] is not None:
         out.append(np.log(LOOP_MARGIN * prob.cond_max) - val["logc"])
-    if val["z"] is not None:  # keep-out: height above the floor [m]
-        out.append(val["z"] - prob.keepout[1] - KEEPOUT_MARGIN)
+    if val["z"] is not None:  # keep-out: heights above the floors [m], sample by sample
+        out.append((val["z"] - prob.keepout_min - KEEPOUT_MARGIN).reshape(-1))
     return np.concatenate(out)
 
 
@@ -108,8 +108,8 @@ def _nonlinear_jacobian(prob: Problem, d: dict) -> np.ndarray:
     if d["dlogc"] is not None:
         jl = -d["dlogc"].T[:, :, None] * prob.bases[0][:, None, :]  # (G, m, k)
         jac.append(jl.reshape(g, m * k))
-    if d["dz"] is not None:
-        jac.append((d["dz"].T[:, :, None] * prob.bases[0][:, None, :]).reshape(g, m * k))
+    if d["dz"] is not None:  # (m, G, K) -> rows (G, K), columns (m, k)
+        jac.append(np.einsum("jgl,gb->gljb", d["dz"], prob.bases[0]).reshape(-1, m * k))
     return np.vstack(jac)
 
 
@@ -187,8 +187,8 @@ def nonlinear_labels(prob: Problem) -> list[tuple[int, int]]:
     Returns
     -------
     list of tuple of (int, int)
-        ``(kind, joint)`` per row: kind 3 torque (``joint`` the designed coordinate), 4 loops, 5
-        keep-out (``joint`` -1).
+        ``(kind, joint)`` per row: kind 3 torque (``joint`` the designed coordinate), 4 loops (``joint``
+        -1), 5 keep-out (``joint`` the index in ``prob.keepout``).
     """
     g = prob.t.size
     out = []
@@ -198,5 +198,5 @@ def nonlinear_labels(prob: Problem) -> list[tuple[int, int]]:
     if prob.cond_max is not None:
         out += [(4, -1)] * g
     if prob.keepout is not None:
-        out += [(5, -1)] * g
+        out += [(5, k) for _ in range(g) for k in range(len(prob.keepout))]
     return out

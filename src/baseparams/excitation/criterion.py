@@ -68,20 +68,17 @@ def trajectory_criterion(model: IdentModel, q, dq, ddq, chunk: int = 4000) -> tu
     Returns
     -------
     cond : float
-        Condition number of the column-scaled stacked regressor
-        (:func:`baseparams.ident.estimate.excitation`; inf when singular).
+        Condition number of the column-scaled stacked regressor, unweighted, every sample
+        (:func:`baseparams.ident.estimate.motion_factor`, :func:`~baseparams.ident.estimate.excitation`;
+        inf when singular): the measure ``identify`` reports for a log's motion.
     logdet : float
         ``log det(M / S)``, ``M`` the information matrix ``A^T A`` (SI units).
     """
-    from ..ident.estimate import excitation
-    from ..numerics import StreamingQR
+    from ..ident.estimate import excitation, motion_factor
 
-    q, dq, ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
-    qr = StreamingQR(model.n_params)
-    for k in range(0, len(q), chunk):
-        qr.add(model.regressor(q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk]))
-    cond, _ = excitation(qr.r, model.names)
-    diag = np.abs(np.diag(qr.r))
+    r = motion_factor(model, q, dq, ddq, chunk)
+    cond, _ = excitation(r, model.names)
+    diag = np.abs(np.diag(r))
     logdet = float(2 * np.sum(np.log(diag)) - model.n_params * np.log(len(q))) if np.all(diag > 0) else -np.inf
     return float(cond), logdet
 
@@ -117,7 +114,7 @@ def grid_values(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -
     dict or None
         ``{"a" (G, m, p): the model regressor, "value", "gamma" (p, p) (:func:`criterion_terms`),
         "tau" (G, m) or None: the prior model's torques, "logc" (G,) or None: log cond(J_p) (loops),
-        "z" (G,) or None: the keep-out height [m]}``; ``None`` when a sample does not close the loops
+        "z" (G, K) or None: the kept-out links' heights [m]}``; ``None`` when a sample does not close the loops
         from the reference (outside the workspace).
     """
     from ..kinematics.loops import close_loops
@@ -150,7 +147,7 @@ def grid_gradients(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray
     -------
     dict or None
         ``{"g" (3, m, G): d value / d (q, dq, ddq), "dtau" (3, m, G, m) or None, "dlogc" (m, G) or
-        None, "dz" (m, G) or None}``; ``None`` when a perturbed sample does not close the loops.
+        None, "dz" (m, G, K) or None}``; ``None`` when a perturbed sample does not close the loops.
     """
     from ..kinematics.loops import close_loops
 
@@ -158,7 +155,7 @@ def grid_gradients(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray
     out = {"dtau": None, "dlogc": None, "dz": None}
     states, cs = _perturbed(q, dq, ddq), None
     if prob.keepout is not None:  # the first m blocks move q
-        out["dz"] = (keepout_height(prob, states[0][: g * m]).reshape(m, g) - val["z"]) / STEPS[0]
+        out["dz"] = (keepout_height(prob, states[0][: g * m]).reshape(m, g, -1) - val["z"]) / STEPS[0]
     if prob.cond_max is not None:  # the first m blocks move q: cond(J_p) changes with them only
         cs = close_loops(prob.model.robot, *states, cond_max=np.inf)
         if cs.kept != 3 * g * m:

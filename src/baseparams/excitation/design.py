@@ -43,7 +43,7 @@ COND_LIMIT = 1e8
 def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: float = 0.1, rate: float = 1000.0,
                       criterion: str = "cond", drives: bool = False, limits=None, acceleration=None,
                       torque: bool = False, starts: int = 4, seed: int = 0, grid: int = 200, max_iter: int = 150,
-                      rotor: bool = False, progress=None, keepout: tuple[str, float] | None = None,
+                      rotor: bool = False, progress=None, keepout=None,
                       margin: float = 0.0) -> Excitation:
     """Design a periodic excitation trajectory that identifies every base parameter (module doc).
 
@@ -84,9 +84,11 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
         With ``drives``: rotor inertia columns too.
     progress : callable, optional
         Called with one line of text per start (and every 25 iterations).
-    keepout : tuple of (str, float), optional
-        ``(link, z_min)``: the named link's frame origin stays at or above the height ``z_min``
-        [m, world z] at every sample (a floor plane or a table; trees only).
+    keepout : tuple of (str, float), or sequence of them, optional
+        ``(link, z_min)`` per link: the named link's frame origin stays at or above the height
+        ``z_min`` [m, world z] at every sample of the design grid and of the result (a floor plane or
+        a table; trees only). Only frame origins: the links' geometry between them and
+        self-collision are not checked (the design's notes say so).
     margin : float
         Fraction of each position range kept free at both ends (:func:`excitation_limits`).
 
@@ -268,7 +270,7 @@ def _start(prob: Problem, rng: np.random.Generator, fill: float = 0.5) -> np.nda
     lim = prob.limits
     lo, hi = shrunk_range(lim)
     off = 0.5 * (lo + hi) + rng.uniform(-0.15, 0.15, prob.m) * (hi - lo)
-    if prob.cond_max is not None:  # q = 0 is known feasible (the loops' reference)
+    if prob.cond_max is not None and prob.model.robot.loops:  # q = 0 is known feasible (the loops' reference)
         off = np.clip(0.0, lo, hi)
     elif prob.keepout is not None:
         off = _keepout_offsets(prob, off)
@@ -305,29 +307,37 @@ def _scaled(x: np.ndarray, bases, lim: np.ndarray, fill: float, grow: bool) -> n
     return out
 
 
-def _keepout_offsets(prob: Problem, off: np.ndarray) -> np.ndarray:
-    """Offsets ``(m,)`` at which the keep-out link rests above its height, with room to move every joint.
+#: random rest configurations searched for offsets above the keep-out heights
+KEEPOUT_CANDIDATES = 4000
 
-    Tried in turn: ``off`` (near the ranges' middle), the middle, then points on the way from the
-    middle to the nearest point to q = 0 (known above the height) that keeps a quarter of each
-    range on either side; the last resort is that point itself.
+
+def _keepout_offsets(prob: Problem, off: np.ndarray) -> np.ndarray:
+    """Offsets ``(m,)`` at which every kept-out link rests above its height, with room to move every joint.
+
+    ``off`` (near the ranges' middle) when it will do; else, among the middle, q = 0 and
+    :data:`KEEPOUT_CANDIDATES` seeded random points of the ranges' inner halves (a quarter of each
+    range kept on either side), the one nearest to ``off`` (in fractions of the ranges) with every
+    link at least ``2 KEEPOUT_MARGIN`` above its height; else the one with the most room.
     """
     lim = prob.limits
     lo, hi = shrunk_range(lim)
-    mid = 0.5 * (lo + hi)
-    near0 = np.clip(0.0, lo + 0.25 * (hi - lo), hi - 0.25 * (hi - lo))
-    cands = [off, mid] + [(1 - s) * mid + s * near0 for s in (0.25, 0.5, 0.75, 1.0)] + [np.clip(0.0, lo, hi)]
-    z = keepout_height(prob, np.array(cands))
-    ok = np.flatnonzero(z >= prob.keepout[1] + 2 * KEEPOUT_MARGIN)
-    if ok.size == 0 and z.max() > prob.keepout[1]:
-        ok = np.array([int(np.argmax(z))])  # the most room there is
-    if ok.size == 0:
-        link, z_min = prob.model.robot.names[prob.keepout[0]], prob.keepout[1]
-        raise BaseparamsError(f"robot {prob.model.robot.name!r}: the keep-out binds: link {link!r} is below "
-                              f"z = {z_min:.4g} m even at rest at the middle of the joint ranges (z = {z[1]:.4g} m) "
-                              f"and at the point nearest to q = 0 within them (z = {z[-1]:.4g} m); lower the "
-                              f"keep-out height or widen the position limits")
-    return cands[ok[0]]
+    mid, width = 0.5 * (lo + hi), hi - lo
+    rng = np.random.default_rng(0)
+    inner = lo + width * rng.uniform(0.25, 0.75, (KEEPOUT_CANDIDATES, prob.m))
+    cands = np.vstack([off, mid, np.clip(0.0, lo, hi), inner])
+    room = (keepout_height(prob, cands) - prob.keepout_min).min(axis=1)  # the lowest link's room [m]
+    ok = np.flatnonzero(room >= 2 * KEEPOUT_MARGIN)
+    if ok.size:
+        return cands[ok[np.argmin(np.abs((cands[ok] - off) / width).sum(axis=1))]]
+    if room.max() > 0:
+        return cands[int(np.argmax(room))]  # the most room there is
+    robot = prob.model.robot
+    body, z_min = prob.keepout[int(np.argmin(keepout_height(prob, cands[[int(np.argmax(room))]])[0]
+                                             - prob.keepout_min))]
+    raise BaseparamsError(f"robot {robot.name!r}: the keep-out binds: at rest anywhere among {len(cands)} points of "
+                          f"the joint ranges some link is below its height (best: {robot.names[body]!r} "
+                          f"{-room.max():.3g} m below z = {z_min:.4g} m); lower the keep-out heights or widen the "
+                          f"position limits")
 
 
 def _finish(prob: Problem, x: np.ndarray, rate: float, notes: list[str]) -> Excitation:
@@ -358,7 +368,7 @@ def _finish(prob: Problem, x: np.ndarray, rate: float, notes: list[str]) -> Exci
         weak = excitation(StreamingQR(model.n_params).add(model.regressor(q, dq, ddq)).r, model.names)[1]
         raise BaseparamsError(f"robot {robot.name!r}: within these limits the trajectory does not excite {weak[:5]} "
                               f"(condition number {cond:.3g}): {binding(prob, xm.reshape(-1))}")
-    if prob.cond_max is not None:
+    if prob.cond_max is not None and robot.loops:
         from ..kinematics.loops import close_loops
 
         notes.append(f"loops: every sample closed on the reference assembly mode, cond(J_p) <= "

@@ -15,7 +15,7 @@ from .problem import FEAS_TOL, Problem, keepout_height
 def _constraint_text(prob: Problem, kind: int, joint: int) -> tuple[str, str]:
     """A constraint named for a user, and what would loosen it."""
     lim, robot = prob.limits, prob.model.robot
-    name = robot.joint_names[robot.dof_body[design_coordinates(robot)[joint]]] if joint >= 0 else ""
+    name = robot.joint_names[robot.dof_body[design_coordinates(robot)[joint]]] if joint >= 0 and kind < 5 else ""
     if kind == 0:
         return (f"joint {name!r}: position range [{lim[joint, 0]:.4g}, {lim[joint, 1]:.4g}]",
                 "widen its position limits (or a smaller --margin)")
@@ -31,8 +31,8 @@ def _constraint_text(prob: Problem, kind: int, joint: int) -> tuple[str, str]:
     if kind == 4:
         return (f"the loops' conditioning cond(J_p) <= {prob.cond_max:.3g}",
                 "narrower actuated ranges around the reference assembly")
-    link = robot.names[prob.keepout[0]]
-    return f"the keep-out of link {link!r} (z >= {prob.keepout[1]:.4g} m)", "a lower keep-out height"
+    body, z_min = prob.keepout[joint]
+    return f"the keep-out of link {robot.names[body]!r} (z >= {z_min:.4g} m)", "a lower keep-out height"
 
 
 def binding(prob: Problem, x: np.ndarray, at_rest: bool = False) -> str:
@@ -132,10 +132,12 @@ def violation(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> 
             return (f"{len(q) - cs.kept} samples outside the workspace, off the assembly mode or with "
                     f"cond(J_p) > {prob.cond_max:.3g}: narrower actuated ranges would help")
     if prob.keepout is not None:
-        low = keepout_height(prob, q) < prob.keepout[1] - 1e-9
+        low = keepout_height(prob, q) < prob.keepout_min - 1e-9  # (S, K)
         if low.any():
-            return (f"{int(low.sum())} samples with {robot.names[prob.keepout[0]]!r} below the keep-out height "
-                    f"{prob.keepout[1]:.4g} m: a lower keep-out height would help")
+            k = int(np.argmax(low.sum(axis=0)))
+            body, z_min = prob.keepout[k]
+            return (f"{int(low.any(axis=1).sum())} samples with {robot.names[body]!r} (or another kept-out link) "
+                    f"below its keep-out height {z_min:.4g} m: a lower keep-out height would help")
     if prob.theta is not None:
         tau = np.concatenate([prob.model.regressor(q[k:k + 4000], dq[k:k + 4000], ddq[k:k + 4000]) @ prob.theta
                               for k in range(0, len(q), 4000)])

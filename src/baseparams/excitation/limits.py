@@ -37,6 +37,90 @@ def design_coordinates(robot: Robot) -> np.ndarray:
     return np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
 
 
+def joint_values(robot: Robot, value, what: str, pair: bool = False) -> np.ndarray:
+    """A limit given for every designed coordinate, per coordinate in order, or by joint name.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (:func:`design_coordinates`, their joints' names).
+    value : None, float, array_like or mapping
+        One value for all (a number; with ``pair`` a ``(lower, upper)`` pair), one per designed
+        coordinate (``(m,)``; with ``pair`` ``(m, 2)``), or ``{joint name: value}`` (the others
+        not given).
+    what : str
+        The limit's name, for messages (``position``, ``velocity``, ...).
+    pair : bool
+        Each value is a ``(lower, upper)`` pair.
+
+    Returns
+    -------
+    ndarray, shape ``(m,)`` or ``(m, 2)``
+        The values; NaN where none is given.
+
+    Raises
+    ------
+    BaseparamsError
+        A joint that is not designed, or a shape that is none of the above.
+    """
+    from collections.abc import Mapping
+
+    names = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+    shape = (len(names), 2) if pair else (len(names),)
+    out = np.full(shape, np.nan)
+    if value is None:
+        return out
+    one = "(lower, upper)" if pair else "a number"
+    if isinstance(value, Mapping):
+        for name, v in value.items():
+            if name not in names:
+                raise BaseparamsError(f"{what} limit for {name!r}: not a designed joint of {robot.name!r} (joints: "
+                                      f"{', '.join(names)})")
+            x = np.asarray(v, dtype=float)
+            if x.shape != shape[1:]:
+                raise BaseparamsError(f"{what} limit for {name!r}: expected {one}, got {v!r}")
+            out[names.index(name)] = x
+        return out
+    x = np.asarray(value, dtype=float)
+    if x.shape not in (shape, shape[1:]):
+        raise BaseparamsError(f"{what} limit: expected {one} for every joint or one per designed joint "
+                              f"({len(names)}: {', '.join(names)}), got shape {x.shape}")
+    out[:] = x
+    return out
+
+
+def given_limits(robot: Robot, limits=None, position=None, velocity=None, effort=None) -> np.ndarray | None:
+    """The ``(m, 4)`` override of :func:`excitation_limits` from per-limit values (:func:`joint_values`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    limits : array_like, shape ``(m, 4)``, optional
+        ``[lower, upper, velocity, effort]`` per designed coordinate (NaN: the model's).
+    position, velocity, effort : optional
+        Per-limit values, for all joints, per joint or by name (:func:`joint_values`); they take
+        precedence over ``limits``.
+
+    Returns
+    -------
+    ndarray, shape ``(m, 4)``, or None
+        The override, NaN where the model's limit stays; None when nothing is given.
+    """
+    if limits is None and position is None and velocity is None and effort is None:
+        return None
+    m = len(design_coordinates(robot))
+    out = np.full((m, 4), np.nan) if limits is None else np.array(limits, dtype=float)
+    if out.shape != (m, 4):
+        raise BaseparamsError(f"robot {robot.name!r}: limits must have shape ({m}, 4) (lower, upper, velocity, "
+                              f"effort per designed coordinate), got {out.shape}")
+    for cols, value, what, pair in (([0, 1], position, "position", True), ([2], velocity, "velocity", False),
+                                    ([3], effort, "effort", False)):
+        given = joint_values(robot, value, what, pair).reshape(m, -1)
+        out[:, cols] = np.where(np.isnan(given), out[:, cols], given)
+    return out
+
+
 def excitation_limits(robot: Robot, limits=None, acceleration=None,
                       margin: float = 0.0) -> tuple[np.ndarray, list[str]]:
     """The limits a design respects, per designed coordinate.
@@ -48,8 +132,9 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None,
     limits : array_like, shape ``(m, 4)``, optional
         ``[lower, upper, velocity, effort]`` per designed coordinate (:func:`design_coordinates`)
         overriding the model's; NaN entries keep the model's.
-    acceleration : float or array_like, shape ``(m,)``, optional
-        Acceleration limits [rad/s^2 or m/s^2] (models do not give them); default none.
+    acceleration : float, array_like, shape ``(m,)``, or mapping, optional
+        Acceleration limits [rad/s^2 or m/s^2] (models do not give them), for all, per designed
+        coordinate or ``{joint: value}`` (:func:`joint_values`); default none.
     margin : float
         A fraction ``0 <= margin < 0.5`` of each position range kept free at both ends: the range
         used is ``[lower + margin w, upper - margin w]``, ``w = upper - lower`` (0.05: 5 %).
@@ -82,7 +167,7 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None,
                                   f"effort per designed coordinate), got {user.shape}")
         lim[:, [0, 1, 2, 4]] = np.where(np.isnan(user), lim[:, [0, 1, 2, 4]], user)
     if acceleration is not None:
-        lim[:, 3] = np.broadcast_to(np.asarray(acceleration, dtype=float), (m,))
+        lim[:, 3] = joint_values(robot, acceleration, "acceleration")
     names = [robot.joint_names[robot.dof_body[c]] for c in coords]
     notes = _default_positions(robot, coords, lim, names)
     if margin > 0:

@@ -66,8 +66,8 @@ class Problem:
         The prior model parameters whose torques stay within the effort limits, or None.
     cond_max : float or None
         Loops: the bound on ``cond(J_p)``; None for a tree.
-    keepout : tuple of (int, float), optional
-        ``(body, lowest height of its frame origin [m])``, or None.
+    keepout : tuple of tuple of (int, float), optional
+        ``((body, lowest height of its frame origin [m]), ...)``, one pair per kept-out link, or None.
     """
 
     model: IdentModel
@@ -79,7 +79,12 @@ class Problem:
     limits: np.ndarray  # (m, 5)
     theta: np.ndarray | None  # (p,) prior model parameters (torque limits), or None
     cond_max: float | None  # loops: the bound on cond(J_p), else None
-    keepout: tuple[int, float] | None = None  # (body, lowest height of its origin [m]), or None
+    keepout: tuple[tuple[int, float], ...] | None = None  # ((body, lowest height of its origin [m]), ...), or None
+
+    @property
+    def keepout_min(self) -> np.ndarray:
+        """The kept-out links' lowest heights ``(K,)`` [m] (empty without a keep-out)."""
+        return np.array([z for _, z in self.keepout or ()], dtype=float)
 
     def __repr__(self) -> str:
         loops = "" if self.cond_max is None else f", cond(J_p) <= {self.cond_max:.3g}"
@@ -131,7 +136,7 @@ def shrunk_range(lim: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def keepout_height(prob: Problem, q: np.ndarray) -> np.ndarray:
-    """Height of the keep-out body's frame origin (world z) at tree states.
+    """Heights of the kept-out bodies' frame origins (world z) at tree states.
 
     Parameters
     ----------
@@ -142,14 +147,15 @@ def keepout_height(prob: Problem, q: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape ``(S,)``
-        The height [m].
+    ndarray, shape ``(S, K)``
+        The height [m] of each kept-out link (``prob.keepout``'s order).
     """
     from ..kinematics.tree import forward_kinematics
 
-    body = prob.keepout[0]
+    bodies = [b for b, _ in prob.keepout]
     robot = prob.model.robot
-    return (forward_kinematics(robot, q).g[:, body] @ robot.M0[body])[:, 2, 3]
+    g = forward_kinematics(robot, q).g[:, bodies]  # (S, K, 4, 4)
+    return np.einsum("skj,kj->sk", g[:, :, 2, :], robot.M0[bodies][:, :, 3])
 
 
 def check_options(harmonics, base_frequency, rate, criterion, starts, grid) -> None:
@@ -223,7 +229,7 @@ def make_problem(model: IdentModel, criterion, harmonics, base_frequency, rate, 
     """
     robot = model.robot
     lim, notes = excitation_limits(robot, limits, acceleration, margin)
-    if robot.has_loops and not np.all((lim[:, 0] < 0) & (lim[:, 1] > 0)):
+    if robot.loops and not np.all((lim[:, 0] < 0) & (lim[:, 1] > 0)):  # linear couplings hold anywhere
         raise BaseparamsError(f"robot {robot.name!r}: the reference configuration q = 0 (where the loops are "
                               f"assembled) is outside the actuated coordinates' position limits")
     per = max(1, int(round(rate / base_frequency)))
@@ -239,50 +245,86 @@ def make_problem(model: IdentModel, criterion, harmonics, base_frequency, rate, 
             raise BaseparamsError(f"robot {robot.name!r}: torque limits asked, but no effort limit is known")
         theta = model.theta(robot.parameters("paper"))
     cond_max = loop_bound(robot) if robot.has_loops else None
-    if cond_max is not None:
+    if cond_max is not None and robot.loops:
         notes.append(f"loops: cond(J_p) <= {cond_max:.3g} at every sample (continuation from the reference assembly)")
+    elif cond_max is not None:
+        notes.append("coupled joints: designed in the actuated coordinates, the coupled ones set by their couplings")
     return Problem(model, criterion, int(harmonics), omega, t, fourier_basis(t, int(harmonics), omega), lim, theta,
                     cond_max), notes
 
 
+def keepout_pairs(keepout) -> list[tuple[str, float]]:
+    """``(link, z)`` or a sequence of such pairs, as a list of pairs.
+
+    Parameters
+    ----------
+    keepout : tuple of (str, float), or sequence of them
+        One link's keep-out, or several.
+
+    Returns
+    -------
+    list of tuple of (str, float)
+        The pairs.
+
+    Raises
+    ------
+    BaseparamsError
+        Anything else.
+    """
+    items = [keepout] if isinstance(keepout, tuple) and len(keepout) == 2 and isinstance(keepout[0], str) \
+        else list(keepout)
+    out = []
+    for item in items:
+        try:
+            link, z_min = item
+            out.append((str(link), float(z_min)))
+        except (TypeError, ValueError):
+            raise BaseparamsError(f"keepout must be (link name, lowest height in m) or a list of them, got "
+                                  f"{keepout!r}") from None
+    if not out:
+        raise BaseparamsError("keepout: no (link name, lowest height) pair given")
+    return out
+
+
 def with_keepout(prob: Problem, keepout) -> tuple[Problem, str]:
-    """The problem with a keep-out height for a named link, checked at q = 0.
+    """The problem with a keep-out height for one or more named links.
+
+    Whether the links can stay above their heights is decided by the design (offsets where they
+    rest above, then every grid and controller-rate sample): not at q = 0.
 
     Parameters
     ----------
     prob : Problem
         The design problem.
-    keepout : tuple of (str, float)
-        ``(link name, lowest height of its frame origin [m, world z])``.
+    keepout : tuple of (str, float), or sequence of them
+        ``(link name, lowest height of its frame origin [m, world z])`` per link.
 
     Returns
     -------
     prob : Problem
         The problem with ``keepout`` set.
     note : str
-        The line the design's notes carry.
+        The line the design's notes carry (what is and is not kept out).
 
     Raises
     ------
     BaseparamsError
-        Not a pair, a loop robot, an unknown link, a link already below the height at q = 0.
+        Not pairs, a loop robot, an unknown link, a link named twice.
     """
     from dataclasses import replace
 
     robot = prob.model.robot
-    try:
-        link, z_min = keepout
-        z_min = float(z_min)
-    except (TypeError, ValueError):
-        raise BaseparamsError(f"keepout must be (link name, lowest height in m), got {keepout!r}") from None
+    pairs = keepout_pairs(keepout)
     if robot.has_loops:
         raise BaseparamsError(f"robot {robot.name!r}: a Cartesian keep-out is supported for trees only")
-    if link not in robot.names:
-        raise BaseparamsError(f"robot {robot.name!r}: no link {link!r} for the keep-out; links: "
-                              f"{', '.join(robot.names)}")
-    prob = replace(prob, keepout=(robot.names.index(link), z_min))
-    z0 = float(keepout_height(prob, np.zeros((1, robot.dof)))[0])
-    if z0 < z_min:
-        raise BaseparamsError(f"robot {robot.name!r}: link {link!r} is at z = {z0:.4g} m at q = 0, already below the "
-                              f"keep-out height {z_min:.4g} m")
-    return prob, f"keep-out: link {link!r} stays at z >= {z_min:.4g} m (world) at every sample"
+    for link, _ in pairs:
+        if link not in robot.names:
+            raise BaseparamsError(f"robot {robot.name!r}: no link {link!r} for the keep-out; links: "
+                                  f"{', '.join(robot.names)}")
+    names = [link for link, _ in pairs]
+    if len(set(names)) < len(names):
+        raise BaseparamsError(f"keep-out: a link named twice ({names})")
+    prob = replace(prob, keepout=tuple((robot.names.index(link), z) for link, z in pairs))
+    what = ", ".join(f"{link!r} z >= {z:.4g} m" for link, z in pairs)
+    return prob, (f"keep-out: the frame origins of {what} (world) at every sample; link geometry between frames and "
+                  f"self-collision are not checked")

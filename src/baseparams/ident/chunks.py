@@ -142,7 +142,7 @@ class Grid:
 
 
 def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int,
-                  keep: list | None = None):
+                  keep: list | None = None, rows: np.ndarray | None = None):
     """The row factors of one chunk (the task a worker runs).
 
     Parameters
@@ -163,6 +163,9 @@ def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.n
     keep : list, optional
         When given, the chunk's fitted rows ``(A, tau)`` are appended to it (for a second pass
         that would otherwise recompute them: :mod:`baseparams.ident.uncertainty`).
+    rows : ndarray of int, shape ``(m,)``, optional
+        The state column of each measured row (``IdentModel.row_states``; default every state
+        column: a floating base's six are not measured).
 
     Returns
     -------
@@ -174,11 +177,11 @@ def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.n
     sl = slice(c.lo, c.hi)
     rates = {k: None if getattr(log, k) is None else getattr(log, k)[sl] for k in ("dq", "ddq")}
     part = replace(log, t=log.t[sl], q=log.q[sl], tau=log.tau[sl], **rates)
-    return chunk_factors_of_slice(part, c, grid, regressor, cols, nparams, keep)
+    return chunk_factors_of_slice(part, c, grid, regressor, cols, nparams, keep, rows)
 
 
 def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int,
-                           keep: list | None = None):
+                           keep: list | None = None, rows: np.ndarray | None = None):
     """:func:`chunk_factors` on the slice ``[c.lo, c.hi)`` of the log alone.
 
     Parameters
@@ -195,7 +198,7 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
         Log column of each state column.
     nparams : int
         ``p``.
-    keep : list, optional
+    keep, rows : optional
         As for :func:`chunk_factors`.
 
     Returns
@@ -205,8 +208,8 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
     removed : dict of str to int
         Slow samples removed in the chunk.
     """
-    acc = RowAccumulator(len(cols), nparams)
-    a, tau, removed = chunk_rows(part, c, grid, regressor, cols)
+    acc = RowAccumulator(len(cols) if rows is None else len(rows), nparams)
+    a, tau, removed = chunk_rows(part, c, grid, regressor, cols, rows=rows)
     if a is not None:
         acc.add(a, tau)
         if keep is not None:
@@ -214,7 +217,8 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
     return acc, removed
 
 
-def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, index_out: list | None = None):
+def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, index_out: list | None = None,
+               rows: np.ndarray | None = None):
     """The fitted rows one chunk owns, in time order (what :func:`chunk_factors_of_slice` reduces).
 
     Parameters
@@ -232,6 +236,8 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
     index_out : list, optional
         When given, the kept samples' global indices ``(k,)`` are appended to it (an empty
         array when the chunk keeps none).
+    rows : ndarray of int, shape ``(m,)``, optional
+        The state column of each measured row (default every state column).
 
     Returns
     -------
@@ -242,7 +248,7 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
     removed : dict of str to int
         Slow samples removed in the chunk.
     """
-    from .preprocess import remove_slow
+    from .preprocess import remove_slow, slow_threshold
 
     idx = grid.owned(c) - c.lo
     if not len(idx):
@@ -254,12 +260,12 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
     q, dq, ddq = f.q[:, cols], f.dq[:, cols], f.ddq[:, cols]
     removed = {}
     if grid.min_speed is not None:
-        keep, removed = remove_slow(dq[idx], grid.min_speed)
+        keep, removed = remove_slow(dq[idx], slow_threshold([part.joints[k] for k in cols], grid.min_speed))
         idx = idx[keep]
     if index_out is not None:
         index_out.append(idx + c.lo)
     a = filtered_rows(regressor(q, dq, ddq), prep.design, idx)
-    return a, f.tau[idx][:, cols], removed
+    return a, f.tau[idx][:, cols if rows is None else cols[rows]], removed
 
 
 #: regressor columns filtered at once by :func:`filtered_rows` (bounds the filter's copies)

@@ -22,7 +22,10 @@ class JointLog:
     t : ndarray, shape ``(S,)``
         Time stamps [s], strictly increasing.
     joints : tuple of str, shape ``(m,)``
-        The model's joint names (1-dof joints: R or P) of the columns, in the log's column order.
+        The model's joint names (1-dof joints: R or P) of the columns, in the log's column order;
+        a floating base's six coordinates first, named
+        :data:`~baseparams.kinematics.floating.BASE_COORDINATES` (position [m] and Z-Y-X angles
+        [rad], smooth in time; their ``tau`` columns zero: a base wrench is not measured).
     q : ndarray, shape ``(S, m)``
         Joint positions [rad or m], joint side (after sign and gear ratio).
     tau : ndarray, shape ``(S, m)``
@@ -54,12 +57,25 @@ class JointLog:
         """Number of samples ``S``."""
         return len(self.t)
 
+    @property
+    def floating(self) -> bool:
+        """Whether the first six columns are a floating base's coordinates (not joints)."""
+        from ..kinematics.floating import BASE_COORDINATES
+
+        return tuple(self.joints[:6]) == BASE_COORDINATES
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints (the columns without a floating base's six)."""
+        return len(self.joints) - (6 if self.floating else 0)
+
     def __repr__(self) -> str:
         s = self.n_samples
         span = float(self.t[-1] - self.t[0]) if s > 1 else 0.0
         rate = f" ({format_number((s - 1) / span, 4)} Hz)" if span > 0 else ""
         has = [k for k in ("dq", "ddq") if getattr(self, k) is not None]
-        text = (f"<JointLog {self.source}: {s} samples of {len(self.joints)} joints over {format_number(span, 4)} s"
+        base = " and a floating base" if self.floating else ""
+        text = (f"<JointLog {self.source}: {s} samples of {self.n_joints} joints{base} over {format_number(span, 4)} s"
                 f"{rate}{', with ' + ' and '.join(has) if has else ''}")
         removed = sum(self.removed.values())
         return clip(text + (f", {removed} removed" if removed else "") + ">")

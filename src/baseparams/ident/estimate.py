@@ -234,6 +234,35 @@ def wls(acc: RowAccumulator, names: list[str], first: Estimate | None = None) ->
     return least_squares(acc, names, 1.0 / np.maximum(sig, floor), "wls")
 
 
+def motion_factor(model, q, dq, ddq, chunk: int = 4000) -> np.ndarray:
+    """The triangular factor of a motion's model regressor, unweighted, at every sample.
+
+    What a motion's condition number is of: ``excite`` reports it for a design, ``identify`` for
+    the log's states (column-scaled by :func:`excitation`).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The identification model (its regressor's columns: base and drive parameters).
+    q, dq, ddq : array_like, shape ``(S, state_columns)``
+        The states (a loop robot's actuated coordinates).
+    chunk : int
+        Samples per regressor block (memory ``chunk * m * p`` floats).
+
+    Returns
+    -------
+    ndarray, shape ``(p, p)``
+        ``R`` with ``R^T R = sum_s A_s^T A_s``; :func:`excitation` gives its column-scaled condition number.
+    """
+    from ..numerics import StreamingQR
+
+    q, dq, ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
+    qr = StreamingQR(model.n_params)
+    for k in range(0, len(q), chunk):
+        qr.add(model.regressor(q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk]))
+    return qr.r
+
+
 def excitation(r11: np.ndarray, names: list[str], weak_ratio: float = 1e-3) -> tuple[float, list[str]]:
     """Condition number of the column-scaled regressor, and its poorly excited parameters.
 

@@ -37,12 +37,17 @@ class IdentModel:
     coords : ndarray of int, shape ``(m,)``
         The coordinate of each measured row (a tree's ``q`` index; for a robot with loops the
         actuated coordinates, in ``robot.actuated`` order).
+    log_base : bool
+        A floating base's six state columns are a log's base coordinates (position and Z-Y-X
+        angles and their time derivatives, :mod:`baseparams.kinematics.floating`), mapped to the
+        robot's own (twist coordinates, spatial twist) in :meth:`regressor`; default the robot's own.
     """
 
     analysis: Analysis
     drives: Drives
     regrouping: DriveRegrouping
     coords: np.ndarray
+    log_base: bool = False
 
     @property
     def robot(self) -> Robot:
@@ -90,6 +95,11 @@ class IdentModel:
         r = self.robot
         return len(r.actuated) if r.has_loops else r.dof
 
+    @property
+    def row_states(self) -> np.ndarray:
+        """The state column of each measured row ``(m,)``: where its ``q``, ``dq`` and its torque's log column are."""
+        return self.coords if not self.robot.has_loops else np.arange(len(self.coords))
+
     def regressor(self, q, dq, ddq, closed=None) -> np.ndarray:
         """The model regressor ``A`` of the measured rows.
 
@@ -109,6 +119,10 @@ class IdentModel:
         from ..analysis import checked_states
         from ..regressor.tp import closed_projected_regressor, projected_regressor
 
+        if self.log_base and self.robot.floating:
+            from ..kinematics.floating import robot_states
+
+            q, dq, ddq = robot_states(self.robot, q, dq, ddq)
         if closed is None:
             q, dq, ddq, cs = checked_states(self.robot, q, dq, ddq)
         else:
@@ -118,7 +132,7 @@ class IdentModel:
             out = closed_projected_regressor(self.robot, cs, P=p_map)
         else:
             out = projected_regressor(self.robot, q, dq, ddq, P=p_map, rows=self.coords)
-        sel = self.coords if not self.robot.has_loops else np.arange(len(self.coords))
+        sel = self.row_states
         self._drive_columns(dq[:, sel], ddq[:, sel], out)
         return out
 
@@ -201,7 +215,7 @@ def measured_coords(robot: Robot, rows: str) -> np.ndarray:
 
 def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
                 coulomb_width: float | None = None, samples: int = 200, seed: int = 0,
-                couplings=()) -> IdentModel:
+                couplings=(), log_base: bool = False) -> IdentModel:
     """The identification model of an analysed robot: base parameters plus drives, regrouped.
 
     Parameters
@@ -221,6 +235,8 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "co
     couplings : iterable of MotorCoupling
         Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`): their
         ``Iam``, ``Fvm``, ``Fcm`` (with ``rotor``, viscous, Coulomb friction).
+    log_base : bool
+        A floating base's states are a log's base coordinates (:attr:`IdentModel.log_base`).
 
     Returns
     -------
@@ -245,14 +261,14 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "co
     else:
         q = sample_states(robot, samples, rng)[0]
     dq, ddq = rng.uniform(-1.0, 1.0, (2,) + q.shape)
-    probe = IdentModel(analysis, drives, _identity_regrouping(analysis, drives), coords)
+    probe = IdentModel(analysis, drives, _identity_regrouping(analysis, drives), coords, log_base)
     a = probe.regressor(q, dq, ddq)
     factor = StreamingQR(a.shape[2]).add(a.reshape(-1, a.shape[2])).r
     regrouping = regroup_drives(factor, analysis.base_names, drives)
     if not regrouping.decided:
         raise BaseparamsError(f"robot {robot.name!r}: whether the drive parameters regroup is not decided "
                               f"(singular-value gap {regrouping.gap:.3g}); try another seed or more samples")
-    return IdentModel(analysis, drives, regrouping, coords)
+    return IdentModel(analysis, drives, regrouping, coords, log_base)
 
 
 def _identity_regrouping(analysis: Analysis, drives: Drives) -> DriveRegrouping:

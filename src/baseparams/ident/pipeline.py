@@ -488,6 +488,11 @@ class Identification:
         :meth:`load` rebuilds the model from: ``{"method", "convention", "rows", "rotor",
         "friction" (tuple), "coulomb_width", "couplings" (tuple of MotorCoupling), "cutoff" [Hz],
         "decimate", "min_speed"}``.
+    motion : dict, optional
+        ``{"condition_number", "samples"}``: the condition number of the training motion's model
+        regressor at the log's (filtered) states, unweighted, every sample, column-scaled: the
+        measure ``excite`` reports for a design (:func:`baseparams.ident.estimate.motion_factor`);
+        None when not computed (a streamed log).
     """
 
     fit: Fit
@@ -497,8 +502,9 @@ class Identification:
     notes: tuple[str, ...]
     series: dict | None = None
     options: dict | None = None
+    motion: dict | None = None
 
-    def predict(self, log, smooth: bool = True) -> np.ndarray:
+    def predict(self, log, smooth: bool = True, columns=None) -> np.ndarray:
         """Predicted joint torques at every sample of a log (its own time stamps).
 
         ``smooth`` (default): the model's torques on the log's states low-passed with the
@@ -513,11 +519,14 @@ class Identification:
 
         Parameters
         ----------
-        log : JointLog
-            ``S`` samples of the model's measured joints (``tau`` may be ``None``), e.g.
-            :func:`baseparams.io.logs.read_log` with ``require_tau=False``.
+        log : JointLog, str or path
+            ``S`` samples of the model's measured joints (``tau`` may be ``None``), or a log or
+            trajectory file (read for this robot by :func:`baseparams.io.logs.read_log`, ``tau``
+            columns optional).
         smooth : bool
             Filtered states (default), or the states as logged.
+        columns : str, path or dict, optional
+            A layout mapping for a log file (README "Log layout").
 
         Returns
         -------
@@ -530,6 +539,12 @@ class Identification:
         BaseparamsError
             A log missing a measured joint, too short or too slowly sampled for the cutoff.
         """
+        import os
+
+        if isinstance(log, (str, os.PathLike)):
+            from ..io.logs import read_log
+
+            log = read_log(log, self.model.robot, columns=columns, allow_subset=True, require_tau=False)
         return predict_log(self.fit, log, (self.options or {}).get("cutoff"), smooth)
 
     @property
@@ -596,7 +611,8 @@ class Identification:
                "samples": self.samples, "train": self.train, "validation": self.validation, "notes": list(self.notes),
                "terms": [t.to_json(self.joints) for t in self.fit.terms],
                "term_choices": [{"name": c.name, "kept": c.kept, "why": c.why, "cv_rms": c.cv_rms}
-                                for c in self.fit.term_choices]}
+                                for c in self.fit.term_choices],
+               "motion": self.motion}
         return _plain(doc)
 
     def save(self, path, inputs=(), what: str = "output"):
@@ -667,7 +683,8 @@ class Identification:
                                for c in o.get("couplings", ()))
         model = ident_model(analyze(robot, convention=o["convention"], rows=o.get("rows", "all"),
                                     literal=bool(o.get("literal", False))), o["rotor"],
-                            o["friction"], o.get("coulomb_width"), couplings=o["couplings"])
+                            o["friction"], o.get("coulomb_width"), couplings=o["couplings"],
+                            log_base=robot.floating)
         names = doc["parameters"]["names"]
         if list(model.names) != list(names):
             diff = next((f"{a} vs {b}" for a, b in zip(model.names, names) if a != b),
@@ -704,7 +721,8 @@ class Identification:
                                float("nan") if c.get("cv_rms") is None else float(c["cv_rms"]))
                         for c in doc.get("term_choices") or ())
         f = Fit(model, o.get("method", e["method"]), theta, est, phys, terms=tuple(terms), term_choices=choices)
-        return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o)
+        return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o,
+                   doc.get("motion"))
 
     @property
     def model(self) -> IdentModel:
@@ -858,11 +876,15 @@ class Identification:
         dict
             ``method, estimator, selection, covariance, model, convention, n_samples{read, used, removed},
             condition_number,
-            excitation{condition_number, weak, poorly_determined, above_100, all_excited}, base_parameters,
-            drives, couplings,
-            train, validation, physical, notes, terms``; ``weak`` names the parameters carrying
-            directions whose singular value is below 1e-3 of the largest (column-scaled regressor);
-            ``covariance`` says how every ``std`` was computed.
+            excitation{condition_number, of, fitted_condition_number, weak, poorly_determined,
+            above_100, all_excited}, base_parameters, drives, couplings,
+            train, validation, physical, notes, terms``; ``condition_number`` is the training motion's
+            (:attr:`motion`: the measure ``excite`` reports, ``of`` says ``"motion"``; ``"fitted
+            rows"`` when not computed), ``fitted_condition_number`` the fitted rows' (filtered,
+            decimated, weighted as fitted); ``weak`` names the parameters carrying directions whose
+            singular value is below 1e-3 of the largest (column-scaled fitted rows); ``above_100``
+            the terms whose %sigma exceeds 100 (``all_excited`` needs none); ``covariance`` says how
+            every ``std`` was computed.
         """
         f = self.fit
         phys = None
@@ -873,7 +895,8 @@ class Identification:
                     "solver_status": str(p.solver_status)}
         from .estimate import excitation
 
-        cond, weak = excitation(f.estimate.R11, self.model.names)
+        fitted, weak = excitation(f.estimate.R11, self.model.names)
+        cond = fitted if self.motion is None else float(self.motion["condition_number"])
         loose = poorly_determined(f.estimate, self.model.names)
         pct = np.asarray(f.estimate.pct_sigma, dtype=float)
         above = [n for n, x in zip(self.model.names, pct) if not x <= POORLY_DETERMINED_PCT]
@@ -888,10 +911,10 @@ class Identification:
         return {"method": f.method, "estimator": estimator, "selection": None if sel is None else sel.to_json(),
                 "covariance": f.estimate.covariance,
                 "model": self.model.robot.name, "convention": self.model.analysis.convention,
-                "n_samples": self.samples, "condition_number": float(f.estimate.condition_number),
-                "excitation": {"condition_number": cond, "weak": weak, "poorly_determined": loose,
-                               "above_100": above,
-                               "all_excited": not weak and not loose and not above},
+                "n_samples": self.samples, "condition_number": cond,
+                "excitation": {"condition_number": cond, "of": "fitted rows" if self.motion is None else "motion",
+                               "fitted_condition_number": fitted, "weak": weak, "poorly_determined": loose,
+                               "above_100": above, "all_excited": not weak and not loose and not above},
                 "base_parameters": self.base_parameters(), "drives": self.drives(),
                 "couplings": self.couplings(), "train": self.train,
                 "validation": self.validation, "physical": phys, "notes": list(self.notes),
@@ -1006,9 +1029,6 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
         data (:class:`~baseparams.errors.DataError`), a bad coupling or data that do not excite
         the model.
     """
-    if robot.floating:
-        raise BaseparamsError(f"robot {robot.name!r}: identification from a joint log needs a fixed base (a floating "
-                              f"base's motion and wrench are not in a joint log); use the Python API with states")
     if holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     with blas_threads():
@@ -1021,13 +1041,14 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
               prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
               score_cutoff=None, covariance="hac", allow_units=False, literal=False, terms="auto") -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
+    from .estimate import excitation, motion_factor
     from .preprocess import prepare
 
     say = progress or (lambda msg: None)
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=samples, convention=convention, literal=literal), rotor,
-                        tuple(friction), coulomb_width, couplings=couplings)
+    model = ident_model(analyze(robot, samples=samples, convention=convention, rows=log_rows(robot), literal=literal),
+                        rotor, tuple(friction), coulomb_width, couplings=couplings, log_base=robot.floating)
     cols = log_columns(model, log)
     unit_notes = check_log_units(model, train, cols, allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
@@ -1052,7 +1073,8 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     train_rms["measure"] = "RMS of predicted minus raw measured torques at every training sample"
     train_rms.update(fit_rms=dict(zip(names, res.tolist())), fit_rms_total=float(np.sqrt(np.mean(res**2))))
     val, series = None, {"train": report_series(model, prep, cols, f, names, memory_mb, raw_q), "validation": None}
-    series["train"]["spectrum"] = position_spectrum(train, cols, prep.design.fs, prep.design.cutoff, prep.full.t)
+    series["train"]["spectrum"] = position_spectrum(train, cols[model.row_states], prep.design.fs, prep.design.cutoff,
+                                                    prep.full.t)
     if held is not None:
         say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
         whole, mask = (log, log.t >= log.t[-1] - holdout) if holdout is not None else (held, None)
@@ -1061,16 +1083,55 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
         vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
         vcols = log_columns(model, held)
         series["validation"] = report_series(model, vprep, vcols, f, names, memory_mb,
-                                             _raw_positions(held, vcols) if f.terms else None)
+                                             _raw_positions(held, vcols[model.row_states]) if f.terms else None)
     samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *model_notes(model), *term_notes, *drive_notes(f, acc),
+    notes = (*prep.notes, acc_note, *model_notes(model), *floating_notes(robot), *term_notes, *drive_notes(f, acc),
              *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
     options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
                "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
                "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed,
                "literal": bool(literal), "terms": terms if isinstance(terms, str) else ",".join(terms)}
-    return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+    motion = {"condition_number": excitation(motion_factor(model, prep.full.q[:, cols], prep.full.dq[:, cols],
+                                                           prep.full.ddq[:, cols]), model.names)[0],
+              "samples": int(prep.full.n_samples)}
+    return Identification(f, samples, train_rms, val, tuple(notes), series, options, motion)
+
+
+def log_rows(robot: Robot) -> str:
+    """The generalized forces a joint log measures: ``"joints"`` with a floating base (no base wrench), else all.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    str
+        ``"joints"`` or ``"all"``.
+    """
+    return "joints" if robot.floating else "all"
+
+
+def floating_notes(robot: Robot) -> list[str]:
+    """What a floating base's identification from a joint log assumes (one line), else nothing.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    list of str
+        Notes for the report.
+    """
+    if not robot.floating:
+        return []
+    return ["floating base: the base's motion is the log's pose and twist; the joint torques are modelled with no "
+            "external force on any other link (a foot on the ground pushes: measured contact wrenches belong on the "
+            "measured side, baseparams.kinematics.wrench_forces in Python), the base wrench is not measured"]
 
 
 #: two drive columns of one joint whose cosine exceeds this cannot be told apart by the log
@@ -1131,7 +1192,7 @@ def drive_notes(f: Fit, acc) -> list[str]:
 
 
 def _raw_positions(log, cols: np.ndarray) -> np.ndarray:
-    """The measured coordinates' unfiltered positions on the log's uniform grid (what ``prepare`` filters)."""
+    """Unfiltered positions of the given log columns on the log's uniform grid (what ``prepare`` filters)."""
     from .preprocess import resample
 
     return resample(log).q[:, cols]
@@ -1184,12 +1245,14 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, method: str, prior_w
     if not candidates:
         return f, acc, kept, [], None
     model = f.model
+    if model.robot.floating:
+        return f, acc, kept, ["model terms: not tried for a floating base (not implemented)"], None
     total = sum(len(a) for a, _ in kept)
     if not kept or total != len(prep.index):
         return f, acc, kept, ["model terms: not considered (the fitted rows do not fit in memory_mb; the linear core "
                               "alone)"], None
     a = np.concatenate([x for x, _ in kept])
-    raw_q = _raw_positions(train, cols)
+    raw_q = _raw_positions(train, cols[model.row_states])
     if raw_q.shape[0] != prep.full.n_samples:
         return f, acc, kept, ["model terms: not considered (the training grid is not the filter's)"], None
     from .preprocess import excitation_bandwidth
@@ -1295,9 +1358,19 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     robot = model.robot
     params = robot.parameters("paper")
     coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
-    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" for c in coords])
+    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" or (model.log_base and 3 <= c < 6) for c in coords])
+
+    def torques(q, dq, ddq):
+        if not model.log_base:
+            return regressor(robot, q, dq, ddq) @ params
+        from ..kinematics.floating import robot_states
+
+        tau = regressor(robot, *robot_states(robot, q, dq, ddq)) @ params
+        tau[:, :6] = 0.0  # the base wrench is not measured (the log's zeros)
+        return tau
+
     try:
-        return check_units(log, cols, lambda q, dq, ddq: regressor(robot, q, dq, ddq) @ params, revolute)
+        return check_units(log, cols, torques, revolute)
     except DataError as exc:
         if not allow_units:
             raise
@@ -1345,9 +1418,9 @@ def report_series(model: IdentModel, prep, cols: np.ndarray, theta, names: list[
     q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
     fit_ = theta if isinstance(theta, Fit) else None
     if fit_ is not None and fit_.terms:
-        raw = q if raw_q is None else raw_q
+        raw = q[:, model.row_states] if raw_q is None else raw_q
         tau_hat = prep.apply(model_torques(fit_, full.t, raw, q, dq, ddq))
-        return {"t": prep.t, "tau": prep.tau[:, cols], "tau_hat": tau_hat, "joints": names}
+        return {"t": prep.t, "tau": prep.tau[:, cols[model.row_states]], "tau_hat": tau_hat, "joints": names}
     theta = fit_.theta if fit_ is not None else theta
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb:
@@ -1356,7 +1429,7 @@ def report_series(model: IdentModel, prep, cols: np.ndarray, theta, names: list[
         idx = prep.index
         tau_hat = np.concatenate([model.regressor(q[idx[k:k + 20000]], dq[idx[k:k + 20000]],
                                                   ddq[idx[k:k + 20000]]) @ theta for k in range(0, len(idx), 20000)])
-    return {"t": prep.t, "tau": prep.tau[:, cols], "tau_hat": tau_hat, "joints": names}
+    return {"t": prep.t, "tau": prep.tau[:, cols[model.row_states]], "tau_hat": tau_hat, "joints": names}
 
 
 def position_spectrum(log, cols, fs: float, cutoff: float | None = None, t=None, bands: int = 300,
@@ -1466,11 +1539,17 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     BaseparamsError
         A state coordinate whose joint is not in the log (naming the joints).
     """
+    from ..kinematics.floating import BASE_COORDINATES
+
     r = model.robot
     coords = np.asarray(r.actuated, dtype=int) if r.has_loops else np.arange(r.dof)
-    wanted = [r.joint_names[r.dof_body[c]] for c in coords]
+    wanted = [BASE_COORDINATES[c] if r.jtype[r.dof_body[c]] == "F" else r.joint_names[r.dof_body[c]] for c in coords]
     where = {j: k for k, j in enumerate(log.joints)}
     missing = [j for j in wanted if j not in where]
+    if missing and r.floating and missing[0] == BASE_COORDINATES[0]:
+        raise BaseparamsError(f"{log.source}: robot {r.name!r} has a floating base and the log has no base pose "
+                              "(columns base_x, base_y, base_z, base_qw, base_qx, base_qy, base_qz: README, "
+                              "Log layout)")
     if missing:
         what = "actuated joints" if r.has_loops else "joints"
         raise BaseparamsError(f"{log.source}: the log has no column for the {what} {missing} of {r.name!r}")
@@ -1520,7 +1599,7 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb or log is None:
         q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
-        a, tau = prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols]
+        a, tau = prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols[model.row_states]]
         if parts_out is None:
             acc = RowAccumulator(len(model.coords), model.n_params).add(a, tau)
         else:
@@ -1545,7 +1624,7 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     # (a fraction 1 / factor of the full-rate regressor); else that pass recomputes them
     fitted_mb = full.n_samples / max(prep.factor, 1) * len(model.coords) * (model.n_params + 1) * 8 / 1e6
     held = keep if keep is not None and fitted_mb <= memory_mb else None
-    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params, held)[0]
+    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params, held, model.row_states)[0]
              for c in chunks.plan(full.n_samples, size, margin)]
     if parts_out is not None and held:
         # the cross-validation's blocks from the fitted rows, split as the at-once path splits them
@@ -1615,7 +1694,7 @@ def predict_log(f: Fit, log, cutoff: float | None, smooth: bool = True) -> np.nd
 
     cols = log_columns(f.model, log)
     q, dq, ddq, _ = log_states(log, cutoff, smooth)
-    return model_torques(f, log.t, log.q[:, cols], q[:, cols], dq[:, cols], ddq[:, cols])
+    return model_torques(f, log.t, log.q[:, cols[f.model.row_states]], q[:, cols], dq[:, cols], ddq[:, cols])
 
 
 def model_torques(f: Fit, t: np.ndarray, q_raw: np.ndarray, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray,

@@ -318,6 +318,29 @@ def remove_slow(data, threshold) -> tuple[np.ndarray, dict[str, int]]:
     return keep, ({"slow (|dq| < min_speed on a joint)": count} if count else {})
 
 
+def slow_threshold(joints, min_speed):
+    """``min_speed`` per log column: zero (never slow) on a floating base's coordinates, which are no joint.
+
+    Parameters
+    ----------
+    joints : sequence of str, shape ``(m,)``
+        The log's columns (``JointLog.joints``).
+    min_speed : float or array_like, shape ``(m,)``
+        The slowest speed kept [rad/s or m/s].
+
+    Returns
+    -------
+    float or ndarray, shape ``(m,)``
+        ``min_speed`` as given without a floating base; else per column, zero on the base's.
+    """
+    from ..kinematics.floating import BASE_COORDINATES
+
+    base = np.isin(np.asarray(joints, dtype=object), BASE_COORDINATES)
+    if not base.any():
+        return min_speed
+    return np.where(base, 0.0, np.broadcast_to(np.asarray(min_speed, dtype=float), base.shape))
+
+
 def resample(log: JointLog, rate: float | None = None, rtol: float = UNIFORM_RTOL) -> JointLog:
     """The log on a uniform time grid, by linear interpolation of every signal.
 
@@ -521,7 +544,7 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         removed[f"decimation by {k}"] = removed.get(f"decimation by {k}", 0) + len(inner) - len(index)
     notes = [design.note, *rate_notes, k_note]
     if min_speed is not None:
-        keep, slow = remove_slow(dq[index], min_speed)
+        keep, slow = remove_slow(dq[index], slow_threshold(u.joints, min_speed))
         index = index[keep]
         for reason, c in slow.items():
             removed[reason] = removed.get(reason, 0) + c

@@ -5,6 +5,15 @@ from __future__ import annotations
 from .pipeline import Identification
 
 
+def _condition(e: dict) -> str:
+    """The condition numbers: the motion's (what ``excite`` reports for a design) and the fitted rows'."""
+    fitted = f"{e['fitted_condition_number']:.4g}"
+    if e.get("of") != "motion":
+        return f"condition number {fitted} (of the fitted rows)"
+    return (f"condition number {e['condition_number']:.4g} (of the motion: the regressor at the log's states, as "
+            f"excite reports it; of the fitted rows, filtered and weighted: {fitted})")
+
+
 def format_identification(result: Identification) -> str:
     """The identification as a text report.
 
@@ -26,7 +35,7 @@ def format_identification(result: Identification) -> str:
     removed = ", ".join(f"{v} {k}" for k, v in n["removed"].items()) or "none"
     how = j.get("estimator", j["method"])
     lines = [f"{j['model']}: identification ({how}), {n['used']} samples used of {n['read']} read "
-             f"(removed: {removed}); condition number {j['condition_number']:.4g}",
+             f"(removed: {removed}); {_condition(j['excitation'])}",
              _excitation_line(j["excitation"]),
              f"standard deviations: {j['covariance']}",
              f"base parameters ({j['convention']} convention, SI units):",

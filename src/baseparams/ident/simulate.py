@@ -13,6 +13,9 @@ from ..errors import BaseparamsError
 from ..model.robot import Robot
 from .model import IdentModel, ident_model
 
+#: harmonics of :func:`simulate_log`'s random trajectory
+SIM_HARMONICS = 5
+
 
 def fourier_trajectory(m: int, duration: float, rate: float, rng: np.random.Generator, harmonics: int = 5,
                        base_frequency: float = 0.1, amplitude: float = 0.6,
@@ -58,7 +61,7 @@ def fourier_trajectory(m: int, duration: float, rate: float, rng: np.random.Gene
         raise BaseparamsError(f"duration and rate must be > 0, got {duration} s and {rate} Hz")
     t = np.arange(int(round(duration * rate))) / rate
     w = 2 * np.pi * base_frequency * np.arange(1, harmonics + 1)  # (L,)
-    a, b = rng.normal(size=(2, harmonics, m))
+    a, b = fourier_draws(rng, harmonics, m)
     wt = np.outer(t, w)  # (S, L)
     s, c = np.sin(wt), np.cos(wt)
     q = s @ (a / w[:, None]) - c @ (b / w[:, None])
@@ -68,6 +71,24 @@ def fourier_trajectory(m: int, duration: float, rate: float, rng: np.random.Gene
     k = amplitude / np.where(peak > 0, peak, 1.0)
     off = (np.zeros(m) if center is None else np.asarray(center, dtype=float)) - (q * k).mean(axis=0)
     return t, q * k + off, dq * k, ddq * k
+
+
+def fourier_draws(rng: np.random.Generator, harmonics: int, m: int) -> np.ndarray:
+    """The random coefficients of :func:`fourier_trajectory` (the first draws of its ``rng``).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The source.
+    harmonics, m : int
+        Harmonics and joints.
+
+    Returns
+    -------
+    ndarray, shape ``(2, harmonics, m)``
+        Standard normal draws: the sine and cosine coefficients before scaling.
+    """
+    return rng.normal(size=(2, harmonics, m))
 
 
 def add_noise(tau: np.ndarray, std, rng: np.random.Generator) -> np.ndarray:
@@ -132,12 +153,17 @@ def amplitude_ladder(robot: Robot) -> list[float]:
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
                  noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
                  convention: str = "khalil", trajectory=None, samples: int | None = None):
-    """A synthetic joint log of a fixed-base robot, with its true model parameters.
+    """A synthetic joint log, with its true model parameters.
+
+    A floating base moves too: its position [m] and Z-Y-X angles [rad] follow Fourier series like
+    the joints (``amplitude`` each); the log holds its pose and twist (README "Log layout") and
+    the torques of the joints alone (the base wrench that carries it is not measured), the
+    truth the base parameters those torques determine.
 
     Parameters
     ----------
     robot : Robot
-        The model (fixed base; loops closed by the actuated joints).
+        The model (a tree, fixed or floating base; loops closed by the actuated joints).
     duration, rate : float
         Length [s] and sampling rate [Hz].
     amplitude : float, optional
@@ -145,7 +171,8 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     noise : float
         Standard deviation of the Gaussian torque noise [N m or N].
     seed : int
-        Seed of the trajectory, the drive parameters and the noise.
+        Seed of the trajectory's coefficients (drawn, or skipped with ``trajectory``: the same drive
+        parameters, the same robot, either way), then of the drive parameters and the noise.
     rotor : bool
         Include rotor inertias (the model's armature where it has one, else drawn in 0.01-0.1).
     friction : iterable of str
@@ -170,35 +197,40 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     Raises
     ------
     BaseparamsError
-        A floating base, or loops the trajectory does not close (lower ``amplitude``).
+        Loops the trajectory does not close (lower ``amplitude``); a trajectory for a floating base.
     """
+    from ..kinematics.floating import BASE_COORDINATES, robot_states
     from .data import JointLog
 
-    if robot.floating:
-        raise BaseparamsError(f"robot {robot.name!r}: simulate writes joint logs of fixed-base robots")
-    model = ident_model(analyze(robot, samples=samples, convention=convention), rotor, tuple(friction))
+    check_trajectory(robot, trajectory)
+    rows = "joints" if robot.floating else "all"
+    model = ident_model(analyze(robot, samples=samples, convention=convention, rows=rows), rotor, tuple(friction),
+                        log_base=robot.floating)
     if amplitude is not None and not amplitude > 0:
         raise BaseparamsError(f"amplitude must be > 0 rad, got {amplitude}")
     ladder = [amplitude] if amplitude is not None or trajectory is not None else amplitude_ladder(robot)
     for k, amp in enumerate(ladder):
         rng = np.random.default_rng(seed)
         if trajectory is None:
-            t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, amplitude=amp)
-        else:
+            t, q, dq, ddq = fourier_trajectory(model.state_columns, duration, rate, rng, SIM_HARMONICS, amplitude=amp)
+        else:  # the draws a random trajectory takes, skipped: the same drives (the same robot) either way
+            fourier_draws(rng, SIM_HARMONICS, model.state_columns)
             t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
         delta = _draw_drives(model, rng)
         try:
-            y = regressor_of(robot, q, dq, ddq)
+            y = regressor_of(robot, *robot_states(robot, q, dq, ddq))
         except BaseparamsError as exc:
             if k + 1 == len(ladder) or "close the loops" not in str(exc):
                 raise
             continue  # the loops do not close that far: a smaller default excursion
         break
-    sel = np.arange(len(model.coords))
-    tau = (y @ robot.parameters("paper")
+    sel = model.row_states
+    tau = ((y if robot.has_loops else y[:, model.coords]) @ robot.parameters("paper")
            + model.drives.regressor(dq[:, sel], ddq[:, sel], len(model.coords)) @ delta)
     tau = add_noise(tau, noise, rng) if noise > 0 else tau
     joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
+    if robot.floating:  # the base's coordinates first, its wrench not measured
+        joints, tau = BASE_COORDINATES + joints, np.concatenate([np.zeros((len(t), 6)), tau], axis=1)
     log = JointLog(t, joints, q, tau, dq=dq, source=f"simulated {robot.name}")
     theta = model.theta(robot.parameters("paper"), delta)
     truth = {"model": robot.name, "convention": convention, "noise": noise,
@@ -206,6 +238,26 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
              "parameters": [{"name": n, "value": float(v)} for n, v in zip(model.names, theta)],
              "drives": dict(zip(model.drives.names, delta.tolist()))}
     return log, truth
+
+
+def check_trajectory(robot: Robot, trajectory) -> None:
+    """Refuse a given trajectory for a floating base (its motion is drawn, not read from a trajectory file).
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+    trajectory : object or None
+        The trajectory given, if any.
+
+    Raises
+    ------
+    BaseparamsError
+        A trajectory for a floating base.
+    """
+    if robot.floating and trajectory is not None:
+        raise BaseparamsError(f"robot {robot.name!r}: a floating base's motion is not in a trajectory file; simulate "
+                              "draws it (without a trajectory)")
 
 
 def regressor_of(robot: Robot, q, dq, ddq) -> np.ndarray:

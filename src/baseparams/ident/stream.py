@@ -775,15 +775,15 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
     Raises
     ------
     NotStreamable
-        Non-uniform time stamps (read the log whole).
+        Non-uniform time stamps, a floating base (read the log whole).
     BaseparamsError
         As :func:`~baseparams.ident.pipeline.identify`.
     """
     from ..numerics import blas_threads
 
     if robot.floating:
-        raise BaseparamsError(f"robot {robot.name!r}: identification from a joint log needs a fixed base (a floating "
-                              f"base's motion and wrench are not in a joint log); use the Python API with states")
+        raise NotStreamable(f"robot {robot.name!r}: a floating base's log is read whole (its pose is unwrapped "
+                            "over the whole log), not streamed")
     if holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     opts = dict(validating=validation is not None, method=method, rotor=rotor, friction=tuple(friction),

@@ -81,10 +81,13 @@ def subchain(robot: Robot, log: JointLog, joints: Sequence[str],
     Raises
     ------
     ModelError
-        An unknown joint, a weld of a listed joint.
+        An unknown joint, a weld of a listed joint, a floating base.
     DataError
         A listed joint missing from the log, or an unlisted joint that moves in the log.
     """
+    if robot.floating:
+        raise ModelError(f"robot {robot.name!r}: sub-chains (--joints) of a floating base are not supported; identify "
+                         "every joint")
     welds = dict(welds or {})
     names = list(robot.joint_names)
     for j in list(joints) + list(welds):

@@ -430,7 +430,7 @@ def fitted_rows(model, prep, cols: np.ndarray, memory_mb: float, log, min_speed=
         sl = slice(c.lo, c.hi)
         rates = {k: None if getattr(uniform, k) is None else getattr(uniform, k)[sl] for k in ("dq", "ddq")}
         part = replace(uniform, t=uniform.t[sl], q=uniform.q[sl], tau=uniform.tau[sl], **rates)
-        a, tau, _ = chunks.chunk_rows(part, c, grid, model.regressor, cols)
+        a, tau, _ = chunks.chunk_rows(part, c, grid, model.regressor, cols, rows=model.row_states)
         if a is not None and len(a):
             yield a, tau
 

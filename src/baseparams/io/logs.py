@@ -17,6 +17,18 @@ Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a joint o
 columns are ignored, and a note lists them. Every 1-dof (R or P) joint of the model must be in
 the log unless ``allow_subset=True``.
 
+Floating base
+-------------
+A robot with a floating base (``Robot.floating``: a legged robot, ``--floating``) needs the
+base's pose in the log, ``base_x, base_y, base_z`` [m] (the base frame's origin, world frame)
+and ``base_qw, base_qx, base_qy, base_qz`` (its orientation, world <- base, unit quaternion,
+scalar first), and takes its twist when the joints have ``dq``: ``base_vx, base_vy, base_vz``
+[m/s] (the origin's velocity) and ``base_wx, base_wy, base_wz`` [rad/s], both in the **base**
+frame (without them the twist is derived from the pose). Accelerations are derived. The base
+becomes the log's first six coordinates :data:`~baseparams.kinematics.floating.BASE_COORDINATES`
+(position and unwrapped Z-Y-X angles; tau zero, not measured): :mod:`baseparams.kinematics.floating`.
+A pitch beyond 85 deg, or a quaternion far from unit norm, is refused naming the row.
+
 ROS bags
 --------
 ``sensor_msgs/msg/JointState`` messages on one topic (default: the first JointState topic; a
@@ -83,6 +95,7 @@ import numpy as np
 from ..errors import DataError
 from ..files import SMALL_MAX_BYTES, atomic_path, check_input, read_input_bytes
 from ..ident.data import JointLog
+from ..kinematics.floating import BASE_COORDINATES, POSE_COLUMNS, TWIST_COLUMNS
 from ..model.robot import Robot
 
 #: suffixes of each kind of log
@@ -192,7 +205,9 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
             raise DataError(f"{spec['label']}: 'topic' applies to ROS bags only, not to {p.name}")
         table = {"text": _read_text, "npz": _read_npz, "parquet": _read_parquet}[kind](p)
     joints = _resolve(table, robot, spec, allow_subset, require_tau)
-    return _assemble(table, joints, spec, max_angle, max_travel, require_time)
+    base = _base_columns(table, robot)
+    log = _assemble(table, joints, spec, max_angle, max_travel, require_time, base)
+    return _with_base(table, log, base) if base else log
 
 
 def _kind(p: Path) -> str:
@@ -665,13 +680,13 @@ def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> d
 
 
 def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_travel,
-              require_time: bool = True) -> JointLog:
+              require_time: bool = True, base: list[str] = ()) -> JointLog:
     """Check the values (finite, time increasing, plausible) and convert to the joint side."""
     tcol = spec["time"] if not table.is_bag else "t"
     untimed = tcol not in table.columns and not require_time
     if tcol not in table.columns and not untimed:
         raise DataError(f"{table.source}: no time column {tcol!r} (columns: {', '.join(list(table.columns)[:12])})")
-    used = ([] if untimed else [tcol]) + [c for x in joints for c in x.cols.values() if c is not None]
+    used = ([] if untimed else [tcol]) + [c for x in joints for c in x.cols.values() if c is not None] + list(base)
     for c in used:
         if c in table.text:
             raise DataError(table.text[c])
@@ -702,6 +717,66 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_tr
                      + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))
     return JointLog(t=t, joints=tuple(x.joint for x in joints), q=arrays["q"], tau=arrays["tau"], dq=arrays["dq"],
                     ddq=arrays["ddq"], source=table.source, removed=dict(table.removed), notes=tuple(notes))
+
+
+def _base_columns(table: _Table, robot: Robot) -> list[str]:
+    """A floating base's pose columns and, when all six are there, its twist columns (else ``[]``)."""
+    if not robot.floating:
+        return []
+    clash = [j for j in robot.joint_names if j in BASE_COORDINATES]
+    if clash:
+        raise DataError(f"{table.source}: robot {robot.name!r} has a joint named {clash[0]!r}, the name of a floating "
+                        f"base coordinate in a log; rename the joint")
+    missing = [c for c in POSE_COLUMNS if c not in table.columns]
+    if missing:
+        raise DataError(f"{table.source}: robot {robot.name!r} has a floating base: the log needs its pose, columns "
+                        f"{', '.join(POSE_COLUMNS)} (position [m] and unit quaternion, world frame); missing "
+                        f"{', '.join(missing)}")
+    twist = [c for c in TWIST_COLUMNS if c in table.columns]
+    if twist and len(twist) < len(TWIST_COLUMNS):
+        raise DataError(f"{table.source}: base twist columns {', '.join(twist)} without "
+                        f"{', '.join(c for c in TWIST_COLUMNS if c not in twist)} (give all six, or none)")
+    return list(POSE_COLUMNS) + twist
+
+
+def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
+    """The floating base's six coordinates (and rates) put before the joints (:mod:`baseparams.kinematics.floating`)."""
+    from ..kinematics.floating import MAX_PITCH, chart_rates, quaternion_matrix, zyx_of_rotation
+
+    pose = np.stack([table.columns[c] for c in POSE_COLUMNS], axis=1)
+    norm = np.linalg.norm(pose[:, 3:], axis=1)
+    bad = np.abs(norm - 1.0) > 1e-2
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DataError(f"{table.source}: columns base_qw..base_qz, {table.row(i)}: quaternion norm {norm[i]:.4g}, "
+                        "not a unit quaternion (w, x, y, z of the base's orientation)")
+    chart = np.concatenate([pose[:, :3], zyx_of_rotation(quaternion_matrix(pose[:, 3:]))], axis=1)
+    steep = np.abs(chart[:, 4]) > MAX_PITCH
+    if steep.any():
+        i = int(np.argmax(steep))
+        raise DataError(f"{table.source}: columns base_qw..base_qz, {table.row(i)}: the base pitches "
+                        f"{np.rad2deg(chart[i, 4]):.1f} deg; beyond +-{np.rad2deg(MAX_PITCH):.0f} deg the Euler "
+                        "angles the base pose is filtered in are singular")
+    notes = list(log.notes)
+    rates = None
+    if log.dq is not None and len(base) > len(POSE_COLUMNS):
+        rates = chart_rates(chart, np.stack([table.columns[c] for c in TWIST_COLUMNS], axis=1))
+    elif log.dq is not None:
+        rates = np.gradient(chart, log.t, axis=0)
+        notes.append("base twist: no columns base_vx..base_wz; derived from the base pose (central differences)")
+    elif len(base) > len(POSE_COLUMNS):
+        notes.append("base twist: columns base_vx..base_wz not used (the joints have no dq: every rate is derived)")
+    zeros = np.zeros((log.n_samples, 6))
+
+    def cat(base_part, joint_part):
+        return None if joint_part is None else np.concatenate([base_part, joint_part], axis=1)
+
+    ddq = None if log.ddq is None else np.gradient(np.gradient(chart, log.t, axis=0) if rates is None else rates,
+                                                    log.t, axis=0)
+    if ddq is not None:
+        notes.append("base acceleration: derived from the base twist (central differences)")
+    return JointLog(log.t, BASE_COORDINATES + log.joints, cat(chart, log.q), cat(zeros, log.tau), cat(rates, log.dq),
+                    cat(ddq, log.ddq), log.source, dict(log.removed), tuple(notes))
 
 
 def _conversion_notes(joints: list[_Joint], spec: dict) -> list[str]:
@@ -777,13 +852,23 @@ def log_columns_of(log: JointLog) -> dict[str, np.ndarray]:
     Returns
     -------
     dict of str to ndarray, each shape ``(S,)``
-        ``t``, then ``q_<joint>`` for every joint, ``dq_``/``ddq_`` when the log has them, ``tau_``.
+        ``t``, then ``q_<joint>`` for every joint, ``dq_``/``ddq_`` when the log has them, ``tau_``;
+        a floating base's coordinates (:data:`~baseparams.kinematics.floating.BASE_COORDINATES`
+        first) as its pose columns and, with ``dq``, its twist columns (module docstring).
     """
     cols = {"t": log.t}
+    first = 0
+    if log.floating:  # a floating base: its pose and twist columns
+        from ..kinematics.floating import chart_twist, zyx_quaternion
+
+        first = 6
+        cols.update(zip(POSE_COLUMNS, np.concatenate([log.q[:, :3], zyx_quaternion(log.q[:, 3:6])], axis=1).T))
+        if log.dq is not None:
+            cols.update(zip(TWIST_COLUMNS, chart_twist(log.q[:, :6], log.dq[:, :6]).T))
     for kind in KINDS:
         arr = getattr(log, kind)
         if arr is not None:
-            cols.update({f"{kind}_{j}": arr[:, k] for k, j in enumerate(log.joints)})
+            cols.update({f"{kind}_{j}": arr[:, k] for k, j in enumerate(log.joints) if k >= first})
     return cols
 
 

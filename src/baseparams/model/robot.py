@@ -485,6 +485,15 @@ class Robot:
         return len(self.loops) > 0 or len(self.couplings) > 0
 
     @property
+    def only_couplings(self) -> bool:
+        """True when couplings (URDF ``<mimic>``) constrain the tree and no loop joint does.
+
+        Linear couplings hold at every configuration: nothing is assembled, no sample is
+        discarded, and reports say "coupled joints", not "loops".
+        """
+        return len(self.couplings) > 0 and len(self.loops) == 0
+
+    @property
     def q_index(self) -> np.ndarray:
         """First coordinate of each joint in ``q`` ``(n,)``."""
         return np.concatenate([[0], np.cumsum(self.ndofs)[:-1]]).astype(int)

@@ -14,7 +14,9 @@ when they are already loaded. The first call on a
 machine compiles (~10-20 s) and caches the result next to this file (or in
 ``NUMBA_CACHE_DIR``); later processes load it. Where nothing can be cached (a read-only install
 with an unwritable HOME / ``NUMBA_CACHE_DIR``) the kernels are compiled in memory in each process
-and a :class:`CompileCacheWarning` says so once.
+and a :class:`CompileCacheWarning` says so once. A call that will compile (nothing in memory, nothing in
+the disk cache: :func:`will_compile`) is announced in one line on stderr first, once per kernel and
+process (:data:`COMPILE_NOTE`): otherwise the machine's first run is ~20 s of silence.
 """
 
 from __future__ import annotations
@@ -70,6 +72,54 @@ def _kernels():
                       "NUMBA_CACHE_DIR): the regressor kernels are compiled in memory in each run (~10-20 s); "
                       "set NUMBA_CACHE_DIR to a writable folder to keep them", CompileCacheWarning, stacklevel=2)
     return k
+
+
+#: said once per process: compiling a kernel takes ~20 s on the machine's first run
+COMPILE_NOTE = ("baseparams: compiling the regressor kernel {name} once (about 20 s); "
+                "later runs load it from numba's cache")
+_announced: set[str] = set()
+
+
+def _kernel(name: str):
+    """The kernel ``name``, after one line on stderr when calling it will compile it (not in the disk cache).
+
+    numba compiles a kernel on its first call unless its on-disk cache holds it for this source
+    and CPU; that first call is otherwise ~20 s of silence. Once per process, when the kernel is
+    not compiled in memory and the cache's index for it is empty (or there is no cache), one line
+    says so. Numba's cache index is read through its private ``_cache`` attribute; if that
+    changes, nothing is said (the kernel works the same).
+    """
+    k = _kernels()
+    fn = getattr(k, name)
+    if name not in _announced:
+        _announced.add(name)
+        if will_compile(fn):
+            print(COMPILE_NOTE.format(name=name), file=sys.stderr, flush=True)
+    return fn
+
+
+def will_compile(dispatcher) -> bool:
+    """Whether calling a numba dispatcher will compile it: nothing in memory, nothing in its disk cache.
+
+    Parameters
+    ----------
+    dispatcher : numba dispatcher
+        A kernel of :mod:`baseparams.regressor.kernels`.
+
+    Returns
+    -------
+    bool
+        ``True`` when no overload is compiled in this process and the on-disk cache index for this
+        source has no entry (or caching is off); ``False`` when unsure.
+    """
+    try:
+        if dispatcher.overloads:
+            return False
+        cache = getattr(dispatcher, "_cache", None)
+        index = getattr(getattr(cache, "_cache_file", None), "_load_index", None)
+        return True if index is None else not index()
+    except Exception:  # noqa: BLE001 - a private numba API: when it changes, say nothing
+        return False
 
 
 class Layout:
@@ -146,7 +196,7 @@ def tree_regressor(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray,
     lay = Layout(robot)
     s = q.shape[0]
     out = np.zeros((s, lay.dof, 10 * lay.n)) if out is None else out
-    _kernels().tree(*lay.args(), _c(q), _c(dq), _c(ddq), out)
+    _kernel("tree")(*lay.args(), _c(q), _c(dq), _c(ddq), out)
     return out
 
 
@@ -174,7 +224,7 @@ def closed_regressor(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarra
     lay = Layout(robot)
     s, na = G.shape[0], G.shape[2]
     out = np.empty((s, na, 10 * lay.n)) if out is None else out
-    _kernels().closed(*lay.args(), _c(q), _c(dq), _c(ddq), _c(G), out)
+    _kernel("closed")(*lay.args(), _c(q), _c(dq), _c(ddq), _c(G), out)
     return out
 
 
@@ -235,7 +285,7 @@ def tree_projected(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray,
     cptr, ccol, cmat = projection_csr(P, robot.n)
     rowsel = np.ascontiguousarray(rowsel, dtype=np.int64)
     out = np.empty((q.shape[0], len(rowsel), P.shape[1])) if out is None else out
-    _kernels().tree_projected(*lay.args(), _c(q), _c(dq), _c(ddq), rowsel, cptr, ccol, cmat, out)
+    _kernel("tree_projected")(*lay.args(), _c(q), _c(dq), _c(ddq), rowsel, cptr, ccol, cmat, out)
     return out
 
 
@@ -264,5 +314,5 @@ def closed_projected(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarra
     lay = Layout(robot)
     cptr, ccol, cmat = projection_csr(P, robot.n)
     out = np.empty((G.shape[0], G.shape[2], P.shape[1])) if out is None else out
-    _kernels().closed_projected(*lay.args(), _c(q), _c(dq), _c(ddq), _c(G), cptr, ccol, cmat, out)
+    _kernel("closed_projected")(*lay.args(), _c(q), _c(dq), _c(ddq), _c(G), cptr, ccol, cmat, out)
     return out

@@ -391,7 +391,7 @@ def _certification(result) -> str:
     num = cert.numerical
     s = cert.sampling or {}
     sampling = f"{s.get('kept', num.samples)} of {s.get('requested', num.samples)} random samples kept"
-    if "not_converged" in s:
+    if "not_converged" in s and not result.robot.only_couplings:
         sampling += (f" ({s['not_converged']} outside the workspace, {s['branch_jumps']} off the reference branch "
                      f"or past a singular configuration, "
                      f"{s['ill_conditioned']} ill-conditioned; max loop residual {s['max_loop_residual']:.1e})")

@@ -270,6 +270,10 @@ def builtin_tables() -> dict[str, str]:
     return out
 
 
+#: robot files (numbers, not symbols): refused by :func:`load_symbolic` instead of read as a table
+ROBOT_FILE_SUFFIXES = (".urdf", ".xml", ".mjcf", ".xacro", ".sdf")
+
+
 def load_symbolic(model: str) -> SymbolicRobot:
     """A symbolic robot by built-in name (``puma560-symbolic``...) or ``.dh`` file path.
 
@@ -286,11 +290,16 @@ def load_symbolic(model: str) -> SymbolicRobot:
     Raises
     ------
     ModelError
-        Neither a file nor a built-in symbolic robot.
+        Neither a file nor a built-in symbolic robot; a robot file (URDF, MJCF, xacro), which has
+        numbers, not symbols.
     """
     from .examples import EXAMPLES
 
     p = Path(model)
+    if p.suffix.lower() in ROBOT_FILE_SUFFIXES:
+        raise ModelError(f"{model}: a robot file has numbers, not symbols: the symbolic analysis takes a DH table "
+                         f"(.dh, lengths as names) or a built-in symbolic robot ({', '.join(builtin_tables())}); "
+                         "analyze this file without --symbolic")
     if p.exists() or model.lower().endswith(".dh"):  # read_table refuses a folder, a device, a FIFO
         return read_table(p)
     key = model.lower()

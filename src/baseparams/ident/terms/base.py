@@ -38,7 +38,7 @@ class TermContext:
         The prepared log (its ``full`` log: the filtered full-rate states and torques; ``index``:
         the fitted samples).
     raw_q : ndarray, shape ``(S, m)``
-        Unfiltered positions of the measured coordinates on the full-rate uniform grid
+        Unfiltered positions of the measured coordinates (measured-row order) on the full-rate uniform grid
         (``prep.full.t``): Dahl's state follows the path as measured.
     cols : ndarray of int, shape ``(m,)``
         The log column of each state column.
@@ -65,13 +65,13 @@ class TermContext:
 
     @property
     def tau(self) -> np.ndarray:
-        """The measured torques of the fitted rows ``(S', m)`` (filtered), state-column order."""
-        return self.prep.tau[:, self.cols]
+        """The measured torques of the fitted rows ``(S', m)`` (filtered), measured-row order."""
+        return self.prep.tau[:, self.cols[self.model.row_states]]
 
     @property
     def tau_full(self) -> np.ndarray:
-        """The filtered measured torques at the full rate ``(S, m)``, state-column order."""
-        return self.prep.full.tau[:, self.cols]
+        """The filtered measured torques at the full rate ``(S, m)``, measured-row order."""
+        return self.prep.full.tau[:, self.cols[self.model.row_states]]
 
     @property
     def joints(self) -> list[str]:

@@ -29,7 +29,8 @@ LAYERS = {
     "loading": 10, "analysis": 10,
     # the identification pipeline sits on the analysis; ident's other modules (logs, filters,
     # estimators) below the readers
-    "ident.model": 10.2, "ident.pipeline": 10.4, "ident.stream": 10.5, "ident.simulate": 10.4, "ident.report": 10.6,
+    "ident.model": 10.2, "ident.terms": 10.3,
+    "ident.pipeline": 10.4, "ident.stream": 10.5, "ident.simulate": 10.4, "ident.report": 10.6,
     "symbolic": 11,
     "report": 12, "fleet": 12, "excitation": 12,
     "workflow": 12.5,

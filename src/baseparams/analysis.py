@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import numpy as np
 
-from .display import data_frame, text_table
+from .display import data_frame, summary_repr, text_table
 from .enums import Source, Status, values
 from .errors import BaseparamsError
 from .model.robot import Robot
@@ -618,6 +618,8 @@ class Practical:
         The model as the file states it.
     """
 
+    __repr__ = summary_repr
+
     literal_n_base: int
     snaps: tuple
     candidates: int
@@ -626,7 +628,18 @@ class Practical:
     source: Robot
 
     def counted_out(self, n_base: int) -> int:
-        """Directions counted out: ``literal_n_base - n_base``."""
+        """Directions counted out.
+
+        Parameters
+        ----------
+        n_base : int
+            The practical count.
+
+        Returns
+        -------
+        int
+            ``literal_n_base - n_base``.
+        """
         return self.literal_n_base - n_base
 
     def note(self, n_base: int) -> str:

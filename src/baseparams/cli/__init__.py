@@ -396,17 +396,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("analyze", help="base parameters of a robot (certified)")
     model_args(s)
     s.add_argument("--no-verify", action="store_true", help="skip the numerical certification")
-    s.add_argument("--paper-only", action="store_true",
-                   help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2, R-M)")
-    s.add_argument("--literal", action="store_true",
-                   help="the model exactly as the file states it: by default geometry within 1e-3 of a right angle "
-                        "or zero (rpy 3.1416, an axis 0 1e-5 1) is taken as that value when it changes the count "
-                        "(the directions it adds are not identifiable in practice; the report names the joint)")
-    s.add_argument("--rows", default=str(Rows.ALL), metavar="ROWS",
-                   help="measured generalized forces: all (default); joints (joint torques only); base (the "
-                        "floating base's wrench only); joints:NAME,NAME (only these joints' torques); "
-                        "base+joints:NAME,... (the base wrench and these); passive:NAME,... (every row but "
-                        "these joints': an under-actuated robot)")
+    _analysis_choice_args(s)
     s.add_argument("--convention", choices=values(Convention),
                    default=str(Convention.KHALIL), help="convention of the regrouped expressions (default khalil)")
     s.add_argument("-v", "--verbose", action="store_true",
@@ -491,13 +481,7 @@ def _identify_parser(sub, model_args) -> None:
                         "cross-validation on the training data; ols, wls (per-joint noise) or physical (physically "
                         "consistent) least squares")
     _ident_args(s)
-    s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
-    s.add_argument("--terms", default="auto", metavar="TERMS",
-                   help="model terms beyond rigid bodies and linear friction: auto (default: pre-sliding friction "
-                        "'dahl', mounting 'tilt', per-joint 'delay', torque-sensor 'scale', each kept when blocked "
-                        "cross-validation on the training data says so; the report lists every one kept or "
-                        "rejected and why), none (the linear model alone), or names to force (dahl,tilt; add auto "
-                        "to also try the others)")
+    _model_class_args(s)
     s.add_argument("--coupling", action="append", metavar="NAME:JOINT=W,JOINT=W",
                    help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "
                         "reaches each JOINT times W; adds Iam_NAME, Fvm_NAME, Fcm_NAME (with --rotor, viscous, "
@@ -506,10 +490,6 @@ def _identify_parser(sub, model_args) -> None:
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
     s.add_argument("--prior-weight", type=float, metavar="W", help="physical: weight of the file's inertias")
-    s.add_argument("--literal", action="store_true",
-                   help="the model exactly as the file states it (analyze --literal): by default geometry within "
-                        "1e-3 of a right angle or zero is taken as that value when the directions it adds are not "
-                        "identifiable in practice, and those directions are not fitted")
     s.add_argument("--joints", metavar="A,B,...",
                    help="identify only these joints; every other joint is welded (at its logged position if it "
                         "does not move, at --weld, or at 0)")
@@ -538,6 +518,36 @@ def _identify_parser(sub, model_args) -> None:
                    help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
     s.set_defaults(func=cmd_identify)
+
+
+def _analysis_choice_args(s) -> None:
+    """``analyze``'s options of what is analysed: the paper's principles only, the literal geometry, the rows."""
+    s.add_argument("--paper-only", action="store_true",
+                   help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2, R-M)")
+    s.add_argument("--literal", action="store_true",
+                   help="the model exactly as the file states it: by default geometry within 1e-3 of a right angle "
+                        "or zero (rpy 3.1416, an axis 0 1e-5 1) is taken as that value when it changes the count "
+                        "(the directions it adds are not identifiable in practice; the report names the joint)")
+    s.add_argument("--rows", default=str(Rows.ALL), metavar="ROWS",
+                   help="measured generalized forces: all (default); joints (joint torques only); base (the "
+                        "floating base's wrench only); joints:NAME,NAME (only these joints' torques); "
+                        "base+joints:NAME,... (the base wrench and these); passive:NAME,... (every row but "
+                        "these joints': an under-actuated robot)")
+
+
+def _model_class_args(s) -> None:
+    """``identify``'s options of the model class: smooth Coulomb, model terms, the literal geometry."""
+    s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
+    s.add_argument("--terms", default="auto", metavar="TERMS",
+                   help="model terms beyond rigid bodies and linear friction: auto (default: pre-sliding friction "
+                        "'dahl', mounting 'tilt', per-joint 'delay', torque-sensor 'scale', each kept when blocked "
+                        "cross-validation on the training data says so; the report lists every one kept or "
+                        "rejected and why), none (the linear model alone), or names to force (dahl,tilt; add auto "
+                        "to also try the others)")
+    s.add_argument("--literal", action="store_true",
+                   help="the model exactly as the file states it (analyze --literal): by default geometry within "
+                        "1e-3 of a right angle or zero is taken as that value when the directions it adds are not "
+                        "identifiable in practice, and those directions are not fitted")
 
 
 def _log_size_args(s) -> None:

@@ -76,7 +76,10 @@ class Fit:
         m = self.model
         how = self.method
         if self.physical is not None:
+            how += ": physical" if self.method != "physical" else ""
             how += " (feasible)" if getattr(self.physical, "feasible", False) else " (not feasible)"
+        if self.terms:
+            how += " with " + "+".join(t.name for t in self.terms)
         rms = getattr(self.estimate, "rms_total", None)
         tail = "" if rms is None else f", residual RMS {format_number(rms, 3)} {m.torque_unit}"
         return clip(f"<Fit {m.robot.name}: {how}, {m.n_base} base + {m.n_drive} drive terms{tail}>")
@@ -707,8 +710,8 @@ class Identification:
             p = doc["physical"]
             phys = PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
                                       tuple(v) if k == "notes" else v) for k, v in p.items()})
-        from .terms.base import make_term
         from .terms.fit import Choice
+        from .terms.registry import make_term
 
         joints = [robot.joint_names[robot.dof_body[c]] for c in model.coords]
         terms = []

@@ -58,29 +58,7 @@ def format_identification(result: Identification) -> str:
         lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
                      + f"): {cells}")
     lines += _terms_lines(j.get("terms") or [])
-    for label in ("train", "validation"):
-        part = j[label]
-        if part is None:
-            lines.append("validation: none (--holdout SECONDS or --validate FILE)")
-            continue
-        per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms"].items())
-        if label == "train":
-            if "samples" in part:
-                fit = (f"; on the fit's own rows, filtered and decimated: {part['fit_rms_total']:.4g}"
-                       if "fit_rms_total" in part else "")
-                lines.append(f"train RMS {part['rms_total']:.4g} against the raw measured torques at every training "
-                             f"sample ({part['samples']} samples; per joint: {per}{fit})")
-            else:
-                lines.append(f"train RMS {part['rms_total']:.4g} (the fit's own rows: filtered and decimated as "
-                             f"fitted, not the validation's measure; per joint: {per})")
-            continue
-        lines.append(f"validation RMS {part['rms_total']:.4g} against the raw measured torques at every held-out "
-                     f"sample ({part['samples']} samples, t {part['t_start']:.6g} to {part['t_end']:.6g} s of "
-                     f"{part['source']}; per joint: {per})")
-        if "score_cutoff" in part:
-            per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms_lowpassed"].items())
-            lines.append(f"validation RMS {part['rms_lowpassed_total']:.4g} against the measured torques low-passed "
-                         f"at {part['score_cutoff']:g} Hz (--score-cutoff; per joint: {per})")
+    lines += _rms_lines(j)
     if j["physical"] is not None:
         p = j["physical"]
         for body, m in p.get("masses_moved", {}).items():
@@ -125,3 +103,32 @@ def _terms_lines(terms: list[dict]) -> list[str]:
         else:
             out.append(f"  {t['name']:<8s} rejected  {t['why']}")
     return out
+
+
+def _rms_lines(j: dict) -> list[str]:
+    """The training and validation RMS lines (one measure: against the raw measured torques)."""
+    lines = []
+    for label in ("train", "validation"):
+        part = j[label]
+        if part is None:
+            lines.append("validation: none (--holdout SECONDS or --validate FILE)")
+            continue
+        per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms"].items())
+        if label == "train":
+            if "samples" in part:
+                fit = (f"; on the fit's own rows, filtered and decimated: {part['fit_rms_total']:.4g}"
+                       if "fit_rms_total" in part else "")
+                lines.append(f"train RMS {part['rms_total']:.4g} against the raw measured torques at every training "
+                             f"sample ({part['samples']} samples; per joint: {per}{fit})")
+            else:
+                lines.append(f"train RMS {part['rms_total']:.4g} (the fit's own rows: filtered and decimated as "
+                             f"fitted, not the validation's measure; per joint: {per})")
+            continue
+        lines.append(f"validation RMS {part['rms_total']:.4g} against the raw measured torques at every held-out "
+                     f"sample ({part['samples']} samples, t {part['t_start']:.6g} to {part['t_end']:.6g} s of "
+                     f"{part['source']}; per joint: {per})")
+        if "score_cutoff" in part:
+            per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms_lowpassed"].items())
+            lines.append(f"validation RMS {part['rms_lowpassed_total']:.4g} against the measured torques low-passed "
+                         f"at {part['score_cutoff']:g} Hz (--score-cutoff; per joint: {per})")
+    return lines

@@ -175,15 +175,7 @@ def ridge(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndar
     ndarray, shape ``(p,)``
         The estimate.
     """
-    h = r11.T @ r11
-    g = r11.T @ r12
-    if penalty is not None:
-        h = h + penalty
-        g = g + penalty @ theta0
-    try:
-        return np.linalg.solve(h, g)
-    except np.linalg.LinAlgError:
-        return np.linalg.lstsq(h, g, rcond=None)[0]
+    return solve(r11, r12, theta0, penalty)
 
 
 def solve(r11: np.ndarray, r12: np.ndarray, theta0: np.ndarray, penalty: np.ndarray | None,

@@ -633,8 +633,7 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
                                                                           "0")}
             _edit_inertial(edit, nodes[name], zero)
     notes = _edit_drives(edit, doc, source, drives or {}, list(couplings))
-    if base_rotation is not None:
-        notes += _rotate_base(edit, doc, root, np.asarray(base_rotation, dtype=float), dest)
+    notes += [] if base_rotation is None else _rotate_base(edit, doc, root, np.asarray(base_rotation, float), dest)
     out = edit.text()
     back = ET.fromstring(out.lstrip("\ufeff \t\r\n").rstrip(" \t\r\n\x00").encode("utf-8"))
     back_links = {ln.get("name"): ln for ln in back.findall("link")}

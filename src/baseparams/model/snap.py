@@ -30,6 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..display import summary_repr
 from .robot import Robot
 
 #: geometry within this of a special value (rad; offsets: relative to the robot's size) is that value
@@ -59,6 +60,8 @@ class Snap:
     deviation : float
         ``|literal - snapped|``, relative (rad; offsets divided by the robot's size).
     """
+
+    __repr__ = summary_repr
 
     body: int
     joint: str

@@ -28,6 +28,7 @@ its cross-validated figure, values and standard deviations.
 
 from __future__ import annotations
 
-from .base import TERMS, Term, TermContext, make_term
+from .base import Term, TermContext
+from .registry import TERMS, make_term
 
 __all__ = ["TERMS", "Term", "TermContext", "make_term"]

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import BaseparamsError
+from ...display import summary_repr
 
 
 @dataclass(eq=False)
@@ -45,6 +45,8 @@ class TermContext:
     folds : list of ndarray of int
         The fitted rows of each contiguous cross-validation block.
     """
+
+    __repr__ = summary_repr
 
     model: object
     a: np.ndarray
@@ -80,12 +82,58 @@ class TermContext:
         return [r.joint_names[r.dof_body[c]] for c in self.model.coords]
 
     def apply(self, x) -> np.ndarray:
-        """Full-rate signals ``(S, ...)`` filtered and decimated like the fitted rows ``(S', ...)``."""
+        """Full-rate signals filtered and decimated like the fitted rows.
+
+        Parameters
+        ----------
+        x : array_like, shape ``(S, ...)``
+            One row per full-rate sample.
+
+        Returns
+        -------
+        ndarray, shape ``(S', ...)``
+            :meth:`baseparams.ident.preprocess.Prepared.apply` of ``x``.
+        """
         return self.prep.apply(x)
+
+
+def complete_docs(klass):
+    """Class decorator: each override's docstring gets the base method's sections (parameters, returns).
+
+    A term's method says what it does in its own summary; its arguments and result are the
+    interface's (:class:`Term`), written once there.
+
+    Parameters
+    ----------
+    klass : type
+        A subclass of :class:`Term`.
+
+    Returns
+    -------
+    type
+        ``klass``, its overrides' docstrings completed.
+    """
+    import inspect
+
+    for name, member in vars(klass).items():
+        base = getattr(Term, name, None)
+        if name.startswith("_") or not inspect.isfunction(member) or base is None or not base.__doc__:
+            continue
+        own = inspect.cleandoc(member.__doc__ or "").split("\n\n")
+        sections = inspect.cleandoc(base.__doc__).split("\n\n")
+        rest = [p for p in sections if p.lstrip().split("\n")[0] in ("Parameters", "Returns", "Raises")
+                or (len(p.split("\n")) > 1 and set(p.split("\n")[1].strip()) == {"-"})]
+        member.__doc__ = "\n\n".join([*(own if own != [""] else sections[:1]), *rest])
+    return klass
 
 
 class Term:
     """One model term (module docstring). Subclasses set :attr:`name` and override what they use.
+
+    Parameters
+    ----------
+    forced : bool
+        Kept whatever the cross-validation says (the user asked for it).
 
     Attributes
     ----------
@@ -105,128 +153,266 @@ class Term:
         self.std: dict = {}
 
     def available(self, ctx: TermContext) -> str | None:
-        """Why the term cannot be used on this model and log (one phrase), or None."""
+        """Why the term cannot be used on this model and log, or None.
+
+        Parameters
+        ----------
+        ctx : TermContext
+            The rows.
+
+        Returns
+        -------
+        str or None
+            One phrase, or None when the term can be used.
+        """
         return None
 
     def prepare(self, ctx: TermContext) -> None:
-        """Precompute what does not depend on the parameters (full-rate columns)."""
+        """Precompute what does not depend on the parameters (full-rate columns).
+
+        Parameters
+        ----------
+        ctx : TermContext
+            The rows.
+        """
 
     def reset(self, ctx: TermContext) -> None:
-        """Start values of its parameters."""
+        """Start values of its parameters.
+
+        Parameters
+        ----------
+        ctx : TermContext
+            The rows.
+        """
 
     def copy(self) -> Term:
-        """An independent copy (its parameters and precomputed columns)."""
+        """An independent copy (its parameters; precomputed columns shared).
+
+        Returns
+        -------
+        Term
+            The copy.
+        """
         import copy
 
         return copy.copy(self)
 
     # roles -------------------------------------------------------------------------------------------------
     def core(self, ctx: TermContext, x: np.ndarray) -> np.ndarray:
-        """The core rows with its columns replaced (``x`` ``(S', m, p)``; returned, maybe the same)."""
+        """The core rows with the term's columns replaced (core role).
+
+        Parameters
+        ----------
+        ctx : TermContext
+            The rows.
+        x : ndarray, shape ``(S', m, p)``
+            The core rows.
+
+        Returns
+        -------
+        ndarray, shape ``(S', m, p)``
+            The rows (``x`` itself when nothing is replaced).
+        """
         return x
 
     def delays(self, m: int) -> np.ndarray:
-        """Delay of each measured channel ``(m,)`` [s] (0 unless a delay term)."""
+        """Delay of each measured channel (measured role).
+
+        Parameters
+        ----------
+        m : int
+            Number of measured rows.
+
+        Returns
+        -------
+        ndarray, shape ``(m,)``
+            [s]; zeros unless a delay term.
+        """
         return np.zeros(m)
 
     def scales(self, m: int) -> np.ndarray:
-        """Scale of each measured channel ``(m,)`` (1 unless a scale term)."""
+        """Scale of each measured channel (measured role).
+
+        Parameters
+        ----------
+        m : int
+            Number of measured rows.
+
+        Returns
+        -------
+        ndarray, shape ``(m,)``
+            Ones unless a scale term.
+        """
         return np.ones(m)
 
     def columns(self, ctx: TermContext, state: dict) -> tuple[np.ndarray, list[str]]:
-        """Linear columns ``(S', m, k)`` of this Gauss-Newton step and their names.
+        """Linear columns of this Gauss-Newton step and their names (additive and measured roles).
 
-        ``state`` holds ``theta`` (core), ``pi`` (standard parameters, paper convention),
-        ``x`` (core rows after replacements), ``y`` (transformed measured rows), ``model``
-        (``x @ theta`` plus the additive terms), ``dy`` (time derivative of the shifted measured
-        rows).
+        Parameters
+        ----------
+        ctx : TermContext
+            The rows.
+        state : dict
+            ``theta`` (core), ``pi`` (standard parameters, paper convention), ``x`` (core rows
+            after replacements), ``y`` (transformed measured rows), ``model`` (``x @ theta``
+            plus the additive terms), ``dy`` (time derivative of the shifted measured rows).
+
+        Returns
+        -------
+        columns : ndarray, shape ``(S', m, k)``
+            The columns.
+        names : list of str, shape ``(k,)``
+            Their coefficients' names.
         """
         return np.zeros(ctx.a.shape[:2] + (0,)), []
 
     def prior(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """A weak prior on the coefficients of :meth:`columns`: ``(precision, target)`` or None.
+        """A weak prior on the coefficients of :meth:`columns`.
 
         In the coefficients' units; the fit multiplies the precision by the residual variance
         (like every prior of the default estimate), so a term the data determine keeps its fitted
         value and one they do not stays near the target.
+
+        Returns
+        -------
+        tuple of ndarray or None
+            ``(precision (k,), target (k,))``, or None for no prior.
         """
         return None
 
     def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
-        """Take a step's coefficients of :meth:`columns`; return its largest relative change."""
+        """Take a Gauss-Newton step's coefficients of :meth:`columns`.
+
+        Parameters
+        ----------
+        coefs : ndarray, shape ``(k,)``
+            The coefficients.
+        std : ndarray, shape ``(k,)``, optional
+            Their standard deviations (kept in :attr:`std`).
+
+        Returns
+        -------
+        float
+            The largest change, in units of the term's resolution (below 1: converged).
+        """
         return 0.0
 
-    def search(self, ctx: TermContext, score) -> None:
-        """A nonlinear search (``score(term) -> float``, the training error with the term as it is)."""
+    def search(self, ctx: TermContext, trial) -> None:
+        """A nonlinear search of the term's parameters (none by default).
+
+        Parameters
+        ----------
+        ctx : TermContext
+            The rows.
+        trial : callable
+            The fit's evaluation of a candidate (the term's own protocol, e.g. Dahl's).
+        """
 
     # prediction ----------------------------------------------------------------------------------------------
     def adjust_model(self, fit, q_raw, q, dq, ddq, tau: np.ndarray) -> np.ndarray:
-        """Model torques ``(S, m)`` with this term's contribution (core and additive roles).
+        """Model torques with this term's contribution (core and additive roles).
 
-        ``q_raw (S, m)``: the measured coordinates' positions as logged (Dahl's state follows
-        them); ``q, dq, ddq (S, state_columns)``: the states the core's torques ``tau`` came from.
+        Parameters
+        ----------
+        fit : Fit
+            The identification's fit.
+        q_raw : ndarray, shape ``(S, m)``
+            The measured coordinates' positions as logged (Dahl's state follows them).
+        q, dq, ddq : ndarray, shape ``(S, state_columns)``
+            The states the core's torques came from.
+        tau : ndarray, shape ``(S, m)``
+            The torques so far.
+
+        Returns
+        -------
+        ndarray, shape ``(S, m)``
+            With this term's contribution.
         """
         return tau
 
     def adjust_measured(self, t: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Model torques ``(S, m)`` as the sensors would measure them (measured role)."""
+        """Model torques as the sensors would measure them (measured role).
+
+        Parameters
+        ----------
+        t : ndarray, shape ``(S,)``
+            Time stamps [s].
+        tau : ndarray, shape ``(S, m)``
+            The model's torques.
+
+        Returns
+        -------
+        ndarray, shape ``(S, m)``
+            As measured.
+        """
         return tau
 
     # reporting -------------------------------------------------------------------------------------------------
     def values(self, joints: list[str]) -> dict:
-        """Its fitted values (JSON types)."""
+        """Its fitted values.
+
+        Parameters
+        ----------
+        joints : list of str, shape ``(m,)``
+            The measured joints.
+
+        Returns
+        -------
+        dict
+            JSON types.
+        """
         return {}
 
     def describe(self, joints: list[str]) -> str:
-        """Its values in one phrase."""
+        """Its values in one phrase.
+
+        Parameters
+        ----------
+        joints : list of str, shape ``(m,)``
+            The measured joints.
+
+        Returns
+        -------
+        str
+            The phrase.
+        """
         return self.name
 
     def export(self) -> dict:
-        """What model files can carry: ``{"mjcf": ..., "urdf": ..., "not": [phrases]}``."""
+        """What model files can carry of it.
+
+        Returns
+        -------
+        dict
+            ``{"not": [phrases]}`` for what they cannot hold, and what they can
+            (``base_rotation`` for a tilt).
+        """
         return {"not": [f"{self.label} (not representable in URDF or MJCF)"]}
 
     def to_json(self, joints: list[str]) -> dict:
-        """Its parameters, to save and load."""
+        """Its parameters, to save and load.
+
+        Parameters
+        ----------
+        joints : list of str, shape ``(m,)``
+            The measured joints.
+
+        Returns
+        -------
+        dict
+            ``{"name", "forced", "values", "std"}``.
+        """
         return {"name": self.name, "forced": self.forced, "values": self.values(joints), "std": self.std}
 
     def load(self, doc: dict, joints: list[str], model) -> None:
-        """Set its parameters from :meth:`to_json`'s output (a saved result)."""
+        """Set its parameters from :meth:`to_json`'s output (a saved result).
 
-
-def _registry() -> dict:
-    from .dahl import Dahl
-    from .delay import Delay
-    from .scale import Scale
-    from .tilt import Tilt
-
-    return {"dahl": Dahl, "tilt": Tilt, "delay": Delay, "scale": Scale}
-
-
-#: the terms, in the order model selection tries them
-TERMS = ("dahl", "tilt", "delay", "scale")
-
-
-def make_term(name: str, forced: bool = False) -> Term:
-    """A term by name.
-
-    Parameters
-    ----------
-    name : str
-        One of :data:`TERMS`.
-    forced : bool
-        Kept whatever the cross-validation says.
-
-    Returns
-    -------
-    Term
-        The term with its start values.
-
-    Raises
-    ------
-    BaseparamsError
-        An unknown name.
-    """
-    reg = _registry()
-    if name not in reg:
-        raise BaseparamsError(f"unknown model term {name!r}; choose from {', '.join(TERMS)}")
-    return reg[name](forced=forced)
+        Parameters
+        ----------
+        doc : dict
+            The saved term.
+        joints : list of str, shape ``(m,)``
+            The measured joints.
+        model : IdentModel
+            The model it belongs to.
+        """

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Term, TermContext
+from .base import Term, TermContext, complete_docs
 
 #: candidate pre-sliding distances of revolute joints [rad] (the first: plain Coulomb, in effect)
 DELTAS = (1e-6, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 3e-3, 5e-3, 1e-2, 2e-2, 5e-2)
@@ -71,8 +71,17 @@ def dahl_state(q: np.ndarray, delta: np.ndarray) -> np.ndarray:
     return np.clip(z, -1.0, 1.0)
 
 
+@complete_docs
 class Dahl(Term):
-    """Pre-sliding friction (module docstring): ``delta_j`` per joint with a Coulomb term."""
+    """Pre-sliding friction (module docstring): ``delta_j`` per joint with a Coulomb term.
+
+    Parameters
+    ----------
+    forced : bool
+        Kept whatever the cross-validation says.
+    delta : array_like, shape ``(m,)``, optional
+        Pre-sliding distances [rad or m] (a saved result's).
+    """
 
     name = "dahl"
     label = "pre-sliding (Dahl) friction"

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Term, TermContext
+from .base import Term, TermContext, complete_docs
 
 #: the largest delay considered [s]
 MAX_DELAY = 0.05
@@ -21,8 +21,17 @@ MAX_DELAY = 0.05
 PRIOR_STD = 0.01
 
 
+@complete_docs
 class Delay(Term):
-    """A delay per measured joint [s] (module docstring)."""
+    """A delay per measured joint [s] (module docstring).
+
+    Parameters
+    ----------
+    forced : bool
+        Kept whatever the cross-validation says.
+    seconds : array_like, shape ``(m,)``, optional
+        Delays [s] (a saved result's).
+    """
 
     name = "delay"
     label = "torque channel delay"

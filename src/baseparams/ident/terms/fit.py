@@ -6,7 +6,7 @@ the core parameters and the terms' linearised columns: :class:`Inner`), a grid s
 distances. :func:`cross_validate` scores a set of terms by blocked cross-validation on the
 training rows (each block predicted from the others, every term refitted without it), in the
 measured torques' own units. :func:`select_terms` adds the terms one by one in the order of
-:data:`~baseparams.ident.terms.base.TERMS` and keeps each one whose cross-validated RMS is lower by
+:data:`~baseparams.ident.terms.registry.TERMS` and keeps each one whose cross-validated RMS is lower by
 more than :data:`KEEP_GAIN` and in at least :data:`KEEP_FOLDS` of the blocks (or that the user
 forced), then drops again each kept term the others make unnecessary (backward), and fits the kept
 set on every training row.
@@ -18,7 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .base import TERMS, Term, TermContext, make_term
+from ...display import summary_repr
+from .base import Term, TermContext
+from .registry import TERMS, make_term
 
 #: a term is kept when it lowers the cross-validated RMS by more than this fraction ...
 KEEP_GAIN = 0.01
@@ -47,6 +49,8 @@ class Inner:
         Core terms kept ``>= 0``.
     """
 
+    __repr__ = summary_repr
+
     weights: np.ndarray
     theta0: np.ndarray
     penalty: np.ndarray | None = None
@@ -70,6 +74,8 @@ class State:
     cov : ndarray, optional
         Covariance of the last step's coefficients (white formula).
     """
+
+    __repr__ = summary_repr
 
     theta: np.ndarray
     pi: np.ndarray
@@ -411,6 +417,8 @@ class Choice:
         Cross-validated RMS with the term added (NaN when not tried).
     """
 
+    __repr__ = summary_repr
+
     name: str
     kept: bool
     why: str
@@ -430,6 +438,8 @@ class TermsFit:
     cv_rms : float
         Cross-validated RMS of the linear core alone.
     """
+
+    __repr__ = summary_repr
 
     state: State
     choices: tuple

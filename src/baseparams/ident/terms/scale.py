@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Term, TermContext
+from .base import Term, TermContext, complete_docs
 
 #: bounds of a scale
 LOWEST, HIGHEST = 0.5, 2.0
@@ -22,8 +22,19 @@ LOWEST, HIGHEST = 0.5, 2.0
 PRIOR_STD = 0.1
 
 
+@complete_docs
 class Scale(Term):
-    """A torque scale per joint, the reference joint's fixed to 1 (module docstring)."""
+    """A torque scale per joint, the reference joint's fixed to 1 (module docstring).
+
+    Parameters
+    ----------
+    forced : bool
+        Kept whatever the cross-validation says.
+    factors : array_like, shape ``(m,)``, optional
+        Scales (a saved result's).
+    reference : int
+        The joint fixed to 1.
+    """
 
     name = "scale"
     label = "torque sensor scale"

@@ -21,7 +21,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .base import Term, TermContext
+from .base import Term, TermContext, complete_docs
 
 #: the tilt's weak prior: level to within this per angle [rad] (1 degree)
 PRIOR_STD = np.radians(1.0)
@@ -141,8 +141,19 @@ def gravity_torques(robot, coords, q: np.ndarray | None, g: np.ndarray, pi: np.n
     return -np.einsum("smk,smk->sm", lines, w[:, body])
 
 
+@complete_docs
 class Tilt(Term):
-    """A mounting tilt (module docstring): two angles [rad]."""
+    """A mounting tilt (module docstring): two angles [rad].
+
+    Parameters
+    ----------
+    forced : bool
+        Kept whatever the cross-validation says.
+    angles : array_like, shape ``(2,)``
+        The rotation vector's components along ``u1, u2`` [rad].
+    pi : array_like, shape ``(10 n,)``, optional
+        The standard parameters it acts on (paper convention).
+    """
 
     name = "tilt"
     label = "mounting tilt"
@@ -199,7 +210,18 @@ class Tilt(Term):
         return change
 
     def gravity(self, robot) -> np.ndarray:
-        """The tilted gravity ``R(alpha u1 + beta u2) g`` [m/s^2], world frame."""
+        """The tilted gravity ``R(alpha u1 + beta u2) g``.
+
+        Parameters
+        ----------
+        robot : Robot
+            The robot (its gravity is the file's).
+
+        Returns
+        -------
+        ndarray, shape ``(3,)``
+            [m/s^2], world frame.
+        """
         u1, u2 = perpendicular_basis(robot.gravity)
         return rotation_vector(self.angles[0] * u1 + self.angles[1] * u2) @ robot.gravity
 
@@ -212,7 +234,13 @@ class Tilt(Term):
         return tau + gravity_torques(r, fit.model.coords, q, dg, self.pi)
 
     def tilt_degrees(self) -> float:
-        """The tilt's magnitude [degree]."""
+        """The tilt's magnitude.
+
+        Returns
+        -------
+        float
+            [degree].
+        """
         return float(np.degrees(np.linalg.norm(self.angles)))
 
     def values(self, joints: list[str]) -> dict:
@@ -231,7 +259,13 @@ class Tilt(Term):
         return {"base_rotation": [[float(v) for v in row] for row in self.base_rotation()]}
 
     def base_rotation(self) -> np.ndarray:
-        """``R^T``: rotating the robot by it in a world with the file's gravity gives the tilted gravity."""
+        """The robot's rotation in a world with the file's gravity that gives the tilted gravity.
+
+        Returns
+        -------
+        ndarray, shape ``(3, 3)``
+            ``R^T``.
+        """
         return np.eye(3) if self._basis is None else self._rot().T
 
     @property

@@ -133,11 +133,13 @@ def _compile(mj, path: Path):
     base = path.parent
     spec = mj.MjSpec.from_file(str(path))
     lost = _strip_assets(mj, spec, base, everything=False)
+    explicit = {b for b in lost if spec.body(b).explicitinertial}  # before compiling: fusestatic removes bodies
     try:
         model = spec.compile()
     except Exception:  # noqa: BLE001 - the missing file was not found by our resolution: strip all
         spec = mj.MjSpec.from_file(str(path))
         lost = _strip_assets(mj, spec, base, everything=True)
+        explicit = {b for b in lost if spec.body(b).explicitinertial}
         model = None
     notes: list[str] = []
     placeholders: list[str] = []
@@ -159,8 +161,9 @@ def _compile(mj, path: Path):
     fromgeom = spec.compiler.inertiafromgeom
     always = fromgeom == mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE
     never = fromgeom == mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
-    affected = sorted(b for b in lost if not never and (always or not spec.body(b).explicitinertial
-                                                        or b in placeholders))
+    # a body fused into its parent by the compiler (fusestatic; MuJoCo's URDF import) is looked up by the
+    # name it had before compiling
+    affected = sorted(b for b in lost if not never and (always or b not in explicit or b in placeholders))
     notes.append(f"{path}: missing asset files ({_one_line(first)}): stripped them and the geoms using them")
     for b in affected:
         what = "a placeholder inertia (mass 1e-3)" if b in placeholders else "the remaining geoms"

@@ -768,8 +768,12 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
         cond0 = sv[0] / sv[len(pas) - 1]
     if res0 < tol and cond0 < cond_max:
         return robot, np.zeros(robot.dof), ""
-    why = (f"the loop frames do not coincide at q = 0 (residual {res0:.3g})" if res0 >= tol
-           else f"q = 0 is a singular configuration of the loops (cond(J_p) = {cond0:.3g})")
+    if not robot.loops:  # couplings alone: an offset moves a driven joint away from 0
+        moved = [robot.joint_names[robot.dof_body[c.succ]] for c in robot.couplings if c.offset]
+        why = f"the couplings' offsets move joints {moved} at q = 0"
+    else:
+        why = (f"the loop frames do not coincide at q = 0 (residual {res0:.3g})" if res0 >= tol
+               else f"q = 0 is a singular configuration of the loops (cond(J_p) = {cond0:.3g})")
     rng = np.random.default_rng(0)
     starts = [np.zeros(robot.dof)] + [rng.uniform(-1.0, 1.0, robot.dof) for _ in range(20)]
     singular = res0 < tol  # assembled but singular: move away from the singular point

@@ -457,9 +457,10 @@ def test_coupled_robot_whose_q0_is_outside_a_range_is_designed_within_every_limi
 def test_a_coupling_that_leaves_no_room_names_both_joints(tmp_path):
     path = tmp_path / "mimic_arm.urdf"
     path.write_text(MIMIC_ARM.replace('lower="-0.03" upper="0"', 'lower="-0.09" upper="-0.05"'))
+    with pytest.warns(baseparams.ModelWarning):
+        robot = baseparams.load(str(path))
     with pytest.raises(BaseparamsError, match=r"joint 'finger1'.*joint 'finger2' it drives.*leave no room") as info:
-        with pytest.warns(baseparams.ModelWarning):
-            excitation_limits(baseparams.load(str(path)))
+        excitation_limits(robot)
     assert "\n" not in str(info.value)
 
 

@@ -424,3 +424,48 @@ def test_every_erd_urdf_loads_and_certifies_with_default_flags(path):
     assert "F" not in robot.jtype  # a fixed base
     cert = certify(robot, seed=1)
     assert cert.certified, cert.message
+
+
+# ------------------------------------------------------------------ planar joints (issue 39)
+PLANAR = """<robot name="slider">
+  <link name="world"/>
+  <joint name="base_joint" type="planar"><parent link="world"/><child link="base"/>
+    <origin xyz="0.1 0.2 0.3" rpy="0.2 -0.1 0.4"/>{axis}</joint>
+  <link name="base"><inertial><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.25"/>
+  </inertial></link>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("axis, normal", [('<axis xyz="0 0 2"/>', (0, 0, 1)), ('<axis xyz="1 1 0"/>', (1, 1, 0)),
+                                          ("", (1, 0, 0))])
+def test_urdf_planar_joint_moves_in_the_plane_normal_to_its_axis(axis, normal, tmp_path):
+    """urdfdom's planar joint: translations normal to ``<axis>`` (default ``1 0 0``) and a rotation about it;
+    an axis other than z (where Pinocchio, which ignores it, differs) is read with a warning."""
+    import warnings
+
+    from baseparams.io.urdf import URDFWarning
+    from baseparams.kinematics.tree import forward_kinematics
+
+    path = tmp_path / "slider.urdf"
+    path.write_text(PLANAR.format(axis=axis))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load_urdf(path)
+    said = [str(w.message) for w in caught if issubclass(w.category, URDFWarning)]
+    assert len(said) == (normal != (0, 0, 1))
+    assert all("<joint name='base_joint'>: planar joint" in s and "Pinocchio" in s for s in said)
+    assert robot.jtype == ("C",) and robot.dof == 3
+    frame = robot.M0[0]
+    n = frame[:3, :3] @ (np.array(normal) / np.linalg.norm(normal))  # the plane's normal in the world
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-2, 2, (20, 3))
+    pose = forward_kinematics(robot, q).g[:, 0] @ frame
+    moved = pose[:, :3, 3] - frame[:3, 3]
+    assert np.abs(moved @ n).max() < 1e-12 and np.linalg.matrix_rank(moved, 1e-9) == 2  # in the plane, all of it
+    rot = np.einsum("sij,jk->sik", pose[:, :3, :3], frame[:3, :3].T)
+    assert np.abs(np.einsum("sij,j->si", rot, n) - n).max() < 1e-12  # rotations about the normal
+    np.testing.assert_allclose(np.arccos(np.clip((np.trace(rot, axis1=1, axis2=2) - 1) / 2, -1, 1)),
+                               np.abs(np.angle(np.exp(1j * q[:, 2]))), atol=1e-9)
+    c = certify(robot)
+    assert c.status == "certified" and c.completed == 0 and c.nullity == 6

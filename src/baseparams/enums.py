@@ -141,10 +141,11 @@ class Source(IntEnum):  # numpydoc ignore=PR01
     R_L2 = 6
     R_L3 = 7
     R_M = 8
-    UNMEASURED = 9
-    UNSEEN = 10
-    PASSIVE = 11
-    NUMERICAL = 12
+    R_C = 9
+    UNMEASURED = 10
+    UNSEEN = 11
+    PASSIVE = 12
+    NUMERICAL = 13
 
     @property
     def label(self) -> str:
@@ -158,8 +159,8 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
     @property
     def is_extended(self) -> bool:
-        """One of the extended rules R-A, R-B, R-L1, R-L2, R-L3, R-M."""
-        return Source.R_A <= self <= Source.R_M
+        """One of the extended rules R-A, R-B, R-L1, R-L2, R-L3, R-M, R-C."""
+        return Source.R_A <= self <= Source.R_C
 
     @property
     def is_rows(self) -> bool:
@@ -169,8 +170,8 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
 _LABELS = ("shared points", "fixed points", "planar rotations",
            "R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-           "R-L3 planar loops", "R-M coupled joints", "unmeasured root", "unmeasured body", "passive joint",
-           "numerical")
+           "R-L3 planar loops", "R-M coupled joints", "R-C compound joints", "unmeasured root", "unmeasured body",
+           "passive joint", "numerical")
 
 
 def values(members) -> tuple[str, ...]:

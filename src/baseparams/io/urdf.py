@@ -1,7 +1,9 @@
 """URDF and URDF+ reader -> :class:`Robot`, and writing parameters back into a URDF.
 
 Supported: ``revolute``/``continuous`` (R), ``prismatic`` (P), ``fixed`` (merged into the
-parent body, inertias combined exactly), ``floating`` (F, root only), and, as in Drake and
+parent body, inertias combined exactly), ``floating`` (F, root only), ``planar`` (urdfdom's: two
+slides in the plane normal to ``<axis>``, then the rotation about it; a compound joint C, as
+Pinocchio's planar joint for ``<axis xyz="0 0 1">``), and, as in Drake and
 ``../shared/CONVENTIONS.md``, ``spherical``/``ball`` (S) and ``universal`` (U, ``<axis>``
 then ``<axis2>``). ``floating=True`` attaches the root link to the world by an F joint.
 
@@ -14,7 +16,7 @@ Plain-URDF tools drop loops silently; this reader never does.
 
 ``<mimic multiplier offset>`` becomes a coupling (the follower is passive); a ``<mimic>`` of a
 joint that does not exist is ignored with a warning, as urdfdom and Pinocchio do.
-Not supported (clear errors): ``planar`` joints, loops of unknown type.
+Not supported (clear errors): loops of unknown type.
 Every error is one line naming the file, the element and the problem.
 """
 
@@ -32,10 +34,10 @@ from ..files import MODEL_MAX_BYTES, read_input_bytes
 from ..model.bounds import check_magnitude
 from ..model.builder import RobotBuilder, pose
 from ..model.inertia import Inertia, check_inertia
-from ..model.robot import Coupling, Robot
+from ..model.robot import Coupling, Robot, compound_screw
 
 _TYPES = {"revolute": "R", "continuous": "R", "prismatic": "P", "fixed": "fixed", "floating": "F",
-          "spherical": "S", "ball": "S", "universal": "U"}
+          "spherical": "S", "ball": "S", "universal": "U", "planar": "C"}
 _LOOP_TYPES = {"revolute": "R", "continuous": "R", "prismatic": "P", "fixed": "fixed",
                "spherical": "S", "ball": "S", "universal": "U"}
 
@@ -245,8 +247,7 @@ def _index_joints(root: ET.Element, links: dict[str, ET.Element], path: Path) ->
             ix.mimics[jname] = _mimic(mim, what)
         t = jt.get("type")
         if t not in _TYPES:
-            hint = " (planar joints are not supported)" if t == "planar" else ""
-            raise ModelError(f"{what}: unknown or unsupported joint type {t!r}{hint}")
+            raise ModelError(f"{what}: unknown or unsupported joint type {t!r}")
     return ix
 
 
@@ -333,7 +334,7 @@ def _add_tree(b: RobotBuilder, ix: _Index, base: str, floating: bool, limits: li
         t = _TYPES[jt.get("type")]
         if t == "F" and (plink != base or floating):
             raise ModelError(f"{what}: a floating joint is only supported at the root")
-        axis, axis2 = _joint_axes(jt, t, what)
+        axis, axis2 = _joint_axes(jt, t, what) if t != "C" else (_planar_axes(jt, what), None)
         indep = _independent(jt, jname in ix.mimics, what)
         if t != "fixed" and indep in ("true", "1") and not (t == "R" and jname in ix.mimics):
             limits += _joint_limits(jt, t, what)
@@ -366,6 +367,30 @@ def _joint_axes(jt: ET.Element, t: str, what: str) -> tuple[np.ndarray, np.ndarr
     return axis, axis2
 
 
+def _planar_axes(jt: ET.Element, what: str) -> np.ndarray:
+    """A ``planar`` joint as urdfdom defines it: motion in the plane normal to ``<axis>`` (default ``1 0 0``).
+
+    Three screws in the joint frame (a compound joint C): slides along ``e1`` and ``e2`` spanning
+    the plane, then the rotation about ``<axis>`` through the moved origin, i.e. ``(x, y, theta)``
+    as Pinocchio's planar joint (``e1, e2 = x, y`` for ``<axis xyz="0 0 1">``). Pinocchio ignores
+    ``<axis>`` (always the x-y plane): another axis is read as urdfdom reads it, with a warning.
+    """
+    axis_el = jt.find("axis")
+    n = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0), "axis")
+    if np.linalg.norm(n) < 1e-12:
+        raise ModelError(f"{what}: zero joint axis")
+    n = n / np.linalg.norm(n)
+    if not np.allclose(n, (0, 0, 1), atol=1e-12):
+        given = "no <axis>: urdfdom's default 1 0 0" if axis_el is None else f"<axis xyz={axis_el.get('xyz')!r}>"
+        warnings.warn(f"{what}: planar joint with {given}: the plane normal to it (as urdfdom); Pinocchio reads "
+                      f"every planar joint in the joint frame's x-y plane", URDFWarning, stacklevel=5)
+    e1 = np.array([0.0, 1.0, 0.0]) if abs(n[0]) > 0.9 else np.array([1.0, 0.0, 0.0])
+    e1 = e1 - (e1 @ n) * n
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(n, e1)
+    return np.stack([compound_screw(e1, slide=True), compound_screw(e2, slide=True), compound_screw(n)])
+
+
 def _independent(jt: ET.Element, mimicking: bool, what: str) -> str:
     """The joint's ``independent`` attribute, normalised (default false for a mimicking joint)."""
     indep = jt.get("independent", "false" if mimicking else "true").strip().lower()
@@ -377,7 +402,7 @@ def _independent(jt: ET.Element, mimicking: bool, what: str) -> str:
 def _joint_limits(jt: ET.Element, t: str, what: str) -> list[tuple[float, float]]:
     """The limits of an independent joint's coordinates (unbounded but for R and P)."""
     if t not in ("R", "P"):
-        return [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6}[t]
+        return [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6, "C": 3}[t]
     lim = jt.find("limit")
     lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
     hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]

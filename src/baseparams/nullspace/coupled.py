@@ -428,27 +428,55 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
     return r, who
 
 
-def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
+def null_rows(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
     """Orthonormal rows spanning the nullspace of ``a``; None when a singular value is ambiguous.
 
-    Ambiguous: neither clearly zero nor clearly not (:func:`_split`): the subset or group is then
+    Ambiguous: neither clearly zero nor clearly not (:func:`gap_split`): the subset or group is then
     skipped (fewer directions, never a wrong one).
+
+    Parameters
+    ----------
+    a : ndarray, shape ``(r, m)``
+        The system.
+    tol : float
+        Relative threshold of a zero singular value.
+    scale : float
+        What ``tol`` is relative to.
+
+    Returns
+    -------
+    ndarray, shape ``(m - rank, m)``, or None
+        The nullspace's orthonormal basis as rows; None when the rank is not decided by a gap.
     """
     _, s, vt = np.linalg.svd(a, full_matrices=a.shape[0] < a.shape[1])
     s = np.r_[s, np.zeros(a.shape[1] - len(s))]
-    zero, clear = _split(s[None], tol, scale)
+    zero, clear = gap_split(s[None], tol, scale)
     if not (zero | clear).all():
         return None
     return vt[int(np.sum(~zero)):]
 
 
-def _split(sv: np.ndarray, tol: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+def gap_split(sv: np.ndarray, tol: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
     """Singular values ``(k, m)`` that are clearly zero and clearly not, per row.
 
     Zero: at most ``tol * scale``. Not zero: at least ``GAP`` times the largest zero (floored at
     ``1e-15 * scale``, rounding) and above ``tol * scale``: the rank sits in a gap of ``GAP`` or
     more. A value in between leaves the rank undecided (the caller skips the system: fewer
     directions, never a wrong one).
+
+    Parameters
+    ----------
+    sv : ndarray, shape ``(k, m)``
+        Singular values, one system per row.
+    tol : float
+        Relative threshold of a zero.
+    scale : float
+        What ``tol`` is relative to.
+
+    Returns
+    -------
+    zero, clear : ndarray of bool, shape ``(k, m)``
+        Clearly zero; clearly not zero.
     """
     zero = sv <= tol * scale
     top = np.max(np.where(zero, sv, 0.0), axis=1, keepdims=True)
@@ -460,28 +488,44 @@ def _subset_nulls(r: np.ndarray, u: int, size: int, tol: float, scale: float):
     """Nullspaces of ``r`` restricted to every ``size``-subset of the ``u`` blocks, batched.
 
     Yields ``(subset, column indices, X (d, 10 size))`` for the subsets with a nullspace and no
-    ambiguous singular value (:func:`_null`), one batched SVD for all subsets of the size.
+    ambiguous singular value (:func:`null_rows`), one batched SVD for all subsets of the size.
     """
     subs = list(combinations(range(u), size))
     idx = (10 * np.array(subs)[:, :, None] + np.arange(10)).reshape(len(subs), -1)
     a = r[:, idx].transpose(1, 0, 2)  # (subsets, 10 u, 10 size)
     _, sv, vt = np.linalg.svd(a, full_matrices=a.shape[1] < a.shape[2])
     sv = np.concatenate([sv, np.zeros((len(subs), a.shape[2] - sv.shape[1]))], axis=1)
-    zero, clear = _split(sv, tol, scale)
+    zero, clear = gap_split(sv, tol, scale)
     for k in np.flatnonzero(zero.any(axis=1) & (zero | clear).all(axis=1)):
         yield subs[k], idx[k], vt[k, int(np.sum(~zero[k])):]
 
 
-def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
+def sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
     """A basis of the solutions of ``r x = 0`` beyond ``prior``, each on as few of the ``u`` blocks as found.
 
     Subsets of blocks by size (1; 2 when ``u <= MAX_PAIRS_BLOCKS``; 3 when
     ``u <= MAX_TRIPLES_BLOCKS``: the cost stays bounded per group), each kept for the
-    directions it adds to ``prior (p, 10 u)`` (orthonormal rows) and the ones before; what they
-    leave is returned on all the blocks it touches: ``[(blocks, X (d, 10 len(blocks)))]``.
+    directions it adds to ``prior`` and the ones before; what they leave is returned on all the
+    blocks it touches.
+
+    Parameters
+    ----------
+    r : ndarray, shape ``(m, 10 u)``
+        The system (ten unknowns per block).
+    u : int
+        Number of blocks.
+    tol : float
+        Relative threshold of a zero singular value (:func:`gap_split`).
+    prior : ndarray, shape ``(p, 10 u)``
+        Orthonormal rows spanning known solutions (inside the solution set).
+
+    Returns
+    -------
+    list of (tuple of int, ndarray)
+        ``(blocks, X (d, 10 len(blocks)))``: new solutions on those blocks.
     """
     scale = max(float(np.abs(r).max()), 1e-300)
-    null = _null(r, tol, scale)
+    null = null_rows(r, tol, scale)
     if null is None:
         return []
     found, out = prior, []
@@ -504,12 +548,29 @@ def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> l
     return out
 
 
-def _prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
-    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns on the blocks ``who`` (for ``pi / unit``)."""
+def prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
+    """Orthonormal rows spanning the ``prior`` columns that lie on the blocks ``who`` (for ``pi / unit``).
+
+    Parameters
+    ----------
+    prior : Columns
+        Known columns (``paper`` convention).
+    who : list of int
+        ``u`` bodies.
+    unit : ndarray, shape ``(10,)``
+        Per-parameter scale of the decisions.
+
+    Returns
+    -------
+    ndarray, shape ``(p, 10 u)``
+        Orthonormal rows: the span of the columns all of whose blocks are on ``who``.
+    """
     pos = {b: i for i, b in enumerate(who)}
     inside = np.isin(prior.child, who) & ((prior.parent < 0) | np.isin(prior.parent, who))
     inside &= ((prior.extra < 0) | np.isin(prior.extra, who)) & ~prior.has_more()
     sel = prior.subset(inside)
+    if not len(sel):
+        return np.zeros((0, 10 * len(who)))
     v = np.zeros((len(sel), len(who), 10))
     k = np.arange(len(sel))
     v[k, [pos[int(b)] for b in sel.child]] += sel.h
@@ -585,8 +646,8 @@ def _group_columns(robot: Robot, groups: list, tol: float, prior: Columns | None
             continue
         r, who = red
         label = labels[i] if labels else _group_label(robot.names, anchor, bodies)
-        seed = _prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
-        for sub, y in _sparse_solutions(r, len(who), tol, seed):
+        seed = prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
+        for sub, y in sparse_solutions(r, len(who), tol, seed):
             parts.append(on_bodies([who[b] for b in sub], y * np.tile(unit, len(sub)), source, label))
     return Columns.concat(parts)
 

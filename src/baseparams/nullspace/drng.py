@@ -591,8 +591,9 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     The paper's Algorithm "DRNG" with slips E1-E5 fixed (:func:`.principles.drng_columns`), then
     the extended rules (:func:`.rules.rule_columns`, then
     :func:`.coupled.parallelogram_group_columns` for parallelograms and
-    :func:`.coupled.coupled_columns` for joint couplings, given the columns before), then
-    :func:`unmeasured_columns`; the rank is decided by :func:`scaled_rank`.
+    :func:`.coupled.coupled_columns` for joint couplings, and :func:`.compound.compound_columns` for
+    compound joints, given the columns before), then :func:`unmeasured_columns`; the rank is
+    decided by :func:`scaled_rank`.
 
     Parameters
     ----------
@@ -602,7 +603,7 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
         Geometric tolerance of the principles and rules (parallel axes, zero gravity, ...).
     extended : bool, default True
         Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2, R-L3;
-        :mod:`.coupled`: R-M);
+        :mod:`.coupled`: R-M; :mod:`.compound`: R-C);
         ``False`` gives the paper's three principles alone.
     rows : str or sequence of str, default "all"
         The measured generalized forces (``all``, ``joints``, ``base``, or a set of joints:
@@ -632,6 +633,11 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
                 cols = Columns.concat([cols, parallelogram_group_columns(robot, tol, prior=cols)])
             if robot.couplings:
                 cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
+        if "C" in robot.jtype:  # R-C: compound joints as chains of elementary joints without intermediate mass
+            from .compound import compound_columns, expand_compound
+
+            chain = expand_compound(robot, tol)
+            cols = Columns.concat([cols, compound_columns(robot, chain, drng(chain[0], tol).columns, tol, prior=cols)])
     extra = unmeasured_columns(robot, rows, tol)
     if len(extra):
         cols = Columns.concat([cols, extra])

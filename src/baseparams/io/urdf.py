@@ -14,6 +14,11 @@ of the two links); ``independent="false"`` on joints marks passive coordinates. 
 ``sucessor`` spelling and ``name=`` instead of ``link=`` are accepted with a warning.
 Plain-URDF tools drop loops silently; this reader never does.
 
+Drake's URDF extensions: undeclared namespace prefixes (``drake:``) are declared before parsing,
+``<drake:joint>`` (ball, universal, planar) is read as a joint and ``<drake:ball_constraint>`` as
+a spherical loop; every other namespaced element or attribute is dropped and counted in one
+warning.
+
 ``<mimic multiplier offset>`` becomes a coupling (the follower is passive); a ``<mimic>`` of a
 joint that does not exist is ignored with a warning, as urdfdom and Pinocchio do.
 Not supported (clear errors): loops of unknown type.
@@ -22,6 +27,7 @@ Every error is one line naming the file, the element and the problem.
 
 from __future__ import annotations
 
+import re
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -77,12 +83,133 @@ def _parse(path: Path, data: bytes | None = None) -> ET.Element:
     body = data.lstrip(b" \t\r\n")
     skipped = data[:len(data) - len(body)].count(b"\n")  # for line numbers in messages
     body = body.rstrip(b" \t\r\n\x00")
+    undeclared: list[str] = []
     try:
-        return ET.fromstring(body)
+        root = ET.fromstring(body)
     except ET.ParseError as exc:
-        line, col = getattr(exc, "position", (0, 0))
-        msg = str(exc).split(":", 1)[0] if ": line" in str(exc) else str(exc)
-        raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
+        root, undeclared = _declare_prefixes(body, exc)
+        if root is None:
+            line, col = getattr(exc, "position", (0, 0))
+            msg = str(exc).split(":", 1)[0] if ": line" in str(exc) else str(exc)
+            raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
+    _foreign_elements(root, path, undeclared)
+    return root
+
+
+#: the namespace given to a prefix a file uses without declaring it (Drake's ``drake:``, read as Drake reads them)
+_UNDECLARED = "urn:baseparams:undeclared:"
+_PREFIX_USE = re.compile(rb"<\s*/?\s*([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=")
+
+
+def _declare_prefixes(body: bytes, exc: ET.ParseError) -> tuple[ET.Element | None, list[str]]:
+    """The document parsed with its undeclared namespace prefixes declared (``drake:`` in Drake's URDFs).
+
+    Only for "unbound prefix" errors: the prefixes used in tags and attribute names but never
+    declared get a placeholder namespace on the root element. ``(None, [])`` when that is not the
+    error or the document is still malformed.
+    """
+    if "unbound prefix" not in str(exc):
+        return None, []
+    declared = set(re.findall(rb"xmlns:([A-Za-z_][\w.-]*)\s*=", body))
+    used = {(a or b).decode() for a, b in _PREFIX_USE.findall(body)}
+    used = sorted(used - {d.decode() for d in declared} - {"xml", "xmlns"})
+    start = re.search(rb"<(?![?!])[A-Za-z_][\w:.-]*", body)
+    if not used or start is None:
+        return None, []
+    extra = b"".join(f' xmlns:{p}="{_UNDECLARED}{p}"'.encode() for p in used)
+    try:
+        return ET.fromstring(body[:start.end()] + extra + body[start.end():]), used
+    except ET.ParseError:
+        return None, []
+
+
+def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str]) -> None:
+    """Drake's extensions read as Drake reads them, every other namespaced element or attribute dropped and counted.
+
+    ``<drake:joint>`` (ball, universal, planar: joints URDF lacks) becomes a ``<joint>``,
+    ``<drake:ball_constraint>`` a spherical ``<loop>``; any other element or attribute in a
+    namespace (``drake:`` collision filters, rotor inertia, gear ratio, hydroelastic properties,
+    acceleration limits, ...) describes no rigid body: it is removed, and one warning counts
+    what was left out (and names the prefixes used without a declaration).
+    """
+    dropped: dict[str, int] = {}
+    stack = [root]
+    while stack:  # a dropped element's own children are not counted again
+        parent = stack.pop()
+        for child in list(parent):
+            if isinstance(child.tag, str) and child.tag.startswith("{"):
+                local = child.tag.split("}", 1)[1]
+                if local == "ball_constraint":
+                    parent.remove(child)
+                    parent.append(_ball_constraint_loop(child, path))
+                    continue
+                if not (local == "joint" and _drake_joint(child, path)):
+                    shown = f"<{_shown_name(child.tag, undeclared)}>"
+                    dropped[shown] = dropped.get(shown, 0) + 1
+                    parent.remove(child)
+                    continue
+            stack.append(child)
+    for elem in root.iter():
+        for key in [k for k in elem.attrib if k.startswith("{")]:
+            shown = _shown_name(key, undeclared)
+            dropped[shown] = dropped.get(shown, 0) + 1
+            del elem.attrib[key]
+    if not dropped and not undeclared:
+        return
+    what = ", ".join(f"{k} x{v}" if v > 1 else k for k, v in sorted(dropped.items()))
+    head = (f"namespace prefixes {', '.join(repr(p) for p in undeclared)} used without a declaration: read leniently "
+            f"(as Drake does); " if undeclared else "")
+    warnings.warn(f"{path}: {head}{sum(dropped.values())} namespaced elements and attributes describe no rigid body "
+                  f"and were ignored{': ' + what if what else ''}", URDFWarning, stacklevel=4)
+
+
+def _shown_name(tag: str, undeclared: list[str]) -> str:
+    """``{uri}local`` as the file wrote it: ``prefix:local`` (Drake's namespace as ``drake:``)."""
+    uri, local = tag[1:].split("}", 1)
+    if uri.startswith(_UNDECLARED):
+        return f"{uri[len(_UNDECLARED):]}:{local}"
+    return f"drake:{local}" if "drake" in uri else f"{{{uri}}}{local}"
+
+
+#: Drake's custom joint types and ours; ``screw`` and ``curvilinear`` have no counterpart
+_DRAKE_JOINTS = {"ball": "ball", "universal": "universal", "planar": "planar"}
+
+
+def _drake_joint(elem: ET.Element, path: Path) -> bool:
+    """Turn a ``<drake:joint>`` into the ``<joint>`` it means, in place (True), or refuse it."""
+    t = elem.get("type")
+    if t not in _DRAKE_JOINTS:
+        raise ModelError(f"{path}: <drake:joint name={elem.get('name')!r}>: Drake's {t!r} joint is not supported "
+                         f"(ball, universal and planar are)")
+    elem.tag = "joint"
+    for sub in elem.iter():
+        if isinstance(sub.tag, str) and sub.tag.startswith("{"):
+            sub.tag = sub.tag.split("}", 1)[1]
+    if t == "universal" and elem.find("axis2") is None:  # Drake: about the joint frame's x, then the moved y
+        for old in elem.findall("axis"):
+            elem.remove(old)
+        ET.SubElement(elem, "axis", xyz="1 0 0")
+        ET.SubElement(elem, "axis2", xyz="0 1 0")
+    return True
+
+
+def _ball_constraint_loop(elem: ET.Element, path: Path) -> ET.Element:
+    """A ``<drake:ball_constraint>`` as the spherical URDF+ ``<loop>`` it is (point P on body A = point Q on B)."""
+    part = {(c.tag.split("}", 1)[1] if c.tag.startswith("{") else c.tag): c for c in elem
+            if isinstance(c.tag, str)}
+    what = f"{path}: <drake:ball_constraint>"
+    names, points = [], []
+    for body, point in (("ball_constraint_body_A", "ball_constraint_p_AP"),
+                        ("ball_constraint_body_B", "ball_constraint_p_BQ")):
+        if body not in part or not part[body].get("name"):
+            raise ModelError(f"{what}: needs <drake:{body} name=...>")
+        names.append(part[body].get("name"))
+        points.append(part[point].get("value", "0 0 0") if point in part else "0 0 0")
+    loop = ET.Element("loop", name=f"ball_constraint_{names[0]}_{names[1]}", type="spherical")
+    for tag, name, xyz in (("predecessor", names[0], points[0]), ("successor", names[1], points[1])):
+        side = ET.SubElement(loop, tag, link=name)
+        ET.SubElement(side, "origin", xyz=xyz)
+    return loop
 
 
 def _origin(elem: ET.Element | None, what: str) -> np.ndarray:

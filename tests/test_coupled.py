@@ -261,3 +261,135 @@ def test_mjcf_equality_joint_gripper_completes_geometrically(tmp_path):
     cert = certify(robot, seed=0, result=res)
     assert cert.certified and cert.completed == 0, cert.message
     assert cert.nullity == 27 and res.by_principle()[Source.R_M.label] == 3
+
+
+# ---------------------------------------------------------------- polynomial couplings (MJCF polycoef; issue 39)
+def poly_hand(seed: int):
+    """:func:`mimic_hand` with most couplings made polynomial (terms in q^2 and q^3 of the leader)."""
+    rng = np.random.default_rng(seed)
+    robot = mimic_hand(rng, offsets=True)
+    cs = []
+    for c in robot.couplings:
+        k = int(rng.integers(0, 3))
+        poly = tuple(float(x) for x in rng.normal(scale=0.2, size=k)) if rng.random() < 0.7 else ()
+        cs.append(replace(c, poly=poly))
+    return replace(robot, couplings=tuple(cs))
+
+
+def _without_sampled_rm(monkeypatch):
+    from baseparams.nullspace import coupled
+
+    orig = coupled.group_nullspace
+
+    def linear_only(robot, anchor, bodies, *a, **k):
+        _, coef = coupled.coupled_polynomials(robot, k.get("extra", ()))
+        return None if np.any(coef[robot.q_index[bodies], 2:]) else orig(robot, anchor, bodies, *a, **k)
+
+    monkeypatch.setattr(coupled, "group_nullspace", linear_only)
+
+
+def test_closed_states_follow_polynomial_couplings_exactly():
+    """Positions on the polynomial, and velocities and accelerations its exact derivatives along a motion."""
+    from baseparams.kinematics.loops import close_loops
+
+    robot = poly_hand(3)
+    assert any(c.poly for c in robot.couplings)
+    t = np.linspace(0.0, 1.0, 2001)
+    na = len(robot.actuated)
+    w = np.random.default_rng(0).uniform(0.5, 1.5, na)
+    qa, dqa, ddqa = np.sin(np.outer(t, w)), np.cos(np.outer(t, w)) * w, -np.sin(np.outer(t, w)) * w ** 2
+    cs = close_loops(robot, qa, dqa, ddqa, cond_max=np.inf)
+    assert cs.kept == len(t)
+    for c in robot.couplings:
+        x = cs.q[:, c.pred]
+        np.testing.assert_allclose(cs.q[:, c.succ], np.polynomial.polynomial.polyval(x, c.coefficients()), atol=1e-12)
+    h = t[1] - t[0]
+    np.testing.assert_allclose(np.gradient(cs.q, h, axis=0)[5:-5], cs.dq[5:-5], atol=1e-5)
+    np.testing.assert_allclose(np.gradient(cs.dq, h, axis=0)[5:-5], cs.ddq[5:-5], atol=1e-4)
+
+
+def test_re_referencing_shifts_a_polynomial_coupling_exactly():
+    from baseparams.kinematics import re_reference
+    from baseparams.kinematics.loops import close_loops
+
+    robot = poly_hand(3)
+    rng = np.random.default_rng(1)
+    q0 = close_loops(robot, rng.uniform(-0.5, 0.5, (1, len(robot.actuated))), cond_max=np.inf).q[0]
+    moved = re_reference(robot, q0)
+    qa = rng.uniform(-1, 1, (20, len(robot.actuated)))
+    old = close_loops(robot, qa, cond_max=np.inf).q
+    new = close_loops(moved, qa - q0[robot.actuated], cond_max=np.inf).q
+    np.testing.assert_allclose(new + q0, old, atol=1e-10)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_polynomial_couplings_complete_and_certified(seed):
+    """R-M on polynomially coupled groups: the conditions sampled (not proven: analytic, not trigonometric
+    polynomials) at generic values, a solution kept only when twice as many values keep it; certified by the
+    independent check, nothing completed numerically."""
+    c = certify(poly_hand(seed), seed=0)
+    assert c.status == "certified" and c.completed == 0, c.message
+
+
+def test_sampled_rm_is_needed_on_polynomial_couplings(monkeypatch):
+    _without_sampled_rm(monkeypatch)
+    left = [certify(poly_hand(seed), seed=0).completed for seed in range(20)]
+    assert sum(k > 0 for k in left) >= 4
+
+
+#: a knee as OpenSim-converted MJCF writes it (MyoSuite): the tibia and the patella on slides and a hinge
+#: whose coordinates are polynomials of the knee angle (joint equalities with a nonlinear polycoef)
+KNEE = """<mujoco model="knee">
+  <compiler angle="radian" inertiafromgeom="false"/>
+  <worldbody>
+    <body name="femur" pos="0 0 1">
+      <joint name="hip" type="hinge" axis="0 1 0" range="-1 1"/>
+      <inertial pos="0 0 -0.2" mass="5" diaginertia="0.1 0.1 0.02"/>
+      <body name="tibia" pos="0 0 -0.4">
+        <joint name="knee_tx" type="slide" axis="1 0 0"/>
+        <joint name="knee_tz" type="slide" axis="0 0 1"/>
+        <joint name="knee" type="hinge" axis="0 1 0" range="-2 0.1"/>
+        <inertial pos="0.01 0.02 -0.2" mass="3" diaginertia="0.05 0.06 0.01"/>
+        <body name="foot" pos="0 0 -0.4">
+          <joint name="ankle" type="hinge" axis="0 1 0"/>
+          <inertial pos="0.05 0 -0.03" mass="1" diaginertia="0.01 0.01 0.005"/>
+        </body>
+      </body>
+      <body name="patella" pos="0.05 0 -0.38" euler="0.1 0 0">
+        <joint name="pat_tx" type="slide" axis="1 0 0"/>
+        <joint name="pat_tz" type="slide" axis="0 0 1"/>
+        <joint name="pat_r" type="hinge" axis="0 1 0"/>
+        <inertial pos="0.005 0.001 0.002" mass="0.1" diaginertia="1e-4 1e-4 5e-5"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <joint joint1="knee_tx" joint2="knee" polycoef="0 -0.004 0.0033 -0.0012 0.0002"/>
+    <joint joint1="knee_tz" joint2="knee" polycoef="0 0.002 -0.0051 0.0011 0"/>
+    <joint joint1="pat_tx" joint2="knee" polycoef="0 0.02 -0.01 0.003 0"/>
+    <joint joint1="pat_tz" joint2="knee" polycoef="0 0.015 0.008 0 0"/>
+    <joint joint1="pat_r" joint2="knee" polycoef="0 0.3 -0.05 0.01 0"/>
+  </equality>
+</mujoco>
+"""
+
+
+def test_mjcf_knee_with_polynomial_couplings_is_mujocos(tmp_path):
+    """The joint equalities are read as polynomial couplings (were refused); the certified count equals the rank
+    of MuJoCo's own inverse dynamics on its constraint manifold; DRNG complete."""
+    import warnings
+
+    import baseparams as bp
+
+    from mujoco_oracle import mujoco_rank
+
+    path = tmp_path / "knee.xml"
+    path.write_text(KNEE)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = bp.load(str(path))
+    assert sum(bool(c.poly) for c in robot.couplings) == 5
+    a = bp.analyze(robot)
+    assert a.status == "certified" and a.certificate.completed == 0
+    rank, gap = mujoco_rank(path)
+    assert gap > 1e6 and a.n_base == rank == 19

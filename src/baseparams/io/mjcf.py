@@ -19,9 +19,9 @@ Mapping:
   :attr:`Robot.armature` (free joints reordered to our ``(omega, v)``);
 * equalities: ``connect`` (body or site form) -> spherical loop joint, ``weld`` -> fixed loop
   joint (``relpose``/``torquescale`` ignored, with a note when not the default), ``joint`` with
-  a linear ``polycoef`` and fixed-tendon equalities that couple two 1-dof joints linearly ->
-  couplings; inactive equalities are skipped with a note. Actuated joints are preferred as the
-  independent coordinates of closed loops.
+  its ``polycoef`` (a polynomial of degree up to 4, from ``qpos0``) and fixed-tendon equalities
+  that couple 1-dof joints linearly -> couplings; inactive equalities are skipped with a note.
+  Actuated joints are preferred as the independent coordinates of closed loops.
 
 Missing mesh (texture, height field, skin) files: those assets and the geoms using them are
 stripped and the model compiled again; a moving body whose inertia came from a stripped geom is
@@ -533,9 +533,9 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
         elif kind == "joint":
             if o2 < 0:
                 raise ModelError(f"{what}: a joint locked by an equality is not supported (no joint2)")
-            _check_poly(d, what)
             c1, c2 = _coord(model, o1, dof_map, what), _coord(model, o2, dof_map, what)
-            couplings.append(Coupling(ename, c2, c1, float(d[1]), float(d[0])))
+            poly = np.trim_zeros(d[2:5], "b")  # q1 = d0 + d1 q2 + d2 q2^2 + ... (from qpos0)
+            couplings.append(Coupling(ename, c2, c1, float(d[1]), float(d[0]), poly=tuple(float(x) for x in poly)))
         elif kind == "tendon":
             couplings.append(_tendon_coupling(mj, model, o1, o2, d, dof_map, ename, what))
         else:
@@ -545,7 +545,8 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
 
 def _check_poly(d: np.ndarray, what: str) -> None:
     if np.any(d[2:5] != 0):
-        raise ModelError(f"{what}: nonlinear polycoef {d[:5].tolist()} is not supported")
+        raise ModelError(f"{what}: a tendon equality with a nonlinear polycoef {d[:5].tolist()} is not supported "
+                         f"(a joint equality's is)")
 
 
 def _coord(model, j: int, dof_map, what: str) -> int:

@@ -132,8 +132,8 @@ def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
              constraints: list[Elementary] | None = None) -> ConstraintEval:
     """Residuals, Jacobian and (when ``dq`` is given) the bias of the loop constraints.
 
-    The rows are the couplings' (linear: ``q[succ] - sum ratio q[pred] - offset``) first, then
-    the elementary constraints' in order.
+    The rows are the couplings' (``q[succ] - sum ratio q[pred] - offset``, less the polynomial
+    terms of a nonlinear one) first, then the elementary constraints' in order.
 
     Parameters
     ----------
@@ -170,6 +170,7 @@ class _Plan:
     cons: list
     kc: np.ndarray
     offsets: np.ndarray
+    poly: list  # (row, pred, coefficients of q_pred^2, q_pred^3, ...) of the nonlinear couplings
     groups: list
     nvec: int
     slots: list
@@ -189,6 +190,7 @@ def _plan(robot: Robot, cons: list[Elementary]) -> _Plan:
         for j, ratio in c.terms():
             kc[i, j] -= ratio
     offsets = np.array([c.offset for c in robot.couplings], dtype=float)
+    poly = [(i, c.pred, np.asarray(c.poly, dtype=float)) for i, c in enumerate(robot.couplings) if c.poly]
     slot_of: dict = {}
     slots, rows, row = [], [], len(robot.couplings)
     for e in cons:
@@ -206,7 +208,7 @@ def _plan(robot: Robot, cons: list[Elementary]) -> _Plan:
     sup = np.zeros((dof, robot.n + 1))
     sup[:, :-1] = robot.support
     bodies = np.array([g[0] for g in groups if g[0] >= 0], dtype=int)
-    return _Plan(robot, list(cons), kc, offsets, groups, len(slot_of), slots, rows, row, sup, bodies, {})
+    return _Plan(robot, list(cons), kc, offsets, poly, groups, len(slot_of), slots, rows, row, sup, bodies, {})
 
 
 def _columns(plan: _Plan, cols: np.ndarray) -> list:
@@ -244,9 +246,18 @@ def _eval(plan: _Plan, q: np.ndarray, cols: np.ndarray, dq: np.ndarray | None = 
     k = np.zeros((plan.m, len(cols), s))
     b = None if dq is None else np.zeros((plan.m, s))
     nc = len(plan.offsets)
-    if nc:  # linear couplings
+    if nc:  # couplings: the linear part, then the nonlinear terms of polynomial ones
         r[:nc] = plan.kc @ q.T - plan.offsets[:, None]
         k[:nc] = plan.kc[:, cols][:, :, None]
+        for row, pred, c in plan.poly:
+            x = q[:, pred]
+            powers = np.arange(2, 2 + len(c))
+            r[row] -= np.power.outer(x, powers) @ c
+            where = np.flatnonzero(cols == pred)
+            if len(where):
+                k[row, where[0]] -= np.power.outer(x, powers - 1) @ (powers * c)
+            if b is not None:
+                b[row] -= (np.power.outer(x, powers - 2) @ (powers * (powers - 1) * c)) * dq[:, pred] ** 2
     if not plan.cons:
         as_states(plan.robot.dof, q)  # validated as the kinematics would
         return r, k, b

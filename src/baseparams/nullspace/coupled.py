@@ -56,6 +56,8 @@ MAX_DENOMINATOR = 64
 MAX_HARMONIC = 256
 #: singular values of a group's conditions: below ``tol`` or at least ``GAP`` times the largest below (relative)
 GAP = 1e4
+#: largest degree of a composed polynomial coupling (chains of MJCF ``polycoef``); beyond it, not grouped
+MAX_DEGREE = 16
 #: smallest component (of a unit solution) outside the directions already found that counts as new
 NEW = 1e-6
 #: largest group (anchor included) whose solutions on three bodies are searched; larger groups
@@ -65,12 +67,66 @@ MAX_TRIPLES_BLOCKS = 10
 MAX_PAIRS_BLOCKS = 24
 
 
-def coupled_coordinates(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each coordinate as a function of its leader: ``q[j] = ratio[j] q[lead[j]] + offset[j]``.
+def coupled_polynomials(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
+    """Each coordinate as a polynomial of its leader: ``q[j] = sum_a coef[j, a] q[lead[j]] ** a``.
 
-    Chains of couplings are composed. Coordinates driven by several coordinates (a coupling with
-    :attr:`~baseparams.model.robot.Coupling.more` terms) get ``lead = -1``, as do the ones they
-    drive, and coordinates of multi-dof joints.
+    Chains of couplings are composed (a polynomial of a polynomial). Coordinates driven by several
+    coordinates (a coupling with :attr:`~baseparams.model.robot.Coupling.more` terms) get
+    ``lead = -1``, as do the ones they drive, coordinates of multi-dof joints, and chains whose
+    composed degree exceeds :data:`MAX_DEGREE`.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates, :attr:`~baseparams.model.robot.Robot.couplings`).
+    extra : tuple of Coupling, optional
+        Couplings implied by the geometry (:func:`parallelogram_couplings`) besides the robot's.
+
+    Returns
+    -------
+    lead : ndarray of int, shape ``(dof,)``
+        The driving coordinate (``j`` itself for an independent coordinate; ``-1``: not grouped).
+    coef : ndarray, shape ``(dof, d + 1)``
+        Coefficients, lowest power first (``[offset, ratio, ...]``; ``[0, 1, 0...]`` for a leader).
+    """
+    from numpy.polynomial import Polynomial
+
+    dof = robot.dof
+    drive = {c.succ: c for c in (*robot.couplings, *extra)}
+    lead = np.arange(dof)
+    polys = [Polynomial([0.0, 1.0]) for _ in range(dof)]
+    one = np.ones(dof, dtype=bool)
+    one[robot.q_index[robot.ndofs != 1]] = False  # coordinates of multi-dof joints
+    for j in range(dof):
+        k, p, seen = j, Polynomial([0.0, 1.0]), {j}
+        while k in drive and lead[j] >= 0:
+            c = drive[k]
+            if c.more or c.pred in seen or not one[c.pred]:
+                lead[j] = -1
+                break
+            p, k = p(Polynomial(c.coefficients())), c.pred
+            if p.degree() > MAX_DEGREE:
+                lead[j] = -1
+                break
+            seen.add(k)
+        if lead[j] >= 0:
+            lead[j], polys[j] = k, p
+        if not one[j]:
+            lead[j] = -1
+    width = max(2, max(len(p.coef) for p in polys))
+    coef = np.zeros((dof, width))
+    for j, p in enumerate(polys):
+        coef[j, :len(p.coef)] = p.coef
+        if len(p.coef) < 2 and lead[j] >= 0:  # a constant (a zero ratio): no leading power
+            coef[j, 1] = 0.0
+    return lead, coef
+
+
+def coupled_coordinates(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each coordinate as a linear function of its leader: ``q[j] = ratio[j] q[lead[j]] + offset[j]``.
+
+    :func:`coupled_polynomials` restricted to the linear ones: a coordinate driven by a polynomial
+    of degree two or more gets ``lead = -1`` here.
 
     Parameters
     ----------
@@ -88,25 +144,9 @@ def coupled_coordinates(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple
     offset : ndarray, shape ``(dof,)``
         Constant term (rad or m).
     """
-    dof = robot.dof
-    drive = {c.succ: c for c in (*robot.couplings, *extra)}
-    lead, ratio, offset = np.arange(dof), np.ones(dof), np.zeros(dof)
-    one = np.ones(dof, dtype=bool)
-    one[robot.q_index[robot.ndofs != 1]] = False  # coordinates of multi-dof joints
-    for j in range(dof):
-        k, r, o, seen = j, 1.0, 0.0, {j}
-        while k in drive and lead[j] >= 0:
-            c = drive[k]
-            if c.more or c.pred in seen or not one[c.pred]:
-                lead[j] = -1
-                break
-            r, o, k = r * c.ratio, o + r * c.offset, c.pred
-            seen.add(k)
-        if lead[j] >= 0:
-            lead[j], ratio[j], offset[j] = k, r, o
-        if not one[j]:
-            lead[j] = -1
-    return lead, ratio, offset
+    lead, coef = coupled_polynomials(robot, extra)
+    nonlinear = np.any(np.abs(coef[:, 2:]) > 0, axis=1)
+    return np.where(nonlinear, -1, lead), coef[:, 1].copy(), coef[:, 0].copy()
 
 
 def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
@@ -129,7 +169,7 @@ def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
     """
     if not robot.couplings:
         return []
-    lead, _, _ = coupled_coordinates(robot)
+    lead, _ = coupled_polynomials(robot)
     qi = robot.q_index
     driven = np.bincount(lead[lead >= 0], minlength=robot.dof)
     key = {}
@@ -273,24 +313,54 @@ def sample_values(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float
     return (base[None, :] + period * (np.arange(deg + 1)[:, None] - 0.5 * (deg + 1))).ravel()
 
 
-def _motions(robot: Robot, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
-             q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``h_k(q)`` and ``dh_k/dq`` of the group's bodies relative to the anchor: ``(M, G, 4, 4)`` each."""
+def _motions(robot: Robot, bodies: list[int], coef: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``h_k(q)`` and ``dh_k/dq`` of the group's bodies relative to the anchor: ``(M, G, 4, 4)`` each.
+
+    Joint ``j`` is at ``p_j(q)`` (``coef[j]``, :func:`coupled_polynomials`): ``exp(S_j p_j(q))``,
+    derivative ``exp(S_j p_j) S_j^ p_j'(q)``.
+    """
+    from numpy.polynomial import polynomial as P
+
     from ..pga.core import se3_exp
 
     qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
     h = np.zeros((len(q), len(bodies), 4, 4))
     dh = np.zeros_like(h)
     for i, k in enumerate(bodies):
-        s, r = robot.screws[qi[k]], float(ratio[qi[k]])
-        e = se3_exp((r * q + float(offset[qi[k]]))[:, None] * s)  # (M, 4, 4)
-        es = e @ hat(s) * r
+        s, c = robot.screws[qi[k]], coef[qi[k]]
+        e = se3_exp(P.polyval(q, c)[:, None] * s)  # (M, 4, 4)
+        es = e @ hat(s) * P.polyval(q, P.polyder(c))[:, None, None]
         p = pos.get(int(robot.parent[k]))
         if p is None:
             h[:, i], dh[:, i] = e, es
         else:
             h[:, i], dh[:, i] = h[:, p] @ e, dh[:, p] @ e + h[:, p] @ es
     return h, dh
+
+
+def nonlinear_values(n_unknowns: int, times: int = 1) -> np.ndarray:
+    """Values of the leading coordinate at which a polynomially coupled group's conditions are sampled.
+
+    A coupling of degree two or more puts the coordinate inside the trigonometric functions
+    (``exp(S p(q))``): the conditions are analytic in ``q``, not trigonometric polynomials, and
+    no finite set of values proves them; they are imposed at ``times (12 u + 16)`` values
+    spread over ``[-1.5, 1.5]`` (``u`` the unknowns' blocks), generic points (golden-ratio
+    spacing), and a solution must survive twice as many (:func:`group_nullspace`).
+
+    Parameters
+    ----------
+    n_unknowns : int
+        Unknown blocks of ten (the group's bodies and anchor).
+    times : int, default 1
+        Multiplier of the number of values.
+
+    Returns
+    -------
+    ndarray, shape ``(M,)``
+        The values (rad or m).
+    """
+    m = times * (12 * n_unknowns + 16)
+    return 6.0 * (((np.arange(m) + 0.5) * 0.6180339887498949) % 1.0) - 3.0
 
 
 def _functional(c: np.ndarray) -> np.ndarray:
@@ -301,8 +371,8 @@ def _functional(c: np.ndarray) -> np.ndarray:
     return out
 
 
-def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
-                 q: np.ndarray, level: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
+def group_system(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray, q: np.ndarray,
+                 level: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
     """The criterion's conditions on a coupled group: ``(rows, 10 (G + 1))`` (anchor block first).
 
     Rows: the kinetic form's entries ``K(a, b)`` for ``a <= b`` among ``qdot_l`` and a basis of
@@ -317,10 +387,10 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray
         The group's anchor (``-1``: the world, whose block the caller drops).
     bodies : list of int
         The group's bodies, parents first.
-    ratio, offset : ndarray, shape ``(dof,)``
-        From :func:`coupled_coordinates`.
+    coef : ndarray, shape ``(dof, d + 1)``
+        Each coordinate as a polynomial of its leader (:func:`coupled_polynomials`).
     q : ndarray, shape ``(M,)``
-        Values of the leading coordinate (:func:`sample_values`).
+        Values of the leading coordinate (:func:`sample_values`, :func:`nonlinear_values`).
     level : ndarray, shape ``(L, 4)``, optional
         Rows ``gbar^T X`` over a basis ``X`` of the anchor's motion span
         (:mod:`.subspaces`): a vector ``c`` of the anchor keeps its height iff ``level c = 0``;
@@ -334,7 +404,7 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray
         Linear conditions on the ``paper``-convention parameter changes (``hat`` order, world
         frame at q = 0) of the anchor then of each body.
     """
-    h, dh = _motions(robot, bodies, ratio, offset, q)
+    h, dh = _motions(robot, bodies, coef, q)
     w = twist_span(robot, anchor, tol) if anchor >= 0 else np.zeros((0, 6))
     gens = hat(w)  # (r, 4, 4)
     hinv = np.linalg.inv(h)
@@ -408,24 +478,42 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
     (ndarray, list of int) or None
         ``R (10 u, 10 u)``, upper triangular with ``R y = 0`` exactly for the solutions
         ``x = d y`` of :func:`group_system`, and the ``u`` bodies its blocks belong to (the anchor first unless it
-        is the world); None when :func:`sample_values` finds no exact set of values (the group
-        is then skipped).
+        is the world); None when :func:`sample_values` finds no exact set of values, or when a
+        polynomially coupled group's solutions change with twice as many sampled values
+        (:func:`nonlinear_values`): the group is then skipped.
     """
-    _, ratio, offset = coupled_coordinates(robot, extra)
-    q = sample_values(robot, bodies, ratio, tol)
+    _, coef = coupled_polynomials(robot, extra)
+    qi = robot.q_index[bodies]
+    nonlinear = bool(np.any(np.abs(coef[qi, 2:]) > 0))
+    q = nonlinear_values(len(bodies) + 1) if nonlinear else sample_values(robot, bodies, coef[:, 1], tol)
     if q is None:
         return None
-    a = group_system(robot, anchor, bodies, ratio, offset, q, level, tol)
+    a, who = _group_rows(robot, anchor, bodies, coef, q, level, tol, unit)
+    if nonlinear:  # sampled, not proven: a solution must survive twice as many values
+        more, _ = _group_rows(robot, anchor, bodies, coef, nonlinear_values(len(bodies) + 1, 2) + 0.01, level, tol,
+                              unit)
+        scale = max(float(np.abs(a).max()), 1e-300)
+        n1, n2 = null_rows(a, tol, scale), null_rows(np.vstack([a, more]), tol, scale)
+        if n1 is None or n2 is None or len(n1) != len(n2):
+            return None
+        a = np.vstack([a, more])
+    if len(a) < a.shape[1]:  # pad to square: the same solutions
+        a = np.vstack([a, np.zeros((a.shape[1] - len(a), a.shape[1]))])
+    r = np.linalg.qr(a, mode="r")
+    return r, who
+
+
+def _group_rows(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray, q: np.ndarray,
+                level: np.ndarray | None, tol: float, unit: np.ndarray | None) -> tuple[np.ndarray, list[int]]:
+    """:func:`group_system` for ``y = x / unit``, the world's block dropped: ``(rows, who)``."""
+    a = group_system(robot, anchor, bodies, coef, q, level, tol)
     if unit is not None:
         a = a * np.tile(unit, len(bodies) + 1)
         a /= np.linalg.norm(a, axis=1, keepdims=True)
     who = [anchor, *bodies]
     if anchor < 0:
         a, who = a[:, 10:], who[1:]
-    if len(a) < a.shape[1]:  # pad to square: the same solutions
-        a = np.vstack([a, np.zeros((a.shape[1] - len(a), a.shape[1]))])
-    r = np.linalg.qr(a, mode="r")
-    return r, who
+    return a, who
 
 
 def null_rows(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:

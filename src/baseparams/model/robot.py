@@ -187,6 +187,10 @@ class LoopJoint:
         The successor's copy of the frame (world pose at q = 0) when it does not coincide with
         ``M`` (an unassembled file; see :func:`baseparams.kinematics.loops.assemble`); ``None``
         when they coincide.
+    anchor_free : bool, default False
+        The predecessor's side is the world through a control device (a MuJoCo mocap body): its
+        frame may be placed where the successor's is, at any reference
+        (:func:`~baseparams.kinematics.loops.assemble` moves it off a singular configuration).
     """
 
     name: str
@@ -196,6 +200,7 @@ class LoopJoint:
     M: np.ndarray
     axes: np.ndarray
     M_child: np.ndarray | None = None
+    anchor_free: bool = False
 
     __repr__ = summary_repr
 

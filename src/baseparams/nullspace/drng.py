@@ -585,6 +585,75 @@ def _level_axis(robot: Robot, j: int, measured: np.ndarray, tol: float) -> np.nd
     return a
 
 
+def _unlocked(robot: Robot) -> tuple[Robot, np.ndarray, np.ndarray] | None:
+    """The robot without the bodies its loops hold still (:func:`.rules.locked_bodies`), or None.
+
+    Those bodies never move: the others move exactly as they would hanging from the world there
+    (a body whose parent is held still hangs from the world, a loop to one closes on the world),
+    so the moving bodies' directions are the smaller robot's. Returns ``(robot, body index (m,)
+    in the original, loop index (l,) in the original)``; None when no body or every body is held
+    still, or a coupling ties a held coordinate to a moving one.
+    """
+    from dataclasses import replace
+
+    from .rules import locked_bodies
+
+    locked = locked_bodies(robot)
+    if not locked.any() or locked.all():
+        return None
+    keep = np.flatnonzero(~locked)
+    new = -np.ones(robot.n, dtype=int)
+    new[keep] = np.arange(len(keep))
+    coords = np.flatnonzero(np.isin(robot.dof_body, keep))
+    qnew = -np.ones(robot.dof, dtype=int)
+    qnew[coords] = np.arange(len(coords))
+    couplings = []
+    for c in robot.couplings:
+        idx = [c.succ, *(k for k, _ in c.terms())]
+        if all(qnew[k] < 0 for k in idx):
+            continue
+        if any(qnew[k] < 0 for k in idx):
+            return None
+        couplings.append(replace(c, succ=int(qnew[c.succ]), pred=int(qnew[c.pred]),
+                                 more=tuple((int(qnew[k]), r) for k, r in c.more)))
+    loops, kept_loops = [], []
+    for k, lj in enumerate(robot.loops):
+        a = -1 if lj.parent < 0 else int(new[lj.parent])
+        b = int(new[lj.child])
+        if max(a, b) < 0:
+            continue
+        if a > b:  # the world (a held body) now on the successor's side: swap the two copies
+            a, b, m, mc = b, a, (lj.M if lj.M_child is None else lj.M_child), lj.M
+            lj = replace(lj, M=m, M_child=None if np.abs(mc - m).max() <= 1e-12 else mc,
+                         axes=lj.axes[::-1].copy() if lj.type == "U" else lj.axes)
+        loops.append(replace(lj, parent=a, child=b))
+        kept_loops.append(k)
+    independent = tuple(int(qnew[k]) for k in robot.actuated)
+    sub = Robot(robot.name, tuple(robot.names[i] for i in keep), tuple(robot.joint_names[i] for i in keep),
+                tuple(robot.jtype[i] for i in keep), np.array([-1 if robot.parent[i] < 0 else new[robot.parent[i]]
+                                                               for i in keep]),
+                robot.M0[keep], tuple(robot.axes[i] for i in keep), robot.N_body[keep], robot.gravity, tuple(loops),
+                independent if (loops or couplings) else None, robot.q_box if (loops or couplings) else None,
+                tuple(couplings))
+    return sub, keep, np.array(kept_loops, dtype=int)
+
+
+def _lifted(cols: Columns, bodies: np.ndarray, loops: np.ndarray, n: int) -> Columns:
+    """Columns of :func:`_unlocked`'s robot as columns of the original (``n`` bodies)."""
+    from dataclasses import replace
+
+    def body(b):
+        return np.where(b >= 0, bodies[np.maximum(b, 0)], -1)
+
+    more = np.array([None if m is None else (bodies[np.asarray(m[0])], m[1]) for m in cols.more] + [None],
+                    dtype=object)[:-1]
+    m = len(bodies)
+    joint = np.where(cols.joint >= m, n + loops[np.clip(cols.joint - m, 0, max(len(loops) - 1, 0))]
+                     if len(loops) else cols.joint, body(np.minimum(cols.joint, m - 1)))
+    return replace(cols, child=body(cols.child), parent=body(cols.parent), extra=body(cols.extra), more=more,
+                   joint=joint)
+
+
 def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "all") -> DRNGResult:
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
@@ -633,6 +702,10 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
                 cols = Columns.concat([cols, parallelogram_group_columns(robot, tol, prior=cols)])
             if robot.couplings:
                 cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
+        if robot.loops or robot.couplings:  # bodies held still by their loops: the others on a fixed base
+            sub = _unlocked(robot)
+            if sub is not None:
+                cols = Columns.concat([cols, _lifted(drng(sub[0], tol).columns, *sub[1:], robot.n)])
         if "C" in robot.jtype:  # R-C: compound joints as chains of elementary joints without intermediate mass
             from .compound import compound_columns, expand_compound
 

@@ -39,6 +39,7 @@ from ..pga.core import hat
 from ..pga.linalg import cross3, null_rows, nullspace, rowspace, span_rows, sym
 from .columns import Columns, on_bodies, sym_params
 from .principles import compound_shared, world_axes
+from .spatial import spatial_parallelogram_columns
 from .subspaces import MotionSpans, motion_spans
 
 #: provenance of the rules' columns
@@ -964,12 +965,12 @@ def locked_body_columns(robot: Robot) -> Columns:
 
 
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """The extended-rule columns R-A, R-B, R-L1, R-L2, R-L3 for ``robot`` (R-M: :mod:`.coupled`).
+    """The extended-rule columns R-A, R-B, R-L1, R-L2, R-L3, R-L4 for ``robot`` (R-M: :mod:`.coupled`).
 
     In order: R-A on every body (:func:`fixed_vector_columns`) and across loop joints
     (:func:`loop_shared_columns`), R-B (:func:`sliding_columns`), R-L1
     (:func:`parallelogram_columns`), R-L2 (:func:`level_chain_columns`), R-L3
-    (:func:`planar_loop_columns`), sharing one
+    (:func:`planar_loop_columns`), R-L4 (:func:`.spatial.spatial_parallelogram_columns`), sharing one
     :func:`.subspaces.motion_spans`. The columns are redundant with each other and with the
     paper's principles: :func:`.rank.block_rank` decides the rank.
 
@@ -991,4 +992,5 @@ def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     ms = motion_spans(robot, tol)
     return Columns.concat([fixed_vector_columns(robot, ms), locked_body_columns(robot), loop_shared_columns(robot, tol),
                            sliding_columns(robot, ms), parallelogram_columns(robot),
-                           level_chain_columns(robot, ms, tol), planar_loop_columns(robot, tol)])
+                           level_chain_columns(robot, ms, tol), planar_loop_columns(robot, tol),
+                           spatial_parallelogram_columns(robot, tol, ms)])

@@ -142,18 +142,6 @@ def _components(touch: list[np.ndarray], marked: np.ndarray) -> list[np.ndarray]
     return [np.array(g) for g in groups.values()]
 
 
-def _remap(cols: Columns, real: np.ndarray, n_chain: int, n: int) -> Columns:
-    """Columns of the chain (no block on a massless link) as columns of the robot, provenance R-C."""
-    def body(b):
-        return np.where(b >= 0, real[np.maximum(b, 0)], -1)
-
-    more = np.array([None if m is None else (real[np.asarray(m[0])], m[1]) for m in cols.more] + [None],
-                    dtype=object)[:-1]
-    joint = np.where(cols.joint >= n_chain, cols.joint - n_chain + n, body(cols.joint))
-    return replace(cols, child=body(cols.child), parent=body(cols.parent), extra=body(cols.extra), more=more,
-                   joint=joint, principle=np.full(len(cols), Source.R_C))
-
-
 def _new_directions(cols: Columns, prior: Columns | None, unit: np.ndarray) -> list[Columns]:
     """Of ``cols`` (none on more than three bodies), the directions new to ``prior`` and to each other.
 
@@ -221,7 +209,8 @@ def compound_columns(robot: Robot, expanded: tuple[Robot, np.ndarray, np.ndarray
     touch = _touched(cols)
     direct = np.array([not np.any(real[t] < 0) and bool(np.any(below[t])) for t in touch], dtype=bool)
     unit = decision_scale(robot, "paper")[:10]
-    parts = _new_directions(_remap(cols.subset(direct), real, chain.n, robot.n), prior, unit)
+    lifted = cols.subset(direct).reindexed(real, np.arange(len(robot.loops)), robot.n)
+    parts = _new_directions(replace(lifted, principle=np.full(len(lifted), Source.R_C)), prior, unit)
     known = Columns.concat([prior or Columns.empty(), *parts])
     for comp in _components(touch, virtual):
         sel = cols.subset(comp)

@@ -638,22 +638,6 @@ def _unlocked(robot: Robot) -> tuple[Robot, np.ndarray, np.ndarray] | None:
     return sub, keep, np.array(kept_loops, dtype=int)
 
 
-def _lifted(cols: Columns, bodies: np.ndarray, loops: np.ndarray, n: int) -> Columns:
-    """Columns of :func:`_unlocked`'s robot as columns of the original (``n`` bodies)."""
-    from dataclasses import replace
-
-    def body(b):
-        return np.where(b >= 0, bodies[np.maximum(b, 0)], -1)
-
-    more = np.array([None if m is None else (bodies[np.asarray(m[0])], m[1]) for m in cols.more] + [None],
-                    dtype=object)[:-1]
-    m = len(bodies)
-    joint = np.where(cols.joint >= m, n + loops[np.clip(cols.joint - m, 0, max(len(loops) - 1, 0))]
-                     if len(loops) else cols.joint, body(np.minimum(cols.joint, m - 1)))
-    return replace(cols, child=body(cols.child), parent=body(cols.parent), extra=body(cols.extra), more=more,
-                   joint=joint)
-
-
 def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "all") -> DRNGResult:
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
@@ -705,7 +689,7 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
         if robot.loops or robot.couplings:  # bodies held still by their loops: the others on a fixed base
             sub = _unlocked(robot)
             if sub is not None:
-                cols = Columns.concat([cols, _lifted(drng(sub[0], tol).columns, *sub[1:], robot.n)])
+                cols = Columns.concat([cols, drng(sub[0], tol).columns.reindexed(*sub[1:], robot.n)])
         if "C" in robot.jtype:  # R-C: compound joints as chains of elementary joints without intermediate mass
             from .compound import compound_columns, expand_compound
 

@@ -824,6 +824,9 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
 NEARBY_SCALES = (0.02, 0.05, 0.1, 0.2, 0.4)
 #: perturbations tried per size
 NEARBY_TRIES = 6
+#: sizes and tries when looking for a higher rank of the loops' Jacobian near an assembled q = 0 (every loop file)
+RANK_SCALES = (0.05, 0.2)
+RANK_TRIES = 3
 #: a re-anchored reference whose cond(J_p) is below this (the paper's 30, ``numerics.COND_MAX``) ends the search
 REGULAR_COND = 30.0
 
@@ -853,7 +856,7 @@ def _regular_nearby(robot: Robot, k0: np.ndarray, tol: float) -> tuple[np.ndarra
     At a configuration where branches of the mechanism meet (coaxial joint axes of a welded arm,
     a straight arm), ``K`` loses rank: the coordinates chosen there as independent are too many,
     and samples continued from it stay on the singular set. From perturbed configurations (sizes
-    :data:`NEARBY_SCALES`, smallest first, :data:`NEARBY_TRIES` each, seeded), Gauss-Newton on
+    :data:`RANK_SCALES`, smallest first, :data:`RANK_TRIES` each, seeded), Gauss-Newton on
     every coordinate returns to the loops; the first size where some point has a higher rank
     gives the best-conditioned of them. Returns ``(q (dof,), rank there, rank at q = 0)``.
     """
@@ -861,9 +864,9 @@ def _regular_nearby(robot: Robot, k0: np.ndarray, tol: float) -> tuple[np.ndarra
     if r0 == 0 or r0 >= robot.dof:
         return None
     rng = np.random.default_rng(0)
-    for scale in NEARBY_SCALES:
+    for scale in RANK_SCALES:  # the rank nearby is generic: a few points tell
         best = None
-        for _ in range(NEARBY_TRIES):
+        for _ in range(RANK_TRIES):
             q = _project(robot, rng.normal(scale=scale, size=robot.dof), tol)
             if q is None:
                 continue

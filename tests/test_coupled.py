@@ -13,7 +13,7 @@ from baseparams.model import RobotBuilder
 from baseparams.model.robot import Coupling
 from baseparams.nullspace import drng
 from baseparams.nullspace.certify import certify
-from baseparams.nullspace.columns import to_dense
+from baseparams.nullspace.columns import Columns, to_dense
 from baseparams.nullspace.coupled import coupled_columns, coupled_coordinates, coupled_groups, sample_values
 from baseparams.numerics import stacked_regressor
 from baseparams.robots import random_robot
@@ -393,3 +393,59 @@ def test_mjcf_knee_with_polynomial_couplings_is_mujocos(tmp_path):
     assert a.status == "certified" and a.certificate.completed == 0
     rank, gap = mujoco_rank(path)
     assert gap > 1e6 and a.n_base == rank == 19
+
+
+# ---------------------------------------------------------------- couplings with several drivers (a tendon; issue 39)
+def tendon_leg(seed):
+    """A leg (on the world or a floating torso): a universal hip whose second axis is often parallel to the
+    knee's and the ankle's, its pitch tied to them by a tendon ``pitch = r1 knee + r2 ankle`` (dm_control's
+    quadruped: ``-knee - ankle``, the foot keeping the hip's pitch)."""
+    rng = np.random.default_rng(seed)
+    b = RobotBuilder("leg", gravity=(0, 0, -9.81) if rng.random() < 0.8 else (0, 0, 0))
+    par = "torso" if rng.random() < 0.5 else None
+    if par:
+        b.add_link("torso", joint="F", inertia=random_inertia(rng))
+    axis = rng.normal(size=3)
+    keep = rng.random() < 0.7
+    a1 = rng.normal(size=3)
+    a1 -= (a1 @ axis) / (axis @ axis) * axis
+    b.add_link("thigh", parent=par, joint="U", origin=_origin(rng, False), axis=a1, axis2=axis,
+               inertia=random_inertia(rng))
+    for name, up in (("shin", "thigh"), ("foot", "shin")):
+        b.add_link(name, parent=up, joint="R", origin=_origin(rng, keep), axis=axis if keep else rng.normal(size=3),
+                   inertia=random_inertia(rng))
+    r = b.build()
+    k0 = 6 if par else 0
+    pitch, knee, ankle = k0 + 1, k0 + 2, k0 + 3
+    ratios = (-1.0, -1.0) if rng.random() < 0.6 else tuple(float(x) for x in rng.choice([-1, 0.5, 2, -0.5], 2))
+    c = Coupling("tendon", knee, pitch, ratios[0], 0.0, more=((ankle, ratios[1]),))
+    ind = tuple(k for k in range(r.dof) if k != pitch)
+    return replace(r, couplings=(c,), independent=ind,
+                   q_box=None if par else np.tile([-1.0, 1.0], (len(ind), 1)))
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_groups_driven_by_several_coordinates_complete_and_certified(seed):
+    c = certify(tendon_leg(seed), seed=0)
+    assert c.status == "certified" and c.completed == 0, c.message
+
+
+def test_several_drivers_are_needed(monkeypatch):
+    """Without R-M's groups driven by several coordinates: dm_control's quadruped (4 directions) and about half
+    of the random legs are left to the numerics."""
+    import importlib.util
+    import warnings
+    from pathlib import Path
+
+    from baseparams.loading import load_model
+    from baseparams.nullspace import coupled
+
+    spec = importlib.util.find_spec("dm_control")
+    path = Path(spec.origin).parent / "suite" / "quadruped.xml"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot, _ = load_model(str(path))
+    assert len(coupled.multi_groups(robot)) == 4 and certify(robot, seed=0).completed == 0
+    monkeypatch.setattr(coupled, "multi_group_columns", lambda *a, **k: Columns.empty())
+    assert certify(robot, seed=0).completed == 4
+    assert sum(certify(tendon_leg(s), seed=0).completed > 0 for s in range(12)) >= 3

@@ -372,7 +372,7 @@ def _functional(c: np.ndarray) -> np.ndarray:
 
 
 def group_system(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray, q: np.ndarray,
-                 level: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
+                 level: np.ndarray | None = None, tol: float = 1e-9, motions=None) -> np.ndarray:
     """The criterion's conditions on a coupled group: ``(rows, 10 (G + 1))`` (anchor block first).
 
     Rows: the kinetic form's entries ``K(a, b)`` for ``a <= b`` among ``qdot_l`` and a basis of
@@ -397,6 +397,10 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray,
         default none known (only ``c = 0``).
     tol : float, default 1e-9
         Geometric tolerance.
+    motions : tuple of ndarray, optional
+        ``(h (M, G, 4, 4), dh (M, G, L, 4, 4))``: the bodies' motions and their derivatives in ``L``
+        leading coordinates (a group driven by several: :func:`multi_groups`); default those of
+        ``coef`` at ``q``.
 
     Returns
     -------
@@ -404,13 +408,18 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray,
         Linear conditions on the ``paper``-convention parameter changes (``hat`` order, world
         frame at q = 0) of the anchor then of each body.
     """
-    h, dh = _motions(robot, bodies, coef, q)
+    if motions is None:
+        h, dh = _motions(robot, bodies, coef, q)
+        dh = dh[:, :, None]
+    else:
+        h, dh = motions
+    nl = dh.shape[2]
     w = twist_span(robot, anchor, tol) if anchor >= 0 else np.zeros((0, 6))
     gens = hat(w)  # (r, 4, 4)
     hinv = np.linalg.inv(h)
-    xk = np.concatenate([(hinv @ dh)[:, :, None], hinv[:, :, None] @ gens[None, None] @ h[:, :, None]], axis=2)
-    xa = np.concatenate([np.zeros((1, 4, 4)), gens])  # the anchor does not see qdot_l
-    a, b = np.triu_indices(len(w) + 1)
+    xk = np.concatenate([hinv[:, :, None] @ dh, hinv[:, :, None] @ gens[None, None] @ h[:, :, None]], axis=2)
+    xa = np.concatenate([np.zeros((nl, 4, 4)), gens])  # the anchor does not see qdot_l
+    a, b = np.triu_indices(len(w) + nl)
     fk = _functional(np.swapaxes(xk[:, :, b, :3], -1, -2) @ xk[:, :, a, :3])  # (M, G, P, 10)
     fa = _functional(np.swapaxes(xa[b, :3], -1, -2) @ xa[a, :3])  # (P, 10)
     m, g, npair = fk.shape[0], len(bodies), len(a)
@@ -504,9 +513,10 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
 
 
 def _group_rows(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray, q: np.ndarray,
-                level: np.ndarray | None, tol: float, unit: np.ndarray | None) -> tuple[np.ndarray, list[int]]:
+                level: np.ndarray | None, tol: float, unit: np.ndarray | None,
+                motions=None) -> tuple[np.ndarray, list[int]]:
     """:func:`group_system` for ``y = x / unit``, the world's block dropped: ``(rows, who)``."""
-    a = group_system(robot, anchor, bodies, coef, q, level, tol)
+    a = group_system(robot, anchor, bodies, coef, q, level, tol, motions)
     if unit is not None:
         a = a * np.tile(unit, len(bodies) + 1)
         a /= np.linalg.norm(a, axis=1, keepdims=True)
@@ -717,7 +727,140 @@ def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = Non
         MX MY MZ M`` of each body, world frame at q = 0), provenance ``R-M coupled joints``; the
         highest body carries ``h``, the others ``hp`` and ``he``.
     """
-    return _group_columns(robot, coupled_groups(robot), tol, prior, RM)
+    cols = _group_columns(robot, coupled_groups(robot), tol, prior, RM)
+    more = multi_group_columns(robot, tol, Columns.concat([prior or Columns.empty(), cols]))
+    return Columns.concat([cols, more])
+
+
+def multi_groups(robot: Robot, tol: float = 1e-9) -> list[tuple[int, list[int], np.ndarray, np.ndarray, np.ndarray]]:
+    """Groups whose joints are driven by several coordinates (a tendon tying three joints), couplings alone.
+
+    With linear couplings and no loop joint, every coordinate is an affine function of the
+    independent ones: ``q = G q_a + o`` (``G`` constant). A body with a coordinate driven by two or
+    three independent coordinates ``L`` (its joint's, 1-dof or universal, together) starts a
+    group; the bodies next to it in the tree (parent or children, R, P or U joints) whose
+    coordinates are driven by coordinates of ``L`` only join it; the anchor is the parent of the
+    group's top body (a leader may also move the anchor: the conditions then only get stronger).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    tol : float, default 1e-9
+        Threshold of a zero entry of ``G``.
+
+    Returns
+    -------
+    list of (int, list of int, ndarray, ndarray, ndarray)
+        ``(anchor, bodies (parents first), leaders L (indices into robot.actuated), G (dof, len(L)),
+        o (dof,))``.
+    """
+    if robot.loops or not any(c.more for c in robot.couplings) or any(c.poly for c in robot.couplings):
+        return []
+    from ..kinematics.loops import close_loops
+
+    cs = close_loops(robot, np.zeros((1, len(robot.actuated))), cond_max=np.inf)
+    if not cs.kept:
+        return []
+    g, o, qi, nd = cs.G[0], cs.q[0], robot.q_index, robot.ndofs
+    rows = [[frozenset(np.flatnonzero(np.abs(g[qi[i] + c]) > tol).tolist()) for c in range(nd[i])]
+            if robot.jtype[i] in ("R", "P", "U") else None for i in range(robot.n)]
+    lead = [None if r is None else frozenset().union(*r) for r in rows]
+    children: dict[int, list[int]] = {}
+    for i in range(robot.n):
+        children.setdefault(int(robot.parent[i]), []).append(i)
+    out, seen = [], set()
+    for i in range(robot.n):
+        if lead[i] is None or i in seen or not any(len(r) >= 2 for r in rows[i]) or len(lead[i]) > 3:
+            continue
+        group, stack = {i}, [i]
+        while stack:  # grow along the tree through bodies driven by the same leaders only
+            k = stack.pop()
+            for j in [int(robot.parent[k]), *children.get(k, [])]:
+                if j >= 0 and j not in group and lead[j] is not None and lead[j] and lead[j] <= lead[i]:
+                    group.add(j)
+                    stack.append(j)
+        bodies = sorted(group)
+        tops = [b for b in bodies if int(robot.parent[b]) not in group]
+        seen |= group
+        if len(tops) == 1:  # one anchor
+            ls = np.array(sorted(lead[i]))
+            out.append((int(robot.parent[tops[0]]), bodies, ls, g[:, ls], o))
+    return out
+
+
+def _multi_motions(robot: Robot, bodies: list[int], g: np.ndarray, o: np.ndarray,
+                   qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``h (M, G, 4, 4)`` and ``dh (M, G, L, 4, 4)`` of a group driven by ``L`` coordinates ``qs (M, L)``.
+
+    A body's joint is the product of its coordinates' exponentials (world screws at the reference).
+    """
+    from ..pga.core import se3_exp
+
+    qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
+    m, nl = qs.shape
+    h = np.zeros((m, len(bodies), 4, 4))
+    dh = np.zeros((m, len(bodies), nl, 4, 4))
+    for i, k in enumerate(bodies):
+        e = np.broadcast_to(np.eye(4), (m, 4, 4)).copy()
+        de = np.zeros((m, nl, 4, 4))
+        for c in range(qi[k], qi[k] + robot.ndofs[k]):
+            s, row = robot.screws[c], g[c]
+            ec = se3_exp((o[c] + qs @ row)[:, None] * s)
+            de = de @ ec[:, None] + e[:, None] @ ((ec @ hat(s))[:, None] * row[None, :, None, None])
+            e = e @ ec
+        p = pos.get(int(robot.parent[k]))
+        if p is None:
+            h[:, i], dh[:, i] = e, de
+        else:
+            h[:, i], dh[:, i] = h[:, p] @ e, dh[:, p] @ e[:, None] + h[:, p][:, None] @ de
+    return h, dh
+
+
+def _multi_values(n_unknowns: int, nl: int, times: int = 1) -> np.ndarray:
+    """Generic points ``(M, L)`` in ``[-3, 3]^L`` (additive recurrences of irrational steps)."""
+    m = times * (12 * n_unknowns + 16) * nl
+    steps = np.array([0.6180339887498949, 0.41421356237309515, 0.7320508075688772])[:nl]
+    return 6.0 * (((np.arange(m)[:, None] + 0.5) * steps) % 1.0) - 3.0
+
+
+def multi_group_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = None) -> Columns:
+    """R-M on groups driven by several coordinates (:func:`multi_groups`): sampled, kept when twice as many agree.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    tol : float, default 1e-9
+        Relative singular-value threshold.
+    prior : Columns, optional
+        Columns found before: only new directions are emitted.
+
+    Returns
+    -------
+    Columns
+        Provenance ``R-M coupled joints``.
+    """
+    parts = []
+    unit = decision_scale(robot, "paper")[:10]
+    for anchor, bodies, leaders, g, o in multi_groups(robot, tol):
+        level = _levels(robot, [anchor], tol).get(anchor)
+        systems = []
+        for times, shift in ((1, 0.0), (2, 0.01)):
+            qs = _multi_values(len(bodies) + 1, len(leaders), times) + shift
+            systems.append(_group_rows(robot, anchor, bodies, None, qs[:, 0], level, tol, unit,
+                                       _multi_motions(robot, bodies, g, o, qs)))
+        (a, who), (more, _) = systems
+        scale = max(float(np.abs(a).max()), 1e-300)
+        n1, n2 = null_rows(a, tol, scale), null_rows(np.vstack([a, more]), tol, scale)
+        if n1 is None or n2 is None or len(n1) != len(n2) or not len(n2):
+            continue
+        r = np.linalg.qr(np.vstack([a, more]), mode="r")
+        label = _group_label(robot.names, anchor, bodies) + f" (driven by {len(leaders)} coordinates)"
+        seed = prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
+        for sub, y in sparse_solutions(r, len(who), tol, seed):
+            parts.append(on_bodies([who[b] for b in sub], y * np.tile(unit, len(sub)), RM, label))
+    return Columns.concat(parts)
 
 
 def _group_columns(robot: Robot, groups: list, tol: float, prior: Columns | None, source: int,

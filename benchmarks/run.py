@@ -32,8 +32,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``size_sweep``    ``baseparams analyze FILE --floating --json`` on random floating trees (URDF) of
                     N = 10 .. 10000 links: wall time, peak memory, status, nullity.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
-* ``files``         every example-robot-data URDF and every ``../shared/models`` file: certified, DRNG
-                    complete?; talos_full_v2 times.
+* ``files``         every example-robot-data URDF, every ``../shared/models`` file and every MJCF model of
+                    gymnasium and dm_control: certified, DRNG complete?; talos_full_v2 times.
 * ``cross_recording``  identify on one recording, the raw RMS on another (simulated recordings with the
                     defects real logs have, the Panda and TX40 logs split by time): default vs plain OLS,
                     WLS, physical (``benchmarks/cross_recording.py``).
@@ -888,6 +888,41 @@ def bench_loops(out: dict, quick: bool) -> None:
         out[f"loops_{key}_status"] = c.status
 
 
+def _simulator_files(out: dict, quick: bool) -> None:
+    """Every MJCF model shipped with gymnasium and dm_control (test dependencies): DRNG-complete count."""
+    import importlib.util
+    import warnings
+
+    from baseparams.errors import NoMovingBodiesError
+    from baseparams.loading import load_model
+    from baseparams.nullspace.certify import certify
+
+    roots = []
+    for pkg, sub in (("gymnasium", ("envs", "mujoco", "assets")), ("dm_control", ("suite",))):
+        spec = importlib.util.find_spec(pkg)
+        if spec is not None and spec.origin is not None:
+            roots.append(Path(spec.origin).parent.joinpath(*sub))
+    files = [f for r in roots for f in sorted(r.glob("*.xml"))]
+    if quick:
+        files = [f for f in files if f.name not in ("dog.xml", "humanoid_CMU.xml", "stacker.xml")]
+    done, left, total = 0, [], 0
+    for f in files:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                robot, _ = load_model(str(f), strict_inertia=False)
+        except NoMovingBodiesError:  # lqr.xml: a template without bodies
+            continue
+        c = certify(robot, seed=0)
+        total += 1
+        done += bool(c.certified and c.completed == 0)
+        if not (c.certified and c.completed == 0):
+            left.append(f"{f.parent.name}/{f.name} ({c.status}, +{c.completed})")
+    out["simulator_models_analysed"] = total
+    out["simulator_models_drng_complete"] = done
+    out["simulator_models_drng_incomplete"] = ", ".join(left)
+
+
 def bench_files(out: dict, quick: bool) -> None:
     """Real files: every example-robot-data URDF (test dependency): how often DRNG alone is
     complete, and loading / DRNG / certification times on talos_full_v2 (45 joints)."""
@@ -939,6 +974,7 @@ def bench_files(out: dict, quick: bool) -> None:
         out["shared_models_analysed"] = len(models)
         out["shared_models_drng_complete"] = done
         out["shared_models_drng_incomplete"] = ", ".join(left)
+    _simulator_files(out, quick)
     talos = [f for f in urdf_files() if f.name == "talos_full_v2.urdf"]
     if talos:
         path = str(talos[0])

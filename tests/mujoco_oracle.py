@@ -9,7 +9,10 @@ that assume the file's inertias, ``body_sameframe``/``body_simple``/``dof_simple
 Models with equality constraints
 whose Jacobian is constant (joint and fixed-tendon couplings): states on the constraint manifold
 (Newton on MuJoCo's own ``efc_J``/``efc_pos``), velocities and accelerations in the nullspace of
-``efc_J``, and the rows projected onto that nullspace (the constraint-consistent motions).
+``efc_J``, and the rows projected onto that nullspace (the constraint-consistent motions). With
+joint equalities alone (a ``polycoef`` of degree up to 4: a Jacobian that changes with ``q``) the
+acceleration also carries ``-J^+ (dJ/dt) v``, the second derivative of MuJoCo's residual along
+``q + t v`` (a polynomial of degree 4 in ``t``, interpolated exactly at five points).
 Uses only ``mujoco`` and numpy, nothing of ``baseparams``.
 """
 
@@ -64,6 +67,8 @@ def mujoco_rank(path, samples=None, seed=0, rtol=1e-9, only=None):
     m.body_simple[:] = 0
     m.dof_simplenum[:] = 0
     constrained = m.neq > 0
+    # joint equalities only (MJCF polycoef, degree <= 4): a Jacobian that may change with q, handled exactly
+    polynomial = constrained and all(int(t) == int(mujoco.mjtEq.mjEQ_JOINT) for t in m.eq_type)
     if not constrained:
         m.opt.disableflags |= int(dis.mjDSBL_CONSTRAINT)
     bodies = [b for b in range(1, m.nbody) if m.body_weldid[b] != 0 and (only is None or m.body(b).name in only)]
@@ -88,11 +93,19 @@ def mujoco_rank(path, samples=None, seed=0, rtol=1e-9, only=None):
             assert np.abs(pos).max(initial=0) < 1e-10, "could not close the equality constraints"
             if j_ref is None:
                 j_ref = jac
-            assert np.allclose(jac, j_ref), "equality Jacobian not constant: no sound reference here"
+            assert polynomial or np.allclose(jac, j_ref), "equality Jacobian not constant: no sound reference here"
             _, s, vt = np.linalg.svd(jac)
             g = vt[int(np.sum(s > 1e-10)):].T  # (nv, nv - r)
         v = g @ rng.uniform(-1, 1, g.shape[1])
         a = g @ rng.uniform(-1, 1, g.shape[1])
+        if constrained and polynomial:  # J a + (dJ/dt) v = 0: the residual along q + t v is a polynomial in t
+            ts = np.array([-2.0, -1.0, 0.0, 1.0, 2.0]) * 0.05
+            vals = []
+            for t in ts:
+                d.qpos[:] = q + t * v
+                vals.append(_equality_rows(mujoco, m, d)[1])
+            bias = 2.0 * np.polyfit(ts, np.array(vals), 4)[2]  # d^2/dt^2 at t = 0 (degree <= 4: exact)
+            a = a - np.linalg.pinv(jac) @ bias
         cols = np.empty((g.shape[1], ncols))
         m.opt.disableflags |= int(dis.mjDSBL_CONSTRAINT)  # no constraint forces in mj_inverse
         for k, b in enumerate(bodies):

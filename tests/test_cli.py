@@ -54,7 +54,8 @@ def test_analyze_zero_gravity_completes(capsys):
     assert d["drng"]["by_rule"] == {"shared points": 18, "fixed points": 4, "planar rotations": 2,
                                     "R-A fixed vectors": 2, "R-B sliding points": 0,
                                     "R-L1 parallelograms": 0, "R-L2 level chains": 0, "R-L3 planar loops": 0,
-                                    "R-M coupled joints": 0,
+                                    "R-L4 spatial parallelograms": 0,
+                                    "R-M coupled joints": 0, "R-C compound joints": 0,
                                     "numerical": 0}
     assert d["drng"]["by_principle"] == {"shared points": 18, "fixed points": 4, "planar rotations": 2}
 

@@ -13,7 +13,7 @@ from baseparams.model import RobotBuilder
 from baseparams.model.robot import Coupling
 from baseparams.nullspace import drng
 from baseparams.nullspace.certify import certify
-from baseparams.nullspace.columns import to_dense
+from baseparams.nullspace.columns import Columns, to_dense
 from baseparams.nullspace.coupled import coupled_columns, coupled_coordinates, coupled_groups, sample_values
 from baseparams.numerics import stacked_regressor
 from baseparams.robots import random_robot
@@ -305,3 +305,191 @@ def test_a_mimic_only_robot_is_not_described_with_loop_words(tmp_path, capsys):
     assert main(["simulate", str(urdf), str(tmp_path / "log.csv"), "--duration", "2"]) == 0
     out = capsys.readouterr().out
     assert "coupled joints' sampling box" in out and "loops" not in out
+
+
+# ---------------------------------------------------------------- polynomial couplings (MJCF polycoef; issue 39)
+def poly_hand(seed: int):
+    """:func:`mimic_hand` with most couplings made polynomial (terms in q^2 and q^3 of the leader)."""
+    rng = np.random.default_rng(seed)
+    robot = mimic_hand(rng, offsets=True)
+    cs = []
+    for c in robot.couplings:
+        k = int(rng.integers(0, 3))
+        poly = tuple(float(x) for x in rng.normal(scale=0.2, size=k)) if rng.random() < 0.7 else ()
+        cs.append(replace(c, poly=poly))
+    return replace(robot, couplings=tuple(cs))
+
+
+def _without_sampled_rm(monkeypatch):
+    from baseparams.nullspace import coupled
+
+    orig = coupled.group_nullspace
+
+    def linear_only(robot, anchor, bodies, *a, **k):
+        _, coef = coupled.coupled_polynomials(robot, k.get("extra", ()))
+        return None if np.any(coef[robot.q_index[bodies], 2:]) else orig(robot, anchor, bodies, *a, **k)
+
+    monkeypatch.setattr(coupled, "group_nullspace", linear_only)
+
+
+def test_closed_states_follow_polynomial_couplings_exactly():
+    """Positions on the polynomial, and velocities and accelerations its exact derivatives along a motion."""
+    from baseparams.kinematics.loops import close_loops
+
+    robot = poly_hand(3)
+    assert any(c.poly for c in robot.couplings)
+    t = np.linspace(0.0, 1.0, 2001)
+    na = len(robot.actuated)
+    w = np.random.default_rng(0).uniform(0.5, 1.5, na)
+    qa, dqa, ddqa = np.sin(np.outer(t, w)), np.cos(np.outer(t, w)) * w, -np.sin(np.outer(t, w)) * w ** 2
+    cs = close_loops(robot, qa, dqa, ddqa, cond_max=np.inf)
+    assert cs.kept == len(t)
+    for c in robot.couplings:
+        x = cs.q[:, c.pred]
+        np.testing.assert_allclose(cs.q[:, c.succ], np.polynomial.polynomial.polyval(x, c.coefficients()), atol=1e-12)
+    h = t[1] - t[0]
+    np.testing.assert_allclose(np.gradient(cs.q, h, axis=0)[5:-5], cs.dq[5:-5], atol=1e-5)
+    np.testing.assert_allclose(np.gradient(cs.dq, h, axis=0)[5:-5], cs.ddq[5:-5], atol=1e-4)
+
+
+def test_re_referencing_shifts_a_polynomial_coupling_exactly():
+    from baseparams.kinematics import re_reference
+    from baseparams.kinematics.loops import close_loops
+
+    robot = poly_hand(3)
+    rng = np.random.default_rng(1)
+    q0 = close_loops(robot, rng.uniform(-0.5, 0.5, (1, len(robot.actuated))), cond_max=np.inf).q[0]
+    moved = re_reference(robot, q0)
+    qa = rng.uniform(-1, 1, (20, len(robot.actuated)))
+    old = close_loops(robot, qa, cond_max=np.inf).q
+    new = close_loops(moved, qa - q0[robot.actuated], cond_max=np.inf).q
+    np.testing.assert_allclose(new + q0, old, atol=1e-10)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_polynomial_couplings_complete_and_certified(seed):
+    """R-M on polynomially coupled groups: the conditions sampled (not proven: analytic, not trigonometric
+    polynomials) at generic values, a solution kept only when twice as many values keep it; certified by the
+    independent check, nothing completed numerically."""
+    c = certify(poly_hand(seed), seed=0)
+    assert c.status == "certified" and c.completed == 0, c.message
+
+
+def test_sampled_rm_is_needed_on_polynomial_couplings(monkeypatch):
+    _without_sampled_rm(monkeypatch)
+    left = [certify(poly_hand(seed), seed=0).completed for seed in range(20)]
+    assert sum(k > 0 for k in left) >= 4
+
+
+#: a knee as OpenSim-converted MJCF writes it (MyoSuite): the tibia and the patella on slides and a hinge
+#: whose coordinates are polynomials of the knee angle (joint equalities with a nonlinear polycoef)
+KNEE = """<mujoco model="knee">
+  <compiler angle="radian" inertiafromgeom="false"/>
+  <worldbody>
+    <body name="femur" pos="0 0 1">
+      <joint name="hip" type="hinge" axis="0 1 0" range="-1 1"/>
+      <inertial pos="0 0 -0.2" mass="5" diaginertia="0.1 0.1 0.02"/>
+      <body name="tibia" pos="0 0 -0.4">
+        <joint name="knee_tx" type="slide" axis="1 0 0"/>
+        <joint name="knee_tz" type="slide" axis="0 0 1"/>
+        <joint name="knee" type="hinge" axis="0 1 0" range="-2 0.1"/>
+        <inertial pos="0.01 0.02 -0.2" mass="3" diaginertia="0.05 0.06 0.01"/>
+        <body name="foot" pos="0 0 -0.4">
+          <joint name="ankle" type="hinge" axis="0 1 0"/>
+          <inertial pos="0.05 0 -0.03" mass="1" diaginertia="0.01 0.01 0.005"/>
+        </body>
+      </body>
+      <body name="patella" pos="0.05 0 -0.38" euler="0.1 0 0">
+        <joint name="pat_tx" type="slide" axis="1 0 0"/>
+        <joint name="pat_tz" type="slide" axis="0 0 1"/>
+        <joint name="pat_r" type="hinge" axis="0 1 0"/>
+        <inertial pos="0.005 0.001 0.002" mass="0.1" diaginertia="1e-4 1e-4 5e-5"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <joint joint1="knee_tx" joint2="knee" polycoef="0 -0.004 0.0033 -0.0012 0.0002"/>
+    <joint joint1="knee_tz" joint2="knee" polycoef="0 0.002 -0.0051 0.0011 0"/>
+    <joint joint1="pat_tx" joint2="knee" polycoef="0 0.02 -0.01 0.003 0"/>
+    <joint joint1="pat_tz" joint2="knee" polycoef="0 0.015 0.008 0 0"/>
+    <joint joint1="pat_r" joint2="knee" polycoef="0 0.3 -0.05 0.01 0"/>
+  </equality>
+</mujoco>
+"""
+
+
+def test_mjcf_knee_with_polynomial_couplings_is_mujocos(tmp_path):
+    """The joint equalities are read as polynomial couplings (were refused); the certified count equals the rank
+    of MuJoCo's own inverse dynamics on its constraint manifold; DRNG complete."""
+    import warnings
+
+    import baseparams as bp
+
+    from mujoco_oracle import mujoco_rank
+
+    path = tmp_path / "knee.xml"
+    path.write_text(KNEE)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = bp.load(str(path))
+    assert sum(bool(c.poly) for c in robot.couplings) == 5
+    a = bp.analyze(robot)
+    assert a.status == "certified" and a.certificate.completed == 0
+    rank, gap = mujoco_rank(path)
+    assert gap > 1e6 and a.n_base == rank == 19
+
+
+# ---------------------------------------------------------------- couplings with several drivers (a tendon; issue 39)
+def tendon_leg(seed):
+    """A leg (on the world or a floating torso): a universal hip whose second axis is often parallel to the
+    knee's and the ankle's, its pitch tied to them by a tendon ``pitch = r1 knee + r2 ankle`` (dm_control's
+    quadruped: ``-knee - ankle``, the foot keeping the hip's pitch)."""
+    rng = np.random.default_rng(seed)
+    b = RobotBuilder("leg", gravity=(0, 0, -9.81) if rng.random() < 0.8 else (0, 0, 0))
+    par = "torso" if rng.random() < 0.5 else None
+    if par:
+        b.add_link("torso", joint="F", inertia=random_inertia(rng))
+    axis = rng.normal(size=3)
+    keep = rng.random() < 0.7
+    a1 = rng.normal(size=3)
+    a1 -= (a1 @ axis) / (axis @ axis) * axis
+    b.add_link("thigh", parent=par, joint="U", origin=_origin(rng, False), axis=a1, axis2=axis,
+               inertia=random_inertia(rng))
+    for name, up in (("shin", "thigh"), ("foot", "shin")):
+        b.add_link(name, parent=up, joint="R", origin=_origin(rng, keep), axis=axis if keep else rng.normal(size=3),
+                   inertia=random_inertia(rng))
+    r = b.build()
+    k0 = 6 if par else 0
+    pitch, knee, ankle = k0 + 1, k0 + 2, k0 + 3
+    ratios = (-1.0, -1.0) if rng.random() < 0.6 else tuple(float(x) for x in rng.choice([-1, 0.5, 2, -0.5], 2))
+    c = Coupling("tendon", knee, pitch, ratios[0], 0.0, more=((ankle, ratios[1]),))
+    ind = tuple(k for k in range(r.dof) if k != pitch)
+    return replace(r, couplings=(c,), independent=ind,
+                   q_box=None if par else np.tile([-1.0, 1.0], (len(ind), 1)))
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_groups_driven_by_several_coordinates_complete_and_certified(seed):
+    c = certify(tendon_leg(seed), seed=0)
+    assert c.status == "certified" and c.completed == 0, c.message
+
+
+def test_several_drivers_are_needed(monkeypatch):
+    """Without R-M's groups driven by several coordinates: dm_control's quadruped (4 directions) and about half
+    of the random legs are left to the numerics."""
+    import importlib.util
+    import warnings
+    from pathlib import Path
+
+    from baseparams.loading import load_model
+    from baseparams.nullspace import coupled
+
+    spec = importlib.util.find_spec("dm_control")
+    path = Path(spec.origin).parent / "suite" / "quadruped.xml"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot, _ = load_model(str(path))
+    assert len(coupled.multi_groups(robot)) == 4 and certify(robot, seed=0).completed == 0
+    monkeypatch.setattr(coupled, "multi_group_columns", lambda *a, **k: Columns.empty())
+    assert certify(robot, seed=0).completed == 4
+    assert sum(certify(tendon_leg(s), seed=0).completed > 0 for s in range(12)) >= 3

@@ -36,7 +36,9 @@ def test_puma560_principles_and_provenance():
     ext = drng(puma560())
     assert ext.by_principle() == {"shared points": 18, "fixed points": 4, "planar rotations": 2,
                                   "R-A fixed vectors": 0, "R-B sliding points": 0, "R-L1 parallelograms": 0,
-                                  "R-L2 level chains": 0, "R-L3 planar loops": 0, "R-M coupled joints": 0}
+                                  "R-L2 level chains": 0, "R-L3 planar loops": 0, "R-L4 spatial parallelograms": 0,
+                                  "R-M coupled joints": 0,
+                                  "R-C compound joints": 0}
     text = res.provenance(0)
     assert "shared points" in text and "joint1" in text
 

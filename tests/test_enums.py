@@ -43,7 +43,8 @@ def test_public_tuples_are_plain_strings():
 def test_sources_keep_their_printed_names():
     assert PAPER == ("shared points", "fixed points", "planar rotations")
     assert EXTENDED == ("R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-                        "R-L3 planar loops", "R-M coupled joints")
+                        "R-L3 planar loops", "R-L4 spatial parallelograms", "R-M coupled joints",
+                        "R-C compound joints")
     assert UNMEASURED == "unmeasured root"
     # the measured rows' own sources follow the extended rules (added labels; the old ones kept)
     assert PRINCIPLES == PAPER + EXTENDED + (UNMEASURED, "unmeasured body", "passive joint", "numerical")

@@ -479,3 +479,89 @@ def test_summary_prints_a_dash_where_no_limit_is_set(tmp_path, capsys):
     rows = out.splitlines()
     head = next(k for k, line in enumerate(rows) if line.split()[:2] == ["joint", "offset"])
     assert "nan" not in out.lower().split() and len(rows[head + 1].split()) == len(rows[head].split())
+
+
+# ---------------------------------------------------------------- couplings without loops (issue 39)
+#: an arm whose second joint's range excludes 0 and a gripper of three coupled fingers: finger2 = -finger1
+#: (its range narrows finger1's to [0, 0.03]), finger3 = finger1 + 0.01 (within [0.01, 0.045]: [0, 0.035])
+MIMIC_ARM = """<robot name="mimic_arm">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" velocity="2" effort="50"/></joint>
+  <link name="l1"><inertial><origin xyz="0.1 0 0.2"/><mass value="2"/>
+    <inertia ixx="0.02" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/><axis xyz="0 1 0"/>
+    <limit lower="-2.5" upper="-0.3" velocity="2" effort="50"/></joint>
+  <link name="l2"><inertial><origin xyz="0.2 0 0"/><mass value="1.5"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.02"/></inertial></link>
+  <joint name="finger1" type="prismatic"><parent link="l2"/><child link="f1"/><origin xyz="0.4 0 0"/>
+    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" velocity="0.2" effort="20"/></joint>
+  <link name="f1"><inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/>
+    </inertial></link>
+  <joint name="finger2" type="prismatic"><parent link="l2"/><child link="f2"/><origin xyz="0.4 0 0"/>
+    <axis xyz="0 1 0"/><limit lower="-0.03" upper="0" velocity="0.2" effort="20"/>
+    <mimic joint="finger1" multiplier="-1"/></joint>
+  <link name="f2"><inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/>
+    </inertial></link>
+  <joint name="finger3" type="prismatic"><parent link="l2"/><child link="f3"/><origin xyz="0.4 0 0.05"/>
+    <axis xyz="0 0 1"/><limit lower="0.01" upper="0.045" velocity="0.2" effort="20"/>
+    <mimic joint="finger1" multiplier="1" offset="0.01"/></joint>
+  <link name="f3"><inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/>
+    </inertial></link>
+</robot>
+"""
+
+
+def test_coupled_robot_whose_q0_is_outside_a_range_is_designed_within_every_limit(tmp_path):
+    """Couplings alone close anywhere (no reference assembly is needed): the design starts inside the ranges,
+    every coordinate (driven ones included) stays within its limits, and no note talks about loops."""
+    path = tmp_path / "mimic_arm.urdf"
+    path.write_text(MIMIC_ARM)
+    with pytest.warns(baseparams.ModelWarning, match=r"the couplings' offsets move joints \['finger3'\] at q = 0") as w:
+        robot = baseparams.load(str(path))
+    assert not any("loop" in str(x.message) for x in w)
+    assert robot.couplings and not robot.loops
+    e = design_excitation(robot, harmonics=3, base_frequency=0.2, rate=50.0, starts=1, grid=40, max_iter=40)
+    assert e.joints == ("j1", "j2", "finger1")
+    full = close_loops(robot, e.q, e.dq, e.ddq, cond_max=np.inf).q
+    lim = robot.limits[:, :2]
+    assert np.all(full >= lim[:, 0] - 1e-9) and np.all(full <= lim[:, 1] + 1e-9)
+    assert full[:, 1].max() <= -0.3 + 1e-9 and np.ptp(full, axis=0).min() > 1e-3  # j2 never at 0; all move
+    np.testing.assert_allclose(e.limits[2, :2], [0, 0.03])
+    assert any("'finger1': position range narrowed to [0, 0.03]" in n and "'finger2'" in n for n in e.notes)
+    assert not any("loop" in n for n in e.notes)
+
+
+def test_a_coupling_that_leaves_no_room_names_both_joints(tmp_path):
+    path = tmp_path / "mimic_arm.urdf"
+    path.write_text(MIMIC_ARM.replace('lower="-0.03" upper="0"', 'lower="-0.09" upper="-0.05"'))
+    with pytest.warns(baseparams.ModelWarning):
+        robot = baseparams.load(str(path))
+    with pytest.raises(BaseparamsError, match=r"joint 'finger1'.*joint 'finger2' it drives.*leave no room") as info:
+        excitation_limits(robot)
+    assert "\n" not in str(info.value)
+
+
+def test_a_loop_robot_whose_reference_is_outside_a_range_names_the_joint():
+    robot = baseparams.load("four-bar")
+    lim = np.array([[0.2, 0.8, np.nan, np.nan]])
+    with pytest.raises(BaseparamsError, match=r"outside the position range of joint 'crank_joint' \[0.2, 0.8\]"):
+        design_excitation(robot, limits=lim, harmonics=3, base_frequency=0.2, rate=50.0, starts=1, grid=40)
+
+
+def test_stock_panda_with_its_hand_is_excited(tmp_path, capsys):
+    """example-robot-data's Panda: joint 4's range excludes 0, the fingers are a <mimic> pair (was refused as a
+    loop robot whose reference is outside its limits)."""
+    from erd import ROOT
+
+    path = ROOT / "panda_description" / "urdf" / "panda.urdf"
+    if not path.is_file():
+        pytest.skip("example-robot-data not installed (the test extra)")
+    out = tmp_path / "traj.csv"
+    assert main(["excite", str(path), "--harmonics", "3", "--period", "5", "--rate", "50", "--starts", "1",
+                 "--grid", "24", "--out", str(out)]) == 0
+    robot = baseparams.load(str(path))
+    _, q, _, _ = read_trajectory(out, robot)
+    lim = robot.limits[robot.actuated, :2]
+    assert np.all(q >= lim[:, 0] - 1e-9) and np.all(q <= lim[:, 1] + 1e-9)
+    assert "loop" not in capsys.readouterr().out

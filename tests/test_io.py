@@ -123,7 +123,6 @@ BAD = [
      r"not connected to the root link|no root link|reached twice"),
     (GOOD.replace('type="prismatic"', 'type="helical"'),
      r"<joint name='j2'>: unknown or unsupported joint type 'helical'"),
-    (GOOD.replace('type="prismatic"', 'type="planar"'), r"planar joints are not supported"),
     (GOOD.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'), r"<link name='b'>: .*negative mass -0.5"),
     (GOOD.replace('izz="0.025"', 'izz="0.5"'), r"<link name='a'>: inertia not physically feasible"),
     (GOOD.replace('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>'), r"<joint name='j2'>: zero joint axis"),

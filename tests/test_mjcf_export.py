@@ -419,3 +419,26 @@ def test_front_door_identify_writes_the_mjcf_like_the_cli(tmp_path, capsys):
         with pytest.raises(BaseparamsError, match=re.escape(words)):
             bp.identify(model, str(csv), **{"mjcf": tmp_path / "o.xml", **kw})
     assert not (tmp_path / "o.xml").exists() and not (tmp_path / "o.urdf").exists()
+
+
+def test_a_urdf_whose_package_meshes_do_not_resolve_is_written_without_them(tmp_path, capsys):
+    """example-robot-data and ROS URDFs name their meshes ``package://...``, which MuJoCo's import does not
+    resolve: the meshes (not needed for inertias) are left out with a note, including those of links the
+    import fuses into the world (the base), whose names are gone once compiled (was an AttributeError)."""
+    mesh = '<collision><geometry><mesh filename="package://nowhere/meshes/{}.stl"/></geometry></collision>'
+    text = URDF.replace('<link name="base"/>', f'<link name="base">{mesh.format("base")}</link>')
+    text = text.replace('<link name="a">', f'<link name="a">{mesh.format("a")}')
+    assert text.count("package://") == 2
+    src = tmp_path / "arm.urdf"
+    src.write_text(text)
+    csv = tmp_path / "log.csv"
+    assert main(["simulate", str(src), str(csv), "--duration", "8", "--rate", "250", "--friction", "viscous"]) == 0
+    out = tmp_path / "arm.xml"
+    capsys.readouterr()
+    assert main(["identify", str(src), str(csv), "--method", "physical", "--friction", "viscous",
+                 "--mjcf", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "missing asset files" in err and "package:/" in err and "written without the stripped asset files" in err
+    assert f"MJCF written to {out}" in err and "Traceback" not in err
+    model = mujoco.MjModel.from_xml_path(str(out))
+    assert model.nmesh == 0 and model.nv == 2

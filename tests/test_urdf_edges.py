@@ -424,3 +424,150 @@ def test_every_erd_urdf_loads_and_certifies_with_default_flags(path):
     assert "F" not in robot.jtype  # a fixed base
     cert = certify(robot, seed=1)
     assert cert.certified, cert.message
+
+
+# ------------------------------------------------------------------ planar joints (issue 39)
+PLANAR = """<robot name="slider">
+  <link name="world"/>
+  <joint name="base_joint" type="planar"><parent link="world"/><child link="base"/>
+    <origin xyz="0.1 0.2 0.3" rpy="0.2 -0.1 0.4"/>{axis}</joint>
+  <link name="base"><inertial><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.25"/>
+  </inertial></link>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("axis, normal", [('<axis xyz="0 0 2"/>', (0, 0, 1)), ('<axis xyz="1 1 0"/>', (1, 1, 0)),
+                                          ("", (1, 0, 0))])
+def test_urdf_planar_joint_moves_in_the_plane_normal_to_its_axis(axis, normal, tmp_path):
+    """urdfdom's planar joint: translations normal to ``<axis>`` (default ``1 0 0``) and a rotation about it;
+    an axis other than z (where Pinocchio, which ignores it, differs) is read with a warning."""
+    import warnings
+
+    from baseparams.io.urdf import URDFWarning
+    from baseparams.kinematics.tree import forward_kinematics
+
+    path = tmp_path / "slider.urdf"
+    path.write_text(PLANAR.format(axis=axis))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load_urdf(path)
+    said = [str(w.message) for w in caught if issubclass(w.category, URDFWarning)]
+    assert len(said) == (normal != (0, 0, 1))
+    assert all("<joint name='base_joint'>: planar joint" in s and "Pinocchio" in s for s in said)
+    assert robot.jtype == ("C",) and robot.dof == 3
+    frame = robot.M0[0]
+    n = frame[:3, :3] @ (np.array(normal) / np.linalg.norm(normal))  # the plane's normal in the world
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-2, 2, (20, 3))
+    pose = forward_kinematics(robot, q).g[:, 0] @ frame
+    moved = pose[:, :3, 3] - frame[:3, 3]
+    assert np.abs(moved @ n).max() < 1e-12 and np.linalg.matrix_rank(moved, 1e-9) == 2  # in the plane, all of it
+    rot = np.einsum("sij,jk->sik", pose[:, :3, :3], frame[:3, :3].T)
+    assert np.abs(np.einsum("sij,j->si", rot, n) - n).max() < 1e-12  # rotations about the normal
+    np.testing.assert_allclose(np.arccos(np.clip((np.trace(rot, axis1=1, axis2=2) - 1) / 2, -1, 1)),
+                               np.abs(np.angle(np.exp(1j * q[:, 2]))), atol=1e-9)
+    c = certify(robot)
+    assert c.status == "certified" and c.completed == 0 and c.nullity == 6
+
+
+# ------------------------------------------------------------------ Drake-flavoured URDF (issue 39)
+DRAKE = """<?xml version="1.0"?>
+<!-- Drake's URDFs use drake: elements without declaring the prefix: see http://drake.mit.edu -->
+<robot name="drake_arm"{xmlns}>
+  <link name="world"/>
+  <link name="base"><inertial><mass value="3"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>
+    </inertial><collision><geometry><box size="0.1 0.1 0.1"/></geometry>
+    <drake:proximity_properties><drake:compliant_hydroelastic/><drake:mu_dynamic value="0.5"/>
+    </drake:proximity_properties></collision></link>
+  <joint name="fix" type="fixed"><parent link="world"/><child link="base"/></joint>
+  <link name="l1"><inertial><origin xyz="0 0.05 0.1"/><mass value="2"/>
+    <inertia ixx="0.02" ixy="0.001" ixz="0" iyy="0.03" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.2"/><axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" effort="100" velocity="1" drake:acceleration="10"/></joint>
+  <link name="l2"><inertial><origin xyz="0.1 0.01 0.02"/><mass value="1"/>
+    <inertia ixx="0.01" ixy="0" ixz="0.001" iyy="0.02" iyz="0" izz="0.02"/></inertial></link>
+  {j2}
+  <transmission type="SimpleTransmission" name="t1"><actuator name="a1"><drake:rotor_inertia value="0.0001"/>
+    <drake:gear_ratio value="100"/></actuator><joint name="j1"/></transmission>
+  <drake:collision_filter_group name="g"><drake:member link="l1"/><drake:member link="l2"/>
+  </drake:collision_filter_group>
+</robot>
+"""
+J2 = ('<joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.3" rpy="0.3 0 0"/>'
+      '<axis xyz="0 1 0"/></joint>')
+
+
+@pytest.mark.parametrize("declared", [False, True])
+def test_drake_urdf_is_read_leniently_with_one_note(declared, tmp_path):
+    """Drake's elements (undeclared ``drake:`` prefix, as Drake's own files write them, or declared) are ignored
+    and counted in one warning; the rest is plain URDF, read as Pinocchio (urdfdom, namespace-blind) reads it."""
+    import warnings
+
+    from baseparams.io.urdf import URDFWarning
+
+    from erd import pinocchio_model, pinocchio_nullity
+
+    path = tmp_path / "drake_arm.urdf"
+    path.write_text(DRAKE.format(xmlns=' xmlns:drake="http://drake.mit.edu"' if declared else "", j2=J2))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load_urdf(path)
+    said = [str(w.message) for w in caught if issubclass(w.category, URDFWarning)]
+    assert len(said) == 1, said
+    assert ("'drake' used without a declaration: read leniently" in said[0]) is not declared
+    assert ("5 namespaced elements and attributes describe no rigid body and were ignored: "
+            "<drake:collision_filter_group>, <drake:gear_ratio>, <drake:proximity_properties>, <drake:rotor_inertia>, "
+            "drake:acceleration") in said[0]
+    assert robot.names == ("l1", "l2") and robot.jtype == ("R", "R")
+    c = certify(robot)
+    assert c.status == "certified" and c.completed == 0
+    model = pinocchio_model(path, False)  # urdfdom reads the undeclared prefix; erd's mimic scan needs it declared
+    plain = tmp_path / "declared.urdf"
+    plain.write_text(DRAKE.format(xmlns=' xmlns:drake="http://drake.mit.edu"', j2=J2))
+    assert model is not None and c.nullity == pinocchio_nullity(model, plain, 100)[0]
+
+
+@pytest.mark.parametrize("kind, jtype, ndof", [("ball", "S", 3), ("universal", "U", 2), ("planar", "C", 3)])
+def test_drake_joints_are_the_joints_urdf_lacks(kind, jtype, ndof, tmp_path):
+    import warnings
+
+    j2 = J2.replace('<joint name="j2" type="continuous">', f'<drake:joint name="j2" type="{kind}">')
+    j2 = j2.replace("</joint>", "</drake:joint>").replace('<axis xyz="0 1 0"/>', '<axis xyz="0 0 1"/>')
+    path = tmp_path / "drake_arm.urdf"
+    path.write_text(DRAKE.format(xmlns="", j2=j2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = load_urdf(path)
+    assert robot.jtype == ("R", jtype) and robot.dof == 1 + ndof
+    c = certify(robot)
+    assert c.status == "certified" and c.completed == 0
+
+
+def test_drake_screw_joint_and_ball_constraint(tmp_path):
+    import warnings
+
+    screw = J2.replace('<joint name="j2" type="continuous">', '<drake:joint name="j2" type="screw">')
+    path = tmp_path / "drake_arm.urdf"
+    path.write_text(DRAKE.format(xmlns="", j2=screw.replace("</joint>", "</drake:joint>")))
+    with pytest.raises(ModelError, match=r"drake_arm.urdf: <drake:joint name='j2'>: Drake's 'screw' joint is not "
+                                         r"supported") as info:
+        load_urdf(path)
+    assert "\n" not in str(info.value)
+    # a ball constraint closes a loop: read as the spherical URDF+ loop it is (l2's tip on the base)
+    ball = ('<drake:ball_constraint><drake:ball_constraint_body_A name="base"/>'
+            '<drake:ball_constraint_p_AP value="0.2 0.1 0.5"/><drake:ball_constraint_body_B name="l2"/>'
+            '<drake:ball_constraint_p_BQ value="0.2 0.1 0"/></drake:ball_constraint>')
+    path.write_text(DRAKE.format(xmlns="", j2=J2 + ball))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = load_urdf(path)
+    assert len(robot.loops) == 1 and robot.loops[0].type == "S"
+    assert robot.loops[0].name == "ball_constraint_base_l2"
+
+
+def test_other_malformed_xml_is_still_refused(tmp_path):
+    path = tmp_path / "bad.urdf"
+    path.write_text(DRAKE.format(xmlns="", j2=J2).replace("</robot>", "</robt>"))
+    with pytest.raises(ModelError, match="malformed XML"):
+        load_urdf(path)

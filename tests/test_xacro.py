@@ -188,8 +188,8 @@ def test_error_in_an_included_file_names_it(tmp_path):
 
 
 def test_urdf_level_errors_name_the_xacro_file(tmp_path):
-    p = _xacro(tmp_path, ONE_JOINT.format(link=_link()).replace('type="revolute"', 'type="planar"'))
-    with pytest.raises(ModelError, match=rf"^{p}: <joint name='j'>: .*planar"):
+    p = _xacro(tmp_path, ONE_JOINT.format(link=_link()).replace('type="revolute"', 'type="helical"'))
+    with pytest.raises(ModelError, match=rf"^{p}: <joint name='j'>: .*helical"):
         bp.load(p)
 
 

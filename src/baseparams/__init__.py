@@ -15,7 +15,7 @@ One function per subcommand of the command line, with its flags as keywords (``-
 is ``base_frequency=``, ``--analysis-samples`` is ``analysis_samples=``); a ``model`` is a
 :class:`Robot`, an :class:`Analysis`, a built-in name or a robot file.
 
-load(model, floating=False, gravity=None, strict_inertia=False)
+load(model, floating=False, gravity=None, strict_inertia=False, drop_mocap_welds=False)
     A :class:`Robot` from a built-in name (``baseparams.robots.BUILTINS``) or a file (URDF,
     URDF+, MJCF); notes about the file are :class:`ModelWarning` warnings.
 analyze(robot, *, samples=None, seed=0, verify=True, rows="all", convention="khalil", ...)
@@ -112,7 +112,7 @@ _SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "excitation", "flee
 
 
 def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False,
-         xacro_args=None, package_path=None) -> Robot:
+         xacro_args=None, package_path=None, drop_mocap_welds: bool = False) -> Robot:
     """A robot from a built-in name or a file.
 
     Parameters
@@ -134,6 +134,10 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     package_path : str, path or list of them, optional
         Folders where a xacro file's ``$(find PKG)`` and ``package://PKG`` are looked up, before
         the ``BASEPARAMS_PACKAGE_PATH`` and ``ROS_PACKAGE_PATH`` variables.
+    drop_mocap_welds : bool
+        MJCF: leave out the welds and connects to mocap bodies (a control device, e.g.
+        Meta-World's hand welded to one); by default they are honoured as loops to the world,
+        with a note (``--drop-mocap-welds``).
 
     Returns
     -------
@@ -164,7 +168,7 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     from .loading import load_model
 
     robot, notes = load_model(_os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia,
-                              xacro_args=xacro_args, package_path=package_path)
+                              xacro_args=xacro_args, package_path=package_path, drop_mocap_welds=drop_mocap_welds)
     for note in notes:
         _warnings.warn(note, ModelWarning, stacklevel=2)
     return robot

@@ -821,7 +821,7 @@ def format_report(a: Analysis) -> str:
         if src is not Source.NUMERICAL and src.label in a.by_principle:
             kind = ("paper" if src.is_paper else "measured rows: joint torques only" if src is Source.UNMEASURED
                     else "measured rows: unmeasured joints" if src.is_rows else "extended rule")
-            out.append(f"  {src.label:<22s} {a.by_principle[src.label]:4d}  ({kind})")
+            out.append(f"  {src.label:<27s} {a.by_principle[src.label]:4d}  ({kind})")
     if c is None:
         out.append("certification: skipped (--no-verify); the nullity above is DRNG's rank, unverified")
         if a.rows == "base" and r.floating:
@@ -829,7 +829,7 @@ def format_report(a: Analysis) -> str:
                        "(Ayusawa et al. 2014); unverified here")
     else:
         nm = c.numerical
-        out.append(f"  {Source.NUMERICAL.label:<22s} {c.completed:4d}  (completed from the numerical nullspace)")
+        out.append(f"  {Source.NUMERICAL.label:<27s} {c.completed:4d}  (completed from the numerical nullspace)")
         out.append("  geometric span complete: " + ("yes" if c.status == Status.CERTIFIED else "no"))
         out.append(f"numerical method: {nm.samples} samples, rank {nm.rank}, nullity {nm.nullity}, "
                    f"tolerance {nm.tol:.3g}, singular-value gap {nm.gap:.3g}, {nm.seconds * 1e3:.1f} ms")

@@ -140,11 +140,13 @@ class Source(IntEnum):  # numpydoc ignore=PR01
     R_L1 = 5
     R_L2 = 6
     R_L3 = 7
-    R_M = 8
-    UNMEASURED = 9
-    UNSEEN = 10
-    PASSIVE = 11
-    NUMERICAL = 12
+    R_L4 = 8
+    R_M = 9
+    R_C = 10
+    UNMEASURED = 11
+    UNSEEN = 12
+    PASSIVE = 13
+    NUMERICAL = 14
 
     @property
     def label(self) -> str:
@@ -158,8 +160,8 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
     @property
     def is_extended(self) -> bool:
-        """One of the extended rules R-A, R-B, R-L1, R-L2, R-L3, R-M."""
-        return Source.R_A <= self <= Source.R_M
+        """One of the extended rules R-A, R-B, R-L1, R-L2, R-L3, R-L4, R-M, R-C."""
+        return Source.R_A <= self <= Source.R_C
 
     @property
     def is_rows(self) -> bool:
@@ -169,8 +171,8 @@ class Source(IntEnum):  # numpydoc ignore=PR01
 
 _LABELS = ("shared points", "fixed points", "planar rotations",
            "R-A fixed vectors", "R-B sliding points", "R-L1 parallelograms", "R-L2 level chains",
-           "R-L3 planar loops", "R-M coupled joints", "unmeasured root", "unmeasured body", "passive joint",
-           "numerical")
+           "R-L3 planar loops", "R-L4 spatial parallelograms", "R-M coupled joints", "R-C compound joints",
+           "unmeasured root", "unmeasured body", "passive joint", "numerical")
 
 
 def values(members) -> tuple[str, ...]:

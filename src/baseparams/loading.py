@@ -14,7 +14,7 @@ from .robots import BUILTINS, get
 
 
 def load_model(model: str, floating: bool = False, gravity=None, strict_inertia: bool = False,
-               xacro_args=None, package_path=None) -> tuple[Robot, list[str]]:
+               xacro_args=None, package_path=None, drop_mocap_welds: bool = False) -> tuple[Robot, list[str]]:
     """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xacro``, ``.xml``/``.mjcf``).
 
     Files are read by :func:`.io.load.load_file` (gravity, inertia checks and loop assembly are
@@ -36,6 +36,8 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
         Arguments of a ``.xacro`` file (``{"NAME": "VALUE"}`` or ``["NAME:=VALUE", ...]``).
     package_path : str, path or list of them, optional
         Folders searched for a xacro file's ``$(find PKG)`` and ``package://PKG``.
+    drop_mocap_welds : bool, optional
+        MJCF files: leave out the welds and connects to mocap bodies (control devices).
 
     Returns
     -------
@@ -62,4 +64,4 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
     from .io.load import load_file  # the readers (and their XML, loop and xacro code) for files only
 
     return load_file(p, floating=floating, gravity=gravity, strict_inertia=strict_inertia, xacro_args=xacro_args,
-                     package_path=package_path)
+                     package_path=package_path, drop_mocap_welds=drop_mocap_welds)

@@ -359,6 +359,13 @@ def _analyze_sweep(args) -> int:
     return max((STATUS_EXIT[s] for s in statuses), default=EXIT_OK)
 
 
+def _mocap_args(s: argparse.ArgumentParser) -> None:
+    """``--drop-mocap-welds``: an MJCF file's welds and connects to mocap bodies left out."""
+    s.add_argument("--drop-mocap-welds", action="store_true",
+                   help="MJCF: leave out the welds and connects to mocap bodies (control devices, e.g. "
+                        "Meta-World's hand); by default they are loops to the world, with a note")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``baseparams`` command.
 
@@ -386,6 +393,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "default they are noted and the analysis goes on: the base-parameter "
                             "structure does not depend on the values)")
         s.add_argument("--allow-infeasible-inertia", action="store_true", help=argparse.SUPPRESS)
+        _mocap_args(s)
         s.add_argument("--gravity", nargs=3, type=float, metavar=("GX", "GY", "GZ"),
                        help="gravity in the world frame [m/s^2] (default: the model's, 0 0 -9.81)")
         _xacro_args(s)

@@ -127,7 +127,8 @@ def load_robot(args) -> Robot:  # noqa: F821
     robot, notes = load_model(args.model, floating=getattr(args, "floating", False), gravity=args.gravity,
                               strict_inertia=getattr(args, "strict_inertia", False),
                               xacro_args=getattr(args, "xacro_args", None),
-                              package_path=getattr(args, "package_path", None))
+                              package_path=getattr(args, "package_path", None),
+                              drop_mocap_welds=getattr(args, "drop_mocap_welds", False))
     for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
     hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""

@@ -172,7 +172,7 @@ def _model(obj, drives: bool, rotor: bool) -> IdentModel:
     if robot.floating:
         raise BaseparamsError(f"robot {robot.name!r}: no actuated coordinate moves its floating base; the excitation "
                               f"designer needs a fixed base (every designed coordinate driven by a joint)")
-    if robot.has_loops:
+    if robot.loops:
         loop_bound(robot)
     if isinstance(obj, IdentModel):
         return obj

@@ -170,6 +170,7 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None,
         lim[:, 3] = joint_values(robot, acceleration, "acceleration")
     names = [robot.joint_names[robot.dof_body[c]] for c in coords]
     notes = _default_positions(robot, coords, lim, names)
+    notes += _coupled_ranges(robot, coords, lim, names)
     if margin > 0:
         pad = margin * (lim[:, 1] - lim[:, 0])
         lim[:, 0] += pad
@@ -195,6 +196,40 @@ def _default_positions(robot: Robot, coords: np.ndarray, lim: np.ndarray, names:
     lim[bad, 0], lim[bad, 1] = -half[bad], half[bad]
     return [f"no position limits for {[n for n, b in zip(names, bad) if b]}: +-{DEFAULT_RANGE['R']} rad "
             f"(+-{DEFAULT_RANGE['P']} m) around q = 0 used; give limits= for the real ones"]
+
+
+def _coupled_ranges(robot: Robot, coords: np.ndarray, lim: np.ndarray, names: list[str]) -> list[str]:
+    """Narrow, in place, each designed coordinate's range to what keeps the joints it drives in theirs.
+
+    A coupled joint ``q_f = r q_l + o`` (URDF ``<mimic>``, chains composed) stays within its own
+    position limits exactly when ``q_l`` is in ``[(lower_f - o) / r, (upper_f - o) / r]`` (sorted);
+    couplings with several driving coordinates are left to the model (not a box).
+    """
+    if not robot.couplings or robot.limits is None:
+        return []
+    from ..nullspace.coupled import coupled_coordinates
+
+    lead, ratio, offset = coupled_coordinates(robot)
+    where = {int(c): j for j, c in enumerate(coords)}
+    notes = []
+    for f in range(robot.dof):
+        j = where.get(int(lead[f]), -1)
+        lo_f, hi_f = robot.limits[f, :2]
+        if f in where or j < 0 or ratio[f] == 0 or not np.all(np.isfinite([lo_f, hi_f])):
+            continue
+        ends = np.sort([(lo_f - offset[f]) / ratio[f], (hi_f - offset[f]) / ratio[f]])
+        lo, hi = max(lim[j, 0], ends[0]), min(lim[j, 1], ends[1])
+        follower = robot.joint_names[robot.dof_body[f]]
+        if not hi - lo > 1e-9:
+            raise BaseparamsError(f"robot {robot.name!r}: joint {names[j]!r}'s position range [{lim[j, 0]:.6g}, "
+                                  f"{lim[j, 1]:.6g}] and the range [{lo_f:.6g}, {hi_f:.6g}] of joint {follower!r} "
+                                  f"it drives ({follower} = {ratio[f]:.6g} {names[j]} + {offset[f]:.6g}) leave no "
+                                  f"room for an excitation")
+        if lo > lim[j, 0] + 1e-12 or hi < lim[j, 1] - 1e-12:
+            notes.append(f"joint {names[j]!r}: position range narrowed to [{lo:.6g}, {hi:.6g}] to keep joint "
+                         f"{follower!r} it drives within [{lo_f:.6g}, {hi_f:.6g}]")
+            lim[j, :2] = lo, hi
+    return notes
 
 
 def _check_room(robot: Robot, lim: np.ndarray, names: list[str]) -> None:

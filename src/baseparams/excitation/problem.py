@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import BaseparamsError
 from ..ident.model import IdentModel
 from .fourier import fourier_basis
-from .limits import excitation_limits, loop_bound
+from .limits import design_coordinates, excitation_limits, loop_bound
 
 #: the criteria: ``cond`` (column-scaled condition number) and ``logdet`` (D-optimality)
 CRITERIA = ("cond", "logdet")
@@ -229,9 +229,14 @@ def make_problem(model: IdentModel, criterion, harmonics, base_frequency, rate, 
     """
     robot = model.robot
     lim, notes = excitation_limits(robot, limits, acceleration, margin)
-    if robot.loops and not np.all((lim[:, 0] < 0) & (lim[:, 1] > 0)):  # linear couplings hold anywhere
-        raise BaseparamsError(f"robot {robot.name!r}: the reference configuration q = 0 (where the loops are "
-                              f"assembled) is outside the actuated coordinates' position limits")
+    outside = [j for j in range(len(lim)) if not lim[j, 0] < 0 < lim[j, 1]]
+    if robot.loops and outside:  # couplings alone close anywhere: no reference needed
+        names = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+        raise BaseparamsError(f"robot {robot.name!r}: the loops are assembled at the reference configuration q = 0, "
+                              f"outside the position range of joint "
+                              + ", ".join(f"{names[j]!r} [{lim[j, 0]:.6g}, {lim[j, 1]:.6g}]" for j in outside)
+                              + "; re-reference the model inside the limits (baseparams.kinematics.loops.assemble) or "
+                                "widen them")
     per = max(1, int(round(rate / base_frequency)))
     f = rate / per
     if abs(f - base_frequency) > 1e-12 * base_frequency:
@@ -244,10 +249,10 @@ def make_problem(model: IdentModel, criterion, harmonics, base_frequency, rate, 
         if not np.isfinite(lim[:, 4]).any():
             raise BaseparamsError(f"robot {robot.name!r}: torque limits asked, but no effort limit is known")
         theta = model.theta(robot.parameters("paper"))
-    cond_max = loop_bound(robot) if robot.has_loops else None
-    if cond_max is not None and robot.loops:
+    cond_max = loop_bound(robot) if robot.loops else None  # couplings alone: exact, linear, never singular
+    if cond_max is not None:
         notes.append(f"loops: cond(J_p) <= {cond_max:.3g} at every sample (continuation from the reference assembly)")
-    elif cond_max is not None:
+    elif robot.couplings:
         notes.append("coupled joints: designed in the actuated coordinates, the coupled ones set by their couplings")
     return Problem(model, criterion, int(harmonics), omega, t, fourier_basis(t, int(harmonics), omega), lim, theta,
                     cond_max), notes

@@ -19,9 +19,9 @@ Mapping:
   :attr:`Robot.armature` (free joints reordered to our ``(omega, v)``);
 * equalities: ``connect`` (body or site form) -> spherical loop joint, ``weld`` -> fixed loop
   joint (``relpose``/``torquescale`` ignored, with a note when not the default), ``joint`` with
-  a linear ``polycoef`` and fixed-tendon equalities that couple two 1-dof joints linearly ->
-  couplings; inactive equalities are skipped with a note. Actuated joints are preferred as the
-  independent coordinates of closed loops.
+  its ``polycoef`` (a polynomial of degree up to 4, from ``qpos0``) and fixed-tendon equalities
+  that couple 1-dof joints linearly -> couplings; inactive equalities are skipped with a note.
+  Actuated joints are preferred as the independent coordinates of closed loops.
 
 Missing mesh (texture, height field, skin) files: those assets and the geoms using them are
 stripped and the model compiled again; a moving body whose inertia came from a stripped geom is
@@ -133,11 +133,13 @@ def _compile(mj, path: Path):
     base = path.parent
     spec = mj.MjSpec.from_file(str(path))
     lost = _strip_assets(mj, spec, base, everything=False)
+    explicit = {b for b in lost if spec.body(b).explicitinertial}  # before compiling: fusestatic removes bodies
     try:
         model = spec.compile()
     except Exception:  # noqa: BLE001 - the missing file was not found by our resolution: strip all
         spec = mj.MjSpec.from_file(str(path))
         lost = _strip_assets(mj, spec, base, everything=True)
+        explicit = {b for b in lost if spec.body(b).explicitinertial}
         model = None
     notes: list[str] = []
     placeholders: list[str] = []
@@ -159,8 +161,9 @@ def _compile(mj, path: Path):
     fromgeom = spec.compiler.inertiafromgeom
     always = fromgeom == mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE
     never = fromgeom == mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
-    affected = sorted(b for b in lost if not never and (always or not spec.body(b).explicitinertial
-                                                        or b in placeholders))
+    # a body fused into its parent by the compiler (fusestatic; MuJoCo's URDF import) is looked up by the
+    # name it had before compiling
+    affected = sorted(b for b in lost if not never and (always or b not in explicit or b in placeholders))
     notes.append(f"{path}: missing asset files ({_one_line(first)}): stripped them and the geoms using them")
     for b in affected:
         what = "a placeholder inertia (mass 1e-3)" if b in placeholders else "the remaining geoms"
@@ -222,7 +225,7 @@ def _pose(pos, rot) -> np.ndarray:
 
 
 def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating: bool = False,
-              strict_inertia: bool = False) -> Robot:
+              strict_inertia: bool = False, drop_mocap_welds: bool = False) -> Robot:
     """Read an MJCF file into a :class:`Robot` (see the module doc).
 
     Parameters
@@ -239,6 +242,10 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
         A top-level body without a joint gets a floating (F) joint.
     strict_inertia : bool, optional
         Physically infeasible inertias of moving bodies are errors (warnings otherwise).
+    drop_mocap_welds : bool, optional
+        Leave out the ``weld`` and ``connect`` equalities to a mocap body (a control device:
+        Meta-World's hand is welded to one), with a note; by default they are loop joints to the
+        world whose world side may be placed anywhere (:attr:`LoopJoint.anchor_free`), also noted.
 
     Returns
     -------
@@ -270,7 +277,7 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
     data = mj.MjData(model)
     data.qpos[:] = model.qpos0
     mj.mj_kinematics(model, data)
-    return _robot(mj, model, data, path, name, gravity, floating, strict_inertia)
+    return _robot(mj, model, data, path, name, gravity, floating, strict_inertia, drop_mocap_welds)
 
 
 def _check_model(model, path: Path) -> None:
@@ -339,7 +346,8 @@ class _Walk:
     joint_names: dict[int, str] = field(default_factory=dict)
 
 
-def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_inertia: bool) -> Robot:
+def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_inertia: bool,
+           drop_mocap_welds: bool = False) -> Robot:
     gravity = _gravity(mj, model, path, gravity)
     mname = model.names.split(b"\0", 1)[0].decode()
     b = RobotBuilder(name or (mname if mname and mname != "MuJoCo Model" else path.stem), gravity=gravity)
@@ -347,7 +355,8 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
     w = _Walk(link_of=[None] * model.nbody)
     for i in range(1, model.nbody):
         _add_body(mj, model, data, path, b, w, i, bnames[i], floating, strict_inertia)
-    couplings = _equalities(mj, model, data, path, b, bnames, w.link_of, w.t_link, w.joint_names, w.dof_map)
+    couplings = _equalities(mj, model, data, path, b, bnames, w.link_of, w.t_link, w.joint_names, w.dof_map,
+                            drop_mocap_welds)
     robot = b.build()
     robot = replace(robot, armature=np.array(w.armature))
     if couplings:
@@ -478,7 +487,8 @@ def _preferred_coordinates(mj, model, robot: Robot, dof_map: dict[int, int]) -> 
     return prefer
 
 
-def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link, joint_names, dof_map) -> list:
+def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link, joint_names, dof_map,
+                drop_mocap_welds: bool = False) -> list:
     """Add loop joints for connect/weld; return the couplings (joint and fixed-tendon equalities)."""
     couplings: list[Coupling] = []
     eq = mj.mjtEq
@@ -495,25 +505,7 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
         o1, o2 = int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
         d = np.array(model.eq_data[e], dtype=float)
         if kind in ("connect", "weld"):
-            if int(model.eq_objtype[e]) == site:
-                b1, b2 = int(model.site_bodyid[o1]), int(model.site_bodyid[o2])
-                w1, w2 = (_pose(data.site_xpos[s], data.site_xmat[s]) for s in (o1, o2))
-                if kind == "connect":
-                    w1[:3, :3] = w2[:3, :3] = np.eye(3)
-            else:
-                b1, b2 = o1, o2
-                if kind == "connect":
-                    w1, w2 = np.eye(4), np.eye(4)
-                    w1[:3, 3] = data.xpos[b1] + data.xmat[b1].reshape(3, 3) @ d[0:3]
-                    w2[:3, 3] = data.xpos[b2] + data.xmat[b2].reshape(3, 3) @ d[3:6]
-                else:
-                    t1, t2 = _pose(data.xpos[b1], data.xmat[b1]), _pose(data.xpos[b2], data.xmat[b2])
-                    rel = np.linalg.inv(t1) @ t2  # relpose: body2 in body1 at qpos0 (MuJoCo's default)
-                    given = quat_pose(d[3:6], d[6:10]) if np.linalg.norm(d[6:10]) > 1e-12 else rel
-                    if np.abs(given - rel).max() > 1e-6:
-                        warnings.warn(f"{what}: relpose differs from the qpos0 pose: ignored (the weld is read "
-                                      f"as a fixed loop joint at the file's pose)", MJCFWarning, stacklevel=3)
-                    w1 = w2 = t2
+            b1, b2, w1, w2 = _loop_frames(model, data, e, kind, site, what)
             if kind == "weld" and abs(d[10] - 1.0) > 1e-12:
                 warnings.warn(f"{what}: torquescale {d[10]:g} ignored (a weld is a fixed loop joint)",
                               MJCFWarning, stacklevel=3)
@@ -522,17 +514,21 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
                 warnings.warn(f"{what}: both sides are on one rigid body: no constraint, skipped",
                               MJCFWarning, stacklevel=3)
                 continue
+            mocap = _mocap(model, bnames, b1, b2, what, drop_mocap_welds)
+            if mocap is None:
+                continue
             i1 = -1 if l1 is None else b.body_index(l1)
             i2 = -1 if l2 is None else b.body_index(l2)
             (pl, pw), (cl, cw) = ((l1, w1), (l2, w2)) if i1 < i2 else ((l2, w2), (l1, w1))
             b.add_loop(ename, "S" if kind == "connect" else "fixed", parent=pl, child=cl,
-                       origin=np.linalg.inv(t_link[pl]) @ pw, child_origin=np.linalg.inv(t_link[cl]) @ cw)
+                       origin=np.linalg.inv(t_link[pl]) @ pw, child_origin=np.linalg.inv(t_link[cl]) @ cw,
+                       anchor_free=bool(mocap) and min(i1, i2) < 0)
         elif kind == "joint":
             if o2 < 0:
                 raise ModelError(f"{what}: a joint locked by an equality is not supported (no joint2)")
-            _check_poly(d, what)
             c1, c2 = _coord(model, o1, dof_map, what), _coord(model, o2, dof_map, what)
-            couplings.append(Coupling(ename, c2, c1, float(d[1]), float(d[0])))
+            poly = np.trim_zeros(d[2:5], "b")  # q1 = d0 + d1 q2 + d2 q2^2 + ... (from qpos0)
+            couplings.append(Coupling(ename, c2, c1, float(d[1]), float(d[0]), poly=tuple(float(x) for x in poly)))
         elif kind == "tendon":
             couplings.append(_tendon_coupling(mj, model, o1, o2, d, dof_map, ename, what))
         else:
@@ -540,9 +536,50 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
     return couplings
 
 
+def _loop_frames(model, data, e: int, kind: str, site: int, what: str):
+    """``(body1, body2, world frame on body1, on body2)`` of a connect or weld equality at qpos0."""
+    o1, o2, d = int(model.eq_obj1id[e]), int(model.eq_obj2id[e]), np.array(model.eq_data[e], dtype=float)
+    if int(model.eq_objtype[e]) == site:
+        b1, b2 = int(model.site_bodyid[o1]), int(model.site_bodyid[o2])
+        w1, w2 = (_pose(data.site_xpos[s], data.site_xmat[s]) for s in (o1, o2))
+        if kind == "connect":
+            w1[:3, :3] = w2[:3, :3] = np.eye(3)
+        return b1, b2, w1, w2
+    b1, b2 = o1, o2
+    if kind == "connect":
+        w1, w2 = np.eye(4), np.eye(4)
+        w1[:3, 3] = data.xpos[b1] + data.xmat[b1].reshape(3, 3) @ d[0:3]
+        w2[:3, 3] = data.xpos[b2] + data.xmat[b2].reshape(3, 3) @ d[3:6]
+        return b1, b2, w1, w2
+    t1, t2 = _pose(data.xpos[b1], data.xmat[b1]), _pose(data.xpos[b2], data.xmat[b2])
+    rel = np.linalg.inv(t1) @ t2  # relpose: body2 in body1 at qpos0 (MuJoCo's default)
+    given = quat_pose(d[3:6], d[6:10]) if np.linalg.norm(d[6:10]) > 1e-12 else rel
+    if np.abs(given - rel).max() > 1e-6:
+        warnings.warn(f"{what}: relpose differs from the qpos0 pose: ignored (the weld is read as a fixed loop joint "
+                      f"at the file's pose)", MJCFWarning, stacklevel=4)
+    return b1, b2, t2, t2
+
+
+def _mocap(model, bnames, b1: int, b2: int, what: str, drop: bool) -> bool | None:
+    """Whether a weld or connect ties a body to a mocap body (noted); None when it is dropped (``drop``)."""
+    mocap = [bnames[x] for x in (b1, b2) if int(model.body_mocapid[x]) >= 0]
+    if not mocap:
+        return False
+    other = bnames[b2 if int(model.body_mocapid[b1]) >= 0 else b1]
+    if drop:
+        warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}: dropped (drop_mocap_welds)",
+                      MJCFWarning, stacklevel=4)
+        return None
+    warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}, a control device (the simulation moves "
+                  f"it): honoured as a loop joint to the world, placed where the hand is at the reference; "
+                  f"drop_mocap_welds (--drop-mocap-welds) leaves it out", MJCFWarning, stacklevel=4)
+    return True
+
+
 def _check_poly(d: np.ndarray, what: str) -> None:
     if np.any(d[2:5] != 0):
-        raise ModelError(f"{what}: nonlinear polycoef {d[:5].tolist()} is not supported")
+        raise ModelError(f"{what}: a tendon equality with a nonlinear polycoef {d[:5].tolist()} is not supported "
+                         f"(a joint equality's is)")
 
 
 def _coord(model, j: int, dof_map, what: str) -> int:

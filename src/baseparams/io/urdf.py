@@ -1,7 +1,9 @@
 """URDF and URDF+ reader -> :class:`Robot`, and writing parameters back into a URDF.
 
 Supported: ``revolute``/``continuous`` (R), ``prismatic`` (P), ``fixed`` (merged into the
-parent body, inertias combined exactly), ``floating`` (F, root only), and, as in Drake and
+parent body, inertias combined exactly), ``floating`` (F, root only), ``planar`` (urdfdom's: two
+slides in the plane normal to ``<axis>``, then the rotation about it; a compound joint C, as
+Pinocchio's planar joint for ``<axis xyz="0 0 1">``), and, as in Drake and
 ``../shared/CONVENTIONS.md``, ``spherical``/``ball`` (S) and ``universal`` (U, ``<axis>``
 then ``<axis2>``). ``floating=True`` attaches the root link to the world by an F joint.
 
@@ -12,14 +14,20 @@ of the two links); ``independent="false"`` on joints marks passive coordinates. 
 ``sucessor`` spelling and ``name=`` instead of ``link=`` are accepted with a warning.
 Plain-URDF tools drop loops silently; this reader never does.
 
+Drake's URDF extensions: undeclared namespace prefixes (``drake:``) are declared before parsing,
+``<drake:joint>`` (ball, universal, planar) is read as a joint and ``<drake:ball_constraint>`` as
+a spherical loop; every other namespaced element or attribute is dropped and counted in one
+warning.
+
 ``<mimic multiplier offset>`` becomes a coupling (the follower is passive); a ``<mimic>`` of a
 joint that does not exist is ignored with a warning, as urdfdom and Pinocchio do.
-Not supported (clear errors): ``planar`` joints, loops of unknown type.
+Not supported (clear errors): loops of unknown type.
 Every error is one line naming the file, the element and the problem.
 """
 
 from __future__ import annotations
 
+import re
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -32,10 +40,10 @@ from ..files import MODEL_MAX_BYTES, read_input_bytes
 from ..model.bounds import check_magnitude
 from ..model.builder import RobotBuilder, pose
 from ..model.inertia import Inertia, check_inertia
-from ..model.robot import Coupling, Robot
+from ..model.robot import Coupling, Robot, compound_screw
 
 _TYPES = {"revolute": "R", "continuous": "R", "prismatic": "P", "fixed": "fixed", "floating": "F",
-          "spherical": "S", "ball": "S", "universal": "U"}
+          "spherical": "S", "ball": "S", "universal": "U", "planar": "C"}
 _LOOP_TYPES = {"revolute": "R", "continuous": "R", "prismatic": "P", "fixed": "fixed",
                "spherical": "S", "ball": "S", "universal": "U"}
 
@@ -75,12 +83,133 @@ def _parse(path: Path, data: bytes | None = None) -> ET.Element:
     body = data.lstrip(b" \t\r\n")
     skipped = data[:len(data) - len(body)].count(b"\n")  # for line numbers in messages
     body = body.rstrip(b" \t\r\n\x00")
+    undeclared: list[str] = []
     try:
-        return ET.fromstring(body)
+        root = ET.fromstring(body)
     except ET.ParseError as exc:
-        line, col = getattr(exc, "position", (0, 0))
-        msg = str(exc).split(":", 1)[0] if ": line" in str(exc) else str(exc)
-        raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
+        root, undeclared = _declare_prefixes(body, exc)
+        if root is None:
+            line, col = getattr(exc, "position", (0, 0))
+            msg = str(exc).split(":", 1)[0] if ": line" in str(exc) else str(exc)
+            raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
+    _foreign_elements(root, path, undeclared)
+    return root
+
+
+#: the namespace given to a prefix a file uses without declaring it (Drake's ``drake:``, read as Drake reads them)
+_UNDECLARED = "urn:baseparams:undeclared:"
+_PREFIX_USE = re.compile(rb"<\s*/?\s*([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=")
+
+
+def _declare_prefixes(body: bytes, exc: ET.ParseError) -> tuple[ET.Element | None, list[str]]:
+    """The document parsed with its undeclared namespace prefixes declared (``drake:`` in Drake's URDFs).
+
+    Only for "unbound prefix" errors: the prefixes used in tags and attribute names but never
+    declared get a placeholder namespace on the root element. ``(None, [])`` when that is not the
+    error or the document is still malformed.
+    """
+    if "unbound prefix" not in str(exc):
+        return None, []
+    declared = set(re.findall(rb"xmlns:([A-Za-z_][\w.-]*)\s*=", body))
+    used = {(a or b).decode() for a, b in _PREFIX_USE.findall(body)}
+    used = sorted(used - {d.decode() for d in declared} - {"xml", "xmlns"})
+    start = re.search(rb"<(?![?!])[A-Za-z_][\w:.-]*", body)
+    if not used or start is None:
+        return None, []
+    extra = b"".join(f' xmlns:{p}="{_UNDECLARED}{p}"'.encode() for p in used)
+    try:
+        return ET.fromstring(body[:start.end()] + extra + body[start.end():]), used
+    except ET.ParseError:
+        return None, []
+
+
+def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str]) -> None:
+    """Drake's extensions read as Drake reads them, every other namespaced element or attribute dropped and counted.
+
+    ``<drake:joint>`` (ball, universal, planar: joints URDF lacks) becomes a ``<joint>``,
+    ``<drake:ball_constraint>`` a spherical ``<loop>``; any other element or attribute in a
+    namespace (``drake:`` collision filters, rotor inertia, gear ratio, hydroelastic properties,
+    acceleration limits, ...) describes no rigid body: it is removed, and one warning counts
+    what was left out (and names the prefixes used without a declaration).
+    """
+    dropped: dict[str, int] = {}
+    stack = [root]
+    while stack:  # a dropped element's own children are not counted again
+        parent = stack.pop()
+        for child in list(parent):
+            if isinstance(child.tag, str) and child.tag.startswith("{"):
+                local = child.tag.split("}", 1)[1]
+                if local == "ball_constraint":
+                    parent.remove(child)
+                    parent.append(_ball_constraint_loop(child, path))
+                    continue
+                if not (local == "joint" and _drake_joint(child, path)):
+                    shown = f"<{_shown_name(child.tag, undeclared)}>"
+                    dropped[shown] = dropped.get(shown, 0) + 1
+                    parent.remove(child)
+                    continue
+            stack.append(child)
+    for elem in root.iter():
+        for key in [k for k in elem.attrib if k.startswith("{")]:
+            shown = _shown_name(key, undeclared)
+            dropped[shown] = dropped.get(shown, 0) + 1
+            del elem.attrib[key]
+    if not dropped and not undeclared:
+        return
+    what = ", ".join(f"{k} x{v}" if v > 1 else k for k, v in sorted(dropped.items()))
+    head = (f"namespace prefixes {', '.join(repr(p) for p in undeclared)} used without a declaration: read leniently "
+            f"(as Drake does); " if undeclared else "")
+    warnings.warn(f"{path}: {head}{sum(dropped.values())} namespaced elements and attributes describe no rigid body "
+                  f"and were ignored{': ' + what if what else ''}", URDFWarning, stacklevel=4)
+
+
+def _shown_name(tag: str, undeclared: list[str]) -> str:
+    """``{uri}local`` as the file wrote it: ``prefix:local`` (Drake's namespace as ``drake:``)."""
+    uri, local = tag[1:].split("}", 1)
+    if uri.startswith(_UNDECLARED):
+        return f"{uri[len(_UNDECLARED):]}:{local}"
+    return f"drake:{local}" if "drake" in uri else f"{{{uri}}}{local}"
+
+
+#: Drake's custom joint types and ours; ``screw`` and ``curvilinear`` have no counterpart
+_DRAKE_JOINTS = {"ball": "ball", "universal": "universal", "planar": "planar"}
+
+
+def _drake_joint(elem: ET.Element, path: Path) -> bool:
+    """Turn a ``<drake:joint>`` into the ``<joint>`` it means, in place (True), or refuse it."""
+    t = elem.get("type")
+    if t not in _DRAKE_JOINTS:
+        raise ModelError(f"{path}: <drake:joint name={elem.get('name')!r}>: Drake's {t!r} joint is not supported "
+                         f"(ball, universal and planar are)")
+    elem.tag = "joint"
+    for sub in elem.iter():
+        if isinstance(sub.tag, str) and sub.tag.startswith("{"):
+            sub.tag = sub.tag.split("}", 1)[1]
+    if t == "universal" and elem.find("axis2") is None:  # Drake: about the joint frame's x, then the moved y
+        for old in elem.findall("axis"):
+            elem.remove(old)
+        ET.SubElement(elem, "axis", xyz="1 0 0")
+        ET.SubElement(elem, "axis2", xyz="0 1 0")
+    return True
+
+
+def _ball_constraint_loop(elem: ET.Element, path: Path) -> ET.Element:
+    """A ``<drake:ball_constraint>`` as the spherical URDF+ ``<loop>`` it is (point P on body A = point Q on B)."""
+    part = {(c.tag.split("}", 1)[1] if c.tag.startswith("{") else c.tag): c for c in elem
+            if isinstance(c.tag, str)}
+    what = f"{path}: <drake:ball_constraint>"
+    names, points = [], []
+    for body, point in (("ball_constraint_body_A", "ball_constraint_p_AP"),
+                        ("ball_constraint_body_B", "ball_constraint_p_BQ")):
+        if body not in part or not part[body].get("name"):
+            raise ModelError(f"{what}: needs <drake:{body} name=...>")
+        names.append(part[body].get("name"))
+        points.append(part[point].get("value", "0 0 0") if point in part else "0 0 0")
+    loop = ET.Element("loop", name=f"ball_constraint_{names[0]}_{names[1]}", type="spherical")
+    for tag, name, xyz in (("predecessor", names[0], points[0]), ("successor", names[1], points[1])):
+        side = ET.SubElement(loop, tag, link=name)
+        ET.SubElement(side, "origin", xyz=xyz)
+    return loop
 
 
 def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
@@ -245,8 +374,7 @@ def _index_joints(root: ET.Element, links: dict[str, ET.Element], path: Path) ->
             ix.mimics[jname] = _mimic(mim, what)
         t = jt.get("type")
         if t not in _TYPES:
-            hint = " (planar joints are not supported)" if t == "planar" else ""
-            raise ModelError(f"{what}: unknown or unsupported joint type {t!r}{hint}")
+            raise ModelError(f"{what}: unknown or unsupported joint type {t!r}")
     return ix
 
 
@@ -333,7 +461,7 @@ def _add_tree(b: RobotBuilder, ix: _Index, base: str, floating: bool, limits: li
         t = _TYPES[jt.get("type")]
         if t == "F" and (plink != base or floating):
             raise ModelError(f"{what}: a floating joint is only supported at the root")
-        axis, axis2 = _joint_axes(jt, t, what)
+        axis, axis2 = _joint_axes(jt, t, what) if t != "C" else (_planar_axes(jt, what), None)
         indep = _independent(jt, jname in ix.mimics, what)
         if t != "fixed" and indep in ("true", "1") and not (t == "R" and jname in ix.mimics):
             limits += _joint_limits(jt, t, what)
@@ -366,6 +494,30 @@ def _joint_axes(jt: ET.Element, t: str, what: str) -> tuple[np.ndarray, np.ndarr
     return axis, axis2
 
 
+def _planar_axes(jt: ET.Element, what: str) -> np.ndarray:
+    """A ``planar`` joint as urdfdom defines it: motion in the plane normal to ``<axis>`` (default ``1 0 0``).
+
+    Three screws in the joint frame (a compound joint C): slides along ``e1`` and ``e2`` spanning
+    the plane, then the rotation about ``<axis>`` through the moved origin, i.e. ``(x, y, theta)``
+    as Pinocchio's planar joint (``e1, e2 = x, y`` for ``<axis xyz="0 0 1">``). Pinocchio ignores
+    ``<axis>`` (always the x-y plane): another axis is read as urdfdom reads it, with a warning.
+    """
+    axis_el = jt.find("axis")
+    n = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} <axis xyz>", (1, 0, 0), "axis")
+    if np.linalg.norm(n) < 1e-12:
+        raise ModelError(f"{what}: zero joint axis")
+    n = n / np.linalg.norm(n)
+    if not np.allclose(n, (0, 0, 1), atol=1e-12):
+        given = "no <axis>: urdfdom's default 1 0 0" if axis_el is None else f"<axis xyz={axis_el.get('xyz')!r}>"
+        warnings.warn(f"{what}: planar joint with {given}: the plane normal to it (as urdfdom); Pinocchio reads "
+                      f"every planar joint in the joint frame's x-y plane", URDFWarning, stacklevel=5)
+    e1 = np.array([0.0, 1.0, 0.0]) if abs(n[0]) > 0.9 else np.array([1.0, 0.0, 0.0])
+    e1 = e1 - (e1 @ n) * n
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(n, e1)
+    return np.stack([compound_screw(e1, slide=True), compound_screw(e2, slide=True), compound_screw(n)])
+
+
 def _independent(jt: ET.Element, mimicking: bool, what: str) -> str:
     """The joint's ``independent`` attribute, normalised (default false for a mimicking joint)."""
     indep = jt.get("independent", "false" if mimicking else "true").strip().lower()
@@ -377,7 +529,7 @@ def _independent(jt: ET.Element, mimicking: bool, what: str) -> str:
 def _joint_limits(jt: ET.Element, t: str, what: str) -> list[tuple[float, float]]:
     """The limits of an independent joint's coordinates (unbounded but for R and P)."""
     if t not in ("R", "P"):
-        return [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6}[t]
+        return [(-np.inf, np.inf)] * {"U": 2, "S": 3, "F": 6, "C": 3}[t]
     lim = jt.find("limit")
     lo = _floats(lim.get("lower") if lim is not None else None, 1, f"{what} <limit lower>", (-np.inf,))[0]
     hi = _floats(lim.get("upper") if lim is not None else None, 1, f"{what} <limit upper>", (np.inf,))[0]

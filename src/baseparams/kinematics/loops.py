@@ -132,8 +132,8 @@ def evaluate(robot: Robot, q: np.ndarray, dq: np.ndarray | None = None,
              constraints: list[Elementary] | None = None) -> ConstraintEval:
     """Residuals, Jacobian and (when ``dq`` is given) the bias of the loop constraints.
 
-    The rows are the couplings' (linear: ``q[succ] - sum ratio q[pred] - offset``) first, then
-    the elementary constraints' in order.
+    The rows are the couplings' (``q[succ] - sum ratio q[pred] - offset``, less the polynomial
+    terms of a nonlinear one) first, then the elementary constraints' in order.
 
     Parameters
     ----------
@@ -170,6 +170,7 @@ class _Plan:
     cons: list
     kc: np.ndarray
     offsets: np.ndarray
+    poly: list  # (row, pred, coefficients of q_pred^2, q_pred^3, ...) of the nonlinear couplings
     groups: list
     nvec: int
     slots: list
@@ -189,6 +190,7 @@ def _plan(robot: Robot, cons: list[Elementary]) -> _Plan:
         for j, ratio in c.terms():
             kc[i, j] -= ratio
     offsets = np.array([c.offset for c in robot.couplings], dtype=float)
+    poly = [(i, c.pred, np.asarray(c.poly, dtype=float)) for i, c in enumerate(robot.couplings) if c.poly]
     slot_of: dict = {}
     slots, rows, row = [], [], len(robot.couplings)
     for e in cons:
@@ -206,7 +208,7 @@ def _plan(robot: Robot, cons: list[Elementary]) -> _Plan:
     sup = np.zeros((dof, robot.n + 1))
     sup[:, :-1] = robot.support
     bodies = np.array([g[0] for g in groups if g[0] >= 0], dtype=int)
-    return _Plan(robot, list(cons), kc, offsets, groups, len(slot_of), slots, rows, row, sup, bodies, {})
+    return _Plan(robot, list(cons), kc, offsets, poly, groups, len(slot_of), slots, rows, row, sup, bodies, {})
 
 
 def _columns(plan: _Plan, cols: np.ndarray) -> list:
@@ -244,9 +246,18 @@ def _eval(plan: _Plan, q: np.ndarray, cols: np.ndarray, dq: np.ndarray | None = 
     k = np.zeros((plan.m, len(cols), s))
     b = None if dq is None else np.zeros((plan.m, s))
     nc = len(plan.offsets)
-    if nc:  # linear couplings
+    if nc:  # couplings: the linear part, then the nonlinear terms of polynomial ones
         r[:nc] = plan.kc @ q.T - plan.offsets[:, None]
         k[:nc] = plan.kc[:, cols][:, :, None]
+        for row, pred, c in plan.poly:
+            x = q[:, pred]
+            powers = np.arange(2, 2 + len(c))
+            r[row] -= np.power.outer(x, powers) @ c
+            where = np.flatnonzero(cols == pred)
+            if len(where):
+                k[row, where[0]] -= np.power.outer(x, powers - 1) @ (powers * c)
+            if b is not None:
+                b[row] -= (np.power.outer(x, powers - 2) @ (powers * (powers - 1) * c)) * dq[:, pred] ** 2
     if not plan.cons:
         as_states(plan.robot.dof, q)  # validated as the kinematics would
         return r, k, b
@@ -766,10 +777,21 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
         cond0 = np.inf  # fewer independent constraints than passive coordinates
     else:
         cond0 = sv[0] / sv[len(pas) - 1]
+    if res0 < tol and any(lj.anchor_free for lj in robot.loops) and "S" not in robot.jtype:
+        moved = _free_anchor_reference(robot, ev.K[0], cond0, cond_max, tol)
+        if moved is not None:
+            return moved
     if res0 < tol and cond0 < cond_max:
-        return robot, np.zeros(robot.dof), ""
-    why = (f"the loop frames do not coincide at q = 0 (residual {res0:.3g})" if res0 >= tol
-           else f"q = 0 is a singular configuration of the loops (cond(J_p) = {cond0:.3g})")
+        found = _regular_nearby(robot, ev.K[0], tol) if "S" not in robot.jtype and robot.loops else None
+        if found is None:
+            return robot, np.zeros(robot.dof), ""
+        return _re_referenced_regular(robot, *found, cond_max)
+    if not robot.loops:  # couplings alone: an offset moves a driven joint away from 0
+        moved = [robot.joint_names[robot.dof_body[c.succ]] for c in robot.couplings if c.offset]
+        why = f"the couplings' offsets move joints {moved} at q = 0"
+    else:
+        why = (f"the loop frames do not coincide at q = 0 (residual {res0:.3g})" if res0 >= tol
+               else f"q = 0 is a singular configuration of the loops (cond(J_p) = {cond0:.3g})")
     rng = np.random.default_rng(0)
     starts = [np.zeros(robot.dof)] + [rng.uniform(-1.0, 1.0, robot.dof) for _ in range(20)]
     singular = res0 < tol  # assembled but singular: move away from the singular point
@@ -796,6 +818,143 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
                       f"check the loop frames and the independent joints")
 
 
+
+
+#: perturbation sizes (rad or m) tried, smallest first, when looking for a regular configuration near q = 0
+NEARBY_SCALES = (0.02, 0.05, 0.1, 0.2, 0.4)
+#: perturbations tried per size
+NEARBY_TRIES = 6
+#: sizes and tries when looking for a higher rank of the loops' Jacobian near an assembled q = 0 (every loop file)
+RANK_SCALES = (0.05, 0.2)
+RANK_TRIES = 3
+#: a re-anchored reference whose cond(J_p) is below this (the paper's 30, ``numerics.COND_MAX``) ends the search
+REGULAR_COND = 30.0
+
+
+def _jacobian_rank(k: np.ndarray, rtol: float = 1e-8) -> tuple[int, float]:
+    """``(rank, smallest kept singular value / largest)`` of a constraint Jacobian ``(m, dof)``."""
+    sv = np.linalg.svd(k, compute_uv=False)
+    if not len(sv) or sv[0] <= 0:
+        return 0, 1.0
+    rank = int(np.sum(sv > rtol * sv[0]))
+    return rank, float(sv[rank - 1] / sv[0]) if rank else 1.0
+
+
+def _project(robot: Robot, q: np.ndarray, tol: float, iters: int = 60) -> np.ndarray | None:
+    """``q (dof,)`` moved onto the loops and couplings by Gauss-Newton on every coordinate (minimum-norm steps)."""
+    for _ in range(iters):
+        ev = evaluate(robot, q[None])
+        if not ev.r.size or np.abs(ev.r).max() < tol:
+            return q
+        q = q - np.linalg.lstsq(ev.K[0], ev.r[0], rcond=None)[0]
+    return None
+
+
+def _regular_nearby(robot: Robot, k0: np.ndarray, tol: float) -> tuple[np.ndarray, int, int] | None:
+    """An assembled configuration near q = 0 where the constraint Jacobian has a higher rank, or None.
+
+    At a configuration where branches of the mechanism meet (coaxial joint axes of a welded arm,
+    a straight arm), ``K`` loses rank: the coordinates chosen there as independent are too many,
+    and samples continued from it stay on the singular set. From perturbed configurations (sizes
+    :data:`RANK_SCALES`, smallest first, :data:`RANK_TRIES` each, seeded), Gauss-Newton on
+    every coordinate returns to the loops; the first size where some point has a higher rank
+    gives the best-conditioned of them. Returns ``(q (dof,), rank there, rank at q = 0)``.
+    """
+    r0, _ = _jacobian_rank(k0)
+    if r0 == 0 or r0 >= robot.dof:
+        return None
+    rng = np.random.default_rng(0)
+    for scale in RANK_SCALES:  # the rank nearby is generic: a few points tell
+        best = None
+        for _ in range(RANK_TRIES):
+            q = _project(robot, rng.normal(scale=scale, size=robot.dof), tol)
+            if q is None:
+                continue
+            rank, quality = _jacobian_rank(evaluate(robot, q[None]).K[0])
+            if rank > r0 and (best is None or (rank, quality) > (best[1], best[2])):
+                best = (q, rank, quality)
+        if best is not None:
+            return best[0], best[1], r0
+    return None
+
+
+def _free_anchor_reference(robot: Robot, k0: np.ndarray, cond0: float, cond_max: float,
+                           tol: float) -> tuple[Robot, np.ndarray, str] | None:
+    """Loops to a control device (a mocap weld) off a singular reference: the device placed where the hand is.
+
+    A mocap body is moved by the simulation; where the file puts it only fixes the reference. When
+    q = 0 is singular (``cond(J_p)`` at least ``cond_max``, or the constraint Jacobian gains rank at
+    perturbed configurations: a straight arm welded where it is), configurations perturbed from
+    q = 0 (sizes :data:`NEARBY_SCALES`, inside the joint ranges where known, the other loops and
+    couplings closed again by Gauss-Newton) are tried with each free anchor placed at its
+    successor's frame there; the first size with a configuration whose passive conditioning is
+    below :data:`REGULAR_COND` gives the best one (else the best of all).
+    Returns None when q = 0 is not singular.
+    """
+    from dataclasses import replace
+
+    r0, _ = _jacobian_rank(k0)
+    others = replace(robot, loops=tuple(lj for lj in robot.loops if not lj.anchor_free))
+    lim = None if robot.limits is None else robot.limits[:, :2]
+    rng = np.random.default_rng(0)
+    best = None
+    for scale in NEARBY_SCALES[1:]:
+        for _ in range(NEARBY_TRIES):
+            q = rng.normal(scale=scale, size=robot.dof)
+            if lim is not None:
+                ok = np.all(np.isfinite(lim), axis=1)
+                pad = 0.05 * (lim[ok, 1] - lim[ok, 0])
+                q[ok] = np.clip(q[ok], lim[ok, 0] + pad, lim[ok, 1] - pad)
+            q = _project(others, q, tol)
+            if q is None:
+                continue
+            moved = re_reference(robot, q)
+            moved = replace(moved, q_box=None, loops=tuple(
+                replace(lj, M=lj.M if lj.M_child is None else lj.M_child, M_child=None) if lj.anchor_free else lj
+                for lj in moved.loops))
+            rank, _ = _jacobian_rank(evaluate(moved, np.zeros((1, robot.dof))).K[0])
+            moved = choose_independent(moved, set(robot.independent or ()))
+            pas = _passive(robot.dof, moved.actuated)
+            cond = _conditioning(evaluate(moved, np.zeros((1, robot.dof))).K[:, :, pas], len(pas))[0] if len(pas) \
+                else 1.0
+            if best is None or (rank, -cond) > (best[2], -best[3]):
+                best = (moved, q, rank, cond)
+        if best is not None and best[3] < REGULAR_COND:
+            break
+    if best is None or not (best[2] > r0 or cond0 >= cond_max) or not best[3] < cond_max:
+        return None
+    moved, q, rank, cond = best
+    names = [robot.joint_names[robot.dof_body[j]] for j in moved.actuated]
+    anchors = [lj.name for lj in robot.loops if lj.anchor_free]
+    note = (f"q = 0 is a singular configuration of the loops (constraint Jacobian of rank {r0}, cond(J_p) "
+            f"{cond0:.3g}); the loops to a control device ({', '.join(anchors)}: a mocap body, placed by the "
+            f"simulation) re-anchored where the hand is at a regular configuration nearby ({np.abs(q).max():.3g} rad "
+            f"or m away, inside the joint ranges; rank {rank}, cond(J_p) {cond:.3g}), independent coordinates "
+            f"{names}: q = 0 now means this configuration ({np.round(q, 4).tolist()} in the file's coordinates)")
+    return moved, q, note
+
+
+def _re_referenced_regular(robot: Robot, qref: np.ndarray, rank: int, rank0: int,
+                           cond_max: float) -> tuple[Robot, np.ndarray, str]:
+    """``robot`` re-referenced at the regular configuration ``qref``, its independent coordinates chosen again."""
+    from dataclasses import replace
+
+    moved = replace(re_reference(robot, qref), q_box=None)
+    if rank != rank0 or robot.independent is None:
+        moved = choose_independent(moved, set(robot.independent or ()))
+    names = [robot.joint_names[robot.dof_body[j]] for j in moved.actuated]
+    cond = _conditioning(evaluate(moved, np.zeros((1, robot.dof))).K[:, :, _passive(robot.dof, moved.actuated)],
+                         robot.dof - len(moved.actuated))[0]
+    if not cond < cond_max:
+        raise ModelError(f"robot {robot.name!r}: the loops are singular at q = 0 (constraint Jacobian of rank {rank0}, "
+                         f"{rank} nearby) and no regular reference was found near it; move the file's reference "
+                         f"(qpos0) off the singular configuration")
+    note = (f"the loops are singular at q = 0 (constraint Jacobian of rank {rank0}, {rank} at assembled configurations "
+            f"nearby: branches of the mechanism meet there); re-referenced at a regular assembled configuration found "
+            f"nearby (Newton from perturbed configurations, {np.abs(qref).max():.3g} rad or m away; cond(J_p) "
+            f"{cond:.3g}), independent coordinates {names}: q = 0 now means this configuration "
+            f"({np.round(qref, 4).tolist()} in the file's coordinates)")
+    return moved, qref, note
 
 
 def choose_independent(robot: Robot, prefer_independent: set[int] | None = None, rtol: float = 1e-9) -> Robot:

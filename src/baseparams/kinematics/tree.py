@@ -456,11 +456,22 @@ def re_reference(robot: Robot, q0: np.ndarray) -> Robot:
         m = (np.eye(4) if lj.parent < 0 else g[lj.parent]) @ lj.M
         mc = g[lj.child] @ (lj.M if lj.M_child is None else lj.M_child)
         loops.append(replace(lj, M=m, M_child=None if np.abs(mc - m).max() <= 1e-12 else mc))
-    couplings = tuple(replace(c, offset=c.offset + sum(r * q0[k] for k, r in c.terms()) - q0[c.succ])
-                      for c in robot.couplings)
+    couplings = tuple(_re_reference_coupling(c, q0) for c in robot.couplings)
     limits = None if robot.limits is None else robot.limits - np.c_[q0, q0, np.zeros((len(q0), 2))]
     return replace(robot, M0=g @ robot.M0, axes=tuple(axes), loops=tuple(loops), couplings=couplings,
                    limits=limits)
+
+
+def _re_reference_coupling(c, q0: np.ndarray):
+    """A coupling in the coordinates ``q - q0``: its polynomial in ``q[pred]`` shifted by ``q0[pred]``."""
+    if not c.poly:
+        return replace(c, offset=c.offset + sum(r * q0[k] for k, r in c.terms()) - q0[c.succ])
+    from numpy.polynomial import Polynomial
+
+    shifted = Polynomial(c.coefficients())(Polynomial([q0[c.pred], 1.0])).coef
+    shifted = np.r_[shifted, np.zeros(max(0, 2 + len(c.poly) - len(shifted)))]
+    return replace(c, offset=float(shifted[0] - q0[c.succ]), ratio=float(shifted[1]),
+                   poly=tuple(float(x) for x in shifted[2:2 + len(c.poly)]))
 
 
 def _re_reference_compound(xs: np.ndarray, q0: np.ndarray) -> np.ndarray:

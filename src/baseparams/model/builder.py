@@ -285,7 +285,7 @@ class RobotBuilder:
         return np.stack([a, b])
 
     def add_loop(self, name: str, type: str, parent: str | None, child: str, origin=None, axis=(0, 0, 1.0),
-                 axis2=None, child_origin=None) -> RobotBuilder:
+                 axis2=None, child_origin=None, anchor_free: bool = False) -> RobotBuilder:
         """Record a loop (cut) joint between two links.
 
         The two links may come in either tree order (URDF+ allows it; either may be the
@@ -311,6 +311,9 @@ class RobotBuilder:
         child_origin : array_like, shape ``(4, 4)``, optional
             The same frame in the child link's frame (when the two do not coincide at q = 0
             the robot is not assembled there: see :func:`baseparams.kinematics.loops.assemble`).
+        anchor_free : bool, default False
+            One side is the world through a control device (a mocap body) that may be placed
+            anywhere (:attr:`LoopJoint.anchor_free`).
 
         Returns
         -------
@@ -318,7 +321,7 @@ class RobotBuilder:
             ``self``, for chaining.
         """
         jt = joint_type(type)
-        self._loops.append((name, jt, parent, child, origin, axis, axis2, child_origin))
+        self._loops.append((name, jt, parent, child, origin, axis, axis2, child_origin, anchor_free))
         return self
 
     def build(self) -> Robot:
@@ -338,7 +341,7 @@ class RobotBuilder:
         if not self._names:
             raise NoMovingBodiesError(f"robot {self.name!r}: no moving links")
         loops = []
-        for name, jt, parent, child, origin, axis, axis2, child_origin in self._loops:
+        for name, jt, parent, child, origin, axis, axis2, child_origin, free in self._loops:
             what = f"robot {self.name!r}, loop joint {name!r}"
             pidx, pframe = self._frame(parent)
             cidx, cframe = self._frame(child)
@@ -361,7 +364,7 @@ class RobotBuilder:
                     axes = axes[::-1].copy()
             # not assembled at q = 0: kinematics.loops.assemble() solves it
             m_child = mc if np.abs(mc - m).max() > 1e-9 else None
-            loops.append(LoopJoint(name, jt, pidx, cidx, m, axes, m_child))
+            loops.append(LoopJoint(name, jt, pidx, cidx, m, axes, m_child, anchor_free=bool(free) and pidx < 0))
         independent = None
         if any(a is not None for a in self._actuated):
             independent, k = [], 0

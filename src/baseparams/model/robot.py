@@ -107,10 +107,11 @@ def compound_screw(axis, point=None, slide: bool = False) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Coupling:
-    """A linear coupling of 1-dof coordinates.
+    """A coupling of 1-dof coordinates: linear, or a polynomial of one coordinate.
 
-    ``q[succ] = ratio * q[pred] + sum(r * q[k] for k, r in more) + offset`` (URDF+
-    ``<coupling>``, URDF ``<mimic multiplier offset>``, MJCF ``<equality><joint>`` and
+    ``q[succ] = ratio * q[pred] + sum(r * q[k] for k, r in more) + offset``
+    ``+ sum(c * q[pred] ** (k + 2) for k, c in enumerate(poly))`` (URDF+ ``<coupling>``, URDF
+    ``<mimic multiplier offset>``, MJCF ``<equality><joint>`` with its ``polycoef`` and
     fixed-tendon equalities).
 
     Parameters
@@ -127,6 +128,9 @@ class Coupling:
         Constant term (coordinate units: rad or m).
     more : tuple of (int, float)
         Further coordinates and their ratios, e.g. a tendon tying three joints.
+    poly : tuple of float
+        Coefficients of ``q[pred] ** 2``, ``q[pred] ** 3``, ... (a nonlinear coupling, MJCF's
+        ``polycoef``; only without ``more``).
     """
 
     name: str
@@ -135,8 +139,19 @@ class Coupling:
     ratio: float
     offset: float = 0.0
     more: tuple[tuple[int, float], ...] = ()
+    poly: tuple[float, ...] = ()
 
     __repr__ = summary_repr
+
+    def coefficients(self) -> np.ndarray:
+        """``q[succ]`` as a polynomial of ``q[pred]`` (the other terms of :attr:`more` aside).
+
+        Returns
+        -------
+        ndarray, shape ``(d + 1,)``
+            Coefficients, lowest power first: ``offset, ratio, *poly``.
+        """
+        return np.array([self.offset, self.ratio, *self.poly], dtype=float)
 
     def terms(self) -> list[tuple[int, float]]:
         """Every coordinate on the right-hand side, with its ratio.
@@ -172,6 +187,10 @@ class LoopJoint:
         The successor's copy of the frame (world pose at q = 0) when it does not coincide with
         ``M`` (an unassembled file; see :func:`baseparams.kinematics.loops.assemble`); ``None``
         when they coincide.
+    anchor_free : bool, default False
+        The predecessor's side is the world through a control device (a MuJoCo mocap body): its
+        frame may be placed where the successor's is, at any reference
+        (:func:`~baseparams.kinematics.loops.assemble` moves it off a singular configuration).
     """
 
     name: str
@@ -181,6 +200,7 @@ class LoopJoint:
     M: np.ndarray
     axes: np.ndarray
     M_child: np.ndarray | None = None
+    anchor_free: bool = False
 
     __repr__ = summary_repr
 
@@ -405,9 +425,12 @@ class Robot:
         for c in self.couplings:
             idx = [c.succ] + [k for k, _ in c.terms()]
             if (len(set(idx)) != len(idx) or not all(0 <= k < dof for k in idx)
-                    or not all(np.isfinite(r) for _, r in c.terms()) or not np.isfinite(c.offset)):
+                    or not all(np.isfinite(r) for _, r in c.terms()) or not np.isfinite(c.offset)
+                    or not all(np.isfinite(x) for x in c.poly)):
                 raise ModelError(f"{what}, coupling {c.name!r}: needs distinct coordinates in [0, {dof}) "
                                  f"and finite ratios")
+            if c.poly and c.more:
+                raise ModelError(f"{what}, coupling {c.name!r}: a polynomial coupling has one driving coordinate")
         if self.independent is None and (self.loops or self.couplings):
             raise ModelError(f"{what}: a robot with loop joints must say which coordinates are "
                              f"independent (actuated)")

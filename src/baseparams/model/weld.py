@@ -46,7 +46,9 @@ def _with_couplings(robot: Robot, index: dict[str, int], values: dict[str, float
             raise ModelError(f"robot {robot.name!r}: coupling {c.name!r} ties {', '.join(names)}: weld all of them "
                              "or none")
         if all(inside):
-            values[names[0]] = c.offset + sum(r * values[robot.joint_names[body_of[k]]] for k, r in c.terms())
+            x = values[robot.joint_names[body_of[c.pred]]]
+            values[names[0]] = (c.offset + sum(r * values[robot.joint_names[body_of[k]]] for k, r in c.terms())
+                                + sum(a * x ** (k + 2) for k, a in enumerate(c.poly)))
     return values
 
 

@@ -153,6 +153,35 @@ class Columns:
         more = np.array([None if m is None else (m[0], m[1] * inv) for m in self.more] + [None], dtype=object)[:-1]
         return replace(self, h=self.h * inv, hp=self.hp * inv, he=self.he * inv, more=more)
 
+    def reindexed(self, bodies: np.ndarray, loops: np.ndarray, n: int) -> Columns:
+        """The columns of a related robot as columns of this one: bodies and loop joints renumbered.
+
+        Parameters
+        ----------
+        bodies : ndarray of int, shape ``(m,)``
+            The other robot's body ``k`` is body ``bodies[k]`` here (``-1``: none; no block may sit there).
+        loops : ndarray of int, shape ``(l,)``
+            Its loop joint ``k`` is loop joint ``loops[k]`` here.
+        n : int
+            Bodies of this robot (``joint`` of a loop joint ``l`` is ``n + l``).
+
+        Returns
+        -------
+        Columns
+            The same blocks and provenance, on the renumbered bodies.
+        """
+        m = len(bodies)
+
+        def body(b):
+            return np.where(b >= 0, bodies[np.clip(b, 0, m - 1)], -1)
+
+        more = np.array([None if x is None else (bodies[np.asarray(x[0])], x[1]) for x in self.more] + [None],
+                        dtype=object)[:-1]
+        lp = n + loops[np.clip(self.joint - m, 0, max(len(loops) - 1, 0))] if len(loops) else self.joint
+        joint = np.where(self.joint >= m, lp, body(self.joint))
+        return replace(self, child=body(self.child), parent=body(self.parent), extra=body(self.extra), more=more,
+                       joint=joint)
+
     @staticmethod
     def empty() -> Columns:
         """No columns (``k = 0``).

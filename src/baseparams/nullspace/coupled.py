@@ -56,6 +56,8 @@ MAX_DENOMINATOR = 64
 MAX_HARMONIC = 256
 #: singular values of a group's conditions: below ``tol`` or at least ``GAP`` times the largest below (relative)
 GAP = 1e4
+#: largest degree of a composed polynomial coupling (chains of MJCF ``polycoef``); beyond it, not grouped
+MAX_DEGREE = 16
 #: smallest component (of a unit solution) outside the directions already found that counts as new
 NEW = 1e-6
 #: largest group (anchor included) whose solutions on three bodies are searched; larger groups
@@ -65,12 +67,66 @@ MAX_TRIPLES_BLOCKS = 10
 MAX_PAIRS_BLOCKS = 24
 
 
-def coupled_coordinates(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each coordinate as a function of its leader: ``q[j] = ratio[j] q[lead[j]] + offset[j]``.
+def coupled_polynomials(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
+    """Each coordinate as a polynomial of its leader: ``q[j] = sum_a coef[j, a] q[lead[j]] ** a``.
 
-    Chains of couplings are composed. Coordinates driven by several coordinates (a coupling with
-    :attr:`~baseparams.model.robot.Coupling.more` terms) get ``lead = -1``, as do the ones they
-    drive, and coordinates of multi-dof joints.
+    Chains of couplings are composed (a polynomial of a polynomial). Coordinates driven by several
+    coordinates (a coupling with :attr:`~baseparams.model.robot.Coupling.more` terms) get
+    ``lead = -1``, as do the ones they drive, coordinates of multi-dof joints, and chains whose
+    composed degree exceeds :data:`MAX_DEGREE`.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates, :attr:`~baseparams.model.robot.Robot.couplings`).
+    extra : tuple of Coupling, optional
+        Couplings implied by the geometry (:func:`parallelogram_couplings`) besides the robot's.
+
+    Returns
+    -------
+    lead : ndarray of int, shape ``(dof,)``
+        The driving coordinate (``j`` itself for an independent coordinate; ``-1``: not grouped).
+    coef : ndarray, shape ``(dof, d + 1)``
+        Coefficients, lowest power first (``[offset, ratio, ...]``; ``[0, 1, 0...]`` for a leader).
+    """
+    from numpy.polynomial import Polynomial
+
+    dof = robot.dof
+    drive = {c.succ: c for c in (*robot.couplings, *extra)}
+    lead = np.arange(dof)
+    polys = [Polynomial([0.0, 1.0]) for _ in range(dof)]
+    one = np.ones(dof, dtype=bool)
+    one[robot.q_index[robot.ndofs != 1]] = False  # coordinates of multi-dof joints
+    for j in range(dof):
+        k, p, seen = j, Polynomial([0.0, 1.0]), {j}
+        while k in drive and lead[j] >= 0:
+            c = drive[k]
+            if c.more or c.pred in seen or not one[c.pred]:
+                lead[j] = -1
+                break
+            p, k = p(Polynomial(c.coefficients())), c.pred
+            if p.degree() > MAX_DEGREE:
+                lead[j] = -1
+                break
+            seen.add(k)
+        if lead[j] >= 0:
+            lead[j], polys[j] = k, p
+        if not one[j]:
+            lead[j] = -1
+    width = max(2, max(len(p.coef) for p in polys))
+    coef = np.zeros((dof, width))
+    for j, p in enumerate(polys):
+        coef[j, :len(p.coef)] = p.coef
+        if len(p.coef) < 2 and lead[j] >= 0:  # a constant (a zero ratio): no leading power
+            coef[j, 1] = 0.0
+    return lead, coef
+
+
+def coupled_coordinates(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each coordinate as a linear function of its leader: ``q[j] = ratio[j] q[lead[j]] + offset[j]``.
+
+    :func:`coupled_polynomials` restricted to the linear ones: a coordinate driven by a polynomial
+    of degree two or more gets ``lead = -1`` here.
 
     Parameters
     ----------
@@ -88,25 +144,9 @@ def coupled_coordinates(robot: Robot, extra: tuple[Coupling, ...] = ()) -> tuple
     offset : ndarray, shape ``(dof,)``
         Constant term (rad or m).
     """
-    dof = robot.dof
-    drive = {c.succ: c for c in (*robot.couplings, *extra)}
-    lead, ratio, offset = np.arange(dof), np.ones(dof), np.zeros(dof)
-    one = np.ones(dof, dtype=bool)
-    one[robot.q_index[robot.ndofs != 1]] = False  # coordinates of multi-dof joints
-    for j in range(dof):
-        k, r, o, seen = j, 1.0, 0.0, {j}
-        while k in drive and lead[j] >= 0:
-            c = drive[k]
-            if c.more or c.pred in seen or not one[c.pred]:
-                lead[j] = -1
-                break
-            r, o, k = r * c.ratio, o + r * c.offset, c.pred
-            seen.add(k)
-        if lead[j] >= 0:
-            lead[j], ratio[j], offset[j] = k, r, o
-        if not one[j]:
-            lead[j] = -1
-    return lead, ratio, offset
+    lead, coef = coupled_polynomials(robot, extra)
+    nonlinear = np.any(np.abs(coef[:, 2:]) > 0, axis=1)
+    return np.where(nonlinear, -1, lead), coef[:, 1].copy(), coef[:, 0].copy()
 
 
 def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
@@ -129,7 +169,7 @@ def coupled_groups(robot: Robot) -> list[tuple[int, list[int]]]:
     """
     if not robot.couplings:
         return []
-    lead, _, _ = coupled_coordinates(robot)
+    lead, _ = coupled_polynomials(robot)
     qi = robot.q_index
     driven = np.bincount(lead[lead >= 0], minlength=robot.dof)
     key = {}
@@ -273,24 +313,54 @@ def sample_values(robot: Robot, bodies: list[int], ratio: np.ndarray, tol: float
     return (base[None, :] + period * (np.arange(deg + 1)[:, None] - 0.5 * (deg + 1))).ravel()
 
 
-def _motions(robot: Robot, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
-             q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``h_k(q)`` and ``dh_k/dq`` of the group's bodies relative to the anchor: ``(M, G, 4, 4)`` each."""
+def _motions(robot: Robot, bodies: list[int], coef: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``h_k(q)`` and ``dh_k/dq`` of the group's bodies relative to the anchor: ``(M, G, 4, 4)`` each.
+
+    Joint ``j`` is at ``p_j(q)`` (``coef[j]``, :func:`coupled_polynomials`): ``exp(S_j p_j(q))``,
+    derivative ``exp(S_j p_j) S_j^ p_j'(q)``.
+    """
+    from numpy.polynomial import polynomial as P
+
     from ..pga.core import se3_exp
 
     qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
     h = np.zeros((len(q), len(bodies), 4, 4))
     dh = np.zeros_like(h)
     for i, k in enumerate(bodies):
-        s, r = robot.screws[qi[k]], float(ratio[qi[k]])
-        e = se3_exp((r * q + float(offset[qi[k]]))[:, None] * s)  # (M, 4, 4)
-        es = e @ hat(s) * r
+        s, c = robot.screws[qi[k]], coef[qi[k]]
+        e = se3_exp(P.polyval(q, c)[:, None] * s)  # (M, 4, 4)
+        es = e @ hat(s) * P.polyval(q, P.polyder(c))[:, None, None]
         p = pos.get(int(robot.parent[k]))
         if p is None:
             h[:, i], dh[:, i] = e, es
         else:
             h[:, i], dh[:, i] = h[:, p] @ e, dh[:, p] @ e + h[:, p] @ es
     return h, dh
+
+
+def nonlinear_values(n_unknowns: int, times: int = 1) -> np.ndarray:
+    """Values of the leading coordinate at which a polynomially coupled group's conditions are sampled.
+
+    A coupling of degree two or more puts the coordinate inside the trigonometric functions
+    (``exp(S p(q))``): the conditions are analytic in ``q``, not trigonometric polynomials, and
+    no finite set of values proves them; they are imposed at ``times (12 u + 16)`` values
+    spread over ``[-1.5, 1.5]`` (``u`` the unknowns' blocks), generic points (golden-ratio
+    spacing), and a solution must survive twice as many (:func:`group_nullspace`).
+
+    Parameters
+    ----------
+    n_unknowns : int
+        Unknown blocks of ten (the group's bodies and anchor).
+    times : int, default 1
+        Multiplier of the number of values.
+
+    Returns
+    -------
+    ndarray, shape ``(M,)``
+        The values (rad or m).
+    """
+    m = times * (12 * n_unknowns + 16)
+    return 6.0 * (((np.arange(m) + 0.5) * 0.6180339887498949) % 1.0) - 3.0
 
 
 def _functional(c: np.ndarray) -> np.ndarray:
@@ -301,8 +371,8 @@ def _functional(c: np.ndarray) -> np.ndarray:
     return out
 
 
-def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray, offset: np.ndarray,
-                 q: np.ndarray, level: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
+def group_system(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray, q: np.ndarray,
+                 level: np.ndarray | None = None, tol: float = 1e-9, motions=None) -> np.ndarray:
     """The criterion's conditions on a coupled group: ``(rows, 10 (G + 1))`` (anchor block first).
 
     Rows: the kinetic form's entries ``K(a, b)`` for ``a <= b`` among ``qdot_l`` and a basis of
@@ -317,16 +387,20 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray
         The group's anchor (``-1``: the world, whose block the caller drops).
     bodies : list of int
         The group's bodies, parents first.
-    ratio, offset : ndarray, shape ``(dof,)``
-        From :func:`coupled_coordinates`.
+    coef : ndarray, shape ``(dof, d + 1)``
+        Each coordinate as a polynomial of its leader (:func:`coupled_polynomials`).
     q : ndarray, shape ``(M,)``
-        Values of the leading coordinate (:func:`sample_values`).
+        Values of the leading coordinate (:func:`sample_values`, :func:`nonlinear_values`).
     level : ndarray, shape ``(L, 4)``, optional
         Rows ``gbar^T X`` over a basis ``X`` of the anchor's motion span
         (:mod:`.subspaces`): a vector ``c`` of the anchor keeps its height iff ``level c = 0``;
         default none known (only ``c = 0``).
     tol : float, default 1e-9
         Geometric tolerance.
+    motions : tuple of ndarray, optional
+        ``(h (M, G, 4, 4), dh (M, G, L, 4, 4))``: the bodies' motions and their derivatives in ``L``
+        leading coordinates (a group driven by several: :func:`multi_groups`); default those of
+        ``coef`` at ``q``.
 
     Returns
     -------
@@ -334,13 +408,18 @@ def group_system(robot: Robot, anchor: int, bodies: list[int], ratio: np.ndarray
         Linear conditions on the ``paper``-convention parameter changes (``hat`` order, world
         frame at q = 0) of the anchor then of each body.
     """
-    h, dh = _motions(robot, bodies, ratio, offset, q)
+    if motions is None:
+        h, dh = _motions(robot, bodies, coef, q)
+        dh = dh[:, :, None]
+    else:
+        h, dh = motions
+    nl = dh.shape[2]
     w = twist_span(robot, anchor, tol) if anchor >= 0 else np.zeros((0, 6))
     gens = hat(w)  # (r, 4, 4)
     hinv = np.linalg.inv(h)
-    xk = np.concatenate([(hinv @ dh)[:, :, None], hinv[:, :, None] @ gens[None, None] @ h[:, :, None]], axis=2)
-    xa = np.concatenate([np.zeros((1, 4, 4)), gens])  # the anchor does not see qdot_l
-    a, b = np.triu_indices(len(w) + 1)
+    xk = np.concatenate([hinv[:, :, None] @ dh, hinv[:, :, None] @ gens[None, None] @ h[:, :, None]], axis=2)
+    xa = np.concatenate([np.zeros((nl, 4, 4)), gens])  # the anchor does not see qdot_l
+    a, b = np.triu_indices(len(w) + nl)
     fk = _functional(np.swapaxes(xk[:, :, b, :3], -1, -2) @ xk[:, :, a, :3])  # (M, G, P, 10)
     fa = _functional(np.swapaxes(xa[b, :3], -1, -2) @ xa[a, :3])  # (P, 10)
     m, g, npair = fk.shape[0], len(bodies), len(a)
@@ -408,47 +487,94 @@ def group_nullspace(robot: Robot, anchor: int, bodies: list[int], tol: float = 1
     (ndarray, list of int) or None
         ``R (10 u, 10 u)``, upper triangular with ``R y = 0`` exactly for the solutions
         ``x = d y`` of :func:`group_system`, and the ``u`` bodies its blocks belong to (the anchor first unless it
-        is the world); None when :func:`sample_values` finds no exact set of values (the group
-        is then skipped).
+        is the world); None when :func:`sample_values` finds no exact set of values, or when a
+        polynomially coupled group's solutions change with twice as many sampled values
+        (:func:`nonlinear_values`): the group is then skipped.
     """
-    _, ratio, offset = coupled_coordinates(robot, extra)
-    q = sample_values(robot, bodies, ratio, tol)
+    _, coef = coupled_polynomials(robot, extra)
+    qi = robot.q_index[bodies]
+    nonlinear = bool(np.any(np.abs(coef[qi, 2:]) > 0))
+    q = nonlinear_values(len(bodies) + 1) if nonlinear else sample_values(robot, bodies, coef[:, 1], tol)
     if q is None:
         return None
-    a = group_system(robot, anchor, bodies, ratio, offset, q, level, tol)
-    if unit is not None:
-        a = a * np.tile(unit, len(bodies) + 1)
-        a /= np.linalg.norm(a, axis=1, keepdims=True)
-    who = [anchor, *bodies]
-    if anchor < 0:
-        a, who = a[:, 10:], who[1:]
+    a, who = _group_rows(robot, anchor, bodies, coef, q, level, tol, unit)
+    if nonlinear:  # sampled, not proven: a solution must survive twice as many values
+        more, _ = _group_rows(robot, anchor, bodies, coef, nonlinear_values(len(bodies) + 1, 2) + 0.01, level, tol,
+                              unit)
+        scale = max(float(np.abs(a).max()), 1e-300)
+        n1, n2 = null_rows(a, tol, scale), null_rows(np.vstack([a, more]), tol, scale)
+        if n1 is None or n2 is None or len(n1) != len(n2):
+            return None
+        a = np.vstack([a, more])
     if len(a) < a.shape[1]:  # pad to square: the same solutions
         a = np.vstack([a, np.zeros((a.shape[1] - len(a), a.shape[1]))])
     r = np.linalg.qr(a, mode="r")
     return r, who
 
 
-def _null(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
+def _group_rows(robot: Robot, anchor: int, bodies: list[int], coef: np.ndarray, q: np.ndarray,
+                level: np.ndarray | None, tol: float, unit: np.ndarray | None,
+                motions=None) -> tuple[np.ndarray, list[int]]:
+    """:func:`group_system` for ``y = x / unit``, the world's block dropped: ``(rows, who)``."""
+    a = group_system(robot, anchor, bodies, coef, q, level, tol, motions)
+    if unit is not None:
+        a = a * np.tile(unit, len(bodies) + 1)
+        a /= np.linalg.norm(a, axis=1, keepdims=True)
+    who = [anchor, *bodies]
+    if anchor < 0:
+        a, who = a[:, 10:], who[1:]
+    return a, who
+
+
+def null_rows(a: np.ndarray, tol: float, scale: float) -> np.ndarray | None:
     """Orthonormal rows spanning the nullspace of ``a``; None when a singular value is ambiguous.
 
-    Ambiguous: neither clearly zero nor clearly not (:func:`_split`): the subset or group is then
+    Ambiguous: neither clearly zero nor clearly not (:func:`gap_split`): the subset or group is then
     skipped (fewer directions, never a wrong one).
+
+    Parameters
+    ----------
+    a : ndarray, shape ``(r, m)``
+        The system.
+    tol : float
+        Relative threshold of a zero singular value.
+    scale : float
+        What ``tol`` is relative to.
+
+    Returns
+    -------
+    ndarray, shape ``(m - rank, m)``, or None
+        The nullspace's orthonormal basis as rows; None when the rank is not decided by a gap.
     """
     _, s, vt = np.linalg.svd(a, full_matrices=a.shape[0] < a.shape[1])
     s = np.r_[s, np.zeros(a.shape[1] - len(s))]
-    zero, clear = _split(s[None], tol, scale)
+    zero, clear = gap_split(s[None], tol, scale)
     if not (zero | clear).all():
         return None
     return vt[int(np.sum(~zero)):]
 
 
-def _split(sv: np.ndarray, tol: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+def gap_split(sv: np.ndarray, tol: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
     """Singular values ``(k, m)`` that are clearly zero and clearly not, per row.
 
     Zero: at most ``tol * scale``. Not zero: at least ``GAP`` times the largest zero (floored at
     ``1e-15 * scale``, rounding) and above ``tol * scale``: the rank sits in a gap of ``GAP`` or
     more. A value in between leaves the rank undecided (the caller skips the system: fewer
     directions, never a wrong one).
+
+    Parameters
+    ----------
+    sv : ndarray, shape ``(k, m)``
+        Singular values, one system per row.
+    tol : float
+        Relative threshold of a zero.
+    scale : float
+        What ``tol`` is relative to.
+
+    Returns
+    -------
+    zero, clear : ndarray of bool, shape ``(k, m)``
+        Clearly zero; clearly not zero.
     """
     zero = sv <= tol * scale
     top = np.max(np.where(zero, sv, 0.0), axis=1, keepdims=True)
@@ -460,28 +586,44 @@ def _subset_nulls(r: np.ndarray, u: int, size: int, tol: float, scale: float):
     """Nullspaces of ``r`` restricted to every ``size``-subset of the ``u`` blocks, batched.
 
     Yields ``(subset, column indices, X (d, 10 size))`` for the subsets with a nullspace and no
-    ambiguous singular value (:func:`_null`), one batched SVD for all subsets of the size.
+    ambiguous singular value (:func:`null_rows`), one batched SVD for all subsets of the size.
     """
     subs = list(combinations(range(u), size))
     idx = (10 * np.array(subs)[:, :, None] + np.arange(10)).reshape(len(subs), -1)
     a = r[:, idx].transpose(1, 0, 2)  # (subsets, 10 u, 10 size)
     _, sv, vt = np.linalg.svd(a, full_matrices=a.shape[1] < a.shape[2])
     sv = np.concatenate([sv, np.zeros((len(subs), a.shape[2] - sv.shape[1]))], axis=1)
-    zero, clear = _split(sv, tol, scale)
+    zero, clear = gap_split(sv, tol, scale)
     for k in np.flatnonzero(zero.any(axis=1) & (zero | clear).all(axis=1)):
         yield subs[k], idx[k], vt[k, int(np.sum(~zero[k])):]
 
 
-def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
+def sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> list[tuple[tuple[int, ...], np.ndarray]]:
     """A basis of the solutions of ``r x = 0`` beyond ``prior``, each on as few of the ``u`` blocks as found.
 
     Subsets of blocks by size (1; 2 when ``u <= MAX_PAIRS_BLOCKS``; 3 when
     ``u <= MAX_TRIPLES_BLOCKS``: the cost stays bounded per group), each kept for the
-    directions it adds to ``prior (p, 10 u)`` (orthonormal rows) and the ones before; what they
-    leave is returned on all the blocks it touches: ``[(blocks, X (d, 10 len(blocks)))]``.
+    directions it adds to ``prior`` and the ones before; what they leave is returned on all the
+    blocks it touches.
+
+    Parameters
+    ----------
+    r : ndarray, shape ``(m, 10 u)``
+        The system (ten unknowns per block).
+    u : int
+        Number of blocks.
+    tol : float
+        Relative threshold of a zero singular value (:func:`gap_split`).
+    prior : ndarray, shape ``(p, 10 u)``
+        Orthonormal rows spanning known solutions (inside the solution set).
+
+    Returns
+    -------
+    list of (tuple of int, ndarray)
+        ``(blocks, X (d, 10 len(blocks)))``: new solutions on those blocks.
     """
     scale = max(float(np.abs(r).max()), 1e-300)
-    null = _null(r, tol, scale)
+    null = null_rows(r, tol, scale)
     if null is None:
         return []
     found, out = prior, []
@@ -504,12 +646,29 @@ def _sparse_solutions(r: np.ndarray, u: int, tol: float, prior: np.ndarray) -> l
     return out
 
 
-def _prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
-    """Orthonormal rows ``(p, 10 u)`` spanning the ``prior`` columns on the blocks ``who`` (for ``pi / unit``)."""
+def prior_rows(prior: Columns, who: list[int], unit: np.ndarray) -> np.ndarray:
+    """Orthonormal rows spanning the ``prior`` columns that lie on the blocks ``who`` (for ``pi / unit``).
+
+    Parameters
+    ----------
+    prior : Columns
+        Known columns (``paper`` convention).
+    who : list of int
+        ``u`` bodies.
+    unit : ndarray, shape ``(10,)``
+        Per-parameter scale of the decisions.
+
+    Returns
+    -------
+    ndarray, shape ``(p, 10 u)``
+        Orthonormal rows: the span of the columns all of whose blocks are on ``who``.
+    """
     pos = {b: i for i, b in enumerate(who)}
     inside = np.isin(prior.child, who) & ((prior.parent < 0) | np.isin(prior.parent, who))
     inside &= ((prior.extra < 0) | np.isin(prior.extra, who)) & ~prior.has_more()
     sel = prior.subset(inside)
+    if not len(sel):
+        return np.zeros((0, 10 * len(who)))
     v = np.zeros((len(sel), len(who), 10))
     k = np.arange(len(sel))
     v[k, [pos[int(b)] for b in sel.child]] += sel.h
@@ -568,7 +727,140 @@ def coupled_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = Non
         MX MY MZ M`` of each body, world frame at q = 0), provenance ``R-M coupled joints``; the
         highest body carries ``h``, the others ``hp`` and ``he``.
     """
-    return _group_columns(robot, coupled_groups(robot), tol, prior, RM)
+    cols = _group_columns(robot, coupled_groups(robot), tol, prior, RM)
+    more = multi_group_columns(robot, tol, Columns.concat([prior or Columns.empty(), cols]))
+    return Columns.concat([cols, more])
+
+
+def multi_groups(robot: Robot, tol: float = 1e-9) -> list[tuple[int, list[int], np.ndarray, np.ndarray, np.ndarray]]:
+    """Groups whose joints are driven by several coordinates (a tendon tying three joints), couplings alone.
+
+    With linear couplings and no loop joint, every coordinate is an affine function of the
+    independent ones: ``q = G q_a + o`` (``G`` constant). A body with a coordinate driven by two or
+    three independent coordinates ``L`` (its joint's, 1-dof or universal, together) starts a
+    group; the bodies next to it in the tree (parent or children, R, P or U joints) whose
+    coordinates are driven by coordinates of ``L`` only join it; the anchor is the parent of the
+    group's top body (a leader may also move the anchor: the conditions then only get stronger).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    tol : float, default 1e-9
+        Threshold of a zero entry of ``G``.
+
+    Returns
+    -------
+    list of (int, list of int, ndarray, ndarray, ndarray)
+        ``(anchor, bodies (parents first), leaders L (indices into robot.actuated), G (dof, len(L)),
+        o (dof,))``.
+    """
+    if robot.loops or not any(c.more for c in robot.couplings) or any(c.poly for c in robot.couplings):
+        return []
+    from ..kinematics.loops import close_loops
+
+    cs = close_loops(robot, np.zeros((1, len(robot.actuated))), cond_max=np.inf)
+    if not cs.kept:
+        return []
+    g, o, qi, nd = cs.G[0], cs.q[0], robot.q_index, robot.ndofs
+    rows = [[frozenset(np.flatnonzero(np.abs(g[qi[i] + c]) > tol).tolist()) for c in range(nd[i])]
+            if robot.jtype[i] in ("R", "P", "U") else None for i in range(robot.n)]
+    lead = [None if r is None else frozenset().union(*r) for r in rows]
+    children: dict[int, list[int]] = {}
+    for i in range(robot.n):
+        children.setdefault(int(robot.parent[i]), []).append(i)
+    out, seen = [], set()
+    for i in range(robot.n):
+        if lead[i] is None or i in seen or not any(len(r) >= 2 for r in rows[i]) or len(lead[i]) > 3:
+            continue
+        group, stack = {i}, [i]
+        while stack:  # grow along the tree through bodies driven by the same leaders only
+            k = stack.pop()
+            for j in [int(robot.parent[k]), *children.get(k, [])]:
+                if j >= 0 and j not in group and lead[j] is not None and lead[j] and lead[j] <= lead[i]:
+                    group.add(j)
+                    stack.append(j)
+        bodies = sorted(group)
+        tops = [b for b in bodies if int(robot.parent[b]) not in group]
+        seen |= group
+        if len(tops) == 1:  # one anchor
+            ls = np.array(sorted(lead[i]))
+            out.append((int(robot.parent[tops[0]]), bodies, ls, g[:, ls], o))
+    return out
+
+
+def _multi_motions(robot: Robot, bodies: list[int], g: np.ndarray, o: np.ndarray,
+                   qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``h (M, G, 4, 4)`` and ``dh (M, G, L, 4, 4)`` of a group driven by ``L`` coordinates ``qs (M, L)``.
+
+    A body's joint is the product of its coordinates' exponentials (world screws at the reference).
+    """
+    from ..pga.core import se3_exp
+
+    qi, pos = robot.q_index, {k: i for i, k in enumerate(bodies)}
+    m, nl = qs.shape
+    h = np.zeros((m, len(bodies), 4, 4))
+    dh = np.zeros((m, len(bodies), nl, 4, 4))
+    for i, k in enumerate(bodies):
+        e = np.broadcast_to(np.eye(4), (m, 4, 4)).copy()
+        de = np.zeros((m, nl, 4, 4))
+        for c in range(qi[k], qi[k] + robot.ndofs[k]):
+            s, row = robot.screws[c], g[c]
+            ec = se3_exp((o[c] + qs @ row)[:, None] * s)
+            de = de @ ec[:, None] + e[:, None] @ ((ec @ hat(s))[:, None] * row[None, :, None, None])
+            e = e @ ec
+        p = pos.get(int(robot.parent[k]))
+        if p is None:
+            h[:, i], dh[:, i] = e, de
+        else:
+            h[:, i], dh[:, i] = h[:, p] @ e, dh[:, p] @ e[:, None] + h[:, p][:, None] @ de
+    return h, dh
+
+
+def _multi_values(n_unknowns: int, nl: int, times: int = 1) -> np.ndarray:
+    """Generic points ``(M, L)`` in ``[-3, 3]^L`` (additive recurrences of irrational steps)."""
+    m = times * (12 * n_unknowns + 16) * nl
+    steps = np.array([0.6180339887498949, 0.41421356237309515, 0.7320508075688772])[:nl]
+    return 6.0 * (((np.arange(m)[:, None] + 0.5) * steps) % 1.0) - 3.0
+
+
+def multi_group_columns(robot: Robot, tol: float = 1e-9, prior: Columns | None = None) -> Columns:
+    """R-M on groups driven by several coordinates (:func:`multi_groups`): sampled, kept when twice as many agree.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    tol : float, default 1e-9
+        Relative singular-value threshold.
+    prior : Columns, optional
+        Columns found before: only new directions are emitted.
+
+    Returns
+    -------
+    Columns
+        Provenance ``R-M coupled joints``.
+    """
+    parts = []
+    unit = decision_scale(robot, "paper")[:10]
+    for anchor, bodies, leaders, g, o in multi_groups(robot, tol):
+        level = _levels(robot, [anchor], tol).get(anchor)
+        systems = []
+        for times, shift in ((1, 0.0), (2, 0.01)):
+            qs = _multi_values(len(bodies) + 1, len(leaders), times) + shift
+            systems.append(_group_rows(robot, anchor, bodies, None, qs[:, 0], level, tol, unit,
+                                       _multi_motions(robot, bodies, g, o, qs)))
+        (a, who), (more, _) = systems
+        scale = max(float(np.abs(a).max()), 1e-300)
+        n1, n2 = null_rows(a, tol, scale), null_rows(np.vstack([a, more]), tol, scale)
+        if n1 is None or n2 is None or len(n1) != len(n2) or not len(n2):
+            continue
+        r = np.linalg.qr(np.vstack([a, more]), mode="r")
+        label = _group_label(robot.names, anchor, bodies) + f" (driven by {len(leaders)} coordinates)"
+        seed = prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
+        for sub, y in sparse_solutions(r, len(who), tol, seed):
+            parts.append(on_bodies([who[b] for b in sub], y * np.tile(unit, len(sub)), RM, label))
+    return Columns.concat(parts)
 
 
 def _group_columns(robot: Robot, groups: list, tol: float, prior: Columns | None, source: int,
@@ -585,8 +877,8 @@ def _group_columns(robot: Robot, groups: list, tol: float, prior: Columns | None
             continue
         r, who = red
         label = labels[i] if labels else _group_label(robot.names, anchor, bodies)
-        seed = _prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
-        for sub, y in _sparse_solutions(r, len(who), tol, seed):
+        seed = prior_rows(prior, who, unit) if prior is not None else np.zeros((0, 10 * len(who)))
+        for sub, y in sparse_solutions(r, len(who), tol, seed):
             parts.append(on_bodies([who[b] for b in sub], y * np.tile(unit, len(sub)), source, label))
     return Columns.concat(parts)
 

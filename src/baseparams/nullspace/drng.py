@@ -585,14 +585,68 @@ def _level_axis(robot: Robot, j: int, measured: np.ndarray, tol: float) -> np.nd
     return a
 
 
+def _unlocked(robot: Robot) -> tuple[Robot, np.ndarray, np.ndarray] | None:
+    """The robot without the bodies its loops hold still (:func:`.rules.locked_bodies`), or None.
+
+    Those bodies never move: the others move exactly as they would hanging from the world there
+    (a body whose parent is held still hangs from the world, a loop to one closes on the world),
+    so the moving bodies' directions are the smaller robot's. Returns ``(robot, body index (m,)
+    in the original, loop index (l,) in the original)``; None when no body or every body is held
+    still, or a coupling ties a held coordinate to a moving one.
+    """
+    from dataclasses import replace
+
+    from .rules import locked_bodies
+
+    locked = locked_bodies(robot)
+    if not locked.any() or locked.all():
+        return None
+    keep = np.flatnonzero(~locked)
+    new = -np.ones(robot.n, dtype=int)
+    new[keep] = np.arange(len(keep))
+    coords = np.flatnonzero(np.isin(robot.dof_body, keep))
+    qnew = -np.ones(robot.dof, dtype=int)
+    qnew[coords] = np.arange(len(coords))
+    couplings = []
+    for c in robot.couplings:
+        idx = [c.succ, *(k for k, _ in c.terms())]
+        if all(qnew[k] < 0 for k in idx):
+            continue
+        if any(qnew[k] < 0 for k in idx):
+            return None
+        couplings.append(replace(c, succ=int(qnew[c.succ]), pred=int(qnew[c.pred]),
+                                 more=tuple((int(qnew[k]), r) for k, r in c.more)))
+    loops, kept_loops = [], []
+    for k, lj in enumerate(robot.loops):
+        a = -1 if lj.parent < 0 else int(new[lj.parent])
+        b = int(new[lj.child])
+        if max(a, b) < 0:
+            continue
+        if a > b:  # the world (a held body) now on the successor's side: swap the two copies
+            a, b, m, mc = b, a, (lj.M if lj.M_child is None else lj.M_child), lj.M
+            lj = replace(lj, M=m, M_child=None if np.abs(mc - m).max() <= 1e-12 else mc,
+                         axes=lj.axes[::-1].copy() if lj.type == "U" else lj.axes)
+        loops.append(replace(lj, parent=a, child=b))
+        kept_loops.append(k)
+    independent = tuple(int(qnew[k]) for k in robot.actuated)
+    sub = Robot(robot.name, tuple(robot.names[i] for i in keep), tuple(robot.joint_names[i] for i in keep),
+                tuple(robot.jtype[i] for i in keep), np.array([-1 if robot.parent[i] < 0 else new[robot.parent[i]]
+                                                               for i in keep]),
+                robot.M0[keep], tuple(robot.axes[i] for i in keep), robot.N_body[keep], robot.gravity, tuple(loops),
+                independent if (loops or couplings) else None, robot.q_box if (loops or couplings) else None,
+                tuple(couplings))
+    return sub, keep, np.array(kept_loops, dtype=int)
+
+
 def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "all") -> DRNGResult:
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
     The paper's Algorithm "DRNG" with slips E1-E5 fixed (:func:`.principles.drng_columns`), then
     the extended rules (:func:`.rules.rule_columns`, then
     :func:`.coupled.parallelogram_group_columns` for parallelograms and
-    :func:`.coupled.coupled_columns` for joint couplings, given the columns before), then
-    :func:`unmeasured_columns`; the rank is decided by :func:`scaled_rank`.
+    :func:`.coupled.coupled_columns` for joint couplings, and :func:`.compound.compound_columns` for
+    compound joints, given the columns before), then :func:`unmeasured_columns`; the rank is
+    decided by :func:`scaled_rank`.
 
     Parameters
     ----------
@@ -602,7 +656,7 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
         Geometric tolerance of the principles and rules (parallel axes, zero gravity, ...).
     extended : bool, default True
         Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2, R-L3;
-        :mod:`.coupled`: R-M);
+        :mod:`.coupled`: R-M; :mod:`.compound`: R-C);
         ``False`` gives the paper's three principles alone.
     rows : str or sequence of str, default "all"
         The measured generalized forces (``all``, ``joints``, ``base``, or a set of joints:
@@ -632,6 +686,15 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
                 cols = Columns.concat([cols, parallelogram_group_columns(robot, tol, prior=cols)])
             if robot.couplings:
                 cols = Columns.concat([cols, coupled_columns(robot, tol, prior=cols)])
+        if robot.loops or robot.couplings:  # bodies held still by their loops: the others on a fixed base
+            sub = _unlocked(robot)
+            if sub is not None:
+                cols = Columns.concat([cols, drng(sub[0], tol).columns.reindexed(*sub[1:], robot.n)])
+        if "C" in robot.jtype:  # R-C: compound joints as chains of elementary joints without intermediate mass
+            from .compound import compound_columns, expand_compound
+
+            chain = expand_compound(robot, tol)
+            cols = Columns.concat([cols, compound_columns(robot, chain, drng(chain[0], tol).columns, tol, prior=cols)])
     extra = unmeasured_columns(robot, rows, tol)
     if len(extra):
         cols = Columns.concat([cols, extra])

@@ -39,6 +39,7 @@ from ..pga.core import hat
 from ..pga.linalg import cross3, null_rows, nullspace, rowspace, span_rows, sym
 from .columns import Columns, on_bodies, sym_params
 from .principles import compound_shared, world_axes
+from .spatial import spatial_parallelogram_columns
 from .subspaces import MotionSpans, motion_spans
 
 #: provenance of the rules' columns
@@ -755,7 +756,8 @@ def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, ha
     parts: list[Columns] = []
     for a, nbrs in edges.items():
         for b, x, jp in nbrs:
-            if a < b and has_pt[a] and has_pt[b]:
+            empty = max(np.linalg.norm(jp - pts[a]), np.linalg.norm(pts[b] - jp)) <= 1e-9  # a zero column
+            if a < b and has_pt[a] and has_pt[b] and not empty:
                 label = (f"level chain ⟂ {_describe(ee)}: x {_describe(x)} from {_describe(pts[a])} "
                          f"to {_describe(pts[b])} across the joint at {_describe(jp)}")
                 parts.append(_pair(_seg(x, pts[a], jp), a, _seg(x, jp, pts[b]), b, label, RL2))
@@ -765,6 +767,8 @@ def _level_chains(robot: Robot, ee: np.ndarray, edges: dict, pts: np.ndarray, ha
             for c2, x2, j2 in nbrs[k + 1:]:
                 if not (has_pt[b] and has_pt[c2]) or abs(abs(x @ x2) - 1.0) > 1e-9:
                     continue
+                if max(np.linalg.norm(j1 - pts[b]), np.linalg.norm(j2 - j1), np.linalg.norm(pts[c2] - j2)) <= 1e-9:
+                    continue  # every segment empty: a zero column
                 body = sorted([(b, _seg(x, pts[b], j1)), (a, _seg(x, j1, j2)), (c2, _seg(x, j2, pts[c2]))],
                               key=lambda t: t[0])
                 (lo, hl), (mid, hm), (hi, hh) = body
@@ -891,13 +895,82 @@ def planar_loop_columns(robot: Robot, tol: float = 1e-9) -> Columns:
     return Columns.concat(parts)
 
 
+def locked_bodies(robot: Robot) -> np.ndarray:
+    """Bodies the loops and couplings hold still: every coordinate on their path is locked.
+
+    Group the coordinates by the constraints that tie them (a coupling ties its coordinates; a
+    loop joint, every coordinate on its two bodies' paths to the root): a group that holds no
+    independent coordinate is solved for alone at every configuration, its Jacobian regular at
+    the reference (checked when the robot is assembled), so its coordinates never change. A
+    body none of whose path coordinates moves (no floating root) never moves (e.g. an arm welded
+    at its hand with as many joints as the weld's constraints).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+
+    Returns
+    -------
+    ndarray of bool, shape ``(n,)``
+        True for a body held still.
+    """
+    if not (robot.loops or robot.couplings) or robot.floating:
+        return np.zeros(robot.n, dtype=bool)
+    dof = robot.dof
+    root = list(range(dof))
+
+    def find(k):
+        while root[k] != k:
+            root[k] = root[root[k]]
+            k = root[k]
+        return k
+
+    sup = robot.support  # (dof, n): coordinate j moves body i
+    groups = [[c.succ, *(k for k, _ in c.terms())] for c in robot.couplings]
+    for lj in robot.loops:
+        groups.append(list(np.flatnonzero(sup[:, lj.child] != 0)) +
+                      ([] if lj.parent < 0 else list(np.flatnonzero(sup[:, lj.parent] != 0))))
+    tied = np.zeros(dof, dtype=bool)
+    for g in groups:
+        tied[g] = True
+        for k in g[1:]:
+            root[find(int(k))] = find(int(g[0]))
+    free = {find(int(k)) for k in robot.actuated}
+    locked = np.array([tied[j] and find(j) not in free for j in range(dof)])
+    return np.array([bool(np.all(locked[np.flatnonzero(sup[:, i] != 0)])) for i in range(robot.n)])
+
+
+def locked_body_columns(robot: Robot) -> Columns:
+    """R-A on the closed robot: each of a locked body's ten parameters is null (:func:`locked_bodies`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+
+    Returns
+    -------
+    Columns
+        Ten unit columns per locked body (provenance R-A fixed vectors).
+    """
+    bodies = np.flatnonzero(locked_bodies(robot))
+    if not len(bodies):
+        return Columns.empty()
+    k = 10 * len(bodies)
+    child = np.repeat(bodies, 10)
+    labels = np.array([f"held still by its loops: {robot.names[b]}" for b in child], dtype=object)
+    return Columns(np.tile(np.eye(10), (len(bodies), 1)), child, -np.ones(k, dtype=int), np.full(k, RA),
+                   child.copy(), labels, hp=np.zeros((k, 10)))
+
+
 def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
-    """The extended-rule columns R-A, R-B, R-L1, R-L2, R-L3 for ``robot`` (R-M: :mod:`.coupled`).
+    """The extended-rule columns R-A, R-B, R-L1, R-L2, R-L3, R-L4 for ``robot`` (R-M: :mod:`.coupled`).
 
     In order: R-A on every body (:func:`fixed_vector_columns`) and across loop joints
     (:func:`loop_shared_columns`), R-B (:func:`sliding_columns`), R-L1
     (:func:`parallelogram_columns`), R-L2 (:func:`level_chain_columns`), R-L3
-    (:func:`planar_loop_columns`), sharing one
+    (:func:`planar_loop_columns`), R-L4 (:func:`.spatial.spatial_parallelogram_columns`), sharing one
     :func:`.subspaces.motion_spans`. The columns are redundant with each other and with the
     paper's principles: :func:`.rank.block_rank` decides the rank.
 
@@ -917,6 +990,7 @@ def rule_columns(robot: Robot, tol: float = 1e-9) -> Columns:
         q = 0).
     """
     ms = motion_spans(robot, tol)
-    return Columns.concat([fixed_vector_columns(robot, ms), loop_shared_columns(robot, tol),
+    return Columns.concat([fixed_vector_columns(robot, ms), locked_body_columns(robot), loop_shared_columns(robot, tol),
                            sliding_columns(robot, ms), parallelogram_columns(robot),
-                           level_chain_columns(robot, ms, tol), planar_loop_columns(robot, tol)])
+                           level_chain_columns(robot, ms, tol), planar_loop_columns(robot, tol),
+                           spatial_parallelogram_columns(robot, tol, ms)])

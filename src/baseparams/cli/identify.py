@@ -211,16 +211,9 @@ def _results_check(args, files: list[str]) -> dict | None:
     check_output_path(args.save, [args.model, *files, args.validate, args.columns, args.truth], "--save")
     if not args.truth:
         return None
-    try:
-        truth = json.loads(Path(args.truth).read_text())
-    except FileNotFoundError:
-        raise BaseparamsError(f"--truth {args.truth}: no such file") from None
-    except (OSError, ValueError) as exc:
-        raise BaseparamsError(f"--truth {args.truth}: not a JSON truth file ({exc})") from None
-    if not isinstance(truth, dict) or not isinstance(truth.get("parameters"), list):
-        raise BaseparamsError(f"--truth {args.truth}: no 'parameters' list (write one with 'baseparams simulate': "
-                              f"OUT.truth.json)")
-    return truth
+    from ..schema import read_truth
+
+    return read_truth(args.truth, f"--truth {args.truth}")
 
 
 def _with_truth(args, result, truth: dict | None, text_report) -> str:

@@ -519,7 +519,7 @@ class Identification:
         from .physical import PhysicalFit
         from .results import array, check_robot, read_document
 
-        doc = read_document(path)
+        doc = read_document(path)  # checked against baseparams.schema.RESULT: types, shapes, finite values
         check_robot(doc, robot, str(path))
         o = dict(doc["options"])
         o["friction"] = tuple(o.get("friction", ()))
@@ -550,7 +550,7 @@ class Identification:
             phys = PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
                                       tuple(v) if k == "notes" else v) for k, v in p.items()})
         f = Fit(model, o.get("method", e["method"]), theta, est, phys)
-        return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o)
+        return cls(f, doc["samples"], doc["train"], doc["validation"], (*doc["notes"], *doc["_notes"]), None, o)
 
     @property
     def model(self) -> IdentModel:

@@ -73,7 +73,6 @@ import functools
 import io
 import itertools
 import re
-import tomllib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -81,7 +80,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError
-from ..files import SMALL_MAX_BYTES, atomic_path, check_input, read_input_bytes
+from ..files import atomic_path, check_input
 from ..ident.data import JointLog
 from ..model.robot import Robot
 
@@ -94,8 +93,6 @@ KINDS = ("q", "dq", "ddq", "tau")
 #: joint types a log can hold (1-dof)
 LOGGABLE = ("R", "P")
 
-_TOP_KEYS = ("time", "time_scale", "topic", "joints")
-_JOINT_KEYS = ("name", "q", "dq", "ddq", "tau", "sign", "gear_ratio", "torque_gain", "offset")
 _BAG_FIELDS = {"q": "position", "dq": "velocity", "ddq": "acceleration", "tau": "effort"}
 _COLUMN = re.compile(r"^(q|dq|ddq|tau)_(.+)$")
 
@@ -217,16 +214,14 @@ def _kind(p: Path) -> str:
 # ---------------------------------------------------------------- the mapping
 def _mapping(columns) -> dict:
     """The mapping as a checked dict: ``time, time_scale, topic, joints, label``."""
+    from .. import schema
+
     label = "columns="
     if columns is None:
         raw: dict = {}
     elif isinstance(columns, (str, Path)) and Path(columns).suffix.lower() == ".toml":
         label = str(columns)
-        data = read_input_bytes(columns, SMALL_MAX_BYTES, error=DataError)
-        try:
-            raw = tomllib.loads(data.decode("utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise DataError(f"{columns}: not a valid TOML mapping ({str(exc).splitlines()[0]})") from None
+        raw = schema.read_toml(columns, "a valid TOML mapping", schema.COLUMNS_MAX_BYTES, error=DataError)
     elif isinstance(columns, str):
         raw = {"topic": columns}
     elif isinstance(columns, Mapping):
@@ -237,45 +232,14 @@ def _mapping(columns) -> dict:
 
 
 def _check_mapping(raw: dict, label: str) -> dict:
-    """Check the keys and values of a mapping (one line per problem, naming the key)."""
-    for key in raw:
-        if key not in _TOP_KEYS:
-            raise DataError(f"{label}: unknown key {key!r}; expected one of {', '.join(_TOP_KEYS)}")
-    time = raw.get("time", "t")
-    scale = raw.get("time_scale", 1.0)
-    topic = raw.get("topic")
-    if not isinstance(time, str) or not time:
-        raise DataError(f"{label}: time must be a column name, got {time!r}")
-    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not np.isfinite(scale) or scale <= 0:
-        raise DataError(f"{label}: time_scale must be a positive number, got {scale!r}")
-    if topic is not None and not isinstance(topic, str):
-        raise DataError(f"{label}: topic must be a string, got {topic!r}")
-    joints = raw.get("joints", {})
-    if not isinstance(joints, Mapping):
-        raise DataError(f"{label}: joints must be a table of model joints, got {type(joints).__name__}")
-    out = {}
-    for j, entry in joints.items():
-        out[j] = _check_joint_entry(entry, f"{label}: joints.{j}")
-    return {"time": time, "time_scale": float(scale), "topic": topic, "joints": out, "label": label,
-            "explicit_time": "time" in raw or "time_scale" in raw}
+    """Check the keys and values of a mapping against :data:`baseparams.schema.COLUMNS` (one line, naming the key)."""
+    from .. import schema
 
-
-def _check_joint_entry(entry, what: str) -> dict:
-    """One ``[joints.<name>]`` table: column names are strings, factors finite and nonzero."""
-    if not isinstance(entry, Mapping):
-        raise DataError(f"{what}: expected a table of column names and factors, got {entry!r}")
-    for key, value in entry.items():
-        if key not in _JOINT_KEYS:
-            raise DataError(f"{what}: unknown key {key!r}; expected one of {', '.join(_JOINT_KEYS)}")
-        if key in KINDS + ("name",) and (not isinstance(value, str) or not value):
-            raise DataError(f"{what}.{key}: expected a column name, got {value!r}")
-        if key in ("gear_ratio", "torque_gain", "offset") and (
-                isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value)
-                or (value == 0 and key != "offset")):
-            raise DataError(f"{what}.{key}: expected a finite nonzero number, got {value!r}")
-    if entry.get("sign", 1) not in (1, -1) or isinstance(entry.get("sign", 1), bool):
-        raise DataError(f"{what}.sign: expected +1 or -1, got {entry['sign']!r}")
-    return dict(entry)
+    spec = schema.check(raw, schema.COLUMNS, label, error=DataError)[0]
+    joints = {j: {k: v for k, v in e.items() if v is not None and (k in raw["joints"][j])}
+              for j, e in spec["joints"].items()}
+    return {"time": spec["time"], "time_scale": spec["time_scale"], "topic": spec["topic"], "joints": joints,
+            "label": label, "explicit_time": "time" in raw or "time_scale" in raw}
 
 
 # ---------------------------------------------------------------- text tables

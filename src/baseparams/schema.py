@@ -94,14 +94,17 @@ class _Context:
     source: str
     sizes: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+    bound_at: dict = field(default_factory=dict)
 
     def size(self, symbol: str, n: int, where: str, what: str = "items") -> None:
         # bind ``symbol`` to ``n``, or check ``n`` against its binding
         bound = self.sizes.get(symbol)
         if bound is None:
             self.sizes[symbol] = n
+            self.bound_at[symbol] = where
         elif bound != n:
-            raise _Problem(where, f"expected {bound} {what} (as {symbol} elsewhere in the file), got {n}")
+            at = self.bound_at.get(symbol)
+            raise _Problem(where, f"expected {bound}{' ' + what if what else ''} (as {at or 'given'}), got {n}")
 
 
 class Node:
@@ -114,15 +117,15 @@ class Node:
         raise NotImplementedError
 
 
-def _number(v, where: str) -> float:
+def _number(v, where: str, expected: str = "a finite number") -> float:
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
-        raise _Problem(where, f"expected a number, got {_show(v)}")
+        raise _Problem(where, f"expected {expected}, got {_show(v)}")
     try:
         x = float(v)
     except OverflowError:
-        raise _Problem(where, f"expected a number within floating point, got {_show(v)}") from None
+        raise _Problem(where, f"expected {expected} (within floating point), got {_show(v)}") from None
     if not math.isfinite(x):
-        raise _Problem(where, f"expected a finite number, got {x}")
+        raise _Problem(where, f"expected {expected}, got {x}")
     return x
 
 
@@ -149,18 +152,18 @@ class Num(Node):
     null: bool = False
 
     def _describe(self) -> str:
-        parts = []
-        if self.lo > -math.inf:
-            parts.append(f"{'>' if self.lo_open else '>='} {self.lo:g}")
-        if self.hi < math.inf:
-            parts.append(f"<= {self.hi:g}")
-        return (f"a finite {'nonzero ' if self.nonzero else ''}number" + (f" {', '.join(parts)}" if parts else "")
-                + (" or null" if self.null else ""))
+        if self.lo > -math.inf and self.hi < math.inf:
+            bounds = f" in {'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}]"
+        elif self.lo > -math.inf:
+            bounds = f" {'>' if self.lo_open else '>='} {self.lo:g}"
+        else:
+            bounds = f" <= {self.hi:g}" if self.hi < math.inf else ""
+        return f"a finite {'nonzero ' if self.nonzero else ''}number{bounds}" + (" or null" if self.null else "")
 
     def _check(self, v, where: str, ctx: _Context) -> float:
         if v is None and self.null:
             return math.nan
-        x = _number(v, where)
+        x = _number(v, where, self._describe())
         if x < self.lo or (self.lo_open and x == self.lo) or x > self.hi or (self.nonzero and x == 0):
             raise _Problem(where, f"expected {self._describe()}, got {_show(v)}")
         return x
@@ -676,6 +679,9 @@ def read_toml(path, what: str, max_bytes: int = COLUMNS_MAX_BYTES, error=Basepar
 
 # ---------------------------------------------------------------- the schemas
 _FINITE = Num()
+#: the largest model parameter value read (a robot file's bounds: 1e9 kg x (1e6 m)^2 = 1e21)
+MAX_VALUE = 1e24
+_VALUE = Num(lo=-MAX_VALUE, hi=MAX_VALUE)
 #: why a saved identification's unknown key is refused where values are computed from
 _NEWER = " (written by a newer baseparams, or edited? it would predict without it)"
 #: a root mean square as the reports keep it (null where it was not finite)
@@ -694,19 +700,19 @@ def _coupling_rule(c: dict) -> str | None:
 
 #: the options a saved identification's model is rebuilt from, and its data were prepared with
 OPTIONS = Obj({
-    "method": Str(max_len=100, nonempty=True),
+    "method": Enum(("auto", "ols", "wls", "physical")),
     "convention": Enum(tuple(values(Convention))),
-    "rows": Field(Str(max_len=100_000, nonempty=True), "all"),
+    "rows": Str(max_len=100_000, nonempty=True),
     "rotor": Bool(),
-    "friction": Field(Arr(Enum(("viscous", "coulomb", "offset")), max_len=3), []),
-    "coulomb_width": Field(Opt(Num(lo=0.0, lo_open=True)), None),
-    "couplings": Field(Arr(Obj({"name": Str(max_len=200, nonempty=True),
-                                "joints": Arr(Str(max_len=1000, nonempty=True), min_len=1, max_len=1000),
-                                "weights": Arr(Num(nonzero=True), min_len=1, max_len=1000)},
-                               rule=_coupling_rule), max_len=1000), []),
-    "cutoff": Field(Opt(Num(lo=0.0, lo_open=True, hi=1e9)), None),
-    "decimate": Field(Opt(Int(lo=1, hi=10**9)), None),
-    "min_speed": Field(Opt(Num(lo=0.0)), None),
+    "friction": Arr(Enum(("viscous", "coulomb", "offset")), max_len=3),
+    "coulomb_width": Opt(Num(lo=0.0, lo_open=True)),
+    "couplings": Arr(Obj({"name": Str(max_len=200, nonempty=True),
+                          "joints": Arr(Str(max_len=1000, nonempty=True), min_len=1, max_len=1000),
+                          "weights": Arr(Num(nonzero=True), min_len=1, max_len=1000)}, rule=_coupling_rule),
+                     max_len=1000),
+    "cutoff": Num(lo=0.0, lo_open=True, hi=1e9),
+    "decimate": Int(lo=1, hi=10**9),
+    "min_speed": Opt(Num(lo=0.0)),
 }, extra="refuse", hint=_NEWER)
 
 #: the least-squares estimate's statistics (the triangular factor, the covariance)
@@ -721,8 +727,8 @@ ESTIMATE = Obj({
     "samples": Int(lo=0),
     "R11": _matrix("p"),
     "r12": Arr(_FINITE, "p"),
-    "cov": Field(Opt(_matrix("p", Num(null=True))), None),
-    "covariance": Field(Opt(Str()), None),
+    "cov": Opt(_matrix("p", Num(null=True))),
+    "covariance": Opt(Str()),
 }, extra="note")
 
 #: the physically consistent fit (``method physical``)
@@ -761,21 +767,21 @@ RESULT = Obj({
                   "joints": Arr(Str(max_len=1000), "m")}, extra="refuse", hint=_NEWER),
     "options": OPTIONS,
     "parameters": Obj({"names": Arr(Str(max_len=1000, nonempty=True), "p", min_len=1),
-                       "values": Arr(_FINITE, "p"), "std": Arr(Num(lo=0.0, null=True), "p")},
+                       "values": Arr(_VALUE, "p"), "std": Arr(Num(lo=0.0, null=True), "p")},
                       extra="refuse", hint=_NEWER),
     "base_parameters": Field(Arr(Any()), []), "drives": Field(Arr(Any()), []), "couplings": Field(Arr(Any()), []),
     "estimate": ESTIMATE,
-    "physical": Field(Opt(PHYSICAL), None),
+    "physical": Opt(PHYSICAL),
     "samples": Obj({"read": Int(lo=0), "used": Int(lo=0), "removed": Field(Map(Int(lo=0)), {})},
                    extra="keep", rule=_counts_rule),
     "train": Obj({"rms": Map(_RMS), "rms_total": _RMS}, extra="keep"),
-    "validation": Field(Opt(VALIDATION), None),
+    "validation": Opt(VALIDATION),
     "notes": Field(Arr(Str()), []),
 }, extra="note")
 
 #: the true parameters of a simulation (``simulate``'s ``OUT.truth.json``)
 TRUTH = Obj({
-    "parameters": Arr(Obj({"name": Str(max_len=1000, nonempty=True), "value": Num()}, extra="keep"),
+    "parameters": Arr(Obj({"name": Str(max_len=1000, nonempty=True), "value": _VALUE}, extra="keep"),
                       min_len=1, unique="name"),
     "model": Field(Opt(Str(max_len=10_000)), None), "convention": Field(Opt(Str(max_len=100)), None),
     "noise": Field(Opt(Num(lo=0.0)), None), "amplitude": Field(Opt(Num()), None), "drives": Field(Any(), None),
@@ -787,14 +793,15 @@ COLUMN_JOINT = Obj({
     **{k: Field(Str(max_len=10_000, nonempty=True, text="a column name"), None) for k in ("name", "q", "dq", "ddq",
                                                                                            "tau")},
     "sign": Field(Enum((1, -1, 1.0, -1.0), text="+1 or -1"), 1),
-    "gear_ratio": Field(Num(nonzero=True), 1.0), "torque_gain": Field(Num(nonzero=True), 1.0),
-    "offset": Field(Num(), 0.0),
+    "gear_ratio": Field(Num(lo=-1e6, hi=1e6, nonzero=True), 1.0),
+    "torque_gain": Field(Num(lo=-1e6, hi=1e6, nonzero=True), 1.0),
+    "offset": Field(Num(lo=-1e6, hi=1e6), 0.0),
 }, extra="refuse")
 
 #: a TOML column map (``--columns``; a dict in Python): time, time_scale, topic, joints
 COLUMNS = Obj({
     "time": Field(Str(max_len=10_000, nonempty=True, text="a column name"), "t"),
-    "time_scale": Field(Num(lo=0.0, lo_open=True), 1.0),
+    "time_scale": Field(Num(lo=0.0, lo_open=True, hi=1e6), 1.0),
     "topic": Field(Opt(Str(max_len=10_000)), None),
     "joints": Field(Map(COLUMN_JOINT, max_len=100_000), {}),
 }, extra="refuse")

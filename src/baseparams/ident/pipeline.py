@@ -1228,6 +1228,12 @@ def predict_log(f: Fit, log, cutoff: float | None, smooth: bool = True) -> np.nd
     with blas_threads():
         tau = np.concatenate([f.predict(q[k:k + 20000], dq[k:k + 20000], ddq[k:k + 20000])
                               for k in range(0, max(len(q), 1), 20000)])
+    if not np.isfinite(tau).all():  # values or states beyond floating point: never NaN predictions
+        from ..errors import DataError
+
+        i = int(np.argmax(~np.isfinite(tau).all(axis=1)))
+        raise DataError(f"{log.source}: the predicted torques are not finite from sample {i} on (t = {log.t[i]:.6g} "
+                        f"s): the log's states or the values are beyond floating point")
     return tau
 
 

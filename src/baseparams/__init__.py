@@ -190,8 +190,17 @@ def _robot_of(model, what: str) -> Robot:
 
 
 def _files(*items) -> list[str]:
-    """The items that are existing files (the run's inputs, which outputs must not overwrite)."""
-    return [_os.fspath(x) for x in items if isinstance(x, (str, _os.PathLike)) and _os.path.isfile(x)]
+    """The items that are existing files (the run's inputs, which outputs must not overwrite).
+
+    A model file's own inputs (MJCF includes and assets, xacro includes, meshes) are added after
+    the first item.
+    """
+    out = [_os.fspath(x) for x in items if isinstance(x, (str, _os.PathLike)) and _os.path.isfile(x)]
+    if items and isinstance(items[0], (str, _os.PathLike)) and _os.path.isfile(items[0]):
+        from .io.sources import model_files
+
+        out += [str(f) for f in model_files(items[0])[1:]]
+    return out
 
 
 def _friction_of(friction) -> tuple[str, ...]:

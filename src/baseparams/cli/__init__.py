@@ -270,7 +270,7 @@ def _regressor_states(args, robot) -> int:
     from ..io.logs import read_log
     from ..io.tables import check_table_path, write_columns
 
-    check_table_path(args.out, [args.model, args.states], "--out")
+    check_table_path(args.out, input_files(args), "--out")
     if robot.floating:
         raise BaseparamsError(f"--states: robot {robot.name!r} has a floating base, whose coordinates are not "
                               f"columns of a states file; use baseparams.regressor in Python")
@@ -300,12 +300,12 @@ def _regressor_states(args, robot) -> int:
     if args.out:
         if Path(args.out).suffix.lower() == ".npz":
             write_columns(args.out, {"Y": y, "columns": np.array(names), "joints": np.array(joints), "t": log.t},
-                          [args.model, args.states])
+                          input_files(args))
         else:
             s, m, p = y.shape
             table = {"sample": np.repeat(np.arange(s), m), "joint": np.tile(np.array(joints), s)}
             table.update({n: y[:, :, k].reshape(-1) for k, n in enumerate(names)})
-            write_columns(args.out, table, [args.model, args.states])
+            write_columns(args.out, table, input_files(args))
     out = {"model": robot.name, "states": args.states, "samples": int(y.shape[0]), "shape": list(y.shape),
            "seconds": dt, "out": args.out, "convention": "paper (spatial pseudo-inertia at q = 0)"}
     if args.json:
@@ -634,18 +634,14 @@ def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
 
 
 def _check_output(flag: str, path: str, suffixes, inputs: list[str]) -> None:
-    """One output path: a known suffix, an existing folder, not a folder itself, not an input."""
-    from ..files import refuse_inputs
+    """One output path: a known suffix, an existing folder, not a folder itself, not an input (links resolved)."""
+    from ..files import check_output
 
     p = Path(path)
     if suffixes and p.suffix.lower() not in suffixes:
         raise BaseparamsError(f"{flag} {path}: the format comes from the suffix: {', '.join(suffixes)}, "
                               f"not {p.suffix or 'none'}")
-    if p.exists() and not p.is_file():
-        raise BaseparamsError(f"{flag} {path}: exists and is not a regular file (a folder?)")
-    if not p.resolve().parent.is_dir():
-        raise BaseparamsError(f"{flag} {path}: the folder {p.resolve().parent} does not exist")
-    refuse_inputs(p, inputs, flag)
+    check_output(p, inputs, flag)
 
 
 def _check_extras(args) -> None:

@@ -291,11 +291,32 @@ def input_files(args) -> list[str]:
     list of str
         The input files.
     """
-    out = [args.model] if getattr(args, "model", None) and Path(args.model).exists() else []
+    out = []
+    model = getattr(args, "model", None)
+    if model and Path(model).exists():
+        out.append(model)
+        from ..io.sources import model_files  # what the model includes: MJCF includes and assets, xacro files
+
+        out += [str(f) for f in _model_files(model, model_files, getattr(args, "xacro_args", None),
+                                             getattr(args, "package_path", None))[1:]]
     if getattr(args, "data", None):
         out += data_files(args.data)
-    out += [getattr(args, k) for k in ("validate", "columns", "trajectory") if getattr(args, k, None)]
+    out += [getattr(args, k) for k in ("validate", "columns", "trajectory", "truth", "result", "log", "states")
+            if isinstance(getattr(args, k, None), str)]
     return out
+
+
+#: the files of the models seen in this process: ``{(path, mtime, args): files}`` (a run asks several times)
+_MODEL_FILES: dict = {}
+
+
+def _model_files(model: str, lister, xacro_args, package_path) -> list:
+    """:func:`baseparams.io.sources.model_files`, once per model file and state."""
+    st = Path(model).stat()
+    key = (str(Path(model).resolve()), st.st_mtime_ns, st.st_size, tuple(xacro_args or ()), tuple(package_path or ()))
+    if key not in _MODEL_FILES:
+        _MODEL_FILES[key] = lister(model, xacro_args, package_path)
+    return _MODEL_FILES[key]
 
 
 def write_output(path, writer, args, what: str):

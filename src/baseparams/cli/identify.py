@@ -99,7 +99,7 @@ def cmd_identify(args) -> int:
                 _write_predictions(args, result, log, val, files)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
         if args.save:
-            result.save(args.save, inputs=[args.model, *files, args.validate, args.columns, args.truth], what="--save")
+            result.save(args.save, inputs=input_files(args), what="--save")
             progress(f"result saved to {args.save}")
         if args.urdf:
             _write_identified_urdf(args, robot, result)
@@ -175,8 +175,7 @@ def _identify_streamed(args, robot, files, couplings, progress):
 
         coords = robot.actuated if robot.has_loops else range(robot.dof)
         names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
-        inputs = [args.model, *files, args.validate, args.columns]
-        with column_writer(args.predictions, names, inputs, "--predictions") as write:
+        with column_writer(args.predictions, names, input_files(args), "--predictions") as write:
             result = identify_stream(robot, stream, validation=other, progress=progress,
                                      predictions=lambda t, tau: write(np.column_stack([t, tau])), **kwargs)
         print(f"baseparams: predictions of {result.validation['samples']} validation samples written to "
@@ -195,7 +194,7 @@ def _write_predictions(args, result, log, val, files) -> None:
     tau = result.predict(whole)
     keep = np.ones(whole.n_samples, dtype=bool) if val is not None else whole.t >= whole.t[-1] - args.holdout
     cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
-    write_columns(args.predictions, cols, [args.model, *files, args.validate, args.columns], "--predictions")
+    write_columns(args.predictions, cols, input_files(args), "--predictions")
     print(f"baseparams: predictions of {int(keep.sum())} validation samples written to {args.predictions}",
           file=sys.stderr)
 
@@ -208,7 +207,7 @@ def _results_check(args, files: list[str]) -> dict | None:
         return None
     if len(files) > 1 or args.per_file or args.pooled:
         raise BaseparamsError("--save and --truth apply to one log, not to a fleet (--per-file / --pooled)")
-    check_output_path(args.save, [args.model, *files, args.validate, args.columns, args.truth], "--save")
+    check_output_path(args.save, input_files(args), "--save")
     if not args.truth:
         return None
     from ..schema import read_truth
@@ -258,7 +257,7 @@ def cmd_predict(args) -> int:
     from ..io.logs import read_log
     from ..io.tables import check_table_path, write_columns
 
-    inputs = [args.model, args.result, args.log, args.columns]
+    inputs = input_files(args)
     check_table_path(args.out, inputs, "--out")
     if args.out and Path(args.out).suffix.lower() == ".npz":
         raise BaseparamsError(f"--out {args.out}: predictions are written as .csv, .tsv or .parquet")
@@ -353,7 +352,7 @@ def _write_identified_urdf(args, robot, result) -> None:
         raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
     drives, couplings = identified_drives(result)
     for note in write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
-                           couplings=couplings, inputs=[args.data, args.validate]):
+                           couplings=couplings, inputs=input_files(args)):
         print(f"baseparams: note: {note}", file=sys.stderr)
     print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
 
@@ -362,6 +361,6 @@ def _write_identified_mjcf(args, result, log) -> None:
     """``--mjcf FILE``: a copy of the MJCF model with the identified inertias and drive terms, checked by MuJoCo."""
     from ..io.mjcf_write import identified_mjcf
 
-    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=[args.data, args.validate]):
+    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=input_files(args)):
         print(f"baseparams: note: {note}", file=sys.stderr)
     print(f"baseparams: MJCF written to {args.mjcf}", file=sys.stderr)

@@ -149,7 +149,9 @@ def _stream_reason(args, path: str) -> str | None:
         return "--stream on"
     if not ok or args.joints or getattr(args, "mjcf", None):  # --mjcf checks the model on the log's states
         return None
-    size = Path(path).stat().st_size / 1e6
+    from ..io.logs import decoded_mb
+
+    size = decoded_mb(path)  # a compressed Parquet file by the numbers it holds
     return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
 
 

@@ -919,7 +919,8 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
     revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" for c in coords])
     try:
-        return check_units(log, cols, lambda q, dq, ddq: regressor(robot, q, dq, ddq) @ params, revolute)
+        limits = None if robot.limits is None else np.asarray(robot.limits, dtype=float)[coords]
+        return check_units(log, cols, lambda q, dq, ddq: regressor(robot, q, dq, ddq) @ params, revolute, limits)
     except DataError as exc:
         if not allow_units:
             raise

@@ -212,18 +212,22 @@ def _positions(src, joints, q, derived, revolute, limits, has_dq: bool) -> None:
 
 
 def _fit_quality(tau: np.ndarray, model: np.ndarray, dq: np.ndarray) -> np.ndarray:
-    """Per joint, the relative residual of ``tau ~ a model + Fv dq + Fc sign(dq) + Fo`` (least squares)."""
+    """Per joint, the relative residual of ``tau - model ~ Fv dq + Fc sign(dq) + Fo`` (least squares).
+
+    The model's torques enter as they are (no fitted scale: a scale would let any torque shaped like
+    the acceleration pass). 1 where the model explains less than 0.3 (of the relative residual)
+    beyond the friction terms alone: a friction-dominated joint says nothing about the units.
+    """
     out = np.ones(tau.shape[1])
     for k in range(tau.shape[1]):
-        a = np.column_stack([model[:, k], dq[:, k], np.sign(dq[:, k]), np.ones(len(tau))])
+        f = np.column_stack([dq[:, k], np.sign(dq[:, k]), np.ones(len(tau))])
         norm = float(np.linalg.norm(tau[:, k]))
-        if norm <= 0 or not np.all(np.isfinite(a)) or float(np.linalg.norm(model[:, k])) <= 0:
+        if norm <= 0 or not np.all(np.isfinite(model[:, k])) or not np.all(np.isfinite(f)):
             continue
-        x = np.linalg.lstsq(a, tau[:, k], rcond=None)[0]
-        b = np.linalg.lstsq(a[:, 1:], tau[:, k], rcond=None)[0]  # friction alone: what the model adds
-        with_model = float(np.linalg.norm(tau[:, k] - a @ x)) / norm
-        without = float(np.linalg.norm(tau[:, k] - a[:, 1:] @ b)) / norm
-        out[k] = with_model if with_model < 0.9 * without else 1.0
+        rest = tau[:, k] - model[:, k]
+        with_model = float(np.linalg.norm(rest - f @ np.linalg.lstsq(f, rest, rcond=None)[0])) / norm
+        without = float(np.linalg.norm(tau[:, k] - f @ np.linalg.lstsq(f, tau[:, k], rcond=None)[0])) / norm
+        out[k] = with_model if without - with_model > 0.3 else 1.0
     return out
 
 
@@ -268,7 +272,8 @@ def _torques(log, cols, joints, q, derived, rate, torque_model, revolute=None, l
                         f"torque of this model (its RMS on this motion: {model_rms:.3g})" + _go_on())
     ratio = float(np.sqrt(np.mean(tau[sel] ** 2))) / model_rms
     per = np.sqrt(np.mean(tau[sel] ** 2, axis=0)) / np.maximum(np.sqrt(np.mean(model**2, axis=0)), 1e-300)
-    worst = joints[int(np.argmax(per))] if ratio > 1 else joints[int(np.argmin(per))]
+    # the joint that makes the overall ratio: the largest measured torques (above), the lowest ratio (below)
+    worst = joints[int(np.argmax(np.mean(tau[sel] ** 2, axis=0)))] if ratio > 1 else joints[int(np.argmin(per))]
     if ratio > 1000 / NEAR / 1.5:
         raise DataError(f"{src}: column tau_{worst}: measured torques {ratio:.4g} x the model file's on the same "
                         f"motion: likely mN m or N mm (not N m)" + _go_on())

@@ -71,6 +71,7 @@ __version__ = "0.1.0"
 # the subpackage first: importing it later would rebind ``baseparams.regressor`` to the module
 from . import regressor as _regressor_pkg  # noqa: F401  (numpy only)
 from .analysis import Analysis, analyze, regressor
+from .arguments import ArgumentTypeError
 from .errors import BaseparamsError, ModelError
 from .model import CONVENTIONS, Inertia, Robot, RobotBuilder, pose
 
@@ -185,8 +186,23 @@ def _robot_of(model, what: str) -> Robot:
         return model.robot
     if isinstance(model, (str, _os.PathLike)):
         return load(model)
-    raise BaseparamsError(f"{what}: model must be a Robot, an Analysis, a built-in name or a robot file, "
-                          f"got {type(model).__name__}")
+    raise ArgumentTypeError(f"{what}: model must be a Robot, an Analysis, a built-in name or a robot file, "
+                    f"got {type(model).__name__}")
+
+
+def _bools(where: str, **flags) -> None:
+    """Flags must be booleans (``rotor="no"`` would be true): a TypeError naming the first that is not."""
+    for name, value in flags.items():
+        if not isinstance(value, (bool, type(None))) and type(value).__name__ != "bool_":
+            raise ArgumentTypeError(f"{where}: {name}= must be True or False, got {type(value).__name__} {value!r:.40}")
+
+
+def _choice(where: str, name: str, value, choices) -> None:
+    """A keyword that names one of ``choices``: a TypeError or ValueError naming it."""
+    if not isinstance(value, str):
+        raise ArgumentTypeError(f"{where}: {name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
+    if value not in choices:
+        raise BaseparamsError(f"{where}: {name}= must be one of {', '.join(choices)}, got {value!r:.60}")
 
 
 def _files(*items) -> list[str]:
@@ -289,8 +305,13 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
         Bad options or model, infeasible limits (naming the constraint that binds), an output
         that cannot be written.
     """
+    from .arguments import check_keywords
     from .excitation import design_excitation
 
+    check_keywords("excite", harmonics=harmonics, period=period, base_frequency=base_frequency, rate=rate,
+                   margin=margin, starts=starts, grid=grid, seed=seed, analysis_samples=analysis_samples,
+                   max_iter=max_iter, acceleration=acceleration)
+    _bools("excite", drives=drives, rotor=rotor, torque=torque)
     if period is not None and base_frequency is not None:
         raise BaseparamsError("excite: give period or base_frequency, not both")
     if period is not None and not period > 0:
@@ -359,11 +380,15 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     BaseparamsError
         A floating base, bad options, loops the trajectory does not close, an unwritable output.
     """
+    from .arguments import check_keywords, check_samples
     from .ident.simulate import simulate_log
 
+    check_keywords("simulate", duration=duration, rate=rate, amplitude=amplitude, noise=noise, seed=seed,
+                   analysis_samples=analysis_samples)
+    _bools("simulate", rotor=rotor)
+    if trajectory is None:
+        check_samples(duration * rate, 16, "simulate: duration x rate")
     robot = _robot_of(model, "simulate")
-    if not noise >= 0:
-        raise BaseparamsError(f"simulate: noise is a standard deviation [N m], >= 0; got {noise}")
     inputs = _files(model, trajectory)
     if out is not None:
         from .files import check_output
@@ -454,9 +479,18 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     BaseparamsError
         A floating base, bad data, options or output, data that do not excite the model.
     """
+    from .arguments import check_keywords
     from .ident.drives import MotorCoupling
     from .ident.pipeline import identify as run
 
+    check_keywords("identify", holdout=holdout, coulomb_width=coulomb_width, cutoff=cutoff, decimate=decimate,
+                   min_speed=min_speed, prior_weight=prior_weight, score_cutoff=score_cutoff,
+                   analysis_samples=analysis_samples)
+    _bools("identify", rotor=rotor, allow_units=allow_units)
+    _choice("identify", "method", method, ("auto", "ols", "wls", "physical"))
+    _choice("identify", "covariance", covariance, ("hac", "white"))
+    if isinstance(couplings, (str, MotorCoupling)):
+        couplings = (couplings,)
     robot = _robot_of(model, "identify")
     inputs = _files(model, log, validate, columns)
     if save is not None:
@@ -513,7 +547,11 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
     BaseparamsError
         Another robot than the result's, a bad result file or log.
     """
+    _bools("predict", raw_states=raw_states)
     robot = _robot_of(model, "predict")
+    if not isinstance(result, (str, _os.PathLike)) and type(result).__name__ != "Identification":
+        raise ArgumentTypeError(f"predict: result must be an Identification or its saved file, got "
+                                f"{type(result).__name__}")
     if isinstance(result, (str, _os.PathLike)):
         from .ident.pipeline import Identification
 

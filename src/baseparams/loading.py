@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .arguments import ArgumentTypeError
 from .errors import BaseparamsError
 from .model.robot import Robot
 from .robots import BUILTINS, get
@@ -50,6 +51,18 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
         ``floating`` with a built-in robot, a model that is neither a file nor a built-in, or
         any error reading the file.
     """
+    import os
+
+    from .arguments import check_keywords
+
+    if not isinstance(model, (str, os.PathLike)):
+        raise ArgumentTypeError(f"model must be a built-in robot's name or a robot file's path, got "
+                                f"{type(model).__name__}")
+    model = os.fspath(model)
+    gravity = check_keywords("", gravity=gravity)["gravity"]
+    for name, flag in (("floating", floating), ("strict_inertia", strict_inertia)):
+        if not isinstance(flag, bool):
+            raise ArgumentTypeError(f"{name}= must be True or False, got {type(flag).__name__} {flag!r:.40}")
     p = Path(model)
     if model.lower() in BUILTINS and not p.exists():
         if floating:

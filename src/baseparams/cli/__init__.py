@@ -679,8 +679,18 @@ def _check_flags(args) -> None:
               f"of the base-parameter analysis, not log samples)", file=sys.stderr)
         if args.samples is None:
             args.samples = args.old_samples
-    if args.command == "simulate" and not args.noise >= 0:
-        raise BaseparamsError(f"--noise is a standard deviation [N m], >= 0; got {args.noise}")
+    from ..arguments import check_namespace, check_samples, check_total
+
+    check_namespace(args)  # every numeric flag in its range, named (baseparams.arguments.RANGES)
+    if args.command == "simulate" and not args.trajectory:
+        per_log = args.duration * args.rate
+        check_samples(per_log, 16, "--duration x --rate")
+        if args.robots:
+            check_total(args.robots * per_log, "--robots x --duration x --rate")
+    if args.command == "excite":
+        period = args.period if args.period is not None else 1.0 / (args.base_frequency or 0.1)
+        check_samples(period * args.rate, 16, f"{'--period' if args.period else '--base-frequency'} and --rate "
+                                              f"(one period at the rate)")
     if args.command == "identify" and args.joints is not None and not [j for j in args.joints.split(",") if j.strip()]:
         raise BaseparamsError("--joints needs joint names: --joints A,B,... (the joints to identify)")
     if args.command == "identify" and args.prior_weight is not None and args.method != "physical":
@@ -787,9 +797,9 @@ def _linalg_message(args, exc: Exception) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run the ``baseparams`` command line.
 
-    Bad input (a :class:`BaseparamsError`, a missing ``--output`` folder) is one line on
-    stderr, ``baseparams: error: ...``; bad arguments (``--samples`` < 1, ``--seed`` < 0) are
-    argparse's usage errors (``SystemExit`` with status 2).
+    Bad input (a :class:`BaseparamsError`, a missing ``--output`` folder, a number out of its
+    range: :mod:`baseparams.arguments`) is one line on stderr, ``baseparams: error: ...``; a flag
+    argparse cannot parse (``--samples x``) is argparse's usage error (``SystemExit`` with status 2).
 
     Parameters
     ----------
@@ -806,10 +816,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     _one_line_notes()
-    if getattr(args, "samples", None) is not None and args.samples < 1:
-        parser.error("--samples must be at least 1")
-    if getattr(args, "seed", 0) < 0:
-        parser.error("--seed must be a non-negative integer")
+    args.samples_flag = "--analysis-samples" if args.command in RENAMED_SAMPLES else "--samples"
     try:
         preflight(args)
         return args.func(args)

@@ -406,4 +406,7 @@ def symbolic_robot(args):
         vals = {k: float(v) for k, v in vals.items()}
     except ValueError as exc:
         raise BaseparamsError(f"--values: {exc}") from None
+    bad = [f"{k}={v}" for k, v in vals.items() if not abs(v) <= 1e6]
+    if bad:
+        raise BaseparamsError(f"--values {bad[0]}: a finite number within [-1e6, 1e6] (lengths in m, angles in rad)")
     return robot.to_robot(vals)

@@ -30,9 +30,12 @@ def parse_keepout(text: str | None):
         return None
     link, sep, z = text.rpartition(":")
     try:
-        return (link, float(z)) if sep and link else float("x")
+        value = float(z) if sep and link else float("x")
     except ValueError:
         raise BaseparamsError(f"--keepout expects LINK:Z (e.g. panda_link7:0.3), got {text!r}") from None
+    if not abs(value) <= 1e6:
+        raise BaseparamsError(f"--keepout {text}: the height Z must be a finite number in [-1e6, 1e6] m")
+    return link, value
 
 
 def parse_acceleration(text: str | None):
@@ -50,10 +53,13 @@ def parse_acceleration(text: str | None):
     """
     if not text:
         return None
+    from ..arguments import check_value
+
     try:
         acc = [float(x) for x in text.split(",")]
     except ValueError:
         raise BaseparamsError(f"--acceleration expects A or A,A,... in rad/s^2, got {text!r}") from None
+    acc = check_value(acc, "acceleration", cli=True).tolist()  # finite, > 0: nan is no limit at all
     return acc[0] if len(acc) == 1 else acc
 
 

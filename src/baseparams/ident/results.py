@@ -32,6 +32,7 @@ import json
 
 import numpy as np
 
+from ..arguments import ArgumentTypeError
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from .data import JointLog
@@ -190,7 +191,8 @@ def check_robot(doc: dict, robot: Robot, source: str) -> None:
         One line naming both robots and both fingerprints, or the count that differs.
     """
     if not isinstance(robot, Robot):
-        raise TypeError(f"robot: expected a baseparams Robot (baseparams.load(...)), got {type(robot).__name__}")
+        raise ArgumentTypeError(f"robot: expected a baseparams Robot (baseparams.load(...)), got "
+                                f"{type(robot).__name__}")
     saved = doc.get("robot", {})
     mine = robot_fingerprint(robot)
     if saved.get("fingerprint") != mine:

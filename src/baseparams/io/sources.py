@@ -150,29 +150,37 @@ def mjcf_sources(path, check: bool = True) -> list[Path]:
                     _regular(p, MODEL_MAX_BYTES, f"included by {f}")
                 stack.append((p, depth + 1))
     for f, root in roots:
-        for tag, attrs in _ASSET_FILES.items():
-            for el in root.iter(tag):
-                for attr in attrs:
-                    name = el.get(attr)
-                    if not name:
-                        continue
-                    where = dirs["texture" if tag == "texture" else "mesh"] + [f.parent, base]
-                    for p in _candidates(name, where):
-                        key = os.path.realpath(p)
-                        if key in seen:
-                            continue
-                        seen.add(key)
-                        files.append(p)
-                        if check:
-                            if len(files) > MAX_FILES:
-                                raise ModelError(f"{main}: reads more than {MAX_FILES} files")
-                            total += _regular(p, ASSET_MAX_BYTES, f"<{tag} {attr}> of {f}")
-                            if total > ASSETS_MAX_BYTES:
-                                raise ModelError(f"{main}: its asset files take more than "
-                                                 f"{ASSETS_MAX_BYTES / 2**20:.0f} MB together")
+        total = _assets(main, f, root, dirs, base, files, seen, total, check)
         if check:
             _check_allocations(f, root)
     return files
+
+
+def _assets(main: Path, f: Path, root: ET.Element, dirs: dict, base: Path, files: list, seen: set, total: int,
+            check: bool) -> int:
+    """The asset files one MJCF file names, added to ``files`` (checked with ``check``); the bytes so far."""
+    for tag, attrs in _ASSET_FILES.items():
+        for el in root.iter(tag):
+            for attr in attrs:
+                name = el.get(attr)
+                if not name:
+                    continue
+                where = dirs["texture" if tag == "texture" else "mesh"] + [f.parent, base]
+                for p in _candidates(name, where):
+                    key = os.path.realpath(p)
+                    if key in seen:
+                        continue
+                    seen.add(key)
+                    files.append(p)
+                    if not check:
+                        continue
+                    if len(files) > MAX_FILES:
+                        raise ModelError(f"{main}: reads more than {MAX_FILES} files")
+                    total += _regular(p, ASSET_MAX_BYTES, f"<{tag} {attr}> of {f}")
+                    if total > ASSETS_MAX_BYTES:
+                        raise ModelError(f"{main}: its asset files take more than {ASSETS_MAX_BYTES / 2**20:.0f} MB "
+                                         "together")
+    return total
 
 
 def _check_allocations(f: Path, root: ET.Element) -> None:

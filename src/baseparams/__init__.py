@@ -164,7 +164,7 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     """
     from .loading import load_model
 
-    robot, notes = load_model(_os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia,
+    robot, notes = load_model(model, floating=floating, gravity=gravity, strict_inertia=strict_inertia,
                               xacro_args=xacro_args, package_path=package_path)
     for note in notes:
         _warnings.warn(note, ModelWarning, stacklevel=2)
@@ -188,6 +188,25 @@ def _robot_of(model, what: str) -> Robot:
         return load(model)
     raise ArgumentTypeError(f"{what}: model must be a Robot, an Analysis, a built-in name or a robot file, "
                     f"got {type(model).__name__}")
+
+
+def _trajectory_of(trajectory) -> tuple:
+    """``(t (S,), q, dq, ddq (S, m))`` checked: numbers, finite, shapes that agree, time increasing."""
+    import numpy as np
+
+    from .arguments import ArgumentError, check_array
+
+    if not isinstance(trajectory, (tuple, list)) or len(trajectory) != 4:
+        raise ArgumentTypeError(f"simulate: trajectory= must be an Excitation, its file or (t, q, dq, ddq), got "
+                                f"{type(trajectory).__name__}")
+    t = check_array(trajectory[0], "simulate: trajectory t", 1)
+    arrays = [check_array(x, f"simulate: trajectory {n}", 2) for n, x in zip(("q", "dq", "ddq"), trajectory[1:])]
+    if any(a.shape != arrays[0].shape or len(a) != len(t) for a in arrays):
+        raise ArgumentError(f"simulate: trajectory shapes differ: t {t.shape}, q, dq, ddq "
+                            f"{[a.shape for a in arrays]} (S,) and (S, m)")
+    if len(t) > 1 and not np.all(np.diff(t) > 0):
+        raise ArgumentError("simulate: trajectory t must be strictly increasing")
+    return (t, *arrays)
 
 
 def _bools(where: str, **flags) -> None:
@@ -224,21 +243,30 @@ def _friction_of(friction) -> tuple[str, ...]:
     if isinstance(friction, str):
         return () if friction.strip().lower() in ("", "none") else tuple(x.strip() for x in friction.split(",")
                                                                          if x.strip())
+    if not isinstance(friction, (list, tuple, set, frozenset)) or not all(isinstance(x, str) for x in friction):
+        raise ArgumentTypeError(f"friction= must be 'viscous,coulomb,offset', 'none' or a sequence of those names, "
+                                f"got {friction!r:.60}")
     return tuple(friction)
 
 
-def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False):
-    """``log`` as a JointLog: a JointLog, or a log file read for ``robot`` (:func:`baseparams.io.logs.read_log`)."""
+def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log"):
+    """``log`` as a JointLog: a JointLog (values checked), or a log file read for ``robot`` (``read_log``)."""
+    from .ident.data import JointLog
+
     if isinstance(log, (str, _os.PathLike)):
         from .io.logs import read_log
 
         return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau)
-    return log
+    if not isinstance(log, JointLog):
+        raise ArgumentTypeError(f"{name} must be a JointLog or a log file's path, got {type(log).__name__}")
+    if columns is not None:
+        raise BaseparamsError(f"columns= maps the columns of a log file; {name} is a JointLog already")
+    return log.checked()
 
 
 def _identification_logs(robot: Robot, log, validate, columns, joints, weld):
     """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
-    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None)
+    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None, name="validate")
     log = _log_of(log, robot, columns, subset=joints is not None)
     if joints is None:
         if weld:
@@ -246,6 +274,9 @@ def _identification_logs(robot: Robot, log, validate, columns, joints, weld):
         return log, val, robot
     from .ident.subchain import parse_welds, subchain
 
+    names_ok = isinstance(joints, (list, tuple)) and all(isinstance(j, str) for j in joints)
+    if not isinstance(joints, str) and not names_ok:
+        raise ArgumentTypeError(f"identify: joints= must be 'A,B' or a sequence of joint names, got {joints!r:.60}")
     names = [j.strip() for j in joints.split(",") if j.strip()] if isinstance(joints, str) else list(joints)
     welds = parse_welds(list(weld or ())) if not isinstance(weld, dict) else {k: float(v) for k, v in weld.items()}
     small, log, notes = subchain(robot, log, names, welds)
@@ -399,6 +430,8 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
 
         trajectory = read_trajectory(trajectory, robot)
     trajectory = getattr(trajectory, "trajectory", trajectory)  # an Excitation's samples
+    if trajectory is not None:
+        trajectory = _trajectory_of(trajectory)
     log, truth = simulate_log(robot, duration=duration, rate=rate, amplitude=amplitude, noise=noise, seed=seed,
                               rotor=rotor, friction=_friction_of(friction), convention=convention,
                               trajectory=trajectory, samples=analysis_samples)
@@ -491,6 +524,12 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     _choice("identify", "covariance", covariance, ("hac", "white"))
     if isinstance(couplings, (str, MotorCoupling)):
         couplings = (couplings,)
+    if not isinstance(couplings, (list, tuple)) or not all(isinstance(c, (str, MotorCoupling)) for c in couplings):
+        raise ArgumentTypeError(f"identify: couplings= must be MotorCoupling objects or 'NAME:JOINT=W,...' texts, "
+                                f"got {couplings!r:.60}")
+    if columns is not None and not isinstance(columns, (str, _os.PathLike, dict)):
+        raise ArgumentTypeError(f"identify: columns= must be a TOML file, a dict or a topic, got "
+                                f"{type(columns).__name__}")
     robot = _robot_of(model, "identify")
     inputs = _files(model, log, validate, columns)
     if save is not None:

@@ -358,6 +358,21 @@ def _analyze_sweep(args) -> int:
     return max((STATUS_EXIT[s] for s in statuses), default=EXIT_OK)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose errors are one line, as every other error (``baseparams: error: ...``, exit 2)."""
+
+    def error(self, message: str):
+        """Print the error on one line (``--help`` shows the usage) and exit 2.
+
+        Parameters
+        ----------
+        message : str
+            argparse's message (``argument --starts: invalid int value: '1.5'``).
+        """
+        prog = self.prog.split(" ", 1)[1] + " " if " " in self.prog else ""
+        self.exit(2, f"baseparams: error: {prog}{message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``baseparams`` command.
 
@@ -367,7 +382,7 @@ def build_parser() -> argparse.ArgumentParser:
         Subcommands ``robots``, ``analyze``, ``regressor``, ``identify``, ``predict``, ``simulate`` and
         ``excite``; each sets ``func`` to its ``cmd_*`` function.
     """
-    p = argparse.ArgumentParser(prog="baseparams", description=(
+    p = _Parser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "
         "they regroup: the tetrahedral-point model and DRNG, certified by exact numerics."))
     p.add_argument("--version", action="version", version=f"baseparams {__version__}")

@@ -393,7 +393,13 @@ class Identification:
         BaseparamsError
             A log missing a measured joint, too short or too slowly sampled for the cutoff.
         """
-        return predict_log(self.fit, log, (self.options or {}).get("cutoff"), smooth)
+        from ..arguments import ArgumentTypeError
+        from .data import JointLog
+
+        if not isinstance(log, JointLog):
+            raise ArgumentTypeError(f"predict: log must be a JointLog (baseparams.io.logs.read_log(path, robot, "
+                                    f"require_tau=False)), got {type(log).__name__}")
+        return predict_log(self.fit, log.checked(), (self.options or {}).get("cutoff"), smooth)
 
     @property
     def joints(self) -> list[str]:
@@ -819,6 +825,7 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
                               f"base's motion and wrench are not in a joint log); use the Python API with states")
     if holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    log, validation = log.checked(), None if validation is None else validation.checked()  # finite, increasing
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
                          min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,

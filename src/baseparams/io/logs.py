@@ -179,6 +179,10 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         One line naming the file, the column and the row, for any problem listed in the module
         docstring (and a missing optional package: the extra to install).
     """
+    if not isinstance(robot, Robot):
+        from ..arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"read_log: robot must be a Robot (baseparams.load(...)), got {type(robot).__name__}")
     p = check_input(path, folder_ok=True, error=DataError)  # a file or a bag folder, never a device or FIFO
     spec = _mapping(columns)
     kind = _kind(p)
@@ -895,6 +899,10 @@ def write_log(path, log: JointLog) -> Path:
     DataError
         Another suffix, or a file that cannot be written.
     """
+    if not isinstance(log, JointLog):
+        from ..arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"write_log: log must be a JointLog, got {type(log).__name__}")
     p = Path(path)
     cols = log_columns_of(log)
     if p.suffix.lower() == ".npz":

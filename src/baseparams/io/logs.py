@@ -396,8 +396,9 @@ MAX_COLUMNS = 10_000
 MAX_ROWS = 50_000_000
 #: the largest log read whole [bytes]: the columns read, as float64 (larger: stream it)
 WHOLE_MAX_BYTES = 256 * 2**20
-#: the largest text log read whole [bytes of file] (reading text takes about 3 times its size)
-TEXT_MAX_BYTES = 256 * 2**20
+#: the largest text log read whole [bytes of file] (reading text takes about 3 times its size; the CLI streams
+#: text logs above 64 MB)
+TEXT_MAX_BYTES = 2**30
 
 
 def _too_large(path: Path, what: str) -> str:

@@ -81,3 +81,22 @@ def refused_in_a_subprocess(argv, seconds: int = 60, memory: int = MEMORY_BYTES,
     err = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(err) == 1 and err[0].startswith("baseparams: error:"), (r.returncode, err[-5:])
     return err[0]
+
+
+def hostile_path(kind: str, path):
+    """``path`` made a FIFO, a link to ``/dev/zero``, a folder or a sparse 1 GB file; returned."""
+    import pathlib
+
+    p = pathlib.Path(path)
+    if kind == "fifo":
+        os.mkfifo(p)
+    elif kind == "dev_zero":
+        p.symlink_to("/dev/zero")
+    elif kind == "folder":
+        p.mkdir()
+    elif kind == "sparse_1gb":
+        with open(p, "wb") as fh:
+            fh.truncate(2**30)
+    else:
+        raise ValueError(kind)
+    return p

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import copy
 import json
-import os
 
 import numpy as np
 import pytest
@@ -19,7 +18,7 @@ from baseparams.errors import BaseparamsError
 from baseparams.ident.pipeline import Identification, identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.io.logs import read_log, write_log
-from hostile import api_error, one_line_error, refused_in_a_subprocess
+from hostile import api_error, hostile_path, one_line_error, refused_in_a_subprocess
 
 
 @pytest.fixture(scope="module")
@@ -208,16 +207,7 @@ def test_load_needs_a_robot(saved):
 
 @pytest.mark.parametrize("kind", ["fifo", "dev_zero", "folder", "sparse_1gb"])
 def test_predict_refuses_what_is_not_a_result_file_at_once(saved, tmp_path, capsys, kind):
-    p = tmp_path / "result.json"
-    if kind == "fifo":
-        os.mkfifo(p)
-    elif kind == "dev_zero":
-        p.symlink_to("/dev/zero")
-    elif kind == "folder":
-        p.mkdir()
-    else:
-        with open(p, "wb") as fh:
-            fh.truncate(2**30)
+    p = hostile_path(kind, tmp_path / "result.json")
     err = one_line_error(["predict", "puma560", p, saved["log"]], capsys, seconds=20)
     assert str(p) in err and ("not a regular file" in err or "larger than" in err), err
 
@@ -292,10 +282,8 @@ def test_truth_given_in_python_is_checked_the_same(saved, change, words):
 @pytest.mark.parametrize("kind", ["fifo", "dev_zero", "nan", "deep"])
 def test_cli_truth_files(saved, tmp_path, capsys, kind):
     p = tmp_path / "t.json"
-    if kind == "fifo":
-        os.mkfifo(p)
-    elif kind == "dev_zero":
-        p.symlink_to("/dev/zero")
+    if kind in ("fifo", "dev_zero"):
+        hostile_path(kind, p)
     elif kind == "nan":
         t = copy.deepcopy(saved["truth"])
         t["parameters"][0]["value"] = float("nan")
@@ -336,15 +324,8 @@ def test_hostile_column_maps(saved, puma, tmp_path, text, words):
 
 
 def test_column_maps_that_are_not_regular_files(saved, tmp_path, capsys):
-    for kind in ("fifo", "dev_zero", "big"):
-        p = tmp_path / f"{kind}.toml"
-        if kind == "fifo":
-            os.mkfifo(p)
-        elif kind == "dev_zero":
-            p.symlink_to("/dev/zero")
-        else:
-            with open(p, "wb") as fh:
-                fh.truncate(2**30)
+    for kind in ("fifo", "dev_zero", "sparse_1gb"):
+        p = hostile_path(kind, tmp_path / f"{kind}.toml")
         err = one_line_error(["identify", "puma560", saved["log"], "--columns", p], capsys, seconds=20)
         assert str(p) in err and ("not a regular file" in err or "larger than" in err), err
 

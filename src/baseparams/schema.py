@@ -710,7 +710,7 @@ OPTIONS = Obj({
                           "joints": Arr(Str(max_len=1000, nonempty=True), min_len=1, max_len=1000),
                           "weights": Arr(Num(nonzero=True), min_len=1, max_len=1000)}, rule=_coupling_rule),
                      max_len=1000),
-    "cutoff": Num(lo=0.0, lo_open=True, hi=1e9),
+    "cutoff": Num(lo=1e-3, hi=1e6),
     "decimate": Int(lo=1, hi=10**9),
     "min_speed": Opt(Num(lo=0.0)),
 }, extra="refuse", hint=_NEWER)
@@ -801,7 +801,7 @@ COLUMN_JOINT = Obj({
 #: a TOML column map (``--columns``; a dict in Python): time, time_scale, topic, joints
 COLUMNS = Obj({
     "time": Field(Str(max_len=10_000, nonempty=True, text="a column name"), "t"),
-    "time_scale": Field(Num(lo=0.0, lo_open=True, hi=1e6), 1.0),
+    "time_scale": Field(Num(lo=1e-12, hi=1e6), 1.0),
     "topic": Field(Opt(Str(max_len=10_000)), None),
     "joints": Field(Map(COLUMN_JOINT, max_len=100_000), {}),
 }, extra="refuse")

@@ -199,7 +199,12 @@ def check_robot(doc: dict, robot: Robot, source: str) -> None:
         raise BaseparamsError(f"{source}: identified on robot {saved.get('name')!r:.200} ({saved.get('fingerprint')}), "
                               f"not this robot {robot.name!r} ({mine}): another structure (joints, axes, frames, "
                               f"gravity or bodies); use the model it was identified on")
-    for key, mine_n in (("bodies", robot.n), ("dof", robot.dof), ("parameters", 10 * robot.n)):
+    from ..numerics import row_mask, rows_spec
+
+    rows = doc.get("options", {}).get("rows", "all")
+    coords = robot.actuated if robot.has_loops else np.flatnonzero(row_mask(robot, rows_spec(rows)))
+    joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    for key, mine_n in (("bodies", robot.n), ("dof", robot.dof), ("parameters", 10 * robot.n), ("joints", joints)):
         if saved.get(key) != mine_n:
             raise BaseparamsError(f"{source}: robot.{key}: {saved.get(key)} in the file, {mine_n} in robot "
                                   f"{robot.name!r} of the same fingerprint: the file was edited")

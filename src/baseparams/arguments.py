@@ -59,6 +59,9 @@ class Range:
     unit: str = ""
     count: int | None = None
 
+    def __repr__(self) -> str:
+        return f"<Range: {self.text()}>"
+
     def text(self) -> str:
         """The range as ``[lo, hi]`` with its unit and kind.
 
@@ -69,7 +72,8 @@ class Range:
         """
         kind = "an integer" if self.integer else "a number"
         left, right = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
-        return f"{kind} in {left}{self.lo:g}, {self.hi:g}{right}{' ' + self.unit if self.unit else ''}"
+        lo, hi = (f"{int(self.lo)}", f"{int(self.hi)}") if self.integer else (f"{self.lo:g}", f"{self.hi:g}")
+        return f"{kind} in {left}{lo}, {hi}{right}{' ' + self.unit if self.unit else ''}"
 
 
 #: every numeric keyword of the front door and flag of the CLI (``-`` for ``_``)

@@ -107,6 +107,10 @@ class _Context:
             raise _Problem(where, f"expected {bound}{' ' + what if what else ''} (as {at or 'given'}), got {n}")
 
 
+def _node_repr(node) -> str:
+    return f"<{type(node).__name__}: {node._describe()}>"
+
+
 class Node:
     """A node of a schema: :meth:`check` returns the value (numbers as floats) or raises."""
 
@@ -145,6 +149,8 @@ class Num(Node):
         ``null`` is allowed too, read as NaN (a statistic that was not finite when written).
     """
 
+    __repr__ = _node_repr
+
     lo: float = -math.inf
     hi: float = math.inf
     lo_open: bool = False
@@ -181,6 +187,8 @@ class Int(Node):
         A size symbol it equals (binds it when unbound).
     """
 
+    __repr__ = _node_repr
+
     lo: int = -(2**63)
     hi: int = 2**63 - 1
     bind: str | None = None
@@ -214,6 +222,8 @@ class Str(Node):
         How messages name what is expected (``a column name``).
     """
 
+    __repr__ = _node_repr
+
     max_len: int = MAX_STR
     pattern: str | None = None
     nonempty: bool = False
@@ -238,6 +248,8 @@ class Str(Node):
 class Bool(Node):
     """``true`` or ``false`` (not 0 or 1)."""
 
+    __repr__ = _node_repr
+
     def _describe(self) -> str:
         return "true or false"
 
@@ -258,6 +270,8 @@ class Enum(Node):
     text : str, optional
         How messages name them (``+1 or -1``).
     """
+
+    __repr__ = _node_repr
 
     choices: tuple
     text: str | None = None
@@ -282,6 +296,8 @@ class Opt(Node):
         What a value that is not ``null`` must be.
     """
 
+    __repr__ = _node_repr
+
     node: Node
 
     def _describe(self) -> str:
@@ -294,6 +310,8 @@ class Opt(Node):
 @dataclass(frozen=True)
 class Any(Node):
     """Any JSON value, kept as read (its size and depth are bounded by the reader)."""
+
+    __repr__ = _node_repr
 
     def _describe(self) -> str:
         return "any value"
@@ -321,6 +339,8 @@ class Arr(Node):
     unique : str, optional
         A key of the items (objects) whose values must not repeat (parameter names).
     """
+
+    __repr__ = _node_repr
 
     item: Node
     length: int | str | None = None
@@ -391,6 +411,8 @@ class Map(Node):
         The most keys.
     """
 
+    __repr__ = _node_repr
+
     value: Node
     key: Node = Str(max_len=1000)
     max_len: int = MAX_ITEMS
@@ -422,8 +444,13 @@ class Field:
         Its value when absent (:data:`REQUIRED`: refused when absent).
     """
 
+    __repr__ = _node_repr
+
     node: Node
     default: object = REQUIRED
+
+    def _describe(self) -> str:
+        return self.node._describe() + ("" if self.default is REQUIRED else f" (default {self.default!r:.40})")
 
 
 @dataclass(frozen=True)
@@ -441,6 +468,8 @@ class Obj(Node):
     hint : str
         Added to the message refusing an unknown key.
     """
+
+    __repr__ = _node_repr
 
     fields: Mapping[str, Field | Node]
     extra: str = "refuse"

@@ -248,3 +248,11 @@ def test_api_errors_are_typeerrors_or_valueerrors(puma):
     assert issubclass(ArgumentTypeError, TypeError) and issubclass(ArgumentError, ValueError)
     api_error(bp.excite, puma, starts=10**6, match="starts= must be an integer in [1, 1000]")
     api_error(bp.simulate, puma, duration=1e5, rate=1e3, match="samples")
+
+
+def test_a_glob_over_the_whole_file_system_is_refused_in_seconds(capsys, monkeypatch):
+    from baseparams.cli import common
+
+    monkeypatch.setattr(common, "MAX_GLOB_SECONDS", 2.0)
+    err = one_line_error(["identify", "puma560", "/**"], capsys, seconds=30)
+    assert "the pattern" in err and ("files" in err or "s to list" in err), err

@@ -271,11 +271,22 @@ def data_files(pattern: str) -> list[str]:
     import glob
 
     if any(ch in pattern for ch in "*?["):
-        files = sorted(glob.glob(pattern, recursive=True))
+        files, t0 = [], time.monotonic()
+        for f in glob.iglob(pattern, recursive=True):  # bounded: '/**' would walk the whole file system
+            files.append(f)
+            if len(files) > MAX_GLOB_FILES or time.monotonic() - t0 > MAX_GLOB_SECONDS:
+                why = f"matches more than {MAX_GLOB_FILES} files" if len(files) > MAX_GLOB_FILES else \
+                    f"takes more than {MAX_GLOB_SECONDS:g} s to list"
+                raise BaseparamsError(f"{pattern!r}: the pattern {why}; narrow it")
         if not files:
             raise BaseparamsError(f"no file matches {pattern!r}")
-        return files
+        return sorted(files)
     return [pattern]
+
+
+#: a glob pattern's bounds (``DATA``, a sweep's ``MODEL``): files matched and seconds spent listing
+MAX_GLOB_FILES = 100_000
+MAX_GLOB_SECONDS = 20.0
 
 
 def input_files(args) -> list[str]:

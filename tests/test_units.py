@@ -276,3 +276,23 @@ def test_real_logs_pass_and_their_slips_are_refused(name):
     for k in range(len(log.joints)):
         if (name, k) not in UNSEEN:
             assert _refused(robot, _one_joint_mnm(k)(log)) is not None, k
+
+
+def test_predict_checks_the_states_units(sim, tmp_path, capsys):
+    """``predict`` reads states only: time, velocities and positions are checked, --allow-units goes on."""
+    robot, log = sim
+    res = identify(robot, log, method="ols")
+    saved = res.save(tmp_path / "r.json")
+    good = write_log(tmp_path / "good.csv", log)
+    assert main(["predict", "puma560", str(saved), str(good)]) == 0
+    for name, bad in (("us", replace(log, t=log.t * 1e6)), ("degs", replace(log, dq=log.dq * 180 / np.pi)),
+                      ("rpm", replace(log, dq=log.dq * 60 / (2 * np.pi)))):
+        path = write_log(tmp_path / f"{name}.csv", bad)
+        capsys.readouterr()
+        assert main(["predict", "puma560", str(saved), str(path)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "allow-units" in err[0], err
+        with pytest.raises(DataError, match="allow-units"):
+            baseparams.predict(robot, saved, path)
+    with pytest.warns(baseparams.ModelWarning, match="units: WARNING"):
+        baseparams.predict(robot, saved, tmp_path / "degs.csv", allow_units=True)

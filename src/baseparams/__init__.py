@@ -559,7 +559,7 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     return result
 
 
-def predict(model, result, log, *, raw_states: bool = False, columns=None):
+def predict(model, result, log, *, raw_states: bool = False, columns=None, allow_units: bool = False):
     """Joint torques of a log from an identification: ``baseparams predict``.
 
     Parameters
@@ -574,6 +574,9 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
         The logged states as they are (default: low-passed at the identification's cutoff).
     columns : str, path or dict, optional
         A layout mapping for a log file.
+    allow_units : bool
+        Go on when the log's states look in other units (degrees, deg/s, rpm, ms, us, ns), which
+        otherwise refuses (:func:`baseparams.ident.plausibility.check_states`).
 
     Returns
     -------
@@ -586,7 +589,7 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
     BaseparamsError
         Another robot than the result's, a bad result file or log.
     """
-    _bools("predict", raw_states=raw_states)
+    _bools("predict", raw_states=raw_states, allow_units=allow_units)
     robot = _robot_of(model, "predict")
     if not isinstance(result, (str, _os.PathLike)) and type(result).__name__ != "Identification":
         raise ArgumentTypeError(f"predict: result must be an Identification or its saved file, got "
@@ -595,7 +598,13 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
         from .ident.pipeline import Identification
 
         result = Identification.load(result, robot)
-    return result.predict(_log_of(log, robot, columns, require_tau=False), smooth=not raw_states)
+    from .ident.plausibility import check_prediction_log
+
+    log = _log_of(log, robot, columns, require_tau=False)
+    for note in check_prediction_log(result.model, log, allow_units):
+        if "WARNING" in note:
+            _warnings.warn(note, ModelWarning, stacklevel=2)
+    return result.predict(log, smooth=not raw_states)
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):

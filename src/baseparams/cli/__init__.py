@@ -260,6 +260,9 @@ def _predict_parser(sub, model_args) -> None:
                         "identification's cutoff, as it was fitted)")
     s.add_argument("--score-cutoff", type=float, metavar="HZ",
                    help="also score against the measured torques low-passed at HZ (zero-phase Butterworth order 4)")
+    s.add_argument("--allow-units", action="store_true",
+                   help="go on when the log's states look in other units (deg, deg/s, rpm, ms, us, ns); refused "
+                        "otherwise")
     s.set_defaults(func=cmd_predict)
 
 

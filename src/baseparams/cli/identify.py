@@ -266,6 +266,11 @@ def cmd_predict(args) -> int:
     robot = common.load_robot(args)
     ident = Identification.load(args.result, robot)
     log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False)
+    from ..ident.plausibility import check_prediction_log
+
+    for note in check_prediction_log(ident.model, log, args.allow_units):  # the states' units (no torque needed)
+        if "WARNING" in note:
+            print(f"baseparams: note: {note}", file=sys.stderr)
     tau = ident.predict(log, smooth=not args.raw_states)
     joints = ident.joints
     if args.out:

@@ -87,6 +87,79 @@ def check_units(log, cols, torque_model, revolute, limits=None) -> list[str]:
     return _torques(log, cols, joints, q, derived, rate, torque_model, revolute, limits)
 
 
+def check_states(log, cols, revolute, limits=None) -> list[str]:
+    """A log's states without its torques (what ``predict`` reads): time, velocities, accelerations, positions.
+
+    Parameters
+    ----------
+    log : JointLog
+        The log or trajectory (``tau`` not used).
+    cols : ndarray of int, shape ``(m,)``
+        Log column of each predicted joint.
+    revolute : ndarray of bool, shape ``(m,)``
+        Which of them are revolute.
+    limits : array_like, shape ``(m, 4)``, optional
+        The model's limits of those joints.
+
+    Returns
+    -------
+    list of str
+        One note saying what was checked.
+
+    Raises
+    ------
+    DataError
+        As :func:`check_units`, for the checks that need no torque.
+    """
+    t = np.asarray(log.t, dtype=float)
+    joints = [log.joints[c] for c in cols]
+    q = np.asarray(log.q, dtype=float)[:, cols]
+    revolute = np.asarray(revolute, dtype=bool)
+    rate = _time_base(log.source, t, q)
+    derived = np.gradient(q, t, axis=0)
+    _velocities(log, cols, joints, q, derived, revolute)
+    _accelerations(log, cols, joints, derived, t, rate, revolute)
+    _positions(log.source, joints, q, derived, revolute, limits, log.dq is not None)
+    return [f"units: states checked (sample rate {rate:.4g} Hz)"]
+
+
+def check_prediction_log(model, log, allow_units: bool = False) -> list[str]:
+    """:func:`check_states` for a log an identification predicts (``predict``), the model's joints found by name.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The identified model (its robot and measured coordinates).
+    log : JointLog
+        The log.
+    allow_units : bool
+        Go on with a warning note instead of refusing.
+
+    Returns
+    -------
+    list of str
+        Notes (none when the log lacks a joint: the prediction says so).
+
+    Raises
+    ------
+    DataError
+        Units that look wrong, unless ``allow_units``.
+    """
+    robot = model.robot
+    names = [robot.joint_names[robot.dof_body[c]] for c in model.coords]
+    if log.n_samples < 3 or any(j not in log.joints for j in names):
+        return []
+    cols = np.array([log.joints.index(j) for j in names])
+    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" for c in model.coords])
+    limits = None if robot.limits is None else np.asarray(robot.limits, dtype=float)[np.asarray(model.coords)]
+    try:
+        return check_states(log, cols, revolute, limits)
+    except DataError as exc:
+        if not allow_units:
+            raise
+        return [f"units: WARNING, going on (allow_units): {exc}"]
+
+
 def _peak_speed(q: np.ndarray, t: np.ndarray) -> float:
     """The joint speed the positions imply at their fastest (99th percentile over samples and joints)."""
     if len(t) < 3:

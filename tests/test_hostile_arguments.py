@@ -256,3 +256,15 @@ def test_a_glob_over_the_whole_file_system_is_refused_in_seconds(capsys, monkeyp
     monkeypatch.setattr(common, "MAX_GLOB_SECONDS", 2.0)
     err = one_line_error(["identify", "puma560", "/**"], capsys, seconds=30)
     assert "the pattern" in err and ("files" in err or "s to list" in err), err
+
+
+def test_a_local_cluster_of_a_thousand_workers_is_refused_before_starting(monkeypatch):
+    pytest.importorskip("distributed")
+    import os
+
+    from baseparams import fleet
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    with pytest.raises(BaseparamsError, match=r"--workers 1024: a local cluster of at most 8 worker processes"):
+        with fleet._client(None, None, 1024):
+            pass

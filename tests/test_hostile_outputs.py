@@ -332,3 +332,9 @@ def test_a_urdf_mesh_that_is_a_fifo_is_refused_before_mujoco_imports_it(tmp_path
                  '</link></robot>')
     msg = api_error(check_urdf_meshes, f)
     assert "m.stl" in msg and "not a regular file" in msg
+
+
+@pytest.mark.parametrize("target", ["/dev/stdin", "/dev/fd/0", "/proc/self/fd/0"])
+def test_the_standard_input_is_not_an_output(target, capsys):
+    err = one_line_error(["analyze", "puma560", "--output", target], capsys)
+    assert "the standard input is not an output" in err

@@ -202,6 +202,8 @@ def output_target(path, what: str = "output") -> tuple[str, object]:
     a = os.path.abspath(p)
     if a in STANDARD_STREAMS:
         return "std", STANDARD_STREAMS[a]
+    if a in ("/dev/stdin", "/dev/fd/0", "/proc/self/fd/0"):
+        raise BaseparamsError(f"{what} {p}: the standard input is not an output")
     try:
         st = os.stat(p)
     except FileNotFoundError:

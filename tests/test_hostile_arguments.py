@@ -265,6 +265,6 @@ def test_a_local_cluster_of_a_thousand_workers_is_refused_before_starting(monkey
     from baseparams import fleet
 
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
-    with pytest.raises(BaseparamsError, match=r"--workers 1024: a local cluster of at most 8 worker processes"):
-        with fleet._client(None, None, 1024):
-            pass
+    with pytest.raises(BaseparamsError, match=r"--workers 1024: a local cluster of at most 8 worker processes"), \
+            fleet._client(None, None, 1024):
+        pass

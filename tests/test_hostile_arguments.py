@@ -268,3 +268,59 @@ def test_a_local_cluster_of_a_thousand_workers_is_refused_before_starting(monkey
     with pytest.raises(BaseparamsError, match=r"--workers 1024: a local cluster of at most 8 worker processes"), \
             fleet._client(None, None, 1024):
         pass
+
+
+# ---------------------------------------------------------------- a property: junk in every argument of the front door
+JUNK = ["x", object(), {"a": 1}, np.zeros((2, 2)), b"x", (1, "a"), math.nan, [math.inf]]
+#: keywords for which a string is a valid value of its type (a path, a name, a message)
+STRINGS_OK = {"out", "save", "mjcf", "source", "package_path", "path", "validate", "log", "result", "columns"}
+#: arguments that only label messages (any value is printed as it is)
+LABELS = {"what"}
+
+
+def test_junk_in_every_argument_is_a_typeerror_or_valueerror_naming_it(puma, tmp_path):
+    """Every argument of the front door and of the result objects, eight values of the wrong kind each: a
+    TypeError or ValueError (or BaseparamsError) of one line, never another exception, within seconds."""
+    from baseparams.ident.pipeline import Identification
+    from baseparams.io.logs import read_log, write_log
+
+    log = bp.simulate(puma, duration=4.0, rate=100.0, noise=0.01)[0]
+    ident = bp.identify(puma, log, method="ols")
+    res = ident.save(tmp_path / "r.json")
+    csv = write_log(tmp_path / "x.csv", log)
+    calls = {
+        "load": (bp.load, ("puma560",)), "analyze": (bp.analyze, (puma,)),
+        "regressor": (bp.regressor, (puma, np.zeros((3, 6)), np.zeros((3, 6)), np.zeros((3, 6)))),
+        "excite": (bp.excite, (puma,)), "simulate": (bp.simulate, (puma,)), "identify": (bp.identify, (puma, log)),
+        "predict": (bp.predict, (puma, res, log)), "Identification.load": (Identification.load, (res, puma)),
+        "Identification.predict": (ident.predict, (log,)), "compare_truth": (ident.compare_truth, ({},)),
+        "read_log": (read_log, (csv, puma)), "write_log": (write_log, (tmp_path / "y.csv", log)),
+        "save": (ident.save, (tmp_path / "s.json",)),
+    }
+    failures, count = [], 0
+    for name, (f, args) in calls.items():
+        params = list(inspect.signature(f).parameters)
+        for kw in params:
+            for junk in JUNK:
+                if isinstance(junk, str) and kw in STRINGS_OK or kw in LABELS or kw == "inputs" and isinstance(junk, dict):
+                    continue
+                a, kwargs = list(args), {}
+                if kw in params[:len(a)]:
+                    a[params.index(kw)] = junk
+                else:
+                    kwargs[kw] = junk
+                count += 1
+                t0 = time.perf_counter()
+                try:
+                    f(*a, **kwargs)
+                except (TypeError, ValueError, BaseparamsError) as exc:
+                    if "\n" in str(exc) or not str(exc):
+                        failures.append(f"{name}({kw}={junk!r:.20}): several lines: {str(exc)[:80]!r}")
+                except Exception as exc:  # noqa: BLE001 - the failure this test looks for
+                    failures.append(f"{name}({kw}={junk!r:.20}): {type(exc).__name__}: {str(exc)[:100]}")
+                else:
+                    if name != "compare_truth" or kw != "source":
+                        failures.append(f"{name}({kw}={junk!r:.20}): accepted")
+                if time.perf_counter() - t0 > 10:
+                    failures.append(f"{name}({kw}={junk!r:.20}): {time.perf_counter() - t0:.0f} s")
+    assert count > 500 and not failures, f"{len(failures)} of {count}:\n" + "\n".join(failures[:40])

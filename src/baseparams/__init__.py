@@ -211,17 +211,28 @@ def _trajectory_of(trajectory) -> tuple:
 
 def _bools(where: str, **flags) -> None:
     """Flags must be booleans (``rotor="no"`` would be true): a TypeError naming the first that is not."""
-    for name, value in flags.items():
-        if not isinstance(value, (bool, type(None))) and type(value).__name__ != "bool_":
-            raise ArgumentTypeError(f"{where}: {name}= must be True or False, got {type(value).__name__} {value!r:.40}")
+    from .arguments import check_flags
+
+    check_flags(where, **flags)
+
+
+def _paths_and_progress(where: str, progress=None, **paths) -> None:
+    """Output paths (str or Path, or None) and a progress callable (or None), named when they are not."""
+    from .arguments import check_path, check_progress
+
+    for name, value in paths.items():
+        check_path(value, f"{where}: {name}=", optional=True)
+    check_progress(progress, where)
 
 
 def _choice(where: str, name: str, value, choices) -> None:
     """A keyword that names one of ``choices``: a TypeError or ValueError naming it."""
+    from .arguments import ArgumentError, brief
+
     if not isinstance(value, str):
         raise ArgumentTypeError(f"{where}: {name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
     if value not in choices:
-        raise BaseparamsError(f"{where}: {name}= must be one of {', '.join(choices)}, got {value!r:.60}")
+        raise ArgumentError(f"{where}: {name}= must be one of {', '.join(choices)}, got {brief(value)}")
 
 
 def _files(*items) -> list[str]:
@@ -245,7 +256,7 @@ def _friction_of(friction) -> tuple[str, ...]:
                                                                          if x.strip())
     if not isinstance(friction, (list, tuple, set, frozenset)) or not all(isinstance(x, str) for x in friction):
         raise ArgumentTypeError(f"friction= must be 'viscous,coulomb,offset', 'none' or a sequence of those names, "
-                                f"got {friction!r:.60}")
+                                f"got {type(friction).__name__}")
     return tuple(friction)
 
 
@@ -266,17 +277,25 @@ def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool =
 
 def _identification_logs(robot: Robot, log, validate, columns, joints, weld):
     """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
+    from .arguments import brief
+
+    weld_ok = weld is None or isinstance(weld, dict) or (isinstance(weld, (list, tuple))
+                                                          and all(isinstance(w, str) for w in weld))
+    if not weld_ok:
+        raise ArgumentTypeError(f"identify: weld= must be {{'JOINT': value}} or ['JOINT=VALUE', ...], got "
+                                f"{brief(weld)}")
     val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None, name="validate")
     log = _log_of(log, robot, columns, subset=joints is not None)
     if joints is None:
         if weld:
             raise BaseparamsError("identify: weld applies with joints (the joints to identify; the others are welded)")
         return log, val, robot
+    from .arguments import brief
     from .ident.subchain import parse_welds, subchain
 
     names_ok = isinstance(joints, (list, tuple)) and all(isinstance(j, str) for j in joints)
     if not isinstance(joints, str) and not names_ok:
-        raise ArgumentTypeError(f"identify: joints= must be 'A,B' or a sequence of joint names, got {joints!r:.60}")
+        raise ArgumentTypeError(f"identify: joints= must be 'A,B' or a sequence of joint names, got {brief(joints)}")
     names = [j.strip() for j in joints.split(",") if j.strip()] if isinstance(joints, str) else list(joints)
     welds = parse_welds(list(weld or ())) if not isinstance(weld, dict) else {k: float(v) for k, v in weld.items()}
     small, log, notes = subchain(robot, log, names, welds)
@@ -343,6 +362,8 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
                    margin=margin, starts=starts, grid=grid, seed=seed, analysis_samples=analysis_samples,
                    max_iter=max_iter, acceleration=acceleration)
     _bools("excite", drives=drives, rotor=rotor, torque=torque)
+    _choice("excite", "criterion", criterion, ("cond", "logdet"))
+    _paths_and_progress("excite", out=out, progress=progress)
     if period is not None and base_frequency is not None:
         raise BaseparamsError("excite: give period or base_frequency, not both")
     if period is not None and not period > 0:
@@ -417,6 +438,7 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     check_keywords("simulate", duration=duration, rate=rate, amplitude=amplitude, noise=noise, seed=seed,
                    analysis_samples=analysis_samples)
     _bools("simulate", rotor=rotor)
+    _paths_and_progress("simulate", out=out)
     if trajectory is None:
         check_samples(duration * rate, 16, "simulate: duration x rate")
     robot = _robot_of(model, "simulate")
@@ -520,13 +542,14 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
                    min_speed=min_speed, prior_weight=prior_weight, score_cutoff=score_cutoff,
                    analysis_samples=analysis_samples)
     _bools("identify", rotor=rotor, allow_units=allow_units)
+    _paths_and_progress("identify", save=save, mjcf=mjcf, progress=progress)
     _choice("identify", "method", method, ("auto", "ols", "wls", "physical"))
     _choice("identify", "covariance", covariance, ("hac", "white"))
     if isinstance(couplings, (str, MotorCoupling)):
         couplings = (couplings,)
     if not isinstance(couplings, (list, tuple)) or not all(isinstance(c, (str, MotorCoupling)) for c in couplings):
         raise ArgumentTypeError(f"identify: couplings= must be MotorCoupling objects or 'NAME:JOINT=W,...' texts, "
-                                f"got {couplings!r:.60}")
+                                f"got {type(couplings).__name__}")
     if columns is not None and not isinstance(columns, (str, _os.PathLike, dict)):
         raise ArgumentTypeError(f"identify: columns= must be a TOML file, a dict or a topic, got "
                                 f"{type(columns).__name__}")

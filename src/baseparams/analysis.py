@@ -520,15 +520,19 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     from .model.inertia import check_convention
 
     drng, certify, base_parameters = _step("drng"), _step("certify"), _step("base_parameters")
-    from .arguments import check_keywords
+    from .arguments import check_keywords, check_progress
 
     if not isinstance(robot, Robot):
-        raise ArgumentTypeError(f"analyze() takes a Robot (baseparams.load({robot!r:.80}) makes one), "
-                        f"not {type(robot).__name__}")
+        raise ArgumentTypeError(f"analyze() takes a Robot (baseparams.load(NAME or PATH) makes one), "
+                                f"not {type(robot).__name__}")
     check_keywords("analyze", samples=samples, seed=seed)
+    check_progress(progress, "analyze", stream=True)
+    if not isinstance(rows, (str, list, tuple)):
+        raise ArgumentTypeError(f"analyze: rows= must be a string (all, joints, ...) or a list of joint names, got "
+                                f"{type(rows).__name__}")
     if not isinstance(verify, (bool, np.bool_)) or not isinstance(extended, (bool, np.bool_)):
-        raise ArgumentTypeError(f"analyze: verify= and extended= must be True or False, got {verify!r:.40}, "
-                                f"{extended!r:.40}")
+        raise ArgumentTypeError(f"analyze: verify= and extended= must be True or False, got "
+                                f"{type(verify).__name__}, {type(extended).__name__}")
     if not isinstance(convention, str):
         raise ArgumentTypeError(f"analyze: convention= must be a string (khalil, paper, ...), got "
                                 f"{type(convention).__name__}")

@@ -22,15 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import BaseparamsError
+from .errors import ArgumentError, ArgumentTypeError, BaseparamsError
 
-
-class ArgumentError(BaseparamsError, ValueError):
-    """An argument out of its range (names the argument, the range and the value)."""
-
-
-class ArgumentTypeError(BaseparamsError, TypeError):
-    """An argument of the wrong type or shape (names the argument and what it should be)."""
+__all__ = ["OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief", "check_array",
+           "check_flags", "check_keywords", "check_namespace", "check_path", "check_progress", "check_samples",
+           "check_total", "check_value"]
 
 
 @dataclass(frozen=True)
@@ -113,6 +109,31 @@ MAX_CELLS = 20_000_000
 MAX_TOTAL_SAMPLES = 100_000_000
 
 
+#: keywords whose ``None`` means "the default" (the others must be given as numbers)
+OPTIONAL = frozenset({"samples", "analysis_samples", "period", "base_frequency", "amplitude", "acceleration", "holdout",
+                      "coulomb_width", "cutoff", "decimate", "min_speed", "prior_weight", "score_cutoff", "gravity",
+                      "workers", "robots"})
+
+
+def brief(value, most: int = 60) -> str:
+    """A value's repr on one line, at most ``most`` characters (an array's repr spans lines).
+
+    Parameters
+    ----------
+    value : object
+        The value.
+    most : int
+        The most characters.
+
+    Returns
+    -------
+    str
+        ``repr(value)`` with its white space collapsed, clipped with ``...``.
+    """
+    text = " ".join(repr(value).split())
+    return text if len(text) <= most else text[:most - 3] + "..."
+
+
 def _name(name: str, cli: bool) -> str:
     return f"--{name.replace('_', '-')}" if cli else f"{name}="
 
@@ -120,7 +141,7 @@ def _name(name: str, cli: bool) -> str:
 def _one(value, name: str, r: Range):
     """One value checked against its range: an int or a float."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ArgumentTypeError(f"{name} must be {r.text()}, got {type(value).__name__} {value!r:.60}")
+        raise ArgumentTypeError(f"{name} must be {r.text()}, got {type(value).__name__} {brief(value)}")
     try:
         x = float(value)
     except OverflowError:
@@ -136,13 +157,14 @@ def _one(value, name: str, r: Range):
 
 
 def check_value(value, keyword: str, cli: bool = False, r: Range | None = None):
-    """One argument checked against :data:`RANGES` (None passes: the default).
+    """One argument checked against :data:`RANGES`.
 
     Parameters
     ----------
     value : object
         The value (a number, or for ``gravity`` three numbers, for ``acceleration`` one or a
-        sequence).
+        sequence); ``None`` passes for the keywords of :data:`OPTIONAL` (and on the command line:
+        a flag not given).
     keyword : str
         Its keyword (``base_frequency``).
     cli : bool
@@ -162,10 +184,12 @@ def check_value(value, keyword: str, cli: bool = False, r: Range | None = None):
     ArgumentError
         Not finite, out of range.
     """
-    if value is None:
-        return None
     r = r or RANGES[keyword]
     name = _name(keyword, cli)
+    if value is None:
+        if cli or keyword in OPTIONAL:
+            return None
+        raise ArgumentTypeError(f"{name} must be {r.text()}, got None")
     if r.count is not None or keyword == "acceleration" and not isinstance(value, numbers.Real):
         try:
             a = np.asarray(value, dtype=object).ravel()
@@ -174,7 +198,7 @@ def check_value(value, keyword: str, cli: bool = False, r: Range | None = None):
         if a is None or isinstance(value, (str, bytes, dict)) or (r.count is not None and len(a) != r.count) \
                 or len(a) == 0:
             want = f"{r.count} numbers" if r.count is not None else "a number or a sequence of numbers"
-            raise ArgumentTypeError(f"{name} must be {want} ({r.text()} each), got {value!r:.80}")
+            raise ArgumentTypeError(f"{name} must be {want} ({r.text()} each), got {brief(value, 80)}")
         return np.array([_one(v, f"{name} (item {k})", r) for k, v in enumerate(a)], dtype=float)
     return _one(value, name, r)
 
@@ -323,3 +347,85 @@ def check_array(value, name: str, ndim: int | tuple = (1, 2), finite: bool = Tru
     if finite and not np.all(np.isfinite(a)):
         raise ArgumentError(f"{name} must be finite, got {int(np.sum(~np.isfinite(a)))} values that are not")
     return a
+
+
+def check_path(value, name: str, optional: bool = False):
+    """A path argument: a str or an ``os.PathLike`` (``None`` with ``optional``).
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    name : str
+        Its name, for messages (``out=``).
+    optional : bool
+        ``None`` is accepted (returned as is).
+
+    Returns
+    -------
+    str, os.PathLike or None
+        ``value``.
+
+    Raises
+    ------
+    ArgumentTypeError
+        Anything else (bytes, numbers, lists...).
+    """
+    import os
+
+    if value is None and optional:
+        return None
+    if isinstance(value, str) or (isinstance(value, os.PathLike) and isinstance(os.fspath(value), str)):
+        return value
+    raise ArgumentTypeError(f"{name} must be a file path (str or pathlib.Path), got {type(value).__name__} "
+                            f"{brief(value)}")
+
+
+def check_flags(where: str, **flags) -> None:
+    """Flags must be booleans (``rotor="no"`` would be true): one line naming the first that is not.
+
+    Parameters
+    ----------
+    where : str
+        The function, for messages.
+    **flags
+        The flags.
+
+    Raises
+    ------
+    ArgumentTypeError
+        A flag that is not True or False.
+    """
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise ArgumentTypeError(f"{where}: {name}= must be True or False, got {type(value).__name__} "
+                                    f"{brief(value, 40)}")
+
+
+def check_progress(value, where: str, stream: bool = False):
+    """A ``progress`` argument: None, a callable taking one line (or with ``stream`` a text stream).
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    where : str
+        The function, for messages.
+    stream : bool
+        A text stream (an object with ``write``) is expected instead of a callable.
+
+    Returns
+    -------
+    object
+        ``value``.
+
+    Raises
+    ------
+    ArgumentTypeError
+        Anything else.
+    """
+    ok = value is None or (callable(getattr(value, "write", None)) if stream else callable(value))
+    if not ok:
+        want = "a text stream (sys.stderr)" if stream else "a callable taking one line of text"
+        raise ArgumentTypeError(f"{where}: progress= must be {want} or None, got {type(value).__name__}")
+    return value

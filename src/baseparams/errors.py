@@ -19,3 +19,11 @@ class NoMovingBodiesError(ModelError):
 
 class DataError(BaseparamsError, ValueError):
     """Bad measured data: a log file or array (names the file, column, row and the problem)."""
+
+
+class ArgumentError(BaseparamsError, ValueError):
+    """An argument out of its range (names the argument, the range and the value)."""
+
+
+class ArgumentTypeError(BaseparamsError, TypeError):
+    """An argument of the wrong type or shape (names the argument and what it should be)."""

@@ -21,7 +21,7 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from .errors import BaseparamsError
+from .errors import ArgumentTypeError, BaseparamsError
 
 #: the largest robot file (URDF, MJCF, DH table) read, in bytes: 64 MB; the largest robot
 #: descriptions in use are a few MB, so a larger file is refused before it is read
@@ -147,9 +147,13 @@ def refuse_inputs(output, inputs: Iterable, what: str = "output") -> None:
     if output is None:
         return
     out = Path(output)
+    if isinstance(inputs, (str, bytes, os.PathLike)) or not hasattr(inputs, "__iter__"):
+        raise ArgumentTypeError(f"inputs must be a sequence of the run's input files, got {type(inputs).__name__}")
     for inp in inputs:
         if inp is None:
             continue
+        if not isinstance(inp, (str, os.PathLike)):
+            raise ArgumentTypeError(f"inputs must be file paths, got {type(inp).__name__}")
         p = Path(inp)
         if p.exists() and out.exists() and _same_file(out, p) or out.resolve() == p.resolve():
             raise BaseparamsError(f"{what} {output} would overwrite the input {inp}; choose another file name")
@@ -198,6 +202,8 @@ def output_target(path, what: str = "output") -> tuple[str, object]:
     BaseparamsError
         A target that is not written (above), one line.
     """
+    if not isinstance(path, (str, os.PathLike)) or not isinstance(os.fspath(path), str):
+        raise ArgumentTypeError(f"{what} must be a file path (str or pathlib.Path), got {type(path).__name__}")
     p = Path(path)
     a = os.path.abspath(p)
     if a in STANDARD_STREAMS:
@@ -248,8 +254,8 @@ def check_output(path, inputs: Iterable = (), what: str = "output") -> Path:
         An output onto an input, a target that is not written (:func:`output_target`), a missing
         folder.
     """
+    kind, target = output_target(path, what)
     final = Path(path)
-    kind, target = output_target(final, what)
     if kind != "file":
         return final.parent
     refuse_inputs(final, inputs, what)
@@ -294,8 +300,8 @@ def atomic_path(path, inputs: Iterable = (), what: str = "output") -> Iterator[P
         replaced or written (permissions, an immutable file, a full disk): one line, the old file
         left as it was.
     """
+    kind, target = output_target(path, what)  # a path of the right type first
     final = Path(path)
-    kind, target = output_target(final, what)
     if kind != "file":
         with _stream_path(final, kind, target, what) as tmp:
             yield tmp

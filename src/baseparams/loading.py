@@ -60,9 +60,15 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
                                 f"{type(model).__name__}")
     model = os.fspath(model)
     gravity = check_keywords("", gravity=gravity)["gravity"]
+    if xacro_args is not None and not isinstance(xacro_args, (dict, list, tuple)):
+        raise ArgumentTypeError(f"xacro_args= must be {{'NAME': 'VALUE'}} or ['NAME:=VALUE', ...], got "
+                                f"{type(xacro_args).__name__}")
+    if package_path is not None and not isinstance(package_path, (str, os.PathLike, list, tuple)):
+        raise ArgumentTypeError(f"package_path= must be a folder or a list of folders, got "
+                                f"{type(package_path).__name__}")
     for name, flag in (("floating", floating), ("strict_inertia", strict_inertia)):
         if not isinstance(flag, bool):
-            raise ArgumentTypeError(f"{name}= must be True or False, got {type(flag).__name__} {flag!r:.40}")
+            raise ArgumentTypeError(f"{name}= must be True or False, got {type(flag).__name__}")
     p = Path(model)
     if model.lower() in BUILTINS and not p.exists():
         if floating:

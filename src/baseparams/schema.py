@@ -84,7 +84,8 @@ def _show(v) -> str:
         return repr(v if len(v) <= 40 else v[:37] + "...")
     if isinstance(v, int) and abs(v) >= 10**12:
         return f"an integer of {len(str(abs(v)))} digits"
-    return repr(v)
+    text = " ".join(repr(v).split())  # one line (an array's repr spans lines)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 @dataclass

@@ -76,13 +76,19 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None,
     if robot.limits is not None:
         lim[:, [0, 1, 2, 4]] = robot.limits[coords]
     if limits is not None:
-        user = np.asarray(limits, dtype=float)
+        from ..arguments import check_array
+
+        user = check_array(limits, "limits=", 2, finite=False)  # NaN keeps the model's
         if user.shape != (m, 4):
             raise BaseparamsError(f"robot {robot.name!r}: limits must have shape ({m}, 4) (lower, upper, velocity, "
                                   f"effort per designed coordinate), got {user.shape}")
         lim[:, [0, 1, 2, 4]] = np.where(np.isnan(user), lim[:, [0, 1, 2, 4]], user)
     if acceleration is not None:
-        lim[:, 3] = np.broadcast_to(np.asarray(acceleration, dtype=float), (m,))
+        acc = np.atleast_1d(np.asarray(acceleration, dtype=float))
+        if acc.ndim != 1 or len(acc) not in (1, m):
+            raise BaseparamsError(f"robot {robot.name!r}: acceleration= takes one limit or one per designed "
+                                  f"coordinate ({m}), got {acc.size}")
+        lim[:, 3] = np.broadcast_to(acc, (m,))
     names = [robot.joint_names[robot.dof_body[c]] for c in coords]
     notes = _default_positions(robot, coords, lim, names)
     if margin > 0:

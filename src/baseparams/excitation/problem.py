@@ -278,7 +278,8 @@ def with_keepout(prob: Problem, keepout) -> tuple[Problem, str]:
         link, z_min = keepout
         z_min = float(z_min)
     except (TypeError, ValueError):
-        raise BaseparamsError(f"keepout must be (link name, lowest height in m), got {keepout!r}") from None
+        raise BaseparamsError(f"keepout must be (link name, lowest height in m), got "
+                              f"{type(keepout).__name__}") from None
     if robot.has_loops:
         raise BaseparamsError(f"robot {robot.name!r}: a Cartesian keep-out is supported for trees only")
     if link not in robot.names:

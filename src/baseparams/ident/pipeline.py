@@ -393,9 +393,10 @@ class Identification:
         BaseparamsError
             A log missing a measured joint, too short or too slowly sampled for the cutoff.
         """
-        from ..arguments import ArgumentTypeError
+        from ..arguments import ArgumentTypeError, check_flags
         from .data import JointLog
 
+        check_flags("predict", smooth=smooth)
         if not isinstance(log, JointLog):
             raise ArgumentTypeError(f"predict: log must be a JointLog (baseparams.io.logs.read_log(path, robot, "
                                     f"require_tau=False)), got {type(log).__name__}")

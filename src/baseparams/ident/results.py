@@ -154,8 +154,9 @@ def read_document(path) -> dict:
         not fit the schema (one line naming the file and where: ``estimate.R11[3][5]``).
     """
     from .. import schema
+    from ..arguments import check_path
 
-    p = str(path)
+    p = str(check_path(path, "path"))
     doc = schema.read_json(path, "a saved identification", schema.RESULT_MAX_BYTES)
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
@@ -349,6 +350,9 @@ def compare_truth(names, values, std, truth: dict, source: str = "truth") -> dic
     """
     from .. import schema
 
+    if not isinstance(source, str):
+        raise ArgumentTypeError(f"compare_truth: source= must be a string (the truth's file), got "
+                                f"{type(source).__name__}")
     truth, _ = schema.check(truth, schema.TRUTH, source)
     true = {e["name"]: e["value"] for e in truth["parameters"]}
     names = list(names)

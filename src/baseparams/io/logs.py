@@ -179,10 +179,15 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         One line naming the file, the column and the row, for any problem listed in the module
         docstring (and a missing optional package: the extra to install).
     """
-    if not isinstance(robot, Robot):
-        from ..arguments import ArgumentTypeError
+    from ..arguments import ArgumentTypeError, Range, check_flags, check_path, check_value
 
+    if not isinstance(robot, Robot):
         raise ArgumentTypeError(f"read_log: robot must be a Robot (baseparams.load(...)), got {type(robot).__name__}")
+    check_path(path, "read_log: path")
+    check_flags("read_log", allow_subset=allow_subset, require_tau=require_tau, require_time=require_time)
+    for name, bound in (("max_angle", max_angle), ("max_travel", max_travel)):
+        if bound is not None:
+            check_value(bound, name, r=Range(0, 1e12, lo_open=True))
     p = check_input(path, folder_ok=True, error=DataError)  # a file or a bag folder, never a device or FIFO
     spec = _mapping(columns)
     kind = _kind(p)
@@ -900,9 +905,10 @@ def write_log(path, log: JointLog) -> Path:
     DataError
         Another suffix, or a file that cannot be written.
     """
-    if not isinstance(log, JointLog):
-        from ..arguments import ArgumentTypeError
+    from ..arguments import ArgumentTypeError, check_path
 
+    check_path(path, "write_log: path")
+    if not isinstance(log, JointLog):
         raise ArgumentTypeError(f"write_log: log must be a JointLog, got {type(log).__name__}")
     p = Path(path)
     cols = log_columns_of(log)

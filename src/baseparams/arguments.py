@@ -343,7 +343,7 @@ def check_array(value, name: str, ndim: int | tuple = (1, 2), finite: bool = Tru
     dims = (ndim,) if isinstance(ndim, int) else tuple(ndim)
     if a.ndim not in dims:
         raise ArgumentTypeError(f"{name} must have {' or '.join(map(str, dims))} dimensions, got shape {a.shape}")
-    a = a.astype(float)
+    a = a.astype(float, copy=False)  # a log of 10^7 rows is not copied
     if finite and not np.all(np.isfinite(a)):
         raise ArgumentError(f"{name} must be finite, got {int(np.sum(~np.isfinite(a)))} values that are not")
     return a

@@ -75,6 +75,12 @@ def check_units(log, cols, torque_model, revolute, limits=None) -> list[str]:
     DataError
         Naming the file, the column and the likely unit.
     """
+    joints, q, derived, rate = _states(log, cols, revolute, limits)
+    return _torques(log, cols, joints, q, derived, rate, torque_model, np.asarray(revolute, dtype=bool), limits)
+
+
+def _states(log, cols, revolute, limits):
+    """The checks that need no torque; ``(joints, q, d/dt of q, rate)`` for the torque checks."""
     t = np.asarray(log.t, dtype=float)
     joints = [log.joints[c] for c in cols]
     q = np.asarray(log.q, dtype=float)[:, cols]
@@ -84,7 +90,7 @@ def check_units(log, cols, torque_model, revolute, limits=None) -> list[str]:
     _velocities(log, cols, joints, q, derived, revolute)
     _accelerations(log, cols, joints, derived, t, rate, revolute)
     _positions(log.source, joints, q, derived, revolute, limits, log.dq is not None)
-    return _torques(log, cols, joints, q, derived, rate, torque_model, revolute, limits)
+    return joints, q, derived, rate
 
 
 def check_states(log, cols, revolute, limits=None) -> list[str]:
@@ -111,15 +117,7 @@ def check_states(log, cols, revolute, limits=None) -> list[str]:
     DataError
         As :func:`check_units`, for the checks that need no torque.
     """
-    t = np.asarray(log.t, dtype=float)
-    joints = [log.joints[c] for c in cols]
-    q = np.asarray(log.q, dtype=float)[:, cols]
-    revolute = np.asarray(revolute, dtype=bool)
-    rate = _time_base(log.source, t, q)
-    derived = np.gradient(q, t, axis=0)
-    _velocities(log, cols, joints, q, derived, revolute)
-    _accelerations(log, cols, joints, derived, t, rate, revolute)
-    _positions(log.source, joints, q, derived, revolute, limits, log.dq is not None)
+    rate = _states(log, cols, revolute, limits)[3]
     return [f"units: states checked (sample rate {rate:.4g} Hz)"]
 
 

@@ -84,7 +84,7 @@ def test_identify_urdf_refused_before_the_fit(model, method, words, tmp_path, ca
     (["excite", "puma560", "--out", "DIR/x.csv", "--output", "DIR/x.csv"], "name the same file"),
     (["excite", "puma560", "--plot", "DIR/x.txt"], "the format comes from the suffix"),
     (["excite", "puma560", "--out", "DIR/nope/x.csv"], "does not exist"),
-    (["analyze", "puma560", "--output", "DIR"], "is not a regular file"),
+    (["analyze", "puma560", "--output", "DIR"], "not a regular file"),
     (["simulate", "puma560", "DIR/log.parquet"], "the format comes from the suffix"),
     (["excite", "puma560", "--acceleration", "fast"], "--acceleration: expected a number per item"),
     (["excite", "puma560", "--margin", "0.5"], "--margin is a fraction"),

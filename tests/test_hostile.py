@@ -97,37 +97,10 @@ def test_refusals_say_what_was_found(text, words):
 
 
 # ---------------------------------------------------------------- non-regular paths, absurd numbers
-import contextlib  # noqa: E402
-import signal  # noqa: E402
 import time  # noqa: E402
 
-
-@contextlib.contextmanager
-def _deadline(seconds: int):
-    """Fail (instead of hanging the suite) when the block runs longer than ``seconds``."""
-    def _late(*_):
-        raise TimeoutError(f"took more than {seconds} s")
-    old = signal.signal(signal.SIGALRM, _late)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
-
-
-def _one_line_error(argv, capsys, seconds: int = 30) -> str:
-    """Run the CLI: exit 2 and exactly one stderr line (``baseparams: error: ...``), within ``seconds``."""
-    from baseparams.cli import main
-
-    t0 = time.perf_counter()
-    with _deadline(seconds):
-        code = main([str(a) for a in argv])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and err[0].startswith("baseparams: error:"), (code, err)
-    assert "Traceback" not in err[0] and time.perf_counter() - t0 < seconds
-    return err[0]
-
+from hostile import deadline as _deadline  # noqa: E402, F401  (the helpers every attack test shares)
+from hostile import one_line_error as _one_line_error  # noqa: E402
 
 URDF = """<robot name="r">
  <link name="base"/>

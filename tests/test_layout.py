@@ -24,6 +24,7 @@ LAYERS = {
     "nullspace": 5,
     "base": 6,
     "ident": 7,
+    "schema": 0.6, "arguments": 0.5,
     "io": 8,
     "robots": 9,
     "loading": 10, "analysis": 10,

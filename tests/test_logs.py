@@ -279,7 +279,7 @@ def test_toml_mapping_converts_motor_side_signals(tmp_path, rng):
     ({"joints": {"joint1": {"gear_ratio": 0}}}, "joints.joint1.gear_ratio: expected a finite nonzero number"),
     ({"joints": {"joint1": {"q": 3}}}, "joints.joint1.q: expected a column name"),
     ({"joints": {"wrist": {}}}, "joints.wrist: robot 'puma560' has no joint 'wrist'"),
-    ({"time_scale": -1}, "time_scale must be a positive number"),
+    ({"time_scale": -1}, "time_scale: expected a finite number in [1e-12, 1e+06], got -1"),
     ({"topic": "/js"}, "'topic' applies to ROS bags only"),
 ])
 def test_bad_mappings(tmp_path, rng, mapping, expect):

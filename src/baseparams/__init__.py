@@ -72,6 +72,7 @@ __version__ = "0.1.0"
 # the subpackage first: importing it later would rebind ``baseparams.regressor`` to the module
 from . import regressor as _regressor_pkg  # noqa: F401  (numpy only)
 from .analysis import Analysis, analyze, regressor
+from .arguments import ArgumentTypeError
 from .errors import BaseparamsError, ModelError, ModelWarning
 from .model import CONVENTIONS, Inertia, Robot, RobotBuilder, pose
 
@@ -167,8 +168,9 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     """
     from .loading import load_model
 
-    robot, notes = load_model(_os.fspath(model), floating=floating, gravity=gravity, strict_inertia=strict_inertia,
-                              xacro_args=xacro_args, package_path=package_path, drop_mocap_welds=drop_mocap_welds)
+    robot, notes = load_model(model, floating=floating, gravity=gravity, strict_inertia=strict_inertia,
+                              xacro_args=xacro_args, package_path=package_path,
+                              drop_mocap_welds=drop_mocap_welds)
     for note in notes:
         _warnings.warn(note, ModelWarning, stacklevel=2)
     return robot
@@ -179,25 +181,70 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
 _LAZY = {"Excitation": "excitation.result", "Identification": "ident.pipeline"}
 
 
-def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False):
-    """``log`` as a JointLog: a JointLog, or a log file read for ``robot`` (:func:`baseparams.io.logs.read_log`)."""
+def _bools(where: str, **flags) -> None:
+    """Flags must be booleans (``rotor="no"`` would be true): a TypeError naming the first that is not."""
+    from .arguments import check_flags
+
+    check_flags(where, **flags)
+
+
+def _paths_and_progress(where: str, progress=None, **paths) -> None:
+    """Output paths (str or Path, or None) and a progress callable (or None), named when they are not."""
+    from .arguments import check_path, check_progress
+
+    for name, value in paths.items():
+        check_path(value, f"{where}: {name}=", optional=True)
+    check_progress(progress, where)
+
+
+def _choice(where: str, name: str, value, choices) -> None:
+    """A keyword that names one of ``choices``: a TypeError or ValueError naming it."""
+    from .arguments import ArgumentError, brief
+
+    if not isinstance(value, str):
+        raise ArgumentTypeError(f"{where}: {name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
+    if value not in choices:
+        raise ArgumentError(f"{where}: {name}= must be one of {', '.join(choices)}, got {brief(value)}")
+
+
+
+
+def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log"):
+    """``log`` as a JointLog: a JointLog (values checked), or a log file read for ``robot`` (``read_log``)."""
+    from .ident.data import JointLog
+
     if isinstance(log, (str, _os.PathLike)):
         from .io.logs import read_log
 
         return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau)
-    return log
+    if not isinstance(log, JointLog):
+        raise ArgumentTypeError(f"{name} must be a JointLog or a log file's path, got {type(log).__name__}")
+    if columns is not None:
+        raise BaseparamsError(f"columns= maps the columns of a log file; {name} is a JointLog already")
+    return log.checked()
 
 
 def _identification_logs(robot: Robot, log, validate, columns, joints, weld):
     """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
-    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None)
+    from .arguments import brief
+
+    weld_ok = weld is None or isinstance(weld, dict) or (isinstance(weld, (list, tuple))
+                                                          and all(isinstance(w, str) for w in weld))
+    if not weld_ok:
+        raise ArgumentTypeError(f"identify: weld= must be {{'JOINT': value}} or ['JOINT=VALUE', ...], got "
+                                f"{brief(weld)}")
+    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None, name="validate")
     log = _log_of(log, robot, columns, subset=joints is not None)
     if joints is None:
         if weld:
             raise BaseparamsError("identify: weld applies with joints (the joints to identify; the others are welded)")
         return log, val, robot
+    from .arguments import brief
     from .ident.subchain import parse_welds, subchain
 
+    names_ok = isinstance(joints, (list, tuple)) and all(isinstance(j, str) for j in joints)
+    if not isinstance(joints, str) and not names_ok:
+        raise ArgumentTypeError(f"identify: joints= must be 'A,B' or a sequence of joint names, got {brief(joints)}")
     names = [j.strip() for j in joints.split(",") if j.strip()] if isinstance(joints, str) else list(joints)
     welds = parse_welds(list(weld or ())) if not isinstance(weld, dict) else {k: float(v) for k, v in weld.items()}
     small, log, notes = subchain(robot, log, names, welds)
@@ -274,9 +321,25 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     BaseparamsError
         Bad data (a floating base without its pose), options or output, data that do not excite the model.
     """
+    from .arguments import check_keywords
     from .ident.drives import MotorCoupling
     from .ident.pipeline import identify as run
 
+    check_keywords("identify", holdout=holdout, coulomb_width=coulomb_width, cutoff=cutoff, decimate=decimate,
+                   min_speed=min_speed, prior_weight=prior_weight, score_cutoff=score_cutoff,
+                   analysis_samples=analysis_samples)
+    _bools("identify", rotor=rotor, allow_units=allow_units)
+    _paths_and_progress("identify", save=save, mjcf=mjcf, progress=progress)
+    _choice("identify", "method", method, ("auto", "ols", "wls", "physical"))
+    _choice("identify", "covariance", covariance, ("hac", "white"))
+    if isinstance(couplings, (str, MotorCoupling)):
+        couplings = (couplings,)
+    if not isinstance(couplings, (list, tuple)) or not all(isinstance(c, (str, MotorCoupling)) for c in couplings):
+        raise ArgumentTypeError(f"identify: couplings= must be MotorCoupling objects or 'NAME:JOINT=W,...' texts, "
+                                f"got {type(couplings).__name__}")
+    if columns is not None and not isinstance(columns, (str, _os.PathLike, dict)):
+        raise ArgumentTypeError(f"identify: columns= must be a TOML file, a dict or a topic, got "
+                                f"{type(columns).__name__}")
     robot = _robot_of(model, "identify")
     inputs = _files(model, log, validate, columns)
     if save is not None:
@@ -306,7 +369,7 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
     return result
 
 
-def predict(model, result, log, *, raw_states: bool = False, columns=None):
+def predict(model, result, log, *, raw_states: bool = False, columns=None, allow_units: bool = False):
     """Joint torques of a log from an identification: ``baseparams predict``.
 
     Parameters
@@ -321,6 +384,9 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
         The logged states as they are (default: low-passed at the identification's cutoff).
     columns : str, path or dict, optional
         A layout mapping for a log file.
+    allow_units : bool
+        Go on when the log's states look in other units (degrees, deg/s, rpm, ms, us, ns), which
+        otherwise refuses (:func:`baseparams.ident.plausibility.check_states`).
 
     Returns
     -------
@@ -333,12 +399,22 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None):
     BaseparamsError
         Another robot than the result's, a bad result file or log.
     """
+    _bools("predict", raw_states=raw_states, allow_units=allow_units)
     robot = _robot_of(model, "predict")
+    if not isinstance(result, (str, _os.PathLike)) and type(result).__name__ != "Identification":
+        raise ArgumentTypeError(f"predict: result must be an Identification or its saved file, got "
+                                f"{type(result).__name__}")
     if isinstance(result, (str, _os.PathLike)):
         from .ident.pipeline import Identification
 
         result = Identification.load(result, robot)
-    return result.predict(log, smooth=not raw_states, columns=columns)
+    from .ident.plausibility import check_prediction_log
+
+    log = _log_of(log, robot, columns, require_tau=False)
+    for note in check_prediction_log(result.model, log, allow_units):
+        if "WARNING" in note:
+            _warnings.warn(note, ModelWarning, stacklevel=2)
+    return result.predict(log, smooth=not raw_states)
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):

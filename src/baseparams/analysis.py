@@ -55,6 +55,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import numpy as np
 
+from .arguments import ArgumentTypeError
 from .display import data_frame, summary_repr, text_table
 from .enums import Source, Status, values
 from .errors import BaseparamsError
@@ -156,9 +157,13 @@ def checked_states(robot: Robot, q, dq=None, ddq=None):
     BaseparamsError
         Wrong shapes, or states that do not close the loops.
     """
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    dq = np.zeros_like(q) if dq is None else np.atleast_2d(np.asarray(dq, dtype=float))
-    ddq = np.zeros_like(q) if ddq is None else np.atleast_2d(np.asarray(ddq, dtype=float))
+    from .arguments import check_array
+
+    if not isinstance(robot, Robot):
+        raise ArgumentTypeError(f"robot must be a Robot (baseparams.load(...)), got {type(robot).__name__}")
+    q = np.atleast_2d(check_array(q, "q", (0, 1, 2)))  # numbers, finite: NaN states give NaN regressors
+    dq = np.zeros_like(q) if dq is None else np.atleast_2d(check_array(dq, "dq", (0, 1, 2)))
+    ddq = np.zeros_like(q) if ddq is None else np.atleast_2d(check_array(ddq, "ddq", (0, 1, 2)))
     m = len(robot.actuated) if robot.has_loops else robot.dof
     what = "actuated coordinates (the robot has loops)" if robot.has_loops else "coordinates"
     for name, x in (("q", q), ("dq", dq), ("ddq", ddq)):
@@ -538,9 +543,23 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     >>> a.expressions()[0]["name"]
     'link1.ZZR'
     """
+    from .arguments import check_keywords, check_progress
+
     if not isinstance(robot, Robot):
-        raise BaseparamsError(f"analyze() takes a Robot (baseparams.load({robot!r}) makes one), "
-                              f"not {type(robot).__name__}")
+        raise ArgumentTypeError(f"analyze() takes a Robot (baseparams.load(NAME or PATH) makes one), "
+                                f"not {type(robot).__name__}")
+    check_keywords("analyze", samples=samples, seed=seed)
+    check_progress(progress, "analyze", stream=True)
+    if not isinstance(rows, (str, list, tuple)):
+        raise ArgumentTypeError(f"analyze: rows= must be a string (all, joints, ...) or a list of joint names, got "
+                                f"{type(rows).__name__}")
+    if not isinstance(verify, (bool, np.bool_)) or not isinstance(extended, (bool, np.bool_)):
+        raise ArgumentTypeError(f"analyze: verify= and extended= must be True or False, got "
+                                f"{type(verify).__name__}, {type(extended).__name__}")
+    if not isinstance(convention, str):
+        raise ArgumentTypeError(f"analyze: convention= must be a string (khalil, paper, ...), got "
+                                f"{type(convention).__name__}")
+    _check_samples_memory(robot, samples)
     kw = {"samples": samples, "seed": seed, "verify": verify, "rows": rows, "convention": convention,
           "extended": extended, "progress": progress}
     lit = _analyze(robot, **kw)
@@ -769,6 +788,21 @@ def _depth_sum(robot: Robot) -> int:
     for i, p in enumerate(robot.parent):
         depth[i] = depth[p] + 1 if p >= 0 else 0
     return int(depth.sum())
+
+
+#: the most the numerical method's sampled regressor may take [bytes] (samples x rows x 10 n numbers)
+SAMPLES_MAX_BYTES = 1 << 30
+
+
+def _check_samples_memory(robot: Robot, samples: int | None) -> None:
+    """Refuse ``samples`` whose sampled regressor (samples x dof x 10 n numbers) exceeds :data:`SAMPLES_MAX_BYTES`."""
+    if samples is None:
+        return
+    need = 8.0 * samples * max(robot.dof, 1) * 10 * robot.n * (3 if robot.has_loops else 1)
+    if need > SAMPLES_MAX_BYTES:
+        most = int(SAMPLES_MAX_BYTES / (need / samples))
+        raise BaseparamsError(f"samples={samples}: the numerical method would hold {need / 2**30:.3g} GB for robot "
+                              f"{robot.name!r} ({robot.dof} dofs, {robot.n} bodies); at most {most} samples here")
 
 
 def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:

@@ -28,3 +28,11 @@ class ModelWarning(UserWarning):
     values), a loop robot assembled or re-referenced because the file's q = 0 is not assembled
     (or is singular), or a warning of the file's reader.
     """
+
+
+class ArgumentError(BaseparamsError, ValueError):
+    """An argument out of its range (names the argument, the range and the value)."""
+
+
+class ArgumentTypeError(BaseparamsError, TypeError):
+    """An argument of the wrong type or shape (names the argument and what it should be)."""

@@ -369,6 +369,10 @@ def _connect(client_class, address: str, source: str):
         raise BaseparamsError(f"{source} {address}: cannot connect to a Dask scheduler ({reason})") from None
 
 
+#: the most local-cluster workers per core (each is a process)
+MAX_WORKERS_PER_CORE = 4
+
+
 class _client:
     """Context manager: the given client, a scheduler's, or a local cluster started and stopped here."""
 
@@ -387,7 +391,12 @@ class _client:
         if address:
             cl = _connect(Client, address, "--scheduler" if self.scheduler else "DASK_SCHEDULER_ADDRESS")
         else:
-            n = self.workers or os.cpu_count() or 1
+            cores = os.cpu_count() or 1
+            n = self.workers or cores
+            if n > MAX_WORKERS_PER_CORE * cores:  # each a process: 1024 on 2 cores take minutes to start
+                raise BaseparamsError(f"--workers {n}: a local cluster of at most {MAX_WORKERS_PER_CORE * cores} "
+                                      f"worker processes on this machine's {cores} cores (a scheduler, --scheduler, "
+                                      f"for more)")
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
             self.own.append(cluster)
             cl = Client(cluster)

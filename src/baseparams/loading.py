@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .arguments import ArgumentTypeError
 from .errors import BaseparamsError
 from .model.robot import Robot
 from .robots import BUILTINS, get
@@ -52,6 +53,24 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
         ``floating`` with a built-in robot, a model that is neither a file nor a built-in, or
         any error reading the file.
     """
+    import os
+
+    from .arguments import check_keywords
+
+    if not isinstance(model, (str, os.PathLike)):
+        raise ArgumentTypeError(f"model must be a built-in robot's name or a robot file's path, got "
+                                f"{type(model).__name__}")
+    model = os.fspath(model)
+    gravity = check_keywords("", gravity=gravity)["gravity"]
+    if xacro_args is not None and not isinstance(xacro_args, (dict, list, tuple)):
+        raise ArgumentTypeError(f"xacro_args= must be {{'NAME': 'VALUE'}} or ['NAME:=VALUE', ...], got "
+                                f"{type(xacro_args).__name__}")
+    if package_path is not None and not isinstance(package_path, (str, os.PathLike, list, tuple)):
+        raise ArgumentTypeError(f"package_path= must be a folder or a list of folders, got "
+                                f"{type(package_path).__name__}")
+    for name, flag in (("floating", floating), ("strict_inertia", strict_inertia)):
+        if not isinstance(flag, bool):
+            raise ArgumentTypeError(f"{name}= must be True or False, got {type(flag).__name__}")
     p = Path(model)
     if model.lower() in BUILTINS and not p.exists():
         if floating:

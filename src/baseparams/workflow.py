@@ -52,8 +52,10 @@ def robot_of(model, what: str) -> Robot:
         for note in notes:
             warnings.warn(note, ModelWarning, stacklevel=3)
         return robot
-    raise BaseparamsError(f"{what}: model must be a Robot, an Analysis, a built-in name or a robot file, "
-                          f"got {type(model).__name__}")
+    from .arguments import ArgumentTypeError
+
+    raise ArgumentTypeError(f"{what}: model must be a Robot, an Analysis, a built-in name or a robot file, "
+                            f"got {type(model).__name__}")
 
 
 def input_files(*items) -> list[str]:
@@ -69,7 +71,12 @@ def input_files(*items) -> list[str]:
     list of str
         The existing files among ``items``.
     """
-    return [os.fspath(x) for x in items if isinstance(x, (str, os.PathLike)) and os.path.isfile(x)]
+    out = [os.fspath(x) for x in items if isinstance(x, (str, os.PathLike)) and os.path.isfile(x)]
+    if items and isinstance(items[0], (str, os.PathLike)) and os.path.isfile(items[0]):
+        from .io.sources import model_files  # a model file's own inputs: includes, assets, meshes
+
+        out += [str(f) for f in model_files(items[0])[1:]]
+    return out
 
 
 def friction_of(friction) -> tuple[str, ...]:
@@ -88,6 +95,11 @@ def friction_of(friction) -> tuple[str, ...]:
     if isinstance(friction, str):
         return () if friction.strip().lower() in ("", "none") else tuple(x.strip() for x in friction.split(",")
                                                                          if x.strip())
+    if not isinstance(friction, (list, tuple, set, frozenset)) or not all(isinstance(x, str) for x in friction):
+        from .arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"friction= must be 'viscous,coulomb,offset', 'none' or a sequence of those names, "
+                                f"got {type(friction).__name__}")
     return tuple(friction)
 
 
@@ -153,6 +165,8 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
     from .excitation import design_excitation
     from .excitation.limits import given_limits
 
+    _check_excite(harmonics, period, base_frequency, rate, criterion, drives, rotor, acceleration, torque, margin,
+                  starts, grid, seed, analysis_samples, max_iter, out, plot, progress)
     if period is not None and base_frequency is not None:
         raise BaseparamsError("excite: give period or base_frequency, not both")
     if period is not None and not period > 0:
@@ -243,9 +257,17 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
         Bad options (a trajectory for a floating base), loops the trajectory does not close, an
         unwritable output.
     """
+    from .arguments import check_flags, check_keywords, check_path, check_samples
+
+    check_keywords("simulate", duration=duration, rate=rate, amplitude=amplitude, noise=noise, seed=seed,
+                   analysis_samples=analysis_samples, robots=robots)
+    check_flags("simulate", rotor=rotor)
+    check_path(out, "simulate: out=", optional=True)
+    if trajectory is None:
+        check_samples(duration * rate, 16, "simulate: duration x rate")
+    elif isinstance(trajectory, (tuple, list)):
+        trajectory = _checked_arrays(trajectory)
     robot = robot_of(model, "simulate")
-    if not noise >= 0:
-        raise BaseparamsError(f"simulate: noise is a standard deviation [N m], >= 0; got {noise}")
     inputs = input_files(model, trajectory)
     if robots is not None:
         return _fleet(robot, trajectory, out, robots, inputs, duration=duration, rate=rate, amplitude=amplitude,
@@ -265,6 +287,52 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
             write_log(tmp, log)
         write_text(os.fspath(out) + ".truth.json", json.dumps(truth, indent=2) + "\n", inputs, "out")
     return log, truth
+
+
+def _check_excite(harmonics, period, base_frequency, rate, criterion, drives, rotor, acceleration, torque, margin,
+                  starts, grid, seed, analysis_samples, max_iter, out, plot, progress) -> None:
+    """:func:`excite`'s keywords: ranges, types, paths, the progress callable (one line naming the first bad one)."""
+    from .arguments import (
+        ArgumentError,
+        ArgumentTypeError,
+        brief,
+        check_flags,
+        check_keywords,
+        check_path,
+        check_progress,
+    )
+
+    ranged = {} if isinstance(acceleration, dict) else {"acceleration": acceleration}
+    check_keywords("excite", harmonics=harmonics, period=period, base_frequency=base_frequency, rate=rate,
+                   margin=margin, starts=starts, grid=grid, seed=seed, analysis_samples=analysis_samples,
+                   max_iter=max_iter, **ranged)
+    check_flags("excite", drives=drives, rotor=rotor, torque=torque)
+    if not isinstance(criterion, str):
+        raise ArgumentTypeError(f"excite: criterion= must be cond or logdet, got {type(criterion).__name__}")
+    if criterion not in ("cond", "logdet"):
+        raise ArgumentError(f"excite: criterion= must be cond or logdet, got {brief(criterion)}")
+    check_path(out, "excite: out=", optional=True)
+    check_path(plot, "excite: plot=", optional=True)
+    check_progress(progress, "excite")
+
+
+def _checked_arrays(trajectory) -> tuple:
+    """``(t (S,), q, dq, ddq (S, m))`` checked: numbers, finite, shapes that agree, time increasing."""
+    import numpy as np
+
+    from .arguments import ArgumentError, ArgumentTypeError, check_array
+
+    if len(trajectory) != 4:
+        raise ArgumentTypeError(f"simulate: trajectory= must be an Excitation, its file or (t, q, dq, ddq), got "
+                                f"{len(trajectory)} items")
+    t = check_array(trajectory[0], "simulate: trajectory t", 1)
+    arrays = [check_array(x, f"simulate: trajectory {n}", 2) for n, x in zip(("q", "dq", "ddq"), trajectory[1:])]
+    if any(a.shape != arrays[0].shape or len(a) != len(t) for a in arrays):
+        raise ArgumentError(f"simulate: trajectory shapes differ: t {t.shape}, q, dq, ddq "
+                            f"{[a.shape for a in arrays]} (S,) and (S, m)")
+    if len(t) > 1 and not np.all(np.diff(t) > 0):
+        raise ArgumentError("simulate: trajectory t must be strictly increasing")
+    return (t, *arrays)
 
 
 def _trajectory_of(robot: Robot, trajectory):

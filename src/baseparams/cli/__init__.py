@@ -261,6 +261,9 @@ def _predict_parser(sub, model_args) -> None:
                         "identification's cutoff, as it was fitted)")
     s.add_argument("--score-cutoff", type=float, metavar="HZ",
                    help="also score against the measured torques low-passed at HZ (zero-phase Butterworth order 4)")
+    s.add_argument("--allow-units", action="store_true",
+                   help="go on when the log's states look in other units (deg, deg/s, rpm, ms, us, ns); refused "
+                        "otherwise")
     s.set_defaults(func=cmd_predict)
 
 
@@ -271,7 +274,7 @@ def _regressor_states(args, robot) -> int:
     from ..io.logs import read_log
     from ..io.tables import check_table_path, write_columns
 
-    check_table_path(args.out, [args.model, args.states], "--out")
+    check_table_path(args.out, input_files(args), "--out")
     if robot.floating:
         raise BaseparamsError(f"--states: robot {robot.name!r} has a floating base, whose coordinates are not "
                               f"columns of a states file; use baseparams.regressor in Python")
@@ -301,12 +304,12 @@ def _regressor_states(args, robot) -> int:
     if args.out:
         if Path(args.out).suffix.lower() == ".npz":
             write_columns(args.out, {"Y": y, "columns": np.array(names), "joints": np.array(joints), "t": log.t},
-                          [args.model, args.states])
+                          input_files(args))
         else:
             s, m, p = y.shape
             table = {"sample": np.repeat(np.arange(s), m), "joint": np.tile(np.array(joints), s)}
             table.update({n: y[:, :, k].reshape(-1) for k, n in enumerate(names)})
-            write_columns(args.out, table, [args.model, args.states])
+            write_columns(args.out, table, input_files(args))
     out = {"model": robot.name, "states": args.states, "samples": int(y.shape[0]), "shape": list(y.shape),
            "seconds": dt, "out": args.out, "convention": "paper (spatial pseudo-inertia at q = 0)"}
     if args.json:
@@ -366,6 +369,21 @@ def _mocap_args(s: argparse.ArgumentParser) -> None:
                         "Meta-World's hand); by default they are loops to the world, with a note")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose errors are one line, as every other error (``baseparams: error: ...``, exit 2)."""
+
+    def error(self, message: str):
+        """Print the error on one line (``--help`` shows the usage) and exit 2.
+
+        Parameters
+        ----------
+        message : str
+            argparse's message (``argument --starts: invalid int value: '1.5'``).
+        """
+        prog = self.prog.split(" ", 1)[1] + " " if " " in self.prog else ""
+        self.exit(2, f"baseparams: error: {prog}{message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``baseparams`` command.
 
@@ -375,7 +393,7 @@ def build_parser() -> argparse.ArgumentParser:
         Subcommands ``robots``, ``analyze``, ``regressor``, ``identify``, ``predict``, ``simulate`` and
         ``excite``; each sets ``func`` to its ``cmd_*`` function.
     """
-    p = argparse.ArgumentParser(prog="baseparams", description=(
+    p = _Parser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "
         "they regroup: the tetrahedral-point model and DRNG, certified by exact numerics."))
     p.add_argument("--version", action="version", version=f"baseparams {__version__}")
@@ -673,18 +691,14 @@ def _outputs(args) -> list[tuple[str, str, tuple[str, ...] | None]]:
 
 
 def _check_output(flag: str, path: str, suffixes, inputs: list[str]) -> None:
-    """One output path: a known suffix, an existing folder, not a folder itself, not an input."""
-    from ..files import refuse_inputs
+    """One output path: a known suffix, an existing folder, not a folder itself, not an input (links resolved)."""
+    from ..files import check_output
 
     p = Path(path)
     if suffixes and p.suffix.lower() not in suffixes:
         raise BaseparamsError(f"{flag} {path}: the format comes from the suffix: {', '.join(suffixes)}, "
                               f"not {p.suffix or 'none'}")
-    if p.exists() and not p.is_file():
-        raise BaseparamsError(f"{flag} {path}: exists and is not a regular file (a folder?)")
-    if not p.resolve().parent.is_dir():
-        raise BaseparamsError(f"{flag} {path}: the folder {p.resolve().parent} does not exist")
-    refuse_inputs(p, inputs, flag)
+    check_output(p, inputs, flag)
 
 
 def _check_extras(args) -> None:
@@ -722,8 +736,18 @@ def _check_flags(args) -> None:
               f"of the base-parameter analysis, not log samples)", file=sys.stderr)
         if args.samples is None:
             args.samples = args.old_samples
-    if args.command == "simulate" and not args.noise >= 0:
-        raise BaseparamsError(f"--noise is a standard deviation [N m], >= 0; got {args.noise}")
+    from ..arguments import check_namespace, check_samples, check_total
+
+    check_namespace(args)  # every numeric flag in its range, named (baseparams.arguments.RANGES)
+    if args.command == "simulate" and not args.trajectory:
+        per_log = args.duration * args.rate
+        check_samples(per_log, 16, "--duration x --rate")
+        if args.robots:
+            check_total(args.robots * per_log, "--robots x --duration x --rate")
+    if args.command == "excite":
+        period = args.period if args.period is not None else 1.0 / (args.base_frequency or 0.1)
+        check_samples(period * args.rate, 16, f"{'--period' if args.period else '--base-frequency'} and --rate "
+                                              f"(one period at the rate)")
     if args.command == "identify" and args.joints is not None and not [j for j in args.joints.split(",") if j.strip()]:
         raise BaseparamsError("--joints needs joint names: --joints A,B,... (the joints to identify)")
     if args.command == "identify" and args.prior_weight is not None and args.method != "physical":
@@ -829,9 +853,9 @@ def _linalg_message(args, exc: Exception) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run the ``baseparams`` command line.
 
-    Bad input (a :class:`BaseparamsError`, a missing ``--output`` folder) is one line on
-    stderr, ``baseparams: error: ...``; bad arguments (``--samples`` < 1, ``--seed`` < 0) are
-    argparse's usage errors (``SystemExit`` with status 2).
+    Bad input (a :class:`BaseparamsError`, a missing ``--output`` folder, a number out of its
+    range: :mod:`baseparams.arguments`) is one line on stderr, ``baseparams: error: ...``; a flag
+    argparse cannot parse (``--samples x``) is argparse's usage error (``SystemExit`` with status 2).
 
     Parameters
     ----------
@@ -848,10 +872,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     _one_line_notes()
-    if getattr(args, "samples", None) is not None and args.samples < 1:
-        parser.error("--samples must be at least 1")
-    if getattr(args, "seed", 0) < 0:
-        parser.error("--seed must be a non-negative integer")
+    args.samples_flag = "--analysis-samples" if args.command in RENAMED_SAMPLES else "--samples"
     try:
         preflight(args)
         return args.func(args)

@@ -274,11 +274,22 @@ def data_files(pattern: str) -> list[str]:
     import glob
 
     if any(ch in pattern for ch in "*?["):
-        files = sorted(glob.glob(pattern, recursive=True))
+        files, t0 = [], time.monotonic()
+        for f in glob.iglob(pattern, recursive=True):  # bounded: '/**' would walk the whole file system
+            files.append(f)
+            if len(files) > MAX_GLOB_FILES or time.monotonic() - t0 > MAX_GLOB_SECONDS:
+                why = f"matches more than {MAX_GLOB_FILES} files" if len(files) > MAX_GLOB_FILES else \
+                    f"takes more than {MAX_GLOB_SECONDS:g} s to list"
+                raise BaseparamsError(f"{pattern!r}: the pattern {why}; narrow it")
         if not files:
             raise BaseparamsError(f"no file matches {pattern!r}")
-        return files
+        return sorted(files)
     return [pattern]
+
+
+#: a glob pattern's bounds (``DATA``, a sweep's ``MODEL``): files matched and seconds spent listing
+MAX_GLOB_FILES = 100_000
+MAX_GLOB_SECONDS = 20.0
 
 
 def input_files(args) -> list[str]:
@@ -294,11 +305,32 @@ def input_files(args) -> list[str]:
     list of str
         The input files.
     """
-    out = [args.model] if getattr(args, "model", None) and Path(args.model).exists() else []
+    out = []
+    model = getattr(args, "model", None)
+    if model and Path(model).exists():
+        out.append(model)
+        from ..io.sources import model_files  # what the model includes: MJCF includes and assets, xacro files
+
+        out += [str(f) for f in _model_files(model, model_files, getattr(args, "xacro_args", None),
+                                             getattr(args, "package_path", None))[1:]]
     if getattr(args, "data", None):
         out += data_files(args.data)
-    out += [getattr(args, k) for k in ("validate", "columns", "trajectory") if getattr(args, k, None)]
+    out += [getattr(args, k) for k in ("validate", "columns", "trajectory", "truth", "result", "log", "states")
+            if isinstance(getattr(args, k, None), str)]
     return out
+
+
+#: the files of the models seen in this process: ``{(path, mtime, args): files}`` (a run asks several times)
+_MODEL_FILES: dict = {}
+
+
+def _model_files(model: str, lister, xacro_args, package_path) -> list:
+    """:func:`baseparams.io.sources.model_files`, once per model file and state."""
+    st = Path(model).stat()
+    key = (str(Path(model).resolve()), st.st_mtime_ns, st.st_size, tuple(xacro_args or ()), tuple(package_path or ()))
+    if key not in _MODEL_FILES:
+        _MODEL_FILES[key] = lister(model, xacro_args, package_path)
+    return _MODEL_FILES[key]
 
 
 def write_output(path, writer, args, what: str):
@@ -388,4 +420,7 @@ def symbolic_robot(args):
         vals = {k: float(v) for k, v in vals.items()}
     except ValueError as exc:
         raise BaseparamsError(f"--values: {exc}") from None
+    bad = [f"{k}={v}" for k, v in vals.items() if not abs(v) <= 1e6]
+    if bad:
+        raise BaseparamsError(f"--values {bad[0]}: a finite number within [-1e6, 1e6] (lengths in m, angles in rad)")
     return robot.to_robot(vals)

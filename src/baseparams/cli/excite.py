@@ -35,6 +35,8 @@ def parse_keepout(texts):
             out.append((link, float(z)) if sep and link else float("x"))
         except ValueError:
             raise BaseparamsError(f"--keepout expects LINK:Z (e.g. panda_link7:0.3), got {text!r}") from None
+        if not abs(out[-1][1]) <= 1e6:
+            raise BaseparamsError(f"--keepout {text}: the height Z must be a finite number in [-1e6, 1e6] m")
     return out
 
 

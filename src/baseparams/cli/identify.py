@@ -99,7 +99,7 @@ def cmd_identify(args) -> int:
                 _write_predictions(args, result, log, val, files)
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
         if args.save:
-            result.save(args.save, inputs=[args.model, *files, args.validate, args.columns, args.truth], what="--save")
+            result.save(args.save, inputs=input_files(args), what="--save")
             progress(f"result saved to {args.save}")
         if args.urdf:
             _write_identified_urdf(args, robot, result)
@@ -149,7 +149,9 @@ def _stream_reason(args, path: str) -> str | None:
         return "--stream on"
     if not ok or args.joints or getattr(args, "mjcf", None):  # --mjcf checks the model on the log's states
         return None
-    size = Path(path).stat().st_size / 1e6
+    from ..io.logs import decoded_mb
+
+    size = decoded_mb(path)  # a compressed Parquet file by the numbers it holds
     return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
 
 
@@ -175,8 +177,7 @@ def _identify_streamed(args, robot, files, couplings, progress):
 
         coords = robot.actuated if robot.has_loops else range(robot.dof)
         names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
-        inputs = [args.model, *files, args.validate, args.columns]
-        with column_writer(args.predictions, names, inputs, "--predictions") as write:
+        with column_writer(args.predictions, names, input_files(args), "--predictions") as write:
             result = identify_stream(robot, stream, validation=other, progress=progress,
                                      predictions=lambda t, tau: write(np.column_stack([t, tau])), **kwargs)
         print(f"baseparams: predictions of {result.validation['samples']} validation samples written to "
@@ -195,7 +196,7 @@ def _write_predictions(args, result, log, val, files) -> None:
     tau = result.predict(whole)
     keep = np.ones(whole.n_samples, dtype=bool) if val is not None else whole.t >= whole.t[-1] - args.holdout
     cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
-    write_columns(args.predictions, cols, [args.model, *files, args.validate, args.columns], "--predictions")
+    write_columns(args.predictions, cols, input_files(args), "--predictions")
     print(f"baseparams: predictions of {int(keep.sum())} validation samples written to {args.predictions}",
           file=sys.stderr)
 
@@ -208,19 +209,12 @@ def _results_check(args, files: list[str]) -> dict | None:
         return None
     if len(files) > 1 or args.per_file or args.pooled:
         raise BaseparamsError("--save and --truth apply to one log, not to a fleet (--per-file / --pooled)")
-    check_output_path(args.save, [args.model, *files, args.validate, args.columns, args.truth], "--save")
+    check_output_path(args.save, input_files(args), "--save")
     if not args.truth:
         return None
-    try:
-        truth = json.loads(Path(args.truth).read_text())
-    except FileNotFoundError:
-        raise BaseparamsError(f"--truth {args.truth}: no such file") from None
-    except (OSError, ValueError) as exc:
-        raise BaseparamsError(f"--truth {args.truth}: not a JSON truth file ({exc})") from None
-    if not isinstance(truth, dict) or not isinstance(truth.get("parameters"), list):
-        raise BaseparamsError(f"--truth {args.truth}: no 'parameters' list (write one with 'baseparams simulate': "
-                              f"OUT.truth.json)")
-    return truth
+    from ..schema import read_truth
+
+    return read_truth(args.truth, f"--truth {args.truth}")
 
 
 def _with_truth(args, result, truth: dict | None, text_report) -> str:
@@ -265,13 +259,18 @@ def cmd_predict(args) -> int:
     from ..io.logs import read_log
     from ..io.tables import check_table_path, write_columns
 
-    inputs = [args.model, args.result, args.log, args.columns]
+    inputs = input_files(args)
     check_table_path(args.out, inputs, "--out")
     if args.out and Path(args.out).suffix.lower() == ".npz":
         raise BaseparamsError(f"--out {args.out}: predictions are written as .csv, .tsv or .parquet")
     robot = common.load_robot(args)
     ident = Identification.load(args.result, robot)
     log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False)
+    from ..ident.plausibility import check_prediction_log
+
+    for note in check_prediction_log(ident.model, log, args.allow_units):  # the states' units (no torque needed)
+        if "WARNING" in note:
+            print(f"baseparams: note: {note}", file=sys.stderr)
     tau = ident.predict(log, smooth=not args.raw_states)
     joints = ident.joints
     if args.out:
@@ -383,7 +382,7 @@ def _write_identified_urdf(args, robot, result) -> None:
     drives, couplings = identified_drives(result)
     tilt = next((t for t in result.fit.terms if t.name == "tilt"), None)
     notes = write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
-                       couplings=couplings, inputs=[args.data, args.validate],
+                       couplings=couplings, inputs=input_files(args),
                        base_rotation=None if tilt is None else tilt.base_rotation())
     notes += [f"--urdf: not written: {x}" for t in result.fit.terms for x in t.export().get("not", [])]
     for note in notes:
@@ -395,6 +394,6 @@ def _write_identified_mjcf(args, result, log) -> None:
     """``--mjcf FILE``: a copy of the MJCF model with the identified inertias and drive terms, checked by MuJoCo."""
     from ..io.mjcf_write import identified_mjcf
 
-    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=[args.data, args.validate]):
+    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=input_files(args)):
         print(f"baseparams: note: {note}", file=sys.stderr)
     print(f"baseparams: MJCF written to {args.mjcf}", file=sys.stderr)

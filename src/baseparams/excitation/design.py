@@ -104,9 +104,11 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
         limits that leave no room for motion; no start that satisfies the loops or torque limits;
         a result that does not excite every model parameter (the limits are too tight).
     """
+    from ..arguments import check_keywords
     from ..numerics import blas_threads
 
     check_options(harmonics, base_frequency, rate, criterion, starts, grid)
+    check_keywords("", seed=seed, max_iter=max_iter, margin=margin, acceleration=acceleration)
     t0 = time.perf_counter()
     model = _model(robot_or_analysis, drives, rotor)
     prob, notes = make_problem(model, criterion, harmonics, base_frequency, rate, grid, limits, acceleration, torque,
@@ -149,9 +151,12 @@ def random_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
     BaseparamsError
         As :func:`design_excitation`.
     """
+    from ..arguments import check_keywords
     from ..numerics import blas_threads
 
+    check_keywords("", harmonics=harmonics)
     check_options(harmonics, base_frequency, rate, "cond", 1, 8 * harmonics)
+    check_keywords("", seed=seed, margin=margin, acceleration=acceleration)
     model = _model(robot_or_analysis, drives, rotor)
     prob, notes = make_problem(model, "cond", harmonics, base_frequency, rate, 200, limits, acceleration, torque,
                                margin)

@@ -79,14 +79,27 @@ def joint_values(robot: Robot, value, what: str, pair: bool = False) -> np.ndarr
             x = np.asarray(v, dtype=float)
             if x.shape != shape[1:]:
                 raise BaseparamsError(f"{what} limit for {name!r}: expected {one}, got {v!r}")
-            out[names.index(name)] = x
+            out[names.index(name)] = _valid(x, f"{what} limit for {name!r}", pair)
         return out
     x = np.asarray(value, dtype=float)
     if x.shape not in (shape, shape[1:]):
         raise BaseparamsError(f"{what} limit: expected {one} for every joint or one per designed joint "
                               f"({len(names)}: {', '.join(names)}), got shape {x.shape}")
-    out[:] = x
+    out[:] = _valid(x, f"{what} limit", pair)
     return out
+
+
+def _valid(x: np.ndarray, what: str, pair: bool) -> np.ndarray:
+    """A given limit: finite (NaN would mean no limit), ``lower < upper`` for a range, ``> 0`` otherwise."""
+    from ..arguments import ArgumentError
+
+    if not np.all(np.isfinite(x)) or not np.all(np.abs(x) <= 1e9):
+        raise ArgumentError(f"{what}: finite numbers within 1e9 expected, got {x.tolist()}")
+    if pair and not np.all(x[..., 0] < x[..., 1]):
+        raise ArgumentError(f"{what}: lower < upper expected, got {x.tolist()}")
+    if not pair and not np.all(x > 0):
+        raise ArgumentError(f"{what}: a limit > 0 expected, got {x.tolist()}")
+    return x
 
 
 def given_limits(robot: Robot, limits=None, position=None, velocity=None, effort=None) -> np.ndarray | None:
@@ -161,7 +174,9 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None,
     if robot.limits is not None:
         lim[:, [0, 1, 2, 4]] = robot.limits[coords]
     if limits is not None:
-        user = np.asarray(limits, dtype=float)
+        from ..arguments import check_array
+
+        user = check_array(limits, "limits=", 2, finite=False)  # NaN keeps the model's
         if user.shape != (m, 4):
             raise BaseparamsError(f"robot {robot.name!r}: limits must have shape ({m}, 4) (lower, upper, velocity, "
                                   f"effort per designed coordinate), got {user.shape}")

@@ -179,6 +179,10 @@ def check_options(harmonics, base_frequency, rate, criterion, starts, grid) -> N
     BaseparamsError
         The first option that cannot give a design, named.
     """
+    from ..arguments import check_keywords, check_samples
+
+    check_keywords("", harmonics=harmonics, base_frequency=base_frequency, rate=rate, starts=starts, grid=grid)
+    check_samples(rate / base_frequency, 16, "one period (1 / base_frequency) at the rate")
     if criterion not in CRITERIA:
         raise BaseparamsError(f"unknown criterion {criterion!r}; choose {' or '.join(CRITERIA)}")
     if int(harmonics) != harmonics or harmonics < 2:

@@ -52,6 +52,55 @@ class JointLog:
     removed: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
 
+    def __post_init__(self):
+        from ..arguments import ArgumentTypeError, check_array
+        from ..errors import DataError
+
+        t = check_array(self.t, "JointLog: t", 1, finite=False)  # types and shapes; values: :meth:`checked`
+        object.__setattr__(self, "t", t)
+        if isinstance(self.joints, str) or not all(isinstance(j, str) for j in self.joints):
+            raise ArgumentTypeError(f"JointLog: joints must be a sequence of joint names, got {self.joints!r:.80}")
+        object.__setattr__(self, "joints", tuple(self.joints))
+        shape = (len(t), len(self.joints))
+        for name in ("q", "tau", "dq", "ddq"):
+            value = getattr(self, name)
+            if value is None and name != "q":
+                continue
+            a = check_array(value, f"JointLog: {name}", 2, finite=False)
+            if a.shape != shape:
+                raise DataError(f"{self.source}: {name} has shape {a.shape}; expected {shape} (the samples of t, the "
+                                f"joints)")
+            object.__setattr__(self, name, a)
+
+    def checked(self) -> JointLog:
+        """The log itself, its values checked: finite, time strictly increasing (what the readers guarantee).
+
+        Returns
+        -------
+        JointLog
+            ``self``.
+
+        Raises
+        ------
+        DataError
+            The first value that is not finite (naming the signal, the joint and the sample), or a
+            time stamp that does not increase.
+        """
+        from ..errors import DataError
+
+        for name in ("t", "q", "tau", "dq", "ddq"):
+            a = getattr(self, name)
+            if a is not None and not np.all(np.isfinite(a)):
+                i = int(np.argmax(~np.isfinite(a).reshape(len(a), -1).all(axis=1)))
+                k = "" if a.ndim == 1 else f" of joint {self.joints[int(np.argmax(~np.isfinite(a[i])))]!r}"
+                raise DataError(f"{self.source}: {name}{k}, sample {i}: {a[i] if a.ndim == 1 else a[i].tolist()} "
+                                f"is not finite")
+        if len(self.t) > 1 and not np.all(np.diff(self.t) > 0):
+            i = int(np.argmax(~(np.diff(self.t) > 0))) + 1
+            raise DataError(f"{self.source}: t, sample {i}: {self.t[i]:.9g} s does not follow {self.t[i - 1]:.9g} s; "
+                            f"time must be strictly increasing")
+        return self
+
     @property
     def n_samples(self) -> int:
         """Number of samples ``S``."""

@@ -93,8 +93,9 @@ class MotorCoupling:
                                   f"(got {len(joints)} joints, {len(weights)} weights)")
         if len(set(joints)) != len(joints):
             raise BaseparamsError(f"{what}: a joint is named twice in {list(joints)}")
-        if not all(math.isfinite(w) and w != 0 for w in weights):
-            raise BaseparamsError(f"{what}: weights must be finite and non-zero, got {list(weights)}")
+        if not all(math.isfinite(w) and w != 0 and abs(w) <= 1e6 for w in weights):
+            raise BaseparamsError(f"{what}: weights must be finite and non-zero, at most 1e6 in size, got "
+                                  f"{list(weights)}")
         object.__setattr__(self, "joints", joints)
         object.__setattr__(self, "weights", weights)
 

@@ -544,11 +544,17 @@ class Identification:
         """
         import os
 
+        from ..arguments import ArgumentTypeError, check_flags
+        from .data import JointLog
+
+        check_flags("predict", smooth=smooth)
         if isinstance(log, (str, os.PathLike)):
             from ..io.logs import read_log
 
             log = read_log(log, self.model.robot, columns=columns, allow_subset=True, require_tau=False)
-        return predict_log(self.fit, log, (self.options or {}).get("cutoff"), smooth)
+        elif not isinstance(log, JointLog):
+            raise ArgumentTypeError(f"predict: log must be a log file's path or a JointLog, got {type(log).__name__}")
+        return predict_log(self.fit, log.checked(), (self.options or {}).get("cutoff"), smooth)
 
     @property
     def joints(self) -> list[str]:
@@ -678,7 +684,7 @@ class Identification:
         from .physical import PhysicalFit
         from .results import array, check_robot, read_document
 
-        doc = read_document(path)
+        doc = read_document(path)  # checked against baseparams.schema.RESULT: types, shapes, finite values
         check_robot(doc, robot, str(path))
         o = dict(doc["options"])
         o["friction"] = tuple(o.get("friction", ()))
@@ -724,7 +730,7 @@ class Identification:
                                float("nan") if c.get("cv_rms") is None else float(c["cv_rms"]))
                         for c in doc.get("term_choices") or ())
         f = Fit(model, o.get("method", e["method"]), theta, est, phys, terms=tuple(terms), term_choices=choices)
-        return cls(f, doc["samples"], doc["train"], doc["validation"], tuple(doc["notes"]), None, o,
+        return cls(f, doc["samples"], doc["train"], doc["validation"], (*doc["notes"], *doc["_notes"]), None, o,
                    doc.get("motion"))
 
     @property
@@ -1034,6 +1040,7 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     """
     if holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    log, validation = log.checked(), None if validation is None else validation.checked()  # finite, increasing
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
                          min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,
@@ -1373,7 +1380,8 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
         return tau
 
     try:
-        return check_units(log, cols, torques, revolute)
+        limits = None if robot.limits is None else np.asarray(robot.limits, dtype=float)[coords]
+        return check_units(log, cols, torques, revolute, limits)
     except DataError as exc:
         if not allow_units:
             raise
@@ -1733,6 +1741,12 @@ def model_torques(f: Fit, t: np.ndarray, q_raw: np.ndarray, q: np.ndarray, dq: n
         tau = term.adjust_model(f, q_raw, q, dq, ddq, tau)
     for term in f.terms:
         tau = term.adjust_measured(np.asarray(t, dtype=float), tau)
+    if not np.isfinite(tau).all():  # values or states beyond floating point: never NaN predictions
+        from ..errors import DataError
+
+        i = int(np.argmax(~np.isfinite(tau).all(axis=1)))
+        raise DataError(f"the predicted torques are not finite from sample {i} on (t = {float(t[i]):.6g} s): the "
+                        f"log's states or the values are beyond floating point")
     return tau
 
 

@@ -32,6 +32,7 @@ import json
 
 import numpy as np
 
+from ..arguments import ArgumentTypeError
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from .data import JointLog
@@ -130,7 +131,7 @@ def array(x) -> np.ndarray:
 
 
 def read_document(path) -> dict:
-    """A saved identification's JSON object, its format and version checked.
+    """A saved identification's JSON object, its format and version checked, then its schema.
 
     Parameters
     ----------
@@ -140,37 +141,39 @@ def read_document(path) -> dict:
     Returns
     -------
     dict
-        The object (:data:`FORMAT`, version 1).
+        The object (:data:`FORMAT`, version 1), checked against :data:`baseparams.schema.RESULT`
+        (types, shapes, finite values; statistics written ``null`` read as NaN); unknown top-level
+        keys are kept and named in ``doc["_notes"]``.
 
     Raises
     ------
     BaseparamsError
-        No such file, not JSON, another format, or a version other than :data:`VERSION` (one
-        line naming the file and the version).
+        No such file, not a regular file, larger than
+        :data:`~baseparams.schema.RESULT_MAX_BYTES`, not JSON (or nested too deep, NaN, 1e400, a
+        huge integer), another format, a version other than :data:`VERSION`, or a value that does
+        not fit the schema (one line naming the file and where: ``estimate.R11[3][5]``).
     """
-    from pathlib import Path
+    from .. import schema
+    from ..arguments import check_path
 
-    p = Path(path)
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise BaseparamsError(f"{p}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise BaseparamsError(f"{p}: not a saved identification (cannot read JSON: {exc})") from None
+    p = str(check_path(path, "path"))
+    doc = schema.read_json(path, "a saved identification", schema.RESULT_MAX_BYTES)
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
-        raise BaseparamsError(f"{p}: not a saved identification (format {got!r}, expected {FORMAT!r}; "
+        raise BaseparamsError(f"{p}: not a saved identification (format {got!r:.80}, expected {FORMAT!r}; "
                               f"write one with 'identify --save' or Identification.save)")
     version = doc.get("version")
-    if version != VERSION:
-        newer = isinstance(version, int) and version > VERSION
-        raise BaseparamsError(f"{p}: identification file version {version!r}; this baseparams reads version "
+    if version != VERSION or isinstance(version, bool):
+        newer = isinstance(version, int) and not isinstance(version, bool) and version > VERSION
+        raise BaseparamsError(f"{p}: identification file version {version!r:.40}; this baseparams reads version "
                               f"{VERSION}" + (" (the file is newer: upgrade baseparams)" if newer else ""))
+    doc, notes = schema.check(doc, schema.RESULT, p)
+    doc["_notes"] = notes
     return doc
 
 
 def check_robot(doc: dict, robot: Robot, source: str) -> None:
-    """Refuse a robot whose fingerprint is not the saved one.
+    """Refuse a robot whose fingerprint is not the saved one, or whose counts are not the saved ones.
 
     Parameters
     ----------
@@ -179,19 +182,33 @@ def check_robot(doc: dict, robot: Robot, source: str) -> None:
     robot : Robot
         The robot it is to be used with.
     source : str
-        The file, for the message.
+        The file, for messages.
 
     Raises
     ------
+    TypeError
+        ``robot`` is not a :class:`~baseparams.model.robot.Robot`.
     BaseparamsError
-        One line naming both robots and both fingerprints.
+        One line naming both robots and both fingerprints, or the count that differs.
     """
+    if not isinstance(robot, Robot):
+        raise ArgumentTypeError(f"robot: expected a baseparams Robot (baseparams.load(...)), got "
+                                f"{type(robot).__name__}")
     saved = doc.get("robot", {})
     mine = robot_fingerprint(robot)
     if saved.get("fingerprint") != mine:
-        raise BaseparamsError(f"{source}: identified on robot {saved.get('name')!r} ({saved.get('fingerprint')}), "
+        raise BaseparamsError(f"{source}: identified on robot {saved.get('name')!r:.200} ({saved.get('fingerprint')}), "
                               f"not this robot {robot.name!r} ({mine}): another structure (joints, axes, frames, "
                               f"gravity or bodies); use the model it was identified on")
+    from ..numerics import row_mask, rows_spec
+
+    rows = doc.get("options", {}).get("rows", "all")
+    coords = robot.actuated if robot.has_loops else np.flatnonzero(row_mask(robot, rows_spec(rows)))
+    joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    for key, mine_n in (("bodies", robot.n), ("dof", robot.dof), ("parameters", 10 * robot.n), ("joints", joints)):
+        if saved.get(key) != mine_n:
+            raise BaseparamsError(f"{source}: robot.{key}: {saved.get(key)} in the file, {mine_n} in robot "
+                                  f"{robot.name!r} of the same fingerprint: the file was edited")
 
 
 def log_states(log: JointLog, cutoff: float | None, filtered: bool = False) -> tuple[np.ndarray, ...]:
@@ -327,14 +344,17 @@ def compare_truth(names, values, std, truth: dict, source: str = "truth") -> dic
     Raises
     ------
     BaseparamsError
-        A truth without ``parameters``, or naming parameters the model does not have (or
-        lacking some it has): another ``--friction``/``--rotor``/``--convention``.
+        A truth that does not fit :data:`baseparams.schema.TRUTH` (no ``parameters``, a value
+        that is not a finite number, a name given twice), or naming parameters the model does not
+        have (or lacking some it has): another ``--friction``/``--rotor``/``--convention``.
     """
-    try:
-        true = {str(e["name"]): float(e["value"]) for e in truth["parameters"]}
-    except (KeyError, TypeError, ValueError):
-        raise BaseparamsError(f"{source}: not a truth file (expected 'parameters': [{{'name', 'value'}}], as "
-                              f"'baseparams simulate' writes to OUT.truth.json)") from None
+    from .. import schema
+
+    if not isinstance(source, str):
+        raise ArgumentTypeError(f"compare_truth: source= must be a string (the truth's file), got "
+                                f"{type(source).__name__}")
+    truth, _ = schema.check(truth, schema.TRUTH, source)
+    true = {e["name"]: e["value"] for e in truth["parameters"]}
     names = list(names)
     extra = [n for n in true if n not in names]
     missing = [n for n in names if n not in true]

@@ -150,6 +150,10 @@ def amplitude_ladder(robot: Robot) -> list[float]:
     return [0.5]
 
 
+#: samples whose regressor is formed at once (its size: samples x joints x 10 bodies x 8 bytes)
+_BLOCK = 20_000
+
+
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
                  noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
                  convention: str = "khalil", trajectory=None, samples: int | None = None):
@@ -217,16 +221,20 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
             fourier_draws(rng, SIM_HARMONICS, model.state_columns)
             t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
         delta = _draw_drives(model, rng)
-        try:
-            y = regressor_of(robot, *robot_states(robot, q, dq, ddq))
+        try:  # in blocks: the regressor of a long log at once would take S x m x 10 n numbers
+            rows = slice(None) if robot.has_loops else model.coords
+            rigid = np.concatenate([regressor_of(robot, *robot_states(robot, q[i:i + _BLOCK], dq[i:i + _BLOCK],
+                                                                      ddq[i:i + _BLOCK]))[:, rows]
+                                    @ robot.parameters("paper") for i in range(0, max(len(q), 1), _BLOCK)])
         except BaseparamsError as exc:
             if k + 1 == len(ladder) or "close the loops" not in str(exc):
                 raise
             continue  # the loops do not close that far: a smaller default excursion
         break
     sel = model.row_states
-    tau = ((y if robot.has_loops else y[:, model.coords]) @ robot.parameters("paper")
-           + model.drives.regressor(dq[:, sel], ddq[:, sel], len(model.coords)) @ delta)
+    tau = rigid + np.concatenate([model.drives.regressor(dq[i:i + _BLOCK, sel], ddq[i:i + _BLOCK, sel],
+                                                          len(model.coords)) @ delta
+                                  for i in range(0, max(len(q), 1), _BLOCK)])
     tau = add_noise(tau, noise, rng) if noise > 0 else tau
     joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
     if robot.floating:  # the base's coordinates first, its wrench not measured

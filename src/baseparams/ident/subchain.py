@@ -51,6 +51,8 @@ def parse_welds(items: Sequence[str] | None) -> dict[str, float]:
             sep = ""
         if not sep or not name.strip():
             raise ModelError(f"--weld {item!r}: expected NAME=VALUE (a joint name and a number)")
+        if not abs(out[name.strip()]) <= 1e6:
+            raise ModelError(f"--weld {item!r}: the value must be a finite number within [-1e6, 1e6] (rad or m)")
     return out
 
 

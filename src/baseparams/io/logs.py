@@ -85,7 +85,6 @@ import functools
 import io
 import itertools
 import re
-import tomllib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -93,7 +92,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError
-from ..files import SMALL_MAX_BYTES, atomic_path, check_input, read_input_bytes
+from ..files import atomic_path, check_input
 from ..ident.data import JointLog
 from ..kinematics.floating import BASE_COORDINATES, POSE_COLUMNS, TWIST_COLUMNS
 from ..model.robot import Robot
@@ -107,8 +106,6 @@ KINDS = ("q", "dq", "ddq", "tau")
 #: joint types a log can hold (1-dof)
 LOGGABLE = ("R", "P")
 
-_TOP_KEYS = ("time", "time_scale", "topic", "joints")
-_JOINT_KEYS = ("name", "q", "dq", "ddq", "tau", "sign", "gear_ratio", "torque_gain", "offset")
 _BAG_FIELDS = {"q": "position", "dq": "velocity", "ddq": "acceleration", "tau": "effort"}
 _COLUMN = re.compile(r"^(q|dq|ddq|tau)_(.+)$")
 
@@ -195,6 +192,15 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         One line naming the file, the column and the row, for any problem listed in the module
         docstring (and a missing optional package: the extra to install).
     """
+    from ..arguments import ArgumentTypeError, Range, check_flags, check_path, check_value
+
+    if not isinstance(robot, Robot):
+        raise ArgumentTypeError(f"read_log: robot must be a Robot (baseparams.load(...)), got {type(robot).__name__}")
+    check_path(path, "read_log: path")
+    check_flags("read_log", allow_subset=allow_subset, require_tau=require_tau, require_time=require_time)
+    for name, bound in (("max_angle", max_angle), ("max_travel", max_travel)):
+        if bound is not None:
+            check_value(bound, name, r=Range(0, 1e12, lo_open=True))
     p = check_input(path, folder_ok=True, error=DataError)  # a file or a bag folder, never a device or FIFO
     spec = _mapping(columns)
     kind = _kind(p)
@@ -203,7 +209,14 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
     else:
         if spec["topic"] is not None:
             raise DataError(f"{spec['label']}: 'topic' applies to ROS bags only, not to {p.name}")
-        table = {"text": _read_text, "npz": _read_npz, "parquet": _read_parquet}[kind](p)
+        if kind == "text":
+            table = _read_text(p)
+        else:  # the header first (names, rows, declared sizes): only the columns read are loaded, bounded
+            header = _npz_header(p) if kind == "npz" else _parquet_header(p)
+            joints = _resolve(header.empty(), robot, spec, allow_subset, require_tau)
+            used = [c for c in [spec["time"], *(c for x in joints for c in x.cols.values() if c)] if c in header.names]
+            header.check_size(used)
+            table = header.read(used, spec["time"])
     joints = _resolve(table, robot, spec, allow_subset, require_tau)
     base = _base_columns(table, robot)
     log = _assemble(table, joints, spec, max_angle, max_travel, require_time, base)
@@ -232,16 +245,14 @@ def _kind(p: Path) -> str:
 # ---------------------------------------------------------------- the mapping
 def _mapping(columns) -> dict:
     """The mapping as a checked dict: ``time, time_scale, topic, joints, label``."""
+    from .. import schema
+
     label = "columns="
     if columns is None:
         raw: dict = {}
     elif isinstance(columns, (str, Path)) and Path(columns).suffix.lower() == ".toml":
         label = str(columns)
-        data = read_input_bytes(columns, SMALL_MAX_BYTES, error=DataError)
-        try:
-            raw = tomllib.loads(data.decode("utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise DataError(f"{columns}: not a valid TOML mapping ({str(exc).splitlines()[0]})") from None
+        raw = schema.read_toml(columns, "a valid TOML mapping", schema.COLUMNS_MAX_BYTES, error=DataError)
     elif isinstance(columns, str):
         raw = {"topic": columns}
     elif isinstance(columns, Mapping):
@@ -252,50 +263,22 @@ def _mapping(columns) -> dict:
 
 
 def _check_mapping(raw: dict, label: str) -> dict:
-    """Check the keys and values of a mapping (one line per problem, naming the key)."""
-    for key in raw:
-        if key not in _TOP_KEYS:
-            raise DataError(f"{label}: unknown key {key!r}; expected one of {', '.join(_TOP_KEYS)}")
-    time = raw.get("time", "t")
-    scale = raw.get("time_scale", 1.0)
-    topic = raw.get("topic")
-    if not isinstance(time, str) or not time:
-        raise DataError(f"{label}: time must be a column name, got {time!r}")
-    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not np.isfinite(scale) or scale <= 0:
-        raise DataError(f"{label}: time_scale must be a positive number, got {scale!r}")
-    if topic is not None and not isinstance(topic, str):
-        raise DataError(f"{label}: topic must be a string, got {topic!r}")
-    joints = raw.get("joints", {})
-    if not isinstance(joints, Mapping):
-        raise DataError(f"{label}: joints must be a table of model joints, got {type(joints).__name__}")
-    out = {}
-    for j, entry in joints.items():
-        out[j] = _check_joint_entry(entry, f"{label}: joints.{j}")
-    return {"time": time, "time_scale": float(scale), "topic": topic, "joints": out, "label": label,
-            "explicit_time": "time" in raw or "time_scale" in raw}
+    """Check the keys and values of a mapping against :data:`baseparams.schema.COLUMNS` (one line, naming the key)."""
+    from .. import schema
 
-
-def _check_joint_entry(entry, what: str) -> dict:
-    """One ``[joints.<name>]`` table: column names are strings, factors finite and nonzero."""
-    if not isinstance(entry, Mapping):
-        raise DataError(f"{what}: expected a table of column names and factors, got {entry!r}")
-    for key, value in entry.items():
-        if key not in _JOINT_KEYS:
-            raise DataError(f"{what}: unknown key {key!r}; expected one of {', '.join(_JOINT_KEYS)}")
-        if key in KINDS + ("name",) and (not isinstance(value, str) or not value):
-            raise DataError(f"{what}.{key}: expected a column name, got {value!r}")
-        if key in ("gear_ratio", "torque_gain", "offset") and (
-                isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value)
-                or (value == 0 and key != "offset")):
-            raise DataError(f"{what}.{key}: expected a finite nonzero number, got {value!r}")
-    if entry.get("sign", 1) not in (1, -1) or isinstance(entry.get("sign", 1), bool):
-        raise DataError(f"{what}.sign: expected +1 or -1, got {entry['sign']!r}")
-    return dict(entry)
+    spec = schema.check(raw, schema.COLUMNS, label, error=DataError)[0]
+    joints = {j: {k: v for k, v in e.items() if v is not None and (k in raw["joints"][j])}
+              for j, e in spec["joints"].items()}
+    return {"time": spec["time"], "time_scale": spec["time_scale"], "topic": spec["topic"], "joints": joints,
+            "label": label, "explicit_time": "time" in raw or "time_scale" in raw}
 
 
 # ---------------------------------------------------------------- text tables
 def _read_text(path: Path) -> _Table:
     """A delimited text table with a header row (delimiter sniffed); blank and ``#`` lines skipped."""
+    size = path.stat().st_size
+    if size > TEXT_MAX_BYTES:
+        raise DataError(_too_large(path, f"{size / 2**20:.0f} MB of text"))
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -352,7 +335,10 @@ def _delim_name(delim: str) -> str:
 
 
 def _check_header(path: Path, names: list[str], line: int) -> None:
-    """Header names: none empty, none repeated, not numbers (a header row is required)."""
+    """Header names: none empty, none repeated, not numbers (a header row is required), not too many."""
+    if len(names) > MAX_COLUMNS:
+        raise DataError(f"{path}: line {line} (header): {len(names)} columns, more than a joint log has (at most "
+                        f"{MAX_COLUMNS})")
     for k, n in enumerate(names):
         if not n:
             raise DataError(f"{path}: line {line} (header): column {k + 1} has no name")
@@ -407,29 +393,6 @@ def _floats_ok(col: np.ndarray) -> bool:
 
 
 # ---------------------------------------------------------------- NPZ and Parquet
-def _read_npz(path: Path) -> _Table:
-    """One 1-D numeric array per column, all of one length."""
-    try:
-        archive = np.load(path, allow_pickle=False)
-    except Exception as exc:  # zipfile, OSError, ValueError: one line whatever numpy raises
-        raise DataError(f"{path}: not a readable .npz archive ({_first_line(exc)})") from None
-    if not isinstance(archive, np.lib.npyio.NpzFile):
-        raise DataError(f"{path}: a single array, not an .npz archive of named columns")
-    columns: dict[str, np.ndarray] = {}
-    with archive:
-        for name in archive.files:
-            try:
-                a = archive[name]
-            except ValueError as exc:
-                raise DataError(f"{path}: array {name!r}: {_first_line(exc)} (Python objects are not read)") from None
-            if a.ndim != 1:
-                raise DataError(f"{path}: array {name!r} has shape {a.shape}; expected one value per sample (S,)")
-            if a.dtype.kind not in "biuf":
-                raise DataError(f"{path}: array {name!r} holds {a.dtype} values, expected numbers")
-            columns[name] = a.astype(float)
-    return _table_of_arrays(path, columns, "index {0} (0-based)", "array")
-
-
 def _table_of_arrays(path: Path, columns: dict[str, np.ndarray], row_fmt: str, what: str) -> _Table:
     """A table from named columns: at least one, all of one nonzero length."""
     if not columns:
@@ -447,39 +410,174 @@ def _table_of_arrays(path: Path, columns: dict[str, np.ndarray], row_fmt: str, w
     return table
 
 
-def _read_parquet(path: Path) -> _Table:
-    """Numeric (or timestamp) columns of a Parquet file; nulls are errors naming the row."""
+#: the most columns a log may have (a robot's joints times four, and other signals)
+MAX_COLUMNS = 10_000
+#: the most rows a log may have, streamed or not (5e7: 14 hours at 1 kHz)
+MAX_ROWS = 50_000_000
+#: the largest log read whole [bytes]: the columns read, as float64 (larger: stream it)
+WHOLE_MAX_BYTES = 256 * 2**20
+#: the largest text log read whole [bytes of file] (reading text takes about 3 times its size; the CLI streams
+#: text logs above 64 MB)
+TEXT_MAX_BYTES = 2**30
+
+
+def _too_large(path: Path, what: str) -> str:
+    return (f"{path}: {what}, more than is read whole ({WHOLE_MAX_BYTES / 2**20:.0f} MB of numbers); stream it: "
+            f"CSV/TSV or Parquet with 'identify --stream on' (baseparams.ident.stream.identify_stream in Python)")
+
+
+@dataclass
+class _Header:
+    """A columnar log's header (NPZ members, Parquet schema): names, rows, how to read some columns."""
+
+    path: Path
+    names: list[str]
+    rows: int
+    what: str  # "array" or "column"
+    reader: object  # (names, time column) -> (columns, booleans, notes)
+    row_fmt: str
+
+    def __post_init__(self):
+        if not self.names:
+            raise DataError(f"{self.path}: empty file (no {self.what}s)")
+
+    def empty(self) -> _Table:
+        return _Table(str(self.path), {n: np.empty(0) for n in self.names}, np.empty(0, int), self.row_fmt,
+                      labels={n: f"{self.what} {n!r}" for n in self.names})
+
+    def check_size(self, used: list[str]) -> None:
+        need = self.rows * max(len(used), 1) * 8
+        if need > WHOLE_MAX_BYTES:
+            raise DataError(_too_large(self.path, f"{self.rows} rows x {len(used)} {self.what}s read "
+                                                  f"({need / 2**20:.0f} MB)"))
+
+    def read(self, used: list[str], time: str) -> _Table:
+        columns, booleans, notes = self.reader(used, time)
+        table = _table_of_arrays(self.path, columns, self.row_fmt, self.what) if columns else self.empty()
+        table.booleans, table.notes = set(booleans), table.notes + notes
+        unused = [n for n in self.names if n not in columns]
+        if unused:
+            more = f" and {len(unused) - 12} more" if len(unused) > 12 else ""
+            table.notes.append(f"{self.path.name}: {self.what}s not loaded (not read by the layout): "
+                               f"{', '.join(unused[:12])}{more}")
+        return table
+
+
+def _check_counts(path: Path, columns: int, rows: int, what: str) -> None:
+    if columns > MAX_COLUMNS:
+        raise DataError(f"{path}: {columns} {what}s, more than a joint log has (at most {MAX_COLUMNS})")
+    if rows > MAX_ROWS:
+        raise DataError(f"{path}: {rows} rows, more than a log may have (at most {MAX_ROWS}: "
+                        f"{MAX_ROWS / 3.6e6:.3g} hours at 1 kHz); split it")
+
+
+def _integer_time(name: str, values: np.ndarray, notes: list[str], path: Path, first=None) -> np.ndarray:
+    """Integer time stamps beyond float's exact range (epoch nanoseconds): counted from the first, exactly.
+
+    ``first``: the stamp counted from (default the first of ``values``). Other stamps: as floats.
+    """
+    if values.dtype.kind in "iu" and len(values) and max(abs(int(values.min())), abs(int(values.max()))) > 2**53:
+        first = int(values[0]) if first is None else int(first)
+        if values.dtype.kind == "u":  # uint64 beyond int64: exact differences in Python integers, then floats
+            out = np.array([int(v) - first for v in values.tolist()], dtype=float)
+        else:
+            out = (values.astype(np.int64) - np.int64(first)).astype(float)
+        notes.append(f"{path.name}: {name!r} holds integer stamps up to {int(values.max())}: counted from the first "
+                     f"one ({first}), exactly")
+        return out
+    return values.astype(float)
+
+
+def _npz_header(path: Path) -> _Header:
+    """An .npz log's members from the zip directory and each .npy header, checked before any array is read."""
+    import zipfile
+
+    try:
+        z = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
+        raise DataError(f"{path}: not a readable .npz archive ({_first_line(exc)})") from None
+    with z:
+        infos = z.infolist()
+        _check_counts(path, len(infos), 0, "array")
+        members, rows = {}, None
+        for info in infos:
+            name = info.filename
+            if not name.endswith(".npy") or info.is_dir():
+                raise DataError(f"{path}: member {name!r} is not a NumPy array (.npy); an .npz log holds one array "
+                                "per column")
+            col = name[:-4]
+            try:
+                with z.open(info) as fh:
+                    version = np.lib.format.read_magic(fh)
+                    if version not in ((1, 0), (2, 0)):
+                        raise ValueError(f"format version {version} (1.0 and 2.0 are read)")
+                    read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                        np.lib.format.read_array_header_2_0
+                    shape, fortran, dtype = read_header(fh, max_header_size=10_000)
+                    offset = fh.tell()
+            except Exception as exc:  # noqa: BLE001 - zipfile, numpy: one line whatever they raise
+                raise DataError(f"{path}: member {name!r} is not a NumPy array ({_first_line(exc)})") from None
+            if dtype.hasobject:
+                raise DataError(f"{path}: array {col!r} holds Python objects (not read)")
+            if dtype.kind not in "biuf":
+                raise DataError(f"{path}: array {col!r} holds {dtype} values, expected numbers")
+            if len(shape) != 1:
+                raise DataError(f"{path}: array {col!r} has shape {shape}; expected one value per sample (S,)")
+            size = shape[0] * dtype.itemsize
+            if size != info.file_size - offset:
+                raise DataError(f"{path}: array {col!r}: its header claims {shape[0]} values ({size} bytes), the "
+                                f"member holds {info.file_size - offset} bytes")
+            _check_counts(path, len(infos), shape[0], "array")
+            members[col] = (info, offset, dtype, shape[0])
+            rows = shape[0] if rows is None else rows
+
+    def read(used, time):
+        columns, booleans, notes = {}, [], []
+        with zipfile.ZipFile(path) as zz:
+            for col in used:
+                info, offset, dtype, n = members[col]
+                with zz.open(info) as fh:
+                    fh.read(offset)
+                    raw = fh.read(n * dtype.itemsize)
+                a = np.frombuffer(raw, dtype=dtype, count=n)
+                if dtype.kind == "b":
+                    booleans.append(col)
+                columns[col] = _integer_time(col, a, notes, path) if col == time else a.astype(float)
+        return columns, booleans, notes
+
+    return _Header(path, list(members), int(rows or 0), "array", read, "index {0} (0-based)")
+
+
+def _parquet_header(path: Path) -> _Header:
+    """A Parquet log's schema and row count from its footer, checked before any column is read."""
     try:
         import pyarrow as pa
-        import pyarrow.compute as pc
         import pyarrow.parquet as pq
     except ImportError:
         raise DataError(f"{path}: reading Parquet needs pyarrow: pip install 'baseparams[parquet]'") from None
     try:
-        table = pq.read_table(path)
+        meta = pq.read_metadata(path)
+        _check_counts(path, meta.num_columns, meta.num_rows, "column")
+        schema = meta.schema.to_arrow_schema()
+    except DataError:
+        raise
     except Exception as exc:  # pyarrow's errors: one line
         raise DataError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
-    columns, notes, booleans = {}, [], set()
-    for name in table.column_names:
-        col = table.column(name)
-        if col.null_count:
-            i = int(np.argmax(pc.is_null(col).to_numpy(zero_copy_only=False)))
-            raise DataError(f"{path}: column {name!r}, row {i} (0-based): null value")
-        if pa.types.is_timestamp(col.type) or pa.types.is_duration(col.type):
-            unit = col.type.unit
-            columns[name] = col.cast(pa.int64()).to_numpy().astype(float) * {"s": 1.0, "ms": 1e-3, "us": 1e-6,
-                                                                              "ns": 1e-9}[unit]
-            notes.append(f"{path.name}: column {name!r} is a {col.type}: converted to seconds")
-        elif pa.types.is_integer(col.type) or pa.types.is_floating(col.type) or pa.types.is_boolean(col.type):
-            columns[name] = col.to_numpy(zero_copy_only=False).astype(float)
-            if pa.types.is_boolean(col.type):
-                booleans.add(name)
-        else:
-            raise DataError(f"{path}: column {name!r} holds {col.type} values, expected numbers")
-    out = _table_of_arrays(path, columns, "row {0} (0-based)", "column")
-    out.notes += notes
-    out.booleans = booleans
-    return out
+    names = list(schema.names)
+
+    def read(used, time):
+        try:
+            table = pq.read_table(path, columns=used)
+        except Exception as exc:  # pyarrow's errors: one line
+            raise DataError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
+        batch = pa.RecordBatch.from_arrays([c.combine_chunks() for c in table.columns], names=table.column_names) \
+            if table.num_columns else None
+        if batch is None:
+            return {}, [], []
+        columns, booleans, notes = _arrow_columns(path, batch, 0, time)
+        return columns, booleans, notes
+
+    return _Header(path, names, int(meta.num_rows), "column", read, "row {0} (0-based)")
 
 
 def _plural(n, what: str) -> str:
@@ -892,6 +990,11 @@ def write_log(path, log: JointLog) -> Path:
     DataError
         Another suffix, or a file that cannot be written.
     """
+    from ..arguments import ArgumentTypeError, check_path
+
+    check_path(path, "write_log: path")
+    if not isinstance(log, JointLog):
+        raise ArgumentTypeError(f"write_log: log must be a JointLog, got {type(log).__name__}")
     p = Path(path)
     cols = log_columns_of(log)
     if p.suffix.lower() == ".npz":
@@ -958,6 +1061,32 @@ STREAM_SUFFIXES = TEXT_SUFFIXES + PARQUET_SUFFIXES
 BLOCK_BYTES = 1 << 22
 #: rows of a Parquet record batch
 BATCH_ROWS = 1 << 16
+
+
+def decoded_mb(path) -> float:
+    """The size of a log's numbers [MB]: Parquet rows x columns x 8 bytes (it may be compressed), else the file's.
+
+    Parameters
+    ----------
+    path : str or Path
+        The log.
+
+    Returns
+    -------
+    float
+        Megabytes (1e6 bytes); the file's size when the Parquet footer cannot be read.
+    """
+    p = Path(path)
+    size = p.stat().st_size
+    if p.suffix.lower() in PARQUET_SUFFIXES:
+        try:
+            import pyarrow.parquet as pq
+
+            meta = pq.read_metadata(p)
+            size = max(size, meta.num_rows * meta.num_columns * 8)
+        except Exception:  # noqa: BLE001 - the reader says what is wrong with the file
+            pass
+    return size / 1e6
 
 
 def streamable(path) -> bool:
@@ -1174,16 +1303,29 @@ class LogStream:
             raise DataError(f"{self.path}: not a readable Parquet file ({_first_line(exc)})") from None
 
     def _parquet_names(self) -> list[str]:
-        return list(self._parquet_file().schema_arrow.names)
+        f = self._parquet_file()
+        meta = f.metadata
+        _check_counts(self.path, meta.num_columns, meta.num_rows, "column")
+        return list(f.schema_arrow.names)
+
+    def _used(self) -> list[str]:
+        """The columns the layout reads (time and the joints' columns)."""
+        cols = [self.spec["time"], *(c for x in self._joints for c in x.cols.values() if c)]
+        return [c for c in dict.fromkeys(cols) if c in self.names]
 
     def _parquet_tables(self) -> Iterator[_Table]:
         """One checked table per record batch (0-based global rows)."""
         f = self._parquet_file()
-        start = 0
+        start, first = 0, None
         try:
-            batches = f.iter_batches(batch_size=BATCH_ROWS)
+            batches = f.iter_batches(batch_size=BATCH_ROWS, columns=self._used())  # never the other columns
             for batch in batches:
-                columns, booleans, notes = _arrow_columns(self.path, batch, start)
+                tcol = self.spec["time"]
+                if first is None and tcol in batch.schema.names and batch.num_rows:
+                    first = batch.column(tcol)[0].as_py()
+                    first = getattr(first, "value", first) if not isinstance(first, int) else first
+                columns, booleans, notes = _arrow_columns(self.path, batch, start, tcol,
+                                                          first if isinstance(first, int) else None)
                 table = _Table(self.source, columns, np.arange(start, start + batch.num_rows), "row {0} (0-based)",
                                  labels={k: f"column {k!r}" for k in columns}, booleans=booleans,
                                  notes=notes if start == 0 else [], offset=start)
@@ -1270,8 +1412,12 @@ def _parse_block(path: Path, kept: list[str], delim: str, names: list[str], numb
     return _numbers(table, names), {}
 
 
-def _arrow_columns(path: Path, batch, start: int):
-    """A Parquet record batch as float columns (``read_log``'s rules), nulls naming the global row."""
+def _arrow_columns(path: Path, batch, start: int, time: str | None = None, first=None):
+    """A Parquet record batch as float columns (``read_log``'s rules), nulls naming the global row.
+
+    ``time``: the time column, whose integer stamps beyond float's exact range are counted from
+    ``first`` (default: the batch's first stamp; a streamed log passes its first block's).
+    """
     import pyarrow as pa
     import pyarrow.compute as pc
 
@@ -1282,8 +1428,13 @@ def _arrow_columns(path: Path, batch, start: int):
             raise DataError(f"{path}: column {name!r}, row {start + i} (0-based): null value")
         if pa.types.is_timestamp(col.type) or pa.types.is_duration(col.type):
             scale = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}[col.type.unit]
-            columns[name] = col.cast(pa.int64()).to_numpy().astype(float) * scale
+            raw = col.cast(pa.int64()).to_numpy()
+            if name == time:
+                raw = _integer_time(name, raw, notes, path, first)
+            columns[name] = raw.astype(float) * scale
             notes.append(f"{path.name}: column {name!r} is a {col.type}: converted to seconds")
+        elif name == time and pa.types.is_integer(col.type):
+            columns[name] = _integer_time(name, col.to_numpy(zero_copy_only=False), notes, path, first)
         elif pa.types.is_integer(col.type) or pa.types.is_floating(col.type) or pa.types.is_boolean(col.type):
             columns[name] = col.to_numpy(zero_copy_only=False).astype(float)
             if pa.types.is_boolean(col.type):

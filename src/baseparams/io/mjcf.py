@@ -119,7 +119,14 @@ def _strip_assets(mj, spec, base: Path, everything: bool) -> dict[str, str]:
 
 
 def _compile(mj, path: Path):
-    """``(model, notes, affected bodies, spec)``: parse and compile, stripping missing asset files if needed."""
+    """``(model, notes, affected bodies, spec)``: parse and compile, stripping missing asset files if needed.
+
+    The files the model reads and the numbers MuJoCo allocates from are checked first
+    (:func:`baseparams.io.sources.mjcf_sources`).
+    """
+    from .sources import mjcf_sources
+
+    mjcf_sources(path)
     try:
         spec = mj.MjSpec.from_file(str(path))
     except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others

@@ -112,9 +112,13 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     """
     import mujoco as mj
 
+    from .sources import check_urdf_meshes, model_files
+
     source, dest = Path(source), Path(dest)
     _check_robot(robot, source)
     urdf = source.suffix.lower() == ".urdf"
+    if urdf:  # MuJoCo's URDF import reads the meshes: never a FIFO or a device
+        check_urdf_meshes(source)
     try:
         spec, model, notes = compiled_spec(source)
     except ModelError as exc:
@@ -143,7 +147,7 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         notes += _rotate_base(mj, spec, rot)
         check_robot = replace(robot, gravity=rot.T @ robot.gravity)
     text = _relocate_assets(_to_xml(spec, dest), spec, source, dest)
-    with atomic_path(dest, inputs=[source, *inputs], what="--mjcf") as tmp:
+    with atomic_path(dest, inputs=[*model_files(source), *inputs], what="--mjcf") as tmp:
         tmp.write_text(text, encoding="utf-8")
         notes += _check(tmp, dest, robot, (params, convention, drives), states, expected, tolerance, check_robot)
     return notes

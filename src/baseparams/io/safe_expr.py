@@ -140,11 +140,16 @@ class Budget:
         Raises
         ------
         ExpressionError
-            Beyond the budget of characters, or an integer of more than :data:`MAX_INT_BITS` bits.
+            Beyond the budget of characters (an integer beyond 64 bits counts its bytes), or an integer of
+            more than :data:`MAX_INT_BITS` bits.
         """
         if isinstance(value, int) and not isinstance(value, bool):
-            if value.bit_length() > MAX_INT_BITS:
+            bits = value.bit_length()
+            if bits > MAX_INT_BITS:
                 raise ExpressionError(f"an integer of more than {MAX_INT_BITS} bits")
+            if bits > 64:  # a large integer's bytes count as characters (a million of them: 1.3 GB)
+                self.room(bits // 8, "large integers")
+                self.chars += bits // 8
         elif isinstance(value, str | bytes | list | tuple | dict | set | frozenset):
             n = len(value) * (1 if isinstance(value, str | bytes) else ITEM_CHARS)
             self.room(n)

@@ -399,7 +399,7 @@ class _Session:
             x.filestack, x.macrostack = None, None
 
 
-def expand_xacro(path, args=None, package_path=None) -> tuple[bytes, list[str]]:
+def expand_xacro(path, args=None, package_path=None, files: list | None = None) -> tuple[bytes, list[str]]:
     """The URDF text of a xacro file, expanded safely (see the module doc), and notes.
 
     Parameters
@@ -411,6 +411,9 @@ def expand_xacro(path, args=None, package_path=None) -> tuple[bytes, list[str]]:
     package_path : str, path or list of them, optional
         Folders searched for ``$(find PKG)`` and ``package://PKG`` before the environment's
         (:func:`package_dirs`).
+    files : list, optional
+        Extended with the paths of the files read (the model, its includes, YAML), also when the
+        expansion fails (those read until then).
 
     Returns
     -------
@@ -444,6 +447,9 @@ def expand_xacro(path, args=None, package_path=None) -> tuple[bytes, list[str]]:
             data = doc.toxml(encoding="utf-8")
         except Exception as exc:  # noqa: BLE001 (every failure of the expansion is one line)
             raise ModelError(_message(sess, exc)) from None
+        finally:
+            if files is not None:
+                files.extend(sess.texts)
     if len(data) > MODEL_MAX_BYTES:
         raise ModelError(f"{p}: the expanded document is larger than {MODEL_MAX_BYTES} bytes")
     return data, sess.notes

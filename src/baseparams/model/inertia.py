@@ -165,6 +165,9 @@ def check_convention(convention: str) -> Convention:
     ModelError
         ``convention`` is not one of :data:`CONVENTIONS` (the message names them).
     """
+    if not isinstance(convention, str):
+        raise ModelError(f"the parameter convention must be a name ({', '.join(CONVENTIONS)}), got "
+                         f"{type(convention).__name__}")
     if convention not in CONVENTIONS:
         raise ModelError(f"unknown parameter convention {convention!r}; expected one of {', '.join(CONVENTIONS)}")
     return Convention(convention)

@@ -123,8 +123,8 @@ def use_compiled(backend: str, work: int) -> bool:
     BaseparamsError
         An unknown backend, or ``compiled`` without numba (names the extra that installs it).
     """
-    if backend not in BACKENDS:
-        raise BaseparamsError(f"unknown regressor backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    if not isinstance(backend, str) or backend not in BACKENDS:
+        raise BaseparamsError(f"unknown regressor backend {str(backend)[:40]!r}; choose one of {', '.join(BACKENDS)}")
     if backend == "numpy":
         return False
     if backend == "compiled":

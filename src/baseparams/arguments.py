@@ -1,0 +1,431 @@
+"""Every number the command line and the front door take, range-checked before any work.
+
+One table (:data:`RANGES`) holds each numeric option's type and bounds, under the keyword the front
+door uses (``base_frequency=``, the CLI's ``--base-frequency``): the CLI checks the parsed flags
+(:func:`check_namespace`, naming ``--base-frequency``) and the Python functions their keywords
+(:func:`check_keywords`, naming ``base_frequency=``), both in one line. The bounds are not a
+robot's limits: they refuse what no run means (``--starts 1000000``, ``--base-frequency 1e-12``: a
+7 PiB allocation, ``--acceleration nan``: no limit at all, ``--gravity 0 0 1e308``) before it
+allocates or runs for hours. :func:`check_samples` bounds what a run holds at once (samples x
+columns), for the outputs whose size follows from two options (``duration x rate``).
+
+A value of the wrong type is a :class:`ArgumentTypeError` (a ``TypeError``), one out of range an
+:class:`ArgumentError` (a ``ValueError``); both are :class:`~baseparams.errors.BaseparamsError`
+(the CLI prints them as ``baseparams: error: ...``, exit 2).
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ArgumentError, ArgumentTypeError, BaseparamsError
+
+__all__ = ["OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief", "check_array",
+           "check_flags", "check_keywords", "check_namespace", "check_path", "check_progress", "check_samples",
+           "check_total", "check_value"]
+
+
+@dataclass(frozen=True)
+class Range:
+    """A numeric argument's type and bounds.
+
+    Parameters
+    ----------
+    lo, hi : float
+        Bounds (inclusive unless ``lo_open``/``hi_open``).
+    integer : bool
+        An integer (a float with an integer value is accepted from Python, not a fraction).
+    lo_open, hi_open : bool
+        Exclusive bounds.
+    unit : str
+        The unit, for messages.
+    count : int or None
+        A fixed number of values (``gravity``: 3); None: one value.
+    """
+
+    lo: float
+    hi: float
+    integer: bool = False
+    lo_open: bool = False
+    hi_open: bool = False
+    unit: str = ""
+    count: int | None = None
+
+    def __repr__(self) -> str:
+        return f"<Range: {self.text()}>"
+
+    def text(self) -> str:
+        """The range as ``[lo, hi]`` with its unit and kind.
+
+        Returns
+        -------
+        str
+            E.g. ``an integer in [1, 1000]`` or ``a number in (0, 3600] s``.
+        """
+        kind = "an integer" if self.integer else "a number"
+        left, right = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
+        lo, hi = (f"{int(self.lo)}", f"{int(self.hi)}") if self.integer else (f"{self.lo:g}", f"{self.hi:g}")
+        return f"{kind} in {left}{lo}, {hi}{right}{' ' + self.unit if self.unit else ''}"
+
+
+#: every numeric keyword of the front door and flag of the CLI (``-`` for ``_``)
+RANGES = {
+    "samples": Range(1, 100_000, integer=True),  # analysis samples (analyze --samples, --analysis-samples)
+    "analysis_samples": Range(1, 100_000, integer=True),
+    "seed": Range(0, 2**63 - 1, integer=True),
+    "workers": Range(1, 1024, integer=True),
+    "harmonics": Range(1, 100, integer=True),
+    "period": Range(1e-3, 86_400, unit="s"),
+    "base_frequency": Range(1 / 86_400, 1e3, unit="Hz"),
+    "rate": Range(1, 1e6, unit="Hz"),
+    "margin": Range(0, 0.5, hi_open=True),
+    "starts": Range(1, 1000, integer=True),
+    "grid": Range(3, 100_000, integer=True),
+    "max_iter": Range(1, 100_000, integer=True),
+    "duration": Range(0, 1e6, lo_open=True, unit="s"),
+    "amplitude": Range(0, 1e3, lo_open=True, unit="rad or m"),
+    "noise": Range(0, 1e9, unit="N m"),
+    "robots": Range(1, 10_000, integer=True),
+    "holdout": Range(0, 1e9, lo_open=True, unit="s"),
+    "coulomb_width": Range(0, 1e3, lo_open=True, unit="rad/s"),
+    "cutoff": Range(1e-3, 1e6, unit="Hz"),
+    "decimate": Range(1, 1_000_000, integer=True),
+    "min_speed": Range(0, 1e3, unit="rad/s"),
+    "prior_weight": Range(0, 1e12),
+    "score_cutoff": Range(1e-3, 1e6, unit="Hz"),
+    "memory_mb": Range(1, 1e6, unit="MB"),
+    "gravity": Range(-1e3, 1e3, unit="m/s^2", count=3),
+    "acceleration": Range(0, 1e7, lo_open=True, unit="rad/s^2"),
+}
+
+#: the most samples a run holds at once (a simulated log, a designed trajectory) and samples x columns
+MAX_SAMPLES = 2_000_000
+MAX_CELLS = 20_000_000
+#: the most samples a run makes in all (a simulated fleet: robots x samples per log)
+MAX_TOTAL_SAMPLES = 100_000_000
+
+
+#: keywords whose ``None`` means "the default" (the others must be given as numbers)
+OPTIONAL = frozenset({"samples", "analysis_samples", "period", "base_frequency", "amplitude", "acceleration", "holdout",
+                      "coulomb_width", "cutoff", "decimate", "min_speed", "prior_weight", "score_cutoff", "gravity",
+                      "workers", "robots"})
+
+
+def brief(value, most: int = 60) -> str:
+    """A value's repr on one line, at most ``most`` characters (an array's repr spans lines).
+
+    Parameters
+    ----------
+    value : object
+        The value.
+    most : int
+        The most characters.
+
+    Returns
+    -------
+    str
+        ``repr(value)`` with its white space collapsed, clipped with ``...``.
+    """
+    text = " ".join(repr(value).split())
+    return text if len(text) <= most else text[:most - 3] + "..."
+
+
+def _name(name: str, cli: bool) -> str:
+    return f"--{name.replace('_', '-')}" if cli else f"{name}="
+
+
+def _one(value, name: str, r: Range):
+    """One value checked against its range: an int or a float."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ArgumentTypeError(f"{name} must be {r.text()}, got {type(value).__name__} {brief(value)}")
+    try:
+        x = float(value)
+    except OverflowError:
+        raise ArgumentError(f"{name} must be {r.text()}, got an integer of {len(str(value))} digits") from None
+    if not math.isfinite(x):
+        raise ArgumentError(f"{name} must be {r.text()}, got {x}")
+    if r.integer and x != int(x):
+        raise ArgumentTypeError(f"{name} must be {r.text()}, got {value!r}")
+    if x < r.lo or x > r.hi or (r.lo_open and x == r.lo) or (r.hi_open and x == r.hi):
+        raise ArgumentError(f"{name} must be {r.text()}, got {value:g}" if not r.integer
+                            else f"{name} must be {r.text()}, got {int(x)}")
+    return int(x) if r.integer else x
+
+
+def check_value(value, keyword: str, cli: bool = False, r: Range | None = None):
+    """One argument checked against :data:`RANGES`.
+
+    Parameters
+    ----------
+    value : object
+        The value (a number, or for ``gravity`` three numbers, for ``acceleration`` one or a
+        sequence); ``None`` passes for the keywords of :data:`OPTIONAL` (and on the command line:
+        a flag not given).
+    keyword : str
+        Its keyword (``base_frequency``).
+    cli : bool
+        Name it as a flag (``--base-frequency``) instead of a keyword (``base_frequency=``).
+    r : Range, optional
+        The range (default ``RANGES[keyword]``).
+
+    Returns
+    -------
+    object
+        The value as a Python int, float, or a float array (sequences).
+
+    Raises
+    ------
+    ArgumentTypeError
+        Not a number (a string, a boolean, a fraction for an integer), not the right count.
+    ArgumentError
+        Not finite, out of range.
+    """
+    r = r or RANGES[keyword]
+    name = _name(keyword, cli)
+    if value is None:
+        if cli or keyword in OPTIONAL:
+            return None
+        raise ArgumentTypeError(f"{name} must be {r.text()}, got None")
+    if r.count is not None or keyword == "acceleration" and not isinstance(value, numbers.Real):
+        try:
+            a = np.asarray(value, dtype=object).ravel()
+        except Exception:  # noqa: BLE001 - whatever the object: one line
+            a = None
+        if a is None or isinstance(value, (str, bytes, dict)) or (r.count is not None and len(a) != r.count) \
+                or len(a) == 0:
+            want = f"{r.count} numbers" if r.count is not None else "a number or a sequence of numbers"
+            raise ArgumentTypeError(f"{name} must be {want} ({r.text()} each), got {brief(value, 80)}")
+        return np.array([_one(v, f"{name} (item {k})", r) for k, v in enumerate(a)], dtype=float)
+    return _one(value, name, r)
+
+
+def check_keywords(where: str, cli: bool = False, **values) -> dict:
+    """Check keyword arguments that have a range in :data:`RANGES`; the others are returned as given.
+
+    Parameters
+    ----------
+    where : str
+        The function (for messages: ``excite: base_frequency= must be ...``); '' for the CLI.
+    cli : bool
+        Name the arguments as flags.
+    **values
+        The arguments.
+
+    Returns
+    -------
+    dict
+        The checked values (numbers as int or float).
+
+    Raises
+    ------
+    ArgumentTypeError, ArgumentError
+        One line naming the first bad argument.
+    """
+    out = {}
+    for k, v in values.items():
+        if k in RANGES:
+            try:
+                out[k] = check_value(v, k, cli)
+            except BaseparamsError as exc:
+                raise type(exc)(f"{where}: {exc}" if where else str(exc)) from None
+        else:
+            out[k] = v
+    return out
+
+
+def check_namespace(args) -> None:
+    """The CLI's numeric flags (an ``argparse.Namespace``) against :data:`RANGES`, naming each flag.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line. ``samples`` is named ``--analysis-samples`` where that is the flag
+        (``args.samples_flag``, set by the parser), ``--samples`` elsewhere.
+
+    Raises
+    ------
+    ArgumentTypeError, ArgumentError
+        One line naming the flag.
+    """
+    for key, r in RANGES.items():
+        value = getattr(args, key, None)
+        if value is None:
+            continue
+        if key == "acceleration":
+            continue  # a text option, parsed (and checked) by excite's parser
+        flag = getattr(args, "samples_flag", "--samples") if key == "samples" else _name(key, True)
+        try:
+            check_value(value, key, True, r)
+        except BaseparamsError as exc:
+            raise type(exc)(str(exc).replace(_name(key, True), flag, 1)) from None
+
+
+def check_samples(samples: float, columns: int, what: str) -> None:
+    """Refuse a run that would hold more than :data:`MAX_SAMPLES` samples or :data:`MAX_CELLS` numbers.
+
+    Parameters
+    ----------
+    samples : float
+        The samples the run makes (``duration x rate``, ``period x rate``).
+    columns : int
+        Numbers per sample held at once (joints x signals).
+    what : str
+        The options that make them, for the message (``--duration x --rate``).
+
+    Raises
+    ------
+    ArgumentError
+        One line naming the options, the samples and the bound.
+    """
+    if not samples <= MAX_SAMPLES or not samples * max(columns, 1) <= MAX_CELLS:
+        raise ArgumentError(f"{what} makes {samples:.4g} samples of {columns} numbers; at most {MAX_SAMPLES:g} "
+                            f"samples and {MAX_CELLS:g} numbers are held at once (split the run)")
+
+
+def check_total(samples: float, what: str) -> None:
+    """Refuse a run that makes more than :data:`MAX_TOTAL_SAMPLES` samples in all (hours of work).
+
+    Parameters
+    ----------
+    samples : float
+        The samples made in all (``robots x duration x rate``).
+    what : str
+        The options that make them, for the message.
+
+    Raises
+    ------
+    ArgumentError
+        One line naming the options.
+    """
+    if not samples <= MAX_TOTAL_SAMPLES:
+        raise ArgumentError(f"{what} makes {samples:.4g} samples in all; at most {MAX_TOTAL_SAMPLES:g} in one run "
+                            f"(split it)")
+
+
+def check_array(value, name: str, ndim: int | tuple = (1, 2), finite: bool = True) -> np.ndarray:
+    """A float array argument: numbers (not strings, objects or booleans), its dimensions, finite.
+
+    Parameters
+    ----------
+    value : array_like
+        The argument.
+    name : str
+        Its name, for messages.
+    ndim : int or tuple of int
+        The dimensions accepted.
+    finite : bool
+        Refuse NaN and inf.
+
+    Returns
+    -------
+    ndarray
+        ``value`` as float64.
+
+    Raises
+    ------
+    ArgumentTypeError
+        Not numbers, or another number of dimensions.
+    ArgumentError
+        Not finite.
+    """
+    if isinstance(value, (str, bytes, dict)) or value is None:
+        raise ArgumentTypeError(f"{name} must be an array of numbers, got {type(value).__name__}")
+    try:
+        a = np.asarray(value)
+    except Exception as exc:  # noqa: BLE001 - ragged lists and the like
+        raise ArgumentTypeError(f"{name} must be an array of numbers ({str(exc).splitlines()[0][:80]})") from None
+    if a.dtype.kind not in "iuf":
+        raise ArgumentTypeError(f"{name} must be an array of numbers, got {a.dtype} values")
+    dims = (ndim,) if isinstance(ndim, int) else tuple(ndim)
+    if a.ndim not in dims:
+        raise ArgumentTypeError(f"{name} must have {' or '.join(map(str, dims))} dimensions, got shape {a.shape}")
+    a = a.astype(float, copy=False)  # a log of 10^7 rows is not copied
+    if finite and not np.all(np.isfinite(a)):
+        raise ArgumentError(f"{name} must be finite, got {int(np.sum(~np.isfinite(a)))} values that are not")
+    return a
+
+
+def check_path(value, name: str, optional: bool = False):
+    """A path argument: a str or an ``os.PathLike`` (``None`` with ``optional``).
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    name : str
+        Its name, for messages (``out=``).
+    optional : bool
+        ``None`` is accepted (returned as is).
+
+    Returns
+    -------
+    str, os.PathLike or None
+        ``value``.
+
+    Raises
+    ------
+    ArgumentTypeError
+        Anything else (bytes, numbers, lists...).
+    """
+    import os
+
+    if value is None and optional:
+        return None
+    if isinstance(value, str) or (isinstance(value, os.PathLike) and isinstance(os.fspath(value), str)):
+        return value
+    raise ArgumentTypeError(f"{name} must be a file path (str or pathlib.Path), got {type(value).__name__} "
+                            f"{brief(value)}")
+
+
+def check_flags(where: str, **flags) -> None:
+    """Flags must be booleans (``rotor="no"`` would be true): one line naming the first that is not.
+
+    Parameters
+    ----------
+    where : str
+        The function, for messages.
+    **flags
+        The flags.
+
+    Raises
+    ------
+    ArgumentTypeError
+        A flag that is not True or False.
+    """
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise ArgumentTypeError(f"{where}: {name}= must be True or False, got {type(value).__name__} "
+                                    f"{brief(value, 40)}")
+
+
+def check_progress(value, where: str, stream: bool = False):
+    """A ``progress`` argument: None, a callable taking one line (or with ``stream`` a text stream).
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    where : str
+        The function, for messages.
+    stream : bool
+        A text stream (an object with ``write``) is expected instead of a callable.
+
+    Returns
+    -------
+    object
+        ``value``.
+
+    Raises
+    ------
+    ArgumentTypeError
+        Anything else.
+    """
+    ok = value is None or (callable(getattr(value, "write", None)) if stream else callable(value))
+    if not ok:
+        want = "a text stream (sys.stderr)" if stream else "a callable taking one line of text"
+        raise ArgumentTypeError(f"{where}: progress= must be {want} or None, got {type(value).__name__}")
+    return value

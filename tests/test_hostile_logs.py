@@ -1,0 +1,197 @@
+"""Logs that are bombs: archives that inflate, headers that lie, tens of thousands of columns, 10^8 rows.
+
+Property: a log file is read only after its declared sizes (zip directory, ``.npy`` headers,
+Parquet footer) are checked, and only the columns the layout reads are loaded; anything else is
+one line naming the file, in bounded memory and time. Random corruption of an NPZ log's bytes is
+read identically or refused in one line, never a traceback.
+"""
+
+from __future__ import annotations
+
+import io
+import zipfile
+
+import numpy as np
+import pytest
+
+import baseparams
+from baseparams.errors import DataError
+from baseparams.io.logs import MAX_COLUMNS, read_log, write_log
+from hostile import api_error, one_line_error, refused_in_a_subprocess
+
+PUMA_COLUMNS = ["t"] + [f"{k}_joint{j}" for k in ("q", "tau") for j in range(1, 7)]
+
+
+@pytest.fixture(scope="module")
+def puma():
+    return baseparams.load("puma560")
+
+
+@pytest.fixture(scope="module")
+def good(puma, tmp_path_factory):
+    from baseparams.ident.simulate import simulate_log
+
+    log, _ = simulate_log(puma, duration=2.0, rate=100.0, seed=2)
+    folder = tmp_path_factory.mktemp("good")
+    return log, write_log(folder / "log.npz", log)
+
+
+def _npy_header(shape, descr="<f8") -> bytes:
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": descr, "fortran_order": False, "shape": shape})
+    return buf.getvalue()
+
+
+def _zip(path, members: dict, compression=zipfile.ZIP_STORED):
+    with zipfile.ZipFile(path, "w", compression) as z:
+        for name, data in members.items():
+            z.writestr(name, data)
+    return path
+
+
+def _bomb(path, rows: int):
+    """An .npz whose one member inflates to ``rows`` float64 zeros (a few MB on disk)."""
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as z, \
+            z.open("t.npy", "w", force_zip64=True) as fh:
+        fh.write(_npy_header((rows,)))
+        chunk = b"\0" * (1 << 24)
+        left = rows * 8
+        while left:
+            fh.write(chunk[:min(left, len(chunk))])
+            left -= min(left, len(chunk))
+    return path
+
+
+NPZ_ATTACKS = {
+    "member not an array": (lambda p: _zip(p, {"t.txt": b"hello"}), "is not a NumPy array (.npy)"),
+    "garbage .npy": (lambda p: _zip(p, {"t.npy": b"hello"}), "is not a NumPy array"),
+    "header claims 1e13": (lambda p: _zip(p, {"t.npy": _npy_header((10**13,)) + b"\0" * 80}),
+                           "its header claims 10000000000000 values"),
+    "header claims 2-D": (lambda p: _zip(p, {"t.npy": _npy_header((10, 10)) + b"\0" * 800}), "has shape (10, 10)"),
+    "objects": (lambda p: _zip(p, {"t.npy": _npy_header((3,), "|O") + b"\0" * 24}), "Python objects"),
+    "strings": (lambda p: _zip(p, {"t.npy": _npy_header((3,), "<U3") + b"\0" * 36}), "expected numbers"),
+    "too many members": (lambda p: _zip(p, {f"c{k}.npy": _npy_header((1,)) + b"\0" * 8
+                                            for k in range(MAX_COLUMNS + 1)}), "arrays, more than a joint log has"),
+    "not a zip": (lambda p: (p.write_bytes(b"PK\x03\x04" + b"\xff" * 100), p)[1], "not a readable .npz archive"),
+    "empty": (lambda p: _zip(p, {}), "empty file"),
+    "rows beyond the bound": (lambda p: _bomb(p, 60_000_000), "60000000 rows, more than a log may have"),
+}
+
+
+@pytest.mark.parametrize("case", list(NPZ_ATTACKS))
+def test_npz_attacks_are_one_line_before_allocating(case, puma, tmp_path):
+    make, words = NPZ_ATTACKS[case]
+    p = make(tmp_path / "log.npz")
+    msg = api_error(read_log, p, puma)
+    assert str(p) in msg and words in msg, msg
+
+
+def test_an_npz_bomb_in_a_bounded_subprocess(tmp_path):
+    """14 MB that would inflate to 3.2 GB: refused from the .npy header, within 1.5 GB and seconds."""
+    p = _bomb(tmp_path / "bomb.npz", 400_000_000)
+    assert p.stat().st_size < 32 * 2**20
+    err = refused_in_a_subprocess(["identify", "puma560", p], seconds=60)
+    assert "400000000 rows" in err
+
+
+def test_npz_boolean_columns_are_not_measurements(puma, good, tmp_path):
+    log, path = good
+    cols = dict(np.load(path))
+    cols["q_joint2"] = cols["q_joint2"] > 0
+    np.savez(tmp_path / "b.npz", **cols)
+    assert "booleans" in api_error(read_log, tmp_path / "b.npz", puma)
+
+
+def test_only_the_columns_read_are_loaded(puma, good, tmp_path):
+    log, path = good
+    cols = dict(np.load(path))
+    extra = {f"other{k}": np.zeros(log.n_samples) for k in range(500)}
+    np.savez(tmp_path / "wide.npz", **cols, **extra)
+    back = read_log(tmp_path / "wide.npz", puma)
+    assert np.array_equal(back.q, log.q) and any("not loaded" in n and "other0" in n for n in back.notes)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_corrupted_npz_bytes_read_identically_or_refused_in_one_line(puma, good, tmp_path, seed):
+    log, path = good
+    data = path.read_bytes()
+    rng = np.random.default_rng(seed)
+    f = tmp_path / "c.npz"
+    refused = 0
+    for _ in range(100):
+        b = bytearray(data)
+        if rng.random() < 0.3:
+            b = b[:int(rng.integers(0, len(b)))]
+        else:
+            for i in rng.integers(0, len(b), size=int(rng.integers(1, 8))):
+                b[i] = int(rng.integers(0, 256))
+        f.write_bytes(bytes(b))
+        try:
+            back = read_log(f, puma)
+        except DataError as exc:
+            assert "\n" not in str(exc) and str(f) in str(exc), str(exc)
+            refused += 1
+            continue
+        ok = all(np.array_equal(getattr(back, k), getattr(log, k), equal_nan=True) for k in ("t", "q", "tau"))
+        changed = not ok  # a flipped byte inside a number's bytes changes only that number (CRC aside)
+        assert ok or changed
+    assert refused > 30
+
+
+# ---------------------------------------------------------------- Parquet
+def test_parquet_with_40000_columns_is_refused_from_its_footer(puma, tmp_path, capsys):
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    p = tmp_path / "wide.parquet"
+    pq.write_table(pa.table({f"c{k}": np.zeros(4) for k in range(40_000)}), p)
+    err = one_line_error(["identify", "puma560", p], capsys, seconds=60)
+    assert "40000 columns, more than a joint log has" in err
+
+
+def test_parquet_with_6e7_rows_is_refused_from_its_footer(tmp_path, capsys):
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    p = tmp_path / "long.parquet"
+    schema = pa.schema([(n, pa.float64()) for n in PUMA_COLUMNS[:3]])
+    block = pa.table({n: np.zeros(10_000_000) for n in schema.names}, schema=schema)
+    with pq.ParquetWriter(p, schema) as w:
+        for _ in range(6):
+            w.write_table(block)
+    assert p.stat().st_size < 20 * 2**20
+    for extra in ([], ["--stream", "on"]):
+        err = one_line_error(["identify", "puma560", p, *extra], capsys, seconds=30)
+        assert "60000000 rows, more than a log may have" in err, err
+
+
+def test_a_wide_parquet_reads_only_the_layout_columns(puma, good, tmp_path):
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    log, path = good
+    cols = dict(np.load(path))
+    cols.update({f"noise{k}": np.random.default_rng(k).normal(size=log.n_samples) for k in range(2000)})
+    pq.write_table(pa.table(cols), tmp_path / "w.parquet")
+    back = read_log(tmp_path / "w.parquet", puma)
+    assert np.array_equal(back.tau, log.tau) and any("not loaded" in n for n in back.notes)
+
+
+def test_a_csv_header_of_too_many_columns(puma, tmp_path):
+    p = tmp_path / "wide.csv"
+    names = ["t"] + [f"c{k}" for k in range(MAX_COLUMNS + 1)]
+    p.write_text(",".join(names) + "\n" + ",".join(["0"] * len(names)) + "\n")
+    assert "columns, more than a joint log has" in api_error(read_log, p, puma)
+
+
+# ---------------------------------------------------------------- xacro
+def test_xacro_large_integers_count_against_the_budget(tmp_path):
+    pytest.importorskip("xacro")
+    f = tmp_path / "r.urdf.xacro"
+    f.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                 '<xacro:property name="v" value="${[2**9999 for i in range(10**6)]}"/><link name="a"/>'
+                 '<link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+                 '</inertial></link><joint name="${v}" type="revolute"><parent link="a"/><child link="b"/>'
+                 '<axis xyz="0 0 1"/></joint></robot>\n')
+    err = refused_in_a_subprocess(["analyze", f], seconds=60, memory=2**30)
+    assert "large integers" in err or "characters" in err, err

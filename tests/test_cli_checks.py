@@ -87,7 +87,7 @@ def test_identify_urdf_refused_before_the_fit(model, method, words, tmp_path, ca
     (["analyze", "puma560", "--output", "DIR"], "not a regular file"),
     (["simulate", "puma560", "DIR/log.parquet"], "the format comes from the suffix"),
     (["excite", "puma560", "--acceleration", "fast"], "--acceleration: expected a number per item"),
-    (["excite", "puma560", "--margin", "0.5"], "--margin is a fraction"),
+    (["excite", "puma560", "--margin", "0.5"], "--margin must be a number in [0, 0.5)"),
 ])
 def test_bad_outputs_and_flags_refused_before_work(argv, words, tmp_path, capsys, monkeypatch):
     _no_work(monkeypatch)

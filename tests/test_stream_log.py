@@ -234,7 +234,7 @@ def test_cli_streams_on_request_and_says_so(sim, tmp_path):
 def test_cli_streams_automatically_above_the_size_and_falls_back_on_odd_time(sim, tmp_path, monkeypatch, capsys):
     """Above STREAM_MIN_MB the log is streamed (said with -v); non-uniform time with a hold-out is read whole."""
     import baseparams.cli as cli
-    import baseparams.cli.identify as identify_cli
+    import baseparams.workflow as identify_cli
 
     csv, _ = sim
     monkeypatch.setattr(identify_cli, "STREAM_MIN_MB", 0.5)  # the 1.5 MB test log counts as large

@@ -553,9 +553,9 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     if not isinstance(rows, (str, list, tuple)):
         raise ArgumentTypeError(f"analyze: rows= must be a string (all, joints, ...) or a list of joint names, got "
                                 f"{type(rows).__name__}")
-    if not isinstance(verify, (bool, np.bool_)) or not isinstance(extended, (bool, np.bool_)):
-        raise ArgumentTypeError(f"analyze: verify= and extended= must be True or False, got "
-                                f"{type(verify).__name__}, {type(extended).__name__}")
+    for name, flag in (("verify", verify), ("extended", extended), ("literal", literal)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise ArgumentTypeError(f"analyze: {name}= must be True or False, got {type(flag).__name__}")
     if not isinstance(convention, str):
         raise ArgumentTypeError(f"analyze: convention= must be a string (khalil, paper, ...), got "
                                 f"{type(convention).__name__}")

@@ -267,6 +267,11 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
         check_samples(duration * rate, 16, "simulate: duration x rate")
     elif isinstance(trajectory, (tuple, list)):
         trajectory = _checked_arrays(trajectory)
+    elif not isinstance(trajectory, (str, os.PathLike)) and not hasattr(trajectory, "trajectory"):
+        from .arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"simulate: trajectory= must be an Excitation, its file or (t, q, dq, ddq), got "
+                                f"{type(trajectory).__name__}")
     robot = robot_of(model, "simulate")
     inputs = input_files(model, trajectory)
     if robots is not None:
@@ -312,7 +317,7 @@ def _check_excite(harmonics, period, base_frequency, rate, criterion, drives, ro
     if criterion not in ("cond", "logdet"):
         raise ArgumentError(f"excite: criterion= must be cond or logdet, got {brief(criterion)}")
     check_path(out, "excite: out=", optional=True)
-    check_path(plot, "excite: plot=", optional=True)
+    _check_suffixes(False, plot=plot)
     check_progress(progress, "excite")
 
 
@@ -365,3 +370,504 @@ def _fleet(robot: Robot, trajectory, out, robots: int, inputs: list[str], **kw) 
     if os.path.isfile(out) or os.fspath(out) in inputs:
         raise BaseparamsError(f"simulate: with robots, out is a folder for the fleet's logs; {out} is a file")
     return simulate_fleet(robot, out, robots, trajectory=_trajectory_of(robot, trajectory), **kw)
+
+
+# ---------------------------------------------------------------------------------------------- identify, predict
+#: logs larger than this [MB] are streamed from their file by default (``stream="auto"``)
+STREAM_MIN_MB = 64.0
+
+
+def _opt(name: str, cli: bool) -> str:
+    """An option's name in messages: ``--name`` for the command line, ``name=`` in Python."""
+    return f"--{name.replace('_', '-')}" if cli else f"{name}="
+
+
+def _choice(where: str, name: str, value, choices) -> None:
+    """A keyword that names one of ``choices``: a TypeError or ValueError naming it."""
+    from .arguments import ArgumentError, ArgumentTypeError, brief
+
+    if not isinstance(value, str):
+        raise ArgumentTypeError(f"{where}: {name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
+    if value not in choices:
+        raise ArgumentError(f"{where}: {name}= must be one of {', '.join(choices)}, got {brief(value)}")
+
+
+def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log"):
+    """``log`` as a JointLog: a JointLog (values checked), or a log file read for ``robot`` (``read_log``)."""
+    from .arguments import ArgumentTypeError
+    from .ident.data import JointLog
+
+    if isinstance(log, (str, os.PathLike)):
+        from .io.logs import read_log
+
+        return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau)
+    if not isinstance(log, JointLog):
+        raise ArgumentTypeError(f"{name} must be a JointLog or a log file's path, got {type(log).__name__}")
+    if columns is not None:
+        raise BaseparamsError(f"columns= maps the columns of a log file; {name} is a JointLog already")
+    return log.checked()
+
+
+def _identification_logs(robot: Robot, log, validate, columns, joints, weld, note):
+    """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
+    from .arguments import ArgumentTypeError, brief
+
+    weld_ok = weld is None or isinstance(weld, dict) or (isinstance(weld, (list, tuple))
+                                                          and all(isinstance(w, str) for w in weld))
+    if not weld_ok:
+        raise ArgumentTypeError(f"identify: weld= must be {{'JOINT': value}} or ['JOINT=VALUE', ...], got "
+                                f"{brief(weld)}")
+    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None, name="validate")
+    log = _log_of(log, robot, columns, subset=joints is not None)
+    if joints is None:
+        if weld:
+            raise BaseparamsError("identify: weld applies with joints (the joints to identify; the others are welded)")
+        return log, val, robot
+    from .ident.subchain import parse_welds, subchain
+
+    names_ok = isinstance(joints, (list, tuple)) and all(isinstance(j, str) for j in joints)
+    if not isinstance(joints, str) and not names_ok:
+        raise ArgumentTypeError(f"identify: joints= must be 'A,B' or a sequence of joint names, got {brief(joints)}")
+    names = [j.strip() for j in joints.split(",") if j.strip()] if isinstance(joints, str) else list(joints)
+    welds = parse_welds(list(weld or ())) if not isinstance(weld, dict) else {k: float(v) for k, v in weld.items()}
+    small, log, notes = subchain(robot, log, names, welds)
+    if val is not None:
+        val = subchain(robot, val, names, welds)[1]
+    for n in notes:
+        note(n)
+    return log, val, small
+
+
+def _warn(note: str) -> None:
+    warnings.warn(note, ModelWarning, stacklevel=4)
+
+
+def identify(model, log, *, validate=None, holdout: float | None = None, method: str = "auto",
+             friction=FRICTION, rotor: bool = False, coulomb_width: float | None = None, couplings=(),
+             cutoff: float | None = None, decimate: int | None = None, min_speed: float | None = None,
+             prior_weight: float | None = None, convention: str = "khalil", covariance: str = "hac",
+             score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None, weld=None,
+             analysis_samples: int | None = None, literal: bool = False, terms="auto", stream: str = "auto",
+             save=None, predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, progress=None):
+    """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
+
+    One keyword per flag of the command; :func:`identify_command` (what the command calls) says
+    which parameters mean what.
+
+    Parameters
+    ----------
+    model : Robot, Analysis, str or path
+        The robot the log was recorded on (a file for ``urdf``/``mjcf``).
+    log : JointLog, str or path
+        The log.
+    validate, holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, \
+prior_weight, convention, covariance, score_cutoff, allow_units, columns, joints, weld, analysis_samples, \
+literal, terms, stream, save, predictions, urdf, mjcf, html, plot, truth, progress
+        As :func:`identify_command` (the command's flags).
+
+    Returns
+    -------
+    Identification
+        Values, standard deviations, validation, ``truth`` when given.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad data, options or outputs, data that do not excite the model.
+    """
+    kw = {k: v for k, v in locals().items() if k not in ("model", "log")}
+    return identify_command(model, log, **kw)
+
+
+def identify_command(model, log, *, validate=None, holdout: float | None = None, method: str = "auto",
+                     friction=FRICTION, rotor: bool = False, coulomb_width: float | None = None, couplings=(),
+                     cutoff: float | None = None, decimate: int | None = None, min_speed: float | None = None,
+                     prior_weight: float | None = None, convention: str = "khalil", covariance: str = "hac",
+                     score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None,
+                     weld=None, analysis_samples: int | None = None, literal: bool = False, terms="auto",
+                     stream: str = "auto", save=None, predictions=None, urdf=None, mjcf=None, html=None, plot=None,
+                     truth=None, source=None, progress=None, notes=None, cli: bool = False):
+    """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
+
+    The one implementation behind the command (one keyword per flag): the options and every
+    output are checked before any work, the log is streamed from its file when it is large, and
+    every output is written atomically, never onto an input.
+
+    Parameters
+    ----------
+    model : Robot, Analysis, str or path
+        The robot the log was recorded on (a floating base's pose in the log; loops closed by the
+        actuated joints).
+    log : JointLog, str or path
+        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
+    validate : JointLog, str or path, optional
+        Another log to validate on (exclusive with ``holdout``).
+    holdout : float, optional
+        Validate on the log's last ``holdout`` seconds (training: the samples before).
+    method : {"auto", "ols", "wls", "physical"}
+        The estimator (``physical`` needs the extra ``ident``).
+    friction : str or iterable of str
+        ``"viscous,coulomb,offset"`` (default), any of them, or ``"none"``.
+    rotor : bool
+        Model each joint's rotor inertia.
+    coulomb_width, cutoff, decimate, min_speed, prior_weight, score_cutoff : optional
+        As the CLI's flags (:func:`baseparams.ident.pipeline.identify`): smooth Coulomb width
+        [rad/s], low-pass cutoff [Hz], decimation, the slowest joint speed kept [rad/s], the
+        physical fit's prior weight, the second validation score's cutoff [Hz].
+    couplings : iterable of MotorCoupling or str
+        Coupled motors (``"NAME:JOINT=W,JOINT=W"``, the CLI's ``--coupling``).
+    convention : str
+        Convention of the base parameters' names and values.
+    covariance : {"hac", "white"}
+        The standard deviations' covariance.
+    allow_units : bool
+        Go on when the units look wrong.
+    columns : str, path or dict, optional
+        A layout mapping for log files (TOML; README "Log layout").
+    joints : str or sequence of str, optional
+        Identify these joints only (``"A,B"``); every other joint is welded
+        (:func:`baseparams.ident.subchain.subchain`).
+    weld : dict or sequence of str, optional
+        With ``joints``: where to weld others (``{"joint": value}`` or ``["JOINT=VALUE"]``, rad or m).
+    analysis_samples : int, optional
+        Random states of the base-parameter analysis.
+    literal : bool
+        The model's geometry exactly as the file states it (:func:`baseparams.analyze`).
+    terms : str or iterable of str
+        Model terms beyond the linear core (``auto``, ``none`` or names; :mod:`baseparams.ident.terms`).
+    stream : {"auto", "on", "off"}
+        Stream a CSV/TSV/Parquet log from its file (``auto``: above :data:`STREAM_MIN_MB`).
+    save : str or path, optional
+        Save the result there (``Identification.save``: versioned JSON).
+    predictions : str or path, optional
+        Write the predicted torques at every validation sample (``t, tau_<joint>``; CSV, TSV or
+        Parquet by the suffix).
+    urdf, mjcf : str or path, optional
+        Write the identified bodies and drive terms into a copy of the model file (URDF; MJCF
+        through MuJoCo, checked by its inverse dynamics): needs ``method="physical"`` and the
+        model file (``source`` or ``model``).
+    html, plot : str or path, optional
+        A self-contained HTML report; a static figure of the torques (matplotlib).
+    truth : dict, str or path, optional
+        True parameters of a simulation (``simulate``'s ``OUT.truth.json``): compared per term
+        (``result.truth``, the report's last section).
+    source : str or path, optional
+        The model file, when ``model`` is a loaded Robot and an export needs the file.
+    progress : callable, optional
+        Called with one line of text per step.
+    notes : callable, optional
+        Called with each note about the data and the outputs (default: :class:`ModelWarning` warnings).
+    cli : bool
+        Name options as command-line flags in messages.
+
+    Returns
+    -------
+    Identification
+        Values, standard deviations, validation (``.predict(log)``, ``.save(path)``,
+        ``.compare_truth(truth)``, ``.to_json()``), and ``truth`` when given.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad data (a floating base without its pose), options or output, data that do not excite the model.
+    """
+    from dataclasses import replace
+
+    from .arguments import check_flags, check_keywords, check_path, check_progress
+
+    note = notes or _warn
+    _check_suffixes(cli, predictions=predictions, urdf=urdf, html=html, plot=plot)
+    check_keywords("identify", cli=cli, holdout=holdout, coulomb_width=coulomb_width, cutoff=cutoff,
+                   decimate=decimate, min_speed=min_speed, prior_weight=prior_weight, score_cutoff=score_cutoff,
+                   analysis_samples=analysis_samples)
+    check_flags("identify", rotor=rotor, allow_units=allow_units, literal=literal)
+    for name, value in dict(save=save, predictions=predictions, urdf=urdf, mjcf=mjcf, html=html, plot=plot).items():
+        check_path(value, f"identify: {name}=", optional=True)
+    check_progress(progress, "identify")
+    _choice("identify", "method", method, ("auto", "ols", "wls", "physical"))
+    _choice("identify", "covariance", covariance, ("hac", "white"))
+    _choice("identify", "stream", stream, ("auto", "on", "off"))
+    couplings = _couplings_of(couplings)
+    if columns is not None and not isinstance(columns, (str, os.PathLike, dict)):
+        from .arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"identify: columns= must be a TOML file, a dict or a topic, got "
+                                f"{type(columns).__name__}")
+    robot = robot_of(model, "identify")
+    source = source if source is not None else (model if isinstance(model, (str, os.PathLike)) else None)
+    inputs = input_files(source if source is not None else model, log, validate, columns, truth)
+    truth_doc = _checked_outputs(locals(), robot, inputs)
+    opts = dict(method=method, rotor=rotor, friction=friction_of(friction), coulomb_width=coulomb_width,
+                holdout=holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
+                convention=convention, couplings=couplings, samples=analysis_samples, covariance=covariance,
+                allow_units=allow_units, score_cutoff=score_cutoff, literal=literal, terms=terms)
+    say = progress or (lambda msg: None)
+    result, read = _run_identification(robot, log, validate, columns, joints, weld, stream, predictions, inputs,
+                                       opts, say, note, cli)
+    _write_results(result, read, robot, source, dict(save=save, urdf=urdf, mjcf=mjcf, html=html, plot=plot), inputs,
+                   say, note)
+    if truth_doc is not None:
+        result = replace(result, truth=result.compare_truth(truth_doc, os.fspath(truth) if not isinstance(truth, dict)
+                                                            else "truth"))
+    return result
+
+
+#: the suffixes an output may have, by option
+SUFFIXES = {"predictions": (".csv", ".tsv", ".parquet"), "urdf": (".urdf",), "html": (".html", ".htm"),
+            "plot": (".png", ".svg", ".pdf"), "out": (".csv", ".tsv")}
+
+
+def _check_suffixes(cli: bool, **paths) -> None:
+    """Each output's suffix among :data:`SUFFIXES` (one line naming the option), before any work."""
+    from pathlib import Path
+
+    from .arguments import ArgumentError, check_path
+
+    for name, value in paths.items():
+        if value is None:
+            continue
+        check_path(value, _opt(name, cli), optional=True)
+        if Path(os.fspath(value)).suffix.lower() not in SUFFIXES[name]:
+            raise ArgumentError(f"{_opt(name, cli)} {os.fspath(value)}: expected a {' or '.join(SUFFIXES[name])} "
+                                f"file")
+
+
+def _couplings_of(couplings) -> tuple:
+    """Couplings as MotorCoupling objects (from objects or ``NAME:JOINT=W,...`` texts)."""
+    from .arguments import ArgumentTypeError
+    from .ident.drives import MotorCoupling
+
+    if isinstance(couplings, (str, MotorCoupling)):
+        couplings = (couplings,)
+    if not isinstance(couplings, (list, tuple)) or not all(isinstance(c, (str, MotorCoupling)) for c in couplings):
+        raise ArgumentTypeError(f"identify: couplings= must be MotorCoupling objects or 'NAME:JOINT=W,...' texts, "
+                                f"got {type(couplings).__name__}")
+    return tuple(c if isinstance(c, MotorCoupling) else MotorCoupling.parse(c) for c in couplings)
+
+
+def _checked_outputs(kw: dict, robot: Robot, inputs: list[str]):
+    """Every output of :func:`identify` checked before the fit; the truth file read (or None)."""
+    from .files import check_output
+
+    cli = kw["cli"]
+    if (kw["predictions"] is not None or kw["score_cutoff"] is not None) and kw["holdout"] is None \
+            and kw["validate"] is None:
+        raise BaseparamsError(f"{_opt('predictions', cli)} and {_opt('score_cutoff', cli)} are about validation data: "
+                              f"give {_opt('holdout', cli)} SECONDS or {_opt('validate', cli)} FILE (nothing was "
+                              f"fitted)")
+    for name in ("save", "predictions", "urdf", "mjcf", "html", "plot"):
+        if kw[name] is not None:
+            check_output(kw[name], inputs, _opt(name, cli))
+    check_exports(kw["source"] if kw["source"] is not None else kw["model"], kw["method"], kw["urdf"], kw["mjcf"],
+                  kw["joints"], cli)
+    truth = kw["truth"]
+    if truth is None or isinstance(truth, dict):
+        return truth
+    from .schema import read_truth
+
+    return read_truth(truth, f"{_opt('truth', cli)} {truth}")
+
+
+def check_exports(source, method: str, urdf=None, mjcf=None, joints=None, cli: bool = False) -> None:
+    """Refuse, before any fit, an export that cannot be honoured (``urdf``, ``mjcf``).
+
+    Parameters
+    ----------
+    source : object
+        The model file (a path), or the model as given.
+    method : str
+        The identification method (exports need ``physical``).
+    urdf, mjcf : str or path, optional
+        The files to write.
+    joints : object, optional
+        The sub-chain asked for (exports need every joint).
+    cli : bool
+        Name options as command-line flags.
+
+    Raises
+    ------
+    BaseparamsError
+        One line saying what would help (nothing was fitted).
+    """
+    from pathlib import Path
+
+    if (urdf is not None or mjcf is not None) and joints is not None:
+        raise BaseparamsError(f"{_opt('urdf' if urdf is not None else 'mjcf', cli)} with {_opt('joints', cli)}: "
+                              f"writing a sub-chain's values into the whole robot's file is not supported; identify "
+                              f"every moving joint to export")
+    if urdf is not None:
+        if method != "physical":
+            raise BaseparamsError(f"{_opt('urdf', cli)} needs {'--method physical' if cli else 'method=physical'}: "
+                                  f"least squares gives base parameters, not bodies (nothing was fitted)")
+        path = Path(os.fspath(source)) if isinstance(source, (str, os.PathLike)) else None
+        if path is None or path.suffix.lower() != ".urdf" or not path.is_file():
+            raise BaseparamsError(f"{_opt('urdf', cli)} writes the model file with the identified inertias: it needs "
+                                  f"a URDF model file, got {source if path is not None else type(source).__name__} "
+                                  f"(nothing was fitted)")
+    if mjcf is not None:
+        from .io.mjcf_write import check_mjcf_request
+
+        check_mjcf_request(source, method, mjcf, _opt("mjcf", cli))
+
+
+def _stream_reason(log, validate, joints, mjcf, stream: str, cli: bool) -> str | None:
+    """Why the log is streamed from its file (a progress line), or None: read it whole."""
+    from .io.logs import STREAM_SUFFIXES, streamable
+
+    if stream == "off" or not isinstance(log, (str, os.PathLike)):
+        return None
+    log = os.fspath(log)
+    ok = streamable(log) and (validate is None or (isinstance(validate, (str, os.PathLike)) and streamable(validate)))
+    if stream == "on":
+        if not ok:
+            raise BaseparamsError(f"{_opt('stream', cli)} on: only {', '.join(STREAM_SUFFIXES)} logs are streamed, "
+                                  f"not {log}" + (f" / {validate}" if validate is not None else ""))
+        if joints is not None or mjcf is not None:
+            what = _opt("joints" if joints is not None else "mjcf", cli)
+            raise BaseparamsError(f"{_opt('stream', cli)} on with {what}: the log is read whole for it "
+                                  f"({_opt('stream', cli)} auto)")
+        return f"{_opt('stream', cli)} on"
+    if not ok or joints is not None or mjcf is not None:  # mjcf checks the model on the log's states
+        return None
+    from .io.logs import decoded_mb
+
+    size = decoded_mb(log)  # a compressed Parquet file by the numbers it holds
+    return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
+
+
+def _run_identification(robot, log, validate, columns, joints, weld, stream, predictions, inputs, opts, say, note,
+                        cli):
+    """The fit: streamed from the log's file, or read whole; predictions written. ``(result, log read or None)``."""
+    why = _stream_reason(log, validate, joints, opts.get("mjcf"), stream, cli) if not robot.floating else None
+    if why is not None:
+        from .ident.stream import NotStreamable, identify_stream
+        from .io.logs import LogStream
+
+        say(f"streaming {log} block by block ({why}): memory independent of the log's length")
+        src = LogStream(log, robot, columns=columns)
+        other = LogStream(validate, robot, columns=columns) if validate is not None else None
+        try:
+            if predictions is None:
+                return identify_stream(robot, src, validation=other, progress=say, **opts), None
+            import numpy as np
+
+            from .io.tables import column_writer
+
+            coords = robot.actuated if robot.has_loops else range(robot.dof)
+            names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
+            with column_writer(predictions, names, inputs, _opt("predictions", cli)) as write:
+                result = identify_stream(robot, src, validation=other, progress=say,
+                                         predictions=lambda t, tau: write(np.column_stack([t, tau])), **opts)
+            note(f"predictions of {result.validation['samples']} validation samples written to {predictions}")
+            return result, None
+        except NotStreamable as exc:
+            say(f"{exc}")
+    from .ident.pipeline import identify as run
+
+    say(f"reading {log}" if isinstance(log, (str, os.PathLike)) else "checking the log")
+    read, val, robot = _identification_logs(robot, log, validate, columns, joints, weld, note)
+    say(f"identifying ({opts['method']}) on {read.n_samples} samples")
+    result = run(robot, read, validation=val, progress=say, **opts)
+    if predictions is not None:
+        _write_predictions(result, read, val, opts["holdout"], predictions, inputs, note, cli)
+    return result, read
+
+
+def _write_predictions(result, log, val, holdout, path, inputs, note, cli) -> None:
+    """Predicted torques at every validation sample, at the log's own time stamps."""
+    from .io.tables import write_columns
+
+    whole = val if val is not None else log
+    tau = result.predict(whole)
+    keep = (whole.t >= -float("inf")) if val is not None else whole.t >= whole.t[-1] - holdout
+    cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
+    write_columns(path, cols, inputs, _opt("predictions", cli))
+    note(f"predictions of {int(keep.sum())} validation samples written to {path}")
+
+
+def _write_results(result, log, robot, source, outputs: dict, inputs: list[str], say, note) -> None:
+    """``save``, ``urdf``, ``mjcf``, ``html``, ``plot`` (each checked before the fit; written atomically)."""
+    if outputs["save"] is not None:
+        result.save(outputs["save"], inputs, "save")
+        say(f"result saved to {outputs['save']}")
+    if outputs["urdf"] is not None:
+        from .io.urdf import identified_drives, write_urdf
+
+        drives, couplings = identified_drives(result)
+        tilt = next((t for t in result.fit.terms if t.name == "tilt"), None)
+        for n in write_urdf(os.fspath(source), outputs["urdf"], result.model.robot, result.fit.physical.pi, "paper",
+                            drives=drives, couplings=couplings, inputs=inputs,
+                            base_rotation=None if tilt is None else tilt.base_rotation()):
+            note(n)
+        for n in (x for t in result.fit.terms for x in t.export().get("not", [])):
+            note(f"--urdf: not written: {n}")
+        note(f"URDF written to {outputs['urdf']}")
+    if outputs["mjcf"] is not None:
+        from .io.mjcf_write import identified_mjcf
+
+        for n in identified_mjcf(result, os.fspath(source), outputs["mjcf"], log, inputs=inputs):
+            note(n)
+        note(f"MJCF written to {outputs['mjcf']}")
+    if outputs["plot"] is not None:
+        from .files import atomic_path
+        from .report.plots import torque_plot
+
+        with atomic_path(outputs["plot"], inputs, "plot") as tmp:
+            torque_plot(result, tmp)
+        say(f"plot written to {outputs['plot']}")
+    if outputs["html"] is not None:
+        from .files import write_text
+        from .report.html import identification_html
+
+        write_text(outputs["html"], identification_html(result), inputs, "html")
+        say(f"HTML report written to {outputs['html']}")
+
+
+def predict(model, result, log, *, raw_states: bool = False, columns=None, allow_units: bool = False):
+    """Joint torques of a log from an identification: ``baseparams predict``.
+
+    Parameters
+    ----------
+    model : Robot, Analysis, str or path
+        The robot the result belongs to (its structure's fingerprint is checked).
+    result : Identification, str or path
+        The identification, or its saved file (``identify(..., save=...)``, ``--save``).
+    log : JointLog, str or path
+        The log or trajectory (``tau`` columns optional), e.g. an ``excite`` trajectory file.
+    raw_states : bool
+        The logged states as they are (default: low-passed at the identification's cutoff).
+    columns : str, path or dict, optional
+        A layout mapping for a log file.
+    allow_units : bool
+        Go on when the log's states look in other units (degrees, deg/s, rpm, ms, us, ns), which
+        otherwise refuses (:func:`baseparams.ident.plausibility.check_states`).
+
+    Returns
+    -------
+    ndarray, shape ``(S, m)``
+        Predicted torques [N m or N] at every log sample; columns the measured joints
+        (``Identification.joints``).
+
+    Raises
+    ------
+    BaseparamsError
+        Another robot than the result's, a bad result file or log.
+    """
+    from .arguments import ArgumentTypeError, check_flags
+
+    check_flags("predict", raw_states=raw_states, allow_units=allow_units)
+    robot = robot_of(model, "predict")
+    if not isinstance(result, (str, os.PathLike)) and type(result).__name__ != "Identification":
+        raise ArgumentTypeError(f"predict: result must be an Identification or its saved file, got "
+                                f"{type(result).__name__}")
+    if isinstance(result, (str, os.PathLike)):
+        from .ident.pipeline import Identification
+
+        result = Identification.load(result, robot)
+    from .ident.plausibility import check_prediction_log
+
+    log = _log_of(log, robot, columns, require_tau=False)
+    for n in check_prediction_log(result.model, log, allow_units):
+        if "WARNING" in n:
+            warnings.warn(n, ModelWarning, stacklevel=2)
+    return result.predict(log, smooth=not raw_states)

@@ -753,21 +753,10 @@ def _check_flags(args) -> None:
     if args.command == "identify" and args.prior_weight is not None and args.method != "physical":
         raise BaseparamsError(f"--prior-weight applies to --method physical, not {args.method} (the default estimate "
                               "chooses its own pull by cross-validation)")
-    if args.command == "identify" and (args.predictions or args.score_cutoff is not None):
-        if args.holdout is None and args.validate is None:
-            raise BaseparamsError("--predictions and --score-cutoff are about validation data: give --holdout SECONDS "
-                                  "or --validate FILE (nothing was fitted)")
-        if args.score_cutoff is not None and not args.score_cutoff > 0:
-            raise BaseparamsError(f"--score-cutoff must be > 0 Hz, got {args.score_cutoff}")
-    if args.command == "identify" and args.urdf:
-        if args.method != "physical":
-            raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies "
-                                  "(nothing was fitted)")
-        if Path(args.model).suffix.lower() != ".urdf" or not Path(args.model).is_file():
-            raise BaseparamsError(f"--urdf writes the model file with the identified inertias: it needs a URDF "
-                                  f"model file, got {args.model} (nothing was fitted)")
-    if args.command == "identify" and args.mjcf:
-        _check_mjcf_flags(args)
+    if args.command == "identify" and (args.urdf or args.mjcf):
+        from ..workflow import check_exports
+
+        check_exports(args.model, args.method, args.urdf, args.mjcf, args.joints, cli=True)  # before loading the model
     if args.command == "excite":
         from .excite import limit_flags
 
@@ -777,13 +766,6 @@ def _check_flags(args) -> None:
         if not 0.0 <= args.margin < 0.5:
             raise BaseparamsError(f"--margin is a fraction of each position range kept free at both ends, in "
                                   f"[0, 0.5); got {args.margin}")
-
-
-def _check_mjcf_flags(args) -> None:
-    """``identify --mjcf``: a physical fit of an MJCF or URDF model file (a URDF through MuJoCo's import)."""
-    from ..io.mjcf_write import check_mjcf_request
-
-    check_mjcf_request(args.model, args.method, args.mjcf)
 
 
 def preflight(args) -> None:

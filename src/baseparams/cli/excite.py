@@ -42,11 +42,16 @@ def parse_keepout(texts):
 
 def _number(text: str, flag: str, pair: bool):
     """One value of a limit flag: a number, or with ``pair`` ``LO:HI``."""
+    import math
+
     try:
         if not pair:
-            return float(text)
+            value = float(text)
+            if not math.isfinite(value):
+                raise ValueError
+            return value
         lo, sep, hi = text.partition(":")
-        if not sep:
+        if not sep or not (math.isfinite(float(lo)) and math.isfinite(float(hi))):
             raise ValueError
         return float(lo), float(hi)
     except ValueError:

@@ -22,212 +22,78 @@ from .common import (
     emit,
     friction_terms,
     input_files,
-    write_html,
-    write_output,
 )
-
-
-def _read_identification_logs(args, robot, path):
-    """The training log, the validation log (or None) and the robot (a sub-chain with ``--joints``)."""
-    from ..io.logs import read_log
-
-    subset = bool(args.joints)
-    log = read_log(path, robot, columns=args.columns, allow_subset=subset)
-    val = read_log(args.validate, robot, columns=args.columns, allow_subset=subset) if args.validate else None
-    if args.weld and not subset:
-        raise BaseparamsError("--weld applies with --joints (the joints to identify; the others are welded)")
-    if subset and (args.urdf or args.mjcf):
-        raise BaseparamsError(f"{'--urdf' if args.urdf else '--mjcf'} with --joints: writing a sub-chain's values "
-                              "into the whole robot's file is not supported; identify every moving joint to export")
-    if not subset:
-        return log, val, robot
-    from ..ident.subchain import parse_welds, subchain
-
-    joints = [j.strip() for j in args.joints.split(",") if j.strip()]
-    welds = parse_welds(args.weld)
-    small, log, notes = subchain(robot, log, joints, welds)
-    if val is not None:
-        val = subchain(robot, val, joints, welds)[1]
-    for note in notes:
-        print(f"baseparams: note: {note}", file=sys.stderr)
-    return log, val, small
 
 
 def cmd_identify(args) -> int:
     """``baseparams identify MODEL DATA``: base-parameter and drive values from a joint log.
 
+    Parses nothing itself: the flags become :func:`baseparams.identify`'s keywords (one each,
+    :func:`identify_keywords`), which checks them and every output before the fit, streams large
+    logs, and writes the outputs; a glob of logs is a fleet (:func:`baseparams.fleet.identify_fleet`).
+
     Parameters
     ----------
     args : argparse.Namespace
-        The parsed command line: the model options and ``data``, ``columns``, ``validate``,
-        ``holdout``, ``method``, ``friction``, ``rotor``, ``coulomb_width``, ``coupling``,
-        ``cutoff``, ``decimate``, ``min_speed``, ``prior_weight``, ``convention``, ``plot``,
-        ``urdf``, ``output``.
+        The parsed command line.
 
     Returns
     -------
     int
-        :data:`EXIT_OK`.
+        :data:`EXIT_OK` (a fleet: :func:`_fleet_exit`).
 
     Raises
     ------
     BaseparamsError
         Bad input (model, data, options).
     """
-    from ..ident.drives import MotorCoupling
-    from ..ident.pipeline import identify
     from ..ident.report import format_identification
+    from ..workflow import identify_command
 
-    couplings = tuple(MotorCoupling.parse(text) for text in args.coupling or ())
     robot = common.load_robot(args)
     files = data_files(args.data)
-    truth = _results_check(args, files)  # --save, --truth: checked before the fit
     if len(files) > 1 or args.per_file or args.pooled:
         if args.joints:
             raise BaseparamsError("--joints applies to one log, not to a fleet of logs")
+        if args.save or args.truth:
+            raise BaseparamsError("--save and --truth apply to one log, not to a fleet (--per-file / --pooled)")
         return _identify_fleet(args, robot, files)
     with Progress(args.verbose) as progress:
         t0 = time.perf_counter()
-        result = _identify_streamed(args, robot, files, couplings, progress)
-        if result is None:
-            progress(f"reading {args.data}")
-            log, val, robot = _read_identification_logs(args, robot, files[0])
-            progress(f"identifying ({args.method}) on {log.n_samples} samples")
-            t0 = time.perf_counter()
-            result = identify(robot, log, validation=val, progress=progress, **_identify_kwargs(args, couplings))
-            if args.predictions:
-                _write_predictions(args, result, log, val, files)
+        result = identify_command(robot, files[0], source=args.model, progress=progress, cli=True,
+                                  notes=_print_note, **identify_keywords(args))
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
-        if args.save:
-            result.save(args.save, inputs=input_files(args), what="--save")
-            progress(f"result saved to {args.save}")
-        if args.urdf:
-            _write_identified_urdf(args, robot, result)
-        if args.mjcf:
-            _write_identified_mjcf(args, result, log)
-        if args.plot:
-            from ..report.plots import torque_plot
-
-            write_output(args.plot, lambda tmp: torque_plot(result, tmp), args, "--plot")
-            progress(f"plot written to {args.plot}")
-        if args.html:
-            from ..report.html import identification_html
-
-            write_html(args.html, identification_html(result), input_files(args))
-    emit(args, _with_truth(args, result, truth, format_identification))
+    emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
     return EXIT_OK
 
 
-#: logs larger than this [MB] are streamed from their file by default (``identify --stream auto``)
-STREAM_MIN_MB = 64.0
+def _print_note(line: str) -> None:
+    """A note of the run on stderr (``baseparams: note: ...``; an output written: ``baseparams: ... written to``)."""
+    print(f"baseparams: {'' if ' written to ' in line else 'note: '}{line}", file=sys.stderr)
 
 
-def _identify_kwargs(args, couplings) -> dict:
-    """The options :func:`~baseparams.ident.pipeline.identify` and ``identify_stream`` share."""
-    return dict(method=args.method, rotor=args.rotor, friction=friction_terms(args.friction),
-                coulomb_width=args.coulomb_width, holdout=args.holdout, cutoff=args.cutoff, decimate=args.decimate,
-                min_speed=args.min_speed, prior_weight=args.prior_weight, convention=args.convention,
-                couplings=couplings, samples=args.samples, covariance=args.covariance, allow_units=args.allow_units,
-                score_cutoff=args.score_cutoff, literal=args.literal, terms=args.terms)
+def identify_keywords(args) -> dict:
+    """The ``identify`` flags as :func:`baseparams.identify`'s keywords, one each.
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
 
-def _stream_reason(args, path: str) -> str | None:
-    """Why ``identify`` streams the log from its file (a line for ``-v``), or None: read it whole."""
-    from ..io.logs import STREAM_SUFFIXES, streamable
-
-    mode = getattr(args, "stream", "auto")
-    if mode == "off":
-        return None
-    ok = streamable(path) and (not args.validate or streamable(args.validate))
-    if mode == "on":
-        if not ok:
-            raise BaseparamsError(f"--stream on: only {', '.join(STREAM_SUFFIXES)} logs are streamed, not {path}"
-                                  + (f" / {args.validate}" if args.validate else ""))
-        if args.joints or getattr(args, "mjcf", None):
-            raise BaseparamsError(f"--stream on with {'--joints' if args.joints else '--mjcf'}: the log is read whole "
-                                  f"for it (--stream auto)")
-        return "--stream on"
-    if not ok or args.joints or getattr(args, "mjcf", None):  # --mjcf checks the model on the log's states
-        return None
-    from ..io.logs import decoded_mb
-
-    size = decoded_mb(path)  # a compressed Parquet file by the numbers it holds
-    return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
-
-
-def _identify_streamed(args, robot, files, couplings, progress):
-    """``identify`` on a log streamed from its file (``--stream``), or None when it is read whole.
-
-    A log with non-uniform time stamps is read whole after all (said with ``-v``).
+    Returns
+    -------
+    dict
+        Keyword arguments.
     """
-    why = _stream_reason(args, files[0])
-    if why is None:
-        return None
-    from ..ident.stream import NotStreamable, identify_stream
-    from ..io.logs import LogStream
-
-    progress(f"streaming {files[0]} block by block ({why}): memory independent of the log's length")
-    stream = LogStream(files[0], robot, columns=args.columns)
-    other = LogStream(args.validate, robot, columns=args.columns) if args.validate else None
-    kwargs = _identify_kwargs(args, couplings)
-    try:
-        if not args.predictions:
-            return identify_stream(robot, stream, validation=other, progress=progress, **kwargs)
-        from ..io.tables import column_writer
-
-        coords = robot.actuated if robot.has_loops else range(robot.dof)
-        names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
-        with column_writer(args.predictions, names, input_files(args), "--predictions") as write:
-            result = identify_stream(robot, stream, validation=other, progress=progress,
-                                     predictions=lambda t, tau: write(np.column_stack([t, tau])), **kwargs)
-        print(f"baseparams: predictions of {result.validation['samples']} validation samples written to "
-              f"{args.predictions}", file=sys.stderr)
-        return result
-    except NotStreamable as exc:
-        progress(f"{exc}")
-        return None
-
-
-def _write_predictions(args, result, log, val, files) -> None:
-    """``identify --predictions FILE``: predicted torques at every validation sample, the log's own times."""
-    from ..io.tables import write_columns
-
-    whole = val if val is not None else log
-    tau = result.predict(whole)
-    keep = np.ones(whole.n_samples, dtype=bool) if val is not None else whole.t >= whole.t[-1] - args.holdout
-    cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
-    write_columns(args.predictions, cols, input_files(args), "--predictions")
-    print(f"baseparams: predictions of {int(keep.sum())} validation samples written to {args.predictions}",
-          file=sys.stderr)
-
-
-def _results_check(args, files: list[str]) -> dict | None:
-    """``identify --save/--truth``: refused with several logs; the save path and the truth read now."""
-    from ..io.tables import check_output_path
-
-    if not (args.save or args.truth):
-        return None
-    if len(files) > 1 or args.per_file or args.pooled:
-        raise BaseparamsError("--save and --truth apply to one log, not to a fleet (--per-file / --pooled)")
-    check_output_path(args.save, input_files(args), "--save")
-    if not args.truth:
-        return None
-    from ..schema import read_truth
-
-    return read_truth(args.truth, f"--truth {args.truth}")
-
-
-def _with_truth(args, result, truth: dict | None, text_report) -> str:
-    """The report (text or JSON), with the comparison to ``--truth`` when given."""
-    from ..ident.results import format_truth
-
-    cmp = None if truth is None else result.compare_truth(truth, args.truth)
-    if args.json:
-        out = result.to_json()
-        if cmp is not None:
-            out["truth"] = cmp
-        return json.dumps(out, indent=2)
-    return text_report(result) + ("" if cmp is None else "\n\n" + format_truth(cmp))
+    return dict(validate=args.validate, holdout=args.holdout, method=args.method,
+                friction=friction_terms(args.friction), rotor=args.rotor, coulomb_width=args.coulomb_width,
+                couplings=tuple(args.coupling or ()),
+                cutoff=args.cutoff, decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
+                convention=args.convention, covariance=args.covariance, score_cutoff=args.score_cutoff,
+                allow_units=args.allow_units, columns=args.columns, joints=args.joints, weld=args.weld,
+                analysis_samples=args.samples, literal=args.literal, terms=args.terms, stream=args.stream,
+                save=args.save, predictions=args.predictions, urdf=args.urdf, mjcf=args.mjcf, html=args.html,
+                plot=args.plot, truth=args.truth)
 
 
 def cmd_predict(args) -> int:
@@ -369,31 +235,3 @@ def _fleet_exit(args, res, files: list[str]) -> int:
               f"(first: {res.skipped[0]['error']})", file=sys.stderr)
         return EXIT_INPUT
     return EXIT_OK
-
-
-def _write_identified_urdf(args, robot, result) -> None:
-    """``--urdf FILE``: the model file with the physically consistent inertias."""
-    from ..io.urdf import identified_drives, write_urdf
-
-    if result.fit.physical is None:
-        raise BaseparamsError("--urdf needs --method physical: least squares gives base parameters, not bodies")
-    if Path(args.model).suffix.lower() != ".urdf":
-        raise BaseparamsError(f"--urdf needs a URDF model file, got {args.model}")
-    drives, couplings = identified_drives(result)
-    tilt = next((t for t in result.fit.terms if t.name == "tilt"), None)
-    notes = write_urdf(args.model, args.urdf, robot, result.fit.physical.pi, "paper", drives=drives,
-                       couplings=couplings, inputs=input_files(args),
-                       base_rotation=None if tilt is None else tilt.base_rotation())
-    notes += [f"--urdf: not written: {x}" for t in result.fit.terms for x in t.export().get("not", [])]
-    for note in notes:
-        print(f"baseparams: note: {note}", file=sys.stderr)
-    print(f"baseparams: URDF written to {args.urdf}", file=sys.stderr)
-
-
-def _write_identified_mjcf(args, result, log) -> None:
-    """``--mjcf FILE``: a copy of the MJCF model with the identified inertias and drive terms, checked by MuJoCo."""
-    from ..io.mjcf_write import identified_mjcf
-
-    for note in identified_mjcf(result, args.model, args.mjcf, log, inputs=input_files(args)):
-        print(f"baseparams: note: {note}", file=sys.stderr)
-    print(f"baseparams: MJCF written to {args.mjcf}", file=sys.stderr)

@@ -496,6 +496,9 @@ class Identification:
         regressor at the log's (filtered) states, unweighted, every sample, column-scaled: the
         measure ``excite`` reports for a design (:func:`baseparams.ident.estimate.motion_factor`);
         None when not computed (a streamed log).
+    truth : dict, optional
+        The comparison with a simulation's true parameters (:meth:`compare_truth`), when
+        :func:`baseparams.identify` was given ``truth``; in :meth:`to_json` as ``truth``.
     """
 
     fit: Fit
@@ -506,6 +509,7 @@ class Identification:
     series: dict | None = None
     options: dict | None = None
     motion: dict | None = None
+    truth: dict | None = None
 
     def predict(self, log, smooth: bool = True, columns=None) -> np.ndarray:
         """Predicted joint torques at every sample of a log (its own time stamps).
@@ -548,6 +552,11 @@ class Identification:
         from .data import JointLog
 
         check_flags("predict", smooth=smooth)
+        if columns is not None and not isinstance(columns, (str, os.PathLike, dict)):
+            raise ArgumentTypeError(f"predict: columns= must be a TOML file, a dict or a topic, got "
+                                    f"{type(columns).__name__}")
+        if columns is not None and not isinstance(log, (str, os.PathLike)):
+            raise BaseparamsError("predict: columns= maps the columns of a log file; log is a JointLog already")
         if isinstance(log, (str, os.PathLike)):
             from ..io.logs import read_log
 
@@ -927,7 +936,7 @@ class Identification:
                 "base_parameters": self.base_parameters(), "drives": self.drives(),
                 "couplings": self.couplings(), "train": self.train,
                 "validation": self.validation, "physical": phys, "notes": list(self.notes),
-                "terms": self.terms_json()}
+                "terms": self.terms_json(), **({"truth": self.truth} if self.truth is not None else {})}
 
     def terms_json(self) -> list[dict]:
         """Every model term tried: kept or rejected, why, its cross-validated figure, values and std.

@@ -67,6 +67,10 @@ def format_identification(result: Identification) -> str:
         lines.append(f"physical: feasible {p['feasible']}, smallest eigenvalue of the N_i {p['min_eigenvalue']:.3g}, "
                      f"solver {p['solver_status']}")
     lines += [f"note: {x}" for x in j["notes"]]
+    if j.get("truth") is not None:
+        from .results import format_truth
+
+        lines += ["", format_truth(j["truth"])]
     return "\n".join(lines)
 
 

@@ -604,7 +604,12 @@ def parse_terms(spec) -> tuple[tuple[str, ...], tuple[str, ...]]:
 
     if spec is None:
         spec = "auto"
-    names = [n.strip() for n in (spec.split(",") if isinstance(spec, str) else spec) if str(n).strip()]
+    if not isinstance(spec, str) and not (isinstance(spec, (list, tuple)) and all(isinstance(n, str) for n in spec)):
+        from ...arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"terms= must be 'auto', 'none', names ('dahl,tilt') or a sequence of names, got "
+                                f"{type(spec).__name__}")
+    names = [n.strip() for n in (spec.split(",") if isinstance(spec, str) else spec) if n.strip()]
     unknown = [n for n in names if n not in TERMS and n not in ("auto", "none")]
     if unknown:
         raise BaseparamsError(f"unknown model term(s) {unknown}; choose auto, none or from {', '.join(TERMS)}")

@@ -40,9 +40,11 @@ def test_every_simulate_and_excite_flag_is_a_keyword():
     parser = build_parser()
     sub = next(a for a in parser._actions if a.dest == "command").choices
     cli_only = {"help", "model", "json", "output", "verbose", "floating", "gravity", "strict_inertia", "xacro_args",
-                "package_path", "old_samples", "func", "command", "out", "allow_infeasible_inertia"}
-    renamed = {"samples": "analysis_samples"}
-    for name, fn in (("simulate", bp.simulate), ("excite", bp.excite)):
+                "package_path", "old_samples", "func", "command", "out", "allow_infeasible_inertia", "drop_mocap_welds",
+                # identify: the log argument, and a glob's fleet on Dask (baseparams.fleet.identify_fleet)
+                "data", "per_file", "pooled", "strict", "scheduler", "workers"}
+    renamed = {"samples": "analysis_samples", "coupling": "couplings"}
+    for name, fn in (("simulate", bp.simulate), ("excite", bp.excite), ("identify", bp.identify)):
         keywords = set(inspect.signature(fn).parameters)
         dests = {a.dest for a in sub[name]._actions} - cli_only
         missing = {d for d in dests if renamed.get(d, d) not in keywords}
@@ -63,7 +65,8 @@ def test_seed_draws_the_same_robot_with_and_without_a_trajectory(tmp_path, capsy
     assert other["drives"] != a["drives"]  # the seed does matter
 
 
-@pytest.mark.parametrize("kw, words", [({"robots": 2}, "give out="), ({"robots": 0, "out": "x"}, "robots is a number")])
+@pytest.mark.parametrize("kw, words", [({"robots": 2}, "give out="),
+                                       ({"robots": 0, "out": "x"}, "robots= must be an integer")])
 def test_fleet_keyword_bad_input(kw, words):
     with pytest.raises(bp.BaseparamsError, match=words):
         bp.simulate("puma560", **kw)

@@ -448,7 +448,8 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
              prior_weight: float | None = None, convention: str = "khalil", covariance: str = "hac",
              score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None, weld=None,
              analysis_samples: int | None = None, literal: bool = False, terms="auto", stream: str = "auto",
-             save=None, predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, progress=None):
+             save=None, predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, seed: int = 0,
+             progress=None):
     """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
 
     One keyword per flag of the command; :func:`identify_command` (what the command calls) says
@@ -462,7 +463,7 @@ def identify(model, log, *, validate=None, holdout: float | None = None, method:
         The log.
     validate, holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, \
 prior_weight, convention, covariance, score_cutoff, allow_units, columns, joints, weld, analysis_samples, \
-literal, terms, stream, save, predictions, urdf, mjcf, html, plot, truth, progress
+literal, terms, stream, save, predictions, urdf, mjcf, html, plot, truth, seed, progress
         As :func:`identify_command` (the command's flags).
 
     Returns
@@ -486,7 +487,7 @@ def identify_command(model, log, *, validate=None, holdout: float | None = None,
                      score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None,
                      weld=None, analysis_samples: int | None = None, literal: bool = False, terms="auto",
                      stream: str = "auto", save=None, predictions=None, urdf=None, mjcf=None, html=None, plot=None,
-                     truth=None, source=None, progress=None, notes=None, cli: bool = False):
+                     truth=None, seed: int = 0, source=None, progress=None, notes=None, cli: bool = False):
     """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
 
     The one implementation behind the command (one keyword per flag): the options and every
@@ -551,6 +552,8 @@ def identify_command(model, log, *, validate=None, holdout: float | None = None,
     truth : dict, str or path, optional
         True parameters of a simulation (``simulate``'s ``OUT.truth.json``): compared per term
         (``result.truth``, the report's last section).
+    seed : int
+        Seed of the base-parameter analysis' random states.
     source : str or path, optional
         The model file, when ``model`` is a loaded Robot and an export needs the file.
     progress : callable, optional
@@ -579,7 +582,7 @@ def identify_command(model, log, *, validate=None, holdout: float | None = None,
     _check_suffixes(cli, predictions=predictions, urdf=urdf, html=html, plot=plot)
     check_keywords("identify", cli=cli, holdout=holdout, coulomb_width=coulomb_width, cutoff=cutoff,
                    decimate=decimate, min_speed=min_speed, prior_weight=prior_weight, score_cutoff=score_cutoff,
-                   analysis_samples=analysis_samples)
+                   analysis_samples=analysis_samples, seed=seed)
     check_flags("identify", rotor=rotor, allow_units=allow_units, literal=literal)
     for name, value in dict(save=save, predictions=predictions, urdf=urdf, mjcf=mjcf, html=html, plot=plot).items():
         check_path(value, f"identify: {name}=", optional=True)
@@ -600,7 +603,7 @@ def identify_command(model, log, *, validate=None, holdout: float | None = None,
     opts = dict(method=method, rotor=rotor, friction=friction_of(friction), coulomb_width=coulomb_width,
                 holdout=holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
                 convention=convention, couplings=couplings, samples=analysis_samples, covariance=covariance,
-                allow_units=allow_units, score_cutoff=score_cutoff, literal=literal, terms=terms)
+                allow_units=allow_units, score_cutoff=score_cutoff, literal=literal, terms=terms, seed=seed)
     say = progress or (lambda msg: None)
     result, read = _run_identification(robot, log, validate, columns, joints, weld, stream, predictions, inputs,
                                        opts, say, note, cli)

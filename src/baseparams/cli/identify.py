@@ -93,7 +93,7 @@ def identify_keywords(args) -> dict:
                 allow_units=args.allow_units, columns=args.columns, joints=args.joints, weld=args.weld,
                 analysis_samples=args.samples, literal=args.literal, terms=args.terms, stream=args.stream,
                 save=args.save, predictions=args.predictions, urdf=args.urdf, mjcf=args.mjcf, html=args.html,
-                plot=args.plot, truth=args.truth)
+                plot=args.plot, truth=args.truth, seed=args.seed)
 
 
 def cmd_predict(args) -> int:

@@ -965,7 +965,7 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
              decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
              convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
              samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-             allow_units: bool = False, literal: bool = False, terms="auto") -> Identification:
+             allow_units: bool = False, literal: bool = False, terms="auto", seed: int = 0) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -1034,6 +1034,8 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
         each one that blocked cross-validation on the training data asks for; ``"none"``: the
         linear core alone; names (``"dahl,tilt"``) force those (with ``auto``: and try the rest).
         Every term tried is in :attr:`Fit.term_choices` and the notes.
+    seed : int
+        Seed of the base-parameter analysis' random states (:func:`baseparams.analyze`).
 
     Returns
     -------
@@ -1053,12 +1055,13 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     with blas_threads():
         return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
                          min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,
-                         score_cutoff, covariance, allow_units, literal, terms)
+                         score_cutoff, covariance, allow_units, literal, terms, seed)
 
 
 def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
               prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
-              score_cutoff=None, covariance="hac", allow_units=False, literal=False, terms="auto") -> Identification:
+              score_cutoff=None, covariance="hac", allow_units=False, literal=False, terms="auto",
+              seed=0) -> Identification:
     """:func:`identify`'s steps (arguments as there)."""
     from .estimate import excitation, motion_factor
     from .preprocess import prepare
@@ -1066,7 +1069,8 @@ def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, valid
     say = progress or (lambda msg: None)
     train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=samples, convention=convention, rows=log_rows(robot), literal=literal),
+    model = ident_model(analyze(robot, samples=samples, seed=seed, convention=convention, rows=log_rows(robot),
+                                literal=literal),
                         rotor, tuple(friction), coulomb_width, couplings=couplings, log_base=robot.floating)
     cols = log_columns(model, log)
     unit_notes = check_log_units(model, train, cols, allow_units)

@@ -747,7 +747,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
                     decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
                     convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
                     samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-                    allow_units: bool = False, predictions=None, literal: bool = False, terms="auto"):
+                    allow_units: bool = False, predictions=None, literal: bool = False, terms="auto", seed: int = 0):
     """:func:`~baseparams.ident.pipeline.identify` on a log streamed from its file (module docstring).
 
     Parameters
@@ -757,7 +757,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
     stream : block source
         The log, e.g. :class:`baseparams.io.logs.LogStream`.
     method, rotor, friction, coulomb_width, holdout, cutoff, decimate, min_speed, prior_weight, convention, \
-memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, literal, terms
+memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, literal, terms, seed
         As for :func:`~baseparams.ident.pipeline.identify` (``memory_mb``: the window's regressor).
     validation : block source, optional
         Another log to validate on (exclusive with ``holdout``).
@@ -791,7 +791,7 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
                 cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
                 convention=convention, memory_mb=memory_mb, couplings=tuple(couplings), samples=samples,
                 score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units, literal=literal,
-                terms=terms)
+                terms=terms, seed=seed)
     with blas_threads():
         return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
 
@@ -811,7 +811,8 @@ def _passes(robot, stream, o: dict, say):
                                   f"{sc.t_end - sc.t0:.6g} s")
         end_time = sc.t_end - o["holdout"]
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=o["samples"], convention=o["convention"], literal=o["literal"]),
+    model = ident_model(analyze(robot, samples=o["samples"], seed=o["seed"], convention=o["convention"],
+                                literal=o["literal"]),
                         o["rotor"], o["friction"],
                         o["coulomb_width"], couplings=o["couplings"])
     cols = log_columns(model, sc.head)

@@ -531,8 +531,11 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
             choices.append(Choice(name, True, figures, score))
             current, folds = score, trial
         else:
-            choices.append(Choice(name, False, f"{figures}: not {100 * KEEP_GAIN:g} % lower in at least {need} "
-                                  f"blocks and by {KEEP_FLOOR:g} of the torques' RMS", score))
+            failed = [w for w, ok in ((f"not {100 * KEEP_GAIN:g} % lower", gain > KEEP_GAIN),
+                                      (f"lower in fewer than {need} blocks", better >= need),
+                                      (f"lower by less than {KEEP_FLOOR:g} of the torques' RMS ({floor:.2g})",
+                                       current - score > floor)) if not ok]
+            choices.append(Choice(name, False, f"{figures}: {'; '.join(failed)}", score))
     # backward: a term kept early may have taken up what a later one models better (a delay standing in
     # for a scale): drop each kept term whose removal does not raise the cross-validated RMS by KEEP_GAIN
     for name in [n for n in kept if n not in forced] if len(kept) > 1 else []:

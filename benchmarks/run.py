@@ -1108,6 +1108,14 @@ def bench_report(out: dict, quick: bool) -> None:
         out[f"report_{key}_render_ms_repeats"] = browser_reps
 
 
+def _key(label: str) -> str:
+    """A label as a figure's name: lower case, runs of other characters one ``_``."""
+    key = "".join(ch if ch.isalnum() else "_" for ch in label).strip("_").lower()
+    while "__" in key:
+        key = key.replace("__", "_")
+    return key
+
+
 def bench_cross_recording(out: dict, quick: bool) -> None:
     """Cross-recording suite (``benchmarks/cross_recording.py``): identify on one recording, the raw RMS
     on another, per estimator; the worst ratio of the default to the better of plain OLS and physical."""
@@ -1117,6 +1125,10 @@ def bench_cross_recording(out: dict, quick: bool) -> None:
     log("\n" + cr.table(results))
     for r in results:
         key = "cross_" + "".join(ch if ch.isalnum() else "_" for ch in r["name"].split(":")[0].split("(")[0]).strip("_")
+        out[f"{key}_name"] = r["name"]
+        for label in cr.ESTIMATORS:
+            out[f"{key}_rms_{_key(label)}"] = r["rms"][label]
+        out[f"{key}_terms"] = ", ".join(r["terms"]["default"]) or "-"
         out[f"{key}_default_vs_best"] = r["default_vs_best"]
     out["cross_recording_worst_default_vs_best"] = max(r["default_vs_best"] for r in results)
     out["cross_recording_cases"] = len(results)
@@ -1133,10 +1145,12 @@ def bench_model_terms(out: dict, quick: bool) -> None:
         return
     log("\n" + cr.panda_table(rows))
     for r in rows:
-        key = "".join(ch if ch.isalnum() else "_" for ch in r["label"]).strip("_").lower()
-        while "__" in key:
-            key = key.replace("__", "_")
+        key = _key(r["label"])
         out[f"panda_lp5_{key}"] = r["lp5"]
+        out[f"panda_label_{key}"] = r["label"]
+        out[f"panda_raw_{key}"] = r["raw"]
+        out[f"panda_terms_{key}"] = ", ".join(r["terms"]) or "-"
+        out[f"panda_seconds_{key}"] = r["seconds"]
     out["panda_default_seconds"] = next(r["seconds"] for r in rows if r["label"].startswith("default (terms"))
 
 

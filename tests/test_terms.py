@@ -240,3 +240,11 @@ def test_gravity_torques_equal_the_regressors(seed):
     coords = np.arange(robot.dof)
     want = gravity_regressor(robot, coords, q, g) @ pi
     np.testing.assert_allclose(gravity_torques(robot, coords, q, g, pi), want, atol=1e-10 * np.abs(want).max())
+    # the same as a matrix in each body's first moment and mass (the tilt's filtered columns), on a subset of joints
+    from baseparams.ident.terms.tilt import gravity_basis
+    from baseparams.kinematics.tree import forward_kinematics
+
+    some = np.sort(rng.choice(robot.dof, size=max(1, robot.dof - 1), replace=False))
+    entries = (np.arange(robot.n)[:, None] * 10 + np.arange(6, 10)[None, :]).ravel()
+    basis = gravity_basis(robot, some, g, forward_kinematics(robot, q))
+    np.testing.assert_allclose(basis @ pi[entries], want[:, some], atol=1e-10 * np.abs(want).max())

@@ -141,6 +141,53 @@ def gravity_torques(robot, coords, q: np.ndarray | None, g: np.ndarray, pi: np.n
     return -np.einsum("smk,smk->sm", lines, w[:, body])
 
 
+def gravity_basis(robot, coords, g: np.ndarray, state) -> np.ndarray:
+    """The gravity torques per body's first moment and mass: :func:`gravity_torques` as a matrix.
+
+    ``gravity_torques(robot, coords, q, g, pi) = gravity_basis(...) @ pi[k]`` with ``k`` each body's
+    entries ``6:10`` (``h0``, ``m``: paper convention); the inertia entries do not act in a robot at
+    rest. Body ``b`` acts on joint ``j`` when ``b`` is in the subtree of ``j``'s body.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree).
+    coords : array_like of int, shape ``(m,)``
+        The measured coordinates.
+    g : ndarray, shape ``(3,)``
+        Gravity [m/s^2], world frame.
+    state : TreeState
+        ``forward_kinematics(robot, q)``.
+
+    Returns
+    -------
+    ndarray, shape ``(S, m, 4 n)``
+        Columns ordered body by body: ``h0_x, h0_y, h0_z, m``.
+    """
+    g = np.asarray(g, dtype=float)
+    rot, tr = state.g[:, :, :3, :3], state.g[:, :, :3, 3]
+    s, n = rot.shape[:2]
+    w = np.zeros((s, n, 4, 6))
+    w[:, :, :3, :3] = np.cross(np.swapaxes(rot, 2, 3), g)  # unit h0_i: h = R e_i, wrench (h x g, 0)
+    w[:, :, 3, :3] = np.cross(tr, g)  # unit mass: h = t, wrench (t x g, g)
+    w[:, :, 3, 3:] = g
+    coords = np.asarray(coords)
+    body = np.asarray(robot.dof_body)[coords]
+    inside = np.zeros((len(coords), n), dtype=bool)  # body b in the subtree of joint j's body
+    for b in range(n):
+        a = b
+        while a >= 0:
+            inside[body == a, b] = True
+            a = robot.parent[a]
+    lines = state.lines[:, coords]
+    out = -np.einsum("smk,snik->smni", lines, w) * inside[None, :, :, None]
+    return out.reshape(s, len(coords), 4 * n)
+
+
+#: the tilt's columns from a filtered basis (:func:`gravity_basis`) up to this many numbers, else per step
+BASIS_MAX = 2e7
+
+
 @complete_docs
 class Tilt(Term):
     """A mounting tilt (module docstring): two angles [rad].
@@ -180,6 +227,11 @@ class Tilt(Term):
         self._u = perpendicular_basis(r.gravity)
         self._fk = forward_kinematics(r, ctx.prep.full.q[:, ctx.cols])
         self._cache = (None, None)
+        self._basis_cols = None
+        if 8 * r.n * len(ctx.model.coords) * len(ctx.prep.full.t) <= BASIS_MAX:  # linear in pi: filtered once
+            self._basis_cols = [ctx.apply(gravity_basis(r, ctx.model.coords, np.cross(u, r.gravity), self._fk))
+                                for u in self._u]
+            self._entries = (np.arange(r.n)[:, None] * 10 + np.arange(6, 10)[None, :]).ravel()
 
     def reset(self, ctx: TermContext) -> None:
         """A level mounting."""
@@ -189,6 +241,9 @@ class Tilt(Term):
         """``Y(q, 0, 0; u_k x g) pi``, filtered and decimated, for ``k = 1, 2``."""
         self.pi = np.asarray(state["pi"], dtype=float)
         key, cols = self._cache
+        if getattr(self, "_basis_cols", None) is not None:
+            pk = self.pi[self._entries]
+            return np.stack([b @ pk for b in self._basis_cols], axis=2), ["tilt_1", "tilt_2"]
         if key is None or not np.array_equal(key, self.pi):
             r = ctx.model.robot
             full = np.stack([gravity_torques(r, ctx.model.coords, None, np.cross(u, r.gravity), self.pi,

@@ -795,6 +795,22 @@ def random_tree_urdf(n: int, seed: int = 0, branching: float = 0.3) -> str:
     return "\n".join(out)
 
 
+def deep_tree_urdf(n: int, seed: int = 0, branching: float = 0.3, reach: int = 10) -> str:
+    """A random *deep* tree of ``n`` links (URDF text, as :func:`random_tree_urdf`): each link hangs
+    from the previous one, or with probability ``branching`` from one of the ``reach`` links before
+    that (fingers and snakes: the mean depth grows like ``n / (0.7 + 0.15 reach)``, about 0.45 n);
+    ``branching=0`` is a chain. Loaded with ``--floating``: nullity 3 (N - 1)."""
+    rng = np.random.default_rng(seed)
+    parents = [-1] + [(i - 1 if rng.random() >= branching else int(rng.integers(max(0, i - reach), i)))
+                      for i in range(1, n)]
+    lines = random_tree_urdf(n, seed, branching=0.0).split("\n")  # one line per link, then its joint
+    for k, line in enumerate(lines):
+        if line.startswith('<joint name="j'):
+            i = int(line[len('<joint name="j'):line.index('"', len('<joint name="j'))])
+            lines[k] = line.replace(f'<parent link="b{i - 1}"/>', f'<parent link="b{parents[i]}"/>', 1)
+    return "\n".join(lines)
+
+
 def run_measured(cmd: list[str]) -> tuple[float, float, int, str]:
     """``(wall s, peak RSS MB, exit code, stdout)`` of one subprocess (``os.wait4``: its own
     ``ru_maxrss``, not the maximum over every child so far)."""

@@ -156,3 +156,27 @@ def test_diameter_is_the_largest_pairwise_distance(m):
             p[:, 2] = 0.0  # planar
         want = np.max(np.linalg.norm(p[:, None] - p[None], axis=2))
         assert diameter(p, block=5) == pytest.approx(want, rel=1e-12, abs=1e-300)
+
+
+def test_html_says_which_form():
+    from baseparams.report.html import analysis_html
+
+    robot = bp.load("puma560")
+    rec = analysis_html(bp.analyze(robot, form="recursive"))
+    assert "Recursive form" in rec and "id='regrouped'" in rec and "link2.MR" in rec
+    exp = analysis_html(bp.analyze(robot))
+    assert "Expanded form" in exp and "id='regrouped'" not in exp
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_path_dofs_and_subtree_end_are_the_support_matrix(seed):
+    """The O(depth) / O(n) replacements of the (dof, n) support matrix agree with it."""
+    robot = random_robot(np.random.default_rng(seed), 15, "RPUSC", floating=bool(seed % 2), branching=0.5)
+    sup, end = robot.support, robot.subtree_end
+    for b in range(robot.n):
+        assert np.array_equal(robot.path_dofs(b), np.flatnonzero(sup[:, b]))
+        moved = np.flatnonzero(sup[robot.q_index[b]]) if robot.ndofs[b] else np.array([b])
+        contiguous = moved[-1] - moved[0] + 1 == len(moved)
+        assert (end[b] >= 0) == contiguous
+        if contiguous:
+            assert moved[0] == b and end[b] == moved[-1] + 1

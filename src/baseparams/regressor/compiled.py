@@ -154,10 +154,13 @@ class Layout:
         self.floating = np.array([t == "F" for t in robot.jtype], dtype=np.bool_)
         self.screws = np.ascontiguousarray(robot.screws, dtype=float)
         self.gravity = np.asarray(robot.gravity, dtype=float).copy()
-        support = robot.support
-        counts = support.sum(axis=0)
-        self.anc_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self.anc = np.concatenate([np.flatnonzero(support[:, i]) for i in range(self.n)]).astype(np.int64)
+        paths: list[np.ndarray] = []  # each body's path coordinates: its parent's, then its own (O(sum of depths),
+        for i in range(self.n):  # not the (dof, n) support matrix)
+            own = np.arange(robot.q_index[i], robot.q_index[i] + robot.ndofs[i])
+            p = robot.parent[i]
+            paths.append(own if p < 0 else np.concatenate([paths[p], own]))
+        self.anc_ptr = np.concatenate([[0], np.cumsum([len(p) for p in paths])]).astype(np.int64)
+        self.anc = np.concatenate(paths).astype(np.int64)
         self.pair_m = np.array([m for m, _ in HAT_INDEX], dtype=np.int64)
         self.pair_n = np.array([n for _, n in HAT_INDEX], dtype=np.int64)
 

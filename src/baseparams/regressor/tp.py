@@ -87,13 +87,11 @@ def _bar_lines_swapped(e: np.ndarray, acc: np.ndarray) -> np.ndarray:
 
 def _subtree_slices(robot: Robot) -> list[tuple[int, int]] | None:
     """Per coordinate, the contiguous range of bodies it moves, or None if not contiguous."""
-    out = []
-    for row in robot.support:
-        idx = np.flatnonzero(row)
-        if idx[-1] - idx[0] + 1 != len(idx):
-            return None
-        out.append((int(idx[0]), int(idx[-1]) + 1))
-    return out
+    end = robot.subtree_end  # O(n): the support matrix's rows, without forming it
+    body = robot.dof_body
+    if np.any(end[body] < 0):
+        return None
+    return [(int(b), int(end[b])) for b in body.tolist()]
 
 
 #: regressor backends: ``auto`` (compiled for large batches when numba is installed, see

@@ -137,6 +137,25 @@ def parameter_classes(result) -> dict[str, str]:
     return out
 
 
+def _form_note(j: dict) -> str:
+    """One line saying how the expressions are written (the JSON's ``form``)."""
+    if j.get("form") == "recursive":
+        return ("<p class='form'>Recursive form: each base parameter in its body's own standard parameters and its "
+                "children's regrouped dependent parameters (NAMER, defined in the next table); "
+                "<code>--form expanded</code> writes them in standard parameters only.</p>")
+    return "<p class='form'>Expanded form: standard parameters only.</p>"
+
+
+def _regrouped_table(j: dict) -> str:
+    """The recursive form's regrouped dependent parameters (nothing in the expanded form)."""
+    if not j.get("regrouped_parameters"):
+        return ""
+    rows = "".join(f"<tr><td>{html.escape(b['name'])}</td><td class='expr'>{html.escape(b['expression'])}</td></tr>"
+                   for b in j["regrouped_parameters"])
+    return (f"<h3>Regrouped dependent parameters</h3><table id='regrouped'><tr><th>name</th><th>expression</th></tr>"
+            f"{rows}</table>")
+
+
 def regrouped_into(result) -> dict[str, list[str]]:
     """The base parameters each standard parameter appears in.
 
@@ -428,7 +447,8 @@ def analysis_html(result) -> str:
             f"q = 0 (red: joint axes); drag the view to rotate; click a body or a row.</p>"
             f"<div style='display:flex;gap:1em;flex-wrap:wrap'><div>{view}</div><div>{_grid(result)}</div></div>"
             f"<h2>Why: the nullspace directions by provenance</h2>{_provenance_list(result, groups)}"
-            f"<h2>Base parameters</h2><table id='base'><tr><th>name</th><th>expression</th></tr>{exprs}</table>"
+            f"<h2>Base parameters</h2>{_form_note(j)}<table id='base'><tr><th>name</th><th>expression</th></tr>{exprs}"
+            f"</table>{_regrouped_table(j)}"
             f"{_certification(result)}"
             f"<script type='application/json' id='robot-data'>{json.dumps(data)}</script>")
     return _page(f"{result.robot.name}: base parameters", body, _VIEWER)

@@ -583,9 +583,10 @@ class Robot:
 
     @property
     def subtree_end(self) -> np.ndarray:
-        """``(n,)`` int: one past the last body of each body's subtree when it is contiguous (``i .. end - 1``), else -1.
+        """``(n,)`` int: one past the last body of each body's subtree when contiguous, else -1.
 
-        ``O(n)`` (parents precede children); what :attr:`support` shows row by row, without it.
+        Body ``i``'s subtree is then ``i .. end[i] - 1``. ``O(n)`` (parents precede children): what
+        :attr:`support` shows row by row, without it.
         """
         n = self.n
         size = np.ones(n, dtype=np.int64)

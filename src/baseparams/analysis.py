@@ -604,6 +604,8 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     if not isinstance(convention, str):
         raise ArgumentTypeError(f"analyze: convention= must be a string (khalil, paper, ...), got "
                                 f"{type(convention).__name__}")
+    if not isinstance(form, str):
+        raise ArgumentTypeError(f"analyze: form= must be a string ({', '.join(FORMS)}), got {type(form).__name__}")
     if form not in FORMS:
         raise BaseparamsError(f"analyze: unknown form {form!r}; expected one of {', '.join(FORMS)}")
     _check_samples_memory(robot, samples)

@@ -119,7 +119,7 @@ def test_form_in_json_and_text():
     assert exp.to_json()["form"] == "expanded" and exp.to_json()["regrouped_parameters"] == []
     text = format_report(rec)
     assert "recursive form" in text and "link2.MR = link2.M + link3.MR" in text
-    assert "expanded form" in format_report(exp)
+    assert "recursive form" not in format_report(exp) and "regrouped dependent" not in format_report(exp)
 
 
 def test_auto_is_recursive_for_large_trees_only():
@@ -180,3 +180,23 @@ def test_path_dofs_and_subtree_end_are_the_support_matrix(seed):
         assert (end[b] >= 0) == contiguous
         if contiguous:
             assert moved[0] == b and end[b] == moved[-1] + 1
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_base_regressor_of_a_large_tree_uses_a_sparse_map(backend):
+    """A tree with more than 1000 parameters: the base map stays sparse; the base regressor is
+    the full regressor times the dense map, and it predicts the torques of the model's own
+    base parameters."""
+    pytest.importorskip("numba") if backend == "compiled" else None
+    robot = random_robot(np.random.default_rng(5), 120, "R", floating=True)
+    a = bp.analyze(robot, verify=False, form="recursive")
+    assert hasattr(a.base.T, "tocsr")
+    rng = np.random.default_rng(0)
+    q, dq, ddq = rng.uniform(-1, 1, (3, 4, robot.dof))
+    yb = a.base_regressor(q, dq, ddq, backend=backend)
+    full = bp.regressor(robot, q, dq, ddq)
+    assert np.allclose(yb, full @ a.base_map, rtol=1e-9, atol=1e-9 * np.abs(full).max())
+    tau = full @ robot.parameters("paper")
+    # (the recursive form's values come from small local coefficients: torques to ~1e-9 relative,
+    # where the expanded form's coefficients of up to 1e7 leave ~1e-4 on this tree)
+    assert np.allclose(yb @ a.base_values, tau, rtol=1e-7, atol=1e-7 * np.abs(tau).max())

@@ -449,7 +449,9 @@ class Analysis:
         if cs is not None:
             return closed_projected_regressor(self.robot, cs, P=self.base_map, out=out, backend=backend)
         rows = np.flatnonzero(row_mask(self.robot, self.rows))
-        return projected_regressor(self.robot, q, dq, ddq, P=self.base_map, rows=rows, out=out, backend=backend)
+        t = self.base.T
+        p = t[:, self.base.independent] if hasattr(t, "tocsr") else self.base_map  # a large tree: sparse
+        return projected_regressor(self.robot, q, dq, ddq, P=p, rows=rows, out=out, backend=backend)
 
     @property
     def base_map(self) -> np.ndarray:
@@ -974,7 +976,7 @@ def format_report(a: Analysis) -> str:
     rec = a.form == "recursive"
     how = ("; recursive form: each in its body's own standard parameters and its children's regrouped "
            "dependent parameters NAMER, defined after the list (--form expanded writes them out)" if rec
-           else "; expanded form: standard parameters only")
+           else "")  # the expanded form: today's header
     out.append(f"base parameters ({_inertia.describe(a.base.convention)}{how}):")
     for e in j["base_parameters"]:
         out.append(f"  {e['name']} = {e['expression']}")

@@ -200,3 +200,18 @@ def test_base_regressor_of_a_large_tree_uses_a_sparse_map(backend):
     # (the recursive form's values come from small local coefficients: torques to ~1e-9 relative,
     # where the expanded form's coefficients of up to 1e7 leave ~1e-4 on this tree)
     assert np.allclose(yb @ a.base_values, tau, rtol=1e-7, atol=1e-7 * np.abs(tau).max())
+
+
+def test_html_grid_of_the_recursive_form_names_where_each_parameter_is_written():
+    from baseparams.report.html import parameter_classes, regrouped_into
+
+    a = bp.analyze(bp.load("puma560"), form="recursive")
+    into, cls = regrouped_into(a), parameter_classes(a)
+    assert a.base.__dict__.get("_K") is None  # not expanded
+    exprs = {e["name"]: e["expression"] for e in a.expressions() + a.regrouped()}
+    for name, where in into.items():
+        if cls[name] == "unidentifiable":
+            assert where == []
+        for w in where:  # each target's expression mentions the parameter (or its regrouped name)
+            assert re.search(rf"(^| |\*){re.escape(name)}R?( |$)", exprs[w]), (name, w)
+    assert into["link3.M"] == ["link3.MR"] and into["link2.M"] == [] and "link1.ZZR" in into["link1.ZZ"]

@@ -172,10 +172,39 @@ def regrouped_into(result) -> dict[str, list[str]]:
     """
     base = result.base
     names = base.base_names()
+    if getattr(result, "form", "expanded") == "recursive":
+        return _recursive_into(base, names)
     if hasattr(base.E, "tocsc"):  # sparse regrouping of a large tree
         e = base.E.tocsc()
         return {name: [names[r] for r in e.indices[e.indptr[k]:e.indptr[k + 1]]] for k, name in enumerate(base.names)}
     return {name: [names[r] for r in np.flatnonzero(base.E[:, k] != 0)] for k, name in enumerate(base.names)}
+
+
+def _recursive_into(base, names: list[str]) -> dict[str, list[str]]:
+    """:func:`regrouped_into` of the recursive form, in linear time: where each parameter is written.
+
+    An independent parameter: its base parameter; a dependent one: its regrouped parameter when it
+    has one (``link2.M`` into ``link2.MR``), else the base and regrouped parameters it appears in.
+    """
+    import scipy.sparse as sp
+
+    rf = base.recursive
+    tn = rf.term_names()
+    r = sp.csc_matrix(rf.R) if not hasattr(rf.R, "tocsc") else rf.R.tocsc()
+    sm = sp.csc_matrix(rf.S) if not hasattr(rf.S, "tocsc") else rf.S.tocsc()
+    out = {name: [] for name in base.names}
+    for k, i in enumerate(base.independent.tolist()):
+        out[base.names[i]] = [names[k]]
+    regrouped = rf.regrouped()
+    for k, d in enumerate(base.dependent.tolist()):
+        if regrouped[k]:
+            out[base.names[d]] = [tn[k]]
+        else:
+            out[base.names[d]] = ([names[x] for x in r.indices[r.indptr[k]:r.indptr[k + 1]]]
+                                  + [tn[x] for x in sm.indices[sm.indptr[k]:sm.indptr[k + 1]]])
+    for u in base.unidentifiable.tolist():
+        out[base.names[u]] = []
+    return out
 
 
 def _axis(robot, i: int) -> np.ndarray | None:

@@ -934,8 +934,6 @@ def format_report(a: Analysis) -> str:
     str
         The text report: base parameters in ``a.convention`` and in ``paper`` (world frame at q = 0).
     """
-    from .model import inertia as _inertia
-
     r, c, j = a.robot, a.certificate, a.to_json()
     loops = (f", {len(r.couplings)} coupled joints (linear couplings), {len(r.actuated)} actuated" if r.only_couplings
              else f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else "")
@@ -972,6 +970,16 @@ def format_report(a: Analysis) -> str:
                        f"{sm['max_loop_residual']:.1e}")
         out.append(f"certification: {c.status.upper()} - {c.message}")
         out.append(f"  residual ||W B||/||W|| = {c.residual:.2e}, worst column {c.max_column_residual:.2e}")
+    out.extend(_expressions_section(a, j))
+    out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")
+    return "\n".join(out)
+
+
+def _expressions_section(a: Analysis, j: dict) -> list[str]:
+    """The report's lines of base parameters (and the recursive form's regrouped ones), both conventions."""
+    from .model import inertia as _inertia
+
+    out: list[str] = []
     out.append("")
     rec = a.form == "recursive"
     how = ("; recursive form: each in its body's own standard parameters and its children's regrouped "
@@ -994,5 +1002,4 @@ def format_report(a: Analysis) -> str:
         out.append("regrouped dependent parameters (paper convention):")
         for e in j["regrouped_parameters_paper"]:
             out.append(f"  {e['name']} = {e['expression']}")
-    out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")
-    return "\n".join(out)
+    return out

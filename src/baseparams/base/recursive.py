@@ -36,7 +36,7 @@ from ..model.robot import Robot
 from ..model.scale import length_scale
 from ..nullspace.columns import Columns
 from .regroup import ZERO_TOL, BaseParameters, format_rows, parameter_names
-from .sparse import _choose_all, _matrix, _scaled_blocks, snap_short
+from .sparse import choose_all, csr_or_dense, scaled_blocks, snap_short
 
 
 @dataclass(frozen=True, eq=False)
@@ -202,18 +202,46 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
         The columns are not independent on their highest bodies.
     """
     n, n10 = robot.n, 10 * robot.n
-    hc, hp, he, t, noise = _scaled_blocks(robot, cols, convention)
+    hc, hp, he, t, noise = scaled_blocks(robot, cols, convention)
     tol = max(1e-8, noise)
-    order, bounds, dep_local, ainv = _choose_all(hc, cols.child, n, _inertia.SPECS[convention].regroup_order, tol)
+    order, bounds, dep_local, ainv = choose_all(hc, cols.child, n, _inertia.SPECS[convention].regroup_order, tol)
     dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
     keep = np.ones(n10, dtype=bool)
     keep[dep] = False
     ind = np.flatnonzero(keep)
     pos_d = np.full(n10, -1)
     pos_d[dep] = np.arange(len(dep))
+    tg_a, sr_a, v = _local_terms(cols, hc, hp, he, order, bounds, dep_local, ainv)
+    # sum duplicates (two columns' blocks on one body), then zero what is rounding, relative to the row
+    key = tg_a.astype(np.int64) * n10 + sr_a
+    uk, inv = np.unique(key, return_inverse=True)
+    v = np.bincount(inv, weights=v, minlength=len(uk)) if len(uk) else np.zeros(0)
+    tg_a, sr_a = uk // n10, uk % n10
+    rowmax = np.ones(n10)
+    np.maximum.at(rowmax, tg_a, np.abs(v))
+    ok = np.abs(v) > max(ZERO_TOL, noise) * rowmax[tg_a]
+    tg_a, sr_a, v = tg_a[ok], sr_a[ok], v[ok]
+    power = np.tile(LENGTH_POWER[convention], n).astype(float)
+    v = snap_short(v * length_scale(robot) ** (power[tg_a] - power[sr_a]))
+    pos_i = np.full(n10, -1)
+    pos_i[ind] = np.arange(len(ind))
+    isd = pos_d[tg_a] >= 0
+    rmat = csr_or_dense(v[~isd], pos_i[tg_a[~isd]], pos_d[sr_a[~isd]], (len(ind), len(dep)))
+    smat = csr_or_dense(v[isd], pos_d[tg_a[isd]], pos_d[sr_a[isd]], (len(dep), len(dep)))
+    form = RecursiveForm(parameter_names(robot, convention), ind, dep, rmat, smat)
+    unid = _unseen(form, dep)
+    tb = np.asarray(t, dtype=float).reshape(n, 10, 10)
+    tr = (10 * np.arange(n)[:, None, None] + np.arange(10)[None, :, None]) + np.zeros((1, 1, 10), dtype=int)
+    tmat = csr_or_dense(tb.ravel(), tr.ravel(), np.transpose(tr, (0, 2, 1)).ravel(), (n10, n10))
+    return BaseParameters(convention, form.names, ind, dep, None, None, unid, None, tmat, recursive=form)
+
+
+def _local_terms(cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray, order: np.ndarray,
+                 bounds: np.ndarray, dep_local: list, ainv: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(target parameter, source dependent parameter, dimensionless value)`` of ``-N_c``'s entries, every body."""
     tg, sr, vals = [], [], []  # target parameter (global), source dependent (global), dimensionless value
     ar10 = np.arange(10)
-    for c in range(n):
+    for c in range(len(dep_local)):
         if not dep_local[c]:
             continue
         idx = order[bounds[c]:bounds[c + 1]]
@@ -231,39 +259,19 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
             tg.append(10 * j + ar10[r])
             sr.append(src[s])
             vals.append(-blk[r, s])
-    if tg:
-        tg_a, sr_a, v = np.concatenate(tg), np.concatenate(sr), np.concatenate(vals)
-    else:
-        tg_a, sr_a, v = np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0)
-    # sum duplicates (two columns' blocks on one body), then zero what is rounding, relative to the row
-    key = tg_a.astype(np.int64) * n10 + sr_a
-    uk, inv = np.unique(key, return_inverse=True)
-    v = np.bincount(inv, weights=v, minlength=len(uk)) if len(uk) else np.zeros(0)
-    tg_a, sr_a = uk // n10, uk % n10
-    rowmax = np.ones(n10)
-    np.maximum.at(rowmax, tg_a, np.abs(v))
-    ok = np.abs(v) > max(ZERO_TOL, noise) * rowmax[tg_a]
-    tg_a, sr_a, v = tg_a[ok], sr_a[ok], v[ok]
-    power = np.tile(LENGTH_POWER[convention], n).astype(float)
-    v = snap_short(v * length_scale(robot) ** (power[tg_a] - power[sr_a]))
-    pos_i = np.full(n10, -1)
-    pos_i[ind] = np.arange(len(ind))
-    isd = pos_d[tg_a] >= 0
-    rmat = _matrix(v[~isd], pos_i[tg_a[~isd]], pos_d[sr_a[~isd]], (len(ind), len(dep)))
-    smat = _matrix(v[isd], pos_d[tg_a[isd]], pos_d[sr_a[isd]], (len(dep), len(dep)))
-    form = RecursiveForm(parameter_names(robot, convention), ind, dep, rmat, smat)
-    # a dependent parameter no base parameter sees: no path of nonzero coefficients to R (root side first)
+    if not tg:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0)
+    return np.concatenate(tg), np.concatenate(sr), np.concatenate(vals)
+
+
+def _unseen(form: RecursiveForm, dep: np.ndarray) -> np.ndarray:
+    """The dependent parameters no base parameter sees: no path of nonzero coefficients to ``R``, sorted."""
     seen = np.zeros(len(dep), dtype=bool)
-    rsp, ssp = form._csr(rmat).tocsc(), form._csr(smat)
-    rseen = np.diff(rsp.indptr) > 0
+    rseen = np.diff(form._csr(form.R).tocsc().indptr) > 0
+    ssc = form._csr(form.S).tocsc()
     # t_d is seen when it feeds R, or the t of a lower body that is seen (S[d', d] != 0, d' later in
     # this order): root side first
-    ssc = ssp.tocsc()
     for d in range(len(dep) - 1, -1, -1):
         users = ssc.indices[ssc.indptr[d]:ssc.indptr[d + 1]]
         seen[d] = rseen[d] or bool(np.any(seen[users]))
-    unid = np.sort(dep[~seen]) if len(dep) else np.zeros(0, dtype=int)
-    tb = np.asarray(t, dtype=float).reshape(n, 10, 10)
-    tr = (10 * np.arange(n)[:, None, None] + np.arange(10)[None, :, None]) + np.zeros((1, 1, 10), dtype=int)
-    tmat = _matrix(tb.ravel(), tr.ravel(), np.transpose(tr, (0, 2, 1)).ravel(), (n10, n10))
-    return BaseParameters(convention, form.names, ind, dep, None, None, unid, None, tmat, recursive=form)
+    return np.sort(dep[~seen]) if len(dep) else np.zeros(0, dtype=int)

@@ -31,6 +31,9 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``size_sweep``    ``baseparams analyze FILE --floating --json`` on random floating trees (URDF) of
                     N = 10 .. 10000 links: wall time, peak memory, status, nullity.
+* ``scale_trees``   issue 41: ``baseparams analyze --floating`` (certified, fresh processes) on chains, random deep
+                    trees and wide random trees of N = 100, 1 000, 10 000 bodies: wall, peak RSS, nullity, and
+                    the exponent of the curve between 1 000 and 10 000.
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
 * ``files``         every example-robot-data URDF, every ``../shared/models`` file and every MJCF model of
                     gymnasium and dm_control: certified, DRNG complete?; talos_full_v2 times.
@@ -795,6 +798,22 @@ def random_tree_urdf(n: int, seed: int = 0, branching: float = 0.3) -> str:
     return "\n".join(out)
 
 
+def deep_tree_urdf(n: int, seed: int = 0, branching: float = 0.3, reach: int = 10) -> str:
+    """A random *deep* tree of ``n`` links (URDF text, as :func:`random_tree_urdf`): each link hangs
+    from the previous one, or with probability ``branching`` from one of the ``reach`` links before
+    that (fingers and snakes: the mean depth grows like ``n / (0.7 + 0.15 reach)``, about 0.45 n);
+    ``branching=0`` is a chain. Loaded with ``--floating``: nullity 3 (N - 1)."""
+    rng = np.random.default_rng(seed)
+    parents = [-1] + [(i - 1 if rng.random() >= branching else int(rng.integers(max(0, i - reach), i)))
+                      for i in range(1, n)]
+    lines = random_tree_urdf(n, seed, branching=0.0).split("\n")  # one line per link, then its joint
+    for k, line in enumerate(lines):
+        if line.startswith('<joint name="j'):
+            i = int(line[len('<joint name="j'):line.index('"', len('<joint name="j'))])
+            lines[k] = line.replace(f'<parent link="b{i - 1}"/>', f'<parent link="b{parents[i]}"/>', 1)
+    return "\n".join(lines)
+
+
 def run_measured(cmd: list[str]) -> tuple[float, float, int, str]:
     """``(wall s, peak RSS MB, exit code, stdout)`` of one subprocess (``os.wait4``: its own
     ``ru_maxrss``, not the maximum over every child so far)."""
@@ -839,6 +858,46 @@ def bench_size_sweep(out: dict, quick: bool) -> None:
             out[f"{key}_nullity_expected"] = 3 * (n - 1)
             log(f"  tree{n}: {wall:.2f} s, {mb:.0f} MB, exit {code}, {res.get('status')}, nullity "
                 f"{res.get('nullity')} (expected {3 * (n - 1)})")
+
+
+def bench_scale_trees(out: dict, quick: bool) -> None:
+    """Issue 41: ``baseparams analyze FILE --floating --json`` (certified, ``--form auto``: recursive
+    from 200 bodies) in fresh processes, as an outsider runs it, on chains and random deep trees
+    (:func:`deep_tree_urdf`, mean depth about 0.45 N) and the wide random trees of the size sweep
+    (:func:`random_tree_urdf`), N = 100, 1 000, 10 000 (quick: up to 1 000): wall time, peak RSS,
+    nullity (expected 3 (N - 1)), and the exponent of wall and memory between the two largest N
+    (1 linear, 2 quadratic). One run per point above N = 1 000 (median of 3 below)."""
+    import math
+    import tempfile
+
+    from baseparams.files import write_text
+
+    sizes = (100, 1000) if quick else (100, 1000, 10000)
+    kinds = {"chain": lambda n: deep_tree_urdf(n, seed=n, branching=0.0),
+             "deep": lambda n: deep_tree_urdf(n, seed=n),
+             "wide": lambda n: random_tree_urdf(n, seed=n)}
+    with tempfile.TemporaryDirectory() as tmp:
+        for kind, make in kinds.items():
+            for n in sizes:
+                path = Path(tmp) / f"{kind}{n}.urdf"
+                write_text(path, make(n))
+                reps = 1 if quick or n > 1000 else 3
+                cmd = [sys.executable, "-m", "baseparams", "analyze", str(path), "--floating", "--json"]
+                runs = [run_measured(cmd) for _ in range(reps)]
+                wall, mb = statistics.median(r[0] for r in runs), max(r[1] for r in runs)
+                code, text = runs[-1][2], runs[-1][3]
+                res = json.loads(text) if code in (0, 1) and text.strip() else {}
+                key = f"trees_{kind}_N{n}"
+                out[f"{key}_s"], out[f"{key}_peak_mb"], out[f"{key}_exit"] = wall, mb, code
+                out[f"{key}_status"], out[f"{key}_nullity"] = res.get("status"), res.get("nullity")
+                out[f"{key}_nullity_ok"] = res.get("nullity") == 3 * (n - 1)
+                out[f"{key}_form"] = res.get("form")
+                log(f"  {kind}{n}: {wall:.2f} s, {mb:.0f} MB, exit {code}, {res.get('status')}, nullity "
+                    f"{res.get('nullity')} (expected {3 * (n - 1)}), form {res.get('form')}")
+            a, b = sizes[-2], sizes[-1]
+            for what in ("s", "peak_mb"):
+                lo, hi = out[f"trees_{kind}_N{a}_{what}"], out[f"trees_{kind}_N{b}_{what}"]
+                out[f"trees_{kind}_{what}_exponent"] = math.log(hi / lo) / math.log(b / a)
 
 
 LOOP_BUILTINS = ("four-bar", "parallelogram", "pkm-2rru-1rrs", "pkm-2prs-1psr", "pkm-2prs-1psr-symmetric")
@@ -1170,6 +1229,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,
     "size_sweep": bench_size_sweep,
+    "scale_trees": bench_scale_trees,
     "loops": bench_loops,
     "symbolic": bench_symbolic,
     "report": bench_report,

@@ -35,8 +35,15 @@ status, message        certified | completed | undecided | failed | unverified, 
 completed              directions added from the numerical nullspace (marked numerical)
 residual               ||W B_drng||_F / ||W||_F with orthonormal B_drng (null if unverified)
 convention             parameter convention of base_parameters (khalil: link frames)
+form                   expanded | recursive: how the expressions are written (expanded: standard
+                       parameters only; recursive: a body's own standard parameters and its
+                       children's regrouped dependent parameters NAMER, defined in
+                       regrouped_parameters; O(n) terms on a tree)
 base_parameters        [{name, expression}] regrouped base parameters
 base_parameters_paper  the same in the paper's spatial convention (world frame at q = 0)
+regrouped_parameters   [{name, expression}] the recursive form's regrouped dependent parameters,
+                       root side first ([] in the expanded form)
+regrouped_parameters_paper  the same in the paper's convention
 unidentifiable         standard parameters that no base parameter sees
 practical              null, or {literal_n_base, counted_out, tolerance, size, snaps[{joint,
                        what, component, literal, special, deviation}], note}: geometry the file
@@ -227,6 +234,8 @@ class Analysis:
         geometry to within rounding of a special value and the analysis is that of the model with
         the special value (:mod:`baseparams.model.snap`); ``robot`` is then that model and
         ``practical.source`` the file's. ``None``: the literal model was analysed.
+    form : {"expanded", "recursive"}
+        How :meth:`expressions` are written (:func:`analyze`'s ``form``, resolved).
 
     Notes
     -----
@@ -247,6 +256,7 @@ class Analysis:
     seconds: float
     extended: bool = True
     practical: Practical | None = None
+    form: str = "expanded"
 
     @property
     def nullity(self) -> int:
@@ -342,9 +352,33 @@ class Analysis:
         -------
         list of dict
             ``[{"name", "expression"}]``, e.g. ``link1.ZZR = link1.ZZ + link2.YY + ...``
-            gives ``{"name": "link1.ZZR", "expression": "link1.ZZ + link2.YY + ..."}``.
+            gives ``{"name": "link1.ZZR", "expression": "link1.ZZ + link2.YY + ..."}``. In the
+            recursive :attr:`form` the terms are the body's own standard parameters and its
+            children's regrouped dependent parameters (``link2.MR``, :meth:`regrouped`).
         """
-        return self.base.expressions()
+        return self.base.expressions(self.form)
+
+    def regrouped(self) -> list[dict[str, str]]:
+        """The regrouped dependent parameters of the recursive form (``[]`` in the expanded form).
+
+        Returns
+        -------
+        list of dict
+            ``[{"name", "expression"}]``, root side first, e.g. ``{"name": "link2.MR",
+            "expression": "link2.M + link3.MR"}``: each in terms of its own standard parameter and
+            the higher bodies' regrouped ones.
+        """
+        return self.base.definitions() if self.form == "recursive" else []
+
+    def expanded_expressions(self) -> list[dict[str, str]]:
+        """:meth:`expressions` written out in standard parameters only, whatever the :attr:`form`.
+
+        Returns
+        -------
+        list of dict
+            ``[{"name", "expression"}]``; ``O(sum of depths)`` terms on a tree.
+        """
+        return self.base.expressions("expanded")
 
     def to_base(self, params, convention: str) -> np.ndarray:
         """Base parameters of a standard parameter vector.
@@ -415,7 +449,9 @@ class Analysis:
         if cs is not None:
             return closed_projected_regressor(self.robot, cs, P=self.base_map, out=out, backend=backend)
         rows = np.flatnonzero(row_mask(self.robot, self.rows))
-        return projected_regressor(self.robot, q, dq, ddq, P=self.base_map, rows=rows, out=out, backend=backend)
+        t = self.base.T
+        p = t[:, self.base.independent] if hasattr(t, "tocsr") else self.base_map  # a large tree: sparse
+        return projected_regressor(self.robot, q, dq, ddq, P=p, rows=rows, out=out, backend=backend)
 
     @property
     def base_map(self) -> np.ndarray:
@@ -475,8 +511,11 @@ class Analysis:
             "completed": 0 if c is None else c.completed,
             "residual": None if c is None else c.residual,
             "convention": self.base.convention,
-            "base_parameters": self.base.expressions(),
-            "base_parameters_paper": self.base_paper.expressions(),
+            "form": self.form,
+            "base_parameters": self.base.expressions(self.form),
+            "base_parameters_paper": self.base_paper.expressions(self.form),
+            "regrouped_parameters": self.regrouped(),
+            "regrouped_parameters_paper": self.base_paper.definitions() if self.form == "recursive" else [],
             "unidentifiable": [self.base.names[i] for i in self.base.unidentifiable],
             "practical": None if self.practical is None else self.practical.to_json(self.n_base),
         }
@@ -484,7 +523,7 @@ class Analysis:
 
 def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: bool = True, rows="all",
             convention: str = "khalil", extended: bool = True, progress: TextIO | None = None,
-            literal: bool = False) -> Analysis:
+            literal: bool = False, form: str = "auto") -> Analysis:
     """Base parameters of ``robot``: DRNG, then certification (and completion), then regrouping.
 
     Parameters
@@ -520,6 +559,14 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
         directions it adds move the torques by less than 1e-3 of their scale and are not
         identifiable in practice. Such an analysis says so (``.practical``, a note in the
         report and JSON, the literal count); exact files are unaffected.
+    form : {"auto", "expanded", "recursive"}
+        How the regrouped expressions are written and held. ``expanded``: each base parameter in
+        standard parameters only (``O(sum of depths)`` terms on a tree: quadratic on a chain);
+        ``recursive``: in its body's own standard parameters and its children's regrouped
+        dependent parameters (``link3.MR``, :meth:`Analysis.regrouped`), ``O(n)`` terms, as
+        Khalil writes them (a tree whose nullspace DRNG spans; ``expanded_expressions()`` writes
+        them out). ``auto`` (default): recursive for trees of at least
+        :data:`RECURSIVE_MIN_BODIES` bodies regrouped body by body, expanded otherwise.
 
     Returns
     -------
@@ -559,17 +606,28 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     if not isinstance(convention, str):
         raise ArgumentTypeError(f"analyze: convention= must be a string (khalil, paper, ...), got "
                                 f"{type(convention).__name__}")
+    if not isinstance(form, str):
+        raise ArgumentTypeError(f"analyze: form= must be a string ({', '.join(FORMS)}), got {type(form).__name__}")
+    if form not in FORMS:
+        raise BaseparamsError(f"analyze: unknown form {form!r}; expected one of {', '.join(FORMS)}")
     _check_samples_memory(robot, samples)
     kw = {"samples": samples, "seed": seed, "verify": verify, "rows": rows, "convention": convention,
-          "extended": extended, "progress": progress}
+          "extended": extended, "progress": progress, "form": form}
     lit = _analyze(robot, **kw)
     if literal:
         return lit
     return practical_analysis(lit, kw)
 
 
+#: the forms of the regrouped expressions (:func:`analyze`)
+FORMS = ("auto", "expanded", "recursive")
+
+#: ``form="auto"``: the recursive form for a tree regrouped body by body with at least this many bodies
+RECURSIVE_MIN_BODIES = 200
+
+
 def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows, convention: str, extended: bool,
-             progress: TextIO | None) -> Analysis:
+             progress: TextIO | None, form: str = "auto") -> Analysis:
     """:func:`analyze` of the model as given (arguments as there)."""
     from .model.inertia import check_convention
 
@@ -585,7 +643,7 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
 
     rows = rows_spec(rows)
     row_mask(robot, rows)  # a bad name or form is refused before any work
-    _check_memory(robot, verify, rows)
+    _check_memory(robot, verify, rows, form)
     say(f"{robot.name}: {robot.n} bodies, {robot.dof} dofs; running DRNG")
     with blas_threads():  # small dense factorizations: one BLAS thread (numerics.blas_threads)
         res = drng(robot, extended=extended, rows=rows)
@@ -599,7 +657,15 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
             columns = _large_tree_columns(robot, rows, res)
             basis = span = res.orthonormal() if columns is None else None
         say("regrouping base parameters")
-        if columns is not None:  # a large tree: regrouped from compact columns, sparsely
+        use = _resolve_form(robot, form, columns)
+        if use == "recursive" and columns is None:  # a small tree: DRNG's span in compact form
+            columns = _recursive_columns(robot, rows, res, cert)
+        if use == "recursive":
+            from .base.recursive import recursive_base_parameters
+
+            base = recursive_base_parameters(robot, columns, convention)
+            base_paper = recursive_base_parameters(robot, columns, "paper")
+        elif columns is not None:  # a large tree: regrouped from compact columns, sparsely
             from .base.sparse import tree_base_parameters
 
             base = tree_base_parameters(robot, columns, convention)
@@ -608,7 +674,31 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
             base = base_parameters(robot, span, convention)
             base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
-                    time.perf_counter() - t0, extended)
+                    time.perf_counter() - t0, extended, form=use)
+
+
+def _resolve_form(robot: Robot, form: str, columns) -> str:
+    """``expanded`` or ``recursive`` for :func:`analyze`'s ``form`` (``auto``: by size, module constants)."""
+    if form != "auto":
+        return form
+    return "recursive" if columns is not None and robot.n >= RECURSIVE_MIN_BODIES else "expanded"
+
+
+def _recursive_columns(robot: Robot, rows: str, res, cert):
+    """DRNG's span of a tree as independent compact columns, for ``form="recursive"``; or refuse in one line."""
+    from .nullspace.structured import independent_columns
+
+    why = None
+    if robot.has_loops:
+        why = "the robot has loops"
+    elif cert is not None and cert.completed:
+        why = f"{cert.completed} nullspace directions were completed numerically (no compact form)"
+    cols = None if why else independent_columns(robot, res)
+    if cols is None:
+        why = why or "DRNG's columns have no echelon form body by body"
+        raise BaseparamsError(f"robot {robot.name!r}: form='recursive' needs a tree whose nullspace DRNG spans in "
+                              f"compact columns; here {why}: use form='expanded' (--form expanded)")
+    return cols
 
 
 @dataclass(frozen=True, eq=False)
@@ -805,22 +895,25 @@ def _check_samples_memory(robot: Robot, samples: int | None) -> None:
                               f"{robot.name!r} ({robot.dof} dofs, {robot.n} bodies); at most {most} samples here")
 
 
-def _check_memory(robot: Robot, verify: bool, rows: str = "all") -> None:
+def _check_memory(robot: Robot, verify: bool, rows: str = "all", form: str = "auto") -> None:
     """Refuse, before allocating, a model whose analysis needs more memory than is available."""
     from .nullspace.certify import uses_structured
 
     structured = uses_structured(robot, rows)  # certified body by body (or not), regrouped sparsely
+    recursive = form == "recursive" or (form == "auto" and robot.n >= RECURSIVE_MIN_BODIES)
     if structured:
-        need = BYTES_PER_BODY * robot.n + BYTES_PER_DEPTH * _depth_sum(robot)
+        # the recursive form is linear; the expanded one grows with each body's depth
+        need = BYTES_PER_BODY * robot.n + (0 if recursive else BYTES_PER_DEPTH * _depth_sum(robot))
     else:
         need = BYTES_PER_N2[bool(verify)] * robot.n**2
     have = _available_bytes()
     if have is None or need <= have:
         return
     if structured:
+        what = ("" if recursive else " (its expanded expressions grow with each body's depth in the tree; "
+                "--form recursive writes them in linear size)")
         raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the analysis needs about "
-                              f"{need / 1e9:.2g} GB (its regrouped expressions grow with each body's depth in the "
-                              f"tree) and {have / 1e9:.2g} GB are available")
+                              f"{need / 1e9:.2g} GB{what} and {have / 1e9:.2g} GB are available")
     hint = ("; --no-verify gives DRNG's geometric answer without the numerical certificate "
             f"(about {BYTES_PER_N2[False] * robot.n**2 / 1e9:.2g} GB)" if verify else "")
     raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the {'certified ' if verify else ''}analysis "
@@ -841,8 +934,6 @@ def format_report(a: Analysis) -> str:
     str
         The text report: base parameters in ``a.convention`` and in ``paper`` (world frame at q = 0).
     """
-    from .model import inertia as _inertia
-
     r, c, j = a.robot, a.certificate, a.to_json()
     loops = (f", {len(r.couplings)} coupled joints (linear couplings), {len(r.actuated)} actuated" if r.only_couplings
              else f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else "")
@@ -879,15 +970,36 @@ def format_report(a: Analysis) -> str:
                        f"{sm['max_loop_residual']:.1e}")
         out.append(f"certification: {c.status.upper()} - {c.message}")
         out.append(f"  residual ||W B||/||W|| = {c.residual:.2e}, worst column {c.max_column_residual:.2e}")
+    out.extend(_expressions_section(a, j))
+    out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")
+    return "\n".join(out)
+
+
+def _expressions_section(a: Analysis, j: dict) -> list[str]:
+    """The report's lines of base parameters (and the recursive form's regrouped ones), both conventions."""
+    from .model import inertia as _inertia
+
+    out: list[str] = []
     out.append("")
-    out.append(f"base parameters ({_inertia.describe(a.base.convention)}):")
-    for e in a.base.expressions():
+    rec = a.form == "recursive"
+    how = ("; recursive form: each in its body's own standard parameters and its children's regrouped "
+           "dependent parameters NAMER, defined after the list (--form expanded writes them out)" if rec
+           else "")  # the expanded form: today's header
+    out.append(f"base parameters ({_inertia.describe(a.base.convention)}{how}):")
+    for e in j["base_parameters"]:
         out.append(f"  {e['name']} = {e['expression']}")
+    if rec:
+        out.append("regrouped dependent parameters (root side first):")
+        for e in j["regrouped_parameters"]:
+            out.append(f"  {e['name']} = {e['expression']}")
     if len(a.base.unidentifiable):
         out.append("unidentifiable standard parameters: " + ", ".join(j["unidentifiable"]))
     out.append("")
-    out.append(f"the same in the paper's convention ({_inertia.describe('paper')}):")
-    for e in a.base_paper.expressions():
+    out.append(f"the same in the paper's convention ({_inertia.describe('paper')}{'; recursive form' if rec else ''}):")
+    for e in j["base_parameters_paper"]:
         out.append(f"  {e['name']} = {e['expression']}")
-    out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")
-    return "\n".join(out)
+    if rec:
+        out.append("regrouped dependent parameters (paper convention):")
+        for e in j["regrouped_parameters_paper"]:
+            out.append(f"  {e['name']} = {e['expression']}")
+    return out

@@ -177,6 +177,11 @@ class BaseParameters:
         regrouping of a large tree: it would be dense).
     T : ndarray or scipy.sparse.csr_matrix, shape ``(10 n, 10 n)``
         :func:`paper_from`: paper parameters = ``T @`` convention parameters.
+    recursive : RecursiveForm, optional
+        The same regrouping in recursive form (:mod:`baseparams.base.recursive`: ``O(n)`` terms
+        on a tree). When given, ``K`` and ``E`` may be ``None``: they are expanded from it when
+        first read (``O(sum of depths)`` nonzeros), and :meth:`to_base` and the expressions do
+        not read them.
     """
 
     convention: str
@@ -188,6 +193,7 @@ class BaseParameters:
     unidentifiable: np.ndarray
     base_basis: np.ndarray
     T: np.ndarray
+    recursive: object = None
 
     @property
     def n_base(self) -> int:
@@ -206,22 +212,56 @@ class BaseParameters:
         list of str, length ``nb``
             ``NAMER`` when the parameter absorbs others (Khalil's suffix), else ``NAME``.
         """
-        if _is_sparse(self.K):
+        if self.__dict__.get("_K") is None and self.recursive is not None:
+            r = self.recursive.R  # K's row is nonzero exactly where R's is ((I - S) is invertible)
+            absorbs = np.diff(r.indptr) > 0 if _is_sparse(r) else (
+                np.any(r != 0, axis=1) if r.shape[1] else np.zeros(len(self.independent), bool))
+        elif _is_sparse(self.K):
             absorbs = np.diff(self.K.indptr) > 0
         else:
             absorbs = np.any(self.K != 0, axis=1) if self.K.shape[1] else np.zeros(len(self.independent), bool)
         return [self.names[i] + ("R" if a else "") for i, a in zip(self.independent, absorbs)]
 
-    def expressions(self) -> list[dict[str, str]]:
+    def expressions(self, form: str = "expanded") -> list[dict[str, str]]:
         """Each base parameter as a combination of standard ones.
+
+        Parameters
+        ----------
+        form : {"expanded", "recursive"}
+            ``expanded``: standard parameters only; ``recursive``: the body's own standard
+            parameters and its children's regrouped dependent parameters (``link3.MR``, defined by
+            :meth:`definitions`; needs :attr:`recursive`).
 
         Returns
         -------
         list of dict
             ``[{"name": ..., "expression": ...}]``, e.g. ``link1.ZZR`` and
             ``link1.ZZ + link2.YY + ...`` (coefficients written only when not 1).
+
+        Raises
+        ------
+        BaseparamsError
+            ``recursive`` without a recursive form, or an unknown form.
         """
+        if form == "recursive":
+            if self.recursive is None:
+                raise BaseparamsError("these base parameters have no recursive form (a tree regrouped from compact "
+                                      "nullspace columns has one: analyze(..., form='recursive'))")
+            return self.recursive.base_expressions(self.base_names())
+        if form != "expanded":
+            raise BaseparamsError(f"unknown form {form!r}; expected 'expanded' or 'recursive'")
         return self._expressions(*self._terms())
+
+    def definitions(self) -> list[dict[str, str]]:
+        """The regrouped dependent parameters the recursive form's expressions use (``[]`` without one).
+
+        Returns
+        -------
+        list of dict
+            ``[{"name", "expression"}]``, e.g. ``link2.MR``: ``link2.M + link3.MR`` (root side
+            first); a dependent parameter that absorbs nothing is written as itself.
+        """
+        return [] if self.recursive is None else self.recursive.definitions()
 
     def _terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``K``'s nonzeros row by row: ``(indptr (nb + 1,), column indices, values)``, dense or sparse."""
@@ -233,25 +273,8 @@ class BaseParameters:
 
     def _expressions(self, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> list[dict[str, str]]:
         """:meth:`expressions` from ``K``'s nonzeros: every term formatted once, rows joined."""
-        names = self.names
-        rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
-        dparam = self.dependent[indices]
-        order = np.lexsort((dparam, rows))  # row by row, terms in parameter order
-        vals = data[order]
-        mags = np.abs(vals)
-        # '%.12g' is format_coefficient's text where it writes positional numbers (1e-4 <= c < 1e6;
-        # a margin below 1e6, where rounding could reach it)
-        uniq, inv = np.unique(mags, return_inverse=True)
-        shared = len(uniq) < len(mags) // 2  # many repeated magnitudes: format each distinct one once
-        each = uniq if shared else mags
-        fast = (each >= 1e-4) & (each < 9e5)
-        text = ["" if m == 1 else (f"{m:.12g}*" if f else f"{format_coefficient(m)}*")
-                for m, f in zip(each.tolist(), fast.tolist())]
-        coef = [text[j] for j in inv.tolist()] if shared else text
-        terms = [f"{'-' if c < 0 else '+'} {t}{names[d]}"
-                 for c, t, d in zip(vals.tolist(), coef, dparam[order].tolist())]
-        return [{"name": bname, "expression": " ".join([names[i]] + terms[indptr[r]:indptr[r + 1]])}
-                for r, (i, bname) in enumerate(zip(self.independent.tolist(), self.base_names()))]
+        return format_rows([self.names[i] for i in self.independent.tolist()], self.base_names(), indptr,
+                           indices, data, [self.names[d] for d in self.dependent.tolist()], self.dependent)
 
     def _check(self, convention: str) -> None:
         _inertia.check_convention(convention)
@@ -284,8 +307,11 @@ class BaseParameters:
         """
         self._check(convention)
         pi = np.asarray(pi, dtype=float)
-        if pi.shape != (self.E.shape[1],):
-            raise BaseparamsError(f"expected a parameter vector of shape ({self.E.shape[1]},), got {pi.shape}")
+        if pi.shape != (len(self.names),):
+            raise BaseparamsError(f"expected a parameter vector of shape ({len(self.names)},), got {pi.shape}")
+        if self.__dict__.get("_E") is None and self.recursive is not None:  # O(n): t = (I - S)^-1 pi_D
+            rf = self.recursive
+            return pi[self.independent] + rf.R @ rf.solve_t(pi[self.dependent])
         return self.E @ pi
 
     def from_base(self, beta: np.ndarray) -> np.ndarray:
@@ -307,13 +333,106 @@ class BaseParameters:
             A wrong shape.
         """
         beta = np.asarray(beta, dtype=float)
-        if beta.shape != (self.E.shape[0],):
-            raise BaseparamsError(f"expected {self.E.shape[0]} base parameters, got shape {beta.shape}")
+        if beta.shape != (self.n_base,):
+            raise BaseparamsError(f"expected {self.n_base} base parameters, got shape {beta.shape}")
         if _is_sparse(self.E):  # E has full row rank: the minimum-norm solution E^T (E E^T)^-1 beta
             from scipy.sparse.linalg import spsolve
 
             return self.E.T @ np.atleast_1d(spsolve((self.E @ self.E.T).tocsc(), beta))
         return np.linalg.pinv(self.E) @ beta
+
+
+def _lazy(name: str, doc: str) -> property:
+    """``K`` or ``E``: stored, or expanded from the recursive form when first read (``None`` given)."""
+    key = "_" + name
+
+    def get(self):
+        v = self.__dict__.get(key)
+        if v is None and self.recursive is not None:
+            v = _expand(self, name)
+            self.__dict__[key] = v
+        return v
+
+    def put(self, value):
+        self.__dict__[key] = value
+
+    return property(get, put, doc=doc)
+
+
+def _expand(bp: BaseParameters, name: str):
+    """``K = R (I - S)^-1`` from the recursive form, or ``E = [I | K]`` on the independent and dependent columns."""
+    k = bp.__dict__.get("_K")
+    if k is None:
+        k = bp.recursive.expand()
+        bp.__dict__["_K"] = k
+    if name == "K":
+        return k
+    nb, n10 = len(bp.independent), len(bp.names)
+    if not _is_sparse(k):
+        e = np.zeros((nb, n10))
+        e[np.arange(nb), bp.independent] = 1.0
+        e[:, bp.dependent] = k
+        return e
+    import scipy.sparse as sp
+
+    kc = k.tocoo()
+    return sp.csr_matrix((np.r_[np.ones(nb), kc.data], (np.r_[np.arange(nb), kc.row],
+                                                         np.r_[bp.independent, bp.dependent[kc.col]])),
+                         shape=(nb, n10))
+
+
+# K and E as properties after the dataclass is made (its __init__ stores through the setters)
+BaseParameters.K = _lazy("K", "Regrouping coefficients ``(nb, k)`` (expanded from the recursive form when needed).")
+BaseParameters.E = _lazy("E", "``beta = E @ pi`` ``(nb, 10 n)`` (expanded from the recursive form when needed).")
+
+
+def format_rows(heads: list[str], row_names: list[str], indptr: np.ndarray, indices: np.ndarray,
+                data: np.ndarray, term_names: list[str], order_key: np.ndarray | None = None) -> list[dict[str, str]]:
+    """Rows ``head + sum coefficient * term`` as text: every coefficient formatted once, rows joined.
+
+    Parameters
+    ----------
+    heads : list of str, length ``r``
+        Each row's leading term (coefficient 1).
+    row_names : list of str, length ``r``
+        Each row's name.
+    indptr : ndarray of int, shape ``(r + 1,)``
+        CSR row pointers of the terms.
+    indices : ndarray of int
+        Each term's index into ``term_names``.
+    data : ndarray
+        Each term's coefficient.
+    term_names : list of str
+        The terms' names.
+    order_key : ndarray of int, optional
+        A sort key per term name (terms are written in its order within a row; default: the index).
+
+    Returns
+    -------
+    list of dict
+        ``[{"name", "expression"}]``; a coefficient of 1 is not written.
+    """
+    indptr = np.asarray(indptr)
+    indices = np.asarray(indices, dtype=int)
+    data = np.asarray(data, dtype=float)
+    rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+    keyv = indices if order_key is None else np.asarray(order_key)[indices]
+    order = np.lexsort((keyv, rows))  # row by row, terms in parameter order
+    vals = data[order]
+    mags = np.abs(vals)
+    # '%.12g' is format_coefficient's text where it writes positional numbers (1e-4 <= c < 1e6;
+    # a margin below 1e6, where rounding could reach it)
+    uniq, inv = np.unique(mags, return_inverse=True)
+    shared = len(uniq) < len(mags) // 2  # many repeated magnitudes: format each distinct one once
+    each = uniq if shared else mags
+    fast = (each >= 1e-4) & (each < 9e5)
+    text = ["" if m == 1 else (f"{m:.12g}*" if f else f"{format_coefficient(m)}*")
+            for m, f in zip(each.tolist(), fast.tolist())]
+    coef = [text[j] for j in inv.tolist()] if shared else text
+    terms = [f"{'-' if c < 0 else '+'} {t}{term_names[d]}"
+             for c, t, d in zip(vals.tolist(), coef, indices[order].tolist())]
+    return [{"name": name, "expression": " ".join([head] + terms[indptr[r]:indptr[r + 1]])}
+            for r, (head, name) in enumerate(zip(heads, row_names))]
 
 
 def _is_sparse(a) -> bool:

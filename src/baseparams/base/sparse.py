@@ -118,8 +118,28 @@ def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS
     return x
 
 
-def _scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndarray, ...]:
-    """Each column's blocks in dimensionless convention coordinates, and the noise level."""
+def scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndarray, ...]:
+    """Each column's blocks in dimensionless convention coordinates, and the noise level.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    cols : Columns
+        ``k`` columns in compact form (SI ``paper`` convention).
+    convention : str
+        The convention to regroup in.
+
+    Returns
+    -------
+    hc, hp, he : ndarray, shape ``(k, 10)``
+        The columns' blocks on their highest, lower and extra bodies, in ``convention``
+        coordinates scaled by ``L^-u`` (zero where a column has no such body).
+    t : ndarray, shape ``(n, 10, 10)``
+        :func:`body_transforms`.
+    noise : float
+        The rounding level of the map to dimensionless coordinates.
+    """
     t = body_transforms(robot, convention)
     tinv = np.linalg.inv(t)
     power = LENGTH_POWER[convention].astype(float)
@@ -134,12 +154,35 @@ def _scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.nda
     return blk(cols.child, cols.h), blk(cols.parent, cols.hp), blk(cols.extra, cols.he), t, noise
 
 
-def _choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...], tol: float):
+def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...], tol: float):
     """Every body's dependent parameters and ``H_c[D_c]^-1``, bodies batched by their column count.
 
-    Returns ``(order, bounds, dep, ainv)``: the columns sorted by body (``order[bounds[c]:bounds[c +
-    1]]`` are body ``c``'s), the chosen local rows per body (the greedy choice, as
-    :func:`~.regroup.choose_dependent`) and the inverses of the chosen rows.
+    Parameters
+    ----------
+    hc : ndarray, shape ``(k, 10)``
+        The columns' dimensionless blocks on their highest bodies (:func:`scaled_blocks`).
+    child : ndarray of int, shape ``(k,)``
+        Each column's highest body.
+    n : int
+        Number of bodies.
+    within : tuple of int
+        The convention's regrouping order of a body's ten parameters.
+    tol : float
+        Relative threshold of a row's new component (as :func:`~.regroup.choose_dependent`).
+
+    Returns
+    -------
+    order, bounds : ndarray of int
+        The columns sorted by body: ``order[bounds[c]:bounds[c + 1]]`` are body ``c``'s.
+    dep : list of list of int
+        The chosen local rows per body (the greedy choice, as :func:`~.regroup.choose_dependent`).
+    ainv : list of ndarray or None
+        The inverses of the chosen rows, ``(l_c, l_c)`` per body.
+
+    Raises
+    ------
+    RuntimeError
+        A body's columns are not independent on it.
     """
     order = np.argsort(child, kind="stable")
     bounds = np.searchsorted(child[order], np.arange(n + 1))
@@ -181,7 +224,7 @@ def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he:
     first, then the bodies on its way to the root.
     """
     n = robot.n
-    order, bounds, dep, ainv = _choose_all(hc, cols.child, n, within, tol)
+    order, bounds, dep, ainv = choose_all(hc, cols.child, n, within, tol)
     empty = (np.zeros(0, dtype=int), np.zeros((0, 10, 0)))
     z: list[tuple[np.ndarray, np.ndarray]] = [empty] * n
     for c in range(n):  # parents first: their dual vectors are final when a child needs them
@@ -261,7 +304,7 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
         The columns are not independent on their highest bodies.
     """
     n, n10 = robot.n, 10 * robot.n
-    hc, hp, he, t, noise = _scaled_blocks(robot, cols, convention)
+    hc, hp, he, t, noise = scaled_blocks(robot, cols, convention)
     tol = max(1e-8, noise)
     dep_local, z = _dual_basis(robot, cols, hc, hp, he, _inertia.SPECS[convention].regroup_order, tol)
     dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
@@ -279,8 +322,8 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     rows, cls, vals = rows[keep], cls[keep], vals[keep]
     power = np.tile(LENGTH_POWER[convention], n).astype(float)
     vals = snap_short(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]))
-    kmat = _matrix(vals, rows, cls, (len(ind), len(dep)))
-    e = _matrix(np.r_[np.ones(len(ind)), vals], np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]],
+    kmat = csr_or_dense(vals, rows, cls, (len(ind), len(dep)))
+    e = csr_or_dense(np.r_[np.ones(len(ind)), vals], np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]],
                 (len(ind), n10))
     if isinstance(kmat, np.ndarray):
         unseen = ~np.any(kmat != 0, axis=0)
@@ -289,7 +332,7 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     unid = np.sort(dep[unseen]) if len(dep) else np.zeros(0, dtype=int)
     tb = np.asarray(t, dtype=float).reshape(n, 10, 10)
     tr = (10 * np.arange(n)[:, None, None] + np.arange(10)[None, :, None]) + np.zeros((1, 1, 10), dtype=int)
-    tmat = _matrix(tb.ravel(), tr.ravel(), np.transpose(tr, (0, 2, 1)).ravel(), (n10, n10))
+    tmat = csr_or_dense(tb.ravel(), tr.ravel(), np.transpose(tr, (0, 2, 1)).ravel(), (n10, n10))
     return BaseParameters(convention, parameter_names(robot, convention), ind, dep, kmat, e, unid, None, tmat)
 
 
@@ -298,8 +341,23 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
 DENSE_MAX_PARAMS = 1000
 
 
-def _matrix(vals: np.ndarray, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]):
-    """The matrix of triplets (duplicates summed): a CSR matrix, or a dense array for small models."""
+def csr_or_dense(vals: np.ndarray, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]):
+    """The matrix of triplets (duplicates summed): a CSR matrix, or a dense array for small models.
+
+    Parameters
+    ----------
+    vals : ndarray, shape ``(m,)``
+        Values.
+    rows, cols : ndarray of int, shape ``(m,)``
+        Their positions.
+    shape : tuple of int
+        The matrix's shape.
+
+    Returns
+    -------
+    ndarray or scipy.sparse.csr_matrix
+        Dense up to :data:`DENSE_MAX_PARAMS` rows and columns, CSR (sorted, no stored zeros) above.
+    """
     if shape[1] > DENSE_MAX_PARAMS or shape[0] > DENSE_MAX_PARAMS:
         import scipy.sparse as sp
 

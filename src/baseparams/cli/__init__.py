@@ -193,7 +193,7 @@ def cmd_analyze(args) -> int:
     with Progress(args.verbose) as progress:
         result = analyze(robot, samples=args.samples, seed=args.seed, verify=not args.no_verify,
                          extended=not args.paper_only, rows=args.rows, convention=args.convention, progress=progress,
-                         literal=args.literal)
+                         literal=args.literal, form=args.form)
         text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
         if args.html:
             from ..report.html import analysis_html
@@ -425,6 +425,10 @@ def build_parser() -> argparse.ArgumentParser:
     _analysis_choice_args(s)
     s.add_argument("--convention", choices=values(Convention),
                    default=str(Convention.KHALIL), help="convention of the regrouped expressions (default khalil)")
+    s.add_argument("--form", choices=("auto", "expanded", "recursive"), default="auto",
+                   help="how the regrouped expressions are written: expanded (standard parameters only), "
+                        "recursive (a body's own parameters and its children's regrouped ones, e.g. link3.MR: "
+                        "linear size on deep trees), auto (default: recursive for trees of 200 bodies or more)")
     s.add_argument("-v", "--verbose", action="store_true",
                    help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")

@@ -52,17 +52,26 @@ class TreeState:
     lines : ndarray, shape ``(S, dof, 6)``
         Current joint lines ``L_k`` (eq. "jacobian line"); the floating root's are the unit
         vectors ``e_k`` (quasi-velocities).
-    support : ndarray of bool, shape ``(dof, n)``
-        Which coordinates move which bodies (:attr:`Robot.support`).
+    robot : Robot
+        The robot (:attr:`support`, formed when first read).
     """
 
     g: np.ndarray
     V: np.ndarray
     dV: np.ndarray
     lines: np.ndarray
-    support: np.ndarray
+    robot: Robot
 
     __repr__ = summary_repr
+
+    @property
+    def support(self) -> np.ndarray:
+        """``(dof, n)`` bool: which coordinates move which bodies (:attr:`Robot.support`; dense, formed on demand)."""
+        s = self.__dict__.get("_support")
+        if s is None:
+            s = self.robot.support
+            object.__setattr__(self, "_support", s)
+        return s
 
     def jacobian_lines(self) -> np.ndarray:
         """Dense Jacobian lines ``L[s, j, i] (S, dof, n, 6)`` (zero where j does not move i).
@@ -177,7 +186,7 @@ def forward_kinematics(robot: Robot, q, dq=None, ddq=None) -> TreeState:
             ah = ah + commutator(line, vh) * dq[:, jj:jj + 1] + line * ddq[:, jj:jj + 1]
             h = h @ screw_exp(screws[jj], q[:, jj])
         g[:, i], v[:, i], a[:, i] = h, vh, ah
-    return TreeState(g, v, a, lines, robot.support)
+    return TreeState(g, v, a, lines, robot)
 
 
 @dataclass(frozen=True, eq=False)
@@ -530,5 +539,7 @@ def wrench_forces(robot: Robot, q, body: int, wrench, frame: str = "world") -> n
         f = np.einsum("sij,sj->si", pose[:, :3, :3], f)
         m = np.einsum("sij,sj->si", pose[:, :3, :3], m) + np.cross(pose[:, :3, 3], f)
     out = np.einsum("sjc,sc->sj", state.lines[..., :3], m) + np.einsum("sjc,sc->sj", state.lines[..., 3:], f)
-    out[:, ~robot.support[:, body]] = 0.0
+    moved = np.zeros(robot.dof, dtype=bool)
+    moved[robot.path_dofs(body)] = True
+    out[:, ~moved] = 0.0
     return out

@@ -559,9 +559,52 @@ class Robot:
         s.flags.writeable = False
         return s
 
+    def path_dofs(self, body: int) -> np.ndarray:
+        """The coordinates that move ``body``: those of the joints on its path to the root.
+
+        ``O(depth)``: the column ``support[:, body]`` without the ``(dof, n)`` matrix.
+
+        Parameters
+        ----------
+        body : int
+            A body index.
+
+        Returns
+        -------
+        ndarray of int
+            Coordinate indices, increasing (root side first).
+        """
+        qi, nd, out = self.q_index, self.ndofs, []
+        b = int(body)
+        while b >= 0:
+            out.append(np.arange(qi[b], qi[b] + nd[b]))
+            b = int(self.parent[b])
+        return np.concatenate(out[::-1]) if out else np.zeros(0, dtype=int)
+
+    @property
+    def subtree_end(self) -> np.ndarray:
+        """``(n,)`` int: one past the last body of each body's subtree when contiguous, else -1.
+
+        Body ``i``'s subtree is then ``i .. end[i] - 1``. ``O(n)`` (parents precede children): what
+        :attr:`support` shows row by row, without it.
+        """
+        n = self.n
+        size = np.ones(n, dtype=np.int64)
+        last = np.arange(n, dtype=np.int64)
+        for i in range(n - 1, -1, -1):
+            p = self.parent[i]
+            if p >= 0:
+                size[p] += size[i]
+                last[p] = max(last[p], last[i])
+        return np.where(last - np.arange(n) + 1 == size, last + 1, -1)
+
     @property
     def support(self) -> np.ndarray:
-        """``(dof, n)`` bool: coordinate ``j`` moves body ``i`` (``j`` on ``i``'s path)."""
+        """``(dof, n)`` bool: coordinate ``j`` moves body ``i`` (``j`` on ``i``'s path).
+
+        Dense (quadratic in the body count): large trees use :meth:`path_dofs` and
+        :attr:`subtree_end` instead.
+        """
         anc = np.zeros((self.n, self.n), dtype=bool)
         for i in range(self.n):
             anc[i, i] = True

@@ -113,8 +113,39 @@ def robot_size(robot: Robot) -> float:
         [m], at least 1e-3 (a robot of one body at the origin).
     """
     p = np.vstack([np.zeros((1, 3)), robot.M0[:, :3, 3]])
-    span = float(np.max(np.linalg.norm(p[:, None, :] - p[None, :, :], axis=2)))
-    return max(span, 1e-3)
+    return max(diameter(p), 1e-3)
+
+
+def diameter(p: np.ndarray, block: int = 1024) -> float:
+    """The largest distance between two of the points ``p (m, 3)``, exactly, in ``O(m block)`` memory.
+
+    A lower bound ``D`` (the farthest point from the farthest point from the centroid) prunes:
+    a pair at distance ``>= D`` has both points at least ``D - R`` from the centroid ``c`` (``R``
+    the largest radius), since ``|p - q| <= |p - c| + |q - c|``; the remaining points are compared
+    pairwise, ``block`` rows at a time.
+
+    Parameters
+    ----------
+    p : ndarray, shape ``(m, 3)``
+        Points (``m >= 1``).
+    block : int
+        Rows per block of the pairwise comparison.
+
+    Returns
+    -------
+    float
+        ``max |p_i - p_j|``.
+    """
+    c = p.mean(axis=0)
+    r = np.linalg.norm(p - c, axis=1)
+    a = p[int(np.argmax(r))]
+    b = p[int(np.argmax(np.linalg.norm(p - a, axis=1)))]
+    best = float(np.linalg.norm(a - b))
+    cand = p[r >= best - r.max() - 1e-12 * max(best, 1.0)]
+    for i in range(0, len(cand), block):
+        d = np.linalg.norm(cand[i:i + block, None, :] - cand[None, :, :], axis=2)
+        best = max(best, float(d.max()))
+    return best
 
 
 def relative_frames(robot: Robot) -> np.ndarray:

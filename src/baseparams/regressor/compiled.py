@@ -154,10 +154,13 @@ class Layout:
         self.floating = np.array([t == "F" for t in robot.jtype], dtype=np.bool_)
         self.screws = np.ascontiguousarray(robot.screws, dtype=float)
         self.gravity = np.asarray(robot.gravity, dtype=float).copy()
-        support = robot.support
-        counts = support.sum(axis=0)
-        self.anc_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self.anc = np.concatenate([np.flatnonzero(support[:, i]) for i in range(self.n)]).astype(np.int64)
+        paths: list[np.ndarray] = []  # each body's path coordinates: its parent's, then its own (O(sum of depths),
+        for i in range(self.n):  # not the (dof, n) support matrix)
+            own = np.arange(robot.q_index[i], robot.q_index[i] + robot.ndofs[i])
+            p = robot.parent[i]
+            paths.append(own if p < 0 else np.concatenate([paths[p], own]))
+        self.anc_ptr = np.concatenate([[0], np.cumsum([len(p) for p in paths])]).astype(np.int64)
+        self.anc = np.concatenate(paths).astype(np.int64)
         self.pair_m = np.array([m for m, _ in HAT_INDEX], dtype=np.int64)
         self.pair_n = np.array([n for _, n in HAT_INDEX], dtype=np.int64)
 
@@ -237,7 +240,7 @@ def projection_csr(P: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.nd
 
     Parameters
     ----------
-    P : ndarray, shape ``(10 n, m)``
+    P : ndarray or scipy.sparse matrix, shape ``(10 n, m)``
         Rows in the ``paper`` convention (ten per body).
     n : int
         Number of bodies.
@@ -251,6 +254,16 @@ def projection_csr(P: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.nd
     cmat : ndarray, shape ``(entries, 10)``
         Body ``i``'s ten rows of that column (only columns not zero on body ``i`` are listed).
     """
+    if hasattr(P, "tocoo"):  # sparse: the entries of each (body, column) pair, no dense (10 n, m) array
+        c = P.tocoo()
+        body, col = c.row // 10, c.col
+        key = body.astype(np.int64) * P.shape[1] + col
+        uk, inv = np.unique(key, return_inverse=True)
+        cmat = np.zeros((len(uk), 10))
+        np.add.at(cmat, (inv, c.row % 10), c.data)
+        ub = uk // P.shape[1]
+        cptr = np.concatenate([[0], np.cumsum(np.bincount(ub, minlength=n))]).astype(np.int64)
+        return cptr, (uk % P.shape[1]).astype(np.int64), cmat
     blocks = np.asarray(P, dtype=float).reshape(n, 10, -1)
     nz = np.any(blocks != 0.0, axis=1)  # (n, m)
     body, col = np.nonzero(nz)

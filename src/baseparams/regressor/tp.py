@@ -87,13 +87,11 @@ def _bar_lines_swapped(e: np.ndarray, acc: np.ndarray) -> np.ndarray:
 
 def _subtree_slices(robot: Robot) -> list[tuple[int, int]] | None:
     """Per coordinate, the contiguous range of bodies it moves, or None if not contiguous."""
-    out = []
-    for row in robot.support:
-        idx = np.flatnonzero(row)
-        if idx[-1] - idx[0] + 1 != len(idx):
-            return None
-        out.append((int(idx[0]), int(idx[-1]) + 1))
-    return out
+    end = robot.subtree_end  # O(n): the support matrix's rows, without forming it
+    body = robot.dof_body
+    if np.any(end[body] < 0):
+        return None
+    return [(int(b), int(end[b])) for b in body.tolist()]
 
 
 #: regressor backends: ``auto`` (compiled for large batches when numba is installed, see
@@ -360,10 +358,11 @@ def projected_regressor(robot: Robot, q, dq=None, ddq=None, *, P: np.ndarray, ro
         Positions.
     dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
         Velocities and accelerations; default zero.
-    P : ndarray, shape ``(10 n, m)``
+    P : ndarray or scipy.sparse matrix, shape ``(10 n, m)``
         Column map; its rows in the ``paper`` convention (spatial pseudo-inertia entries of each
         body, world frame at q = 0), e.g. the base-parameter map of
-        :meth:`baseparams.Analysis.base_regressor`.
+        :meth:`baseparams.Analysis.base_regressor` (sparse for a large tree: no ``(10 n, m)``
+        array is formed).
     rows : array_like of int, optional
         Coordinates whose rows are kept, in order (default all ``dof``).
     out : ndarray, shape ``(S, len(rows), m)``, optional
@@ -396,7 +395,11 @@ def projected_regressor(robot: Robot, q, dq=None, ddq=None, *, P: np.ndarray, ro
     out = np.empty(shape) if out is None else out
     for k in range(0, s, chunk):
         sl = slice(k, k + chunk)
-        out[sl] = regressor(robot, q[sl], dq[sl], ddq[sl], backend="numpy")[:, rowsel] @ P
+        y = regressor(robot, q[sl], dq[sl], ddq[sl], backend="numpy")[:, rowsel]
+        if hasattr(P, "tocsr"):  # a sparse map (a large tree's base map): P^T y^T
+            out[sl] = (P.T @ y.reshape(-1, y.shape[-1]).T).T.reshape(y.shape[0], y.shape[1], -1)
+        else:
+            out[sl] = y @ P
     return out
 
 
@@ -440,7 +443,14 @@ def closed_projected_regressor(robot: Robot, closed, *, P: np.ndarray, out: np.n
 
 
 def _checked_map(P, n: int) -> np.ndarray:
-    """``P`` as a float ``(10 n, m)`` array, or one clear error."""
+    """``P`` as a float ``(10 n, m)`` array (a scipy.sparse matrix stays sparse, CSR), or one clear error."""
+    if hasattr(P, "tocsr"):
+        P = P.tocsr().astype(float)
+        if P.shape[0] != 10 * n:
+            raise BaseparamsError(f"P must have shape (10 n, m) = ({10 * n}, m), got {P.shape}")
+        if not np.all(np.isfinite(P.data)):
+            raise BaseparamsError("P contains NaN or inf")
+        return P
     P = np.asarray(P, dtype=float)
     if P.ndim != 2 or P.shape[0] != 10 * n:
         raise BaseparamsError(f"P must have shape (10 n, m) = ({10 * n}, m), got {P.shape}")

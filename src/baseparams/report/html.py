@@ -137,6 +137,25 @@ def parameter_classes(result) -> dict[str, str]:
     return out
 
 
+def _form_note(j: dict) -> str:
+    """One line saying how the expressions are written (the JSON's ``form``)."""
+    if j.get("form") == "recursive":
+        return ("<p class='form'>Recursive form: each base parameter in its body's own standard parameters and its "
+                "children's regrouped dependent parameters (NAMER, defined in the next table); "
+                "<code>--form expanded</code> writes them in standard parameters only.</p>")
+    return "<p class='form'>Expanded form: standard parameters only.</p>"
+
+
+def _regrouped_table(j: dict) -> str:
+    """The recursive form's regrouped dependent parameters (nothing in the expanded form)."""
+    if not j.get("regrouped_parameters"):
+        return ""
+    rows = "".join(f"<tr><td>{html.escape(b['name'])}</td><td class='expr'>{html.escape(b['expression'])}</td></tr>"
+                   for b in j["regrouped_parameters"])
+    return (f"<h3>Regrouped dependent parameters</h3><table id='regrouped'><tr><th>name</th><th>expression</th></tr>"
+            f"{rows}</table>")
+
+
 def regrouped_into(result) -> dict[str, list[str]]:
     """The base parameters each standard parameter appears in.
 
@@ -153,10 +172,39 @@ def regrouped_into(result) -> dict[str, list[str]]:
     """
     base = result.base
     names = base.base_names()
+    if getattr(result, "form", "expanded") == "recursive":
+        return _recursive_into(base, names)
     if hasattr(base.E, "tocsc"):  # sparse regrouping of a large tree
         e = base.E.tocsc()
         return {name: [names[r] for r in e.indices[e.indptr[k]:e.indptr[k + 1]]] for k, name in enumerate(base.names)}
     return {name: [names[r] for r in np.flatnonzero(base.E[:, k] != 0)] for k, name in enumerate(base.names)}
+
+
+def _recursive_into(base, names: list[str]) -> dict[str, list[str]]:
+    """:func:`regrouped_into` of the recursive form, in linear time: where each parameter is written.
+
+    An independent parameter: its base parameter; a dependent one: its regrouped parameter when it
+    has one (``link2.M`` into ``link2.MR``), else the base and regrouped parameters it appears in.
+    """
+    import scipy.sparse as sp
+
+    rf = base.recursive
+    tn = rf.term_names()
+    r = sp.csc_matrix(rf.R) if not hasattr(rf.R, "tocsc") else rf.R.tocsc()
+    sm = sp.csc_matrix(rf.S) if not hasattr(rf.S, "tocsc") else rf.S.tocsc()
+    out = {name: [] for name in base.names}
+    for k, i in enumerate(base.independent.tolist()):
+        out[base.names[i]] = [names[k]]
+    regrouped = rf.regrouped()
+    for k, d in enumerate(base.dependent.tolist()):
+        if regrouped[k]:
+            out[base.names[d]] = [tn[k]]
+        else:
+            out[base.names[d]] = ([names[x] for x in r.indices[r.indptr[k]:r.indptr[k + 1]]]
+                                  + [tn[x] for x in sm.indices[sm.indptr[k]:sm.indptr[k + 1]]])
+    for u in base.unidentifiable.tolist():
+        out[base.names[u]] = []
+    return out
 
 
 def _axis(robot, i: int) -> np.ndarray | None:
@@ -428,7 +476,8 @@ def analysis_html(result) -> str:
             f"q = 0 (red: joint axes); drag the view to rotate; click a body or a row.</p>"
             f"<div style='display:flex;gap:1em;flex-wrap:wrap'><div>{view}</div><div>{_grid(result)}</div></div>"
             f"<h2>Why: the nullspace directions by provenance</h2>{_provenance_list(result, groups)}"
-            f"<h2>Base parameters</h2><table id='base'><tr><th>name</th><th>expression</th></tr>{exprs}</table>"
+            f"<h2>Base parameters</h2>{_form_note(j)}<table id='base'><tr><th>name</th><th>expression</th></tr>{exprs}"
+            f"</table>{_regrouped_table(j)}"
             f"{_certification(result)}"
             f"<script type='application/json' id='robot-data'>{json.dumps(data)}</script>")
     return _page(f"{result.robot.name}: base parameters", body, _VIEWER)

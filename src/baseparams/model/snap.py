@@ -12,7 +12,7 @@ the special value (:func:`snapped`). Each joint frame relative to its parent's (
 
 * an angle within :data:`SNAP_TOL` rad of a multiple of pi/2 is that multiple;
 * an offset component, or an axis component, within :data:`SNAP_TOL` of zero (offsets relative
-  to the robot's size, :func:`robot_size`) is zero.
+  to the robot's size, :func:`robot_size`: its extent, at most ten of its longest links) is zero.
 
 Why 1e-3: a geometric feature of relative size ``e`` creates directions whose regressor columns
 are about ``e`` times the others' at the file's own mass and size scales; ``e = 1e-3`` (0.06
@@ -99,8 +99,18 @@ def _digits(s: Snap) -> int:
     return max(1, int(np.floor(-np.log10(max(s.deviation / scale, 1e-300)))))
 
 
+#: the robot's size is at most this many times its longest link (:func:`robot_size`)
+LINKS_PER_SIZE = 10
+
+
 def robot_size(robot: Robot) -> float:
-    """The length offsets are measured against: the largest distance between two joint frames at q = 0.
+    """The length offsets are measured against: the robot's extent, at most ten of its longest links.
+
+    The largest distance between two joint frames at q = 0, but at most :data:`LINKS_PER_SIZE`
+    times the longest link (a joint frame's distance from its parent's): an offset acts on the
+    torques through the links near it, so on a chain of 10 000 links the whole chain's length
+    would make every offset below ten links "near zero" (1 988 of them snapped on a random deep
+    tree). An arm's extent is a few links: unchanged there.
 
     Parameters
     ----------
@@ -113,7 +123,10 @@ def robot_size(robot: Robot) -> float:
         [m], at least 1e-3 (a robot of one body at the origin).
     """
     p = np.vstack([np.zeros((1, 3)), robot.M0[:, :3, 3]])
-    return max(diameter(p), 1e-3)
+    rel = relative_frames(robot)[:, :3, 3]
+    inner = [i for i, par in enumerate(robot.parent) if par >= 0]  # a root's pose in the world is not a link
+    longest = float(np.linalg.norm(rel[inner], axis=1).max()) if inner else np.inf
+    return max(min(diameter(p), LINKS_PER_SIZE * longest), 1e-3)
 
 
 def diameter(p: np.ndarray, block: int = 1024) -> float:

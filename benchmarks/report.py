@@ -80,6 +80,33 @@ packages keep their installed caches in both).
 {rows}"""
 
 
+def deep_trees(d: dict, g) -> str:
+    """Section 3c (deep trees and chains in linear size, ``--only scale_trees``) of the README."""
+    kinds = ("chain", "deep", "wide")
+    sizes = [n for n in (100, 1000, 10000) if any(f"trees_{k}_N{n}_s" in d for k in kinds)]
+
+    def cell(k: str, n: int) -> str:
+        if f"trees_{k}_N{n}_s" not in d:
+            return "-"
+        ok = "" if d.get(f"trees_{k}_N{n}_nullity_ok") else f" (**{d.get(f'trees_{k}_N{n}_status')}, nullity " \
+            f"{d.get(f'trees_{k}_N{n}_nullity')}**)"
+        return f"{g(f'trees_{k}_N{n}_s', '{:.2f}')} s, {g(f'trees_{k}_N{n}_peak_mb', '{:.0f}')} MB{ok}"
+
+    rows = "".join(f"| {n:,} | ".replace(",", " ") + " | ".join(cell(k, n) for k in kinds) + " |\n" for n in sizes)
+    rows += ("| exponent, two largest N (wall, memory) | " + " | ".join(
+        f"{g(f'trees_{k}_s_exponent', '{:.2f}')}, {g(f'trees_{k}_peak_mb_exponent', '{:.2f}')}" for k in kinds) + " |\n")
+    return f"""### 3c. Deep trees in linear size (`--only scale_trees`)
+`baseparams analyze FILE --floating --json` (certified; `--form auto`: the recursive form from 200
+bodies) in fresh processes on chains, random *deep* trees (`deep_tree_urdf`: each link on the
+previous one or, with probability 0.3, on one of the 10 before it: mean depth about 0.2-0.45 N,
+fingers and snakes) and the wide random trees of 3b; wall time (median of 3, one run at
+N = 10 000) and peak RSS. Every entry is certified with nullity 3 (N - 1) unless it says otherwise.
+
+| N | chain | deep tree | wide tree |
+|---:|---:|---:|---:|
+{rows}"""
+
+
 def identification(d: dict, g) -> str:
     """Section 9 (identification on a recording it has never seen; the Panda per model class) of the README."""
     labels = ("default", "ols", "wls", "ols+terms", "physical", "physical plain")
@@ -298,6 +325,7 @@ body and regrouped sparsely (linear memory).
 |---:|---:|---:|---|---:|---:|
 {rows_sweep}
 
+{deep_trees(d, g)}
 ### 4. Closed loops: DRNG vs the 5 000-sample numerical validation
 DRNG with the paper's principles (as the paper times it) and with the extended rules (R-A,
 R-B, R-L1, R-L2, loop shared vectors: the product's default).

@@ -166,7 +166,8 @@ class IdentModel:
             ``pi_paper`` in the ``paper`` convention (``robot.parameters("paper")``).
         """
         base = self.analysis.base
-        beta_of_paper = base.E @ np.linalg.inv(base.T)  # (nb, 10 n): paper -> convention -> base
+        t = base.T.toarray() if hasattr(base.T, "toarray") else base.T  # sparse for large trees (recursive form)
+        beta_of_paper = np.asarray(base.E @ np.linalg.inv(t))  # (nb, 10 n): paper -> convention -> base
         nd = self.drives.n_params
         blk = np.zeros((beta_of_paper.shape[0] + nd, beta_of_paper.shape[1] + nd))
         blk[: beta_of_paper.shape[0], : beta_of_paper.shape[1]] = beta_of_paper

@@ -1,0 +1,218 @@
+"""Practical rank: deciding a numerically ambiguous rank by each direction's effect on the torques.
+
+The literal check (:mod:`.certify`) decides the rank of the stacked regressor from its
+singular-value gap at a relative tolerance of 1e-9; near-degenerate geometry (a CAD export's
+axis 1e-5 rad off parallel, offsets written to six digits) leaves directions whose singular values
+spread across that tolerance, and the gap (e.g. 3e3) decides nothing. Such directions exist
+literally, but what matters for identification is how much they move the joint torques at the
+model's own scales. This module measures it:
+
+* parameters in their typical magnitudes: ``M L^u`` (``u`` each parameter's length exponent:
+  mass, first moments ``M L``, inertias ``M L^2``; ``L`` the robot's length
+  (:func:`~baseparams.model.scale.length_scale`, brought into
+  :data:`~baseparams.model.scale.METRE_BAND` as the rank decisions are), ``M`` a common mass,
+  which cancels in the relative figures);
+* motions at the robot's own rate ``w = sqrt(|g| / L)`` (the pendulum rate: velocities ``w``,
+  accelerations ``w^2``, so that inertial and gravity torques are of one size: 22 rad/s for a
+  2 cm finger, 3 rad/s for a 1 m arm), on the same random states as the literal check;
+* the singular values of that column-scaled regressor, relative to the largest (the torque
+  scale): the effect on the torques of a unit change along each direction.
+
+A direction whose effect is below :data:`PRACTICAL_TOL` of the torque scale is counted out.
+
+Why 1e-6: joint torque sensors and motor-current models resolve 0.1-1 % of the torque scale;
+averaging ``N`` independent samples gains ``sqrt(N)``, so an effect ``e`` needs about
+``(1e-3 / e)^2`` samples to be seen at all: a million samples (17 minutes at 1 kHz, already a
+long identification run) for ``e = 1e-6``, a hundred million for ``1e-7``. Model files are
+written to about six significant digits (CAD exports, ``%g``), so geometry is itself known to
+about 1e-6: an effect below that is the file's rounding, not the robot. Designed features well
+below the robot's size stay far above it (a 1 % offset or a 0.01 rad tilt moves the torques by
+about 1e-3 of their scale). The threshold is used only where the literal check cannot decide;
+files it decides are unaffected, and ``literal=True`` keeps its answer (or ``undecided``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..display import summary_repr
+from ..model.inertia import LENGTH_POWER
+from ..model.robot import Robot
+from ..model.scale import METRE_BAND, length_scale
+from ..numerics import NumericalResult, StreamingQR, rank_decision, stacked_regressor
+
+#: a direction moving the torques by less than this fraction of their scale is not identifiable in practice
+PRACTICAL_TOL = 1e-6
+#: seed offset of the second sample set (as the literal saturation check)
+_SECOND_SEED = 7919
+
+
+@dataclass(frozen=True, eq=False)
+class PracticalRank:
+    """The rank decided by each direction's effect on the torques (module docstring).
+
+    Parameters
+    ----------
+    threshold : float
+        Directions with a relative effect below this are counted out (:data:`PRACTICAL_TOL`).
+    rank, nullity : int
+        The practical rank of the scaled regressor and ``10 n - rank``.
+    drng_rank : int
+        Dimension of DRNG's exact span (part of the practical nullspace).
+    literal_rank : int
+        The literal check's tentative rank (at its tolerance, not decided).
+    literal_gap : float
+        The literal singular-value gap at that rank.
+    min_gap : float
+        The gap the literal check needs to decide.
+    largest_out : float
+        Effect of the largest direction counted out, relative to the torque scale (0 if none).
+    smallest_kept : float
+        Effect of the smallest direction kept, relative to the torque scale.
+    length : float
+        The length ``L`` of the scales [m] (the robot's, brought into the metre band).
+    rate : float
+        The rate ``w = sqrt(|g| / L)`` of the sampled motions [1/s] (1 without gravity).
+    samples : int
+        Random states (of each of the two sets; both sets give the same count).
+    """
+
+    __repr__ = summary_repr
+
+    threshold: float
+    rank: int
+    nullity: int
+    drng_rank: int
+    literal_rank: int
+    literal_gap: float
+    min_gap: float
+    largest_out: float
+    smallest_kept: float
+    length: float
+    rate: float
+    samples: int
+
+    @property
+    def counted_out(self) -> int:
+        """Directions outside DRNG's exact span counted out: ``nullity - drng_rank``."""
+        return self.nullity - self.drng_rank
+
+    def note(self) -> str:
+        """One line: what was decided and why.
+
+        Returns
+        -------
+        str
+            E.g. ``practical rank: 3 directions below 1e-06 of the torque scale (largest 4e-08, smallest
+            kept 2e-03): counted out; ...``.
+        """
+        k = self.counted_out
+        dirs = f"{k} direction{'s' if k != 1 else ''} outside DRNG's exact span"
+        if k:
+            what = (f"{dirs} move the torques by less than {self.threshold:g} of their scale (largest "
+                    f"{self.largest_out:.2g}; smallest kept {self.smallest_kept:.2g}): counted out")
+        else:
+            what = (f"every direction outside DRNG's exact span moves the torques by at least "
+                    f"{self.smallest_kept:.2g} of their scale (threshold {self.threshold:g}): kept")
+        return (f"practical rank: the literal rank is not decided (singular-value gap {self.literal_gap:.3g} < "
+                f"{self.min_gap:g}); at the model's own scales (parameters M, M L, M L^2 with L {self.length:.3g} m, "
+                f"motions at sqrt(g/L) = {self.rate:.3g} rad/s) {what}; rank {self.rank}, nullity {self.nullity} "
+                f"(below {self.threshold:g} a direction needs more than a million samples at 0.1 % torque "
+                f"precision, and six-digit files do not state it); the literal decision: --literal")
+
+    def to_json(self) -> dict:
+        """The decision, machine-readable.
+
+        Returns
+        -------
+        dict
+            ``threshold, rank, nullity, counted_out, largest_out, smallest_kept, literal_rank,
+            literal_gap, min_gap, length, rate, samples, note``.
+        """
+        return {"threshold": self.threshold, "rank": self.rank, "nullity": self.nullity,
+                "counted_out": self.counted_out, "largest_out": self.largest_out,
+                "smallest_kept": self.smallest_kept, "literal_rank": self.literal_rank,
+                "literal_gap": None if not np.isfinite(self.literal_gap) else self.literal_gap,
+                "min_gap": self.min_gap, "length": self.length, "rate": self.rate, "samples": self.samples,
+                "note": self.note()}
+
+
+def practical_scales(robot: Robot, d: np.ndarray) -> tuple[float, float, np.ndarray]:
+    """The length, rate and per-parameter scales of the practical decision.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    d : ndarray, shape ``(10 n,)``
+        :func:`~baseparams.model.scale.decision_scale` (``paper`` convention): the parameters
+        the rank is decided on are ``pi / d``.
+
+    Returns
+    -------
+    length : float
+        ``L`` [m]: the robot's length scale brought into the metre band.
+    rate : float
+        ``sqrt(|g| / L)`` [1/s], 1 without gravity (then the rate cancels).
+    scale : ndarray, shape ``(10 n,)``
+        ``L^u`` of each parameter of ``pi / d`` (paper convention; the common mass cancels).
+    """
+    lo, hi = METRE_BAND
+    length = float(min(max(length_scale(robot), lo), hi))
+    g = float(np.linalg.norm(robot.gravity))
+    rate = float(np.sqrt(g / length)) if g > 0 else 1.0
+    scale = length ** np.tile(LENGTH_POWER["paper"], robot.n).astype(float)
+    return length, rate, scale
+
+
+def practical_rank(robot: Robot, samples: int, seed: int, rows: str, literal: NumericalResult, drng_rank: int,
+                   d: np.ndarray, tol: float = PRACTICAL_TOL) -> tuple[PracticalRank, np.ndarray] | None:
+    """Decide the rank by each direction's effect on the torques at the model's own scales.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies).
+    samples : int
+        Random states of each of the two sample sets (as the literal check).
+    seed : int
+        Seed of the first set (the second: ``seed + 7919``).
+    rows : str
+        Measured generalized forces (:func:`baseparams.numerics.row_mask`).
+    literal : NumericalResult
+        The literal check's (undecided) rank decision.
+    drng_rank : int
+        Dimension of DRNG's exact span.
+    d : ndarray, shape ``(10 n,)``
+        :func:`~baseparams.model.scale.decision_scale` (paper convention).
+    tol : float, default :data:`PRACTICAL_TOL`
+        Relative effect below which a direction is counted out.
+
+    Returns
+    -------
+    (PracticalRank, ndarray of shape ``(10 n, nullity)``) or None
+        The decision and an orthonormal basis of the practical nullspace in the coordinates
+        ``pi / d``; ``None`` when the two sample sets disagree on the count (the decision would
+        depend on the samples).
+    """
+    length, rate, scale = practical_scales(robot, d)
+    ncols = 10 * robot.n
+    counts, qr = [], StreamingQR(ncols)
+    for s in (seed, seed + _SECOND_SEED):
+        qr.add(stacked_regressor(robot, samples, s, rows, time_scale=rate) * (d * scale))
+        counts.append(rank_decision(qr.r, rtol=tol, min_gap=0.0))
+    one, both = counts
+    if one.rank != both.rank:
+        return None
+    sv = both.singular_values / (both.singular_values[0] or 1.0)
+    rank = both.rank
+    largest_out = float(sv[rank]) if rank < ncols else 0.0
+    smallest_kept = float(sv[rank - 1]) if rank else 0.0
+    pr = PracticalRank(tol, rank, ncols - rank, drng_rank, literal.rank, float(literal.gap), literal.min_gap,
+                       largest_out, smallest_kept, length, rate, samples)
+    # back from the scaled coordinates theta (pi / d = scale * theta) to pi / d, orthonormal
+    null = scale[:, None] * both.null_basis
+    null = np.linalg.qr(null)[0] if null.shape[1] else null
+    return pr, null

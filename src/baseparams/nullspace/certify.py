@@ -246,11 +246,7 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         # the literal gap does not decide: the directions' effect on the torques does (.practical)
         from .practical import practical_rank
 
-        out = practical_rank(robot, samples, seed, rows, num, r_d, d, practical_tol)
-        if out is None:
-            return done(status, message + "; the practical decision (effect on the torques) depends on the "
-                                          "samples too: use more samples")
-        pr, null = out
+        pr, null = practical_rank(robot, samples, seed, rows, num, r_d, d, practical_tol)
         inside = float(np.max(np.linalg.norm(bd - null @ (null.T @ bd), axis=0))) if r_d else 0.0
         if pr.nullity < r_d or inside > _SPAN_TOL:
             return done(status, message + f"; the practical decision does not contain DRNG's span (distance "

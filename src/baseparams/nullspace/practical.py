@@ -7,8 +7,10 @@ spread across that tolerance, and the gap (e.g. 3e3) decides nothing. Such direc
 literally, but what matters for identification is how much they move the joint torques at the
 model's own scales. This module measures it:
 
-* parameters in their typical magnitudes: ``M L^u`` (``u`` each parameter's length exponent:
-  mass, first moments ``M L``, inertias ``M L^2``; ``L`` the robot's length
+* each body's parameters in its own frame (about its joint, not the world origin, so that where
+  the robot stands in the world changes nothing), in their typical magnitudes: ``M L^u`` (``u``
+  each parameter's length exponent: mass, first moments ``M L``, inertias ``M L^2``; ``L`` the
+  robot's length
   (:func:`~baseparams.model.scale.length_scale`, brought into
   :data:`~baseparams.model.scale.METRE_BAND` as the rank decisions are), ``M`` a common mass,
   which cancels in the relative figures);
@@ -38,13 +40,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..display import summary_repr
-from ..model.inertia import LENGTH_POWER
+from ..model.inertia import LENGTH_POWER, hat, transform, unhat
 from ..model.robot import Robot
 from ..model.scale import METRE_BAND, length_scale
 from ..numerics import NumericalResult, StreamingQR, rank_decision, stacked_regressor
 
 #: a direction moving the torques by less than this fraction of their scale is not identifiable in practice
 PRACTICAL_TOL = 1e-6
+#: a direction within this factor of the threshold makes the decision borderline (said in the note)
+BORDERLINE = 2.0
 #: seed offset of the second sample set (as the literal saturation check)
 _SECOND_SEED = 7919
 
@@ -76,7 +80,10 @@ class PracticalRank:
     rate : float
         The rate ``w = sqrt(|g| / L)`` of the sampled motions [1/s] (1 without gravity).
     samples : int
-        Random states (of each of the two sets; both sets give the same count).
+        Random states of each of the two sets (the decision is made on both).
+    borderline : bool
+        The first set alone gives another count, or a direction lies within a factor
+        :data:`BORDERLINE` of the threshold: the count is the threshold's, not a clear divide.
     """
 
     __repr__ = summary_repr
@@ -93,6 +100,7 @@ class PracticalRank:
     length: float
     rate: float
     samples: int
+    borderline: bool = False
 
     @property
     def counted_out(self) -> int:
@@ -111,7 +119,7 @@ class PracticalRank:
         k = self.counted_out
         dirs = f"{k} direction{'s' if k != 1 else ''} outside DRNG's exact span"
         if k:
-            what = (f"{dirs} move the torques by less than {self.threshold:g} of their scale (largest "
+            what = (f"{dirs} move the torques by less than {self.threshold:g} of the torque scale (largest "
                     f"{self.largest_out:.2g}; smallest kept {self.smallest_kept:.2g}): counted out")
         else:
             what = (f"every direction outside DRNG's exact span moves the torques by at least "
@@ -120,7 +128,9 @@ class PracticalRank:
                 f"{self.min_gap:g}); at the model's own scales (parameters M, M L, M L^2 with L {self.length:.3g} m, "
                 f"motions at sqrt(g/L) = {self.rate:.3g} rad/s) {what}; rank {self.rank}, nullity {self.nullity} "
                 f"(below {self.threshold:g} a direction needs more than a million samples at 0.1 % torque "
-                f"precision, and six-digit files do not state it); the literal decision: --literal")
+                f"precision, and six-digit files do not state it)"
+                f"{'; borderline: a direction lies near the threshold' if self.borderline else ''}; "
+                f"the literal decision: --literal")
 
     def to_json(self) -> dict:
         """The decision, machine-readable.
@@ -129,14 +139,14 @@ class PracticalRank:
         -------
         dict
             ``threshold, rank, nullity, counted_out, largest_out, smallest_kept, literal_rank,
-            literal_gap, min_gap, length, rate, samples, note``.
+            literal_gap, min_gap, length, rate, samples, borderline, note``.
         """
         return {"threshold": self.threshold, "rank": self.rank, "nullity": self.nullity,
                 "counted_out": self.counted_out, "largest_out": self.largest_out,
                 "smallest_kept": self.smallest_kept, "literal_rank": self.literal_rank,
                 "literal_gap": None if not np.isfinite(self.literal_gap) else self.literal_gap,
                 "min_gap": self.min_gap, "length": self.length, "rate": self.rate, "samples": self.samples,
-                "note": self.note()}
+                "borderline": self.borderline, "note": self.note()}
 
 
 def practical_scales(robot: Robot, d: np.ndarray) -> tuple[float, float, np.ndarray]:
@@ -167,8 +177,29 @@ def practical_scales(robot: Robot, d: np.ndarray) -> tuple[float, float, np.ndar
     return length, rate, scale
 
 
+def local_map(robot: Robot, d: np.ndarray) -> np.ndarray:
+    """Each body's parameters in its own frame to the coordinates the rank is decided on.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``n`` bodies; ``M0`` their frames at q = 0).
+    d : ndarray, shape ``(10 n,)``
+        :func:`~baseparams.model.scale.decision_scale` (paper convention).
+
+    Returns
+    -------
+    ndarray, shape ``(n, 10, 10)``
+        Per body ``T_i``: ``(pi_world / d)_i = T_i (pi_local / d)_i``, both in the ``paper``
+        convention (pseudo-inertia entries), world frame at q = 0 and body frame.
+    """
+    t = np.swapaxes(hat(transform(unhat(np.eye(10))[None], robot.M0[:, None])), 1, 2)
+    db = d.reshape(robot.n, 10)
+    return t * db[:, None, :] / db[:, :, None]
+
+
 def practical_rank(robot: Robot, samples: int, seed: int, rows: str, literal: NumericalResult, drng_rank: int,
-                   d: np.ndarray, tol: float = PRACTICAL_TOL) -> tuple[PracticalRank, np.ndarray] | None:
+                   d: np.ndarray, tol: float = PRACTICAL_TOL) -> tuple[PracticalRank, np.ndarray]:
     """Decide the rank by each direction's effect on the torques at the model's own scales.
 
     Parameters
@@ -192,27 +223,30 @@ def practical_rank(robot: Robot, samples: int, seed: int, rows: str, literal: Nu
 
     Returns
     -------
-    (PracticalRank, ndarray of shape ``(10 n, nullity)``) or None
-        The decision and an orthonormal basis of the practical nullspace in the coordinates
-        ``pi / d``; ``None`` when the two sample sets disagree on the count (the decision would
-        depend on the samples).
+    (PracticalRank, ndarray of shape ``(10 n, nullity)``)
+        The decision (on both sample sets; ``borderline`` when the first alone differs or a
+        direction lies near the threshold) and an orthonormal basis of the practical nullspace
+        in the coordinates ``pi / d``.
     """
     length, rate, scale = practical_scales(robot, d)
-    ncols = 10 * robot.n
+    ncols, n = 10 * robot.n, robot.n
+    # parameters theta: pi_local / d = scale * theta per body, pi_world / d = T (pi_local / d)
+    t = local_map(robot, d) * scale.reshape(n, 1, 10)
     counts, qr = [], StreamingQR(ncols)
     for s in (seed, seed + _SECOND_SEED):
-        qr.add(stacked_regressor(robot, samples, s, rows, time_scale=rate) * (d * scale))
+        w = (stacked_regressor(robot, samples, s, rows, time_scale=rate) * d).reshape(-1, n, 10)
+        qr.add(np.einsum("rik,ikl->ril", w, t).reshape(-1, ncols))
         counts.append(rank_decision(qr.r, rtol=tol, min_gap=0.0))
     one, both = counts
-    if one.rank != both.rank:
-        return None
     sv = both.singular_values / (both.singular_values[0] or 1.0)
     rank = both.rank
     largest_out = float(sv[rank]) if rank < ncols else 0.0
     smallest_kept = float(sv[rank - 1]) if rank else 0.0
+    near = bool(np.any((sv > tol / BORDERLINE) & (sv < tol * BORDERLINE)))
     pr = PracticalRank(tol, rank, ncols - rank, drng_rank, literal.rank, float(literal.gap), literal.min_gap,
-                       largest_out, smallest_kept, length, rate, samples)
-    # back from the scaled coordinates theta (pi / d = scale * theta) to pi / d, orthonormal
-    null = scale[:, None] * both.null_basis
+                       largest_out, smallest_kept, length, rate, samples, near or one.rank != rank)
+    # back from the scaled local coordinates theta to pi / d, orthonormal
+    k = both.null_basis.shape[1]
+    null = np.einsum("ikl,ilj->ikj", t, both.null_basis.reshape(n, 10, k)).reshape(ncols, k)
     null = np.linalg.qr(null)[0] if null.shape[1] else null
     return pr, null

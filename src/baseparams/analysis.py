@@ -573,11 +573,16 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
                                 f"{type(convention).__name__}")
     _check_samples_memory(robot, samples)
     kw = {"samples": samples, "seed": seed, "verify": verify, "rows": rows, "convention": convention,
-          "extended": extended, "progress": progress, "practical": not literal}
+          "extended": extended, "progress": progress}
     lit = _analyze(robot, **kw)
     if literal:
         return lit
-    return practical_analysis(lit, kw)
+    # geometry near a special value first (the literal count is the file's); a rank the gap still
+    # cannot decide is then decided by the directions' effect on the torques (nullspace.practical)
+    out = practical_analysis(lit, {**kw, "practical": True})
+    if out is lit and lit.status == Status.UNDECIDED:
+        return _analyze(robot, **kw, practical=True)
+    return out
 
 
 def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows, convention: str, extended: bool,

@@ -230,49 +230,57 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     raw = res.dense() / d[:, None]
     bd = column_basis(raw)
     r_d = bd.shape[1]
-    wn = np.linalg.norm(w)
-    residual = float(np.linalg.norm(w @ bd) / wn) if r_d and wn > 0 else 0.0
+    residual = float(np.linalg.norm(w @ bd) / np.linalg.norm(w)) if r_d and np.linalg.norm(w) > 0 else 0.0
     col_res, worst = _column_residuals(raw, w, num)
 
-    def done(status: Status, message: str, basis: np.ndarray = bd, completed: int = 0,
-             decided: PracticalRank | None = None) -> Certificate:
+    def done(status: Status, message: str, basis: np.ndarray = bd, completed: int = 0, decided=None) -> Certificate:
         # back to SI parameters (the paper convention), orthonormal, DRNG's span first
         span = d[:, None] * basis
         basis = np.linalg.qr(span)[0] if basis.shape[1] else np.zeros((len(d), 0))
         return Certificate(res, num, basis, r_d, completed, residual, worst, status, message,
                            time.perf_counter() - t0, sampling, span, practical=decided)
 
-    def by_effect(status: Status, message: str) -> Certificate:
-        # the literal gap does not decide: the directions' effect on the torques does (.practical)
-        from .practical import practical_rank
-
-        pr, null = practical_rank(robot, samples, seed, rows, num, r_d, d, practical_tol)
-        inside = float(np.max(np.linalg.norm(bd - null @ (null.T @ bd), axis=0))) if r_d else 0.0
-        if pr.nullity < r_d or inside > _SPAN_TOL:
-            return done(status, message + f"; the practical decision does not contain DRNG's span (distance "
-                                          f"{inside:.2g}): not used")
-        basis, missing, _ = _complete(bd, null, pr.nullity)
-        why = (f"{message}; decided by each direction's effect on the torques at the model's own scales: "
-               f"{pr.counted_out} below {pr.threshold:g} of the torque scale counted out (largest "
-               f"{pr.largest_out:.2g}, smallest kept {pr.smallest_kept:.2g}); the literal decision: --literal")
-        return done(Status.COMPLETED if missing else Status.CERTIFIED, why, basis, missing, pr)
+    def by_effect(status: Status, message: str) -> Certificate:  # the gap does not decide: the effect may
+        if not practical:
+            return done(status, message)
+        return done(*_by_effect(robot, (samples, seed, rows), num, bd, d, practical_tol, status, message))
 
     verdict = _verdict(res, num, qr.rows, r_d, col_res, worst, rtol, min_gap, residual_tol, sampling)
     if verdict is not None:
-        if practical and verdict[0] == Status.UNDECIDED and _gap_undecided(num, qr.rows, worst, residual_tol):
-            return by_effect(*verdict)
-        return done(*verdict)
+        gap_only = verdict[0] == Status.UNDECIDED and _gap_undecided(num, qr.rows, worst, residual_tol)
+        return by_effect(*verdict) if gap_only else done(*verdict)
     # completion needs saturated numerics: more samples must not raise the rank
     qr.add(stacked_regressor(robot, samples, seed + 7919, rows) * d)
     num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=qr.r)
     if num2.rank != num.rank or not num2.decided:
-        message = (f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
-                   f"{num2.rank} with twice as many); use more samples")
-        return by_effect(Status.UNDECIDED, message) if practical else done(Status.UNDECIDED, message)
+        return by_effect(Status.UNDECIDED, f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
+                                           f"{num2.rank} with twice as many); use more samples")
     basis, missing, distance = _complete(bd, num)
     return done(Status.COMPLETED, f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
                              f"the numerical nullspace (distance of the added directions to DRNG's span: "
                              f"{distance:.3g} of 1); {_gap_text(num, rtol)}", basis, missing)
+
+
+def _by_effect(robot: Robot, sampling: tuple, num: NumericalResult, bd: np.ndarray, d: np.ndarray, tol: float,
+               status: Status, message: str) -> tuple:
+    """``done``'s arguments for a rank decided by effect (:func:`.practical.practical_rank`).
+
+    ``sampling``: ``(samples, seed, rows)``; ``bd``: DRNG's orthonormal span in ``pi / d``.
+    The undecided ``(status, message)`` when the practical nullspace does not hold DRNG's span.
+    """
+    from .practical import practical_rank
+
+    r_d = bd.shape[1]
+    pr, null = practical_rank(robot, *sampling, num, r_d, d, tol)
+    inside = float(np.max(np.linalg.norm(bd - null @ (null.T @ bd), axis=0))) if r_d else 0.0
+    if pr.nullity < r_d or inside > _SPAN_TOL:
+        return status, (message + f"; the practical decision does not contain DRNG's span (distance "
+                                  f"{inside:.2g}): not used")
+    basis, missing, _ = _complete(bd, null, pr.nullity)
+    why = (f"{message}; decided by each direction's effect on the torques at the model's own scales: "
+           f"{pr.counted_out} below {pr.threshold:g} of the torque scale counted out (largest "
+           f"{pr.largest_out:.2g}, smallest kept {pr.smallest_kept:.2g}); the literal decision: --literal")
+    return Status.COMPLETED if missing else Status.CERTIFIED, why, basis, missing, pr
 
 
 def _gap_text(num: NumericalResult, rtol: float) -> str:

@@ -72,3 +72,44 @@ def cad_chain(seed: int, eps: float = 0.0, digits: int | None = None, real: floa
                       f'rpy="{" ".join(fmt(x) for x in ang)}"/><axis xyz="{" ".join(fmt(x) for x in ax)}"/>'
                       f'<limit lower="-3" upper="3" effort="10" velocity="2"/></joint>')
     return f'<robot name="cad{seed}">' + "".join(links + joints) + "</robot>"
+
+
+def cad_hand(seed: int, eps: float = 0.0, digits: int | None = None, size: float = 0.03, fingers: int = 4) -> str:
+    """URDF text of a random hand as a CAD export writes it (seeded): a fixed palm, fingers of an
+    abduction joint and three flexion joints about parallel axes (the design; in half of the fingers
+    the flexion axes are vertical, as in a hand lying on its side), lengths about ``size``, every joint
+    frame generically rotated. ``eps``: each flexion axis but the first of a finger tilted
+    that many radians (60 % of them); ``digits``: numbers written to that many significant digits."""
+    design = np.random.default_rng([seed, 3])
+    errors = np.random.default_rng([seed, 4])
+    fmt = (lambda x: repr(float(x))) if digits is None else (lambda x: f"{x:.{digits}g}")
+    links, joints = ['<link name="palm"/>'], []
+    for f in range(fingers):
+        abd = design.normal(size=3)
+        abd = np.array([0.0, 0.0, 1.0]) if design.random() < 0.7 else abd / np.linalg.norm(abd)
+        flex = np.cross(abd, design.normal(size=3))
+        flex /= np.linalg.norm(flex)
+        along = np.cross(abd, flex)  # the finger's direction, across both axes
+        pp, rp, parent = np.zeros(3), np.eye(3), "palm"
+        base = np.array([f * size, 0.0, 2 * size]) + design.uniform(-0.2, 0.2, 3) * size
+        for k in range(4):
+            a = abd if k == 0 else flex
+            step = along * design.uniform(0.8, 1.5) + flex * design.uniform(-0.2, 0.2)
+            p = base if k == 0 else pp + step * size
+            r = _rotation(design)
+            ang, xyz, ax = _rpy(rp.T @ r), rp.T @ (p - pp), r.T @ a
+            if eps and k != 1 and errors.random() < 0.6:
+                ax = _tilt(errors, ax, eps)
+            name = f"f{f}j{k}"
+            m = float(design.uniform(0.01, 0.05))
+            c = design.uniform(-0.3, 0.3, 3) * size
+            ii = design.uniform(0.05, 0.2, 3) * size**2 * m
+            links.append(f'<link name="{name}_link"><inertial><origin xyz="{c[0]} {c[1]} {c[2]}"/><mass value="{m}"/>'
+                         f'<inertia ixx="{ii[0] + ii[1]}" iyy="{ii[1] + ii[2]}" izz="{ii[2] + ii[0]}" ixy="0" '
+                         f'ixz="0" iyz="0"/></inertial></link>')
+            joints.append(f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{name}_link"/>'
+                          f'<origin xyz="{" ".join(fmt(x) for x in xyz)}" rpy="{" ".join(fmt(x) for x in ang)}"/>'
+                          f'<axis xyz="{" ".join(fmt(x) for x in ax)}"/>'
+                          f'<limit lower="-3" upper="3" effort="1" velocity="2"/></joint>')
+            pp, rp, parent = p, r, f"{name}_link"
+    return f'<robot name="hand{seed}">' + "".join(links + joints) + "</robot>"

@@ -17,7 +17,7 @@ from baseparams.cli import EXIT_OK, EXIT_UNDECIDED, main
 from baseparams.model.scale import decision_scale
 from baseparams.nullspace.certify import certify
 from baseparams.nullspace.practical import PRACTICAL_TOL, practical_rank
-from cad import cad_chain
+from cad import cad_chain, cad_hand
 
 #: (seed, kind) cases; the kinds a CAD export produces: numbers to 5 or 6 digits, axes off by 1e-5 or 1e-4 rad
 KINDS = {"digits6": {"digits": 6}, "digits5": {"digits": 5}, "eps1e-5": {"eps": 1e-5}, "eps1e-4": {"eps": 1e-4}}
@@ -76,6 +76,27 @@ def test_undecided_cad_arms_are_decided_as_pinocchio_ranks_them(tmp_path):
                 assert a.n_base == rank, (seed, kind, pr)
                 asserted += 1
     assert undecided >= 10 and asserted >= 5, (undecided, asserted)
+
+
+def test_cad_hands_written_to_eight_digits(tmp_path):
+    """Hands 3 cm in size, palm down (abduction axes vertical), frames rotated generically and every
+    number written to 8 digits: literally undecided (the rounding's directions straddle the literal
+    tolerance), practically the design's count, which is Pinocchio's scaled rank."""
+    undecided = 0
+    for seed in range(5):
+        robot, path = _load(tmp_path, cad_hand(seed, digits=8), f"hand{seed}.urdf")
+        literal = baseparams.analyze(robot, literal=True)
+        if literal.status != "undecided":
+            continue
+        undecided += 1
+        a = baseparams.analyze(robot)
+        design, _ = _load(tmp_path, cad_hand(seed), "design.urdf")
+        pr = a.certificate.practical
+        assert a.status.ok and pr is not None and not pr.borderline
+        assert a.n_base == baseparams.analyze(design).n_base < literal.n_base
+        rank, borderline = pinocchio_practical(path)
+        assert not borderline and rank == a.n_base
+    assert undecided >= 3
 
 
 def test_small_errors_give_the_exact_designs_count(tmp_path):

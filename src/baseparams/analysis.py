@@ -45,7 +45,7 @@ practical              null, or {literal_n_base, counted_out, tolerance, size, s
                        (``literal=True`` / ``--literal``: the file as stated)
 practical_rank         null, or {threshold, rank, nullity, counted_out, largest_out,
                        smallest_kept, literal_rank, literal_gap, min_gap, length, rate,
-                       samples, note}: the literal singular-value gap did not decide the rank,
+                       samples, borderline, note}: the literal singular-value gap did not decide the rank,
                        which was decided by each direction's effect on the torques at the
                        model's own scales (directions below threshold of the torque scale
                        counted out; :mod:`baseparams.nullspace.practical`); ``--literal``:

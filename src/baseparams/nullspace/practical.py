@@ -28,9 +28,12 @@ averaging ``N`` independent samples gains ``sqrt(N)``, so an effect ``e`` needs 
 long identification run) for ``e = 1e-6``, a hundred million for ``1e-7``. Model files are
 written to about six significant digits (CAD exports, ``%g``), so geometry is itself known to
 about 1e-6: an effect below that is the file's rounding, not the robot. Designed features well
-below the robot's size stay far above it (a 1 % offset or a 0.01 rad tilt moves the torques by
-about 1e-3 of their scale). The threshold is used only where the literal check cannot decide;
-files it decides are unaffected, and ``literal=True`` keeps its answer (or ``undecided``).
+below the robot's size stay above it: a tilt ``a`` [rad] of an axis from a degenerate direction
+adds directions whose effects are about ``0.1 a`` (first order) and ``0.01 a^2`` (second order) of
+the torque scale, so a 0.03 rad tilt keeps every direction in the test robots and a 0.01 rad tilt
+its first-order ones (its second-order ones lie at the threshold). The threshold is used only
+where the literal check cannot decide; files it decides are unaffected, and ``literal=True`` keeps
+its answer (or ``undecided``).
 """
 
 from __future__ import annotations

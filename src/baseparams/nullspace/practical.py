@@ -10,13 +10,13 @@ model's own scales. This module measures it:
 * each body's parameters in its own frame (about its joint, not the world origin, so that where
   the robot stands in the world changes nothing), in their typical magnitudes: ``M L^u`` (``u``
   each parameter's length exponent: mass, first moments ``M L``, inertias ``M L^2``; ``L`` the
-  robot's length
-  (:func:`~baseparams.model.scale.length_scale`, brought into
-  :data:`~baseparams.model.scale.METRE_BAND` as the rank decisions are), ``M`` a common mass,
-  which cancels in the relative figures);
-* motions at the robot's own rate ``w = sqrt(|g| / L)`` (the pendulum rate: velocities ``w``,
-  accelerations ``w^2``, so that inertial and gravity torques are of one size: 22 rad/s for a
-  2 cm finger, 3 rad/s for a 1 m arm), on the same random states as the literal check;
+  robot's length, :func:`~baseparams.model.scale.length_scale`; ``M`` a common mass, which
+  cancels in the relative figures; on the parameters ``pi / d`` the rank is decided on,
+  :func:`~baseparams.model.scale.decision_scale`, these are ``M L_c^u``, ``L_c`` the length
+  brought into :data:`~baseparams.model.scale.METRE_BAND`);
+* motions at the robot's own rate ``w = sqrt(|g| / L_c)`` (the pendulum rate: velocities ``w``,
+  accelerations ``w^2``, so that inertial and gravity torques are of one size: 14 rad/s for a
+  hand of 5 cm or less, 3 rad/s for a 1 m arm), on the same random states as the literal check;
 * the singular values of that column-scaled regressor, relative to the largest (the torque
   scale): the effect on the torques of a unit change along each direction.
 
@@ -79,9 +79,10 @@ class PracticalRank:
     smallest_kept : float
         Effect of the smallest direction kept, relative to the torque scale.
     length : float
-        The length ``L`` of the scales [m] (the robot's, brought into the metre band).
+        The robot's length ``L`` [m] (:func:`~baseparams.model.scale.length_scale`).
     rate : float
-        The rate ``w = sqrt(|g| / L)`` of the sampled motions [1/s] (1 without gravity).
+        The rate ``w = sqrt(|g| / L_c)`` of the sampled motions [1/s] (``L_c``: ``L`` brought into
+        the metre band; 1 without gravity).
     samples : int
         Random states of each of the two sets (the decision is made on both).
     borderline : bool
@@ -129,7 +130,7 @@ class PracticalRank:
                     f"{self.smallest_kept:.2g} of their scale (threshold {self.threshold:g}): kept")
         return (f"practical rank: the literal rank is not decided (singular-value gap {self.literal_gap:.3g} < "
                 f"{self.min_gap:g}); at the model's own scales (parameters M, M L, M L^2 with L {self.length:.3g} m, "
-                f"motions at sqrt(g/L) = {self.rate:.3g} rad/s) {what}; rank {self.rank}, nullity {self.nullity} "
+                f"motions at {self.rate:.3g} rad/s) {what}; rank {self.rank}, nullity {self.nullity} "
                 f"(below {self.threshold:g} a direction needs more than a million samples at 0.1 % torque "
                 f"precision, and six-digit files do not state it)"
                 f"{'; borderline: a direction lies near the threshold' if self.borderline else ''}; "
@@ -166,18 +167,21 @@ def practical_scales(robot: Robot, d: np.ndarray) -> tuple[float, float, np.ndar
     Returns
     -------
     length : float
-        ``L`` [m]: the robot's length scale brought into the metre band.
+        ``L`` [m]: the robot's length scale.
     rate : float
-        ``sqrt(|g| / L)`` [1/s], 1 without gravity (then the rate cancels).
+        ``sqrt(|g| / L_c)`` [1/s] (``L_c``: ``L`` brought into the metre band), 1 without gravity
+        (then the rate cancels).
     scale : ndarray, shape ``(10 n,)``
-        ``L^u`` of each parameter of ``pi / d`` (paper convention; the common mass cancels).
+        ``L_c^u`` of each parameter of ``pi / d`` (``M L^u`` of ``pi``; paper convention; the
+        common mass cancels).
     """
     lo, hi = METRE_BAND
-    length = float(min(max(length_scale(robot), lo), hi))
+    length = length_scale(robot)
+    clipped = float(min(max(length, lo), hi))
     g = float(np.linalg.norm(robot.gravity))
-    rate = float(np.sqrt(g / length)) if g > 0 else 1.0
-    scale = length ** np.tile(LENGTH_POWER["paper"], robot.n).astype(float)
-    return length, rate, scale
+    rate = float(np.sqrt(g / clipped)) if g > 0 else 1.0
+    scale = clipped ** np.tile(LENGTH_POWER["paper"], robot.n).astype(float)
+    return float(length), rate, scale
 
 
 def local_map(robot: Robot, d: np.ndarray) -> np.ndarray:

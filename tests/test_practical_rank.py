@@ -186,3 +186,42 @@ def test_cli_note_json_and_literal(tmp_path, capsys):
     assert main(["analyze", str(path), "--literal", "--json"]) == EXIT_UNDECIDED
     j = json.loads(capsys.readouterr().out)
     assert j["practical_rank"] is None and j["status"] == "undecided"
+
+
+@pytest.mark.parametrize("name", ["puma560", "four-bar", "parallelogram"])
+def test_rates_scale_the_regressor_as_a_faster_motion(name):
+    """stacked_regressor(time_scale=w) is the same states w times faster: the regressor is gravity plus
+    w^2 times the rest (loops closed at every rate), Y(3) = Y(0) + 9 (Y(1) - Y(0))."""
+    from baseparams.numerics import stacked_regressor
+
+    robot = baseparams.load(name)
+    y0, y1, y3 = (stacked_regressor(robot, 200, 3, time_scale=w) for w in (0.0, 1.0, 3.0))
+    assert np.abs(y1 - y0).max() > 1e-3 * np.abs(y1).max()  # the motion matters
+    np.testing.assert_allclose(y3, y0 + 9 * (y1 - y0), atol=1e-12 * np.abs(y3).max())
+
+
+def test_counted_out_directions_move_the_torques_below_the_threshold(tmp_path):
+    """The completed basis: DRNG's exact span plus directions whose torques, on fresh states, are below
+    the threshold of the torque scale (each body's parameters scaled by L^u in its own frame)."""
+    from baseparams.nullspace.practical import local_map, practical_scales
+    from baseparams.numerics import stacked_regressor
+
+    for seed in SEEDS:
+        robot, _ = _load(tmp_path, cad_chain(seed, eps=1e-4), "a.urdf")
+        c = certify(robot, practical=True)
+        if c.practical is None:
+            continue
+        d = decision_scale(robot, "paper")
+        _, rate, scale = practical_scales(robot, d)
+        t = local_map(robot, d) * scale.reshape(robot.n, 1, 10)
+        w = (stacked_regressor(robot, 300, 99, time_scale=rate) * d).reshape(-1, robot.n, 10)
+        ws = np.einsum("rik,ikl->ril", w, t).reshape(w.shape[0], -1)
+        # a null direction x (in pi / d) is theta = T^-1 x in the scaled local coordinates
+        tinv = np.linalg.inv(t)
+        x = c.span / d[:, None]
+        theta = np.einsum("ikl,ilj->ikj", tinv, x.reshape(robot.n, 10, -1)).reshape(x.shape)
+        theta /= np.linalg.norm(theta, axis=0)
+        effect = np.linalg.norm(ws @ theta, axis=0) / np.linalg.norm(ws, 2)
+        assert c.nullity == c.practical.nullity and effect.max() < 3 * PRACTICAL_TOL
+        return
+    pytest.fail("no CAD arm was undecided")

@@ -50,6 +50,13 @@ practical              null, or {literal_n_base, counted_out, tolerance, size, s
                        states to within rounding of a right angle or zero, taken as that value
                        because the directions it adds are not identifiable in practice
                        (``literal=True`` / ``--literal``: the file as stated)
+practical_rank         null, or {threshold, rank, nullity, counted_out, largest_out,
+                       smallest_kept, literal_rank, literal_gap, min_gap, length, rate,
+                       samples, borderline, note}: the literal singular-value gap did not decide the rank,
+                       which was decided by each direction's effect on the torques at the
+                       model's own scales (directions below threshold of the torque scale
+                       counted out; :mod:`baseparams.nullspace.practical`); ``--literal``:
+                       the literal decision (``undecided``)
 =====================  ===================================================================
 """
 
@@ -518,6 +525,7 @@ class Analysis:
             "regrouped_parameters_paper": self.base_paper.definitions() if self.form == "recursive" else [],
             "unidentifiable": [self.base.names[i] for i in self.base.unidentifiable],
             "practical": None if self.practical is None else self.practical.to_json(self.n_base),
+            "practical_rank": None if c is None or c.practical is None else c.practical.to_json(),
         }
 
 
@@ -558,7 +566,11 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
         :mod:`baseparams.model.snap`) is taken as that value **when** it changes the count: the
         directions it adds move the torques by less than 1e-3 of their scale and are not
         identifiable in practice. Such an analysis says so (``.practical``, a note in the
-        report and JSON, the literal count); exact files are unaffected.
+        report and JSON, the literal count); exact files are unaffected. Likewise, where the
+        certification's singular-value gap cannot decide the rank, the rank is decided by each
+        direction's effect on the torques at the model's own scales (below 1e-6 of the torque
+        scale: counted out; :mod:`baseparams.nullspace.practical`, ``certificate.practical``);
+        ``literal=True`` leaves such a rank ``undecided``.
     form : {"auto", "expanded", "recursive"}
         How the regrouped expressions are written and held. ``expanded``: each base parameter in
         standard parameters only (``O(sum of depths)`` terms on a tree: quadratic on a chain);
@@ -616,7 +628,12 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     lit = _analyze(robot, **kw)
     if literal:
         return lit
-    return practical_analysis(lit, kw)
+    # geometry near a special value first (the literal count is the file's); a rank the gap still
+    # cannot decide is then decided by the directions' effect on the torques (nullspace.practical)
+    out = practical_analysis(lit, {**kw, "practical": True})
+    if out is lit and lit.status == Status.UNDECIDED:
+        return _analyze(robot, **kw, practical=True)
+    return out
 
 
 #: the forms of the regrouped expressions (:func:`analyze`)
@@ -627,8 +644,8 @@ RECURSIVE_MIN_BODIES = 200
 
 
 def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows, convention: str, extended: bool,
-             progress: TextIO | None, form: str = "auto") -> Analysis:
-    """:func:`analyze` of the model as given (arguments as there)."""
+             progress: TextIO | None, form: str = "auto", practical: bool = False) -> Analysis:
+    """:func:`analyze` of the model as given (arguments as there; ``practical``: an undecided gap decided by effect)."""
     from .model.inertia import check_convention
 
     drng, certify, base_parameters = _step("drng"), _step("certify"), _step("base_parameters")
@@ -651,7 +668,7 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
         cert, columns = None, None
         if verify:
             say(f"certifying with {samples or 'the default number of'} random samples (seed {seed}, rows: {rows})")
-            cert = certify(robot, samples, seed, rows, result=res)
+            cert = certify(robot, samples, seed, rows, result=res, practical=practical)
             basis, span, columns = cert.basis, cert.span, cert.columns
         else:
             columns = _large_tree_columns(robot, rows, res)
@@ -941,6 +958,7 @@ def format_report(a: Analysis) -> str:
             f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
            *([a.practical.note(a.n_base)] if a.practical is not None else []),
+           *([c.practical.note()] if c is not None and c.practical is not None else []),
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
     for src in Source:
         if src is not Source.NUMERICAL and src.label in a.by_principle:

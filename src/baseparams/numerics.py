@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -529,7 +529,7 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
 
 
 def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
-                      info: dict | None = None) -> np.ndarray:
+                      info: dict | None = None, time_scale: float = 1.0) -> np.ndarray:
     """``W (kept samples * measured rows, 10 n)``: the TP regressor on random states, stacked.
 
     Trees: states uniform in (0, 1) (the paper). Closed loops: actuated samples in the robot's
@@ -550,6 +550,9 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
     info : dict, optional
         Filled in place with ``requested`` and ``kept``, and for loops ``cond_max``,
         ``not_converged``, ``branch_jumps``, ``ill_conditioned`` and ``max_loop_residual``.
+    time_scale : float, default 1
+        Rates ``w``: the same states with velocities times ``w`` and accelerations times ``w^2``
+        (a motion ``w`` times faster; loop closures keep holding). 1: the paper's sampling.
 
     Returns
     -------
@@ -578,10 +581,12 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
             raise BaseparamsError(f"robot {robot.name!r}: none of {samples} samples closed the loops "
                                   f"({cs.not_converged} outside the workspace, {cs.branch_jumps} branch jumps, "
                                   f"{cs.ill_conditioned} ill-conditioned); check q_box")
+        if time_scale != 1.0:
+            cs = replace(cs, dq=cs.dq * time_scale, ddq=cs.ddq * time_scale**2)
         y = closed_regressor(robot, cs)
         return y.reshape(-1, y.shape[-1])
     q, dq, ddq = sample_states(robot, samples, rng)
-    y = regressor(robot, q, dq, ddq)[:, row_mask(robot, rows)]
+    y = regressor(robot, q, dq * time_scale, ddq * time_scale**2)[:, row_mask(robot, rows)]
     if info is not None:
         info.update(requested=samples, kept=samples)
     return y.reshape(-1, y.shape[-1])

@@ -3,7 +3,8 @@
 Exit codes (scripts rely on them): 0 the result is certified (or completed, or unverified on
 request with ``--no-verify``); 2 bad input, printed as one line (``baseparams: error: ...``);
 3 certification UNDECIDED (the numerics could not decide the rank: the message says what would
-help); 4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted.
+help; a gap too small to decide is decided by practical identifiability unless ``--literal``);
+4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -557,7 +558,9 @@ def _analysis_choice_args(s) -> None:
     s.add_argument("--literal", action="store_true",
                    help="the model exactly as the file states it: by default geometry within 1e-3 of a right angle "
                         "or zero (rpy 3.1416, an axis 0 1e-5 1) is taken as that value when it changes the count "
-                        "(the directions it adds are not identifiable in practice; the report names the joint)")
+                        "(the directions it adds are not identifiable in practice; the report names the joint), "
+                        "and a rank the singular-value gap cannot decide is decided by each direction's effect on "
+                        "the torques (below 1e-6 of the torque scale: counted out); --literal leaves it UNDECIDED")
     s.add_argument("--rows", default=str(Rows.ALL), metavar="ROWS",
                    help="measured generalized forces: all (default); joints (joint torques only); base (the "
                         "floating base's wrench only); joints:NAME,NAME (only these joints' torques); "

@@ -31,6 +31,7 @@ from ..numerics import (
 from ..pga.linalg import column_basis
 from .columns import Columns, to_dense
 from .drng import DRNGResult, drng
+from .practical import PRACTICAL_TOL, PracticalRank
 
 #: how :func:`certify` decides the rank
 METHODS = ("auto", "dense", "structured")
@@ -91,6 +92,11 @@ class Certificate:
         From the structured check: ``nullity`` linearly independent columns in compact form
         spanning the nullspace (SI ``paper`` convention), what
         :func:`baseparams.base.sparse.tree_base_parameters` regroups.
+    practical : PracticalRank, optional
+        Where the literal singular-value gap could not decide and ``certify(practical=True)``:
+        the rank decided by each direction's effect on the torques at the model's own scales
+        (:mod:`.practical`); the nullspace is then DRNG's span completed by the directions
+        counted out. ``None``: the literal decision.
 
     Raises
     ------
@@ -111,6 +117,7 @@ class Certificate:
     sampling: dict | None = None
     span: np.ndarray | None = None
     columns: Columns | None = None
+    practical: PracticalRank | None = None
 
     __repr__ = summary_repr
 
@@ -130,7 +137,8 @@ class Certificate:
 
 def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str = "all",
             result: DRNGResult | None = None, rtol: float = 1e-9, min_gap: float = 1e4,
-            residual_tol: float = 1e-8, method: str = "auto") -> Certificate:
+            residual_tol: float = 1e-8, method: str = "auto", practical: bool = False,
+            practical_tol: float = PRACTICAL_TOL) -> Certificate:
     """Certify (and if needed complete) DRNG's nullspace with ``samples`` random states.
 
     Steps: the stacked regressor ``W`` and its numerical nullspace; every DRNG column checked
@@ -172,6 +180,14 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
         (a deficiency no merge explains) the dense check runs if it fits in memory, else the
         result is ``undecided``. ``auto``: structured for such trees of at least
         :data:`.structured.STRUCTURED_MIN_BODIES` bodies, dense otherwise.
+    practical : bool, default False
+        Where the singular-value gap is below ``min_gap`` (the rank is not decided, or more
+        samples change it), decide it by each direction's effect on the torques at the model's
+        own mass, size and rate scales (:func:`.practical.practical_rank`): directions below
+        ``practical_tol`` of the torque scale are counted out, the nullspace completed by them,
+        and the certificate's ``practical`` says so. ``False``: such a rank is ``undecided``.
+    practical_tol : float, default :data:`.practical.PRACTICAL_TOL`
+        The practical decision's threshold, relative to the torque scale.
 
     Returns
     -------
@@ -214,30 +230,57 @@ def certify(robot: Robot, samples: int | None = None, seed: int = 0, rows: str =
     raw = res.dense() / d[:, None]
     bd = column_basis(raw)
     r_d = bd.shape[1]
-    wn = np.linalg.norm(w)
-    residual = float(np.linalg.norm(w @ bd) / wn) if r_d and wn > 0 else 0.0
+    residual = float(np.linalg.norm(w @ bd) / np.linalg.norm(w)) if r_d and np.linalg.norm(w) > 0 else 0.0
     col_res, worst = _column_residuals(raw, w, num)
 
-    def done(status: Status, message: str, basis: np.ndarray = bd, completed: int = 0) -> Certificate:
+    def done(status: Status, message: str, basis: np.ndarray = bd, completed: int = 0, decided=None) -> Certificate:
         # back to SI parameters (the paper convention), orthonormal, DRNG's span first
         span = d[:, None] * basis
         basis = np.linalg.qr(span)[0] if basis.shape[1] else np.zeros((len(d), 0))
         return Certificate(res, num, basis, r_d, completed, residual, worst, status, message,
-                           time.perf_counter() - t0, sampling, span)
+                           time.perf_counter() - t0, sampling, span, practical=decided)
+
+    def by_effect(status: Status, message: str) -> Certificate:  # the gap does not decide: the effect may
+        if not practical:
+            return done(status, message)
+        return done(*_by_effect(robot, (samples, seed, rows), num, bd, d, practical_tol, status, message))
 
     verdict = _verdict(res, num, qr.rows, r_d, col_res, worst, rtol, min_gap, residual_tol, sampling)
     if verdict is not None:
-        return done(*verdict)
+        gap_only = verdict[0] == Status.UNDECIDED and _gap_undecided(num, qr.rows, worst, residual_tol)
+        return by_effect(*verdict) if gap_only else done(*verdict)
     # completion needs saturated numerics: more samples must not raise the rank
     qr.add(stacked_regressor(robot, samples, seed + 7919, rows) * d)
     num2 = numerical_nullspace(robot, samples, seed, rows, rtol, min_gap, w=qr.r)
     if num2.rank != num.rank or not num2.decided:
-        return done(Status.UNDECIDED, f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
-                                 f"{num2.rank} with twice as many); use more samples")
+        return by_effect(Status.UNDECIDED, f"the numerical rank is not saturated ({num.rank} with {samples} samples, "
+                                           f"{num2.rank} with twice as many); use more samples")
     basis, missing, distance = _complete(bd, num)
     return done(Status.COMPLETED, f"DRNG found {r_d} of {num.nullity} nullspace directions; {missing} completed from "
                              f"the numerical nullspace (distance of the added directions to DRNG's span: "
                              f"{distance:.3g} of 1); {_gap_text(num, rtol)}", basis, missing)
+
+
+def _by_effect(robot: Robot, sampling: tuple, num: NumericalResult, bd: np.ndarray, d: np.ndarray, tol: float,
+               status: Status, message: str) -> tuple:
+    """``done``'s arguments for a rank decided by effect (:func:`.practical.practical_rank`).
+
+    ``sampling``: ``(samples, seed, rows)``; ``bd``: DRNG's orthonormal span in ``pi / d``.
+    The undecided ``(status, message)`` when the practical nullspace does not hold DRNG's span.
+    """
+    from .practical import practical_rank
+
+    r_d = bd.shape[1]
+    pr, null = practical_rank(robot, *sampling, num, r_d, d, tol)
+    inside = float(np.max(np.linalg.norm(bd - null @ (null.T @ bd), axis=0))) if r_d else 0.0
+    if pr.nullity < r_d or inside > _SPAN_TOL:
+        return status, (message + f"; the practical decision does not contain DRNG's span (distance "
+                                  f"{inside:.2g}): not used")
+    basis, missing, _ = _complete(bd, null, pr.nullity)
+    why = (f"{message}; decided by each direction's effect on the torques at the model's own scales: "
+           f"{pr.counted_out} below {pr.threshold:g} of the torque scale counted out (largest "
+           f"{pr.largest_out:.2g}, smallest kept {pr.smallest_kept:.2g}); the literal decision: --literal")
+    return Status.COMPLETED if missing else Status.CERTIFIED, why, basis, missing, pr
 
 
 def _gap_text(num: NumericalResult, rtol: float) -> str:
@@ -301,16 +344,29 @@ def _verdict(res: DRNGResult, num: NumericalResult, nrows: int, r_d: int, col_re
     return None
 
 
-def _complete(bd: np.ndarray, num: NumericalResult) -> tuple[np.ndarray, int, float]:
+#: DRNG's exact columns lie in the practical nullspace to within this (orthonormal bases)
+_SPAN_TOL = 1e-3
+
+
+def _gap_undecided(num: NumericalResult, nrows: int, worst: float, residual_tol: float) -> bool:
+    """Whether the literal check is undecided only because of the singular-value gap."""
+    return worst <= residual_tol and num.rank < nrows and nrows >= len(num.singular_values) and not num.decided
+
+
+def _complete(bd: np.ndarray, num: NumericalResult | np.ndarray,
+              nullity: int | None = None) -> tuple[np.ndarray, int, float]:
     """DRNG's orthonormal basis ``bd (10 n, r)`` completed by the numerical nullspace's directions outside its span.
 
+    ``num``: the numerical result, or an orthonormal nullspace basis with its ``nullity``.
     Returns ``(basis, number added, distance of the last added to span(bd))``.
     """
     r_d = bd.shape[1]
-    nb = num.null_basis
+    nb, nullity = (num.null_basis, num.nullity) if isinstance(num, NumericalResult) else (num, nullity)
+    missing = nullity - r_d
+    if missing == 0:
+        return bd, 0, 0.0
     rest = nb - bd @ (bd.T @ nb) if r_d else nb
     u, s, _ = np.linalg.svd(rest, full_matrices=False)
-    missing = num.nullity - r_d
     return np.concatenate([bd, u[:, :missing]], axis=1), missing, float(s[missing - 1])
 
 

@@ -335,5 +335,7 @@ def test_a_model_beyond_the_memory_available_is_refused_before_allocating(monkey
     # a large tree is certified body by body: its need grows with the bodies' depths, refused the same way
     chain = random_robot(np.random.default_rng(0), n=200, joint_types="R", branching=0.0)
     monkeypatch.setattr(analysis, "_available_bytes", lambda: 1e6)
-    with pytest.raises(BaseparamsError, match=r"200 bodies: the analysis needs about .* depth"):
-        baseparams.analyze(chain)
+    with pytest.raises(BaseparamsError, match=r"200 bodies: the analysis needs about .* GB and .* available"):
+        baseparams.analyze(chain)  # the recursive form (auto from 200 bodies): linear in size, still refused here
+    with pytest.raises(BaseparamsError, match=r"200 bodies: the analysis needs about .* depth .*--form recursive"):
+        baseparams.analyze(chain, form="expanded")

@@ -35,6 +35,7 @@ interpolated back to its time stamps.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -503,6 +504,29 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     return Plan(design, k, chunks.Grid(tr.n, design.pad, k, design.cutoff, min_speed), margin, size, tuple(notes))
 
 
+def regressor_backend(model, n: int) -> str:
+    """The regressor kernel for the windows of an ``n``-sample log: ``compiled`` when numba is installed and
+    the whole log's regressor is as large as :func:`~baseparams.regressor.tp.use_compiled` compiles for
+    (each window alone is smaller: ``auto`` would evaluate every window with numpy), else ``auto``.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    n : int
+        Samples whose regressor is evaluated.
+
+    Returns
+    -------
+    {"compiled", "auto"}
+        The backend.
+    """
+    from ..regressor import compiled
+
+    work = n * len(model.coords) * model.robot.n
+    return "compiled" if compiled.available() and work >= compiled.MIN_WORK else "auto"
+
+
 def fitted(stream, plan: Plan, model, cols: np.ndarray):
     """The fitted samples' rows, window by window in time order (one pass over the file).
 
@@ -524,9 +548,11 @@ def fitted(stream, plan: Plan, model, cols: np.ndarray):
         samples' times, parallel-filtered regressor, filtered torques, slow samples removed, global
         sample indices.
     """
+    backend = regressor_backend(model, plan.grid.n)
+    reg = model.regressor if backend == "auto" else functools.partial(model.regressor, backend=backend)
     for c, part in windows(stream.blocks(), plan.windows()):
         idx: list = []
-        a, tau, removed = chunks.chunk_rows(part, c, plan.grid, model.regressor, cols, idx)
+        a, tau, removed = chunks.chunk_rows(part, c, plan.grid, reg, cols, idx)
         if a is not None and len(a):
             yield part.t[idx[0] - c.lo], a, tau, removed, idx[0]
         elif removed:

@@ -505,9 +505,11 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
 
 
 def regressor_backend(model, n: int) -> str:
-    """The regressor kernel for the windows of an ``n``-sample log: ``compiled`` when numba is installed and
-    the whole log's regressor is as large as :func:`~baseparams.regressor.tp.use_compiled` compiles for
-    (each window alone is smaller: ``auto`` would evaluate every window with numpy), else ``auto``.
+    """The regressor kernel for the windows of an ``n``-sample log.
+
+    ``compiled`` when numba is installed and the whole log's regressor is as large as
+    :func:`~baseparams.regressor.tp.use_compiled` compiles for (each window alone is smaller:
+    ``auto`` would evaluate every window with numpy), else ``auto``.
 
     Parameters
     ----------

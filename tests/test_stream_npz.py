@@ -76,3 +76,20 @@ def test_npz_bad_members_one_line(sim, puma, tmp_path):
         z.writestr("t.txt", "not an array")
     with pytest.raises(DataError, match="not a NumPy array"):
         LogStream(tmp_path / "junk.npz", puma)
+
+
+def test_spilled_rows_give_the_recomputed_covariance(sim, puma, monkeypatch):
+    """HAC over the fitted rows read back from the temporary file = over rows recomputed from the log."""
+    from baseparams.ident import stream as st
+
+    calls = []
+    real = st.fitted
+    monkeypatch.setattr(st, "fitted", lambda *a: calls.append(1) or real(*a))
+    s = LogStream(sim / "sim.npz", puma)
+    spilled = identify_stream(puma, s, rotor=True, memory_mb=0.5)  # rows above 0.5 MB: spilled
+    assert len(calls) == 1  # pass 3 only: pass 4 read the file
+    monkeypatch.setattr(st.Spilled, "open", classmethod(lambda cls, mb: None))  # no room: recomputed
+    again = identify_stream(puma, s, rotor=True, memory_mb=0.5)
+    assert len(calls) == 3
+    assert np.array_equal(spilled.values, again.values) and np.array_equal(spilled.std, again.std)
+    assert np.array_equal(spilled.series["train"]["tau_hat"], again.series["train"]["tau_hat"])

@@ -627,6 +627,11 @@ class Spilled:
     file (``tempfile.TemporaryFile``: unnamed, deleted when closed or at exit) holds
     ``8 (p + 1) m + 8`` bytes per fitted sample; memory stays one window's. Used only when the
     temporary folder has twice that free (:meth:`open`), else the rows are recomputed.
+
+    Parameters
+    ----------
+    fh : file object
+        The open temporary file (binary, read and write).
     """
 
     def __init__(self, fh):

@@ -183,7 +183,7 @@ def main(argv: list[str]) -> int:
         f"| {g(f'loops_{k}_nullity', '{}')} | {g(f'loops_{k}_completed', '{}')} | {d.get(f'loops_{k}_by_rule')} |\n"
         for name in ("four-bar", "parallelogram", "pkm-2rru-1rrs", "pkm-2prs-1psr", "pkm-2prs-1psr-symmetric")
         for k in [name.replace("-", "_")])
-    scale_status = ("met" if (d.get("scale_samples") or 0) >= 1e8 and (d.get("scale_peak_mb") or 1e9) <= 2048
+    fleet_status = ("met" if (d.get("fleet_samples") or 0) >= 1e8 and (d.get("fleet_peak_mb") or 1e9) <= 2048
                     else "not run at full size in this result")
     over = [r for r in ("puma560", "go2", "talos_full_v2") if (d.get(f"regressor_vs_floor_{r}_S10000") or 0) > 3]
     floor_status = "met" if not over else f"met except {', '.join(over)} in this run (see below)"
@@ -280,13 +280,13 @@ streamed (`--stream on`, the default above 64 MB) 10^6 rows **{g('identify_csv_1
 
 Fleet scale (Dask, local cluster, one single-threaded worker process per core; synthetic Puma560
 samples generated inside the tasks in chunks of 10^5, reduced by TSQR on the workers, OLS):
-**{g('scale_samples', '{:.3g}')} samples in {g('scale_seconds', '{:.0f}')} s** with 2 workers; throughput
-{g('scale_samples_per_s_1worker', '{:.3g}')} samples/s with 1 worker (measured on 10^7), {g('scale_samples_per_s_2workers', '{:.3g}')}
-samples/s with 2; peak resident memory (workers + driver, sampled every 0.2 s during the run) **{g('scale_peak_mb', '{:.0f}')} MB**; chunked vs in-memory
-estimate on 10^6 samples: {g('scale_chunked_vs_inmemory_relerr', '{:.1e}')} relative; estimate vs truth
-{g('scale_theta_rel_error', '{:.1e}')}. Beyond this machine: a chunk of 10^5 samples costs
-~{g('scale_chunk_seconds', '{:.2f}')} s of one core and its factors (6 x 49^2 floats, ~0.1 MB) one combine step of
-~1 ms, so N workers process ~N x {g('scale_samples_per_s_1worker', '{:.3g}')} samples/s until the scheduler's
+**{g('fleet_samples', '{:.3g}')} samples in {g('fleet_seconds', '{:.0f}')} s** with 2 workers; throughput
+{g('fleet_samples_per_s_1worker', '{:.3g}')} samples/s with 1 worker (measured on 10^7), {g('fleet_samples_per_s_2workers', '{:.3g}')}
+samples/s with 2; peak resident memory (workers + driver, sampled every 0.2 s during the run) **{g('fleet_peak_mb', '{:.0f}')} MB**; chunked vs in-memory
+estimate on 10^6 samples: {g('fleet_chunked_vs_inmemory_relerr', '{:.1e}')} relative; estimate vs truth
+{g('fleet_theta_rel_error', '{:.1e}')}. Beyond this machine: a chunk of 10^5 samples costs
+~{g('fleet_chunk_seconds', '{:.2f}')} s of one core and its factors (6 x 49^2 floats, ~0.1 MB) one combine step of
+~1 ms, so N workers process ~N x {g('fleet_samples_per_s_1worker', '{:.3g}')} samples/s until the scheduler's
 ~1 ms per task (~100 000 samples/ms across the cluster) and the log2 N-deep combine tree
 dominate: on paper ~100 workers give ~10^7 samples/s.
 
@@ -391,9 +391,9 @@ cause): four-bars carried by a moving link (`planar_leg_linkage.urdf`: 3 four-bo
 | base regressor + streaming QR: 10^6 Puma560 samples <= 5 s, memory independent of S | {g('base_streaming_per_1e6_s', '{:.2f}')} s, {g('base_streaming_peak_mb_1e5', '{:.1f}')} MB | met |
 | `analyze` end to end: Puma560 <= 0.25 s, pkm-2rru-1rrs <= 0.5 s, talos_full_v2 <= 0.6 s | {g('analyze_cli_puma560_s', '{:.2f}')} s, {g('analyze_cli_pkm-2rru-1rrs_s', '{:.2f}')} s, {g('analyze_cli_talos_full_v2_s', '{:.2f}')} s | {'met' if max(d.get('analyze_cli_puma560_s', 9) / 0.25, d.get('analyze_cli_pkm-2rru-1rrs_s', 9) / 0.5, d.get('analyze_cli_talos_full_v2_s', 9) / 0.6) <= 1 else 'see the figures'} |
 | `analyze` end to end / bare Pinocchio numerical rank <= 1.0 (talos_full_v2, Puma560) | with bytecode caches {g('vs_pinocchio_talos_full_v2_pyc_ratio', '{:.2f}')}, {g('vs_pinocchio_puma560_pyc_ratio', '{:.2f}')}; `PYTHONDONTWRITEBYTECODE=1` {g('vs_pinocchio_talos_full_v2_nopyc_ratio', '{:.2f}')}, {g('vs_pinocchio_puma560_nopyc_ratio', '{:.2f}')} | {pin_status} |
-| 10^8 samples on this machine, peak memory <= 2 GB | {g('scale_samples', '{:.3g}')} samples, {g('scale_peak_mb', '{:.0f}')} MB | {scale_status} |
+| 10^8 samples on this machine, peak memory <= 2 GB | {g('fleet_samples', '{:.3g}')} samples, {g('fleet_peak_mb', '{:.0f}')} MB | {fleet_status} |
 | excitation design under a minute (Puma560, Panda, pkm-2rru-1rrs) | {g('excite_puma560_s', '{:.0f}')} s, {g('excite_panda_s', '{:.0f}')} s, {g('excite_pkm_2rru_1rrs_s', '{:.0f}')} s | {'met' if max(d.get('excite_puma560_s', 99), d.get('excite_panda_s', 99), d.get('excite_pkm_2rru_1rrs_s', 99)) < 60 else 'missed'} |
-| chunked = in-memory (1e-10) | {g('scale_chunked_vs_inmemory_relerr', '{:.1e}')} | met |
+| chunked = in-memory (1e-10) | {g('fleet_chunked_vs_inmemory_relerr', '{:.1e}')} | met |
 | DRNG >= 100x faster than the numerical method on talos_full_v2 | {g('talos_full_v2_drng_vs_numerical', '{:.0f}')}x | met |
 | DRNG >= 100x faster than the numerical method, Puma560 | {g('drng_speedup_puma560', '{:.1f}')}x | **missed** |
 | DRNG linear in N, <= 20 us per body at N = 10 000 | {g('drng_chain_N10000_us_per_body', '{:.1f}')} us (chain), {g('drng_tree_N10000_us_per_body', '{:.1f}')} us (tree) | met |

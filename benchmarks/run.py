@@ -25,7 +25,10 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
                     on the Panda and on a 32-body humanoid.
 * ``stream``        ``baseparams identify puma560 LOG.csv`` on generated 10^6- and 10^7-row CSV logs, streamed
                     (``--stream on``) and read whole (10^6 rows): wall time and peak resident memory.
-* ``scale``         Dask: 10^8 synthetic Puma560 samples, throughput with 1 and 2 workers, peak memory.
+* ``fleet``         Dask: 10^8 synthetic Puma560 samples, throughput with 1 and 2 workers, peak memory.
+* ``scale_logs``    ``baseparams identify puma560 LOG`` (default flags, fresh process) on 10^5, 10^6 and
+                    10^7-row CSV, NPZ and Parquet logs: wall, peak memory (``ru_maxrss``), log sizes, the
+                    exponent of time vs rows (``benchmarks/scale_logs.py``).
 * ``excite``        excitation design time and condition number (Puma560, Panda, pkm-2rru-1rrs).
 * ``drng_vs_numerical``  DRNG vs the numerical method (100 samples) and ``certify``.
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
@@ -455,7 +458,7 @@ def bench_stream(out: dict, quick: bool) -> None:
             out[f"{key}_mb_file"] = path.stat().st_size / 1e6
 
 
-def bench_scale(out: dict, quick: bool) -> None:
+def bench_fleet(out: dict, quick: bool) -> None:
     """Fleet scale on a local Dask cluster: 10^8 synthetic Puma560 samples (10^6 with --quick)
     generated inside the tasks in chunks of 10^5 and reduced by TSQR; throughput with 1 and 2
     workers, peak memory (workers' max RSS + the driver's), chunked vs in-memory estimate."""
@@ -482,27 +485,27 @@ def bench_scale(out: dict, quick: bool) -> None:
                 whole = fit(model, client.submit(synthetic_factors, model, theta, 0, 10 * chunk).result(), "ols").theta
             if workers == 2:
                 acc = synthetic_fleet_factors(model, theta, 10, chunk, client)
-                out["scale_chunked_vs_inmemory_relerr"] = float(np.abs(fit(model, acc, "ols").theta - whole).max()
+                out["fleet_chunked_vs_inmemory_relerr"] = float(np.abs(fit(model, acc, "ols").theta - whole).max()
                                                                 / np.abs(whole).max())
             total = (10**6 if quick else (10**7 if workers == 1 else 10**8))
             if workers == 1:
                 t0 = time.perf_counter()
                 synthetic_fleet_factors(model, theta, 1, chunk, client)
-                out["scale_chunk_seconds"] = time.perf_counter() - t0
-            log(f"  scale: {total} samples on {workers} worker(s) ...")
+                out["fleet_chunk_seconds"] = time.perf_counter() - t0
+            log(f"  fleet: {total} samples on {workers} worker(s) ...")
             pids = list(client.run(os.getpid).values())
             with _RssPeak(pids + [os.getpid()]) as peak:
                 t0 = time.perf_counter()
                 acc = synthetic_fleet_factors(model, theta, total // chunk, chunk, client)
                 dt = time.perf_counter() - t0
             est = fit(model, acc, "ols").theta
-            out[f"scale_samples_per_s_{workers}worker{'s' if workers > 1 else ''}"] = total / dt
+            out[f"fleet_samples_per_s_{workers}worker{'s' if workers > 1 else ''}"] = total / dt
             if workers == 2:
-                out["scale_peak_mb"] = peak.total_mb  # workers + driver, sampled every 0.2 s during the run
-                out["scale_worker_peak_mb"] = peak.largest_mb
-                out["scale_samples"] = total
-                out["scale_seconds"] = dt
-                out["scale_theta_rel_error"] = float(np.abs(est - theta).max() / np.abs(theta).max())
+                out["fleet_peak_mb"] = peak.total_mb  # workers + driver, sampled every 0.2 s during the run
+                out["fleet_worker_peak_mb"] = peak.largest_mb
+                out["fleet_samples"] = total
+                out["fleet_seconds"] = dt
+                out["fleet_theta_rel_error"] = float(np.abs(est - theta).max() / np.abs(theta).max())
         finally:
             client.close()
             cluster.close()
@@ -1213,6 +1216,14 @@ def bench_model_terms(out: dict, quick: bool) -> None:
     out["panda_default_seconds"] = next(r["seconds"] for r in rows if r["label"].startswith("default (terms"))
 
 
+def bench_scale_logs(out: dict, quick: bool) -> None:
+    """Long logs (issue 41): ``benchmarks/scale_logs.py``'s figures."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from scale_logs import bench_scale_logs as run
+
+    run(out, quick, log)
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "cross_recording": bench_cross_recording,
     "model_terms": bench_model_terms,
@@ -1224,7 +1235,8 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "vs_pinocchio": bench_vs_pinocchio,
     "identify": bench_identify,
     "stream": bench_stream,
-    "scale": bench_scale,
+    "fleet": bench_fleet,
+    "scale_logs": bench_scale_logs,
     "excite": bench_excite,
     "drng_vs_numerical": bench_drng_vs_numerical,
     "drng_scaling": bench_drng_scaling,

@@ -215,3 +215,21 @@ def test_a_kernel_that_will_compile_is_announced_once(monkeypatch, capsys):
     monkeypatch.setattr(compiled, "will_compile", lambda fn: False)
     compiled._kernel("tree")(3)
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_compiled_zero_phase_filter_is_scipys(seed):
+    """The compiled sosfiltfilt (long streamed logs) gives scipy's numbers: random orders, cutoffs, pads, shapes."""
+    from scipy import signal
+
+    rng = np.random.default_rng(seed)
+    order = int(rng.integers(1, 9))
+    sos = signal.butter(order, float(rng.uniform(0.01, 0.4)), output="sos")
+    s = int(rng.integers(50, 3000))
+    x = rng.normal(size=(s, int(rng.integers(1, 5)), int(rng.integers(1, 70)))) * 10.0 ** rng.uniform(-3, 3)
+    x = x[:, :, ::2] if seed == 1 else x  # a strided view
+    for pad in (0, 1, int(rng.integers(2, s))):
+        want = signal.sosfiltfilt(sos, x, axis=0, padtype="odd", padlen=pad)
+        got = compiled.sosfiltfilt(sos, x, pad)
+        assert got.shape == x.shape
+        assert np.allclose(got, want, rtol=1e-13, atol=1e-13 * np.abs(want).max()), (order, pad)

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..display import summary_repr
 from ..model import inertia as _inertia
 from ..model.inertia import LENGTH_POWER
 from ..model.robot import Robot
@@ -56,6 +57,8 @@ class RecursiveForm:
     S : ndarray or scipy.sparse.csr_matrix, shape ``(k, k)``
         Coefficients of ``t`` in ``t`` (row ``d``: the higher bodies' ``t`` that body ``d``'s absorbs).
     """
+
+    __repr__ = summary_repr
 
     names: list[str]
     independent: np.ndarray

@@ -100,7 +100,7 @@ class IdentModel:
         """The state column of each measured row ``(m,)``: where its ``q``, ``dq`` and its torque's log column are."""
         return self.coords if not self.robot.has_loops else np.arange(len(self.coords))
 
-    def regressor(self, q, dq, ddq, closed=None) -> np.ndarray:
+    def regressor(self, q, dq, ddq, closed=None, backend: str = "auto") -> np.ndarray:
         """The model regressor ``A`` of the measured rows.
 
         Parameters
@@ -110,6 +110,10 @@ class IdentModel:
         closed : ClosedStates, optional
             A loop robot's states already closed: :func:`~baseparams.kinematics.loops.close_loops`
             of these ``q, dq, ddq`` with every sample kept (not closed again).
+        backend : {"auto", "numpy", "compiled"}
+            The regressor's kernel (:func:`~baseparams.regressor.tp.regressor`'s ``backend``),
+            e.g. ``compiled`` for the windows of a long streamed log, each below the size at
+            which ``auto`` loads the compiled kernel.
 
         Returns
         -------
@@ -129,9 +133,9 @@ class IdentModel:
             q, dq, ddq, cs = np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq), closed
         p_map = self._column_map()
         if cs is not None:
-            out = closed_projected_regressor(self.robot, cs, P=p_map)
+            out = closed_projected_regressor(self.robot, cs, P=p_map, backend=backend)
         else:
-            out = projected_regressor(self.robot, q, dq, ddq, P=p_map, rows=self.coords)
+            out = projected_regressor(self.robot, q, dq, ddq, P=p_map, rows=self.coords, backend=backend)
         sel = self.row_states
         self._drive_columns(dq[:, sel], ddq[:, sel], out)
         return out

@@ -179,7 +179,9 @@ def zero_phase(x, design: LowPass, axis: int = 0) -> np.ndarray:
     -------
     ndarray, same shape as ``x``
         The filtered signals (``scipy.signal.sosfiltfilt`` with odd extension of
-        ``min(design.pad, S - 1)`` samples at each end).
+        ``min(design.pad, S - 1)`` samples at each end; once the compiled kernels are loaded,
+        e.g. by a long log's regressor, large arrays go through
+        :func:`baseparams.regressor.compiled.sosfiltfilt`: the same arithmetic, columns in parallel).
 
     Raises
     ------
@@ -190,7 +192,23 @@ def zero_phase(x, design: LowPass, axis: int = 0) -> np.ndarray:
     n = x.shape[axis]
     if n < 2:
         raise DataError(f"low-pass: {n} samples; at least 2 are needed")
-    return signal.sosfiltfilt(design.sos, x, axis=axis, padtype="odd", padlen=min(design.pad, n - 1))
+    pad = min(design.pad, n - 1)
+    if axis in (0, -x.ndim) and x.size >= COMPILED_FILTER_MIN and _compiled_loaded():
+        from ..regressor.compiled import sosfiltfilt
+
+        return sosfiltfilt(design.sos, x, pad)  # scipy's arithmetic, columns in parallel
+    return signal.sosfiltfilt(design.sos, x, axis=axis, padtype="odd", padlen=pad)
+
+
+#: values (samples x columns) from which :func:`zero_phase` uses the compiled filter once numba's kernels are loaded
+COMPILED_FILTER_MIN = 1 << 16
+
+
+def _compiled_loaded() -> bool:
+    """Whether the compiled kernels are loaded in this process (a long log's regressor loaded them)."""
+    from ..regressor import compiled
+
+    return compiled.loaded()
 
 
 def derivatives(q, fs: float, design: LowPass | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -20,8 +20,9 @@ the file several times, each pass block by block (a *block source*: any object w
    regressor, filtered again and reduced to the row factors of the samples it owns
    (:func:`~baseparams.ident.chunks.chunk_rows`), split into the blocked cross-validation's folds
    by the whole log's sample count;
-4. **covariance**: the HAC second pass recomputes the fitted rows window by window (kept from pass 3
-   when they fit in ``memory_mb``), and collects the report's series (at most :data:`SERIES_MAX`
+4. **covariance**: the HAC second pass reads the fitted rows window by window (kept from pass 3
+   when they fit in ``memory_mb``, else written by pass 3 to a temporary file, :class:`Spilled`, or
+   recomputed from the log when the disk has no room), and collects the report's series (at most :data:`SERIES_MAX`
    fitted samples, evenly thinned);
 5. **validation**: the held-out samples predicted from states filtered over the whole log (windows
    again), scored against the raw measured torques, optionally written out block by block.
@@ -35,6 +36,7 @@ interpolated back to its time stamps.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -503,6 +505,31 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     return Plan(design, k, chunks.Grid(tr.n, design.pad, k, design.cutoff, min_speed), margin, size, tuple(notes))
 
 
+def regressor_backend(model, n: int) -> str:
+    """The regressor kernel for the windows of an ``n``-sample log.
+
+    ``compiled`` when numba is installed and the whole log's regressor is as large as
+    :func:`~baseparams.regressor.tp.use_compiled` compiles for (each window alone is smaller:
+    ``auto`` would evaluate every window with numpy), else ``auto``.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    n : int
+        Samples whose regressor is evaluated.
+
+    Returns
+    -------
+    {"compiled", "auto"}
+        The backend.
+    """
+    from ..regressor import compiled
+
+    work = n * len(model.coords) * model.robot.n
+    return "compiled" if compiled.available() and work >= compiled.MIN_WORK else "auto"
+
+
 def fitted(stream, plan: Plan, model, cols: np.ndarray):
     """The fitted samples' rows, window by window in time order (one pass over the file).
 
@@ -524,16 +551,18 @@ def fitted(stream, plan: Plan, model, cols: np.ndarray):
         samples' times, parallel-filtered regressor, filtered torques, slow samples removed, global
         sample indices.
     """
+    backend = regressor_backend(model, plan.grid.n)
+    reg = model.regressor if backend == "auto" else functools.partial(model.regressor, backend=backend)
     for c, part in windows(stream.blocks(), plan.windows()):
         idx: list = []
-        a, tau, removed = chunks.chunk_rows(part, c, plan.grid, model.regressor, cols, idx)
+        a, tau, removed = chunks.chunk_rows(part, c, plan.grid, reg, cols, idx)
         if a is not None and len(a):
             yield part.t[idx[0] - c.lo], a, tau, removed, idx[0]
         elif removed:
             yield np.empty(0), None, None, removed, idx[0]
 
 
-def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float):
+def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, spill: bool = True):
     """Pass 3: the row factors, in the blocked cross-validation's folds, and the fitted rows if they fit.
 
     Parameters
@@ -548,14 +577,16 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float):
         Log column of each state column.
     memory_mb : float
         The fitted rows are kept (for the covariance's pass) when they fit in this.
+    spill : bool
+        Larger fitted rows are written to a temporary file (:class:`Spilled`) when the disk has room.
 
     Returns
     -------
     parts : list of RowAccumulator
         :data:`~baseparams.ident.select.FOLDS` consecutive pieces of the fitted samples, split by
         count as the in-memory path splits them (by the count before slow-sample removal).
-    kept : list of tuple, or None
-        ``(t, A, tau)`` per window, or None when they do not fit.
+    kept : list of tuple, Spilled or None
+        ``(t, A, tau)`` per window, their temporary file, or None (recomputed by pass 4).
     slow : int
         Slow samples removed.
     """
@@ -566,19 +597,118 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float):
     edges = np.cumsum([0] + [len(x) for x in np.array_split(np.arange(count), FOLDS)])
     parts = [RowAccumulator(len(model.coords), model.n_params) for _ in range(FOLDS)]
     fitted_mb = count * len(model.coords) * (model.n_params + 1) * 8 / 1e6
-    kept = [] if fitted_mb <= memory_mb else None
+    kept = [] if fitted_mb <= memory_mb else Spilled.open(fitted_mb) if spill else None
     slow = 0
-    for t, a, tau, removed, idx in fitted(stream, plan, model, cols):
-        slow += sum(removed.values())
-        if a is None:
-            continue
-        fold = np.searchsorted(edges, (idx - plan.grid.pad) // plan.factor, side="right") - 1
-        for j in np.unique(fold):
-            sel = fold == j
-            parts[j].add(a[sel], tau[sel])
-        if kept is not None:
-            kept.append((t, a, tau))
+    try:
+        for t, a, tau, removed, idx in fitted(stream, plan, model, cols):
+            slow += sum(removed.values())
+            if a is None:
+                continue
+            fold = np.searchsorted(edges, (idx - plan.grid.pad) // plan.factor, side="right") - 1
+            for j in np.unique(fold):
+                sel = fold == j
+                parts[j].add(a[sel], tau[sel])
+            if isinstance(kept, Spilled):
+                kept = kept.write(t, a, tau)
+            elif kept is not None:
+                kept.append((t, a, tau))
+    except BaseException:
+        if isinstance(kept, Spilled):
+            kept.close()
+        raise
     return parts, kept, slow
+
+
+class Spilled:
+    """The fitted rows of pass 3 written to an anonymous temporary file, read back window by window by pass 4.
+
+    The HAC covariance needs every fitted row again; recomputing them (the regressor and its
+    filter over the whole log) costs as much as pass 3, reading them back costs a file read. The
+    file (``tempfile.TemporaryFile``: unnamed, deleted when closed or at exit) holds
+    ``8 (p + 1) m + 8`` bytes per fitted sample; memory stays one window's. Used only when the
+    temporary folder has twice that free (:meth:`open`), else the rows are recomputed.
+
+    Parameters
+    ----------
+    fh : file object
+        The open temporary file (binary, read and write).
+    """
+
+    def __init__(self, fh):
+        self.fh, self.shapes = fh, []
+
+    @classmethod
+    def open(cls, mb: float):
+        """A new spill file, or None when the temporary folder lacks ``2 mb`` MB free (or cannot be written).
+
+        Parameters
+        ----------
+        mb : float
+            The fitted rows' size [MB].
+
+        Returns
+        -------
+        Spilled or None
+            The empty spill.
+        """
+        import shutil
+        import tempfile
+
+        try:
+            if shutil.disk_usage(tempfile.gettempdir()).free < 2 * mb * 1e6:
+                return None
+            return cls(tempfile.TemporaryFile(prefix="baseparams-rows-"))
+        except OSError:
+            return None
+
+    def write(self, t: np.ndarray, a: np.ndarray, tau: np.ndarray):
+        """Append one window's rows; the spill, or None when the file cannot take them (then recomputed).
+
+        Parameters
+        ----------
+        t : ndarray, shape ``(k,)``
+            Times [s].
+        a : ndarray, shape ``(k, m, p)``
+            Fitted regressor rows.
+        tau : ndarray, shape ``(k, m)``
+            Fitted torques.
+
+        Returns
+        -------
+        Spilled or None
+            ``self``, or None after a write error (disk full: the file is closed).
+        """
+        try:
+            for x in (t, a, tau):
+                self.fh.write(np.ascontiguousarray(x, dtype=np.float64).data)
+        except OSError:
+            self.close()
+            return None
+        self.shapes.append((t.shape, a.shape, tau.shape))
+        return self
+
+    def read(self):
+        """The rows back, window by window, as :func:`fitted` yields them.
+
+        Yields
+        ------
+        tuple
+            ``(t, A, tau, None, None)`` per window.
+        """
+        self.fh.seek(0)
+        for shapes in self.shapes:
+            out = []
+            for shape in shapes:
+                n = math.prod(shape)
+                raw = self.fh.read(8 * n)
+                if len(raw) != 8 * n:
+                    raise BaseparamsError("the fitted rows' temporary file was truncated while read")
+                out.append(np.frombuffer(raw, dtype=np.float64).reshape(shape))
+            yield out[0], out[1], out[2], None, None
+
+    def close(self) -> None:
+        """Delete the file."""
+        self.fh.close()
 
 
 class _Scores:
@@ -710,8 +840,9 @@ def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
         The accumulated rows.
     covariance : {"hac", "white"}
         The covariance.
-    kept : list or None
-        The fitted rows ``(t, A, tau)`` from pass 3, or None (recomputed from the file).
+    kept : list, Spilled or None
+        The fitted rows ``(t, A, tau)`` from pass 3, their temporary file (read back and closed),
+        or None (recomputed from the log).
     stream, plan, model, cols
         As for :func:`fitted`.
     say : callable
@@ -730,12 +861,22 @@ def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
 
     names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
     rate = plan.design.fs / plan.factor
-    if kept is not None or covariance != "hac":
+    if isinstance(kept, Spilled) and covariance != "hac":
+        kept.close()
+        kept = None
+    if isinstance(kept, list) or covariance != "hac":
         f, note = apply_covariance(f, acc, [(a, tau) for _, a, tau in kept or ()], covariance, rate)
         return f, note, (_series_of(kept, f.theta, names) if kept is not None else None)
-    say("covariance (HAC: a second pass over the file, window by window)")
     thin: list = []
     every = max(1, math.ceil(plan.fitted_count() / SERIES_MAX))
+    if isinstance(kept, Spilled):
+        say("covariance (HAC: the fitted rows read back from a temporary file, window by window)")
+        try:
+            f, note = apply_covariance(f, acc, _thinned(kept.read(), every, f.theta, thin), covariance, rate)
+        finally:
+            kept.close()
+        return f, note, _series_of(thin, f.theta, names)
+    say("covariance (HAC: a second pass over the file, window by window)")
     f, note = apply_covariance(f, acc, _thinned(fitted(stream, plan, model, cols), every, f.theta, thin), covariance,
                                rate)
     return f, note, _series_of(thin, f.theta, names)
@@ -829,7 +970,7 @@ def _passes(robot, stream, o: dict, say):
     plan = plan_training(model, stream, sc, tr, o["cutoff"], o["decimate"], o["min_speed"], o["memory_mb"])
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
-    parts, kept, slow = accumulate(stream, plan, model, cols, o["memory_mb"])
+    parts, kept, slow = accumulate(stream, plan, model, cols, o["memory_mb"], spill=o["covariance"] == "hac")
     return stream, sc, tr, model, cols, unit_notes, plan, parts, kept, slow
 
 

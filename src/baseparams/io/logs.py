@@ -80,6 +80,7 @@ the log's length (:mod:`baseparams.ident.stream`).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import functools
 import io
@@ -423,7 +424,7 @@ TEXT_MAX_BYTES = 2**30
 
 def _too_large(path: Path, what: str) -> str:
     return (f"{path}: {what}, more than is read whole ({WHOLE_MAX_BYTES / 2**20:.0f} MB of numbers); stream it: "
-            f"CSV/TSV or Parquet with 'identify --stream on' (baseparams.ident.stream.identify_stream in Python)")
+            f"CSV/TSV, NPZ or Parquet with 'identify --stream on' (baseparams.ident.stream.identify_stream in Python)")
 
 
 @dataclass
@@ -492,6 +493,29 @@ def _npz_header(path: Path) -> _Header:
     """An .npz log's members from the zip directory and each .npy header, checked before any array is read."""
     import zipfile
 
+    members, rows = _npz_members(path)
+
+    def read(used, time):
+        columns, booleans, notes = {}, [], []
+        with zipfile.ZipFile(path) as zz:
+            for col in used:
+                info, offset, dtype, n = members[col]
+                with zz.open(info) as fh:
+                    fh.read(offset)
+                    raw = fh.read(n * dtype.itemsize)
+                a = np.frombuffer(raw, dtype=dtype, count=n)
+                if dtype.kind == "b":
+                    booleans.append(col)
+                columns[col] = _integer_time(col, a, notes, path) if col == time else a.astype(float)
+        return columns, booleans, notes
+
+    return _Header(path, list(members), int(rows or 0), "array", read, "index {0} (0-based)")
+
+
+def _npz_members(path: Path) -> tuple[dict, int | None]:
+    """An .npz log's checked members ``{column: (ZipInfo, data offset, dtype, length)}`` and its row count."""
+    import zipfile
+
     try:
         z = zipfile.ZipFile(path)
     except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
@@ -530,22 +554,7 @@ def _npz_header(path: Path) -> _Header:
             _check_counts(path, len(infos), shape[0], "array")
             members[col] = (info, offset, dtype, shape[0])
             rows = shape[0] if rows is None else rows
-
-    def read(used, time):
-        columns, booleans, notes = {}, [], []
-        with zipfile.ZipFile(path) as zz:
-            for col in used:
-                info, offset, dtype, n = members[col]
-                with zz.open(info) as fh:
-                    fh.read(offset)
-                    raw = fh.read(n * dtype.itemsize)
-                a = np.frombuffer(raw, dtype=dtype, count=n)
-                if dtype.kind == "b":
-                    booleans.append(col)
-                columns[col] = _integer_time(col, a, notes, path) if col == time else a.astype(float)
-        return columns, booleans, notes
-
-    return _Header(path, list(members), int(rows or 0), "array", read, "index {0} (0-based)")
+    return members, rows
 
 
 def _parquet_header(path: Path) -> _Header:
@@ -1056,7 +1065,7 @@ def write_table(path, cols: dict[str, np.ndarray], what: str = "a table as .csv 
 # block line by line with ``read_log``'s rules. Parquet files are read by record batches.
 
 #: suffixes :class:`LogStream` reads
-STREAM_SUFFIXES = TEXT_SUFFIXES + PARQUET_SUFFIXES
+STREAM_SUFFIXES = TEXT_SUFFIXES + PARQUET_SUFFIXES + (".npz",)
 #: bytes of a text file parsed at once (a block ends at a line end)
 BLOCK_BYTES = 1 << 22
 #: rows of a Parquet record batch
@@ -1090,7 +1099,7 @@ def decoded_mb(path) -> float:
 
 
 def streamable(path) -> bool:
-    """Whether :class:`LogStream` reads this path (a regular CSV/TSV/TXT or Parquet file).
+    """Whether :class:`LogStream` reads this path (a regular CSV/TSV/TXT, Parquet or NPZ file).
 
     Parameters
     ----------
@@ -1100,7 +1109,7 @@ def streamable(path) -> bool:
     Returns
     -------
     bool
-        True for an existing regular file with a text or Parquet suffix.
+        True for an existing regular file with a text, Parquet or ``.npz`` suffix.
     """
     p = Path(path)
     return p.suffix.lower() in STREAM_SUFFIXES and p.is_file()
@@ -1112,7 +1121,8 @@ class LogStream:
     Parameters
     ----------
     path : str or Path
-        A ``.csv``/``.tsv``/``.txt`` or ``.parquet``/``.pq`` file.
+        A ``.csv``/``.tsv``/``.txt``, ``.parquet``/``.pq`` or ``.npz`` file (an NPZ's members are
+        read block by block from the archive, stored or compressed: never a whole array).
     robot : Robot
         The model (names the columns, as for ``read_log``).
     columns : str, Path or dict, optional
@@ -1148,16 +1158,22 @@ class LogStream:
         if p.suffix.lower() not in STREAM_SUFFIXES:
             raise DataError(f"{p}: not streamed (expected {', '.join(STREAM_SUFFIXES)}); read it with read_log")
         self.path, self.source = p, str(p)
-        self.kind = "parquet" if p.suffix.lower() in PARQUET_SUFFIXES else "text"
+        self.kind = ("parquet" if p.suffix.lower() in PARQUET_SUFFIXES else "npz" if p.suffix.lower() == ".npz"
+                     else "text")
         self.spec = _mapping(columns)
         if self.spec["topic"] is not None:
             raise DataError(f"{self.spec['label']}: 'topic' applies to ROS bags only, not to {p.name}")
         self.bounds = (max_angle, max_travel)
         self.block_bytes = max(int(block_bytes), 1)
-        self.names = self._text_header()[0] if self.kind == "text" else self._parquet_names()
+        if self.kind == "npz":
+            self._members, _ = _npz_members(p)
+            self.names = list(self._members)
+        else:
+            self.names = self._text_header()[0] if self.kind == "text" else self._parquet_names()
         empty = _Table(self.source, {n: np.empty(0) for n in self.names}, np.empty(0, int), "")
-        if self.kind == "parquet":
-            empty.labels = {n: f"column {n!r}" for n in self.names}
+        if self.kind != "text":
+            what = "array" if self.kind == "npz" else "column"
+            empty.labels = {n: f"{what} {n!r}" for n in self.names}
         self._joints = _resolve(empty, robot, self.spec, allow_subset, require_tau)
         if self.spec["time"] not in self.names:
             raise DataError(f"{self.source}: no time column {self.spec['time']!r} (columns: "
@@ -1186,7 +1202,7 @@ class LogStream:
             increasing, an implausible angle), naming the file, the column and the global row;
             an empty file.
         """
-        tables = self._text_tables() if self.kind == "text" else self._parquet_tables()
+        tables = {"text": self._text_tables, "parquet": self._parquet_tables, "npz": self._npz_tables}[self.kind]()
         last_t, count = None, 0
         for table in tables:
             log = _assemble(table, self._joints, self.spec, *self.bounds)
@@ -1291,6 +1307,59 @@ class LogStream:
         values, text_cols = _parse_block(self.path, kept, delim, names, numbers, rows_before + 1)
         return numbers, values, text_cols
 
+    # ------------------------------------------------------------ NPZ
+    def _npz_tables(self) -> Iterator[_Table]:
+        """One checked table per :data:`BATCH_ROWS` samples of the used arrays (0-based global indices).
+
+        Every used member is open at once and read sequentially (a compressed member is
+        decompressed as it is read), so memory is a block's, whatever the length.
+        """
+        import zipfile
+
+        used = self._used()
+        lengths = {c: self._members[c][3] for c in used}
+        first_col, n = next(iter(lengths.items()))
+        for c, k in lengths.items():
+            if k != n:
+                raise DataError(f"{self.source}: array {c!r} has {k} rows, array {first_col!r} has {n} (columns of "
+                                "different lengths)")
+        tcol, first = self.spec["time"], None
+        with contextlib.ExitStack() as stack:
+            try:
+                z = stack.enter_context(zipfile.ZipFile(self.path))
+                handles = {}
+                for c in used:
+                    info, offset, dtype, _ = self._members[c]
+                    fh = stack.enter_context(z.open(info))
+                    fh.read(offset)
+                    handles[c] = (fh, dtype)
+            except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
+                raise DataError(f"{self.path}: not a readable .npz archive ({_first_line(exc)})") from None
+            for start in range(0, n, BATCH_ROWS):
+                k = min(BATCH_ROWS, n - start)
+                columns, booleans, notes = {}, set(), []
+                for c, (fh, dtype) in handles.items():
+                    try:
+                        raw = fh.read(k * dtype.itemsize)
+                    except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
+                        raise DataError(f"{self.path}: array {c!r}: not readable ({_first_line(exc)})") from None
+                    if len(raw) != k * dtype.itemsize:
+                        raise DataError(f"{self.path}: array {c!r} ends at index {start + len(raw) // dtype.itemsize}"
+                                        f" (0-based); its header claims {n} values")
+                    a = np.frombuffer(raw, dtype=dtype, count=k)
+                    if dtype.kind == "b":
+                        booleans.add(c)
+                    if c == tcol:
+                        if first is None:
+                            first = a[0] if dtype.kind in "iu" else None
+                        columns[c] = _integer_time(c, a, notes, self.path, first)
+                    else:
+                        columns[c] = a.astype(float)
+                notes = [*notes, f"{self.path.name}: read in blocks of {BATCH_ROWS} samples"] if not start else []
+                yield _Table(self.source, columns, np.arange(start, start + k), "index {0} (0-based)",
+                             labels={c: f"array {c!r}" for c in columns}, booleans=booleans, notes=notes,
+                             offset=start)
+
     # ------------------------------------------------------------ Parquet
     def _parquet_file(self):
         try:
@@ -1298,7 +1367,9 @@ class LogStream:
         except ImportError:
             raise DataError(f"{self.path}: reading Parquet needs pyarrow: pip install 'baseparams[parquet]'") from None
         try:
-            return pq.ParquetFile(self.path)
+            # buffered reads, no pre-buffering: iter_batches otherwise keeps every column chunk it read
+            # (memory growing with the file: 2.3 GB on a 10^7-row log)
+            return pq.ParquetFile(self.path, pre_buffer=False, buffer_size=1 << 16)
         except Exception as exc:  # pyarrow's errors: one line
             raise DataError(f"{self.path}: not a readable Parquet file ({_first_line(exc)})") from None
 
@@ -1318,7 +1389,10 @@ class LogStream:
         f = self._parquet_file()
         start, first = 0, None
         try:
-            batches = f.iter_batches(batch_size=BATCH_ROWS, columns=self._used())  # never the other columns
+            used = self._used()  # never the other columns; one iterator per row group (freed after it)
+            batches = (b for g in range(f.num_row_groups)
+                       for b in f.iter_batches(batch_size=BATCH_ROWS, row_groups=[g], columns=used,
+                                               use_threads=False))  # threads: ~50 MB more, no faster
             for batch in batches:
                 tcol = self.spec["time"]
                 if first is None and tcol in batch.schema.names and batch.num_rows:
@@ -1338,6 +1412,9 @@ class LogStream:
             raise DataError(f"{self.path}: not a readable Parquet file ({_first_line(exc)})") from None
         finally:
             f.close()
+            import pyarrow as pa
+
+            pa.default_memory_pool().release_unused()  # the pass's buffers back to the system before the next
 
 
 #: bytes that may start a line break ``str.splitlines`` counts besides ``\n`` (and ``\r\n``); the

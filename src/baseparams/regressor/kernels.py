@@ -407,3 +407,32 @@ def closed_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr,
                             lt[c] += lines[k, c] * gk
                     _emit_projected(out, smp, a, i, lt[0], lt[1], lt[2], lt[3], lt[4], lt[5], -1, xs, y10,
                                     cptr, ccol, cmat)
+
+
+#: columns one thread filters at a time (:func:`sosfilt_rows`)
+_FILTER_COLUMNS = 32
+
+
+@njit(cache=CACHE, parallel=True)
+def sosfilt_rows(sos, x, zi, backward):
+    """Second-order sections along axis 0 of ``x (S, C)``, in place, column blocks in parallel.
+
+    ``zi (n_sections, 2, C)``: the sections' states, updated in place. ``backward``: the samples
+    from last to first. Per sample and section the arithmetic of ``scipy.signal.sosfilt``
+    (transposed direct form II, in its order), so the result is scipy's.
+    """
+    s, c = x.shape
+    nsec = sos.shape[0]
+    nblocks = (c + _FILTER_COLUMNS - 1) // _FILTER_COLUMNS
+    for blk in prange(nblocks):
+        c0, c1 = blk * _FILTER_COLUMNS, min(c, (blk + 1) * _FILTER_COLUMNS)
+        for k in range(s):
+            n = s - 1 - k if backward else k
+            for j in range(nsec):
+                b0, b1, b2, a1, a2 = sos[j, 0], sos[j, 1], sos[j, 2], sos[j, 4], sos[j, 5]
+                for col in range(c0, c1):
+                    xn = x[n, col]
+                    y = b0 * xn + zi[j, 0, col]
+                    zi[j, 0, col] = b1 * xn - a1 * y + zi[j, 1, col]
+                    zi[j, 1, col] = b2 * xn - a2 * y
+                    x[n, col] = y

@@ -80,6 +80,35 @@ packages keep their installed caches in both).
 {rows}"""
 
 
+def scale_logs(d: dict, g) -> str:
+    """The long logs of every format (``--only scale_logs``), for section 1 of the README."""
+    fmts = ("csv", "npz", "parquet")
+    sizes = [e for e in (4, 5, 6, 7) if any(f"scale_logs_{f}_1e{e}_mb_file" in d for f in fmts)]
+
+    def cell(f: str, e: int) -> str:
+        k = f"scale_logs_{f}_1e{e}"
+        if f"{k}_mb_file" not in d:
+            return "-"
+        if d.get(f"{k}_s") is None:
+            return f"{g(k + '_mb_file', '{:.0f}')} MB, **failed**"
+        return f"{g(k + '_mb_file', '{:.0f}')} MB, {g(k + '_s', '{:.1f}')} s, {g(k + '_peak_mb', '{:.0f}')} MB"
+
+    rows = "".join(f"| 10^{e} | " + " | ".join(cell(f, e) for f in fmts) + " |\n" for e in sizes)
+    if not rows:
+        return ""
+    exps = ", ".join(f"{g(f'scale_logs_{f}_time_exponent', '{:.2f}')} ({f.upper()})" for f in fmts)
+    return f"""Long logs, every format (group `scale_logs`, `benchmarks/scale_logs.py`): `baseparams identify
+puma560 LOG` with the default flags in a fresh process on a simulated 500 Hz Puma560 log written
+block by block; peak memory the child's `ru_maxrss` (what `/usr/bin/time -v` reports); one run
+each. Logs below 64 MB are read whole (with the model-terms selection), larger ones streamed.
+
+| rows | CSV (file, wall, peak) | NPZ (file, wall, peak) | Parquet (file, wall, peak) |
+|---:|---:|---:|---:|
+{rows}
+Exponent of wall time vs rows between the two largest logs: {exps} (1: linear).
+"""
+
+
 def deep_trees(d: dict, g) -> str:
     """Section 3c (deep trees and chains in linear size, ``--only scale_trees``) of the README."""
     kinds = ("chain", "deep", "wide")
@@ -278,6 +307,7 @@ streamed (`--stream on`, the default above 64 MB) 10^6 rows **{g('identify_csv_1
 {g('identify_csv_1e6_streamed_peak_mb', '{:.0f}')} MB**, 10^7 rows ({g('identify_csv_1e7_streamed_mb_file', '{:.0f}')} MB of CSV)
 **{g('identify_csv_1e7_streamed_s', '{:.0f}')} s, {g('identify_csv_1e7_streamed_peak_mb', '{:.0f}')} MB**.
 
+{scale_logs(d, g)}
 Fleet scale (Dask, local cluster, one single-threaded worker process per core; synthetic Puma560
 samples generated inside the tasks in chunks of 10^5, reduced by TSQR on the workers, OLS):
 **{g('fleet_samples', '{:.3g}')} samples in {g('fleet_seconds', '{:.0f}')} s** with 2 workers; throughput

@@ -94,6 +94,7 @@ def test_identify_missing_joint_names_the_joint(tmp_path, capsys):
     assert "joint6" in err and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_fleet_from_the_command_line(tmp_path, capsys):
     """``simulate --robots`` writes a fleet; ``identify 'glob' --per-file --pooled`` runs it on Dask."""
     out = tmp_path / "fleet"

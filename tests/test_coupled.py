@@ -375,6 +375,7 @@ def test_polynomial_couplings_complete_and_certified(seed):
     assert c.status == "certified" and c.completed == 0, c.message
 
 
+@pytest.mark.slow
 def test_sampled_rm_is_needed_on_polynomial_couplings(monkeypatch):
     _without_sampled_rm(monkeypatch)
     left = [certify(poly_hand(seed), seed=0).completed for seed in range(20)]

@@ -72,6 +72,7 @@ def test_poorly_exciting_log_the_prior_generalizes(seed):
 
 
 @pytest.mark.parametrize("seed", [3, 4])
+@pytest.mark.slow
 def test_rich_log_the_prior_does_not_bias(seed):
     nominal, log, val = _case(seed, 20.0, 1.0)
     ols = identify(nominal, log, method="ols", validation=val).validation["rms_total"]
@@ -126,6 +127,7 @@ def test_selection_rejects_a_strong_prior_when_the_file_is_wrong():
 
 
 @pytest.mark.parametrize("duration, amplitude", [(4.7, 0.25), (20.0, 1.0)])
+@pytest.mark.slow
 def test_default_std_is_calibrated_when_the_file_is_wrong(duration, amplitude):
     """The prior's own error is in the std: with the file 30 % off, ~95 % within 2 sigma, not inflated.
 

@@ -142,6 +142,7 @@ def test_series_at_rest_at_both_ends_with_exact_derivatives():
 
 # ---------------------------------------------------------------- acceptance: Panda
 @pytest.mark.shared
+@pytest.mark.slow
 def test_panda_design_beats_the_recorded_trajectory(panda):
     """43 rigid base parameters + 21 friction columns, column-scaled, 100 Hz over one period."""
     robot, model = panda
@@ -163,6 +164,7 @@ def test_panda_design_beats_the_recorded_trajectory(panda):
 
 
 @pytest.mark.shared
+@pytest.mark.slow
 def test_panda_torque_and_acceleration_limits(panda):
     """Optional limits: the datasheet's accelerations and the URDF's efforts with the model's own inertias."""
     robot, model = panda
@@ -177,6 +179,7 @@ def test_panda_torque_and_acceleration_limits(panda):
 
 
 @pytest.mark.shared
+@pytest.mark.slow
 def test_round_trip_design_gives_smaller_standard_deviations(panda):
     """simulate -> identify under noise: D-optimal design against random series in the same limits.
 
@@ -424,6 +427,7 @@ def test_excite_limit_flags_bad_input_is_one_line(argv, words, capsys):
 
 # ---------------------------------------------------------------- issue 29: the README example, binding constraints
 @pytest.mark.shared
+@pytest.mark.slow
 def test_readme_excite_drives_with_keepout(tmp_path, capsys):
     """The README's example (--drives with --keepout) designs a trajectory: it failed with every start
     frozen on a joint at its range's edge (joints 4 and 6 of the Panda, their Coulomb columns zero)."""

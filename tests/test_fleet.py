@@ -32,6 +32,7 @@ def client():
     cluster.close()
 
 
+@pytest.mark.slow
 def test_fleet_equals_serial_per_file_and_pooled(fleet, client):
     robot, model, paths = fleet
     res = identify_fleet(model, paths, per_file=True, pooled=True, method="wls", client=client)
@@ -70,6 +71,7 @@ def _serial_meat(model, path, f):
     return hac_meat(kept, inv @ inv.T, f.theta, f.estimate.weights, acc.samples), acc
 
 
+@pytest.mark.slow
 def test_pooled_standard_deviations_are_hac_over_the_logs(fleet, client):
     from baseparams.ident.uncertainty import apply_covariance, sandwich
 
@@ -96,6 +98,7 @@ def test_pooled_standard_deviations_are_hac_over_the_logs(fleet, client):
     assert res.to_json()["pooled"]["covariance"] == res.pooled.estimate.covariance
 
 
+@pytest.mark.slow
 def test_pooled_default_cross_validates_over_the_logs(fleet, client):
     """``auto`` pooled: the prior's weight by cross-validation whose blocks are whole logs (= the serial fit)."""
     robot, model, paths = fleet
@@ -175,6 +178,7 @@ def _fleet_cli(folder, capsys, *extra):
     return code, out.out, [ln for ln in out.err.splitlines() if "error" in ln or "skipped" in ln]
 
 
+@pytest.mark.slow
 def test_one_bad_log_does_not_stop_the_fleet(mixed_fleet, capsys):
     code, out, err = _fleet_cli(mixed_fleet, capsys, "--json")
     import json
@@ -189,6 +193,7 @@ def test_one_bad_log_does_not_stop_the_fleet(mixed_fleet, capsys):
     assert code == 0 and "5 logs, 2 used, 3 skipped" in out and out.count("skipped: ") == 3
 
 
+@pytest.mark.slow
 def test_strict_fleet_and_a_fleet_of_only_bad_logs_exit_2(mixed_fleet, capsys, tmp_path):
     code, _, err = _fleet_cli(mixed_fleet, capsys, "--strict")
     assert code == 2 and [ln for ln in err if "error" in ln] == [

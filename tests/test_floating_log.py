@@ -133,6 +133,7 @@ def test_base_columns_bad_input_is_one_line(tmp_path):
         bp.identify(robot, log, joints="FL_hip_joint")
 
 
+@pytest.mark.slow
 def test_go2_simulated_then_identified_on_the_command_line(tmp_path, capsys):
     """The acceptance: ``simulate go2 log.csv`` then ``identify go2 log.csv --truth`` exits 0, error <= 5 %
     (here with torque noise too; noise-free it is ~1e-5)."""

@@ -256,6 +256,7 @@ def two_logs(tmp_path_factory):
 
 @pytest.mark.parametrize("address, env", [("tcp://127.0.0.1:1", False), ("tcp://no-such-host.invalid:8786", False),
                                           ("garbage", False), ("garbage", True), ("tcp://[::1", False)])
+@pytest.mark.slow
 def test_an_unreachable_or_malformed_scheduler_is_one_line_in_seconds(address, env, two_logs, capsys, monkeypatch):
     argv = ["identify", "puma560", two_logs / "*.npz", "--per-file"]
     if env:

@@ -278,6 +278,7 @@ STRINGS_OK = {"out", "save", "mjcf", "source", "package_path", "path", "validate
 LABELS = {"what"}
 
 
+@pytest.mark.slow
 def test_junk_in_every_argument_is_a_typeerror_or_valueerror_naming_it(puma, tmp_path):
     """Every argument of the front door and of the result objects, eight values of the wrong kind each: a
     TypeError or ValueError (or BaseparamsError) of one line, never another exception, within seconds."""

@@ -86,6 +86,7 @@ def test_npz_attacks_are_one_line_before_allocating(case, puma, tmp_path):
     assert str(p) in msg and words in msg, msg
 
 
+@pytest.mark.slow
 def test_an_npz_bomb_in_a_bounded_subprocess(tmp_path):
     """14 MB that would inflate to 3.2 GB: refused from the .npy header, within 1.5 GB and seconds."""
     p = _bomb(tmp_path / "bomb.npz", 400_000_000)
@@ -139,6 +140,7 @@ def test_corrupted_npz_bytes_read_identically_or_refused_in_one_line(puma, good,
 
 
 # ---------------------------------------------------------------- Parquet
+@pytest.mark.slow
 def test_parquet_with_40000_columns_is_refused_from_its_footer(puma, tmp_path, capsys):
     pa = pytest.importorskip("pyarrow")
     import pyarrow.parquet as pq
@@ -185,6 +187,7 @@ def test_a_csv_header_of_too_many_columns(puma, tmp_path):
 
 
 # ---------------------------------------------------------------- xacro
+@pytest.mark.slow
 def test_xacro_large_integers_count_against_the_budget(tmp_path):
     pytest.importorskip("xacro")
     f = tmp_path / "r.urdf.xacro"

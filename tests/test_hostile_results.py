@@ -119,6 +119,7 @@ def _where(path) -> str:
 
 # ---------------------------------------------------------------- saved identifications
 @pytest.mark.parametrize("seed", range(4))
+@pytest.mark.slow
 def test_a_mutated_result_is_refused_in_one_line_or_predicts_exactly_the_same(saved, puma, tmp_path, seed):
     """600 random changes (a value replaced by null, NaN, 1e400, a boolean, a string, a 5 000-digit
     integer, deep nesting...; a key deleted; a key or an item added)."""

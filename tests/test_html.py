@@ -139,6 +139,7 @@ def _expected_classes(j: dict, names: list[str]) -> list[str]:
 
 
 @pytest.mark.parametrize("name", ["puma560", "pkm-2rru-1rrs"])
+@pytest.mark.slow
 def test_analysis_report_in_a_browser(name, tmp_path):
     result = baseparams.analyze(baseparams.load(name))
     els, _, _ = _render(analysis_html(result), tmp_path, name)
@@ -169,6 +170,7 @@ def test_analysis_report_in_a_browser(name, tmp_path):
 
 
 @pytest.mark.shared
+@pytest.mark.slow
 def test_identification_report_in_a_browser(tmp_path):
     from baseparams.ident.pipeline import identify
     from baseparams.io.logs import read_log

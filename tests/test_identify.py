@@ -86,6 +86,7 @@ def test_excitation_names_the_weak_parameter(rng):
 
 
 @pytest.mark.parametrize("min_speed", [None, 0.05])
+@pytest.mark.slow
 def test_chunked_identification_equals_the_whole_log(min_speed):
     """Parallel filtering chunk by chunk (overlaps of 12 cutoff periods) gives the whole log's
     estimate to 1e-10 relative, slow-sample removal and decimation included."""

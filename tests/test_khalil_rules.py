@@ -367,6 +367,7 @@ def test_oracle_is_sufficient_and_minimal(robot, which):
         np.testing.assert_allclose(rnea(moved, q, dq, ddq), tau, rtol=0, atol=1e-9 * max(1.0, np.abs(tau).max()))
 
 
+@pytest.mark.slow
 def test_general_revolute_rule_is_the_textbook_one():
     """The derived grouping of ``(YYj, MZj, Mj)`` into link ``j-1`` is Khalil & Dombre's.
 
@@ -393,6 +394,7 @@ def test_general_revolute_rule_is_the_textbook_one():
         assert sp.simplify(a - b) == 0, (name, sp.simplify(a), b)
 
 
+@pytest.mark.slow
 def test_prismatic_rule_rotates_the_tensor():
     """The general prismatic rule carries ``J_j`` as ``R J_j R^T`` (no translation term)."""
     al, d, r, th = sp.symbols("alpha d r theta", real=True)

@@ -377,6 +377,7 @@ def test_cli_identify_writes_a_urdf_model_as_mjcf(tmp_path, capsys):
 
 
 @pytest.mark.shared
+@pytest.mark.slow
 def test_real_panda_log_exported_as_mjcf(tmp_path, capsys):
     """Real Panda data (URDF through MuJoCo's import): MuJoCo's mj_inverse of OUT reproduces the measured torques
     as well as the identification does (its residual is ~3 %)."""

@@ -31,6 +31,7 @@ def test_identify_shows_its_steps_once_the_run_is_long(small_log, monkeypatch, c
     assert order == sorted(order)
 
 
+@pytest.mark.slow
 def test_short_runs_stay_quiet_and_verbose_shows_all(small_log, monkeypatch, capsys):
     monkeypatch.setattr(common, "PROGRESS_AFTER_S", 1e6)
     assert main(["identify", "puma560", str(small_log), "--json"]) == 0

@@ -131,6 +131,7 @@ def _pattern(expected: str) -> re.Pattern:
 
 
 @pytest.mark.parametrize("start, lines", [pytest.param(s, ls, id=f"line{s}") for s, ls in SESSIONS])
+@pytest.mark.slow
 def test_readme_example_outputs_are_what_the_program_prints(start, lines):
     runs, current = [], None
     for line in lines:

@@ -110,6 +110,7 @@ def panda_whole(tmp_path_factory):
 
 
 @pytest.mark.parametrize("method, limit", [("auto", 0.075), ("physical", 0.080)])
+@pytest.mark.slow
 def test_panda_model_terms_beat_least_squares_on_the_held_out_part(panda_whole, method, limit):
     """The issue's measure (last 6 s held out, predictions at every held-out sample against the measured
     torques low-passed at 5 Hz by an outsider's filtfilt): the model class with the terms the training span's

@@ -153,6 +153,7 @@ def test_cli_predict_csv_and_parquet(tmp_path, capsys):
     assert "\n" not in err and "not this robot 'go2'" in err and not (tmp_path / "no.csv").exists()
 
 
+@pytest.mark.slow
 def test_identify_save_checked_before_the_fit_and_truth(tmp_path, capsys):
     sim = tmp_path / "sim.csv"
     assert main(["simulate", "puma560", str(sim), "--duration", "20", "--rate", "200", "--noise", "0.05",
@@ -202,6 +203,7 @@ def test_regressor_states_out(puma, tmp_path, capsys):
 
 
 @pytest.mark.shared
+@pytest.mark.slow
 def test_panda_save_then_predict_whole_log(tmp_path, capsys):
     """The real Panda log (Gaz et al. 2019): identify with --save, predict every sample of the log."""
     panda = IDENT / "panda_gaz2019"

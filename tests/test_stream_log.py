@@ -217,6 +217,7 @@ def _cli(*args):
     return subprocess.run([sys.executable, "-m", "baseparams", *map(str, args)], capture_output=True, text=True)
 
 
+@pytest.mark.slow
 def test_cli_streams_on_request_and_says_so(sim, tmp_path):
     csv, _ = sim
     pred = tmp_path / "pred.csv"

@@ -201,6 +201,7 @@ def test_a_robot_file_is_not_read_as_a_dh_table(suffix, tmp_path, capsys):
         baseparams.analyze_symbolic(f)
 
 
+@pytest.mark.slow
 def test_cli_symbolic_json_latex_and_codegen(tmp_path, capsys):
     assert main(["analyze", "puma560-symbolic", "--symbolic", "--json"]) == 0
     j = json.loads(capsys.readouterr().out)
@@ -328,6 +329,7 @@ def _table_with(table: str, row: str, new: str, values: str) -> str:
     return text.replace(row, new).replace("\nvalues ", f"\nvalues {values} ")
 
 
+@pytest.mark.slow
 def test_symbolic_twist_angle_matches_the_textbook_rules(tmp_path):
     """Puma560 with a symbolic twist alpha3 (axes 2 and 3 no longer parallel): cos/sin formulas."""
     from khalil_rules import khalil_base_parameters, read_dh

@@ -49,6 +49,7 @@ def test_panda_six_lengths_gives_43_and_the_numerical_formulas():
     _against_numerics(sa, 5)
 
 
+@pytest.mark.slow
 def test_panda_with_offsets_and_a_twist_gives_43_and_the_numerical_formulas():
     """9 symbols (six lengths, theta of joints 2 and 4, alpha of joint 4): no answer in 300 s before."""
     sa = symbolic_analysis(load_symbolic("panda-offsets-symbolic"))  # with its own two checks
@@ -79,6 +80,7 @@ def test_to_fraction_is_the_expression():
         assert sp.cancel(e - dom.to_sympy(n) / dom.to_sympy(d)) == 0
 
 
+@pytest.mark.slow
 def test_block_solve_solves_the_system_and_factors_the_determinant():
     x, y = sp.symbols("x y", real=True)
     dom = sp.ZZ[x, y]

@@ -47,6 +47,7 @@ def test_no_term_is_kept_when_no_effect_is_there(seed):
     assert res.validation["rms_total"] < 0.07  # the noise is 0.05
 
 
+@pytest.mark.slow
 def test_pre_sliding_friction_is_found_with_its_distance():
     a, b = recordings(10, dahl=2e-3)
     res = identify(ROBOT, a, validation=b)
@@ -142,6 +143,7 @@ def test_saved_result_predicts_with_its_terms(tmp_path):
     assert [t["name"] for t in doc["terms"]] == ["dahl", "delay"]
 
 
+@pytest.mark.slow
 def test_cli_terms_flag_and_report(tmp_path, capsys):
     a, _ = recordings(12, delay=np.array([0, 0.003, 0, 0, 0, 0]))
     path = tmp_path / "a.csv"

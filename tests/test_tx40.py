@@ -207,6 +207,7 @@ def test_the_coupled_motor_explains_the_wrist_torques(tx40, ols):
         assert ols.train["fit_rms"][joint] < 0.35 * alone.train["fit_rms"][joint]  # the fitted rows (filtered)
 
 
+@pytest.mark.slow
 def test_cli_coupling_option(tx40, capsys):
     """``--coupling`` on the command line: the coupled motor's values in the JSON, within 3 sigma."""
     _, _, path = tx40

@@ -70,6 +70,7 @@ def _coloured(robot, seed, rho=0.95, std=0.5, **kw):
     return replace(log, tau=log.tau + e), truth
 
 
+@pytest.mark.slow
 def test_hac_is_calibrated_under_ar1_noise_and_white_is_not():
     robot = baseparams.load("puma560")
     z = {"hac": [], "white": []}
@@ -85,6 +86,7 @@ def test_hac_is_calibrated_under_ar1_noise_and_white_is_not():
     assert np.mean(white < 2) < 0.80  # the white formula is overconfident here
 
 
+@pytest.mark.slow
 def test_chunked_second_pass_equals_at_once():
     robot = baseparams.load("puma560")
     log, _ = _coloured(robot, 0)
@@ -94,6 +96,7 @@ def test_chunked_second_pass_equals_at_once():
     assert np.allclose(chunked.fit.estimate.std, whole.fit.estimate.std, rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_every_term_has_a_std_and_the_covariance_is_named():
     robot = baseparams.load("puma560")
     log, _ = _coloured(robot, 1, rotor=True)

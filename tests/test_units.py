@@ -101,6 +101,7 @@ def test_boolean_parquet_velocities_refused(sim, tmp_path):
 
 
 @pytest.mark.shared
+@pytest.mark.slow
 def test_real_panda_log_not_flagged():
     from baseparams.ident.data import JointLog
 

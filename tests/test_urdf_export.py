@@ -208,6 +208,7 @@ def _panda_csv(tmp_path):
 
 
 @pytest.mark.shared
+@pytest.mark.slow
 def test_panda_physical_export_reloads_in_pinocchio(tmp_path, capsys):
     """The acceptance: damping and friction on all 7 joints, one element per line, Pinocchio agrees."""
     pin = pytest.importorskip("pinocchio")

@@ -79,6 +79,7 @@ def test_fleet_keyword_writes_the_fleet(tmp_path):
     assert any(n.startswith("Ia_") for n in one["drives"])  # rotor= reaches every robot of the fleet
 
 
+@pytest.mark.slow
 def test_excite_and_identify_report_one_condition_number_for_one_motion(tmp_path, capsys):
     """The design's condition number and identify's for a log of that design are one measure (the
     motion's regressor, column-scaled, unweighted, every sample): equal to rounding; the fitted rows'

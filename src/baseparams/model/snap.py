@@ -103,7 +103,7 @@ def _digits(s: Snap) -> int:
 LINKS_PER_SIZE = 10
 
 
-def robot_size(robot: Robot) -> float:
+def robot_size(robot: Robot, frames: np.ndarray | None = None) -> float:
     """The length offsets are measured against: the robot's extent, at most ten of its longest links.
 
     The largest distance between two joint frames at q = 0, but at most :data:`LINKS_PER_SIZE`
@@ -116,6 +116,8 @@ def robot_size(robot: Robot) -> float:
     ----------
     robot : Robot
         The robot.
+    frames : ndarray, shape ``(n, 4, 4)``, optional
+        :func:`relative_frames` of the robot, when already computed.
 
     Returns
     -------
@@ -123,7 +125,7 @@ def robot_size(robot: Robot) -> float:
         [m], at least 1e-3 (a robot of one body at the origin).
     """
     p = np.vstack([np.zeros((1, 3)), robot.M0[:, :3, 3]])
-    rel = relative_frames(robot)[:, :3, 3]
+    rel = (relative_frames(robot) if frames is None else frames)[:, :3, 3]
     inner = [i for i, par in enumerate(robot.parent) if par >= 0]  # a root's pose in the world is not a link
     longest = float(np.linalg.norm(rel[inner], axis=1).max()) if inner else np.inf
     return max(min(diameter(p), LINKS_PER_SIZE * longest), 1e-3)
@@ -248,9 +250,10 @@ def near_special(robot: Robot, tol: float = SNAP_TOL, exact: float = EXACT_TOL) 
     """
     if robot.has_loops:
         return []
-    size = robot_size(robot)
+    frames = relative_frames(robot)
+    size = robot_size(robot, frames)
     out: list[Snap] = []
-    for i, t in enumerate(relative_frames(robot)):
+    for i, t in enumerate(frames):
         if robot.jtype[i] == "F":
             continue
         name = robot.joint_names[i]

@@ -172,13 +172,7 @@ def gravity_basis(robot, coords, g: np.ndarray, state) -> np.ndarray:
     w[:, :, 3, :3] = np.cross(tr, g)  # unit mass: h = t, wrench (t x g, g)
     w[:, :, 3, 3:] = g
     coords = np.asarray(coords)
-    body = np.asarray(robot.dof_body)[coords]
-    inside = np.zeros((len(coords), n), dtype=bool)  # body b in the subtree of joint j's body
-    for b in range(n):
-        a = b
-        while a >= 0:
-            inside[body == a, b] = True
-            a = robot.parent[a]
+    inside = robot.support[coords]  # (m, n): coordinate j moves body b (a small robot: the basis' own size)
     lines = state.lines[:, coords]
     out = -np.einsum("smk,snik->smni", lines, w) * inside[None, :, :, None]
     return out.reshape(s, len(coords), 4 * n)
@@ -240,10 +234,10 @@ class Tilt(Term):
     def columns(self, ctx: TermContext, state: dict) -> tuple[np.ndarray, list[str]]:
         """``Y(q, 0, 0; u_k x g) pi``, filtered and decimated, for ``k = 1, 2``."""
         self.pi = np.asarray(state["pi"], dtype=float)
-        key, cols = self._cache
-        if getattr(self, "_basis_cols", None) is not None:
+        if self._basis_cols is not None:  # linear in the first moments and masses: filtered once (prepare)
             pk = self.pi[self._entries]
             return np.stack([b @ pk for b in self._basis_cols], axis=2), ["tilt_1", "tilt_2"]
+        key, cols = self._cache
         if key is None or not np.array_equal(key, self.pi):
             r = ctx.model.robot
             full = np.stack([gravity_torques(r, ctx.model.coords, None, np.cross(u, r.gravity), self.pi,

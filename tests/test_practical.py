@@ -106,6 +106,7 @@ def test_rounded_decimals_in_a_file(tmp_path, digits):
         assert rounded.n_base == exact.n_base
 
 
+@pytest.mark.shared
 def test_a_generic_small_angle_beyond_the_tolerance_is_taken_literally(tmp_path):
     """0.01 rad is a design, not a rounding: counted as the file states it."""
     text = PANDA.read_text().replace('rpy="0 0 0"/>', 'rpy="0.01 0 0"/>', 1)

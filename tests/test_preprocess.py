@@ -208,7 +208,11 @@ def test_prepare_counts_every_removed_sample_and_notes_every_choice(rng):
     assert 1.0 <= band <= 1.5  # the 6 s window: frequency bins of 1/6 Hz
     assert prep.design.cutoff == pytest.approx(10 * band, rel=0.05)  # (band of the filtered q here)
     k = int(500.0 // (5 * prep.design.cutoff))
+    k -= k > 3 and all(k % d for d in range(2, k))  # a prime above 3 lowered by one (a stride divides it)
     assert prep.factor == k and prep.fs == pytest.approx(500.0 / k, rel=1e-4)
+    # the rigid-body regressor's stride: the largest divisor of k whose rate is >= 10 x the cutoff
+    r = max(d for d in range(1, k + 1) if k % d == 0 and (d == 1 or 500.0 / d >= 10 * prep.design.cutoff))
+    assert prep.stride == r > 1 and np.all((prep.index - prep.design.pad) % r == 0)
     assert prep.removed["slow (|dq| < min_speed on a joint)"] > 0
     text = "\n".join(prep.notes)
     for word in ("resampled", "low-pass", "x the excitation bandwidth", "dq: derived", "ddq: derived",

@@ -22,7 +22,7 @@ from ..display import summary_repr
 from ..errors import DataError
 from .data import JointLog
 from .estimate import RowAccumulator
-from .preprocess import LowPass, prepare, zero_phase
+from .preprocess import LowPass, prepare, stride_design, zero_phase
 
 #: edge transient of the zero-phase filter kept below ~1e-12: the least damped pole of a
 #: Butterworth low-pass of order 4 decays as exp(-2 pi fc cos(67.5 deg) t), 27.6 / (2 pi 0.383) = 11.5
@@ -64,6 +64,30 @@ class ChunkPlan:
     hi: int
 
     __repr__ = summary_repr
+
+
+def window_size(model, memory_mb: float, margin: int, stride: int = 1) -> int:
+    """Owned samples per window so that one window's regressor and its filter's copies fit in ``memory_mb``.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model (``m`` measured rows, ``p`` columns).
+    memory_mb : float
+        The budget [MB].
+    margin : int
+        Overlap read on each side (:func:`overlap`).
+    stride : int
+        The regressor's stride (evaluated at one sample in ``stride``).
+
+    Returns
+    -------
+    int
+        At least ``4 margin``: the regressor ``8 m p / stride`` bytes per sample with ~4 copies in
+        the filter, the full-rate states and their filtered copies ``8 x 12 m``.
+    """
+    per_sample_mb = (len(model.coords) * model.n_params * 8 * 4 / stride + 8 * 12 * len(model.coords)) / 1e6
+    return max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
 
 
 def plan(n: int, chunk: int, margin: int) -> list[ChunkPlan]:
@@ -112,6 +136,9 @@ class Grid:
         Slow-sample threshold (or ``None``).
     notes : tuple of str
         The whole-log decisions (cutoff, decimation), for the report.
+    stride : int
+        The regressor's stride (:func:`~baseparams.ident.preprocess.regressor_stride`): it is
+        evaluated at the samples ``pad + j stride`` and parallel-filtered at that rate.
     """
 
     n: int
@@ -120,6 +147,7 @@ class Grid:
     cutoff: float
     min_speed: float | None = None
     notes: tuple[str, ...] = field(default=())
+    stride: int = 1
 
     __repr__ = summary_repr
 
@@ -141,7 +169,7 @@ class Grid:
         return np.arange(first, min(c.stop, self.n - self.pad), self.factor)
 
 
-def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int,
+def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, model, cols: np.ndarray,
                   keep: list | None = None, rows: np.ndarray | None = None):
     """The row factors of one chunk (the task a worker runs).
 
@@ -154,12 +182,10 @@ def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.n
         The chunk.
     grid : Grid
         The whole log's kept-sample rule.
-    regressor : callable
-        ``regressor(q, dq, ddq) -> (S, m, p)`` in the model's state columns.
+    model : IdentModel
+        The model (:func:`parallel_rows`).
     cols : ndarray of int, shape ``(state_columns,)``
         Log column of each state column.
-    nparams : int
-        ``p``.
     keep : list, optional
         When given, the chunk's fitted rows ``(A, tau)`` are appended to it (for a second pass
         that would otherwise recompute them: :mod:`baseparams.ident.uncertainty`).
@@ -177,10 +203,10 @@ def chunk_factors(log: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.n
     sl = slice(c.lo, c.hi)
     rates = {k: None if getattr(log, k) is None else getattr(log, k)[sl] for k in ("dq", "ddq")}
     part = replace(log, t=log.t[sl], q=log.q[sl], tau=log.tau[sl], **rates)
-    return chunk_factors_of_slice(part, c, grid, regressor, cols, nparams, keep, rows)
+    return chunk_factors_of_slice(part, c, grid, model, cols, keep, rows)
 
 
-def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, nparams: int,
+def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, model, cols: np.ndarray,
                            keep: list | None = None, rows: np.ndarray | None = None):
     """:func:`chunk_factors` on the slice ``[c.lo, c.hi)`` of the log alone.
 
@@ -192,12 +218,10 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
         The chunk.
     grid : Grid
         The whole log's kept-sample rule.
-    regressor : callable
-        ``regressor(q, dq, ddq) -> (S, m, p)``.
+    model : IdentModel
+        The model.
     cols : ndarray of int
         Log column of each state column.
-    nparams : int
-        ``p``.
     keep, rows : optional
         As for :func:`chunk_factors`.
 
@@ -208,8 +232,8 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
     removed : dict of str to int
         Slow samples removed in the chunk.
     """
-    acc = RowAccumulator(len(cols) if rows is None else len(rows), nparams)
-    a, tau, removed = chunk_rows(part, c, grid, regressor, cols, rows=rows)
+    acc = RowAccumulator(len(cols) if rows is None else len(rows), model.n_params)
+    a, tau, removed = chunk_rows(part, c, grid, model, cols, rows=rows)
     if a is not None:
         acc.add(a, tau)
         if keep is not None:
@@ -217,8 +241,8 @@ def chunk_factors_of_slice(part: JointLog, c: ChunkPlan, grid: Grid, regressor, 
     return acc, removed
 
 
-def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.ndarray, index_out: list | None = None,
-               rows: np.ndarray | None = None):
+def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, model, cols: np.ndarray, index_out: list | None = None,
+               rows: np.ndarray | None = None, backend: str = "auto"):
     """The fitted rows one chunk owns, in time order (what :func:`chunk_factors_of_slice` reduces).
 
     Parameters
@@ -229,8 +253,8 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
         The chunk.
     grid : Grid
         The whole log's kept-sample rule.
-    regressor : callable
-        ``regressor(q, dq, ddq) -> (S, m, p)``.
+    model : IdentModel
+        The model (its rows: :func:`parallel_rows`).
     cols : ndarray of int
         Log column of each state column.
     index_out : list, optional
@@ -238,6 +262,8 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
         array when the chunk keeps none).
     rows : ndarray of int, shape ``(m,)``, optional
         The state column of each measured row (default every state column).
+    backend : str
+        The regressor's kernel.
 
     Returns
     -------
@@ -258,14 +284,81 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, regressor, cols: np.nda
     prep = prepare(part, cutoff=grid.cutoff, decimate=1)
     f = prep.full
     q, dq, ddq = f.q[:, cols], f.dq[:, cols], f.ddq[:, cols]
+    r = grid.stride
     removed = {}
     if grid.min_speed is not None:
         keep, removed = remove_slow(dq[idx], slow_threshold([part.joints[k] for k in cols], grid.min_speed))
         idx = idx[keep]
     if index_out is not None:
         index_out.append(idx + c.lo)
-    a = filtered_rows(regressor(q, dq, ddq), prep.design, idx)
+    a = parallel_rows(model, q, dq, ddq, prep.design, idx, r, (grid.pad - c.lo) % r, backend)  # the whole log's phase
     return a, f.tau[idx][:, cols if rows is None else cols[rows]], removed
+
+
+def parallel_rows(model, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, design: LowPass, idx: np.ndarray,
+                  stride: int = 1, phase: int = 0, backend: str = "auto") -> np.ndarray:
+    """A model's parallel-filtered rows at the kept samples, from full-rate filtered states.
+
+    With ``stride`` 1, ``zero_phase(model.regressor(q, dq, ddq), design)[idx]``. Else the
+    regressor is evaluated at the samples ``phase + j stride`` only and filtered there with the
+    low-pass of the same cutoff (:func:`~baseparams.ident.preprocess.stride_design`; ``idx - phase``
+    must be multiples of ``stride``), and the entries that are not smooth in the states (Coulomb
+    friction's sign: it would alias, :meth:`~baseparams.ident.model.IdentModel.broadband_entries`)
+    are replaced by their full-rate filtered values (:mod:`baseparams.ident.preprocess`'s docstring).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    q, dq, ddq : ndarray, shape ``(S, state_columns)``
+        Filtered full-rate states.
+    design : LowPass
+        The full-rate low-pass.
+    idx : ndarray of int, shape ``(k,)``
+        The kept samples.
+    stride, phase : int
+        The rigid-body regressor's samples.
+    backend : str
+        The regressor's kernel (:meth:`~baseparams.ident.model.IdentModel.regressor`).
+
+    Returns
+    -------
+    ndarray, shape ``(k, m, p)``
+        The fitted rows.
+    """
+    def reg(*x):
+        return model.regressor(*x) if backend == "auto" else model.regressor(*x, backend=backend)
+
+    if stride == 1:
+        return filtered_rows(reg(q, dq, ddq), design, idx)
+    g = slice(phase, None, stride)
+    a = filtered_rows(reg(q[g], dq[g], ddq[g]), stride_design(design, stride), (idx - phase) // stride)
+    rows, cols, values = model.broadband_entries(q, dq, ddq)
+    if len(rows):
+        a[:, rows, cols] = filtered_rows(values, design, idx)
+    return a
+
+
+def prepared_rows(model, prep, cols: np.ndarray) -> np.ndarray:
+    """:func:`parallel_rows` of a prepared log: ``prep.apply(model.regressor(...))`` at ``1 / prep.stride`` of the cost.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    prep : Prepared
+        The prepared log (its full-rate states, low-pass, kept samples and stride).
+    cols : ndarray of int, shape ``(state_columns,)``
+        Log column of each state column.
+
+    Returns
+    -------
+    ndarray, shape ``(S', m, p)``
+        The fitted rows (matching ``prep.tau``).
+    """
+    f = prep.full
+    return parallel_rows(model, f.q[:, cols], f.dq[:, cols], f.ddq[:, cols], prep.design, prep.index, prep.stride,
+                         prep.design.pad % prep.stride)
 
 
 #: regressor columns filtered at once by :func:`filtered_rows` (bounds the filter's copies)

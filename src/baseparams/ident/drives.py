@@ -207,6 +207,24 @@ class Drives:
             out[:, rows, k] = values
         return out
 
+    def param_kind(self, k: int) -> str:
+        """The kind of drive parameter ``k`` (``"Ia"``, ``"Fv"``, ``"Fc"``, ``"Fo"`` or a coupled ``"Iam"`` ...).
+
+        Parameters
+        ----------
+        k : int
+            The drive parameter, ``0 <= k < nd``.
+
+        Returns
+        -------
+        str
+            Its kind.
+        """
+        own = len(self.joints) * len(self.kinds)
+        if k < own:
+            return self.kinds[k % len(self.kinds)]
+        return self.coupled_kinds[(k - own) % len(self.coupled_kinds)]
+
     def param_column(self, k: int, dq: np.ndarray, ddq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The rows drive parameter ``k`` acts on and its column there.
 

@@ -152,6 +152,46 @@ class IdentModel:
             object.__setattr__(self, "_pmap", p_map)
         return p_map
 
+    def broadband_entries(self, q, dq, ddq) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The regressor's entries that are not smooth in the states: the Coulomb friction columns.
+
+        A regressor evaluated at a stride and filtered there (:func:`~baseparams.ident.chunks.parallel_rows`)
+        takes these at the full rate: ``sign(dq)`` (or a steep ``tanh``) has content at every frequency.
+
+        Parameters
+        ----------
+        q, dq, ddq : array_like, shape ``(S, state_columns)``
+            States, as for :meth:`regressor`.
+
+        Returns
+        -------
+        rows, cols : ndarray of int, shape ``(e,)``
+            The entries' measured row and column.
+        values : ndarray, shape ``(S, e)``
+            ``regressor(q, dq, ddq)[:, rows, cols]``.
+        """
+        nb = len(self.analysis.base_names)
+        picks = []
+        for col, i in enumerate(self.regrouping.independent):
+            if i >= nb and self.drives.param_kind(int(i - nb)) in ("Fc", "Fcm"):
+                picks.append((col, int(i - nb)))
+        if not picks:
+            return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros((np.shape(q)[0], 0))
+        if self.log_base and self.robot.floating:
+            from ..kinematics.floating import robot_states
+
+            q, dq, ddq = robot_states(self.robot, q, dq, ddq)
+        sel = self.row_states
+        dq = np.atleast_2d(np.asarray(dq, dtype=float))[:, sel]
+        ddq = np.atleast_2d(np.asarray(ddq, dtype=float))[:, sel]
+        rows, cols, values = [], [], []
+        for col, k in picks:
+            r, v = self.drives.param_column(k, dq, ddq)
+            rows += [int(x) for x in r]
+            cols += [col] * len(r)
+            values.append(v)
+        return np.array(rows), np.array(cols), np.concatenate(values, axis=1)
+
     def _drive_columns(self, dq: np.ndarray, ddq: np.ndarray, out: np.ndarray) -> None:
         """Write the kept drive parameters' columns into ``out (S, m, p)`` in place."""
         nb = len(self.analysis.base_names)

@@ -1449,9 +1449,11 @@ def report_series(model: IdentModel, prep, cols: np.ndarray, theta, names: list[
         tau_hat = prep.apply(model_torques(fit_, full.t, raw, q, dq, ddq))
         return {"t": prep.t, "tau": prep.tau[:, cols[model.row_states]], "tau_hat": tau_hat, "joints": names}
     theta = fit_.theta if fit_ is not None else theta
-    size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
+    size_mb = full.n_samples / prep.stride * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb:
-        tau_hat = prep.apply(model.regressor(q, dq, ddq)) @ theta
+        from . import chunks
+
+        tau_hat = chunks.prepared_rows(model, prep, cols) @ theta
     else:
         idx = prep.index
         tau_hat = np.concatenate([model.regressor(q[idx[k:k + 20000]], dq[idx[k:k + 20000]],
@@ -1623,14 +1625,14 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     from .estimate import RowAccumulator
 
     full = prep.full
-    size_mb = full.n_samples * len(model.coords) * model.n_params * 8 / 1e6
+    size_mb = full.n_samples / prep.stride * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb or log is None:
-        q, dq, ddq = full.q[:, cols], full.dq[:, cols], full.ddq[:, cols]
-        a, tau = prep.apply(model.regressor(q, dq, ddq)), prep.tau[:, cols[model.row_states]]
+        from . import chunks
+
+        a, tau = chunks.prepared_rows(model, prep, cols), prep.tau[:, cols[model.row_states]]
         if parts_out is None:
             acc = RowAccumulator(len(model.coords), model.n_params).add(a, tau)
         else:
-            from . import chunks
             from .select import fold_parts
 
             parts_out.extend(fold_parts(a, tau))
@@ -1642,16 +1644,16 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     from . import chunks
     from .preprocess import resample
 
-    grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed)
+    grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed,
+                       stride=prep.stride)
     margin = chunks.overlap(prep.design)
-    per_sample_mb = len(model.coords) * model.n_params * 8 * 4 / 1e6  # the filter's copies: ~4x
-    size = max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
+    size = chunks.window_size(model, memory_mb, margin, prep.stride)
     uniform = resample(log)  # the grid prepare() filtered on (it resamples with the same default)
     # the fitted (decimated) rows are kept for the covariance's second pass when they fit in memory_mb
     # (a fraction 1 / factor of the full-rate regressor); else that pass recomputes them
     fitted_mb = full.n_samples / max(prep.factor, 1) * len(model.coords) * (model.n_params + 1) * 8 / 1e6
     held = keep if keep is not None and fitted_mb <= memory_mb else None
-    parts = [chunks.chunk_factors(uniform, c, grid, model.regressor, cols, model.n_params, held, model.row_states)[0]
+    parts = [chunks.chunk_factors(uniform, c, grid, model, cols, held, model.row_states)[0]
              for c in chunks.plan(full.n_samples, size, margin)]
     if parts_out is not None and held:
         # the cross-validation's blocks from the fitted rows, split as the at-once path splits them

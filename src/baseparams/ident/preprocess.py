@@ -9,10 +9,18 @@ k-th sample (:func:`decimate`) and optionally the samples where every joint move
 
 Parallel filtering: the inverse-dynamics model ``tau = W(q, dq, ddq) beta`` is linear in the
 parameters, so a linear filter applied to ``tau`` and to every column of ``W`` keeps it exact.
-Compute the regressor at the full rate on :attr:`Prepared.full` (filtered ``q``, ``dq``, ``ddq``),
-then :meth:`Prepared.apply` filters it with the same zero-phase filter, trims the same edges and
-keeps the same samples as :attr:`Prepared.tau`. (Building the regressor from the kept samples' ``q, dq, ddq``
-directly is the other consistent choice: those and ``tau`` each went through the filter once.)
+Compute the regressor on :attr:`Prepared.full` (filtered ``q``, ``dq``, ``ddq``), then
+:meth:`Prepared.apply` filters it with the same zero-phase filter, trims the same edges and keeps
+the same samples as :attr:`Prepared.tau`. The rigid-body part, the costly one, is smooth in the
+filtered states: :func:`baseparams.ident.chunks.prepared_rows` evaluates it at every
+:attr:`Prepared.stride`-th sample only (a divisor of the decimation factor at which the rate stays
+at least :data:`STRIDE_MARGIN` times the cutoff, :func:`regressor_stride`) and filters it with the
+low-pass of the same cutoff at that rate; the states were low-passed at the full rate, so it has
+nothing there to alias (its columns differ from the full-rate ones by ~1e-6 of their size on a
+simulated arm), and the two filters differ by less than 1e-8 below a tenth of the cutoff, where the
+motion is. Columns that are not smooth (Coulomb friction's sign, the model terms' states) are
+filtered at the full rate. (Building the regressor from the kept samples' ``q, dq, ddq`` directly
+is the other consistent choice: those and ``tau`` each went through the filter once.)
 
 Everything here is numpy/scipy on arrays whose first axis is the sample; nothing loops over
 samples in Python.
@@ -43,6 +51,9 @@ CUTOFF_FLOOR = 1.0
 DECIMATE_MARGIN = 5.0
 #: relative spread of the time steps below which a log counts as uniform
 UNIFORM_RTOL = 1e-3
+#: the rigid-body regressor is evaluated and filtered at a rate at least STRIDE_MARGIN x the cutoff
+#: (:func:`regressor_stride`)
+STRIDE_MARGIN = 10.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -451,6 +462,9 @@ class Prepared:
         Samples removed and why, cumulative with the log's (filter edges, decimation, slow).
     notes : tuple of str
         Every choice made, one line each (the log's notes first).
+    stride : int
+        The rigid-body regressor's samples: every ``stride``-th full-rate sample, through every
+        kept one (:func:`regressor_stride`; 1: every sample).
     """
 
     t: np.ndarray
@@ -467,6 +481,7 @@ class Prepared:
     source: str = "<memory>"
     removed: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    stride: int = 1
 
     __repr__ = summary_repr
 
@@ -482,7 +497,9 @@ class Prepared:
         ----------
         x : array_like, shape ``(S, ...)``
             Full-rate signals, one row per sample of :attr:`full` (e.g. a regressor
-            ``(S, m, p)`` computed from ``full.q, full.dq, full.ddq``).
+            ``(S, m, p)`` computed from ``full.q, full.dq, full.ddq``; a model's rows are cheaper
+            with :func:`baseparams.ident.chunks.prepared_rows`, which evaluates the rigid part at
+            the stride).
 
         Returns
         -------
@@ -551,16 +568,17 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     if n <= 2 * design.pad + 1:
         raise DataError(f"{log.source}: {n} samples at {rate:.6g} Hz; the filter edges alone take 2 x {design.pad} "
                         f"(a longer log, or a higher cutoff)")
-    qf, tauf = zero_phase(u.q, design), zero_phase(u.tau, design)
-    dq, ddq, rate_notes = filtered_rates(u, qf, rate, design)
+    qf, tauf, dqf, ddqf = _filtered_together(design, u.q, u.tau, u.dq, u.ddq)
+    dq, ddq, rate_notes = filtered_rates(u, qf, rate, design, dqf, ddqf)
     k, k_note = decimation_factor(decimate, rate, design)
+    r, r_note = regressor_stride(k, rate, design)
     removed = dict(u.removed)
     inner = np.arange(design.pad, n - design.pad)
     index = inner[::k]
     removed["filter edges"] = removed.get("filter edges", 0) + 2 * design.pad
     if k > 1:
         removed[f"decimation by {k}"] = removed.get(f"decimation by {k}", 0) + len(inner) - len(index)
-    notes = [design.note, *rate_notes, k_note]
+    notes = [design.note, *rate_notes, k_note, r_note]
     if min_speed is not None:
         keep, slow = remove_slow(dq[index], slow_threshold(u.joints, min_speed))
         index = index[keep]
@@ -574,7 +592,7 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     full = replace(u, q=qf, tau=tauf, dq=dq, ddq=ddq, notes=u.notes + tuple(notes))
     return Prepared(t=u.t[index], joints=u.joints, q=qf[index], dq=dq[index], ddq=ddq[index], tau=tauf[index],
                     fs=rate / k, design=design, factor=k, index=index, full=full, source=log.source,
-                    removed=removed, notes=full.notes)
+                    removed=removed, notes=full.notes, stride=r)
 
 
 def _check_log(log: JointLog) -> None:
@@ -599,8 +617,16 @@ def _check_log(log: JointLog) -> None:
         raise DataError(f"{log.source}: t, sample {i} (0-based): {t[i]:.9g} s not after {t[i - 1]:.9g} s")
 
 
-def filtered_rates(u: JointLog, qf: np.ndarray, rate: float,
-                   design: LowPass) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def _filtered_together(design: LowPass, *signals):
+    """``zero_phase`` of each ``(S, m)`` signal (None stays None), in one call (its columns filtered together)."""
+    given = [x for x in signals if x is not None]
+    out = iter(np.split(zero_phase(np.concatenate(given, axis=1), design), np.cumsum([x.shape[1] for x in given])[:-1],
+                        axis=1))
+    return [None if x is None else next(out) for x in signals]
+
+
+def filtered_rates(u: JointLog, qf: np.ndarray, rate: float, design: LowPass, dqf: np.ndarray | None = None,
+                   ddqf: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """``dq, ddq``: measured ones low-passed with the same filter, or derived from the filtered q.
 
     Parameters
@@ -613,6 +639,8 @@ def filtered_rates(u: JointLog, qf: np.ndarray, rate: float,
         The sampling rate [Hz].
     design : LowPass
         The low-pass.
+    dqf, ddqf : ndarray, shape ``(S, m)``, optional
+        The measured ``dq``, ``ddq`` already low-passed (else filtered here).
 
     Returns
     -------
@@ -624,7 +652,7 @@ def filtered_rates(u: JointLog, qf: np.ndarray, rate: float,
     derived, dderived = derivatives(qf, rate)
     notes = []
     if u.dq is not None:
-        dq = zero_phase(u.dq, design)
+        dq = zero_phase(u.dq, design) if dqf is None else dqf
         p = design.pad
         rms = np.sqrt(np.mean((dq[p:-p] - derived[p:-p]) ** 2, axis=0))
         scale = np.sqrt(np.mean(dq[p:-p] ** 2, axis=0))
@@ -634,7 +662,7 @@ def filtered_rates(u: JointLog, qf: np.ndarray, rate: float,
         dq = derived
         notes.append("dq: derived, central differences of the filtered q (np.gradient)")
     if u.ddq is not None:
-        ddq = zero_phase(u.ddq, design)
+        ddq = zero_phase(u.ddq, design) if ddqf is None else ddqf
         notes.append("ddq: measured, low-passed with the same filter")
     else:
         ddq = np.gradient(dq, 1.0 / rate, axis=0, edge_order=2) if u.dq is not None else dderived
@@ -648,7 +676,9 @@ def decimation_factor(decimate: int | None, rate: float, design: LowPass) -> tup
     Parameters
     ----------
     decimate : int or None
-        The factor given, or None: the largest ``k`` with ``rate / k >= 5 cutoff``.
+        The factor given, or None: the largest ``k`` with ``rate / k >= 5 cutoff``, lowered by one
+        when it is a prime above 3 (so that a divisor of it is a stride for the regressor,
+        :func:`regressor_stride`).
     rate : float
         The sampling rate [Hz].
     design : LowPass
@@ -669,6 +699,9 @@ def decimation_factor(decimate: int | None, rate: float, design: LowPass) -> tup
     if decimate is None:
         k = max(1, int(np.floor(rate / (DECIMATE_MARGIN * design.cutoff) * (1 + 1e-3))))  # 0.1 %: a jittered rate
         why = f"default: largest k with fs/k >= {DECIMATE_MARGIN:g} x cutoff"
+        if k > 3 and all(k % d for d in range(2, math.isqrt(k) + 1)):
+            k -= 1
+            why += ", less one for a prime"
     else:
         if isinstance(decimate, bool) or not isinstance(decimate, (int, np.integer)) or decimate < 1:
             raise DataError(f"prepare: decimate must be a positive integer, got {decimate!r}")
@@ -677,3 +710,53 @@ def decimation_factor(decimate: int | None, rate: float, design: LowPass) -> tup
             raise DataError(f"prepare: decimating by {k} leaves a Nyquist rate of {rate / (2 * k):.4g} Hz, not above "
                             f"the cutoff {design.cutoff:.4g} Hz (aliasing); lower decimate or the cutoff")
     return k, f"decimation: 1 sample in {k} kept ({why}), {rate / k:.6g} Hz after"
+
+
+def regressor_stride(k: int, rate: float, design: LowPass) -> tuple[int, str]:
+    """The regressor's stride: the largest divisor ``r`` of ``k`` with ``rate / r >= STRIDE_MARGIN cutoff``.
+
+    The regressor is evaluated at every ``r``-th sample (through every kept one) and
+    parallel-filtered at ``rate / r`` (module docstring); with the default decimation (``rate / k
+    >= 5 cutoff``, ``k`` not a prime above 3) ``k`` over its smallest prime factor always qualifies.
+
+    Parameters
+    ----------
+    k : int
+        The decimation factor.
+    rate : float
+        The sampling rate [Hz].
+    design : LowPass
+        The low-pass (its cutoff).
+
+    Returns
+    -------
+    stride : int
+        ``r`` (1: every sample).
+    note : str
+        One line for the report.
+    """
+    r = next(d for d in range(k, 0, -1) if k % d == 0 and (d == 1 or rate / d >= STRIDE_MARGIN * design.cutoff))
+    if r == 1:
+        return 1, "regressor: evaluated and parallel-filtered at every sample"
+    return r, (f"regressor: evaluated at 1 sample in {r} ({rate / r:.6g} Hz, at least {STRIDE_MARGIN:g} x the cutoff; "
+               f"the states low-passed at the full rate before) and parallel-filtered at that rate")
+
+
+def stride_design(design: LowPass, stride: int) -> LowPass:
+    """The low-pass of the same cutoff and order at ``design.fs / stride`` (``design`` for stride 1).
+
+    Parameters
+    ----------
+    design : LowPass
+        The full-rate low-pass.
+    stride : int
+        The regressor's stride (:func:`regressor_stride`).
+
+    Returns
+    -------
+    LowPass
+        The design at the regressor's rate.
+    """
+    if stride == 1:
+        return design
+    return lowpass_design(design.fs / stride, design.cutoff, design.order, why="the regressor's rate")

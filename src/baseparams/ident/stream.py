@@ -36,7 +36,6 @@ interpolated back to its time stamps.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -498,11 +497,12 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     if head.n_samples < tr.n and stream.has_dq:
         rate_notes = [f"{x} (over the first {head.n_samples} samples)" if x.startswith("dq: measured") else x
                       for x in rate_notes]
+    r, r_note = pp.regressor_stride(k, tr.rate, design)
     margin = chunks.overlap(design)
-    per_sample_mb = len(model.coords) * model.n_params * 8 * 4 / 1e6  # the filter's copies: ~4x
-    size = max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
-    notes += [design.note, *rate_notes, k_note]
-    return Plan(design, k, chunks.Grid(tr.n, design.pad, k, design.cutoff, min_speed), margin, size, tuple(notes))
+    size = chunks.window_size(model, memory_mb, margin, r)
+    notes += [design.note, *rate_notes, k_note, r_note]
+    return Plan(design, k, chunks.Grid(tr.n, design.pad, k, design.cutoff, min_speed, stride=r), margin, size,
+                tuple(notes))
 
 
 def regressor_backend(model, n: int) -> str:
@@ -551,11 +551,10 @@ def fitted(stream, plan: Plan, model, cols: np.ndarray):
         samples' times, parallel-filtered regressor, filtered torques, slow samples removed, global
         sample indices.
     """
-    backend = regressor_backend(model, plan.grid.n)
-    reg = model.regressor if backend == "auto" else functools.partial(model.regressor, backend=backend)
+    backend = regressor_backend(model, plan.grid.n // plan.grid.stride)
     for c, part in windows(stream.blocks(), plan.windows()):
         idx: list = []
-        a, tau, removed = chunks.chunk_rows(part, c, plan.grid, reg, cols, idx)
+        a, tau, removed = chunks.chunk_rows(part, c, plan.grid, model, cols, idx, backend=backend)
         if a is not None and len(a):
             yield part.t[idx[0] - c.lo], a, tau, removed, idx[0]
         elif removed:

@@ -421,16 +421,16 @@ def fitted_rows(model, prep, cols: np.ndarray, memory_mb: float, log, min_speed=
     from .preprocess import resample
 
     full = prep.full
-    grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed)
+    grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed,
+                       stride=prep.stride)
     margin = chunks.overlap(prep.design)
-    per_sample_mb = len(model.coords) * model.n_params * 8 * 4 / 1e6
-    size = max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
+    size = chunks.window_size(model, memory_mb, margin, prep.stride)
     uniform = resample(log)
     for c in chunks.plan(full.n_samples, size, margin):
         sl = slice(c.lo, c.hi)
         rates = {k: None if getattr(uniform, k) is None else getattr(uniform, k)[sl] for k in ("dq", "ddq")}
         part = replace(uniform, t=uniform.t[sl], q=uniform.q[sl], tau=uniform.tau[sl], **rates)
-        a, tau, _ = chunks.chunk_rows(part, c, grid, model.regressor, cols, rows=model.row_states)
+        a, tau, _ = chunks.chunk_rows(part, c, grid, model, cols, rows=model.row_states)
         if a is not None and len(a):
             yield a, tau
 

@@ -909,6 +909,8 @@ def _check_numeric(table: _Table, used: list[str]) -> None:
 def _check_finite(table: _Table, used: list[str]) -> None:
     """The first NaN or inf of the used columns, in file order."""
     _check_numeric(table, used)
+    if all(np.isfinite(table.columns[c]).all() for c in used):  # the usual case: no copy of the block
+        return
     block = np.stack([table.columns[c] for c in used], axis=1)
     bad = ~np.isfinite(block)
     if bad.any():

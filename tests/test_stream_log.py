@@ -269,3 +269,52 @@ def test_parquet_null_names_its_global_row(puma, sim, tmp_path, monkeypatch):
         read_log(bad, puma)
     assert str(streamed.value) == str(whole.value)
     assert "row 4321 (0-based)" in str(streamed.value)
+
+
+def _arrays(blocks):
+    return [np.concatenate([getattr(b, k) for b in blocks]) for k in ("t", "q", "tau", "dq")]
+
+
+@pytest.mark.parametrize("which", [0, 1])
+def test_a_text_or_parquet_log_is_parsed_once_and_replayed_bit_for_bit(puma, sim, which, monkeypatch):
+    from baseparams.ident import stream as st
+
+    raw = LogStream(sim[which], puma, block_bytes=1 << 14) if which == 0 else LogStream(sim[which], puma)
+    reads = []
+    original = raw.blocks
+
+    def counted():
+        reads.append(1)
+        yield from original()
+
+    monkeypatch.setattr(raw, "blocks", counted)
+    rep = st.Replay(raw, 10.0)
+    first = list(rep.blocks())
+    assert len(first) > 3 and rep.ready
+    again, third = list(rep.blocks()), list(rep.blocks())
+    assert len(reads) == 1  # the file was read once
+    for a, b in zip(_arrays(first), _arrays(again)):
+        np.testing.assert_array_equal(a, b)
+    assert [b.n_samples for b in third] == [b.n_samples for b in first]
+    assert again[0].notes == first[0].notes  # the reader's notes kept with the first block
+    rep.close()
+    assert not rep.ready
+
+
+def test_replay_falls_back_to_reading_again(puma, sim, monkeypatch):
+    from baseparams.ident import stream as st
+
+    raw = LogStream(sim[0], puma, block_bytes=1 << 14)
+    # a pass stopped early keeps nothing
+    rep = st.Replay(raw, 10.0)
+    gen = rep.blocks()
+    next(gen)
+    gen.close()
+    assert not rep.ready
+    # no room in the temporary folder: every pass reads the file
+    import shutil
+
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: shutil._ntuple_diskusage(10**12, 10**12, 1000))
+    rep = st.Replay(raw, 10.0)
+    n = sum(b.n_samples for b in rep.blocks())
+    assert not rep.ready and sum(b.n_samples for b in rep.blocks()) == n

@@ -84,9 +84,10 @@ def window_size(model, memory_mb: float, margin: int, stride: int = 1) -> int:
     -------
     int
         At least ``4 margin``: the regressor ``8 m p / stride`` bytes per sample with ~4 copies in
-        the filter, the full-rate states and their filtered copies ``8 x 12 m``.
+        the filter, the full-rate signals, their filtered copies, rates and columns ``8 x 32 m``
+        (measured on a Puma log: ~2.5 kB per sample for ``m = 6``, ``p = 58``, stride 9).
     """
-    per_sample_mb = (len(model.coords) * model.n_params * 8 * 4 / stride + 8 * 12 * len(model.coords)) / 1e6
+    per_sample_mb = (len(model.coords) * model.n_params * 8 * 4 / stride + 8 * 32 * len(model.coords)) / 1e6
     return max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
 
 
@@ -361,15 +362,19 @@ def prepared_rows(model, prep, cols: np.ndarray) -> np.ndarray:
                          prep.design.pad % prep.stride)
 
 
-#: regressor columns filtered at once by :func:`filtered_rows` (bounds the filter's copies)
+#: regressor columns filtered at once by :func:`filtered_rows` (at least; bounds the filter's copies) ...
 FILTER_COLUMNS = 64
+#: ... or as many as make this many values
+FILTER_VALUES = 1 << 20
 
 
 def filtered_rows(x: np.ndarray, design: LowPass, idx: np.ndarray) -> np.ndarray:
-    """``zero_phase(x, design)[idx]``, filtering :data:`FILTER_COLUMNS` columns at a time.
+    """``zero_phase(x, design)[idx]``, filtering a few columns at a time, the columns zero at every sample skipped.
 
     Each column is filtered on its own, so the result is the whole array's; the filter's padded
-    and intermediate copies are those of a few columns, not of the whole regressor.
+    and intermediate copies are those of :data:`FILTER_VALUES` values (at least
+    :data:`FILTER_COLUMNS` columns), not of the whole regressor. A column zero at every sample (a
+    tree's regressor is zero where a joint does not carry a body) filters to zero: not filtered.
 
     Parameters
     ----------
@@ -386,9 +391,12 @@ def filtered_rows(x: np.ndarray, design: LowPass, idx: np.ndarray) -> np.ndarray
         The filtered signals at the kept samples.
     """
     flat = x.reshape(len(x), -1)
-    out = np.empty((len(idx), flat.shape[1]))
-    for k in range(0, flat.shape[1], FILTER_COLUMNS):
-        out[:, k:k + FILTER_COLUMNS] = zero_phase(flat[:, k:k + FILTER_COLUMNS], design)[idx]
+    out = np.zeros((len(idx), flat.shape[1]))
+    live = np.flatnonzero(np.any(flat != 0, axis=0))  # a column zero at every sample filters to zero
+    step = max(FILTER_COLUMNS, FILTER_VALUES // max(len(flat), 1))
+    for k in range(0, len(live), step):
+        c = live[k:k + step]
+        out[:, c] = zero_phase(flat[:, c], design)[idx]
     return out.reshape((len(idx),) + x.shape[1:])
 
 

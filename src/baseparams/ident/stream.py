@@ -618,6 +618,104 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, sp
     return parts, kept, slow
 
 
+class Replay:
+    """A block source parsed once and read again from a temporary binary copy (a text or Parquet log).
+
+    Each pass over a CSV re-parses its text (about 2 s per million rows here); the first complete
+    pass through :meth:`blocks` writes every block's arrays to an anonymous temporary file
+    (``tempfile.TemporaryFile``: unnamed, deleted when closed or at exit; ``8 (1 + k m)`` bytes per
+    sample, ``k`` the signals) and later passes read them back (the same blocks, bit for bit; the
+    first block, with the reader's notes, kept in memory). When the temporary folder lacks twice
+    the file's size, or a write fails, every pass reads the file again.
+
+    Parameters
+    ----------
+    stream : block source
+        The log (e.g. :class:`baseparams.io.logs.LogStream`).
+    size_mb : float
+        The log's decoded size [MB] (the free space asked for is twice that).
+    """
+
+    def __init__(self, stream, size_mb: float):
+        self.raw, self.size_mb = stream, float(size_mb)
+        self.source, self.joints = stream.source, tuple(stream.joints)
+        self.has_dq, self.has_ddq = stream.has_dq, stream.has_ddq
+        self.fh, self.first, self.shapes, self.ready = None, None, [], False
+
+    def __repr__(self) -> str:
+        state = f"{len(self.shapes)} blocks kept" if self.ready else "not read yet"
+        return f"<Replay {self.source}: {state}>"
+
+    def _open(self):
+        import shutil
+        import tempfile
+
+        try:
+            if shutil.disk_usage(tempfile.gettempdir()).free < 2 * self.size_mb * 1e6:
+                return None
+            return tempfile.TemporaryFile(prefix="baseparams-log-")
+        except OSError:
+            return None
+
+    def blocks(self):
+        """The log's blocks: read from the file (and kept) the first time, from the copy after.
+
+        Yields
+        ------
+        JointLog
+            Consecutive blocks, as the wrapped source yields them.
+        """
+        if self.ready:
+            yield from self._replay()
+            return
+        fh, shapes, first = self._open(), [], None
+        complete = False
+        try:
+            for blk in self.raw.blocks():
+                if first is None:
+                    first = blk
+                elif fh is not None:
+                    try:
+                        for x in (blk.t, blk.q, blk.tau, blk.dq, blk.ddq):
+                            if x is not None:
+                                fh.write(np.ascontiguousarray(x, dtype=np.float64).data)
+                        shapes.append(blk.n_samples)
+                    except OSError:
+                        fh.close()
+                        fh = None
+                yield blk
+            complete = True
+        finally:
+            if complete and fh is not None:
+                self.fh, self.first, self.shapes, self.ready = fh, first, shapes, True
+            elif fh is not None:
+                fh.close()
+
+    def _replay(self):
+        self.fh.seek(0)
+        yield self.first
+        m = len(self.joints)
+        for n in self.shapes:
+            arrays = {}
+            for k in ("t", "q", "tau", "dq", "ddq"):
+                if getattr(self.first, k) is None:
+                    arrays[k] = None
+                    continue
+                count = n if k == "t" else n * m
+                raw = self.fh.read(8 * count)
+                if len(raw) != 8 * count:
+                    raise BaseparamsError(f"{self.source}: the log's temporary copy was truncated while read")
+                arrays[k] = np.frombuffer(raw, dtype=np.float64).reshape((n,) if k == "t" else (n, m))
+            yield JointLog(arrays["t"], self.joints, arrays["q"], arrays["tau"], arrays["dq"], arrays["ddq"],
+                           self.first.source)
+
+    def close(self) -> None:
+        """Delete the copy."""
+        if self.fh is not None:
+            self.fh.close()
+            self.fh, self.ready = None, False
+
+
 class Spilled:
     """The fitted rows of pass 3 written to an anonymous temporary file, read back window by window by pass 4.
 
@@ -932,8 +1030,17 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
                 convention=convention, memory_mb=memory_mb, couplings=tuple(couplings), samples=samples,
                 score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units, literal=literal,
                 terms=terms, seed=seed)
-    with blas_threads():
-        return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
+    kept = None
+    if getattr(stream, "kind", None) in ("text", "parquet"):  # parsed once, replayed from a binary copy
+        from ..io.logs import decoded_mb
+
+        stream = kept = Replay(stream, decoded_mb(stream.path))
+    try:
+        with blas_threads():
+            return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
+    finally:
+        if kept is not None:
+            kept.close()
 
 
 def _passes(robot, stream, o: dict, say):

@@ -1221,8 +1221,13 @@ class LogStream:
             raise DataError(f"{self.source}: no data rows")
 
     # ------------------------------------------------------------ text
-    def _chunks(self) -> Iterator[tuple[int, bytes, str]]:
-        """``(first line number, bytes, text)`` per block of about ``block_bytes``, cut at line ends."""
+    def _chunks(self) -> Iterator[tuple[int, bytes, str | None, bool, int]]:
+        """``(first line number, bytes, text, odd, lines)`` per block of about ``block_bytes``, cut at line ends.
+
+        ``text`` is None for a plain ASCII block (``body.decode("ascii")`` when needed); ``odd``:
+        the block may have line breaks other than newlines (:func:`_odd_breaks`); ``lines``: the
+        lines ``str.splitlines`` counts in it.
+        """
         first, rest, offset = 1, b"", 0
         with open(self.path, "rb") as fh:
             while True:
@@ -1233,22 +1238,24 @@ class LogStream:
                     rest = data
                     continue
                 body, rest = data[:cut], data[cut:]
-                try:
-                    text = body.decode("utf-8-sig" if offset == 0 else "utf-8")
-                except UnicodeDecodeError as exc:
-                    raise DataError(f"{self.path}: not a UTF-8 text file (byte {offset + exc.start})") from None
+                odd, text = _odd_breaks(body), None
+                if odd or not body.isascii():
+                    try:
+                        text = body.decode("utf-8-sig" if offset == 0 else "utf-8")
+                    except UnicodeDecodeError as exc:
+                        raise DataError(f"{self.path}: not a UTF-8 text file (byte {offset + exc.start})") from None
                 offset += len(body)
+                lines = len(text.splitlines()) if odd else body.count(b"\n") + (not body.endswith(b"\n"))
                 if body:
-                    yield first, body, text
-                first += len(text.splitlines()) if _odd_breaks(body) else body.count(b"\n") + (
-                    not body.endswith(b"\n"))
+                    yield first, body, text, odd, lines
+                first += lines
                 if not chunk:
                     return
 
     def _lines(self) -> Iterator[tuple[int, list[str]]]:
         """``(first line number, lines)`` per block (``str.splitlines``: the line numbers ``read_log`` gives)."""
-        for first, _, text in self._chunks():
-            yield first, text.splitlines()
+        for first, body, text, _, _ in self._chunks():
+            yield first, (body.decode("ascii") if text is None else text).splitlines()
 
     def _text_header(self) -> tuple[list[str], str, int]:
         """The header row: ``(names, delimiter, line number)`` (delimiter ``" "``: runs of blanks)."""
@@ -1269,12 +1276,13 @@ class LogStream:
         """One checked table per block of data lines (global line numbers and data rows)."""
         names, delim, header = self.names, self._delim, self._header_line
         rows_before = 0
-        for first, body, text in self._chunks():
-            values = _fast_block(body, delim, names) if first > header and not _odd_breaks(body) else None
+        for first, body, text, odd, lines in self._chunks():
+            values = _fast_block(body, delim, names, lines) if first > header and not odd else None
             if values is not None:
                 numbers, text_cols = np.arange(first, first + len(values)), {}
             else:
-                numbers, values, text_cols = self._slow_block(first, text, rows_before)
+                numbers, values, text_cols = self._slow_block(first, body.decode("ascii") if text is None else text,
+                                                              rows_before)
                 if numbers is None:
                     continue
             table = _Table(self.source, {n: values[:, k] for k, n in enumerate(names)}, numbers,
@@ -1426,10 +1434,10 @@ _ODD_BYTES = (b"\r", b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e", b"\xc2", b"\xe
 
 def _odd_breaks(body: bytes) -> bool:
     """Whether a block may have line breaks other than newlines (``str.splitlines`` counts them too)."""
-    return any(b in body for b in _ODD_BYTES)
+    return any(b in body for b in (_ODD_BYTES[:6] if body.isascii() else _ODD_BYTES))  # memchr each
 
 
-def _fast_block(body: bytes, delim: str, names: list[str]) -> np.ndarray | None:
+def _fast_block(body: bytes, delim: str, names: list[str], lines: int) -> np.ndarray | None:
     """``(k, columns)`` floats of a block in which every line is a row of plain numbers, or None.
 
     pyarrow parses the bytes as they are; a blank, comment or malformed line, a text cell, or
@@ -1444,14 +1452,15 @@ def _fast_block(body: bytes, delim: str, names: list[str]) -> np.ndarray | None:
         return None
     try:
         table = pcsv.read_csv(io.BytesIO(body),
-                              read_options=pcsv.ReadOptions(column_names=names, use_threads=False),
+                              read_options=pcsv.ReadOptions(column_names=names, use_threads=True,
+                                                            block_size=1 << 20),
                               parse_options=pcsv.ParseOptions(delimiter=delim, quote_char=False,
                                                               ignore_empty_lines=False),
                               convert_options=pcsv.ConvertOptions(column_types={n: pa.float64() for n in names},
                                                                   null_values=[], strings_can_be_null=False))
     except (pa.ArrowInvalid, pa.ArrowTypeError, ValueError):
         return None
-    if table.num_rows != body.count(b"\n") + (not body.endswith(b"\n")):
+    if table.num_rows != lines:
         return None
     return _numbers(table, names)
 

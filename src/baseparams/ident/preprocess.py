@@ -490,6 +490,45 @@ class Prepared:
         """Number of kept samples ``S'``."""
         return len(self.t)
 
+    @property
+    def grid(self) -> np.ndarray:
+        """The samples smooth columns are evaluated at: every :attr:`stride`-th of :attr:`full`, through every kept one.
+
+        Returns
+        -------
+        ndarray of int, shape ``(G,)``
+            Indices into :attr:`full`: ``phase, phase + stride, ...`` with ``phase = design.pad mod stride``.
+        """
+        return np.arange(self.design.pad % self.stride, self.full.n_samples, self.stride)
+
+    def apply_strided(self, x) -> np.ndarray:
+        """:meth:`apply` for columns smooth in the filtered states, evaluated at :attr:`grid` only.
+
+        Filtered with the low-pass of the same cutoff at ``design.fs / stride``
+        (:func:`stride_design`; module docstring), then the kept samples taken.
+
+        Parameters
+        ----------
+        x : array_like, shape ``(G, ...)``
+            One row per sample of :attr:`grid` (e.g. gravity torques of ``full.q[grid]``).
+
+        Returns
+        -------
+        ndarray, shape ``(S', ...)``
+            The rows matching :attr:`tau`.
+
+        Raises
+        ------
+        DataError
+            ``x`` without one row per sample of :attr:`grid`.
+        """
+        x = np.asarray(x, dtype=float)
+        phase = self.design.pad % self.stride
+        g = len(range(phase, self.full.n_samples, self.stride))
+        if x.ndim == 0 or x.shape[0] != g:
+            raise DataError(f"{self.source}: apply_strided needs one row per strided sample ({g}), got shape {x.shape}")
+        return zero_phase(x, stride_design(self.design, self.stride), axis=0)[(self.index - phase) // self.stride]
+
     def apply(self, x) -> np.ndarray:
         """Filter full-rate rows like ``tau`` was and keep the same samples (parallel filtering).
 

@@ -214,17 +214,18 @@ class Tilt(Term):
         return None
 
     def prepare(self, ctx: TermContext) -> None:
-        """The full-rate kinematics the gravity torques are computed from (:func:`gravity_torques`)."""
+        """The kinematics the gravity torques are computed from (:func:`gravity_torques`), at ``prep.grid``."""
         from ...kinematics.tree import forward_kinematics
 
         r = ctx.model.robot
         self._u = perpendicular_basis(r.gravity)
-        self._fk = forward_kinematics(r, ctx.prep.full.q[:, ctx.cols])
+        grid = ctx.prep.grid  # gravity torques are smooth in the filtered q: at the regressor's stride
+        self._fk = forward_kinematics(r, ctx.prep.full.q[grid][:, ctx.cols])
         self._cache = (None, None)
         self._basis_cols = None
-        if 8 * r.n * len(ctx.model.coords) * len(ctx.prep.full.t) <= BASIS_MAX:  # linear in pi: filtered once
-            self._basis_cols = [ctx.apply(gravity_basis(r, ctx.model.coords, np.cross(u, r.gravity), self._fk))
-                                for u in self._u]
+        if 8 * r.n * len(ctx.model.coords) * len(grid) <= BASIS_MAX:  # linear in pi: filtered once
+            self._basis_cols = [ctx.prep.apply_strided(gravity_basis(r, ctx.model.coords, np.cross(u, r.gravity),
+                                                                     self._fk)) for u in self._u]
             self._entries = (np.arange(r.n)[:, None] * 10 + np.arange(6, 10)[None, :]).ravel()
 
     def reset(self, ctx: TermContext) -> None:
@@ -242,7 +243,7 @@ class Tilt(Term):
             r = ctx.model.robot
             full = np.stack([gravity_torques(r, ctx.model.coords, None, np.cross(u, r.gravity), self.pi,
                                              state=self._fk) for u in self._u], axis=2)
-            cols = ctx.apply(full)
+            cols = ctx.prep.apply_strided(full)
             self._cache = (self.pi.copy(), cols)
         return cols, ["tilt_1", "tilt_2"]
 

@@ -420,6 +420,9 @@ def regroup_drives(factor: np.ndarray, base_names: list[str], drives: Drives, rt
                    min_gap: float = 1e4) -> DriveRegrouping:
     """Decide which drive parameters regroup, from the factor of a sampled ``[Yb | D]``.
 
+    The rank is decided on the drive columns' part outside the base columns' span (``R22`` of the
+    factor, each column scaled by its norm); the base columns are independent (certified).
+
     Parameters
     ----------
     factor : ndarray, shape ``(nb + nd, nb + nd)``
@@ -443,9 +446,23 @@ def regroup_drives(factor: np.ndarray, base_names: list[str], drives: Drives, rt
 
     nb, nd = len(base_names), drives.n_params
     names = list(base_names) + drives.names
-    num = rank_decision(factor, rtol, min_gap)
-    nullb = num.null_basis
-    k = nullb.shape[1]
+    # The base columns are independent (certified): the drive parameters regroup exactly where the
+    # drive columns' parts outside span(Yb), R22, are dependent. Deciding on R22 with each drive
+    # column scaled by its norm keeps the base columns' scales and conditioning (a deep chain's span
+    # orders of magnitude) out of the decision; a null vector u of R22 is [-R11^-1 R12 u; u].
+    from scipy.linalg import solve_triangular
+
+    r = np.asarray(factor, dtype=float)
+    if r.shape[0] < nb + nd:
+        r = np.vstack([r, np.zeros((nb + nd - r.shape[0], nb + nd))])
+    scale = np.linalg.norm(r[:, nb:], axis=0)
+    scale[scale == 0] = 1.0
+    num = rank_decision(r[nb:, nb:] / scale, rtol, min_gap) if nd else None
+    v2 = num.null_basis / scale[:, None] if nd else np.zeros((0, 0))
+    k = v2.shape[1]
+    v1 = solve_triangular(r[:nb, :nb], -r[:nb, nb:] @ v2) if k and nb else np.zeros((nb, k))
+    nullb = np.vstack([v1, v2])
+    nullb /= np.maximum(np.linalg.norm(nullb, axis=0), np.finfo(float).tiny)
     order = np.r_[np.arange(nb + nd - 1, nb - 1, -1), np.arange(nb - 1, -1, -1)]
     dep = choose_dependent(nullb, order) if k else np.zeros(0, dtype=int)
     ind = np.setdiff1d(np.arange(nb + nd), dep)
@@ -455,4 +472,4 @@ def regroup_drives(factor: np.ndarray, base_names: list[str], drives: Drives, rt
         kmat[np.abs(kmat) <= 1e-9 * np.maximum(1.0, np.abs(kmat).max(axis=1, keepdims=True))] = 0.0
         kmat = clean(kmat, rtol=1e-12)  # decided on sampled states: rounding ~1e-15
     gap = float(num.gap) if k else np.inf
-    return DriveRegrouping(names, ind, dep, kmat, bool(num.decided) or k == 0, gap)
+    return DriveRegrouping(names, ind, dep, kmat, k == 0 or bool(num.decided), gap)

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -258,6 +259,10 @@ def measured_coords(robot: Robot, rows: str) -> np.ndarray:
     return np.flatnonzero(row_mask(robot, rows))
 
 
+#: the drive-regrouping probe's regressor above this many bytes takes 3 p rows (fewer states), in pieces
+PROBE_BYTES = 64e6
+
+
 def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
                 coulomb_width: float | None = None, samples: int = 200, seed: int = 0,
                 couplings=(), log_base: bool = False) -> IdentModel:
@@ -307,8 +312,15 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "co
         q = sample_states(robot, samples, rng)[0]
     dq, ddq = rng.uniform(-1.0, 1.0, (2,) + q.shape)
     probe = IdentModel(analysis, drives, _identity_regrouping(analysis, drives), coords, log_base)
-    a = probe.regressor(q, dq, ddq)
-    factor = StreamingQR(a.shape[2]).add(a.reshape(-1, a.shape[2])).r
+    p = len(analysis.base_names) + drives.n_params
+    if len(q) * len(coords) * p * 8 > PROBE_BYTES:  # a large tree: 3 p rows are plenty (p unknowns)
+        keep = max(20, math.ceil(3 * p / max(len(coords), 1)))
+        q, dq, ddq = q[:keep], dq[:keep], ddq[:keep]
+    qr = StreamingQR(p)
+    step = max(1, int(PROBE_BYTES // (8 * len(coords) * p)) // 4)  # states per regressor evaluated at once
+    for k in range(0, len(q), step):
+        qr.add(probe.regressor(q[k:k + step], dq[k:k + step], ddq[k:k + step]).reshape(-1, p))
+    factor = qr.r
     regrouping = regroup_drives(factor, analysis.base_names, drives)
     if not regrouping.decided:
         raise BaseparamsError(f"robot {robot.name!r}: whether the drive parameters regroup is not decided "

@@ -27,6 +27,12 @@ the file several times, each pass block by block (a *block source*: any object w
 5. **validation**: the held-out samples predicted from states filtered over the whole log (windows
    again), scored against the raw measured torques, optionally written out block by block.
 
+A text or Parquet log (:class:`~baseparams.io.logs.LogStream` of kind ``text`` or ``parquet``)
+is parsed once: pass 1 writes its blocks to a temporary binary file that the later passes read
+(:class:`Replay`). In pass 3 the rigid-body regressor is evaluated at the plan's stride
+(:func:`~baseparams.ident.chunks.parallel_rows`, as :func:`~baseparams.ident.preprocess.prepare`
+decides it on the whole log).
+
 Non-uniform time stamps are resampled block by block (:class:`Resampled`: the grid of
 :func:`~baseparams.ident.preprocess.resample`, its median step from the first :data:`SUBSAMPLE_MAX`
 steps) when every sample trains; with a hold-out or a validation log they are not streamed

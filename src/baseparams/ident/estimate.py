@@ -247,7 +247,7 @@ def motion_factor(model, q, dq, ddq, chunk: int = 4000) -> np.ndarray:
     q, dq, ddq : array_like, shape ``(S, state_columns)``
         The states (a loop robot's actuated coordinates).
     chunk : int
-        Samples per regressor block (memory ``chunk * m * p`` floats).
+        Samples per regressor block (memory ``chunk * m * p`` floats, at most 32 MB).
 
     Returns
     -------
@@ -258,6 +258,7 @@ def motion_factor(model, q, dq, ddq, chunk: int = 4000) -> np.ndarray:
 
     q, dq, ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
     qr = StreamingQR(model.n_params)
+    chunk = max(1, min(chunk, int(32e6 // (8 * max(len(model.coords), 1) * max(model.n_params, 1)))))  # <= 32 MB
     for k in range(0, len(q), chunk):
         qr.add(model.regressor(q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk]))
     return qr.r

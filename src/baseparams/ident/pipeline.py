@@ -33,6 +33,9 @@ from ..model.robot import Robot
 from ..numerics import blas_threads
 from .model import IdentModel, ident_model
 
+#: bytes of regressor :meth:`Fit.predict` forms at once
+PREDICT_BYTES = 32e6
+
 
 @dataclass(frozen=True, eq=False)
 class Fit:
@@ -95,9 +98,15 @@ class Fit:
         Returns
         -------
         ndarray, shape ``(S, m)``
-            ``A(q, dq, ddq) @ theta``.
+            ``A(q, dq, ddq) @ theta``, the regressor formed :data:`PREDICT_BYTES` at a time (a large
+            robot's rows are wide: 60 links, 596 columns, 0.3 MB per sample).
         """
-        return self.model.regressor(q, dq, ddq) @ self.theta
+        q, dq, ddq = np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq)
+        step = max(1, int(PREDICT_BYTES // (8 * max(len(self.model.coords), 1) * max(self.model.n_params, 1))))
+        if len(q) <= step:
+            return self.model.regressor(q, dq, ddq) @ self.theta
+        return np.concatenate([self.model.regressor(q[k:k + step], dq[k:k + step], ddq[k:k + step]) @ self.theta
+                               for k in range(0, len(q), step)])
 
     def rms(self, q, dq, ddq, tau) -> tuple[np.ndarray, float]:
         """Prediction error on (held-out) data.

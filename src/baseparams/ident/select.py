@@ -216,8 +216,9 @@ def bounded_quadratic(h: np.ndarray, g: np.ndarray, nonneg: np.ndarray | None = 
     """``argmin 1/2 x^T h x - g^T x`` subject to ``x[nonneg] >= 0`` (an active-set method).
 
     Lawson and Hanson's active set on the normal equations: variables that come out negative are
-    held at 0, one that the gradient would move up is released, until both hold. ``h`` is small
-    (the model's parameters), so each step is one dense solve.
+    held at 0, one that the gradient would move up is released, until both hold. The unbounded
+    variables are eliminated first (their Schur complement), so each step is one dense solve of the
+    bounded ones (a 60-link chain: 180 drive terms instead of 596 parameters, ~30x cheaper).
 
     Parameters
     ----------
@@ -242,6 +243,15 @@ def bounded_quadratic(h: np.ndarray, g: np.ndarray, nonneg: np.ndarray | None = 
 
     x = lin(h, g)
     if nonneg is None or not np.any(nonneg) or np.all(x[nonneg] >= 0):
+        return x
+    nonneg = np.asarray(nonneg, dtype=bool)
+    if not nonneg.all():  # free variables eliminated once (Schur complement): the active set on the bounded ones
+        u, v = np.flatnonzero(~nonneg), np.flatnonzero(nonneg)
+        z = lin(h[np.ix_(u, u)], np.column_stack([h[np.ix_(u, v)], g[u]]))
+        hv = h[np.ix_(v, v)] - h[np.ix_(v, u)] @ z[:, :-1]
+        xv = bounded_quadratic((hv + hv.T) / 2, g[v] - h[np.ix_(v, u)] @ z[:, -1], np.ones(len(v), dtype=bool))
+        x = np.empty_like(g)
+        x[v], x[u] = xv, z[:, -1] - z[:, :-1] @ xv
         return x
     scale = max(float(np.max(np.abs(g))), 1e-300)
     active = np.asarray(nonneg, dtype=bool) & (x < 0)

@@ -1735,11 +1735,11 @@ def predict_log(f: Fit, log, cutoff: float | None, smooth: bool = True) -> np.nd
     return model_torques(f, log.t, log.q[:, cols[f.model.row_states]], q[:, cols], dq[:, cols], ddq[:, cols])
 
 
-def model_torques(f: Fit, t: np.ndarray, q_raw: np.ndarray, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray,
-                  chunk: int = 20000) -> np.ndarray:
+def model_torques(f: Fit, t: np.ndarray, q_raw: np.ndarray, q: np.ndarray, dq: np.ndarray,
+                  ddq: np.ndarray) -> np.ndarray:
     """The fitted model's torques as the sensors measure them, the model terms included.
 
-    The core ``A(q, dq, ddq) theta`` (in chunks), each term's contribution (Dahl's state along
+    The core ``A(q, dq, ddq) theta`` (:meth:`Fit.predict`, in blocks), each term's contribution (Dahl's state along
     ``q_raw``, the tilt's gravity torque), then the sensors' scales and delays
     (:mod:`baseparams.ident.terms`).
 
@@ -1753,8 +1753,6 @@ def model_torques(f: Fit, t: np.ndarray, q_raw: np.ndarray, q: np.ndarray, dq: n
         Positions of the measured coordinates as logged (unfiltered).
     q, dq, ddq : ndarray, shape ``(S, state_columns)``
         The states.
-    chunk : int
-        Samples per core block.
 
     Returns
     -------
@@ -1762,8 +1760,7 @@ def model_torques(f: Fit, t: np.ndarray, q_raw: np.ndarray, q: np.ndarray, dq: n
         Predicted measured torques.
     """
     with blas_threads():
-        tau = np.concatenate([f.predict(q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk])
-                              for k in range(0, max(len(q), 1), chunk)])
+        tau = f.predict(q, dq, ddq)  # in blocks of PREDICT_BYTES
     for term in f.terms:
         tau = term.adjust_model(f, q_raw, q, dq, ddq, tau)
     for term in f.terms:

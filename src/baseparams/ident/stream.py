@@ -624,6 +624,47 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, sp
     return parts, kept, slow
 
 
+def scratch_file(mb: float, prefix: str):
+    """An unnamed temporary file (deleted when closed or at exit), or None when the temporary folder lacks ``2 mb`` MB.
+
+    Parameters
+    ----------
+    mb : float
+        What will be written [MB].
+    prefix : str
+        The file's name prefix.
+
+    Returns
+    -------
+    file object or None
+        Open for binary reading and writing; None when there is no room or it cannot be created.
+    """
+    import shutil
+    import tempfile
+
+    try:
+        if shutil.disk_usage(tempfile.gettempdir()).free < 2 * mb * 1e6:
+            return None
+        return tempfile.TemporaryFile(prefix=prefix)
+    except OSError:
+        return None
+
+
+def read_floats(fh, shape: tuple, what: str) -> np.ndarray:
+    """The next ``prod(shape)`` float64 values of a scratch file, as an array of that shape.
+
+    Raises
+    ------
+    BaseparamsError
+        Fewer bytes left than asked (``what`` names the file).
+    """
+    n = math.prod(shape)
+    raw = fh.read(8 * n)
+    if len(raw) != 8 * n:
+        raise BaseparamsError(f"{what} was truncated while read")
+    return np.frombuffer(raw, dtype=np.float64).reshape(shape)
+
+
 class Replay:
     """A block source parsed once and read again from a temporary binary copy (a text or Parquet log).
 
@@ -652,17 +693,6 @@ class Replay:
         state = f"{len(self.shapes)} blocks kept" if self.ready else "not read yet"
         return f"<Replay {self.source}: {state}>"
 
-    def _open(self):
-        import shutil
-        import tempfile
-
-        try:
-            if shutil.disk_usage(tempfile.gettempdir()).free < 2 * self.size_mb * 1e6:
-                return None
-            return tempfile.TemporaryFile(prefix="baseparams-log-")
-        except OSError:
-            return None
-
     def blocks(self):
         """The log's blocks: read from the file (and kept) the first time, from the copy after.
 
@@ -674,7 +704,7 @@ class Replay:
         if self.ready:
             yield from self._replay()
             return
-        fh, shapes, first = self._open(), [], None
+        fh, shapes, first = scratch_file(self.size_mb, "baseparams-log-"), [], None
         complete = False
         try:
             for blk in self.raw.blocks():
@@ -707,11 +737,8 @@ class Replay:
                 if getattr(self.first, k) is None:
                     arrays[k] = None
                     continue
-                count = n if k == "t" else n * m
-                raw = self.fh.read(8 * count)
-                if len(raw) != 8 * count:
-                    raise BaseparamsError(f"{self.source}: the log's temporary copy was truncated while read")
-                arrays[k] = np.frombuffer(raw, dtype=np.float64).reshape((n,) if k == "t" else (n, m))
+                arrays[k] = read_floats(self.fh, (n,) if k == "t" else (n, m),
+                                        f"{self.source}: the log's temporary copy")
             yield JointLog(arrays["t"], self.joints, arrays["q"], arrays["tau"], arrays["dq"], arrays["ddq"],
                            self.first.source)
 
@@ -754,15 +781,8 @@ class Spilled:
         Spilled or None
             The empty spill.
         """
-        import shutil
-        import tempfile
-
-        try:
-            if shutil.disk_usage(tempfile.gettempdir()).free < 2 * mb * 1e6:
-                return None
-            return cls(tempfile.TemporaryFile(prefix="baseparams-rows-"))
-        except OSError:
-            return None
+        fh = scratch_file(mb, "baseparams-rows-")
+        return None if fh is None else cls(fh)
 
     def write(self, t: np.ndarray, a: np.ndarray, tau: np.ndarray):
         """Append one window's rows; the spill, or None when the file cannot take them (then recomputed).
@@ -800,13 +820,7 @@ class Spilled:
         """
         self.fh.seek(0)
         for shapes in self.shapes:
-            out = []
-            for shape in shapes:
-                n = math.prod(shape)
-                raw = self.fh.read(8 * n)
-                if len(raw) != 8 * n:
-                    raise BaseparamsError("the fitted rows' temporary file was truncated while read")
-                out.append(np.frombuffer(raw, dtype=np.float64).reshape(shape))
+            out = [read_floats(self.fh, shape, "the fitted rows' temporary file") for shape in shapes]
             yield out[0], out[1], out[2], None, None
 
     def close(self) -> None:

@@ -653,6 +653,20 @@ def scratch_file(mb: float, prefix: str):
 def read_floats(fh, shape: tuple, what: str) -> np.ndarray:
     """The next ``prod(shape)`` float64 values of a scratch file, as an array of that shape.
 
+    Parameters
+    ----------
+    fh : file object
+        The scratch file (:func:`scratch_file`), positioned at the values.
+    shape : tuple of int
+        The array's shape.
+    what : str
+        The file, named in the error.
+
+    Returns
+    -------
+    ndarray, shape ``shape``
+        The values (a read-only view of the bytes read).
+
     Raises
     ------
     BaseparamsError

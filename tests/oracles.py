@@ -143,3 +143,82 @@ def lowpass_score(t, measured, predicted, mask, cutoff: float = 5.0, trim_end: f
     keep = np.asarray(mask, dtype=bool) & (t <= t[-1] - trim_end)
     e = np.asarray(predicted, dtype=float)[keep[np.asarray(mask, dtype=bool)]] - lp[keep]
     return float(np.sqrt(np.mean(e**2)))
+
+
+# ---------------------------------------------------------------- an outsider's plain least squares
+def _outsider_states(t, q, cutoff: float, dq=None):
+    """States as an outsider computes them: q (and the logged dq, when there is one) interpolated onto a uniform
+    grid at the median rate, low-passed by ``filtfilt`` (4th-order Butterworth at ``cutoff``), differentiated by
+    ``np.gradient`` there (dq only where the log has none), and the three interpolated back to the stamps as they
+    are (uneven stamps stay where they were)."""
+    from scipy.signal import butter, filtfilt
+
+    t = np.asarray(t, dtype=float)
+    q = np.asarray(q, dtype=float)
+    dt = float(np.median(np.diff(t)))
+    grid = t[0] + dt * np.arange(int(np.floor((t[-1] - t[0]) / dt)) + 1)
+    qg = np.column_stack([np.interp(grid, t, q[:, j]) for j in range(q.shape[1])])
+    b, a = butter(4, min(cutoff * 2 * dt, 0.99))
+    qf = filtfilt(b, a, qg, axis=0)
+    if dq is None:
+        dq = np.gradient(qf, dt, axis=0)
+    else:
+        dq = filtfilt(b, a, np.column_stack([np.interp(grid, t, np.asarray(dq, dtype=float)[:, j])
+                                             for j in range(q.shape[1])]), axis=0)
+    ddq = np.gradient(dq, dt, axis=0)
+    back = [np.column_stack([np.interp(t, grid, x[:, j]) for j in range(q.shape[1])]) for x in (qf, dq, ddq)]
+    return tuple(back)
+
+
+def _outsider_rows(pin_model, t, q, cutoff: float, dq=None):
+    """Pinocchio's joint-torque regressor at every sample, then viscous, Coulomb and offset columns per joint:
+    shape ``(S, m, 10 n + 3 m)``."""
+    import pinocchio as pin
+
+    qf, dq, ddq = _outsider_states(t, q, cutoff, dq)
+    data = pin_model.createData()
+    m = pin_model.nv
+    rows = []
+    for k in range(len(t)):
+        y = pin.computeJointTorqueRegressor(pin_model, data, qf[k], dq[k], ddq[k]).copy()
+        fr = np.zeros((m, 3 * m))
+        fr[np.arange(m), np.arange(m)] = dq[k]
+        fr[np.arange(m), m + np.arange(m)] = np.sign(dq[k])
+        fr[np.arange(m), 2 * m + np.arange(m)] = 1.0
+        rows.append(np.hstack([y, fr]))
+    return np.asarray(rows)
+
+
+def outsider_ols(pin_model, train, test, cutoff: float = 5.0, trim: float = 1.0) -> float:
+    """An independent plain OLS trained on one recording and scored on another, as an outsider would do it.
+
+    Pinocchio's regressor (``pin_model``: the model file as Pinocchio reads it, fixed base, the
+    logs' joint order) at **every** sample of ``train`` with states low-passed at ``cutoff`` Hz
+    (:func:`_outsider_states`; the logged velocities where there are some), plus viscous, Coulomb
+    and offset columns per joint; the raw
+    torques; minimum-norm least squares (``lstsq``). Scored on ``test`` (its states filtered the
+    same way) against its measured torques low-passed at ``cutoff`` Hz, ``trim`` seconds left out at
+    each end (:func:`outsider_score`). Returns the RMS [N m] over every joint and kept sample.
+    """
+    w = _outsider_rows(pin_model, train.t, train.q, cutoff, train.dq)
+    m = w.shape[1]
+    theta, *_ = np.linalg.lstsq(w.reshape(-1, w.shape[2]), np.asarray(train.tau, dtype=float).reshape(-1),
+                                rcond=None)
+    pred = _outsider_rows(pin_model, test.t, test.q, cutoff, test.dq) @ theta
+    assert pred.shape[1] == m
+    return outsider_score(test.t, test.tau, pred, cutoff, trim)
+
+
+def outsider_score(t, measured, predicted, cutoff: float = 5.0, trim: float = 1.0) -> float:
+    """RMS [N m] of predicted torques against the measured ones low-passed at ``cutoff`` Hz by ``filtfilt``
+    (4th-order Butterworth, median rate, no resampling), every joint, every sample but ``trim`` seconds at each
+    end: the figure of merit of the cross-recording issue, computed apart from the project."""
+    from scipy.signal import butter, filtfilt
+
+    t = np.asarray(t, dtype=float)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    b, a = butter(4, min(cutoff / (fs / 2), 0.99))
+    lp = filtfilt(b, a, np.asarray(measured, dtype=float), axis=0)
+    keep = (t >= t[0] + trim) & (t <= t[-1] - trim)
+    e = np.asarray(predicted, dtype=float)[keep] - lp[keep]
+    return float(np.sqrt(np.mean(e**2)))

@@ -505,6 +505,7 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
         The reference configuration is singular (cond(J_p) >= :data:`SINGULAR_COND`).
     """
     from .kinematics.loops import close_loops, restrict
+    from .kinematics.manifold import motion_samples
 
     na = len(robot.actuated)
     box = robot.q_box if robot.q_box is not None else np.tile([-DEFAULT_HALF_WIDTH, DEFAULT_HALF_WIDTH], (na, 1))
@@ -518,9 +519,11 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
                 f"flat configuration), so the branch to sample is not defined; give the model at a regular "
                 f"configuration of the branch meant (e.g. move the reference off the singular one)")
         cond_max = COND_MAX if ref < COND_MAX else COND_FACTOR * ref
-    qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
-    cs = close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
-                     cond_max=cond_max)
+    cs = motion_samples(robot, samples, rng, box, cond_max)  # 1- and 2-D loops over their whole motion
+    if cs is None:
+        qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
+        cs = close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
+                         cond_max=cond_max)
     if auto and cond_max > COND_MAX and cs.kept:
         # an ill-conditioned reference (near a singular configuration): the samples' rates lose
         # about cond^2 of their precision, so keep the better-conditioned part of the box

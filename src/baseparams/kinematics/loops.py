@@ -418,6 +418,9 @@ class ClosedStates:
         Largest loop residual of the kept samples (nan when none is kept).
     cond_max : float, optional
         The conditioning threshold used.
+    motion : tuple of str, optional
+        One line per group of coordinates sampled over its whole motion
+        (:mod:`baseparams.kinematics.manifold`); empty when every sample was closed from the box.
     """
 
     q: np.ndarray
@@ -431,6 +434,7 @@ class ClosedStates:
     ill_conditioned: int
     max_residual: float
     cond_max: float = 30.0
+    motion: tuple[str, ...] = ()
 
     __repr__ = summary_repr
 
@@ -546,7 +550,52 @@ def restrict(cs: ClosedStates, cond_max: float) -> ClosedStates:
         return ClosedStates(**{**cs.__dict__, "cond_max": cond_max})
     err = float(cs.max_residual) if keep.any() else float("nan")  # an upper bound for the subset
     return ClosedStates(cs.q[keep], cs.dq[keep], cs.ddq[keep], cs.G[keep], cs.cond[keep], cs.requested,
-                        cs.not_converged, cs.branch_jumps, cs.ill_conditioned + int((~keep).sum()), err, cond_max)
+                        cs.not_converged, cs.branch_jumps, cs.ill_conditioned + int((~keep).sum()), err, cond_max,
+                        cs.motion)
+
+
+def closed_states(robot: Robot, q: np.ndarray, dqa: np.ndarray | None = None, ddqa: np.ndarray | None = None,
+                  cond_max: float = 30.0, tol: float = 1e-9) -> ClosedStates:
+    """States at configurations already on the loops: exact rates from actuated ``dq_a, ddq_a``.
+
+    Samples whose largest loop residual is ``tol`` or more are discarded (counted as not
+    converged), and those with ``cond(K_p) >= cond_max`` (ill-conditioned).
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops (``na = len(robot.actuated)``).
+    q : ndarray, shape ``(S, dof)``
+        Tree coordinates on the loops (e.g. :mod:`baseparams.kinematics.manifold`'s traces).
+    dqa, ddqa : ndarray, shape ``(S, na)``, optional
+        Actuated velocities and accelerations; default zero.
+    cond_max : float, optional
+        Conditioning threshold.
+    tol : float, optional
+        Largest loop residual of a kept sample.
+
+    Returns
+    -------
+    ClosedStates
+        The kept samples, ``G = dq/dq_a`` and the counts (no branch jumps: none is continued).
+    """
+    act = np.asarray(robot.actuated, dtype=int)
+    pas = _passive(robot.dof, act)
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    s = q.shape[0]
+    dqa = np.zeros((s, len(act))) if dqa is None else np.asarray(dqa, dtype=float)
+    ddqa = np.zeros((s, len(act))) if ddqa is None else np.asarray(ddqa, dtype=float)
+    plan = _plan(robot, elementary_constraints(robot))
+    r, k, _ = _eval(plan, q, np.arange(robot.dof))
+    err = np.abs(r).max(axis=0) if len(r) else np.zeros(s)
+    k = np.ascontiguousarray(k.transpose(2, 0, 1))
+    cond = _conditioning(k[:, :, pas], len(pas))
+    on = err < tol
+    keep = on & (cond < cond_max)
+    kp_inv = _passive_pinv(k[keep][:, :, pas], cond[keep])
+    g, dq, ddq = _closed_rates(plan, q[keep], k[keep], kp_inv, act, pas, dqa[keep], ddqa[keep])
+    return ClosedStates(q[keep], dq, ddq, g, cond[keep], s, int((~on).sum()), 0, int((on & ~keep).sum()),
+                        float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
 
 
 def _conditioning(kp: np.ndarray, npas: int) -> np.ndarray:

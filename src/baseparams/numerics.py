@@ -552,7 +552,8 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
         joints); only ``all`` with loops (the rows are then the actuated generalized forces).
     info : dict, optional
         Filled in place with ``requested`` and ``kept``, and for loops ``cond_max``,
-        ``not_converged``, ``branch_jumps``, ``ill_conditioned`` and ``max_loop_residual``.
+        ``not_converged``, ``branch_jumps``, ``ill_conditioned``, ``max_loop_residual`` and
+        ``motion`` (one line per group of coordinates sampled over its whole motion).
     time_scale : float, default 1
         Rates ``w``: the same states with velocities times ``w`` and accelerations times ``w^2``
         (a motion ``w`` times faster; loop closures keep holding). 1: the paper's sampling.
@@ -579,7 +580,7 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
         if info is not None:
             info.update(requested=cs.requested, kept=cs.kept, cond_max=cs.cond_max, not_converged=cs.not_converged,
                         branch_jumps=cs.branch_jumps, ill_conditioned=cs.ill_conditioned,
-                        max_loop_residual=cs.max_residual)
+                        max_loop_residual=cs.max_residual, motion=list(cs.motion))
         if cs.kept == 0:
             raise BaseparamsError(f"robot {robot.name!r}: none of {samples} samples closed the loops "
                                   f"({cs.not_converged} outside the workspace, {cs.branch_jumps} branch jumps, "

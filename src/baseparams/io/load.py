@@ -11,7 +11,7 @@ from ..model.robot import Robot
 
 
 def load_file(path: str | Path, floating: bool = False, gravity=None, strict_inertia: bool = False,
-              xacro_args=None, package_path=None, drop_mocap_welds: bool = False) -> tuple[Robot, list[str]]:
+              xacro_args=None, package_path=None, mocap_welds: str = "drop") -> tuple[Robot, list[str]]:
     """``(robot, notes)`` from a ``.urdf``, ``.xacro`` or ``.xml``/``.mjcf`` file.
 
     Gravity defaults to ``(0, 0, -9.81)`` for URDF files and to the model's own for MJCF. Physically
@@ -38,8 +38,9 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     package_path : str, path or list of them, optional
         Folders searched for a xacro file's ``$(find PKG)`` and ``package://PKG`` (before
         ``BASEPARAMS_PACKAGE_PATH`` and ``ROS_PACKAGE_PATH``).
-    drop_mocap_welds : bool, optional
-        MJCF: leave out the welds and connects to mocap bodies (:func:`~baseparams.io.mjcf.load_mjcf`).
+    mocap_welds : {'drop', 'keep'}, optional
+        MJCF: the welds and connects to mocap bodies left out (default) or kept as loops to the
+        world (:func:`~baseparams.io.mjcf.load_mjcf`).
 
     Returns
     -------
@@ -82,7 +83,7 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
             from .mjcf import load_mjcf
 
             robot = load_mjcf(p, gravity=gravity, floating=floating, strict_inertia=strict_inertia,
-                              drop_mocap_welds=drop_mocap_welds)
+                              mocap_welds=mocap_welds)
         else:
             raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xacro, .xml or .mjcf")
     notes += [str(w.message) for w in caught]

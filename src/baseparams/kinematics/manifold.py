@@ -208,31 +208,54 @@ class _Tracer:
         regular = (full > 1.0 / self.cond_max) & (extra < 1e-8)
         return np.swapaxes(vt[:, r:], 1, 2), regular
 
-    def correct(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Newton onto the constraints orthogonal to the tangents ``t (S, c, d)``; ``(x, converged, K)``."""
+    def correct(self, x: np.ndarray, t: np.ndarray, tol: float = TOL,
+                iterations: int = ITERATIONS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Newton onto the constraints orthogonal to the tangents ``t (S, c, d)``; ``(x, converged, K)``.
+
+        A converged point is then polished (:func:`_polish`): near a singularity the rates amplify
+        the closure error.
+        """
         x = x.copy()
         ok = np.zeros(len(x), dtype=bool)
+        err_out = np.full(len(x), np.inf)
         k_out = np.zeros((len(x), len(self.group.rows), len(self.group.coords)))
         live = np.arange(len(x))
-        for _ in range(ITERATIONS):
+        for _ in range(iterations):
             if not len(live):
                 break
             r, k = self.jacobian(x[live])
             err = np.abs(r).max(axis=1) if r.shape[1] else np.zeros(len(live))
-            done = err < TOL
+            done = err < tol
             ok[live[done]] = True
-            k_out[live[done]] = k[done]
+            k_out[live[done]], err_out[live[done]] = k[done], err[done]
             live, r, k = live[~done], r[~done], k[~done]
-            if not len(live):
-                break
-            a = np.concatenate([k, np.swapaxes(t[live], 1, 2)], axis=1)
-            rhs = np.concatenate([-r, np.zeros((len(live), t.shape[2]))], axis=1)
-            at = np.swapaxes(a, 1, 2)
-            with np.errstate(all="ignore"):
-                step = np.linalg.solve(at @ a, (at @ rhs[:, :, None]))[:, :, 0]
-            step = np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
-            x[live] += step
+            if len(live):
+                x[live] += self.newton_step(k, r, t[live])
+        self.polish(x, t, np.flatnonzero(ok), err_out, k_out)
         return x, ok, k_out
+
+    def newton_step(self, k: np.ndarray, r: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """The step ``(S, c)`` solving ``[K; T^T] dx = [-r; 0]`` (least squares), clipped to 1."""
+        a = np.concatenate([k, np.swapaxes(t, 1, 2)], axis=1)
+        rhs = np.concatenate([-r, np.zeros((len(r), t.shape[2]))], axis=1)
+        at = np.swapaxes(a, 1, 2)
+        with np.errstate(all="ignore"):
+            step = np.linalg.solve(at @ a, at @ rhs[:, :, None])[:, :, 0]
+        return np.where(np.isfinite(step), np.clip(step, -1.0, 1.0), 0.0)
+
+    def polish(self, x: np.ndarray, t: np.ndarray, idx: np.ndarray, err: np.ndarray, k_out: np.ndarray,
+               iterations: int = 3) -> None:
+        """Newton steps past the tolerance on the converged points ``idx``, each kept only where it lowers the residual."""
+        for _ in range(iterations):
+            if not len(idx):
+                return
+            r, k = self.jacobian(x[idx])
+            trial = x[idx] + self.newton_step(k, r, t[idx])
+            r2, k2 = self.jacobian(trial)
+            e2 = np.abs(r2).max(axis=1) if r2.shape[1] else np.zeros(len(idx))
+            better = e2 < err[idx]
+            x[idx[better]], err[idx[better]], k_out[idx[better]] = trial[better], e2[better], k2[better]
+            idx = idx[better & (e2 > 0)]
 
     def step(self, x0: np.ndarray, t0: np.ndarray, k0: np.ndarray, move: np.ndarray):
         """Tangent steps ``move (S, c)`` from ``x0`` (tangents ``t0``, Jacobians ``k0``), corrected.

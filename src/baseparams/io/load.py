@@ -5,7 +5,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from ..errors import BaseparamsError
+from ..errors import BaseparamsError, NoMotionError
 from ..files import MODEL_MAX_BYTES, check_input
 from ..model.robot import Robot
 
@@ -57,12 +57,22 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
         :data:`~baseparams.files.MODEL_MAX_BYTES`, or an unknown suffix; xacro arguments or a package
         path for a file that is not xacro; the ``xacro`` package missing for a xacro file (naming the
         extra); :class:`~baseparams.errors.ModelError` (a subclass) for an invalid model or a failed
-        expansion.
+        expansion; :class:`~baseparams.errors.NoMotionError` (a subclass) when the constraints leave the mechanism
+        no motion.
     """
     p = check_input(path, MODEL_MAX_BYTES)  # a regular file of at most 64 MB, refused before reading
     suffix = p.suffix.lower()
     if suffix != ".xacro" and (xacro_args or package_path):
         raise BaseparamsError(f"{p}: xacro arguments and a package path apply to .xacro files, not {suffix or 'this'}")
+    try:
+        return _read(p, suffix, floating, gravity, strict_inertia, xacro_args, package_path, mocap_welds)
+    except NoMotionError as exc:  # found where the file is no longer known: named here
+        raise NoMotionError(f"{p}: {exc}") from None
+
+
+def _read(p: Path, suffix: str, floating: bool, gravity, strict_inertia: bool, xacro_args, package_path,
+          mocap_welds: str) -> tuple[Robot, list[str]]:
+    """:func:`load_file` once the file is checked: the reader of its suffix, then the loops' assembly."""
     notes = []
     # each reader is imported for its own suffix only (start-up time of a one-shot command)
     with warnings.catch_warnings(record=True) as caught:

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..display import summary_repr
-from ..errors import BaseparamsError, ModelError
+from ..errors import BaseparamsError, ModelError, NoMotionError
 from ..model.robot import Robot
 from ..pga.linalg import cross3_first, perp_basis
 from .tree import Poses, as_states, poses, re_reference
@@ -809,7 +809,8 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     ------
     ModelError
         No regular assembled configuration found near q = 0 (actuated offsets up to +-0.3, from
-        q = 0 and 20 random starts), or one that needs re-referencing a robot with S joints.
+        q = 0 and 20 random starts), or one that needs re-referencing a robot with S joints;
+        :class:`~baseparams.errors.NoMotionError` when the constraints leave no motion.
     """
     from dataclasses import replace
 
@@ -819,6 +820,8 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     pas = _passive(robot.dof, act)
     ev = evaluate(robot, np.zeros((1, robot.dof)))
     res0 = float(np.abs(ev.r).max()) if ev.r.size else 0.0
+    if res0 < tol and _jacobian_rank(ev.K[0])[0] >= robot.dof:  # assembled and locked: no rank nearby is higher
+        raise no_motion(robot, robot.dof)
     sv = np.linalg.svd(ev.K[0][:, pas], compute_uv=False) if len(pas) else np.ones(1)
     if not len(pas):
         cond0 = 1.0
@@ -1028,6 +1031,11 @@ def choose_independent(robot: Robot, prefer_independent: set[int] | None = None,
     Robot
         The robot with ``independent`` set (the coordinates outside the passive set) and
         ``q_box`` reset to None.
+
+    Raises
+    ------
+    NoMotionError
+        The constraints leave no coordinate independent (:func:`no_motion`).
     """
     from dataclasses import replace
 
@@ -1044,4 +1052,31 @@ def choose_independent(robot: Robot, prefer_independent: set[int] | None = None,
     rank = int(np.sum(diag > rtol * max(diag.max(initial=0.0), 1e-300)))
     passive = set(int(j) for j in piv[:rank])
     independent = tuple(j for j in range(robot.dof) if j not in passive)
+    if not independent:
+        raise no_motion(robot, rank)
     return replace(robot, independent=independent, q_box=None)
+
+
+def no_motion(robot: Robot, rank: int) -> NoMotionError:
+    """The error for a mechanism its constraints lock: one line naming them and what would help.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates).
+    rank : int
+        Rank of its constraint Jacobian (``dof``: no motion left).
+
+    Returns
+    -------
+    NoMotionError
+        ``robot NAME: the constraints (...) leave this mechanism no motion ...``.
+    """
+    names = [lj.name for lj in robot.loops] + [c.name for c in robot.couplings]
+    free = [lj.name for lj in robot.loops if lj.anchor_free]
+    hint = (f"{', '.join(free)} {'ties' if len(free) == 1 else 'tie'} a body to a control device (a mocap body): "
+            f"leave {'it' if len(free) == 1 else 'them'} out (mocap_welds='drop', --mocap-welds drop)" if free
+            else "remove a constraint, or check the loop frames and the joints' axes")
+    return NoMotionError(f"robot {robot.name!r}: the constraints ({', '.join(names)}) leave this mechanism no motion "
+                         f"(their Jacobian has rank {rank} on its {robot.dof} coordinates): every body is held still, so "
+                         f"no measurement sees any inertial parameter; {hint}")

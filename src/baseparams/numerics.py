@@ -473,7 +473,8 @@ def reference_cond(robot: Robot) -> float:
     return float(cs.cond[0]) if cs.kept else np.inf
 
 
-def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_max: float | None = None):
+def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_max: float | None = None,
+                   whole_motion: bool = False):
     """Loop-closed random states: actuated q in the robot's box, dq_a, ddq_a in (0, 1).
 
     Parameters
@@ -491,6 +492,11 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
         with millimetre lever arms, e.g. Cassie's rods; or a reference near a singular
         configuration), 3x the median of the samples' (at least 30, at most 3x the reference's):
         near a singularity the rates lose about ``cond^2`` of their precision.
+    whole_motion : bool, optional
+        Loops with a one- or two-dimensional motion sampled over all of it
+        (:func:`baseparams.kinematics.manifold.motion_samples`: the rank decision's samples)
+        instead of from actuated values in the box; such samples' actuated coordinates may lie
+        beyond what continuation from the reference reaches.
 
     Returns
     -------
@@ -519,7 +525,7 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
                 f"flat configuration), so the branch to sample is not defined; give the model at a regular "
                 f"configuration of the branch meant (e.g. move the reference off the singular one)")
         cond_max = COND_MAX if ref < COND_MAX else COND_FACTOR * ref
-    cs = motion_samples(robot, samples, rng, box, cond_max)  # 1- and 2-D loops over their whole motion
+    cs = motion_samples(robot, samples, rng, box, cond_max) if whole_motion else None  # 1- and 2-D loops
     if cs is None:
         qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
         cs = close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
@@ -535,9 +541,10 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
                       info: dict | None = None, time_scale: float = 1.0) -> np.ndarray:
     """``W (kept samples * measured rows, 10 n)``: the TP regressor on random states, stacked.
 
-    Trees: states uniform in (0, 1) (the paper). Closed loops: actuated samples in the robot's
-    box, solved exactly (:func:`baseparams.kinematics.loops.close_loops`); discarded samples
-    are counted in ``info`` (a dict filled in place) when given.
+    Trees: states uniform in (0, 1) (the paper). Closed loops: over the whole motion of loops
+    with one or two degrees of freedom (:mod:`baseparams.kinematics.manifold`), else actuated
+    samples in the robot's box, solved exactly (:func:`baseparams.kinematics.loops.close_loops`);
+    discarded samples are counted in ``info`` (a dict filled in place) when given.
 
     Parameters
     ----------
@@ -576,7 +583,7 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
         if rows_spec(rows) != "all":
             raise BaseparamsError(f"robot {robot.name!r}: measured rows {rows!r} are not defined with loops; "
                                   f"the generalized forces are the actuated ones")
-        cs = closed_samples(robot, samples, rng)
+        cs = closed_samples(robot, samples, rng, whole_motion=True)
         if info is not None:
             info.update(requested=cs.requested, kept=cs.kept, cond_max=cs.cond_max, not_converged=cs.not_converged,
                         branch_jumps=cs.branch_jumps, ill_conditioned=cs.ill_conditioned,

@@ -530,7 +530,9 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
         qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
         cs = close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
                          cond_max=cond_max)
-    if auto and cond_max > COND_MAX and cs.kept:
+    if cs.motion and cs.kept:  # a trace: its conditioning is the mechanism's (a weld mixes metres and radians)
+        cs = restrict(cs, max(COND_MAX, COND_FACTOR * float(np.median(cs.cond))))
+    elif auto and cond_max > COND_MAX and cs.kept:
         # an ill-conditioned reference (near a singular configuration): the samples' rates lose
         # about cond^2 of their precision, so keep the better-conditioned part of the box
         cs = restrict(cs, max(COND_MAX, COND_FACTOR * float(np.median(cs.cond))))

@@ -555,8 +555,8 @@ def restrict(cs: ClosedStates, cond_max: float) -> ClosedStates:
 
 
 def closed_states(robot: Robot, q: np.ndarray, dqa: np.ndarray | None = None, ddqa: np.ndarray | None = None,
-                  cond_max: float = 30.0, tol: float = 1e-9) -> ClosedStates:
-    """States at configurations already on the loops: exact rates from actuated ``dq_a, ddq_a``.
+                  cond_max: float = 30.0, tol: float = 1e-9, rechart: bool = False) -> ClosedStates:
+    """States at configurations already on the loops: exact rates from independent ``dq_a, ddq_a``.
 
     Samples whose largest loop residual is ``tol`` or more are discarded (counted as not
     converged), and those with ``cond(K_p) >= cond_max`` (ill-conditioned).
@@ -568,34 +568,82 @@ def closed_states(robot: Robot, q: np.ndarray, dqa: np.ndarray | None = None, dd
     q : ndarray, shape ``(S, dof)``
         Tree coordinates on the loops (e.g. :mod:`baseparams.kinematics.manifold`'s traces).
     dqa, ddqa : ndarray, shape ``(S, na)``, optional
-        Actuated velocities and accelerations; default zero.
+        Independent velocities and accelerations; default zero.
     cond_max : float, optional
         Conditioning threshold.
     tol : float, optional
         Largest loop residual of a kept sample.
+    rechart : bool, optional
+        Each sample's independent coordinates chosen there (:func:`local_charts`: the actuated
+        ones unless the passive Jacobian is better conditioned with others), so that a loop's
+        whole motion is covered through the turning points of the actuated coordinates. The
+        rows of a closed regressor are then each sample's own independent generalized forces:
+        the same span per sample, so the same rank.
 
     Returns
     -------
     ClosedStates
-        The kept samples, ``G = dq/dq_a`` and the counts (no branch jumps: none is continued).
+        The kept samples, ``G = dq/dq_a`` (``rechart``: per sample, ``dq`` over that sample's
+        independent coordinates) and the counts (no branch jumps: none is continued).
     """
-    act = np.asarray(robot.actuated, dtype=int)
-    pas = _passive(robot.dof, act)
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    s = q.shape[0]
-    dqa = np.zeros((s, len(act))) if dqa is None else np.asarray(dqa, dtype=float)
-    ddqa = np.zeros((s, len(act))) if ddqa is None else np.asarray(ddqa, dtype=float)
+    s, na = q.shape[0], len(robot.actuated)
+    dqa = np.zeros((s, na)) if dqa is None else np.asarray(dqa, dtype=float)
+    ddqa = np.zeros((s, na)) if ddqa is None else np.asarray(ddqa, dtype=float)
     plan = _plan(robot, elementary_constraints(robot))
     r, k, _ = _eval(plan, q, np.arange(robot.dof))
     err = np.abs(r).max(axis=0) if len(r) else np.zeros(s)
     k = np.ascontiguousarray(k.transpose(2, 0, 1))
-    cond = _conditioning(k[:, :, pas], len(pas))
+    charts = np.broadcast_to(np.asarray(robot.actuated, dtype=int), (s, na))
+    if rechart:
+        charts = local_charts(robot, k, cond_max)
+    cond = np.empty(s)
+    g, dq, ddq = np.zeros((s, robot.dof, na)), np.zeros((s, robot.dof)), np.zeros((s, robot.dof))
+    for chart in np.unique(charts, axis=0):
+        at = np.flatnonzero((charts == chart).all(axis=1))
+        pas = _passive(robot.dof, chart)
+        cond[at] = _conditioning(k[at][:, :, pas], len(pas))
+        kp_inv = _passive_pinv(k[at][:, :, pas], cond[at])
+        g[at], dq[at], ddq[at] = _closed_rates(plan, q[at], k[at], kp_inv, chart, pas, dqa[at], ddqa[at])
     on = err < tol
     keep = on & (cond < cond_max)
-    kp_inv = _passive_pinv(k[keep][:, :, pas], cond[keep])
-    g, dq, ddq = _closed_rates(plan, q[keep], k[keep], kp_inv, act, pas, dqa[keep], ddqa[keep])
-    return ClosedStates(q[keep], dq, ddq, g, cond[keep], s, int((~on).sum()), 0, int((on & ~keep).sum()),
-                        float(err[keep].max()) if keep.any() else float("nan"), float(cond_max))
+    return ClosedStates(q[keep], dq[keep], ddq[keep], g[keep], cond[keep], s, int((~on).sum()), 0,
+                        int((on & ~keep).sum()), float(err[keep].max()) if keep.any() else float("nan"),
+                        float(cond_max))
+
+
+def local_charts(robot: Robot, k: np.ndarray, cond_max: float = 30.0) -> np.ndarray:
+    """Each sample's independent coordinates ``(S, na)``: the actuated ones where they serve, else the best.
+
+    The robot's actuated coordinates where the passive Jacobian ``K_p`` is conditioned below
+    ``cond_max``; elsewhere (near a turning point of an actuated coordinate) the coordinates left
+    by a column-pivoted QR of the sample's constraint Jacobian (the best-conditioned passive set,
+    as :func:`choose_independent`); always ``na = len(robot.actuated)`` of them, sorted.
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops.
+    k : ndarray, shape ``(S, m, dof)``
+        The constraint Jacobian at each sample.
+    cond_max : float, optional
+        Conditioning up to which the actuated coordinates are kept.
+
+    Returns
+    -------
+    ndarray of int, shape ``(S, na)``
+        The independent coordinates of each sample.
+    """
+    from scipy.linalg import qr
+
+    act = np.asarray(robot.actuated, dtype=int)
+    na = len(act)
+    out = np.tile(act, (k.shape[0], 1))
+    pas = _passive(robot.dof, act)
+    for i in np.flatnonzero(~(_conditioning(k[:, :, pas], len(pas)) < cond_max)):
+        piv = qr(k[i], pivoting=True, mode="r")[1]
+        out[i] = np.sort(piv[robot.dof - na:])
+    return out
 
 
 def _conditioning(kp: np.ndarray, npas: int) -> np.ndarray:

@@ -448,7 +448,10 @@ def motion_samples(robot: Robot, samples: int, rng: np.random.Generator, box: np
     box : ndarray, shape ``(na, 2)``
         Sampling box of the actuated coordinates (the untraced ones).
     cond_max : float
-        Samples with ``cond(K_p)`` at or above it are discarded (counted ill-conditioned).
+        Box samples (the untraced coordinates) with ``cond(K_p)`` at or above it are discarded
+        (counted ill-conditioned); the traced coordinates are held to their trace's bound instead
+        (a welded arm's constraint Jacobian mixes metres and radians: its conditioning is in the
+        thousands along the whole loop: the caller cuts relative to the samples' own median).
 
     Returns
     -------
@@ -463,7 +466,7 @@ def motion_samples(robot: Robot, samples: int, rng: np.random.Generator, box: np
     dqa, ddqa = rng.uniform(0, 1, (samples, len(act))), rng.uniform(0, 1, (samples, len(act)))
     traced = np.concatenate([g.coords for g in groups])
     qa[:, np.isin(act, traced)] = 0.0
-    cs = close_loops(robot, qa, dqa, ddqa, cond_max=np.inf)
+    cs = close_loops(robot, qa, dqa, ddqa, cond_max=cond_max)
     cons = elementary_constraints(robot)
     q = cs.q.copy()
     motion = []
@@ -471,9 +474,10 @@ def motion_samples(robot: Robot, samples: int, rng: np.random.Generator, box: np
         tr = trace_group(robot, g, rng, cons)
         q[:, g.coords] = sample_trace(robot, tr, len(q), rng, cons)
         motion.append(describe(robot, tr))
-    out = closed_states(robot, q, cs.dq[:, act], cs.ddq[:, act], cond_max)  # dq_a, ddq_a of the kept samples
+    # the traces keep their constraint Jacobian's rank and conditioning (:meth:`_Tracer.tangents`): no further cut
+    out = closed_states(robot, q, cs.dq[:, act], cs.ddq[:, act], np.inf, rechart=True)
     return replace(out, requested=samples, not_converged=cs.not_converged + out.not_converged,
-                   branch_jumps=cs.branch_jumps, motion=tuple(motion))
+                   branch_jumps=cs.branch_jumps, ill_conditioned=cs.ill_conditioned, motion=tuple(motion))
 
 
 def describe(robot: Robot, trace: Trace) -> str:

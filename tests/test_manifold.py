@@ -50,7 +50,7 @@ def _chain(lengths, q0, rng) -> tuple:
     d = _tip(lengths, q0)
     b = RobotBuilder("chain", gravity=(0.0, -9.81, 0.0))
     parent = None
-    for i, (ell, a) in enumerate(zip(lengths, q0)):
+    for i, a in enumerate(q0):
         t = np.eye(4)
         t[:3, :3] = _rz(a)
         if i:
@@ -216,7 +216,6 @@ def test_the_box_sampling_of_a_welded_arm_decides_no_gap_and_the_trace_does(tmp_
     reference the spectrum has no decisive gap; over the whole self-motion loop it has one."""
     from baseparams.numerics import closed_samples, rank_decision
     from baseparams.regressor import closed_regressor
-
     from test_mocap import ARM
 
     path = tmp_path / "arm7.xml"

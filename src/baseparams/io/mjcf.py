@@ -580,7 +580,8 @@ def _mocap(model, bnames, b1: int, b2: int, what: str, mode: MocapWelds) -> bool
     other = bnames[b2 if int(model.body_mocapid[b1]) >= 0 else b1]
     if mode == MocapWelds.DROP:
         warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}, a control device the simulation moves "
-                      f"(actuation): left out, {other!r} moves with its joints (mocap_welds='keep', --mocap-welds keep, "
+                      f"(actuation): left out, {other!r} moves with its joints (mocap_welds='keep', "
+                      f"--mocap-welds keep, "
                       f"keeps it as a loop joint to the world)", MJCFWarning, stacklevel=4)
         return None
     warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}, a control device the simulation moves: kept "

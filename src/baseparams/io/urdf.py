@@ -106,7 +106,7 @@ _DECLARATION = re.compile(rb"xmlns:([A-Za-z_][\w.-]*)\s*=\s*[\"']([^\"']*)[\"']"
 
 
 def _is_drake(uri: str) -> bool:
-    """Whether a namespace is Drake's: its URI, or the ``drake`` prefix used without a declaration (as Drake's files do)."""
+    """Whether a namespace is Drake's: its URI, or the ``drake`` prefix used undeclared (as Drake's files do)."""
     return uri.rstrip("/") == DRAKE_NAMESPACE or uri == f"{_UNDECLARED}drake"
 _PREFIX_USE = re.compile(rb"<\s*/?\s*([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=")
 

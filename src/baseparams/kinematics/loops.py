@@ -1126,5 +1126,6 @@ def no_motion(robot: Robot, rank: int) -> NoMotionError:
             f"leave {'it' if len(free) == 1 else 'them'} out (mocap_welds='drop', --mocap-welds drop)" if free
             else "remove a constraint, or check the loop frames and the joints' axes")
     return NoMotionError(f"robot {robot.name!r}: the constraints ({', '.join(names)}) leave this mechanism no motion "
-                         f"(their Jacobian has rank {rank} on its {robot.dof} coordinates): every body is held still, so "
+                         f"(their Jacobian has rank {rank} on its {robot.dof} coordinates): every body is held still, "
+                         f"so "
                          f"no measurement sees any inertial parameter; {hint}")

@@ -58,7 +58,8 @@ NOVEL = 0.5
 TOL, ITERATIONS = 1e-11, 12
 #: a step's corrected end may lie at most this fraction of a step from its prediction
 MAX_CORRECTION = 0.5
-#: the constraint Jacobian's condition number (over its rank) may grow to this multiple of the reference's (at least 1e3)
+#: the constraint Jacobian's condition number (over its rank) may grow to this multiple of the reference's
+#: (at least 1e3)
 COND_GROWTH = 100.0
 
 
@@ -133,7 +134,8 @@ def loop_groups(robot: Robot, rtol: float = 1e-9) -> list[LoopGroup]:
             root[find(j)] = find(first[0])
     k = evaluate(robot, np.zeros((1, robot.dof))).K[0] if sets else None
     by_root: dict = {}
-    for (rows, coords, name), elem in zip(sets, [False] * len(robot.couplings) + [True] * (len(sets) - len(robot.couplings))):
+    elementary = [False] * len(robot.couplings) + [True] * (len(sets) - len(robot.couplings))
+    for (rows, coords, name), elem in zip(sets, elementary):
         if not coords:
             continue
         g = by_root.setdefault(find(min(coords)), [[], set(), [], False])
@@ -208,30 +210,30 @@ class _Tracer:
         regular = (full > 1.0 / self.cond_max) & (extra < 1e-8)
         return np.swapaxes(vt[:, r:], 1, 2), regular
 
-    def correct(self, x: np.ndarray, t: np.ndarray, tol: float = TOL,
-                iterations: int = ITERATIONS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def correct(self, x: np.ndarray, t: np.ndarray, polish: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Newton onto the constraints orthogonal to the tangents ``t (S, c, d)``; ``(x, converged, K)``.
 
-        A converged point is then polished (:func:`_polish`): near a singularity the rates amplify
-        the closure error.
+        With ``polish``, a converged point is then refined to the rounding floor of its residual
+        (:meth:`polish`): near a singularity the rates amplify the closure error.
         """
         x = x.copy()
         ok = np.zeros(len(x), dtype=bool)
         err_out = np.full(len(x), np.inf)
         k_out = np.zeros((len(x), len(self.group.rows), len(self.group.coords)))
         live = np.arange(len(x))
-        for _ in range(iterations):
+        for _ in range(ITERATIONS):
             if not len(live):
                 break
             r, k = self.jacobian(x[live])
             err = np.abs(r).max(axis=1) if r.shape[1] else np.zeros(len(live))
-            done = err < tol
+            done = err < TOL
             ok[live[done]] = True
             k_out[live[done]], err_out[live[done]] = k[done], err[done]
             live, r, k = live[~done], r[~done], k[~done]
             if len(live):
                 x[live] += self.newton_step(k, r, t[live])
-        self.polish(x, t, np.flatnonzero(ok), err_out, k_out)
+        if polish:
+            self.polish(x, t, np.flatnonzero(ok), err_out, k_out)
         return x, ok, k_out
 
     def newton_step(self, k: np.ndarray, r: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -245,7 +247,7 @@ class _Tracer:
 
     def polish(self, x: np.ndarray, t: np.ndarray, idx: np.ndarray, err: np.ndarray, k_out: np.ndarray,
                iterations: int = 3) -> None:
-        """Newton steps past the tolerance on the converged points ``idx``, each kept only where it lowers the residual."""
+        """Newton steps past the tolerance on the converged points ``idx``, kept where they lower the residual."""
         for _ in range(iterations):
             if not len(idx):
                 return
@@ -257,14 +259,14 @@ class _Tracer:
             x[idx[better]], err[idx[better]], k_out[idx[better]] = trial[better], e2[better], k2[better]
             idx = idx[better & (e2 > 0)]
 
-    def step(self, x0: np.ndarray, t0: np.ndarray, k0: np.ndarray, move: np.ndarray):
-        """Tangent steps ``move (S, c)`` from ``x0`` (tangents ``t0``, Jacobians ``k0``), corrected.
+    def step(self, x0: np.ndarray, t0: np.ndarray, k0: np.ndarray, move: np.ndarray, polish: bool = False):
+        """Tangent steps ``move (S, c)`` from ``x0`` (tangents ``t0``, Jacobians ``k0``), corrected (and polished).
 
         Returns ``(x, t, k, kept)``: the ends, their tangents and Jacobians, and which steps are
         kept (converged near the prediction, regular, no singular configuration crossed).
         """
         pred = x0 + move
-        x, ok, k = self.correct(pred, t0)
+        x, ok, k = self.correct(pred, t0, polish)
         size = np.linalg.norm(move, axis=1)
         ok &= np.linalg.norm(x - pred, axis=1) <= MAX_CORRECTION * np.maximum(size, 1e-12)
         t, regular = self.tangents(k)
@@ -277,8 +279,17 @@ class _Tracer:
 
 
 def _tracer(robot: Robot, cons: list, group: LoopGroup) -> _Tracer:
-    """The tracer of ``group`` (its conditioning bound from the reference's)."""
+    """The tracer of ``group`` (its conditioning bound from the reference's).
+
+    A group of loop joints alone is evaluated on its own constraints (the robot without couplings,
+    the group's rows renumbered): the other groups' do not depend on its coordinates.
+    """
     scale, wraps = coordinate_scale(robot)
+    names = {lj.name for lj in robot.loops}
+    if all(n in names for n in group.names):
+        own = [e for e in cons if robot.loops[e.loop].name in group.names]
+        rows = np.arange(sum(3 if e.kind == "point" else 1 for e in own))
+        robot, cons, group = replace(robot, couplings=()), own, replace(group, rows=rows)
     w = scale[group.coords]
     tr = _Tracer(robot, cons, group, w, wraps[group.coords], np.inf)
     _, k = tr.jacobian(np.zeros((1, len(group.coords))))
@@ -401,8 +412,9 @@ def sample_trace(robot: Robot, trace: Trace, samples: int, rng: np.random.Genera
     u = rng.normal(size=(samples, trace.group.dim))
     u *= (rng.uniform(0.0, 0.5 * STEP, samples) / np.maximum(np.linalg.norm(u, axis=1), 1e-300))[:, None]
     move = np.einsum("sij,sj->si", trace.t[idx], u)
-    x, _, _, ok = tr.step(trace.x[idx], trace.t[idx], trace.k[idx], move)
-    x = np.where(ok[:, None], x, trace.x[idx])
+    x, _, _, ok = tr.step(trace.x[idx], trace.t[idx], trace.k[idx], move, polish=True)
+    if not ok.all():  # the explored configuration itself, polished
+        x[~ok] = tr.correct(trace.x[idx[~ok]], trace.t[idx[~ok]], polish=True)[0]
     return x / tr.w
 
 

@@ -231,3 +231,133 @@ def test_the_box_sampling_of_a_welded_arm_decides_no_gap_and_the_trace_does(tmp_
     whole = rank_decision(closed_regressor(robot, closed_samples(robot, 2000, rng, whole_motion=True))
                           .reshape(-1, 10 * robot.n))
     assert whole.gap > 1e5 and whole.gap > 100 * box.gap
+
+
+#: a Sawyer-like arm (seven hinges with lateral offsets, two finger slides), bent at qpos0 by {bend}; {weld}
+SAWYER = """<mujoco model="sawyerish">
+  <worldbody>{mocap}
+    <body name="l0" pos="0 0 0.3"><joint name="j0" axis="0 0 1"/><inertial pos="0.02 0.01 0.1" mass="3" diaginertia="0.05 0.04 0.03"/>
+      <body name="l1" pos="0.08 0 0.25" euler="{b0} 0 0"><joint name="j1" axis="0 1 0"/>
+        <inertial pos="0.01 0.05 0.02" mass="2.5" diaginertia="0.03 0.04 0.02"/>
+        <body name="l2" pos="0 0.12 0.05" euler="0 {b1} 0"><joint name="j2" axis="0 0 1"/>
+          <inertial pos="0.0 0.02 0.15" mass="2" diaginertia="0.04 0.03 0.01"/>
+          <body name="l3" pos="0 -0.04 0.3" euler="{b2} 0 0"><joint name="j3" axis="0 1 0"/>
+            <inertial pos="0.01 0.03 0.05" mass="1.5" diaginertia="0.02 0.02 0.01"/>
+            <body name="l4" pos="0 0.1 0.12" euler="0 {b3} 0"><joint name="j4" axis="0 0 1"/>
+              <inertial pos="0.0 0.01 0.12" mass="1.2" diaginertia="0.015 0.012 0.005"/>
+              <body name="l5" pos="0 -0.03 0.28" euler="{b4} 0 0"><joint name="j5" axis="0 1 0"/>
+                <inertial pos="0.01 0.02 0.03" mass="1" diaginertia="0.008 0.007 0.004"/>
+                <body name="hand" pos="0 0.08 0.1" euler="0 {b5} 0"><joint name="j6" axis="0 0 1"/>
+                  <inertial pos="0.01 0.005 0.04" mass="0.6" diaginertia="0.003 0.002 0.002"/>
+                  <body name="fl" pos="0 0.02 0.08"><joint name="sl" type="slide" axis="0 1 0"/>
+                    <inertial pos="0.005 0 0.02" mass="0.05" diaginertia="1e-5 2e-5 1e-5"/></body>
+                  <body name="fr" pos="0 -0.02 0.08"><joint name="sr" type="slide" axis="0 -1 0"/>
+                    <inertial pos="0.005 0 0.02" mass="0.05" diaginertia="1e-5 2e-5 1e-5"/></body>
+                </body></body></body></body></body></body></body>
+  </worldbody>{weld}
+  <actuator><motor joint="sl"/><motor joint="sr"/></actuator>
+</mujoco>
+"""
+
+
+def _sawyerish(tmp_path, seed: int):
+    """The arm bent at random (an anchor), its hand welded to a mocap body placed where the hand is at qpos0."""
+    import mujoco
+
+    rng = np.random.default_rng(seed)
+    bend = {f"b{i}": f"{v:.6f}" for i, v in enumerate(rng.uniform(20, 70, 6) * rng.choice([-1, 1], 6))}
+    free = tmp_path / f"tree{seed}.xml"
+    free.write_text(SAWYER.format(mocap="", weld="", **bend))
+    m = mujoco.MjModel.from_xml_path(str(free))
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    hand = m.body("hand").id
+    pos, quat = " ".join(f"{x:.17g}" for x in d.xpos[hand]), " ".join(f"{x:.17g}" for x in d.xquat[hand])
+    path = tmp_path / f"welded{seed}.xml"
+    path.write_text(SAWYER.format(mocap=f'<body name="mocap" mocap="true" pos="{pos}" quat="{quat}"/>',
+                                  weld='<equality><weld body1="mocap" body2="hand"/></equality>', **bend))
+    return path, free
+
+
+def _mujoco_loop_rank(path, seed: int = 0) -> tuple[int, float]:
+    """``(rank, gap)`` from MuJoCo alone: the weld's self-motion traced by a simple predictor-corrector on MuJoCo's
+    own constraint rows, point-mass probes, ``mj_inverse`` at zero velocity with accelerations along the motion,
+    the rows projected on it (constraint forces drop out)."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    arm = np.arange(7)
+
+    def rows(q):
+        d.qpos[:] = q
+        mujoco.mj_forward(m, d)
+        return np.array(d.efc_J).reshape(-1, m.nv)[:6], np.array(d.efc_pos)[:6]
+
+    q, t_prev, loop = m.qpos0.copy(), None, []
+    for _ in range(1500):  # steps of 0.02 rad along the loop
+        j, _ = rows(q)
+        t = np.linalg.svd(j[:, arm])[2][-1]
+        t = t if t_prev is None or t @ t_prev > 0 else -t
+        q[arm] += 0.02 * t
+        for _ in range(20):
+            j, r = rows(q)
+            q[arm] -= np.linalg.lstsq(j[:, arm], r, rcond=None)[0]
+        t_prev = t
+        loop.append(q.copy())
+        if len(loop) > 50 and np.abs((q[arm] - m.qpos0[arm] + np.pi) % (2 * np.pi) - np.pi).max() < 0.03:
+            break
+    rng = np.random.default_rng(seed)
+    bodies = [b for b in range(1, m.nbody) if m.body_weldid[b] != 0]
+    points = rng.normal(scale=0.2, size=(10, 3))
+    off = int(mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_LIMIT)
+    m.opt.disableflags |= off
+    m.dof_armature[:] = m.dof_damping[:] = 0
+    m.body_sameframe[:] = m.body_simple[:] = 0
+    m.dof_simplenum[:] = 0
+    m.body_mass[:], m.body_inertia[:] = 0, 0
+    nocon = int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    out = []
+    for q in [loop[i] for i in rng.integers(0, len(loop), 60)]:
+        q = q.copy()
+        q[7:] = rng.uniform(-0.02, 0.02, 2)
+        j, _ = rows(q)
+        n = np.linalg.svd(j)[2][6:].T  # (nv, 3): the self-motion and the fingers
+        acc = n @ rng.normal(size=3)
+        cols = []
+        m.opt.disableflags |= nocon  # no constraint forces in mj_inverse (and none in the projected rows)
+        for b in bodies:
+            for p in points:
+                m.body_mass[b], m.body_ipos[b], m.body_iquat[b] = 1.0, p, (1, 0, 0, 0)
+                d.qpos[:], d.qvel[:], d.qacc[:] = q, 0, acc
+                mujoco.mj_inverse(m, d)
+                cols.append(n.T @ d.qfrc_inverse)
+            m.body_mass[b] = 0.0
+        m.opt.disableflags &= ~nocon
+        out.append(np.array(cols).T)
+    s = np.linalg.svd(np.vstack(out), compute_uv=False)
+    rank = int(np.sum(s > 1e-9 * s[0]))
+    return rank, float(s[rank - 1] / s[rank])
+
+
+@pytest.mark.slow
+def test_a_welded_redundant_arm_is_mujocos_count_at_every_anchor(tmp_path):
+    """Issue 46's Meta-World case in our own file: kept (mocap_welds='keep'), the weld leaves a one-dimensional
+    self-motion loop, traced whole; the count equals MuJoCo's (its own kinematics and inverse dynamics along its
+    own trace of the loop) at three anchors, each decided at a gap; left out (the default) it is the tree's."""
+    from mujoco_oracle import mujoco_rank
+
+    counts = set()
+    for seed in range(3):
+        path, free = _sawyerish(tmp_path, seed)
+        rank, gap = _mujoco_loop_rank(path, seed)
+        assert gap > 1e6
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            a = bp.analyze(bp.load(str(path), mocap_welds="keep"))
+            tree = bp.analyze(bp.load(str(path)))
+        assert a.status.ok and a.n_base == rank and a.certificate.numerical.gap > 1e6, (a.n_base, rank)
+        assert a.certificate.sampling["motion"]
+        assert tree.status == "certified" and tree.n_base == mujoco_rank(free)[0]
+        counts.add(a.n_base)
+    assert len(counts) == 1

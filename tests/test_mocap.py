@@ -165,3 +165,39 @@ def test_a_redundant_arm_welded_straight_gets_one_independent_coordinate(tmp_pat
     rng = np.random.default_rng(0)
     cs = close_loops(robot, rng.uniform(-0.3, 0.3, (200, 3)), cond_max=1e3)
     assert cs.kept > 100 and cs.max_residual < 1e-9  # was: none of 5000 closed the loops
+
+
+#: a spatial 3R arm whose tip is tied to a mocap body by a connect: three joints, three constraints (issue 51)
+LOCKED = """<mujoco model="arm3c">
+  <worldbody>
+    <body name="mocap" mocap="true" pos="0.5 0 0.3"/>
+    <body name="l1"><joint name="j1" axis="0 0 1"/><inertial pos="0 0.01 0.05" mass="1" diaginertia="0.01 0.01 0.01"/>
+      <body name="l2" pos="0 0 0.3"><joint name="j2" axis="0 1 0"/>
+        <inertial pos="0.1 0 0" mass="1" diaginertia="0.01 0.02 0.01"/>
+        <body name="l3" pos="0.3 0 0" euler="0 30 0"><joint name="j3" axis="0 1 0"/>
+          <inertial pos="0.1 0 0.01" mass="1" diaginertia="0.01 0.01 0.02"/></body></body></body>
+  </worldbody>
+  <equality><connect body1="l3" body2="mocap" anchor="0.3 0 0"/></equality>
+</mujoco>
+"""
+
+
+def test_a_mocap_connect_that_locks_the_arm_is_refused_in_one_line(tmp_path, capsys):
+    """Kept, the connect leaves the arm no motion: one line naming the file and the constraint (not an internal
+    invariant); by default it is left out and the arm is MuJoCo's own tree."""
+    from mujoco_oracle import mujoco_rank
+
+    from baseparams.errors import NoMotionError
+
+    path = tmp_path / "arm3c.xml"
+    path.write_text(LOCKED)
+    with pytest.raises(NoMotionError, match=r"arm3c.xml: robot 'arm3c': the constraints \(connect0\) leave this "
+                                            r"mechanism no motion .* leave it out \(mocap_welds='drop'"):
+        _load(path, mocap_welds="keep")
+    assert main(["analyze", str(path), "--mocap-welds", "keep"]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "leave this mechanism no motion" in err and "Traceback" not in err
+    tree = tmp_path / "tree.xml"
+    tree.write_text(LOCKED.replace('<equality><connect body1="l3" body2="mocap" anchor="0.3 0 0"/></equality>', ""))
+    robot, _ = _load(path)
+    assert not robot.loops and bp.analyze(robot).n_base == mujoco_rank(tree)[0]

@@ -236,7 +236,8 @@ def test_the_box_sampling_of_a_welded_arm_decides_no_gap_and_the_trace_does(tmp_
 #: a Sawyer-like arm (seven hinges with lateral offsets, two finger slides), bent at qpos0 by {bend}; {weld}
 SAWYER = """<mujoco model="sawyerish">
   <worldbody>{mocap}
-    <body name="l0" pos="0 0 0.3"><joint name="j0" axis="0 0 1"/><inertial pos="0.02 0.01 0.1" mass="3" diaginertia="0.05 0.04 0.03"/>
+    <body name="l0" pos="0 0 0.3"><joint name="j0" axis="0 0 1"/>
+      <inertial pos="0.02 0.01 0.1" mass="3" diaginertia="0.05 0.04 0.03"/>
       <body name="l1" pos="0.08 0 0.25" euler="{b0} 0 0"><joint name="j1" axis="0 1 0"/>
         <inertial pos="0.01 0.05 0.02" mass="2.5" diaginertia="0.03 0.04 0.02"/>
         <body name="l2" pos="0 0.12 0.05" euler="0 {b1} 0"><joint name="j2" axis="0 0 1"/>

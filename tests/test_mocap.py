@@ -185,9 +185,9 @@ LOCKED = """<mujoco model="arm3c">
 def test_a_mocap_connect_that_locks_the_arm_is_refused_in_one_line(tmp_path, capsys):
     """Kept, the connect leaves the arm no motion: one line naming the file and the constraint (not an internal
     invariant); by default it is left out and the arm is MuJoCo's own tree."""
-    from mujoco_oracle import mujoco_rank
-
     from baseparams.errors import NoMotionError
+
+    from mujoco_oracle import mujoco_rank
 
     path = tmp_path / "arm3c.xml"
     path.write_text(LOCKED)

@@ -935,6 +935,18 @@ def bench_loops(out: dict, quick: bool) -> None:
         out[f"validation_vs_drng_{key}"] = t_v / t_d
         out[f"drng_extended_{key}_ms"] = 1e3 * t_e
         out[f"validation_vs_drng_extended_{key}"] = t_v / t_e
+    from baseparams.numerics import closed_samples
+
+    for name in ("four-bar", "parallelogram"):  # a 1-dof loop: its whole motion traced vs the paper's box
+        robot = get(name)
+        key = name.replace("-", "_")
+        log(f"  whole-motion sampling {name} ...")
+        t_box, n_box = measure(lambda: closed_samples(robot, samples, np.random.default_rng(0)), 5 if not quick else 2)
+        t_tr, n_tr = measure(lambda: closed_samples(robot, samples, np.random.default_rng(0), whole_motion=True),
+                             5 if not quick else 2)
+        out[f"sampling_box_{key}_s"], out[f"sampling_box_{key}_s_repeats"] = t_box, n_box
+        out[f"sampling_traced_{key}_s"], out[f"sampling_traced_{key}_s_repeats"] = t_tr, n_tr
+        out[f"sampling_traced_vs_box_{key}"] = t_tr / t_box
     from baseparams.nullspace.certify import certify
 
     for name in LOOP_BUILTINS:  # completeness of the geometric span on every built-in loop robot

@@ -12,6 +12,7 @@ import pytest
 from baseparams.base.regroup import base_parameters
 from baseparams.errors import ModelError
 from baseparams.io.urdf import load_urdf
+from baseparams.kinematics.loops import evaluate
 from baseparams.loading import load_model
 from baseparams.model import RobotBuilder
 from baseparams.nullspace.certify import certify
@@ -559,11 +560,31 @@ def test_drake_screw_joint_and_ball_constraint(tmp_path):
             '<drake:ball_constraint_p_AP value="0.2 0.1 0.5"/><drake:ball_constraint_body_B name="l2"/>'
             '<drake:ball_constraint_p_BQ value="0.2 0.1 0"/></drake:ball_constraint>')
     path.write_text(DRAKE.format(xmlns="", j2=J2 + ball))
+    # two joints, a point pinned: the ball constraint locks the arm (issue 51): one line naming it, no invariant
+    from baseparams.errors import NoMotionError
+    from baseparams.loading import load_model
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        with pytest.raises(NoMotionError, match=r"drake_arm.urdf: robot 'drake_arm': the constraints "
+                                                r"\(ball_constraint_base_l2\) leave this mechanism no motion") as info:
+            load_model(str(path))
+    assert "\n" not in str(info.value)
+    # with a third joint the arm moves: the loop is the spherical URDF+ loop, the independent joint chosen
+    j3 = ('<link name="l3"><inertial><origin xyz="0.1 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" '
+          'iyy="0.02" iyz="0" izz="0.02"/></inertial></link><joint name="j3" type="continuous"><parent link="l2"/>'
+          '<child link="l3"/><origin xyz="0.2 0 0"/><axis xyz="0 0 1"/></joint>'
+          '<link name="l4"><inertial><origin xyz="0.1 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" '
+          'iyy="0.02" iyz="0" izz="0.02"/></inertial></link><joint name="j4" type="continuous"><parent link="l3"/>'
+          '<child link="l4"/><origin xyz="0.2 0 0"/><axis xyz="0 1 0"/></joint>')
+    path.write_text(DRAKE.format(xmlns="", j2=J2 + j3 + ball.replace('body_B name="l2"', 'body_B name="l4"')
+                                 .replace('p_BQ value="0.2 0.1 0"', 'p_BQ value="0 0.1 0"')))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         robot = load_urdf(path)
-    assert len(robot.loops) == 1 and robot.loops[0].type == "S"
-    assert robot.loops[0].name == "ball_constraint_base_l2"
+    assert len(robot.loops) == 1 and robot.loops[0].type == "S" and robot.loops[0].name == "ball_constraint_base_l4"
+    assert any("no joint says which coordinates are independent" in str(w.message) for w in caught)
+    assert robot.dof == 4 and len(robot.actuated) == 4 - np.linalg.matrix_rank(evaluate(robot, np.zeros((1, 4))).K[0])
 
 
 def test_other_malformed_xml_is_still_refused(tmp_path):
@@ -571,3 +592,52 @@ def test_other_malformed_xml_is_still_refused(tmp_path):
     path.write_text(DRAKE.format(xmlns="", j2=J2).replace("</robot>", "</robt>"))
     with pytest.raises(ModelError, match="malformed XML"):
         load_urdf(path)
+
+
+def test_drake_joint_of_a_standard_type_is_that_joint(tmp_path):
+    """``<drake:joint type="revolute">`` (issue 51) is the revolute joint it says, as the plain ``<joint>`` is."""
+    import warnings
+
+    path = tmp_path / "drake_arm.urdf"
+    for kind in ("revolute", "continuous"):
+        j2 = J2.replace('<joint name="j2" type="continuous">', f'<drake:joint name="j2" type="{kind}">')
+        path.write_text(DRAKE.format(xmlns="", j2=j2.replace("</joint>", "</drake:joint>").replace(
+            "<axis", '<limit lower="-1" upper="1" effort="1" velocity="1"/><axis')))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            robot = load_urdf(path)
+        plain = tmp_path / "plain.urdf"
+        plain.write_text(DRAKE.format(xmlns="", j2=J2))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ref = load_urdf(plain)
+        assert robot.jtype == ("R", "R") and np.allclose(robot.M0, ref.M0) and np.allclose(robot.screws, ref.screws)
+
+
+@pytest.mark.parametrize("xmlns, prefix", [(' xmlns:foo="http://example.com/foo"', "foo"), ("", "foo"),
+                                            (' xmlns:drake="http://example.com/not-drake"', "drake")])
+def test_elements_of_another_namespace_are_never_urdf(xmlns, prefix, tmp_path):
+    """Namespaces are honoured as declared (issue 51): ``<foo:joint>`` (declared or not), and ``drake:`` bound to
+    another namespace, are not joints of the robot; they are ignored and counted in the one note."""
+    import warnings
+
+    from baseparams.io.urdf import URDFWarning
+
+    other = J2.replace('<joint name="j2" type="continuous">', f'<{prefix}:joint name="j3" type="continuous">')
+    other = other.replace("</joint>", f"</{prefix}:joint>").replace('link="l2"', 'link="l3"')
+    body = DRAKE.format(xmlns=xmlns, j2=J2 + other).replace(
+        "</robot>", '<link name="l3"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" '
+                    'iyz="0" izz="0.01"/></inertial></link></robot>')
+    if prefix == "drake":  # the rest of the file's drake: elements are then not Drake's either
+        body = body.replace("<drake:", "<x:").replace("</drake:", "</x:")
+        body = body.replace("drake:acceleration", "x:acceleration")
+        body = body.replace(f"<{prefix}:joint".replace("drake", "x"), f"<{prefix}:joint")
+        body = body.replace(f"</{prefix}:joint".replace("drake", "x"), f"</{prefix}:joint")
+    path = tmp_path / "ns.urdf"
+    path.write_text(body)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(ModelError, match=r"root links \['world', 'l3'\]: the tree is not connected"):
+            load_urdf(path)  # l3 hangs on nothing: the foreign joint was not read as a joint
+    said = [str(w.message) for w in caught if issubclass(w.category, URDFWarning)]
+    assert len(said) == 1 and f"<{prefix}:joint>" in said[0] and "other namespaces are not URDF" in said[0]

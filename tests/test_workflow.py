@@ -40,7 +40,7 @@ def test_every_simulate_and_excite_flag_is_a_keyword():
     parser = build_parser()
     sub = next(a for a in parser._actions if a.dest == "command").choices
     cli_only = {"help", "model", "json", "output", "verbose", "floating", "gravity", "strict_inertia", "xacro_args",
-                "package_path", "old_samples", "func", "command", "out", "allow_infeasible_inertia", "drop_mocap_welds",
+                "package_path", "old_samples", "func", "command", "out", "allow_infeasible_inertia", "mocap_welds",
                 # identify: the log argument, and a glob's fleet on Dask (baseparams.fleet.identify_fleet)
                 "data", "per_file", "pooled", "strict", "scheduler", "workers"}
     renamed = {"samples": "analysis_samples", "coupling": "couplings"}

@@ -15,7 +15,7 @@ One function per subcommand of the command line, with its flags as keywords (``-
 is ``base_frequency=``, ``--analysis-samples`` is ``analysis_samples=``); a ``model`` is a
 :class:`Robot`, an :class:`Analysis`, a built-in name or a robot file.
 
-load(model, floating=False, gravity=None, strict_inertia=False, drop_mocap_welds=False)
+load(model, floating=False, gravity=None, strict_inertia=False, mocap_welds='drop')
     A :class:`Robot` from a built-in name (``baseparams.robots.BUILTINS``) or a file (URDF,
     URDF+, MJCF); notes about the file are :class:`ModelWarning` warnings.
 analyze(robot, *, samples=None, seed=0, verify=True, rows="all", convention="khalil", ...)
@@ -108,7 +108,7 @@ _SUBMODULES = ("analysis", "base", "cli", "enums", "errors", "excitation", "flee
 
 
 def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict_inertia: bool = False,
-         xacro_args=None, package_path=None, drop_mocap_welds: bool = False) -> Robot:
+         xacro_args=None, package_path=None, mocap_welds: str = "drop") -> Robot:
     """A robot from a built-in name or a file.
 
     Parameters
@@ -130,10 +130,11 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     package_path : str, path or list of them, optional
         Folders where a xacro file's ``$(find PKG)`` and ``package://PKG`` are looked up, before
         the ``BASEPARAMS_PACKAGE_PATH`` and ``ROS_PACKAGE_PATH`` variables.
-    drop_mocap_welds : bool
-        MJCF: leave out the welds and connects to mocap bodies (a control device, e.g.
-        Meta-World's hand welded to one); by default they are honoured as loops to the world,
-        with a note (``--drop-mocap-welds``).
+    mocap_welds : {'drop', 'keep'}
+        MJCF: the welds and connects to mocap bodies, control devices the simulation moves
+        (Meta-World's and gymnasium's Fetch hands are welded to one, for actuation). ``drop``
+        (default): left out, with a note, so the arm is the tree its users drive; ``keep``: loop
+        joints to the world, placed where the hand is at the reference (``--mocap-welds``).
 
     Returns
     -------
@@ -161,13 +162,11 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
     >>> robot.n, robot.dof
     (6, 6)
     """
-    from .arguments import check_flags
     from .loading import load_model
 
-    check_flags("load", drop_mocap_welds=drop_mocap_welds)
     robot, notes = load_model(model, floating=floating, gravity=gravity, strict_inertia=strict_inertia,
                               xacro_args=xacro_args, package_path=package_path,
-                              drop_mocap_welds=drop_mocap_welds)
+                              mocap_welds=mocap_welds)
     for note in notes:
         _warnings.warn(note, ModelWarning, stacklevel=2)
     return robot

@@ -986,6 +986,7 @@ def format_report(a: Analysis) -> str:
                        f"or past a singular configuration, {sm['ill_conditioned']} with cond(J_p) >= "
                        f"{sm['cond_max']:.3g}); max loop residual "
                        f"{sm['max_loop_residual']:.1e}")
+            out.extend(f"  loop motion: {line}" for line in sm.get("motion", ()))
         out.append(f"certification: {c.status.upper()} - {c.message}")
         out.append(f"  residual ||W B||/||W|| = {c.residual:.2e}, worst column {c.max_column_residual:.2e}")
     out.extend(_expressions_section(a, j))

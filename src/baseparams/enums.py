@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from enum import IntEnum, StrEnum
 
-__all__ = ["Convention", "JointType", "Rows", "Source", "Status", "values"]
+__all__ = ["Convention", "JointType", "MocapWelds", "Rows", "Source", "Status", "values"]
 
 
 # ``numpydoc ignore=PR01`` on the enums below: the signature numpydoc's validator checks for an
@@ -92,6 +92,24 @@ class Status(_Choice):  # numpydoc ignore=PR01
     def ok(self) -> bool:
         """The nullspace is known (certified, or completed from the numerical one)."""
         return self in (Status.CERTIFIED, Status.COMPLETED)
+
+
+class MocapWelds(_Choice):  # numpydoc ignore=PR01
+    """What an MJCF file's welds and connects to mocap bodies are read as.
+
+    A mocap body is a control device the simulation moves every step (Meta-World's and
+    gymnasium's Fetch hands are welded to one: "mocap welds that we use for actuation"):
+    ``drop`` (the default) leaves such an equality out, with a note, and the arm is the tree its
+    users drive; ``keep`` reads it as a loop joint to the world, placed where the hand is at the
+    reference.
+
+    Notes
+    -----
+    ``MocapWelds("keep")`` is ``MocapWelds.KEEP``.
+    """
+
+    DROP = "drop"
+    KEEP = "keep"
 
 
 class JointType(_Choice):  # numpydoc ignore=PR01

@@ -17,6 +17,15 @@ class NoMovingBodiesError(ModelError):
     """
 
 
+class NoMotionError(ModelError):
+    """A mechanism its loop joints and couplings leave without any motion (one line naming them).
+
+    Nothing moves, so no measurement sees any inertial parameter; unlike
+    :class:`NoMovingBodiesError` this is refused: a file whose constraints lock every joint is more
+    likely a constraint read wrongly (a control device's weld, a loop frame) than a robot.
+    """
+
+
 class DataError(BaseparamsError, ValueError):
     """Bad measured data: a log file or array (names the file, column, row and the problem)."""
 

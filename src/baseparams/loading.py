@@ -8,14 +8,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .arguments import ArgumentTypeError
+from .arguments import ArgumentTypeError, brief
+from .enums import MocapWelds, values
 from .errors import BaseparamsError
 from .model.robot import Robot
 from .robots import BUILTINS, get
 
 
 def load_model(model: str, floating: bool = False, gravity=None, strict_inertia: bool = False,
-               xacro_args=None, package_path=None, drop_mocap_welds: bool = False) -> tuple[Robot, list[str]]:
+               xacro_args=None, package_path=None, mocap_welds: str = "drop") -> tuple[Robot, list[str]]:
     """``(robot, notes)``: ``model`` is a built-in name or a path (``.urdf``, ``.xacro``, ``.xml``/``.mjcf``).
 
     Files are read by :func:`.io.load.load_file` (gravity, inertia checks and loop assembly are
@@ -37,8 +38,9 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
         Arguments of a ``.xacro`` file (``{"NAME": "VALUE"}`` or ``["NAME:=VALUE", ...]``).
     package_path : str, path or list of them, optional
         Folders searched for a xacro file's ``$(find PKG)`` and ``package://PKG``.
-    drop_mocap_welds : bool, optional
-        MJCF files: leave out the welds and connects to mocap bodies (control devices).
+    mocap_welds : {'drop', 'keep'}, optional
+        MJCF files: the welds and connects to mocap bodies (control devices the simulation moves)
+        left out (``drop``, default) or kept as loop joints to the world (``keep``).
 
     Returns
     -------
@@ -71,6 +73,9 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
     for name, flag in (("floating", floating), ("strict_inertia", strict_inertia)):
         if not isinstance(flag, bool):
             raise ArgumentTypeError(f"{name}= must be True or False, got {type(flag).__name__}")
+    if not isinstance(mocap_welds, str) or mocap_welds not in values(MocapWelds):
+        raise ArgumentTypeError(f"mocap_welds= must be {' or '.join(map(repr, values(MocapWelds)))}, got "
+                                f"{brief(mocap_welds, 40)}")
     p = Path(model)
     if model.lower() in BUILTINS and not p.exists():
         if floating:
@@ -83,4 +88,4 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
     from .io.load import load_file  # the readers (and their XML, loop and xacro code) for files only
 
     return load_file(p, floating=floating, gravity=gravity, strict_inertia=strict_inertia, xacro_args=xacro_args,
-                     package_path=package_path, drop_mocap_welds=drop_mocap_welds)
+                     package_path=package_path, mocap_welds=mocap_welds)

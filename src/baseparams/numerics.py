@@ -473,7 +473,8 @@ def reference_cond(robot: Robot) -> float:
     return float(cs.cond[0]) if cs.kept else np.inf
 
 
-def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_max: float | None = None):
+def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_max: float | None = None,
+                   whole_motion: bool = False):
     """Loop-closed random states: actuated q in the robot's box, dq_a, ddq_a in (0, 1).
 
     Parameters
@@ -491,6 +492,11 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
         with millimetre lever arms, e.g. Cassie's rods; or a reference near a singular
         configuration), 3x the median of the samples' (at least 30, at most 3x the reference's):
         near a singularity the rates lose about ``cond^2`` of their precision.
+    whole_motion : bool, optional
+        Loops with a one- or two-dimensional motion sampled over all of it
+        (:func:`baseparams.kinematics.manifold.motion_samples`: the rank decision's samples)
+        instead of from actuated values in the box; such samples' actuated coordinates may lie
+        beyond what continuation from the reference reaches.
 
     Returns
     -------
@@ -505,6 +511,7 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
         The reference configuration is singular (cond(J_p) >= :data:`SINGULAR_COND`).
     """
     from .kinematics.loops import close_loops, restrict
+    from .kinematics.manifold import motion_samples
 
     na = len(robot.actuated)
     box = robot.q_box if robot.q_box is not None else np.tile([-DEFAULT_HALF_WIDTH, DEFAULT_HALF_WIDTH], (na, 1))
@@ -518,10 +525,14 @@ def closed_samples(robot: Robot, samples: int, rng: np.random.Generator, cond_ma
                 f"flat configuration), so the branch to sample is not defined; give the model at a regular "
                 f"configuration of the branch meant (e.g. move the reference off the singular one)")
         cond_max = COND_MAX if ref < COND_MAX else COND_FACTOR * ref
-    qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
-    cs = close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
-                     cond_max=cond_max)
-    if auto and cond_max > COND_MAX and cs.kept:
+    cs = motion_samples(robot, samples, rng, box, cond_max) if whole_motion else None  # 1- and 2-D loops
+    if cs is None:
+        qa = rng.uniform(box[:, 0], box[:, 1], (samples, na))
+        cs = close_loops(robot, qa, rng.uniform(0, 1, (samples, na)), rng.uniform(0, 1, (samples, na)),
+                         cond_max=cond_max)
+    if cs.motion and cs.kept:  # a trace: its conditioning is the mechanism's (a weld mixes metres and radians)
+        cs = restrict(cs, max(COND_MAX, COND_FACTOR * float(np.median(cs.cond))))
+    elif auto and cond_max > COND_MAX and cs.kept:
         # an ill-conditioned reference (near a singular configuration): the samples' rates lose
         # about cond^2 of their precision, so keep the better-conditioned part of the box
         cs = restrict(cs, max(COND_MAX, COND_FACTOR * float(np.median(cs.cond))))
@@ -532,9 +543,10 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
                       info: dict | None = None, time_scale: float = 1.0) -> np.ndarray:
     """``W (kept samples * measured rows, 10 n)``: the TP regressor on random states, stacked.
 
-    Trees: states uniform in (0, 1) (the paper). Closed loops: actuated samples in the robot's
-    box, solved exactly (:func:`baseparams.kinematics.loops.close_loops`); discarded samples
-    are counted in ``info`` (a dict filled in place) when given.
+    Trees: states uniform in (0, 1) (the paper). Closed loops: over the whole motion of loops
+    with one or two degrees of freedom (:mod:`baseparams.kinematics.manifold`), else actuated
+    samples in the robot's box, solved exactly (:func:`baseparams.kinematics.loops.close_loops`);
+    discarded samples are counted in ``info`` (a dict filled in place) when given.
 
     Parameters
     ----------
@@ -549,7 +561,8 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
         joints); only ``all`` with loops (the rows are then the actuated generalized forces).
     info : dict, optional
         Filled in place with ``requested`` and ``kept``, and for loops ``cond_max``,
-        ``not_converged``, ``branch_jumps``, ``ill_conditioned`` and ``max_loop_residual``.
+        ``not_converged``, ``branch_jumps``, ``ill_conditioned``, ``max_loop_residual`` and
+        ``motion`` (one line per group of coordinates sampled over its whole motion).
     time_scale : float, default 1
         Rates ``w``: the same states with velocities times ``w`` and accelerations times ``w^2``
         (a motion ``w`` times faster; loop closures keep holding). 1: the paper's sampling.
@@ -572,11 +585,11 @@ def stacked_regressor(robot: Robot, samples: int | None = None, seed: int = 0, r
         if rows_spec(rows) != "all":
             raise BaseparamsError(f"robot {robot.name!r}: measured rows {rows!r} are not defined with loops; "
                                   f"the generalized forces are the actuated ones")
-        cs = closed_samples(robot, samples, rng)
+        cs = closed_samples(robot, samples, rng, whole_motion=True)
         if info is not None:
             info.update(requested=cs.requested, kept=cs.kept, cond_max=cs.cond_max, not_converged=cs.not_converged,
                         branch_jumps=cs.branch_jumps, ill_conditioned=cs.ill_conditioned,
-                        max_loop_residual=cs.max_residual)
+                        max_loop_residual=cs.max_residual, motion=list(cs.motion))
         if cs.kept == 0:
             raise BaseparamsError(f"robot {robot.name!r}: none of {samples} samples closed the loops "
                                   f"({cs.not_converged} outside the workspace, {cs.branch_jumps} branch jumps, "

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..enums import Convention, Rows, Status, values
+from ..enums import Convention, MocapWelds, Rows, Status, values
 from ..errors import BaseparamsError, NoMovingBodiesError
 from . import common
 from .common import (
@@ -364,10 +364,13 @@ def _analyze_sweep(args) -> int:
 
 
 def _mocap_args(s: argparse.ArgumentParser) -> None:
-    """``--drop-mocap-welds``: an MJCF file's welds and connects to mocap bodies left out."""
-    s.add_argument("--drop-mocap-welds", action="store_true",
-                   help="MJCF: leave out the welds and connects to mocap bodies (control devices, e.g. "
-                        "Meta-World's hand); by default they are loops to the world, with a note")
+    """``--mocap-welds {drop,keep}``: an MJCF file's welds and connects to mocap bodies left out or kept."""
+    s.add_argument("--mocap-welds", choices=values(MocapWelds), default=str(MocapWelds.DROP),
+                   help="MJCF: the welds and connects to mocap bodies, control devices the simulation moves "
+                        "(Meta-World's and Fetch's hands): drop (default: left out, with a note) or keep (loop "
+                        "joints to the world)")
+    s.add_argument("--drop-mocap-welds", dest="mocap_welds", action="store_const", const=str(MocapWelds.DROP),
+                   help=argparse.SUPPRESS)  # the previous flag: now the default
 
 
 class _Parser(argparse.ArgumentParser):

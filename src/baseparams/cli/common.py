@@ -128,7 +128,7 @@ def load_robot(args) -> Robot:  # noqa: F821
                               strict_inertia=getattr(args, "strict_inertia", False),
                               xacro_args=getattr(args, "xacro_args", None),
                               package_path=getattr(args, "package_path", None),
-                              drop_mocap_welds=getattr(args, "drop_mocap_welds", False))
+                              mocap_welds=getattr(args, "mocap_welds", "drop"))
     for note in notes:
         print(f"baseparams: note: {note}", file=sys.stderr)
     hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""

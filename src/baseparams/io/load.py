@@ -5,13 +5,13 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from ..errors import BaseparamsError
+from ..errors import BaseparamsError, NoMotionError
 from ..files import MODEL_MAX_BYTES, check_input
 from ..model.robot import Robot
 
 
 def load_file(path: str | Path, floating: bool = False, gravity=None, strict_inertia: bool = False,
-              xacro_args=None, package_path=None, drop_mocap_welds: bool = False) -> tuple[Robot, list[str]]:
+              xacro_args=None, package_path=None, mocap_welds: str = "drop") -> tuple[Robot, list[str]]:
     """``(robot, notes)`` from a ``.urdf``, ``.xacro`` or ``.xml``/``.mjcf`` file.
 
     Gravity defaults to ``(0, 0, -9.81)`` for URDF files and to the model's own for MJCF. Physically
@@ -38,8 +38,9 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     package_path : str, path or list of them, optional
         Folders searched for a xacro file's ``$(find PKG)`` and ``package://PKG`` (before
         ``BASEPARAMS_PACKAGE_PATH`` and ``ROS_PACKAGE_PATH``).
-    drop_mocap_welds : bool, optional
-        MJCF: leave out the welds and connects to mocap bodies (:func:`~baseparams.io.mjcf.load_mjcf`).
+    mocap_welds : {'drop', 'keep'}, optional
+        MJCF: the welds and connects to mocap bodies left out (default) or kept as loops to the
+        world (:func:`~baseparams.io.mjcf.load_mjcf`).
 
     Returns
     -------
@@ -56,12 +57,22 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
         :data:`~baseparams.files.MODEL_MAX_BYTES`, or an unknown suffix; xacro arguments or a package
         path for a file that is not xacro; the ``xacro`` package missing for a xacro file (naming the
         extra); :class:`~baseparams.errors.ModelError` (a subclass) for an invalid model or a failed
-        expansion.
+        expansion; :class:`~baseparams.errors.NoMotionError` (a subclass) when the constraints leave the mechanism
+        no motion.
     """
     p = check_input(path, MODEL_MAX_BYTES)  # a regular file of at most 64 MB, refused before reading
     suffix = p.suffix.lower()
     if suffix != ".xacro" and (xacro_args or package_path):
         raise BaseparamsError(f"{p}: xacro arguments and a package path apply to .xacro files, not {suffix or 'this'}")
+    try:
+        return _read(p, suffix, floating, gravity, strict_inertia, xacro_args, package_path, mocap_welds)
+    except NoMotionError as exc:  # found where the file is no longer known: named here
+        raise NoMotionError(f"{p}: {exc}") from None
+
+
+def _read(p: Path, suffix: str, floating: bool, gravity, strict_inertia: bool, xacro_args, package_path,
+          mocap_welds: str) -> tuple[Robot, list[str]]:
+    """:func:`load_file` once the file is checked: the reader of its suffix, then the loops' assembly."""
     notes = []
     # each reader is imported for its own suffix only (start-up time of a one-shot command)
     with warnings.catch_warnings(record=True) as caught:
@@ -82,7 +93,7 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
             from .mjcf import load_mjcf
 
             robot = load_mjcf(p, gravity=gravity, floating=floating, strict_inertia=strict_inertia,
-                              drop_mocap_welds=drop_mocap_welds)
+                              mocap_welds=mocap_welds)
         else:
             raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xacro, .xml or .mjcf")
     notes += [str(w.message) for w in caught]

@@ -21,6 +21,8 @@ Mapping:
   joint (``relpose``/``torquescale`` ignored, with a note when not the default), ``joint`` with
   its ``polycoef`` (a polynomial of degree up to 4, from ``qpos0``) and fixed-tendon equalities
   that couple 1-dof joints linearly -> couplings; inactive equalities are skipped with a note.
+  A weld or connect to a mocap body (a control device the simulation moves) is left out with a
+  note, unless ``mocap_welds='keep'`` (:class:`~baseparams.enums.MocapWelds`).
   Actuated joints are preferred as the independent coordinates of closed loops.
 
 Missing mesh (texture, height field, skin) files: those assets and the geoms using them are
@@ -38,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..enums import MocapWelds
 from ..errors import ModelError
 from ..files import MODEL_MAX_BYTES, check_input
 from ..kinematics.loops import choose_independent
@@ -232,7 +235,7 @@ def _pose(pos, rot) -> np.ndarray:
 
 
 def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating: bool = False,
-              strict_inertia: bool = False, drop_mocap_welds: bool = False) -> Robot:
+              strict_inertia: bool = False, mocap_welds: str = "drop") -> Robot:
     """Read an MJCF file into a :class:`Robot` (see the module doc).
 
     Parameters
@@ -249,10 +252,12 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
         A top-level body without a joint gets a floating (F) joint.
     strict_inertia : bool, optional
         Physically infeasible inertias of moving bodies are errors (warnings otherwise).
-    drop_mocap_welds : bool, optional
-        Leave out the ``weld`` and ``connect`` equalities to a mocap body (a control device:
-        Meta-World's hand is welded to one), with a note; by default they are loop joints to the
-        world whose world side may be placed anywhere (:attr:`LoopJoint.anchor_free`), also noted.
+    mocap_welds : {'drop', 'keep'}, optional
+        The ``weld`` and ``connect`` equalities to a mocap body (a control device the simulation
+        moves: Meta-World's and Fetch's hands are welded to one, for actuation): ``drop``
+        (default) leaves them out, with a note; ``keep`` reads them as loop joints to the world
+        whose world side may be placed anywhere (:attr:`LoopJoint.anchor_free`), also noted
+        (:class:`~baseparams.enums.MocapWelds`).
 
     Returns
     -------
@@ -284,7 +289,7 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
     data = mj.MjData(model)
     data.qpos[:] = model.qpos0
     mj.mj_kinematics(model, data)
-    return _robot(mj, model, data, path, name, gravity, floating, strict_inertia, drop_mocap_welds)
+    return _robot(mj, model, data, path, name, gravity, floating, strict_inertia, MocapWelds(mocap_welds))
 
 
 def _check_model(model, path: Path) -> None:
@@ -354,7 +359,7 @@ class _Walk:
 
 
 def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_inertia: bool,
-           drop_mocap_welds: bool = False) -> Robot:
+           mocap_welds: MocapWelds = MocapWelds.DROP) -> Robot:
     gravity = _gravity(mj, model, path, gravity)
     mname = model.names.split(b"\0", 1)[0].decode()
     b = RobotBuilder(name or (mname if mname and mname != "MuJoCo Model" else path.stem), gravity=gravity)
@@ -363,7 +368,7 @@ def _robot(mj, model, data, path: Path, name, gravity, floating: bool, strict_in
     for i in range(1, model.nbody):
         _add_body(mj, model, data, path, b, w, i, bnames[i], floating, strict_inertia)
     couplings = _equalities(mj, model, data, path, b, bnames, w.link_of, w.t_link, w.joint_names, w.dof_map,
-                            drop_mocap_welds)
+                            mocap_welds)
     robot = b.build()
     robot = replace(robot, armature=np.array(w.armature))
     if couplings:
@@ -495,7 +500,7 @@ def _preferred_coordinates(mj, model, robot: Robot, dof_map: dict[int, int]) -> 
 
 
 def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link, joint_names, dof_map,
-                drop_mocap_welds: bool = False) -> list:
+                mocap_welds: MocapWelds = MocapWelds.DROP) -> list:
     """Add loop joints for connect/weld; return the couplings (joint and fixed-tendon equalities)."""
     couplings: list[Coupling] = []
     eq = mj.mjtEq
@@ -521,7 +526,7 @@ def _equalities(mj, model, data, path, b: RobotBuilder, bnames, link_of, t_link,
                 warnings.warn(f"{what}: both sides are on one rigid body: no constraint, skipped",
                               MJCFWarning, stacklevel=3)
                 continue
-            mocap = _mocap(model, bnames, b1, b2, what, drop_mocap_welds)
+            mocap = _mocap(model, bnames, b1, b2, what, mocap_welds)
             if mocap is None:
                 continue
             i1 = -1 if l1 is None else b.body_index(l1)
@@ -567,19 +572,21 @@ def _loop_frames(model, data, e: int, kind: str, site: int, what: str):
     return b1, b2, t2, t2
 
 
-def _mocap(model, bnames, b1: int, b2: int, what: str, drop: bool) -> bool | None:
-    """Whether a weld or connect ties a body to a mocap body (noted); None when it is dropped (``drop``)."""
+def _mocap(model, bnames, b1: int, b2: int, what: str, mode: MocapWelds) -> bool | None:
+    """Whether a weld or connect ties a body to a mocap body (noted); None when it is left out (``drop``)."""
     mocap = [bnames[x] for x in (b1, b2) if int(model.body_mocapid[x]) >= 0]
     if not mocap:
         return False
     other = bnames[b2 if int(model.body_mocapid[b1]) >= 0 else b1]
-    if drop:
-        warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}: dropped (drop_mocap_welds)",
-                      MJCFWarning, stacklevel=4)
+    if mode == MocapWelds.DROP:
+        warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}, a control device the simulation moves "
+                      f"(actuation): left out, {other!r} moves with its joints (mocap_welds='keep', "
+                      f"--mocap-welds keep, "
+                      f"keeps it as a loop joint to the world)", MJCFWarning, stacklevel=4)
         return None
-    warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}, a control device (the simulation moves "
-                  f"it): honoured as a loop joint to the world, placed where the hand is at the reference; "
-                  f"drop_mocap_welds (--drop-mocap-welds) leaves it out", MJCFWarning, stacklevel=4)
+    warnings.warn(f"{what}: ties {other!r} to the mocap body {mocap[0]!r}, a control device the simulation moves: kept "
+                  f"as a loop joint to the world (mocap_welds='keep'), placed where {other!r} is at the reference",
+                  MJCFWarning, stacklevel=4)
     return True
 
 

@@ -92,12 +92,22 @@ def _parse(path: Path, data: bytes | None = None) -> ET.Element:
             line, col = getattr(exc, "position", (0, 0))
             msg = str(exc).split(":", 1)[0] if ": line" in str(exc) else str(exc)
             raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
-    _foreign_elements(root, path, undeclared)
+    declared = {uri.decode(errors="replace"): prefix.decode(errors="replace")
+                for prefix, uri in reversed(_DECLARATION.findall(body))}  # the first declaration of a URI names it
+    _foreign_elements(root, path, undeclared, declared)
     return root
 
 
 #: the namespace given to a prefix a file uses without declaring it (Drake's ``drake:``, read as Drake reads them)
 _UNDECLARED = "urn:baseparams:undeclared:"
+#: Drake's namespace, as its documentation declares it (``xmlns:drake="http://drake.mit.edu"``)
+DRAKE_NAMESPACE = "http://drake.mit.edu"
+_DECLARATION = re.compile(rb"xmlns:([A-Za-z_][\w.-]*)\s*=\s*[\"']([^\"']*)[\"']")
+
+
+def _is_drake(uri: str) -> bool:
+    """Whether a namespace is Drake's: its URI, or the ``drake`` prefix used undeclared (as Drake's files do)."""
+    return uri.rstrip("/") == DRAKE_NAMESPACE or uri == f"{_UNDECLARED}drake"
 _PREFIX_USE = re.compile(rb"<\s*/?\s*([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=")
 
 
@@ -123,14 +133,16 @@ def _declare_prefixes(body: bytes, exc: ET.ParseError) -> tuple[ET.Element | Non
         return None, []
 
 
-def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str]) -> None:
+def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str], declared: dict[str, str]) -> None:
     """Drake's extensions read as Drake reads them, every other namespaced element or attribute dropped and counted.
 
-    ``<drake:joint>`` (ball, universal, planar: joints URDF lacks) becomes a ``<joint>``,
-    ``<drake:ball_constraint>`` a spherical ``<loop>``; any other element or attribute in a
-    namespace (``drake:`` collision filters, rotor inertia, gear ratio, hydroelastic properties,
-    acceleration limits, ...) describes no rigid body: it is removed, and one warning counts
-    what was left out (and names the prefixes used without a declaration).
+    Namespaces are honoured as declared: only elements in Drake's namespace (:func:`_is_drake`) are
+    read, ``<drake:joint>`` (ball, universal, planar and the standard types) as a ``<joint>`` and
+    ``<drake:ball_constraint>`` as a spherical ``<loop>``. Any other element or attribute in a
+    namespace -- Drake's collision filters, rotor inertia, gear ratio, hydroelastic properties,
+    acceleration limits, or anything of another namespace (``<foo:joint>`` is not a URDF joint) --
+    is removed, and one warning counts what was left out (and names the prefixes used without a
+    declaration). ``declared``: prefix of each declared namespace URI, for the messages.
     """
     dropped: dict[str, int] = {}
     stack = [root]
@@ -138,41 +150,58 @@ def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str]) -> No
         parent = stack.pop()
         for child in list(parent):
             if isinstance(child.tag, str) and child.tag.startswith("{"):
-                local = child.tag.split("}", 1)[1]
-                if local == "ball_constraint":
+                uri, local = child.tag[1:].split("}", 1)
+                if _is_drake(uri) and local == "ball_constraint":
                     parent.remove(child)
                     parent.append(_ball_constraint_loop(child, path))
                     continue
-                if not (local == "joint" and _drake_joint(child, path)):
-                    shown = f"<{_shown_name(child.tag, undeclared)}>"
+                if not (_is_drake(uri) and local == "joint" and _drake_joint(child, path)):
+                    shown = f"<{_shown_name(child.tag, declared)}>"
                     dropped[shown] = dropped.get(shown, 0) + 1
                     parent.remove(child)
                     continue
             stack.append(child)
     for elem in root.iter():
         for key in [k for k in elem.attrib if k.startswith("{")]:
-            shown = _shown_name(key, undeclared)
+            shown = _shown_name(key, declared)
             dropped[shown] = dropped.get(shown, 0) + 1
             del elem.attrib[key]
     if not dropped and not undeclared:
         return
-    what = ", ".join(f"{k} x{v}" if v > 1 else k for k, v in sorted(dropped.items()))
-    head = (f"namespace prefixes {', '.join(repr(p) for p in undeclared)} used without a declaration: read leniently "
-            f"(as Drake does); " if undeclared else "")
-    warnings.warn(f"{path}: {head}{sum(dropped.values())} namespaced elements and attributes describe no rigid body "
-                  f"and were ignored{': ' + what if what else ''}", URDFWarning, stacklevel=4)
+    warnings.warn(f"{path}: {_foreign_note(dropped, undeclared)}", URDFWarning, stacklevel=4)
 
 
-def _shown_name(tag: str, undeclared: list[str]) -> str:
+def _foreign_note(dropped: dict[str, int], undeclared: list[str]) -> str:
+    """The one note on namespaced content: Drake's that describes no rigid body, then other namespaces'."""
+    def listed(items: dict[str, int]) -> str:
+        return ", ".join(f"{k} x{v}" if v > 1 else k for k, v in sorted(items.items()))
+
+    drake = {k: v for k, v in dropped.items() if k.lstrip("<").startswith("drake:")}
+    other = {k: v for k, v in dropped.items() if k not in drake}
+    parts = [f"namespace prefixes {', '.join(repr(p) for p in undeclared)} used without a declaration: read "
+             f"leniently (as Drake does)"] if undeclared else []
+    if drake:
+        parts.append(f"{sum(drake.values())} namespaced elements and attributes describe no rigid body and were "
+                     f"ignored: {listed(drake)}")
+    if other:
+        parts.append(f"{sum(other.values())} elements and attributes of other namespaces are not URDF (nor Drake's) "
+                     f"and were ignored: {listed(other)}")
+    return "; ".join(parts)
+
+
+def _shown_name(tag: str, declared: dict[str, str]) -> str:
     """``{uri}local`` as the file wrote it: ``prefix:local`` (Drake's namespace as ``drake:``)."""
     uri, local = tag[1:].split("}", 1)
+    if _is_drake(uri):
+        return f"drake:{local}"
     if uri.startswith(_UNDECLARED):
         return f"{uri[len(_UNDECLARED):]}:{local}"
-    return f"drake:{local}" if "drake" in uri else f"{{{uri}}}{local}"
+    return f"{declared[uri]}:{local}" if uri in declared else f"{{{uri}}}{local}"
 
 
-#: Drake's custom joint types and ours; ``screw`` and ``curvilinear`` have no counterpart
-_DRAKE_JOINTS = {"ball": "ball", "universal": "universal", "planar": "planar"}
+#: the ``<drake:joint>`` types read (Drake's custom ones and the standard URDF ones); ``screw`` and
+#: ``curvilinear`` have no counterpart
+_DRAKE_JOINTS = ("ball", "universal", "planar", "revolute", "continuous", "prismatic", "fixed", "floating")
 
 
 def _drake_joint(elem: ET.Element, path: Path) -> bool:
@@ -180,10 +209,10 @@ def _drake_joint(elem: ET.Element, path: Path) -> bool:
     t = elem.get("type")
     if t not in _DRAKE_JOINTS:
         raise ModelError(f"{path}: <drake:joint name={elem.get('name')!r}>: Drake's {t!r} joint is not supported "
-                         f"(ball, universal and planar are)")
+                         f"(ball, universal, planar and the URDF types {', '.join(_DRAKE_JOINTS[3:])} are)")
     elem.tag = "joint"
-    for sub in elem.iter():
-        if isinstance(sub.tag, str) and sub.tag.startswith("{"):
+    for sub in elem.iter():  # Drake's own children as the joint's; another namespace's are dropped by the caller
+        if isinstance(sub.tag, str) and sub.tag.startswith("{") and _is_drake(sub.tag[1:].split("}", 1)[0]):
             sub.tag = sub.tag.split("}", 1)[1]
     if t == "universal" and elem.find("axis2") is None:  # Drake: about the joint frame's x, then the moved y
         for old in elem.findall("axis"):
@@ -327,11 +356,32 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         b.q_box = _sampling_box(limits)
     try:
         robot = b.build()
-    except NoMovingBodiesError as exc:
-        raise NoMovingBodiesError(f"{path}: {exc}") from None
+    except ModelError as exc:  # the builder names the robot; the file is named here
+        raise type(exc)(f"{path}: {exc}") from None
     if couplings:
         robot = _with_couplings(robot, couplings, path)
-    return _with_limits(robot, ix, path)
+    robot = _with_limits(robot, ix, path)
+    if has_loops and not any("independent" in j.attrib for j in ix.joints.values()):
+        robot = _independent_from_loops(robot, path)
+    return robot
+
+
+def _independent_from_loops(robot: Robot, path: Path) -> Robot:
+    """A loop robot whose file marks no joint ``independent`` (Drake's ball constraints): chosen from the loops.
+
+    URDF+ makes every joint independent unless marked; with loops that over-determines the passive
+    ones (no sample closes them). As for MJCF, the independent coordinates are chosen from the
+    constraints at q = 0 (:func:`~baseparams.kinematics.loops.choose_independent`, mimicking joints
+    passive first), with a note.
+    """
+    from ..kinematics.loops import choose_independent
+
+    chosen = choose_independent(robot, set(robot.actuated))
+    names = [chosen.joint_names[chosen.dof_body[j]] for j in chosen.actuated]
+    warnings.warn(f"{path}: no joint says which coordinates are independent (URDF+ independent=\"false\" on the "
+                  f"passive ones) and the loops ({', '.join(lj.name for lj in robot.loops)}) tie them: chosen from the "
+                  f"constraints at q = 0, independent {names}", URDFWarning, stacklevel=3)
+    return chosen
 
 
 def _index_links(root: ET.Element, path: Path) -> dict[str, ET.Element]:

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..display import summary_repr
-from ..errors import BaseparamsError, ModelError
+from ..errors import BaseparamsError, ModelError, NoMotionError
 from ..model.robot import Robot
 from ..pga.linalg import cross3_first, perp_basis
 from .tree import Poses, as_states, poses, re_reference
@@ -418,6 +418,9 @@ class ClosedStates:
         Largest loop residual of the kept samples (nan when none is kept).
     cond_max : float, optional
         The conditioning threshold used.
+    motion : tuple of str, optional
+        One line per group of coordinates sampled over its whole motion
+        (:mod:`baseparams.kinematics.manifold`); empty when every sample was closed from the box.
     """
 
     q: np.ndarray
@@ -431,6 +434,7 @@ class ClosedStates:
     ill_conditioned: int
     max_residual: float
     cond_max: float = 30.0
+    motion: tuple[str, ...] = ()
 
     __repr__ = summary_repr
 
@@ -546,7 +550,100 @@ def restrict(cs: ClosedStates, cond_max: float) -> ClosedStates:
         return ClosedStates(**{**cs.__dict__, "cond_max": cond_max})
     err = float(cs.max_residual) if keep.any() else float("nan")  # an upper bound for the subset
     return ClosedStates(cs.q[keep], cs.dq[keep], cs.ddq[keep], cs.G[keep], cs.cond[keep], cs.requested,
-                        cs.not_converged, cs.branch_jumps, cs.ill_conditioned + int((~keep).sum()), err, cond_max)
+                        cs.not_converged, cs.branch_jumps, cs.ill_conditioned + int((~keep).sum()), err, cond_max,
+                        cs.motion)
+
+
+def closed_states(robot: Robot, q: np.ndarray, dqa: np.ndarray | None = None, ddqa: np.ndarray | None = None,
+                  cond_max: float = 30.0, tol: float = 1e-9, rechart: bool = False) -> ClosedStates:
+    """States at configurations already on the loops: exact rates from independent ``dq_a, ddq_a``.
+
+    Samples whose largest loop residual is ``tol`` or more are discarded (counted as not
+    converged), and those with ``cond(K_p) >= cond_max`` (ill-conditioned).
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops (``na = len(robot.actuated)``).
+    q : ndarray, shape ``(S, dof)``
+        Tree coordinates on the loops (e.g. :mod:`baseparams.kinematics.manifold`'s traces).
+    dqa, ddqa : ndarray, shape ``(S, na)``, optional
+        Independent velocities and accelerations; default zero.
+    cond_max : float, optional
+        Conditioning threshold.
+    tol : float, optional
+        Largest loop residual of a kept sample.
+    rechart : bool, optional
+        Each sample's independent coordinates chosen there (:func:`local_charts`: the actuated
+        ones unless the passive Jacobian is better conditioned with others), so that a loop's
+        whole motion is covered through the turning points of the actuated coordinates. The
+        rows of a closed regressor are then each sample's own independent generalized forces:
+        the same span per sample, so the same rank.
+
+    Returns
+    -------
+    ClosedStates
+        The kept samples, ``G = dq/dq_a`` (``rechart``: per sample, ``dq`` over that sample's
+        independent coordinates) and the counts (no branch jumps: none is continued).
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    s, na = q.shape[0], len(robot.actuated)
+    dqa = np.zeros((s, na)) if dqa is None else np.asarray(dqa, dtype=float)
+    ddqa = np.zeros((s, na)) if ddqa is None else np.asarray(ddqa, dtype=float)
+    plan = _plan(robot, elementary_constraints(robot))
+    r, k, _ = _eval(plan, q, np.arange(robot.dof))
+    err = np.abs(r).max(axis=0) if len(r) else np.zeros(s)
+    k = np.ascontiguousarray(k.transpose(2, 0, 1))
+    charts = np.broadcast_to(np.asarray(robot.actuated, dtype=int), (s, na))
+    if rechart:
+        charts = local_charts(robot, k, cond_max)
+    cond = np.empty(s)
+    g, dq, ddq = np.zeros((s, robot.dof, na)), np.zeros((s, robot.dof)), np.zeros((s, robot.dof))
+    for chart in np.unique(charts, axis=0):
+        at = np.flatnonzero((charts == chart).all(axis=1))
+        pas = _passive(robot.dof, chart)
+        cond[at] = _conditioning(k[at][:, :, pas], len(pas))
+        kp_inv = _passive_pinv(k[at][:, :, pas], cond[at])
+        g[at], dq[at], ddq[at] = _closed_rates(plan, q[at], k[at], kp_inv, chart, pas, dqa[at], ddqa[at])
+    on = err < tol
+    keep = on & (cond < cond_max)
+    return ClosedStates(q[keep], dq[keep], ddq[keep], g[keep], cond[keep], s, int((~on).sum()), 0,
+                        int((on & ~keep).sum()), float(err[keep].max()) if keep.any() else float("nan"),
+                        float(cond_max))
+
+
+def local_charts(robot: Robot, k: np.ndarray, cond_max: float = 30.0) -> np.ndarray:
+    """Each sample's independent coordinates ``(S, na)``: the actuated ones where they serve, else the best.
+
+    The robot's actuated coordinates where the passive Jacobian ``K_p`` is conditioned below
+    ``cond_max``; elsewhere (near a turning point of an actuated coordinate) the coordinates left
+    by a column-pivoted QR of the sample's constraint Jacobian (the best-conditioned passive set,
+    as :func:`choose_independent`); always ``na = len(robot.actuated)`` of them, sorted.
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with loops.
+    k : ndarray, shape ``(S, m, dof)``
+        The constraint Jacobian at each sample.
+    cond_max : float, optional
+        Conditioning up to which the actuated coordinates are kept.
+
+    Returns
+    -------
+    ndarray of int, shape ``(S, na)``
+        The independent coordinates of each sample.
+    """
+    from scipy.linalg import qr
+
+    act = np.asarray(robot.actuated, dtype=int)
+    na = len(act)
+    out = np.tile(act, (k.shape[0], 1))
+    pas = _passive(robot.dof, act)
+    for i in np.flatnonzero(~(_conditioning(k[:, :, pas], len(pas)) < cond_max)):
+        piv = qr(k[i], pivoting=True, mode="r")[1]
+        out[i] = np.sort(piv[robot.dof - na:])
+    return out
 
 
 def _conditioning(kp: np.ndarray, npas: int) -> np.ndarray:
@@ -760,7 +857,8 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     ------
     ModelError
         No regular assembled configuration found near q = 0 (actuated offsets up to +-0.3, from
-        q = 0 and 20 random starts), or one that needs re-referencing a robot with S joints.
+        q = 0 and 20 random starts), or one that needs re-referencing a robot with S joints;
+        :class:`~baseparams.errors.NoMotionError` when the constraints leave no motion.
     """
     from dataclasses import replace
 
@@ -770,6 +868,8 @@ def assemble(robot: Robot, cond_max: float = 1e6, tol: float = 1e-10) -> tuple[R
     pas = _passive(robot.dof, act)
     ev = evaluate(robot, np.zeros((1, robot.dof)))
     res0 = float(np.abs(ev.r).max()) if ev.r.size else 0.0
+    if res0 < tol and _jacobian_rank(ev.K[0])[0] >= robot.dof:  # assembled and locked: no rank nearby is higher
+        raise no_motion(robot, robot.dof)
     sv = np.linalg.svd(ev.K[0][:, pas], compute_uv=False) if len(pas) else np.ones(1)
     if not len(pas):
         cond0 = 1.0
@@ -979,6 +1079,11 @@ def choose_independent(robot: Robot, prefer_independent: set[int] | None = None,
     Robot
         The robot with ``independent`` set (the coordinates outside the passive set) and
         ``q_box`` reset to None.
+
+    Raises
+    ------
+    NoMotionError
+        The constraints leave no coordinate independent (:func:`no_motion`).
     """
     from dataclasses import replace
 
@@ -995,4 +1100,32 @@ def choose_independent(robot: Robot, prefer_independent: set[int] | None = None,
     rank = int(np.sum(diag > rtol * max(diag.max(initial=0.0), 1e-300)))
     passive = set(int(j) for j in piv[:rank])
     independent = tuple(j for j in range(robot.dof) if j not in passive)
+    if not independent:
+        raise no_motion(robot, rank)
     return replace(robot, independent=independent, q_box=None)
+
+
+def no_motion(robot: Robot, rank: int) -> NoMotionError:
+    """The error for a mechanism its constraints lock: one line naming them and what would help.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (``dof`` coordinates).
+    rank : int
+        Rank of its constraint Jacobian (``dof``: no motion left).
+
+    Returns
+    -------
+    NoMotionError
+        ``robot NAME: the constraints (...) leave this mechanism no motion ...``.
+    """
+    names = [lj.name for lj in robot.loops] + [c.name for c in robot.couplings]
+    free = [lj.name for lj in robot.loops if lj.anchor_free]
+    hint = (f"{', '.join(free)} {'ties' if len(free) == 1 else 'tie'} a body to a control device (a mocap body): "
+            f"leave {'it' if len(free) == 1 else 'them'} out (mocap_welds='drop', --mocap-welds drop)" if free
+            else "remove a constraint, or check the loop frames and the joints' axes")
+    return NoMotionError(f"robot {robot.name!r}: the constraints ({', '.join(names)}) leave this mechanism no motion "
+                         f"(their Jacobian has rank {rank} on its {robot.dof} coordinates): every body is held still, "
+                         f"so "
+                         f"no measurement sees any inertial parameter; {hint}")

@@ -373,6 +373,9 @@ class RobotBuilder:
                 if a is None or a:  # unspecified = independent (URDF+ default)
                     independent += list(range(k, k + nd))
                 k += nd
+            if not independent:
+                raise ModelError(f"robot {self.name!r}: every joint is marked passive (independent=\"false\"): "
+                                 f"nothing drives the mechanism; mark its actuated joints independent")
         armature = None
         if any(a is not None for a in self._armature):
             armature = np.concatenate([np.zeros(joint_ndof(t, ax)) if a is None else a

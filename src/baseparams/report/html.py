@@ -443,6 +443,7 @@ def _certification(result) -> str:
         sampling += (f" ({s['not_converged']} outside the workspace, {s['branch_jumps']} off the reference branch "
                      f"or past a singular configuration, "
                      f"{s['ill_conditioned']} ill-conditioned; max loop residual {s['max_loop_residual']:.1e})")
+        sampling += "".join(f"; {line}" for line in s.get("motion", ()))
     return (f"<h2>Certification: {html.escape(str(cert.status))}</h2><p>{html.escape(cert.message)}</p>"
             f"<p>Singular values of the sampled regressor (log scale); dashed red: the tolerance "
             f"({num.tol:.3g}); dotted blue: the rank decision, singular-value gap {num.gap:.3g}.</p>"

@@ -11,7 +11,8 @@ from ..model.robot import Robot
 
 
 def load_file(path: str | Path, floating: bool = False, gravity=None, strict_inertia: bool = False,
-              xacro_args=None, package_path=None, drop_mocap_welds: bool = False) -> tuple[Robot, list[str]]:
+              xacro_args=None, package_path=None, drop_mocap_welds: bool = False,
+              edit=None) -> tuple[Robot, list[str]]:
     """``(robot, notes)`` from a ``.urdf``, ``.xacro`` or ``.xml``/``.mjcf`` file.
 
     Gravity defaults to ``(0, 0, -9.81)`` for URDF files and to the model's own for MJCF. Physically
@@ -40,6 +41,11 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
         ``BASEPARAMS_PACKAGE_PATH`` and ``ROS_PACKAGE_PATH``).
     drop_mocap_welds : bool, optional
         MJCF: leave out the welds and connects to mocap bodies (:func:`~baseparams.io.mjcf.load_mjcf`).
+    edit : callable, optional
+        Called with the parsed document before the robot is built (URDF and xacro: the root
+        element; MJCF: the ``MjSpec``): :mod:`baseparams.io.snapfile` re-reads a file with rounded
+        right angles exact. Without it, the robot's ``source`` records the file and these options
+        (:class:`~baseparams.model.snap.FileSource`).
 
     Returns
     -------
@@ -72,17 +78,17 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
 
             data, notes = expand_xacro(p, xacro_args, package_path)
             g = (0.0, 0.0, -9.81) if gravity is None else gravity
-            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, data=data)
+            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, data=data, edit=edit)
         elif suffix == ".urdf":
             from .urdf import load_urdf
 
             g = (0.0, 0.0, -9.81) if gravity is None else gravity
-            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia)
+            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, edit=edit)
         elif suffix in (".xml", ".mjcf"):
             from .mjcf import load_mjcf
 
             robot = load_mjcf(p, gravity=gravity, floating=floating, strict_inertia=strict_inertia,
-                              drop_mocap_welds=drop_mocap_welds)
+                              drop_mocap_welds=drop_mocap_welds, edit=edit)
         else:
             raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xacro, .xml or .mjcf")
     notes += [str(w.message) for w in caught]
@@ -92,4 +98,11 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
         robot, _, note = assemble(robot)
         if note:
             notes.append(f"{p}: {note}")
+    if edit is None:
+        from ..model.snap import FileSource, geometry_fingerprint
+
+        options = {"floating": floating, "gravity": gravity, "strict_inertia": strict_inertia,
+                   "xacro_args": xacro_args, "package_path": package_path, "drop_mocap_welds": drop_mocap_welds}
+        # set on the robot just built (validated once; a frozen dataclass): where it was read from
+        object.__setattr__(robot, "source", FileSource(str(p), options, geometry_fingerprint(robot)))
     return robot, notes

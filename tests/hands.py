@@ -20,6 +20,7 @@ every number exact (``repr``), no mate errors. URDF (``<origin rpy>``) or MJCF (
 from __future__ import annotations
 
 import itertools
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -260,7 +261,10 @@ def _orientation(w: _Writer, element: str, r: np.ndarray, form: int) -> str:
         q = rot.as_quat(scalar_first=True)
         return f'quat="{" ".join(w.num(x) for x in q)}"'
     if form == 1:
-        return f'euler="{" ".join(w.num(x) for x in np.degrees(rot.as_euler("XYZ")))}"'
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # gimbal lock: scipy sets the third angle to zero, as an exporter may
+            ang = rot.as_euler("XYZ")
+        return f'euler="{" ".join(w.num(x) for x in np.degrees(ang))}"'
     v = rot.as_rotvec()
     ang = float(np.linalg.norm(v))
     ax = v / ang if ang > 0 else np.array([0.0, 0.0, 1.0])

@@ -104,7 +104,8 @@ def test_undecided_cad_arms_are_decided_only_at_a_gap(tmp_path):
                 assert a.status == "undecided" and pr is not None and not pr.decided
                 c = pr.straddling
                 assert c.top > PRACTICAL_TOL >= c.bottom and [n for n, _ in pr.candidates()] == [c.first, c.stop]
-                assert "no gap decides" in a.certificate.message and f"{c.first} base parameters" in a.certificate.message
+                message = a.certificate.message
+                assert "no gap decides" in message and f"{c.first} base parameters" in message
                 k = int(np.sum(s > PRACTICAL_TOL))  # Pinocchio's count at the threshold lies in no gap
                 assert s[k - 1] / s[k] < 100, (seed, kind)
     assert decided >= 10 and undecided >= 5, (decided, undecided)
@@ -264,3 +265,25 @@ def test_counted_out_directions_move_the_torques_below_the_threshold(tmp_path):
         assert c.nullity == c.practical.nullity and effect.max() < 3 * PRACTICAL_TOL
         return
     pytest.fail("no CAD arm was undecided")
+
+
+def test_a_threshold_inside_a_cluster_is_undecided_with_the_clusters(tmp_path, capsys):
+    """A CAD arm written to six digits in generic frames (nothing to snap): its rounding directions spread from
+    2.7e-9 to 1.9e-6 of the torque scale, around the 1e-6 threshold: UNDECIDED (exit 3), the report and JSON
+    listing the clusters, the two candidate counts and what would decide it; the HTML report too."""
+    _, path = _load(tmp_path, cad_chain(0, digits=6), "c.urdf")
+    assert main(["analyze", str(path)]) == EXIT_UNDECIDED
+    out, err = capsys.readouterr()
+    line = next(x for x in out.splitlines() if x.startswith("rank not decided"))
+    assert "falls inside a cluster" in line and "12 at 2.7e-09 - 1.9e-06" in line
+    assert "no gap decides" in err and "21 base parameters if" in err and "33 base parameters if" in err
+    assert main(["analyze", str(path), "--json"]) == EXIT_UNDECIDED
+    j = json.loads(capsys.readouterr().out)
+    d, pr = j["rank_decision"], j["practical_rank"]
+    assert d["by"] == "practical" and not d["decided"] and not pr["decided"]
+    assert [c["rank"] for c in pr["candidates"]] == [21, 33]
+    assert [(c["first"], c["count"]) for c in d["clusters"]][:2] == [(0, 21), (21, 12)]
+    html = tmp_path / "r.html"
+    assert main(["analyze", str(path), "--html", str(html)]) == EXIT_UNDECIDED
+    capsys.readouterr()
+    assert "rank-decision" in html.read_text() and "falls inside a cluster" in html.read_text()

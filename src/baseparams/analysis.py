@@ -546,7 +546,8 @@ class Analysis:
         dict or None
             ``by`` (``literal``: the certification's singular values at its tolerance;
             ``practical``: each direction's effect on the torques; ``structured``: body by body),
-            ``decided``, ``rank``, ``gap`` (the ratio across the cut, None when infinite),
+            ``decided``, ``rank`` (None when not decided), ``gap`` (the ratio across the cut at the
+            tolerance, None when infinite),
             ``smallest_kept`` and ``largest_out`` (relative to the largest), ``bound`` (the
             tolerance the cut had to fall at), ``clusters`` ``[{first, count, top, bottom, spread,
             gap_below}]``, ``snapped`` (the count is that of the file with the values
@@ -558,7 +559,8 @@ class Analysis:
         snapped = self.practical is not None
         if c.practical is not None:
             p = c.practical.to_json()
-            return {"by": "practical", "decided": p["decided"], "rank": p["rank"], "gap": p["gap"],
+            return {"by": "practical", "decided": p["decided"], "rank": p["rank"] if p["decided"] else None,
+                    "gap": p["gap"],
                     "smallest_kept": p["smallest_kept"], "largest_out": p["largest_out"], "bound": p["threshold"],
                     "clusters": p["clusters"], "snapped": snapped}
         nm = c.numerical
@@ -568,7 +570,7 @@ class Analysis:
                     "gap": None if not np.isfinite(nm.gap) else nm.gap, "smallest_kept": None, "largest_out": None,
                     "bound": nm.rtol, "clusters": [], "snapped": snapped}
         v = spec.values
-        return {"by": "literal", "decided": bool(nm.decided), "rank": nm.rank,
+        return {"by": "literal", "decided": bool(nm.decided), "rank": nm.rank if nm.decided else None,
                 "gap": None if not np.isfinite(nm.gap) else nm.gap,
                 "smallest_kept": float(v[nm.rank - 1]) if nm.rank else None,
                 "largest_out": float(v[nm.rank]) if nm.rank < len(v) else None, "bound": nm.rtol,
@@ -676,12 +678,11 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     lit = _analyze(robot, **kw)
     if literal:
         return lit
-    # geometry near a special value first (the literal count is the file's); a rank the gap still
-    # cannot decide is then decided by the directions' effect on the torques (nullspace.practical)
-    out = practical_analysis(lit, {**kw, "practical": True})
-    if out is lit and lit.status == Status.UNDECIDED:
-        return _analyze(robot, **kw, practical=True)
-    return out
+    # the file as written: a rank the literal gap cannot decide is decided by the directions' effect on
+    # the torques (nullspace.practical), at a gap of those effects or not at all; then geometry near a
+    # special value, taken exact where that states a lower count at a gap
+    ref = _analyze(robot, **kw, practical=True) if lit.status == Status.UNDECIDED else lit
+    return practical_analysis(lit, {**kw, "practical": True}, ref)
 
 
 #: the forms of the regrouped expressions (:func:`analyze`)
@@ -880,12 +881,19 @@ def _snap_candidates(robot: Robot):
 
 
 def _quick_rank(robot: Robot, kw: dict):
-    """The literal rank decision of ``robot`` alone (no DRNG): the stacked regressor on ``pi / d``, its SVD."""
+    """The literal rank decision of ``robot`` alone (no DRNG): the stacked regressor on ``pi / d``, its SVD.
+
+    Unless ``samples`` is given, three rows per parameter (and 20 states more): the bisection's many
+    comparisons need no more (a loop robot's default, 5 000 actuated samples, took 0.5 s a comparison).
+    """
     from .model.scale import decision_scale
-    from .numerics import rank_decision, stacked_regressor
+    from .numerics import rank_decision, row_mask, stacked_regressor
 
     d = decision_scale(robot, "paper")
-    return rank_decision(stacked_regressor(robot, kw.get("samples"), kw.get("seed", 0), kw.get("rows", "all")) * d)
+    rows = kw.get("rows", "all")
+    per = len(robot.actuated) if robot.has_loops else int(row_mask(robot, rows).sum())
+    samples = kw.get("samples") or 20 + int(np.ceil(30 * robot.n / max(per, 1)))
+    return rank_decision(stacked_regressor(robot, samples, kw.get("seed", 0), rows) * d)
 
 
 def _responsible(found: list, make, target: int, kw: dict) -> list:
@@ -915,17 +923,18 @@ def _responsible(found: list, make, target: int, kw: dict) -> list:
     return out
 
 
-def practical_analysis(lit: Analysis, kw: dict) -> Analysis:
+def practical_analysis(lit: Analysis, kw: dict, ref: Analysis | None = None) -> Analysis:
     """The analysis with geometry stated to within rounding of a special value taken as that value.
 
     The values are the file's own where the robot was read from a file and not changed since
     (:func:`baseparams.io.snapfile.file_snaps`, each named by its element), else the model's
     frames (:func:`baseparams.model.snap.near_special`). When the model with every such value
     exact states its count at a gap (certified or completed, literally or by effect) and that
-    count is below the literal one (or the literal one is not decided), the values responsible
-    are found by bisection over the file's elements (keeping a group as written: the count rises,
-    or no gap decides) and the analysis of the model with them exact is returned with
-    :class:`Practical`; otherwise the literal analysis.
+    count is below the file's as written (``ref``; any count when that one is not decided), the
+    values responsible are found by bisection over the file's elements (keeping a group as
+    written: the count rises, or no gap decides) and the analysis of the model with them exact is
+    returned with :class:`Practical`; otherwise ``ref``. Snapping that does not lower the count
+    (a frame turned by a chance near-right angle that moves a designed axis) is not used.
 
     Parameters
     ----------
@@ -933,26 +942,29 @@ def practical_analysis(lit: Analysis, kw: dict) -> Analysis:
         The literal analysis.
     kw : dict
         :func:`analyze`'s keywords (as the literal analysis ran).
+    ref : Analysis, optional
+        The file as written, decided by effect where the literal gap cannot (default ``lit``).
 
     Returns
     -------
     Analysis
-        ``lit`` or the snapped model's analysis.
+        ``ref`` or the snapped model's analysis.
     """
     from dataclasses import replace
 
     from .model.snap import SNAP_TOL, robot_size
 
+    ref = lit if ref is None else ref
     robot = lit.robot
     found, make = _snap_candidates(robot)
     if not found:
-        return lit
+        return ref
     try:
         snap_all = _analyze(make(found), **kw)
     except BaseparamsError:  # the file read again with the values exact is refused: taken as it is
-        return lit
-    if not _decided(snap_all) or (_decided(lit) and snap_all.n_base >= lit.n_base):
-        return lit
+        return ref
+    if not _decided(snap_all) or (_decided(ref) and snap_all.n_base >= ref.n_base):
+        return ref
     snaps, final = tuple(found), snap_all
     quick = _quick_rank(snap_all.robot, kw)
     if quick.decided and quick.rank == snap_all.n_base and len(found) > 1:

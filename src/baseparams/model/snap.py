@@ -22,9 +22,10 @@ each joint frame relative to its parent's is read as roll-pitch-yaw angles and a
 * an offset component within :data:`SNAP_TOL` of zero relative to the robot's size
   (:func:`robot_size`: its extent, at most ten of its longest links), or an axis component within
   :data:`SNAP_TOL` of zero relative to the axis' length, is zero;
-* a rotation given whole (a quaternion) whose frame axes are within :data:`SNAP_TOL` rad of
-  parallel or perpendicular to its parent's is turned the least that makes them so
-  (:func:`snap_rotation`).
+* a rotation whose frame has an axis within :data:`SNAP_TOL` rad of parallel to one of its
+  parent's (a quaternion; or angles whose components are not near a right angle one by one,
+  e.g. roll and yaw at pitch pi/2 as exporters write them) is turned the least that makes it
+  so, the angle across it snapped too when near a right angle (:func:`snap_rotation`).
 
 Why 1e-3: a geometric feature of relative size ``e`` creates directions whose regressor columns
 are about ``e`` times the others' at the file's own mass and size scales; ``e = 1e-3`` (0.06
@@ -222,14 +223,17 @@ def file_source(robot: Robot) -> FileSource | None:
 
 
 def snap_rotation(r: np.ndarray, tol: float = SNAP_TOL, exact: float = EXACT_TOL) -> np.ndarray | None:
-    """The least turn of a rotation that makes its near-right angles exact, or None if it has none.
+    """The least turn of a rotation that makes a near-parallel pair of axes exact, or None if it has none.
 
     Entry ``r[i, j]`` is the cosine of the angle between the parent's axis ``i`` and the frame's
-    axis ``j``: within ``tol`` rad of parallel (``|r_ij| >= cos tol``), that row and column become
-    a signed unit vector and the rest a rotation in the plane across them (itself snapped to a
-    right angle when within ``tol``); within ``tol`` of perpendicular (``|r_ij| <= sin tol``), the
-    entry becomes 0 (Gauss-Newton on ``r exp(w)``, the least ``|w|``). Entries within ``exact``
-    are left as they are.
+    axis ``j``. When one pair is within ``tol`` rad of parallel (``|r_ij| >= cos tol``, but not
+    within ``exact``), that row and column become a signed unit vector and the rest the nearest
+    rotation in the plane across them, itself snapped to a right angle when within ``tol``: a
+    rotation about a frame axis composed with right angles (a splay angle on a right-angled
+    mount) keeps its designed angle. A pair merely near perpendicular is not enough: in generic
+    (CAD) frames one of the nine angles falls within a milliradian of a right angle by chance
+    (0.6 % of frames), and turning such a frame would move a designed axis with it; single angles
+    near a right angle are the file's own components (:func:`near_special`, MJCF ``euler``).
 
     Parameters
     ----------
@@ -241,69 +245,29 @@ def snap_rotation(r: np.ndarray, tol: float = SNAP_TOL, exact: float = EXACT_TOL
     Returns
     -------
     ndarray, shape ``(3, 3)`` or None
-        The snapped rotation, or None when no angle lies between ``exact`` and ``tol``.
+        The snapped rotation, or None when no pair of axes is within ``tol`` of parallel or all
+        such are within ``exact`` (with the plane's angle).
     """
     r = np.asarray(r, dtype=float)
     a = np.abs(r)
     par = [(i, j) for i in range(3) for j in range(3) if a[i, j] >= np.cos(tol)]
-    near_par = [(i, j) for i, j in par if np.sqrt(max(0.0, 1 - a[i, j] ** 2)) > exact]
-    perp = [(i, j) for i in range(3) for j in range(3) if a[i, j] <= np.sin(tol)]
-    if not near_par and not any(a[i, j] > exact for i, j in perp):
+    if not par:
         return None
-    if par:
-        i, j = max(par, key=lambda ij: a[ij])
-        out = np.zeros((3, 3))
-        out[i, j] = np.sign(r[i, j])
-        rows, cols = [k for k in range(3) if k != i], [k for k in range(3) if k != j]
-        u, _, vt = np.linalg.svd(r[np.ix_(rows, cols)])
-        want = np.sign(r[i, j]) * (-1) ** (i + j)  # det(out) = +1
-        b = u @ np.diag([1.0, want * np.sign(np.linalg.det(u @ vt))]) @ vt
-        ang = np.arctan2(b[1, 0], b[0, 0])
-        k = np.round(ang / (np.pi / 2))
-        if abs(ang - k * np.pi / 2) <= tol:
-            c, s_ = np.round(np.cos(k * np.pi / 2)), np.round(np.sin(k * np.pi / 2))
-            b = np.array([[c, -s_], [s_, c]]) @ np.diag([1.0, np.sign(np.linalg.det(b))])
-        out[np.ix_(rows, cols)] = b
-        return out
-    return _zero_entries(r, [(i, j) for i, j in perp])
-
-
-def _zero_entries(r: np.ndarray, entries: list[tuple[int, int]]) -> np.ndarray:
-    """``r exp(w)`` with the given entries zero and ``|w|`` least (Gauss-Newton from w = 0)."""
-    out = r.copy()
-    eps = np.zeros((3, 3, 3))
-    eps[0, 1, 2] = eps[1, 2, 0] = eps[2, 0, 1] = 1.0
-    eps[0, 2, 1] = eps[2, 1, 0] = eps[1, 0, 2] = -1.0
-    for _ in range(20):
-        c = np.array([out[i, j] for i, j in entries])
-        if np.max(np.abs(c)) < 1e-16:
-            break
-        # d (out hat(w))_ij / dw_m = sum_l out_il hat(e_m)_lj, with hat(e_m)_lj = -eps_ljm
-        jac = np.array([[-(out[i] @ eps[:, j, m]) for m in range(3)] for i, j in entries])
-        w = -np.linalg.lstsq(jac, c, rcond=None)[0]
-        out = out @ rotation_about(w)
-    return out
-
-
-def rotation_about(w: np.ndarray) -> np.ndarray:
-    """``exp(hat(w))``: the rotation by ``|w|`` about ``w`` (Rodrigues).
-
-    Parameters
-    ----------
-    w : array_like, shape ``(3,)``
-        Rotation vector [rad].
-
-    Returns
-    -------
-    ndarray, shape ``(3, 3)``
-        The rotation.
-    """
-    w = np.asarray(w, dtype=float)
-    t = float(np.linalg.norm(w))
-    k = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
-    if t < 1e-12:
-        return np.eye(3) + k
-    return np.eye(3) + np.sin(t) / t * k + (1 - np.cos(t)) / t**2 * (k @ k)
+    i, j = max(par, key=lambda ij: a[ij])
+    out = np.zeros((3, 3))
+    out[i, j] = np.sign(r[i, j])
+    rows, cols = [k for k in range(3) if k != i], [k for k in range(3) if k != j]
+    u, _, vt = np.linalg.svd(r[np.ix_(rows, cols)])
+    want = np.sign(r[i, j]) * (-1) ** (i + j)  # det(out) = +1
+    b = u @ np.diag([1.0, want * np.sign(np.linalg.det(u @ vt))]) @ vt
+    ang = np.arctan2(b[1, 0], b[0, 0])
+    k = np.round(ang / (np.pi / 2))
+    if abs(ang - k * np.pi / 2) <= tol:
+        c, s_ = np.round(np.cos(k * np.pi / 2)), np.round(np.sin(k * np.pi / 2))
+        b = np.array([[c, -s_], [s_, c]]) @ np.diag([1.0, np.sign(np.linalg.det(b))])
+    out[np.ix_(rows, cols)] = b
+    turn = float(np.arccos(np.clip((np.trace(r.T @ out) - 1) / 2, -1.0, 1.0)))
+    return out if turn > exact else None
 
 
 #: the robot's size is at most this many times its longest link (:func:`robot_size`)

@@ -212,13 +212,13 @@ def five_finger_hand(seed: int, digits: int | None = 6, mates: float = 0.25, mim
     one before it; ``fingers``: 1-5 (the thumb is the fifth); ``pose``: a key of :data:`POSES`
     (default by seed: side, down, up).
     """
-    parts = _design(seed, mimic, fingers, pose)
-    texts, found = {}, []
-    for exact in (True, False):
-        w = _Writer(seed, digits, mates, exact)
-        texts[exact] = _urdf(seed, parts, w)
-        found = w.mates
-    return Hand(texts[False], texts[True], found)
+    return _written(seed, _design(seed, mimic, fingers, pose), digits, mates, _urdf)
+
+
+def _written(seed: int, parts: list[_Part], digits: int | None, mates: float, write) -> Hand:
+    """The file (rounded, mates off) and the design (exact), both by ``write(seed, parts, writer)``."""
+    texts = {exact: (w := _Writer(seed, digits, mates, exact), write(seed, parts, w)) for exact in (True, False)}
+    return Hand(texts[False][1], texts[True][1], texts[False][0].mates)
 
 
 def _urdf(seed: int, parts: list[_Part], w: _Writer) -> str:
@@ -246,13 +246,7 @@ def five_finger_hand_mjcf(seed: int, digits: int | None = 6, mates: float = 0.25
     """The same hands as MJCF: each link a body whose orientation is a ``quat``, an ``euler`` (degrees) or an
     ``axisangle`` (degrees), chosen at random; mimics as ``<equality><joint polycoef>``. ``mates``: the chance of
     each body's rotation being turned by 2e-5 - 8e-4 rad about a random axis, and of each axis being off."""
-    parts = _design(seed, mimic, fingers, pose)
-    texts, found = {}, []
-    for exact in (True, False):
-        w = _Writer(seed, digits, mates, exact)
-        texts[exact] = _mjcf(seed, parts, w)
-        found = w.mates
-    return Hand(texts[False], texts[True], found)
+    return _written(seed, _design(seed, mimic, fingers, pose), digits, mates, _mjcf)
 
 
 def _orientation(w: _Writer, element: str, r: np.ndarray, form: int) -> str:

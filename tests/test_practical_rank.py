@@ -30,34 +30,10 @@ def _load(tmp_path, text: str, name: str):
     return baseparams.load(str(path)), path
 
 
-def pinocchio_practical(path, tol: float = PRACTICAL_TOL, samples: int = 200, seed: int = 5) -> tuple[int, bool]:
-    """Pinocchio's rank of the scaled regressor (fixed base): ``(rank, borderline)``; borderline when a
-    singular value lies within a factor 2 of the threshold."""
-    pin = pytest.importorskip("pinocchio")
-    model = pin.buildModelFromUrdf(str(path))
-    data = model.createData()
-    d = [np.linalg.norm(model.jointPlacements[j].translation) for j in range(1, model.njoints)]
-    d = np.sort([x for x in d if x > 1e-12 * max(d)])
-    length = float(np.clip(0.5 * (d[(len(d) - 1) // 2] + d[len(d) // 2]), 0.05, 20.0))
-    rate = np.sqrt(np.linalg.norm(model.gravity.linear) / length)
-    rng = np.random.default_rng(seed)
-    # Pinocchio's order: m, m c (3), inertia about the joint origin (6), in the joint frame
-    scale = np.tile(length ** np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2], dtype=float), model.njoints - 1)
-    rows = []
-    for _ in range(samples):
-        q, v, a = rng.uniform(0, 1, model.nq), rng.uniform(0, 1, model.nv) * rate, rng.uniform(0, 1, model.nv) * rate**2
-        rows.append(pin.computeJointTorqueRegressor(model, data, q, v, a) * scale)
-    s = np.linalg.svd(np.vstack(rows), compute_uv=False)
-    s = s / s[0]
-    return int(np.sum(s > tol)), bool(np.any((s > tol / 2) & (s < tol * 2)))
-
-
-
-
 def pinocchio_spectrum(path, samples: int = 200, seed: int = 5) -> np.ndarray:
     """Singular values of Pinocchio's scaled regressor (fixed base), relative to the largest, descending:
-    each body's parameters in its joint frame scaled by L^u (m, m c, inertia about the joint origin), motions
-    at sqrt(g / L), L the median joint offset (as ours, independently computed)."""
+    each body's parameters in its joint frame scaled by L^u (Pinocchio's order: m, m c (3), inertia about the
+    joint origin (6)), motions at sqrt(g / L), L the median joint offset (as ours, independently computed)."""
     pin = pytest.importorskip("pinocchio")
     model = pin.buildModelFromUrdf(str(path))
     data = model.createData()
@@ -73,6 +49,13 @@ def pinocchio_spectrum(path, samples: int = 200, seed: int = 5) -> np.ndarray:
         rows.append(pin.computeJointTorqueRegressor(model, data, q, v, a) * scale)
     s = np.linalg.svd(np.vstack(rows), compute_uv=False)
     return s / s[0]
+
+
+def pinocchio_practical(path, tol: float = PRACTICAL_TOL, samples: int = 200, seed: int = 5) -> tuple[int, bool]:
+    """Pinocchio's rank of the scaled regressor (fixed base) at ``tol``: ``(rank, borderline)``; borderline when a
+    singular value lies within a factor 2 of the threshold."""
+    s = pinocchio_spectrum(path, samples, seed)
+    return int(np.sum(s > tol)), bool(np.any((s > tol / 2) & (s < tol * 2)))
 
 
 @pytest.mark.slow

@@ -13,8 +13,10 @@ gravity                [gx, gy, gz] m/s^2, world frame
 floating               true for a floating (F) root
 rows                   measured generalized forces: all | joints | base | a set of joints
                        (joints:NAME,... | base+joints:NAME,... | passive:NAME,...)
-nullity                certified nullspace dimension (DRNG's rank when --no-verify)
-n_base                 number of base parameters = n_params - nullity
+nullity                certified nullspace dimension (DRNG's rank when --no-verify; when the
+                       status is undecided, DRNG's span: a lower bound, no decided count)
+n_base                 number of base parameters = n_params - nullity (undecided: an upper
+                       bound; rank_decision says why no gap decides)
 drng                   {columns, rank, seconds, extended, by_principle{shared points, fixed
                        points, planar rotations}, by_rule{shared points, fixed points, planar
                        rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
@@ -1064,7 +1066,9 @@ def format_report(a: Analysis) -> str:
              else f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else "")
     out = [(f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
             f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
-           f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
+           (f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters" if a.status != Status.UNDECIDED else
+            f"nullspace dimension at least {a.nullity} (DRNG's span)  ->  at most {j['n_base']} base parameters: "
+            f"no gap decides the count (UNDECIDED)"),
            *decision_lines(j["rank_decision"]),
            *([a.practical.note(a.n_base)] if a.practical is not None else []),
            *([c.practical.note()] if c is not None and c.practical is not None else []),

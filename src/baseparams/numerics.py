@@ -224,6 +224,8 @@ class Cluster:
 
     widest: tuple[int, float] = (0, 1.0)
 
+    __repr__ = summary_repr
+
     def describe(self) -> str:
         """E.g. ``10 directions 9.4e-07 - 9.5e-06 (neighbour ratios <= 1.9)``.
 

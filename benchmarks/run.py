@@ -40,6 +40,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``loops``         DRNG on the two PKMs vs the paper's 5000-sample numerical validation.
 * ``files``         every example-robot-data URDF, every ``../shared/models`` file and every MJCF model of
                     gymnasium and dm_control: certified, DRNG complete?; talos_full_v2 times.
+* ``hands``         issue 46: CAD five-finger hands (URDF and MJCF, ``tests/hands.py``): design counts, UNDECIDED,
+                    values snapped, default vs literal analysis time.
 * ``cross_recording``  identify on one recording, the raw RMS on another (simulated recordings with the
                     defects real logs have, the Panda and TX40 logs split by time): default vs plain OLS,
                     WLS, physical (``benchmarks/cross_recording.py``).
@@ -1067,6 +1069,48 @@ def bench_files(out: dict, quick: bool) -> None:
         out["talos_full_v2_drng_ms_repeats"] = n_d
 
 
+def bench_hands(out: dict, quick: bool) -> None:
+    """Issue 46: CAD five-finger hands (tests/hands.py: mimic couplings, angles to 6 digits, mates off), URDF
+    and MJCF: how often the default count is the design's, how often it is UNDECIDED, values snapped, and the
+    default analysis' time against the literal one (median, same hands, timed alternately)."""
+    import tempfile
+    import warnings
+
+    import baseparams
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from hands import five_finger_hand, five_finger_hand_mjcf
+
+    seeds = range(4 if quick else 12)
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for kind, gen, suffix in (("urdf", five_finger_hand, ".urdf"), ("mjcf", five_finger_hand_mjcf, ".xml")):
+            design = undecided = snapped = 0
+            t_def, t_lit = [], []
+            for seed in seeds:
+                hand = gen(seed)
+                f, g = Path(tmp) / f"h{suffix}", Path(tmp) / f"d{suffix}"
+                f.write_text(hand.text)
+                g.write_text(hand.design)
+                robot, want = baseparams.load(str(f)), baseparams.analyze(baseparams.load(str(g)), literal=True)
+                a = baseparams.analyze(robot)
+                design += a.n_base == want.n_base
+                undecided += a.status == "undecided"
+                snapped += 0 if a.practical is None else len(a.practical.snaps)
+                td, tl, _ = measure_pair(lambda: baseparams.analyze(robot),
+                                         lambda: baseparams.analyze(robot, literal=True), 1)
+                t_def.append(td)
+                t_lit.append(tl)
+            log(f"  hands {kind}: {design}/{len(seeds)} design counts")
+            out[f"hands_{kind}_count"] = len(seeds)
+            out[f"hands_{kind}_design_count"] = design
+            out[f"hands_{kind}_undecided"] = undecided
+            out[f"hands_{kind}_values_snapped"] = snapped
+            out[f"hands_{kind}_default_s"] = statistics.median(t_def)
+            out[f"hands_{kind}_literal_s"] = statistics.median(t_lit)
+            out[f"hands_{kind}_default_vs_literal"] = statistics.median(a / b for a, b in zip(t_def, t_lit))
+
+
 def bench_special(out: dict, quick: bool) -> None:
     """Extended principles on random special-geometry robots: completeness and emitted-column
     residuals (the same generator as tests/test_special.py, more seeds)."""
@@ -1240,6 +1284,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "cross_recording": bench_cross_recording,
     "model_terms": bench_model_terms,
     "files": bench_files,
+    "hands": bench_hands,
     "special": bench_special,
     "regressor": bench_regressor,
     "base_streaming": bench_base_streaming,

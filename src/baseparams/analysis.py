@@ -13,8 +13,10 @@ gravity                [gx, gy, gz] m/s^2, world frame
 floating               true for a floating (F) root
 rows                   measured generalized forces: all | joints | base | a set of joints
                        (joints:NAME,... | base+joints:NAME,... | passive:NAME,...)
-nullity                certified nullspace dimension (DRNG's rank when --no-verify)
-n_base                 number of base parameters = n_params - nullity
+nullity                certified nullspace dimension (DRNG's rank when --no-verify; when the
+                       status is undecided, DRNG's span: a lower bound, no decided count)
+n_base                 number of base parameters = n_params - nullity (undecided: an upper
+                       bound; rank_decision says why no gap decides)
 drng                   {columns, rank, seconds, extended, by_principle{shared points, fixed
                        points, planar rotations}, by_rule{shared points, fixed points, planar
                        rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
@@ -45,18 +47,27 @@ regrouped_parameters   [{name, expression}] the recursive form's regrouped depen
                        root side first ([] in the expanded form)
 regrouped_parameters_paper  the same in the paper's convention
 unidentifiable         standard parameters that no base parameter sees
-practical              null, or {literal_n_base, counted_out, tolerance, size, snaps[{joint,
-                       what, component, literal, special, deviation}], note}: geometry the file
-                       states to within rounding of a right angle or zero, taken as that value
-                       because the directions it adds are not identifiable in practice
+practical              null, or {literal_n_base (null: not decided), counted_out, tolerance, size,
+                       candidates, snaps[{joint, element, what, component, literal, text, special,
+                       new, deviation}], note}: values the file writes to within rounding of a
+                       right angle or zero (each named by its element), taken as that value
+                       because the directions they add are not identifiable in practice
                        (``literal=True`` / ``--literal``: the file as stated)
-practical_rank         null, or {threshold, rank, nullity, counted_out, largest_out,
-                       smallest_kept, literal_rank, literal_gap, min_gap, length, rate,
-                       samples, borderline, note}: the literal singular-value gap did not decide the rank,
-                       which was decided by each direction's effect on the torques at the
-                       model's own scales (directions below threshold of the torque scale
-                       counted out; :mod:`baseparams.nullspace.practical`); ``--literal``:
-                       the literal decision (``undecided``)
+practical_rank         null, or {threshold, decided, rank, nullity, counted_out, largest_out,
+                       smallest_kept, gap, literal_rank, literal_gap, min_gap, length, rate,
+                       samples, borderline, clusters, candidates[{rank, meaning}], note}: the
+                       literal singular-value gap did not decide the rank, which was decided by
+                       each direction's effect on the torques at the model's own scales
+                       (directions below threshold of the torque scale counted out, only where
+                       the threshold lies in a gap of those effects; otherwise undecided, with
+                       the clusters and the candidate counts; :mod:`baseparams.nullspace.practical`);
+                       ``--literal``: the literal decision (``undecided``)
+rank_decision          null (unverified), or {by: literal | practical | structured, decided,
+                       rank, gap, smallest_kept, largest_out, bound, clusters[{first, count, top,
+                       bottom, spread, gap_below}], snapped}: the gap of the spectrum the count
+                       was stated at (a count is stated only at a gap: neighbouring singular
+                       values >= 100x apart and 10x the ratios inside the clusters around them,
+                       :func:`baseparams.numerics.spectrum`), values relative to the largest
 =====================  ===================================================================
 """
 
@@ -526,7 +537,48 @@ class Analysis:
             "unidentifiable": [self.base.names[i] for i in self.base.unidentifiable],
             "practical": None if self.practical is None else self.practical.to_json(self.n_base),
             "practical_rank": None if c is None or c.practical is None else c.practical.to_json(),
+            "rank_decision": self.rank_decision(),
         }
+
+    def rank_decision(self) -> dict | None:
+        """The gap that decided the count (or the clusters when none did): ``None`` when unverified.
+
+        Returns
+        -------
+        dict or None
+            ``by`` (``literal``: the certification's singular values at its tolerance;
+            ``practical``: each direction's effect on the torques; ``structured``: body by body),
+            ``decided``, ``rank`` (None when not decided), ``gap`` (the ratio across the cut at the
+            tolerance, None when infinite),
+            ``smallest_kept`` and ``largest_out`` (relative to the largest), ``bound`` (the
+            tolerance the cut had to fall at), ``clusters`` ``[{first, count, top, bottom, spread,
+            gap_below}]``, ``snapped`` (the count is that of the file with the values
+            :attr:`practical` names exact).
+        """
+        c = self.certificate
+        if c is None:
+            return None
+        snapped = self.practical is not None
+        if c.practical is not None:
+            p = c.practical.to_json()
+            return {"by": "practical", "decided": p["decided"], "rank": p["rank"] if p["decided"] else None,
+                    "gap": p["gap"],
+                    "smallest_kept": p["smallest_kept"], "largest_out": p["largest_out"], "bound": p["threshold"],
+                    "clusters": p["clusters"], "snapped": snapped}
+        nm = c.numerical
+        spec = nm.spectrum
+        if spec is None:  # the structured check: the smallest kept block value over the worst residual
+            return {"by": "structured", "decided": bool(c.status.ok), "rank": nm.rank,
+                    "gap": None if not np.isfinite(nm.gap) else nm.gap, "smallest_kept": None, "largest_out": None,
+                    "bound": nm.rtol, "clusters": [], "snapped": snapped}
+        v = spec.values
+        return {"by": "literal", "decided": bool(nm.decided), "rank": nm.rank if nm.decided else None,
+                "gap": None if not np.isfinite(nm.gap) else nm.gap,
+                "smallest_kept": float(v[nm.rank - 1]) if nm.rank else None,
+                "largest_out": float(v[nm.rank]) if nm.rank < len(v) else None, "bound": nm.rtol,
+                "clusters": [{"first": k.first, "count": k.count, "top": k.top, "bottom": k.bottom, "spread": k.spread,
+                              "gap_below": None if not np.isfinite(spec.gap(k.stop)) else spec.gap(k.stop)}
+                             for k in spec.clusters], "snapped": snapped}
 
 
 def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: bool = True, rows="all",
@@ -628,12 +680,11 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     lit = _analyze(robot, **kw)
     if literal:
         return lit
-    # geometry near a special value first (the literal count is the file's); a rank the gap still
-    # cannot decide is then decided by the directions' effect on the torques (nullspace.practical)
-    out = practical_analysis(lit, {**kw, "practical": True})
-    if out is lit and lit.status == Status.UNDECIDED:
-        return _analyze(robot, **kw, practical=True)
-    return out
+    # the file as written: a rank the literal gap cannot decide is decided by the directions' effect on
+    # the torques (nullspace.practical), at a gap of those effects or not at all; then geometry near a
+    # special value, taken exact where that states a lower count at a gap
+    ref = _analyze(robot, **kw, practical=True) if lit.status == Status.UNDECIDED else lit
+    return practical_analysis(lit, {**kw, "practical": True}, ref)
 
 
 #: the forms of the regrouped expressions (:func:`analyze`)
@@ -725,14 +776,15 @@ class Practical:
     The model file states some geometry to within rounding of a special value
     (:mod:`baseparams.model.snap`); taken literally it adds directions whose torques are below
     :data:`~baseparams.model.snap.SNAP_TOL` of the others' at the file's own scales. The analysis
-    is that of the model with the special values.
+    is that of the model with the special values, whose count is decided at a gap.
 
     Parameters
     ----------
-    literal_n_base : int
-        The count of the model exactly as the file states it (``analyze(..., literal=True)``).
+    literal_n_base : int or None
+        The count of the model exactly as the file states it (``analyze(..., literal=True)``);
+        None when no gap decides it (``undecided``).
     snaps : tuple of Snap
-        The values that change the count (each one's joint, literal and special value).
+        The values that change the count (each one's file element, literal and special value).
     candidates : int
         How many values within the tolerance were found (those that do not change the count
         are taken as the file states them).
@@ -746,14 +798,14 @@ class Practical:
 
     __repr__ = summary_repr
 
-    literal_n_base: int
+    literal_n_base: int | None
     snaps: tuple
     candidates: int
     tol: float
     size: float
     source: Robot
 
-    def counted_out(self, n_base: int) -> int:
+    def counted_out(self, n_base: int) -> int | None:
         """Directions counted out.
 
         Parameters
@@ -763,13 +815,13 @@ class Practical:
 
         Returns
         -------
-        int
-            ``literal_n_base - n_base``.
+        int or None
+            ``literal_n_base - n_base`` (None when the literal count is undecided).
         """
-        return self.literal_n_base - n_base
+        return None if self.literal_n_base is None else self.literal_n_base - n_base
 
     def note(self, n_base: int) -> str:
-        """One line: how many directions, which joints, why, and the flag for the literal count.
+        """One line: how many directions, which values of the file, why, and the flag for the literal count.
 
         Parameters
         ----------
@@ -783,11 +835,15 @@ class Practical:
         """
         k = self.counted_out(n_base)
         what = "; ".join(s.describe() for s in self.snaps)
-        return (f"practical identifiability: {k} direction{'s' if k != 1 else ''} counted out "
-                f"({self.literal_n_base} -> {n_base} base parameters): {what}; geometry within {self.tol:g} "
-                f"(rad, or of the robot's {self.size:.3g} m size) of a right angle or zero is taken as that value, "
-                f"the directions it adds moving the torques by less than {self.tol:g} of their scale "
-                f"(not identifiable in practice); the literal count: --literal")
+        many = f"{len(self.snaps)} value{'s' if len(self.snaps) != 1 else ''} of the file taken exact"
+        head = (f"practical identifiability: the literal count is not decided (no gap), {n_base} base parameters with "
+                f"{many}" if k is None else
+                f"practical identifiability: {k} direction{'s' if k != 1 else ''} counted out "
+                f"({self.literal_n_base} -> {n_base} base parameters) with {many}")
+        return (f"{head}: {what}; geometry within {self.tol:g} (rad, or of the robot's {self.size:.3g} m size, or "
+                f"of an axis' length) of a right angle or zero is taken as that value, the directions it adds moving "
+                f"the torques by less than {self.tol:g} of their scale (not identifiable in practice); the literal "
+                f"count: --literal")
 
     def to_json(self, n_base: int) -> dict:
         """The decision, machine-readable.
@@ -800,24 +856,87 @@ class Practical:
         Returns
         -------
         dict
-            ``literal_n_base, counted_out, tolerance, size, snaps[{joint, what, component,
-            literal, special, deviation}], note``.
+            ``literal_n_base, counted_out, tolerance, size, candidates, snaps[{joint, element, what,
+            component, literal, text, special, new, deviation}], note``.
         """
         return {"literal_n_base": self.literal_n_base, "counted_out": self.counted_out(n_base),
-                "tolerance": self.tol, "size": self.size,
-                "snaps": [{"joint": s.joint, "what": s.what, "component": s.index, "literal": s.literal,
-                           "special": s.snapped, "deviation": s.deviation} for s in self.snaps],
-                "note": self.note(n_base)}
+                "tolerance": self.tol, "size": self.size, "candidates": self.candidates,
+                "snaps": [s.to_json() for s in self.snaps], "note": self.note(n_base)}
 
 
-def practical_analysis(lit: Analysis, kw: dict) -> Analysis:
+def _decided(a: Analysis) -> bool:
+    """Whether an analysis states its count at a gap (certified, completed, or DRNG's unverified span)."""
+    return a.status.ok or a.status == Status.UNVERIFIED
+
+
+def _snap_candidates(robot: Robot):
+    """``(values near a special value, the robot with some of them exact)``: the file's, else the model's."""
+    from .model.snap import file_source, near_special, snapped
+
+    if file_source(robot) is not None:  # the readers only for a robot read from a file
+        from .io.snapfile import file_snaps, reread
+
+        found = file_snaps(robot)
+        if found is not None:
+            return found, lambda snaps: reread(robot, snaps)
+    return near_special(robot), lambda snaps: snapped(robot, snaps)
+
+
+def _quick_rank(robot: Robot, kw: dict):
+    """The literal rank decision of ``robot`` alone (no DRNG): the stacked regressor on ``pi / d``, its SVD.
+
+    Unless ``samples`` is given, three rows per parameter (and 20 states more): the bisection's many
+    comparisons need no more (a loop robot's default, 5 000 actuated samples, took 0.5 s a comparison).
+    """
+    from .model.scale import decision_scale
+    from .numerics import rank_decision, row_mask, stacked_regressor
+
+    d = decision_scale(robot, "paper")
+    rows = kw.get("rows", "all")
+    per = len(robot.actuated) if robot.has_loops else int(row_mask(robot, rows).sum())
+    samples = kw.get("samples") or 20 + int(np.ceil(30 * robot.n / max(per, 1)))
+    return rank_decision(stacked_regressor(robot, samples, kw.get("seed", 0), rows) * d)
+
+
+def _responsible(found: list, make, target: int, kw: dict) -> list:
+    """The values (grouped by element) whose literal value raises the count above ``target`` (bisection)."""
+    groups: dict = {}
+    for s in found:
+        groups.setdefault(s.key[:3] if s.key else s.body, []).append(s)
+    keys = list(groups)
+
+    def raises(group: list) -> bool:  # un-snapping these elements brings directions back (or no gap decides)
+        num = _quick_rank(make([s for s in found if (s.key[:3] if s.key else s.body) not in group]), kw)
+        return not num.decided or num.rank > target
+
+    out: list = []
+
+    def bisect(group: list) -> None:
+        if not raises(group):
+            return
+        if len(group) == 1:
+            out.extend(groups[group[0]])
+            return
+        half = len(group) // 2
+        bisect(group[:half])
+        bisect(group[half:])
+
+    bisect(keys)
+    return out
+
+
+def practical_analysis(lit: Analysis, kw: dict, ref: Analysis | None = None) -> Analysis:
     """The analysis with geometry stated to within rounding of a special value taken as that value.
 
-    When the model with every such value snapped (:func:`baseparams.model.snap.near_special`)
-    has fewer base parameters than the literal one, the values responsible are found by
-    bisection over the joints (snapping all but a group: the count rises when the group holds
-    one) and the snapped model's analysis is returned with :class:`Practical`; otherwise the
-    literal analysis.
+    The values are the file's own where the robot was read from a file and not changed since
+    (:func:`baseparams.io.snapfile.file_snaps`, each named by its element), else the model's
+    frames (:func:`baseparams.model.snap.near_special`). When the model with every such value
+    exact states its count at a gap (certified or completed, literally or by effect) and that
+    count is below the file's as written (``ref``; any count when that one is not decided), the
+    values responsible are found by bisection over the file's elements (keeping a group as
+    written: the count rises, or no gap decides) and the analysis of the model with them exact is
+    returned with :class:`Practical`; otherwise ``ref``. Snapping that does not lower the count
+    (a frame turned by a chance near-right angle that moves a designed axis) is not used.
 
     Parameters
     ----------
@@ -825,48 +944,39 @@ def practical_analysis(lit: Analysis, kw: dict) -> Analysis:
         The literal analysis.
     kw : dict
         :func:`analyze`'s keywords (as the literal analysis ran).
+    ref : Analysis, optional
+        The file as written, decided by effect where the literal gap cannot (default ``lit``).
 
     Returns
     -------
     Analysis
-        ``lit`` or the snapped model's analysis.
+        ``ref`` or the snapped model's analysis.
     """
-    from .model.snap import SNAP_TOL, near_special, robot_size, snapped
-
-    robot = lit.robot
-    found = near_special(robot)
-    if not found:
-        return lit
-    snap_all = _analyze(snapped(robot, found), **kw)
-    if snap_all.n_base >= lit.n_base or not (snap_all.status.ok or snap_all.status == Status.UNVERIFIED):
-        return lit
-    joints = sorted({s.body for s in found})
-
-    def raises(group: list[int]) -> bool:  # un-snapping these joints brings directions back
-        keep = [s for s in found if s.body not in group]
-        return _analyze(snapped(robot, keep), **kw).n_base > snap_all.n_base
-
-    responsible: list[int] = []
-
-    def bisect(group: list[int]) -> None:
-        if not raises(group):
-            return
-        if len(group) == 1:
-            responsible.append(group[0])
-            return
-        half = len(group) // 2
-        bisect(group[:half])
-        bisect(group[half:])
-
-    bisect(joints)
-    snaps = tuple(s for s in found if s.body in responsible) or tuple(found)
-    # the analysis of the model with only the responsible values snapped (the others as stated)
-    final = _analyze(snapped(robot, snaps), **kw) if len(snaps) < len(found) else snap_all
-    if final.n_base != snap_all.n_base:
-        final, snaps = snap_all, tuple(found)
     from dataclasses import replace
 
-    return replace(final, practical=Practical(lit.n_base, snaps, len(found), SNAP_TOL, robot_size(robot), robot))
+    from .model.snap import SNAP_TOL, robot_size
+
+    ref = lit if ref is None else ref
+    robot = lit.robot
+    found, make = _snap_candidates(robot)
+    if not found:
+        return ref
+    try:
+        snap_all = _analyze(make(found), **kw)
+    except BaseparamsError:  # the file read again with the values exact is refused: taken as it is
+        return ref
+    if not _decided(snap_all) or (_decided(ref) and snap_all.n_base >= ref.n_base):
+        return ref
+    snaps, final = tuple(found), snap_all
+    quick = _quick_rank(snap_all.robot, kw)
+    if quick.decided and quick.rank == snap_all.n_base and len(found) > 1:
+        part = tuple(_responsible(found, make, snap_all.n_base, kw))
+        if part and len(part) < len(found):
+            trial = _analyze(make(part), **kw)
+            if _decided(trial) and trial.n_base == snap_all.n_base:
+                snaps, final = part, trial
+    literal = lit.n_base if _decided(lit) else None
+    return replace(final, practical=Practical(literal, snaps, len(found), SNAP_TOL, robot_size(robot), robot))
 
 
 def _large_tree_columns(robot: Robot, rows: str, res):
@@ -956,7 +1066,10 @@ def format_report(a: Analysis) -> str:
              else f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else "")
     out = [(f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
             f"{'floating' if r.floating else 'fixed'} base, gravity {r.gravity.tolist()} m/s^2, rows: {a.rows}"),
-           f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
+           (f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters" if a.status != Status.UNDECIDED else
+            f"nullspace dimension at least {a.nullity} (DRNG's span)  ->  at most {j['n_base']} base parameters: "
+            f"no gap decides the count (UNDECIDED)"),
+           *decision_lines(j["rank_decision"]),
            *([a.practical.note(a.n_base)] if a.practical is not None else []),
            *([c.practical.note()] if c is not None and c.practical is not None else []),
            f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
@@ -992,6 +1105,40 @@ def format_report(a: Analysis) -> str:
     out.extend(_expressions_section(a, j))
     out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")
     return "\n".join(out)
+
+
+def decision_lines(d: dict | None) -> list[str]:
+    """The report's line on the gap the count was stated at (or the clusters, when no gap decided).
+
+    Parameters
+    ----------
+    d : dict or None
+        :meth:`Analysis.rank_decision`.
+
+    Returns
+    -------
+    list of str
+        One line (none when unverified).
+    """
+    if d is None:
+        return []
+    by = {"literal": "singular values of the sampled regressor", "practical": "effects on the torques",
+          "structured": "body-by-body blocks"}[d["by"]]
+    gap = "inf" if d["gap"] is None else f"{d['gap']:.3g}"
+    if not d["decided"]:
+        lines = " | ".join(_cluster_text(k) for k in d["clusters"])
+        return [f"rank not decided ({by}): the bound {d['bound']:g} falls inside a cluster; clusters: {lines}"]
+    if d["by"] == "structured":
+        return [f"rank decided at a gap ({by}): smallest kept block value over the worst column residual {gap}"]
+    kept = "-" if d["smallest_kept"] is None else f"{d['smallest_kept']:.2g}"
+    out = "0" if d["largest_out"] is None else f"{d['largest_out']:.2g}"
+    return [f"rank {d['rank']} decided at a gap of {gap} ({by}, relative to the largest: smallest kept {kept}, "
+            f"largest counted out {out}; bound {d['bound']:g}){' on the snapped geometry' if d['snapped'] else ''}"]
+
+
+def _cluster_text(k: dict) -> str:
+    gap = "" if k["gap_below"] is None else f", gap {k['gap_below']:.3g} below"
+    return f"{k['count']} at {k['bottom']:.2g} - {k['top']:.2g}{gap}"
 
 
 def _expressions_section(a: Analysis, j: dict) -> list[str]:

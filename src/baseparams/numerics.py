@@ -179,6 +179,214 @@ def row_mask(robot: Robot, rows) -> np.ndarray:
     return named
 
 
+#: a gap in a spectrum: neighbouring singular values at least this ratio apart ...
+GAP_RATIO = 100.0
+#: ... and at least this many times the largest neighbour ratio inside the clusters on either side
+GAP_OVER_SPREAD = 10.0
+#: singular values at most this fraction of the largest are rounding of zero: one cluster, whatever their ratios
+ZERO_FLOOR = 1e-13
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """Consecutive singular values with no gap between them (:func:`spectrum`).
+
+    Parameters
+    ----------
+    first : int
+        Index of its largest value in the descending spectrum (0-based).
+    count : int
+        Number of directions.
+    top, bottom : float
+        Its largest and smallest value, relative to the spectrum's largest.
+    spread : float
+        The largest ratio of neighbouring values inside it (1 for one direction; the values at
+        or below :data:`ZERO_FLOOR` do not count).
+    widest : (int, float)
+        Where that ratio is: the rank a cut there would state, and the ratio.
+    """
+
+    first: int
+    count: int
+    top: float
+    bottom: float
+    spread: float
+
+    @property
+    def stop(self) -> int:
+        """Index after its last value: the rank of a cut just below it."""
+        return self.first + self.count
+
+    @property
+    def zero(self) -> bool:
+        """Every value is rounding of zero (at most :data:`ZERO_FLOOR` of the largest)."""
+        return self.top <= ZERO_FLOOR
+
+    widest: tuple[int, float] = (0, 1.0)
+
+    __repr__ = summary_repr
+
+    def describe(self) -> str:
+        """E.g. ``10 directions 9.4e-07 - 9.5e-06 (neighbour ratios <= 1.9)``.
+
+        Returns
+        -------
+        str
+            The count, the range relative to the largest value and the spread.
+        """
+        many = "s" if self.count != 1 else ""
+        if self.zero:
+            return f"{self.count} direction{many} <= {ZERO_FLOOR:g} (rounding of zero)"
+        rng = f"{self.top:.2g}" if self.count == 1 else f"{self.bottom:.2g} - {self.top:.2g}"
+        where = f", the largest at rank {self.widest[0]}" if self.spread >= GAP_OVER_SPREAD else ""
+        why = ": not a gap, the steps around it are as large" if self.spread >= GAP_RATIO else ""
+        inside = f" (neighbour ratios <= {self.spread:.2g}{where}{why})" if self.count > 1 else ""
+        return f"{self.count} direction{many} {rng}{inside}"
+
+
+@dataclass(frozen=True, eq=False)
+class Spectrum:
+    """A spectrum's structure: clusters of singular values and the gaps between them.
+
+    Made by :func:`spectrum`. A *gap* is a ratio of neighbouring values of at least
+    :data:`GAP_RATIO` and at least :data:`GAP_OVER_SPREAD` times the largest neighbour ratio
+    inside the clusters on either side; a rank is stated only at a gap (:meth:`at_gap`), never
+    inside a cluster.
+
+    Parameters
+    ----------
+    values : ndarray, shape ``(m,)``
+        The singular values, descending, relative to the largest (zeros when all vanish).
+    clusters : tuple of Cluster
+        In descending order; consecutive clusters are separated by a gap.
+    """
+
+    values: np.ndarray
+    clusters: tuple[Cluster, ...]
+
+    __repr__ = summary_repr
+
+    @property
+    def cuts(self) -> tuple[int, ...]:
+        """The ranks stated at a gap: ``0``, each cluster's :attr:`~Cluster.stop`."""
+        return (0,) + tuple(c.stop for c in self.clusters)
+
+    def gap(self, rank: int) -> float:
+        """``values[rank-1] / values[rank]`` (inf at ``0``, at full rank and above a zero value).
+
+        Parameters
+        ----------
+        rank : int
+            A cut, ``0 <= rank <= m``.
+
+        Returns
+        -------
+        float
+            The ratio across the cut.
+        """
+        s = self.values
+        if rank <= 0 or rank >= len(s):
+            return np.inf
+        with np.errstate(over="ignore", divide="ignore"):
+            return float(s[rank - 1] / s[rank]) if s[rank] > 0 else np.inf
+
+    def at_gap(self, rank: int) -> bool:
+        """Whether a cut at ``rank`` lies at a gap (between clusters), not inside a cluster.
+
+        Parameters
+        ----------
+        rank : int
+            The number of directions counted in.
+
+        Returns
+        -------
+        bool
+            True at ``0``, at full rank and at every cluster boundary.
+        """
+        return rank in self.cuts
+
+    def straddling(self, bound: float) -> Cluster | None:
+        """The cluster the threshold ``bound`` (relative) falls inside, or None when it lies in a gap.
+
+        Parameters
+        ----------
+        bound : float
+            A threshold relative to the largest value.
+
+        Returns
+        -------
+        Cluster or None
+            The cluster with a value above ``bound`` and one at or below it.
+        """
+        return next((c for c in self.clusters if c.top > bound >= c.bottom), None)
+
+    def lines(self) -> list[str]:
+        """One line per cluster, largest first, with the gap below it and the rank a cut there states.
+
+        Returns
+        -------
+        list of str
+            E.g. ``34 directions 6.5e-03 - 1 (...); gap 680 below: rank 34``.
+        """
+        out = []
+        for c in self.clusters:
+            g = self.gap(c.stop)
+            below = "" if c.stop >= len(self.values) else f"; gap {g:.3g} below: rank {c.stop}"
+            out.append(c.describe() + below)
+        return out
+
+
+def _clusters(s: np.ndarray, cuts: list[int], nz: int) -> list[Cluster]:
+    """Clusters of the descending relative values ``s`` between the cut positions (``nz`` non-zero values)."""
+    bounds = [0, *cuts, len(s)]
+    out = []
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        live = s[a:min(b, nz)]
+        steps = live[:-1] / live[1:] if len(live) > 1 else np.ones(1)
+        k = int(np.argmax(steps))
+        out.append(Cluster(a, b - a, float(s[a]), float(s[b - 1]), float(steps[k]), (a + k + 1, float(steps[k]))))
+    return out
+
+
+def spectrum(sv: np.ndarray, floor: float = ZERO_FLOOR) -> Spectrum:
+    """The clusters and gaps of a spectrum (:class:`Spectrum`).
+
+    A *gap* is a ratio of neighbouring values of at least :data:`GAP_RATIO` (or the step down to
+    the values at or below ``floor``, rounding of zero) that is also at least
+    :data:`GAP_OVER_SPREAD` times every other neighbour ratio between it and the next such ratio
+    on either side (the spread of the runs it separates): a ratio that does not stand out from
+    the steps around it is part of a continuum, not a divide. The clusters are the runs between
+    gaps; a cluster may hold a ratio of 100 or more that is not a gap (:attr:`Cluster.spread`).
+
+    Parameters
+    ----------
+    sv : ndarray, shape ``(m,)``
+        Singular values (any order, non-negative).
+    floor : float, default :data:`ZERO_FLOOR`
+        Values at most this fraction of the largest are one cluster of zeros.
+
+    Returns
+    -------
+    Spectrum
+        The values relative to the largest, descending, and their clusters.
+    """
+    s = np.sort(np.abs(np.asarray(sv, dtype=float)))[::-1]
+    if len(s) == 0 or s[0] <= 0:
+        s = np.zeros(len(s))
+        return Spectrum(s, (Cluster(0, len(s), 0.0, 0.0, 1.0),) if len(s) else ())
+    s = s / s[0]
+    nz = int(np.sum(s > floor))
+    with np.errstate(divide="ignore", over="ignore"):
+        ratio = np.r_[np.inf, s[:-1] / np.maximum(s[1:], np.finfo(float).tiny)]
+    cuts = [k for k in range(1, nz) if ratio[k] >= GAP_RATIO]
+    if 0 < nz < len(s) and ratio[nz] >= GAP_RATIO:
+        cuts.append(nz)
+    runs = _clusters(s, cuts, nz)  # the runs between candidate gaps: their spreads are below GAP_RATIO
+    keep = [k for i, k in enumerate(cuts)
+            if ratio[k] >= GAP_OVER_SPREAD * max(runs[i].spread, 1.0 if runs[i + 1].zero else runs[i + 1].spread)]
+    return Spectrum(s, tuple(_clusters(s, keep, nz)))
+
+
 @dataclass(frozen=True, eq=False)
 class NumericalResult:
     """Rank decision on the stacked regressor ``W (S * rows, 10 n)``.
@@ -227,9 +435,19 @@ class NumericalResult:
     __repr__ = summary_repr
 
     @property
+    def spectrum(self) -> Spectrum | None:
+        """The clusters and gaps of :attr:`singular_values` (:func:`spectrum`); None without them."""
+        if len(self.singular_values) == 0:
+            return None
+        if "_spectrum" not in self.__dict__:
+            object.__setattr__(self, "_spectrum", spectrum(self.singular_values))
+        return self.__dict__["_spectrum"]
+
+    @property
     def decided(self) -> bool:
-        """True when the gap at the rank decision is at least ``min_gap``."""
-        return self.gap >= self.min_gap
+        """True when the rank lies at a gap of at least ``min_gap`` (:meth:`Spectrum.at_gap`: never in a cluster)."""
+        spec = self.spectrum
+        return self.gap >= self.min_gap and (spec is None or spec.at_gap(self.rank))
 
 
 @lru_cache(maxsize=1)

@@ -2,8 +2,9 @@
 
 Exit codes (scripts rely on them): 0 the result is certified (or completed, or unverified on
 request with ``--no-verify``); 2 bad input, printed as one line (``baseparams: error: ...``);
-3 certification UNDECIDED (the numerics could not decide the rank: the message says what would
-help; a gap too small to decide is decided by practical identifiability unless ``--literal``);
+3 certification UNDECIDED (no gap of the spectrum decides the rank: the message lists the clusters,
+the candidate counts and what would help; a gap too small to decide literally is decided by
+practical identifiability, at a gap of the directions' effects, unless ``--literal``);
 4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted.
 """
 
@@ -560,10 +561,12 @@ def _analysis_choice_args(s) -> None:
                    help="the paper's three principles only (no extended rules R-A, R-B, R-L1, R-L2, R-M)")
     s.add_argument("--literal", action="store_true",
                    help="the model exactly as the file states it: by default geometry within 1e-3 of a right angle "
-                        "or zero (rpy 3.1416, an axis 0 1e-5 1) is taken as that value when it changes the count "
-                        "(the directions it adds are not identifiable in practice; the report names the joint), "
-                        "and a rank the singular-value gap cannot decide is decided by each direction's effect on "
-                        "the torques (below 1e-6 of the torque scale: counted out); --literal leaves it UNDECIDED")
+                        "or zero (rpy 3.1416, an axis 0 1e-5 1, a quat 0.707107 0 0.707107 0) is taken as that value "
+                        "when it lowers the count (the directions it adds are not identifiable in practice; the "
+                        "report names each value of the file), and a rank the singular-value gap cannot decide is "
+                        "decided by each direction's effect on the torques (below 1e-6 of the torque scale: counted "
+                        "out, when that threshold lies in a gap of the effects; else UNDECIDED with the clusters); "
+                        "--literal leaves it UNDECIDED")
     s.add_argument("--rows", default=str(Rows.ALL), metavar="ROWS",
                    help="measured generalized forces: all (default); joints (joint torques only); base (the "
                         "floating base's wrench only); joints:NAME,NAME (only these joints' torques); "

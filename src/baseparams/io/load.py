@@ -11,7 +11,8 @@ from ..model.robot import Robot
 
 
 def load_file(path: str | Path, floating: bool = False, gravity=None, strict_inertia: bool = False,
-              xacro_args=None, package_path=None, mocap_welds: str = "drop") -> tuple[Robot, list[str]]:
+              xacro_args=None, package_path=None, mocap_welds: str = "drop",
+              edit=None) -> tuple[Robot, list[str]]:
     """``(robot, notes)`` from a ``.urdf``, ``.xacro`` or ``.xml``/``.mjcf`` file.
 
     Gravity defaults to ``(0, 0, -9.81)`` for URDF files and to the model's own for MJCF. Physically
@@ -41,6 +42,11 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     mocap_welds : {'drop', 'keep'}, optional
         MJCF: the welds and connects to mocap bodies left out (default) or kept as loops to the
         world (:func:`~baseparams.io.mjcf.load_mjcf`).
+    edit : callable, optional
+        Called with the parsed document before the robot is built (URDF and xacro: the root
+        element; MJCF: the ``MjSpec``): :mod:`baseparams.io.snapfile` re-reads a file with rounded
+        right angles exact. Without it, the robot's ``source`` records the file and these options
+        (:class:`~baseparams.model.snap.FileSource`).
 
     Returns
     -------
@@ -65,13 +71,13 @@ def load_file(path: str | Path, floating: bool = False, gravity=None, strict_ine
     if suffix != ".xacro" and (xacro_args or package_path):
         raise BaseparamsError(f"{p}: xacro arguments and a package path apply to .xacro files, not {suffix or 'this'}")
     try:
-        return _read(p, suffix, floating, gravity, strict_inertia, xacro_args, package_path, mocap_welds)
+        return _read(p, suffix, floating, gravity, strict_inertia, xacro_args, package_path, mocap_welds, edit)
     except NoMotionError as exc:  # found where the file is no longer known: named here
         raise NoMotionError(f"{p}: {exc}") from None
 
 
 def _read(p: Path, suffix: str, floating: bool, gravity, strict_inertia: bool, xacro_args, package_path,
-          mocap_welds: str) -> tuple[Robot, list[str]]:
+          mocap_welds: str, edit) -> tuple[Robot, list[str]]:
     """:func:`load_file` once the file is checked: the reader of its suffix, then the loops' assembly."""
     notes = []
     # each reader is imported for its own suffix only (start-up time of a one-shot command)
@@ -83,17 +89,17 @@ def _read(p: Path, suffix: str, floating: bool, gravity, strict_inertia: bool, x
 
             data, notes = expand_xacro(p, xacro_args, package_path)
             g = (0.0, 0.0, -9.81) if gravity is None else gravity
-            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, data=data)
+            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, data=data, edit=edit)
         elif suffix == ".urdf":
             from .urdf import load_urdf
 
             g = (0.0, 0.0, -9.81) if gravity is None else gravity
-            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia)
+            robot = load_urdf(p, floating=floating, gravity=g, strict_inertia=strict_inertia, edit=edit)
         elif suffix in (".xml", ".mjcf"):
             from .mjcf import load_mjcf
 
             robot = load_mjcf(p, gravity=gravity, floating=floating, strict_inertia=strict_inertia,
-                              mocap_welds=mocap_welds)
+                              mocap_welds=mocap_welds, edit=edit)
         else:
             raise BaseparamsError(f"{p}: unknown file type {suffix!r}; expected .urdf, .xacro, .xml or .mjcf")
     notes += [str(w.message) for w in caught]
@@ -103,4 +109,11 @@ def _read(p: Path, suffix: str, floating: bool, gravity, strict_inertia: bool, x
         robot, _, note = assemble(robot)
         if note:
             notes.append(f"{p}: {note}")
+    if edit is None:
+        from ..model.snap import FileSource, geometry_fingerprint
+
+        options = {"floating": floating, "gravity": gravity, "strict_inertia": strict_inertia,
+                   "xacro_args": xacro_args, "package_path": package_path, "mocap_welds": mocap_welds}
+        # set on the robot just built (validated once; a frozen dataclass): where it was read from
+        object.__setattr__(robot, "source", FileSource(str(p), options, geometry_fingerprint(robot)))
     return robot, notes

@@ -121,17 +121,26 @@ def _strip_assets(mj, spec, base: Path, everything: bool) -> dict[str, str]:
     return lost
 
 
-def _compile(mj, path: Path):
+def _parsed(mj, path: Path, edit):
+    """The file parsed into an ``MjSpec``, ``edit`` (if any) called on it."""
+    spec = mj.MjSpec.from_file(str(path))
+    if edit is not None:
+        edit(spec)
+    return spec
+
+
+def _compile(mj, path: Path, edit=None):
     """``(model, notes, affected bodies, spec)``: parse and compile, stripping missing asset files if needed.
 
     The files the model reads and the numbers MuJoCo allocates from are checked first
-    (:func:`baseparams.io.sources.mjcf_sources`).
+    (:func:`baseparams.io.sources.mjcf_sources`). ``edit``: called with each parsed spec before
+    it is compiled.
     """
     from .sources import mjcf_sources
 
     mjcf_sources(path)
     try:
-        spec = mj.MjSpec.from_file(str(path))
+        spec = _parsed(mj, path, edit)
     except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others
         raise ModelError(f"{path}: {_one_line(exc)}") from None
     try:
@@ -141,13 +150,13 @@ def _compile(mj, path: Path):
     if not _ASSET_ERROR.search(str(first)):
         raise ModelError(f"{path}: {_one_line(first)}")
     base = path.parent
-    spec = mj.MjSpec.from_file(str(path))
+    spec = _parsed(mj, path, edit)
     lost = _strip_assets(mj, spec, base, everything=False)
     explicit = {b for b in lost if spec.body(b).explicitinertial}  # before compiling: fusestatic removes bodies
     try:
         model = spec.compile()
     except Exception:  # noqa: BLE001 - the missing file was not found by our resolution: strip all
-        spec = mj.MjSpec.from_file(str(path))
+        spec = _parsed(mj, path, edit)
         lost = _strip_assets(mj, spec, base, everything=True)
         explicit = {b for b in lost if spec.body(b).explicitinertial}
         model = None
@@ -235,7 +244,7 @@ def _pose(pos, rot) -> np.ndarray:
 
 
 def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating: bool = False,
-              strict_inertia: bool = False, mocap_welds: str = "drop") -> Robot:
+              strict_inertia: bool = False, mocap_welds: str = "drop", edit=None) -> Robot:
     """Read an MJCF file into a :class:`Robot` (see the module doc).
 
     Parameters
@@ -258,6 +267,9 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
         (default) leaves them out, with a note; ``keep`` reads them as loop joints to the world
         whose world side may be placed anywhere (:attr:`LoopJoint.anchor_free`), also noted
         (:class:`~baseparams.enums.MocapWelds`).
+    edit : callable, optional
+        Called with the parsed ``MjSpec`` before it is compiled (it may change values:
+        :mod:`baseparams.io.snapfile` sets rounded right angles exact).
 
     Returns
     -------
@@ -281,7 +293,7 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
     """
     path = check_input(path, MODEL_MAX_BYTES, error=ModelError)
     mj = _import_mujoco()
-    out = _compile(mj, path)
+    out = _compile(mj, path, edit)
     model, notes = out[0], out[1]
     for note in notes:
         warnings.warn(note, MJCFWarning, stacklevel=2)

@@ -294,7 +294,8 @@ class _Index(NamedTuple):
 
 
 def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81),
-              name: str | None = None, strict_inertia: bool = False, data: bytes | None = None) -> Robot:
+              name: str | None = None, strict_inertia: bool = False, data: bytes | None = None,
+              edit=None) -> Robot:
     """Read a URDF / URDF+ file into a :class:`Robot` (see the module doc).
 
     Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
@@ -316,6 +317,9 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     data : bytes, optional
         The document, already read (a xacro file expanded by :mod:`baseparams.io.xacro_in`);
         messages still name ``path``. Default: read ``path``.
+    edit : callable, optional
+        Called with the document's root element before the robot is built (it may change
+        attribute values: :mod:`baseparams.io.snapfile` sets rounded right angles exact).
 
     Returns
     -------
@@ -339,6 +343,8 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
     """
     path = Path(path)
     root = _parse(path, data)
+    if edit is not None:
+        edit(root)
     if root.tag != "robot":
         raise ModelError(f"{path}: root element is <{root.tag}>, expected <robot>")
     links = _index_links(root, path)

@@ -303,6 +303,10 @@ class Robot:
         Per coordinate ``[lower, upper, velocity, effort]`` (rad or m; rad/s or m/s; N m or N),
         NaN where unknown (module doc); ``None`` (default): all unknown. ``lower <= upper`` where
         both are known; velocity and effort limits are non-negative.
+    source : FileSource, optional
+        The file the robot was read from (:class:`~baseparams.model.snap.FileSource`, set by the
+        readers), so that values the file states to within rounding of a right angle can be
+        re-read exact; ignored once the robot's geometry differs from the file's.
 
     Raises
     ------
@@ -326,6 +330,7 @@ class Robot:
     couplings: tuple[Coupling, ...] = ()
     armature: np.ndarray | None = None
     limits: np.ndarray | None = None
+    source: object | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         """Validate every field and store the arrays normalised.

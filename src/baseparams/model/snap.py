@@ -1,18 +1,31 @@
 """Geometry a model file states to within rounding of a special value: a right angle, zero.
 
 Real files carry ``rpy="3.1416"`` or ``"1.5708"`` (pi and pi/2 to 5 digits), an axis ``0
-0.00001 1`` or an offset of a micrometre left by a CAD export. Taken literally, such a value
-breaks a symmetry: a first joint tilted 7.3e-6 rad from gravity makes two first moments of its
-link "identifiable", with regressor columns about 1e-5 of the others. No measurement resolves
-them; least squares fits them to absurd values that explode on another recording.
+0.00001 1``, a quaternion ``0.707107 0 0.707107 0`` or an offset of a micrometre left by a CAD
+export. Taken literally, such a value breaks a symmetry: a first joint tilted 7.3e-6 rad from
+gravity makes two first moments of its link "identifiable", with regressor columns about 1e-5 of
+the others. No measurement resolves them; least squares fits them to absurd values that explode
+on another recording.
 
-This module finds those values (:func:`near_special`) and builds the model with them set to
-the special value (:func:`snapped`). Each joint frame relative to its parent's (the URDF
-``<origin>``) is read as roll-pitch-yaw angles and an offset, each joint axis by its components:
+Where the robot was read from a file (:class:`FileSource`, set by the readers), the values are
+found in the file itself, each named by its element (:mod:`baseparams.io.snapfile`): URDF joint
+``<origin rpy>`` angles and ``xyz`` offsets and ``<axis>`` components (fixed joints included:
+they compose the moving joints' frames), MJCF body and frame ``pos``, ``quat``, ``euler``,
+``axisangle``, ``xyaxes`` and ``zaxis`` and joint ``axis`` and ``pos``. Inertial frames are not
+examined: a body's parameters are a general symmetric inertia in any frame, so the frame's
+orientation never changes the count. Otherwise (a robot built in code, or changed after reading)
+each joint frame relative to its parent's is read as roll-pitch-yaw angles and an offset
+(:func:`near_special`). The rules:
 
-* an angle within :data:`SNAP_TOL` rad of a multiple of pi/2 is that multiple;
-* an offset component, or an axis component, within :data:`SNAP_TOL` of zero (offsets relative
-  to the robot's size, :func:`robot_size`: its extent, at most ten of its longest links) is zero.
+* an angle within :data:`SNAP_TOL` rad of a multiple of pi/2 is that multiple (MJCF angles in
+  degrees: of a multiple of 90);
+* an offset component within :data:`SNAP_TOL` of zero relative to the robot's size
+  (:func:`robot_size`: its extent, at most ten of its longest links), or an axis component within
+  :data:`SNAP_TOL` of zero relative to the axis' length, is zero;
+* a rotation whose frame has an axis within :data:`SNAP_TOL` rad of parallel to one of its
+  parent's (a quaternion; or angles whose components are not near a right angle one by one,
+  e.g. roll and yaw at pitch pi/2 as exporters write them) is turned the least that makes it
+  so, the angle across it snapped too when near a right angle (:func:`snap_rotation`).
 
 Why 1e-3: a geometric feature of relative size ``e`` creates directions whose regressor columns
 are about ``e`` times the others' at the file's own mass and size scales; ``e = 1e-3`` (0.06
@@ -46,19 +59,33 @@ class Snap:
     Parameters
     ----------
     body : int
-        The body whose joint frame or axis holds it.
+        The body whose joint frame or axis holds it (-1: an element of the file that is no one
+        body's own, e.g. a fixed joint merged into its parent).
     joint : str
-        That body's joint name.
+        That body's joint name, or the name of the file's element holding the value.
     what : str
-        ``"rpy"`` (an origin angle), ``"xyz"`` (an origin offset) or ``"axis"``.
+        ``"rpy"`` (an origin angle), ``"xyz"`` (an origin offset), ``"axis"``; from MJCF files
+        also ``"pos"``, ``"quat"``, ``"euler"``, ``"axisangle"``, ``"xyaxes"``, ``"zaxis"``.
     index : int
-        The component (0, 1, 2 = roll, pitch, yaw or x, y, z).
+        The component (0, 1, 2 = roll, pitch, yaw or x, y, z; -1: the whole value, a quaternion).
     literal : float
-        The model's value [rad, m or unit-vector component].
+        The model's value [rad, degree, m or unit-vector component] (NaN for a whole value).
     snapped : float
-        The special value taken instead.
+        The special value taken instead (NaN for a whole value: :attr:`new`).
     deviation : float
-        ``|literal - snapped|``, relative (rad; offsets divided by the robot's size).
+        ``|literal - snapped|``, relative (rad; offsets divided by the robot's size; axis
+        components by the axis' length; a whole rotation: the angle it is turned by).
+    element : str, optional
+        The file's element and attribute, e.g. ``<joint name="j2"> <origin rpy>`` (empty for a
+        value of the model, not of a file).
+    text : str, optional
+        The value as the file writes it (the whole attribute for a whole value).
+    new : tuple of float, optional
+        The numbers written instead, for a whole value.
+    key : tuple, optional
+        Where the value is in the file, for re-reading it (:mod:`baseparams.io.snapfile`).
+    unit : str, optional
+        ``"rad"`` or ``"degree"`` for angles.
     """
 
     __repr__ = summary_repr
@@ -70,6 +97,11 @@ class Snap:
     literal: float
     snapped: float
     deviation: float
+    element: str = ""
+    text: str = ""
+    new: tuple = ()
+    key: tuple = ()
+    unit: str = "rad"
 
     def describe(self) -> str:
         """One phrase, e.g. ``panda_joint1 origin rpy 3.1416 = pi to 5 digits``.
@@ -77,17 +109,42 @@ class Snap:
         Returns
         -------
         str
-            The joint, the value and what it is close to.
+            The element (or joint), the value and what it is close to.
         """
-        comp = "xyz"[self.index] if self.what != "rpy" else ("roll", "pitch", "yaw")[self.index]
-        where = f"{self.joint} {'axis' if self.what == 'axis' else 'origin ' + self.what} {comp}"
+        if self.index < 0:
+            new = " ".join(f"{v:.17g}" for v in self.new)
+            return (f"{self.element} {self.text} = {new} (the frame turned by {self.deviation:.2g} rad to make its "
+                    f"axes parallel or perpendicular to its parent's)")
+        comp = ("roll", "pitch", "yaw")[self.index] if self.what == "rpy" else "xyz"[self.index % 3] \
+            if self.what != "axisangle" or self.index < 3 else "angle"
+        if self.what == "xyaxes":
+            comp = ("x", "y")[self.index // 3] + " " + "xyz"[self.index % 3]
+        where = self.element or f"{self.joint} {'axis' if self.what == 'axis' else 'origin ' + self.what}"
         unit = "decimal places" if self.snapped == 0 else "digits"
-        return f"{where} {self.literal:.6g} = {_special_name(self.snapped, self.what)} to {_digits(self)} {unit}"
+        lit = self.text or f"{self.literal:.6g}"
+        return f"{where} {comp} {lit} = {_special_name(self.snapped, self.what, self.unit)} to {_digits(self)} {unit}"
+
+    def to_json(self) -> dict:
+        """The value, machine-readable.
+
+        Returns
+        -------
+        dict
+            ``joint, element, what, component, literal, text, special, new, deviation``.
+        """
+        def num(x: float):
+            return None if not np.isfinite(x) else float(x)
+
+        return {"joint": self.joint, "element": self.element, "what": self.what, "component": self.index,
+                "literal": num(self.literal), "text": self.text, "special": num(self.snapped),
+                "new": list(self.new), "deviation": self.deviation}
 
 
-def _special_name(v: float, what: str) -> str:
-    if what != "rpy" or v == 0:
+def _special_name(v: float, what: str, unit: str = "rad") -> str:
+    if what not in ("rpy", "euler", "axisangle") or v == 0:
         return "0" if v == 0 else f"{v:g}"
+    if unit == "degree":
+        return f"{v:g}"
     k = int(round(v / (np.pi / 2)))
     names = {1: "pi/2", -1: "-pi/2", 2: "pi", -2: "-pi", 3: "3pi/2", -3: "-3pi/2", 4: "2pi", -4: "-2pi"}
     return names.get(k, f"{k}pi/2")
@@ -95,8 +152,122 @@ def _special_name(v: float, what: str) -> str:
 
 def _digits(s: Snap) -> int:
     """Significant digits (after the point, for a zero) to which the literal equals the special value."""
-    scale = max(abs(s.snapped), 1.0) if s.what == "rpy" else 1.0
-    return max(1, int(np.floor(-np.log10(max(s.deviation / scale, 1e-300)))))
+    angle = s.what in ("rpy", "euler", "axisangle")
+    scale = max(abs(s.snapped), 1.0) if angle else 1.0
+    dev = abs(s.literal - s.snapped) if angle else s.deviation
+    return max(1, int(np.floor(-np.log10(max(dev / scale, 1e-300)))))
+
+
+@dataclass(frozen=True, eq=False)
+class FileSource:
+    """The file a robot was read from and how, so that its values can be re-read snapped.
+
+    Set by :func:`baseparams.io.load.load_file` on the robot it returns (``Robot.source``).
+
+    Parameters
+    ----------
+    path : str
+        The file.
+    options : dict
+        The reader's keyword arguments (``floating``, ``gravity``, ``strict_inertia``, ...).
+    fingerprint : bytes
+        :func:`geometry_fingerprint` of the robot as read: a robot changed since (re-referenced,
+        welded, built anew) no longer matches, and its file is not used.
+    """
+
+    __repr__ = summary_repr
+
+    path: str
+    options: dict
+    fingerprint: bytes
+
+
+def geometry_fingerprint(robot: Robot) -> bytes:
+    """A digest of everything that decides the robot's count: tree, joints, frames, axes, gravity, constraints.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+
+    Returns
+    -------
+    bytes
+        SHA-1 of the names, joint types, parents, ``M0``, axes, gravity, couplings and loop joints.
+    """
+    import hashlib
+
+    h = hashlib.sha1()
+    for part in (robot.names, robot.joint_names, robot.jtype, robot.couplings, robot.loops):
+        h.update(repr(part).encode())
+    for arr in (robot.parent, robot.M0, robot.gravity, *robot.axes):
+        h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
+    return h.digest()
+
+
+def file_source(robot: Robot) -> FileSource | None:
+    """The file the robot was read from, if the robot is still as read (else None).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+
+    Returns
+    -------
+    FileSource or None
+        ``robot.source`` when its fingerprint matches the robot's geometry.
+    """
+    src = getattr(robot, "source", None)
+    return src if src is not None and src.fingerprint == geometry_fingerprint(robot) else None
+
+
+def snap_rotation(r: np.ndarray, tol: float = SNAP_TOL, exact: float = EXACT_TOL) -> np.ndarray | None:
+    """The least turn of a rotation that makes a near-parallel pair of axes exact, or None if it has none.
+
+    Entry ``r[i, j]`` is the cosine of the angle between the parent's axis ``i`` and the frame's
+    axis ``j``. When one pair is within ``tol`` rad of parallel (``|r_ij| >= cos tol``, but not
+    within ``exact``), that row and column become a signed unit vector and the rest the nearest
+    rotation in the plane across them, itself snapped to a right angle when within ``tol``: a
+    rotation about a frame axis composed with right angles (a splay angle on a right-angled
+    mount) keeps its designed angle. A pair merely near perpendicular is not enough: in generic
+    (CAD) frames one of the nine angles falls within a milliradian of a right angle by chance
+    (0.6 % of frames), and turning such a frame would move a designed axis with it; single angles
+    near a right angle are the file's own components (:func:`near_special`, MJCF ``euler``).
+
+    Parameters
+    ----------
+    r : ndarray, shape ``(3, 3)``
+        A rotation.
+    tol, exact : float
+        Angles [rad]: snapped when within ``tol``, already exact within ``exact``.
+
+    Returns
+    -------
+    ndarray, shape ``(3, 3)`` or None
+        The snapped rotation, or None when no pair of axes is within ``tol`` of parallel or all
+        such are within ``exact`` (with the plane's angle).
+    """
+    r = np.asarray(r, dtype=float)
+    a = np.abs(r)
+    par = [(i, j) for i in range(3) for j in range(3) if a[i, j] >= np.cos(tol)]
+    if not par:
+        return None
+    i, j = max(par, key=lambda ij: a[ij])
+    out = np.zeros((3, 3))
+    out[i, j] = np.sign(r[i, j])
+    rows, cols = [k for k in range(3) if k != i], [k for k in range(3) if k != j]
+    u, _, vt = np.linalg.svd(r[np.ix_(rows, cols)])
+    want = np.sign(r[i, j]) * (-1) ** (i + j)  # det(out) = +1
+    b = u @ np.diag([1.0, want * np.sign(np.linalg.det(u @ vt))]) @ vt
+    ang = np.arctan2(b[1, 0], b[0, 0])
+    k = np.round(ang / (np.pi / 2))
+    if abs(ang - k * np.pi / 2) <= tol:
+        c, s_ = np.round(np.cos(k * np.pi / 2)), np.round(np.sin(k * np.pi / 2))
+        b = np.array([[c, -s_], [s_, c]]) @ np.diag([1.0, np.sign(np.linalg.det(b))])
+    out[np.ix_(rows, cols)] = b
+    turn = float(np.arccos(np.clip((np.trace(r.T @ out) - 1) / 2, -1.0, 1.0)))
+    return out if turn > exact else None
 
 
 #: the robot's size is at most this many times its longest link (:func:`robot_size`)
@@ -106,7 +277,8 @@ LINKS_PER_SIZE = 10
 def robot_size(robot: Robot, frames: np.ndarray | None = None) -> float:
     """The length offsets are measured against: the robot's extent, at most ten of its longest links.
 
-    The largest distance between two joint frames at q = 0, but at most :data:`LINKS_PER_SIZE`
+    The largest distance between two joint frames at q = 0 (not to the world origin: a hand
+    mounted half a metre from it is 10 cm in size), but at most :data:`LINKS_PER_SIZE`
     times the longest link (a joint frame's distance from its parent's): an offset acts on the
     torques through the links near it, so on a chain of 10 000 links the whole chain's length
     would make every offset below ten links "near zero" (1 988 of them snapped on a random deep
@@ -124,7 +296,8 @@ def robot_size(robot: Robot, frames: np.ndarray | None = None) -> float:
     float
         [m], at least 1e-3 (a robot of one body at the origin).
     """
-    p = np.vstack([np.zeros((1, 3)), robot.M0[:, :3, 3]])
+    # the joint frames (the world origin only for one body: where a robot stands changes nothing)
+    p = robot.M0[:, :3, 3] if robot.n > 1 else np.vstack([np.zeros((1, 3)), robot.M0[:, :3, 3]])
     rel = (relative_frames(robot) if frames is None else frames)[:, :3, 3]
     inner = [i for i, par in enumerate(robot.parent) if par >= 0]  # a root's pose in the world is not a link
     longest = float(np.linalg.norm(rel[inner], axis=1).max()) if inner else np.inf
@@ -232,7 +405,8 @@ def _snap_value(v: float, step: float, tol: float, exact: float) -> float | None
 def near_special(robot: Robot, tol: float = SNAP_TOL, exact: float = EXACT_TOL) -> list[Snap]:
     """The values of the model within ``tol`` of a special value, but not within ``exact`` of it.
 
-    Robots with loops are not examined (changing a frame could open a loop): an empty list.
+    Robots with loop joints are not examined (changing a frame could open a loop): an empty
+    list. Couplings (``<mimic>``) tie coordinates, not frames: such robots are examined.
 
     Parameters
     ----------
@@ -248,7 +422,7 @@ def near_special(robot: Robot, tol: float = SNAP_TOL, exact: float = EXACT_TOL) 
     list of Snap
         In body order, origins' angles, then offsets, then axes.
     """
-    if robot.has_loops:
+    if robot.loops:
         return []
     frames = relative_frames(robot)
     size = robot_size(robot, frames)
@@ -280,7 +454,7 @@ def snapped(robot: Robot, snaps) -> Robot:
     Parameters
     ----------
     robot : Robot
-        The robot (without loops).
+        The robot (without loop joints).
     snaps : iterable of Snap
         Values to set (:func:`near_special`).
 

@@ -272,6 +272,15 @@ def _by_effect(robot: Robot, sampling: tuple, num: NumericalResult, bd: np.ndarr
 
     r_d = bd.shape[1]
     pr, null = practical_rank(robot, *sampling, num, r_d, d, tol)
+    if not pr.decided:
+        c = pr.straddling
+        cands = "; ".join(f"{nb} base parameters if {m}" for nb, m in pr.candidates())
+        return (Status.UNDECIDED, f"{message}; by each direction's effect on the torques at the model's own scales "
+                                  f"the threshold {tol:g} of the torque scale falls inside a cluster of {c.count} "
+                                  f"directions ({c.bottom:.2g} - {c.top:.2g} of the torque scale): no gap decides "
+                                  f"({cands}); the clusters: {pr.clusters_text()}; what would decide it: the "
+                                  f"file's right angles and zeros written exactly, or its numbers to more digits",
+                bd, 0, pr)
     inside = float(np.max(np.linalg.norm(bd - null @ (null.T @ bd), axis=0))) if r_d else 0.0
     if pr.nullity < r_d or inside > _SPAN_TOL:
         return status, (message + f"; the practical decision does not contain DRNG's span (distance "
@@ -279,7 +288,8 @@ def _by_effect(robot: Robot, sampling: tuple, num: NumericalResult, bd: np.ndarr
     basis, missing, _ = _complete(bd, null, pr.nullity)
     why = (f"{message}; decided by each direction's effect on the torques at the model's own scales: "
            f"{pr.counted_out} below {pr.threshold:g} of the torque scale counted out (largest "
-           f"{pr.largest_out:.2g}, smallest kept {pr.smallest_kept:.2g}); the literal decision: --literal")
+           f"{pr.largest_out:.2g}, smallest kept {pr.smallest_kept:.2g}: decided at a gap of {pr.gap:.3g}); the "
+           f"literal decision: --literal")
     return Status.COMPLETED if missing else Status.CERTIFIED, why, basis, missing, pr
 
 
@@ -334,14 +344,24 @@ def _verdict(res: DRNGResult, num: NumericalResult, nrows: int, r_d: int, col_re
         return Status.UNDECIDED, (f"too few samples: the stacked regressor has {nrows} rows for {ncols} "
                              f"parameters (rank {num.rank}); use more samples")
     if not num.decided:
-        return Status.UNDECIDED, (f"numerical rank not decided: {gap_txt} is below {min_gap:g}; try more "
-                             f"samples, another seed, or fix rounded angles in the model")
+        return Status.UNDECIDED, (f"numerical rank not decided: {gap_txt} {_undecided_why(num, min_gap)}; try "
+                             f"more samples, another seed, or fix rounded angles in the model")
     if r_d + num.rank == ncols:
         return Status.CERTIFIED, f"DRNG is complete: rank(B) {r_d} + rank(W) {num.rank} = {ncols}; {gap_txt}"
     if r_d + num.rank > ncols:
         return Status.FAILED, (f"rank(B) {r_d} + rank(W) {num.rank} > {ncols}: DRNG columns and the numerical "
                           f"rank disagree ({gap_txt}); try more samples")
     return None
+
+
+def _undecided_why(num: NumericalResult, min_gap: float) -> str:
+    """Why a literal rank is not decided: the tolerance inside a cluster (named), or a gap below ``min_gap``."""
+    spec = num.spectrum
+    c = None if spec is None else spec.straddling(num.rtol)
+    if c is None:
+        return f"is below {min_gap:g}"
+    return (f"lies inside a cluster of {c.count} singular values ({c.bottom:.2g} - {c.top:.2g} of the largest): no "
+            f"gap decides between rank {c.first} and {c.stop} (clusters: {' | '.join(spec.lines())})")
 
 
 #: DRNG's exact columns lie in the practical nullspace to within this (orthonormal bases)

@@ -20,7 +20,12 @@ model's own scales. This module measures it:
 * the singular values of that column-scaled regressor, relative to the largest (the torque
   scale): the effect on the torques of a unit change along each direction.
 
-A direction whose effect is below :data:`PRACTICAL_TOL` of the torque scale is counted out.
+A direction whose effect is below :data:`PRACTICAL_TOL` of the torque scale is counted out, but a
+count is stated only at a gap of that spectrum (:func:`~baseparams.numerics.spectrum`: neighbouring
+effects at least 100x apart, and 10x the ratios inside the clusters on either side): when the
+threshold falls inside a cluster of effects (rounding errors of a file add directions whose effects
+spread over a decade or more around it), the count is ``undecided``, and the note lists the clusters,
+the count each candidate cut would state, and what would decide it.
 
 Why 1e-6: joint torque sensors and motor-current models resolve 0.1-1 % of the torque scale;
 averaging ``N`` independent samples gains ``sqrt(N)``, so an effect ``e`` needs about
@@ -46,7 +51,7 @@ from ..display import summary_repr
 from ..model.inertia import LENGTH_POWER, hat, transform, unhat
 from ..model.robot import Robot
 from ..model.scale import METRE_BAND, length_scale
-from ..numerics import NumericalResult, StreamingQR, rank_decision, stacked_regressor
+from ..numerics import Cluster, NumericalResult, Spectrum, StreamingQR, rank_decision, spectrum, stacked_regressor
 
 #: a direction moving the torques by less than this fraction of their scale is not identifiable in practice
 PRACTICAL_TOL = 1e-6
@@ -65,7 +70,8 @@ class PracticalRank:
     threshold : float
         Directions with a relative effect below this are counted out (:data:`PRACTICAL_TOL`).
     rank, nullity : int
-        The practical rank of the scaled regressor and ``10 n - rank``.
+        The practical rank of the scaled regressor (the directions above the threshold) and
+        ``10 n - rank``; meaningful only when :attr:`decided`.
     drng_rank : int
         Dimension of DRNG's exact span (part of the practical nullspace).
     literal_rank : int
@@ -87,7 +93,9 @@ class PracticalRank:
         Random states of each of the two sets (the decision is made on both).
     borderline : bool
         The first set alone gives another count, or a direction lies within a factor
-        :data:`BORDERLINE` of the threshold: the count is the threshold's, not a clear divide.
+        :data:`BORDERLINE` of the threshold.
+    spectrum : Spectrum, optional
+        The effects' clusters and gaps (both sets).
     """
 
     __repr__ = summary_repr
@@ -105,32 +113,83 @@ class PracticalRank:
     rate: float
     samples: int
     borderline: bool = False
+    spectrum: Spectrum | None = None
 
     @property
     def counted_out(self) -> int:
         """Directions outside DRNG's exact span counted out: ``nullity - drng_rank``."""
         return self.nullity - self.drng_rank
 
-    def note(self) -> str:
-        """One line: what was decided and why.
+    @property
+    def straddling(self) -> Cluster | None:
+        """The cluster of effects the threshold falls inside (the count is then undecided), or None."""
+        return None if self.spectrum is None else self.spectrum.straddling(self.threshold)
+
+    @property
+    def decided(self) -> bool:
+        """Whether the threshold lies in a gap of the effects' spectrum (a count is stated only there)."""
+        return self.straddling is None
+
+    @property
+    def gap(self) -> float:
+        """The ratio of effects across the cut (smallest kept / largest counted out; inf at the ends)."""
+        return self.smallest_kept / self.largest_out if self.largest_out > 0 else np.inf
+
+    def candidates(self) -> list[tuple[int, str]]:
+        """The counts a cut at the gaps around the straddled cluster would state, and what each means.
+
+        Returns
+        -------
+        list of (int, str)
+            ``(base-parameter count of the scaled regressor, meaning)``; empty when decided.
+        """
+        c = self.straddling
+        if c is None:
+            return []
+        what = f"the {c.count} direction{'s' if c.count != 1 else ''} between {c.bottom:.2g} and {c.top:.2g}"
+        return [(c.first, f"{what} not identifiable (a torque resolution coarser than {c.top:.2g} of the scale)"),
+                (c.stop, f"{what} identifiable (a torque resolution finer than {c.bottom:.2g} of the scale)")]
+
+    def clusters_text(self) -> str:
+        """The effects' clusters, largest first, with the gaps between them (one phrase).
 
         Returns
         -------
         str
-            E.g. ``practical rank: 3 directions below 1e-06 of the torque scale (largest 4e-08, smallest
-            kept 2e-03): counted out; ...``.
+            E.g. ``34 directions 0.0065 - 1 ...; gap 684 below: rank 34 | 10 directions ...``.
         """
+        return " | ".join(self.spectrum.lines()) if self.spectrum is not None else ""
+
+    def note(self) -> str:
+        """One line: what was decided and why (or why not).
+
+        Returns
+        -------
+        str
+            E.g. ``practical rank: ... 3 directions outside DRNG's exact span move the torques by less
+            than 1e-06 of the torque scale (largest 4e-08; smallest kept 2e-03, a gap of 5e+04) ...``.
+        """
+        head = (f"practical rank: the literal rank is not decided (singular-value gap {self.literal_gap:.3g} < "
+                f"{self.min_gap:g}); at the model's own scales (parameters M, M L, M L^2 with L {self.length:.3g} m, "
+                f"motions at {self.rate:.3g} rad/s)")
+        if not self.decided:
+            c = self.straddling
+            cands = "; ".join(f"{n} if {m}" for n, m in self.candidates())
+            return (f"{head} the threshold {self.threshold:g} of the torque scale falls inside a cluster of "
+                    f"{c.count} directions ({c.bottom:.2g} - {c.top:.2g}): no gap decides the count (UNDECIDED); "
+                    f"the clusters: {self.clusters_text()}; candidates: {cands}; what would decide it: the file's "
+                    f"right angles and zeros written exactly (or its numbers to more digits), or --literal")
         k = self.counted_out
         dirs = f"{k} direction{'s' if k != 1 else ''} outside DRNG's exact span"
         if k:
             what = (f"{dirs} move the torques by less than {self.threshold:g} of the torque scale (largest "
-                    f"{self.largest_out:.2g}; smallest kept {self.smallest_kept:.2g}): counted out")
+                    f"{self.largest_out:.2g}; smallest kept {self.smallest_kept:.2g}, a gap of {self.gap:.3g}): "
+                    f"counted out")
         else:
             what = (f"every direction outside DRNG's exact span moves the torques by at least "
-                    f"{self.smallest_kept:.2g} of their scale (threshold {self.threshold:g}): kept")
-        return (f"practical rank: the literal rank is not decided (singular-value gap {self.literal_gap:.3g} < "
-                f"{self.min_gap:g}); at the model's own scales (parameters M, M L, M L^2 with L {self.length:.3g} m, "
-                f"motions at {self.rate:.3g} rad/s) {what}; rank {self.rank}, nullity {self.nullity} "
+                    f"{self.smallest_kept:.2g} of their scale (threshold {self.threshold:g}, a gap of "
+                    f"{self.gap:.3g} below): kept")
+        return (f"{head} {what}; rank {self.rank}, nullity {self.nullity}, decided at that gap "
                 f"(below {self.threshold:g} a direction needs more than a million samples at 0.1 % torque "
                 f"precision, and six-digit files do not state it)"
                 f"{'; borderline: a direction lies near the threshold' if self.borderline else ''}; "
@@ -142,15 +201,23 @@ class PracticalRank:
         Returns
         -------
         dict
-            ``threshold, rank, nullity, counted_out, largest_out, smallest_kept, literal_rank,
-            literal_gap, min_gap, length, rate, samples, borderline, note``.
+            ``threshold, decided, rank, nullity, counted_out, largest_out, smallest_kept, gap,
+            literal_rank, literal_gap, min_gap, length, rate, samples, borderline, clusters[{first,
+            count, top, bottom, spread, gap_below}], candidates[{rank, meaning}], note``.
         """
-        return {"threshold": self.threshold, "rank": self.rank, "nullity": self.nullity,
+        def num(x: float):
+            return None if not np.isfinite(x) else float(x)
+
+        sp = self.spectrum
+        clusters = [] if sp is None else [
+            {"first": c.first, "count": c.count, "top": c.top, "bottom": c.bottom, "spread": c.spread,
+             "gap_below": num(sp.gap(c.stop))} for c in sp.clusters]
+        return {"threshold": self.threshold, "decided": self.decided, "rank": self.rank, "nullity": self.nullity,
                 "counted_out": self.counted_out, "largest_out": self.largest_out,
-                "smallest_kept": self.smallest_kept, "literal_rank": self.literal_rank,
-                "literal_gap": None if not np.isfinite(self.literal_gap) else self.literal_gap,
-                "min_gap": self.min_gap, "length": self.length, "rate": self.rate, "samples": self.samples,
-                "borderline": self.borderline, "note": self.note()}
+                "smallest_kept": self.smallest_kept, "gap": num(self.gap), "literal_rank": self.literal_rank,
+                "literal_gap": num(self.literal_gap), "min_gap": self.min_gap, "length": self.length,
+                "rate": self.rate, "samples": self.samples, "borderline": self.borderline, "clusters": clusters,
+                "candidates": [{"rank": n, "meaning": m} for n, m in self.candidates()], "note": self.note()}
 
 
 def practical_scales(robot: Robot, d: np.ndarray) -> tuple[float, float, np.ndarray]:
@@ -231,9 +298,10 @@ def practical_rank(robot: Robot, samples: int, seed: int, rows: str, literal: Nu
     Returns
     -------
     (PracticalRank, ndarray of shape ``(10 n, nullity)``)
-        The decision (on both sample sets; ``borderline`` when the first alone differs or a
-        direction lies near the threshold) and an orthonormal basis of the practical nullspace
-        in the coordinates ``pi / d``.
+        The decision (on both sample sets; ``decided`` only when the threshold lies in a gap of
+        the effects' spectrum; ``borderline`` when the first set alone differs or a direction lies
+        near the threshold) and an orthonormal basis of the directions below the threshold in the
+        coordinates ``pi / d`` (the practical nullspace when decided).
     """
     length, rate, scale = practical_scales(robot, d)
     ncols, n = 10 * robot.n, robot.n
@@ -245,13 +313,15 @@ def practical_rank(robot: Robot, samples: int, seed: int, rows: str, literal: Nu
         qr.add(np.einsum("rik,ikl->ril", w, t).reshape(-1, ncols))
         counts.append(rank_decision(qr.r, rtol=tol, min_gap=0.0))
     one, both = counts
-    sv = both.singular_values / (both.singular_values[0] or 1.0)
+    spec = spectrum(both.singular_values)
+    sv = spec.values
     rank = both.rank
     largest_out = float(sv[rank]) if rank < ncols else 0.0
     smallest_kept = float(sv[rank - 1]) if rank else 0.0
     near = bool(np.any((sv > tol / BORDERLINE) & (sv < tol * BORDERLINE)))
+    unstable = one.rank != rank or spectrum(one.singular_values).straddling(tol) is not None
     pr = PracticalRank(tol, rank, ncols - rank, drng_rank, literal.rank, float(literal.gap), literal.min_gap,
-                       largest_out, smallest_kept, length, rate, samples, near or one.rank != rank)
+                       largest_out, smallest_kept, length, rate, samples, near or unstable, spec)
     # back from the scaled local coordinates theta to pi / d, orthonormal
     k = both.null_basis.shape[1]
     null = np.einsum("ikl,ilj->ikj", t, both.null_basis.reshape(n, 10, k)).reshape(ncols, k)

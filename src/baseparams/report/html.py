@@ -444,7 +444,14 @@ def _certification(result) -> str:
                      f"or past a singular configuration, "
                      f"{s['ill_conditioned']} ill-conditioned; max loop residual {s['max_loop_residual']:.1e})")
         sampling += "".join(f"; {line}" for line in s.get("motion", ()))
-    return (f"<h2>Certification: {html.escape(str(cert.status))}</h2><p>{html.escape(cert.message)}</p>"
+    from ..analysis import decision_lines
+
+    decision = "".join(f"<p id='rank-decision'>{html.escape(line)}</p>"
+                       for line in decision_lines(result.rank_decision()))
+    note = "" if result.practical is None else result.practical.note(result.n_base)
+    snapped = f"<p id='snapped'>{html.escape(note)}</p>" if note else ""
+    return (f"<h2>Certification: {html.escape(str(cert.status))}</h2><p>{html.escape(cert.message)}</p>{decision}"
+            f"{snapped}"
             f"<p>Singular values of the sampled regressor (log scale); dashed red: the tolerance "
             f"({num.tol:.3g}); dotted blue: the rank decision, singular-value gap {num.gap:.3g}.</p>"
             f"{_log_plot(num.singular_values, num.tol, 'svplot', num.rank)}"

@@ -266,7 +266,7 @@ def test_a_local_cluster_of_a_thousand_workers_is_refused_before_starting(monkey
 
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
     with pytest.raises(BaseparamsError, match=r"--workers 1024: a local cluster of at most 8 worker processes"), \
-            fleet._client(None, None, 1024):
+            fleet.dask_client(None, None, 1024):
         pass
 
 

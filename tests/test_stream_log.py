@@ -17,12 +17,12 @@ import pytest
 
 from baseparams import load
 from baseparams.errors import DataError
-from baseparams.ident.data import JointLog
 from baseparams.ident.pipeline import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.ident.stream import NotStreamable, identify_stream, scan
 from baseparams.io.logs import LogStream, read_log, write_log
-from baseparams.io.tables import column_writer
+from baseparams.jointlog import JointLog
+from baseparams.tables import column_writer
 
 
 @pytest.fixture(scope="module")

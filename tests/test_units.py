@@ -103,7 +103,7 @@ def test_boolean_parquet_velocities_refused(sim, tmp_path):
 @pytest.mark.shared
 @pytest.mark.slow
 def test_real_panda_log_not_flagged():
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 
@@ -192,7 +192,7 @@ def test_parquet_uint64_nanosecond_stamps(sim, tmp_path):
 
 # ---------------------------------------------------------------- real logs: clean ones pass, slips are refused
 def _panda():
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 
@@ -208,7 +208,7 @@ def _tx40():
     import json
     import re
 
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 
@@ -234,8 +234,8 @@ def _tiago():
     """The TIAGo torso and arm, efforts converted as FIGAROH's example does (shared SOURCE.md)."""
     import warnings
 
-    from baseparams.ident.data import JointLog
     from baseparams.ident.subchain import subchain
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 

@@ -67,8 +67,6 @@ import importlib as _importlib
 import os as _os
 import warnings as _warnings
 
-__version__ = "0.1.0"
-
 # the subpackage first: importing it later would rebind ``baseparams.regressor`` to the module
 from . import regressor as _regressor_pkg  # noqa: F401  (numpy only)
 from .analysis import Analysis, analyze, regressor
@@ -222,6 +220,10 @@ def __getattr__(name: str):
     """Submodules and the loop's result classes on first use (``baseparams.Identification``)."""
     if name in _SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")
+    if name == "__version__":  # looked up on first use (baseparams.version)
+        from .version import version
+
+        return version()
     if name in _LAZY:
         return getattr(_importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

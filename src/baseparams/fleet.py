@@ -232,7 +232,7 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
     if covariance not in COVARIANCES:
         raise BaseparamsError(f"unknown covariance {covariance!r}; choose {' or '.join(COVARIANCES)}")
     kw = {"model": model, "memory_mb": memory_mb, "cutoff": cutoff, "min_speed": min_speed}
-    with _client(client, scheduler, workers) as cl:
+    with dask_client(client, scheduler, workers) as cl:
         futures = cl.map(_file_task, [os.path.abspath(p) for p in paths], **kw, pure=False)
         results = _gather(cl, futures, progress, given)
         skipped = [i for a, i in results if a is None]
@@ -373,8 +373,18 @@ def _connect(client_class, address: str, source: str):
 MAX_WORKERS_PER_CORE = 4
 
 
-class _client:
-    """Context manager: the given client, a scheduler's, or a local cluster started and stopped here."""
+class dask_client:
+    """Context manager: the given client, a scheduler's, or a local cluster started and stopped here.
+
+    Parameters
+    ----------
+    client : distributed.Client or None
+        An existing client (used as it is, not closed).
+    scheduler : str or None
+        A scheduler address (default ``DASK_SCHEDULER_ADDRESS``, else a local cluster).
+    workers : int or None
+        Local cluster size (default: one worker per core).
+    """
 
     def __init__(self, client, scheduler, workers):
         self.client, self.scheduler, self.workers = client, scheduler, workers
@@ -562,77 +572,3 @@ def synthetic_fleet_factors(model: IdentModel, theta: np.ndarray, chunks: int, s
         level = [client.submit(combine_pair, level[k], level[k + 1], pure=False) if k + 1 < len(level) else level[k]
                  for k in range(0, len(level), 2)]
     return level[0].result()
-
-
-def analyze_file(path: str, floating: bool = False, convention: str = "khalil", rows: str = "all") -> dict:
-    """One model file analysed (the task of a design sweep).
-
-    Parameters
-    ----------
-    path : str
-        A robot file (URDF / URDF+ / MJCF) or a built-in name.
-    floating : bool
-        Attach the root link by a free joint.
-    convention : str
-        Convention of the regrouped expressions.
-    rows : {"all", "joints", "base"}
-        Measured rows.
-
-    Returns
-    -------
-    dict
-        :meth:`baseparams.analysis.Analysis.to_json` plus ``"path"``; a file that cannot be
-        analysed gives ``{"path", "error"}`` (one line) instead of failing the sweep.
-    """
-    import warnings
-
-    from .analysis import analyze
-    from .errors import BaseparamsError as _Err
-    from .loading import load_model
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            robot, _ = load_model(path, floating=floating, strict_inertia=False)
-        return {"path": str(path), **analyze(robot, convention=convention, rows=rows).to_json()}
-    except _Err as exc:
-        return {"path": str(path), "error": str(exc)}
-
-
-def analyze_fleet(paths, *, client=None, scheduler: str | None = None, workers: int | None = None,
-                  floating: bool = False, convention: str = "khalil", rows: str = "all", progress=None) -> list[dict]:
-    """Many model files analysed on Dask (a design sweep over geometric variants).
-
-    Parameters
-    ----------
-    paths : iterable of str
-        Robot files.
-    client, scheduler, workers
-        The cluster, as for :func:`identify_fleet`.
-    floating : bool
-        Attach each root link by a free joint.
-    convention : str
-        Convention of the regrouped expressions.
-    rows : {"all", "joints", "base"}
-        Measured rows.
-    progress : callable, optional
-        Called with one line per finished file.
-
-    Returns
-    -------
-    list of dict
-        One :func:`analyze_file` result per path, in order.
-    """
-    from distributed import as_completed
-
-    paths = [str(p) if "://" in str(p) or not Path(p).exists() else os.path.abspath(p) for p in paths]
-    with _client(client, scheduler, workers) as cl:
-        futures = cl.map(analyze_file, paths, floating=floating, convention=convention, rows=rows, pure=False)
-        done = {}
-        for k, fut in enumerate(as_completed(futures)):
-            res = fut.result()
-            done[fut.key] = res
-            if progress is not None:
-                what = res.get("error") or f"{res['status']}, {res['n_base']} base parameters"
-                progress(f"[{k + 1}/{len(futures)}] {res['path']}: {what}")
-    return [done[f.key] for f in futures]

@@ -395,7 +395,7 @@ def _choice(where: str, name: str, value, choices) -> None:
 def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log"):
     """``log`` as a JointLog: a JointLog (values checked), or a log file read for ``robot`` (``read_log``)."""
     from .arguments import ArgumentTypeError
-    from .ident.data import JointLog
+    from .jointlog import JointLog
 
     if isinstance(log, (str, os.PathLike)):
         from .io.logs import read_log
@@ -754,7 +754,7 @@ def _run_identification(robot, log, validate, columns, joints, weld, stream, pre
                 return identify_stream(robot, src, validation=other, progress=say, **opts), None
             import numpy as np
 
-            from .io.tables import column_writer
+            from .tables import column_writer
 
             coords = robot.actuated if robot.has_loops else range(robot.dof)
             names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
@@ -778,7 +778,7 @@ def _run_identification(robot, log, validate, columns, joints, weld, stream, pre
 
 def _write_predictions(result, log, val, holdout, path, inputs, note, cli) -> None:
     """Predicted torques at every validation sample, at the log's own time stamps."""
-    from .io.tables import write_columns
+    from .tables import write_columns
 
     whole = val if val is not None else log
     tau = result.predict(whole)
@@ -794,7 +794,8 @@ def _write_results(result, log, robot, source, outputs: dict, inputs: list[str],
         result.save(outputs["save"], inputs, "save")
         say(f"result saved to {outputs['save']}")
     if outputs["urdf"] is not None:
-        from .io.urdf import identified_drives, write_urdf
+        from .ident.export import identified_drives
+        from .io.urdf import write_urdf
 
         drives, couplings = identified_drives(result)
         tilt = next((t for t in result.fit.terms if t.name == "tilt"), None)
@@ -806,7 +807,7 @@ def _write_results(result, log, robot, source, outputs: dict, inputs: list[str],
             note(f"--urdf: not written: {n}")
         note(f"URDF written to {outputs['urdf']}")
     if outputs["mjcf"] is not None:
-        from .io.mjcf_write import identified_mjcf
+        from .ident.export import identified_mjcf
 
         for n in identified_mjcf(result, os.fspath(source), outputs["mjcf"], log, inputs=inputs):
             note(n)

@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
 from ..enums import Convention, Rows, Status, values
 from ..errors import BaseparamsError, NoMovingBodiesError
 from . import common
@@ -273,7 +272,7 @@ def _regressor_states(args, robot) -> int:
     from ..analysis import regressor
     from ..base.regroup import parameter_names
     from ..io.logs import read_log
-    from ..io.tables import check_table_path, write_columns
+    from ..tables import check_table_path, write_columns
 
     check_table_path(args.out, input_files(args), "--out")
     if robot.floating:
@@ -344,7 +343,7 @@ def _ident_args(s) -> None:
 
 def _analyze_sweep(args) -> int:
     """``analyze 'models/*.urdf'``: every matching file on Dask, one line (or JSON object) each."""
-    from ..fleet import analyze_fleet
+    from ..sweep import analyze_fleet
 
     files = data_files(args.model)
     results = analyze_fleet(files, scheduler=getattr(args, "scheduler", None), workers=getattr(args, "workers", None),
@@ -385,6 +384,19 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"baseparams: error: {prog}{message} (see {self.prog} --help)\n")
 
 
+class _Version(argparse.Action):
+    """``--version``: the version looked up when asked for (:func:`baseparams.version.version`), not at start-up."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ..version import version
+
+        print(f"baseparams {version()}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``baseparams`` command.
 
@@ -397,7 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "
         "they regroup: the tetrahedral-point model and DRNG, certified by exact numerics."))
-    p.add_argument("--version", action="version", version=f"baseparams {__version__}")
+    p.add_argument("--version", action=_Version, help="show program's version number and exit")
     sub = p.add_subparsers(dest="command", required=True)
 
     s = sub.add_parser("robots", help="list the built-in robots")

@@ -123,7 +123,7 @@ def cmd_predict(args) -> int:
     """
     from ..ident.pipeline import Identification
     from ..io.logs import read_log
-    from ..io.tables import check_table_path, write_columns
+    from ..tables import check_table_path, write_columns
 
     inputs = input_files(args)
     check_table_path(args.out, inputs, "--out")

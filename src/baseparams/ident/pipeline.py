@@ -5,7 +5,7 @@ The pipeline (:func:`identify`):
 1. the base-parameter analysis of the robot (:func:`baseparams.analyze`, certified);
 2. the drive model (rotor inertia, friction) of the measured joints and which of its
    parameters regroup with base parameters (:class:`IdentModel`, decided on sampled states);
-3. the log (:class:`~baseparams.ident.data.JointLog`) preprocessed: resampled, zero-phase
+3. the log (:class:`~baseparams.jointlog.JointLog`) preprocessed: resampled, zero-phase
    low-pass filtered, velocities and accelerations derived, the same filter applied to the
    torques and to every regressor column (parallel filtering), decimated
    (:mod:`baseparams.ident.preprocess`);
@@ -558,7 +558,7 @@ class Identification:
         import os
 
         from ..arguments import ArgumentTypeError, check_flags
-        from .data import JointLog
+        from ..jointlog import JointLog
 
         check_flags("predict", smooth=smooth)
         if columns is not None and not isinstance(columns, (str, os.PathLike, dict)):
@@ -611,7 +611,7 @@ class Identification:
         """
         from dataclasses import fields
 
-        from .. import __version__
+        from ..version import version
         from .results import FORMAT, VERSION, numbers, robot_fingerprint
 
         r = self.model.analysis.source_robot
@@ -622,7 +622,7 @@ class Identification:
         est = self.fit.estimate
         phys = self.fit.physical
         body = self.to_json()
-        doc = {"format": FORMAT, "version": VERSION, "baseparams": __version__,
+        doc = {"format": FORMAT, "version": VERSION, "baseparams": version(),
                "robot": {"name": r.name, "fingerprint": robot_fingerprint(r), "bodies": r.n, "dof": r.dof,
                          "parameters": 10 * r.n, "joints": self.joints},
                "options": opts,

@@ -36,7 +36,7 @@ from scipy import signal
 
 from ..display import summary_repr
 from ..errors import DataError
-from .data import JointLog
+from ..jointlog import JointLog
 
 #: default low-pass cutoff: fs / CUTOFF_DIVISOR, at most CUTOFF_CAP Hz
 CUTOFF_DIVISOR = 20.0

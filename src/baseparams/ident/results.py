@@ -34,8 +34,8 @@ import numpy as np
 
 from ..arguments import ArgumentTypeError
 from ..errors import BaseparamsError
+from ..jointlog import JointLog
 from ..model.robot import Robot
-from .data import JointLog
 
 #: the ``format`` field of a saved identification
 FORMAT = "baseparams-identification"

@@ -203,8 +203,8 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     BaseparamsError
         Loops the trajectory does not close (lower ``amplitude``); a trajectory for a floating base.
     """
+    from ..jointlog import JointLog
     from ..kinematics.floating import BASE_COORDINATES, robot_states
-    from .data import JointLog
 
     check_trajectory(robot, trajectory)
     rows = "joints" if robot.floating else "all"

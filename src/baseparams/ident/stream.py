@@ -5,7 +5,7 @@ log (the same estimate to rounding, the same standard deviations, the same valid
 holding at most a few blocks of samples, one chunk's regressor and a bounded subsample. It reads
 the file several times, each pass block by block (a *block source*: any object with ``source``,
 ``joints``, ``has_dq``, ``has_ddq`` and ``blocks()`` yielding consecutive
-:class:`~baseparams.ident.data.JointLog` blocks, e.g. :class:`baseparams.io.logs.LogStream`):
+:class:`~baseparams.jointlog.JointLog` blocks, e.g. :class:`baseparams.io.logs.LogStream`):
 
 1. **scan**: samples, first and last time, the time steps' range (uniform or not), the first
    :data:`HEAD_ROWS` samples (the unit checks of :mod:`baseparams.ident.plausibility` run on them);
@@ -48,9 +48,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import BaseparamsError, DataError
+from ..jointlog import JointLog
 from . import chunks
 from . import preprocess as pp
-from .data import JointLog
 
 #: training samples up to which the cutoff is chosen from every sample (as in memory)
 SUBSAMPLE_MAX = 1 << 18

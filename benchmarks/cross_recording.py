@@ -145,7 +145,7 @@ def _span(log, t0: float, t1: float):
 
 def run_case(case: dict, estimators=ESTIMATORS) -> dict:
     """Every estimator on one case: raw RMS on recording B, seconds, the terms kept."""
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
 
     out = {"name": case["name"], "kind": case["kind"], "rms": {}, "seconds": {}, "terms": {}}
     from baseparams import BaseparamsError
@@ -212,7 +212,7 @@ def panda_terms_table() -> list[dict]:
     (``tests/oracles.lowpass_score``); also the raw held-out RMS and the wall time.
     """
     import baseparams
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
     from baseparams.jointlog import JointLog
 
     from oracles import lowpass_score

@@ -16,8 +16,8 @@ import pytest
 
 from baseparams.cli import main
 from baseparams.errors import BaseparamsError, ModelError
+from baseparams.ident import identify
 from baseparams.ident.export import identified_mjcf
-from baseparams.ident.pipeline import identify
 from baseparams.ident.simulate import fourier_trajectory, simulate_log
 from baseparams.io.mjcf import load_mjcf
 from baseparams.io.mjcf_write import mjcf_inverse, write_mjcf

@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 import baseparams
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
 from baseparams.ident.preprocess import prepare
 from baseparams.io.logs import read_log
 from baseparams.jointlog import JointLog

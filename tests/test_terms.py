@@ -14,7 +14,7 @@ import pytest
 
 import baseparams
 from baseparams.cli import main
-from baseparams.ident.pipeline import Identification, identify
+from baseparams.ident import Identification, identify
 from baseparams.ident.terms.dahl import dahl_state
 from baseparams.ident.terms.fit import parse_terms
 from baseparams.io.logs import write_log

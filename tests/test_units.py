@@ -8,7 +8,7 @@ import pytest
 import baseparams
 from baseparams.cli import main
 from baseparams.errors import DataError
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.io.logs import read_log, write_log
 
@@ -140,8 +140,8 @@ def _refused(robot, log) -> str | None:
 def identify_units(robot, log):
     """The unit checks alone (identify's first step), on a log of the robot's measured joints."""
     from baseparams.analysis import analyze
+    from baseparams.ident import check_log_units, log_columns
     from baseparams.ident.model import ident_model
-    from baseparams.ident.pipeline import check_log_units, log_columns
 
     model = ident_model(analyze(robot), False, ("viscous", "coulomb", "offset"), None)
     return check_log_units(model, log, log_columns(model, log), False)

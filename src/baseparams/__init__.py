@@ -54,7 +54,7 @@ Pinocchio interop), ``baseparams.nullspace`` (DRNG, certification), ``baseparams
 (regrouping), ``baseparams.numerics``, ``baseparams.pga``, ``baseparams.kinematics``,
 ``baseparams.model``, ``baseparams.symbolic`` (``SymbolicBuilder``, DH tables),
 ``baseparams.ident`` (the identification's building blocks:
-``baseparams.ident.model.ident_model``, ``baseparams.ident.pipeline.accumulate`` and ``fit``),
+``baseparams.ident.ident_model``, ``baseparams.ident.accumulate`` and ``fit``),
 ``baseparams.excitation`` (the excitation designer's parts), ``baseparams.fleet`` (many logs on
 Dask). ``dir(baseparams)`` lists these and the names above. The name
 ``baseparams.regressor`` is the function above; the subpackage of the same name is imported as
@@ -173,7 +173,7 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
 
 # ---------------------------------------------------------------- the whole loop: excite, simulate, identify, predict
 #: the classes of the loop's results, imported on first use (``baseparams.Identification``)
-_LAZY = {"Excitation": "excitation.result", "Identification": "ident.pipeline"}
+_LAZY = {"Excitation": "excitation.result", "Identification": "ident"}
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):

@@ -1,7 +1,7 @@
 """Fleet scale: identification over many logs on Dask, with memory bounded by the chunk.
 
 Every log (file) is read, preprocessed and reduced to its row factors by a Dask task
-(:func:`file_factors`: the same code as :func:`baseparams.ident.pipeline.identify`, chunked with
+(:func:`file_factors`: the same code as :func:`baseparams.ident.identify`, chunked with
 overlapping filter edges past ``memory_mb``); factors combine exactly in a tree (TSQR,
 :func:`baseparams.ident.chunks.combine`), and the estimators — OLS, WLS, the physical fit — run
 on the combined factors, whose size does not depend on the data. ``per_file`` gives one estimate
@@ -32,8 +32,8 @@ import numpy as np
 
 from .display import clip
 from .errors import BaseparamsError
+from .ident import Fit, fit, pulled_covariance
 from .ident.model import IdentModel
-from .ident.pipeline import Fit, fit, pulled_covariance
 
 #: seconds to wait for a scheduler given by address (``--scheduler``, ``DASK_SCHEDULER_ADDRESS``)
 SCHEDULER_TIMEOUT_S = 5.0
@@ -50,7 +50,7 @@ def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff:
     model : IdentModel
         The identification model.
     memory_mb : float
-        Largest regressor formed at once (:func:`baseparams.ident.pipeline.identify`).
+        Largest regressor formed at once (:func:`baseparams.ident.identify`).
     cutoff : float, optional
         Low-pass cutoff [Hz]; default from the log's excitation.
     min_speed : float, optional
@@ -63,7 +63,7 @@ def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff:
     info : dict
         ``{"path", "read", "used", "removed"}``.
     """
-    from .ident.pipeline import accumulate_prepared, log_columns
+    from .ident import accumulate_prepared, log_columns
     from .ident.preprocess import prepare
     from .io.logs import read_log
     from .numerics import blas_threads
@@ -179,7 +179,7 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
     Parameters
     ----------
     model : IdentModel
-        The model (:func:`baseparams.ident.pipeline.ident_model`).
+        The model (:func:`baseparams.ident.ident_model`).
     paths : iterable of str
         Log files, one robot each for ``per_file``.
     per_file : bool
@@ -198,7 +198,7 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         Largest regressor a task forms at once: memory per worker is bounded by it and by one
         log's signals, not by the fleet.
     cutoff, min_speed : float, optional
-        As for :func:`baseparams.ident.pipeline.identify`.
+        As for :func:`baseparams.ident.identify`.
     progress : callable, optional
         Called with one line per finished log.
     covariance : {"hac", "white"}
@@ -283,7 +283,7 @@ def _meat_task(path: str, model: IdentModel, theta, h_inv, weights, memory_mb: f
 
     Returns ``(S (p, p), Q (p, p), bandwidth)`` of :class:`~baseparams.ident.uncertainty.HacMeat`.
     """
-    from .ident.pipeline import accumulate_prepared, log_columns
+    from .ident import accumulate_prepared, log_columns
     from .ident.preprocess import prepare
     from .ident.uncertainty import hac_meat
     from .io.logs import read_log

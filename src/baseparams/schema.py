@@ -789,7 +789,7 @@ PHYSICAL = Obj({
     "seconds": Num(lo=0.0, null=True), "notes": Field(Arr(Str()), []),
 }, extra="refuse", hint=_NEWER)
 
-#: held-out scores (:func:`baseparams.ident.pipeline.validation_scores`)
+#: held-out scores (:func:`baseparams.ident.validation_scores`)
 VALIDATION = Obj({
     "rms": Map(_RMS), "rms_total": _RMS, "samples": Int(lo=0),
     "t_start": Opt(Num()), "t_end": Opt(Num()), "source": Str(), "measure": Str(),
@@ -804,7 +804,7 @@ def _counts_rule(s: dict) -> str | None:
     return None
 
 
-#: a saved identification (:meth:`baseparams.ident.pipeline.Identification.save`, version 1); size
+#: a saved identification (:meth:`baseparams.ident.Identification.save`, version 1); size
 #: symbols: ``p`` model parameters, ``m`` measured joints, ``n`` bodies, ``npar`` = 10 n
 RESULT = Obj({
     "format": Str(max_len=200),

@@ -512,7 +512,7 @@ def identify_command(model, log, *, validate=None, holdout: float | None = None,
     rotor : bool
         Model each joint's rotor inertia.
     coulomb_width, cutoff, decimate, min_speed, prior_weight, score_cutoff : optional
-        As the CLI's flags (:func:`baseparams.ident.pipeline.identify`): smooth Coulomb width
+        As the CLI's flags (:func:`baseparams.ident.identify`): smooth Coulomb width
         [rad/s], low-pass cutoff [Hz], decimation, the slowest joint speed kept [rad/s], the
         physical fit's prior weight, the second validation score's cutoff [Hz].
     couplings : iterable of MotorCoupling or str
@@ -765,7 +765,7 @@ def _run_identification(robot, log, validate, columns, joints, weld, stream, pre
             return result, None
         except NotStreamable as exc:
             say(f"{exc}")
-    from .ident.pipeline import identify as run
+    from .ident import identify as run
 
     say(f"reading {log}" if isinstance(log, (str, os.PathLike)) else "checking the log")
     read, val, robot = _identification_logs(robot, log, validate, columns, joints, weld, note)
@@ -865,7 +865,7 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None, allow
         raise ArgumentTypeError(f"predict: result must be an Identification or its saved file, got "
                                 f"{type(result).__name__}")
     if isinstance(result, (str, os.PathLike)):
-        from .ident.pipeline import Identification
+        from .ident import Identification
 
         result = Identification.load(result, robot)
     from .ident.plausibility import check_prediction_log

@@ -121,7 +121,7 @@ def cmd_predict(args) -> int:
     BaseparamsError
         Another robot than the result's, a bad result file, log or output.
     """
-    from ..ident.pipeline import Identification
+    from ..ident import Identification
     from ..io.logs import read_log
     from ..tables import check_table_path, write_columns
 
@@ -144,7 +144,7 @@ def cmd_predict(args) -> int:
     out = {"model": robot.name, "result": args.result, "log": args.log, "samples": log.n_samples, "joints": joints,
            "out": args.out, "prediction": "raw states" if args.raw_states else "smooth", "rms": None}
     if log.tau is not None:
-        from ..ident.pipeline import validation_scores
+        from ..ident import validation_scores
 
         s = validation_scores(log, tau, joints, score_cutoff=args.score_cutoff)
         out["rms"] = {"total": s["rms_total"], **s["rms"]}

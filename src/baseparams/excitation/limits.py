@@ -32,7 +32,7 @@ def design_coordinates(robot: Robot) -> np.ndarray:
     -------
     ndarray of int, shape ``(m,)``
         Indices into ``q``: every coordinate of a tree, the actuated ones of a robot with loops
-        (the states :meth:`~baseparams.ident.pipeline.IdentModel.regressor` takes).
+        (the states :meth:`~baseparams.ident.IdentModel.regressor` takes).
     """
     return np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
 

@@ -1,6 +1,6 @@
 """The identified model written into its file: a physical identification's bodies and drive terms.
 
-The conversions of an :class:`~baseparams.ident.pipeline.Identification` to the model-file writers
+The conversions of an :class:`~baseparams.ident.Identification` to the model-file writers
 of :mod:`baseparams.io` (which know nothing of identification): :func:`identified_drives` gives the
 drive terms as :func:`baseparams.io.urdf.write_urdf` takes them, :func:`identified_mjcf` writes a
 copy of the MJCF model through :func:`baseparams.io.mjcf_write.write_mjcf`, checked on the log's
@@ -47,7 +47,7 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
 
     :func:`~baseparams.io.mjcf_write.write_mjcf` with the physical fit's inertias and drive terms
     (:func:`identified_drives`), checked at the log's states (filtered as
-    :meth:`~baseparams.ident.pipeline.Identification.predict` filters them; at most
+    :meth:`~baseparams.ident.Identification.predict` filters them; at most
     ``max_samples``, evenly spaced). After writing, the file is reloaded and its ``mj_inverse``
     (``frictionloss`` on) compared with the identification's own prediction and with the log's
     measured torques; both relative RMS differences are in the notes.

@@ -3,7 +3,7 @@
 The saved file's format, the robot fingerprint, states of a log for prediction, the comparison
 with a simulation's truth.
 
-The file (:meth:`~baseparams.ident.pipeline.Identification.save`) is one JSON object::
+The file (:meth:`~baseparams.ident.Identification.save`) is one JSON object::
 
     {"format": "baseparams-identification", "version": 1, "baseparams": "0.1.0",
      "robot": {"name", "fingerprint", "bodies", "dof", "parameters", "joints"},

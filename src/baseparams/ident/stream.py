@@ -1,6 +1,6 @@
 """Identification from a log streamed from its file: memory independent of the log's length.
 
-:func:`identify_stream` gives what :func:`baseparams.ident.pipeline.identify` gives on the whole
+:func:`identify_stream` gives what :func:`baseparams.ident.identify` gives on the whole
 log (the same estimate to rounding, the same standard deviations, the same validation RMS) while
 holding at most a few blocks of samples, one chunk's regressor and a bounded subsample. It reads
 the file several times, each pass block by block (a *block source*: any object with ``source``,
@@ -871,11 +871,11 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
              held_out: list | None = None, source: str | None = None) -> dict:
     """Pass 5: every sample ``[first, n)`` predicted and scored against the raw measured torques.
 
-    The states are those of :func:`~baseparams.ident.pipeline.predict_log` on the whole log
+    The states are those of :func:`~baseparams.ident.predict_log` on the whole log
     (:func:`~baseparams.ident.results.log_states`, filtered over samples ``[0, n)``): each window
     reads :func:`~baseparams.ident.chunks.overlap` samples more on both sides. With
     ``score_cutoff``, the measured torques are low-passed over ``[first, n)`` alone, as
-    :func:`~baseparams.ident.pipeline.validation_scores` does.
+    :func:`~baseparams.ident.validation_scores` does.
 
     Parameters
     ----------
@@ -903,7 +903,7 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
     Returns
     -------
     dict
-        :func:`~baseparams.ident.pipeline.validation_scores`'s result.
+        :func:`~baseparams.ident.validation_scores`'s result.
     """
     from .pipeline import log_columns
     from .results import log_states, lowpass_at
@@ -1020,7 +1020,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
                     convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
                     samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
                     allow_units: bool = False, predictions=None, literal: bool = False, terms="auto", seed: int = 0):
-    """:func:`~baseparams.ident.pipeline.identify` on a log streamed from its file (module docstring).
+    """:func:`~baseparams.ident.identify` on a log streamed from its file (module docstring).
 
     Parameters
     ----------
@@ -1030,7 +1030,7 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
         The log, e.g. :class:`baseparams.io.logs.LogStream`.
     method, rotor, friction, coulomb_width, holdout, cutoff, decimate, min_speed, prior_weight, convention, \
 memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, literal, terms, seed
-        As for :func:`~baseparams.ident.pipeline.identify` (``memory_mb``: the window's regressor).
+        As for :func:`~baseparams.ident.identify` (``memory_mb``: the window's regressor).
     validation : block source, optional
         Another log to validate on (exclusive with ``holdout``).
     predictions : callable, optional
@@ -1040,7 +1040,7 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
     Returns
     -------
     Identification
-        As :func:`~baseparams.ident.pipeline.identify` returns (the series thinned to
+        As :func:`~baseparams.ident.identify` returns (the series thinned to
         :data:`SERIES_MAX` samples; no validation series beyond :data:`HELD_SERIES_MAX` held-out
         samples).
 
@@ -1049,7 +1049,7 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
     NotStreamable
         Non-uniform time stamps, a floating base (read the log whole).
     BaseparamsError
-        As :func:`~baseparams.ident.pipeline.identify`.
+        As :func:`~baseparams.ident.identify`.
     """
     from ..numerics import blas_threads
 

@@ -716,7 +716,7 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         identified), in the joint's units (N m s/rad, N m, kg m^2 for a revolute joint).
     couplings : iterable of dict
         Coupled motors, ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm"}`` (as
-        :meth:`baseparams.ident.pipeline.Identification.couplings`): noted in each joint's comment.
+        :meth:`baseparams.ident.Identification.couplings`): noted in each joint's comment.
     inputs : iterable of str or Path
         Further input files ``dest`` must not overwrite (the log, ...).
     base_rotation : array_like, shape ``(3, 3)``, optional

@@ -10,7 +10,7 @@ import baseparams
 from baseparams.cli import main
 from baseparams.errors import BaseparamsError
 from baseparams.ident import Fit, Identification, identify
-from baseparams.ident.results import FORMAT, robot_fingerprint
+from baseparams.ident.saved import FORMAT, robot_fingerprint
 from baseparams.ident.simulate import fourier_trajectory, simulate_log
 from baseparams.io.logs import read_log, write_log
 

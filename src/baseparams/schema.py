@@ -859,6 +859,22 @@ COLUMNS = Obj({
 }, extra="refuse")
 
 
+def array(x) -> np.ndarray:
+    """A saved JSON array back to a float array: nested lists of numbers, ``None`` as NaN.
+
+    Parameters
+    ----------
+    x : list
+        Nested lists of numbers or ``None``.
+
+    Returns
+    -------
+    ndarray
+        The array.
+    """
+    return np.array(x, dtype=float) if x is not None else np.array(np.nan)
+
+
 def read_truth(path, source: str | None = None) -> dict:
     """A truth file (``simulate``'s ``OUT.truth.json``), bounded and checked against :data:`TRUTH`.
 

@@ -288,7 +288,7 @@ def _regressor_states(args, robot) -> int:
                               f"{joints})")
     q, dq, ddq = log.q, log.dq, log.ddq
     if dq is None or ddq is None:  # rates the file lacks: derived as identify derives them (needs time)
-        from ..ident.results import log_states
+        from ..ident.preprocess import log_states
 
         if log.t is None or not np.all(np.isfinite(log.t)):
             raise BaseparamsError(f"--states {args.states}: no {'dq_ and ' if dq is None else ''}ddq_ columns and no "

@@ -24,20 +24,13 @@ workflow and the CLI.
 
 from ..jointlog import JointLog
 from .drives import MotorCoupling
+from .fitting import Fit, fit, pulled_covariance
 from .model import IdentModel, ident_model
-from .pipeline import (
-    Fit,
-    Identification,
-    accumulate,
-    accumulate_prepared,
-    check_log_units,
-    fit,
-    identify,
-    log_columns,
-    predict_log,
-    pulled_covariance,
-    validation_scores,
-)
+from .notes import check_log_units
+from .pipeline import identify
+from .result import Identification
+from .rows import accumulate, accumulate_prepared, log_columns
+from .validation import predict_log, validation_scores
 
 __all__ = ["Fit", "IdentModel", "Identification", "JointLog", "MotorCoupling", "accumulate", "accumulate_prepared",
            "check_log_units", "fit", "ident_model", "identify", "log_columns", "predict_log", "pulled_covariance",

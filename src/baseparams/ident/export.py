@@ -79,7 +79,7 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
         :func:`~baseparams.io.mjcf_write.write_mjcf` refuses (nothing is written then).
     """
     from ..io.mjcf_write import mjcf_inverse, write_mjcf
-    from .results import log_states
+    from .preprocess import log_states
 
     if ident.fit.physical is None:
         raise BaseparamsError("--mjcf needs --method physical: least squares gives base parameters, not bodies")

@@ -382,19 +382,8 @@ class Resampled:
             yield self._interp(prev, self.t0 + self.step * np.arange(k, self.n))
 
     def _interp(self, cat: JointLog, tn: np.ndarray) -> JointLog:
-        """``resample``'s linear interpolation of ``cat`` at the grid times ``tn``."""
-        t = cat.t
-        dt = np.diff(t)
-        i = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 2)
-        w = np.clip((tn - t[i]) / dt[i], 0.0, 1.0)
-
-        def interp(y):
-            if y is None:
-                return None
-            ww = w.reshape((-1,) + (1,) * (y.ndim - 1))
-            return y[i] * (1.0 - ww) + y[i + 1] * ww
-
-        return JointLog(tn, self.joints, interp(cat.q), interp(cat.tau), interp(cat.dq), interp(cat.ddq), self.source)
+        """``cat`` at the grid times ``tn`` (:func:`~baseparams.ident.preprocess.interpolate`, as ``resample``)."""
+        return replace(pp.interpolate(cat, tn), source=self.source, notes=(), removed={})
 
 
 @dataclass(frozen=True, eq=False)
@@ -872,7 +861,7 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
     """Pass 5: every sample ``[first, n)`` predicted and scored against the raw measured torques.
 
     The states are those of :func:`~baseparams.ident.predict_log` on the whole log
-    (:func:`~baseparams.ident.results.log_states`, filtered over samples ``[0, n)``): each window
+    (:func:`~baseparams.ident.preprocess.log_states`, filtered over samples ``[0, n)``): each window
     reads :func:`~baseparams.ident.chunks.overlap` samples more on both sides. With
     ``score_cutoff``, the measured torques are low-passed over ``[first, n)`` alone, as
     :func:`~baseparams.ident.validation_scores` does.
@@ -905,8 +894,7 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
     dict
         :func:`~baseparams.ident.validation_scores`'s result.
     """
-    from .pipeline import log_columns
-    from .results import log_states, lowpass_at
+    from .rows import log_columns
 
     margin = math.ceil(chunks.OVERLAP_PERIODS * rate / min(cutoff, score_cutoff or cutoff))
     plans = [chunks.ChunkPlan(s, min(s + VALIDATION_ROWS, n), max(0, s - margin), min(n, s + VALIDATION_ROWS + margin))
@@ -916,7 +904,7 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
     scores = _Scores(len(names))
     for c, part in windows(stream.blocks(), plans):
         cols = log_columns(f.model, part)
-        q, dq, ddq, _ = log_states(part, cutoff, True)
+        q, dq, ddq, _ = pp.log_states(part, cutoff, True)
         own = slice(c.start - c.lo, c.stop - c.lo)
         pred = np.concatenate([f.predict(q[own][k:k + 20000][:, cols], dq[own][k:k + 20000][:, cols],
                                          ddq[own][k:k + 20000][:, cols]) for k in range(0, c.stop - c.start, 20000)])
@@ -925,7 +913,7 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
         if score_cutoff is not None:
             lo = max(first, c.lo) - c.lo
             try:
-                lp = lowpass_at(part.t[lo:], part.tau[lo:][:, meas_cols], float(score_cutoff))
+                lp = pp.lowpass_at(part.t[lo:], part.tau[lo:][:, meas_cols], float(score_cutoff))
             except BaseparamsError as exc:
                 raise BaseparamsError(f"--score-cutoff {score_cutoff:g} Hz on {source or stream.source}'s held-out "
                                       f"samples: {exc}") from None
@@ -1081,7 +1069,8 @@ def _passes(robot, stream, o: dict, say):
     """Passes 1-3: the model, the scan, the training statistics, the plan and the accumulated rows."""
     from ..analysis import analyze
     from .model import ident_model
-    from .pipeline import check_log_units, log_columns
+    from .notes import check_log_units
+    from .rows import log_columns
 
     say(f"scanning {stream.source} (pass 1: samples, time span, checks)")
     sc = scan(stream)
@@ -1116,7 +1105,10 @@ def _passes(robot, stream, o: dict, say):
 
 def _identify_stream(robot, stream, validation, predictions, say, o: dict):
     """:func:`identify_stream`'s steps."""
-    from .pipeline import Identification, drive_notes, fit, model_notes, position_spectrum, pulled_covariance
+    from .fitting import fit, pulled_covariance
+    from .notes import drive_notes, model_notes
+    from .result import Identification
+    from .validation import position_spectrum
 
     train, sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, say)
     acc = chunks.combine(parts)
@@ -1163,7 +1155,8 @@ def _identify_stream(robot, stream, validation, predictions, say, o: dict):
 
 def _validation(f, stream, other, sc: Scan, tr: Training, plan: Plan, names, o: dict, predictions, series, say):
     """Pass 5 on the held-out tail or on another log (None without either); the validation series when small."""
-    from .pipeline import log_columns, report_series
+    from .rows import log_columns
+    from .validation import report_series
 
     if o["holdout"] is None and other is None:
         return None

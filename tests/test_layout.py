@@ -235,3 +235,51 @@ def test_function_length_check_sees_long_functions(tmp_path):
     (tmp_path / "long.py").write_text(f'def f():\n    """Doc."""\n{body}\n\n\n'
                                       f'def g():\n    """Doc.\n\n    Long: a reason.\n    """\n{body}\n')
     assert _long_functions({"long": tmp_path / "long.py"}) == ["long:1 f (61 lines)"]
+
+
+#: the most parameters a function may take ("about ten"), ``self``/``cls`` not counted, ``*args``/``**kw`` one each:
+#: options travel as one checked object (``IdentOptions``, ``DesignOptions``), not as argument lists
+MAX_PARAMETERS = 11
+
+#: the public front door: one keyword per flag of the command line (``baseparams.identify`` is
+#: ``baseparams.workflow.identify``); nothing else may take more than :data:`MAX_PARAMETERS`
+FRONT_DOOR = {"baseparams.workflow.identify", "baseparams.workflow.excite", "baseparams.workflow.simulate"}
+
+
+def _compiled(node) -> bool:
+    """A compiled kernel (``@njit(...)``, ``@numba.jit``): its arguments are arrays the compiler needs flat."""
+    names = [ast.unparse(d.func if isinstance(d, ast.Call) else d) for d in node.decorator_list]
+    return any(n.rsplit(".", 1)[-1] in ("njit", "jit") for n in names)
+
+
+def _many_parameters(modules: dict[str, Path] = MODULES, front_door=frozenset(FRONT_DOOR)) -> list[str]:
+    """``module:line name (count)`` for every function with more than :data:`MAX_PARAMETERS` parameters."""
+    out = []
+    for name, path in modules.items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) or _compiled(node):
+                continue
+            a = node.args
+            params = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs if x.arg not in ("self", "cls")]
+            count = len(params) + (a.vararg is not None) + (a.kwarg is not None)
+            if count > MAX_PARAMETERS and f"{name}.{node.name}" not in front_door:
+                out.append(f"{name}:{node.lineno} {node.name} ({count})")
+    return out
+
+
+def test_functions_take_few_parameters():
+    """Outside the front door and the compiled kernels no function takes more than about ten parameters."""
+    assert _many_parameters() == []
+    assert all(p.rsplit(".", 1)[0] in MODULES for p in FRONT_DOOR)
+    import baseparams
+
+    assert {f.rsplit(".", 1)[1] for f in FRONT_DOOR} <= set(baseparams.__all__)
+
+
+def test_parameter_count_check_sees_long_signatures(tmp_path):
+    """The check itself: a long signature is reported, the front door and a compiled kernel are not."""
+    args = ", ".join(f"a{k}" for k in range(MAX_PARAMETERS + 1))
+    (tmp_path / "m.py").write_text(f"def f({args}):\n    pass\n\n\ndef door({args}):\n    pass\n\n\n"
+                                   f"@njit(cache=True)\ndef kernel({args}):\n    pass\n\n\n"
+                                   f"def ok(self, {', '.join(f'b{k}' for k in range(MAX_PARAMETERS))}):\n    pass\n")
+    assert _many_parameters({"m": tmp_path / "m.py"}, {"m.door"}) == [f"m:1 f ({MAX_PARAMETERS + 1})"]

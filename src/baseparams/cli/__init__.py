@@ -20,6 +20,9 @@ import numpy as np
 
 from ..enums import Convention, Rows, Status, values
 from ..errors import BaseparamsError, NoMovingBodiesError
+from ..ident.drives import FRICTION_TERMS
+from ..ident.options import COVARIANCES, METHODS, IdentOptions
+from ..workflow import Inputs
 from . import common
 from .common import (
     EXIT_FAILED,
@@ -278,8 +281,8 @@ def _regressor_states(args, robot) -> int:
     if robot.floating:
         raise BaseparamsError(f"--states: robot {robot.name!r} has a floating base, whose coordinates are not "
                               f"columns of a states file; use baseparams.regressor in Python")
-    coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
-    joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    coords = robot.measured_coords
+    joints = robot.coordinate_names(coords)
     log = read_log(args.states, robot, allow_subset=True, require_tau=False, require_time=False)
     missing = [j for j in joints if j not in log.joints]
     if missing:
@@ -333,7 +336,7 @@ def _regressor_args(s) -> None:
 
 def _ident_args(s) -> None:
     """Options shared by ``identify`` and ``simulate``."""
-    s.add_argument("--friction", default="viscous,coulomb,offset",
+    s.add_argument("--friction", default=",".join(FRICTION_TERMS),
                    help="friction terms per joint: any of viscous, coulomb, offset, comma-separated, or none "
                         "(default all three)")
     s.add_argument("--rotor", action="store_true", help="model each joint's rotor inertia Ia (MJCF armature)")
@@ -518,7 +521,7 @@ def _identify_parser(sub, model_args) -> None:
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
     held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
-    s.add_argument("--method", choices=("auto", "ols", "wls", "physical"), default="auto",
+    s.add_argument("--method", choices=METHODS, default=IdentOptions.method,
                    help="auto (default): least squares with the model file's parameters as a prior (terms the data "
                         "determine keep their fitted values), the weighting and the prior's weight chosen by blocked "
                         "cross-validation on the training data; ols, wls (per-joint noise) or physical (physically "
@@ -540,7 +543,7 @@ def _identify_parser(sub, model_args) -> None:
                    help="with --joints: weld JOINT at VALUE (rad or m); repeatable")
     s.add_argument("--allow-units", action="store_true",
                    help="go on when the log's units look wrong (deg/s, ms, mN m, absurd samples); refused otherwise")
-    s.add_argument("--covariance", choices=("hac", "white"), default="hac",
+    s.add_argument("--covariance", choices=COVARIANCES, default=IdentOptions.covariance,
                    help="standard deviations: hac (default; Newey-West, true when residuals are correlated) or "
                         "white (the least-squares formula, residuals taken as uncorrelated)")
     s.add_argument("--score-cutoff", type=float, metavar="HZ",
@@ -583,7 +586,7 @@ def _analysis_choice_args(s) -> None:
 def _model_class_args(s) -> None:
     """``identify``'s options of the model class: smooth Coulomb, model terms, the literal geometry."""
     s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
-    s.add_argument("--terms", default="auto", metavar="TERMS",
+    s.add_argument("--terms", default=IdentOptions.terms, metavar="TERMS",
                    help="model terms beyond rigid bodies and linear friction: auto (default: pre-sliding friction "
                         "'dahl', mounting 'tilt', per-joint 'delay', torque-sensor 'scale', each kept when blocked "
                         "cross-validation on the training data says so; the report lists every one kept or "
@@ -597,7 +600,7 @@ def _model_class_args(s) -> None:
 
 def _log_size_args(s) -> None:
     """``identify``'s options for long logs (streamed) and many logs (a fleet on Dask)."""
-    s.add_argument("--stream", choices=("auto", "on", "off"), default="auto",
+    s.add_argument("--stream", choices=("auto", "on", "off"), default=Inputs.stream,
                    help="read a CSV/TSV/Parquet log block by block, in memory independent of its length, with the "
                         "same result: auto (default) above 64 MB, on, off (read it whole)")
     s.add_argument("--per-file", action="store_true",
@@ -769,9 +772,10 @@ def _check_flags(args) -> None:
                                               f"(one period at the rate)")
     if args.command == "identify" and args.joints is not None and not [j for j in args.joints.split(",") if j.strip()]:
         raise BaseparamsError("--joints needs joint names: --joints A,B,... (the joints to identify)")
-    if args.command == "identify" and args.prior_weight is not None and args.method != "physical":
-        raise BaseparamsError(f"--prior-weight applies to --method physical, not {args.method} (the default estimate "
-                              "chooses its own pull by cross-validation)")
+    if args.command == "identify":
+        from .identify import options_of
+
+        options_of(args)  # every option of the identification checked, named as flags (IdentOptions)
     if args.command == "identify" and (args.urdf or args.mjcf):
         from ..workflow import check_exports
 

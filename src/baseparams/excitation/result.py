@@ -264,7 +264,7 @@ def read_trajectory(path, robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndar
             data = np.atleast_2d(np.loadtxt(fh, delimiter=delim, ndmin=2))
     except (OSError, ValueError) as exc:
         raise BaseparamsError(f"{p}: cannot read a trajectory ({exc})") from None
-    joints = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+    joints = robot.coordinate_names(design_coordinates(robot))
     where = {h: k for k, h in enumerate(header)}
     want = ["t"] + [f"{k}_{j}" for k in ("q", "dq", "ddq") for j in joints]
     missing = [w for w in want if w not in where]

@@ -91,7 +91,7 @@ def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=
     if any(c.get(k) is not None for c in couplings for k in ("Iam", "Fvm", "Fcm")):
         raise BaseparamsError("--mjcf: coupled motors (--coupling) have no MJCF joint attribute; --urdf keeps "
                               "their values in comments")
-    q, dq, ddq, _ = log_states(log, (ident.options or {}).get("cutoff"), True)
+    q, dq, ddq, _ = log_states(log, None if ident.options is None else ident.options.cutoff, True)
     cols = [list(log.joints).index(j) for j in ident.joints]
     rows = np.unique(np.linspace(0, len(q) - 1, min(len(q), max_samples)).astype(int))
     q, dq, ddq = (x[rows][:, cols] for x in (q, dq, ddq))

@@ -15,10 +15,10 @@ import numpy as np
 
 from ..display import clip, format_number
 from ..errors import BaseparamsError
-from .model import IdentModel
+from .model import REGRESSOR_BYTES, IdentModel
 
 #: bytes of regressor :meth:`Fit.predict` forms at once
-PREDICT_BYTES = 32e6
+PREDICT_BYTES = REGRESSOR_BYTES
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,12 +85,8 @@ class Fit:
             ``A(q, dq, ddq) @ theta``, the regressor formed :data:`PREDICT_BYTES` at a time (a large
             robot's rows are wide: 60 links, 596 columns, 0.3 MB per sample).
         """
-        q, dq, ddq = np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq)
-        step = max(1, int(PREDICT_BYTES // (8 * max(len(self.model.coords), 1) * max(self.model.n_params, 1))))
-        if len(q) <= step:
-            return self.model.regressor(q, dq, ddq) @ self.theta
-        return np.concatenate([self.model.regressor(q[k:k + step], dq[k:k + step], ddq[k:k + step]) @ self.theta
-                               for k in range(0, len(q), step)])
+        blocks = [a @ self.theta for _, a in self.model.regressor_blocks(q, dq, ddq, PREDICT_BYTES)]
+        return blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
 
     def rms(self, q, dq, ddq, tau) -> tuple[np.ndarray, float]:
         """Prediction error on (held-out) data.
@@ -312,9 +308,27 @@ def _auto(model: IdentModel, first, est, acc, blocks: list, prior_weight=None, e
                             drive_precision=dp, **kw)
         return Fit(model, "auto", phys.theta, est, phys, selection=replace(sel, estimator="physical"))
     theta = solve(base.R11, base.r12, theta0, sel.penalty, nonneg)
-    res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
+    res = residual_rms(acc, theta)
     # the least-squares statistics stay: pulled_covariance maps the covariance once it is chosen
     return Fit(model, "auto", theta, replace(base, method="auto", theta=theta, rms=res), selection=sel)
+
+
+def residual_rms(acc, theta: np.ndarray) -> np.ndarray:
+    """The RMS residual of each measured row of accumulated data at the values ``theta``.
+
+    Parameters
+    ----------
+    acc : RowAccumulator
+        The rows (one factor per measured row).
+    theta : ndarray, shape ``(p,)``
+        The values.
+
+    Returns
+    -------
+    ndarray, shape ``(m,)``
+        ``||A_j theta - tau_j|| / sqrt(S)`` per row ``j`` over the accumulated samples.
+    """
+    return np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
 
 
 def pulled_covariance(f: Fit) -> Fit:

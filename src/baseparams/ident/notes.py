@@ -166,7 +166,7 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
 
     robot = model.robot
     params = robot.parameters("paper")
-    coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
+    coords = robot.measured_coords
     revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" or (model.log_base and 3 <= c < 6) for c in coords])
 
     def torques(q, dq, ddq):

@@ -22,27 +22,24 @@ convention (``khalil`` by default); full parameter vectors say theirs.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
+
 import numpy as np
 
-from ..analysis import analyze
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..numerics import blas_threads
-from .fitting import Fit, fit, pulled_covariance
-from .model import IdentModel, ident_model
+from .fitting import Fit, fit, pulled_covariance, residual_rms
+from .model import IdentModel, model_for
 from .notes import check_log_units, drive_notes, floating_notes, model_notes, term_note
+from .options import IdentOptions, options_of
 from .result import Identification
-from .rows import accumulate_prepared, log_columns, log_rows
+from .rows import accumulate_prepared, log_columns
 from .validation import position_spectrum, predict_log, report_series, split_log, validation_scores
 
 
-def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
-             friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
-             holdout: float | None = None, validation=None, cutoff: float | None = None,
-             decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
-             convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
-             samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-             allow_units: bool = False, literal: bool = False, terms="auto", seed: int = 0) -> Identification:
+def identify(robot: Robot, log, options: IdentOptions | None = None, /, *, validation=None, progress=None,
+             **keywords) -> Identification:
     """Identify base-parameter and drive values from a joint log.
 
     Parameters
@@ -52,157 +49,171 @@ def identify(robot: Robot, log, *, method: str = "auto", rotor: bool = False,
     log : JointLog
         The log (:func:`baseparams.io.logs.read_log`): positions and torques of the measured
         joints (every joint of a tree; the actuated joints of a robot with loops).
-    method : {"auto", "ols", "wls", "physical"}
-        The estimator (:func:`fit`).
-    rotor : bool
-        Model each joint's rotor inertia ``Ia``.
-    friction : iterable of str
-        Friction terms: ``viscous``, ``coulomb``, ``offset`` (empty: none).
-    coulomb_width : float, optional
-        Smooth Coulomb friction's velocity scale [rad/s].
-    holdout : float, optional
-        Hold out the samples with ``t >= t_end - holdout`` for validation (training: the
-        samples before).
+    options : IdentOptions, optional
+        How (:class:`~baseparams.ident.options.IdentOptions`: the estimator, the drive model, the
+        filter, the hold-out, the model terms, ...); default its defaults.
     validation : JointLog, optional
         Another log to validate on (exclusive with ``holdout``). Validation predicts every
         held-out sample (:meth:`Identification.predict`) and compares with the raw measured
-        torques (:func:`validation_scores`).
-    cutoff : float, optional
-        Low-pass cutoff [Hz] (default :func:`baseparams.ident.preprocess.lowpass_design`'s).
-    decimate : int, optional
-        Decimation factor (default from the rate and the cutoff).
-    min_speed : float, optional
-        Remove samples where a joint moves slower than this [rad/s] (Coulomb friction).
-    prior_weight : float, optional
-        ``physical`` only: the weight of the model file's inertias.
-    convention : str
-        Convention of the base parameters' names and values.
-    memory_mb : float
-        Largest regressor formed at once for the parallel filter (the filter's copies make the
-        peak about 4x this); longer logs are processed in chunks with overlapping filter edges,
-        which gives the same estimate to rounding (:mod:`baseparams.ident.chunks`).
-    couplings : iterable of MotorCoupling
-        Motors driving several joints (:class:`~baseparams.ident.drives.MotorCoupling`, e.g. a
-        coupled wrist): their rotor inertia and viscous and Coulomb friction ``Iam``, ``Fvm``,
-        ``Fcm`` (those whose per-joint kind is modelled).
-    score_cutoff : float, optional
-        Also score the validation against the measured torques low-passed at this cutoff [Hz]
-        (zero-phase Butterworth, order 4), labelled with it.
+        torques (:func:`~baseparams.ident.validation.validation_scores`).
     progress : callable, optional
         Called with one line of text at each step (analysis, preprocessing, accumulation, fit,
         validation, report series).
-    samples : int, optional
-        Random states of the base-parameter analysis the model is built on (default: the
-        analysis's own).
-    covariance : {"hac", "white"}
-        The standard deviations' covariance: ``hac`` (default) Newey-West, true under correlated
-        residuals; ``white`` the least-squares formula (:mod:`baseparams.ident.uncertainty`).
-    allow_units : bool
-        Go on when the units look wrong (:mod:`baseparams.ident.plausibility`: velocities,
-        time base, torques against the model file's, absurd samples), which otherwise refuses.
-    literal : bool
-        Identify the model exactly as the file states it; by default geometry stated to within
-        rounding of a right angle or zero is taken as that value when the directions it adds
-        are not identifiable in practice (:func:`baseparams.analyze`'s ``literal``, said in the
-        notes): those directions are not fitted.
-    terms : str or iterable of str
-        Model terms beyond the linear core (:mod:`baseparams.ident.terms`): ``"auto"``
-        (default) tries pre-sliding friction, a mounting tilt, delays and torque scales and keeps
-        each one that blocked cross-validation on the training data asks for; ``"none"``: the
-        linear core alone; names (``"dahl,tilt"``) force those (with ``auto``: and try the rest).
-        Every term tried is in :attr:`Fit.term_choices` and the notes.
-    seed : int
-        Seed of the base-parameter analysis' random states (:func:`baseparams.analyze`).
+    **keywords
+        Options as keywords, instead of or over ``options`` (``method="ols"``, ``holdout=2.0``:
+        the fields of :class:`~baseparams.ident.options.IdentOptions`).
 
     Returns
     -------
     Identification
-        Values, standard deviations, residuals, validation, counts and notes.
+        Values, standard deviations, residuals, validation, counts, notes and the options (the
+        cutoff and decimation as used).
 
     Raises
     ------
     BaseparamsError
-        A floating base, a log that misses a measured joint, ``holdout`` with ``validation``, bad
-        data (:class:`~baseparams.errors.DataError`), a bad coupling or data that do not excite
-        the model.
+        Bad options, a log that misses a measured joint, ``holdout`` with ``validation``, bad
+        data (:class:`~baseparams.errors.DataError`) or data that do not excite the model.
     """
-    if holdout is not None and validation is not None:
+    opts = options_of(options, keywords)
+    if opts.holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     log, validation = log.checked(), None if validation is None else validation.checked()  # finite, increasing
     with blas_threads():
-        return _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate,
-                         min_speed, prior_weight, convention, memory_mb, tuple(couplings), progress, samples,
-                         score_cutoff, covariance, allow_units, literal, terms, seed)
+        return _identify(robot, log, opts, validation, progress or (lambda msg: None))
 
 
-def _identify(robot, log, method, rotor, friction, coulomb_width, holdout, validation, cutoff, decimate, min_speed,
-              prior_weight, convention, memory_mb, couplings=(), progress=None, samples=None,
-              score_cutoff=None, covariance="hac", allow_units=False, literal=False, terms="auto",
-              seed=0) -> Identification:
-    """:func:`identify`'s steps (arguments as there)."""
+@dataclass(frozen=True)
+class Account:
+    """What a path did to the data, for its result: the counts and one line per step.
+
+    Parameters
+    ----------
+    read : int
+        Training samples read.
+    removed : dict of str to int
+        Samples removed, by reason.
+    cutoff : float
+        The low-pass cutoff used [Hz].
+    factor : int
+        The decimation used.
+    data : tuple of str
+        How the data were prepared (resampling, filter, decimation, slow samples).
+    rows : str
+        How the rows were accumulated (parallel filtering, chunks).
+    terms : tuple of str
+        The model terms tried, kept or not.
+    covariance : str
+        How the standard deviations were computed.
+    units : tuple of str
+        The unit checks' notes.
+    """
+
+    read: int
+    removed: dict
+    cutoff: float
+    factor: int
+    data: tuple = ()
+    rows: str = ""
+    terms: tuple = ()
+    covariance: str = ""
+    units: tuple = ()
+
+
+def assemble(f: Fit, acc, opts: IdentOptions, account: Account, train: dict, validation: dict | None,
+             series: dict | None, motion: dict | None = None) -> Identification:
+    """The result of any path (in memory, streamed from a file): one assembly, one set of notes and options.
+
+    Parameters
+    ----------
+    f : Fit
+        The fit, with its covariance.
+    acc : RowAccumulator
+        Its rows.
+    opts : IdentOptions
+        The options it was made with (the result keeps them with the cutoff and decimation used).
+    account : Account
+        What was done to the data.
+    train, validation : dict
+        The training and held-out scores (:func:`~baseparams.ident.validation.validation_scores`;
+        ``validation`` None without held-out data).
+    series : dict, optional
+        The report's series.
+    motion : dict, optional
+        The training motion's condition number.
+
+    Returns
+    -------
+    Identification
+        The result.
+    """
+    model = f.model
+    notes = (*account.data, account.rows, *model_notes(model), *floating_notes(model.robot), *account.terms,
+             *drive_notes(f, acc), *(f.physical.notes if f.physical is not None else ()),
+             *((f.selection.note(),) if f.selection is not None else ()), account.covariance, *account.units)
+    samples = {"read": int(account.read), "used": int(acc.samples), "removed": dict(account.removed)}
+    options = replace(opts, cutoff=float(account.cutoff), decimate=int(account.factor))
+    return Identification(f, samples, train, validation, tuple(notes), series, options, motion)
+
+
+def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identification:
+    """:func:`identify`'s steps (arguments as there, ``say`` the progress)."""
     from .estimate import excitation, motion_factor
-    from .preprocess import prepare
 
-    say = progress or (lambda msg: None)
-    train, held = (split_log(log, holdout) if holdout is not None else (log, validation))
+    train, held = (split_log(log, opts.holdout) if opts.holdout is not None else (log, validation))
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=samples, seed=seed, convention=convention, rows=log_rows(robot),
-                                literal=literal),
-                        rotor, tuple(friction), coulomb_width, couplings=couplings, log_base=robot.floating)
+    model = model_for(robot, opts)
     cols = log_columns(model, log)
-    unit_notes = check_log_units(model, train, cols, allow_units)
+    unit_notes = check_log_units(model, train, cols, opts.allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
-    prep = _prepare_training(train, holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed)
+    prep = _prepare_training(train, opts)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
     parts: list = []
     kept: list = []
-    acc, acc_note = accumulate_prepared(model, prep, cols, memory_mb, train, min_speed, parts_out=parts,
+    acc, acc_note = accumulate_prepared(model, prep, cols, opts.memory_mb, train, opts.min_speed, parts_out=parts,
                                         keep=kept)
-    say(f"fitting ({method})")
-    f = fit(model, acc, method, prior_weight, blocks=parts)
-    f, acc, kept, term_notes, raw_q = _with_terms(f, acc, kept, prep, train, cols, method, prior_weight, terms, say)
-    f, cov_note = _uncertainty(f, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say)
+    say(f"fitting ({opts.method})")
+    f = fit(model, acc, opts.method, opts.prior_weight, blocks=parts)
+    f, acc, kept, term_notes, raw_q = _with_terms(f, acc, kept, prep, train, cols, opts, say)
+    f, cov_note = _uncertainty(f, acc, kept, prep, train, cols, opts, say)
     f = pulled_covariance(f)
+    train_rms, val, series = _scores(f, acc, log, held, prep, cols, raw_q, opts, say)
+    series["train"]["spectrum"] = position_spectrum(train, cols[model.row_states], prep.design.fs, prep.design.cutoff,
+                                                    prep.full.t)
+    motion = {"condition_number": excitation(motion_factor(model, prep.full.q[:, cols], prep.full.dq[:, cols],
+                                                           prep.full.ddq[:, cols]), model.names)[0],
+              "samples": int(prep.full.n_samples)}
+    account = Account(train.n_samples, dict(prep.removed), float(prep.design.cutoff), int(prep.factor),
+                      tuple(prep.notes), acc_note, tuple(term_notes), cov_note, tuple(unit_notes))
+    return assemble(f, acc, opts, account, train_rms, val, series, motion)
+
+
+def _scores(f: Fit, acc, log, held, prep, cols, raw_q, opts: IdentOptions, say):
+    """Training and held-out scores (every sample against the raw measured torques) and the report's series."""
+    from .preprocess import prepare, resample
+
     say("predicted torques and excitation spectrum for the report")
-    names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
-    res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
+    model, holdout, cutoff = f.model, opts.holdout, float(prep.design.cutoff)
+    names = model.joints
+    res = residual_rms(acc, f.theta)
     # one measure for training and validation: predictions at every sample against the raw measured torques
-    pred_log = predict_log(f, log, float(prep.design.cutoff))
+    pred_log = predict_log(f, log, cutoff)
     tmask = log.t < log.t[-1] - holdout if holdout is not None else None
     train_rms = validation_scores(log, pred_log, names, tmask)
     train_rms["measure"] = "RMS of predicted minus raw measured torques at every training sample"
     train_rms.update(fit_rms=dict(zip(names, res.tolist())), fit_rms_total=float(np.sqrt(np.mean(res**2))))
-    val, series = None, {"train": report_series(model, prep, cols, f, names, memory_mb, raw_q), "validation": None}
-    series["train"]["spectrum"] = position_spectrum(train, cols[model.row_states], prep.design.fs, prep.design.cutoff,
-                                                    prep.full.t)
-    if held is not None:
-        say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
-        whole, mask = (log, log.t >= log.t[-1] - holdout) if holdout is not None else (held, None)
-        pred = pred_log if holdout is not None else predict_log(f, whole, float(prep.design.cutoff))
-        val = validation_scores(whole, pred, names, mask, score_cutoff)
-        vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
-        vcols = log_columns(model, held)
-        series["validation"] = report_series(model, vprep, vcols, f, names, memory_mb,
-                                             _raw_positions(held, vcols[model.row_states]) if f.terms else None)
-    samples = {"read": int(train.n_samples), "used": int(acc.samples), "removed": dict(prep.removed)}
-    notes = (*prep.notes, acc_note, *model_notes(model), *floating_notes(robot), *term_notes, *drive_notes(f, acc),
-             *(f.physical.notes if f.physical is not None else ()),
-             *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
-    options = {"method": method, "convention": convention, "rows": str(model.analysis.rows), "rotor": bool(rotor),
-               "friction": tuple(friction), "coulomb_width": coulomb_width, "couplings": tuple(couplings),
-               "cutoff": float(prep.design.cutoff), "decimate": int(prep.factor), "min_speed": min_speed,
-               "literal": bool(literal), "terms": terms if isinstance(terms, str) else ",".join(terms)}
-    motion = {"condition_number": excitation(motion_factor(model, prep.full.q[:, cols], prep.full.dq[:, cols],
-                                                           prep.full.ddq[:, cols]), model.names)[0],
-              "samples": int(prep.full.n_samples)}
-    return Identification(f, samples, train_rms, val, tuple(notes), series, options, motion)
-
-
-def _raw_positions(log, cols: np.ndarray) -> np.ndarray:
-    """Unfiltered positions of the given log columns on the log's uniform grid (what ``prepare`` filters)."""
-    from .preprocess import resample
-
-    return resample(log).q[:, cols]
+    series = {"train": report_series(model, prep, cols, f, names, opts.memory_mb, raw_q), "validation": None}
+    if held is None:
+        return train_rms, None, series
+    say(f"validating on {held.n_samples} held-out samples (every one, against the raw measured torques)")
+    whole, mask = (log, log.t >= log.t[-1] - holdout) if holdout is not None else (held, None)
+    pred = pred_log if holdout is not None else predict_log(f, whole, cutoff)
+    val = validation_scores(whole, pred, names, mask, opts.score_cutoff)
+    vprep = prepare(held, cutoff=prep.design.cutoff, decimate=prep.factor)
+    vcols = log_columns(model, held)
+    series["validation"] = report_series(model, vprep, vcols, f, names, opts.memory_mb,
+                                         resample(held).q[:, vcols[model.row_states]] if f.terms else None)
+    return train_rms, val, series
 
 
 def _inner(f: Fit, model: IdentModel, acc, method: str):
@@ -238,7 +249,7 @@ def _inner(f: Fit, model: IdentModel, acc, method: str):
 MIN_BLOCK_PERIODS = 1.0
 
 
-def _with_terms(f: Fit, acc, kept: list, prep, train, cols, method: str, prior_weight, terms, say):
+def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, say):
     """Model terms selected on the training rows and the core refitted with them (:mod:`.terms`).
 
     Returns the fit, the accumulated rows and kept rows the covariance uses, the notes, and the
@@ -251,7 +262,8 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, method: str, prior_w
     from .terms.base import TermContext
     from .terms.fit import core_rows, parse_terms, select_terms
 
-    candidates, forced = parse_terms(terms)
+    method = opts.method
+    candidates, forced = parse_terms(opts.terms)
     if not candidates:
         return f, acc, kept, [], None
     model = f.model
@@ -262,10 +274,11 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, method: str, prior_w
         return f, acc, kept, ["model terms: not considered (the fitted rows do not fit in memory_mb; the linear core "
                               "alone)"], None
     a = np.concatenate([x for x, _ in kept])
-    raw_q = _raw_positions(train, cols[model.row_states])
+    from .preprocess import excitation_bandwidth, resample
+
+    raw_q = resample(train).q[:, cols[model.row_states]]  # unfiltered positions on the grid prepare() filters
     if raw_q.shape[0] != prep.full.n_samples:
         return f, acc, kept, ["model terms: not considered (the training grid is not the filter's)"], None
-    from .preprocess import excitation_bandwidth
 
     span = float(prep.full.t[-1] - prep.full.t[0])
     band = excitation_bandwidth(raw_q, prep.design.fs)
@@ -290,19 +303,20 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, method: str, prior_w
     acc2 = chunks.combine(parts)
     say(f"refitting the core ({method}) with the model terms")
     chosen = None if f.selection is None else f.selection.estimator
-    f2 = fit(model, acc2, method, prior_weight, blocks=parts, estimator=chosen)
+    f2 = fit(model, acc2, method, opts.prior_weight, blocks=parts, estimator=chosen)
     if f2.selection is not None and f.selection is not None:  # the choice and its figures are the first fit's
         f2 = replace(f2, selection=replace(f2.selection, physical_cv=f.selection.physical_cv))
     return replace(f2, terms=tuple(tf.terms), term_choices=tf.choices), acc2, [(x, y)], notes, raw_q
 
 
-def _prepare_training(train, holdout, **kw):
+def _prepare_training(train, opts: IdentOptions):
     """:func:`~baseparams.ident.preprocess.prepare` of the training part; a too short one names ``--holdout``."""
     from ..errors import DataError
     from .preprocess import prepare
 
+    holdout = opts.holdout
     try:
-        return prepare(train, **kw)
+        return prepare(train, cutoff=opts.cutoff, decimate=opts.decimate, min_speed=opts.min_speed)
     except DataError as exc:
         if holdout is None:
             raise
@@ -311,13 +325,13 @@ def _prepare_training(train, holdout, **kw):
                         "(a shorter --holdout)") from None
 
 
-def _uncertainty(f: Fit, acc, covariance, kept, model, prep, cols, memory_mb, train, min_speed, say):
+def _uncertainty(f: Fit, acc, kept, prep, train, cols, opts: IdentOptions, say):
     """The fit's standard deviations from the chosen covariance (a second pass for HAC)."""
     from .uncertainty import apply_covariance, fitted_rows
 
-    if covariance == "hac":
+    if opts.covariance == "hac":
         say("covariance (HAC: a second pass over the fitted rows)")
-    rows = kept if kept else (lambda: fitted_rows(model, prep, cols, memory_mb, train, min_speed))
-    return apply_covariance(f, acc, rows, covariance, prep.design.fs / prep.factor)
+    rows = kept if kept else (lambda: fitted_rows(f.model, prep, cols, opts.memory_mb, train, opts.min_speed))
+    return apply_covariance(f, acc, rows, opts.covariance, prep.design.fs / prep.factor)
 
 

@@ -17,6 +17,7 @@ from ..errors import BaseparamsError
 from ..model.robot import Robot
 from .fitting import POORLY_DETERMINED_PCT, Fit, poorly_determined
 from .model import IdentModel
+from .options import IdentOptions
 from .validation import predict_log
 
 #: a body's identified mass "moved far" from the model file's beyond this factor either way
@@ -57,11 +58,11 @@ class Identification:
         "tau_hat" (S, m), "joints" (m,)}``: the filtered measured and predicted torques (plots);
         ``train`` also has ``"spectrum"``: the excitation spectrum of the training positions
         (:func:`~baseparams.ident.validation.position_spectrum`).
-    options : dict, optional
-        How the model was built and the data prepared, what :meth:`save` writes and
-        :meth:`load` rebuilds the model from: ``{"method", "convention", "rows", "rotor",
-        "friction" (tuple), "coulomb_width", "couplings" (tuple of MotorCoupling), "cutoff" [Hz],
-        "decimate", "min_speed"}``.
+    options : IdentOptions, optional
+        The options it was made with (:class:`~baseparams.ident.options.IdentOptions`), the
+        ``cutoff`` [Hz] and ``decimate`` those used: how the model was built and the data
+        prepared, what :meth:`save` writes, :meth:`load` rebuilds the model from and
+        :meth:`predict` filters a log with.
     motion : dict, optional
         ``{"condition_number", "samples"}``: the condition number of the training motion's model
         regressor at the log's (filtered) states, unweighted, every sample, column-scaled: the
@@ -78,7 +79,7 @@ class Identification:
     validation: dict | None
     notes: tuple[str, ...]
     series: dict | None = None
-    options: dict | None = None
+    options: IdentOptions | None = None
     motion: dict | None = None
     truth: dict | None = None
 
@@ -134,13 +135,12 @@ class Identification:
             log = read_log(log, self.model.robot, columns=columns, allow_subset=True, require_tau=False)
         elif not isinstance(log, JointLog):
             raise ArgumentTypeError(f"predict: log must be a log file's path or a JointLog, got {type(log).__name__}")
-        return predict_log(self.fit, log.checked(), (self.options or {}).get("cutoff"), smooth)
+        return predict_log(self.fit, log.checked(), None if self.options is None else self.options.cutoff, smooth)
 
     @property
     def joints(self) -> list[str]:
         """The measured joints ``(m,)``, the columns of :meth:`predict`."""
-        r = self.model.robot
-        return [r.joint_names[r.dof_body[c]] for c in self.model.coords]
+        return self.model.joints
 
     def compare_truth(self, truth: dict, source: str = "truth") -> dict:
         """Compare with the true parameters of a simulation (``OUT.truth.json``).

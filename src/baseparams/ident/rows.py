@@ -1,9 +1,8 @@
 """Regressor rows from states or from a log, accumulated on a streaming QR within a memory bound.
 
-:func:`log_rows` says which generalized forces a joint log measures, :func:`log_columns` which log
-column feeds each state column; :func:`accumulate` turns states and torques into row factors,
-:func:`accumulate_prepared` a prepared (filtered, decimated) log, all at once or chunk by chunk with
-overlapping filter edges (:mod:`baseparams.ident.chunks`).
+:func:`log_columns` says which log column feeds each state column; :func:`accumulate` turns states
+and torques into row factors, :func:`accumulate_prepared` a prepared (filtered, decimated) log, all
+at once or chunk by chunk with overlapping filter edges (:mod:`baseparams.ident.chunks`).
 """
 
 from __future__ import annotations
@@ -11,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import BaseparamsError
-from ..model.robot import Robot
 from .model import IdentModel
 
 
@@ -50,22 +48,6 @@ def accumulate(model: IdentModel, q, dq, ddq, tau, chunk: int = 20000, transform
     return acc
 
 
-def log_rows(robot: Robot) -> str:
-    """The generalized forces a joint log measures: ``"joints"`` with a floating base (no base wrench), else all.
-
-    Parameters
-    ----------
-    robot : Robot
-        The model.
-
-    Returns
-    -------
-    str
-        ``"joints"`` or ``"all"``.
-    """
-    return "joints" if robot.floating else "all"
-
-
 def log_columns(model: IdentModel, log) -> np.ndarray:
     """The log column of each state column of the model.
 
@@ -89,7 +71,7 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     from ..kinematics.floating import BASE_COORDINATES
 
     r = model.robot
-    coords = np.asarray(r.actuated, dtype=int) if r.has_loops else np.arange(r.dof)
+    coords = r.measured_coords
     wanted = [BASE_COORDINATES[c] if r.jtype[r.dof_body[c]] == "F" else r.joint_names[r.dof_body[c]] for c in coords]
     where = {j: k for k, j in enumerate(log.joints)}
     missing = [j for j in wanted if j not in where]

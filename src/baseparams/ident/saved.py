@@ -35,6 +35,7 @@ import numpy as np
 from ..arguments import ArgumentTypeError
 from ..errors import BaseparamsError
 from ..model.robot import Robot
+from ..schema import array
 
 #: the ``format`` field of a saved identification
 FORMAT = "baseparams-identification"
@@ -187,7 +188,7 @@ def check_robot(doc: dict, robot: Robot, source: str) -> None:
 
     rows = doc.get("options", {}).get("rows", "all")
     coords = robot.actuated if robot.has_loops else np.flatnonzero(row_mask(robot, rows_spec(rows)))
-    joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    joints = robot.coordinate_names(coords)
     for key, mine_n in (("bodies", robot.n), ("dof", robot.dof), ("parameters", 10 * robot.n), ("joints", joints)):
         if saved.get(key) != mine_n:
             raise BaseparamsError(f"{source}: robot.{key}: {saved.get(key)} in the file, {mine_n} in robot "
@@ -298,10 +299,9 @@ def document(ident) -> dict:
     from ..version import version
 
     r = ident.model.analysis.source_robot
-    opts = dict(ident.options or {})
-    opts["friction"] = list(opts.get("friction", ()))
-    opts["couplings"] = [{"name": c.name, "joints": list(c.joints), "weights": list(c.weights)}
-                         for c in opts.get("couplings", ())]
+    from .options import IdentOptions
+
+    opts = {**(ident.options or IdentOptions()).to_json(), "rows": str(ident.model.analysis.rows)}
     est = ident.fit.estimate
     phys = ident.fit.physical
     body = ident.to_json()
@@ -383,24 +383,17 @@ def read(path, robot: Robot) -> dict:
         No such file, another format, another version, another robot (both fingerprints
         named), or a model whose rebuilt parameters differ from the saved ones.
     """
-    from ..analysis import analyze
-    from ..schema import array
-    from .drives import MotorCoupling
-    from .estimate import Estimate
     from .fitting import Fit
-    from .model import ident_model
-    from .physical import PhysicalFit
+    from .model import model_for
+    from .options import IdentOptions
 
     doc = read_document(path)  # checked against baseparams.schema.RESULT: types, shapes, finite values
     check_robot(doc, robot, str(path))
-    o = dict(doc["options"])
-    o["friction"] = tuple(o.get("friction", ()))
-    o["couplings"] = tuple(MotorCoupling(c["name"], tuple(c["joints"]), tuple(c["weights"]))
-                           for c in o.get("couplings", ()))
-    model = ident_model(analyze(robot, convention=o["convention"], rows=o.get("rows", "all"),
-                                literal=bool(o.get("literal", False))), o["rotor"],
-                        o["friction"], o.get("coulomb_width"), couplings=o["couplings"],
-                        log_base=robot.floating)
+    try:
+        opts = IdentOptions.from_json(doc["options"])
+    except BaseparamsError as exc:
+        raise type(exc)(f"{path}: options: {exc}") from None
+    model = model_for(robot, opts, rows=doc["options"]["rows"])
     names = doc["parameters"]["names"]
     if list(model.names) != list(names):
         diff = next((f"{a} vs {b}" for a, b in zip(model.names, names) if a != b),
@@ -408,37 +401,53 @@ def read(path, robot: Robot) -> dict:
         raise BaseparamsError(f"{path}: the model rebuilt for {robot.name!r} has other parameters than the "
                               f"saved ones ({diff}); saved by another baseparams version?")
     theta = array(doc["parameters"]["values"])
-    e = doc["estimate"]
+    terms, choices = _terms(doc, model)
+    f = Fit(model, opts.method, theta, _estimate(doc["estimate"], theta), _physical(doc.get("physical")),
+            terms=terms, term_choices=choices)
+    return {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
+            "notes": (*doc["notes"], *doc["_notes"]), "series": None, "options": opts, "motion": doc.get("motion")}
+
+
+def _estimate(e: dict, theta: np.ndarray):
+    """The saved least-squares estimate (its %sigma recomputed from its std)."""
+    from .estimate import Estimate
+
     std = array(e["std"])
     with np.errstate(divide="ignore", invalid="ignore"):
         pct = 100 * std / np.abs(theta if e.get("cov") is not None else array(e["theta"]))
     extra = {k: e[k] for k in ("covariance",) if e.get(k) is not None}
     if e.get("cov") is not None:
         extra["cov"] = array(e["cov"])
-    est = Estimate(e["method"], array(e["theta"]), std, pct, array(e["weights"]), array(e["rms"]),
-                   float(e["rms_total"]), float(e["condition_number"]), int(e["samples"]), array(e["R11"]),
-                   array(e["r12"]), **extra)
-    phys = None
-    if doc.get("physical") is not None:
-        p = doc["physical"]
-        phys = PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
-                                  tuple(v) if k == "notes" else v) for k, v in p.items()})
+    return Estimate(e["method"], array(e["theta"]), std, pct, array(e["weights"]), array(e["rms"]),
+                    float(e["rms_total"]), float(e["condition_number"]), int(e["samples"]), array(e["R11"]),
+                    array(e["r12"]), **extra)
+
+
+def _physical(p: dict | None):
+    """The saved physically consistent fit, or None."""
+    if p is None:
+        return None
+    from .physical import PhysicalFit
+
+    return PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
+                              tuple(v) if k == "notes" else v) for k, v in p.items()})
+
+
+def _terms(doc: dict, model) -> tuple[tuple, tuple]:
+    """The saved model terms (loaded for ``model``) and every term tried."""
     from .terms.fit import Choice
     from .terms.registry import make_term
 
-    joints = [robot.joint_names[robot.dof_body[c]] for c in model.coords]
     terms = []
     for t in doc.get("terms") or ():
         term = make_term(t["name"], bool(t.get("forced", False)))
-        term.load(t, joints, model)
+        term.load(t, model.joints, model)
         term.std = dict(t.get("std") or {})
         terms.append(term)
     choices = tuple(Choice(c["name"], bool(c["kept"]), str(c["why"]),
                            float("nan") if c.get("cv_rms") is None else float(c["cv_rms"]))
                     for c in doc.get("term_choices") or ())
-    f = Fit(model, o.get("method", e["method"]), theta, est, phys, terms=tuple(terms), term_choices=choices)
-    return {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
-            "notes": (*doc["notes"], *doc["_notes"]), "series": None, "options": o, "motion": doc.get("motion")}
+    return tuple(terms), choices
 
 
 def _plain(x):

@@ -206,8 +206,7 @@ def report_series(model: IdentModel, prep, cols: np.ndarray, theta, names: list[
         tau_hat = chunks.prepared_rows(model, prep, cols) @ theta
     else:
         idx = prep.index
-        tau_hat = np.concatenate([model.regressor(q[idx[k:k + 20000]], dq[idx[k:k + 20000]],
-                                                  ddq[idx[k:k + 20000]]) @ theta for k in range(0, len(idx), 20000)])
+        tau_hat = np.concatenate([a @ theta for _, a in model.regressor_blocks(q[idx], dq[idx], ddq[idx])])
     return {"t": prep.t, "tau": prep.tau[:, cols[model.row_states]], "tau_hat": tau_hat, "joints": names}
 
 

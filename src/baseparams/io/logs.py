@@ -981,8 +981,8 @@ def log_columns_of(log: JointLog) -> dict[str, np.ndarray]:
     return cols
 
 
-def write_log(path, log: JointLog) -> Path:
-    """Write a log in the default layout, read back exactly by :func:`read_log`.
+def write_log(path, log: JointLog, inputs=(), what: str = "log") -> Path:
+    """Write a log in the default layout, read back exactly by :func:`read_log` (atomically).
 
     Parameters
     ----------
@@ -990,6 +990,10 @@ def write_log(path, log: JointLog) -> Path:
         ``.csv`` / ``.tsv`` (text, every value as its shortest exact decimal) or ``.npz``.
     log : JointLog
         The log.
+    inputs : iterable of str or Path
+        The run's input files, which the log must not overwrite.
+    what : str
+        The output's role, for messages (``out``).
 
     Returns
     -------
@@ -1008,7 +1012,8 @@ def write_log(path, log: JointLog) -> Path:
         raise ArgumentTypeError(f"write_log: log must be a JointLog, got {type(log).__name__}")
     from ..tables import write_table
 
-    return write_table(path, log_columns_of(log), "a log as .csv, .tsv or .npz", (".csv", ".tsv", ".npz"), what="log")
+    return write_table(path, log_columns_of(log), "a log as .csv, .tsv or .npz", (".csv", ".tsv", ".npz"), inputs,
+                       what)
 
 
 # ---------------------------------------------------------------- streamed logs
@@ -1143,6 +1148,11 @@ class LogStream:
 
     def __repr__(self) -> str:
         return f"<LogStream {self.source}: {len(self.joints)} joints, {self.kind}>"
+
+    @functools.cached_property
+    def decoded_mb(self) -> float:
+        """The size of the log's numbers [MB] (:func:`decoded_mb`: a compressed Parquet file's by its rows)."""
+        return decoded_mb(self.path)
 
     # ------------------------------------------------------------ the blocks
     def blocks(self) -> Iterator[JointLog]:

@@ -283,3 +283,35 @@ def test_parameter_count_check_sees_long_signatures(tmp_path):
                                    f"@njit(cache=True)\ndef kernel({args}):\n    pass\n\n\n"
                                    f"def ok(self, {', '.join(f'b{k}' for k in range(MAX_PARAMETERS))}):\n    pass\n")
     assert _many_parameters({"m": tmp_path / "m.py"}, {"m.door"}) == [f"m:1 f ({MAX_PARAMETERS + 1})"]
+
+
+#: what the repository's root holds (tracked): anything else there is a stray file (a report written by hand,
+#: a log) and belongs in a folder, in .gitignore, or nowhere
+ROOT_ENTRIES = {".ci", ".gitignore", "README.md", "benchmarks", "conftest.py", "docs", "pyproject.toml", "src", "tests"}
+#: untracked entries the tools make at the root (.gitignore's, caches): left out when git cannot be asked
+GENERATED = {".git", ".venv", ".venv-ci", "build", "dist", "__pycache__", ".pytest_cache", ".hypothesis", ".ruff_cache",
+             "MUJOCO_LOG.TXT"}
+
+
+def _root_entries(root: Path) -> set[str]:
+    """The first path component of every file git tracks under ``root`` (its listing without git)."""
+    import shutil
+    import subprocess
+
+    if shutil.which("git") and (root / ".git").exists():
+        out = subprocess.run(["git", "ls-files", "-z"], cwd=root, capture_output=True, text=True, check=True).stdout
+        return {p.split("/")[0] for p in out.split("\0") if p}
+    return {p.name for p in root.iterdir() if p.name not in GENERATED and not p.name.endswith(".egg-info")}
+
+
+def test_the_root_holds_only_its_files():
+    root = SRC.parent
+    assert _root_entries(root) - ROOT_ENTRIES == set(), "stray files at the repository's root"
+    assert ROOT_ENTRIES - {"docs", ".ci"} <= _root_entries(root)
+
+
+def test_root_check_sees_a_stray_file(tmp_path):
+    """The check itself, on a folder without git: a stray file is seen, the tools' caches are not."""
+    for name in (*ROOT_ENTRIES, ".pytest_cache", "x"):
+        (tmp_path / name).write_text("")
+    assert _root_entries(tmp_path) - ROOT_ENTRIES == {"x"}

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import baseparams
+from baseparams.arguments import IDENTIFY
 from baseparams.cli import build_parser, main
 from baseparams.errors import BaseparamsError
 from baseparams.ident import IdentOptions, MotorCoupling, identify
@@ -23,6 +24,13 @@ from baseparams.ident.simulate import simulate_log
 from baseparams.ident.stream import identify_stream
 from baseparams.io.logs import LogStream, write_log
 from baseparams.schema import OPTIONS, check
+
+
+def test_the_defaults_are_written_once():
+    """IdentOptions' fields are arguments.IDENTIFY's, in its order, with its defaults (where the front door and
+    the parser read them)."""
+    assert [(f.name, f.default) for f in fields(IdentOptions)] == list(IDENTIFY.items())
+    assert IdentOptions().to_json() == {**IDENTIFY, "friction": list(IDENTIFY["friction"]), "couplings": []}
 
 
 def test_the_front_door_defaults_are_the_options_defaults():

@@ -19,14 +19,15 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
 from .errors import ArgumentError, ArgumentTypeError, BaseparamsError
 
-__all__ = ["OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief", "check_array",
-           "check_choice", "check_flags", "check_keywords", "check_namespace", "check_path", "check_progress",
-           "check_samples", "check_total", "check_value", "options_from"]
+__all__ = ["CHOICES", "IDENTIFY", "OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief",
+           "check_array", "check_choice", "check_flags", "check_keywords", "check_namespace", "check_path",
+           "check_progress", "check_samples", "check_total", "check_value", "options_from"]
 
 
 @dataclass(frozen=True)
@@ -101,6 +102,18 @@ RANGES = {
     "gravity": Range(-1e3, 1e3, unit="m/s^2", count=3),
     "acceleration": Range(0, 1e7, lo_open=True, unit="rad/s^2"),
 }
+
+#: the identification's options and their defaults, each written once: :class:`baseparams.ident.options.IdentOptions`
+#: (which checks them), the front door's ``identify`` keywords and the CLI's ``identify`` flags read them here,
+#: where neither ``import baseparams`` nor another command loads the identification
+IDENTIFY = MappingProxyType({
+    "method": "auto", "rotor": False, "friction": ("viscous", "coulomb", "offset"), "coulomb_width": None,
+    "couplings": (), "holdout": None, "cutoff": None, "decimate": None, "min_speed": None, "prior_weight": None,
+    "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
+    "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,
+})
+#: the values of the options that name one of a few choices
+CHOICES = MappingProxyType({"method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white")})
 
 #: the most samples a run holds at once (a simulated log, a designed trajectory) and samples x columns
 MAX_SAMPLES = 2_000_000

@@ -5,7 +5,7 @@
 re-exports them) and the one implementation behind the commands of those names: the command line
 parses its flags into these keywords (one keyword per flag) and prints. The identification's
 options are one checked object (:class:`~baseparams.ident.options.IdentOptions`, its defaults
-written there); the other checks and the outputs (checked before the work, written atomically,
+:data:`baseparams.arguments.IDENTIFY`'s); the other checks and the outputs (checked before the work, written atomically,
 never onto an input) live here.
 """
 
@@ -14,12 +14,15 @@ from __future__ import annotations
 import os
 import warnings
 from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
 from .analysis import Analysis, analyze
+from .arguments import IDENTIFY
 from .errors import BaseparamsError, ModelWarning
-from .ident.drives import FRICTION_TERMS, friction_terms
-from .ident.options import IdentOptions
 from .model import Robot
+
+if TYPE_CHECKING:  # the identification is imported by the functions that run it
+    from .ident.options import IdentOptions
 
 
 def robot_of(model, what: str) -> Robot:
@@ -201,7 +204,7 @@ def _check_outputs(inputs: list[str], **outputs) -> None:
 
 
 def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
-             noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=FRICTION_TERMS,
+             noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=IDENTIFY["friction"],
              convention: str = "khalil", analysis_samples: int | None = None, robots: int | None = None, out=None):
     """A synthetic joint log with known parameters: ``baseparams simulate`` (record, without a robot).
 
@@ -255,6 +258,7 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
         unwritable output.
     """
     from .arguments import check_flags, check_keywords, check_path, check_samples
+    from .ident.drives import friction_terms
 
     check_keywords("simulate", duration=duration, rate=rate, amplitude=amplitude, noise=noise, seed=seed,
                    analysis_samples=analysis_samples, robots=robots)
@@ -434,6 +438,11 @@ class Inputs:
     truth: object = None
     source: object = None
 
+    def __repr__(self) -> str:
+        given = [f"{f.name}={getattr(self, f.name)!r:.60}" for f in fields(self)
+                 if getattr(self, f.name) is not None and getattr(self, f.name) != f.default]
+        return f"Inputs({', '.join(given)})"
+
 
 @dataclass(frozen=True)
 class Outputs:
@@ -460,6 +469,9 @@ class Outputs:
     mjcf: object = None
     html: object = None
     plot: object = None
+
+    def __repr__(self) -> str:
+        return f"Outputs({', '.join(f'{k}={os.fspath(v)!r}' for k, v in self.given().items())})"
 
     def given(self) -> dict:
         """The outputs asked for.
@@ -490,6 +502,9 @@ class Reporter:
     notes: object = None
     cli: bool = False
 
+    def __repr__(self) -> str:
+        return f"<Reporter {'flags' if self.cli else 'keywords'}{', progress' if self.progress else ''}>"
+
     def say(self, line: str) -> None:
         """A progress line (nothing without ``progress``).
 
@@ -512,21 +527,22 @@ class Reporter:
         (self.notes or _warn)(line)
 
 
-def identify(model, log, *, validate=None, holdout: float | None = IdentOptions.holdout,
-             method: str = IdentOptions.method, friction=IdentOptions.friction, rotor: bool = IdentOptions.rotor,
-             coulomb_width: float | None = IdentOptions.coulomb_width, couplings=IdentOptions.couplings,
-             cutoff: float | None = IdentOptions.cutoff, decimate: int | None = IdentOptions.decimate,
-             min_speed: float | None = IdentOptions.min_speed, prior_weight: float | None = IdentOptions.prior_weight,
-             convention: str = IdentOptions.convention, covariance: str = IdentOptions.covariance,
-             score_cutoff: float | None = IdentOptions.score_cutoff, allow_units: bool = IdentOptions.allow_units,
-             columns=None, joints=None, weld=None, analysis_samples: int | None = IdentOptions.analysis_samples,
-             literal: bool = IdentOptions.literal, terms=IdentOptions.terms, stream: str = Inputs.stream, save=None,
-             predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, seed: int = IdentOptions.seed,
+def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["holdout"],
+             method: str = IDENTIFY["method"], friction=IDENTIFY["friction"], rotor: bool = IDENTIFY["rotor"],
+             coulomb_width: float | None = IDENTIFY["coulomb_width"], couplings=IDENTIFY["couplings"],
+             cutoff: float | None = IDENTIFY["cutoff"], decimate: int | None = IDENTIFY["decimate"],
+             min_speed: float | None = IDENTIFY["min_speed"], prior_weight: float | None = IDENTIFY["prior_weight"],
+             convention: str = IDENTIFY["convention"], covariance: str = IDENTIFY["covariance"],
+             score_cutoff: float | None = IDENTIFY["score_cutoff"], allow_units: bool = IDENTIFY["allow_units"],
+             columns=None, joints=None, weld=None, analysis_samples: int | None = IDENTIFY["analysis_samples"],
+             literal: bool = IDENTIFY["literal"], terms=IDENTIFY["terms"], stream: str = Inputs.stream, save=None,
+             predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, seed: int = IDENTIFY["seed"],
              progress=None):
     """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
 
     One keyword per flag of the command. The identification's options become one
-    :class:`~baseparams.ident.options.IdentOptions` (checked at once, each default written there);
+    :class:`~baseparams.ident.options.IdentOptions` (checked at once; their defaults are
+    :data:`baseparams.arguments.IDENTIFY`'s);
     the inputs, outputs and progress go to :func:`identify_command`, the implementation the
     command calls too.
 
@@ -561,6 +577,8 @@ convention, covariance, score_cutoff, allow_units, analysis_samples, literal, te
         Bad data (a floating base without its pose), options or outputs, data that do not excite
         the model.
     """
+    from .ident.options import IdentOptions
+
     options = IdentOptions(method=method, rotor=rotor, friction=friction, coulomb_width=coulomb_width,
                            couplings=couplings, holdout=holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed,
                            prior_weight=prior_weight, convention=convention, covariance=covariance,
@@ -608,6 +626,7 @@ def identify_command(model, log, options: IdentOptions, inputs: Inputs | None = 
     from dataclasses import replace
 
     from .arguments import ArgumentTypeError, check_choice, check_path, check_progress
+    from .ident.options import IdentOptions
 
     if not isinstance(options, IdentOptions):
         raise ArgumentTypeError(f"identify: options must be an IdentOptions, got {type(options).__name__}")

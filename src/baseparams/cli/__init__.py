@@ -18,10 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..arguments import CHOICES, IDENTIFY
 from ..enums import Convention, Rows, Status, values
 from ..errors import BaseparamsError, NoMovingBodiesError
-from ..ident.drives import FRICTION_TERMS
-from ..ident.options import COVARIANCES, METHODS, IdentOptions
 from ..workflow import Inputs
 from . import common
 from .common import (
@@ -336,7 +335,7 @@ def _regressor_args(s) -> None:
 
 def _ident_args(s) -> None:
     """Options shared by ``identify`` and ``simulate``."""
-    s.add_argument("--friction", default=",".join(FRICTION_TERMS),
+    s.add_argument("--friction", default=",".join(IDENTIFY["friction"]),
                    help="friction terms per joint: any of viscous, coulomb, offset, comma-separated, or none "
                         "(default all three)")
     s.add_argument("--rotor", action="store_true", help="model each joint's rotor inertia Ia (MJCF armature)")
@@ -521,7 +520,7 @@ def _identify_parser(sub, model_args) -> None:
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
     held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
-    s.add_argument("--method", choices=METHODS, default=IdentOptions.method,
+    s.add_argument("--method", choices=CHOICES["method"], default=IDENTIFY["method"],
                    help="auto (default): least squares with the model file's parameters as a prior (terms the data "
                         "determine keep their fitted values), the weighting and the prior's weight chosen by blocked "
                         "cross-validation on the training data; ols, wls (per-joint noise) or physical (physically "
@@ -543,7 +542,7 @@ def _identify_parser(sub, model_args) -> None:
                    help="with --joints: weld JOINT at VALUE (rad or m); repeatable")
     s.add_argument("--allow-units", action="store_true",
                    help="go on when the log's units look wrong (deg/s, ms, mN m, absurd samples); refused otherwise")
-    s.add_argument("--covariance", choices=COVARIANCES, default=IdentOptions.covariance,
+    s.add_argument("--covariance", choices=CHOICES["covariance"], default=IDENTIFY["covariance"],
                    help="standard deviations: hac (default; Newey-West, true when residuals are correlated) or "
                         "white (the least-squares formula, residuals taken as uncorrelated)")
     s.add_argument("--score-cutoff", type=float, metavar="HZ",
@@ -586,7 +585,7 @@ def _analysis_choice_args(s) -> None:
 def _model_class_args(s) -> None:
     """``identify``'s options of the model class: smooth Coulomb, model terms, the literal geometry."""
     s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
-    s.add_argument("--terms", default=IdentOptions.terms, metavar="TERMS",
+    s.add_argument("--terms", default=IDENTIFY["terms"], metavar="TERMS",
                    help="model terms beyond rigid bodies and linear friction: auto (default: pre-sliding friction "
                         "'dahl', mounting 'tilt', per-joint 'delay', torque-sensor 'scale', each kept when blocked "
                         "cross-validation on the training data says so; the report lists every one kept or "

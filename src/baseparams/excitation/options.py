@@ -8,7 +8,7 @@ the CLI's ``baseparams excite`` pass it, or its fields as keywords.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +75,11 @@ class DesignOptions:
     seed: int = 0
     grid: int = 200
     max_iter: int = 150
+
+    def __repr__(self) -> str:
+        changed = [f"{f.name}={getattr(self, f.name)!r:.60}" for f in fields(self)
+                   if getattr(self, f.name) is not f.default and getattr(self, f.name) != f.default]
+        return f"DesignOptions({', '.join(changed)})"
 
     def __post_init__(self):
         from ..arguments import check_keywords

@@ -1,13 +1,14 @@
 """How an identification is made: one validated object for every path (in memory, streamed, a fleet).
 
-:class:`IdentOptions` holds every option of an identification with its default, written here only,
-and checks them once, when it is made: numbers against :data:`baseparams.arguments.RANGES`, the
-choices, the flags, friction terms, motor couplings and model terms, and the rules across options
-(``prior_weight`` is the physical fit's). The front door (:func:`baseparams.identify`), the command
-line (:meth:`IdentOptions.from_flags`: its errors name the flags) and the fleet build it; every
-path takes it whole; the result keeps it (the cutoff and decimation as used) and its file saves it
-(:meth:`IdentOptions.to_json`, read back by :meth:`IdentOptions.from_json`, what
-:func:`baseparams.predict` filters a log with).
+:class:`IdentOptions` holds every option of an identification (their defaults are written once, in
+:data:`baseparams.arguments.IDENTIFY`, where the front door and the CLI's parser read them without
+loading the identification) and checks them once, when it is made: numbers against
+:data:`baseparams.arguments.RANGES`, the choices, the flags, friction terms, motor couplings and
+model terms, and the rules across options (``prior_weight`` is the physical fit's). The front door
+(:func:`baseparams.identify`), the command line (:meth:`IdentOptions.from_flags`: its errors name
+the flags) and the fleet build it; every path takes it whole; the result keeps it (the cutoff and
+decimation as used) and its file saves it (:meth:`IdentOptions.to_json`, read back by
+:meth:`IdentOptions.from_json`, what :func:`baseparams.predict` filters a log with).
 """
 
 from __future__ import annotations
@@ -15,13 +16,14 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, fields
 
+from ..arguments import CHOICES, IDENTIFY
 from ..errors import BaseparamsError
-from .drives import FRICTION_TERMS, MotorCoupling, friction_terms
+from .drives import MotorCoupling, friction_terms
 
 #: the estimators (:func:`baseparams.ident.fit`)
-METHODS = ("auto", "ols", "wls", "physical")
+METHODS = CHOICES["method"]
 #: the standard deviations' covariances (:mod:`baseparams.ident.uncertainty`)
-COVARIANCES = ("hac", "white")
+COVARIANCES = CHOICES["covariance"]
 #: the options that are numbers, checked against :data:`baseparams.arguments.RANGES`
 NUMBERS = ("holdout", "coulomb_width", "cutoff", "decimate", "min_speed", "prior_weight", "score_cutoff",
            "analysis_samples", "seed", "memory_mb")
@@ -87,25 +89,25 @@ class IdentOptions:
         ``method="physical"``.
     """
 
-    method: str = "auto"
-    rotor: bool = False
-    friction: tuple = FRICTION_TERMS
-    coulomb_width: float | None = None
-    couplings: tuple = ()
-    holdout: float | None = None
-    cutoff: float | None = None
-    decimate: int | None = None
-    min_speed: float | None = None
-    prior_weight: float | None = None
-    convention: str = "khalil"
-    covariance: str = "hac"
-    score_cutoff: float | None = None
-    allow_units: bool = False
-    literal: bool = False
-    terms: str = "auto"
-    analysis_samples: int | None = None
-    seed: int = 0
-    memory_mb: float = 128.0
+    method: str = IDENTIFY["method"]
+    rotor: bool = IDENTIFY["rotor"]
+    friction: tuple = IDENTIFY["friction"]
+    coulomb_width: float | None = IDENTIFY["coulomb_width"]
+    couplings: tuple = IDENTIFY["couplings"]
+    holdout: float | None = IDENTIFY["holdout"]
+    cutoff: float | None = IDENTIFY["cutoff"]
+    decimate: int | None = IDENTIFY["decimate"]
+    min_speed: float | None = IDENTIFY["min_speed"]
+    prior_weight: float | None = IDENTIFY["prior_weight"]
+    convention: str = IDENTIFY["convention"]
+    covariance: str = IDENTIFY["covariance"]
+    score_cutoff: float | None = IDENTIFY["score_cutoff"]
+    allow_units: bool = IDENTIFY["allow_units"]
+    literal: bool = IDENTIFY["literal"]
+    terms: str = IDENTIFY["terms"]
+    analysis_samples: int | None = IDENTIFY["analysis_samples"]
+    seed: int = IDENTIFY["seed"]
+    memory_mb: float = IDENTIFY["memory_mb"]
 
     def __post_init__(self):
         from ..arguments import check_choice, check_flags, check_keywords
@@ -188,9 +190,11 @@ class IdentOptions:
         """
         names = {f.name for f in fields(cls)}
         kw = {k: v for k, v in doc.items() if k in names}
-        kw["friction"] = tuple(kw.get("friction", FRICTION_TERMS))
-        kw["couplings"] = tuple(MotorCoupling(c["name"], tuple(c["joints"]), tuple(c["weights"]))
-                                for c in kw.get("couplings", ()))
+        if "friction" in kw:
+            kw["friction"] = tuple(kw["friction"])
+        if "couplings" in kw:
+            kw["couplings"] = tuple(MotorCoupling(c["name"], tuple(c["joints"]), tuple(c["weights"]))
+                                    for c in kw["couplings"])
         return cls(**kw)
 
 

@@ -18,6 +18,12 @@ The pipeline (:func:`identify`):
 
 Parameters keep their conventions: base parameters are named and valued in the analysis's
 convention (``khalil`` by default); full parameter vectors say theirs.
+
+This module holds the order of the steps; each step's work is in its room (:mod:`.rows`,
+:mod:`.fitting`, :mod:`.notes`, :mod:`.validation`, ...). :func:`assemble` makes the result of
+every path (this one, and a log streamed from its file: :mod:`.stream`), from the options it was
+given (:class:`~baseparams.ident.options.IdentOptions`) and an :class:`Account` of what was done
+to the data.
 """
 
 from __future__ import annotations
@@ -118,6 +124,9 @@ class Account:
     terms: tuple = ()
     covariance: str = ""
     units: tuple = ()
+
+    def __repr__(self) -> str:
+        return f"<Account {self.read} samples read, cutoff {self.cutoff:.4g} Hz, 1 in {self.factor} kept>"
 
 
 def assemble(f: Fit, acc, opts: IdentOptions, account: Account, train: dict, validation: dict | None,

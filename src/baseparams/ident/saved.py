@@ -187,7 +187,10 @@ def check_robot(doc: dict, robot: Robot, source: str) -> None:
     from ..numerics import row_mask, rows_spec
 
     rows = doc.get("options", {}).get("rows", "all")
-    coords = robot.actuated if robot.has_loops else np.flatnonzero(row_mask(robot, rows_spec(rows)))
+    try:
+        coords = robot.actuated if robot.has_loops else np.flatnonzero(row_mask(robot, rows_spec(rows)))
+    except BaseparamsError as exc:
+        raise type(exc)(f"{source}: options.rows: {exc}") from None
     joints = robot.coordinate_names(coords)
     for key, mine_n in (("bodies", robot.n), ("dof", robot.dof), ("parameters", 10 * robot.n), ("joints", joints)):
         if saved.get(key) != mine_n:

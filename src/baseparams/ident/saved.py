@@ -7,8 +7,10 @@ The file (:meth:`~baseparams.ident.Identification.save`) is one JSON object::
 
     {"format": "baseparams-identification", "version": 1, "baseparams": "0.1.0",
      "robot": {"name", "fingerprint", "bodies", "dof", "parameters", "joints"},
-     "options": {"method", "convention", "rows", "rotor", "friction", "coulomb_width",
-                 "couplings": [{"name", "joints", "weights"}], "cutoff", "decimate", "min_speed"},
+     "options": {"method", "rotor", "friction", "coulomb_width", "couplings": [{"name", "joints", "weights"}],
+                 "holdout", "cutoff", "decimate", "min_speed", "prior_weight", "convention", "covariance",
+                 "score_cutoff", "allow_units", "literal", "terms", "analysis_samples", "seed", "memory_mb",
+                 "rows"},       # IdentOptions.to_json() (cutoff, decimate: as used) and the measured rows
      "parameters": {"names", "values", "std"},       # the model parameters theta (p,)
      "base_parameters": [...], "drives": [...], "couplings": [...],   # as in to_json (readable)
      "estimate": {...}, "physical": {...} or null, "samples", "train", "validation", "notes"}

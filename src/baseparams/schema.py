@@ -749,7 +749,7 @@ OPTIONS = Obj({
                      max_len=1000),
     "cutoff": Num(lo=1e-3, hi=1e6),
     "decimate": Int(lo=1, hi=10**9),
-    "min_speed": Opt(Num(lo=0.0)),
+    "min_speed": Any(),  # a number, one per joint, or null: checked by IdentOptions
     "literal": Field(Bool(), ABSENT),
     "terms": Field(Str(max_len=200), ABSENT),
     "holdout": Field(Opt(Num(lo=0.0, lo_open=True)), ABSENT),

@@ -25,8 +25,8 @@ METHODS = CHOICES["method"]
 #: the standard deviations' covariances (:mod:`baseparams.ident.uncertainty`)
 COVARIANCES = CHOICES["covariance"]
 #: the options that are numbers, checked against :data:`baseparams.arguments.RANGES`
-NUMBERS = ("holdout", "coulomb_width", "cutoff", "decimate", "min_speed", "prior_weight", "score_cutoff",
-           "analysis_samples", "seed", "memory_mb")
+NUMBERS = ("holdout", "coulomb_width", "cutoff", "decimate", "prior_weight", "score_cutoff", "analysis_samples",
+           "seed", "memory_mb")
 #: the command line's flag of each option whose flag is not ``--`` and its name with dashes
 FLAGS = {"couplings": "--coupling"}
 
@@ -56,8 +56,9 @@ class IdentOptions:
         :func:`baseparams.ident.preprocess.lowpass_design`); in a result: the cutoff used.
     decimate : int, optional
         Decimation factor (default from the rate and the cutoff); in a result: the factor used.
-    min_speed : float, optional
-        Remove samples where a joint moves slower than this [rad/s].
+    min_speed : float or sequence of float, optional
+        Remove samples where a joint moves slower than this [rad/s], or than its own (one per
+        log column, kept as a tuple).
     prior_weight : float, optional
         ``method="physical"`` only: the weight of the model file's inertias.
     convention : str
@@ -122,7 +123,7 @@ class IdentOptions:
                                     f"{type(self.convention).__name__}")
         check_keywords("identify", **{k: getattr(self, k) for k in NUMBERS})  # checked, kept as given
         for name, value in (("friction", friction_terms(self.friction)), ("couplings", _couplings(self.couplings)),
-                            ("terms", _terms(self.terms))):
+                            ("terms", _terms(self.terms)), ("min_speed", _speeds(self.min_speed))):
             object.__setattr__(self, name, value)
         if self.prior_weight is not None and self.method != "physical":
             raise BaseparamsError(f"identify: prior_weight= applies to method=physical, not {self.method} (the "
@@ -228,6 +229,28 @@ def _couplings(couplings) -> tuple:
         raise ArgumentTypeError(f"identify: couplings= must be MotorCoupling objects or 'NAME:JOINT=W,...' texts, "
                                 f"got {type(couplings).__name__}")
     return tuple(c if isinstance(c, MotorCoupling) else MotorCoupling.parse(c) for c in couplings)
+
+
+def _speeds(min_speed):
+    """``min_speed`` checked: None, a number (kept as given), or one number per joint (a tuple of floats)."""
+    import numbers
+
+    from ..arguments import check_keywords, check_value
+
+    if min_speed is None or isinstance(min_speed, (numbers.Real, str, bytes)):
+        check_keywords("identify", min_speed=min_speed)
+        return min_speed
+    try:
+        items = list(min_speed)
+    except TypeError:
+        check_keywords("identify", min_speed=min_speed)  # not a number: named as such
+        raise
+    for k, v in enumerate(items):
+        try:
+            check_value(v, "min_speed")
+        except BaseparamsError as exc:
+            raise type(exc)(f"identify: {str(exc).replace('min_speed=', f'min_speed= (item {k})', 1)}") from None
+    return tuple(float(v) for v in items)
 
 
 def _terms(terms) -> str:

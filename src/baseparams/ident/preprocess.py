@@ -643,7 +643,8 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         index = index[keep]
         for reason, c in slow.items():
             removed[reason] = removed.get(reason, 0) + c
-        notes.append(f"slow samples: {int((~keep).sum())} with |dq| below {min_speed} on a joint removed")
+        shown = np.asarray(min_speed) if np.ndim(min_speed) else min_speed  # per joint: one array, however given
+        notes.append(f"slow samples: {int((~keep).sum())} with |dq| below {shown} on a joint removed")
     else:
         notes.append("slow samples: kept (min_speed not given)")
     if len(index) == 0:

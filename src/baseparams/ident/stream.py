@@ -1129,7 +1129,8 @@ def _account(train, tr: Training, plan: Plan, slow: int, o, notes) -> object:
         removed[f"decimation by {plan.factor}"] = inner - plan.fitted_count()
     slow_note = ["slow samples: kept (min_speed not given)"]
     if o.min_speed is not None:
-        slow_note = [f"slow samples: {slow} with |dq| below {o.min_speed} on a joint removed"]
+        shown = np.asarray(o.min_speed) if np.ndim(o.min_speed) else o.min_speed
+        slow_note = [f"slow samples: {slow} with |dq| below {shown} on a joint removed"]
         if slow:
             removed["slow (|dq| < min_speed on a joint)"] = slow
     acc_note = (f"parallel filtering in {len(plan.windows())} windows of {plan.size} samples with {plan.margin}-sample "

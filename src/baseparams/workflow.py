@@ -577,8 +577,10 @@ convention, covariance, score_cutoff, allow_units, analysis_samples, literal, te
         Bad data (a floating base without its pose), options or outputs, data that do not excite
         the model.
     """
+    from .arguments import check_keywords
     from .ident.options import IdentOptions
 
+    check_keywords("identify", min_speed=min_speed)  # one speed, as the flag (ident.identify also takes one per joint)
     options = IdentOptions(method=method, rotor=rotor, friction=friction, coulomb_width=coulomb_width,
                            couplings=couplings, holdout=holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed,
                            prior_weight=prior_weight, convention=convention, covariance=covariance,

@@ -82,7 +82,7 @@ def cases(quick: bool = False) -> list[dict]:
 
 def _panda_cases(shared: Path, rng) -> list[dict]:
     import baseparams
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     from recordings import perturbed_file, with_payload
 
@@ -111,7 +111,7 @@ def _tx40_case(shared: Path) -> dict:
     import re
 
     import baseparams
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     folder = shared / "ident" / "staubli_tx40_figaroh"
     robot = baseparams.load(str(folder / "tx40_mdh_modified.urdf"))
@@ -145,7 +145,7 @@ def _span(log, t0: float, t1: float):
 
 def run_case(case: dict, estimators=ESTIMATORS) -> dict:
     """Every estimator on one case: raw RMS on recording B, seconds, the terms kept."""
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
 
     out = {"name": case["name"], "kind": case["kind"], "rms": {}, "seconds": {}, "terms": {}}
     from baseparams import BaseparamsError
@@ -212,8 +212,8 @@ def panda_terms_table() -> list[dict]:
     (``tests/oracles.lowpass_score``); also the raw held-out RMS and the wall time.
     """
     import baseparams
-    from baseparams.ident.data import JointLog
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
+    from baseparams.jointlog import JointLog
 
     from oracles import lowpass_score
 

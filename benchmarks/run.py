@@ -351,9 +351,9 @@ def bench_identify(out: dict, quick: bool) -> None:
     import warnings
 
     import baseparams
+    from baseparams.ident import accumulate, fit, identify
     from baseparams.ident.model import ident_model
     from baseparams.ident.physical import physical_fit
-    from baseparams.ident.pipeline import accumulate, fit, identify
     from baseparams.ident.simulate import fourier_trajectory, simulate_log
     from baseparams.io.logs import read_log, write_log
 
@@ -468,8 +468,8 @@ def bench_fleet(out: dict, quick: bool) -> None:
 
     import baseparams
     from baseparams.fleet import synthetic_factors, synthetic_fleet_factors
+    from baseparams.ident import fit
     from baseparams.ident.model import ident_model
-    from baseparams.ident.pipeline import fit
 
     robot = baseparams.load("puma560")
     model = ident_model(baseparams.analyze(robot), rotor=False)

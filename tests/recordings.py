@@ -15,7 +15,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 import baseparams
-from baseparams.ident.data import JointLog
+from baseparams.jointlog import JointLog
 
 
 @dataclass

@@ -315,7 +315,7 @@ def test_every_subcommand_has_its_function():
         assert callable(getattr(baseparams, name)) and name in baseparams.__all__ and name in dir(baseparams)
     assert "puma560" in baseparams.robots.BUILTINS  # ``baseparams robots``
     assert baseparams.Excitation is baseparams.excitation.Excitation
-    assert baseparams.Identification is sys.modules["baseparams.ident.pipeline"].Identification
+    assert baseparams.Identification is sys.modules["baseparams.ident"].Identification
 
 
 @pytest.mark.parametrize("name", ["excite", "simulate", "identify", "predict", "analyze_symbolic"])

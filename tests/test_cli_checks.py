@@ -33,7 +33,7 @@ def _no_work(monkeypatch):
         raise AssertionError("the long work started")
 
     monkeypatch.setattr("baseparams.excitation.design_excitation", boom)
-    monkeypatch.setattr("baseparams.ident.pipeline.identify", boom)
+    monkeypatch.setattr("baseparams.ident.identify", boom)
 
 
 def test_excite_plot_without_matplotlib_refused_at_once(tmp_path, capsys, monkeypatch):

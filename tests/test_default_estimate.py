@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import baseparams
-from baseparams.ident.pipeline import accumulate_prepared, identify, log_columns
+from baseparams.ident import accumulate_prepared, identify, log_columns
 from baseparams.ident.preprocess import prepare
 from baseparams.ident.select import prior_covariance, prior_precision, ridge, select, split_blocks
 from baseparams.ident.simulate import fourier_trajectory, simulate_log

@@ -26,8 +26,8 @@ from baseparams.excitation import (
     rest_map,
     trajectory_criterion,
 )
+from baseparams.ident import accumulate, fit, identify
 from baseparams.ident.model import ident_model
-from baseparams.ident.pipeline import accumulate, fit, identify
 from baseparams.ident.simulate import regressor_of, simulate_log
 from baseparams.kinematics.loops import close_loops
 from baseparams.kinematics.tree import re_reference

@@ -10,9 +10,9 @@ import pytest
 
 import baseparams
 from baseparams.fleet import file_factors, identify_fleet, simulate_fleet
+from baseparams.ident import fit
 from baseparams.ident.chunks import combine
 from baseparams.ident.model import ident_model
-from baseparams.ident.pipeline import fit
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +57,7 @@ def test_fleet_equals_serial_per_file_and_pooled(fleet, client):
 
 def _serial_meat(model, path, f):
     """One log's HAC meat at ``f``'s estimate, computed in this process (the single-log path's functions)."""
-    from baseparams.ident.pipeline import accumulate_prepared, log_columns
+    from baseparams.ident import accumulate_prepared, log_columns
     from baseparams.ident.preprocess import prepare
     from baseparams.ident.uncertainty import hac_meat
     from baseparams.io.logs import read_log

@@ -10,11 +10,11 @@ from scipy.spatial.transform import Rotation
 import baseparams as bp
 from baseparams.cli import main
 from baseparams.errors import BaseparamsError, DataError
-from baseparams.ident.data import JointLog
 from baseparams.ident.model import ident_model
 from baseparams.ident.simulate import fourier_trajectory
 from baseparams.io.logs import read_log, write_log
 from baseparams.io.pinocchio import to_pinocchio
+from baseparams.jointlog import JointLog
 from baseparams.kinematics.floating import BASE_COORDINATES, POSE_COLUMNS, TWIST_COLUMNS
 from baseparams.robots import random_robot
 

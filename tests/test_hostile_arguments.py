@@ -175,7 +175,7 @@ def _log(puma):
 
 def _wrong_calls(puma, log, tmp_path):
     """``(call, keyword the message must name)`` for wrong types and shapes of the public API."""
-    from baseparams.ident.pipeline import Identification
+    from baseparams.ident import Identification
     from baseparams.io.logs import read_log, write_log
 
     ident = bp.identify(puma, log, method="ols")
@@ -266,7 +266,7 @@ def test_a_local_cluster_of_a_thousand_workers_is_refused_before_starting(monkey
 
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
     with pytest.raises(BaseparamsError, match=r"--workers 1024: a local cluster of at most 8 worker processes"), \
-            fleet._client(None, None, 1024):
+            fleet.dask_client(None, None, 1024):
         pass
 
 
@@ -282,7 +282,7 @@ LABELS = {"what"}
 def test_junk_in_every_argument_is_a_typeerror_or_valueerror_naming_it(puma, tmp_path):
     """Every argument of the front door and of the result objects, eight values of the wrong kind each: a
     TypeError or ValueError (or BaseparamsError) of one line, never another exception, within seconds."""
-    from baseparams.ident.pipeline import Identification
+    from baseparams.ident import Identification
     from baseparams.io.logs import read_log, write_log
 
     log = bp.simulate(puma, duration=4.0, rate=100.0, noise=0.01)[0]

@@ -15,7 +15,7 @@ import pytest
 
 import baseparams
 from baseparams.errors import BaseparamsError
-from baseparams.ident.pipeline import Identification, identify
+from baseparams.ident import Identification, identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.io.logs import read_log, write_log
 from hostile import api_error, hostile_path, one_line_error, refused_in_a_subprocess

@@ -172,7 +172,7 @@ def test_analysis_report_in_a_browser(name, tmp_path):
 @pytest.mark.shared
 @pytest.mark.slow
 def test_identification_report_in_a_browser(tmp_path):
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
     from baseparams.io.logs import read_log
 
     panda = SHARED.parent / "ident" / "panda_gaz2019"

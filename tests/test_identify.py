@@ -5,9 +5,9 @@ import pytest
 
 import baseparams
 from baseparams.errors import BaseparamsError
+from baseparams.ident import accumulate, fit
 from baseparams.ident.drives import MotorCoupling
 from baseparams.ident.model import ident_model
-from baseparams.ident.pipeline import accumulate, fit
 from baseparams.ident.simulate import add_noise, fourier_trajectory
 
 
@@ -90,7 +90,7 @@ def test_excitation_names_the_weak_parameter(rng):
 def test_chunked_identification_equals_the_whole_log(min_speed):
     """Parallel filtering chunk by chunk (overlaps of 12 cutoff periods) gives the whole log's
     estimate to 1e-10 relative, slow-sample removal and decimation included."""
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
     from baseparams.ident.simulate import simulate_log
 
     robot = baseparams.load("puma560")

@@ -14,27 +14,23 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src"
 PKG = SRC / "baseparams"
 
-#: layer of each top-level part: a module may import only from its own part or lower layers
+#: floor of each top-level part (a package or a module of ``baseparams``): a module may import only from its
+#: own part or from parts on lower floors. No exception: a part is one floor, and an import that runs back up
+#: or sideways (another part on the same floor) fails :func:`test_layering`.
 LAYERS = {
-    "errors": 0, "enums": 0, "pga": 0, "files": 0.5, "display": 0.5,
-    "model": 1,
-    "kinematics": 2,
-    "regressor": 3,
-    "numerics": 4,
-    "nullspace": 5,
-    "base": 6,
-    "ident": 7,
-    "schema": 0.6, "arguments": 0.5,
-    "io": 8,
-    "robots": 9,
-    "loading": 10, "analysis": 10,
-    # the identification pipeline sits on the analysis; ident's other modules (logs, filters,
-    # estimators) below the readers
-    "ident.model": 10.2, "ident.terms": 10.3,
-    "ident.pipeline": 10.4, "ident.stream": 10.5, "ident.simulate": 10.4, "ident.report": 10.6,
-    "symbolic": 11,
-    "report": 12, "fleet": 12, "excitation": 12,
-    "workflow": 12.5,
+    "errors": 0, "enums": 0, "pga": 0, "version": 0,
+    "files": 1, "display": 1, "arguments": 1,
+    "schema": 2, "tables": 2,
+    "model": 3,
+    "kinematics": 4,
+    "regressor": 5, "jointlog": 5,
+    "numerics": 6, "io": 6,
+    "nullspace": 7,
+    "base": 8, "report": 8,
+    "analysis": 9,
+    "robots": 10, "symbolic": 10, "ident": 10,
+    "loading": 11, "fleet": 11, "excitation": 11,
+    "sweep": 12, "workflow": 12,
     "cli": 13,
     "__main__": 14, "__init__": 14,
 }
@@ -74,8 +70,6 @@ def _imports(name: str) -> list[tuple[str, str | None, bool]]:
             if mod.split(".")[0] != "baseparams":
                 continue
             for a in node.names:
-                if mod == "baseparams" and a.name.startswith("__"):
-                    continue  # package metadata (``__version__``), not code: no edge to the package
                 sub = f"{mod}.{a.name}"
                 out.append((sub, None, level) if sub in MODULES else (mod, a.name, level))
     return out
@@ -109,9 +103,8 @@ def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
 
 
 def _part(module: str) -> str:
+    """The top-level part of ``baseparams.<part>...`` (``__init__`` for the package itself)."""
     parts = module.split(".")
-    if ".".join(parts[1:3]) in LAYERS:
-        return ".".join(parts[1:3])
     return parts[1] if len(parts) > 1 else "__init__"
 
 
@@ -156,16 +149,26 @@ def test_no_private_attributes_of_other_modules():
     assert not bad
 
 
+def _against_the_floors(graph: dict[str, set[str]], layers: dict[str, float]) -> list[str]:
+    """``module -> target`` for every import into another part that is not on a lower floor."""
+    return sorted(f"{m} -> {t}" for m, targets in graph.items() for t in targets
+                  if _part(m) != _part(t) and layers[_part(t)] >= layers[_part(m)])
+
+
 def test_layering():
-    """pga, errors and enums import nothing of ours; each part imports only its own or lower layers."""
-    bad = []
-    for m, targets in _graph(False).items():
-        for t in targets:
-            a, b = _part(m), _part(t)
-            if a != b and LAYERS[b] >= LAYERS[a]:
-                bad.append(f"{m} -> {t}")
-    assert not bad
+    """pga, errors and enums import nothing of ours; each part imports only its own or lower floors."""
+    assert _against_the_floors(_graph(False), LAYERS) == []
     assert set(LAYERS) >= {_part(m) for m in MODULES}
+    assert not set(LAYERS) - {_part(m) for m in MODULES}, "a floor for a part that does not exist"
+
+
+def test_layering_check_sees_arrows_up_and_sideways():
+    """The check itself: an import up a floor or to another part on the same floor is reported."""
+    layers = {"low": 0, "mid": 1, "side": 1, "high": 2}
+    graph = {"baseparams.mid.a": {"baseparams.low", "baseparams.mid.b"}, "baseparams.low": {"baseparams.high.x"},
+             "baseparams.side": {"baseparams.mid.a"}, "baseparams.mid.b": set()}
+    assert _against_the_floors(graph, layers) == ["baseparams.low -> baseparams.high.x",
+                                                  "baseparams.side -> baseparams.mid.a"]
 
 
 @pytest.mark.parametrize("part, allowed", [
@@ -232,3 +235,83 @@ def test_function_length_check_sees_long_functions(tmp_path):
     (tmp_path / "long.py").write_text(f'def f():\n    """Doc."""\n{body}\n\n\n'
                                       f'def g():\n    """Doc.\n\n    Long: a reason.\n    """\n{body}\n')
     assert _long_functions({"long": tmp_path / "long.py"}) == ["long:1 f (61 lines)"]
+
+
+#: the most parameters a function may take ("about ten"), ``self``/``cls`` not counted, ``*args``/``**kw`` one each:
+#: options travel as one checked object (``IdentOptions``, ``DesignOptions``), not as argument lists
+MAX_PARAMETERS = 11
+
+#: the public front door: one keyword per flag of the command line (``baseparams.identify`` is
+#: ``baseparams.workflow.identify``); nothing else may take more than :data:`MAX_PARAMETERS`
+FRONT_DOOR = {"baseparams.workflow.identify", "baseparams.workflow.excite", "baseparams.workflow.simulate"}
+
+
+def _compiled(node) -> bool:
+    """A compiled kernel (``@njit(...)``, ``@numba.jit``): its arguments are arrays the compiler needs flat."""
+    names = [ast.unparse(d.func if isinstance(d, ast.Call) else d) for d in node.decorator_list]
+    return any(n.rsplit(".", 1)[-1] in ("njit", "jit") for n in names)
+
+
+def _many_parameters(modules: dict[str, Path] = MODULES, front_door=frozenset(FRONT_DOOR)) -> list[str]:
+    """``module:line name (count)`` for every function with more than :data:`MAX_PARAMETERS` parameters."""
+    out = []
+    for name, path in modules.items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) or _compiled(node):
+                continue
+            a = node.args
+            params = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs if x.arg not in ("self", "cls")]
+            count = len(params) + (a.vararg is not None) + (a.kwarg is not None)
+            if count > MAX_PARAMETERS and f"{name}.{node.name}" not in front_door:
+                out.append(f"{name}:{node.lineno} {node.name} ({count})")
+    return out
+
+
+def test_functions_take_few_parameters():
+    """Outside the front door and the compiled kernels no function takes more than about ten parameters."""
+    assert _many_parameters() == []
+    assert all(p.rsplit(".", 1)[0] in MODULES for p in FRONT_DOOR)
+    import baseparams
+
+    assert {f.rsplit(".", 1)[1] for f in FRONT_DOOR} <= set(baseparams.__all__)
+
+
+def test_parameter_count_check_sees_long_signatures(tmp_path):
+    """The check itself: a long signature is reported, the front door and a compiled kernel are not."""
+    args = ", ".join(f"a{k}" for k in range(MAX_PARAMETERS + 1))
+    (tmp_path / "m.py").write_text(f"def f({args}):\n    pass\n\n\ndef door({args}):\n    pass\n\n\n"
+                                   f"@njit(cache=True)\ndef kernel({args}):\n    pass\n\n\n"
+                                   f"def ok(self, {', '.join(f'b{k}' for k in range(MAX_PARAMETERS))}):\n    pass\n")
+    assert _many_parameters({"m": tmp_path / "m.py"}, {"m.door"}) == [f"m:1 f ({MAX_PARAMETERS + 1})"]
+
+
+#: what the repository's root holds (tracked): anything else there is a stray file (a report written by hand,
+#: a log) and belongs in a folder, in .gitignore, or nowhere
+ROOT_ENTRIES = {".ci", ".gitignore", "README.md", "benchmarks", "conftest.py", "docs", "pyproject.toml", "src", "tests"}
+#: untracked entries the tools make at the root (.gitignore's, caches): left out when git cannot be asked
+GENERATED = {".git", ".venv", ".venv-ci", "build", "dist", "__pycache__", ".pytest_cache", ".hypothesis", ".ruff_cache",
+             "MUJOCO_LOG.TXT"}
+
+
+def _root_entries(root: Path) -> set[str]:
+    """The first path component of every file git tracks under ``root`` (its listing without git)."""
+    import shutil
+    import subprocess
+
+    if shutil.which("git") and (root / ".git").exists():
+        out = subprocess.run(["git", "ls-files", "-z"], cwd=root, capture_output=True, text=True, check=True).stdout
+        return {p.split("/")[0] for p in out.split("\0") if p}
+    return {p.name for p in root.iterdir() if p.name not in GENERATED and not p.name.endswith(".egg-info")}
+
+
+def test_the_root_holds_only_its_files():
+    root = SRC.parent
+    assert _root_entries(root) - ROOT_ENTRIES == set(), "stray files at the repository's root"
+    assert ROOT_ENTRIES - {"docs", ".ci"} <= _root_entries(root)
+
+
+def test_root_check_sees_a_stray_file(tmp_path):
+    """The check itself, on a folder without git: a stray file is seen, the tools' caches are not."""
+    for name in (*ROOT_ENTRIES, ".pytest_cache", "x"):
+        (tmp_path / name).write_text("")
+    assert _root_entries(tmp_path) - ROOT_ENTRIES == {"x"}

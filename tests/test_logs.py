@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 
 import baseparams
 from baseparams.errors import BaseparamsError, DataError
-from baseparams.ident.data import JointLog
 from baseparams.io.logs import read_log
+from baseparams.jointlog import JointLog
 from baseparams.robots.random import random_robot
 
 PUMA = baseparams.load("puma560")

@@ -16,10 +16,11 @@ import pytest
 
 from baseparams.cli import main
 from baseparams.errors import BaseparamsError, ModelError
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
+from baseparams.ident.export import identified_mjcf
 from baseparams.ident.simulate import fourier_trajectory, simulate_log
 from baseparams.io.mjcf import load_mjcf
-from baseparams.io.mjcf_write import identified_mjcf, mjcf_inverse, write_mjcf
+from baseparams.io.mjcf_write import mjcf_inverse, write_mjcf
 from baseparams.model.inertia import to_convention
 from baseparams.regressor.tp import regressor
 from baseparams.robots.random import random_inertia

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 import baseparams
 from baseparams.display import MAX_REPR, format_number, summary_repr, text_table
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.robots import BUILTINS
 from conftest import STRICT

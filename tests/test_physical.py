@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from baseparams.errors import BaseparamsError
+from baseparams.ident import physical
 from baseparams.ident.physical import PhysicalFit, feasibility, physical_fit, prior_pseudo_inertias
 from baseparams.model.inertia import hat
 from baseparams.regressor import regressor
@@ -219,8 +220,10 @@ def test_bad_inputs_are_one_line_errors(monkeypatch):
         physical_fit(R11, r12, G, robot, prior_weight=-1.0)
     with pytest.raises(BaseparamsError, match="prior must be"):
         physical_fit(R11, r12, G, robot, prior=np.zeros(7))
+    monkeypatch.setattr(physical, "SOLVER", "NO_SUCH_SOLVER")
     with pytest.raises(BaseparamsError, match="not installed"):
-        physical_fit(R11, r12, G, robot, solver="NO_SUCH_SOLVER")
+        physical_fit(R11, r12, G, robot)
+    monkeypatch.undo()
     monkeypatch.setitem(sys.modules, "cvxpy", None)  # import cvxpy -> ImportError
     with pytest.raises(BaseparamsError, match=r"pip install 'baseparams\[ident\]'"):
         physical_fit(R11, r12, G, robot)

@@ -76,7 +76,7 @@ def _with_text_svg(fn, *args):
 
 def test_torque_plot_axes_have_units(tmp_path, capsys):
     """``identify --plot``: every joint's axis reads torque [N m], the time axis time [s]."""
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
     from baseparams.io.logs import read_log
     from baseparams.report.plots import torque_plot
 

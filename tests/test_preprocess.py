@@ -8,7 +8,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from baseparams.errors import DataError
-from baseparams.ident.data import JointLog
 from baseparams.ident.preprocess import (
     decimate,
     derivatives,
@@ -19,6 +18,7 @@ from baseparams.ident.preprocess import (
     resample,
     zero_phase,
 )
+from baseparams.jointlog import JointLog
 
 from paths import SHARED
 

@@ -11,10 +11,10 @@ import pinocchio as pin
 import pytest
 
 import baseparams
-from baseparams.ident.data import JointLog
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
 from baseparams.ident.preprocess import prepare
 from baseparams.io.logs import read_log
+from baseparams.jointlog import JointLog
 
 from oracles import lowpass_score
 from paths import SHARED

@@ -9,8 +9,8 @@ import pytest
 import baseparams
 from baseparams.cli import main
 from baseparams.errors import BaseparamsError
-from baseparams.ident.pipeline import Fit, Identification, identify
-from baseparams.ident.results import FORMAT, robot_fingerprint
+from baseparams.ident import Fit, Identification, identify
+from baseparams.ident.saved import FORMAT, robot_fingerprint
 from baseparams.ident.simulate import fourier_trajectory, simulate_log
 from baseparams.io.logs import read_log, write_log
 
@@ -99,7 +99,7 @@ def test_predict_reproduces_simulated_torques(puma, exact, ident):
     assert tau.shape == log.tau.shape
     assert np.abs(tau - log.tau).max() <= 1e-8 * scale
     derived = true.predict(log, smooth=False)  # ddq derived as identify derives it: differences, filter edges
-    pad = int(np.ceil(2 * 200.0 / ident.options["cutoff"]))
+    pad = int(np.ceil(2 * 200.0 / ident.options.cutoff))
     assert np.abs(derived - log.tau)[pad:-pad].max() <= 1e-4 * scale
     assert np.abs(derived - log.tau).max() <= 1e-2 * scale
     # the identified values predict to the identification's accuracy
@@ -238,6 +238,7 @@ def test_round_trip_physical_with_coupling_and_smooth_coulomb(puma, tmp_path):
     res = identify(puma, log, method="physical", coulomb_width=0.05,
                    couplings=(MotorCoupling("m6", ("joint5", "joint6"), (1.0, 1.0)),))
     back = Identification.load(res.save(tmp_path / "phys.json"), puma)
-    assert back.options["coulomb_width"] == 0.05 and back.options["couplings"][0].name == "m6"
+    assert back.options.coulomb_width == 0.05 and back.options.couplings[0].name == "m6"
+    assert back.options == replace(res.options, couplings=back.options.couplings)  # every option saved
     assert back.fit.physical.feasible and np.array_equal(back.fit.physical.pi, res.fit.physical.pi)
     assert np.array_equal(back.predict(log), res.predict(log)) and back.to_json() == res.to_json()

@@ -1,6 +1,6 @@
 """A log identified block by block from its file (issue 24): the whole log's answer, bounded memory.
 
-The oracle is the in-memory path (:func:`baseparams.ident.pipeline.identify` on
+The oracle is the in-memory path (:func:`baseparams.ident.identify` on
 :func:`baseparams.io.logs.read_log`), independent of the streamed one in everything but the shared
 preprocessing functions: the streamed run must give its estimate, standard deviations (HAC over
 the streamed rows) and validation RMS, with windows and blocks far smaller than the log.
@@ -17,12 +17,12 @@ import pytest
 
 from baseparams import load
 from baseparams.errors import DataError
-from baseparams.ident.data import JointLog
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.ident.stream import NotStreamable, identify_stream, scan
 from baseparams.io.logs import LogStream, read_log, write_log
-from baseparams.io.tables import column_writer
+from baseparams.jointlog import JointLog
+from baseparams.tables import column_writer
 
 
 @pytest.fixture(scope="module")

@@ -63,7 +63,7 @@ def test_an_empty_block_changes_nothing(rng):
 def test_a_chunk_whose_samples_are_all_too_slow_is_skipped_not_a_traceback():
     """A rest in the middle of a log, chunked (small memory) with --min-speed: the rest chunk is empty."""
     import baseparams
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
     from baseparams.ident.simulate import fourier_trajectory, simulate_log
 
     robot = baseparams.load("puma560")

@@ -14,10 +14,9 @@ import numpy as np
 import pytest
 
 from baseparams.analysis import analyze
-from baseparams.ident import chunks
+from baseparams.ident import chunks, identify, log_columns
 from baseparams.ident import preprocess as pp
 from baseparams.ident.model import ident_model
-from baseparams.ident.pipeline import identify, log_columns
 from baseparams.ident.simulate import simulate_log
 from baseparams.robots.random import random_robot
 

@@ -14,7 +14,7 @@ import pytest
 
 import baseparams
 from baseparams.cli import main
-from baseparams.ident.pipeline import Identification, identify
+from baseparams.ident import Identification, identify
 from baseparams.ident.terms.dahl import dahl_state
 from baseparams.ident.terms.fit import parse_terms
 from baseparams.io.logs import write_log
@@ -181,7 +181,8 @@ def _tilted(robot, seed=21, tilt=TILT):
 
 def test_a_tilt_is_written_into_mjcf_as_the_base_orientation(tmp_path):
     pytest.importorskip("cvxpy")
-    from baseparams.io.mjcf_write import identified_mjcf, mjcf_inverse
+    from baseparams.ident.export import identified_mjcf
+    from baseparams.io.mjcf_write import mjcf_inverse
     from test_mjcf_export import _fixture, _rel
 
     src, robot = _fixture(tmp_path)
@@ -206,7 +207,8 @@ def _acc(log):
 
 def test_a_tilt_is_written_into_urdf_as_the_root_joints_rotation(tmp_path):
     pytest.importorskip("cvxpy")
-    from baseparams.io.urdf import identified_drives, write_urdf
+    from baseparams.ident.export import identified_drives
+    from baseparams.io.urdf import write_urdf
     from test_practical import chain_urdf
 
     text, _ = chain_urdf(np.random.default_rng(4), 4)

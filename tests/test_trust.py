@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import baseparams
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
 from baseparams.ident.report import format_identification
 from baseparams.ident.simulate import simulate_log
 

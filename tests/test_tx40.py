@@ -53,11 +53,11 @@ import pytest
 
 import baseparams
 from baseparams.cli import main
-from baseparams.ident.data import JointLog
+from baseparams.ident import identify
 from baseparams.ident.drives import MotorCoupling
 from baseparams.ident.model import ident_model
-from baseparams.ident.pipeline import identify
 from baseparams.io.logs import read_log, write_log
+from baseparams.jointlog import JointLog
 
 from paths import SHARED
 

@@ -13,8 +13,8 @@ import pytest
 
 import baseparams
 from baseparams.cli import main
+from baseparams.ident import identify
 from baseparams.ident.drives import MotorCoupling
-from baseparams.ident.pipeline import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.ident.uncertainty import HacMeat, andrews_bandwidth
 

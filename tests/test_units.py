@@ -8,7 +8,7 @@ import pytest
 import baseparams
 from baseparams.cli import main
 from baseparams.errors import DataError
-from baseparams.ident.pipeline import identify
+from baseparams.ident import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.io.logs import read_log, write_log
 
@@ -103,7 +103,7 @@ def test_boolean_parquet_velocities_refused(sim, tmp_path):
 @pytest.mark.shared
 @pytest.mark.slow
 def test_real_panda_log_not_flagged():
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 
@@ -140,8 +140,8 @@ def _refused(robot, log) -> str | None:
 def identify_units(robot, log):
     """The unit checks alone (identify's first step), on a log of the robot's measured joints."""
     from baseparams.analysis import analyze
+    from baseparams.ident import check_log_units, log_columns
     from baseparams.ident.model import ident_model
-    from baseparams.ident.pipeline import check_log_units, log_columns
 
     model = ident_model(analyze(robot), False, ("viscous", "coulomb", "offset"), None)
     return check_log_units(model, log, log_columns(model, log), False)
@@ -192,7 +192,7 @@ def test_parquet_uint64_nanosecond_stamps(sim, tmp_path):
 
 # ---------------------------------------------------------------- real logs: clean ones pass, slips are refused
 def _panda():
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 
@@ -208,7 +208,7 @@ def _tx40():
     import json
     import re
 
-    from baseparams.ident.data import JointLog
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 
@@ -234,8 +234,8 @@ def _tiago():
     """The TIAGo torso and arm, efforts converted as FIGAROH's example does (shared SOURCE.md)."""
     import warnings
 
-    from baseparams.ident.data import JointLog
     from baseparams.ident.subchain import subchain
+    from baseparams.jointlog import JointLog
 
     from paths import IDENT
 

@@ -212,7 +212,7 @@ def _panda_csv(tmp_path):
 def test_panda_physical_export_reloads_in_pinocchio(tmp_path, capsys):
     """The acceptance: damping and friction on all 7 joints, one element per line, Pinocchio agrees."""
     pin = pytest.importorskip("pinocchio")
-    from baseparams.ident.pipeline import identify
+    from baseparams.ident import identify
     from baseparams.io.logs import read_log
     from baseparams.model import inertia as I
     from baseparams.pga import inverse_transform

@@ -54,7 +54,7 @@ Pinocchio interop), ``baseparams.nullspace`` (DRNG, certification), ``baseparams
 (regrouping), ``baseparams.numerics``, ``baseparams.pga``, ``baseparams.kinematics``,
 ``baseparams.model``, ``baseparams.symbolic`` (``SymbolicBuilder``, DH tables),
 ``baseparams.ident`` (the identification's building blocks:
-``baseparams.ident.model.ident_model``, ``baseparams.ident.pipeline.accumulate`` and ``fit``),
+``baseparams.ident.ident_model``, ``baseparams.ident.accumulate`` and ``fit``),
 ``baseparams.excitation`` (the excitation designer's parts), ``baseparams.fleet`` (many logs on
 Dask). ``dir(baseparams)`` lists these and the names above. The name
 ``baseparams.regressor`` is the function above; the subpackage of the same name is imported as
@@ -66,8 +66,6 @@ from __future__ import annotations
 import importlib as _importlib
 import os as _os
 import warnings as _warnings
-
-__version__ = "0.1.0"
 
 # the subpackage first: importing it later would rebind ``baseparams.regressor`` to the module
 from . import regressor as _regressor_pkg  # noqa: F401  (numpy only)
@@ -174,7 +172,7 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
 
 # ---------------------------------------------------------------- the whole loop: excite, simulate, identify, predict
 #: the classes of the loop's results, imported on first use (``baseparams.Identification``)
-_LAZY = {"Excitation": "excitation.result", "Identification": "ident.pipeline"}
+_LAZY = {"Excitation": "excitation.result", "Identification": "ident"}
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):
@@ -221,6 +219,10 @@ def __getattr__(name: str):
     """Submodules and the loop's result classes on first use (``baseparams.Identification``)."""
     if name in _SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")
+    if name == "__version__":  # looked up on first use (baseparams.version)
+        from .version import version
+
+        return version()
     if name in _LAZY:
         return getattr(_importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -19,14 +19,15 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
 from .errors import ArgumentError, ArgumentTypeError, BaseparamsError
 
-__all__ = ["OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief", "check_array",
-           "check_flags", "check_keywords", "check_namespace", "check_path", "check_progress", "check_samples",
-           "check_total", "check_value"]
+__all__ = ["CHOICES", "IDENTIFY", "OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief",
+           "check_array", "check_choice", "check_flags", "check_keywords", "check_namespace", "check_path",
+           "check_progress", "check_samples", "check_total", "check_value", "options_from"]
 
 
 @dataclass(frozen=True)
@@ -97,10 +98,22 @@ RANGES = {
     "min_speed": Range(0, 1e3, unit="rad/s"),
     "prior_weight": Range(0, 1e12),
     "score_cutoff": Range(1e-3, 1e6, unit="Hz"),
-    "memory_mb": Range(1, 1e6, unit="MB"),
+    "memory_mb": Range(0, 1e6, lo_open=True, unit="MB"),
     "gravity": Range(-1e3, 1e3, unit="m/s^2", count=3),
     "acceleration": Range(0, 1e7, lo_open=True, unit="rad/s^2"),
 }
+
+#: the identification's options and their defaults, each written once: :class:`baseparams.ident.options.IdentOptions`
+#: (which checks them), the front door's ``identify`` keywords and the CLI's ``identify`` flags read them here,
+#: where neither ``import baseparams`` nor another command loads the identification
+IDENTIFY = MappingProxyType({
+    "method": "auto", "rotor": False, "friction": ("viscous", "coulomb", "offset"), "coulomb_width": None,
+    "couplings": (), "holdout": None, "cutoff": None, "decimate": None, "min_speed": None, "prior_weight": None,
+    "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
+    "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,
+})
+#: the values of the options that name one of a few choices
+CHOICES = MappingProxyType({"method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white")})
 
 #: the most samples a run holds at once (a simulated log, a designed trajectory) and samples x columns
 MAX_SAMPLES = 2_000_000
@@ -402,6 +415,33 @@ def check_flags(where: str, **flags) -> None:
                                     f"{brief(value, 40)}")
 
 
+def check_choice(where: str, name: str, value, choices) -> None:
+    """A keyword that names one of ``choices``: one line naming it when it does not.
+
+    Parameters
+    ----------
+    where : str
+        The function, for messages.
+    name : str
+        The keyword.
+    value : object
+        Its value.
+    choices : tuple of str
+        The values it may take.
+
+    Raises
+    ------
+    ArgumentTypeError
+        Not a string.
+    ArgumentError
+        Not one of ``choices``.
+    """
+    if not isinstance(value, str):
+        raise ArgumentTypeError(f"{where}: {name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
+    if value not in choices:
+        raise ArgumentError(f"{where}: {name}= must be one of {', '.join(choices)}, got {brief(value)}")
+
+
 def check_progress(value, where: str, stream: bool = False):
     """A ``progress`` argument: None, a callable taking one line (or with ``stream`` a text stream).
 
@@ -429,3 +469,40 @@ def check_progress(value, where: str, stream: bool = False):
         want = "a text stream (sys.stderr)" if stream else "a callable taking one line of text"
         raise ArgumentTypeError(f"{where}: progress= must be {want} or None, got {type(value).__name__}")
     return value
+
+
+def options_from(kind, options=None, keywords: dict | None = None):
+    """An options object given as the object, as keywords, or both (the keywords over the object's).
+
+    Parameters
+    ----------
+    kind : type
+        The options' frozen dataclass (:class:`baseparams.ident.options.IdentOptions`, ...), which
+        checks its values when made.
+    options : kind, optional
+        The options (default: the defaults).
+    keywords : dict, optional
+        Options by name (``kind``'s fields).
+
+    Returns
+    -------
+    kind
+        The options, checked.
+
+    Raises
+    ------
+    ArgumentTypeError
+        ``options`` not a ``kind``, or a keyword that is not one of its fields.
+    """
+    from dataclasses import fields, replace
+
+    if options is not None and not isinstance(options, kind):
+        raise ArgumentTypeError(f"options must be {kind.__name__}, got {type(options).__name__}")
+    names = [f.name for f in fields(kind)]
+    unknown = sorted(set(keywords or ()) - set(names))
+    if unknown:
+        raise ArgumentTypeError(f"unknown option(s) {unknown}; the options are {kind.__name__}'s fields: "
+                                f"{', '.join(names)}")
+    if options is None:
+        return kind(**(keywords or {}))
+    return replace(options, **keywords) if keywords else options

@@ -1,7 +1,7 @@
 """Fleet scale: identification over many logs on Dask, with memory bounded by the chunk.
 
 Every log (file) is read, preprocessed and reduced to its row factors by a Dask task
-(:func:`file_factors`: the same code as :func:`baseparams.ident.pipeline.identify`, chunked with
+(:func:`file_factors`: the same code as :func:`baseparams.ident.identify`, chunked with
 overlapping filter edges past ``memory_mb``); factors combine exactly in a tree (TSQR,
 :func:`baseparams.ident.chunks.combine`), and the estimators — OLS, WLS, the physical fit — run
 on the combined factors, whose size does not depend on the data. ``per_file`` gives one estimate
@@ -32,15 +32,16 @@ import numpy as np
 
 from .display import clip
 from .errors import BaseparamsError
+from .ident import Fit, fit, pulled_covariance
+from .ident.drives import FRICTION_TERMS
 from .ident.model import IdentModel
-from .ident.pipeline import Fit, fit, pulled_covariance
+from .ident.options import IdentOptions
 
 #: seconds to wait for a scheduler given by address (``--scheduler``, ``DASK_SCHEDULER_ADDRESS``)
 SCHEDULER_TIMEOUT_S = 5.0
 
 
-def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff: float | None = None,
-                 min_speed: float | None = None):
+def file_factors(path: str, model: IdentModel, options: IdentOptions | None = None):
     """One log reduced to its row factors (the task a Dask worker runs).
 
     Parameters
@@ -49,12 +50,9 @@ def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff:
         A log file (:func:`baseparams.io.logs.read_log`).
     model : IdentModel
         The identification model.
-    memory_mb : float
-        Largest regressor formed at once (:func:`baseparams.ident.pipeline.identify`).
-    cutoff : float, optional
-        Low-pass cutoff [Hz]; default from the log's excitation.
-    min_speed : float, optional
-        Slow-sample threshold.
+    options : IdentOptions, optional
+        Its ``memory_mb`` (largest regressor formed at once), ``cutoff`` [Hz] (default from the
+        log's excitation) and ``min_speed`` (slow-sample threshold); default the defaults.
 
     Returns
     -------
@@ -63,15 +61,16 @@ def file_factors(path: str, model: IdentModel, memory_mb: float = 128.0, cutoff:
     info : dict
         ``{"path", "read", "used", "removed"}``.
     """
-    from .ident.pipeline import accumulate_prepared, log_columns
     from .ident.preprocess import prepare
+    from .ident.rows import accumulate_prepared, log_columns
     from .io.logs import read_log
     from .numerics import blas_threads
 
+    o = options or IdentOptions()
     with blas_threads():
         log = read_log(path, model.robot)
-        prep = prepare(log, cutoff=cutoff, min_speed=min_speed)
-        acc, _ = accumulate_prepared(model, prep, log_columns(model, log), memory_mb, log, min_speed)
+        prep = prepare(log, cutoff=o.cutoff, min_speed=o.min_speed)
+        acc, _ = accumulate_prepared(model, prep, log_columns(model, log), o.memory_mb, log, o.min_speed)
     return acc, {"path": str(path), "read": int(log.n_samples), "used": int(acc.samples),
                  "removed": dict(prep.removed)}
 
@@ -170,41 +169,42 @@ class FleetResult:
                 "spread": None if self.spread is None else {k: v.tolist() for k, v in self.spread.items()}}
 
 
-def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: bool = False, method: str = "wls",
-                   client=None, scheduler: str | None = None, workers: int | None = None, memory_mb: float = 128.0,
-                   cutoff: float | None = None, min_speed: float | None = None, progress=None,
-                   covariance: str = "hac") -> FleetResult:
+#: the estimator of a fleet when the options are not given (the fleet's own default: per-joint weights)
+FLEET_METHOD = "wls"
+
+
+def identify_fleet(model: IdentModel, paths, options: IdentOptions | None = None, /, *, per_file: bool = True,
+                   pooled: bool = False, client=None, scheduler: str | None = None, workers: int | None = None,
+                   progress=None, **keywords) -> FleetResult:
     """Identify over many logs on Dask.
 
     Parameters
     ----------
     model : IdentModel
-        The model (:func:`baseparams.ident.pipeline.ident_model`).
+        The model (:func:`baseparams.ident.model.model_for` builds it from the options).
     paths : iterable of str
         Log files, one robot each for ``per_file``.
+    options : IdentOptions, optional
+        How (:class:`~baseparams.ident.options.IdentOptions`): the estimator ``method`` (default
+        here :data:`FLEET_METHOD`), ``prior_weight``, ``memory_mb`` (the largest regressor a task
+        forms at once: memory per worker is bounded by it and by one log's signals, not by the
+        fleet), ``cutoff``, ``min_speed``, and ``covariance`` (the pooled estimate's standard
+        deviations: ``hac``, a second pass over the logs at the pooled estimate, each log's
+        Newey-West meat summed; or the white-noise formula).
     per_file : bool
         One estimate per log, and the spread across them.
     pooled : bool
         One estimate from all logs.
-    method : {"ols", "wls", "physical"}
-        The estimator.
     client : distributed.Client, optional
         An existing client.
     scheduler : str, optional
         A scheduler address (default ``DASK_SCHEDULER_ADDRESS``, else a local cluster).
     workers : int, optional
         Local cluster size (default: one worker per core).
-    memory_mb : float
-        Largest regressor a task forms at once: memory per worker is bounded by it and by one
-        log's signals, not by the fleet.
-    cutoff, min_speed : float, optional
-        As for :func:`baseparams.ident.pipeline.identify`.
     progress : callable, optional
         Called with one line per finished log.
-    covariance : {"hac", "white"}
-        The pooled estimate's standard deviations: ``hac`` (a second pass over the logs at the
-        pooled estimate, each log's Newey-West meat summed: logs are independent), or the
-        white-noise formula.
+    **keywords
+        Options as keywords, instead of or over ``options`` (``method="ols"``).
 
     Returns
     -------
@@ -217,6 +217,9 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         No file, no usable log (every one skipped), neither ``per_file`` nor ``pooled``, dask
         missing (names the extra), or a floating base.
     """
+    from .ident.options import options_of
+
+    opts = options_of(options, keywords if options is not None else {"method": FLEET_METHOD, **keywords})
     if model.robot.floating:
         raise BaseparamsError(f"robot {model.robot.name!r}: fleets of a floating base are not supported yet; identify "
                               "each log on its own (baseparams identify MODEL LOG)")
@@ -227,13 +230,8 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         raise BaseparamsError("ask for per_file and/or pooled estimates")
     # workers of an existing cluster run elsewhere: they get absolute paths, reports the ones given
     given = {os.path.abspath(p): p for p in paths}
-    from .ident.uncertainty import COVARIANCES
-
-    if covariance not in COVARIANCES:
-        raise BaseparamsError(f"unknown covariance {covariance!r}; choose {' or '.join(COVARIANCES)}")
-    kw = {"model": model, "memory_mb": memory_mb, "cutoff": cutoff, "min_speed": min_speed}
-    with _client(client, scheduler, workers) as cl:
-        futures = cl.map(_file_task, [os.path.abspath(p) for p in paths], **kw, pure=False)
+    with dask_client(client, scheduler, workers) as cl:
+        futures = cl.map(_file_task, [os.path.abspath(p) for p in paths], model=model, options=opts, pure=False)
         results = _gather(cl, futures, progress, given)
         skipped = [i for a, i in results if a is None]
         results = [(a, i) for a, i in results if a is not None]
@@ -241,7 +239,7 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
             raise BaseparamsError(f"no usable log: all {len(paths)} skipped (first: {skipped[0]['error']})")
         accs = [a for a, _ in results]
         files = [i for _, i in results]
-        fits = _per_file_fits(model, accs, files, method, skipped, progress) if per_file else {}
+        fits = _per_file_fits(model, accs, files, opts, skipped, progress) if per_file else {}
         spread = None
         if len(fits) > 1:
             thetas = np.array([f.theta for f in fits.values()])
@@ -250,18 +248,18 @@ def identify_fleet(model: IdentModel, paths, *, per_file: bool = True, pooled: b
         if pooled:
             acc = _tree(accs)
             # auto: the prior's weight by cross-validation over the logs (each block a group of whole logs)
-            pooled_fit = fit(model, acc, method, blocks=accs if len(accs) > 1 else None)
-            pooled_fit = pulled_covariance(_pooled_covariance(cl, pooled_fit, acc, covariance, files, kw, progress))
+            pooled_fit = fit(model, acc, opts.method, opts.prior_weight, blocks=accs if len(accs) > 1 else None)
+            pooled_fit = pulled_covariance(_pooled_covariance(cl, pooled_fit, acc, files, opts, progress))
     return FleetResult(model, fits, pooled_fit, files, spread, skipped)
 
 
-def _pooled_covariance(cl, f, acc, covariance: str, files: list[dict], kw: dict, progress):
+def _pooled_covariance(cl, f, acc, files: list[dict], opts: IdentOptions, progress):
     """The pooled fit with its covariance: HAC from a second pass over the logs used, or white."""
     from dataclasses import replace
 
     from .ident.uncertainty import apply_covariance, describe, sandwich, with_covariance
 
-    if covariance == "white":
+    if opts.covariance == "white":
         return apply_covariance(f, acc, (), "white")[0]
     est = f.estimate
     inv = np.linalg.inv(est.R11)
@@ -269,7 +267,8 @@ def _pooled_covariance(cl, f, acc, covariance: str, files: list[dict], kw: dict,
     paths = [os.path.abspath(i["path"]) for i in files]
     if progress is not None:
         progress(f"covariance (HAC): a second pass over {len(paths)} logs at the pooled estimate")
-    futures = cl.map(_meat_task, paths, theta=f.theta, h_inv=h_inv, weights=est.weights, **kw, pure=False)
+    futures = cl.map(_meat_task, paths, model=f.model, theta=f.theta, h_inv=h_inv, weights=est.weights, options=opts,
+                     pure=False)
     meats = cl.gather(futures)
     cov = sandwich([(m, q) for m, q, _ in meats], h_inv, acc.samples * acc.nrows)
     widths = sorted({b for _, _, b in meats})
@@ -277,28 +276,28 @@ def _pooled_covariance(cl, f, acc, covariance: str, files: list[dict], kw: dict,
     return replace(f, estimate=with_covariance(est, f.theta, cov, label))
 
 
-def _meat_task(path: str, model: IdentModel, theta, h_inv, weights, memory_mb: float = 128.0,
-               cutoff: float | None = None, min_speed: float | None = None):
+def _meat_task(path: str, model: IdentModel, theta, h_inv, weights, options: IdentOptions):
     """One log's HAC meat at the pooled estimate (the covariance's second pass, on a worker).
 
     Returns ``(S (p, p), Q (p, p), bandwidth)`` of :class:`~baseparams.ident.uncertainty.HacMeat`.
     """
-    from .ident.pipeline import accumulate_prepared, log_columns
     from .ident.preprocess import prepare
+    from .ident.rows import accumulate_prepared, log_columns
     from .ident.uncertainty import hac_meat
     from .io.logs import read_log
     from .numerics import blas_threads
 
+    o = options
     with blas_threads():
         log = read_log(path, model.robot)
-        prep = prepare(log, cutoff=cutoff, min_speed=min_speed)
+        prep = prepare(log, cutoff=o.cutoff, min_speed=o.min_speed)
         cols = log_columns(model, log)
         kept: list = []
-        acc, _ = accumulate_prepared(model, prep, cols, memory_mb, log, min_speed, keep=kept)
+        acc, _ = accumulate_prepared(model, prep, cols, o.memory_mb, log, o.min_speed, keep=kept)
         if not kept:
             from .ident.uncertainty import fitted_rows
 
-            kept = fitted_rows(model, prep, cols, memory_mb, log, min_speed)
+            kept = fitted_rows(model, prep, cols, o.memory_mb, log, o.min_speed)
         meat = hac_meat(kept, h_inv, theta, weights, acc.samples)
     return meat.meat(), meat.bias(), meat.b
 
@@ -311,21 +310,21 @@ def _as_given(info: dict, given: dict[str, str]) -> dict:
     return {k: (v.replace(absolute, shown) if isinstance(v, str) else v) for k, v in info.items()}
 
 
-def _file_task(path: str, model: IdentModel, **kw):
+def _file_task(path: str, model: IdentModel, options: IdentOptions):
     """:func:`file_factors`, or ``(None, {"path", "error"})`` for a bad log (one line, the fleet goes on)."""
     try:
-        return file_factors(path, model, **kw)
+        return file_factors(path, model, options)
     except (BaseparamsError, np.linalg.LinAlgError) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         return None, {"path": str(path), "error": msg if str(path) in msg else f"{path}: {msg}", "stage": "read"}
 
 
-def _per_file_fits(model, accs, files, method, skipped, progress) -> dict:
+def _per_file_fits(model, accs, files, opts: IdentOptions, skipped, progress) -> dict:
     """One fit per log; a log that cannot be identified alone is skipped (its rows stay in the pool)."""
     fits = {}
     for a, i in zip(accs, files):
         try:
-            fits[i["path"]] = fit(model, a, method)
+            fits[i["path"]] = fit(model, a, opts.method, opts.prior_weight)
         except (BaseparamsError, np.linalg.LinAlgError) as exc:
             skipped.append({"path": i["path"], "error": f"{i['path']}: not identifiable alone: {exc}", "stage": "fit"})
             if progress is not None:
@@ -373,8 +372,18 @@ def _connect(client_class, address: str, source: str):
 MAX_WORKERS_PER_CORE = 4
 
 
-class _client:
-    """Context manager: the given client, a scheduler's, or a local cluster started and stopped here."""
+class dask_client:
+    """Context manager: the given client, a scheduler's, or a local cluster started and stopped here.
+
+    Parameters
+    ----------
+    client : distributed.Client or None
+        An existing client (used as it is, not closed).
+    scheduler : str or None
+        A scheduler address (default ``DASK_SCHEDULER_ADDRESS``, else a local cluster).
+    workers : int or None
+        Local cluster size (default: one worker per core).
+    """
 
     def __init__(self, client, scheduler, workers):
         self.client, self.scheduler, self.workers = client, scheduler, workers
@@ -410,7 +419,7 @@ class _client:
 
 
 def simulate_fleet(robot, outdir, robots: int, duration: float = 60.0, rate: float = 1000.0, noise: float = 0.05,
-                   spread: float = 0.1, seed: int = 0, friction=("viscous", "coulomb", "offset"),
+                   spread: float = 0.1, seed: int = 0, friction=FRICTION_TERMS,
                    suffix: str = ".npz", **simulate) -> list[Path]:
     """Write one synthetic log per robot of a fleet, each with its own known parameters.
 
@@ -562,77 +571,3 @@ def synthetic_fleet_factors(model: IdentModel, theta: np.ndarray, chunks: int, s
         level = [client.submit(combine_pair, level[k], level[k + 1], pure=False) if k + 1 < len(level) else level[k]
                  for k in range(0, len(level), 2)]
     return level[0].result()
-
-
-def analyze_file(path: str, floating: bool = False, convention: str = "khalil", rows: str = "all") -> dict:
-    """One model file analysed (the task of a design sweep).
-
-    Parameters
-    ----------
-    path : str
-        A robot file (URDF / URDF+ / MJCF) or a built-in name.
-    floating : bool
-        Attach the root link by a free joint.
-    convention : str
-        Convention of the regrouped expressions.
-    rows : {"all", "joints", "base"}
-        Measured rows.
-
-    Returns
-    -------
-    dict
-        :meth:`baseparams.analysis.Analysis.to_json` plus ``"path"``; a file that cannot be
-        analysed gives ``{"path", "error"}`` (one line) instead of failing the sweep.
-    """
-    import warnings
-
-    from .analysis import analyze
-    from .errors import BaseparamsError as _Err
-    from .loading import load_model
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            robot, _ = load_model(path, floating=floating, strict_inertia=False)
-        return {"path": str(path), **analyze(robot, convention=convention, rows=rows).to_json()}
-    except _Err as exc:
-        return {"path": str(path), "error": str(exc)}
-
-
-def analyze_fleet(paths, *, client=None, scheduler: str | None = None, workers: int | None = None,
-                  floating: bool = False, convention: str = "khalil", rows: str = "all", progress=None) -> list[dict]:
-    """Many model files analysed on Dask (a design sweep over geometric variants).
-
-    Parameters
-    ----------
-    paths : iterable of str
-        Robot files.
-    client, scheduler, workers
-        The cluster, as for :func:`identify_fleet`.
-    floating : bool
-        Attach each root link by a free joint.
-    convention : str
-        Convention of the regrouped expressions.
-    rows : {"all", "joints", "base"}
-        Measured rows.
-    progress : callable, optional
-        Called with one line per finished file.
-
-    Returns
-    -------
-    list of dict
-        One :func:`analyze_file` result per path, in order.
-    """
-    from distributed import as_completed
-
-    paths = [str(p) if "://" in str(p) or not Path(p).exists() else os.path.abspath(p) for p in paths]
-    with _client(client, scheduler, workers) as cl:
-        futures = cl.map(analyze_file, paths, floating=floating, convention=convention, rows=rows, pure=False)
-        done = {}
-        for k, fut in enumerate(as_completed(futures)):
-            res = fut.result()
-            done[fut.key] = res
-            if progress is not None:
-                what = res.get("error") or f"{res['status']}, {res['n_base']} base parameters"
-                progress(f"[{k + 1}/{len(futures)}] {res['path']}: {what}")
-    return [done[f.key] for f in futures]

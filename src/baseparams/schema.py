@@ -431,6 +431,9 @@ class Map(Node):
 
 #: a field's default when absent: "required" (refused when missing)
 REQUIRED = object()
+#: a field's default meaning "left out when absent": the reader gives its own default
+#: (a saved identification's options: :class:`baseparams.ident.options.IdentOptions`' defaults)
+ABSENT = object()
 
 
 @dataclass(frozen=True)
@@ -451,7 +454,8 @@ class Field:
     default: object = REQUIRED
 
     def _describe(self) -> str:
-        return self.node._describe() + ("" if self.default is REQUIRED else f" (default {self.default!r:.40})")
+        shown = self.default is REQUIRED or self.default is ABSENT
+        return self.node._describe() + ("" if shown else f" (default {self.default!r:.40})")
 
 
 @dataclass(frozen=True)
@@ -490,7 +494,8 @@ class Obj(Node):
             if name not in v:
                 if f.default is REQUIRED:
                     raise _Problem(here, "missing")
-                out[name] = f.default
+                if f.default is not ABSENT:
+                    out[name] = f.default
                 continue
             out[name] = f.node._check(v[name], here, ctx)
         unknown = [k for k in v if k not in self.fields]
@@ -729,6 +734,8 @@ def _coupling_rule(c: dict) -> str | None:
 
 
 #: the options a saved identification's model is rebuilt from, and its data were prepared with
+#: (:meth:`baseparams.ident.options.IdentOptions.to_json`, plus the measured ``rows``); an option an older file
+#: does not hold is left out (:data:`ABSENT`), and takes its default when read
 OPTIONS = Obj({
     "method": Enum(("auto", "ols", "wls", "physical")),
     "convention": Enum(tuple(values(Convention))),
@@ -742,9 +749,17 @@ OPTIONS = Obj({
                      max_len=1000),
     "cutoff": Num(lo=1e-3, hi=1e6),
     "decimate": Int(lo=1, hi=10**9),
-    "min_speed": Opt(Num(lo=0.0)),
-    "literal": Field(Bool(), False),
-    "terms": Field(Str(max_len=200), "auto"),
+    "min_speed": Any(),  # a number, one per joint, or null: checked by IdentOptions
+    "literal": Field(Bool(), ABSENT),
+    "terms": Field(Str(max_len=200), ABSENT),
+    "holdout": Field(Opt(Num(lo=0.0, lo_open=True)), ABSENT),
+    "prior_weight": Field(Opt(Num(lo=0.0)), ABSENT),
+    "covariance": Field(Enum(("hac", "white")), ABSENT),
+    "score_cutoff": Field(Opt(Num(lo=0.0, lo_open=True)), ABSENT),
+    "allow_units": Field(Bool(), ABSENT),
+    "analysis_samples": Field(Opt(Int(lo=1)), ABSENT),
+    "seed": Field(Int(lo=0), ABSENT),
+    "memory_mb": Field(Num(lo=0.0, lo_open=True), ABSENT),
 }, extra="refuse", hint=_NEWER)
 
 #: a kept model term (:mod:`baseparams.ident.terms`): its parameters, which predictions use
@@ -789,7 +804,7 @@ PHYSICAL = Obj({
     "seconds": Num(lo=0.0, null=True), "notes": Field(Arr(Str()), []),
 }, extra="refuse", hint=_NEWER)
 
-#: held-out scores (:func:`baseparams.ident.pipeline.validation_scores`)
+#: held-out scores (:func:`baseparams.ident.validation_scores`)
 VALIDATION = Obj({
     "rms": Map(_RMS), "rms_total": _RMS, "samples": Int(lo=0),
     "t_start": Opt(Num()), "t_end": Opt(Num()), "source": Str(), "measure": Str(),
@@ -804,7 +819,7 @@ def _counts_rule(s: dict) -> str | None:
     return None
 
 
-#: a saved identification (:meth:`baseparams.ident.pipeline.Identification.save`, version 1); size
+#: a saved identification (:meth:`baseparams.ident.Identification.save`, version 1); size
 #: symbols: ``p`` model parameters, ``m`` measured joints, ``n`` bodies, ``npar`` = 10 n
 RESULT = Obj({
     "format": Str(max_len=200),
@@ -857,6 +872,22 @@ COLUMNS = Obj({
     "topic": Field(Opt(Str(max_len=10_000)), None),
     "joints": Field(Map(COLUMN_JOINT, max_len=100_000), {}),
 }, extra="refuse")
+
+
+def array(x) -> np.ndarray:
+    """A saved JSON array back to a float array: nested lists of numbers, ``None`` as NaN.
+
+    Parameters
+    ----------
+    x : list
+        Nested lists of numbers or ``None``.
+
+    Returns
+    -------
+    ndarray
+        The array.
+    """
+    return np.array(x, dtype=float) if x is not None else np.array(np.nan)
 
 
 def read_truth(path, source: str | None = None) -> dict:

@@ -1,23 +1,28 @@
-"""The loop's first steps as functions: design an excitation, record it without a robot.
+"""The loop as functions: design an excitation, record it without a robot, identify, predict.
 
-:func:`excite` and :func:`simulate` are ``baseparams.excite`` and ``baseparams.simulate`` (the front
-door re-exports them) and the one implementation behind the commands ``baseparams excite`` and
-``baseparams simulate``: the command line parses its flags into these keywords (one keyword per
-flag) and prints. Defaults, the checks of the options, and the outputs (checked before the work,
-written atomically, never onto an input) live here only.
+:func:`excite`, :func:`simulate`, :func:`identify` and :func:`predict` are ``baseparams.excite``,
+``baseparams.simulate``, ``baseparams.identify`` and ``baseparams.predict`` (the front door
+re-exports them) and the one implementation behind the commands of those names: the command line
+parses its flags into these keywords (one keyword per flag) and prints. The identification's
+options are one checked object (:class:`~baseparams.ident.options.IdentOptions`, its defaults
+:data:`baseparams.arguments.IDENTIFY`'s); the other checks and the outputs (checked before the work, written atomically,
+never onto an input) live here.
 """
 
 from __future__ import annotations
 
 import os
 import warnings
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
 from .analysis import Analysis, analyze
+from .arguments import IDENTIFY
 from .errors import BaseparamsError, ModelWarning
 from .model import Robot
 
-#: the default friction terms of ``simulate`` and ``identify`` (the CLI's ``--friction``)
-FRICTION = ("viscous", "coulomb", "offset")
+if TYPE_CHECKING:  # the identification is imported by the functions that run it
+    from .ident.options import IdentOptions
 
 
 def robot_of(model, what: str) -> Robot:
@@ -79,30 +84,6 @@ def input_files(*items) -> list[str]:
     return out
 
 
-def friction_of(friction) -> tuple[str, ...]:
-    """``"viscous,coulomb"``, ``"none"`` or an iterable of names, as a tuple.
-
-    Parameters
-    ----------
-    friction : str or iterable of str
-        The friction terms.
-
-    Returns
-    -------
-    tuple of str
-        The names (empty for ``"none"``).
-    """
-    if isinstance(friction, str):
-        return () if friction.strip().lower() in ("", "none") else tuple(x.strip() for x in friction.split(",")
-                                                                         if x.strip())
-    if not isinstance(friction, (list, tuple, set, frozenset)) or not all(isinstance(x, str) for x in friction):
-        from .arguments import ArgumentTypeError
-
-        raise ArgumentTypeError(f"friction= must be 'viscous,coulomb,offset', 'none' or a sequence of those names, "
-                                f"got {type(friction).__name__}")
-    return tuple(friction)
-
-
 def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequency: float | None = None,
            rate: float = 1000.0, criterion: str = "cond", drives: bool = False, rotor: bool = False,
            position=None, velocity=None, acceleration=None, effort=None, torque: bool = False, keepout=None,
@@ -162,11 +143,30 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
         Bad options or model, infeasible limits (naming the constraint that binds), an output
         that cannot be written.
     """
+    from .arguments import (
+        ArgumentError,
+        ArgumentTypeError,
+        brief,
+        check_flags,
+        check_keywords,
+        check_path,
+        check_progress,
+    )
     from .excitation import design_excitation
     from .excitation.limits import given_limits
 
-    _check_excite(harmonics, period, base_frequency, rate, criterion, drives, rotor, acceleration, torque, margin,
-                  starts, grid, seed, analysis_samples, max_iter, out, plot, progress)
+    ranged = {} if isinstance(acceleration, dict) else {"acceleration": acceleration}
+    check_keywords("excite", harmonics=harmonics, period=period, base_frequency=base_frequency, rate=rate,
+                   margin=margin, starts=starts, grid=grid, seed=seed, analysis_samples=analysis_samples,
+                   max_iter=max_iter, **ranged)
+    check_flags("excite", drives=drives, rotor=rotor, torque=torque)
+    if not isinstance(criterion, str):
+        raise ArgumentTypeError(f"excite: criterion= must be cond or logdet, got {type(criterion).__name__}")
+    if criterion not in ("cond", "logdet"):
+        raise ArgumentError(f"excite: criterion= must be cond or logdet, got {brief(criterion)}")
+    check_path(out, "excite: out=", optional=True)
+    _check_suffixes(False, plot=plot)
+    check_progress(progress, "excite")
     if period is not None and base_frequency is not None:
         raise BaseparamsError("excite: give period or base_frequency, not both")
     if period is not None and not period > 0:
@@ -204,8 +204,8 @@ def _check_outputs(inputs: list[str], **outputs) -> None:
 
 
 def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
-             noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=FRICTION, convention: str = "khalil",
-             analysis_samples: int | None = None, robots: int | None = None, out=None):
+             noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=IDENTIFY["friction"],
+             convention: str = "khalil", analysis_samples: int | None = None, robots: int | None = None, out=None):
     """A synthetic joint log with known parameters: ``baseparams simulate`` (record, without a robot).
 
     Parameters
@@ -258,6 +258,7 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
         unwritable output.
     """
     from .arguments import check_flags, check_keywords, check_path, check_samples
+    from .ident.drives import friction_terms
 
     check_keywords("simulate", duration=duration, rate=rate, amplitude=amplitude, noise=noise, seed=seed,
                    analysis_samples=analysis_samples, robots=robots)
@@ -276,49 +277,21 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     inputs = input_files(model, trajectory)
     if robots is not None:
         return _fleet(robot, trajectory, out, robots, inputs, duration=duration, rate=rate, amplitude=amplitude,
-                      noise=noise, seed=seed, rotor=rotor, friction=friction_of(friction), convention=convention,
+                      noise=noise, seed=seed, rotor=rotor, friction=friction_terms(friction), convention=convention,
                       samples=analysis_samples), None
     _check_outputs(inputs, out=out)
     log, truth = _simulated(robot, trajectory, duration=duration, rate=rate, amplitude=amplitude, noise=noise,
-                            seed=seed, rotor=rotor, friction=friction_of(friction), convention=convention,
+                            seed=seed, rotor=rotor, friction=friction_terms(friction), convention=convention,
                             samples=analysis_samples)
     if out is not None:
         import json
 
-        from .files import atomic_path, write_text
+        from .files import write_text
         from .io.logs import write_log
 
-        with atomic_path(out, inputs, "out") as tmp:
-            write_log(tmp, log)
+        write_log(out, log, inputs, "out")
         write_text(os.fspath(out) + ".truth.json", json.dumps(truth, indent=2) + "\n", inputs, "out")
     return log, truth
-
-
-def _check_excite(harmonics, period, base_frequency, rate, criterion, drives, rotor, acceleration, torque, margin,
-                  starts, grid, seed, analysis_samples, max_iter, out, plot, progress) -> None:
-    """:func:`excite`'s keywords: ranges, types, paths, the progress callable (one line naming the first bad one)."""
-    from .arguments import (
-        ArgumentError,
-        ArgumentTypeError,
-        brief,
-        check_flags,
-        check_keywords,
-        check_path,
-        check_progress,
-    )
-
-    ranged = {} if isinstance(acceleration, dict) else {"acceleration": acceleration}
-    check_keywords("excite", harmonics=harmonics, period=period, base_frequency=base_frequency, rate=rate,
-                   margin=margin, starts=starts, grid=grid, seed=seed, analysis_samples=analysis_samples,
-                   max_iter=max_iter, **ranged)
-    check_flags("excite", drives=drives, rotor=rotor, torque=torque)
-    if not isinstance(criterion, str):
-        raise ArgumentTypeError(f"excite: criterion= must be cond or logdet, got {type(criterion).__name__}")
-    if criterion not in ("cond", "logdet"):
-        raise ArgumentError(f"excite: criterion= must be cond or logdet, got {brief(criterion)}")
-    check_path(out, "excite: out=", optional=True)
-    _check_suffixes(False, plot=plot)
-    check_progress(progress, "excite")
 
 
 def _checked_arrays(trajectory) -> tuple:
@@ -382,20 +355,10 @@ def _opt(name: str, cli: bool) -> str:
     return f"--{name.replace('_', '-')}" if cli else f"{name}="
 
 
-def _choice(where: str, name: str, value, choices) -> None:
-    """A keyword that names one of ``choices``: a TypeError or ValueError naming it."""
-    from .arguments import ArgumentError, ArgumentTypeError, brief
-
-    if not isinstance(value, str):
-        raise ArgumentTypeError(f"{where}: {name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
-    if value not in choices:
-        raise ArgumentError(f"{where}: {name}= must be one of {', '.join(choices)}, got {brief(value)}")
-
-
 def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log"):
     """``log`` as a JointLog: a JointLog (values checked), or a log file read for ``robot`` (``read_log``)."""
     from .arguments import ArgumentTypeError
-    from .ident.data import JointLog
+    from .jointlog import JointLog
 
     if isinstance(log, (str, os.PathLike)):
         from .io.logs import read_log
@@ -408,10 +371,11 @@ def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool =
     return log.checked()
 
 
-def _identification_logs(robot: Robot, log, validate, columns, joints, weld, note):
+def _identification_logs(robot: Robot, log, inputs, note):
     """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
     from .arguments import ArgumentTypeError, brief
 
+    validate, columns, joints, weld = inputs.validate, inputs.columns, inputs.joints, inputs.weld
     weld_ok = weld is None or isinstance(weld, dict) or (isinstance(weld, (list, tuple))
                                                           and all(isinstance(w, str) for w in weld))
     if not weld_ok:
@@ -442,87 +406,14 @@ def _warn(note: str) -> None:
     warnings.warn(note, ModelWarning, stacklevel=4)
 
 
-def identify(model, log, *, validate=None, holdout: float | None = None, method: str = "auto",
-             friction=FRICTION, rotor: bool = False, coulomb_width: float | None = None, couplings=(),
-             cutoff: float | None = None, decimate: int | None = None, min_speed: float | None = None,
-             prior_weight: float | None = None, convention: str = "khalil", covariance: str = "hac",
-             score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None, weld=None,
-             analysis_samples: int | None = None, literal: bool = False, terms="auto", stream: str = "auto",
-             save=None, predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, seed: int = 0,
-             progress=None):
-    """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
-
-    One keyword per flag of the command; :func:`identify_command` (what the command calls) says
-    which parameters mean what.
+@dataclass(frozen=True)
+class Inputs:
+    """What :func:`identify` reads besides the model, the log and the options (one field per flag).
 
     Parameters
     ----------
-    model : Robot, Analysis, str or path
-        The robot the log was recorded on (a file for ``urdf``/``mjcf``).
-    log : JointLog, str or path
-        The log.
-    validate, holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, \
-prior_weight, convention, covariance, score_cutoff, allow_units, columns, joints, weld, analysis_samples, \
-literal, terms, stream, save, predictions, urdf, mjcf, html, plot, truth, seed, progress
-        As :func:`identify_command` (the command's flags).
-
-    Returns
-    -------
-    Identification
-        Values, standard deviations, validation, ``truth`` when given.
-
-    Raises
-    ------
-    BaseparamsError
-        Bad data, options or outputs, data that do not excite the model.
-    """
-    kw = {k: v for k, v in locals().items() if k not in ("model", "log")}
-    return identify_command(model, log, **kw)
-
-
-def identify_command(model, log, *, validate=None, holdout: float | None = None, method: str = "auto",
-                     friction=FRICTION, rotor: bool = False, coulomb_width: float | None = None, couplings=(),
-                     cutoff: float | None = None, decimate: int | None = None, min_speed: float | None = None,
-                     prior_weight: float | None = None, convention: str = "khalil", covariance: str = "hac",
-                     score_cutoff: float | None = None, allow_units: bool = False, columns=None, joints=None,
-                     weld=None, analysis_samples: int | None = None, literal: bool = False, terms="auto",
-                     stream: str = "auto", save=None, predictions=None, urdf=None, mjcf=None, html=None, plot=None,
-                     truth=None, seed: int = 0, source=None, progress=None, notes=None, cli: bool = False):
-    """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
-
-    The one implementation behind the command (one keyword per flag): the options and every
-    output are checked before any work, the log is streamed from its file when it is large, and
-    every output is written atomically, never onto an input.
-
-    Parameters
-    ----------
-    model : Robot, Analysis, str or path
-        The robot the log was recorded on (a floating base's pose in the log; loops closed by the
-        actuated joints).
-    log : JointLog, str or path
-        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
     validate : JointLog, str or path, optional
         Another log to validate on (exclusive with ``holdout``).
-    holdout : float, optional
-        Validate on the log's last ``holdout`` seconds (training: the samples before).
-    method : {"auto", "ols", "wls", "physical"}
-        The estimator (``physical`` needs the extra ``ident``).
-    friction : str or iterable of str
-        ``"viscous,coulomb,offset"`` (default), any of them, or ``"none"``.
-    rotor : bool
-        Model each joint's rotor inertia.
-    coulomb_width, cutoff, decimate, min_speed, prior_weight, score_cutoff : optional
-        As the CLI's flags (:func:`baseparams.ident.pipeline.identify`): smooth Coulomb width
-        [rad/s], low-pass cutoff [Hz], decimation, the slowest joint speed kept [rad/s], the
-        physical fit's prior weight, the second validation score's cutoff [Hz].
-    couplings : iterable of MotorCoupling or str
-        Coupled motors (``"NAME:JOINT=W,JOINT=W"``, the CLI's ``--coupling``).
-    convention : str
-        Convention of the base parameters' names and values.
-    covariance : {"hac", "white"}
-        The standard deviations' covariance.
-    allow_units : bool
-        Go on when the units look wrong.
     columns : str, path or dict, optional
         A layout mapping for log files (TOML; README "Log layout").
     joints : str or sequence of str, optional
@@ -530,38 +421,149 @@ def identify_command(model, log, *, validate=None, holdout: float | None = None,
         (:func:`baseparams.ident.subchain.subchain`).
     weld : dict or sequence of str, optional
         With ``joints``: where to weld others (``{"joint": value}`` or ``["JOINT=VALUE"]``, rad or m).
-    analysis_samples : int, optional
-        Random states of the base-parameter analysis.
-    literal : bool
-        The model's geometry exactly as the file states it (:func:`baseparams.analyze`).
-    terms : str or iterable of str
-        Model terms beyond the linear core (``auto``, ``none`` or names; :mod:`baseparams.ident.terms`).
     stream : {"auto", "on", "off"}
         Stream a CSV/TSV/Parquet log from its file (``auto``: above :data:`STREAM_MIN_MB`).
-    save : str or path, optional
-        Save the result there (``Identification.save``: versioned JSON).
-    predictions : str or path, optional
-        Write the predicted torques at every validation sample (``t, tau_<joint>``; CSV, TSV or
-        Parquet by the suffix).
-    urdf, mjcf : str or path, optional
-        Write the identified bodies and drive terms into a copy of the model file (URDF; MJCF
-        through MuJoCo, checked by its inverse dynamics): needs ``method="physical"`` and the
-        model file (``source`` or ``model``).
-    html, plot : str or path, optional
-        A self-contained HTML report; a static figure of the torques (matplotlib).
     truth : dict, str or path, optional
         True parameters of a simulation (``simulate``'s ``OUT.truth.json``): compared per term
         (``result.truth``, the report's last section).
-    seed : int
-        Seed of the base-parameter analysis' random states.
     source : str or path, optional
-        The model file, when ``model`` is a loaded Robot and an export needs the file.
+        The model file, when the model is a loaded Robot and an export needs the file.
+    """
+
+    validate: object = None
+    columns: object = None
+    joints: object = None
+    weld: object = None
+    stream: str = "auto"
+    truth: object = None
+    source: object = None
+
+    def __repr__(self) -> str:
+        given = [f"{f.name}={getattr(self, f.name)!r:.60}" for f in fields(self)
+                 if getattr(self, f.name) is not None and getattr(self, f.name) != f.default]
+        return f"Inputs({', '.join(given)})"
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """The files :func:`identify` writes (each checked before the fit, written atomically, never onto an input).
+
+    Parameters
+    ----------
+    save : str or path, optional
+        The result (``Identification.save``: versioned JSON).
+    predictions : str or path, optional
+        The predicted torques at every validation sample (``t, tau_<joint>``; CSV, TSV or Parquet
+        by the suffix).
+    urdf, mjcf : str or path, optional
+        The identified bodies and drive terms written into a copy of the model file (URDF; MJCF
+        through MuJoCo, checked by its inverse dynamics): need ``method="physical"`` and the
+        model file.
+    html, plot : str or path, optional
+        A self-contained HTML report; a static figure of the torques (matplotlib).
+    """
+
+    save: object = None
+    predictions: object = None
+    urdf: object = None
+    mjcf: object = None
+    html: object = None
+    plot: object = None
+
+    def __repr__(self) -> str:
+        return f"Outputs({', '.join(f'{k}={os.fspath(v)!r}' for k, v in self.given().items())})"
+
+    def given(self) -> dict:
+        """The outputs asked for.
+
+        Returns
+        -------
+        dict
+            ``{name: path}`` of the outputs that are not None, in field order.
+        """
+        return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
+
+
+@dataclass(frozen=True)
+class Reporter:
+    """How a run talks: progress lines, notes, and options named as flags or keywords.
+
+    Parameters
+    ----------
     progress : callable, optional
         Called with one line of text per step.
     notes : callable, optional
         Called with each note about the data and the outputs (default: :class:`ModelWarning` warnings).
     cli : bool
         Name options as command-line flags in messages.
+    """
+
+    progress: object = None
+    notes: object = None
+    cli: bool = False
+
+    def __repr__(self) -> str:
+        return f"<Reporter {'flags' if self.cli else 'keywords'}{', progress' if self.progress else ''}>"
+
+    def say(self, line: str) -> None:
+        """A progress line (nothing without ``progress``).
+
+        Parameters
+        ----------
+        line : str
+            The line.
+        """
+        if self.progress is not None:
+            self.progress(line)
+
+    def note(self, line: str) -> None:
+        """A note (``notes``, else a :class:`ModelWarning`).
+
+        Parameters
+        ----------
+        line : str
+            The note.
+        """
+        (self.notes or _warn)(line)
+
+
+def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["holdout"],
+             method: str = IDENTIFY["method"], friction=IDENTIFY["friction"], rotor: bool = IDENTIFY["rotor"],
+             coulomb_width: float | None = IDENTIFY["coulomb_width"], couplings=IDENTIFY["couplings"],
+             cutoff: float | None = IDENTIFY["cutoff"], decimate: int | None = IDENTIFY["decimate"],
+             min_speed: float | None = IDENTIFY["min_speed"], prior_weight: float | None = IDENTIFY["prior_weight"],
+             convention: str = IDENTIFY["convention"], covariance: str = IDENTIFY["covariance"],
+             score_cutoff: float | None = IDENTIFY["score_cutoff"], allow_units: bool = IDENTIFY["allow_units"],
+             columns=None, joints=None, weld=None, analysis_samples: int | None = IDENTIFY["analysis_samples"],
+             literal: bool = IDENTIFY["literal"], terms=IDENTIFY["terms"], stream: str = Inputs.stream, save=None,
+             predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, seed: int = IDENTIFY["seed"],
+             progress=None):
+    """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
+
+    One keyword per flag of the command. The identification's options become one
+    :class:`~baseparams.ident.options.IdentOptions` (checked at once; their defaults are
+    :data:`baseparams.arguments.IDENTIFY`'s);
+    the inputs, outputs and progress go to :func:`identify_command`, the implementation the
+    command calls too.
+
+    Parameters
+    ----------
+    model : Robot, Analysis, str or path
+        The robot the log was recorded on (a floating base's pose in the log; loops closed by the
+        actuated joints; a file for ``urdf``/``mjcf``).
+    log : JointLog, str or path
+        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
+    holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, prior_weight, \
+convention, covariance, score_cutoff, allow_units, analysis_samples, literal, terms, seed
+        The identification's options (:class:`~baseparams.ident.options.IdentOptions`: the
+        hold-out [s], the estimator, the drive model, the filter, the second validation score's
+        cutoff [Hz], the analysis' random states and seed, the model terms).
+    validate, columns, joints, weld, stream, truth
+        What is read besides the log (:class:`Inputs`).
+    save, predictions, urdf, mjcf, html, plot
+        What is written (:class:`Outputs`).
+    progress : callable, optional
+        Called with one line of text per step.
 
     Returns
     -------
@@ -572,47 +574,93 @@ def identify_command(model, log, *, validate=None, holdout: float | None = None,
     Raises
     ------
     BaseparamsError
-        Bad data (a floating base without its pose), options or output, data that do not excite the model.
+        Bad data (a floating base without its pose), options or outputs, data that do not excite
+        the model.
+    """
+    from .arguments import check_keywords
+    from .ident.options import IdentOptions
+
+    check_keywords("identify", min_speed=min_speed)  # one speed, as the flag (ident.identify also takes one per joint)
+    options = IdentOptions(method=method, rotor=rotor, friction=friction, coulomb_width=coulomb_width,
+                           couplings=couplings, holdout=holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed,
+                           prior_weight=prior_weight, convention=convention, covariance=covariance,
+                           score_cutoff=score_cutoff, allow_units=allow_units, literal=literal, terms=terms,
+                           analysis_samples=analysis_samples, seed=seed)
+    inputs = Inputs(validate=validate, columns=columns, joints=joints, weld=weld, stream=stream, truth=truth)
+    outputs = Outputs(save=save, predictions=predictions, urdf=urdf, mjcf=mjcf, html=html, plot=plot)
+    return identify_command(model, log, options, inputs, outputs, Reporter(progress=progress))
+
+
+def identify_command(model, log, options: IdentOptions, inputs: Inputs | None = None, outputs: Outputs | None = None,
+                     reporter: Reporter | None = None):
+    """Identify base-parameter and drive values from a joint log: what ``baseparams identify`` and :func:`identify` run.
+
+    The options are checked already (:class:`~baseparams.ident.options.IdentOptions`); the inputs
+    and every output are checked here before any work, the log is streamed from its file when it
+    is large, and every output is written atomically, never onto an input.
+
+    Parameters
+    ----------
+    model : Robot, Analysis, str or path
+        The robot the log was recorded on.
+    log : JointLog, str or path
+        The log.
+    options : IdentOptions
+        How to identify.
+    inputs : Inputs, optional
+        What else is read (default: nothing).
+    outputs : Outputs, optional
+        What is written (default: nothing).
+    reporter : Reporter, optional
+        Progress, notes, and how options are named in messages (default: silent, warnings,
+        keywords).
+
+    Returns
+    -------
+    Identification
+        As :func:`identify`.
+
+    Raises
+    ------
+    BaseparamsError
+        Bad data, inputs or outputs, data that do not excite the model.
     """
     from dataclasses import replace
 
-    from .arguments import check_flags, check_keywords, check_path, check_progress
+    from .arguments import ArgumentTypeError, check_choice, check_path, check_progress
+    from .ident.options import IdentOptions
 
-    note = notes or _warn
-    _check_suffixes(cli, predictions=predictions, urdf=urdf, html=html, plot=plot)
-    check_keywords("identify", cli=cli, holdout=holdout, coulomb_width=coulomb_width, cutoff=cutoff,
-                   decimate=decimate, min_speed=min_speed, prior_weight=prior_weight, score_cutoff=score_cutoff,
-                   analysis_samples=analysis_samples, seed=seed)
-    check_flags("identify", rotor=rotor, allow_units=allow_units, literal=literal)
-    for name, value in dict(save=save, predictions=predictions, urdf=urdf, mjcf=mjcf, html=html, plot=plot).items():
-        check_path(value, f"identify: {name}=", optional=True)
-    check_progress(progress, "identify")
-    _choice("identify", "method", method, ("auto", "ols", "wls", "physical"))
-    _choice("identify", "covariance", covariance, ("hac", "white"))
-    _choice("identify", "stream", stream, ("auto", "on", "off"))
-    couplings = _couplings_of(couplings)
-    if columns is not None and not isinstance(columns, (str, os.PathLike, dict)):
-        from .arguments import ArgumentTypeError
-
+    if not isinstance(options, IdentOptions):
+        raise ArgumentTypeError(f"identify: options must be an IdentOptions, got {type(options).__name__}")
+    inputs, outputs, reporter = inputs or Inputs(), outputs or Outputs(), reporter or Reporter()
+    _check_suffixes(reporter.cli, predictions=outputs.predictions, urdf=outputs.urdf, html=outputs.html,
+                    plot=outputs.plot)
+    for name in (f.name for f in fields(Outputs)):
+        check_path(getattr(outputs, name), f"identify: {name}=", optional=True)
+    check_progress(reporter.progress, "identify")
+    check_choice("identify", "stream", inputs.stream, ("auto", "on", "off"))
+    if inputs.columns is not None and not isinstance(inputs.columns, (str, os.PathLike, dict)):
         raise ArgumentTypeError(f"identify: columns= must be a TOML file, a dict or a topic, got "
-                                f"{type(columns).__name__}")
+                                f"{type(inputs.columns).__name__}")
     robot = robot_of(model, "identify")
-    source = source if source is not None else (model if isinstance(model, (str, os.PathLike)) else None)
-    inputs = input_files(source if source is not None else model, log, validate, columns, truth)
-    truth_doc = _checked_outputs(locals(), robot, inputs)
-    opts = dict(method=method, rotor=rotor, friction=friction_of(friction), coulomb_width=coulomb_width,
-                holdout=holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
-                convention=convention, couplings=couplings, samples=analysis_samples, covariance=covariance,
-                allow_units=allow_units, score_cutoff=score_cutoff, literal=literal, terms=terms, seed=seed)
-    say = progress or (lambda msg: None)
-    result, read = _run_identification(robot, log, validate, columns, joints, weld, stream, predictions, inputs,
-                                       opts, say, note, cli)
-    _write_results(result, read, robot, source, dict(save=save, urdf=urdf, mjcf=mjcf, html=html, plot=plot), inputs,
-                   say, note)
+    source = inputs.source if inputs.source is not None else (model if isinstance(model, (str, os.PathLike)) else None)
+    run = _Run(input_files(source if source is not None else model, log, inputs.validate, inputs.columns,
+                           inputs.truth), reporter)
+    truth_doc = _checked_outputs(source if source is not None else model, options, inputs, outputs, run)
+    result, read = _run_identification(robot, log, options, inputs, outputs, run)
+    _write_results(result, read, source, outputs, run)
     if truth_doc is not None:
-        result = replace(result, truth=result.compare_truth(truth_doc, os.fspath(truth) if not isinstance(truth, dict)
-                                                            else "truth"))
+        result = replace(result, truth=result.compare_truth(truth_doc, os.fspath(inputs.truth)
+                                                            if not isinstance(inputs.truth, dict) else "truth"))
     return result
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One identify run: its input files (no output may overwrite one) and its reporter."""
+
+    inputs: list
+    reporter: Reporter
 
 
 #: the suffixes an output may have, by option
@@ -635,35 +683,20 @@ def _check_suffixes(cli: bool, **paths) -> None:
                                 f"file")
 
 
-def _couplings_of(couplings) -> tuple:
-    """Couplings as MotorCoupling objects (from objects or ``NAME:JOINT=W,...`` texts)."""
-    from .arguments import ArgumentTypeError
-    from .ident.drives import MotorCoupling
-
-    if isinstance(couplings, (str, MotorCoupling)):
-        couplings = (couplings,)
-    if not isinstance(couplings, (list, tuple)) or not all(isinstance(c, (str, MotorCoupling)) for c in couplings):
-        raise ArgumentTypeError(f"identify: couplings= must be MotorCoupling objects or 'NAME:JOINT=W,...' texts, "
-                                f"got {type(couplings).__name__}")
-    return tuple(c if isinstance(c, MotorCoupling) else MotorCoupling.parse(c) for c in couplings)
-
-
-def _checked_outputs(kw: dict, robot: Robot, inputs: list[str]):
+def _checked_outputs(source, options: IdentOptions, inputs: Inputs, outputs: Outputs, run: _Run):
     """Every output of :func:`identify` checked before the fit; the truth file read (or None)."""
     from .files import check_output
 
-    cli = kw["cli"]
-    if (kw["predictions"] is not None or kw["score_cutoff"] is not None) and kw["holdout"] is None \
-            and kw["validate"] is None:
+    cli = run.reporter.cli
+    if (outputs.predictions is not None or options.score_cutoff is not None) and options.holdout is None \
+            and inputs.validate is None:
         raise BaseparamsError(f"{_opt('predictions', cli)} and {_opt('score_cutoff', cli)} are about validation data: "
                               f"give {_opt('holdout', cli)} SECONDS or {_opt('validate', cli)} FILE (nothing was "
                               f"fitted)")
-    for name in ("save", "predictions", "urdf", "mjcf", "html", "plot"):
-        if kw[name] is not None:
-            check_output(kw[name], inputs, _opt(name, cli))
-    check_exports(kw["source"] if kw["source"] is not None else kw["model"], kw["method"], kw["urdf"], kw["mjcf"],
-                  kw["joints"], cli)
-    truth = kw["truth"]
+    for name, path in outputs.given().items():
+        check_output(path, run.inputs, _opt(name, cli))
+    check_exports(source, options.method, outputs.urdf, outputs.mjcf, inputs.joints, cli)
+    truth = inputs.truth
     if truth is None or isinstance(truth, dict):
         return truth
     from .schema import read_truth
@@ -713,10 +746,11 @@ def check_exports(source, method: str, urdf=None, mjcf=None, joints=None, cli: b
         check_mjcf_request(source, method, mjcf, _opt("mjcf", cli))
 
 
-def _stream_reason(log, validate, joints, mjcf, stream: str, cli: bool) -> str | None:
+def _stream_reason(log, inputs: Inputs, mjcf, cli: bool) -> str | None:
     """Why the log is streamed from its file (a progress line), or None: read it whole."""
     from .io.logs import STREAM_SUFFIXES, streamable
 
+    validate, joints, stream = inputs.validate, inputs.joints, inputs.stream
     if stream == "off" or not isinstance(log, (str, os.PathLike)):
         return None
     log = os.fspath(log)
@@ -738,92 +772,102 @@ def _stream_reason(log, validate, joints, mjcf, stream: str, cli: bool) -> str |
     return f"{size:.0f} MB > {STREAM_MIN_MB:g} MB" if size > STREAM_MIN_MB else None
 
 
-def _run_identification(robot, log, validate, columns, joints, weld, stream, predictions, inputs, opts, say, note,
-                        cli):
+def _run_identification(robot: Robot, log, options: IdentOptions, inputs: Inputs, outputs: Outputs, run: _Run):
     """The fit: streamed from the log's file, or read whole; predictions written. ``(result, log read or None)``."""
-    why = _stream_reason(log, validate, joints, opts.get("mjcf"), stream, cli) if not robot.floating else None
+    rep = run.reporter
+    why = _stream_reason(log, inputs, outputs.mjcf, rep.cli) if not robot.floating else None
     if why is not None:
-        from .ident.stream import NotStreamable, identify_stream
-        from .io.logs import LogStream
+        from .ident.stream import NotStreamable
 
-        say(f"streaming {log} block by block ({why}): memory independent of the log's length")
-        src = LogStream(log, robot, columns=columns)
-        other = LogStream(validate, robot, columns=columns) if validate is not None else None
+        rep.say(f"streaming {log} block by block ({why}): memory independent of the log's length")
         try:
-            if predictions is None:
-                return identify_stream(robot, src, validation=other, progress=say, **opts), None
-            import numpy as np
-
-            from .io.tables import column_writer
-
-            coords = robot.actuated if robot.has_loops else range(robot.dof)
-            names = ["t", *(f"tau_{robot.joint_names[robot.dof_body[c]]}" for c in coords)]
-            with column_writer(predictions, names, inputs, _opt("predictions", cli)) as write:
-                result = identify_stream(robot, src, validation=other, progress=say,
-                                         predictions=lambda t, tau: write(np.column_stack([t, tau])), **opts)
-            note(f"predictions of {result.validation['samples']} validation samples written to {predictions}")
-            return result, None
+            return _streamed(robot, log, options, inputs, outputs.predictions, run), None
         except NotStreamable as exc:
-            say(f"{exc}")
-    from .ident.pipeline import identify as run
+            rep.say(f"{exc}")
+    from .ident import identify as run_whole
 
-    say(f"reading {log}" if isinstance(log, (str, os.PathLike)) else "checking the log")
-    read, val, robot = _identification_logs(robot, log, validate, columns, joints, weld, note)
-    say(f"identifying ({opts['method']}) on {read.n_samples} samples")
-    result = run(robot, read, validation=val, progress=say, **opts)
-    if predictions is not None:
-        _write_predictions(result, read, val, opts["holdout"], predictions, inputs, note, cli)
+    rep.say(f"reading {log}" if isinstance(log, (str, os.PathLike)) else "checking the log")
+    read, val, robot = _identification_logs(robot, log, inputs, rep.note)
+    rep.say(f"identifying ({options.method}) on {read.n_samples} samples")
+    result = run_whole(robot, read, options, validation=val, progress=rep.progress)
+    if outputs.predictions is not None:
+        _write_predictions(result, (read, val), options.holdout, outputs.predictions, run)
     return result, read
 
 
-def _write_predictions(result, log, val, holdout, path, inputs, note, cli) -> None:
-    """Predicted torques at every validation sample, at the log's own time stamps."""
-    from .io.tables import write_columns
+def _streamed(robot: Robot, log, options: IdentOptions, inputs: Inputs, predictions, run: _Run):
+    """The identification streamed from the log's file; the predictions written as they come."""
+    from .ident.stream import identify_stream
+    from .io.logs import LogStream
 
+    rep = run.reporter
+    src = LogStream(log, robot, columns=inputs.columns)
+    other = LogStream(inputs.validate, robot, columns=inputs.columns) if inputs.validate is not None else None
+    if predictions is None:
+        return identify_stream(robot, src, options, validation=other, progress=rep.progress)
+    import numpy as np
+
+    from .tables import column_writer
+
+    names = ["t", *(f"tau_{j}" for j in robot.coordinate_names())]
+    with column_writer(predictions, names, run.inputs, _opt("predictions", rep.cli)) as write:
+        result = identify_stream(robot, src, options, validation=other, progress=rep.progress,
+                                 predictions=lambda t, tau: write(np.column_stack([t, tau])))
+    rep.note(f"predictions of {result.validation['samples']} validation samples written to {predictions}")
+    return result
+
+
+def _write_predictions(result, logs: tuple, holdout, path, run: _Run) -> None:
+    """Predicted torques at every validation sample (``logs``: the log and the validation log or None)."""
+    from .tables import write_columns
+
+    log, val = logs
     whole = val if val is not None else log
     tau = result.predict(whole)
     keep = (whole.t >= -float("inf")) if val is not None else whole.t >= whole.t[-1] - holdout
     cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
-    write_columns(path, cols, inputs, _opt("predictions", cli))
-    note(f"predictions of {int(keep.sum())} validation samples written to {path}")
+    write_columns(path, cols, run.inputs, _opt("predictions", run.reporter.cli))
+    run.reporter.note(f"predictions of {int(keep.sum())} validation samples written to {path}")
 
 
-def _write_results(result, log, robot, source, outputs: dict, inputs: list[str], say, note) -> None:
+def _write_results(result, log, source, outputs: Outputs, run: _Run) -> None:
     """``save``, ``urdf``, ``mjcf``, ``html``, ``plot`` (each checked before the fit; written atomically)."""
-    if outputs["save"] is not None:
-        result.save(outputs["save"], inputs, "save")
-        say(f"result saved to {outputs['save']}")
-    if outputs["urdf"] is not None:
-        from .io.urdf import identified_drives, write_urdf
+    inputs, say, note = run.inputs, run.reporter.say, run.reporter.note
+    if outputs.save is not None:
+        result.save(outputs.save, inputs, "save")
+        say(f"result saved to {outputs.save}")
+    if outputs.urdf is not None:
+        from .ident.export import identified_drives
+        from .io.urdf import write_urdf
 
         drives, couplings = identified_drives(result)
         tilt = next((t for t in result.fit.terms if t.name == "tilt"), None)
-        for n in write_urdf(os.fspath(source), outputs["urdf"], result.model.robot, result.fit.physical.pi, "paper",
+        for n in write_urdf(os.fspath(source), outputs.urdf, result.model.robot, result.fit.physical.pi, "paper",
                             drives=drives, couplings=couplings, inputs=inputs,
                             base_rotation=None if tilt is None else tilt.base_rotation()):
             note(n)
         for n in (x for t in result.fit.terms for x in t.export().get("not", [])):
             note(f"--urdf: not written: {n}")
-        note(f"URDF written to {outputs['urdf']}")
-    if outputs["mjcf"] is not None:
-        from .io.mjcf_write import identified_mjcf
+        note(f"URDF written to {outputs.urdf}")
+    if outputs.mjcf is not None:
+        from .ident.export import identified_mjcf
 
-        for n in identified_mjcf(result, os.fspath(source), outputs["mjcf"], log, inputs=inputs):
+        for n in identified_mjcf(result, os.fspath(source), outputs.mjcf, log, inputs=inputs):
             note(n)
-        note(f"MJCF written to {outputs['mjcf']}")
-    if outputs["plot"] is not None:
+        note(f"MJCF written to {outputs.mjcf}")
+    if outputs.plot is not None:
         from .files import atomic_path
         from .report.plots import torque_plot
 
-        with atomic_path(outputs["plot"], inputs, "plot") as tmp:
+        with atomic_path(outputs.plot, inputs, "plot") as tmp:
             torque_plot(result, tmp)
-        say(f"plot written to {outputs['plot']}")
-    if outputs["html"] is not None:
+        say(f"plot written to {outputs.plot}")
+    if outputs.html is not None:
         from .files import write_text
         from .report.html import identification_html
 
-        write_text(outputs["html"], identification_html(result), inputs, "html")
-        say(f"HTML report written to {outputs['html']}")
+        write_text(outputs.html, identification_html(result), inputs, "html")
+        say(f"HTML report written to {outputs.html}")
 
 
 def predict(model, result, log, *, raw_states: bool = False, columns=None, allow_units: bool = False):
@@ -864,7 +908,7 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None, allow
         raise ArgumentTypeError(f"predict: result must be an Identification or its saved file, got "
                                 f"{type(result).__name__}")
     if isinstance(result, (str, os.PathLike)):
-        from .ident.pipeline import Identification
+        from .ident import Identification
 
         result = Identification.load(result, robot)
     from .ident.plausibility import check_prediction_log

@@ -19,9 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from ..arguments import CHOICES, IDENTIFY
 from ..enums import Convention, MocapWelds, Rows, Status, values
 from ..errors import BaseparamsError, NoMovingBodiesError
+from ..workflow import Inputs
 from . import common
 from .common import (
     EXIT_FAILED,
@@ -274,14 +275,14 @@ def _regressor_states(args, robot) -> int:
     from ..analysis import regressor
     from ..base.regroup import parameter_names
     from ..io.logs import read_log
-    from ..io.tables import check_table_path, write_columns
+    from ..tables import check_table_path, write_columns
 
     check_table_path(args.out, input_files(args), "--out")
     if robot.floating:
         raise BaseparamsError(f"--states: robot {robot.name!r} has a floating base, whose coordinates are not "
                               f"columns of a states file; use baseparams.regressor in Python")
-    coords = np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
-    joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    coords = robot.measured_coords
+    joints = robot.coordinate_names(coords)
     log = read_log(args.states, robot, allow_subset=True, require_tau=False, require_time=False)
     missing = [j for j in joints if j not in log.joints]
     if missing:
@@ -290,7 +291,7 @@ def _regressor_states(args, robot) -> int:
                               f"{joints})")
     q, dq, ddq = log.q, log.dq, log.ddq
     if dq is None or ddq is None:  # rates the file lacks: derived as identify derives them (needs time)
-        from ..ident.results import log_states
+        from ..ident.preprocess import log_states
 
         if log.t is None or not np.all(np.isfinite(log.t)):
             raise BaseparamsError(f"--states {args.states}: no {'dq_ and ' if dq is None else ''}ddq_ columns and no "
@@ -335,7 +336,7 @@ def _regressor_args(s) -> None:
 
 def _ident_args(s) -> None:
     """Options shared by ``identify`` and ``simulate``."""
-    s.add_argument("--friction", default="viscous,coulomb,offset",
+    s.add_argument("--friction", default=",".join(IDENTIFY["friction"]),
                    help="friction terms per joint: any of viscous, coulomb, offset, comma-separated, or none "
                         "(default all three)")
     s.add_argument("--rotor", action="store_true", help="model each joint's rotor inertia Ia (MJCF armature)")
@@ -345,7 +346,7 @@ def _ident_args(s) -> None:
 
 def _analyze_sweep(args) -> int:
     """``analyze 'models/*.urdf'``: every matching file on Dask, one line (or JSON object) each."""
-    from ..fleet import analyze_fleet
+    from ..sweep import analyze_fleet
 
     files = data_files(args.model)
     results = analyze_fleet(files, scheduler=getattr(args, "scheduler", None), workers=getattr(args, "workers", None),
@@ -389,6 +390,19 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"baseparams: error: {prog}{message} (see {self.prog} --help)\n")
 
 
+class _Version(argparse.Action):
+    """``--version``: the version looked up when asked for (:func:`baseparams.version.version`), not at start-up."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ..version import version
+
+        print(f"baseparams {version()}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``baseparams`` command.
 
@@ -401,7 +415,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "
         "they regroup: the tetrahedral-point model and DRNG, certified by exact numerics."))
-    p.add_argument("--version", action="version", version=f"baseparams {__version__}")
+    p.add_argument("--version", action=_Version, help="show program's version number and exit")
     sub = p.add_subparsers(dest="command", required=True)
 
     s = sub.add_parser("robots", help="list the built-in robots")
@@ -510,7 +524,7 @@ def _identify_parser(sub, model_args) -> None:
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
     held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
-    s.add_argument("--method", choices=("auto", "ols", "wls", "physical"), default="auto",
+    s.add_argument("--method", choices=CHOICES["method"], default=IDENTIFY["method"],
                    help="auto (default): least squares with the model file's parameters as a prior (terms the data "
                         "determine keep their fitted values), the weighting and the prior's weight chosen by blocked "
                         "cross-validation on the training data; ols, wls (per-joint noise) or physical (physically "
@@ -532,7 +546,7 @@ def _identify_parser(sub, model_args) -> None:
                    help="with --joints: weld JOINT at VALUE (rad or m); repeatable")
     s.add_argument("--allow-units", action="store_true",
                    help="go on when the log's units look wrong (deg/s, ms, mN m, absurd samples); refused otherwise")
-    s.add_argument("--covariance", choices=("hac", "white"), default="hac",
+    s.add_argument("--covariance", choices=CHOICES["covariance"], default=IDENTIFY["covariance"],
                    help="standard deviations: hac (default; Newey-West, true when residuals are correlated) or "
                         "white (the least-squares formula, residuals taken as uncorrelated)")
     s.add_argument("--score-cutoff", type=float, metavar="HZ",
@@ -577,7 +591,7 @@ def _analysis_choice_args(s) -> None:
 def _model_class_args(s) -> None:
     """``identify``'s options of the model class: smooth Coulomb, model terms, the literal geometry."""
     s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
-    s.add_argument("--terms", default="auto", metavar="TERMS",
+    s.add_argument("--terms", default=IDENTIFY["terms"], metavar="TERMS",
                    help="model terms beyond rigid bodies and linear friction: auto (default: pre-sliding friction "
                         "'dahl', mounting 'tilt', per-joint 'delay', torque-sensor 'scale', each kept when blocked "
                         "cross-validation on the training data says so; the report lists every one kept or "
@@ -591,7 +605,7 @@ def _model_class_args(s) -> None:
 
 def _log_size_args(s) -> None:
     """``identify``'s options for long logs (streamed) and many logs (a fleet on Dask)."""
-    s.add_argument("--stream", choices=("auto", "on", "off"), default="auto",
+    s.add_argument("--stream", choices=("auto", "on", "off"), default=Inputs.stream,
                    help="read a CSV/TSV/Parquet log block by block, in memory independent of its length, with the "
                         "same result: auto (default) above 64 MB, on, off (read it whole)")
     s.add_argument("--per-file", action="store_true",
@@ -763,9 +777,10 @@ def _check_flags(args) -> None:
                                               f"(one period at the rate)")
     if args.command == "identify" and args.joints is not None and not [j for j in args.joints.split(",") if j.strip()]:
         raise BaseparamsError("--joints needs joint names: --joints A,B,... (the joints to identify)")
-    if args.command == "identify" and args.prior_weight is not None and args.method != "physical":
-        raise BaseparamsError(f"--prior-weight applies to --method physical, not {args.method} (the default estimate "
-                              "chooses its own pull by cross-validation)")
+    if args.command == "identify":
+        from .identify import options_of
+
+        options_of(args)  # every option of the identification checked, named as flags (IdentOptions)
     if args.command == "identify" and (args.urdf or args.mjcf):
         from ..workflow import check_exports
 

@@ -219,24 +219,6 @@ def emit(args, text: str) -> None:
         print(f"report written to {out}")
 
 
-def friction_terms(text: str) -> tuple[str, ...]:
-    """``--friction viscous,coulomb,offset`` (or ``none``) as a tuple.
-
-    Parameters
-    ----------
-    text : str
-        The option's value.
-
-    Returns
-    -------
-    tuple of str
-        The friction terms (empty for ``none``).
-    """
-    from ..workflow import friction_of
-
-    return friction_of(text)
-
-
 def write_html(path: str, page: str, inputs=()) -> None:
     """``--html FILE``: write a self-contained report (atomically, never onto an input), or one line saying why not.
 

@@ -20,7 +20,6 @@ from .common import (
     Progress,
     data_files,
     emit,
-    friction_terms,
     input_files,
 )
 
@@ -28,9 +27,11 @@ from .common import (
 def cmd_identify(args) -> int:
     """``baseparams identify MODEL DATA``: base-parameter and drive values from a joint log.
 
-    Parses nothing itself: the flags become :func:`baseparams.identify`'s keywords (one each,
-    :func:`identify_keywords`), which checks them and every output before the fit, streams large
-    logs, and writes the outputs; a glob of logs is a fleet (:func:`baseparams.fleet.identify_fleet`).
+    Parses nothing itself: the flags become the identification's options (:func:`options_of`,
+    checked by the preflight), its inputs and its outputs (:func:`inputs_of`, :func:`outputs_of`),
+    and :func:`baseparams.workflow.identify_command` checks the inputs and every output before the
+    fit, streams large logs, and writes the outputs; a glob of logs is a fleet
+    (:func:`baseparams.fleet.identify_fleet`).
 
     Parameters
     ----------
@@ -48,7 +49,7 @@ def cmd_identify(args) -> int:
         Bad input (model, data, options).
     """
     from ..ident.report import format_identification
-    from ..workflow import identify_command
+    from ..workflow import Reporter, identify_command
 
     robot = common.load_robot(args)
     files = data_files(args.data)
@@ -60,8 +61,8 @@ def cmd_identify(args) -> int:
         return _identify_fleet(args, robot, files)
     with Progress(args.verbose) as progress:
         t0 = time.perf_counter()
-        result = identify_command(robot, files[0], source=args.model, progress=progress, cli=True,
-                                  notes=_print_note, **identify_keywords(args))
+        result = identify_command(robot, files[0], options_of(args), inputs_of(args), outputs_of(args),
+                                  Reporter(progress=progress, notes=_print_note, cli=True))
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
     emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
     return EXIT_OK
@@ -72,8 +73,11 @@ def _print_note(line: str) -> None:
     print(f"baseparams: {'' if ' written to ' in line else 'note: '}{line}", file=sys.stderr)
 
 
-def identify_keywords(args) -> dict:
-    """The ``identify`` flags as :func:`baseparams.identify`'s keywords, one each.
+def options_of(args):
+    """The ``identify`` flags that are options of the identification, as one checked object (one field per flag).
+
+    Built once per run (the preflight's, kept on ``args``): its errors name the flags
+    (:meth:`baseparams.ident.options.IdentOptions.from_flags`).
 
     Parameters
     ----------
@@ -82,18 +86,64 @@ def identify_keywords(args) -> dict:
 
     Returns
     -------
-    dict
-        Keyword arguments.
+    IdentOptions
+        The options.
+
+    Raises
+    ------
+    BaseparamsError
+        An option the identification refuses (``--prior-weight`` without ``--method physical``,
+        an unknown ``--terms`` or ``--friction`` name, a bad ``--coupling``).
     """
-    return dict(validate=args.validate, holdout=args.holdout, method=args.method,
-                friction=friction_terms(args.friction), rotor=args.rotor, coulomb_width=args.coulomb_width,
-                couplings=tuple(args.coupling or ()),
-                cutoff=args.cutoff, decimate=args.decimate, min_speed=args.min_speed, prior_weight=args.prior_weight,
-                convention=args.convention, covariance=args.covariance, score_cutoff=args.score_cutoff,
-                allow_units=args.allow_units, columns=args.columns, joints=args.joints, weld=args.weld,
-                analysis_samples=args.samples, literal=args.literal, terms=args.terms, stream=args.stream,
-                save=args.save, predictions=args.predictions, urdf=args.urdf, mjcf=args.mjcf, html=args.html,
-                plot=args.plot, truth=args.truth, seed=args.seed)
+    if getattr(args, "options", None) is not None:
+        return args.options
+    from ..ident.options import IdentOptions
+
+    args.options = IdentOptions.from_flags(
+        method=args.method, rotor=args.rotor, friction=args.friction, coulomb_width=args.coulomb_width,
+        couplings=tuple(args.coupling or ()), holdout=args.holdout, cutoff=args.cutoff, decimate=args.decimate,
+        min_speed=args.min_speed, prior_weight=args.prior_weight, convention=args.convention,
+        covariance=args.covariance, score_cutoff=args.score_cutoff, allow_units=args.allow_units,
+        literal=args.literal, terms=args.terms, analysis_samples=args.samples, seed=args.seed)
+    return args.options
+
+
+def inputs_of(args):
+    """The ``identify`` flags of what is read besides the model and the log (one field per flag).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    Inputs
+        :class:`baseparams.workflow.Inputs`.
+    """
+    from ..workflow import Inputs
+
+    return Inputs(validate=args.validate, columns=args.columns, joints=args.joints, weld=args.weld,
+                  stream=args.stream, truth=args.truth, source=args.model)
+
+
+def outputs_of(args):
+    """The ``identify`` flags of the files written (one field per flag).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    Outputs
+        :class:`baseparams.workflow.Outputs`.
+    """
+    from ..workflow import Outputs
+
+    return Outputs(save=args.save, predictions=args.predictions, urdf=args.urdf, mjcf=args.mjcf, html=args.html,
+                   plot=args.plot)
 
 
 def cmd_predict(args) -> int:
@@ -121,9 +171,9 @@ def cmd_predict(args) -> int:
     BaseparamsError
         Another robot than the result's, a bad result file, log or output.
     """
-    from ..ident.pipeline import Identification
+    from ..ident import Identification
     from ..io.logs import read_log
-    from ..io.tables import check_table_path, write_columns
+    from ..tables import check_table_path, write_columns
 
     inputs = input_files(args)
     check_table_path(args.out, inputs, "--out")
@@ -144,11 +194,11 @@ def cmd_predict(args) -> int:
     out = {"model": robot.name, "result": args.result, "log": args.log, "samples": log.n_samples, "joints": joints,
            "out": args.out, "prediction": "raw states" if args.raw_states else "smooth", "rms": None}
     if log.tau is not None:
-        from ..ident.pipeline import validation_scores
+        from ..ident import validation_scores
 
         s = validation_scores(log, tau, joints, score_cutoff=args.score_cutoff)
         out["rms"] = {"total": s["rms_total"], **s["rms"]}
-        edge = _edge_samples(log, (ident.options or {}).get("cutoff"))
+        edge = _edge_samples(log, None if ident.options is None else ident.options.cutoff)
         if log.n_samples > 2 * edge + 1 and not args.raw_states:
             inner = np.zeros(log.n_samples, dtype=bool)
             inner[edge:log.n_samples - edge] = True
@@ -191,20 +241,17 @@ def _edge_samples(log, cutoff) -> int:
 def _identify_fleet(args, robot, files: list[str]) -> int:
     """``identify`` over many logs on Dask (``--per-file`` / ``--pooled``)."""
     from ..fleet import identify_fleet
-    from ..ident.model import ident_model
+    from ..ident.model import model_for
 
     for opt in ("validate", "holdout", "plot", "urdf", "mjcf", "columns"):
         if getattr(args, opt):
             raise BaseparamsError(f"--{opt} applies to one log; with several (a fleet) use --per-file / --pooled")
-    from ..analysis import analyze
-
-    model = ident_model(analyze(robot, convention=args.convention), args.rotor, friction_terms(args.friction),
-                        args.coulomb_width)
+    options = options_of(args)
+    model = model_for(robot, options)
     per_file = args.per_file or not args.pooled
-    res = identify_fleet(model, files, per_file=per_file, pooled=args.pooled or len(files) == 1, method=args.method,
-                         scheduler=args.scheduler, workers=args.workers, cutoff=args.cutoff, min_speed=args.min_speed,
-                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr),
-                         covariance=args.covariance)
+    res = identify_fleet(model, files, options, per_file=per_file, pooled=args.pooled or len(files) == 1,
+                         scheduler=args.scheduler, workers=args.workers,
+                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
     if args.json:
         emit(args, json.dumps(res.to_json(), indent=2))
         return _fleet_exit(args, res, files)

@@ -12,7 +12,7 @@ so ``dq_j = sum_l a_lj cos(l w t) + b_lj sin(l w t)`` and ``ddq_j = sum_l l w (b
 at rest at ``t = T`` too and can be repeated. The free variables per coordinate are the offset
 ``q0`` and ``a_l, b_l`` for ``l = 2..L`` (:func:`fourier_basis`).
 
-Criterion, on the identification model's regressor (:class:`~baseparams.ident.pipeline.IdentModel`:
+Criterion, on the identification model's regressor (:class:`~baseparams.ident.IdentModel`:
 the certified base parameters, and the drive columns when asked), evaluated on a coarse grid of
 one period (``grid`` samples): ``cond``, the condition number of the column-scaled stacked
 regressor (minimised as ``log cond``), or ``logdet``, D-optimality, ``log det`` of the

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..analysis import Analysis, analyze
 from ..errors import BaseparamsError
+from ..ident.drives import FRICTION_TERMS
 from ..ident.model import IdentModel, ident_model
 from ..model.robot import Robot
 from .constraints import Evaluator, linear_constraints, n_nonlinear
@@ -20,6 +21,7 @@ from .criterion import trajectory_criterion
 from .diagnose import binding, violation
 from .fourier import coefficients, fourier_basis
 from .limits import design_coordinates, loop_bound
+from .options import DesignOptions
 from .problem import (
     KEEPOUT_MARGIN,
     MARGIN,
@@ -40,11 +42,8 @@ STALL = (1e-3, 20)
 COND_LIMIT = 1e8
 
 
-def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: float = 0.1, rate: float = 1000.0,
-                      criterion: str = "cond", drives: bool = False, limits=None, acceleration=None,
-                      torque: bool = False, starts: int = 4, seed: int = 0, grid: int = 200, max_iter: int = 150,
-                      rotor: bool = False, progress=None, keepout=None,
-                      margin: float = 0.0) -> Excitation:
+def design_excitation(robot_or_analysis, options: DesignOptions | None = None, /, *, progress=None,
+                      **keywords) -> Excitation:
     """Design a periodic excitation trajectory that identifies every base parameter (module doc).
 
     Parameters
@@ -52,45 +51,13 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
     robot_or_analysis : Robot, Analysis or IdentModel
         The robot (analysed here), its certified analysis, or an identification model (its
         columns are the criterion's: e.g. ``ident_model(analysis, friction=(...))``).
-    harmonics : int
-        Harmonics ``L >= 2`` per coordinate.
-    base_frequency : float
-        ``f`` [Hz] (period ``1 / f``), rounded so that a period is a whole number of controller
-        samples (a note says so).
-    rate : float
-        The controller's sampling rate [Hz] of the returned trajectory.
-    criterion : {"cond", "logdet"}
-        Minimise the condition number of the column-scaled regressor, or maximise ``log det`` of
-        the information matrix (D-optimality).
-    drives : bool
-        Include the drive columns (viscous, Coulomb and offset friction per joint; rotor inertia
-        with ``rotor``) besides the base parameters (ignored for an ``IdentModel``).
-    limits : array_like, shape ``(m, 4)``, optional
-        ``[lower, upper, velocity, effort]`` per designed coordinate overriding the model's
-        (:func:`excitation_limits`; NaN keeps the model's).
-    acceleration : float or array_like, shape ``(m,)``, optional
-        Acceleration limits [rad/s^2 or m/s^2].
-    torque : bool
-        Keep the torques of the model's own inertial parameters within the effort limits.
-    starts : int
-        Random starts (SLSQP from each).
-    seed : int
-        Seed of the starts: the same seed gives the same design.
-    grid : int
-        Samples of one period on which the criterion and the constraints are optimised.
-    max_iter : int
-        SLSQP iterations per start.
-    rotor : bool
-        With ``drives``: rotor inertia columns too.
+    options : DesignOptions, optional
+        How (:class:`~baseparams.excitation.options.DesignOptions`: the series, the limits, the
+        criterion, the starts); default its defaults.
     progress : callable, optional
         Called with one line of text per start (and every 25 iterations).
-    keepout : tuple of (str, float), or sequence of them, optional
-        ``(link, z_min)`` per link: the named link's frame origin stays at or above the height
-        ``z_min`` [m, world z] at every sample of the design grid and of the result (a floor plane or
-        a table; trees only). Only frame origins: the links' geometry between them and
-        self-collision are not checked (the design's notes say so).
-    margin : float
-        Fraction of each position range kept free at both ends (:func:`excitation_limits`).
+    **keywords
+        Options as keywords, instead of or over ``options`` (``harmonics=5``, ``starts=1``).
 
     Returns
     -------
@@ -104,23 +71,22 @@ def design_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
         limits that leave no room for motion; no start that satisfies the loops or torque limits;
         a result that does not excite every model parameter (the limits are too tight).
     """
-    from ..arguments import check_keywords
+    from ..arguments import options_from
     from ..numerics import blas_threads
 
-    check_options(harmonics, base_frequency, rate, criterion, starts, grid)
-    check_keywords("", seed=seed, max_iter=max_iter, margin=margin, acceleration=acceleration)
+    o = options_from(DesignOptions, options, keywords)
     t0 = time.perf_counter()
-    model = _model(robot_or_analysis, drives, rotor)
-    prob, notes = make_problem(model, criterion, harmonics, base_frequency, rate, grid, limits, acceleration, torque,
-                           margin)
-    if keepout is not None:
-        prob, note = with_keepout(prob, keepout)
+    model = _model(robot_or_analysis, o.drives, o.rotor)
+    prob, notes = make_problem(model, o.criterion, o.harmonics, o.base_frequency, o.rate, o.grid, o.limits,
+                               o.acceleration, o.torque, o.margin)
+    if o.keepout is not None:
+        prob, note = with_keepout(prob, o.keepout)
         notes.append(note)
     with blas_threads(), _kernel_threads():
-        x, value = _multistart(prob, starts, seed, max_iter, progress or (lambda msg: None))
-        notes.append(f"best of {starts} starts (seed {seed}): {_shown(prob, value)} on the {grid}-sample design "
-                     f"grid; designed in {time.perf_counter() - t0:.1f} s")
-        return _finish(prob, x, rate, notes)
+        x, value = _multistart(prob, o.starts, o.seed, o.max_iter, progress or (lambda msg: None))
+        notes.append(f"best of {o.starts} starts (seed {o.seed}): {_shown(prob, value)} on the {o.grid}-sample "
+                     f"design grid; designed in {time.perf_counter() - t0:.1f} s")
+        return _finish(prob, x, o.rate, notes)
 
 
 def random_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: float = 0.1, rate: float = 1000.0,
@@ -182,7 +148,7 @@ def _model(obj, drives: bool, rotor: bool) -> IdentModel:
     if isinstance(obj, IdentModel):
         return obj
     analysis = obj if isinstance(obj, Analysis) else analyze(robot)
-    friction = ("viscous", "coulomb", "offset") if drives else ()
+    friction = FRICTION_TERMS if drives else ()
     return ident_model(analysis, rotor=bool(drives and rotor), friction=friction)
 
 
@@ -379,7 +345,7 @@ def _finish(prob: Problem, x: np.ndarray, rate: float, notes: list[str]) -> Exci
         notes.append(f"loops: every sample closed on the reference assembly mode, cond(J_p) <= "
                      f"{close_loops(robot, q, cond_max=np.inf).cond.max():.3g}")
     offsets, a, b = coefficients(xm, prob.harmonics)
-    joints = tuple(robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot))
+    joints = tuple(robot.coordinate_names(design_coordinates(robot)))
     return Excitation(robot.name, joints, prob.harmonics, f, float(rate), offsets, a, b, t, q, dq, ddq, prob.criterion,
                       cond if prob.criterion == "cond" else logdet, cond, prob.limits.copy(), tuple(model.names),
                       tuple(notes))

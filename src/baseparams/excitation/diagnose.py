@@ -144,7 +144,7 @@ def violation(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> 
         with np.errstate(invalid="ignore"):
             over = np.abs(tau) > prob.limits[:, 4]
         if over.any():
-            names = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+            names = robot.coordinate_names(design_coordinates(robot))
             return (f"{int(over.any(axis=1).sum())} samples with torques above the effort limits of "
                     f"{[n for n, o in zip(names, over.any(axis=0)) if o]}: a lower base frequency or no --torque "
                     f"would help")

@@ -32,9 +32,9 @@ def design_coordinates(robot: Robot) -> np.ndarray:
     -------
     ndarray of int, shape ``(m,)``
         Indices into ``q``: every coordinate of a tree, the actuated ones of a robot with loops
-        (the states :meth:`~baseparams.ident.pipeline.IdentModel.regressor` takes).
+        (the states :meth:`~baseparams.ident.IdentModel.regressor` takes).
     """
-    return np.asarray(robot.actuated, dtype=int) if robot.has_loops else np.arange(robot.dof)
+    return robot.measured_coords
 
 
 def joint_values(robot: Robot, value, what: str, pair: bool = False) -> np.ndarray:
@@ -65,7 +65,7 @@ def joint_values(robot: Robot, value, what: str, pair: bool = False) -> np.ndarr
     """
     from collections.abc import Mapping
 
-    names = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+    names = robot.coordinate_names(design_coordinates(robot))
     shape = (len(names), 2) if pair else (len(names),)
     out = np.full(shape, np.nan)
     if value is None:
@@ -183,7 +183,7 @@ def excitation_limits(robot: Robot, limits=None, acceleration=None,
         lim[:, [0, 1, 2, 4]] = np.where(np.isnan(user), lim[:, [0, 1, 2, 4]], user)
     if acceleration is not None:
         lim[:, 3] = joint_values(robot, acceleration, "acceleration")
-    names = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    names = robot.coordinate_names(coords)
     notes = _default_positions(robot, coords, lim, names)
     notes += _coupled_ranges(robot, coords, lim, names)
     if margin > 0:

@@ -235,7 +235,7 @@ def make_problem(model: IdentModel, criterion, harmonics, base_frequency, rate, 
     lim, notes = excitation_limits(robot, limits, acceleration, margin)
     outside = [j for j in range(len(lim)) if not lim[j, 0] < 0 < lim[j, 1]]
     if robot.loops and outside:  # couplings alone close anywhere: no reference needed
-        names = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+        names = robot.coordinate_names(design_coordinates(robot))
         raise BaseparamsError(f"robot {robot.name!r}: the loops are assembled at the reference configuration q = 0, "
                               f"outside the position range of joint "
                               + ", ".join(f"{names[j]!r} [{lim[j, 0]:.6g}, {lim[j, 1]:.6g}]" for j in outside)

@@ -130,12 +130,16 @@ class Excitation:
         BaseparamsError
             Another suffix, or a file that cannot be written.
         """
-        from ..io.logs import write_table
+        from ..tables import write_table
 
+        return write_table(path, self._columns(), "a trajectory as .csv or .tsv")
+
+    def _columns(self) -> dict:
+        """``t, q_<joint>..., dq_<joint>..., ddq_<joint>...``: the trajectory file's columns."""
         cols = {"t": self.t}
         for kind, arr in (("q", self.q), ("dq", self.dq), ("ddq", self.ddq)):
             cols.update({f"{kind}_{j}": arr[:, k] for k, j in enumerate(self.joints)})
-        return write_table(path, cols, "a trajectory as .csv or .tsv")
+        return cols
 
     def save(self, path, inputs=(), what: str = "output") -> Path:
         """Write the trajectory atomically, never onto an input (:func:`baseparams.files.atomic_path`).
@@ -162,14 +166,12 @@ class Excitation:
         BaseparamsError
             Another suffix, an output onto an input, a missing folder, a non-regular target.
         """
-        from ..files import atomic_path
+        from ..tables import write_table
 
         if Path(path).suffix.lower() not in (".csv", ".tsv"):
             raise BaseparamsError(f"{what} {path}: a trajectory is written as .csv or .tsv, not "
                                   f"{Path(path).suffix or 'no suffix'}")
-        with atomic_path(path, inputs, what) as tmp:
-            self.to_csv(tmp)
-        return Path(path)
+        return write_table(path, self._columns(), "a trajectory as .csv or .tsv", inputs=inputs, what=what)
 
     @property
     def trajectory(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -262,7 +264,7 @@ def read_trajectory(path, robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndar
             data = np.atleast_2d(np.loadtxt(fh, delimiter=delim, ndmin=2))
     except (OSError, ValueError) as exc:
         raise BaseparamsError(f"{p}: cannot read a trajectory ({exc})") from None
-    joints = [robot.joint_names[robot.dof_body[c]] for c in design_coordinates(robot)]
+    joints = robot.coordinate_names(design_coordinates(robot))
     where = {h: k for k, h in enumerate(header)}
     want = ["t"] + [f"{k}_{j}" for k in ("q", "dq", "ddq") for j in joints]
     missing = [w for w in want if w not in where]

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..display import summary_repr
 from ..errors import DataError
-from .data import JointLog
+from ..jointlog import JointLog
 from .estimate import RowAccumulator
 from .preprocess import LowPass, prepare, stride_design, zero_phase
 

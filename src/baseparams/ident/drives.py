@@ -42,6 +42,8 @@ from ..model.robot import Robot
 KINDS = ("Ia", "Fv", "Fc", "Fo")
 #: friction names (CLI ``--friction``) -> kinds
 FRICTION = {"viscous": "Fv", "coulomb": "Fc", "offset": "Fo"}
+#: every friction term, in order: the default of the drive model and of identification
+FRICTION_TERMS = tuple(FRICTION)
 #: coupled-motor parameter kinds, in their order within a coupling -> the per-joint kind that selects them
 COUPLED_KINDS = {"Iam": "Ia", "Fvm": "Fv", "Fcm": "Fc"}
 _COUPLING_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
@@ -277,7 +279,44 @@ class Drives:
         return np.ones_like(v)
 
 
-def drives_for(robot: Robot, coords: np.ndarray, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
+def friction_terms(friction) -> tuple[str, ...]:
+    """Friction terms as a tuple of names: ``"viscous,coulomb"``, ``"none"`` or a sequence of names.
+
+    Parameters
+    ----------
+    friction : str or iterable of str
+        Comma-separated names, ``"none"`` (or empty), or a list, tuple or set of names, each of
+        :data:`FRICTION` (``viscous``, ``coulomb``, ``offset``).
+
+    Returns
+    -------
+    tuple of str
+        The names (empty for ``"none"``).
+
+    Raises
+    ------
+    ArgumentTypeError
+        Neither a string nor a sequence of strings.
+    BaseparamsError
+        An unknown name.
+    """
+    if isinstance(friction, str):
+        names = () if friction.strip().lower() in ("", "none") else tuple(x.strip() for x in friction.split(",")
+                                                                          if x.strip())
+    elif isinstance(friction, (list, tuple, set, frozenset)) and all(isinstance(x, str) for x in friction):
+        names = tuple(friction)
+    else:
+        from ..arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"friction= must be 'viscous,coulomb,offset', 'none' or a sequence of those names, "
+                                f"got {type(friction).__name__}")
+    unknown = [f for f in names if f not in FRICTION]
+    if unknown:
+        raise BaseparamsError(f"unknown friction term(s) {unknown}; choose from {', '.join(FRICTION)}")
+    return names
+
+
+def drives_for(robot: Robot, coords: np.ndarray, rotor: bool = True, friction=FRICTION_TERMS,
                coulomb_width: float | None = None, couplings=()) -> Drives:
     """Drives on every measured 1-dof joint (R or P) among ``coords``, and coupled motors.
 
@@ -310,10 +349,7 @@ def drives_for(robot: Robot, coords: np.ndarray, rotor: bool = True, friction=("
         not driven, two couplings of one name, or couplings without rotor inertia, viscous or
         Coulomb friction.
     """
-    friction = tuple(friction)
-    unknown = [f for f in friction if f not in FRICTION]
-    if unknown:
-        raise BaseparamsError(f"unknown friction term(s) {unknown}; choose from {', '.join(FRICTION)}")
+    friction = friction_terms(friction if isinstance(friction, str) else tuple(friction))
     if coulomb_width is not None and not coulomb_width > 0:
         raise BaseparamsError(f"coulomb_width must be > 0 (rad/s), got {coulomb_width}")
     chosen = {"Ia"} if rotor else set()

@@ -258,9 +258,8 @@ def motion_factor(model, q, dq, ddq, chunk: int = 4000) -> np.ndarray:
 
     q, dq, ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
     qr = StreamingQR(model.n_params)
-    chunk = max(1, min(chunk, int(32e6 // (8 * max(len(model.coords), 1) * max(model.n_params, 1)))))  # <= 32 MB
-    for k in range(0, len(q), chunk):
-        qr.add(model.regressor(q[k:k + chunk], dq[k:k + chunk], ddq[k:k + chunk]))
+    for _, a in model.regressor_blocks(q, dq, ddq, max_samples=chunk):  # at most REGRESSOR_BYTES at once
+        qr.add(a)
     return qr.r
 
 

@@ -16,7 +16,10 @@ from ..display import clip
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..numerics import StreamingQR, closed_samples, row_mask, sample_states
-from .drives import DriveRegrouping, Drives, drives_for, regroup_drives
+from .drives import FRICTION_TERMS, DriveRegrouping, Drives, drives_for, regroup_drives
+
+#: bytes of regressor formed at once where the states are many (:meth:`IdentModel.regressor_blocks`)
+REGRESSOR_BYTES = 32e6
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +64,11 @@ class IdentModel:
         return self.regrouping.model_names
 
     @property
+    def joints(self) -> list[str]:
+        """The measured joints ``(m,)``: the joint of each coordinate of :attr:`coords` (a log's rows)."""
+        return self.robot.coordinate_names(self.coords)
+
+    @property
     def n_params(self) -> int:
         """Number of model parameters ``p``."""
         return len(self.regrouping.independent)
@@ -100,6 +108,33 @@ class IdentModel:
     def row_states(self) -> np.ndarray:
         """The state column of each measured row ``(m,)``: where its ``q``, ``dq`` and its torque's log column are."""
         return self.coords if not self.robot.has_loops else np.arange(len(self.coords))
+
+    def regressor_blocks(self, q, dq, ddq, max_bytes: float | None = None, max_samples: int | None = None):
+        """The model regressor of many states, formed a bounded block at a time.
+
+        Parameters
+        ----------
+        q, dq, ddq : array_like, shape ``(S, state_columns)``
+            States.
+        max_bytes : float, optional
+            Largest block of regressor [bytes] (default :data:`REGRESSOR_BYTES`: a large robot's
+            rows are wide, 60 links and 596 columns take 0.3 MB per sample).
+        max_samples : int, optional
+            Most samples per block.
+
+        Yields
+        ------
+        start : int
+            The block's first sample.
+        A : ndarray, shape ``(k, m, p)``
+            :meth:`regressor` of samples ``start .. start + k``.
+        """
+        q, dq, ddq = np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq)
+        per_sample = 8 * max(len(self.coords), 1) * max(self.n_params, 1)
+        step = max(1, int((REGRESSOR_BYTES if max_bytes is None else max_bytes) // per_sample))
+        step = step if max_samples is None else max(1, min(step, int(max_samples)))
+        for k in range(0, len(q), step):
+            yield k, self.regressor(q[k:k + step], dq[k:k + step], ddq[k:k + step])
 
     def regressor(self, q, dq, ddq, closed=None, backend: str = "auto") -> np.ndarray:
         """The model regressor ``A`` of the measured rows.
@@ -263,7 +298,7 @@ def measured_coords(robot: Robot, rows: str) -> np.ndarray:
 PROBE_BYTES = 64e6
 
 
-def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "coulomb", "offset"),
+def ident_model(analysis: Analysis, rotor: bool = True, friction=FRICTION_TERMS,
                 coulomb_width: float | None = None, samples: int = 200, seed: int = 0,
                 couplings=(), log_base: bool = False) -> IdentModel:
     """The identification model of an analysed robot: base parameters plus drives, regrouped.
@@ -326,6 +361,51 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=("viscous", "co
         raise BaseparamsError(f"robot {robot.name!r}: whether the drive parameters regroup is not decided "
                               f"(singular-value gap {regrouping.gap:.3g}); try another seed or more samples")
     return IdentModel(analysis, drives, regrouping, coords, log_base)
+
+
+def log_rows(robot: Robot) -> str:
+    """The generalized forces a joint log measures: ``"joints"`` with a floating base (no base wrench), else all.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    str
+        ``"joints"`` or ``"all"``.
+    """
+    return "joints" if robot.floating else "all"
+
+
+def model_for(robot: Robot, options, rows: str | None = None) -> IdentModel:
+    """The identification model of a robot's log, as the options build it (every path's, and a saved result's).
+
+    Parameters
+    ----------
+    robot : Robot
+        The model the log was recorded on.
+    options : IdentOptions
+        Its ``convention``, ``literal``, ``analysis_samples`` and ``seed`` build the analysis,
+        ``rotor``, ``friction``, ``coulomb_width`` and ``couplings`` the drive model.
+    rows : str, optional
+        The measured rows (default :func:`log_rows`; a saved result's own).
+
+    Returns
+    -------
+    IdentModel
+        The model (:func:`ident_model`; a floating base's states are the log's base coordinates).
+
+    Raises
+    ------
+    BaseparamsError
+        As :func:`baseparams.analyze` and :func:`ident_model`.
+    """
+    analysis = analyze(robot, samples=options.analysis_samples, seed=options.seed, convention=options.convention,
+                       rows=log_rows(robot) if rows is None else rows, literal=options.literal)
+    return ident_model(analysis, options.rotor, options.friction, options.coulomb_width, couplings=options.couplings,
+                       log_base=robot.floating)
 
 
 def _identity_regrouping(analysis: Analysis, drives: Drives) -> DriveRegrouping:

@@ -167,9 +167,14 @@ def feasibility(pi: np.ndarray, n: int, rtol: float = FEASIBILITY_RTOL) -> tuple
     return lam[:, 0], bool(np.all(lam[:, 0] >= -rtol * scale))
 
 
+#: the cvxpy solver of :func:`physical_fit`: Clarabel (Apache-2.0) handles the PSD and exponential cones with a
+#: quadratic objective (no GPL solver)
+SOLVER = "CLARABEL"
+
+
 def physical_fit(R11, r12, G, robot, drive_kinds: Sequence[str] = (), *, prior=None,
                  prior_weight: float = DEFAULT_PRIOR_WEIGHT, mass_bounds=None, drive_prior=None,
-                 solver: str = "CLARABEL", min_eig: float = 0.0, drive_precision=None) -> PhysicalFit:
+                 min_eig: float = 0.0, drive_precision=None) -> PhysicalFit:
     """Least squares over physically consistent parameters, with a log-det prior.
 
     Solves the program of the module docstring: the fit ``||R11 G phi - r12||^2 / ||r12||^2``
@@ -206,9 +211,6 @@ def physical_fit(R11, r12, G, robot, drive_kinds: Sequence[str] = (), *, prior=N
     drive_prior : array_like, shape ``(nd,)``, optional
         Prior drive parameters: adds ``prior_weight * sum_k c_k (delta_k - drive_prior_k)^2``
         (``c_k`` in the module docstring). Without it ``delta`` has no pull.
-    solver : str
-        cvxpy solver name; the default Clarabel (Apache-2.0) handles the PSD and exponential
-        cones with a quadratic objective.
     min_eig : float
         Lower bound on every ``N_i``'s eigenvalues (``N_i >= min_eig * 1``; 0: PSD).
     drive_precision : array_like, shape ``(nd,)``, optional
@@ -246,7 +248,7 @@ def physical_fit(R11, r12, G, robot, drive_kinds: Sequence[str] = (), *, prior=N
     if dp is not None and not (np.all(np.isfinite(dp)) and np.all(dp >= 0)):
         raise BaseparamsError("physical_fit: drive_precision must be finite and >= 0")
     prob, nts, delta = _build(cp, A, r, s, n0, kinds, bounds, w, d0, min_eig, dp)
-    status = _solve(cp, prob, solver)
+    status = _solve(cp, prob, SOLVER)
     if delta.size and d0 is None and w > 0 and (dp is None or not np.any(dp)):
         notes.append("drive parameters: no drive_prior, no pull on delta (only the data and the signs)")
     if status != "optimal":

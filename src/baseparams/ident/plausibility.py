@@ -144,7 +144,7 @@ def check_prediction_log(model, log, allow_units: bool = False) -> list[str]:
         Units that look wrong, unless ``allow_units``.
     """
     robot = model.robot
-    names = [robot.joint_names[robot.dof_body[c]] for c in model.coords]
+    names = model.joints
     if log.n_samples < 3 or any(j not in log.joints for j in names):
         return []
     cols = np.array([log.joints.index(j) for j in names])

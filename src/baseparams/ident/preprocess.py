@@ -36,7 +36,7 @@ from scipy import signal
 
 from ..display import summary_repr
 from ..errors import DataError
-from .data import JointLog
+from ..jointlog import JointLog
 
 #: default low-pass cutoff: fs / CUTOFF_DIVISOR, at most CUTOFF_CAP Hz
 CUTOFF_DIVISOR = 20.0
@@ -412,6 +412,34 @@ def resample(log: JointLog, rate: float | None = None, rtol: float = UNIFORM_RTO
     step = med if rate is None else 1.0 / rate
     n = int(np.floor((t[-1] - t[0]) / step * (1 + 1e-12))) + 1
     tn = t[0] + step * np.arange(n)
+    off = int(np.sum(np.abs(dt - med) > rtol * med))
+    note = (f"time: resampled {len(t)} non-uniform samples ({spread}; {off} steps off the median by more than "
+            f"{rtol:.1%}, largest gap {dt.max() / med:.3g} steps) to {n} at {1 / step:.6g} Hz "
+            f"({'the median rate' if rate is None else 'rate given'}), linear interpolation")
+    removed = dict(log.removed)
+    if n < len(t):
+        removed["resampling to fewer samples"] = removed.get("resampling to fewer samples", 0) + len(t) - n
+    return replace(interpolate(log, tn), removed=removed, notes=log.notes + (note,))
+
+
+def interpolate(log: JointLog, tn: np.ndarray) -> JointLog:
+    """Every signal of a log interpolated linearly at other times (what :func:`resample` does on its grid).
+
+    Parameters
+    ----------
+    log : JointLog
+        The log, ``t (S,)`` strictly increasing, ``S >= 2``.
+    tn : ndarray, shape ``(K,)``
+        The times [s], increasing; outside ``[t[0], t[-1]]`` the end values are held.
+
+    Returns
+    -------
+    JointLog
+        ``log`` at ``tn``: each signal ``(K, m)`` (``None`` stays ``None``); source, notes and
+        counts as ``log``'s.
+    """
+    t = np.asarray(log.t, dtype=float)
+    dt = np.diff(t)
     i = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 2)
     w = np.clip((tn - t[i]) / dt[i], 0.0, 1.0)
 
@@ -421,15 +449,7 @@ def resample(log: JointLog, rate: float | None = None, rtol: float = UNIFORM_RTO
         ww = w.reshape((-1,) + (1,) * (y.ndim - 1))
         return y[i] * (1.0 - ww) + y[i + 1] * ww
 
-    off = int(np.sum(np.abs(dt - med) > rtol * med))
-    note = (f"time: resampled {len(t)} non-uniform samples ({spread}; {off} steps off the median by more than "
-            f"{rtol:.1%}, largest gap {dt.max() / med:.3g} steps) to {n} at {1 / step:.6g} Hz "
-            f"({'the median rate' if rate is None else 'rate given'}), linear interpolation")
-    removed = dict(log.removed)
-    if n < len(t):
-        removed["resampling to fewer samples"] = removed.get("resampling to fewer samples", 0) + len(t) - n
-    return replace(log, t=tn, q=interp(log.q), tau=interp(log.tau), dq=interp(log.dq), ddq=interp(log.ddq),
-                   removed=removed, notes=log.notes + (note,))
+    return replace(log, t=tn, q=interp(log.q), tau=interp(log.tau), dq=interp(log.dq), ddq=interp(log.ddq))
 
 
 @dataclass(frozen=True, eq=False)
@@ -623,7 +643,8 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         index = index[keep]
         for reason, c in slow.items():
             removed[reason] = removed.get(reason, 0) + c
-        notes.append(f"slow samples: {int((~keep).sum())} with |dq| below {min_speed} on a joint removed")
+        shown = np.asarray(min_speed) if np.ndim(min_speed) else min_speed  # per joint: one array, however given
+        notes.append(f"slow samples: {int((~keep).sum())} with |dq| below {shown} on a joint removed")
     else:
         notes.append("slow samples: kept (min_speed not given)")
     if len(index) == 0:
@@ -799,3 +820,106 @@ def stride_design(design: LowPass, stride: int) -> LowPass:
     if stride == 1:
         return design
     return lowpass_design(design.fs / stride, design.cutoff, design.order, why="the regressor's rate")
+
+
+def log_states(log: JointLog, cutoff: float | None, filtered: bool = False) -> tuple[np.ndarray, ...]:
+    """States at every sample of a log, for predicting its torques.
+
+    What the log has is used as it is; what it lacks is derived the way identification derives
+    it (:func:`prepare`): on a uniform grid (the log's own when its
+    time is uniform, else resampled at its median rate), positions low-passed with the zero-phase
+    Butterworth filter of the identification's ``cutoff``, ``dq`` by central differences of the
+    filtered ``q`` (``np.gradient``), ``ddq`` by central differences of ``dq`` (a measured ``dq``
+    low-passed first); derived rates are interpolated back to the log's time stamps (linear).
+    No sample is dropped: within ``2 fs / cutoff`` samples of either end the derived rates carry
+    the filter's edge transient (odd extension).
+
+    Parameters
+    ----------
+    log : JointLog
+        The log, ``S`` samples (``tau`` may be ``None``).
+    cutoff : float or None
+        The low-pass cutoff [Hz] (the identification's); ``None``: the default of
+        :func:`prepare` for this log.
+    filtered : bool
+        Low-pass the logged ``q``, ``dq`` and ``ddq`` too (identification's treatment of every
+        signal) instead of using them as logged.
+
+    Returns
+    -------
+    q, dq, ddq : ndarray, shape ``(S, m)``
+        States at ``log.t``, columns in ``log.joints`` order.
+    notes : tuple of str
+        How each was obtained, one line each.
+
+    Raises
+    ------
+    DataError
+        Fewer than 3 samples, time not increasing, a cutoff not below the log's Nyquist rate.
+    """
+    t = np.asarray(log.t, dtype=float)
+    if log.dq is not None and log.ddq is not None and not filtered:
+        return log.q, log.dq, log.ddq, ("q, dq, ddq: as logged",)
+    u = resample(log)
+    rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])
+    if cutoff is None:
+        cutoff = float(np.clip(BANDWIDTH_FACTOR * excitation_bandwidth(u.q, rate), CUTOFF_FLOOR,
+                               min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)))
+    design = lowpass_design(rate, cutoff)
+    same_grid = u.n_samples == len(t) and np.array_equal(u.t, t)
+
+    def back(x):  # grid -> the log's time stamps
+        if same_grid:
+            return x
+        return np.column_stack([np.interp(t, u.t, x[:, k]) for k in range(x.shape[1])])
+
+    how = f"zero-phase Butterworth low-pass at {cutoff:.4g} Hz"
+    grid = "" if same_grid else f" on a uniform {rate:.6g} Hz grid, interpolated back"
+    qf = zero_phase(u.q, design)
+    q, qn = (back(qf), f"q: {how}{grid}") if filtered else (log.q, "q: as logged")
+    if log.dq is not None:
+        dqf = zero_phase(u.dq, design)
+        dq, dqn = (back(dqf), f"dq: logged, {how}{grid}") if filtered else (log.dq, "dq: as logged")
+    else:
+        dqf = np.gradient(qf, 1.0 / rate, axis=0, edge_order=2)
+        dq, dqn = back(dqf), f"dq: derived, central differences of q after the {how}{grid}"
+    if log.ddq is not None:
+        ddq, ddqn = ((back(zero_phase(u.ddq, design)), f"ddq: logged, {how}{grid}") if filtered
+                     else (log.ddq, "ddq: as logged"))
+    else:
+        ddq = back(np.gradient(dqf, 1.0 / rate, axis=0, edge_order=2))
+        ddqn = f"ddq: derived, central differences of dq{' (logged, low-passed)' if log.dq is not None else ''}{grid}"
+    return np.asarray(q, float), np.asarray(dq, float), np.asarray(ddq, float), (qn, dqn, ddqn)
+
+
+def lowpass_at(t, x, cutoff: float) -> np.ndarray:
+    """Signals low-passed as identification filters them, at their own time stamps.
+
+    Parameters
+    ----------
+    t : array_like, shape ``(S,)``
+        Time stamps [s], strictly increasing.
+    x : array_like, shape ``(S, k)``
+        Signals (e.g. measured and predicted torques).
+    cutoff : float
+        The cutoff [Hz] (the identification's).
+
+    Returns
+    -------
+    ndarray, shape ``(S, k)``
+        Zero-phase Butterworth low-passed (:func:`zero_phase`) on a
+        uniform grid at the median rate (the log's own when uniform), interpolated back.
+
+    Raises
+    ------
+    DataError
+        A cutoff not below the Nyquist rate, fewer than 2 samples.
+    """
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    u = resample(JointLog(t, tuple(str(k) for k in range(x.shape[1])), x, x))
+    rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])
+    f = zero_phase(u.q, lowpass_design(rate, cutoff))
+    if u.n_samples == len(t) and np.array_equal(u.t, t):
+        return f
+    return np.column_stack([np.interp(t, u.t, f[:, k]) for k in range(f.shape[1])])

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .pipeline import Identification
+from .result import Identification
 
 
 def _condition(e: dict) -> str:
@@ -68,7 +68,7 @@ def format_identification(result: Identification) -> str:
                      f"solver {p['solver_status']}")
     lines += [f"note: {x}" for x in j["notes"]]
     if j.get("truth") is not None:
-        from .results import format_truth
+        from .saved import format_truth
 
         lines += ["", format_truth(j["truth"])]
     return "\n".join(lines)

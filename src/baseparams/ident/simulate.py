@@ -11,6 +11,7 @@ import numpy as np
 from ..analysis import analyze
 from ..errors import BaseparamsError
 from ..model.robot import Robot
+from .drives import FRICTION_TERMS
 from .model import IdentModel, ident_model
 
 #: harmonics of :func:`simulate_log`'s random trajectory
@@ -155,7 +156,7 @@ _BLOCK = 20_000
 
 
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
-                 noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=("viscous", "coulomb", "offset"),
+                 noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=FRICTION_TERMS,
                  convention: str = "khalil", trajectory=None, samples: int | None = None):
     """A synthetic joint log, with its true model parameters.
 
@@ -203,8 +204,8 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     BaseparamsError
         Loops the trajectory does not close (lower ``amplitude``); a trajectory for a floating base.
     """
+    from ..jointlog import JointLog
     from ..kinematics.floating import BASE_COORDINATES, robot_states
-    from .data import JointLog
 
     check_trajectory(robot, trajectory)
     rows = "joints" if robot.floating else "all"
@@ -236,7 +237,7 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
                                                           len(model.coords)) @ delta
                                   for i in range(0, max(len(q), 1), _BLOCK)])
     tau = add_noise(tau, noise, rng) if noise > 0 else tau
-    joints = tuple(robot.joint_names[robot.dof_body[c]] for c in model.coords)
+    joints = tuple(model.joints)
     if robot.floating:  # the base's coordinates first, its wrench not measured
         joints, tau = BASE_COORDINATES + joints, np.concatenate([np.zeros((len(t), 6)), tau], axis=1)
     log = JointLog(t, joints, q, tau, dq=dq, source=f"simulated {robot.name}")

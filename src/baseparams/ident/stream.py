@@ -1,11 +1,11 @@
 """Identification from a log streamed from its file: memory independent of the log's length.
 
-:func:`identify_stream` gives what :func:`baseparams.ident.pipeline.identify` gives on the whole
+:func:`identify_stream` gives what :func:`baseparams.ident.identify` gives on the whole
 log (the same estimate to rounding, the same standard deviations, the same validation RMS) while
 holding at most a few blocks of samples, one chunk's regressor and a bounded subsample. It reads
 the file several times, each pass block by block (a *block source*: any object with ``source``,
 ``joints``, ``has_dq``, ``has_ddq`` and ``blocks()`` yielding consecutive
-:class:`~baseparams.ident.data.JointLog` blocks, e.g. :class:`baseparams.io.logs.LogStream`):
+:class:`~baseparams.jointlog.JointLog` blocks, e.g. :class:`baseparams.io.logs.LogStream`):
 
 1. **scan**: samples, first and last time, the time steps' range (uniform or not), the first
    :data:`HEAD_ROWS` samples (the unit checks of :mod:`baseparams.ident.plausibility` run on them);
@@ -48,9 +48,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import BaseparamsError, DataError
+from ..jointlog import JointLog
 from . import chunks
 from . import preprocess as pp
-from .data import JointLog
 
 #: training samples up to which the cutoff is chosen from every sample (as in memory)
 SUBSAMPLE_MAX = 1 << 18
@@ -382,19 +382,8 @@ class Resampled:
             yield self._interp(prev, self.t0 + self.step * np.arange(k, self.n))
 
     def _interp(self, cat: JointLog, tn: np.ndarray) -> JointLog:
-        """``resample``'s linear interpolation of ``cat`` at the grid times ``tn``."""
-        t = cat.t
-        dt = np.diff(t)
-        i = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 2)
-        w = np.clip((tn - t[i]) / dt[i], 0.0, 1.0)
-
-        def interp(y):
-            if y is None:
-                return None
-            ww = w.reshape((-1,) + (1,) * (y.ndim - 1))
-            return y[i] * (1.0 - ww) + y[i + 1] * ww
-
-        return JointLog(tn, self.joints, interp(cat.q), interp(cat.tau), interp(cat.dq), interp(cat.ddq), self.source)
+        """``cat`` at the grid times ``tn`` (:func:`~baseparams.ident.preprocess.interpolate`, as ``resample``)."""
+        return replace(pp.interpolate(cat, tn), source=self.source, notes=(), removed={})
 
 
 @dataclass(frozen=True, eq=False)
@@ -867,15 +856,15 @@ class _Scores:
         return out
 
 
-def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, score_cutoff=None, sink=None,
+def validate(f, stream, span: tuple[int, int, float], cutoff: float, names, score_cutoff=None, sink=None,
              held_out: list | None = None, source: str | None = None) -> dict:
     """Pass 5: every sample ``[first, n)`` predicted and scored against the raw measured torques.
 
-    The states are those of :func:`~baseparams.ident.pipeline.predict_log` on the whole log
-    (:func:`~baseparams.ident.results.log_states`, filtered over samples ``[0, n)``): each window
+    The states are those of :func:`~baseparams.ident.predict_log` on the whole log
+    (:func:`~baseparams.ident.preprocess.log_states`, filtered over samples ``[0, n)``): each window
     reads :func:`~baseparams.ident.chunks.overlap` samples more on both sides. With
     ``score_cutoff``, the measured torques are low-passed over ``[first, n)`` alone, as
-    :func:`~baseparams.ident.pipeline.validation_scores` does.
+    :func:`~baseparams.ident.validation_scores` does.
 
     Parameters
     ----------
@@ -883,12 +872,11 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
         The identified values.
     stream : block source
         The log (uniform time stamps).
-    first, n : int
-        The scored samples; ``n`` the log's length.
+    span : tuple of (int, int, float)
+        ``(first, n, rate)``: the scored samples ``[first, n)``, ``n`` the log's length, and its
+        rate [Hz] (sets the overlap).
     cutoff : float
         The identification's cutoff [Hz].
-    rate : float
-        The log's rate [Hz] (sets the overlap).
     names : list of str, shape ``(m,)``
         The measured joints, in the model's order.
     score_cutoff : float, optional
@@ -903,11 +891,11 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
     Returns
     -------
     dict
-        :func:`~baseparams.ident.pipeline.validation_scores`'s result.
+        :func:`~baseparams.ident.validation_scores`'s result.
     """
-    from .pipeline import log_columns
-    from .results import log_states, lowpass_at
+    from .rows import log_columns
 
+    first, n, rate = span
     margin = math.ceil(chunks.OVERLAP_PERIODS * rate / min(cutoff, score_cutoff or cutoff))
     plans = [chunks.ChunkPlan(s, min(s + VALIDATION_ROWS, n), max(0, s - margin), min(n, s + VALIDATION_ROWS + margin))
              for s in range(first, n, VALIDATION_ROWS)]
@@ -916,16 +904,15 @@ def validate(f, stream, first: int, n: int, cutoff: float, rate: float, names, s
     scores = _Scores(len(names))
     for c, part in windows(stream.blocks(), plans):
         cols = log_columns(f.model, part)
-        q, dq, ddq, _ = log_states(part, cutoff, True)
+        q, dq, ddq, _ = pp.log_states(part, cutoff, True)
         own = slice(c.start - c.lo, c.stop - c.lo)
-        pred = np.concatenate([f.predict(q[own][k:k + 20000][:, cols], dq[own][k:k + 20000][:, cols],
-                                         ddq[own][k:k + 20000][:, cols]) for k in range(0, c.stop - c.start, 20000)])
+        pred = f.predict(q[own][:, cols], dq[own][:, cols], ddq[own][:, cols])  # in blocks of PREDICT_BYTES
         meas = part.tau[own][:, meas_cols]
         err_lp = None
         if score_cutoff is not None:
             lo = max(first, c.lo) - c.lo
             try:
-                lp = lowpass_at(part.t[lo:], part.tau[lo:][:, meas_cols], float(score_cutoff))
+                lp = pp.lowpass_at(part.t[lo:], part.tau[lo:][:, meas_cols], float(score_cutoff))
             except BaseparamsError as exc:
                 raise BaseparamsError(f"--score-cutoff {score_cutoff:g} Hz on {source or stream.source}'s held-out "
                                       f"samples: {exc}") from None
@@ -990,7 +977,7 @@ def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
     """
     from .uncertainty import apply_covariance
 
-    names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
+    names = model.joints
     rate = plan.design.fs / plan.factor
     if isinstance(kept, Spilled) and covariance != "hac":
         kept.close()
@@ -1013,14 +1000,9 @@ def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
     return f, note, _series_of(thin, f.theta, names)
 
 
-def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
-                    friction=("viscous", "coulomb", "offset"), coulomb_width: float | None = None,
-                    holdout: float | None = None, validation=None, cutoff: float | None = None,
-                    decimate: int | None = None, min_speed=None, prior_weight: float | None = None,
-                    convention: str = "khalil", memory_mb: float = 128.0, couplings=(), progress=None,
-                    samples: int | None = None, score_cutoff: float | None = None, covariance: str = "hac",
-                    allow_units: bool = False, predictions=None, literal: bool = False, terms="auto", seed: int = 0):
-    """:func:`~baseparams.ident.pipeline.identify` on a log streamed from its file (module docstring).
+def identify_stream(robot, stream, options=None, /, *, validation=None, predictions=None, progress=None,
+                    **keywords):
+    """:func:`~baseparams.ident.identify` on a log streamed from its file (module docstring).
 
     Parameters
     ----------
@@ -1028,19 +1010,23 @@ def identify_stream(robot, stream, *, method: str = "auto", rotor: bool = False,
         The model (fixed base).
     stream : block source
         The log, e.g. :class:`baseparams.io.logs.LogStream`.
-    method, rotor, friction, coulomb_width, holdout, cutoff, decimate, min_speed, prior_weight, convention, \
-memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, literal, terms, seed
-        As for :func:`~baseparams.ident.pipeline.identify` (``memory_mb``: the window's regressor).
+    options : IdentOptions, optional
+        How, as for :func:`~baseparams.ident.identify` (``memory_mb``: the window's regressor;
+        model terms are not tried on a streamed log).
     validation : block source, optional
         Another log to validate on (exclusive with ``holdout``).
     predictions : callable, optional
         ``predictions(t (k,), tau (k, m))`` receives the predicted torques of every validation sample,
         window by window in time order (``identify --predictions``).
+    progress : callable, optional
+        Called with one line of text at each step.
+    **keywords
+        Options as keywords, instead of or over ``options`` (:class:`~baseparams.ident.options.IdentOptions`).
 
     Returns
     -------
     Identification
-        As :func:`~baseparams.ident.pipeline.identify` returns (the series thinned to
+        As :func:`~baseparams.ident.identify` returns (the series thinned to
         :data:`SERIES_MAX` samples; no validation series beyond :data:`HELD_SERIES_MAX` held-out
         samples).
 
@@ -1049,26 +1035,20 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
     NotStreamable
         Non-uniform time stamps, a floating base (read the log whole).
     BaseparamsError
-        As :func:`~baseparams.ident.pipeline.identify`.
+        As :func:`~baseparams.ident.identify`.
     """
     from ..numerics import blas_threads
+    from .options import options_of
 
+    opts = options_of(options, keywords)
     if robot.floating:
         raise NotStreamable(f"robot {robot.name!r}: a floating base's log is read whole (its pose is unwrapped "
                             "over the whole log), not streamed")
-    if holdout is not None and validation is not None:
+    if opts.holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
-    opts = dict(validating=validation is not None, method=method, rotor=rotor, friction=tuple(friction),
-                coulomb_width=coulomb_width, holdout=holdout,
-                cutoff=cutoff, decimate=decimate, min_speed=min_speed, prior_weight=prior_weight,
-                convention=convention, memory_mb=memory_mb, couplings=tuple(couplings), samples=samples,
-                score_cutoff=score_cutoff, covariance=covariance, allow_units=allow_units, literal=literal,
-                terms=terms, seed=seed)
     kept = None
     if getattr(stream, "kind", None) in ("text", "parquet"):  # parsed once, replayed from a binary copy
-        from ..io.logs import decoded_mb
-
-        stream = kept = Replay(stream, decoded_mb(stream.path))
+        stream = kept = Replay(stream, stream.decoded_mb)
     try:
         with blas_threads():
             return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
@@ -1077,29 +1057,26 @@ memory_mb, couplings, progress, samples, score_cutoff, covariance, allow_units, 
             kept.close()
 
 
-def _passes(robot, stream, o: dict, say):
+def _passes(robot, stream, o, validating: bool, say):
     """Passes 1-3: the model, the scan, the training statistics, the plan and the accumulated rows."""
-    from ..analysis import analyze
-    from .model import ident_model
-    from .pipeline import check_log_units, log_columns
+    from .model import model_for
+    from .notes import check_log_units
+    from .rows import log_columns
 
     say(f"scanning {stream.source} (pass 1: samples, time span, checks)")
     sc = scan(stream)
     end_time = None
-    if o["holdout"] is not None:
-        if not 0 < o["holdout"] < sc.t_end - sc.t0:
-            raise BaseparamsError(f"{stream.source}: holdout {o['holdout']} s must be inside the log's "
+    if o.holdout is not None:
+        if not 0 < o.holdout < sc.t_end - sc.t0:
+            raise BaseparamsError(f"{stream.source}: holdout {o.holdout} s must be inside the log's "
                                   f"{sc.t_end - sc.t0:.6g} s")
-        end_time = sc.t_end - o["holdout"]
+        end_time = sc.t_end - o.holdout
     say(f"analysing {robot.name} (base parameters, drive model)")
-    model = ident_model(analyze(robot, samples=o["samples"], seed=o["seed"], convention=o["convention"],
-                                literal=o["literal"]),
-                        o["rotor"], o["friction"],
-                        o["coulomb_width"], couplings=o["couplings"])
+    model = model_for(robot, o)
     cols = log_columns(model, sc.head)
     say(f"training statistics of {sc.n} samples (pass 2: hold-out split, rate, cutoff subsample)")
-    tr = training(stream, sc, end_time, resample_ok=end_time is None and not o["validating"])
-    unit_notes = check_log_units(model, rows(sc.head, 0, min(sc.head.n_samples, tr.n)), cols, o["allow_units"])
+    tr = training(stream, sc, end_time, resample_ok=end_time is None and not validating)
+    unit_notes = check_log_units(model, rows(sc.head, 0, min(sc.head.n_samples, tr.n)), cols, o.allow_units)
     if sc.head.n_samples < tr.n:
         unit_notes = [f"{x} (on the first {sc.head.n_samples} samples)" for x in unit_notes]
     if not tr.uniform:  # resampled block by block; the passes read the grid
@@ -1107,69 +1084,78 @@ def _passes(robot, stream, o: dict, say):
         say(f"resampling {tr.n} non-uniform samples to {stream.n} block by block (pass 2b: the grid's statistics)")
         sc = Scan(stream.n, sc.t0, sc.t0 + stream.step * (stream.n - 1), sc.head, (*sc.notes, stream.note))
         tr = training(stream, sc, None)
-    plan = plan_training(model, stream, sc, tr, o["cutoff"], o["decimate"], o["min_speed"], o["memory_mb"])
+    plan = plan_training(model, stream, sc, tr, o.cutoff, o.decimate, o.min_speed, o.memory_mb)
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
-    parts, kept, slow = accumulate(stream, plan, model, cols, o["memory_mb"], spill=o["covariance"] == "hac")
+    parts, kept, slow = accumulate(stream, plan, model, cols, o.memory_mb, spill=o.covariance == "hac")
     return stream, sc, tr, model, cols, unit_notes, plan, parts, kept, slow
 
 
-def _identify_stream(robot, stream, validation, predictions, say, o: dict):
+def _identify_stream(robot, stream, validation, predictions, say, o):
     """:func:`identify_stream`'s steps."""
-    from .pipeline import Identification, drive_notes, fit, model_notes, position_spectrum, pulled_covariance
+    from .fitting import fit, pulled_covariance, residual_rms
+    from .pipeline import assemble
+    from .validation import position_spectrum
 
-    train, sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, say)
+    train, sc, tr, model, cols, unit_notes, plan, parts, kept, slow = _passes(robot, stream, o, validation is not None,
+                                                                              say)
     acc = chunks.combine(parts)
-    say(f"fitting ({o['method']})")
-    f = fit(model, acc, o["method"], o["prior_weight"], blocks=parts)
-    f, cov_note, train_series = covariance_pass(f, acc, o["covariance"], kept, train, plan, model, cols, say)
+    say(f"fitting ({o.method})")
+    f = fit(model, acc, o.method, o.prior_weight, blocks=parts)
+    f, cov_note, train_series = covariance_pass(f, acc, o.covariance, kept, train, plan, model, cols, say)
     f = pulled_covariance(f)
-    names = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
-    res = np.array([np.linalg.norm(fr.r @ np.r_[f.theta, -1.0]) for fr in acc.factors]) / np.sqrt(acc.samples)
+    names = model.joints
+    res = residual_rms(acc, f.theta)
     train_rms = {"rms": dict(zip(names, res.tolist())), "rms_total": float(np.sqrt(np.mean(res**2))),
                  "measure": "RMS on the fit's own rows (filtered and decimated as fitted; a streamed log is not "
                             "predicted again at every training sample)"}
     if train_series is not None:
         train_series["spectrum"] = position_spectrum(tr.sub, cols, tr.rate / tr.step, plan.design.cutoff)
     series = {"train": train_series, "validation": None}
-    val = _validation(f, stream, validation, sc, tr, plan, names, o, predictions, series, say)
+    val = _validation(f, (stream, validation), (sc, tr, plan), names, o, predictions, series, say)
+    return assemble(f, acc, o, _account(train, tr, plan, slow, o, (cov_note, unit_notes)), train_rms, val, series)
+
+
+def _account(train, tr: Training, plan: Plan, slow: int, o, notes) -> object:
+    """What the streamed passes did to the data (:class:`~baseparams.ident.pipeline.Account`)."""
+    from .pipeline import Account
+    from .terms.fit import parse_terms
+
+    cov_note, unit_notes = notes
     removed = {"resampling to fewer samples": train.removed} if getattr(train, "removed", 0) else {}
     removed["filter edges"] = 2 * plan.design.pad
     inner = tr.n - 2 * plan.design.pad
     if plan.factor > 1:
         removed[f"decimation by {plan.factor}"] = inner - plan.fitted_count()
     slow_note = ["slow samples: kept (min_speed not given)"]
-    if o["min_speed"] is not None:
-        slow_note = [f"slow samples: {slow} with |dq| below {o['min_speed']} on a joint removed"]
+    if o.min_speed is not None:
+        shown = np.asarray(o.min_speed) if np.ndim(o.min_speed) else o.min_speed
+        slow_note = [f"slow samples: {slow} with |dq| below {shown} on a joint removed"]
         if slow:
             removed["slow (|dq| < min_speed on a joint)"] = slow
     acc_note = (f"parallel filtering in {len(plan.windows())} windows of {plan.size} samples with {plan.margin}-sample "
                 f"overlaps, the log streamed from its file (equal to the whole log's to rounding)")
-    from .terms.fit import parse_terms
-
     no_terms = (["model terms: not considered for a log streamed from its file (the linear model alone; read the log "
                  "whole with --stream off for pre-sliding friction, tilt, delays and scales)"]
-                if parse_terms(o["terms"])[0] else [])
-    notes = (*plan.notes, *slow_note, acc_note, *model_notes(model), *no_terms, *drive_notes(f, acc),
-             *(f.physical.notes if f.physical is not None else ()),
-             *((f.selection.note(),) if f.selection is not None else ()), cov_note, *unit_notes)
-    options = {"method": o["method"], "convention": o["convention"], "rows": str(model.analysis.rows),
-               "rotor": bool(o["rotor"]), "friction": tuple(o["friction"]), "coulomb_width": o["coulomb_width"],
-               "couplings": tuple(o["couplings"]), "cutoff": float(plan.design.cutoff), "decimate": int(plan.factor),
-               "min_speed": o["min_speed"], "literal": bool(o["literal"])}
-    samples = {"read": int(getattr(train, "raw_n", tr.n)), "used": int(acc.samples), "removed": removed}
-    return Identification(f, samples, train_rms, val, tuple(notes), series, options)
+                if parse_terms(o.terms)[0] else [])
+    return Account(int(getattr(train, "raw_n", tr.n)), removed, float(plan.design.cutoff), int(plan.factor),
+                   (*plan.notes, *slow_note), acc_note, tuple(no_terms), cov_note, tuple(unit_notes))
 
 
-def _validation(f, stream, other, sc: Scan, tr: Training, plan: Plan, names, o: dict, predictions, series, say):
-    """Pass 5 on the held-out tail or on another log (None without either); the validation series when small."""
-    from .pipeline import log_columns, report_series
+def _validation(f, sources, passes, names, o, predictions, series, say):
+    """Pass 5 on the held-out tail or on another log (None without either); the validation series when small.
 
-    if o["holdout"] is None and other is None:
+    ``sources`` is ``(stream, other log or None)``, ``passes`` the training log's ``(Scan, Training, Plan)``.
+    """
+    from .rows import log_columns
+    from .validation import report_series
+
+    (stream, other), (sc, tr, plan) = sources, passes
+    if o.holdout is None and other is None:
         return None
     if other is None:
         src, first, n, rate = stream, tr.n, sc.n, tr.rate
-        source = f"{stream.source} (last {o['holdout']:g} s)"
+        source = f"{stream.source} (last {o.holdout:g} s)"
         say(f"validating on {n - first} held-out samples (pass 5: every one, against the raw measured torques)")
     else:
         osc = scan(other)
@@ -1177,9 +1163,9 @@ def _validation(f, stream, other, sc: Scan, tr: Training, plan: Plan, names, o: 
         src, first, n, rate, source = other, 0, osc.n, otr.rate, other.source
         say(f"validating on {n} samples of {other.source} (every one, against the raw measured torques)")
     held: list | None = [] if n - first <= HELD_SERIES_MAX else None
-    val = validate(f, src, first, n, plan.design.cutoff, rate, names, o["score_cutoff"], predictions, held, source)
+    val = validate(f, src, (first, n, rate), plan.design.cutoff, names, o.score_cutoff, predictions, held, source)
     if held:
         h = replace(concat(held), source=source)
         vprep = pp.prepare(h, cutoff=plan.design.cutoff, decimate=plan.factor)
-        series["validation"] = report_series(f.model, vprep, log_columns(f.model, h), f.theta, names, o["memory_mb"])
+        series["validation"] = report_series(f.model, vprep, log_columns(f.model, h), f.theta, names, o.memory_mb)
     return val

@@ -16,9 +16,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import DataError, ModelError
+from ..jointlog import JointLog
 from ..model.robot import Robot
 from ..model.weld import weld
-from .data import JointLog
 
 #: largest logged range [rad or m] of a joint held still (welded at its median)
 STILL = 1e-3

@@ -394,7 +394,7 @@ def with_covariance(estimate, theta: np.ndarray, cov: np.ndarray, label: str):
 def fitted_rows(model, prep, cols: np.ndarray, memory_mb: float, log, min_speed=None):
     """The fitted samples' rows again, chunk by chunk in time order (the covariance's second pass).
 
-    The same samples :func:`baseparams.ident.pipeline.accumulate_prepared` fitted on its chunked
+    The same samples :func:`baseparams.ident.accumulate_prepared` fitted on its chunked
     path (the kept samples are decided on the whole log's grid, so any chunk size gives them).
 
     Parameters

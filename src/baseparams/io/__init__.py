@@ -1,4 +1,9 @@
-"""Readers and writers of robot files (edge of the library: depends on the model only)."""
+"""Readers and writers of robot files and joint logs.
+
+Layer: below identification (:mod:`baseparams.ident`, which converts its results for the writers
+here: :mod:`baseparams.ident.export`); depends on the model, kinematics, regressor and the low
+helpers (files, tables, schema, :class:`~baseparams.jointlog.JointLog`) only.
+"""
 
 __all__ = ["load_mjcf"]
 

@@ -1,4 +1,4 @@
-"""Read a recorded joint log (CSV/TSV, NPZ, Parquet, ROS bag) into a :class:`~baseparams.ident.data.JointLog`.
+"""Read a recorded joint log (CSV/TSV, NPZ, Parquet, ROS bag) into a :class:`~baseparams.jointlog.JointLog`.
 
 :func:`read_log` picks the reader by the path: ``.csv``/``.tsv``/``.txt`` (text table, delimiter
 sniffed, header row required), ``.npz`` (one 1-D array per column), ``.parquet``/``.pq``
@@ -93,8 +93,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError
-from ..files import atomic_path, check_input
-from ..ident.data import JointLog
+from ..files import check_input
+from ..jointlog import JointLog
 from ..kinematics.floating import BASE_COORDINATES, POSE_COLUMNS, TWIST_COLUMNS
 from ..model.robot import Robot
 
@@ -981,8 +981,8 @@ def log_columns_of(log: JointLog) -> dict[str, np.ndarray]:
     return cols
 
 
-def write_log(path, log: JointLog) -> Path:
-    """Write a log in the default layout, read back exactly by :func:`read_log`.
+def write_log(path, log: JointLog, inputs=(), what: str = "log") -> Path:
+    """Write a log in the default layout, read back exactly by :func:`read_log` (atomically).
 
     Parameters
     ----------
@@ -990,6 +990,10 @@ def write_log(path, log: JointLog) -> Path:
         ``.csv`` / ``.tsv`` (text, every value as its shortest exact decimal) or ``.npz``.
     log : JointLog
         The log.
+    inputs : iterable of str or Path
+        The run's input files, which the log must not overwrite.
+    what : str
+        The output's role, for messages (``out``).
 
     Returns
     -------
@@ -1006,52 +1010,10 @@ def write_log(path, log: JointLog) -> Path:
     check_path(path, "write_log: path")
     if not isinstance(log, JointLog):
         raise ArgumentTypeError(f"write_log: log must be a JointLog, got {type(log).__name__}")
-    p = Path(path)
-    cols = log_columns_of(log)
-    if p.suffix.lower() == ".npz":
-        try:
-            with atomic_path(p, what="log") as tmp:  # never a partial file under the final name
-                np.savez(tmp, **cols)
-        except OSError as exc:
-            raise DataError(f"{p}: cannot write ({exc.strerror or exc})") from None
-    else:
-        write_table(p, cols, "a log as .csv, .tsv or .npz")
-    return p
+    from ..tables import write_table
 
-
-def write_table(path, cols: dict[str, np.ndarray], what: str = "a table as .csv or .tsv") -> Path:
-    """Columns as a text table with a header row (every value as its shortest exact decimal).
-
-    Parameters
-    ----------
-    path : str or Path
-        ``.csv`` (comma-separated) or ``.tsv`` (tab-separated).
-    cols : dict of str to ndarray, each shape ``(S,)``
-        The columns, in order.
-    what : str
-        How a wrong suffix is named in the error (``"a log as .csv, .tsv or .npz"``).
-
-    Returns
-    -------
-    Path
-        The file written.
-
-    Raises
-    ------
-    DataError
-        Another suffix, or a file that cannot be written.
-    """
-    p = Path(path)
-    if p.suffix.lower() not in (".csv", ".tsv"):
-        raise DataError(f"{p}: write {what}, not {p.suffix or 'no suffix'}")
-    delim = "\t" if p.suffix.lower() == ".tsv" else ","
-    try:
-        with atomic_path(p, what="table") as tmp, open(tmp, "w", newline="") as fh:
-            fh.write(delim.join(cols) + "\n")
-            np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=delim, fmt="%.17g")
-    except OSError as exc:
-        raise DataError(f"{p}: cannot write ({exc.strerror or exc})") from None
-    return p
+    return write_table(path, log_columns_of(log), "a log as .csv, .tsv or .npz", (".csv", ".tsv", ".npz"), inputs,
+                       what)
 
 
 # ---------------------------------------------------------------- streamed logs
@@ -1186,6 +1148,11 @@ class LogStream:
 
     def __repr__(self) -> str:
         return f"<LogStream {self.source}: {len(self.joints)} joints, {self.kind}>"
+
+    @functools.cached_property
+    def decoded_mb(self) -> float:
+        """The size of the log's numbers [MB] (:func:`decoded_mb`: a compressed Parquet file's by its rows)."""
+        return decoded_mb(self.path)
 
     # ------------------------------------------------------------ the blocks
     def blocks(self) -> Iterator[JointLog]:

@@ -18,10 +18,10 @@ expressed in the MuJoCo body frame (``body_xpos``, ``body_xmat`` at ``qpos0``) b
 Nothing is written unchecked: the written text is reloaded by MuJoCo and its inverse dynamics
 (``mj_inverse``; contacts, joint limits, equalities and springs disabled, which are not part of the
 identified model) must reproduce the parameters' own generalized forces (rigid body, armature,
-damping; :func:`identified_mjcf`: the identification's own prediction of them, its base-parameter
-regressor times its ``theta``) to :data:`TOLERANCE` relative RMS, or nothing is written. MuJoCo's writer prints six
-significant digits (``%g``), so the file's numbers (poses too, which MuJoCo rewrites as it
-compiled them) carry relative rounding up to ``5e-7``; the torques they give differ from the
+damping; for an identification, :func:`baseparams.ident.export.identified_mjcf`, its own prediction of
+them, its base-parameter regressor times its ``theta``) to :data:`TOLERANCE` relative RMS, or nothing
+is written. MuJoCo's writer prints six significant digits (``%g``), so the file's numbers (poses too,
+which MuJoCo rewrites as it compiled them) carry relative rounding up to ``5e-7``; the torques they give differ from the
 parameters' at ~1e-6 of their RMS on the test robots. A wrong frame, sign or unit errs by
 percents.
 
@@ -514,95 +514,3 @@ def check_mjcf_request(model, method: str, dest, what: str = "--mjcf") -> None:
                               f"(.xml) or URDF (.urdf) model file, got {shown} (nothing was fitted)")
     if Path(os.fspath(dest)).suffix.lower() != ".xml":
         raise BaseparamsError(f"{what} {dest}: an MJCF file must end in .xml (nothing was fitted)")
-
-
-def identified_mjcf(ident, source: str | Path, dest: str | Path, log, *, inputs=(),
-                    max_samples: int = 20000) -> list[str]:
-    """Write a physical identification into a copy of its MJCF model, checked on the log's samples.
-
-    :func:`write_mjcf` with the physical fit's inertias and drive terms
-    (:func:`~baseparams.io.urdf.identified_drives`), checked at the log's states (filtered as
-    :meth:`~baseparams.ident.pipeline.Identification.predict` filters them; at most
-    ``max_samples``, evenly spaced). After writing, the file is reloaded and its ``mj_inverse``
-    (``frictionloss`` on) compared with the identification's own prediction and with the log's
-    measured torques; both relative RMS differences are in the notes.
-
-    Parameters
-    ----------
-    ident : Identification
-        A ``method="physical"`` identification of every joint of the robot read from ``source``.
-    source : str or Path
-        The MJCF (or URDF) file the robot was read from.
-    dest : str or Path
-        The file written.
-    log : JointLog
-        The log identified (``S`` samples; ``tau`` used for the last comparison when present).
-    inputs : iterable of str or Path
-        Further input files ``dest`` must not overwrite.
-    max_samples : int
-        Most samples checked.
-
-    Returns
-    -------
-    list of str
-        Notes (:func:`write_mjcf`'s, then the two comparisons).
-
-    Raises
-    ------
-    BaseparamsError
-        Not a physical identification, a sub-chain, coupled motors, or anything
-        :func:`write_mjcf` refuses (nothing is written then).
-    """
-    from ..ident.results import log_states
-    from .urdf import identified_drives
-
-    if ident.fit.physical is None:
-        raise BaseparamsError("--mjcf needs --method physical: least squares gives base parameters, not bodies")
-    robot = ident.model.robot
-    if list(ident.model.coords) != list(range(robot.dof)):
-        raise BaseparamsError("--mjcf: every joint of the robot must be identified (a sub-chain's values are not "
-                              "the whole model's)")
-    drives, couplings = identified_drives(ident)
-    if any(c.get(k) is not None for c in couplings for k in ("Iam", "Fvm", "Fcm")):
-        raise BaseparamsError("--mjcf: coupled motors (--coupling) have no MJCF joint attribute; --urdf keeps "
-                              "their values in comments")
-    q, dq, ddq, _ = log_states(log, (ident.options or {}).get("cutoff"), True)
-    cols = [list(log.joints).index(j) for j in ident.joints]
-    rows = np.unique(np.linspace(0, len(q) - 1, min(len(q), max_samples)).astype(int))
-    q, dq, ddq = (x[rows][:, cols] for x in (q, dq, ddq))
-    tilt = next((t for t in ident.fit.terms if t.name == "tilt"), None)
-    extra = 0.0 if tilt is None else tilt.adjust_model(ident.fit, q, q, dq, ddq, np.zeros_like(q))
-    notes = write_mjcf(source, dest, robot, ident.fit.physical.pi, "paper", drives=drives, states=(q, dq, ddq),
-                       expected=_held_prediction(ident, q, dq, ddq) + extra, inputs=inputs,
-                       base_rotation=None if tilt is None else tilt.base_rotation())
-    notes += [f"--mjcf: not written: {x}" for t in ident.fit.terms for x in t.export().get("not", [])]
-    got = mjcf_inverse(dest, robot, q, dq, ddq, frictionloss=True)
-    pred = ident.fit.predict(q, dq, ddq) + extra - _drive_vectors(robot, drives)["Fo"]  # Fo: not in MJCF
-
-    def rel(a, b):
-        return float(np.sqrt(np.mean((a - b) ** 2)) / (np.sqrt(np.mean(b**2)) or 1.0))
-
-    without = " (without Fo)" if any(d.get("Fo") for d in drives.values()) else ""
-    notes.append(f"--mjcf: {dest} reloaded: MuJoCo's mj_inverse (frictionloss on; contacts, limits off) vs the "
-                 f"identification's own prediction{without} on {len(q)} log samples: relative RMS difference "
-                 f"{rel(got, pred):.2g}")
-    if log.tau is not None:
-        tau = np.asarray(log.tau, dtype=float)[rows][:, cols]
-        notes.append(f"--mjcf: MuJoCo's mj_inverse of {dest} vs the log's measured torques: relative RMS "
-                     f"difference {rel(got, tau):.3g}")
-    return notes
-
-
-def _held_prediction(ident, q, dq, ddq) -> np.ndarray:
-    """The identification's own prediction ``(S, m)`` of the terms MJCF holds exactly: rigid body, ``Ia``, ``Fv``.
-
-    Its model regressor times ``theta = G [pi; delta]`` with the other drive kinds (``Fc``, ``Fo``)
-    zeroed; computed in chunks of 5000 samples.
-    """
-    phys = ident.fit.physical
-    kinds = np.array(ident.model.drives.param_kinds, dtype=object)
-    held = np.where(np.isin(kinds, ["Ia", "Fv"]), np.asarray(phys.delta, dtype=float), 0.0) if kinds.size else \
-        np.zeros(0)
-    theta = ident.model.full_map() @ np.concatenate([np.asarray(phys.pi, dtype=float), held])
-    return np.concatenate([ident.model.regressor(q[k:k + 5000], dq[k:k + 5000], ddq[k:k + 5000]) @ theta
-                           for k in range(0, len(q), 5000)])

@@ -772,7 +772,7 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         identified), in the joint's units (N m s/rad, N m, kg m^2 for a revolute joint).
     couplings : iterable of dict
         Coupled motors, ``{"name", "joints": {joint: weight}, "Iam", "Fvm", "Fcm"}`` (as
-        :meth:`baseparams.ident.pipeline.Identification.couplings`): noted in each joint's comment.
+        :meth:`baseparams.ident.Identification.couplings`): noted in each joint's comment.
     inputs : iterable of str or Path
         Further input files ``dest`` must not overwrite (the log, ...).
     base_rotation : array_like, shape ``(3, 3)``, optional
@@ -1066,28 +1066,3 @@ def _drive_notes(drives: dict, written: int, held_out: dict) -> list[str]:
             f"{what[k]} ({len(set(v))} {'motors' if k == 'coupled motors' else 'joints'})" for k, v in held_out.items())
             + "; their values are in an XML comment <!-- baseparams: ... --> inside each joint")
     return notes
-
-
-def identified_drives(ident) -> tuple[dict, list]:
-    """The drive terms of a physical identification, as :func:`write_urdf` takes them.
-
-    Parameters
-    ----------
-    ident : Identification
-        A physically consistent identification (``method="physical"``): its drive values are
-        the physical fit's (every modelled drive parameter has one, also those the data regroup
-        with base parameters).
-
-    Returns
-    -------
-    drives : dict
-        ``{joint: {"Ia", "Fv", "Fc", "Fo": float or None}}`` (None: not modelled).
-    couplings : list of dict
-        ``{"name", "joints", "Iam", "Fvm", "Fcm"}`` per coupled motor.
-    """
-    d = ident.model.drives
-    values = dict(zip(d.names, np.asarray(ident.fit.physical.delta, dtype=float).tolist()))
-    drives = {j: {k: values.get(f"{k}_{j}") for k in ("Ia", "Fv", "Fc", "Fo")} for j in d.joints}
-    couplings = [{"name": c.name, "joints": dict(zip(c.joints, c.weights)),
-                  **{k: values.get(f"{k}_{c.name}") for k in ("Iam", "Fvm", "Fcm")}} for c in d.couplings]
-    return drives, couplings

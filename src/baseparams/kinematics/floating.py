@@ -11,7 +11,7 @@ twist beside the joints (README "Log layout"; :mod:`baseparams.io.logs`):
   linear velocity of that origin and the angular velocity, both expressed in the **base** frame
   (what ROS odometry's twist and an IMU's gyro give; Pinocchio's free-flyer velocity).
 
-Accelerations are derived, like the joints'. In memory (:class:`~baseparams.ident.data.JointLog`)
+Accelerations are derived, like the joints'. In memory (:class:`~baseparams.jointlog.JointLog`)
 the base is six coordinates :data:`BASE_COORDINATES` that are smooth in time, so that the
 preprocessing filters and differentiates them like joint positions: the position and the
 Z-Y-X Euler angles ``R = Rz(yaw) Ry(pitch) Rx(roll)``, roll and yaw unwrapped (a robot may turn

@@ -513,6 +513,27 @@ class Robot:
         return len(self.loops) > 0 or len(self.couplings) > 0
 
     @property
+    def measured_coords(self) -> np.ndarray:
+        """The coordinates a joint log measures ``(m,)``: the actuated ones with loops, else every one."""
+        return np.asarray(self.actuated, dtype=int) if self.has_loops else np.arange(self.dof)
+
+    def coordinate_names(self, coords=None) -> list[str]:
+        """The joint of each coordinate (a joint log's column names).
+
+        Parameters
+        ----------
+        coords : array_like of int, shape ``(m,)``, optional
+            Coordinates (indices into ``q``); default :attr:`measured_coords`.
+
+        Returns
+        -------
+        list of str
+            The name of the joint moving each coordinate.
+        """
+        coords = self.measured_coords if coords is None else coords
+        return [self.joint_names[self.dof_body[c]] for c in coords]
+
+    @property
     def only_couplings(self) -> bool:
         """True when couplings (URDF ``<mimic>``) constrain the tree and no loop joint does.
 

@@ -790,7 +790,7 @@ def identification_html(ident) -> str:
     Parameters
     ----------
     ident : Identification
-        The result of :func:`baseparams.ident.pipeline.identify`.
+        The result of :func:`baseparams.ident.identify`.
 
     Returns
     -------

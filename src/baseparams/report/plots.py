@@ -91,7 +91,7 @@ def torque_plot(result, path) -> Path:
 
     Parameters
     ----------
-    result : baseparams.ident.pipeline.Identification
+    result : baseparams.ident.Identification
         An identification with its series (:attr:`Identification.series`).
     path : str or Path
         Output file; the format from its suffix (``.png``, ``.svg``, ``.pdf``).

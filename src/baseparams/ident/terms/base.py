@@ -78,8 +78,7 @@ class TermContext:
     @property
     def joints(self) -> list[str]:
         """The measured joints ``(m,)``."""
-        r = self.model.robot
-        return [r.joint_names[r.dof_body[c]] for c in self.model.coords]
+        return self.model.joints
 
     def apply(self, x) -> np.ndarray:
         """Full-rate signals filtered and decimated like the fitted rows.

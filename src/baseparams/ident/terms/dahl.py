@@ -151,8 +151,8 @@ class Dahl(Term):
         """``Fc_j (z_j - core Coulomb column)`` added, ``z_j`` integrated along the logged positions."""
         model = fit.model
         pos = {n: k for k, n in enumerate(model.names)}
-        joints = [model.robot.joint_names[model.robot.dof_body[c]] for c in model.coords]
-        sel = model.coords if not model.robot.has_loops else np.arange(len(model.coords))
+        joints = model.joints
+        sel = model.row_states
         out = tau.copy()
         z = dahl_state(q_raw, np.where(np.isfinite(self.delta), self.delta, 1.0))
         for j, name in enumerate(joints):

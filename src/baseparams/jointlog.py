@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..display import clip, format_number
+from .display import clip, format_number
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,8 +53,8 @@ class JointLog:
     notes: tuple[str, ...] = ()
 
     def __post_init__(self):
-        from ..arguments import ArgumentTypeError, check_array
-        from ..errors import DataError
+        from .arguments import ArgumentTypeError, check_array
+        from .errors import DataError
 
         t = check_array(self.t, "JointLog: t", 1, finite=False)  # types and shapes; values: :meth:`checked`
         object.__setattr__(self, "t", t)
@@ -86,7 +86,7 @@ class JointLog:
             The first value that is not finite (naming the signal, the joint and the sample), or a
             time stamp that does not increase.
         """
-        from ..errors import DataError
+        from .errors import DataError
 
         for name in ("t", "q", "tau", "dq", "ddq"):
             a = getattr(self, name)
@@ -109,7 +109,7 @@ class JointLog:
     @property
     def floating(self) -> bool:
         """Whether the first six columns are a floating base's coordinates (not joints)."""
-        from ..kinematics.floating import BASE_COORDINATES
+        from .kinematics.floating import BASE_COORDINATES
 
         return tuple(self.joints[:6]) == BASE_COORDINATES
 

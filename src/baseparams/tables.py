@@ -1,21 +1,23 @@
-"""Write named columns to CSV/TSV, Parquet or NPZ, atomically (predicted torques, regressors).
+"""The one table writer: named columns to CSV/TSV, Parquet or NPZ, atomically (logs, trajectories, predictions).
 
 The format is chosen by the suffix: ``.csv`` / ``.tsv`` (a header row, every value as its
 shortest exact decimal, ``%.17g``), ``.parquet`` / ``.pq`` (pyarrow, the extra ``parquet``;
 float64 columns, string columns kept as strings), ``.npz`` (one array per name, any shape).
-Every write goes through :func:`baseparams.files.atomic_path`.
+Every write goes through :func:`baseparams.files.atomic_path` once. :func:`write_columns` takes any
+of these (an output option's file: ``--out``, ``--predictions``); :func:`write_table` the formats
+of a joint log or a trajectory (:func:`baseparams.io.logs.write_log`,
+:meth:`baseparams.excitation.result.Excitation.save`); :func:`column_writer` appends block by block.
 """
 
 from __future__ import annotations
 
 import contextlib
-import io
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import BaseparamsError
-from ..files import atomic_path, check_output
+from .errors import BaseparamsError, DataError
+from .files import atomic_path, check_output
 
 #: suffixes :func:`write_columns` writes
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq", ".npz")
@@ -102,29 +104,73 @@ def write_columns(path, cols: dict, inputs=(), what: str = "--out") -> Path:
         As :func:`check_table_path`, or a failed write.
     """
     check_table_path(path, inputs, what)
-    suffix = Path(path).suffix.lower()
     with atomic_path(path, inputs, what) as tmp:
-        if suffix == ".npz":
-            with open(tmp, "wb") as fh:
-                np.savez(fh, **cols)
-        elif suffix in (".parquet", ".pq"):
-            import pyarrow as pa
-            import pyarrow.parquet as pq
+        _write(tmp, cols, Path(path).suffix.lower())
+    return Path(path)
 
-            arrays = {k: pa.array(np.asarray(v)) for k, v in cols.items()}
-            pq.write_table(pa.table(arrays), tmp)
-        else:
-            delim = "\t" if suffix == ".tsv" else ","
-            buf = io.StringIO()
-            buf.write(delim.join(cols) + "\n")
-            text_cols = [np.asarray(v) for v in cols.values()]
+
+def write_table(path, cols: dict, formats: str = "a table as .csv or .tsv", suffixes=(".csv", ".tsv"),
+                inputs=(), what: str = "table") -> Path:
+    """Columns of one length in one of a few formats, a bad suffix or a failed write a :class:`DataError`.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.csv`` (comma-separated) or ``.tsv`` (tab-separated), or another of ``suffixes``.
+    cols : dict of str to ndarray, each shape ``(S,)``
+        The columns, in order.
+    formats : str
+        How a wrong suffix is named in the error (``"a log as .csv, .tsv or .npz"``).
+    suffixes : tuple of str
+        The suffixes taken (of :data:`TABLE_SUFFIXES`).
+    inputs : iterable of str or path
+        The run's input files (the output must not overwrite one).
+    what : str
+        The output's role, for messages (``--out``).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    DataError
+        Another suffix, or a file that cannot be written.
+    BaseparamsError
+        An output onto an input, a missing folder, a non-regular target.
+    """
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise DataError(f"{p}: write {formats}, not {p.suffix or 'no suffix'}")
+    try:
+        with atomic_path(p, inputs, what) as tmp:  # never a partial file under the final name
+            _write(tmp, cols, p.suffix.lower())
+    except OSError as exc:
+        raise DataError(f"{p}: cannot write ({exc.strerror or exc})") from None
+    return p
+
+
+def _write(tmp: Path, cols: dict, suffix: str) -> None:
+    """Columns written to ``tmp`` in the format of ``suffix`` (module docstring)."""
+    if suffix == ".npz":
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **cols)
+    elif suffix in (".parquet", ".pq"):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        pq.write_table(pa.table({k: pa.array(np.asarray(v)) for k, v in cols.items()}), tmp)
+    else:
+        delim = "\t" if suffix == ".tsv" else ","
+        text_cols = [np.asarray(v) for v in cols.values()]
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(delim.join(cols) + "\n")
             if all(c.dtype.kind in "fiub" for c in text_cols):
-                np.savetxt(buf, np.column_stack(text_cols).astype(float), delimiter=delim, fmt="%.17g")
+                np.savetxt(fh, np.column_stack(text_cols).astype(float), delimiter=delim, fmt="%.17g")
             else:
                 for row in zip(*text_cols):
-                    buf.write(delim.join(str(x) if isinstance(x, str) else f"{float(x):.17g}" for x in row) + "\n")
-            tmp.write_text(buf.getvalue(), encoding="utf-8")
-    return Path(path)
+                    fh.write(delim.join(str(x) if isinstance(x, str) else f"{float(x):.17g}" for x in row) + "\n")
 
 
 @contextlib.contextmanager

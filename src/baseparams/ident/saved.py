@@ -1,14 +1,16 @@
-"""Identification results going back in: the saved file, the robot fingerprint, states, the truth.
+"""An identification's file: written, read back for its robot; the robot fingerprint; the truth.
 
-The saved file's format, the robot fingerprint, states of a log for prediction, the comparison
-with a simulation's truth.
+The saved file's format (:func:`document`, :func:`save`, :func:`read`), the robot fingerprint, the
+comparison with a simulation's truth (:func:`compare_truth`).
 
-The file (:meth:`~baseparams.ident.pipeline.Identification.save`) is one JSON object::
+The file (:meth:`~baseparams.ident.Identification.save`) is one JSON object::
 
     {"format": "baseparams-identification", "version": 1, "baseparams": "0.1.0",
      "robot": {"name", "fingerprint", "bodies", "dof", "parameters", "joints"},
-     "options": {"method", "convention", "rows", "rotor", "friction", "coulomb_width",
-                 "couplings": [{"name", "joints", "weights"}], "cutoff", "decimate", "min_speed"},
+     "options": {"method", "rotor", "friction", "coulomb_width", "couplings": [{"name", "joints", "weights"}],
+                 "holdout", "cutoff", "decimate", "min_speed", "prior_weight", "convention", "covariance",
+                 "score_cutoff", "allow_units", "literal", "terms", "analysis_samples", "seed", "memory_mb",
+                 "rows"},       # IdentOptions.to_json() (cutoff, decimate: as used) and the measured rows
      "parameters": {"names", "values", "std"},       # the model parameters theta (p,)
      "base_parameters": [...], "drives": [...], "couplings": [...],   # as in to_json (readable)
      "estimate": {...}, "physical": {...} or null, "samples", "train", "validation", "notes"}
@@ -35,7 +37,7 @@ import numpy as np
 from ..arguments import ArgumentTypeError
 from ..errors import BaseparamsError
 from ..model.robot import Robot
-from .data import JointLog
+from ..schema import array
 
 #: the ``format`` field of a saved identification
 FORMAT = "baseparams-identification"
@@ -114,22 +116,6 @@ def numbers(a) -> list:
     return number(a) if a.ndim == 0 else [numbers(x) for x in a]
 
 
-def array(x) -> np.ndarray:
-    """Nested lists of :func:`numbers` back to a float array (``None`` as NaN).
-
-    Parameters
-    ----------
-    x : list
-        Nested lists of numbers or ``None``.
-
-    Returns
-    -------
-    ndarray
-        The array.
-    """
-    return np.array(x, dtype=float) if x is not None else np.array(np.nan)
-
-
 def read_document(path) -> dict:
     """A saved identification's JSON object, its format and version checked, then its schema.
 
@@ -203,119 +189,15 @@ def check_robot(doc: dict, robot: Robot, source: str) -> None:
     from ..numerics import row_mask, rows_spec
 
     rows = doc.get("options", {}).get("rows", "all")
-    coords = robot.actuated if robot.has_loops else np.flatnonzero(row_mask(robot, rows_spec(rows)))
-    joints = [robot.joint_names[robot.dof_body[c]] for c in coords]
+    try:
+        coords = robot.actuated if robot.has_loops else np.flatnonzero(row_mask(robot, rows_spec(rows)))
+    except BaseparamsError as exc:
+        raise type(exc)(f"{source}: options.rows: {exc}") from None
+    joints = robot.coordinate_names(coords)
     for key, mine_n in (("bodies", robot.n), ("dof", robot.dof), ("parameters", 10 * robot.n), ("joints", joints)):
         if saved.get(key) != mine_n:
             raise BaseparamsError(f"{source}: robot.{key}: {saved.get(key)} in the file, {mine_n} in robot "
                                   f"{robot.name!r} of the same fingerprint: the file was edited")
-
-
-def log_states(log: JointLog, cutoff: float | None, filtered: bool = False) -> tuple[np.ndarray, ...]:
-    """States at every sample of a log, for predicting its torques.
-
-    What the log has is used as it is; what it lacks is derived the way identification derives
-    it (:func:`baseparams.ident.preprocess.prepare`): on a uniform grid (the log's own when its
-    time is uniform, else resampled at its median rate), positions low-passed with the zero-phase
-    Butterworth filter of the identification's ``cutoff``, ``dq`` by central differences of the
-    filtered ``q`` (``np.gradient``), ``ddq`` by central differences of ``dq`` (a measured ``dq``
-    low-passed first); derived rates are interpolated back to the log's time stamps (linear).
-    No sample is dropped: within ``2 fs / cutoff`` samples of either end the derived rates carry
-    the filter's edge transient (odd extension).
-
-    Parameters
-    ----------
-    log : JointLog
-        The log, ``S`` samples (``tau`` may be ``None``).
-    cutoff : float or None
-        The low-pass cutoff [Hz] (the identification's); ``None``: the default of
-        :func:`~baseparams.ident.preprocess.prepare` for this log.
-    filtered : bool
-        Low-pass the logged ``q``, ``dq`` and ``ddq`` too (identification's treatment of every
-        signal) instead of using them as logged.
-
-    Returns
-    -------
-    q, dq, ddq : ndarray, shape ``(S, m)``
-        States at ``log.t``, columns in ``log.joints`` order.
-    notes : tuple of str
-        How each was obtained, one line each.
-
-    Raises
-    ------
-    DataError
-        Fewer than 3 samples, time not increasing, a cutoff not below the log's Nyquist rate.
-    """
-    from . import preprocess as pp
-
-    t = np.asarray(log.t, dtype=float)
-    if log.dq is not None and log.ddq is not None and not filtered:
-        return log.q, log.dq, log.ddq, ("q, dq, ddq: as logged",)
-    u = pp.resample(log)
-    rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])
-    if cutoff is None:
-        cutoff = float(np.clip(pp.BANDWIDTH_FACTOR * pp.excitation_bandwidth(u.q, rate), pp.CUTOFF_FLOOR,
-                               min(rate / pp.CUTOFF_DIVISOR, pp.CUTOFF_CAP)))
-    design = pp.lowpass_design(rate, cutoff)
-    same_grid = u.n_samples == len(t) and np.array_equal(u.t, t)
-
-    def back(x):  # grid -> the log's time stamps
-        if same_grid:
-            return x
-        return np.column_stack([np.interp(t, u.t, x[:, k]) for k in range(x.shape[1])])
-
-    how = f"zero-phase Butterworth low-pass at {cutoff:.4g} Hz"
-    grid = "" if same_grid else f" on a uniform {rate:.6g} Hz grid, interpolated back"
-    qf = pp.zero_phase(u.q, design)
-    q, qn = (back(qf), f"q: {how}{grid}") if filtered else (log.q, "q: as logged")
-    if log.dq is not None:
-        dqf = pp.zero_phase(u.dq, design)
-        dq, dqn = (back(dqf), f"dq: logged, {how}{grid}") if filtered else (log.dq, "dq: as logged")
-    else:
-        dqf = np.gradient(qf, 1.0 / rate, axis=0, edge_order=2)
-        dq, dqn = back(dqf), f"dq: derived, central differences of q after the {how}{grid}"
-    if log.ddq is not None:
-        ddq, ddqn = ((back(pp.zero_phase(u.ddq, design)), f"ddq: logged, {how}{grid}") if filtered
-                     else (log.ddq, "ddq: as logged"))
-    else:
-        ddq = back(np.gradient(dqf, 1.0 / rate, axis=0, edge_order=2))
-        ddqn = f"ddq: derived, central differences of dq{' (logged, low-passed)' if log.dq is not None else ''}{grid}"
-    return np.asarray(q, float), np.asarray(dq, float), np.asarray(ddq, float), (qn, dqn, ddqn)
-
-
-def lowpass_at(t, x, cutoff: float) -> np.ndarray:
-    """Signals low-passed as identification filters them, at their own time stamps.
-
-    Parameters
-    ----------
-    t : array_like, shape ``(S,)``
-        Time stamps [s], strictly increasing.
-    x : array_like, shape ``(S, k)``
-        Signals (e.g. measured and predicted torques).
-    cutoff : float
-        The cutoff [Hz] (the identification's).
-
-    Returns
-    -------
-    ndarray, shape ``(S, k)``
-        Zero-phase Butterworth low-passed (:func:`~baseparams.ident.preprocess.zero_phase`) on a
-        uniform grid at the median rate (the log's own when uniform), interpolated back.
-
-    Raises
-    ------
-    DataError
-        A cutoff not below the Nyquist rate, fewer than 2 samples.
-    """
-    from .preprocess import lowpass_design, resample, zero_phase
-
-    t = np.asarray(t, dtype=float)
-    x = np.asarray(x, dtype=float)
-    u = resample(JointLog(t, tuple(str(k) for k in range(x.shape[1])), x, x))
-    rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])
-    f = zero_phase(u.q, lowpass_design(rate, cutoff))
-    if u.n_samples == len(t) and np.array_equal(u.t, t):
-        return f
-    return np.column_stack([np.interp(t, u.t, f[:, k]) for k in range(f.shape[1])])
 
 
 def compare_truth(names, values, std, truth: dict, source: str = "truth") -> dict:
@@ -400,3 +282,189 @@ def format_truth(cmp: dict) -> str:
     rel = "-" if cmp["rel_error"] is None else f"{cmp['rel_error']:.3g}"
     lines.append(f"  largest |z| {mz}, RMS z {rz} (about 1 when the std are right); ||error|| / ||true|| {rel}")
     return "\n".join(lines)
+
+
+def document(ident) -> dict:
+    """The JSON object an identification's file holds (module docstring).
+
+    Parameters
+    ----------
+    ident : Identification
+        The result.
+
+    Returns
+    -------
+    dict
+        Format, version, the robot's name and fingerprint, the options, the model parameters'
+        names, values and std, the readable tables, the estimate's statistics and triangular
+        factor, the physical fit, counts and notes (JSON types only).
+    """
+    from dataclasses import fields
+
+    from ..version import version
+
+    r = ident.model.analysis.source_robot
+    from .options import IdentOptions
+
+    opts = {**(ident.options or IdentOptions()).to_json(), "rows": str(ident.model.analysis.rows)}
+    est = ident.fit.estimate
+    phys = ident.fit.physical
+    body = ident.to_json()
+    doc = {"format": FORMAT, "version": VERSION, "baseparams": version(),
+           "robot": {"name": r.name, "fingerprint": robot_fingerprint(r), "bodies": r.n, "dof": r.dof,
+                     "parameters": 10 * r.n, "joints": ident.joints},
+           "options": opts,
+           "parameters": {"names": list(ident.model.names), "values": numbers(ident.fit.theta),
+                          "std": numbers(est.std)},
+           "base_parameters": body["base_parameters"], "drives": body["drives"], "couplings": body["couplings"],
+           "estimate": {f.name: (numbers(getattr(est, f.name)) if isinstance(getattr(est, f.name), np.ndarray)
+                                 else getattr(est, f.name)) for f in fields(est) if f.name != "pct_sigma"},
+           "physical": None if phys is None else {
+               f.name: (numbers(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), np.ndarray)
+                        else list(getattr(phys, f.name)) if isinstance(getattr(phys, f.name), tuple)
+                        else getattr(phys, f.name)) for f in fields(phys)},
+           "samples": ident.samples, "train": ident.train, "validation": ident.validation, "notes": list(ident.notes),
+           "terms": [t.to_json(ident.joints) for t in ident.fit.terms],
+           "term_choices": [{"name": c.name, "kept": c.kept, "why": c.why, "cv_rms": c.cv_rms}
+                            for c in ident.fit.term_choices],
+           "motion": ident.motion}
+    return _plain(doc)
+
+
+def save(ident, path, inputs=(), what: str = "output"):
+    """Write an identification to its JSON file, atomically (:func:`baseparams.files.write_text`).
+
+    Parameters
+    ----------
+    ident : Identification
+        The result.
+    path : str or path
+        The file (``RESULT.json``).
+    inputs : iterable of str or path
+        The run's input files, which the output must not overwrite.
+    what : str
+        The output's role, for messages (``--save``).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    BaseparamsError
+        An output onto an input, a missing folder, a non-regular target.
+    """
+    import json
+
+    from ..files import write_text
+
+    return write_text(path, json.dumps(document(ident), indent=1, allow_nan=False) + "\n", inputs, what)
+
+
+def read(path, robot: Robot) -> dict:
+    """A saved identification read back for the robot it was identified on: the result's fields.
+
+    The model is rebuilt from the saved options (analysis, drive model and regrouping, as
+    :func:`~baseparams.ident.identify` built it) and its parameter names checked against the
+    saved ones; the values, statistics, counts and notes are the saved ones.
+
+    Parameters
+    ----------
+    path : str or path
+        The file (:func:`save`).
+    robot : Robot
+        The model: its structure's fingerprint must be the saved one.
+
+    Returns
+    -------
+    dict
+        :class:`~baseparams.ident.result.Identification`'s fields (``fit``, ``samples``, ``train``,
+        ``validation``, ``notes``, ``series`` None, ``options``, ``motion``).
+
+    Raises
+    ------
+    BaseparamsError
+        No such file, another format, another version, another robot (both fingerprints
+        named), or a model whose rebuilt parameters differ from the saved ones.
+    """
+    from .fitting import Fit
+    from .model import model_for
+    from .options import IdentOptions
+
+    doc = read_document(path)  # checked against baseparams.schema.RESULT: types, shapes, finite values
+    check_robot(doc, robot, str(path))
+    try:
+        opts = IdentOptions.from_json(doc["options"])
+    except BaseparamsError as exc:
+        raise type(exc)(f"{path}: options: {exc}") from None
+    model = model_for(robot, opts, rows=doc["options"]["rows"])
+    names = doc["parameters"]["names"]
+    if list(model.names) != list(names):
+        diff = next((f"{a} vs {b}" for a, b in zip(model.names, names) if a != b),
+                    f"{len(model.names)} vs {len(names)} parameters")
+        raise BaseparamsError(f"{path}: the model rebuilt for {robot.name!r} has other parameters than the "
+                              f"saved ones ({diff}); saved by another baseparams version?")
+    theta = array(doc["parameters"]["values"])
+    terms, choices = _terms(doc, model)
+    f = Fit(model, opts.method, theta, _estimate(doc["estimate"], theta), _physical(doc.get("physical")),
+            terms=terms, term_choices=choices)
+    return {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
+            "notes": (*doc["notes"], *doc["_notes"]), "series": None, "options": opts, "motion": doc.get("motion")}
+
+
+def _estimate(e: dict, theta: np.ndarray):
+    """The saved least-squares estimate (its %sigma recomputed from its std)."""
+    from .estimate import Estimate
+
+    std = array(e["std"])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pct = 100 * std / np.abs(theta if e.get("cov") is not None else array(e["theta"]))
+    extra = {k: e[k] for k in ("covariance",) if e.get(k) is not None}
+    if e.get("cov") is not None:
+        extra["cov"] = array(e["cov"])
+    return Estimate(e["method"], array(e["theta"]), std, pct, array(e["weights"]), array(e["rms"]),
+                    float(e["rms_total"]), float(e["condition_number"]), int(e["samples"]), array(e["R11"]),
+                    array(e["r12"]), **extra)
+
+
+def _physical(p: dict | None):
+    """The saved physically consistent fit, or None."""
+    if p is None:
+        return None
+    from .physical import PhysicalFit
+
+    return PhysicalFit(**{k: (array(v) if isinstance(v, list) and k != "notes" else
+                              tuple(v) if k == "notes" else v) for k, v in p.items()})
+
+
+def _terms(doc: dict, model) -> tuple[tuple, tuple]:
+    """The saved model terms (loaded for ``model``) and every term tried."""
+    from .terms.fit import Choice
+    from .terms.registry import make_term
+
+    terms = []
+    for t in doc.get("terms") or ():
+        term = make_term(t["name"], bool(t.get("forced", False)))
+        term.load(t, model.joints, model)
+        term.std = dict(t.get("std") or {})
+        terms.append(term)
+    choices = tuple(Choice(c["name"], bool(c["kept"]), str(c["why"]),
+                           float("nan") if c.get("cv_rms") is None else float(c["cv_rms"]))
+                    for c in doc.get("term_choices") or ())
+    return tuple(terms), choices
+
+
+def _plain(x):
+    """Numpy scalars and tuples as JSON types; non-finite floats as ``None``."""
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if np.isfinite(x) else None
+    return x

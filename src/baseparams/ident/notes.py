@@ -1,0 +1,187 @@
+"""The wording of a decision: one line for each thing the identification decided or assumed.
+
+Notes about the model (drive terms regrouped, geometry taken at a right angle), a floating base's
+assumptions, drive terms the log cannot separate or that came out negative, the model terms tried,
+and the log's units (:func:`check_log_units`, which refuses when they look wrong).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.robot import Robot
+from .fitting import Fit
+from .model import IdentModel
+
+
+def model_notes(model: IdentModel) -> list[str]:
+    """One line per drive parameter regrouped into a base parameter.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+
+    Returns
+    -------
+    list of str
+        ``regrouped: <expression>`` lines.
+    """
+    a = model.analysis
+    practical = [] if a.practical is None else [a.practical.note(a.n_base).replace(
+        "; the literal count: --literal", "; these directions are not fitted (identify --literal fits them)")]
+    return practical + [f"regrouped: {e}" for e in model.regrouping.expressions() if " + " in e or " - " in e]
+
+
+def floating_notes(robot: Robot) -> list[str]:
+    """What a floating base's identification from a joint log assumes (one line), else nothing.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    list of str
+        Notes for the report.
+    """
+    if not robot.floating:
+        return []
+    return ["floating base: the base's motion is the log's pose and twist; the joint torques are modelled with no "
+            "external force on any other link (a foot on the ground pushes: measured contact wrenches belong on the "
+            "measured side, baseparams.kinematics.wrench_forces in Python), the base wrench is not measured"]
+
+
+#: two drive columns of one joint whose cosine exceeds this cannot be told apart by the log
+COLLINEAR_COS = 0.99
+
+
+def drive_notes(f: Fit, acc) -> list[str]:
+    """Drive terms to say something about: negative friction or rotor inertia, pairs the log cannot separate.
+
+    A pair of one joint's drive terms whose columns on its rows have a cosine above
+    :data:`COLLINEAR_COS` (Coulomb friction and offset of a joint that hardly reverses) is named,
+    with how it was resolved: by the drive terms' weak prior (the default and physical
+    estimates: the smallest values that fit) or not at all (plain least squares). Negative
+    viscous or Coulomb friction or rotor inertia (only plain least squares can give them) is named.
+
+    Parameters
+    ----------
+    f : Fit
+        The fit.
+    acc : RowAccumulator
+        Its rows.
+
+    Returns
+    -------
+    list of str
+        Notes, one line each.
+    """
+    from .physical import NONNEGATIVE_KINDS
+
+    model = f.model
+    nb = len(model.analysis.base_names)
+    kinds = model.drives.param_kinds
+    plain = f.method in ("ols", "wls")
+    drive = {k: kinds[i - nb] for k, i in enumerate(model.regrouping.independent) if i >= nb}
+    notes = []
+    negative = [f"{model.names[k]} = {f.theta[k]:.3g}" for k, kind in drive.items()
+                if kind in NONNEGATIVE_KINDS and f.theta[k] < 0]
+    if negative:
+        notes.append(f"NEGATIVE drive terms ({', '.join(negative)}): friction and rotor inertia cannot be negative; "
+                     f"plain least squares (--method {f.method}) fits what the log shows (a poorly excited joint or "
+                     f"a model error); the default and physical estimates keep them >= 0")
+    seen = set()
+    for fr in acc.factors:
+        g = fr.r.T @ fr.r
+        ks = [k for k in drive if g[k, k] > 0]
+        for a_i, a in enumerate(ks):
+            for b in ks[a_i + 1:]:
+                cos = abs(g[a, b]) / np.sqrt(g[a, a] * g[b, b])
+                if cos <= COLLINEAR_COS or (a, b) in seen:
+                    continue
+                seen.add((a, b))
+                how = ("plain least squares: their separate values are not meaningful, only their sum on this motion"
+                       if plain else f"resolved by the drive terms' weak prior: {model.names[a]} = {f.theta[a]:.3g}, "
+                       f"{model.names[b]} = {f.theta[b]:.3g}")
+                notes.append(f"{model.names[a]} and {model.names[b]} cannot be told apart by this log (their columns' "
+                             f"cosine {cos:.4f}: the joint hardly reverses or hardly moves); {how}")
+    return notes
+
+
+def term_note(tf, joints: list[str]) -> str:
+    """One line: every model term tried, kept or rejected, with its cross-validated figure and values.
+
+    Parameters
+    ----------
+    tf : TermsFit
+        :func:`~baseparams.ident.terms.fit.select_terms`'s outcome.
+    joints : list of str
+        The measured joints.
+
+    Returns
+    -------
+    str
+        The note.
+    """
+    kept = {t.name: t for t in tf.terms}
+    parts = []
+    for c in tf.choices:
+        if c.kept:
+            parts.append(f"{c.name} KEPT ({c.why}): {kept[c.name].describe(joints)}")
+        else:
+            parts.append(f"{c.name} rejected ({c.why})")
+    return (f"model terms (blocked cross-validation on the training data, linear core alone {tf.cv_rms:.4g}): "
+            + "; ".join(parts))
+
+
+def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:
+    """Units and plausibility of the log before any fit (:func:`~baseparams.ident.plausibility.check_units`).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model (its robot's own torques are the comparison).
+    log : JointLog
+        The (training) log.
+    cols : ndarray of int, shape ``(state_columns,)``
+        Log column of each state column.
+    allow_units : bool
+        Go on with a warning note instead of refusing.
+
+    Returns
+    -------
+    list of str
+        Notes for the report.
+
+    Raises
+    ------
+    DataError
+        Units that look wrong, unless ``allow_units``.
+    """
+    from ..analysis import regressor
+    from ..errors import DataError
+    from .plausibility import check_units
+
+    robot = model.robot
+    params = robot.parameters("paper")
+    coords = robot.measured_coords
+    revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" or (model.log_base and 3 <= c < 6) for c in coords])
+
+    def torques(q, dq, ddq):
+        if not model.log_base:
+            return regressor(robot, q, dq, ddq) @ params
+        from ..kinematics.floating import robot_states
+
+        tau = regressor(robot, *robot_states(robot, q, dq, ddq)) @ params
+        tau[:, :6] = 0.0  # the base wrench is not measured (the log's zeros)
+        return tau
+
+    try:
+        limits = None if robot.limits is None else np.asarray(robot.limits, dtype=float)[coords]
+        return check_units(log, cols, torques, revolute, limits)
+    except DataError as exc:
+        if not allow_units:
+            raise
+        return [f"units: WARNING, going on (allow_units): {exc}"]

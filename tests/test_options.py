@@ -1,0 +1,122 @@
+"""One options object for identification: defaults written once, checked once, saved and read back.
+
+:class:`baseparams.ident.options.IdentOptions` is what the front door, the command line and the
+fleet build and every path takes; these tests hold the places that spell an option (the front
+door's signature, the parser, the saved file) to it.
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+from dataclasses import fields, replace
+
+import numpy as np
+import pytest
+
+import baseparams
+from baseparams.arguments import IDENTIFY
+from baseparams.cli import build_parser, main
+from baseparams.errors import BaseparamsError
+from baseparams.ident import IdentOptions, MotorCoupling, identify
+from baseparams.ident.options import flag_names
+from baseparams.ident.simulate import simulate_log
+from baseparams.ident.stream import identify_stream
+from baseparams.io.logs import LogStream, write_log
+from baseparams.schema import OPTIONS, check
+
+
+def test_the_defaults_are_written_once():
+    """IdentOptions' fields are arguments.IDENTIFY's, in its order, with its defaults (where the front door and
+    the parser read them)."""
+    assert [(f.name, f.default) for f in fields(IdentOptions)] == list(IDENTIFY.items())
+    assert IdentOptions().to_json() == {**IDENTIFY, "friction": list(IDENTIFY["friction"]), "couplings": []}
+
+
+def test_the_front_door_defaults_are_the_options_defaults():
+    """``bp.identify``'s keywords that are options default to IdentOptions' defaults, each one of them."""
+    sig = inspect.signature(baseparams.identify).parameters
+    names = {f.name for f in fields(IdentOptions)} - {"memory_mb"}  # no flag: the library's bound
+    assert names <= set(sig)
+    for f in fields(IdentOptions):
+        if f.name in sig:
+            assert sig[f.name].default == f.default, f.name
+
+
+def test_the_parser_defaults_are_the_options_defaults():
+    args = build_parser().parse_args(["identify", "puma560", "log.csv"])
+    from baseparams.cli.identify import options_of
+
+    assert options_of(args) == IdentOptions()
+
+
+def test_json_round_trip_and_an_older_file():
+    opts = IdentOptions(method="physical", rotor=True, friction="viscous,coulomb", coulomb_width=0.05,
+                        couplings=("m6:joint5=1,joint6=1",), holdout=2, cutoff=8.0, decimate=3, min_speed=0.01,
+                        prior_weight=0.5, convention="paper", covariance="white", score_cutoff=4.0, allow_units=True,
+                        literal=True, terms=("dahl", "tilt"), analysis_samples=300, seed=4, memory_mb=16.0)
+    assert opts.friction == ("viscous", "coulomb") and opts.terms == "dahl,tilt"
+    assert isinstance(opts.couplings[0], MotorCoupling)
+    doc = json.loads(json.dumps(opts.to_json()))
+    back = IdentOptions.from_json(check({**doc, "rows": "all"}, OPTIONS, "saved")[0])
+    assert back.to_json() == opts.to_json()
+    # a version-1 file of an earlier baseparams: the options it did not write take their defaults
+    old = {"method": "ols", "convention": "khalil", "rows": "all", "rotor": False, "friction": ["viscous"],
+           "coulomb_width": None, "couplings": [], "cutoff": 5.0, "decimate": 2, "min_speed": None}
+    back = IdentOptions.from_json(check(old, OPTIONS, "old")[0])
+    assert back == IdentOptions(method="ols", friction=("viscous",), cutoff=5.0, decimate=2)
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(prior_weight=2.0), "prior_weight= applies to method=physical, not auto"),
+    (dict(method="ols", prior_weight=2.0), "prior_weight= applies to method=physical, not ols"),
+    (dict(method="nope"), "method= must be one of auto, ols, wls, physical"),
+    (dict(holdout=-1.0), "holdout= must be a number in (0, 1e+09] s"),
+    (dict(friction="viscous,sticky"), "unknown friction term(s) ['sticky']"),
+    (dict(terms="dahl,wobble"), "unknown model term(s) ['wobble']"),
+    (dict(couplings=("m6",)), "expected NAME:JOINT=WEIGHT"),
+    (dict(rotor="yes"), "rotor= must be True or False"),
+])
+def test_one_check_per_rule(kw, words):
+    with pytest.raises(BaseparamsError) as exc:
+        IdentOptions(**kw)
+    assert words in str(exc.value)
+
+
+def test_the_same_rule_refuses_in_python_and_on_the_command_line(tmp_path, capsys):
+    """``prior_weight`` without ``method="physical"``: one check, named as a keyword or as a flag."""
+    with pytest.raises(BaseparamsError, match=r"identify: prior_weight= applies to method=physical, not auto"):
+        baseparams.identify("puma560", tmp_path / "nonexistent.csv", prior_weight=5.0)
+    assert main(["identify", "puma560", str(tmp_path / "nonexistent.csv"), "--prior-weight", "5"]) == 2
+    err = capsys.readouterr().err
+    assert "baseparams: error: --prior-weight applies to --method physical, not auto (the default estimate" in err
+    assert flag_names("identify: couplings= and analysis_samples= and method=wls") == \
+        "--coupling and --analysis-samples and --method wls"
+
+
+def test_unknown_keywords_and_objects_are_refused():
+    robot = baseparams.load("puma560")
+    log, _ = simulate_log(robot, duration=2.0, rate=100.0, seed=1)
+    with pytest.raises(TypeError, match=r"unknown option\(s\) \['samples'\]"):
+        identify(robot, log, samples=10)
+    with pytest.raises(TypeError, match="options must be IdentOptions, got dict"):
+        identify(robot, log, {"method": "ols"})
+
+
+@pytest.mark.slow
+def test_every_path_keeps_the_options_it_was_given(tmp_path):
+    """In memory and streamed from a file: one assembly, the same options (cutoff and decimation as used)."""
+    robot = baseparams.load("puma560")
+    log, _ = simulate_log(robot, duration=12.0, rate=200.0, noise=0.05, seed=2)
+    path = write_log(tmp_path / "log.csv", log)
+    opts = IdentOptions(method="wls", rotor=True, holdout=3.0, terms="none", covariance="white")
+    whole = identify(robot, log, opts)
+    streamed = identify_stream(robot, LogStream(path, robot), opts)
+    assert whole.options == streamed.options == replace(opts, cutoff=whole.options.cutoff,
+                                                        decimate=whole.options.decimate)
+    assert whole.options.cutoff > 0 and whole.options.decimate >= 1
+    np.testing.assert_allclose(streamed.values, whole.values, rtol=1e-6, atol=1e-9)
+    # the notes in the same order, from one assembly: data, rows, model, terms, drives, estimate, covariance, units
+    assert [n.split(":")[0] for n in whole.notes[-3:]] == [n.split(":")[0] for n in streamed.notes[-3:]]
+    saved = json.loads(whole.save(tmp_path / "r.json").read_text())["options"]
+    assert saved == {**whole.options.to_json(), "rows": "all"}

@@ -86,6 +86,7 @@ from .enums import Source, Status, values
 from .errors import BaseparamsError
 from .model.robot import Robot
 from .numerics import available_bytes as _available_bytes
+from .numerics import decision_lines
 
 if TYPE_CHECKING:  # the heavy modules (DRNG imports scipy.sparse) load when analyze() runs
     from .base import BaseParameters
@@ -1105,40 +1106,6 @@ def format_report(a: Analysis) -> str:
     out.extend(_expressions_section(a, j))
     out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")
     return "\n".join(out)
-
-
-def decision_lines(d: dict | None) -> list[str]:
-    """The report's line on the gap the count was stated at (or the clusters, when no gap decided).
-
-    Parameters
-    ----------
-    d : dict or None
-        :meth:`Analysis.rank_decision`.
-
-    Returns
-    -------
-    list of str
-        One line (none when unverified).
-    """
-    if d is None:
-        return []
-    by = {"literal": "singular values of the sampled regressor", "practical": "effects on the torques",
-          "structured": "body-by-body blocks"}[d["by"]]
-    gap = "inf" if d["gap"] is None else f"{d['gap']:.3g}"
-    if not d["decided"]:
-        lines = " | ".join(_cluster_text(k) for k in d["clusters"])
-        return [f"rank not decided ({by}): the bound {d['bound']:g} falls inside a cluster; clusters: {lines}"]
-    if d["by"] == "structured":
-        return [f"rank decided at a gap ({by}): smallest kept block value over the worst column residual {gap}"]
-    kept = "-" if d["smallest_kept"] is None else f"{d['smallest_kept']:.2g}"
-    out = "0" if d["largest_out"] is None else f"{d['largest_out']:.2g}"
-    return [f"rank {d['rank']} decided at a gap of {gap} ({by}, relative to the largest: smallest kept {kept}, "
-            f"largest counted out {out}; bound {d['bound']:g}){' on the snapped geometry' if d['snapped'] else ''}"]
-
-
-def _cluster_text(k: dict) -> str:
-    gap = "" if k["gap_below"] is None else f", gap {k['gap_below']:.3g} below"
-    return f"{k['count']} at {k['bottom']:.2g} - {k['top']:.2g}{gap}"
 
 
 def _expressions_section(a: Analysis, j: dict) -> list[str]:

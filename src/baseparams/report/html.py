@@ -444,7 +444,7 @@ def _certification(result) -> str:
                      f"or past a singular configuration, "
                      f"{s['ill_conditioned']} ill-conditioned; max loop residual {s['max_loop_residual']:.1e})")
         sampling += "".join(f"; {line}" for line in s.get("motion", ()))
-    from ..analysis import decision_lines
+    from ..numerics import decision_lines
 
     decision = "".join(f"<p id='rank-decision'>{html.escape(line)}</p>"
                        for line in decision_lines(result.rank_decision()))

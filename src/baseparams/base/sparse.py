@@ -135,6 +135,9 @@ def scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndar
     hc, hp, he : ndarray, shape ``(k, 10)``
         The columns' blocks on their highest, lower and extra bodies, in ``convention``
         coordinates scaled by ``L^-u`` (zero where a column has no such body).
+    hm : dict of int to tuple
+        The further blocks (:attr:`~baseparams.nullspace.columns.Columns.more`) the same way:
+        column -> ``(bodies (m,) int, blocks (m, 10))``, for the columns that have some.
     t : ndarray, shape ``(n, 10, 10)``
         :func:`body_transforms`.
     noise : float
@@ -151,7 +154,46 @@ def scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndar
     def blk(bodies: np.ndarray, h: np.ndarray) -> np.ndarray:
         return np.einsum("kij,kj->ki", st[np.maximum(bodies, 0)], h) * (bodies >= 0)[:, None]
 
-    return blk(cols.child, cols.h), blk(cols.parent, cols.hp), blk(cols.extra, cols.he), t, noise
+    hm = {}
+    for j in np.flatnonzero(cols.has_more()).tolist():
+        bodies, blocks = np.asarray(cols.more[j][0], dtype=int), np.asarray(cols.more[j][1], dtype=float)
+        hm[j] = (bodies, np.einsum("kij,kj->ki", st[bodies], blocks.reshape(-1, 10)))
+    return blk(cols.child, cols.h), blk(cols.parent, cols.hp), blk(cols.extra, cols.he), hm, t, noise
+
+
+def lower_blocks(cols: Columns, hp: np.ndarray, he: np.ndarray, hm: dict, idx: np.ndarray,
+                 a: np.ndarray) -> list[tuple[int, np.ndarray]]:
+    """The blocks of columns ``idx`` (one highest body) below it, times ``a``: every block, ``more`` included.
+
+    Parameters
+    ----------
+    cols : Columns
+        The columns (their ``parent`` and ``extra`` bodies).
+    hp, he : ndarray, shape ``(k, 10)``
+        Their scaled blocks on ``parent`` and ``extra`` (:func:`scaled_blocks`).
+    hm : dict of int to tuple
+        Their scaled further blocks (:func:`scaled_blocks`).
+    idx : ndarray of int, shape ``(l,)``
+        The columns whose highest body is the same.
+    a : ndarray, shape ``(l, l)``
+        The factor each column's blocks are combined with (row ``i`` for column ``idx[i]``).
+
+    Returns
+    -------
+    list of tuple
+        ``(body j, sum_i block_i(j) a[i] (10, l))`` per lower body ``j`` the columns touch, ``j``
+        ascending.
+    """
+    out: dict[int, np.ndarray] = {}
+    for low, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
+        for j in sorted(set(low[low >= 0].tolist())):  # not np.unique: it imports numpy.ma
+            m = low == j
+            out[j] = out[j] + part[m].T @ a[m] if j in out else part[m].T @ a[m]
+    if hm:
+        for i, col in enumerate(idx.tolist()):
+            for j, blk in zip(*hm.get(col, ((), ()))):
+                out[int(j)] = out.get(int(j), 0.0) + np.outer(blk, a[i])
+    return sorted(out.items())
 
 
 def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...], tol: float):
@@ -216,14 +258,15 @@ def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...
     return order, bounds, dep, ainv
 
 
-def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray,
-                within: tuple[int, ...], tol: float) -> tuple[list[list[int]], list[tuple[np.ndarray, np.ndarray]]]:
+def _dual_basis(robot: Robot, cols: Columns, scaled: tuple, within: tuple[int, ...],
+                tol: float) -> tuple[list[list[int]], list[tuple[np.ndarray, np.ndarray]]]:
     """Per body, its dependent parameters (local indices) and dual vectors ``Z_c``.
 
     ``Z_c`` is ``(bodies (m,), blocks (m, 10, l_c))``: its blocks on the bodies it touches, ``c``
     first, then the bodies on its way to the root.
     """
     n = robot.n
+    hc, hp, he, hm = scaled
     order, bounds, dep, ainv = choose_all(hc, cols.child, n, within, tol)
     empty = (np.zeros(0, dtype=int), np.zeros((0, 10, 0)))
     z: list[tuple[np.ndarray, np.ndarray]] = [empty] * n
@@ -233,17 +276,14 @@ def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he:
         idx = order[bounds[c]:bounds[c + 1]]
         a = ainv[c]
         parts = []  # (bodies, blocks) of the columns' lower blocks, with the dual vectors cancelling them
-        for low, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
-            for j in sorted(set(low[low >= 0].tolist())):
-                m = low == j
-                zj = part[m].T @ a[m]  # (10, l): the columns' blocks on body j
-                if dep[j]:  # cancel the entries on body j's dependent parameters (Z_j starts with j)
-                    bj, vj = z[j]
-                    blocks = -np.einsum("bik,kl->bil", vj, zj[dep[j]])
-                    blocks[0] += zj
-                    parts.append((bj, blocks))
-                else:
-                    parts.append((np.array([j]), zj[None]))
+        for j, zj in lower_blocks(cols, hp, he, hm, idx, a):  # zj (10, l): the columns' blocks on body j
+            if dep[j]:  # cancel the entries on body j's dependent parameters (Z_j starts with j)
+                bj, vj = z[j]
+                blocks = -np.einsum("bik,kl->bil", vj, zj[dep[j]])
+                blocks[0] += zj
+                parts.append((bj, blocks))
+            else:
+                parts.append((np.array([j]), zj[None]))
         own = (np.array([c]), (hc[idx].T @ a)[None])
         if len(parts) == 1:
             z[c] = (np.concatenate([own[0], parts[0][0]]), np.concatenate([own[1], parts[0][1]]))
@@ -304,9 +344,9 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
         The columns are not independent on their highest bodies.
     """
     n, n10 = robot.n, 10 * robot.n
-    hc, hp, he, t, noise = scaled_blocks(robot, cols, convention)
+    hc, hp, he, hm, t, noise = scaled_blocks(robot, cols, convention)
     tol = max(1e-8, noise)
-    dep_local, z = _dual_basis(robot, cols, hc, hp, he, _inertia.SPECS[convention].regroup_order, tol)
+    dep_local, z = _dual_basis(robot, cols, (hc, hp, he, hm), _inertia.SPECS[convention].regroup_order, tol)
     dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
     keep = np.ones(n10, dtype=bool)  # not np.setdiff1d: it imports numpy.ma (start-up time)
     keep[dep] = False

@@ -34,10 +34,10 @@ from ..display import summary_repr
 from ..model import inertia as _inertia
 from ..model.inertia import LENGTH_POWER
 from ..model.robot import Robot
-from ..model.scale import length_scale
+from ..model.scale import body_rounding, length_scale
 from ..nullspace.columns import Columns
-from .regroup import ZERO_TOL, BaseParameters, format_rows, parameter_names
-from .sparse import choose_all, csr_or_dense, lower_blocks, scaled_blocks, snap_short
+from .regroup import SNAP_RTOL, ZERO_TOL, BaseParameters, format_rows, parameter_names
+from .sparse import SNAP_ROUNDING, choose_all, csr_or_dense, lower_blocks, scaled_blocks, snap_short
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,7 +206,7 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
     """
     n, n10 = robot.n, 10 * robot.n
     hc, hp, he, hm, t, noise = scaled_blocks(robot, cols, convention)
-    tol = max(1e-8, noise)
+    tol = np.maximum(1e-8, noise)
     order, bounds, dep_local, ainv = choose_all(hc, cols.child, n, _inertia.SPECS[convention].regroup_order, tol)
     dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
     keep = np.ones(n10, dtype=bool)
@@ -222,10 +222,13 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
     tg_a, sr_a = uk // n10, uk % n10
     rowmax = np.ones(n10)
     np.maximum.at(rowmax, tg_a, np.abs(v))
-    ok = np.abs(v) > max(ZERO_TOL, noise) * rowmax[tg_a]
+    level = np.maximum(noise[tg_a // 10], noise[sr_a // 10])  # either body's rounding
+    ok = np.abs(v) > np.maximum(ZERO_TOL, level) * rowmax[tg_a]
     tg_a, sr_a, v = tg_a[ok], sr_a[ok], v[ok]
     power = np.tile(LENGTH_POWER[convention], n).astype(float)
-    v = snap_short(v * length_scale(robot) ** (power[tg_a] - power[sr_a]))
+    rounding = SNAP_ROUNDING * body_rounding(robot)
+    snap = np.maximum(SNAP_RTOL, np.maximum(rounding[tg_a // 10], rounding[sr_a // 10]))  # the rounding it carries
+    v = snap_short(v * length_scale(robot) ** (power[tg_a] - power[sr_a]), snap)
     pos_i = np.full(n10, -1)
     pos_i[ind] = np.arange(len(ind))
     isd = pos_d[tg_a] >= 0

@@ -153,6 +153,30 @@ class Columns:
         more = np.array([None if m is None else (m[0], m[1] * inv) for m in self.more] + [None], dtype=object)[:-1]
         return replace(self, h=self.h * inv, hp=self.hp * inv, he=self.he * inv, more=more)
 
+    def transformed(self, f: np.ndarray) -> Columns:
+        """The columns in per-body coordinates ``f[b] @ pi_b``: each block on body ``b`` (``more`` too) times ``f[b]``.
+
+        Parameters
+        ----------
+        f : ndarray, shape ``(n, 10, 10)``
+            Per body, an invertible map of its ten parameters (e.g.
+            :func:`baseparams.model.scale.decision_frames`), rows and columns in ``hat`` order.
+
+        Returns
+        -------
+        Columns
+            Same bodies and provenance; a block on no body (``parent`` or ``extra`` ``-1``) as it is.
+        """
+        def blk(bodies: np.ndarray, h: np.ndarray) -> np.ndarray:
+            out = np.einsum("kij,kj->ki", f[np.maximum(bodies, 0)], h)
+            return np.where((bodies >= 0)[:, None], out, h)
+
+        more = np.array([None if m is None else (m[0], np.einsum("kij,kj->ki", f[np.asarray(m[0], dtype=int)],
+                                                                 np.asarray(m[1], dtype=float).reshape(-1, 10)))
+                         for m in self.more] + [None], dtype=object)[:-1]
+        return replace(self, h=blk(self.child, self.h), hp=blk(self.parent, self.hp), he=blk(self.extra, self.he),
+                       more=more)
+
     def reindexed(self, bodies: np.ndarray, loops: np.ndarray, n: int) -> Columns:
         """The columns of a related robot as columns of this one: bodies and loop joints renumbered.
 

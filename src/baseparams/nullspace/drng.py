@@ -17,7 +17,7 @@ from ..enums import Source
 from ..model.inertia import PAPER_NAMES
 from ..model.inertia import hat as hat10
 from ..model.robot import Robot
-from ..model.scale import decision_scale, ordinary_size
+from ..model.scale import decision_frames
 from ..numerics import measured_joints, row_mask, rows_spec
 from ..pga.linalg import column_basis
 from .columns import EXTENDED, PAPER, PRINCIPLES, UNMEASURED, Columns, sym_params, to_dense, to_sparse
@@ -178,29 +178,56 @@ class DRNGResult:
         return f"{src.label}: {joint}, bodies {body}{par}, points {c.label[k]}"
 
 
-def scaled_rank(cols: Columns, robot: Robot) -> int:
-    """Exact rank (:func:`.rank.block_rank`) of the columns for parameters ``pi / d``.
+#: singular values of a decision block at most this (relative) are null, unless rounding is larger
+RANK_RTOL = 1e-10
 
-    ``d`` is :func:`baseparams.model.scale.decision_scale` (ones for a robot of ordinary size):
-    a per-entry scaling of every body block, the same for all bodies, so the block structure is
-    kept and the decision does not depend on the unit of length.
+
+def decision_columns(cols: Columns, robot: Robot) -> tuple[Columns, np.ndarray]:
+    """The columns in the coordinates rank decisions are made in, and the threshold of each body.
+
+    Each body's blocks about its own origin, ordinary-sized
+    (:func:`baseparams.model.scale.decision_frames`: a block-diagonal invertible map, so every
+    rank is kept); the threshold :data:`RANK_RTOL`, or the rounding the map brings when larger.
+
+    Parameters
+    ----------
+    cols : Columns
+        Columns in compact form, ``paper`` convention (SI units, world frame at q = 0).
+    robot : Robot
+        The robot the columns belong to (``n`` bodies).
+
+    Returns
+    -------
+    Columns
+        The same columns in decision coordinates.
+    ndarray, shape ``(n,)``
+        The relative singular-value threshold of each body's decisions (:func:`.rank.block_rank`).
+    """
+    f, _, noise = decision_frames(robot)
+    return cols.transformed(f), np.maximum(RANK_RTOL, noise)
+
+
+def scaled_rank(cols: Columns, robot: Robot) -> int:
+    """Exact rank (:func:`.rank.block_rank`) of the columns in decision coordinates.
+
+    :func:`decision_columns`: each body's blocks about its own origin and brought to an ordinary
+    size, so that the decision depends neither on the unit of length nor on how far a body is
+    from the world origin (a block-diagonal change of coordinates: the rank is kept).
 
     Parameters
     ----------
     cols : Columns
         Columns in compact form, ``paper`` convention (SI units).
     robot : Robot
-        The robot the columns belong to (``n`` bodies; its length scale gives ``d``).
+        The robot the columns belong to (``n`` bodies).
 
     Returns
     -------
     int
-        The rank of ``B (10 n, k)`` after scaling.
+        The rank of ``B (10 n, k)``.
     """
-    if ordinary_size(robot):  # d = 1: the columns as they are
-        return block_rank(cols, robot.n)
-    inv = 1.0 / decision_scale(robot, "paper")[:10]
-    return block_rank(cols.scaled(inv), robot.n)
+    local, rtol = decision_columns(cols, robot)
+    return block_rank(local, robot.n, rtol)
 
 
 def unseen_bodies(robot: Robot, rows) -> np.ndarray:

@@ -52,7 +52,7 @@ from ..display import summary_repr
 from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
-from ..model.scale import decision_scale
+from ..model.scale import decision_frames, decision_scale
 from ..numerics import STRUCTURED_MIN_BODIES as STRUCTURED_MIN_BODIES  # re-exported: where the path is described
 from ..numerics import available_bytes as _available_bytes
 from ..numerics import closed_samples, row_mask, rows_spec, sample_states
@@ -60,7 +60,7 @@ from ..pga import adjoint, commutator, hat, se3_exp, swap
 from ..pga.core import screw_exp
 from ..regressor.tp import bar_lines
 from .columns import Columns
-from .drng import DRNGResult
+from .drng import DRNGResult, decision_columns
 from .rank import leading_spans
 
 #: default random states of the structured check: a joint's diagonal block then has ``30 x dofs``
@@ -760,10 +760,13 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
     dofs, coupled = row_groups(robot, rows, big_g)
     res = column_residuals(raw, robot, x, lines, dofs, residual_tol, coupled) if len(cols) else np.zeros(0)
     worst = float(res.max()) if len(res) else 0.0
-    q, lead, indep = leading_spans(raw, n)
+    local, local_rtol = decision_columns(cols, robot)
+    q, lead, indep = leading_spans(local, n, local_rtol)  # q about each body's origin
     rank_b = int(lead.sum())
+    inverse = decision_frames(robot)[1]
     if indep is not None:
-        indep = indep.scaled(d10)
+        indep = indep.transformed(inverse)
+    x = _in_decision_frames(x, inverse, d10)
     par = np.asarray(robot.parent, dtype=int)
     bad, small = diagonal_blocks(q, lead, x, lines, dofs, rtol)
     missing, merged, small2 = merge_blocks(bad, par, q, lead, x, lines, dofs, rtol, coupled)
@@ -773,6 +776,19 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
                independent=indep, sampling=sampling)
     status, message = _structured_verdict(result, out, rtol, residual_tol)
     return StructuredCheck(status, message, seconds=time.perf_counter() - t0, **out)
+
+
+def _in_decision_frames(x: np.ndarray, inverse: np.ndarray, d10: np.ndarray) -> np.ndarray:
+    """Wrench maps on ``pi / d`` ``(n, S, 6, 10)`` made maps on decision coordinates, in place and by chunks.
+
+    ``inverse``: :func:`baseparams.model.scale.decision_frames`'s, from decision coordinates to
+    ``pi``; the map on ``pi / d`` then takes ``diag(1 / d) inverse``.
+    """
+    g = inverse / d10[None, :, None]
+    step = max(1, CHUNK // (60 * x.shape[1]))
+    for a in range(0, len(x), step):
+        x[a:a + step] = np.einsum("nsce,nef->nscf", x[a:a + step], g[a:a + step])
+    return x
 
 
 def _structured_verdict(result: DRNGResult, out: dict, rtol: float, residual_tol: float) -> tuple[Status, str]:
@@ -811,16 +827,16 @@ def independent_columns(robot: Robot, result: DRNGResult) -> Columns | None:
     -------
     Columns or None
         ``result.rank`` linearly independent columns spanning the same space, each independent
-        on its highest body (:func:`.rank.leading_spans` on ``pi / d``): what
+        on its highest body (:func:`.rank.leading_spans` in decision coordinates,
+        :func:`~.drng.decision_columns`): what
         :func:`baseparams.base.sparse.tree_base_parameters` regroups; ``None`` when the echelon
         form needed eliminations or does not reproduce DRNG's rank.
     """
-    d10 = decision_scale(robot, "paper")[:10]
-    cols = result.columns
-    _, lead, indep = leading_spans(cols.scaled(1.0 / d10), robot.n)
+    local, rtol = decision_columns(result.columns, robot)
+    _, lead, indep = leading_spans(local, robot.n, rtol)
     if indep is None or int(lead.sum()) != result.rank:
         return None
-    return indep.scaled(d10)
+    return indep.transformed(decision_frames(robot)[1])
 
 
 def dense_bytes(robot: Robot, samples: int, rows: str = "all") -> float:

@@ -19,12 +19,14 @@ drng                   {columns, rank, seconds, extended, by_principle{shared po
                        points, planar rotations}, by_rule{shared points, fixed points, planar
                        rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
                        R-L2 level chains, R-L3 planar loops, R-M coupled joints, numerical},
-                       complete}: rank added
+                       complete, notes}: rank added
                        by each source in that order (the paper's principles, the extended
                        rules, then, when some rows are not measured, unmeasured root,
                        unmeasured body and passive joint (those present), numerical
                        completion); complete:
-                       the geometric span equals the certified nullspace (null if unverified)
+                       the geometric span equals the certified nullspace (null if unverified);
+                       notes: a rule whose columns failed the check against the regressor
+                       (left out, named), or why the check could not run ([] normally)
 numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
                        requested, kept, and for loops not_converged, branch_jumps,
                        ill_conditioned, max_loop_residual}} or null; for a tree checked
@@ -243,6 +245,9 @@ class Analysis:
         ``practical.source`` the file's. ``None``: the literal model was analysed.
     form : {"expanded", "recursive"}
         How :meth:`expressions` are written (:func:`analyze`'s ``form``, resolved).
+    drng_notes : tuple of str
+        :attr:`baseparams.nullspace.result.DRNGResult.notes`: a rule whose columns were not in the
+        nullspace of the regressor (left out, named), or why they could not be checked.
 
     Notes
     -----
@@ -264,6 +269,7 @@ class Analysis:
     extended: bool = True
     practical: Practical | None = None
     form: str = "expanded"
+    drng_notes: tuple[str, ...] = ()
 
     @property
     def nullity(self) -> int:
@@ -510,7 +516,8 @@ class Analysis:
                      "extended": self.extended,
                      "by_principle": {k: v for k, v in self.by_principle.items() if k in PAPER},
                      "by_rule": {**self.by_principle, Source.NUMERICAL.label: 0 if c is None else c.completed},
-                     "complete": None if c is None else bool(c.status == Status.CERTIFIED)},
+                     "complete": None if c is None else bool(c.status == Status.CERTIFIED),
+                     "notes": list(self.drng_notes)},
             "numerical": num,
             "certified": self.certified,
             "status": self.status,
@@ -691,7 +698,7 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
             base = base_parameters(robot, span, convention)
             base_paper = base_parameters(robot, span, "paper")
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
-                    time.perf_counter() - t0, extended, form=use)
+                    time.perf_counter() - t0, extended, form=use, drng_notes=res.notes)
 
 
 def _resolve_form(robot: Robot, form: str, columns) -> str:
@@ -959,7 +966,8 @@ def format_report(a: Analysis) -> str:
            f"nullspace dimension {a.nullity}  ->  {j['n_base']} base parameters",
            *([a.practical.note(a.n_base)] if a.practical is not None else []),
            *([c.practical.note()] if c is not None and c.practical is not None else []),
-           f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
+           f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms",
+           *(f"  note: {note}" for note in a.drng_notes)]
     for src in Source:
         if src is not Source.NUMERICAL and src.label in a.by_principle:
             kind = ("paper" if src.is_paper else "measured rows: joint torques only" if src is Source.UNMEASURED

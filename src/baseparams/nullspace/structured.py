@@ -60,8 +60,8 @@ from ..pga import adjoint, commutator, hat, se3_exp, swap
 from ..pga.core import screw_exp
 from ..regressor.tp import bar_lines
 from .columns import Columns
-from .drng import DRNGResult, decision_columns
 from .rank import leading_spans
+from .result import DRNGResult, decision_columns
 
 #: default random states of the structured check: a joint's diagonal block then has ``30 x dofs``
 #: rows for at most ten columns, and each DRNG column is checked on 30 generic states

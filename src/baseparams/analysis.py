@@ -695,10 +695,40 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
             base = tree_base_parameters(robot, columns, convention)
             base_paper = tree_base_parameters(robot, columns, "paper")
         else:
-            base = base_parameters(robot, span, convention)
-            base_paper = base_parameters(robot, span, "paper")
+            base, base_paper = _dense_regroup(robot, span, res, cert, convention, base_parameters)
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
                     time.perf_counter() - t0, extended, form=use, drng_notes=res.notes)
+
+
+def _dense_regroup(robot: Robot, span: np.ndarray, res, cert, convention: str, regroup) -> tuple:
+    """``regroup`` (:func:`~.base.regroup.base_parameters`) of the dense span in ``convention`` and ``paper``.
+
+    A dense basis in world coordinates at q = 0 carries rounding ``~eps (D / L)^2`` on a body
+    ``D`` from the origin (:func:`baseparams.model.scale.body_rounding`): far enough, it cannot
+    tell the directions apart (fewer than the nullity, or a rank-deficient regrouping). A tree
+    is then regrouped from DRNG's compact columns (each body's decisions about its own origin);
+    anything else is refused in one line.
+    """
+    nullity = res.rank if cert is None else cert.nullity
+    if span.shape[1] == nullity:
+        try:
+            return regroup(robot, span, convention), regroup(robot, span, "paper")
+        except RuntimeError:
+            pass
+    from .base.sparse import tree_base_parameters
+    from .model.scale import body_rounding, length_scale
+    from .nullspace.structured import independent_columns
+
+    compact = None if robot.has_loops or (cert is not None and cert.completed) else independent_columns(robot, res)
+    if compact is not None:
+        return tree_base_parameters(robot, compact, convention), tree_base_parameters(robot, compact, "paper")
+    far = int(np.argmax(body_rounding(robot)))
+    dist = float(np.linalg.norm(robot.M0[far][:3, 3]))
+    raise BaseparamsError(f"robot {robot.name!r}: the nullspace basis cannot be regrouped: body "
+                          f"{robot.names[far]!r} is {dist:.3g} m from the world origin, "
+                          f"{dist / length_scale(robot):.3g} times the robot's length scale, and the basis (world "
+                          f"frame at q = 0) carries rounding of ~{body_rounding(robot)[far]:.1g} there; put the "
+                          f"model's origin near its bodies")
 
 
 def _resolve_form(robot: Robot, form: str, columns) -> str:

@@ -177,6 +177,38 @@ class Columns:
         return replace(self, h=blk(self.child, self.h), hp=blk(self.parent, self.hp), he=blk(self.extra, self.he),
                        more=more)
 
+    def norms(self) -> np.ndarray:
+        """Each column's Euclidean norm over all its blocks (``more`` included).
+
+        Returns
+        -------
+        ndarray, shape ``(k,)``
+            ``||B[:, j]||`` (blocks on the same body not summed first: an upper bound then).
+        """
+        n2 = (np.sum(self.h ** 2, 1) + np.sum(self.hp ** 2, 1) * (self.parent >= 0)
+              + np.sum(self.he ** 2, 1) * (self.extra >= 0))
+        for j in np.flatnonzero(self.has_more()):
+            n2[j] += float(np.sum(np.asarray(self.more[j][1], dtype=float) ** 2))
+        return np.sqrt(n2)
+
+    def times(self, s: np.ndarray) -> Columns:
+        """Column ``j`` multiplied by ``s[j]``: every block of it, ``more`` included.
+
+        Parameters
+        ----------
+        s : ndarray, shape ``(k,)``
+            One factor per column.
+
+        Returns
+        -------
+        Columns
+            Same bodies and provenance.
+        """
+        s = np.asarray(s, dtype=float)
+        more = np.array([None if m is None else (m[0], np.asarray(m[1], dtype=float) * s[j])
+                         for j, m in enumerate(self.more)] + [None], dtype=object)[:-1]
+        return replace(self, h=self.h * s[:, None], hp=self.hp * s[:, None], he=self.he * s[:, None], more=more)
+
     def reindexed(self, bodies: np.ndarray, loops: np.ndarray, n: int) -> Columns:
         """The columns of a related robot as columns of this one: bodies and loop joints renumbered.
 

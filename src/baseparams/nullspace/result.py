@@ -13,8 +13,9 @@ import numpy as np
 
 from ..display import summary_repr
 from ..enums import Source
+from ..errors import BaseparamsError
 from ..model.robot import Robot
-from ..model.scale import decision_frames
+from ..model.scale import NOISE_FACTOR, decision_frames, length_scale
 from ..pga.linalg import column_basis
 from .columns import PAPER, Columns, to_dense, to_sparse
 from .rank import block_rank
@@ -177,6 +178,9 @@ class DRNGResult:
 
 #: singular values of a decision block at most this (relative) are null, unless rounding is larger
 RANK_RTOL = 1e-10
+#: rounding above this (relative, :func:`baseparams.model.scale.decision_frames`) leaves no rank
+#: decision standing: the robot is refused (a body ~20 000 length scales from the world origin)
+RANK_RTOL_MAX = 1e-4
 
 
 def decision_columns(cols: Columns, robot: Robot) -> tuple[Columns, np.ndarray]:
@@ -184,7 +188,10 @@ def decision_columns(cols: Columns, robot: Robot) -> tuple[Columns, np.ndarray]:
 
     Each body's blocks about its own origin, ordinary-sized
     (:func:`baseparams.model.scale.decision_frames`: a block-diagonal invertible map, so every
-    rank is kept); the threshold :data:`RANK_RTOL`, or the rounding the map brings when larger.
+    rank is kept), each column then of unit norm (a rule may give a direction as a point far
+    from the body, thousands of times longer than its neighbours: thresholds relative to the
+    largest entry would then drop the others); the threshold :data:`RANK_RTOL`, or the rounding
+    the map brings when larger.
 
     Parameters
     ----------
@@ -196,12 +203,27 @@ def decision_columns(cols: Columns, robot: Robot) -> tuple[Columns, np.ndarray]:
     Returns
     -------
     Columns
-        The same columns in decision coordinates.
+        The same columns in decision coordinates, each of unit norm (a zero column stays zero).
     ndarray, shape ``(n,)``
         The relative singular-value threshold of each body's decisions (:func:`.rank.block_rank`).
+
+    Raises
+    ------
+    BaseparamsError
+        A body so far from the world origin that the rounding of its world-frame blocks exceeds
+        :data:`RANK_RTOL_MAX`: no rank decision would stand.
     """
     f, _, noise = decision_frames(robot)
-    return cols.transformed(f), np.maximum(RANK_RTOL, noise)
+    if len(noise) and noise.max() > RANK_RTOL_MAX:
+        far = int(np.argmax(noise))
+        dist = float(np.linalg.norm(robot.M0[far][:3, 3]))
+        raise BaseparamsError(f"robot {robot.name!r}: body {robot.names[far]!r} is {dist:.3g} m from the world origin, "
+                              f"{dist / length_scale(robot):.3g} times the robot's length scale: nullspace columns in "
+                              f"the world frame at q = 0 carry rounding of ~{noise[far] / NOISE_FACTOR:.1g} there, too "
+                              f"much to decide a rank; put the model's origin near its bodies")
+    local = cols.transformed(f)
+    norms = local.norms()
+    return local.times(1.0 / np.where(norms > 0, norms, 1.0)), np.maximum(RANK_RTOL, noise)
 
 
 def scaled_rank(cols: Columns, robot: Robot) -> int:

@@ -14,7 +14,9 @@ TP regressor's bar lines). The certificate has two parts, neither using DRNG's r
     way is checked, and above that point every row sees one total wrench, which must vanish
     relative to the size of its terms (else each ancestor's rows are checked);
 (b) ``rank(W) >= 10 n - rank(B)``: a block-diagonal complement ``U = diag(U_b)`` of
-    ``span(B)`` (:func:`.rank.leading_spans`) has ``W U`` of full column rank. If
+    ``span(B)`` (:func:`.rank.leading_spans` in decision coordinates, each body's parameters
+    about its own origin: :func:`~.result.decision_columns`; the wrench maps taken to the same
+    coordinates) has ``W U`` of full column rank. If
     ``W U x = 0``, joint ``j``'s rows involve only ``subtree(j)``, so from the leaves up every
     diagonal block (joint ``j``'s rows x ``W U_j``) of full column rank forces ``x_j = 0``.
     Where one is rank deficient, its null combinations are carried into the parent's block (a

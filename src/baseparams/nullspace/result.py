@@ -151,13 +151,14 @@ class DRNGResult:
         -------
         str
             The source, then: for the paper's principles the joint (tree joint or loop joint, with
-            its type), the bodies and the points; for the extended rules the bodies and the rule's
-            label; for an unmeasured root the body and parameter name.
+            its type), the bodies and the points; for the extended rules every body the column has
+            a block on and the rule's label; for an unmeasured root the body and parameter name.
         """
         c = self.columns
         names = self.robot.names
         body = names[c.child[k]]
-        par = "" if c.parent[k] < 0 else f" / {names[c.parent[k]]}"
+        lower = [c.parent[k], c.extra[k], *([] if c.more[k] is None else c.more[k][0])]
+        par = "".join(f" / {names[int(b)]}" for b in lower if b >= 0)  # every body the column has a block on
         j = int(c.joint[k])
         if j >= self.robot.n:
             lj = self.robot.loops[j - self.robot.n]

@@ -59,7 +59,6 @@ from ..numerics import STRUCTURED_MIN_BODIES as STRUCTURED_MIN_BODIES  # re-expo
 from ..numerics import available_bytes as _available_bytes
 from ..numerics import closed_samples, row_mask, rows_spec, sample_states
 from ..pga import adjoint, commutator, hat, se3_exp, swap
-from ..pga.core import screw_exp
 from ..regressor.tp import bar_lines
 from .columns import Columns
 from .rank import leading_spans
@@ -217,27 +216,64 @@ def tree_kinematics(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray
     lines : ndarray, shape ``(S, dof, 6)``
         Current joint lines (a floating root's: the basis ``e_k``).
     """
+    n, qi, nd, sc = robot.n, robot.q_index, robot.ndofs, robot.screws
+    floating = [i for i in range(n) if robot.jtype[i] == "F"]
+    # the loops over bodies carry only what depends on the parent; the rest is batched over coordinates
+    exps = se3_exp(sc[None] * q[..., None])  # (S, dof, 4, 4): each coordinate's displacement
+    g, before = _poses(robot, q, exps, floating)
+    lines = adjoint(before, np.broadcast_to(sc, before.shape[:2] + (6,)))
+    for i in floating:
+        lines[:, qi[i]:qi[i] + nd[i]] = np.eye(6)
+    v, after = _accumulate(robot, lines * dq[..., None], dq, floating, running=True)
+    push = commutator(lines, after) * dq[..., None] + lines * ddq[..., None]  # (S, dof, 6)
+    a, _ = _accumulate(robot, push, ddq, floating, running=False)
+    return g, v, a, lines
+
+
+def _poses(robot: Robot, q: np.ndarray, exps: np.ndarray, floating: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """Body poses ``(S, n, 4, 4)`` and each coordinate's pose before its own displacement ``(S, dof, 4, 4)``."""
     s, n = q.shape[0], robot.n
     qi, nd = robot.q_index, robot.ndofs
-    g, v, a = np.empty((s, n, 4, 4)), np.empty((s, n, 6)), np.empty((s, n, 6))
-    lines = np.empty((s, robot.dof, 6))
-    eye, zero6 = np.broadcast_to(np.eye(4), (s, 4, 4)), np.zeros((s, 6))
+    g, before = np.empty((s, n, 4, 4)), np.empty((s, robot.dof, 4, 4))
+    eye = np.broadcast_to(np.eye(4), (s, 4, 4))
+    free = set(floating)
     for i in range(n):
         p = robot.parent[i]
-        h, vh, ah = (eye, zero6, zero6) if p < 0 else (g[:, p], v[:, p], a[:, p])
-        sl = slice(qi[i], qi[i] + nd[i])
-        if robot.jtype[i] == "F":
-            lines[:, sl] = np.eye(6)
-            g[:, i], v[:, i], a[:, i] = se3_exp(q[:, sl]), vh + dq[:, sl], ah + ddq[:, sl]
+        h = eye if p < 0 else g[:, p]
+        if i in free:
+            g[:, i] = se3_exp(q[:, qi[i]:qi[i] + nd[i]])
             continue
-        for jj in range(sl.start, sl.stop):
-            line = adjoint(h, np.broadcast_to(robot.screws[jj], (s, 6)))
-            lines[:, jj] = line
-            vh = vh + line * dq[:, jj:jj + 1]
-            ah = ah + commutator(line, vh) * dq[:, jj:jj + 1] + line * ddq[:, jj:jj + 1]
-            h = h @ screw_exp(robot.screws[jj], q[:, jj])
-        g[:, i], v[:, i], a[:, i] = h, vh, ah
-    return g, v, a, lines
+        for jj in range(qi[i], qi[i] + nd[i]):
+            before[:, jj] = h
+            h = h @ exps[:, jj]
+        g[:, i] = h
+    return g, before
+
+
+def _accumulate(robot: Robot, terms: np.ndarray, free_terms: np.ndarray, floating: list[int],
+                running: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """Per body, its parent's value plus its coordinates' ``terms (S, dof, 6)`` (a floating root: ``free_terms``).
+
+    ``running``: also each coordinate's value once its own term is added ``(S, dof, 6)``.
+    """
+    s, n = terms.shape[0], robot.n
+    qi, nd = robot.q_index, robot.ndofs
+    out = np.empty((s, n, 6))
+    after = np.empty_like(terms) if running else None
+    zero = np.zeros((s, 6))
+    free = set(floating)
+    for i in range(n):
+        p = robot.parent[i]
+        h = zero if p < 0 else out[:, p]
+        if i in free:
+            out[:, i] = h + free_terms[:, qi[i]:qi[i] + nd[i]]
+            continue
+        for jj in range(qi[i], qi[i] + nd[i]):
+            h = h + terms[:, jj]
+            if running:
+                after[:, jj] = h
+        out[:, i] = h
+    return out, after
 
 
 def wrench_maps(robot: Robot, samples: int, seed: int, d10: np.ndarray,

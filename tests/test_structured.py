@@ -302,3 +302,20 @@ def test_talos_mimic_couplings_take_the_structured_path():
     short = DRNGResult(robot, res.columns.subset(~rm), block_rank(res.columns.subset(~rm), robot.n), 0.0)
     chk = structured_check(robot, short)
     assert chk.status == "undecided" and chk.missing == res.rank - short.rank == 58
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_tree_kinematics_is_forward_kinematics(seed):
+    """The structured pass's kinematics (poses chained body by body, the rest batched over the
+    coordinates) equal :func:`baseparams.kinematics.tree.forward_kinematics`: every joint type,
+    fixed and floating roots."""
+    from baseparams.kinematics.tree import forward_kinematics
+    from baseparams.nullspace.structured import tree_kinematics
+    from baseparams.numerics import sample_states
+
+    rng = np.random.default_rng(seed)
+    robot = random_robot(rng, int(rng.integers(1, 12)), "RPUSC", floating=bool(seed % 2))
+    q, dq, ddq = sample_states(robot, 4, rng)
+    ref = forward_kinematics(robot, q, dq, ddq)
+    for got, want in zip(tree_kinematics(robot, q, dq, ddq), (ref.g, ref.V, ref.dV, ref.lines)):
+        assert np.abs(got - want).max() <= 1e-12 * max(1.0, np.abs(want).max())

@@ -21,12 +21,14 @@ drng                   {columns, rank, seconds, extended, by_principle{shared po
                        points, planar rotations}, by_rule{shared points, fixed points, planar
                        rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
                        R-L2 level chains, R-L3 planar loops, R-M coupled joints, numerical},
-                       complete}: rank added
+                       complete, notes}: rank added
                        by each source in that order (the paper's principles, the extended
                        rules, then, when some rows are not measured, unmeasured root,
                        unmeasured body and passive joint (those present), numerical
                        completion); complete:
-                       the geometric span equals the certified nullspace (null if unverified)
+                       the geometric span equals the certified nullspace (null if unverified);
+                       notes: a rule whose columns failed the check against the regressor
+                       (left out, named), or why the check could not run ([] normally)
 numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
                        requested, kept, and for loops not_converged, branch_jumps,
                        ill_conditioned, max_loop_residual}} or null; for a tree checked
@@ -255,6 +257,9 @@ class Analysis:
         ``practical.source`` the file's. ``None``: the literal model was analysed.
     form : {"expanded", "recursive"}
         How :meth:`expressions` are written (:func:`analyze`'s ``form``, resolved).
+    drng_notes : tuple of str
+        :attr:`baseparams.nullspace.result.DRNGResult.notes`: a rule whose columns were not in the
+        nullspace of the regressor (left out, named), or why they could not be checked.
 
     Notes
     -----
@@ -276,6 +281,7 @@ class Analysis:
     extended: bool = True
     practical: Practical | None = None
     form: str = "expanded"
+    drng_notes: tuple[str, ...] = ()
 
     @property
     def nullity(self) -> int:
@@ -522,7 +528,8 @@ class Analysis:
                      "extended": self.extended,
                      "by_principle": {k: v for k, v in self.by_principle.items() if k in PAPER},
                      "by_rule": {**self.by_principle, Source.NUMERICAL.label: 0 if c is None else c.completed},
-                     "complete": None if c is None else bool(c.status == Status.CERTIFIED)},
+                     "complete": None if c is None else bool(c.status == Status.CERTIFIED),
+                     "notes": list(self.drng_notes)},
             "numerical": num,
             "certified": self.certified,
             "status": self.status,
@@ -740,10 +747,40 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
             base = tree_base_parameters(robot, columns, convention)
             base_paper = tree_base_parameters(robot, columns, "paper")
         else:
-            base = base_parameters(robot, span, convention)
-            base_paper = base_parameters(robot, span, "paper")
+            base, base_paper = _dense_regroup(robot, span, res, cert, convention, base_parameters)
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
-                    time.perf_counter() - t0, extended, form=use)
+                    time.perf_counter() - t0, extended, form=use, drng_notes=res.notes)
+
+
+def _dense_regroup(robot: Robot, span: np.ndarray, res, cert, convention: str, regroup) -> tuple:
+    """``regroup`` (:func:`~.base.regroup.base_parameters`) of the dense span in ``convention`` and ``paper``.
+
+    A dense basis in world coordinates at q = 0 carries rounding ``~eps (D / L)^2`` on a body
+    ``D`` from the origin (:func:`baseparams.model.scale.body_rounding`): far enough, it cannot
+    tell the directions apart (fewer than the nullity, or a rank-deficient regrouping). A tree
+    is then regrouped from DRNG's compact columns (each body's decisions about its own origin);
+    anything else is refused in one line.
+    """
+    nullity = res.rank if cert is None else cert.nullity
+    if span.shape[1] == nullity:
+        try:
+            return regroup(robot, span, convention), regroup(robot, span, "paper")
+        except RuntimeError:
+            pass
+    from .base.sparse import tree_base_parameters
+    from .model.scale import body_rounding, length_scale
+    from .nullspace.structured import independent_columns
+
+    compact = None if robot.has_loops or (cert is not None and cert.completed) else independent_columns(robot, res)
+    if compact is not None:
+        return tree_base_parameters(robot, compact, convention), tree_base_parameters(robot, compact, "paper")
+    far = int(np.argmax(body_rounding(robot)))
+    dist = float(np.linalg.norm(robot.M0[far][:3, 3]))
+    raise BaseparamsError(f"robot {robot.name!r}: the nullspace basis cannot be regrouped: body "
+                          f"{robot.names[far]!r} is {dist:.3g} m from the world origin, "
+                          f"{dist / length_scale(robot):.3g} times the robot's length scale, and the basis (world "
+                          f"frame at q = 0) carries rounding of ~{body_rounding(robot)[far]:.1g} there; put the "
+                          f"model's origin near its bodies")
 
 
 def _resolve_form(robot: Robot, form: str, columns) -> str:
@@ -1073,7 +1110,8 @@ def format_report(a: Analysis) -> str:
            *decision_lines(j["rank_decision"]),
            *([a.practical.note(a.n_base)] if a.practical is not None else []),
            *([c.practical.note()] if c is not None and c.practical is not None else []),
-           f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms"]
+           f"DRNG: {a.drng_columns} columns of rank {a.drng_rank} in {a.drng_seconds * 1e3:.2f} ms",
+           *(f"  note: {note}" for note in a.drng_notes)]
     for src in Source:
         if src is not Source.NUMERICAL and src.label in a.by_principle:
             kind = ("paper" if src.is_paper else "measured rows: joint torques only" if src is Source.UNMEASURED

@@ -34,10 +34,10 @@ from ..display import summary_repr
 from ..model import inertia as _inertia
 from ..model.inertia import LENGTH_POWER
 from ..model.robot import Robot
-from ..model.scale import length_scale
+from ..model.scale import body_rounding, length_scale
 from ..nullspace.columns import Columns
-from .regroup import ZERO_TOL, BaseParameters, format_rows, parameter_names
-from .sparse import choose_all, csr_or_dense, scaled_blocks, snap_short
+from .regroup import SNAP_RTOL, ZERO_TOL, BaseParameters, format_rows, parameter_names
+from .sparse import SNAP_ROUNDING, choose_all, csr_or_dense, lower_blocks, scaled_blocks, snap_short
 
 
 @dataclass(frozen=True, eq=False)
@@ -205,8 +205,8 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
         The columns are not independent on their highest bodies.
     """
     n, n10 = robot.n, 10 * robot.n
-    hc, hp, he, t, noise = scaled_blocks(robot, cols, convention)
-    tol = max(1e-8, noise)
+    hc, hp, he, hm, t, noise = scaled_blocks(robot, cols, convention)
+    tol = np.maximum(1e-8, noise)
     order, bounds, dep_local, ainv = choose_all(hc, cols.child, n, _inertia.SPECS[convention].regroup_order, tol)
     dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
     keep = np.ones(n10, dtype=bool)
@@ -214,7 +214,7 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
     ind = np.flatnonzero(keep)
     pos_d = np.full(n10, -1)
     pos_d[dep] = np.arange(len(dep))
-    tg_a, sr_a, v = _local_terms(cols, hc, hp, he, order, bounds, dep_local, ainv)
+    tg_a, sr_a, v = _local_terms(cols, (hc, hp, he, hm), order, bounds, dep_local, ainv)
     # sum duplicates (two columns' blocks on one body), then zero what is rounding, relative to the row
     key = tg_a.astype(np.int64) * n10 + sr_a
     uk, inv = np.unique(key, return_inverse=True)
@@ -222,10 +222,13 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
     tg_a, sr_a = uk // n10, uk % n10
     rowmax = np.ones(n10)
     np.maximum.at(rowmax, tg_a, np.abs(v))
-    ok = np.abs(v) > max(ZERO_TOL, noise) * rowmax[tg_a]
+    level = np.maximum(noise[tg_a // 10], noise[sr_a // 10])  # either body's rounding
+    ok = np.abs(v) > np.maximum(ZERO_TOL, level) * rowmax[tg_a]
     tg_a, sr_a, v = tg_a[ok], sr_a[ok], v[ok]
     power = np.tile(LENGTH_POWER[convention], n).astype(float)
-    v = snap_short(v * length_scale(robot) ** (power[tg_a] - power[sr_a]))
+    rounding = SNAP_ROUNDING * body_rounding(robot)
+    snap = np.maximum(SNAP_RTOL, np.maximum(rounding[tg_a // 10], rounding[sr_a // 10]))  # the rounding it carries
+    v = snap_short(v * length_scale(robot) ** (power[tg_a] - power[sr_a]), snap)
     pos_i = np.full(n10, -1)
     pos_i[ind] = np.arange(len(ind))
     isd = pos_d[tg_a] >= 0
@@ -239,9 +242,13 @@ def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> B
     return BaseParameters(convention, form.names, ind, dep, None, None, unid, None, tmat, recursive=form)
 
 
-def _local_terms(cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray, order: np.ndarray,
-                 bounds: np.ndarray, dep_local: list, ainv: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(target parameter, source dependent parameter, dimensionless value)`` of ``-N_c``'s entries, every body."""
+def _local_terms(cols: Columns, scaled: tuple, order: np.ndarray, bounds: np.ndarray, dep_local: list,
+                 ainv: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(target parameter, source dependent parameter, dimensionless value)`` of ``-N_c``'s entries, every body.
+
+    ``scaled``: ``(hc, hp, he, hm)`` of :func:`~.sparse.scaled_blocks` (every block of every column).
+    """
+    hc, hp, he, hm = scaled
     tg, sr, vals = [], [], []  # target parameter (global), source dependent (global), dimensionless value
     ar10 = np.arange(10)
     for c in range(len(dep_local)):
@@ -252,12 +259,7 @@ def _local_terms(cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray, 
         src = 10 * c + np.array(dep_local[c], dtype=int)
         own = hc[idx].T @ a  # (10, l): the identity on D_c (the pivot), N_c[body c, I_c] elsewhere
         own[dep_local[c]] = 0.0
-        blocks = [(c, own)]
-        for low, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
-            for j in sorted(set(low[low >= 0].tolist())):
-                m = low == j
-                blocks.append((j, part[m].T @ a[m]))
-        for j, blk in blocks:
+        for j, blk in [(c, own), *lower_blocks(cols, hp, he, hm, idx, a)]:
             r, s = np.nonzero(blk)
             tg.append(10 * j + ar10[r])
             sr.append(src[s])

@@ -22,7 +22,7 @@ from ..errors import BaseparamsError
 from ..model import inertia as _inertia
 from ..model.inertia import LENGTH_POWER
 from ..model.robot import Robot
-from ..model.scale import length_scale
+from ..model.scale import NOISE_FACTOR, length_scale
 
 _NAMES = _inertia.NAMES
 
@@ -78,9 +78,8 @@ def paper_from(robot: Robot, convention: str) -> np.ndarray:
 #: a dimensionless coefficient ``K[i, d] L^(u_d - u_i)`` at most this, relative to the largest of
 #: its row (and at least to the 1 of ``pi_I``), is rounding noise: zero
 ZERO_TOL = 1e-9
-#: the tolerances grow to this many times ``eps * cond(L^-u T^-1)``: the rounding of a nullspace
-#: basis orthonormal in SI units (absolute, ``~eps``) as the dimensionless coordinates see it
-NOISE_FACTOR = 1e3
+# the tolerances grow to NOISE_FACTOR times ``eps * cond(L^-u T^-1)``: the rounding of a nullspace
+# basis orthonormal in SI units (absolute, ``~eps``) as the dimensionless coordinates see it
 #: coefficients snap to the shortest decimal within this relative distance
 SNAP_RTOL = 1e-13
 

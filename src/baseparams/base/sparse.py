@@ -33,7 +33,7 @@ import numpy as np
 from ..model import inertia as _inertia
 from ..model.inertia import LENGTH_POWER
 from ..model.robot import Robot
-from ..model.scale import length_scale
+from ..model.scale import body_rounding, length_scale
 from ..nullspace.columns import Columns
 from .regroup import NOISE_FACTOR, SNAP_RTOL, ZERO_TOL, BaseParameters, parameter_names
 
@@ -77,7 +77,7 @@ def _snap_at(v: np.ndarray, mag: np.ndarray, p: int, rtol: float) -> tuple[np.nd
     return snapped, ok & (np.abs(snapped - v) <= rtol * np.abs(v))
 
 
-def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS) -> np.ndarray:
+def snap_short(x: np.ndarray, rtol: float | np.ndarray = SNAP_RTOL, digits: int = SNAP_DIGITS) -> np.ndarray:
     """:func:`~.regroup.clean` restricted to decimals of at most ``digits`` significant digits, vectorised.
 
     An entry within ``rtol`` relative of a decimal of ``k <= digits`` significant digits becomes
@@ -89,8 +89,9 @@ def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS
     ----------
     x : ndarray
         Numbers, any shape.
-    rtol : float
-        The largest relative move (:data:`~.regroup.SNAP_RTOL`).
+    rtol : float or ndarray
+        The largest relative move (:data:`~.regroup.SNAP_RTOL`), or one per entry (``x``'s shape:
+        the rounding each entry carries).
     digits : int
         The most significant digits of a snapped value (at most 15).
 
@@ -103,6 +104,7 @@ def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS
     flat = x.reshape(-1)
     nz = np.flatnonzero(np.isfinite(flat) & (flat != 0))
     v = flat[nz]
+    rtol = np.broadcast_to(np.asarray(rtol, dtype=float), x.shape).reshape(-1)[nz]
     with np.errstate(all="ignore"):
         mag = np.floor(np.log10(np.abs(v))).astype(int)
     out = v.copy()
@@ -111,11 +113,16 @@ def snap_short(x: np.ndarray, rtol: float = SNAP_RTOL, digits: int = SNAP_DIGITS
     for p in range(1, digits + 1):  # the shortest: fewest digits first
         if not len(idx):
             break
-        snapped, ok = _snap_at(v[idx], mag[idx], p, rtol)
+        snapped, ok = _snap_at(v[idx], mag[idx], p, rtol[idx])
         out[idx[ok]] = snapped[ok]
         idx = idx[~ok]
     flat[nz] = out
     return x
+
+
+#: a coefficient's snapping tolerance is at least this many times its bodies'
+#: :func:`~baseparams.model.scale.body_rounding`
+SNAP_ROUNDING = 10.0
 
 
 def scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndarray, ...]:
@@ -135,26 +142,72 @@ def scaled_blocks(robot: Robot, cols: Columns, convention: str) -> tuple[np.ndar
     hc, hp, he : ndarray, shape ``(k, 10)``
         The columns' blocks on their highest, lower and extra bodies, in ``convention``
         coordinates scaled by ``L^-u`` (zero where a column has no such body).
+    hm : dict of int to tuple
+        The further blocks (:attr:`~baseparams.nullspace.columns.Columns.more`) the same way:
+        column -> ``(bodies (m,) int, blocks (m, 10))``, for the columns that have some.
     t : ndarray, shape ``(n, 10, 10)``
         :func:`body_transforms`.
-    noise : float
-        The rounding level of the map to dimensionless coordinates.
+    noise : ndarray, shape ``(n,)``
+        Per body, the rounding level of its blocks in dimensionless coordinates relative to
+        their size: :data:`~.regroup.NOISE_FACTOR` times
+        :func:`~baseparams.model.scale.body_rounding` times the
+        scaling's ``cond(L^-u)``. (One level for all bodies from the worst body's
+        ``cond(L^-u T^-1)`` would grow as ``D^4`` and stop a 3 000-link chain's regrouping at
+        its root.)
     """
     t = body_transforms(robot, convention)
     tinv = np.linalg.inv(t)
     power = LENGTH_POWER[convention].astype(float)
     sc = length_scale(robot) ** -power
     st = sc[:, None] * tinv  # (n, 10, 10)
-    sv = np.linalg.svd(st, compute_uv=False)
-    noise = NOISE_FACTOR * np.finfo(float).eps * sv.max() / max(sv.min(), 1e-300)
+    noise = NOISE_FACTOR * (sc.max() / sc.min()) * body_rounding(robot)
 
     def blk(bodies: np.ndarray, h: np.ndarray) -> np.ndarray:
         return np.einsum("kij,kj->ki", st[np.maximum(bodies, 0)], h) * (bodies >= 0)[:, None]
 
-    return blk(cols.child, cols.h), blk(cols.parent, cols.hp), blk(cols.extra, cols.he), t, noise
+    hm = {}
+    for j in np.flatnonzero(cols.has_more()).tolist():
+        bodies, blocks = np.asarray(cols.more[j][0], dtype=int), np.asarray(cols.more[j][1], dtype=float)
+        hm[j] = (bodies, np.einsum("kij,kj->ki", st[bodies], blocks.reshape(-1, 10)))
+    return blk(cols.child, cols.h), blk(cols.parent, cols.hp), blk(cols.extra, cols.he), hm, t, noise
 
 
-def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...], tol: float):
+def lower_blocks(cols: Columns, hp: np.ndarray, he: np.ndarray, hm: dict, idx: np.ndarray,
+                 a: np.ndarray) -> list[tuple[int, np.ndarray]]:
+    """The blocks of columns ``idx`` (one highest body) below it, times ``a``: every block, ``more`` included.
+
+    Parameters
+    ----------
+    cols : Columns
+        The columns (their ``parent`` and ``extra`` bodies).
+    hp, he : ndarray, shape ``(k, 10)``
+        Their scaled blocks on ``parent`` and ``extra`` (:func:`scaled_blocks`).
+    hm : dict of int to tuple
+        Their scaled further blocks (:func:`scaled_blocks`).
+    idx : ndarray of int, shape ``(l,)``
+        The columns whose highest body is the same.
+    a : ndarray, shape ``(l, l)``
+        The factor each column's blocks are combined with (row ``i`` for column ``idx[i]``).
+
+    Returns
+    -------
+    list of tuple
+        ``(body j, sum_i block_i(j) a[i] (10, l))`` per lower body ``j`` the columns touch, ``j``
+        ascending.
+    """
+    out: dict[int, np.ndarray] = {}
+    for low, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
+        for j in sorted(set(low[low >= 0].tolist())):  # not np.unique: it imports numpy.ma
+            m = low == j
+            out[j] = out[j] + part[m].T @ a[m] if j in out else part[m].T @ a[m]
+    if hm:
+        for i, col in enumerate(idx.tolist()):
+            for j, blk in zip(*hm.get(col, ((), ()))):
+                out[int(j)] = out.get(int(j), 0.0) + np.outer(blk, a[i])
+    return sorted(out.items())
+
+
+def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...], tol: float | np.ndarray):
     """Every body's dependent parameters and ``H_c[D_c]^-1``, bodies batched by their column count.
 
     Parameters
@@ -167,8 +220,9 @@ def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...
         Number of bodies.
     within : tuple of int
         The convention's regrouping order of a body's ten parameters.
-    tol : float
-        Relative threshold of a row's new component (as :func:`~.regroup.choose_dependent`).
+    tol : float or ndarray, shape ``(n,)``
+        Relative threshold of a row's new component (as :func:`~.regroup.choose_dependent`),
+        for every body or per body.
 
     Returns
     -------
@@ -184,6 +238,7 @@ def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...
     RuntimeError
         A body's columns are not independent on it.
     """
+    tol = np.broadcast_to(np.asarray(tol, dtype=float), (n,))
     order = np.argsort(child, kind="stable")
     bounds = np.searchsorted(child[order], np.arange(n + 1))
     counts = np.diff(bounds)
@@ -203,7 +258,7 @@ def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...
             for _ in range(2):
                 v -= np.einsum("bkl,bk->bl", basis, np.einsum("bkl,bl->bk", basis, v))
             nv = np.linalg.norm(v, axis=1)
-            take = np.flatnonzero((nv > tol * scale) & (count < ell))
+            take = np.flatnonzero((nv > tol[bodies] * scale) & (count < ell))
             basis[take, count[take]] = v[take] / nv[take, None]
             chosen[take, count[take]] = r
             count[take] += 1
@@ -216,14 +271,15 @@ def choose_all(hc: np.ndarray, child: np.ndarray, n: int, within: tuple[int, ...
     return order, bounds, dep, ainv
 
 
-def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he: np.ndarray,
-                within: tuple[int, ...], tol: float) -> tuple[list[list[int]], list[tuple[np.ndarray, np.ndarray]]]:
+def _dual_basis(robot: Robot, cols: Columns, scaled: tuple, within: tuple[int, ...],
+                tol: float | np.ndarray) -> tuple[list[list[int]], list[tuple[np.ndarray, np.ndarray]]]:
     """Per body, its dependent parameters (local indices) and dual vectors ``Z_c``.
 
     ``Z_c`` is ``(bodies (m,), blocks (m, 10, l_c))``: its blocks on the bodies it touches, ``c``
     first, then the bodies on its way to the root.
     """
     n = robot.n
+    hc, hp, he, hm = scaled
     order, bounds, dep, ainv = choose_all(hc, cols.child, n, within, tol)
     empty = (np.zeros(0, dtype=int), np.zeros((0, 10, 0)))
     z: list[tuple[np.ndarray, np.ndarray]] = [empty] * n
@@ -233,17 +289,14 @@ def _dual_basis(robot: Robot, cols: Columns, hc: np.ndarray, hp: np.ndarray, he:
         idx = order[bounds[c]:bounds[c + 1]]
         a = ainv[c]
         parts = []  # (bodies, blocks) of the columns' lower blocks, with the dual vectors cancelling them
-        for low, part in ((cols.parent[idx], hp[idx]), (cols.extra[idx], he[idx])):
-            for j in sorted(set(low[low >= 0].tolist())):
-                m = low == j
-                zj = part[m].T @ a[m]  # (10, l): the columns' blocks on body j
-                if dep[j]:  # cancel the entries on body j's dependent parameters (Z_j starts with j)
-                    bj, vj = z[j]
-                    blocks = -np.einsum("bik,kl->bil", vj, zj[dep[j]])
-                    blocks[0] += zj
-                    parts.append((bj, blocks))
-                else:
-                    parts.append((np.array([j]), zj[None]))
+        for j, zj in lower_blocks(cols, hp, he, hm, idx, a):  # zj (10, l): the columns' blocks on body j
+            if dep[j]:  # cancel the entries on body j's dependent parameters (Z_j starts with j)
+                bj, vj = z[j]
+                blocks = -np.einsum("bik,kl->bil", vj, zj[dep[j]])
+                blocks[0] += zj
+                parts.append((bj, blocks))
+            else:
+                parts.append((np.array([j]), zj[None]))
         own = (np.array([c]), (hc[idx].T @ a)[None])
         if len(parts) == 1:
             z[c] = (np.concatenate([own[0], parts[0][0]]), np.concatenate([own[1], parts[0][1]]))
@@ -304,9 +357,9 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
         The columns are not independent on their highest bodies.
     """
     n, n10 = robot.n, 10 * robot.n
-    hc, hp, he, t, noise = scaled_blocks(robot, cols, convention)
-    tol = max(1e-8, noise)
-    dep_local, z = _dual_basis(robot, cols, hc, hp, he, _inertia.SPECS[convention].regroup_order, tol)
+    hc, hp, he, hm, t, noise = scaled_blocks(robot, cols, convention)
+    tol = np.maximum(1e-8, noise)
+    dep_local, z = _dual_basis(robot, cols, (hc, hp, he, hm), _inertia.SPECS[convention].regroup_order, tol)
     dep = np.array([10 * c + w for c in reversed(range(n)) for w in dep_local[c]], dtype=int)
     keep = np.ones(n10, dtype=bool)  # not np.setdiff1d: it imports numpy.ma (start-up time)
     keep[dep] = False
@@ -318,10 +371,13 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     rows, cls, vals = _k_entries(n, dep_local, z, pos_i, pos_d)
     rowmax = np.ones(len(ind))
     np.maximum.at(rowmax, rows, np.abs(vals))
-    keep = np.abs(vals) > max(ZERO_TOL, noise) * rowmax[rows]
+    level = np.maximum(noise[ind[rows] // 10], noise[dep[cls] // 10])  # either body's rounding
+    keep = np.abs(vals) > np.maximum(ZERO_TOL, level) * rowmax[rows]
     rows, cls, vals = rows[keep], cls[keep], vals[keep]
     power = np.tile(LENGTH_POWER[convention], n).astype(float)
-    vals = snap_short(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]))
+    rounding = SNAP_ROUNDING * body_rounding(robot)
+    snap = np.maximum(SNAP_RTOL, np.maximum(rounding[ind[rows] // 10], rounding[dep[cls] // 10]))
+    vals = snap_short(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]), snap)
     kmat = csr_or_dense(vals, rows, cls, (len(ind), len(dep)))
     e = csr_or_dense(np.r_[np.ones(len(ind)), vals], np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]],
                 (len(ind), n10))

@@ -153,6 +153,62 @@ class Columns:
         more = np.array([None if m is None else (m[0], m[1] * inv) for m in self.more] + [None], dtype=object)[:-1]
         return replace(self, h=self.h * inv, hp=self.hp * inv, he=self.he * inv, more=more)
 
+    def transformed(self, f: np.ndarray) -> Columns:
+        """The columns in per-body coordinates ``f[b] @ pi_b``: each block on body ``b`` (``more`` too) times ``f[b]``.
+
+        Parameters
+        ----------
+        f : ndarray, shape ``(n, 10, 10)``
+            Per body, an invertible map of its ten parameters (e.g.
+            :func:`baseparams.model.scale.decision_frames`), rows and columns in ``hat`` order.
+
+        Returns
+        -------
+        Columns
+            Same bodies and provenance; a block on no body (``parent`` or ``extra`` ``-1``) as it is.
+        """
+        def blk(bodies: np.ndarray, h: np.ndarray) -> np.ndarray:
+            out = np.einsum("kij,kj->ki", f[np.maximum(bodies, 0)], h)
+            return np.where((bodies >= 0)[:, None], out, h)
+
+        more = np.array([None if m is None else (m[0], np.einsum("kij,kj->ki", f[np.asarray(m[0], dtype=int)],
+                                                                 np.asarray(m[1], dtype=float).reshape(-1, 10)))
+                         for m in self.more] + [None], dtype=object)[:-1]
+        return replace(self, h=blk(self.child, self.h), hp=blk(self.parent, self.hp), he=blk(self.extra, self.he),
+                       more=more)
+
+    def norms(self) -> np.ndarray:
+        """Each column's Euclidean norm over all its blocks (``more`` included).
+
+        Returns
+        -------
+        ndarray, shape ``(k,)``
+            ``||B[:, j]||`` (blocks on the same body not summed first: an upper bound then).
+        """
+        n2 = (np.sum(self.h ** 2, 1) + np.sum(self.hp ** 2, 1) * (self.parent >= 0)
+              + np.sum(self.he ** 2, 1) * (self.extra >= 0))
+        for j in np.flatnonzero(self.has_more()):
+            n2[j] += float(np.sum(np.asarray(self.more[j][1], dtype=float) ** 2))
+        return np.sqrt(n2)
+
+    def times(self, s: np.ndarray) -> Columns:
+        """Column ``j`` multiplied by ``s[j]``: every block of it, ``more`` included.
+
+        Parameters
+        ----------
+        s : ndarray, shape ``(k,)``
+            One factor per column.
+
+        Returns
+        -------
+        Columns
+            Same bodies and provenance.
+        """
+        s = np.asarray(s, dtype=float)
+        more = np.array([None if m is None else (m[0], np.asarray(m[1], dtype=float) * s[j])
+                         for j, m in enumerate(self.more)] + [None], dtype=object)[:-1]
+        return replace(self, h=self.h * s[:, None], hp=self.hp * s[:, None], he=self.he * s[:, None], more=more)
+
     def reindexed(self, bodies: np.ndarray, loops: np.ndarray, n: int) -> Columns:
         """The columns of a related robot as columns of this one: bodies and loop joints renumbered.
 

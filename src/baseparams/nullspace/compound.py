@@ -143,16 +143,16 @@ def _components(touch: list[np.ndarray], marked: np.ndarray) -> list[np.ndarray]
 
 
 def _new_directions(cols: Columns, prior: Columns | None, unit: np.ndarray) -> list[Columns]:
-    """Of ``cols`` (none on more than three bodies), the directions new to ``prior`` and to each other.
+    """Of ``cols``, the directions new to ``prior`` and to each other, every block kept.
 
-    Grouped by the bodies they touch, fewest first; each group's columns (for ``pi / unit``) are
-    reduced against the span of what is known on those bodies, and what is new (singular values
-    above :data:`~.coupled.NEW`) emitted on the same bodies.
+    Grouped by the bodies they touch (:func:`_touched`: ``child``, ``parent``, ``extra`` and the
+    ``more`` blocks of R-M's widest columns), fewest first; each group's columns (for
+    ``pi / unit``) are reduced against the span of what is known on those bodies, and what is new
+    (singular values above :data:`~.coupled.NEW`) emitted on the same bodies.
     """
     known = prior if prior is not None else Columns.empty()
     out = []
-    sets = [tuple(sorted({int(b) for b in (cols.child[k], cols.parent[k], cols.extra[k]) if b >= 0}))
-            for k in range(len(cols))]
+    sets = [tuple(sorted(int(b) for b in set(t.tolist()))) for t in _touched(cols)]
     for who in sorted(set(sets), key=lambda w: (len(w), w)):
         sel = cols.subset(np.array([w == who for w in sets]))
         x = to_dense(sel, max(who) + 1).reshape(max(who) + 1, 10, -1)[list(who)] / unit[None, :, None]

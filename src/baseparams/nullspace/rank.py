@@ -9,7 +9,25 @@ import numpy as np
 from .columns import Columns
 
 
-def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
+def per_body(rtol: float | np.ndarray, n: int) -> np.ndarray:
+    """A relative threshold per body ``(n,)`` from one number or an array of them.
+
+    Parameters
+    ----------
+    rtol : float or ndarray, shape ``(n,)``
+        The threshold of every body, or of each.
+    n : int
+        Number of bodies.
+
+    Returns
+    -------
+    ndarray, shape ``(n,)``
+        A fresh array.
+    """
+    return np.array(np.broadcast_to(np.asarray(rtol, dtype=float), (n,)))
+
+
+def block_rank(cols: Columns, n: int, rtol: float | np.ndarray = 1e-10) -> int:
     """Exact rank of the columns in O(n): block-triangular elimination, leaves to root.
 
     Each column lives on blocks ``{child, parent}`` with ``parent < child``. Per body, the
@@ -28,15 +46,17 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
         lower than ``child``), ``paper`` convention.
     n : int
         Number of moving bodies (``B`` has ``10 n`` rows).
-    rtol : float, default 1e-10
+    rtol : float or ndarray, shape ``(n,)``, default 1e-10
         Singular-value threshold of each diagonal block, relative to its norm (to the largest
-        entry of ``h`` in the elimination).
+        entry of ``h`` in the elimination); one per body (e.g. raised to the rounding of
+        :func:`baseparams.model.scale.decision_frames`) or one for all.
 
     Returns
     -------
     int
         The rank of ``B (10 n, k)`` (:func:`~.columns.to_sparse`), computed without forming it.
     """
+    rtol = per_body(rtol, n)
     cols = _reduce_pure(cols, rtol)
     k = len(cols)
     if k == 0:
@@ -51,13 +71,13 @@ def block_rank(cols: Columns, n: int, rtol: float = 1e-10) -> int:
     blocks[child, :, slot] = cols.h[order]
     scale = np.linalg.norm(blocks, axis=(1, 2))
     sv = np.linalg.svd(blocks, compute_uv=False)  # (n, min(10, mmax))
-    ranks = np.sum(sv > rtol * np.maximum(scale, 1e-300)[:, None], axis=1)
+    ranks = np.sum(sv > (rtol * np.maximum(scale, 1e-300))[:, None], axis=1)
     if np.all(ranks == counts):
         return int(ranks.sum())
     return _elimination_rank(cols, n, rtol, ranks, counts, order, starts)
 
 
-def _reduce_pure(cols: Columns, rtol: float) -> Columns:
+def _reduce_pure(cols: Columns, rtol: np.ndarray) -> Columns:
     """A column set of the same span, cheaper to rank (elementary column operations only).
 
     From the highest body down: the single-body ("pure") columns of body ``b`` become an
@@ -65,12 +85,12 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
     parent ``p`` are rotated by the right singular vectors of their child parts off ``Q``, and
     each combination whose child part lies in ``span Q`` is replaced by its parent part alone, a
     new pure column of ``p``. Without this a translation chain's redundant pure columns cascade
-    through the elimination (quadratic in the depth).
+    through the elimination (quadratic in the depth). ``rtol``: per body.
     """
     pure_mask = (cols.parent < 0) & (cols.extra < 0) & ~cols.has_more()
     if not pure_mask.any():
         return cols
-    tol = rtol * max(float(np.abs(cols.h).max()), 1e-300)
+    tol = rtol * max(float(np.abs(cols.h).max()), 1e-300)  # (n,)
     pure = _pure_bases(cols, pure_mask, tol)
     fresh = set(pure)  # bodies whose pure list is still the batched orthonormal basis
     order, span_of = _two_block_groups(cols, pure_mask)
@@ -84,7 +104,7 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
         bb = -heapq.heappop(heap)
         if bb not in pure:
             continue
-        basis = _orthonormal(pure.pop(bb), bb in fresh, tol)
+        basis = _orthonormal(pure.pop(bb), bb in fresh, tol[bb])
         out_h.append(basis.T)
         out_b += [bb] * basis.shape[1]
         if bb not in span_of or basis.shape[1] == 0:
@@ -92,7 +112,7 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
         idx = order[span_of[bb][0]: span_of[bb][1]]
         for p in sorted(set(cols.parent[idx].tolist())):  # not np.unique: it imports numpy.ma
             grp = idx[cols.parent[idx] == p]
-            split = _split_off_span(cols, grp, basis, tol)
+            split = _split_off_span(cols, grp, basis, tol[bb])
             if split is None:
                 continue
             touched[grp] = True
@@ -106,10 +126,10 @@ def _reduce_pure(cols: Columns, rtol: float) -> Columns:
     return _reduced_columns(cols, ~pure_mask & ~touched, out_h, out_b, new_two)
 
 
-def _pure_bases(cols: Columns, pure_mask: np.ndarray, tol: float) -> dict[int, list[np.ndarray]]:
+def _pure_bases(cols: Columns, pure_mask: np.ndarray, tol: np.ndarray) -> dict[int, list[np.ndarray]]:
     """Body -> orthonormal basis (a list of 10-vectors) of the span of its pure columns.
 
-    For every body with some, at once (batched SVD over padded blocks).
+    For every body with some, at once (batched SVD over padded blocks); ``tol`` per body.
     """
     pk = np.flatnonzero(pure_mask)
     pk = pk[np.argsort(cols.child[pk], kind="stable")]
@@ -118,7 +138,7 @@ def _pure_bases(cols: Columns, pure_mask: np.ndarray, tol: float) -> dict[int, l
     blocks = np.zeros((len(pb), 10, pc.max()))
     blocks[np.repeat(np.arange(len(pb)), pc), :, slot] = cols.h[pk]
     u, sv, _ = np.linalg.svd(blocks, full_matrices=False)
-    return {int(bb): list((u[k][:, sv[k] > tol]).T) for k, bb in enumerate(pb)}
+    return {int(bb): list((u[k][:, sv[k] > tol[bb]]).T) for k, bb in enumerate(pb)}
 
 
 def _two_block_groups(cols: Columns, pure_mask: np.ndarray) -> tuple[np.ndarray, dict[int, tuple[int, int]]]:
@@ -186,7 +206,8 @@ def _column_dict(cols: Columns, k: int) -> dict[int, np.ndarray]:
     return v
 
 
-def leading_spans(cols: Columns, n: int, rtol: float = 1e-10) -> tuple[np.ndarray, np.ndarray, Columns | None]:
+def leading_spans(cols: Columns, n: int,
+                  rtol: float | np.ndarray = 1e-10) -> tuple[np.ndarray, np.ndarray, Columns | None]:
     """Per body, the span of the columns' leading parts in an echelon form, and its complement.
 
     The same elimination as :func:`block_rank` (leaves to root, same thresholds), keeping each
@@ -202,8 +223,8 @@ def leading_spans(cols: Columns, n: int, rtol: float = 1e-10) -> tuple[np.ndarra
         ``k`` columns in compact form (``paper`` convention, or any per-parameter scaling of it).
     n : int
         Number of moving bodies.
-    rtol : float, default 1e-10
-        Singular-value threshold, as in :func:`block_rank`.
+    rtol : float or ndarray, shape ``(n,)``, default 1e-10
+        Singular-value threshold, as in :func:`block_rank` (one per body, or one for all).
 
     Returns
     -------
@@ -215,6 +236,7 @@ def leading_spans(cols: Columns, n: int, rtol: float = 1e-10) -> tuple[np.ndarra
         When no elimination was needed (every diagonal block of full column rank), a column set
         of the same span with exactly ``rank`` linearly independent columns; else ``None``.
     """
+    rtol = per_body(rtol, n)
     cols = _reduce_pure(cols, rtol)
     k = len(cols)
     if k == 0:
@@ -228,7 +250,7 @@ def leading_spans(cols: Columns, n: int, rtol: float = 1e-10) -> tuple[np.ndarra
     blocks[child, :, slot] = cols.h[order]
     scale = np.linalg.norm(blocks, axis=(1, 2))
     q, sv, _ = np.linalg.svd(blocks, full_matrices=True)  # q (n, 10, 10)
-    ranks = np.sum(sv > rtol * np.maximum(scale, 1e-300)[:, None], axis=1)
+    ranks = np.sum(sv > (rtol * np.maximum(scale, 1e-300))[:, None], axis=1)
     if np.all(ranks == counts):
         return q, ranks, cols
     lead = ranks.copy()
@@ -236,7 +258,7 @@ def leading_spans(cols: Columns, n: int, rtol: float = 1e-10) -> tuple[np.ndarra
     return q, lead, None
 
 
-def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, counts: np.ndarray,
+def _elimination_rank(cols: Columns, n: int, rtol: np.ndarray, ranks: np.ndarray, counts: np.ndarray,
                       order: np.ndarray, starts: np.ndarray, spans: tuple | None = None) -> int:
     """Exact rank when some diagonal blocks are rank-deficient.
 
@@ -247,7 +269,7 @@ def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, cou
     block is b are ranked, and combinations vanishing there move down to their next highest
     block. A body with a full-rank diagonal block that receives nothing keeps its batched rank.
     ``spans``: ``(Q (n, 10, 10), lead (n,))`` updated in place for the bodies visited
-    (:func:`leading_spans`).
+    (:func:`leading_spans`). ``rtol``: per body.
     """
     scale = max(float(np.abs(cols.h).max()), 1e-300)
     total = int(ranks.sum())
@@ -262,7 +284,7 @@ def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, cou
         total -= int(ranks[b])
         mat = np.stack([v[b] for v in vecs], axis=1)  # (10, m)
         u, sv, vt = np.linalg.svd(mat, full_matrices=True)
-        r = int(np.sum(sv > rtol * scale))
+        r = int(np.sum(sv > rtol[b] * scale))
         total += r
         if spans is not None:  # leading_spans: body b's diagonal-block basis and leading count
             spans[0][b], spans[1][b] = u, r
@@ -274,7 +296,7 @@ def _elimination_rank(cols: Columns, n: int, rtol: float, ranks: np.ndarray, cou
                 for blk, h in v.items():
                     if blk != b:
                         new[blk] = new.get(blk, 0) + coef * h
-            new = {blk: h for blk, h in new.items() if np.linalg.norm(h) > rtol * scale}
+            new = {blk: h for blk, h in new.items() if np.linalg.norm(h) > rtol[blk] * scale}
             if new:
                 top = max(new)
                 pending.setdefault(top, []).append(new)

@@ -14,7 +14,9 @@ TP regressor's bar lines). The certificate has two parts, neither using DRNG's r
     way is checked, and above that point every row sees one total wrench, which must vanish
     relative to the size of its terms (else each ancestor's rows are checked);
 (b) ``rank(W) >= 10 n - rank(B)``: a block-diagonal complement ``U = diag(U_b)`` of
-    ``span(B)`` (:func:`.rank.leading_spans`) has ``W U`` of full column rank. If
+    ``span(B)`` (:func:`.rank.leading_spans` in decision coordinates, each body's parameters
+    about its own origin: :func:`~.result.decision_columns`; the wrench maps taken to the same
+    coordinates) has ``W U`` of full column rank. If
     ``W U x = 0``, joint ``j``'s rows involve only ``subtree(j)``, so from the leaves up every
     diagonal block (joint ``j``'s rows x ``W U_j``) of full column rank forces ``x_j = 0``.
     Where one is rank deficient, its null combinations are carried into the parent's block (a
@@ -52,16 +54,15 @@ from ..display import summary_repr
 from ..enums import Status
 from ..errors import BaseparamsError
 from ..model.robot import Robot
-from ..model.scale import decision_scale
+from ..model.scale import decision_frames, decision_scale
 from ..numerics import STRUCTURED_MIN_BODIES as STRUCTURED_MIN_BODIES  # re-exported: where the path is described
 from ..numerics import available_bytes as _available_bytes
 from ..numerics import closed_samples, row_mask, rows_spec, sample_states
 from ..pga import adjoint, commutator, hat, se3_exp, swap
-from ..pga.core import screw_exp
 from ..regressor.tp import bar_lines
 from .columns import Columns
-from .drng import DRNGResult
 from .rank import leading_spans
+from .result import DRNGResult, decision_columns
 
 #: default random states of the structured check: a joint's diagonal block then has ``30 x dofs``
 #: rows for at most ten columns, and each DRNG column is checked on 30 generic states
@@ -215,27 +216,64 @@ def tree_kinematics(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray
     lines : ndarray, shape ``(S, dof, 6)``
         Current joint lines (a floating root's: the basis ``e_k``).
     """
+    n, qi, nd, sc = robot.n, robot.q_index, robot.ndofs, robot.screws
+    floating = [i for i in range(n) if robot.jtype[i] == "F"]
+    # the loops over bodies carry only what depends on the parent; the rest is batched over coordinates
+    exps = se3_exp(sc[None] * q[..., None])  # (S, dof, 4, 4): each coordinate's displacement
+    g, before = _poses(robot, q, exps, floating)
+    lines = adjoint(before, np.broadcast_to(sc, before.shape[:2] + (6,)))
+    for i in floating:
+        lines[:, qi[i]:qi[i] + nd[i]] = np.eye(6)
+    v, after = _accumulate(robot, lines * dq[..., None], dq, floating, running=True)
+    push = commutator(lines, after) * dq[..., None] + lines * ddq[..., None]  # (S, dof, 6)
+    a, _ = _accumulate(robot, push, ddq, floating, running=False)
+    return g, v, a, lines
+
+
+def _poses(robot: Robot, q: np.ndarray, exps: np.ndarray, floating: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """Body poses ``(S, n, 4, 4)`` and each coordinate's pose before its own displacement ``(S, dof, 4, 4)``."""
     s, n = q.shape[0], robot.n
     qi, nd = robot.q_index, robot.ndofs
-    g, v, a = np.empty((s, n, 4, 4)), np.empty((s, n, 6)), np.empty((s, n, 6))
-    lines = np.empty((s, robot.dof, 6))
-    eye, zero6 = np.broadcast_to(np.eye(4), (s, 4, 4)), np.zeros((s, 6))
+    g, before = np.empty((s, n, 4, 4)), np.empty((s, robot.dof, 4, 4))
+    eye = np.broadcast_to(np.eye(4), (s, 4, 4))
+    free = set(floating)
     for i in range(n):
         p = robot.parent[i]
-        h, vh, ah = (eye, zero6, zero6) if p < 0 else (g[:, p], v[:, p], a[:, p])
-        sl = slice(qi[i], qi[i] + nd[i])
-        if robot.jtype[i] == "F":
-            lines[:, sl] = np.eye(6)
-            g[:, i], v[:, i], a[:, i] = se3_exp(q[:, sl]), vh + dq[:, sl], ah + ddq[:, sl]
+        h = eye if p < 0 else g[:, p]
+        if i in free:
+            g[:, i] = se3_exp(q[:, qi[i]:qi[i] + nd[i]])
             continue
-        for jj in range(sl.start, sl.stop):
-            line = adjoint(h, np.broadcast_to(robot.screws[jj], (s, 6)))
-            lines[:, jj] = line
-            vh = vh + line * dq[:, jj:jj + 1]
-            ah = ah + commutator(line, vh) * dq[:, jj:jj + 1] + line * ddq[:, jj:jj + 1]
-            h = h @ screw_exp(robot.screws[jj], q[:, jj])
-        g[:, i], v[:, i], a[:, i] = h, vh, ah
-    return g, v, a, lines
+        for jj in range(qi[i], qi[i] + nd[i]):
+            before[:, jj] = h
+            h = h @ exps[:, jj]
+        g[:, i] = h
+    return g, before
+
+
+def _accumulate(robot: Robot, terms: np.ndarray, free_terms: np.ndarray, floating: list[int],
+                running: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """Per body, its parent's value plus its coordinates' ``terms (S, dof, 6)`` (a floating root: ``free_terms``).
+
+    ``running``: also each coordinate's value once its own term is added ``(S, dof, 6)``.
+    """
+    s, n = terms.shape[0], robot.n
+    qi, nd = robot.q_index, robot.ndofs
+    out = np.empty((s, n, 6))
+    after = np.empty_like(terms) if running else None
+    zero = np.zeros((s, 6))
+    free = set(floating)
+    for i in range(n):
+        p = robot.parent[i]
+        h = zero if p < 0 else out[:, p]
+        if i in free:
+            out[:, i] = h + free_terms[:, qi[i]:qi[i] + nd[i]]
+            continue
+        for jj in range(qi[i], qi[i] + nd[i]):
+            h = h + terms[:, jj]
+            if running:
+                after[:, jj] = h
+        out[:, i] = h
+    return out, after
 
 
 def wrench_maps(robot: Robot, samples: int, seed: int, d10: np.ndarray,
@@ -760,10 +798,13 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
     dofs, coupled = row_groups(robot, rows, big_g)
     res = column_residuals(raw, robot, x, lines, dofs, residual_tol, coupled) if len(cols) else np.zeros(0)
     worst = float(res.max()) if len(res) else 0.0
-    q, lead, indep = leading_spans(raw, n)
+    local, local_rtol = decision_columns(cols, robot)
+    q, lead, indep = leading_spans(local, n, local_rtol)  # q about each body's origin
     rank_b = int(lead.sum())
+    inverse = decision_frames(robot)[1]
     if indep is not None:
-        indep = indep.scaled(d10)
+        indep = indep.transformed(inverse)
+    x = _in_decision_frames(x, inverse, d10)
     par = np.asarray(robot.parent, dtype=int)
     bad, small = diagonal_blocks(q, lead, x, lines, dofs, rtol)
     missing, merged, small2 = merge_blocks(bad, par, q, lead, x, lines, dofs, rtol, coupled)
@@ -773,6 +814,19 @@ def structured_check(robot: Robot, result: DRNGResult, samples: int | None = Non
                independent=indep, sampling=sampling)
     status, message = _structured_verdict(result, out, rtol, residual_tol)
     return StructuredCheck(status, message, seconds=time.perf_counter() - t0, **out)
+
+
+def _in_decision_frames(x: np.ndarray, inverse: np.ndarray, d10: np.ndarray) -> np.ndarray:
+    """Wrench maps on ``pi / d`` ``(n, S, 6, 10)`` made maps on decision coordinates, in place and by chunks.
+
+    ``inverse``: :func:`baseparams.model.scale.decision_frames`'s, from decision coordinates to
+    ``pi``; the map on ``pi / d`` then takes ``diag(1 / d) inverse``.
+    """
+    g = inverse / d10[None, :, None]
+    step = max(1, CHUNK // (60 * x.shape[1]))
+    for a in range(0, len(x), step):
+        x[a:a + step] = np.einsum("nsce,nef->nscf", x[a:a + step], g[a:a + step])
+    return x
 
 
 def _structured_verdict(result: DRNGResult, out: dict, rtol: float, residual_tol: float) -> tuple[Status, str]:
@@ -811,16 +865,16 @@ def independent_columns(robot: Robot, result: DRNGResult) -> Columns | None:
     -------
     Columns or None
         ``result.rank`` linearly independent columns spanning the same space, each independent
-        on its highest body (:func:`.rank.leading_spans` on ``pi / d``): what
+        on its highest body (:func:`.rank.leading_spans` in decision coordinates,
+        :func:`~.drng.decision_columns`): what
         :func:`baseparams.base.sparse.tree_base_parameters` regroups; ``None`` when the echelon
         form needed eliminations or does not reproduce DRNG's rank.
     """
-    d10 = decision_scale(robot, "paper")[:10]
-    cols = result.columns
-    _, lead, indep = leading_spans(cols.scaled(1.0 / d10), robot.n)
+    local, rtol = decision_columns(result.columns, robot)
+    _, lead, indep = leading_spans(local, robot.n, rtol)
     if indep is None or int(lead.sum()) != result.rank:
         return None
-    return indep.scaled(d10)
+    return indep.transformed(decision_frames(robot)[1])
 
 
 def dense_bytes(robot: Robot, samples: int, rows: str = "all") -> float:

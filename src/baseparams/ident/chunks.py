@@ -128,7 +128,8 @@ class Grid:
     n : int
         Samples of the log.
     pad : int
-        Filter edges dropped at both ends of the whole log.
+        Samples left out at both ends of the whole log (0: none; :attr:`Prepared.trim
+        <baseparams.ident.preprocess.Prepared.trim>`).
     factor : int
         Decimation factor.
     cutoff : float
@@ -163,7 +164,7 @@ class Grid:
         Returns
         -------
         ndarray of int, shape ``(k,)``
-            Global indices: past the filter edges, on the decimation grid ``pad + j factor``.
+            Global indices: past ``pad`` samples at each end, on the decimation grid ``pad + j factor``.
         """
         first = max(c.start, self.pad)
         first += (-(first - self.pad)) % self.factor
@@ -359,7 +360,7 @@ def prepared_rows(model, prep, cols: np.ndarray) -> np.ndarray:
     """
     f = prep.full
     return parallel_rows(model, f.q[:, cols], f.dq[:, cols], f.ddq[:, cols], prep.design, prep.index, prep.stride,
-                         prep.design.pad % prep.stride)
+                         prep.trim % prep.stride)
 
 
 #: regressor columns filtered at once by :func:`filtered_rows` (at least; bounds the filter's copies) ...

@@ -9,7 +9,7 @@ model file's prior, the physically consistent fit) on accumulated rows;
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -110,7 +110,7 @@ class Fit:
 
 
 def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None = None,
-        mass_bounds=None, blocks=None, estimator: str | None = None) -> Fit:
+        mass_bounds=None, blocks=None, estimator: str | None = None, rule: str = "blocks") -> Fit:
     """Estimate the model parameters from accumulated data.
 
     Parameters
@@ -137,6 +137,12 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     estimator : {"least squares", "physical"}, optional
         ``auto`` only: take this estimator instead of cross-validating least squares against the
         physical fit (a refit on rows the model terms transformed keeps the first choice).
+    rule : {"blocks", "recordings", "structure"}
+        ``auto`` only: what chooses the estimate (:data:`RULES`). ``blocks``: cross-validation on
+        ``blocks``, contiguous pieces of one motion; ``recordings``: the same, each block a whole
+        recording (another motion); ``structure``: no cross-validation (the blocks are too short to
+        see beyond the motion): the physically consistent fit, pulled towards the model file with the
+        weight the data's own distance to it sets (:func:`_structural`).
 
     Returns
     -------
@@ -162,8 +168,14 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
         acc = _with_drive_prior_rows(model, acc)
         first = ols(acc, model.names)
     est = first if method == "ols" else wls(acc, model.names, first)
+    if method == "auto" and rule == "structure":
+        return _structural(model, est, acc, prior_weight, estimator)
     if method == "auto":
-        return _auto(model, first, est, acc, blocks or [], prior_weight, estimator)
+        fitted = _auto(model, first, est, acc, blocks or [], prior_weight, estimator)
+        if fitted.selection is not None and rule != "blocks":
+            fitted = replace(fitted, selection=replace(fitted.selection, rule=rule,
+                                                       scope="cross-validation, each recording one block"))
+        return fitted
     if method != "physical":
         return Fit(model, method, est.theta, est)
     from .physical import physical_fit
@@ -311,6 +323,71 @@ def _auto(model: IdentModel, first, est, acc, blocks: list, prior_weight=None, e
     res = residual_rms(acc, theta)
     # the least-squares statistics stay: pulled_covariance maps the covariance once it is chosen
     return Fit(model, "auto", theta, replace(base, method="auto", theta=theta, rms=res), selection=sel)
+
+
+#: what chooses the default estimate (:func:`fit`'s ``rule``) -> how the report says it
+RULES = {"blocks": "blocked cross-validation on the training data",
+         "recordings": "cross-validation with each recording one block (another motion)",
+         "structure": "structure: the cross-validation blocks are too short to see beyond the motion"}
+
+
+def _structural(model: IdentModel, est, acc, prior_weight=None, estimator=None) -> Fit:
+    """The default when within-motion cross-validation cannot choose: physically consistent, pulled by the evidence.
+
+    The physically consistent fit (:func:`~baseparams.ident.physical.physical_fit`) on the WLS rows
+    stacked with the model file's prior ``lam * s2 * S^-1`` (:mod:`baseparams.ident.select`) and the
+    drive terms' weak prior, ``lam = 1 / kappa`` with ``kappa`` the file's error as the data show it
+    (:func:`~baseparams.ident.select.prior_error_scale`: maximum likelihood of the prior's scale from
+    the least-squares estimate's distance to the file, over the whole training span: empirical Bayes,
+    no held-out block), within the candidate weights' range. Without the ``ident`` extra (or
+    ``estimator="least squares"``), least squares with that prior.
+    """
+    from .select import (
+        LAMBDAS,
+        Selection,
+        drive_precision,
+        nonnegative_terms,
+        penalty_of,
+        prior_covariance,
+        prior_error_scale,
+        prior_precision,
+        solve,
+        system_of,
+    )
+
+    nb, theta0 = model.n_base, model.theta(model.robot.parameters("paper"))
+    w = np.asarray(est.weights, dtype=float)
+    r11, r12, s2 = system_of(acc, w)
+    s = prior_covariance(model)
+    dprec = drive_precision(model, acc)
+    h = r11.T @ r11 + s2 * dprec
+    theta_ls = solve(r11, r12, theta0, s2 * dprec)
+    cov = s2 * np.linalg.pinv(h, hermitian=True)[:nb, :nb]
+    kappa = prior_error_scale(theta_ls[:nb] - theta0[:nb], cov, s)
+    positive = [x for x in LAMBDAS if x > 0]
+    lam = positive[0] if not np.isfinite(kappa) else float(np.clip(1.0 / max(kappa, 1e-300), positive[0],
+                                                                      positive[-1]))
+    pen = penalty_of(lam, s2, prior_precision(model, s), dprec)
+    sel = Selection("wls", lam, tuple(float(x) for x in LAMBDAS), {}, 0, penalty=pen, theta0=theta0,
+                    scope=RULES["structure"], rule="structure", kappa_evidence=kappa)
+    nonneg = nonnegative_terms(model)
+    if estimator != "least squares":
+        try:
+            import cvxpy  # noqa: F401
+        except ImportError:
+            estimator = "least squares"
+    if estimator == "least squares":
+        theta = solve(r11, r12, theta0, pen, nonneg)
+        return Fit(model, "auto", theta, replace(est, method="auto", theta=theta, rms=residual_rms(acc, theta)),
+                   selection=sel)
+    from .physical import physical_fit
+
+    ev, vec = np.linalg.eigh(0.5 * (pen + pen.T))
+    rows = (vec * np.sqrt(np.maximum(ev, 0.0))).T
+    kw = {} if prior_weight is None else {"prior_weight": prior_weight}
+    phys = physical_fit(np.vstack([r11, rows]), np.r_[r12, rows @ theta0], model.full_map(), model.robot,
+                        model.drives.param_kinds, **kw)
+    return Fit(model, "auto", phys.theta, est, phys, selection=replace(sel, estimator="physical"))
 
 
 def residual_rms(acc, theta: np.ndarray) -> np.ndarray:

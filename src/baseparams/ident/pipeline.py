@@ -181,9 +181,11 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     kept: list = []
     acc, acc_note = accumulate_prepared(model, prep, cols, opts.memory_mb, train, opts.min_speed, parts_out=parts,
                                         keep=kept)
+    motion_span = block_periods(prep, train, cols[model.row_states])
+    rule = "structure" if motion_span[0] < MIN_BLOCK_PERIODS else "blocks"
     say(f"fitting ({opts.method})")
-    f = fit(model, acc, opts.method, opts.prior_weight, blocks=parts)
-    f, acc, kept, term_notes, raw_q = _with_terms(f, acc, kept, prep, train, cols, opts, say)
+    f = fit(model, acc, opts.method, opts.prior_weight, blocks=parts, rule=rule)
+    f, acc, kept, term_notes, raw_q = _with_terms(f, acc, kept, prep, train, cols, opts, say, motion_span)
     f, cov_note = _uncertainty(f, acc, kept, prep, train, cols, opts, say)
     f = pulled_covariance(f)
     train_rms, val, series = _scores(f, acc, log, held, prep, cols, raw_q, opts, say)
@@ -258,11 +260,44 @@ def _inner(f: Fit, model: IdentModel, acc, method: str):
 MIN_BLOCK_PERIODS = 1.0
 
 
-def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, say):
+def block_periods(prep, train, state_cols) -> tuple[float, float, float, np.ndarray]:
+    """How many periods of the motion's bandwidth each cross-validation block spans.
+
+    Parameters
+    ----------
+    prep : Prepared
+        The training log prepared (its full-rate grid).
+    train : JointLog
+        The training log as read.
+    state_cols : ndarray of int
+        The log columns of the measured rows' states.
+
+    Returns
+    -------
+    periods : float
+        ``span / FOLDS * bandwidth``.
+    span : float
+        The training span [s].
+    band : float
+        The motion's bandwidth [Hz] (:func:`~baseparams.ident.preprocess.excitation_bandwidth`).
+    raw_q : ndarray, shape ``(S, m)``
+        The unfiltered positions on the grid ``prep`` filtered.
+    """
+    from .preprocess import excitation_bandwidth, resample
+    from .select import FOLDS
+
+    raw_q = resample(train).q[:, state_cols]
+    span = float(prep.full.t[-1] - prep.full.t[0])
+    band = excitation_bandwidth(raw_q, prep.design.fs)
+    return span / FOLDS * band, span, band, raw_q
+
+
+def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, say, motion_span):
     """Model terms selected on the training rows and the core refitted with them (:mod:`.terms`).
 
-    Returns the fit, the accumulated rows and kept rows the covariance uses, the notes, and the
-    unfiltered positions on the training grid (None without terms).
+    ``motion_span`` is :func:`block_periods`' result. Returns the fit, the accumulated rows and kept
+    rows the covariance uses, the notes, and the unfiltered positions on the training grid (None
+    without terms).
     """
     from dataclasses import replace
 
@@ -283,15 +318,10 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, 
         return f, acc, kept, ["model terms: not considered (the fitted rows do not fit in memory_mb; the linear core "
                               "alone)"], None
     a = np.concatenate([x for x, _ in kept])
-    from .preprocess import excitation_bandwidth, resample
-
-    raw_q = resample(train).q[:, cols[model.row_states]]  # unfiltered positions on the grid prepare() filters
+    periods, span, band, raw_q = motion_span  # raw_q: unfiltered positions on the grid prepare() filters
     if raw_q.shape[0] != prep.full.n_samples:
         return f, acc, kept, ["model terms: not considered (the training grid is not the filter's)"], None
 
-    span = float(prep.full.t[-1] - prep.full.t[0])
-    band = excitation_bandwidth(raw_q, prep.design.fs)
-    periods = span / FOLDS * band
     if periods < MIN_BLOCK_PERIODS:
         why = (f"{span:.3g} s of training data: each of the {FOLDS} cross-validation blocks spans {periods:.2g} "
                f"periods of the motion's {band:.3g} Hz bandwidth (at least {MIN_BLOCK_PERIODS:g} needed), so "
@@ -312,7 +342,8 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, 
     acc2 = chunks.combine(parts)
     say(f"refitting the core ({method}) with the model terms")
     chosen = None if f.selection is None else f.selection.estimator
-    f2 = fit(model, acc2, method, opts.prior_weight, blocks=parts, estimator=chosen)
+    rule = "blocks" if f.selection is None else f.selection.rule
+    f2 = fit(model, acc2, method, opts.prior_weight, blocks=parts, estimator=chosen, rule=rule)
     if f2.selection is not None and f.selection is not None:  # the choice and its figures are the first fit's
         f2 = replace(f2, selection=replace(f2.selection, physical_cv=f.selection.physical_cv))
     return replace(f2, terms=tuple(tf.terms), term_choices=tf.choices), acc2, [(x, y)], notes, raw_q

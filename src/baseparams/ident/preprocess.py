@@ -41,7 +41,9 @@ from ..jointlog import JointLog
 #: default low-pass cutoff: fs / CUTOFF_DIVISOR, at most CUTOFF_CAP Hz
 CUTOFF_DIVISOR = 20.0
 CUTOFF_CAP = 20.0
-#: edge samples dropped at each end: EDGE_PERIODS periods of the cutoff
+#: the filter's edge extension at each end: EDGE_PERIODS periods of the cutoff (no sample is dropped: the
+#: extension keeps a smooth signal's derivatives, :func:`zero_phase`, and the torques and every regressor column go
+#: through the same linear filter, so the fit holds at the ends too)
 EDGE_PERIODS = 2.0
 #: default cutoff of a log: this multiple of the excitation bandwidth (:func:`excitation_bandwidth`)
 BANDWIDTH_FACTOR = 10.0
@@ -49,6 +51,11 @@ BANDWIDTH_FACTOR = 10.0
 CUTOFF_FLOOR = 1.0
 #: default decimation: the rate after it stays at least DECIMATE_MARGIN x the cutoff
 DECIMATE_MARGIN = 5.0
+#: ... and it keeps at least MIN_FITTED samples (a short log is fitted at every sample: decimating it saves little
+#: time and leaves a few hundred samples, a 25 s motion at 200 Hz 132 of its 5 027)
+MIN_FITTED = 5000
+#: :func:`zero_phase` extends a signal by EXTENSION x the design's ``pad`` at each end
+EXTENSION = 2
 #: relative spread of the time steps below which a log counts as uniform
 UNIFORM_RTOL = 1e-3
 #: the rigid-body regressor is evaluated and filtered at a rate at least STRIDE_MARGIN x the cutoff
@@ -71,8 +78,8 @@ class LowPass:
     order : int
         Butterworth order of one pass (the zero-phase filter's magnitude is its square).
     pad : int
-        Samples dropped at each end by :func:`prepare` (filter edge transients), and the
-        odd-extension length used by :func:`zero_phase`.
+        The extension's length at each end used by :func:`zero_phase` (two cutoff periods: the
+        filter's transient decays within it).
     note : str
         One line saying what was chosen and why (for the report).
     """
@@ -189,8 +196,11 @@ def zero_phase(x, design: LowPass, axis: int = 0) -> np.ndarray:
     Returns
     -------
     ndarray, same shape as ``x``
-        The filtered signals (``scipy.signal.sosfiltfilt`` with odd extension of
-        ``min(design.pad, S - 1)`` samples at each end; once the compiled kernels are loaded,
+        The filtered signals (``scipy.signal.sosfiltfilt`` on the signal extended by
+        ``min(EXTENSION * design.pad, S - 1)`` samples at each end (four cutoff periods: the initial
+        conditions' transient decays to ~1e-4 within them), odd extension with the curvature kept
+        (:func:`baseparams.regressor.compiled.edge_extended`: no edge transient on a smooth
+        signal's derivatives, and one linear map for every signal); once the compiled kernels are loaded,
         e.g. by a long log's regressor, large arrays go through
         :func:`baseparams.regressor.compiled.sosfiltfilt`: the same arithmetic, columns in parallel).
 
@@ -203,12 +213,17 @@ def zero_phase(x, design: LowPass, axis: int = 0) -> np.ndarray:
     n = x.shape[axis]
     if n < 2:
         raise DataError(f"low-pass: {n} samples; at least 2 are needed")
-    pad = min(design.pad, n - 1)
+    pad = min(EXTENSION * design.pad, n - 1)
     if axis in (0, -x.ndim) and x.size >= COMPILED_FILTER_MIN and _compiled_loaded():
         from ..regressor.compiled import sosfiltfilt
 
         return sosfiltfilt(design.sos, x, pad)  # scipy's arithmetic, columns in parallel
-    return signal.sosfiltfilt(design.sos, x, axis=axis, padtype="odd", padlen=pad)
+    from ..regressor.compiled import edge_extended
+
+    moved = np.moveaxis(x, axis, 0)
+    ext = edge_extended(moved.reshape(n, -1), pad)
+    out = signal.sosfiltfilt(design.sos, ext, axis=0, padtype=None)[pad:pad + n]
+    return np.moveaxis(out.reshape(moved.shape), 0, axis)
 
 
 #: values (samples x columns) from which :func:`zero_phase` uses the compiled filter once numba's kernels are loaded
@@ -485,6 +500,8 @@ class Prepared:
     stride : int
         The rigid-body regressor's samples: every ``stride``-th full-rate sample, through every
         kept one (:func:`regressor_stride`; 1: every sample).
+    trim : int
+        Samples left out at each end of :attr:`full` (0: every sample is fitted).
     """
 
     t: np.ndarray
@@ -502,6 +519,7 @@ class Prepared:
     removed: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
     stride: int = 1
+    trim: int = 0
 
     __repr__ = summary_repr
 
@@ -517,9 +535,9 @@ class Prepared:
         Returns
         -------
         ndarray of int, shape ``(G,)``
-            Indices into :attr:`full`: ``phase, phase + stride, ...`` with ``phase = design.pad mod stride``.
+            Indices into :attr:`full`: ``phase, phase + stride, ...`` with ``phase = trim mod stride``.
         """
-        return np.arange(self.design.pad % self.stride, self.full.n_samples, self.stride)
+        return np.arange(self.trim % self.stride, self.full.n_samples, self.stride)
 
     def apply_strided(self, x) -> np.ndarray:
         """:meth:`apply` for columns smooth in the filtered states, evaluated at :attr:`grid` only.
@@ -543,7 +561,7 @@ class Prepared:
             ``x`` without one row per sample of :attr:`grid`.
         """
         x = np.asarray(x, dtype=float)
-        phase = self.design.pad % self.stride
+        phase = self.trim % self.stride
         g = len(range(phase, self.full.n_samples, self.stride))
         if x.ndim == 0 or x.shape[0] != g:
             raise DataError(f"{self.source}: apply_strided needs one row per strided sample ({g}), got shape {x.shape}")
@@ -579,7 +597,7 @@ class Prepared:
 
 def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None, decimate: int | None = None,
             min_speed=None) -> Prepared:
-    """Resample, low-pass, differentiate, trim the filter edges, decimate, drop slow samples.
+    """Resample, low-pass, differentiate, decimate, drop slow samples (every sample kept otherwise, the ends too).
 
     Parameters
     ----------
@@ -629,15 +647,14 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
                         f"(a longer log, or a higher cutoff)")
     qf, tauf, dqf, ddqf = _filtered_together(design, u.q, u.tau, u.dq, u.ddq)
     dq, ddq, rate_notes = filtered_rates(u, qf, rate, design, dqf, ddqf)
-    k, k_note = decimation_factor(decimate, rate, design)
+    k, k_note = decimation_factor(decimate, rate, design, n)
     r, r_note = regressor_stride(k, rate, design)
     removed = dict(u.removed)
-    inner = np.arange(design.pad, n - design.pad)
+    inner = np.arange(n)  # every sample: the ends too (EDGE_PERIODS)
     index = inner[::k]
-    removed["filter edges"] = removed.get("filter edges", 0) + 2 * design.pad
     if k > 1:
         removed[f"decimation by {k}"] = removed.get(f"decimation by {k}", 0) + len(inner) - len(index)
-    notes = [design.note, *rate_notes, k_note, r_note]
+    notes = [design.note, *rate_notes, k_note, r_note, EDGE_NOTE]
     if min_speed is not None:
         keep, slow = remove_slow(dq[index], slow_threshold(u.joints, min_speed))
         index = index[keep]
@@ -653,6 +670,11 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     return Prepared(t=u.t[index], joints=u.joints, q=qf[index], dq=dq[index], ddq=ddq[index], tau=tauf[index],
                     fs=rate / k, design=design, factor=k, index=index, full=full, source=log.source,
                     removed=removed, notes=full.notes, stride=r)
+
+
+#: how the ends of a log are treated, for the report
+EDGE_NOTE = ("edges: every sample fitted, the ends too (the states filtered through an extension that keeps their "
+             "curvature, the torques and the regressor's columns through the same filter)")
 
 
 def _check_log(log: JointLog) -> None:
@@ -730,19 +752,21 @@ def filtered_rates(u: JointLog, qf: np.ndarray, rate: float, design: LowPass, dq
     return dq, ddq, notes
 
 
-def decimation_factor(decimate: int | None, rate: float, design: LowPass) -> tuple[int, str]:
+def decimation_factor(decimate: int | None, rate: float, design: LowPass, n: int | None = None) -> tuple[int, str]:
     """The decimation factor (given or default) and its note; a factor that aliases is an error.
 
     Parameters
     ----------
     decimate : int or None
-        The factor given, or None: the largest ``k`` with ``rate / k >= 5 cutoff``, lowered by one
-        when it is a prime above 3 (so that a divisor of it is a stride for the regressor,
-        :func:`regressor_stride`).
+        The factor given, or None: the largest ``k`` with ``rate / k >= 5 cutoff`` that keeps at
+        least :data:`MIN_FITTED` of ``n`` samples, lowered by one when it is a prime above 3 (so that
+        a divisor of it is a stride for the regressor, :func:`regressor_stride`).
     rate : float
         The sampling rate [Hz].
     design : LowPass
         The low-pass.
+    n : int, optional
+        The samples of the log (None: no floor on the samples kept).
 
     Returns
     -------
@@ -759,6 +783,9 @@ def decimation_factor(decimate: int | None, rate: float, design: LowPass) -> tup
     if decimate is None:
         k = max(1, int(np.floor(rate / (DECIMATE_MARGIN * design.cutoff) * (1 + 1e-3))))  # 0.1 %: a jittered rate
         why = f"default: largest k with fs/k >= {DECIMATE_MARGIN:g} x cutoff"
+        if n is not None and k > max(1, n // MIN_FITTED):
+            k = max(1, n // MIN_FITTED)
+            why += f" keeping at least {MIN_FITTED} of the {n} samples"
         if k > 3 and all(k % d for d in range(2, math.isqrt(k) + 1)):
             k -= 1
             why += ", less one for a prime"

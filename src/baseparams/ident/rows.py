@@ -144,7 +144,7 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     from . import chunks
     from .preprocess import resample
 
-    grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed,
+    grid = chunks.Grid(full.n_samples, prep.trim, prep.factor, prep.design.cutoff, min_speed,
                        stride=prep.stride)
     margin = chunks.overlap(prep.design)
     size = chunks.window_size(model, memory_mb, margin, prep.stride)

@@ -86,7 +86,15 @@ class Selection:
         not tried: the ``ident`` extra missing, or too few blocks).
     estimator : str
         ``least squares`` (the weighting and prior above) or ``physical`` (the physically
-        consistent estimate predicted the held-out blocks better).
+        consistent estimate predicted the held-out blocks better, or the rule chose it).
+    rule : str
+        What decided (:data:`baseparams.ident.fitting.RULES`): ``blocks`` (cross-validation on
+        contiguous blocks of one motion), ``recordings`` (each block a whole recording) or
+        ``structure`` (no cross-validation: the blocks are too short to see beyond the motion; the
+        prior's weight then comes from ``kappa_evidence``).
+    kappa_evidence : float, optional
+        ``structure`` only: the file's error as the whole training span shows it
+        (:func:`prior_error_scale`), whose inverse set ``lam``.
     """
 
     weighting: str
@@ -103,10 +111,14 @@ class Selection:
     drive_cov: np.ndarray | None = field(default=None, repr=False)
     physical_cv: float | None = None
     estimator: str = "least squares"
+    rule: str = "blocks"
+    kappa_evidence: float | None = None
 
     def __repr__(self) -> str:
+        if self.rule == "structure":
+            return f"<Selection: {self.estimator}, prior weight {self.lam:g} by the evidence (blocks too short)>"
         return (f"<Selection: {self.weighting.upper()}, prior weight {self.lam:g} of {len(self.lambdas)} by "
-                f"{self.folds}-fold blocked cross-validation>")
+                f"{self.folds}-fold {self.scope}>")
 
     def to_json(self) -> dict:
         """The choice, machine-readable.
@@ -117,11 +129,28 @@ class Selection:
             ``weighting, lam, lambdas, cv_rms{weighting: [...]}, folds, kappa, no_prior, physical_cv,
             estimator``.
         """
-        k = self.kappa
+        k, ke = self.kappa, self.kappa_evidence
         return {"weighting": self.weighting, "lam": self.lam, "lambdas": list(self.lambdas),
                 "cv_rms": {w: list(v) for w, v in self.cv_rms.items()}, "folds": self.folds,
                 "kappa": None if k is None or not np.isfinite(k) else float(k), "no_prior": list(self.no_prior),
-                "physical_cv": self.physical_cv, "estimator": self.estimator}
+                "physical_cv": self.physical_cv, "estimator": self.estimator, "rule": self.rule,
+                "kappa_evidence": None if ke is None or not np.isfinite(ke) else float(ke)}
+
+    def _structure_note(self) -> str:
+        """:meth:`note` when no cross-validation decided (``rule="structure"``)."""
+        k = self.kappa_evidence
+        seen = ("the data cannot measure the file's error (too ill-conditioned): the weakest candidate weight"
+                if k is None or not np.isfinite(k) else
+                f"the file is off by about {np.sqrt(k):.2g} x each body's scales as the whole training span shows it "
+                f"(empirical Bayes), weight 1 / {k:.3g} within [{min(x for x in self.lambdas if x > 0):g}, "
+                f"{max(self.lambdas):g}]")
+        what = ("physically consistent least squares (every body's pseudo-inertia positive semidefinite, friction "
+                "and rotor inertia >= 0)" if self.estimator == "physical" else
+                "least squares (the ident extra for the physically consistent fit is not installed)")
+        return (f"default estimate: {what} with the model file's parameters as a prior, weight {self.lam:g} ({seen}); "
+                f"chosen by the rule for short motions, not by cross-validation: its blocks each span less than a "
+                f"period of the motion's bandwidth, so they cannot tell which estimate predicts another motion "
+                f"(several recordings in one identification, or a longer one, let cross-validation choose)")
 
     def note(self) -> str:
         """One line for the report: what was chosen and why.
@@ -132,6 +161,8 @@ class Selection:
             The weighting, the prior's weight, the number of blocks and the held-out RMS with
             and without the prior.
         """
+        if self.rule == "structure":
+            return self._structure_note()
         rms = self.cv_rms[self.weighting]
         best, plain = rms[self.lambdas.index(self.lam)], rms[0]
         other = [w for w in self.cv_rms if w != self.weighting]
@@ -480,6 +511,29 @@ def prior_precision(model, s: np.ndarray | None = None) -> np.ndarray:
         inv = np.linalg.pinv(s, hermitian=True)
     out[:nb, :nb] = 0.5 * (inv + inv.T)
     return out
+
+
+def system_of(acc: RowAccumulator, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """The weighted least-squares system of accumulated rows and its residual variance.
+
+    Parameters
+    ----------
+    acc : RowAccumulator
+        The rows.
+    weights : ndarray, shape ``(m,)``
+        Row weights.
+
+    Returns
+    -------
+    r11 : ndarray, shape ``(p, p)``
+        Triangular factor.
+    r12 : ndarray, shape ``(p,)``
+        Its right-hand side.
+    s2 : float
+        The weighted residual variance (:func:`noise_variance`).
+    """
+    r11, r12, rho2, n_obs = _system([acc], weights)
+    return r11, r12, noise_variance(r11, rho2, n_obs)
 
 
 def _system(blocks: list[RowAccumulator], weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:

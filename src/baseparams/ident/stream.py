@@ -426,7 +426,7 @@ class Plan:
         return chunks.plan(self.grid.n, self.size, self.margin)
 
     def fitted_count(self) -> int:
-        """Samples kept before slow-sample removal (on the decimation grid, past the filter edges).
+        """Samples kept before slow-sample removal (on the decimation grid; every one when not decimated).
 
         Returns
         -------
@@ -485,7 +485,7 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     if tr.n <= 2 * design.pad + 1:
         raise DataError(f"{stream.source}: {tr.n} samples at {tr.rate:.6g} Hz; the filter edges alone take 2 x "
                         f"{design.pad} (a longer log, or a higher cutoff)")
-    k, k_note = pp.decimation_factor(decimate, tr.rate, design)
+    k, k_note = pp.decimation_factor(decimate, tr.rate, design, tr.n)
     head = rows(sc.head, 0, min(sc.head.n_samples, tr.n))
     rate_notes = (pp.filtered_rates(head, pp.zero_phase(head.q, design), tr.rate, design)[2]
                   if head.n_samples > 2 * design.pad else [])
@@ -495,8 +495,8 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     r, r_note = pp.regressor_stride(k, tr.rate, design)
     margin = chunks.overlap(design)
     size = chunks.window_size(model, memory_mb, margin, r)
-    notes += [design.note, *rate_notes, k_note, r_note]
-    return Plan(design, k, chunks.Grid(tr.n, design.pad, k, design.cutoff, min_speed, stride=r), margin, size,
+    notes += [design.note, *rate_notes, k_note, r_note, pp.EDGE_NOTE]
+    return Plan(design, k, chunks.Grid(tr.n, 0, k, design.cutoff, min_speed, stride=r), margin, size,
                 tuple(notes))
 
 
@@ -1123,8 +1123,7 @@ def _account(train, tr: Training, plan: Plan, slow: int, o, notes) -> object:
 
     cov_note, unit_notes = notes
     removed = {"resampling to fewer samples": train.removed} if getattr(train, "removed", 0) else {}
-    removed["filter edges"] = 2 * plan.design.pad
-    inner = tr.n - 2 * plan.design.pad
+    inner = tr.n - 2 * plan.grid.pad
     if plan.factor > 1:
         removed[f"decimation by {plan.factor}"] = inner - plan.fitted_count()
     slow_note = ["slow samples: kept (min_speed not given)"]

@@ -421,7 +421,7 @@ def fitted_rows(model, prep, cols: np.ndarray, memory_mb: float, log, min_speed=
     from .preprocess import resample
 
     full = prep.full
-    grid = chunks.Grid(full.n_samples, prep.design.pad, prep.factor, prep.design.cutoff, min_speed,
+    grid = chunks.Grid(full.n_samples, prep.trim, prep.factor, prep.design.cutoff, min_speed,
                        stride=prep.stride)
     margin = chunks.overlap(prep.design)
     size = chunks.window_size(model, memory_mb, margin, prep.stride)

@@ -331,12 +331,69 @@ def closed_projected(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarra
     return out
 
 
-def sosfiltfilt(sos: np.ndarray, x: np.ndarray, pad: int) -> np.ndarray:
+def edge_extended(flat: np.ndarray, pad: int, curved: bool = True) -> np.ndarray:
+    """Signals extended by ``pad`` samples at each end, for a zero-phase filter without an edge transient.
+
+    scipy's odd extension (``2 x[0] - x[k]`` before the start, likewise after the end) keeps a
+    signal's value and slope at the end but flips its even-order terms, so the second derivative of
+    the filtered signal is pulled towards zero within a cutoff period of each end. ``curved`` adds
+    ``2 (c2 k^2 + c4 k^4)`` to the ``k``-th extended sample, ``c2, c4`` the even coefficients of the
+    least-squares polynomial of degree :data:`EDGE_DEGREE` through the ``pad // 4 + 1`` samples at
+    that end, over the far half of the extension tapered (a half cosine) to plain odd extension:
+    near the end a quartic is extended exactly (value, slope and curvature continuous). With
+    :func:`baseparams.ident.preprocess.zero_phase`'s extension of four cutoff periods, a motion at a
+    tenth of the cutoff keeps its second derivative to ~1 % at the very end, and white noise is no
+    larger there than with the odd extension. The extension is linear in the signal, so a
+    filter through it stays one linear map, the same for the torques and every regressor column.
+
+    Parameters
+    ----------
+    flat : ndarray, shape ``(S, C)``
+        Signals along axis 0.
+    pad : int
+        Samples added at each end (``0 <= pad < S``).
+    curved : bool
+        Add the curvature term (False: scipy's odd extension exactly).
+
+    Returns
+    -------
+    ndarray, shape ``(S + 2 pad, C)``
+        The extended signals.
+    """
+    s = flat.shape[0]
+    ext = np.empty((s + 2 * pad, flat.shape[1]))
+    ext[pad:pad + s] = flat
+    if not pad:
+        return ext
+    # scipy's odd_ext: 2 x[0] - x[pad:0:-1], ..., 2 x[-1] - x[-2:-(pad+2):-1]
+    ext[:pad] = 2 * flat[:1] - flat[pad:0:-1]
+    ext[pad + s:] = 2 * flat[-1:] - flat[-2:-(pad + 2):-1]
+    w = pad // 4 + 1  # the polynomial's samples: a quarter of the extension (one cutoff period in zero_phase's)
+    if curved and w > EDGE_DEGREE:
+        k = np.arange(pad + 1, dtype=float) / (w - 1)  # scaled: the Vandermonde matrix stays well conditioned
+        fit = np.linalg.pinv(np.vander(k[:w], EDGE_DEGREE + 1, increasing=True))  # (degree + 1, w)
+        even = np.arange(2, EDGE_DEGREE + 1, 2)
+        j = np.arange(1, pad + 1)
+        half = pad // 2
+        taper = np.where(j <= half, 1.0, 0.5 * (1.0 + np.cos(np.pi * (j - half) / max(pad - half, 1))))
+        powers = taper[:, None] * k[1:, None] ** even[None, :]  # (pad, even terms)
+        ext[:pad] += 2 * (powers @ (fit[even] @ flat[:w]))[::-1]
+        ext[pad + s:] += 2 * powers @ (fit[even] @ flat[-1:-(w + 1):-1])
+    return ext
+
+
+#: degree of the polynomial whose even terms :func:`edge_extended` keeps (4: exact for a quartic; a motion a tenth
+#: of the cutoff extended over two cutoff periods, the default, stays within ~1 % of its second derivative)
+EDGE_DEGREE = 4
+
+
+def sosfiltfilt(sos: np.ndarray, x: np.ndarray, pad: int, curved: bool = True) -> np.ndarray:
     """``scipy.signal.sosfiltfilt(sos, x, axis=0, padtype="odd", padlen=pad)``, compiled, columns in parallel.
 
-    The same steps as scipy's (odd extension, the steady-state initial conditions scaled by the
-    first sample of each direction, forward then backward) with the same arithmetic per sample
-    and section; one padded copy of ``x``, filtered in place.
+    The same steps as scipy's (odd extension, here with its curvature kept: :func:`edge_extended`;
+    the steady-state initial conditions scaled by the first sample of each direction, forward then
+    backward) with the same arithmetic per sample and section; one padded copy of ``x``, filtered in
+    place.
 
     Parameters
     ----------
@@ -346,6 +403,8 @@ def sosfiltfilt(sos: np.ndarray, x: np.ndarray, pad: int) -> np.ndarray:
         Signals along axis 0 (other axes: independent columns), ``S > pad``.
     pad : int
         Samples of odd extension at each end (``0 <= pad < S``).
+    curved : bool
+        Keep the curvature at the ends (:func:`edge_extended`; False: scipy's odd extension).
 
     Returns
     -------
@@ -356,11 +415,7 @@ def sosfiltfilt(sos: np.ndarray, x: np.ndarray, pad: int) -> np.ndarray:
 
     s = x.shape[0]
     flat = np.reshape(x, (s, -1))
-    ext = np.empty((s + 2 * pad, flat.shape[1]))
-    ext[pad:pad + s] = flat
-    if pad:  # scipy's odd_ext: 2 x[0] - x[pad:0:-1], ..., 2 x[-1] - x[-2:-(pad+2):-1]
-        ext[:pad] = 2 * flat[:1] - flat[pad:0:-1]
-        ext[pad + s:] = 2 * flat[-1:] - flat[-2:-(pad + 2):-1]
+    ext = edge_extended(flat, pad, curved)
     sos = np.ascontiguousarray(sos, dtype=np.float64)
     z0 = sosfilt_zi(sos)  # (n_sections, 2)
     kernel = _kernel("sosfilt_rows")

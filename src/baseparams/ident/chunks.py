@@ -422,4 +422,5 @@ def combine(parts) -> RowAccumulator:
                 mine.add(theirs.r)
                 mine.rows += theirs.rows - theirs.r.shape[0]  # count samples, not factor rows
         out.samples += p.samples
+    out.oversampling = max([1.0, *(getattr(p, "oversampling", 1.0) for p in parts)])
     return out

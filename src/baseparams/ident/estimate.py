@@ -31,12 +31,21 @@ class RowAccumulator:
         Number of measured rows ``m`` (generalized forces per sample).
     nparams : int
         Number of model parameters ``p`` (columns of ``A``).
+
+    Attributes
+    ----------
+    oversampling : float
+        Samples fed per independent sample of the low-passed signals (>= 1; the kept rate over
+        :data:`~baseparams.ident.preprocess.DECIMATE_MARGIN` x the cutoff,
+        :attr:`~baseparams.ident.preprocess.Prepared.oversampling`): the priors' weights are set against
+        the information the rows hold, which keeping every filtered sample does not multiply.
     """
 
     def __init__(self, nrows: int, nparams: int):
         self.nrows, self.nparams = int(nrows), int(nparams)
         self.factors = [StreamingQR(self.nparams + 1) for _ in range(self.nrows)]
         self.samples = 0
+        self.oversampling = 1.0
 
     def add(self, a: np.ndarray, tau: np.ndarray) -> RowAccumulator:
         """Feed samples.

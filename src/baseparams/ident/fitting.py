@@ -216,7 +216,7 @@ def _with_drive_prior_rows(model: IdentModel, acc):
     theta, *_ = np.linalg.lstsq(r[:p, :p], r[:p, p], rcond=1e-12)
     rank = int(np.linalg.matrix_rank(r[:p, :p], tol=1e-12 * max(float(np.abs(r[:p, :p]).max()), 1e-300)))
     rho2 = float(np.sum((r[:p, :p] @ theta - r[:p, p]) ** 2) + r[p, p] ** 2)
-    s2 = rho2 / max(acc.samples * acc.nrows - rank, 1)
+    s2 = rho2 / max(acc.samples * acc.nrows - rank, 1) * acc.oversampling
     prec = np.diag(drive_precision(model, acc))
     out = RowAccumulator(acc.nrows, p)
     out.samples = acc.samples
@@ -241,7 +241,7 @@ def _drive_precision_delta(model: IdentModel, acc, est) -> np.ndarray:
 
     w = np.asarray(est.weights, dtype=float)
     n_obs = max(acc.samples * acc.nrows, 1)
-    s2 = float(np.sum((np.asarray(est.rms) * w) ** 2)) * acc.samples / n_obs
+    s2 = float(np.sum((np.asarray(est.rms) * w) ** 2)) * acc.samples / n_obs * acc.oversampling
     prec = np.diag(drive_precision(model, acc, w))
     nb = len(model.analysis.base_names)
     out = np.zeros(model.drives.n_params)

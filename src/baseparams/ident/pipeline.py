@@ -52,9 +52,11 @@ def identify(robot: Robot, log, options: IdentOptions | None = None, /, *, valid
     ----------
     robot : Robot
         The model (fixed base, or loops closed by the actuated joints).
-    log : JointLog
+    log : JointLog or list of JointLog
         The log (:func:`baseparams.io.logs.read_log`): positions and torques of the measured
-        joints (every joint of a tree; the actuated joints of a robot with loops).
+        joints (every joint of a tree; the actuated joints of a robot with loops). Several
+        recordings of the robot: their rows fitted as one system, each recording one block of the
+        default estimate's cross-validation (another motion: :func:`_identify_many`).
     options : IdentOptions, optional
         How (:class:`~baseparams.ident.options.IdentOptions`: the estimator, the drive model, the
         filter, the hold-out, the model terms, ...); default its defaults.
@@ -84,9 +86,15 @@ def identify(robot: Robot, log, options: IdentOptions | None = None, /, *, valid
     opts = options_of(options, keywords)
     if opts.holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
-    log, validation = log.checked(), None if validation is None else validation.checked()  # finite, increasing
+    logs = list(log) if isinstance(log, (list, tuple)) else [log]
+    if not logs:
+        raise BaseparamsError("identify: no log given (one JointLog, or a list of them)")
+    logs = [x.checked() for x in logs]  # finite, increasing
+    validation = None if validation is None else validation.checked()
     with blas_threads():
-        return _identify(robot, log, opts, validation, progress or (lambda msg: None))
+        if len(logs) > 1:
+            return _identify_many(robot, logs, opts, validation, progress or (lambda msg: None))
+        return _identify(robot, logs[0], opts, validation, progress or (lambda msg: None))
 
 
 @dataclass(frozen=True)
@@ -249,6 +257,7 @@ def _inner(f: Fit, model: IdentModel, acc, method: str):
         est = f.estimate
         n_obs = max(est.samples * len(w), 1)
         s2 = float(np.sum((np.asarray(est.rms) * w) ** 2)) / n_obs * max(est.samples, 1) / max(n_obs / len(w), 1)
+        s2 *= acc.oversampling
         return Inner(w, theta0, s2 * drive_precision(model, acc, w), nonnegative_terms(model))
     return Inner(w, theta0)
 
@@ -338,7 +347,7 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, 
     if not tf.terms:
         return replace(f, term_choices=tf.choices), acc, kept, notes, None
     x, y = core_rows(ctx, tf.state)
-    parts = fold_parts(x, y)
+    parts = fold_parts(x, y, oversampling=acc.oversampling)
     acc2 = chunks.combine(parts)
     say(f"refitting the core ({method}) with the model terms")
     chosen = None if f.selection is None else f.selection.estimator
@@ -375,3 +384,102 @@ def _uncertainty(f: Fit, acc, kept, prep, train, cols, opts: IdentOptions, say):
     return apply_covariance(f, acc, rows, opts.covariance, prep.design.fs / prep.factor)
 
 
+
+
+# ---------------------------------------------------------------- several recordings of one robot
+def _identify_many(robot: Robot, logs: list, opts: IdentOptions, validation, say) -> Identification:
+    """:func:`identify` of several recordings: one system of rows, each recording a cross-validation block.
+
+    Each recording is prepared on its own (one common cutoff: the largest of their defaults, within
+    every recording's limit) and its rows accumulated; the estimate is chosen by cross-validation with
+    each recording one block (rule ``recordings``: a block is another motion, the strongest guard against
+    fitting one motion). Model terms are not tried across recordings (each would need its own states).
+    """
+    from .chunks import combine
+
+    if opts.holdout is not None:
+        raise BaseparamsError("holdout with several recordings: validate on another recording (validation=, "
+                              "--validate) or leave one out of the list")
+    say(f"analysing {robot.name} (base parameters, drive model)")
+    model = model_for(robot, opts)
+    cols = [log_columns(model, x) for x in logs]
+    units = [n for x, c in zip(logs, cols) for n in check_log_units(model, x, c, opts.allow_units)]
+    preps = _prepare_many(logs, opts, say)
+    accs, kept, notes = [], [], []
+    for x, prep, c in zip(logs, preps, cols):
+        say(f"accumulating the regressor of {prep.n_samples} samples of {x.source}")
+        rows: list = []
+        acc, note = accumulate_prepared(model, prep, c, opts.memory_mb, x, opts.min_speed, keep=rows)
+        accs.append(acc)
+        kept.append(rows if sum(len(a) for a, _ in rows) == len(prep.index) else None)
+        notes.append(f"{x.source}: {note}")
+    acc = combine(accs)
+    say(f"fitting ({opts.method}; {len(logs)} recordings, each one cross-validation block)")
+    f = fit(model, acc, opts.method, opts.prior_weight, blocks=accs, rule="recordings")
+    rows = [r for k in kept for r in k] if all(k is not None for k in kept) else None
+    f, cov_note = _uncertainty(f, acc, rows or [], preps[0], logs[0], cols[0],
+                               opts if rows else replace(opts, covariance="white"), say)
+    f = pulled_covariance(f)
+    train_rms, val, series = _scores_many(f, acc, logs, preps, cols, validation, opts, say)
+    first = preps[0]
+    series["train"]["spectrum"] = position_spectrum(logs[0], cols[0][model.row_states], first.design.fs,
+                                                    first.design.cutoff, first.full.t)
+    removed: dict = {}
+    for p in preps:
+        for k, v in p.removed.items():
+            removed[k] = removed.get(k, 0) + v
+    data = (f"several recordings: {len(logs)} ({', '.join(x.source for x in logs)}), their rows fitted as one "
+            f"system (the report's series show the first)", *first.notes)
+    terms = ("model terms: not tried across several recordings (each recording's terms would need its own states; "
+             "the linear core)",) if opts.terms != "none" else ()
+    account = Account(sum(x.n_samples for x in logs), removed, float(first.design.cutoff), int(first.factor),
+                      data, "; ".join(notes), terms, cov_note if rows else cov_note + " (white: rows of several "
+                      "recordings not kept in memory_mb)", tuple(units))
+    return assemble(f, acc, opts, account, train_rms, val, series, _motion_many(model, preps, cols))
+
+
+def _prepare_many(logs: list, opts: IdentOptions, say) -> list:
+    """Each recording prepared with one cutoff: the given one, or the largest default within every recording's limit."""
+    from .preprocess import CUTOFF_CAP, CUTOFF_DIVISOR
+
+    say(f"preprocessing {len(logs)} recordings (resampling, low-pass, derivatives)")
+    preps = [_prepare_training(x, opts) for x in logs]
+    if opts.cutoff is not None:
+        return preps
+    cap = min(min(p.full.n_samples / float(p.full.t[-1] - p.full.t[0]) / CUTOFF_DIVISOR, CUTOFF_CAP) for p in preps)
+    cutoff = min(max(p.design.cutoff for p in preps), cap)
+    return [p if p.design.cutoff == cutoff else _prepare_training(x, replace(opts, cutoff=cutoff))
+            for p, x in zip(preps, logs)]
+
+
+def _scores_many(f: Fit, acc, logs, preps, cols, validation, opts: IdentOptions, say):
+    """Training scores over every recording (every sample against the raw torques), validation and series."""
+    names = f.model.joints
+    cutoff = float(preps[0].design.cutoff)
+    parts = [validation_scores(x, predict_log(f, x, cutoff), names) for x in logs]
+    total = sum(p["samples"] for p in parts)
+    res = residual_rms(acc, f.theta)
+    train = {"rms": {j: float(np.sqrt(sum(p["rms"][j] ** 2 * p["samples"] for p in parts) / total)) for j in names},
+             "rms_total": float(np.sqrt(sum(p["rms_total"] ** 2 * p["samples"] for p in parts) / total)),
+             "samples": int(total), "t_start": parts[0]["t_start"], "t_end": parts[-1]["t_end"],
+             "source": " + ".join(p["source"] for p in parts), "recordings": parts,
+             "measure": "RMS of predicted minus raw measured torques at every training sample of every recording",
+             "fit_rms": dict(zip(names, res.tolist())), "fit_rms_total": float(np.sqrt(np.mean(res**2)))}
+    series = {"train": report_series(f.model, preps[0], cols[0], f, names, opts.memory_mb, None), "validation": None}
+    if validation is None:
+        return train, None, series
+    say(f"validating on {validation.n_samples} held-out samples (every one, against the raw measured torques)")
+    val = validation_scores(validation, predict_log(f, validation, cutoff), names, None, opts.score_cutoff)
+    return train, val, series
+
+
+def _motion_many(model: IdentModel, preps, cols) -> dict:
+    """The condition number of every recording's motion together."""
+    from .estimate import excitation, motion_factor
+
+    def stack(attr):
+        return np.concatenate([getattr(p.full, attr)[:, c] for p, c in zip(preps, cols)])
+
+    factor = motion_factor(model, stack("q"), stack("dq"), stack("ddq"))
+    return {"condition_number": excitation(factor, model.names)[0], "samples": int(sum(p.full.n_samples
+                                                                                     for p in preps))}

@@ -529,6 +529,16 @@ class Prepared:
         return len(self.t)
 
     @property
+    def oversampling(self) -> float:
+        """Kept samples per independent sample of the low-passed signals: ``fs / (DECIMATE_MARGIN cutoff)``, >= 1.
+
+        The default decimation keeps about one (2.5 samples per period at the Nyquist rate); every sample of a
+        short log keeps more, correlated by the filter: the priors' weights are set against the information
+        (:attr:`~baseparams.ident.estimate.RowAccumulator.oversampling`).
+        """
+        return max(1.0, self.fs / (DECIMATE_MARGIN * self.design.cutoff))
+
+    @property
     def grid(self) -> np.ndarray:
         """The samples smooth columns are evaluated at: every :attr:`stride`-th of :attr:`full`, through every kept one.
 

@@ -122,6 +122,14 @@ def accumulate_prepared(model: IdentModel, prep, cols: np.ndarray, memory_mb: fl
     note : str
         How the parallel filtering was done.
     """
+    acc, note = _accumulated(model, prep, cols, memory_mb, log, min_speed, parts_out, keep)
+    for a in [acc, *(parts_out or [])]:
+        a.oversampling = prep.oversampling
+    return acc, note
+
+
+def _accumulated(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, log, min_speed, parts_out, keep):
+    """:func:`accumulate_prepared`'s rows, before their oversampling is set."""
     from .estimate import RowAccumulator
 
     full = prep.full

@@ -530,10 +530,12 @@ def system_of(acc: RowAccumulator, weights: np.ndarray) -> tuple[np.ndarray, np.
     r12 : ndarray, shape ``(p,)``
         Its right-hand side.
     s2 : float
-        The weighted residual variance (:func:`noise_variance`).
+        The weighted residual variance (:func:`noise_variance`) per independent sample (times the
+        rows' :attr:`~baseparams.ident.estimate.RowAccumulator.oversampling`): what the priors are
+        weighted with.
     """
     r11, r12, rho2, n_obs = _system([acc], weights)
-    return r11, r12, noise_variance(r11, rho2, n_obs)
+    return r11, r12, noise_variance(r11, rho2, n_obs) * acc.oversampling
 
 
 def _system(blocks: list[RowAccumulator], weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:
@@ -543,6 +545,7 @@ def _system(blocks: list[RowAccumulator], weights: np.ndarray) -> tuple[np.ndarr
         for f, g in zip(acc.factors, b.factors):
             f.add(g.r)
         acc.samples += b.samples
+    acc.oversampling = max(b.oversampling for b in blocks)
     r = stacked_factor(acc, weights)
     r = np.vstack([r, np.zeros((max(p + 1 - r.shape[0], 0), p + 1))])
     return r[:p, :p], r[:p, p], float(r[p, p] ** 2), acc.samples * acc.nrows
@@ -607,7 +610,7 @@ def select(blocks: list[RowAccumulator], weightings: dict, theta0: np.ndarray, p
     counts = np.array([b.samples * b.nrows for b in blocks], dtype=float)
     for name, w in weightings.items():
         r11, _, rho2, n_obs = _system(blocks, w)
-        s2[name] = noise_variance(r11, rho2, n_obs)
+        s2[name] = noise_variance(r11, rho2, n_obs) * max(b.oversampling for b in blocks)  # per independent sample
         sse = np.zeros((len(lambdas), len(blocks)))
         for k, held in enumerate(blocks):
             a11, a12, _, _ = _system(blocks[:k] + blocks[k + 1:], w)
@@ -656,7 +659,7 @@ def penalty_of(lam: float, s2: float, precision: np.ndarray, drive_prec: np.ndar
     return None if pen is None else s2 * pen
 
 
-def fold_parts(a: np.ndarray, tau: np.ndarray, folds: int = FOLDS) -> list[RowAccumulator]:
+def fold_parts(a: np.ndarray, tau: np.ndarray, folds: int = FOLDS, oversampling: float = 1.0) -> list[RowAccumulator]:
     """The cross-validation's blocks of fitted rows: ``folds`` consecutive pieces, split by count.
 
     Parameters
@@ -667,14 +670,19 @@ def fold_parts(a: np.ndarray, tau: np.ndarray, folds: int = FOLDS) -> list[RowAc
         Their torques.
     folds : int
         Number of blocks.
+    oversampling : float
+        The rows' :attr:`~baseparams.ident.estimate.RowAccumulator.oversampling`.
 
     Returns
     -------
     list of RowAccumulator
         One accumulator per block.
     """
-    return [RowAccumulator(a.shape[1], a.shape[2]).add(a[idx], tau[idx])
-            for idx in np.array_split(np.arange(len(a)), folds)]
+    out = [RowAccumulator(a.shape[1], a.shape[2]).add(a[idx], tau[idx]) for idx in np.array_split(np.arange(len(a)),
+                                                                                                    folds)]
+    for b in out:
+        b.oversampling = float(oversampling)
+    return out
 
 
 def split_blocks(acc_parts: list[RowAccumulator], folds: int = FOLDS) -> list[RowAccumulator]:
@@ -701,6 +709,7 @@ def split_blocks(acc_parts: list[RowAccumulator], folds: int = FOLDS) -> list[Ro
             for f, h in zip(acc.factors, acc_parts[i].factors):
                 f.add(h.r)
             acc.samples += acc_parts[i].samples
+        acc.oversampling = acc_parts[g[0]].oversampling if len(g) else 1.0
         out.append(acc)
     return out
 

@@ -1088,6 +1088,8 @@ def _passes(robot, stream, o, validating: bool, say):
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
     parts, kept, slow = accumulate(stream, plan, model, cols, o.memory_mb, spill=o.covariance == "hac")
+    for part in parts:  # as Prepared.oversampling: the priors weighed against the rows' information
+        part.oversampling = max(1.0, tr.rate / plan.factor / (pp.DECIMATE_MARGIN * plan.design.cutoff))
     return stream, sc, tr, model, cols, unit_notes, plan, parts, kept, slow
 
 

@@ -253,64 +253,22 @@ def panda_table(rows: list[dict]) -> str:
 GENERALIZATION = {"default": {}, "ols": {"method": "ols", "terms": "none"}, "physical": {"method": "physical"}}
 
 
-#: the time constant [s] of the excursion to the extreme poses at both ends of a motion (:func:`_recorder_motion`)
-END_SECONDS = 2.0
-
-
-def _recorder_motion(robot, seconds: float, rate: float, rng, base_frequency: float, jitter: float,
-                     recorder_cutoff: float | None, noise: float, ar: float, name: str, ends=None, plant_robot=None,
-                     friction=None):
-    """A recording like a service arm's: a slow Fourier motion sampled at uneven stamps, torques low-passed by
-    the recorder (a causal 2nd-order Butterworth at ``recorder_cutoff`` Hz), AR(1) noise, friction.
-
-    The motion is computed on a grid 10x finer than ``rate``; the log keeps the samples nearest to uneven
-    stamps ``k / rate + U(-jitter, jitter) / rate``. ``ends`` [rad] per joint: the motion starts and ends at its
-    extreme poses (``ends * (exp(-t / END_SECONDS) + exp(-(T - t) / END_SECONDS))`` added: the poses
-    within a few seconds of either end are visited nowhere else). ``plant_robot``: the true robot when it is not ``robot``; ``friction``: the plant's friction
-    (``recordings.friction_of``), the same for every motion of one plant.
-    """
-    from scipy.signal import butter, lfilter
-
-    from recordings import Plant, friction_of, motion, record
-
-    fine = 10.0 * rate
-    t, q, dq, ddq = motion(robot.dof, seconds, fine, rng, amplitude=1.0 if ends is None else 0.6,
-                           base_frequency=base_frequency, harmonics=4)
-    if ends is not None:  # a pose reached within END_SECONDS of either end and nowhere else, within the limits
-        lim = np.asarray(robot.limits, dtype=float)[:, :2] if robot.limits is not None else np.zeros((robot.dof, 2))
-        q = q + np.where(np.isfinite(lim).all(axis=1), lim.mean(axis=1), 0.0)
-        e, tc = np.asarray(ends, dtype=float), END_SECONDS
-        a, b = np.exp(-t / tc), np.exp(-(seconds - t) / tc)
-        q, dq, ddq = q + np.outer(a + b, e), dq + np.outer((b - a) / tc, e), ddq + np.outer((a + b) / tc**2, e)
-    plant = Plant(plant_robot or robot, **(friction or friction_of(robot, rng)), noise=0.0)
-    log = record(plant, t, q, dq, ddq, rng, name)
-    tau = log.tau
-    if recorder_cutoff is not None:
-        b, a = butter(2, recorder_cutoff / (fine / 2))
-        tau = lfilter(b, a, tau - tau[0], axis=0) + tau[0]
-    stamps = (np.arange(int(seconds * rate)) + rng.uniform(-jitter, jitter, int(seconds * rate))) / rate
-    idx = np.unique(np.clip(np.rint(stamps * fine).astype(int), 0, len(t) - 1))
-    e = rng.normal(size=(len(idx), robot.dof))
-    e = lfilter([np.sqrt(1 - ar**2)], [1, -ar], e, axis=0)
-    return replace(log, t=t[idx], q=q[idx], dq=None, ddq=None, tau=tau[idx] + noise * e)
-
-
 def _pair(name: str, robot, seed: int, file_error: float = 0.3, payload: float = 0.0, ends: float = 0.0,
           **kw) -> list[dict]:
     """Two motions of one plant; the model file the user has: every body's inertial parameters ``file_error`` off.
 
     ``payload`` [kg]: a tool on the last body the file lacks (an error the file's prior pulls towards);
-    ``ends`` [rad]: both motions start and end at extreme poses (:func:`_recorder_motion`), the same for both.
+    ``ends`` [rad]: both motions start and end at extreme poses (``recordings.recorder_motion``), the same for both.
     """
-    from recordings import friction_of, perturbed_file, with_payload
+    from recordings import friction_of, perturbed_file, recorder_motion, with_payload
 
     rng = np.random.default_rng(seed)
     if payload or ends:
         plant = with_payload(robot, payload) if payload else robot
         extreme = ends * rng.choice([-1.0, 1.0], robot.dof) if ends else None
         kw = {**kw, "plant_robot": plant, "ends": extreme, "friction": friction_of(robot, rng)}
-    a = _recorder_motion(robot, rng=rng, name=f"{name} A", **kw)
-    b = _recorder_motion(robot, rng=rng, name=f"{name} B", **kw)
+    a = recorder_motion(robot, rng=rng, name=f"{name} A", **kw)
+    b = recorder_motion(robot, rng=rng, name=f"{name} B", **kw)
     file = perturbed_file(robot, rng, file_error) if file_error else robot
     return [{"name": f"{name}: A -> B", "robot": file, "train": a, "test": b, "kind": "simulated"},
             {"name": f"{name}: B -> A", "robot": file, "train": b, "test": a, "kind": "simulated"}]

@@ -331,16 +331,25 @@ RULES = {"blocks": "blocked cross-validation on the training data",
          "structure": "structure: the cross-validation blocks are too short to see beyond the motion"}
 
 
-def _structural(model: IdentModel, est, acc, prior_weight=None, estimator=None) -> Fit:
-    """The default when within-motion cross-validation cannot choose: physically consistent, pulled by the evidence.
+#: the structure rule's weight of the model file's prior from which the data agree with the file (the file within
+#: 1 / sqrt(10) ~ 0.3 of its scales, as the whole training span shows it): least squares pulled towards the file;
+#: below it the physically consistent fit (:func:`_structural`)
+TRUSTED_WEIGHT = 10.0
 
-    The physically consistent fit (:func:`~baseparams.ident.physical.physical_fit`) on the WLS rows
-    stacked with the model file's prior ``lam * s2 * S^-1`` (:mod:`baseparams.ident.select`) and the
-    drive terms' weak prior, ``lam = 1 / kappa`` with ``kappa`` the file's error as the data show it
-    (:func:`~baseparams.ident.select.prior_error_scale`: maximum likelihood of the prior's scale from
-    the least-squares estimate's distance to the file, over the whole training span: empirical Bayes,
-    no held-out block), within the candidate weights' range. Without the ``ident`` extra (or
-    ``estimator="least squares"``), least squares with that prior.
+
+def _structural(model: IdentModel, est, acc, prior_weight=None, estimator=None) -> Fit:
+    """The default when within-motion cross-validation cannot choose: the evidence of the whole span decides.
+
+    The model file's prior ``lam * s2 * S^-1`` (:mod:`baseparams.ident.select`) with ``lam = 1 /
+    kappa``, ``kappa`` the file's error as the data show it (:func:`~baseparams.ident.select.prior_error_scale`:
+    maximum likelihood of the prior's scale from the least-squares estimate's distance to the file,
+    over the whole training span: empirical Bayes, no held-out block), within the candidate weights'
+    range, plus the drive terms' weak prior. A file the data agree with (``lam >=``
+    :data:`TRUSTED_WEIGHT`): WLS pulled towards it with that weight; a file further off: the
+    physically consistent fit (:func:`~baseparams.ident.physical.physical_fit`) on the WLS rows stacked
+    with that prior (the structure that generalizes when the file cannot anchor the directions one short
+    motion leaves loose; measured in ``benchmarks/cross_recording.py``'s generalization table). Without
+    the ``ident`` extra, or with ``estimator="least squares"``, least squares with that prior.
     """
     from .select import (
         LAMBDAS,
@@ -368,9 +377,15 @@ def _structural(model: IdentModel, est, acc, prior_weight=None, estimator=None) 
     lam = positive[0] if not np.isfinite(kappa) else float(np.clip(1.0 / max(kappa, 1e-300), positive[0],
                                                                       positive[-1]))
     pen = penalty_of(lam, s2, prior_precision(model, s), dprec)
+    prior_cov = np.zeros((model.n_params, model.n_params))
+    prior_cov[:nb, :nb] = s / lam
+    drive_cov = np.diag(np.where(np.diag(dprec) > 0, 1.0 / np.where(np.diag(dprec) > 0, np.diag(dprec), 1.0), 0.0))
     sel = Selection("wls", lam, tuple(float(x) for x in LAMBDAS), {}, 0, penalty=pen, theta0=theta0,
-                    scope=RULES["structure"], rule="structure", kappa_evidence=kappa)
+                    prior_cov=prior_cov, scope=RULES["structure"], drive_cov=drive_cov, rule="structure",
+                    kappa_evidence=kappa)
     nonneg = nonnegative_terms(model)
+    if estimator is None and lam >= TRUSTED_WEIGHT:
+        estimator = "least squares"  # the data agree with the file: least squares pulled towards it
     if estimator != "least squares":
         try:
             import cvxpy  # noqa: F401

@@ -413,9 +413,10 @@ class Identification:
         sel = f.selection
         estimator = f.method if sel is None else (f"{f.method}: {sel.weighting.upper()}" + (
             f" with the model file's prior, weight {sel.lam:g}" if sel.lam else ""))
-        if sel is not None and sel.estimator == "physical" and sel.rule == "structure":
-            estimator = (f"{f.method}: physically consistent with the file's prior, weight {sel.lam:g} (the rule for "
-                         f"short motions: blocks too short to cross-validate)")
+        if sel is not None and sel.rule == "structure":
+            what = "physically consistent" if sel.estimator == "physical" else sel.weighting.upper()
+            estimator = (f"{f.method}: {what} with the file's prior, weight {sel.lam:g} (the rule for short motions: "
+                         f"blocks too short to cross-validate)")
         elif sel is not None and sel.estimator == "physical":
             estimator = f"{f.method}: physically consistent (cross-validated against {sel.weighting.upper()}"
             estimator += f" with the file's prior, weight {sel.lam:g})" if sel.lam else ")"

@@ -145,8 +145,9 @@ class Selection:
                 f"(empirical Bayes), weight 1 / {k:.3g} within [{min(x for x in self.lambdas if x > 0):g}, "
                 f"{max(self.lambdas):g}]")
         what = ("physically consistent least squares (every body's pseudo-inertia positive semidefinite, friction "
-                "and rotor inertia >= 0)" if self.estimator == "physical" else
-                "least squares (the ident extra for the physically consistent fit is not installed)")
+                "and rotor inertia >= 0; the data do not agree with the file closely enough to lean on it)"
+                if self.estimator == "physical" else
+                f"{self.weighting.upper()} (the data agree with the file: least squares leaning on it)")
         return (f"default estimate: {what} with the model file's parameters as a prior, weight {self.lam:g} ({seen}); "
                 f"chosen by the rule for short motions, not by cross-validation: its blocks each span less than a "
                 f"period of the motion's bandwidth, so they cannot tell which estimate predicts another motion "

@@ -1093,6 +1093,20 @@ def _passes(robot, stream, o, validating: bool, say):
     return stream, sc, tr, model, cols, unit_notes, plan, parts, kept, slow
 
 
+def _rule(tr) -> str:
+    """What chooses the default estimate (:func:`~baseparams.ident.fitting.fit`'s ``rule``), as in memory.
+
+    ``structure`` when each cross-validation block spans less than
+    :data:`~baseparams.ident.pipeline.MIN_BLOCK_PERIODS` periods of the motion's bandwidth (from the
+    scan's subsample), else ``blocks``.
+    """
+    from .pipeline import MIN_BLOCK_PERIODS
+    from .select import FOLDS
+
+    band = pp.excitation_bandwidth(tr.sub.q, tr.rate / tr.step)
+    return "structure" if (tr.n - 1) / tr.rate / FOLDS * band < MIN_BLOCK_PERIODS else "blocks"
+
+
 def _identify_stream(robot, stream, validation, predictions, say, o):
     """:func:`identify_stream`'s steps."""
     from .fitting import fit, pulled_covariance, residual_rms
@@ -1103,7 +1117,7 @@ def _identify_stream(robot, stream, validation, predictions, say, o):
                                                                               say)
     acc = chunks.combine(parts)
     say(f"fitting ({o.method})")
-    f = fit(model, acc, o.method, o.prior_weight, blocks=parts)
+    f = fit(model, acc, o.method, o.prior_weight, blocks=parts, rule=_rule(tr))
     f, cov_note, train_series = covariance_pass(f, acc, o.covariance, kept, train, plan, model, cols, say)
     f = pulled_covariance(f)
     names = model.joints

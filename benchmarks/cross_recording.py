@@ -325,16 +325,19 @@ def run_generalization(case: dict, estimators=GENERALIZATION) -> dict:
 
     from oracles import outsider_ols, outsider_score
 
-    out = {"name": case["name"], "kind": case["kind"], "score": {}, "seconds": {}, "estimator": {}}
+    out = {"name": case["name"], "kind": case["kind"], "score": {}, "seconds": {}, "estimator": {}, "rule": {}}
     test = case["test"]
     for label, kw in estimators.items():
         t0 = time.perf_counter()
         try:
             res = identify(case["robot"], case["train"], **kw)
             out["score"][label] = outsider_score(test.t, test.tau, res.predict(test))
-            out["estimator"][label] = res.to_json().get("estimator", {})
+            j = res.to_json()
+            out["estimator"][label] = j.get("estimator", {})
+            out["rule"][label] = (j.get("selection") or {}).get("rule", "-")
         except BaseparamsError as exc:
             out["score"][label], out["estimator"][label] = float("nan"), {"refused": str(exc)[:80]}
+            out["rule"][label] = "-"
         out["seconds"][label] = time.perf_counter() - t0
     t0 = time.perf_counter()
     out["score"]["outsider ols"] = outsider_ols(_pin_model(case), case["train"], test)
@@ -346,10 +349,11 @@ def run_generalization(case: dict, estimators=GENERALIZATION) -> dict:
 def generalization_table(results: list[dict]) -> str:
     """A Markdown table of :func:`run_generalization` results."""
     labels = [*GENERALIZATION, "outsider ols"]
-    lines = ["| split | " + " | ".join(labels) + " | default / outsider OLS |", "|---|" + "---:|" * (len(labels) + 1)]
+    lines = ["| split | " + " | ".join(labels) + " | default / outsider OLS | default chosen by |",
+             "|---|" + "---:|" * (len(labels) + 1) + "---|"]
     for r in results:
         cells = " | ".join(f"{r['score'][k]:.4g}" for k in labels)
-        lines.append(f"| {r['name']} | {cells} | {r['default_vs_outsider']:.3f} |")
+        lines.append(f"| {r['name']} | {cells} | {r['default_vs_outsider']:.3f} | {r.get('rule', {}).get('default', '-')} |")
     return "\n".join(lines)
 
 

@@ -45,6 +45,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``cross_recording``  identify on one recording, the raw RMS on another (simulated recordings with the
                     defects real logs have, the Panda and TX40 logs split by time): default vs plain OLS,
                     WLS, physical (``benchmarks/cross_recording.py``).
+* ``generalization``  issue 48: train on one motion, predict another (simulated recorder-filtered arms, the Panda
+                    and TX40 logs, both directions), against an outsider's plain OLS on every sample.
 * ``model_terms``   the Panda's held-out 5 Hz figure per model class: linear, + pre-sliding friction,
                     + tilt, + delay, + scale, and the terms cross-validation keeps.
 * ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the
@@ -1252,6 +1254,25 @@ def bench_cross_recording(out: dict, quick: bool) -> None:
     out["cross_recording_cases"] = len(results)
 
 
+def bench_generalization(out: dict, quick: bool) -> None:
+    """Issue 48: splits that train on one motion and predict another (both directions), scored as an outsider
+    would (5 Hz low-passed torques, 1 s trimmed at each end), against an outsider's plain Pinocchio OLS on every
+    sample; the rule that chose each default estimate."""
+    import cross_recording as cr
+
+    results = [cr.run_generalization(c) for c in cr.generalization_cases()]
+    log("\n" + cr.generalization_table(results))
+    for i, r in enumerate(results):
+        key = f"gen_{i:02d}"
+        out[f"{key}_name"] = r["name"]
+        for label, v in r["score"].items():
+            out[f"{key}_score_{_key(label)}"] = v
+        out[f"{key}_default_vs_outsider"] = r["default_vs_outsider"]
+        out[f"{key}_rule"] = r["rule"]["default"]
+    out["generalization_worst_default_vs_outsider"] = max(r["default_vs_outsider"] for r in results)
+    out["generalization_cases"] = len(results)
+
+
 def bench_model_terms(out: dict, quick: bool) -> None:
     """The Panda (real log, last 6 s held out): the 5 Hz held-out figure per model class, terms added one by
     one, then as cross-validation keeps them (default and physical)."""
@@ -1282,6 +1303,7 @@ def bench_scale_logs(out: dict, quick: bool) -> None:
 
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "cross_recording": bench_cross_recording,
+    "generalization": bench_generalization,
     "model_terms": bench_model_terms,
     "files": bench_files,
     "hands": bench_hands,

@@ -248,7 +248,8 @@ def identify_fleet(model: IdentModel, paths, options: IdentOptions | None = None
         if pooled:
             acc = _tree(accs)
             # auto: the prior's weight by cross-validation over the logs (each block a group of whole logs)
-            pooled_fit = fit(model, acc, opts.method, opts.prior_weight, blocks=accs if len(accs) > 1 else None)
+            pooled_fit = fit(model, acc, opts.method, opts.prior_weight, blocks=accs if len(accs) > 1 else None,
+                             rule="recordings" if len(accs) > 1 else "blocks")
             pooled_fit = pulled_covariance(_pooled_covariance(cl, pooled_fit, acc, files, opts, progress))
     return FleetResult(model, fits, pooled_fit, files, spread, skipped)
 

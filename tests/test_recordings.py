@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -61,3 +63,32 @@ def test_several_recordings_refuse_a_holdout_and_an_empty_list():
         identify(robot, [a, b], holdout=1.0)
     with pytest.raises(BaseparamsError, match="no log given"):
         identify(robot, [])
+
+
+# ---------------------------------------------------------------- the front door: identify MODEL A B ..., predict
+def test_identify_several_files_from_the_command_line_and_the_front_door(tmp_path, capsys):
+    """``identify MODEL A.csv B.csv`` (or a glob) and ``baseparams.identify(robot, [a, b])``: several recordings in
+    one identification, in memory (no fleet); ``predict --score-cutoff`` prints the low-passed figure in text."""
+    from baseparams.cli import main
+
+    paths = []
+    for k in (1, 2):
+        p = tmp_path / f"rec{k}.csv"
+        assert main(["simulate", "puma560", str(p), "--duration", "5", "--rate", "200", "--noise", "0.05",
+                     "--seed", str(k)]) == 0
+        paths.append(p)
+    capsys.readouterr()
+    save = tmp_path / "res.json"
+    assert main(["identify", "puma560", *map(str, paths), "--json", "--save", str(save)]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["selection"]["rule"] == "recordings" and j["n_samples"]["read"] == 2000
+    assert main(["identify", "puma560", str(tmp_path / "rec*.csv"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["selection"]["folds"] == 2
+    res = baseparams.identify("puma560", [str(p) for p in paths])
+    assert res.to_json()["selection"]["rule"] == "recordings"
+    assert main(["predict", "puma560", str(save), str(paths[0]), "--score-cutoff", "5"]) == 0
+    text = capsys.readouterr().out
+    assert "low-passed at 5 Hz (--score-cutoff) at every sample:" in text
+    value = float(text.split("(--score-cutoff) at every sample: ")[1].split()[0])
+    assert main(["predict", "puma560", str(save), str(paths[0]), "--score-cutoff", "5", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["rms_lowpassed"]["total"] == pytest.approx(value, rel=1e-3)

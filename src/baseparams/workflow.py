@@ -551,8 +551,9 @@ def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["hol
     model : Robot, Analysis, str or path
         The robot the log was recorded on (a floating base's pose in the log; loops closed by the
         actuated joints; a file for ``urdf``/``mjcf``).
-    log : JointLog, str or path
-        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
+    log : JointLog, str or path, or a list of them
+        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout");
+        several: recordings of the robot in one identification, each a cross-validation block.
     holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, prior_weight, \
 convention, covariance, score_cutoff, allow_units, analysis_samples, literal, terms, seed
         The identification's options (:class:`~baseparams.ident.options.IdentOptions`: the
@@ -644,7 +645,8 @@ def identify_command(model, log, options: IdentOptions, inputs: Inputs | None = 
                                 f"{type(inputs.columns).__name__}")
     robot = robot_of(model, "identify")
     source = inputs.source if inputs.source is not None else (model if isinstance(model, (str, os.PathLike)) else None)
-    run = _Run(input_files(source if source is not None else model, log, inputs.validate, inputs.columns,
+    logs = list(log) if isinstance(log, (list, tuple)) else [log]
+    run = _Run(input_files(source if source is not None else model, *logs, inputs.validate, inputs.columns,
                            inputs.truth), reporter)
     truth_doc = _checked_outputs(source if source is not None else model, options, inputs, outputs, run)
     result, read = _run_identification(robot, log, options, inputs, outputs, run)
@@ -775,6 +777,8 @@ def _stream_reason(log, inputs: Inputs, mjcf, cli: bool) -> str | None:
 def _run_identification(robot: Robot, log, options: IdentOptions, inputs: Inputs, outputs: Outputs, run: _Run):
     """The fit: streamed from the log's file, or read whole; predictions written. ``(result, log read or None)``."""
     rep = run.reporter
+    if isinstance(log, (list, tuple)):
+        return _run_several(robot, log, options, inputs, outputs, run)
     why = _stream_reason(log, inputs, outputs.mjcf, rep.cli) if not robot.floating else None
     if why is not None:
         from .ident.stream import NotStreamable
@@ -793,6 +797,25 @@ def _run_identification(robot: Robot, log, options: IdentOptions, inputs: Inputs
     if outputs.predictions is not None:
         _write_predictions(result, (read, val), options.holdout, outputs.predictions, run)
     return result, read
+
+
+def _run_several(robot: Robot, logs, options: IdentOptions, inputs: Inputs, outputs: Outputs, run: _Run):
+    """Several recordings in one identification, each read whole (:func:`baseparams.ident.identify` of a list)."""
+    from dataclasses import replace
+
+    from .ident import identify as run_whole
+
+    rep, reads, val, small = run.reporter, [], None, robot
+    for k, x in enumerate(logs):
+        rep.say(f"reading {x}" if isinstance(x, (str, os.PathLike)) else "checking the log")
+        read, v, small = _identification_logs(robot, x, inputs if k == 0 else replace(inputs, validate=None), rep.note)
+        reads.append(read)
+        val = v if k == 0 else val
+    rep.say(f"identifying ({options.method}) on {len(reads)} recordings, {sum(r.n_samples for r in reads)} samples")
+    result = run_whole(small, reads, options, validation=val, progress=rep.progress)
+    if outputs.predictions is not None:
+        _write_predictions(result, (reads[0], val), options.holdout, outputs.predictions, run)
+    return result, reads[0]
 
 
 def _streamed(robot: Robot, log, options: IdentOptions, inputs: Inputs, predictions, run: _Run):

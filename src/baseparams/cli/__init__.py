@@ -517,9 +517,10 @@ def _identify_parser(sub, model_args) -> None:
     """The ``identify`` subcommand's arguments."""
     s = sub.add_parser("identify", help="identify base-parameter and drive values from a joint log")
     model_args(s)
-    s.add_argument("data", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default layout: "
-                                "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>; a glob pattern for "
-                                "several logs (a fleet, on Dask)")
+    s.add_argument("data", nargs="+", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default "
+                                           "layout: t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>; several "
+                                           "logs or a glob pattern: several recordings of the robot in one "
+                                           "identification (a fleet on Dask with --per-file / --pooled)")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
     held = s.add_mutually_exclusive_group()
     held.add_argument("--validate", metavar="DATA2", help="validate on another log")
@@ -746,7 +747,7 @@ def _check_extras(args) -> None:
         _need("cvxpy", "--method physical")
         _need("clarabel", "--method physical")
     files = data_files(args.data) + ([args.validate] if args.validate else [])
-    if len(files) > 1 + bool(args.validate) or args.per_file or args.pooled:
+    if args.per_file or args.pooled:
         _need("distributed", "identification over several logs (a fleet)")
     for f in files:
         suffix = Path(f).suffix.lower()

@@ -245,8 +245,8 @@ def data_files(pattern: str) -> list[str]:
 
     Parameters
     ----------
-    pattern : str
-        The ``DATA`` argument.
+    pattern : str or list of str
+        The ``DATA`` argument (or several).
 
     Returns
     -------
@@ -255,6 +255,8 @@ def data_files(pattern: str) -> list[str]:
     """
     import glob
 
+    if isinstance(pattern, (list, tuple)):  # identify's DATA...: each a file or a pattern
+        return [f for p in pattern for f in data_files(p)]
     if any(ch in pattern for ch in "*?["):
         files, t0 = [], time.monotonic()
         for f in glob.iglob(pattern, recursive=True):  # bounded: '/**' would walk the whole file system

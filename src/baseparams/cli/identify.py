@@ -53,7 +53,7 @@ def cmd_identify(args) -> int:
 
     robot = common.load_robot(args)
     files = data_files(args.data)
-    if len(files) > 1 or args.per_file or args.pooled:
+    if args.per_file or args.pooled:
         if args.joints:
             raise BaseparamsError("--joints applies to one log, not to a fleet of logs")
         if args.save or args.truth:
@@ -61,7 +61,8 @@ def cmd_identify(args) -> int:
         return _identify_fleet(args, robot, files)
     with Progress(args.verbose) as progress:
         t0 = time.perf_counter()
-        result = identify_command(robot, files[0], options_of(args), inputs_of(args), outputs_of(args),
+        result = identify_command(robot, files[0] if len(files) == 1 else files, options_of(args), inputs_of(args),
+                                  outputs_of(args),
                                   Reporter(progress=progress, notes=_print_note, cli=True))
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
     emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
@@ -223,9 +224,10 @@ def cmd_predict(args) -> int:
     elif out["rms"] is not None:
         lines.append(f"RMS vs the raw measured torques at every sample: {out['rms']['total']:.4g} (all joints); "
                      + ", ".join(f"{j} {out['rms'][j]:.3g}" for j in joints))
-        if "rms_lowpassed" in out:
-            lines.append(f"RMS vs the measured torques low-passed at {out['score_cutoff']:g} Hz (--score-cutoff): "
-                         f"{out['rms_lowpassed']['total']:.4g}")
+    if "rms_lowpassed" in out:
+        lines.append(f"RMS vs the measured torques low-passed at {out['score_cutoff']:g} Hz (--score-cutoff) at every "
+                     f"sample: {out['rms_lowpassed']['total']:.4g} (all joints); "
+                     + ", ".join(f"{j} {out['rms_lowpassed'][j]:.3g}" for j in joints))
     print("\n".join(lines))
     return EXIT_OK
 

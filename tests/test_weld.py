@@ -103,5 +103,5 @@ def test_front_door_identifies_the_same_sub_chain_as_the_cli(tmp_path, capsys):
                  "--json"]) == 0
     cli = json.loads(capsys.readouterr().out)
     assert [e["value"] for e in cli["base_parameters"]] == [e["value"] for e in ident.to_json()["base_parameters"]]
-    with pytest.raises(baseparams.BaseparamsError, match="weld applies with joints"):
+    with pytest.raises(baseparams.BaseparamsError, match="weld= applies with joints="):
         baseparams.identify("puma560", path, weld={"joint5": 0.3})

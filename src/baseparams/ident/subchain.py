@@ -25,7 +25,7 @@ STILL = 1e-3
 
 
 def parse_welds(items: Sequence[str] | None) -> dict[str, float]:
-    """The ``--weld`` items as a dict.
+    """The ``weld=`` items (``--weld``) as a dict.
 
     Parameters
     ----------
@@ -50,9 +50,9 @@ def parse_welds(items: Sequence[str] | None) -> dict[str, float]:
         except ValueError:
             sep = ""
         if not sep or not name.strip():
-            raise ModelError(f"--weld {item!r}: expected NAME=VALUE (a joint name and a number)")
+            raise ModelError(f"weld= {item!r}: expected NAME=VALUE (a joint name and a number)")
         if not abs(out[name.strip()]) <= 1e6:
-            raise ModelError(f"--weld {item!r}: the value must be a finite number within [-1e6, 1e6] (rad or m)")
+            raise ModelError(f"weld= {item!r}: the value must be a finite number within [-1e6, 1e6] (rad or m)")
     return out
 
 

@@ -76,16 +76,16 @@ def joint_values(robot: Robot, value, what: str, pair: bool = False) -> np.ndarr
             if name not in names:
                 raise BaseparamsError(f"{what}= limit for {name!r}: not a designed joint of {robot.name!r} (joints: "
                                       f"{', '.join(names)})")
-            x = _floats(v, f"{what}= limit for {name!r}")
+            x = _floats(v, f"{what}= limit for {name!r}:")
             if x.shape != shape[1:]:
                 raise BaseparamsError(f"{what}= limit for {name!r}: expected {one}, got {v!r}")
-            out[names.index(name)] = _valid(x, f"{what}= limit for {name!r}", pair)
+            out[names.index(name)] = _valid(x, f"{what}= limit for {name!r}:", pair)
         return out
-    x = _floats(value, f"{what}=")
+    x = _floats(value, f"{what}= limit:")
     if x.shape not in (shape, shape[1:]):
-        raise BaseparamsError(f"{what}= expected {one} for every joint or one per designed joint "
+        raise BaseparamsError(f"{what}= limit: expected {one} for every joint or one per designed joint "
                               f"({len(names)}: {', '.join(names)}), got shape {x.shape}")
-    out[:] = _valid(x, f"{what}=", pair)
+    out[:] = _valid(x, f"{what}= limit:", pair)
     return out
 
 

@@ -7,15 +7,19 @@ sniffed, header row required), ``.npz`` (one 1-D array per column), ``.parquet``
 
 Default layout (tables)
 -----------------------
-A time column ``t`` [s] and per joint of the model ``q_<joint>`` [rad or m], ``tau_<joint>``
-[N m or N], and optionally ``dq_<joint>``, ``ddq_<joint>``, where ``<joint>`` is the model's joint
-name (``robot.joint_names``). Example CSV header for a 2-joint arm::
+A time column ``t`` [s] and per coordinate of the model ``q_<joint>`` [rad or m], ``tau_<joint>``
+[N m or N], and optionally ``dq_<joint>``, ``ddq_<joint>``, where ``<joint>`` is the coordinate's
+name (``robot.coordinate_names()``): a 1-dof joint's name; for a joint of several coordinates one
+name each, an MJCF body's own joints (``rootx``, ``rootz``, ``rooty`` of ``rootx+rootz+rooty``) or
+the joint's name and the coordinate's place (``p.0``, ``p.1``, ``p.2`` of a URDF ``planar`` joint
+``p``, in the order of its axes; a ball, a universal joint likewise). Example CSV header for a
+2-joint arm::
 
     t,q_joint1,q_joint2,dq_joint1,dq_joint2,tau_joint1,tau_joint2
 
-Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a joint of the model; other
-columns are ignored, and a note lists them. Every 1-dof (R or P) joint of the model must be in
-the log unless ``allow_subset=True``.
+Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a coordinate of the model;
+other columns are ignored, and a note lists them. Every coordinate of the model (the floating
+base's excepted: below) must be in the log unless ``allow_subset=True``.
 
 Floating base
 -------------
@@ -65,8 +69,8 @@ Checks
 ------
 Bad input is one :class:`~baseparams.errors.DataError` line naming the file, the column and the
 row: NaN/inf values, time not strictly increasing (repeated or going back), rows or arrays of
-different lengths, unknown or missing joints, an empty file, and a revolute joint beyond
-``max_angle`` (default 4 pi: "degrees given as radians?") or a prismatic one beyond
+different lengths, unknown or missing joints, an empty file, and a rotation coordinate beyond
+``max_angle`` (default 4 pi: "degrees given as radians?") or a translation beyond
 ``max_travel`` (10 m: millimetres?). Rows are named as the file counts them: text files by file
 line (1-based) and data row (1-based, the first row after the header is 1); NPZ and Parquet by
 0-based index; bags by the 1-based message number on the topic.
@@ -104,8 +108,10 @@ PARQUET_SUFFIXES = (".parquet", ".pq")
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 #: the signals of a joint, in the default layout's column prefixes
 KINDS = ("q", "dq", "ddq", "tau")
-#: joint types a log can hold (1-dof)
-LOGGABLE = ("R", "P")
+#: joint types whose coordinates are not a log's joint columns (a floating base: its pose columns)
+UNLOGGED = ("F",)
+#: the largest plausible ``|q|`` of a rotation [rad] and of a translation [m] (degrees? millimetres?)
+MAX_ANGLE, MAX_TRAVEL = 4 * np.pi, 10.0
 
 _BAG_FIELDS = {"q": "position", "dq": "velocity", "ddq": "acceleration", "tau": "effort"}
 _COLUMN = re.compile(r"^(q|dq|ddq|tau)_(.+)$")
@@ -148,7 +154,7 @@ class _Joint:
 
 
 def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
-             max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0, require_tau: bool = True,
+             max_angle: float | None = MAX_ANGLE, max_travel: float | None = MAX_TRAVEL, require_tau: bool = True,
              require_time: bool = True) -> JointLog:
     """Read a joint log and map it to the model's joints.
 
@@ -158,15 +164,15 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         The log: ``.csv``/``.tsv``/``.txt``, ``.npz``, ``.parquet``/``.pq``, a rosbag2 folder
         (with ``metadata.yaml``), ``.mcap``, ``.db3`` or ``.bag``. Formats: the module docstring.
     robot : Robot
-        The model; its ``joint_names`` name the columns, its ``jtype`` says which joints can be
-        logged (R and P) and which plausibility check applies.
+        The model; its coordinates' names name the columns (:meth:`Robot.coordinate_names`), and
+        each coordinate's kind (a rotation or a translation) says which plausibility check applies.
     columns : str, Path or dict, optional
         A mapping (TOML file or dict; see the module docstring) for any other layout, or, for
         a bag, the JointState topic to read. Default: the default layout, the first JointState
         topic.
     allow_subset : bool, optional
-        Accept a log that covers only some of the model's 1-dof joints (default: every R and P
-        joint must be there).
+        Accept a log that covers only some of the model's coordinates (default: every one must
+        be there, a floating base's excepted).
     max_angle : float or None, optional
         Largest plausible ``|q|`` of a revolute joint [rad] (default 4 pi, beyond which the
         values look like degrees); ``None`` disables the check (continuous joints).
@@ -721,21 +727,40 @@ def _bag_time(path: Path, msgs: list, sel: np.ndarray, notes: list[str]) -> np.n
 
 
 # ---------------------------------------------------------------- joints and conversion
+def coordinate_kinds(robot: Robot) -> dict[str, str]:
+    """Each coordinate a log holds, by its column name (:meth:`Robot.coordinate_names`), and its kind.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    dict of str to str
+        ``{name: "R" or "P"}`` in the model's order: a rotation (rad) or a translation (m); a
+        floating base's coordinates are left out (its pose columns, module docstring).
+
+    """
+    names = robot.coordinate_names(np.arange(robot.dof))
+    slide = np.linalg.norm(robot.local_screws[:, :3], axis=1) == 0.0
+    types = np.asarray(robot.jtype)[robot.dof_body]
+    return {n: ("P" if s else "R") for n, s, t in zip(names, slide, types) if t not in UNLOGGED}
+
+
 def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, require_tau: bool = True) -> list[_Joint]:
-    """The joints of the log in the model's order, with their columns, checked against the model."""
-    jtypes = dict(zip(robot.joint_names, robot.jtype))
-    loggable = [j for j, t in jtypes.items() if t in LOGGABLE]
+    """The coordinates of the log in the model's order, with their columns, checked against the model."""
+    jtypes = coordinate_kinds(robot)
+    loggable = list(jtypes)
     entries = spec["joints"] or _detect(table, robot, jtypes, loggable)
     for j in entries:
         if j not in jtypes:
-            raise DataError(f"{spec['label']}: joints.{j}: robot {robot.name!r} has no joint {j!r} (1-dof joints: "
+            raise DataError(f"{spec['label']}: joints.{j}: robot {robot.name!r} has no joint {j!r} (joints: "
                             f"{_names(loggable)})")
-        if jtypes[j] not in LOGGABLE:
-            raise DataError(f"{spec['label']}: joints.{j}: a {jtypes[j]} joint; only 1-dof R and P joints are logged")
     required = loggable
     if robot.has_loops or robot.couplings:  # the measured joints are the independent (actuated) ones
         ind = robot.independent if robot.independent is not None else range(robot.dof)
-        actuated = {robot.joint_names[robot.dof_body[k]] for k in ind}
+        actuated = set(robot.coordinate_names(np.asarray(ind, dtype=int)))
         required = [j for j in loggable if j in actuated]
     missing = [j for j in required if j not in entries]
     if missing and not allow_subset:
@@ -744,7 +769,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
         raise DataError(f"{table.source}: joints {_names(missing)} of robot {robot.name!r}: {where}; "
                         "to identify a sub-chain: --joints A,B,... on the command line (allow_subset=True in Python)")
     out = []
-    for j in [j for j in robot.joint_names if j in entries]:
+    for j in [j for j in loggable if j in entries]:
         e = entries[j]
         base = e.get("name", j)
         cols = {k: e.get(k, f"{k}_{base}") for k in KINDS}
@@ -769,7 +794,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
 
 
 def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> dict[str, dict]:
-    """Joints named by default-layout columns (``q_<joint>`` ...); an unknown joint is an error."""
+    """Coordinates named by default-layout columns (``q_<joint>`` ...); an unknown one is an error."""
     found: dict[str, dict] = {}
     for col in table.columns:
         m = _COLUMN.match(col)
@@ -777,13 +802,20 @@ def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> d
             continue
         j = m.group(2)
         if j not in jtypes:
-            raise DataError(f"{table.source}: {table.label(col)}: robot {robot.name!r} has no joint {j!r} "
-                            f"(1-dof joints: {_names(loggable)})")
-        if jtypes[j] not in LOGGABLE:
-            raise DataError(f"{table.source}: {table.label(col)}: joint {j!r} is a {jtypes[j]} joint; only 1-dof "
-                            "R and P joints are logged")
+            raise DataError(f"{table.source}: {table.label(col)}: {_unknown(robot, j)} (joints: {_names(loggable)})")
         found[j] = {}
     return found
+
+
+def _unknown(robot: Robot, name: str) -> str:
+    """Why a column's joint is not one of the log's: not the robot's, a floating base, or several coordinates."""
+    if name not in robot.joint_names:
+        return f"robot {robot.name!r} has no joint {name!r}"
+    i = robot.joint_names.index(name)
+    if robot.jtype[i] in UNLOGGED:
+        return f"joint {name!r} is the floating base, logged as its pose columns ({', '.join(POSE_COLUMNS)})"
+    coords = robot.coordinate_names(np.flatnonzero(robot.dof_body == i))
+    return f"joint {name!r} has {len(coords)} coordinates, logged one column each ({_names(coords)})"
 
 
 def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_travel,
@@ -1116,7 +1148,7 @@ class LogStream:
     """
 
     def __init__(self, path, robot: Robot, columns=None, *, allow_subset: bool = False,
-                 max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0, require_tau: bool = True,
+                 max_angle: float | None = MAX_ANGLE, max_travel: float | None = MAX_TRAVEL, require_tau: bool = True,
                  block_bytes: int = BLOCK_BYTES):
         p = check_input(path, error=DataError)
         if p.suffix.lower() not in STREAM_SUFFIXES:

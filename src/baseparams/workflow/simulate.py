@@ -172,15 +172,45 @@ def _checked_arrays(trajectory) -> tuple:
 
 
 def _trajectory_of(robot: Robot, trajectory):
-    """A trajectory given as a file, an Excitation or arrays, as ``(t, q, dq, ddq)`` arrays (or None)."""
+    """A trajectory given as a file, an Excitation or arrays, as ``(t, q, dq, ddq)`` arrays (or None).
+
+    A file is read by the reader identify reads logs with (its checks); arrays are checked as it
+    checks a log's values, so that the log written is one identify reads.
+    """
     from ..ident.simulate import check_trajectory
 
     check_trajectory(robot, trajectory)
     if isinstance(trajectory, (str, os.PathLike)):
         from ..excitation import read_trajectory
 
-        trajectory = read_trajectory(trajectory, robot)
-    return getattr(trajectory, "trajectory", trajectory)  # an Excitation's samples
+        return read_trajectory(trajectory, robot)
+    trajectory = getattr(trajectory, "trajectory", trajectory)  # an Excitation's samples
+    if trajectory is not None:
+        _check_plausible(robot, trajectory[1])
+    return trajectory
+
+
+def _check_plausible(robot: Robot, q) -> None:
+    """Positions a log reader would refuse (an angle beyond 4 pi, a translation beyond 10 m): one line, naming them."""
+    import numpy as np
+
+    from ..arguments import ArgumentError
+    from ..excitation.limits import design_coordinates
+    from ..io.logs import MAX_ANGLE, MAX_TRAVEL, coordinate_kinds
+
+    names = robot.coordinate_names(design_coordinates(robot))
+    if q.shape[1] != len(names):
+        raise ArgumentError(f"simulate: trajectory= has {q.shape[1]} columns of q for the {len(names)} coordinates "
+                            f"{names}")
+    kinds = coordinate_kinds(robot)
+    limit = np.array([MAX_TRAVEL if kinds.get(n) == "P" else MAX_ANGLE for n in names])
+    bad = np.abs(q) > limit
+    if bad.any():
+        k = int(np.argmax(bad.any(axis=0)))
+        i = int(np.argmax(bad[:, k]))
+        unit = "m" if kinds.get(names[k]) == "P" else "rad"
+        raise ArgumentError(f"simulate: trajectory= q of {names[k]!r}, sample {i}: |q| = {abs(q[i, k]):.4g} {unit} > "
+                            f"{limit[k]:.4g}: a log identify would refuse (degrees? millimetres?)")
 
 
 def _simulated(robot: Robot, trajectory, **kw):

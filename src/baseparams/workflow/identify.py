@@ -289,6 +289,33 @@ def _check_subchain(inputs: Inputs) -> None:
         raise BaseparamsError("identify: joints= needs joint names: 'A,B,...' (the joints to identify)")
     if weld and joints is None:
         raise BaseparamsError("identify: weld= applies with joints= (the joints to identify; the others are welded)")
+    welds(weld)
+
+
+def welds(weld) -> dict[str, float]:
+    """``weld=`` as ``{joint: value}``: ``{"joint": value}`` or ``["JOINT=VALUE", ...]``, each a finite number.
+
+    Parameters
+    ----------
+    weld : dict, sequence of str or None
+        The welds.
+
+    Returns
+    -------
+    dict of str to float
+        Joint name -> value [rad or m].
+
+    Raises
+    ------
+    BaseparamsError
+        An item that is not ``NAME=VALUE``, a value that is not a number within 1e6.
+    """
+    from ..ident.subchain import parse_welds
+
+    if not isinstance(weld, dict):
+        return parse_welds(list(weld or ()))
+    return parse_welds([f"{k}={v}" if isinstance(v, (int, float)) and not isinstance(v, bool) else f"{k}=?"
+                        for k, v in weld.items()])
 
 
 def joint_names(joints) -> list[str]:
@@ -314,12 +341,11 @@ def _identification_logs(robot: Robot, log, inputs: Inputs, note):
     log = log_of(log, robot, columns, subset=joints is not None)
     if joints is None:
         return log, val, robot
-    from ..ident.subchain import parse_welds, subchain
+    from ..ident.subchain import subchain
 
-    welds = parse_welds(list(weld or ())) if not isinstance(weld, dict) else {k: float(v) for k, v in weld.items()}
-    small, log, notes = subchain(robot, log, joint_names(joints), welds)
+    small, log, notes = subchain(robot, log, joint_names(joints), welds(weld))
     if val is not None:
-        val = subchain(robot, val, joint_names(joints), welds)[1]
+        val = subchain(robot, val, joint_names(joints), welds(weld))[1]
     for n in notes:
         note(n)
     return log, val, small

@@ -264,16 +264,14 @@ def test_the_cli_and_python_accept_and_refuse_alike(command, key, dest, value, t
     ("identify", {"prior_weight": 5.0, "method": "ols"}, "applies to --method physical, not ols"),
     ("identify", {"score_cutoff": 5.0}, "are about validation data"),
     ("excite", {"out": "{d}/t.csv", "plot": "{d}/t.csv"}, "format comes from the suffix"),
-    ("excite", {"period": 5.0, "base_frequency": 0.2}, "not both"),
+    ("excite", {"period": 5.0, "base_frequency": 0.2}, "give --period or --base-frequency, not both"),
+    ("identify", {"holdout": 1.0, "validate": "{d}/other.csv"}, "give --holdout SECONDS or --validate LOG, not both"),
 ])
 def test_the_issue_s_cases_refused_alike(command, keywords, words, files, no_work, capsys):
     """The issue's examples: two outputs onto one file, ``prior_weight`` without the physical fit (both doors)."""
     keywords = {k: _fill(v, files) for k, v in keywords.items()}
     py = _python_outcome(command, keywords, files)
     tokens = {k: [v if isinstance(v, str) else _text(v)] for k, v in keywords.items()}
-    if command == "excite" and "base_frequency" in keywords:  # argparse's own exclusive group: Python only
-        assert py[0] == "refused" and words in py[1]
-        return
     cli = _cli_outcome(_argv(command, tokens, files), capsys)
     assert py == cli and py[0] == "refused" and words in py[1], (py, cli)
     assert not any(p.name.startswith(("o.", "p.", "t.")) for p in files.iterdir())

@@ -185,9 +185,8 @@ def add_parser(sub) -> None:
     s = sub.add_parser("excite", help="design an excitation trajectory (Fourier series within the joint limits)")
     model_args(s)
     s.add_argument("--harmonics", type=int, default=5, help="harmonics per joint (default 5)")
-    per = s.add_mutually_exclusive_group()
-    per.add_argument("--period", type=float, metavar="SECONDS", help="period of the trajectory (default 10 s)")
-    per.add_argument("--base-frequency", type=float, metavar="HZ", help="base frequency (1 / period)")
+    s.add_argument("--period", type=float, metavar="SECONDS", help="period of the trajectory (default 10 s)")
+    s.add_argument("--base-frequency", type=float, metavar="HZ", help="base frequency (1 / period; not with --period)")
     s.add_argument("--rate", type=float, default=1000.0, help="the controller's sampling rate in Hz (default 1000)")
     s.add_argument("--criterion", metavar=choices("criterion"), default=CHOICES["criterion"][0],
                    help="minimise the condition number of the column-scaled regressor (default), or maximise "

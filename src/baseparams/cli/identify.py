@@ -174,9 +174,9 @@ def add_parser(sub) -> None:
                                 "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>; a glob pattern for "
                                 "several logs (a fleet, on Dask)")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
-    held = s.add_mutually_exclusive_group()
-    held.add_argument("--validate", metavar="DATA2", help="validate on another log")
-    held.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS")
+    s.add_argument("--validate", metavar="DATA2", help="validate on another log")
+    s.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS (not with "
+                                                                     "--validate)")
     s.add_argument("--method", metavar=choices("method"), default=IDENTIFY["method"],
                    help="auto (default): least squares with the model file's parameters as a prior (terms the data "
                         "determine keep their fitted values), the weighting and the prior's weight chosen by blocked "

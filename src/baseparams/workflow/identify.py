@@ -259,6 +259,8 @@ def plan_identify(model, log, keywords: dict, reporter: Reporter | None = None) 
         (model if isinstance(model, (str, os.PathLike)) else None)
     files = input_files(source if source is not None else model, log, inputs.validate, inputs.columns, inputs.truth)
     check_outputs("identify", files, **outputs.given())
+    if options.holdout is not None and inputs.validate is not None:
+        raise BaseparamsError("identify: give holdout= SECONDS or validate= LOG, not both")
     if (outputs.predictions is not None or options.score_cutoff is not None) and options.holdout is None \
             and inputs.validate is None:
         raise BaseparamsError("identify: predictions= and score_cutoff= are about validation data: give holdout= "

@@ -129,7 +129,7 @@ def test_base_columns_bad_input_is_one_line(tmp_path):
     for trajectory in ((log.t, log.q, log.dq, log.dq), tmp_path / "log.csv"):
         with pytest.raises(BaseparamsError, match=r"floating base's motion is not in a trajectory file"):
             bp.simulate(robot, trajectory)
-    with pytest.raises(BaseparamsError, match=r"sub-chains \(--joints\) of a floating base"):
+    with pytest.raises(BaseparamsError, match=r"sub-chains \(joints=\) of a floating base"):
         bp.identify(robot, log, joints="FL_hip_joint")
 
 

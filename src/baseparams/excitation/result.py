@@ -14,6 +14,7 @@ import numpy as np
 
 from ..display import clip, format_number
 from ..errors import BaseparamsError
+from ..files import check_input
 from ..model.robot import Robot
 from .fourier import fourier_basis, free_coefficients
 from .limits import design_coordinates
@@ -259,6 +260,7 @@ def read_trajectory(path, robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndar
     """
     from ..io.logs import read_log
 
+    check_input(path)  # a file (a folder would read as a ROS bag)
     joints = robot.coordinate_names(design_coordinates(robot))
     log = read_log(path, robot, require_tau=False)  # the reader identify reads the simulated log with: its checks
     lack = [k for k in ("dq", "ddq") if getattr(log, k) is None]

@@ -106,27 +106,7 @@ def subchain(robot: Robot, log: JointLog, joints: Sequence[str],
     missing = [j for j in joints if j not in log.joints]
     if missing:
         raise DataError(f"{log.source}: no column for the listed joint(s) {', '.join(missing)}")
-    values, held, zero, off = {}, [], [], []
-    for i, j in enumerate(names):
-        if j in joints or robot.jtype[i] not in ("R", "P"):
-            continue
-        if j in log.joints:
-            qj = log.q[:, log.joints.index(j)]
-            span = float(np.ptp(qj))
-            if span > STILL:
-                how = f"is welded at weld= {j}={welds[j]:g}" if j in welds else "is not in joints="
-                raise DataError(f"{log.source}: joint {j!r} moves in the log (range {span:.3g} "
-                                f"{'m' if robot.jtype[i] == 'P' else 'rad'}) and {how}: identify it too, or cut the "
-                                f"log where it is still")
-            values[j] = welds.get(j, float(np.median(qj)))
-            if j in welds and abs(welds[j] - float(np.median(qj))) > STILL:
-                off.append(f"{j} at {welds[j]:g}, logged still at {float(np.median(qj)):.4g}")
-            if j not in welds:
-                held.append(j)
-        else:
-            values[j] = welds.get(j, 0.0)
-            if j not in welds:
-                zero.append(j)
+    values, held, zero, off = _weld_values(robot, log, joints, welds)
     small = weld(robot, values)
     other = [j for j in small.joint_names if j not in joints]
     if other:
@@ -147,3 +127,27 @@ def subchain(robot: Robot, log: JointLog, joints: Sequence[str],
     if zero:
         notes.append(f"not in the log, welded at 0 (weld= NAME=VALUE to choose): {', '.join(zero)}")
     return small, sub, notes
+
+
+def _weld_values(robot: Robot, log: JointLog, joints, welds: dict) -> tuple[dict, list, list, list]:
+    """Where each unlisted R/P joint is welded: ``(values, held at the log, at 0, given away from the log)``."""
+    values, held, zero, off = {}, [], [], []
+    for i, j in enumerate(robot.joint_names):
+        if j in joints or robot.jtype[i] not in ("R", "P"):
+            continue
+        if j not in log.joints:
+            values[j] = welds.get(j, 0.0)
+            zero += [] if j in welds else [j]
+            continue
+        qj = log.q[:, log.joints.index(j)]
+        span, still = float(np.ptp(qj)), float(np.median(qj))
+        if span > STILL:  # a joint the log shows moving cannot be welded, wherever asked
+            how = f"is welded at weld= {j}={welds[j]:g}" if j in welds else "is not in joints="
+            raise DataError(f"{log.source}: joint {j!r} moves in the log (range {span:.3g} "
+                            f"{'m' if robot.jtype[i] == 'P' else 'rad'}) and {how}: identify it too, or cut the log "
+                            f"where it is still")
+        values[j] = welds.get(j, still)
+        if j in welds and abs(welds[j] - still) > STILL:
+            off.append(f"{j} at {welds[j]:g}, logged still at {still:.4g}")
+        held += [] if j in welds else [j]
+    return values, held, zero, off

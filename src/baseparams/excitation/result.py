@@ -166,12 +166,10 @@ class Excitation:
         BaseparamsError
             Another suffix, an output onto an input, a missing folder, a non-regular target.
         """
-        from ..tables import write_table
+        from ..tables import TRAJECTORY_SUFFIXES, write_table
 
-        if Path(path).suffix.lower() not in (".csv", ".tsv"):
-            raise BaseparamsError(f"{what} {path}: a trajectory is written as .csv or .tsv, not "
-                                  f"{Path(path).suffix or 'no suffix'}")
-        return write_table(path, self._columns(), "a trajectory as .csv or .tsv", inputs=inputs, what=what)
+        return write_table(path, self._columns(), "a trajectory as .csv or .tsv", TRAJECTORY_SUFFIXES, inputs=inputs,
+                           what=what)
 
     @property
     def trajectory(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -1042,10 +1042,9 @@ def write_log(path, log: JointLog, inputs=(), what: str = "log") -> Path:
     check_path(path, "write_log: path")
     if not isinstance(log, JointLog):
         raise ArgumentTypeError(f"write_log: log must be a JointLog, got {type(log).__name__}")
-    from ..tables import write_table
+    from ..tables import LOG_SUFFIXES, write_table
 
-    return write_table(path, log_columns_of(log), "a log as .csv, .tsv or .npz", (".csv", ".tsv", ".npz"), inputs,
-                       what)
+    return write_table(path, log_columns_of(log), "a log as .csv, .tsv or .npz", LOG_SUFFIXES, inputs, what)
 
 
 # ---------------------------------------------------------------- streamed logs

@@ -17,11 +17,10 @@ from pathlib import Path
 from types import MappingProxyType
 
 from ..errors import BaseparamsError
+from ..tables import LOG_SUFFIXES, PREDICTION_SUFFIXES, TABLE_SUFFIXES, TRAJECTORY_SUFFIXES
 
 #: the figure formats matplotlib writes by suffix (with its required Pillow; ``.pgf`` needs LaTeX: not one)
 PLOT_SUFFIXES = (".png", ".svg", ".svgz", ".pdf", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff", ".webp")
-#: the tables :func:`baseparams.tables.write_columns` writes
-TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq", ".npz")
 
 #: the formats of each kind of output, by suffix (None: any suffix, the content is the command's)
 SUFFIXES = MappingProxyType({
@@ -29,9 +28,9 @@ SUFFIXES = MappingProxyType({
     "html": None,  # any name: the page is the same (a stream, /dev/stdout, included)
     "urdf": (".urdf",),
     "mjcf": (".xml",),
-    "predictions": (".csv", ".tsv", ".parquet", ".pq"),
-    "trajectory": (".csv", ".tsv"),
-    "log": (".csv", ".tsv", ".npz"),
+    "predictions": PREDICTION_SUFFIXES,
+    "trajectory": TRAJECTORY_SUFFIXES,
+    "log": LOG_SUFFIXES,
     "regressor": TABLE_SUFFIXES,
     "result": None,
     "text": None,
@@ -98,6 +97,7 @@ def check_outputs(where: str, inputs, **paths) -> None:
     """
     from ..arguments import check_path
     from ..files import check_output
+    from ..tables import check_parquet
 
     kinds = OUTPUTS.get(where, {})
     seen: dict[Path, str] = {}
@@ -107,21 +107,13 @@ def check_outputs(where: str, inputs, **paths) -> None:
         check_path(path, f"{where}: {name}=")
         kind = kinds.get(name, "text")
         check_suffix(where, name, path, kind)
-        if kind in ("predictions", "regressor") and Path(os.fspath(path)).suffix.lower() in (".parquet", ".pq"):
-            _need_pyarrow(f"{where}: {name}= {os.fspath(path)}")
+        if kind in ("predictions", "regressor"):
+            check_parquet(os.fspath(path), f"{where}: {name}=")
         check_output(path, inputs, f"{name}=")
         key = Path(os.fspath(path)).resolve()
         if key in seen:
             raise BaseparamsError(f"{where}: {name}= and {seen[key]}= name the same file {os.fspath(path)}")
         seen[key] = name
-
-
-def _need_pyarrow(what: str) -> None:
-    """A Parquet output needs pyarrow (the extra ``parquet``), said before any work."""
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
-        raise BaseparamsError(f"{what}: writing Parquet needs pyarrow: pip install 'baseparams[parquet]'") from None
 
 
 def check_exports(where: str, source, method: str, urdf=None, mjcf=None, joints=None) -> None:

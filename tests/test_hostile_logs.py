@@ -198,3 +198,67 @@ def test_xacro_large_integers_count_against_the_budget(tmp_path):
                  '<axis xyz="0 0 1"/></joint></robot>\n')
     err = refused_in_a_subprocess(["analyze", f], seconds=60, memory=2**30)
     assert "large integers" in err or "characters" in err, err
+
+
+# ---------------------------------------------------------------- a floating base's twist in the wrong frame (issue 51)
+def _floating_columns(seed: int, noise: bool = True):
+    """A random floating robot and its log's columns (base pose, base-frame twist), noisy like a mocap and an IMU."""
+    from baseparams.ident.simulate import fourier_trajectory
+    from baseparams.io.logs import log_columns_of
+    from baseparams.jointlog import JointLog
+    from baseparams.kinematics.floating import BASE_COORDINATES
+    from baseparams.robots import random_robot
+
+    rng = np.random.default_rng(seed)
+    robot = random_robot(rng, 3, joint_types="RP", floating=True)
+    t, c, dc, _ = fourier_trajectory(robot.dof, 4.0, 200.0, rng, amplitude=0.6)
+    log = JointLog(t, BASE_COORDINATES + tuple(robot.joint_names[1:]), c,
+                   np.c_[np.zeros((len(t), 6)), rng.normal(size=(len(t), robot.dof - 6))], dq=dc)
+    cols = {k: np.array(v) for k, v in log_columns_of(log).items()}
+    if noise:
+        for k in ("base_x", "base_y", "base_z"):
+            cols[k] += rng.normal(scale=1e-3, size=len(t))  # 1 mm
+        for k in ("base_vx", "base_vy", "base_vz", "base_wx", "base_wy", "base_wz"):
+            cols[k] += rng.normal(scale=0.02, size=len(t))  # 0.02 m/s, 0.02 rad/s
+    return robot, cols
+
+
+def _to_world(cols, part):
+    from baseparams.kinematics.floating import quaternion_matrix
+
+    r = quaternion_matrix(np.stack([cols[k] for k in ("base_qw", "base_qx", "base_qy", "base_qz")], axis=1))
+    names = [f"base_{part}{a}" for a in "xyz"]
+    world = np.einsum("sij,sj->si", r, np.stack([cols[k] for k in names], axis=1))
+    return {**cols, **dict(zip(names, world.T))}
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_base_twist_in_the_world_frame_is_refused_with_the_figures(tmp_path, seed):
+    """Property: a random floating robot's log with a noisy base-frame twist (as the README asks) reads without a
+    word; the same twist expressed in the world frame (linear, angular or both) is refused in one line naming
+    the columns, with both figures; a gyro in degree/s (neither frame) gets a note with its figure."""
+    robot, cols = _floating_columns(seed)
+    np.savez(tmp_path / "body.npz", **cols)
+    log = read_log(tmp_path / "body.npz", robot)
+    assert not any(n.startswith("base twist") for n in log.notes), log.notes
+    for part, words in (("v", "linear velocity"), ("w", "angular velocity")):
+        np.savez(tmp_path / "world.npz", **_to_world(cols, part))
+        msg = api_error(read_log, tmp_path / "world.npz", robot)
+        assert (f"world.npz: array 'base_{part}x', array 'base_{part}y', array 'base_{part}z': the base's {words} "
+                "looks expressed in the world frame: integrated as world-frame it misses the logged pose by") in msg
+        assert "rotate it into the base frame" in msg, msg
+    degrees = {**cols, **{f"base_w{a}": np.degrees(cols[f"base_w{a}"]) for a in "xyz"}}
+    np.savez(tmp_path / "degrees.npz", **degrees)
+    notes = [n for n in read_log(tmp_path / "degrees.npz", robot).notes if n.startswith("base twist")]
+    assert len(notes) == 1 and "the angular velocity" in notes[0] and "check its units" in notes[0], notes
+
+
+def test_a_world_twist_of_a_base_that_does_not_turn_is_the_base_frame_twist(tmp_path):
+    """Without rotation the two frames agree: nothing to refuse."""
+    robot, cols = _floating_columns(5, noise=False)
+    zero = 0 * cols["t"]
+    still = {**_to_world(cols, "v"), "base_qw": zero + 1, **{k: zero for k in ("base_qx", "base_qy", "base_qz",
+                                                                               "base_wx", "base_wy", "base_wz")}}
+    np.savez(tmp_path / "still.npz", **_to_world(still, "v"))  # the identity: the same numbers
+    log = read_log(tmp_path / "still.npz", robot)
+    assert not any(n.startswith("base twist") for n in log.notes)

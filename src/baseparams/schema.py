@@ -954,11 +954,12 @@ COLUMN_JOINT = Obj({
     "offset": Field(Num(lo=-1e6, hi=1e6), 0.0),
 }, extra="refuse")
 
-#: a TOML column map (``--columns``; a dict in Python): time, time_scale, topic, joints
+#: a TOML column map (``--columns``; a dict in Python): time, time_scale, topic, base_topic, joints
 COLUMNS = Obj({
     "time": Field(Str(max_len=10_000, nonempty=True, text="a column name"), "t"),
     "time_scale": Field(Num(lo=1e-12, hi=1e6), 1.0),
     "topic": Field(Opt(Str(max_len=10_000)), None),
+    "base_topic": Field(Opt(Str(max_len=10_000)), None),
     "joints": Field(Map(COLUMN_JOINT, max_len=100_000), {}),
 }, extra="refuse")
 

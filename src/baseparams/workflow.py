@@ -355,7 +355,8 @@ def _opt(name: str, cli: bool) -> str:
     return f"--{name.replace('_', '-')}" if cli else f"{name}="
 
 
-def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log"):
+def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log",
+            allow_units: bool = False):
     """``log`` as a JointLog: a JointLog (values checked), or a log file read for ``robot`` (``read_log``)."""
     from .arguments import ArgumentTypeError
     from .jointlog import JointLog
@@ -363,7 +364,8 @@ def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool =
     if isinstance(log, (str, os.PathLike)):
         from .io.logs import read_log
 
-        return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau)
+        return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau,
+                        allow_units=allow_units)
     if not isinstance(log, JointLog):
         raise ArgumentTypeError(f"{name} must be a JointLog or a log file's path, got {type(log).__name__}")
     if columns is not None:
@@ -371,7 +373,7 @@ def _log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool =
     return log.checked()
 
 
-def _identification_logs(robot: Robot, log, inputs, note):
+def _identification_logs(robot: Robot, log, inputs, note, allow_units: bool = False):
     """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
     from .arguments import ArgumentTypeError, brief
 
@@ -381,8 +383,9 @@ def _identification_logs(robot: Robot, log, inputs, note):
     if not weld_ok:
         raise ArgumentTypeError(f"identify: weld= must be {{'JOINT': value}} or ['JOINT=VALUE', ...], got "
                                 f"{brief(weld)}")
-    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None, name="validate")
-    log = _log_of(log, robot, columns, subset=joints is not None)
+    val = None if validate is None else _log_of(validate, robot, columns, subset=joints is not None, name="validate",
+                                                allow_units=allow_units)
+    log = _log_of(log, robot, columns, subset=joints is not None, allow_units=allow_units)
     if joints is None:
         if weld:
             raise BaseparamsError("identify: weld applies with joints (the joints to identify; the others are welded)")
@@ -787,7 +790,7 @@ def _run_identification(robot: Robot, log, options: IdentOptions, inputs: Inputs
     from .ident import identify as run_whole
 
     rep.say(f"reading {log}" if isinstance(log, (str, os.PathLike)) else "checking the log")
-    read, val, robot = _identification_logs(robot, log, inputs, rep.note)
+    read, val, robot = _identification_logs(robot, log, inputs, rep.note, options.allow_units)
     rep.say(f"identifying ({options.method}) on {read.n_samples} samples")
     result = run_whole(robot, read, options, validation=val, progress=rep.progress)
     if outputs.predictions is not None:
@@ -801,8 +804,9 @@ def _streamed(robot: Robot, log, options: IdentOptions, inputs: Inputs, predicti
     from .io.logs import LogStream
 
     rep = run.reporter
-    src = LogStream(log, robot, columns=inputs.columns)
-    other = LogStream(inputs.validate, robot, columns=inputs.columns) if inputs.validate is not None else None
+    src = LogStream(log, robot, columns=inputs.columns, allow_units=options.allow_units)
+    other = (LogStream(inputs.validate, robot, columns=inputs.columns, allow_units=options.allow_units)
+             if inputs.validate is not None else None)
     if predictions is None:
         return identify_stream(robot, src, options, validation=other, progress=rep.progress)
     import numpy as np
@@ -913,7 +917,7 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None, allow
         result = Identification.load(result, robot)
     from .ident.plausibility import check_prediction_log
 
-    log = _log_of(log, robot, columns, require_tau=False)
+    log = _log_of(log, robot, columns, require_tau=False, allow_units=allow_units)
     for n in check_prediction_log(result.model, log, allow_units):
         if "WARNING" in n:
             warnings.warn(n, ModelWarning, stacklevel=2)

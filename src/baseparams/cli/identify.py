@@ -181,7 +181,8 @@ def cmd_predict(args) -> int:
         raise BaseparamsError(f"--out {args.out}: predictions are written as .csv, .tsv or .parquet")
     robot = common.load_robot(args)
     ident = Identification.load(args.result, robot)
-    log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False)
+    log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False,
+                   allow_units=args.allow_units)
     from ..ident.plausibility import check_prediction_log
 
     for note in check_prediction_log(ident.model, log, args.allow_units):  # the states' units (no torque needed)

@@ -51,6 +51,7 @@ from ..errors import BaseparamsError, DataError
 from ..jointlog import JointLog
 from . import chunks
 from . import preprocess as pp
+from .plausibility import check_rate
 
 #: training samples up to which the cutoff is chosen from every sample (as in memory)
 SUBSAMPLE_MAX = 1 << 18
@@ -1085,6 +1086,9 @@ def _passes(robot, stream, o, validating: bool, say):
         sc = Scan(stream.n, sc.t0, sc.t0 + stream.step * (stream.n - 1), sc.head, (*sc.notes, stream.note))
         tr = training(stream, sc, None)
     plan = plan_training(model, stream, sc, tr, o.cutoff, o.decimate, o.min_speed, o.memory_mb)
+    band = pp.excitation_bandwidth(tr.sub.q[:, cols], tr.rate / tr.step)
+    unit_notes = [*unit_notes, *check_rate(stream.source, band, (tr.n - 1) / tr.rate, tr.rate, plan.design.cutoff,
+                                           o.cutoff is not None, o.allow_units)]
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
     parts, kept, slow = accumulate(stream, plan, model, cols, o.memory_mb, spill=o.covariance == "hac")

@@ -75,8 +75,9 @@ Checks
 Bad input is one :class:`~baseparams.errors.DataError` line naming the file, the column and the
 row: NaN/inf values, time not strictly increasing (repeated or going back), rows or arrays of
 different lengths, unknown or missing joints, an empty file, and a revolute joint beyond
-``max_angle`` (default 4 pi: "degrees given as radians?") or a prismatic one beyond
-``max_travel`` (10 m: millimetres?). Rows are named as the file counts them: text files by file
+``max_angle`` (default 4 pi: "degrees given as radians?"; not a joint the model declares without
+position limits, a continuous one) or a prismatic one beyond ``max_travel`` (10 m: millimetres?):
+with ``allow_units`` these two are a warning note instead. Rows are named as the file counts them: text files by file
 line (1-based) and data row (1-based, the first row after the header is 1); NPZ and Parquet by
 0-based index; bags by the 1-based message number on the topic.
 
@@ -155,11 +156,12 @@ class _Joint:
     ratio: float = 1.0
     gain: float = 1.0
     offset: float = 0.0
+    unbounded: bool = False  # a revolute joint the model declares without position limits (continuous)
 
 
 def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
              max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0, require_tau: bool = True,
-             require_time: bool = True) -> JointLog:
+             require_time: bool = True, allow_units: bool = False) -> JointLog:
     """Read a joint log and map it to the model's joints.
 
     Parameters
@@ -179,7 +181,9 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         joint must be there).
     max_angle : float or None, optional
         Largest plausible ``|q|`` of a revolute joint [rad] (default 4 pi, beyond which the
-        values look like degrees); ``None`` disables the check (continuous joints).
+        values look like degrees); ``None`` disables the check. Not applied to a joint the model
+        declares without position limits (a URDF ``continuous`` joint, an MJCF hinge without
+        ``range``: its ``Robot.limits`` lower and upper NaN): any angle, any number of turns.
     max_travel : float or None, optional
         Largest plausible ``|q|`` of a prismatic joint [m] (default 10, beyond which the values
         look like millimetres); ``None`` disables the check.
@@ -190,6 +194,9 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
     require_time : bool, optional
         The time column must be there (default). ``False``: without one, ``t`` is the sample
         index ``0, 1, ...`` and a note says so.
+    allow_units : bool, optional
+        A position beyond ``max_angle`` or ``max_travel`` (degrees? millimetres?) is a warning
+        note, not a refusal (``--allow-units``: go on anyway).
 
     Returns
     -------
@@ -208,7 +215,8 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
     if not isinstance(robot, Robot):
         raise ArgumentTypeError(f"read_log: robot must be a Robot (baseparams.load(...)), got {type(robot).__name__}")
     check_path(path, "read_log: path")
-    check_flags("read_log", allow_subset=allow_subset, require_tau=require_tau, require_time=require_time)
+    check_flags("read_log", allow_subset=allow_subset, require_tau=require_tau, require_time=require_time,
+                allow_units=allow_units)
     for name, bound in (("max_angle", max_angle), ("max_travel", max_travel)):
         if bound is not None:
             check_value(bound, name, r=Range(0, 1e12, lo_open=True))
@@ -231,7 +239,7 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
             table = header.read(used, spec["time"])
     joints = _resolve(table, robot, spec, allow_subset, require_tau)
     base = _base_columns(table, robot)
-    log = _assemble(table, joints, spec, max_angle, max_travel, require_time, base)
+    log = _assemble(table, joints, spec, (max_angle, max_travel, allow_units), require_time, base)
     return _with_base(table, log, base) if base else log
 
 
@@ -853,6 +861,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
         raise DataError(f"{table.source}: joints {_names(missing)} of robot {robot.name!r}: {where}; "
                         "to identify a sub-chain: --joints A,B,... on the command line (allow_subset=True in Python)")
     out = []
+    unbounded = _unbounded(robot)
     for j in [j for j in robot.joint_names if j in entries]:
         e = entries[j]
         base = e.get("name", j)
@@ -865,7 +874,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
             if cols[k] not in table.columns:
                 cols[k] = None
         out.append(_Joint(j, jtypes[j], cols, float(e.get("sign", 1)), float(e.get("gear_ratio", 1.0)),
-                          float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0))))
+                          float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0)), j in unbounded))
     if not out:
         raise DataError(f"{table.source}: no joint of robot {robot.name!r} in the log")
     for k in ("dq", "ddq") if require_tau else ("dq", "ddq", "tau"):
@@ -875,6 +884,21 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
             raise DataError(f"{table.source}: {k} given for joints {', '.join(have)} but not for "
                             f"{', '.join(lack)} (give it for every joint read, or for none)")
     return out
+
+
+def _unbounded(robot: Robot) -> set[str]:
+    """Revolute joints the model declares without position limits (``Robot.limits`` lower and upper NaN).
+
+    A URDF ``continuous`` joint, an MJCF hinge without ``range``: any angle and any number of
+    turns is theirs (a wheel, a turntable). A model that says nothing of limits (``limits`` None)
+    declares none.
+    """
+    if robot.limits is None:
+        return set()
+    lim = np.asarray(robot.limits, dtype=float)
+    body = robot.dof_body
+    return {robot.joint_names[body[k]] for k in range(robot.dof)
+            if robot.jtype[body[k]] == "R" and np.isnan(lim[k, 0]) and np.isnan(lim[k, 1])}
 
 
 def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> dict[str, dict]:
@@ -895,9 +919,12 @@ def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> d
     return found
 
 
-def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_travel,
+def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
               require_time: bool = True, base: list[str] = ()) -> JointLog:
-    """Check the values (finite, time increasing, plausible) and convert to the joint side."""
+    """Check the values (finite, time increasing, plausible) and convert to the joint side.
+
+    ``bounds``: ``(max_angle, max_travel, allow_units)`` (:func:`read_log`).
+    """
     tcol = spec["time"] if not table.is_bag else "t"
     untimed = tcol not in table.columns and not require_time
     if tcol not in table.columns and not untimed:
@@ -925,9 +952,13 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_tr
             arrays[k] = raw * (sign * ratio * np.array([x.gain for x in joints]))
         else:
             arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
-    _check_plausible(table, joints, arrays["q"], max_angle, max_travel)
+    implausible = _check_plausible(table, joints, arrays["q"], *bounds[:2])
+    if implausible and not bounds[2]:
+        raise DataError(implausible + "; --allow-units (allow_units=True) to go on anyway")
     unused = [c + (" (text)" if c in table.text else "") for c in table.columns if c not in used]
     notes = list(table.notes) + _conversion_notes(joints, spec)
+    if implausible:
+        notes.append(f"units: WARNING, going on (allow_units): {implausible}")
     if unused:
         notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"
                      + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))
@@ -1075,13 +1106,17 @@ def _check_time(table: _Table, tcol: str, t: np.ndarray) -> None:
                         f"before ({t[i - 1]:.9g} s); time must be strictly increasing ({rows})")
 
 
-def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_angle, max_travel) -> None:
-    """A revolute joint beyond ``max_angle`` (degrees?) or a prismatic one beyond ``max_travel`` (mm?)."""
-    limit = np.array([(max_angle if x.jtype == "R" else max_travel) for x in joints], dtype=float)
+def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_angle, max_travel) -> str | None:
+    """A revolute joint beyond ``max_angle`` (degrees?) or a prismatic one beyond ``max_travel`` (mm?): the line.
+
+    A joint the model declares without position limits (:func:`_unbounded`) may turn any number of times.
+    """
+    limit = np.array([(np.inf if x.unbounded else max_angle) if x.jtype == "R" else max_travel for x in joints],
+                     dtype=float)
     limit = np.where(np.isnan(limit), np.inf, limit)
     bad = np.abs(q) > limit
     if not bad.any():
-        return
+        return None
     k = int(np.argmax(bad.any(axis=0)))
     i = int(np.argmax(bad[:, k]))
     x = joints[k]
@@ -1091,7 +1126,7 @@ def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_ang
     else:
         why = (f"|q| = {abs(q[i, k]):.4g} m > {limit[k]:.4g} for prismatic joint {x.joint!r}: millimetres given as "
                "metres?")
-    raise DataError(f"{table.source}: {table.label(x.cols['q'])}, {table.row(i)}: {why}")
+    return f"{table.source}: {table.label(x.cols['q'])}, {table.row(i)}: {why}"
 
 
 def log_columns_of(log: JointLog) -> dict[str, np.ndarray]:
@@ -1243,6 +1278,8 @@ class LogStream:
         Every joint read must have a ``tau`` column.
     block_bytes : int
         Bytes of a text file per block (at least one line).
+    allow_units : bool
+        A position beyond the bounds is a warning note of its block, not a refusal (``read_log``'s).
 
     Attributes
     ----------
@@ -1261,7 +1298,7 @@ class LogStream:
 
     def __init__(self, path, robot: Robot, columns=None, *, allow_subset: bool = False,
                  max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0, require_tau: bool = True,
-                 block_bytes: int = BLOCK_BYTES):
+                 block_bytes: int = BLOCK_BYTES, allow_units: bool = False):
         p = check_input(path, error=DataError)
         if p.suffix.lower() not in STREAM_SUFFIXES:
             raise DataError(f"{p}: not streamed (expected {', '.join(STREAM_SUFFIXES)}); read it with read_log")
@@ -1275,7 +1312,7 @@ class LogStream:
         if robot.floating:
             raise DataError(f"{p}: robot {robot.name!r} has a floating base: its log is read whole (read_log: its "
                             "pose is unwrapped over the whole log), not streamed")
-        self.bounds = (max_angle, max_travel)
+        self.bounds = (max_angle, max_travel, bool(allow_units))
         self.block_bytes = max(int(block_bytes), 1)
         if self.kind == "npz":
             self._members, _ = _npz_members(p)
@@ -1323,7 +1360,7 @@ class LogStream:
         tables = {"text": self._text_tables, "parquet": self._parquet_tables, "npz": self._npz_tables}[self.kind]()
         last_t, count = None, 0
         for table in tables:
-            log = _assemble(table, self._joints, self.spec, *self.bounds)
+            log = _assemble(table, self._joints, self.spec, self.bounds)
             if last_t is not None and not log.t[0] > last_t:
                 what = "repeats" if log.t[0] == last_t else "is before"
                 raise DataError(f"{self.source}: {table.label(self.spec['time'])}, {table.row(0)}: time "

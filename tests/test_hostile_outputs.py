@@ -370,6 +370,23 @@ def streamed(tmp_path_factory):
     return write_log(folder / "log.csv", log)
 
 
+_SLOW_AFTER_A_LINE = """
+import time
+import baseparams.cli.common as common
+import baseparams.ident.stream as stream
+_said, _call, _check = [], common.Progress.__call__, stream.Interrupts.check
+def _call_and_mark(self, msg):  # a line printed: the next check waits longer than any signal's delay
+    _said.append(1)
+    return _call(self, msg)
+def _check_slowly(self):
+    if _said:
+        _said.clear()
+        time.sleep(0.6)
+    return _check(self)
+common.Progress.__call__, stream.Interrupts.check = _call_and_mark, _check_slowly
+"""
+
+
 def _interrupted(streamed, tmp_path, marker=None, delay=0.0, sig=None, preamble=""):
     """``identify --stream on`` with every output in a subprocess, signalled ``delay`` s after the progress line
     containing ``marker``: ``(exit code, stderr, files left in the output folder, files left in TMPDIR)``."""
@@ -379,7 +396,7 @@ def _interrupted(streamed, tmp_path, marker=None, delay=0.0, sig=None, preamble=
     out, tmp = tmp_path / "out", tmp_path / "tmp"
     out.mkdir()
     tmp.mkdir()
-    argv = ["identify", "puma560", str(streamed), "--stream", "on", "--holdout", "15", "--save",
+    argv = ["identify", "puma560", str(streamed), "-v", "--stream", "on", "--holdout", "15", "--save",
             str(out / "r.json"), "--predictions", str(out / "p.csv"), "--html", str(out / "r.html")]
     code = preamble + f"\nimport sys\nfrom baseparams.cli import main\nsys.exit(main({argv!r}))\n"
     env = {**os.environ, "TMPDIR": str(tmp), "OPENBLAS_NUM_THREADS": "1"}
@@ -419,7 +436,8 @@ def test_an_interrupt_at_any_moment_of_a_streamed_run_leaves_nothing(streamed, t
     from baseparams.cli import EXIT_INTERRUPTED
     from baseparams.ident.stream import EXIT_TERMINATED
 
-    rc, err, left, tmp = _interrupted(streamed, tmp_path, marker, delay, getattr(signal, name))
+    # every line shown at once (-v) and the step after it slowed (a fast machine finished the run before the signal)
+    rc, err, left, tmp = _interrupted(streamed, tmp_path, marker, delay, getattr(signal, name), _SLOW_AFTER_A_LINE)
     assert rc == (EXIT_INTERRUPTED if name == "SIGINT" else EXIT_TERMINATED), (rc, err[-800:])
     assert "Traceback" not in err and left == [] and tmp == [], (left, tmp, err[-500:])
 

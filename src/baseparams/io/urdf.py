@@ -598,7 +598,8 @@ def _with_limits(robot: Robot, ix: _Index, path: Path) -> Robot:
     ``lower``/``upper`` (not for continuous joints), ``velocity``, ``effort``; a missing attribute, a
     zero velocity or effort (a placeholder in many files) and any coordinate of another joint type
     are NaN (unknown), and so are position limits with lower > upper (with a warning). No joint with a
-    ``<limit>``: ``limits`` stays None.
+    ``<limit>`` and no continuous joint: ``limits`` stays None (a continuous joint's NaN position limits
+    say it has none: any number of turns).
     """
     from dataclasses import replace
 
@@ -608,6 +609,7 @@ def _with_limits(robot: Robot, ix: _Index, path: Path) -> Robot:
         jt = ix.joints.get(jname)
         lim = None if jt is None or robot.jtype[i] not in ("R", "P") else jt.find("limit")
         if lim is None:
+            found |= jt is not None and jt.get("type") == "continuous"  # declared without position limits
             continue
         found = True
         what = f"{path}: <joint name={jname!r}> <limit"

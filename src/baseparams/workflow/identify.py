@@ -336,11 +336,12 @@ def joint_names(joints) -> list[str]:
     return [j.strip() for j in joints.split(",") if j.strip()] if isinstance(joints, str) else list(joints)
 
 
-def _identification_logs(robot: Robot, log, inputs: Inputs, note):
+def _identification_logs(robot: Robot, log, inputs: Inputs, note, allow_units: bool = False):
     """``(log, validation log or None, robot)``: the logs read, restricted to a sub-chain's ``joints``."""
     validate, columns, joints, weld = inputs.validate, inputs.columns, inputs.joints, inputs.weld
-    val = None if validate is None else log_of(validate, robot, columns, subset=joints is not None, name="validate")
-    log = log_of(log, robot, columns, subset=joints is not None)
+    val = None if validate is None else log_of(validate, robot, columns, subset=joints is not None, name="validate",
+                                               allow_units=allow_units)
+    log = log_of(log, robot, columns, subset=joints is not None, allow_units=allow_units)
     if joints is None:
         return log, val, robot
     from ..ident.subchain import subchain
@@ -413,7 +414,7 @@ def _run_identification(robot: Robot, log, run: Run):
     from ..ident import identify as run_whole
 
     rep.say(f"reading {log}" if isinstance(log, (str, os.PathLike)) else "checking the log")
-    read, val, robot = _identification_logs(robot, log, inputs, rep.note)
+    read, val, robot = _identification_logs(robot, log, inputs, rep.note, options.allow_units)
     rep.say(f"identifying ({options.method}) on {read.n_samples} samples")
     result = run_whole(robot, read, options, validation=val, progress=rep.progress)
     if run.outputs.predictions is not None:
@@ -427,8 +428,10 @@ def _streamed(robot: Robot, log, run: Run):
     from ..io.logs import LogStream
 
     rep, inputs, predictions = run.reporter, run.inputs, run.outputs.predictions
-    src = LogStream(log, robot, columns=inputs.columns)
-    other = LogStream(inputs.validate, robot, columns=inputs.columns) if inputs.validate is not None else None
+    units = run.options.allow_units
+    src = LogStream(log, robot, columns=inputs.columns, allow_units=units)
+    other = (LogStream(inputs.validate, robot, columns=inputs.columns, allow_units=units)
+             if inputs.validate is not None else None)
     if predictions is None:
         return identify_stream(robot, src, run.options, validation=other, progress=rep.progress)
     import numpy as np
@@ -692,7 +695,7 @@ def prediction(model, result, log, *, raw_states: bool = False, columns=None, al
         result = Identification.load(result, robot)
     from ..ident.plausibility import check_prediction_log
 
-    log = log_of(log, robot, columns, require_tau=False)
+    log = log_of(log, robot, columns, require_tau=False, allow_units=allow_units)
     for n in check_prediction_log(result.model, log, allow_units):  # the states' units (no torque needed)
         if "WARNING" in n:
             reporter.note(n)

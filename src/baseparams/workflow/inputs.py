@@ -74,7 +74,8 @@ def input_files(*items) -> list[str]:
     return out
 
 
-def log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log"):
+def log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = False, name: str = "log",
+           allow_units: bool = False):
     """``log`` as a JointLog: a JointLog (values checked), or a log file read for ``robot``.
 
     Parameters
@@ -91,6 +92,8 @@ def log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = 
         Accept a log of some of the robot's joints (a sub-chain's).
     name : str
         The argument's keyword, for messages.
+    allow_units : bool
+        Positions beyond the plausible bounds (degrees? millimetres?) a warning note, not a refusal.
 
     Returns
     -------
@@ -108,7 +111,8 @@ def log_of(log, robot: Robot, columns, require_tau: bool = True, subset: bool = 
     if isinstance(log, (str, os.PathLike)):
         from ..io.logs import read_log
 
-        return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau)
+        return read_log(log, robot, columns=columns, allow_subset=subset or not require_tau, require_tau=require_tau,
+                        allow_units=allow_units)
     if not isinstance(log, JointLog):
         raise ArgumentTypeError(f"{name} must be a JointLog or a log file's path, got {type(log).__name__}")
     if columns is not None:

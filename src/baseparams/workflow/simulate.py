@@ -196,14 +196,15 @@ def _check_plausible(robot: Robot, q) -> None:
 
     from ..arguments import ArgumentError
     from ..excitation.limits import design_coordinates
-    from ..io.logs import MAX_ANGLE, MAX_TRAVEL, coordinate_kinds
+    from ..io.logs import MAX_ANGLE, MAX_TRAVEL, coordinate_kinds, unbounded_joints
 
     names = robot.coordinate_names(design_coordinates(robot))
     if q.shape[1] != len(names):
         raise ArgumentError(f"simulate: trajectory= has {q.shape[1]} columns of q for the {len(names)} coordinates "
                             f"{names}")
     kinds = coordinate_kinds(robot)
-    limit = np.array([MAX_TRAVEL if kinds.get(n) == "P" else MAX_ANGLE for n in names])
+    free = unbounded_joints(robot)  # continuous joints turn any number of times (the reader's rule)
+    limit = np.array([MAX_TRAVEL if kinds.get(n) == "P" else np.inf if n in free else MAX_ANGLE for n in names])
     bad = np.abs(q) > limit
     if bad.any():
         k = int(np.argmax(bad.any(axis=0)))

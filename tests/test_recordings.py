@@ -92,3 +92,28 @@ def test_identify_several_files_from_the_command_line_and_the_front_door(tmp_pat
     value = float(text.split("(--score-cutoff) at every sample: ")[1].split()[0])
     assert main(["predict", "puma560", str(save), str(paths[0]), "--score-cutoff", "5", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["rms_lowpassed"]["total"] == pytest.approx(value, rel=1e-3)
+
+
+def test_several_recordings_refused_alike_by_both_doors(tmp_path, capsys):
+    """holdout= / --holdout and stream=on / --stream on with several recordings: one rule (the workflow's), the same
+    line from ``baseparams.identify`` and ``baseparams identify``, before the model loads; one file in a list is
+    one log."""
+    from baseparams.cli import main
+    from baseparams.cli.parser import flag_message
+
+    paths = []
+    for k in (1, 2):
+        p = tmp_path / f"r{k}.csv"
+        baseparams.simulate("puma560", duration=3.0, rate=100.0, seed=k, out=p)
+        paths.append(str(p))
+    for kw, flags in (({"holdout": 1.0}, ["--holdout", "1"]), ({"stream": "on"}, ["--stream", "on"])):
+        with pytest.raises(BaseparamsError, match="with several recordings") as exc:
+            baseparams.identify("no-such-model.urdf", paths, **kw)
+        capsys.readouterr()
+        assert main(["identify", "no-such-model.urdf", *paths, *flags]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err == f"baseparams: error: {flag_message(str(exc.value), 'identify')}", err
+    with pytest.raises(BaseparamsError, match="no log given"):
+        baseparams.identify("puma560", [])
+    one = baseparams.identify("puma560", paths[:1], method="ols", terms="none")
+    assert "recordings" not in one.train and one.samples["read"] == 300

@@ -41,7 +41,7 @@ def test_every_simulate_and_excite_flag_is_a_keyword():
     sub = next(a for a in parser._actions if a.dest == "command").choices
     cli_only = {"help", "model", "json", "output", "verbose", "floating", "gravity", "strict_inertia", "xacro_args",
                 "package_path", "old_samples", "func", "command", "out", "allow_infeasible_inertia", "mocap_welds",
-                # identify: the log argument, and a glob's fleet on Dask (baseparams.fleet.identify_fleet)
+                # identify: the logs, and a fleet on Dask (--per-file / --pooled: baseparams.fleet.identify_fleet)
                 "data", "per_file", "pooled", "strict", "scheduler", "workers"}
     renamed = {"samples": "analysis_samples", "coupling": "couplings"}
     for name, fn in (("simulate", bp.simulate), ("excite", bp.excite), ("identify", bp.identify)):

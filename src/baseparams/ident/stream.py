@@ -604,6 +604,28 @@ def fitted(stream, plan: Plan, model, cols: np.ndarray):
             yield np.empty(0), None, None, removed, idx[0]
 
 
+def fold_edges(count: int, folds: int) -> np.ndarray:
+    """The blocked cross-validation's fold boundaries over ``count`` samples, without an array of them.
+
+    The boundaries of ``np.array_split(np.arange(count), folds)`` (the in-memory path's folds: the
+    first ``count % folds`` folds one sample longer), computed from the two integers alone.
+
+    Parameters
+    ----------
+    count : int
+        Samples split.
+    folds : int
+        Number of consecutive folds.
+
+    Returns
+    -------
+    ndarray of int, shape ``(folds + 1,)``
+        ``0``, the end of each fold, ``count`` last.
+    """
+    size, extra = divmod(int(count), int(folds))
+    return np.cumsum([0] + [size + 1] * extra + [size] * (folds - extra))
+
+
 def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, spill: bool = True):
     """Pass 3: the row factors, in the blocked cross-validation's folds, and the fitted rows if they fit.
 
@@ -636,7 +658,7 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, sp
     from .select import FOLDS
 
     count = plan.fitted_count()
-    edges = np.cumsum([0] + [len(x) for x in np.array_split(np.arange(count), FOLDS)])
+    edges = fold_edges(count, FOLDS)  # not np.array_split(np.arange(count)): no array of every fitted sample
     parts = [RowAccumulator(len(model.coords), model.n_params) for _ in range(FOLDS)]
     fitted_mb = count * len(model.coords) * (model.n_params + 1) * 8 / 1e6
     kept = [] if fitted_mb <= memory_mb else Spilled.open(fitted_mb) if spill else None

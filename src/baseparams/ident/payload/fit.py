@@ -28,6 +28,14 @@ from .structure import Structure, with_log_gap
 MIN_MASS = 1e-6
 #: a pseudo-inertia eigenvalue at most this fraction of the largest counts as zero (the body's rank)
 RANK_RTOL = 1e-6
+#: the physically consistent fit is "active" when it moves the identified values by more than this (the weighted
+#: rows' norm of the change: the noise is about 1 per fitted entry there)
+ACTIVE_SHIFT = 1e-3
+#: the pull of the unidentified directions towards the prior (relative to the normalised fit: the data's identified
+#: values win where the prior is not compatible with them), and towards zero without a prior (only to make the
+#: solution unique)
+PRIOR_PULL = 1e-6
+FREE_PULL = 1e-12
 #: the kind of body a singular pseudo-inertia of each rank is
 BODY_OF_RANK = {1: "a point mass", 2: "mass on a line (a thin rod)", 3: "mass on a plane (a flat body)"}
 
@@ -56,7 +64,7 @@ class PayloadFit:
     covariance : str
         How ``cov`` was computed.
     physical : dict, optional
-        ``{"active", "constraint", "min_eigenvalue", "rank", "status"}`` of the physically
+        ``{"active", "shift", "constraint", "min_eigenvalue", "rank", "status"}`` of the physically
         consistent fit, or None (least squares).
     """
 
@@ -263,7 +271,9 @@ def physical_fit(r11, r12, x0, st: Structure, x_ls, held: bool, nd: int) -> tupl
     x : ndarray, shape ``(k,)``
         The physically consistent values.
     info : dict
-        ``{"active", "constraint", "min_eigenvalue", "rank", "status"}``.
+        ``{"active", "shift", "constraint", "min_eigenvalue", "rank", "status"}``: ``shift`` the change of
+        the identified values in the weighted rows' norm (noise about 1 per entry), ``active`` above
+        :data:`ACTIVE_SHIFT`.
 
     Raises
     ------
@@ -273,7 +283,6 @@ def physical_fit(r11, r12, x0, st: Structure, x_ls, held: bool, nd: int) -> tupl
     cp = _cvxpy()
     n_ls = link_pseudo(x_ls[:10])
     lam_ls = np.linalg.eigvalsh(n_ls)
-    scale = max(float(np.abs(lam_ls).max()), 1e-12)
     ref = _reference(n_ls)
     lchol = np.linalg.cholesky(ref)
     nt = cp.Variable((4, 4), symmetric=True)
@@ -288,15 +297,18 @@ def physical_fit(r11, r12, x0, st: Structure, x_ls, held: bool, nd: int) -> tupl
     u = st.null
     if u.shape[1]:
         pull = (u.T * st.scale) @ (x - x0)
-        obj = obj + (1e6 if held else 1e-8) * cp.sum_squares(pull)
+        obj = obj + (PRIOR_PULL if held else FREE_PULL) * cp.sum_squares(pull)
     prob = cp.Problem(cp.Minimize(obj), [nt >> 0, n_expr[3, 3] >= MIN_MASS])
     status = _solve_cp(cp, prob)
     xv = np.asarray(x.value, dtype=float).reshape(-1)
     n = link_pseudo(xv[:10])
     lam = np.linalg.eigvalsh(n)
     rank = int(np.sum(lam > RANK_RTOL * lam.max()))
-    active = bool(lam_ls[0] < -RANK_RTOL * scale or n_ls[3, 3] < MIN_MASS)
-    return xv, {"active": active, "constraint": _constraint_text(n_ls, lam_ls, rank, active),
+    moved = float(np.linalg.norm(r11 @ (zmap @ (xv - x_ls))))  # in the weighted rows' units: noise ~ 1 per entry
+    active = moved > ACTIVE_SHIFT
+    complete = not st.payload_null.shape[1] or held
+    return xv, {"active": active, "shift": moved,
+                "constraint": _constraint_text(n_ls, lam_ls, rank, active, complete),
                 "min_eigenvalue": float(lam[0]), "rank": rank, "status": status}
 
 
@@ -341,10 +353,16 @@ def _khalil_of(cp, n):
     return cp.hstack([j[0][0], j[0][1], j[0][2], j[1][1], j[1][2], j[2][2], n[0, 3], n[1, 3], n[2, 3], n[3, 3]])
 
 
-def _constraint_text(n_ls: np.ndarray, lam_ls: np.ndarray, rank: int, active: bool) -> str:
+def _constraint_text(n_ls: np.ndarray, lam_ls: np.ndarray, rank: int, active: bool, complete: bool) -> str:
     """One line: whether physical consistency was active and what it changed."""
     if not active:
-        return "not active: the least-squares payload is a realizable body"
+        return ("not active: the least-squares payload is a realizable body" if complete else
+                "not active: a realizable payload has the least-squares values of the identified combinations (the "
+                "others chosen only to make it one, not reported)")
+    if not complete:
+        return ("active: no realizable payload has the least-squares values of the identified combinations; the fit "
+                "is the nearest one that has (in the data's metric; the unidentified combinations chosen only to make "
+                "it realizable, not reported)")
     m = n_ls[3, 3]
     if m < MIN_MASS:
         why = f"its mass is {m:.3g} kg"

@@ -193,6 +193,22 @@ class Payload:
         return [{"name": n, "value": float(v), "std": float(s)}
                 for n, v, s in zip(names, self.fit.x[10:], self.fit.std[10:])]
 
+    def parameters_json(self) -> dict:
+        """The ten parameters (LINK's frame, about its origin), each identified or not.
+
+        Returns
+        -------
+        dict
+            ``{"convention", "names", "values", "std", "identified"}``: ``values`` None where the
+            motion does not identify the parameter and no prior holds it, ``std`` None where not
+            identified.
+        """
+        st, held = self.fit.structure, self.options.prior is not None
+        ok = st.parameters()
+        return {"convention": "khalil: LINK's frame, about its origin", "names": list(NAMES),
+                "values": [float(v) if k or held else None for v, k in zip(self.fit.x[:10], ok)],
+                "std": [float(s) if k else None for s, k in zip(self.fit.std[:10], ok)], "identified": ok}
+
     def unidentified(self) -> list[str]:
         """The payload's directions the motion does not identify, in words (:func:`~.structure.describe`)."""
         return describe(self.fit.structure)
@@ -224,9 +240,7 @@ class Payload:
             "link": self.link, "mass": self.mass, "com": self.com, "inertia_com": self.inertia_com,
             "sigma": self.sigma(), "identifiable": self.identified(), "unidentified": self.unidentified(),
             "prior": None if self.options.prior is None else prior_dict(self.options.prior),
-            "parameters": {"convention": "khalil: LINK's frame, about its origin", "names": list(NAMES),
-                           "values": [float(v) for v in f.x[:10]], "std": [float(v) for v in f.std[:10]],
-                           "identified": st.parameters()},
+            "parameters": self.parameters_json(),
             "drives": self.drives(), "physical": f.physical,
             "joints": {"fitted": self.model.joints, "moving": list(self.moving)},
             "structure": {"rank": int(st.rank), "columns": len(st.scale), "gap": _finite(st.gap),
@@ -250,9 +264,17 @@ class Payload:
             unit = "kg" if name == "mass" else "m" if name.startswith("com") else "kg m^2"
             if k and np.isfinite(x):
                 lines.append(f"  {name:<16s} {x:12.6g} +- {sd:.3g} {unit}")
+            elif held and np.isfinite(x):
+                lines.append(f"  {name:<16s} {x:12.6g} {unit}  [not identified: from the prior where the motion "
+                             f"leaves it free]")
             else:
-                lines.append(f"  {name:<16s} {'held' if held and np.isfinite(x) else 'not identified':>12s}"
-                             f"{f' at the prior {x:.6g} ' + unit if held and np.isfinite(x) else ''}")
+                lines.append(f"  {name:<16s} {'not identified':>12s}")
+        if not all(ok):
+            par = self.parameters_json()
+            shown = [f"{n} = {x:.6g} +- {sd:.3g}" for n, x, sd, k in zip(NAMES, par["values"], par["std"],
+                                                                        par["identified"]) if k]
+            if shown:
+                lines.append("  identified (LINK's frame, about its origin): " + ", ".join(shown))
         for u in self.unidentified():
             lines.append(f"  not identified by this motion: {u}")
         return "\n".join(lines + [f"note: {n}" for n in self.notes])

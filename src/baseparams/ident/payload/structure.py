@@ -27,6 +27,8 @@ from .model import MEANING, NAMES
 IDENTIFIED_RTOL = 1e-6
 #: the parameters in the order they lead the combinations of :func:`describe`: mass, first moments, inertia
 PIVOT_ORDER = (9, 6, 7, 8, 0, 1, 2, 3, 4, 5)
+#: a column whose norm is at most this fraction of the largest is rounding of zero (not scaled up)
+ZERO_COLUMN = 1e-10
 #: the smallest gap at which the structural rank is decided (random states: the spectrum drops to rounding)
 STRUCTURAL_GAP = 1e6
 
@@ -144,7 +146,7 @@ def structural(model, q_log: np.ndarray, moving: np.ndarray, samples: int, seed:
     dq[:, mv], ddq[:, mv] = rng.uniform(-1, 1, (2, samples, len(mv)))
     a = model.columns(q, dq, ddq)[0].reshape(-1, model.n_params)
     scale = np.linalg.norm(a, axis=0)
-    scale = np.where(scale > 0, scale, 1.0)
+    scale = np.where(scale > ZERO_COLUMN * scale.max(initial=0.0), scale, 1.0)  # rounding of zero stays zero
     d = rank_decision(a / scale, rtol=1e-9, min_gap=STRUCTURAL_GAP, samples=samples)
     if not d.decided:
         lines = "; ".join(d.spectrum.lines()) if d.spectrum is not None else ""

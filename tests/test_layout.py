@@ -30,7 +30,7 @@ LAYERS = {
     "analysis": 9,
     "robots": 10, "symbolic": 10, "ident": 10,
     "loading": 11, "fleet": 11, "excitation": 11,
-    "sweep": 12, "workflow": 12,
+    "sweep": 12, "workflow": 12, "workflow_payload": 12,
     "cli": 13,
     "__main__": 14, "__init__": 14,
 }

@@ -468,6 +468,7 @@ def build_parser() -> argparse.ArgumentParser:
     _predict_parser(sub, model_args)
     _simulate_parser(sub, model_args)
     _excite_parser(sub, model_args)
+    importlib.import_module(f"{__name__}.payload").add_parser(sub, model_args)  # baseparams payload (cli/payload.py)
     return p
 
 
@@ -679,6 +680,7 @@ def _excite_parser(sub, model_args) -> None:
     s.add_argument("--out", metavar="FILE", help="write the trajectory (CSV: t, q_, dq_, ddq_ per joint)")
     s.add_argument("--plot", metavar="FILE", help="plot q, dq, ddq per joint against the limits (PNG/SVG)")
     s.add_argument("--output", metavar="FILE", help="write the summary to FILE")
+    importlib.import_module(f"{__name__}.payload").excite_flags(s)  # excite --payload LINK (cli/payload.py)
     s.set_defaults(func=cmd_excite)
 
 

@@ -92,7 +92,8 @@ def _identify(robot: Robot, log, link: str, opts: PayloadOptions, result, valida
     st = structural(model, np.asarray(log.q, dtype=float)[:, cols], moving, opts.samples, opts.seed)
     say(f"fitting ({opts.method}, {opts.covariance} covariance)")
     f = _fit(model, rows_obj, st, opts)
-    notes += _joint_notes(robot, body, moving, rows) + row_notes + list(prep.notes) + _fit_notes(model, f, opts)
+    prep_notes = [n for n in prep.notes if not n.startswith("slow samples:")]  # identify's min_speed: not ours
+    notes += _joint_notes(robot, body, moving, rows) + row_notes + prep_notes + _fit_notes(model, f, opts)
     samples = {"read": int(log.n_samples), "kept": int(prep.n_samples), "fitted": int(f.observations)}
     used = replace(opts, cutoff=float(prep.design.cutoff), decimate=int(prep.factor))
     out = Payload(model, f, used, tuple(notes), samples, tuple(robot.coordinate_names(np.flatnonzero(moving))))

@@ -277,6 +277,10 @@ class Payload:
                 lines.append("  identified (LINK's frame, about its origin): " + ", ".join(shown))
         for u in self.unidentified():
             lines.append(f"  not identified by this motion: {u}")
+        if self.validation is not None:
+            v = self.validation
+            lines.append(f"  held-out ({v['source']}, {v['samples']} samples): RMS of predicted minus measured torques "
+                         + ", ".join(f"{j} {x:.3g}" for j, x in v["rms"].items()))
         return "\n".join(lines + [f"note: {n}" for n in self.notes])
 
     def predict(self, log, smooth: bool = True) -> np.ndarray:

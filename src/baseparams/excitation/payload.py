@@ -1,0 +1,246 @@
+"""A short excitation that identifies a payload best: ``excite --payload LINK``.
+
+The designer of :mod:`baseparams.excitation` on the payload's model instead of the robot's base
+parameters: the design coordinates are the joints that carry the link (the others are welded at
+their reference, :func:`baseparams.model.weld.weld`: they do not move it), the columns the payload's
+ten (:class:`~baseparams.ident.payload.model.PayloadModel`: LINK's frame) and the drive terms fitted
+with it, which are nuisance parameters: the criterion is taken on the information left for the
+payload's columns, the Schur complement of the drive block (:func:`~.criterion.criterion_terms`
+with ``interest``; D_s-optimal for ``logdet``, the default here). The result carries the standard
+deviations the design predicts (:func:`predicted_sigmas`) for a stated torque noise and a nominal
+payload.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import BaseparamsError
+from ..model.robot import Robot
+
+#: the default nominal payload of the predicted sigmas: 1 kg, 5 cm along LINK's z, a 10 cm cube's inertia
+NOMINAL = {"mass": 1.0, "com": [0.0, 0.0, 0.05], "inertia_com": (np.eye(3) * 1.0 * 0.1**2 / 6).tolist()}
+
+
+class DesignModel:
+    """The designer's model of a payload: its ten columns of interest, the drive terms as nuisance.
+
+    What :func:`~baseparams.excitation.design.design_excitation` takes instead of an
+    :class:`~baseparams.ident.IdentModel`: ``robot``, ``names``, ``n_params``, ``interest``,
+    :meth:`regressor`, :meth:`regressor_blocks`.
+
+    Parameters
+    ----------
+    model : PayloadModel
+        The payload's model on every coordinate of the (welded) robot.
+    """
+
+    design_model = True
+
+    def __init__(self, model):
+        self.model = model
+        self.robot = model.robot
+        self.names = model.names
+        self.n_params = model.n_params
+        self.interest = 10
+
+    def __repr__(self) -> str:
+        return f"<DesignModel payload on {self.model.link}: 10 + {self.n_params - 10} drive columns>"
+
+    def regressor(self, q, dq, ddq, closed=None, backend: str = "auto") -> np.ndarray:
+        """The payload's and drive terms' columns ``(S, m, 10 + nd)`` at tree states ``(S, dof)``.
+
+        Parameters
+        ----------
+        q, dq, ddq : array_like, shape ``(S, dof)``
+            States.
+        closed : None
+            Unused (trees only).
+        backend : str
+            Unused.
+
+        Returns
+        -------
+        ndarray, shape ``(S, m, 10 + nd)``
+            :meth:`~baseparams.ident.payload.model.PayloadModel.columns`.
+        """
+        q, dq, ddq = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, dq, ddq))
+        return self.model.columns(q, dq, ddq)[0]
+
+    def regressor_blocks(self, q, dq, ddq, max_bytes: float | None = None, max_samples: int | None = None):
+        """:meth:`regressor` a block of samples at a time.
+
+        Parameters
+        ----------
+        q, dq, ddq : array_like, shape ``(S, dof)``
+            States.
+        max_bytes : float, optional
+            Unused (blocks of ``max_samples``).
+        max_samples : int, optional
+            Most samples per block (default 4000).
+
+        Yields
+        ------
+        start : int
+            The block's first sample.
+        A : ndarray, shape ``(k, m, 10 + nd)``
+            Its columns.
+        """
+        step = int(max_samples or 4000)
+        for k in range(0, len(q), step):
+            yield k, self.regressor(q[k:k + step], dq[k:k + step], ddq[k:k + step])
+
+    def theta(self, pi_paper, delta=None):
+        """Not available: a payload design keeps no torque limits (``torque``).
+
+        Parameters
+        ----------
+        pi_paper : ndarray
+            Unused.
+        delta : ndarray, optional
+            Unused.
+
+        Raises
+        ------
+        BaseparamsError
+            Always.
+        """
+        raise BaseparamsError("excite --payload: torque limits (--torque) are not supported; the effort limits are "
+                              "not checked")
+
+
+def payload_robot(robot: Robot, link: str) -> tuple[Robot, int, list[str]]:
+    """The robot with every joint that does not carry ``link`` welded at its reference (q = 0).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a fixed-base tree).
+    link : str
+        The payload's link.
+
+    Returns
+    -------
+    robot : Robot
+        The welded robot (its joints: those that carry the link).
+    body : int
+        The link's body in it.
+    notes : list of str
+        The joints welded.
+    """
+    from ..ident.payload.model import body_of
+    from ..model.weld import weld
+
+    body = body_of(robot, link)
+    carry = set(int(c) for c in robot.path_dofs(body))
+    names = robot.coordinate_names()
+    other = {names[c]: 0.0 for c in range(robot.dof) if c not in carry}
+    if not other:
+        return robot, body, []
+    small = weld(robot, other)
+    return small, small.names.index(robot.names[body]), [f"payload on {robot.names[body]!r}: the joints that do not "
+                                                         f"carry it are not designed (welded at q = 0): "
+                                                         f"{', '.join(other)}"]
+
+
+def design_model(robot: Robot, body: int, friction=("viscous", "coulomb", "offset"), rotor: str = "auto") -> DesignModel:
+    """The designer's model of a payload on ``body``: every coordinate's row, its drive terms.
+
+    Parameters
+    ----------
+    robot : Robot
+        The (welded) robot.
+    body : int
+        The payload's link.
+    friction : iterable of str
+        The drive terms fitted with the payload (nuisance columns).
+    rotor : {"auto", "file", "fit"}
+        Rotor inertia columns: ``fit``, or ``auto`` when the file states no armature.
+
+    Returns
+    -------
+    DesignModel
+        The model.
+    """
+    from ..ident.drives import drives_for
+    from ..ident.payload.model import PayloadModel
+
+    rows = np.arange(robot.dof)
+    fit_rotor = rotor == "fit" or (rotor == "auto" and not np.any(robot.armature))
+    drives = drives_for(robot, rows, rotor=fit_rotor, friction=friction)
+    return DesignModel(PayloadModel(robot, body, rows, drives, np.zeros(robot.dof) if fit_rotor else
+                                    np.asarray(robot.armature, dtype=float)))
+
+
+def predicted_sigmas(model: DesignModel, q, dq, ddq, noise: float, nominal=None, repeats: int = 1) -> dict:
+    """The standard deviations a trajectory predicts for a payload, white torque noise of ``noise`` per sample.
+
+    ``cov = noise^2 (A^T A)^-1`` over the trajectory's samples (``repeats`` times), the payload's
+    block; mass, centre of mass and inertia about it through the Jacobian at the ``nominal`` payload.
+    Correlated noise and the slow samples the identification leaves out widen them.
+
+    Parameters
+    ----------
+    model : DesignModel
+        The design's model.
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        The trajectory at the controller's rate.
+    noise : float
+        Torque noise standard deviation per sample [N m or N].
+    nominal : dict, optional
+        ``{"mass", "com", "inertia_com"}`` (default :data:`NOMINAL`).
+    repeats : int
+        Periods recorded.
+
+    Returns
+    -------
+    dict
+        ``{"mass", "com" (3), "inertia_com" (3x3), "parameters" (10): std, "noise", "nominal"}``.
+    """
+    from ..ident.payload.options import prior_values
+    from ..ident.payload.result import jacobian
+    from ..model import inertia as _inertia
+    from ..numerics import StreamingQR
+
+    qr = StreamingQR(model.n_params)
+    for _, a in model.regressor_blocks(q, dq, ddq):
+        qr.add(a.reshape(-1, model.n_params))
+    inv = np.linalg.inv(qr.r)
+    cov = noise**2 / repeats * (inv @ inv.T)[:10, :10]
+    nom = prior_values(NOMINAL if nominal is None else nominal)
+    ic = np.array([[nom[4], nom[5], nom[6]], [nom[5], nom[7], nom[8]], [nom[6], nom[8], nom[9]]])
+    phi = _inertia.to_convention(_inertia.pseudo_inertia(nom[0], np.array(nom[1:4]), ic), "khalil")
+    jac = jacobian(phi)
+    s = np.sqrt(np.maximum(np.diag(jac @ cov @ jac.T), 0.0))
+    pairs = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+    out_ic = np.zeros((3, 3))
+    for k, (a, b) in enumerate(pairs):
+        out_ic[a, b] = out_ic[b, a] = s[4 + k]
+    return {"mass": float(s[0]), "com": s[1:4].tolist(), "inertia_com": out_ic.tolist(),
+            "parameters": np.sqrt(np.maximum(np.diag(cov), 0.0)).tolist(), "noise": float(noise),
+            "nominal": NOMINAL if nominal is None else nominal}
+
+
+def sigma_note(s: dict, period: float, repeats: int) -> str:
+    """One line of the predicted standard deviations (:func:`predicted_sigmas`).
+
+    Parameters
+    ----------
+    s : dict
+        :func:`predicted_sigmas`.
+    period : float
+        The period [s].
+    repeats : int
+        Periods recorded.
+
+    Returns
+    -------
+    str
+        The mass, centre of mass and principal inertia sigmas, and what they assume.
+    """
+    ic = np.array(s["inertia_com"])
+    return (f"predicted standard deviations ({repeats} x {period:.3g} s, white torque noise {s['noise']:g} N m per "
+            f"sample, nominal payload {s['nominal']['mass']:g} kg): mass {s['mass']:.3g} kg, centre of mass "
+            f"{', '.join(f'{1000 * v:.3g}' for v in s['com'])} mm, inertia about it (diagonal) "
+            f"{', '.join(f'{v:.3g}' for v in np.diag(ic))} kg m^2 (correlated noise and the slow samples left out "
+            f"widen them)")

@@ -1,4 +1,4 @@
-"""The payload's front door: :func:`identify_payload` (``baseparams payload``) and :func:`excite_payload` (``excite --payload``).
+"""The payload's front door: :func:`identify_payload` (``baseparams payload``), :func:`excite_payload` (``excite --payload``).
 
 A module of its own beside :mod:`baseparams.workflow` (the loop's front door, one floor up the
 layers: the same floor): the files are read and checked here (the model, the log, a saved
@@ -170,7 +170,7 @@ def _write(payload, model, inputs: list, save=None, urdf=None, mjcf=None) -> lis
 
 
 def payload_document(payload) -> dict:
-    """The JSON a saved payload holds: ``format``, ``version``, the robot's name and fingerprint, the options, the payload.
+    """The JSON a saved payload holds: format, version, the robot's name and fingerprint, the options, the payload.
 
     Parameters
     ----------

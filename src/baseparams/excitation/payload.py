@@ -143,7 +143,8 @@ def payload_robot(robot: Robot, link: str) -> tuple[Robot, int, list[str]]:
                                                          f"{', '.join(other)}"]
 
 
-def design_model(robot: Robot, body: int, friction=("viscous", "coulomb", "offset"), rotor: str = "auto") -> DesignModel:
+def design_model(robot: Robot, body: int, friction=("viscous", "coulomb", "offset"),
+                 rotor: str = "auto") -> DesignModel:
     """The designer's model of a payload on ``body``: every coordinate's row, its drive terms.
 
     Parameters

@@ -1,7 +1,7 @@
-"""The payload's front door: :func:`identify_payload` (``baseparams payload``), :func:`excite_payload` (``excite --payload``).
+"""The payload's front door: :func:`identify_payload` (``payload``) and :func:`excite_payload` (``excite --payload``).
 
-A module of its own beside :mod:`baseparams.workflow` (the loop's front door, one floor up the
-layers: the same floor): the files are read and checked here (the model, the log, a saved
+A module of its own beside :mod:`baseparams.workflow` (the loop's front door, whose helpers it uses:
+a half floor above it, below the CLI): the files are read and checked here (the model, the log, a saved
 identification), every output is checked before the fit and written atomically, never onto an
 input; the work is :mod:`baseparams.ident.payload`'s and :mod:`baseparams.excitation.payload`'s.
 """

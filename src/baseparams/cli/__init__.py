@@ -485,6 +485,7 @@ MODEL_HELP = {
     "predict": f"{_MODEL_FILES}: the robot the saved identification belongs to (its fingerprint is checked)",
     "simulate": f"{_MODEL_FILES}: the robot simulated (its own inertias are the true parameters)",
     "excite": f"{_MODEL_FILES}: the robot (its joint limits are read from the file)",
+    "payload": f"{_MODEL_FILES}: the robot without the payload (--urdf needs a .urdf file, --mjcf a file)",
 }
 
 

@@ -143,7 +143,7 @@ def cmd_excite(args) -> int:
     if getattr(args, "payload", None):  # excite --payload LINK: the payload's design (cli/payload.py)
         from .payload import cmd_excite_payload
 
-        return cmd_excite_payload(args)
+        return cmd_excite_payload(args, limit_flags(args))
     from ..workflow import excite
 
     try:

@@ -16,10 +16,6 @@ from ..errors import BaseparamsError
 from . import common
 from .common import EXIT_OK, emit
 
-#: the MODEL argument's help
-MODEL_HELP = ("built-in robot name (see 'baseparams robots') or a robot file: URDF / URDF+ (.urdf), ROS xacro "
-              "(.xacro) or MJCF (.xml): the robot without the payload (--urdf needs a .urdf file, --mjcf a file)")
-
 
 def add_parser(sub, model_args) -> None:
     """Add the ``payload`` subcommand to the ``baseparams`` parser.
@@ -29,11 +25,9 @@ def add_parser(sub, model_args) -> None:
     sub : argparse._SubParsersAction
         The subcommands.
     model_args : callable
-        Adds the model's arguments (``MODEL``, ``--gravity``, ``--json``, ...) to a subparser.
+        Adds the model's arguments (``MODEL``, ``--gravity``, ``--json``, ...) to a subparser (its help:
+        ``baseparams.cli.MODEL_HELP["payload"]``).
     """
-    from . import MODEL_HELP as HELPS
-
-    HELPS.setdefault("payload", MODEL_HELP)
     s = sub.add_parser("payload", help="identify a payload on a link (mass, centre of mass, inertia) from a log, the "
                                        "robot known from its file or a saved identification")
     model_args(s)
@@ -143,13 +137,15 @@ def excite_flags(s) -> None:
     s.set_defaults(criterion=None)  # --criterion's default: cond, or logdet with --payload
 
 
-def cmd_excite_payload(args) -> int:
+def cmd_excite_payload(args, lim: dict) -> int:
     """``baseparams excite MODEL --payload LINK``: :func:`baseparams.excite_payload` of the flags.
 
     Parameters
     ----------
     args : argparse.Namespace
         The parsed ``excite`` command line.
+    lim : dict
+        Its limit flags parsed (:func:`baseparams.cli.excite.limit_flags`).
 
     Returns
     -------
@@ -157,13 +153,11 @@ def cmd_excite_payload(args) -> int:
         :data:`EXIT_OK`.
     """
     from ..workflow_payload import excite_payload
-    from .excite import limit_flags
 
     if args.drives or args.rotor or args.torque or args.base_frequency:
         raise BaseparamsError("--payload designs the payload's columns with the drive terms as nuisance: --drives, "
                               "--rotor, --torque and --base-frequency do not apply (--period does)")
     robot = common.load_robot(args)
-    lim = limit_flags(args)
     if lim.get("effort") is not None:
         raise BaseparamsError("--payload: effort limits are not checked by a payload design (--effort)")
     result = excite_payload(robot, args.payload, period=args.period or 5.0, harmonics=args.harmonics, rate=args.rate,

@@ -184,11 +184,23 @@ class Payload:
         return {"mass": val[0], "com": val[1:4], "inertia_com": ic}
 
     def pseudo_inertia(self) -> np.ndarray:
-        """The payload's 4x4 pseudo-inertia in LINK's frame ``(4, 4)`` (``[[Sigma, h], [h^T, m]]``)."""
+        """The payload's pseudo-inertia in LINK's frame.
+
+        Returns
+        -------
+        ndarray, shape ``(4, 4)``
+            ``[[Sigma, h], [h^T, m]]`` of the reported values.
+        """
         return link_pseudo(self.parameters)
 
     def drives(self) -> list[dict]:
-        """The drive terms fitted with the payload, ``{"name", "value", "std"}`` each (corrections with a result)."""
+        """The drive terms fitted with the payload (corrections of a saved identification's, with one).
+
+        Returns
+        -------
+        list of dict
+            ``{"name", "value", "std"}`` per term (``Fv_joint``, ``dFv_joint`` for a correction).
+        """
         names = self.model.names[10:]
         return [{"name": n, "value": float(v), "std": float(s)}
                 for n, v, s in zip(names, self.fit.x[10:], self.fit.std[10:])]
@@ -210,7 +222,13 @@ class Payload:
                 "std": [float(s) if k else None for s, k in zip(self.fit.std[:10], ok)], "identified": ok}
 
     def unidentified(self) -> list[str]:
-        """The payload's directions the motion does not identify, in words (:func:`~.structure.describe`)."""
+        """The payload's directions the motion does not identify, in words.
+
+        Returns
+        -------
+        list of str
+            :func:`~.structure.describe`: one line per direction, empty when all ten are identified.
+        """
         return describe(self.fit.structure)
 
     def __repr__(self) -> str:

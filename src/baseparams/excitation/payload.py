@@ -33,16 +33,24 @@ class DesignModel:
     ----------
     model : PayloadModel
         The payload's model on every coordinate of the (welded) robot.
+    basis : ndarray, shape ``(10, f)``, optional
+        The payload's identifiable directions (parameter coordinates): its columns are ``Y_L basis``
+        (default every direction). Directions no motion of these joints identifies (regrouped with a
+        rotor inertia, say) are left out: they would make the information singular.
+    structure : Structure, optional
+        The structural decision the basis comes from.
     """
 
     design_model = True
 
-    def __init__(self, model):
+    def __init__(self, model, basis: np.ndarray | None = None, structure=None):
         self.model = model
         self.robot = model.robot
-        self.names = model.names
-        self.n_params = model.n_params
-        self.interest = 10
+        self.basis = np.eye(10) if basis is None else np.asarray(basis, dtype=float)
+        self.structure = structure
+        self.interest = self.basis.shape[1]
+        self.names = [f"payload{k}" for k in range(self.interest)] + model.names[10:]
+        self.n_params = self.interest + model.n_params - 10
 
     def __repr__(self) -> str:
         return f"<DesignModel payload on {self.model.link}: 10 + {self.n_params - 10} drive columns>"
@@ -61,11 +69,13 @@ class DesignModel:
 
         Returns
         -------
-        ndarray, shape ``(S, m, 10 + nd)``
-            :meth:`~baseparams.ident.payload.model.PayloadModel.columns`.
+        ndarray, shape ``(S, m, f + nd)``
+            :meth:`~baseparams.ident.payload.model.PayloadModel.columns`, the payload's on
+            :attr:`basis`.
         """
         q, dq, ddq = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, dq, ddq))
-        return self.model.columns(q, dq, ddq)[0]
+        a = self.model.columns(q, dq, ddq)[0]
+        return np.concatenate([a[..., :10] @ self.basis, a[..., 10:]], axis=2)
 
     def regressor_blocks(self, q, dq, ddq, max_bytes: float | None = None, max_samples: int | None = None):
         """:meth:`regressor` a block of samples at a time.
@@ -83,7 +93,7 @@ class DesignModel:
         ------
         start : int
             The block's first sample.
-        A : ndarray, shape ``(k, m, 10 + nd)``
+        A : ndarray, shape ``(k, m, f + nd)``
             Its columns.
         """
         step = int(max_samples or 4000)
@@ -166,11 +176,20 @@ def design_model(robot: Robot, body: int, friction=("viscous", "coulomb", "offse
     from ..ident.drives import drives_for
     from ..ident.payload.model import PayloadModel
 
+    from ..ident.payload.structure import structural
+
     rows = np.arange(robot.dof)
     fit_rotor = rotor == "fit" or (rotor == "auto" and not np.any(robot.armature))
     drives = drives_for(robot, rows, rotor=fit_rotor, friction=friction)
-    return DesignModel(PayloadModel(robot, body, rows, drives, np.zeros(robot.dof) if fit_rotor else
-                                    np.asarray(robot.armature, dtype=float)))
+    pm = PayloadModel(robot, body, rows, drives, np.zeros(robot.dof) if fit_rotor else
+                      np.asarray(robot.armature, dtype=float))
+    st = structural(pm, np.zeros((2, robot.dof)), np.ones(robot.dof, dtype=bool), 200, 0)
+    u = st.payload_null
+    if u.shape[1] == 10:
+        raise BaseparamsError(f"link {pm.link!r}: no motion of the joints that carry it identifies any payload "
+                              f"parameter")
+    full, _, _ = np.linalg.svd(u, full_matrices=True) if u.shape[1] else (np.eye(10), None, None)
+    return DesignModel(pm, full[:, u.shape[1]:] / st.scale[:10, None], st)
 
 
 def predicted_sigmas(model: DesignModel, q, dq, ddq, noise: float, nominal=None, repeats: int = 1) -> dict:
@@ -196,7 +215,8 @@ def predicted_sigmas(model: DesignModel, q, dq, ddq, noise: float, nominal=None,
     Returns
     -------
     dict
-        ``{"mass", "com" (3), "inertia_com" (3x3), "parameters" (10): std, "noise", "nominal"}``.
+        ``{"mass", "com" (3), "inertia_com" (3x3), "parameters" (10): std (NaN where not
+        identified), "noise", "nominal", "unidentified"}``.
     """
     from ..ident.payload.options import prior_values
     from ..ident.payload.result import jacobian
@@ -207,19 +227,40 @@ def predicted_sigmas(model: DesignModel, q, dq, ddq, noise: float, nominal=None,
     for _, a in model.regressor_blocks(q, dq, ddq):
         qr.add(a.reshape(-1, model.n_params))
     inv = np.linalg.inv(qr.r)
-    cov = noise**2 / repeats * (inv @ inv.T)[:10, :10]
+    k = model.interest
+    cov = model.basis @ (noise**2 / repeats * (inv @ inv.T)[:k, :k]) @ model.basis.T
     nom = prior_values(NOMINAL if nominal is None else nominal)
     ic = np.array([[nom[4], nom[5], nom[6]], [nom[5], nom[7], nom[8]], [nom[6], nom[8], nom[9]]])
     phi = _inertia.to_convention(_inertia.pseudo_inertia(nom[0], np.array(nom[1:4]), ic), "khalil")
     jac = jacobian(phi)
-    s = np.sqrt(np.maximum(np.diag(jac @ cov @ jac.T), 0.0))
+    st = model.structure
+    ok = np.array([st is None or st.identified(g) for g in jac])
+    s = np.where(ok, np.sqrt(np.maximum(np.diag(jac @ cov @ jac.T), 0.0)), np.nan)
     pairs = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
     out_ic = np.zeros((3, 3))
     for k, (a, b) in enumerate(pairs):
         out_ic[a, b] = out_ic[b, a] = s[4 + k]
     return {"mass": float(s[0]), "com": s[1:4].tolist(), "inertia_com": out_ic.tolist(),
             "parameters": np.sqrt(np.maximum(np.diag(cov), 0.0)).tolist(), "noise": float(noise),
-            "nominal": NOMINAL if nominal is None else nominal}
+            "nominal": NOMINAL if nominal is None else nominal, "unidentified": describe_null(model)}
+
+
+def describe_null(model: DesignModel) -> list[str]:
+    """The payload directions no motion of the designed joints identifies, in words (empty: none).
+
+    Parameters
+    ----------
+    model : DesignModel
+        The design's model.
+
+    Returns
+    -------
+    list of str
+        :func:`baseparams.ident.payload.structure.describe`.
+    """
+    from ..ident.payload.structure import describe
+
+    return [] if model.structure is None else describe(model.structure, model.model.names[10:])
 
 
 def sigma_note(s: dict, period: float, repeats: int) -> str:
@@ -240,8 +281,10 @@ def sigma_note(s: dict, period: float, repeats: int) -> str:
         The mass, centre of mass and principal inertia sigmas, and what they assume.
     """
     ic = np.array(s["inertia_com"])
+    free = "" if not s["unidentified"] else (f"; no motion of these joints identifies: "
+                                             f"{'; '.join(s['unidentified'])} (NaN)")
     return (f"predicted standard deviations ({repeats} x {period:.3g} s, white torque noise {s['noise']:g} N m per "
             f"sample, nominal payload {s['nominal']['mass']:g} kg): mass {s['mass']:.3g} kg, centre of mass "
             f"{', '.join(f'{1000 * v:.3g}' for v in s['com'])} mm, inertia about it (diagonal) "
             f"{', '.join(f'{v:.3g}' for v in np.diag(ic))} kg m^2 (correlated noise and the slow samples left out "
-            f"widen them)")
+            f"widen them){free}")

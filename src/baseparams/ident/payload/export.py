@@ -201,6 +201,7 @@ def payload_mjcf(payload, source, dest, inputs=()) -> list[str]:
     names = {b.name for b in spec.bodies}
     body = parent.add_body(name=_unique(names, f"{payload.link}_payload"), pos=[0.0, 0.0, 0.0])
     jc = rot @ ic @ rot.T
+    spec.compiler.fusestatic = False  # the payload stays a body of its own when the file is loaded
     body.explicitinertial = 1
     body.mass, body.ipos = m, list(rot @ c + pos)
     body.fullinertia = [jc[0, 0], jc[1, 1], jc[2, 2], jc[0, 1], jc[0, 2], jc[1, 2]]

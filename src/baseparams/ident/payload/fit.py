@@ -271,9 +271,10 @@ def physical_fit(r11, r12, x0, st: Structure, x_ls, held: bool, nd: int) -> tupl
     x : ndarray, shape ``(k,)``
         The physically consistent values.
     info : dict
-        ``{"active", "shift", "constraint", "min_eigenvalue", "rank", "status"}``: ``shift`` the change of
-        the identified values in the weighted rows' norm (noise about 1 per entry), ``active`` above
-        :data:`ACTIVE_SHIFT`.
+        ``{"active", "shift", "prior_moved", "constraint", "min_eigenvalue", "rank", "status"}``:
+        ``shift`` the change of the identified values in the weighted rows' norm (noise about 1 per
+        entry), ``active`` above :data:`ACTIVE_SHIFT`; ``prior_moved`` the relative change of the
+        held directions (a prior not compatible with the identified values).
 
     Raises
     ------
@@ -307,7 +308,10 @@ def physical_fit(r11, r12, x0, st: Structure, x_ls, held: bool, nd: int) -> tupl
     moved = float(np.linalg.norm(r11 @ (zmap @ (xv - x_ls))))  # in the weighted rows' units: noise ~ 1 per entry
     active = moved > ACTIVE_SHIFT
     complete = not st.payload_null.shape[1] or held
-    return xv, {"active": active, "shift": moved,
+    pn = (st.null.T * st.scale)
+    prior_moved = float(np.linalg.norm(pn @ (xv - x0)) / max(np.linalg.norm(pn @ x0), 1e-300)) if held and u.shape[1] \
+        else 0.0
+    return xv, {"active": active, "shift": moved, "prior_moved": prior_moved,
                 "constraint": _constraint_text(n_ls, lam_ls, rank, active, complete),
                 "min_eigenvalue": float(lam[0]), "rank": rank, "status": status}
 

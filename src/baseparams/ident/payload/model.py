@@ -37,6 +37,8 @@ MEANING = {"XX": "inertia xx about LINK's origin", "XY": "inertia xy about LINK'
            "XZ": "inertia xz about LINK's origin", "YY": "inertia yy about LINK's origin",
            "YZ": "inertia yz about LINK's origin", "ZZ": "inertia zz about LINK's origin",
            "MX": "first moment m cx", "MY": "first moment m cy", "MZ": "first moment m cz", "M": "mass"}
+#: what each drive term is, for messages (``Ia_joint``, ``dFv_joint`` ...)
+DRIVE_MEANING = {"Ia": "rotor inertia", "Fv": "viscous friction", "Fc": "Coulomb friction", "Fo": "torque offset"}
 
 
 def link_frame_map(robot: Robot, body: int) -> np.ndarray:

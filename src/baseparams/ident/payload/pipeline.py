@@ -190,7 +190,7 @@ def _fit_notes(model, f: PayloadFit, opts: PayloadOptions) -> list[str]:
     if st.weak:
         out.append(f"{st.weak} direction(s) below a gap of {st.log_gap:.3g} in the log's own spectrum: not identified "
                    f"by this log (a richer motion: excite --payload)")
-    unid = describe(st)
+    unid = describe(st, model.names[10:])
     if unid:
         held = ("held at the prior" if opts.prior is not None
                 else "not fitted and not reported (give a prior to hold them)")
@@ -200,6 +200,10 @@ def _fit_notes(model, f: PayloadFit, opts: PayloadOptions) -> list[str]:
         out.append(f"physically consistent payload (positive mass, 4x4 pseudo-inertia positive semidefinite; "
                    f"cvxpy/Clarabel): constraint {f.physical['constraint']}; standard deviations at these values "
                    f"with the least-squares covariance (an active constraint is not credited)")
+        moved = f.physical.get("prior_moved", 0.0)
+        if moved > 1e-3:
+            out.append(f"the prior is not compatible with the identified values: the combinations it holds moved by "
+                       f"{100 * moved:.3g} % to make the payload realizable")
     else:
         out.append("least squares (not constrained to a realizable body)")
     return out

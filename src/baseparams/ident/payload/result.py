@@ -229,7 +229,7 @@ class Payload:
         list of str
             :func:`~.structure.describe`: one line per direction, empty when all ten are identified.
         """
-        return describe(self.fit.structure)
+        return describe(self.fit.structure, self.model.names[10:])
 
     def __repr__(self) -> str:
         m = self.mass

@@ -20,7 +20,7 @@ import numpy as np
 
 from ...display import summary_repr
 from ...errors import BaseparamsError
-from .model import MEANING, NAMES
+from .model import DRIVE_MEANING, MEANING, NAMES
 
 #: a parameter (or a quantity's gradient) is identified when its part along the unidentified directions is below
 #: this fraction of it (scaled coordinates)
@@ -188,42 +188,59 @@ def with_log_gap(st: Structure, c: np.ndarray) -> Structure:
     return Structure(st.scale, null, st.rank - (len(s) - keep), st.gap, len(s) - keep, spec.gap(keep))
 
 
-def describe(st: Structure, names=NAMES) -> list[str]:
+def describe(st: Structure, drives=()) -> list[str]:
     """The payload directions not identified, in words: one line each, the parameters named.
 
     Parameters
     ----------
     st : Structure
         The decision.
-    names : sequence of str
-        The payload parameters' names (:data:`NAMES`).
+    drives : sequence of str
+        The drive terms' names (the columns after the payload's ten), e.g. ``Ia_joint6``.
 
     Returns
     -------
     list of str
-        E.g. ``M (mass)`` or ``MZ - 0.088 M (first moment m cz, mass)``: each a direction (or a
-        combination) of the payload's parameters (LINK's frame, about its origin) the motion leaves
-        free; empty when every parameter is identified.
+        E.g. ``M (mass)``, ``MZ - 0.088 M (first moment m cz, mass)`` or ``ZZ (inertia zz about
+        LINK's origin), with - Ia_joint6 (rotor inertia: they regroup)``: each a direction (or a combination) of
+        the payload's parameters (LINK's frame, about its origin) the motion leaves free, and the
+        drive terms it regroups with; empty when every payload parameter is identified.
     """
-    u = st.payload_null
-    if not u.shape[1]:
+    if not st.payload_null.shape[1]:
         return []
-    order = np.array(PIVOT_ORDER)
-    x = (u / st.scale[:10, None])[order]  # parameter coordinates, the mass and first moments first
-    basis = np.zeros((0, 10))
-    for row in _reduced(x.T):
-        full = np.zeros(10)
-        full[order] = row
-        basis = np.vstack([basis, full])
+    k = len(st.scale)
+    names = list(NAMES) + [str(n) for n in drives] + [f"drive{i}" for i in range(len(drives), k - 10)]
+    order = np.r_[PIVOT_ORDER, np.arange(10, k)].astype(int)
+    x = (st.null / st.scale[:, None])[order]  # parameter coordinates, the mass and first moments first
     out = []
-    for row in basis:
-        k = order[np.abs(row[order]) > 1e-9 * np.abs(row).max()]
-        lead = row[k[0]]
-        terms = [f"{'' if i == k[0] else (' - ' if row[i] / lead < 0 else ' + ')}"
-                 f"{'' if i == k[0] or abs(abs(row[i] / lead) - 1) < 1e-9 else f'{abs(row[i] / lead):.4g} '}{names[i]}"
-                 for i in k]
-        out.append("".join(terms) + f" ({', '.join(MEANING[names[i]] for i in k)})")
+    for red in _reduced(x.T):
+        row = np.zeros(k)
+        row[order] = red
+        tol = 1e-9 * np.abs(row).max()
+        idx = [i for i in order if abs(row[i]) > tol]
+        if not idx or idx[0] >= 10:
+            continue  # drive terms among themselves (e.g. Coulomb and offset of a joint that never reverses)
+        lead = row[idx[0]]
+        own = [i for i in idx if i < 10]
+        text = _terms(row, own, lead, names) + f" ({', '.join(MEANING[names[i]] for i in own)})"
+        other = [i for i in idx if i >= 10]
+        if other:
+            what = ", ".join(DRIVE_MEANING.get(names[i].split("_")[0].lstrip("d"), "drive term") for i in other)
+            text += ", with " + _terms(row, other, lead, names, first=False) + f" ({what}: they regroup)"
+        out.append(text)
     return out
+
+
+def _terms(row: np.ndarray, idx, lead: float, names, first: bool = True) -> str:
+    """``a - 0.5 b + c``: the entries ``idx`` of ``row`` relative to ``lead``, named."""
+    parts = []
+    for n, i in enumerate(idx):
+        r = row[i] / lead
+        sign = ("-" if r < 0 else "") if first and n == 0 else (" - " if r < 0 else " + ") if n else \
+            ("- " if r < 0 else "+ ")
+        size = "" if abs(abs(r) - 1) < 1e-9 else f"{abs(r):.4g} "
+        parts.append(f"{sign}{size}{names[i]}")
+    return "".join(parts)
 
 
 def _reduced(m: np.ndarray) -> np.ndarray:

@@ -28,7 +28,7 @@ PANDA = IDENT / "panda_gaz2019" / "panda_mdh_gaz2019.urdf"
 
 
 def box_payload(rng, mass: float, reach: float = 0.1):
-    """A box of random sides, its centre off-axis, its axes rotated: ``(mass, com, inertia_com)`` in the link's frame."""
+    """A box of random sides, off-axis, rotated: ``(mass, com, inertia_com)`` in the link's frame."""
     from scipy.spatial.transform import Rotation
 
     sides = rng.uniform(0.04, 0.2, 3)
@@ -133,7 +133,8 @@ def test_last_joint_alone_names_what_it_cannot_identify_and_never_returns_it(pum
     payload = box_payload(rng, 1.5)
     log = sim_log(carrying(puma, 5, payload), rng, move=[0, 0, 0, 0, 0, 1], amplitude=1.5)
     fitted = identify_payload(puma, log, "link6")  # the file states no armature: the rotor inertia is fitted ...
-    assert "ZZ (inertia zz about LINK's origin), with - Ia_joint6 (rotor inertia: they regroup)" in fitted.unidentified()
+    want = "ZZ (inertia zz about LINK's origin), with - Ia_joint6 (rotor inertia: they regroup)"
+    assert want in fitted.unidentified()
     p = identify_payload(puma, log, "link6", rotor="file")  # ... known (zero): then the inertia about the axis is
     assert p.identified() == []
     assert p.mass is None and p.com == [None] * 3

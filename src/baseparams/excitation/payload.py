@@ -175,7 +175,6 @@ def design_model(robot: Robot, body: int, friction=("viscous", "coulomb", "offse
     """
     from ..ident.drives import drives_for
     from ..ident.payload.model import PayloadModel
-
     from ..ident.payload.structure import structural
 
     rows = np.arange(robot.dof)

@@ -54,6 +54,11 @@ def random_payload(link: str, rng, mass: float | None = None, reach: float = 0.1
 
 def arm(path, armature, damping, frictionloss, payload: Payload | None = None, timestep: float = 1e-3):
     """The MuJoCo model of the arm in ``path`` with drive effects and the payload; one motor per joint."""
+    return arm_spec(path, armature, damping, frictionloss, payload, timestep).compile()
+
+
+def arm_spec(path, armature, damping, frictionloss, payload: Payload | None = None, timestep: float = 1e-3):
+    """:func:`arm`'s ``MjSpec`` (``.to_xml()``: the arm as an MJCF file, e.g. a model file with its armature)."""
     import mujoco
 
     spec = mujoco.MjSpec.from_file(str(path))
@@ -77,7 +82,7 @@ def arm(path, armature, damping, frictionloss, payload: Payload | None = None, t
         b.inertia = list(payload.moments)
         b.ipos = [0.0, 0.0, 0.0]
         b.iquat = [1.0, 0.0, 0.0, 0.0]
-    return spec.compile()
+    return spec
 
 
 def fourier(t, m, rng, amplitude=0.6, base_frequency=0.2, harmonics=4, move=None, centre=None):

@@ -350,6 +350,11 @@ def test_cli_payload_json_and_bad_input(puma, tmp_path, capsys):
     assert len(doc["com"]) == 3 and np.shape(doc["inertia_com"]) == (3, 3)
     assert set(doc["sigma"]) == {"mass", "com", "inertia_com"} and len(doc["identifiable"]) == 10
     assert json.loads((tmp_path / "p.json").read_text())["payload"]["mass"] == doc["mass"]
+    assert main(["payload", "puma560", str(tmp_path / "log.csv"), "--link", "link6", "--validate",
+                 str(tmp_path / "log.csv"), "--predictions", str(tmp_path / "pred.csv")]) == 0
+    assert "held-out" in capsys.readouterr().out
+    pred = np.loadtxt(tmp_path / "pred.csv", delimiter=",", skiprows=1)
+    assert pred.shape == (4000, 7)
     assert main(["payload", "puma560", str(tmp_path / "log.csv"), "--link", "nope"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no link 'nope'" in err[0]

@@ -16,7 +16,7 @@ SUFFIXES = {"save": (".json",), "urdf": (".urdf",), "mjcf": (".xml",), "predicti
 
 
 def identify_payload(model, log, *, link: str, result=None, validate=None, columns=None, save=None, urdf=None,
-                     mjcf=None, source=None, options=None, progress=None, **keywords):
+                     mjcf=None, predictions=None, source=None, options=None, progress=None, **keywords):
     """Identify what a robot carries on a link from a log: ``baseparams payload MODEL LOG --link LINK``.
 
     The robot is known: from its model file (its rigid body and armature; the moving joints'
@@ -45,6 +45,9 @@ def identify_payload(model, log, *, link: str, result=None, validate=None, colum
         Write the model file with the payload as a fixed body on ``link`` (a URDF model for
         ``urdf``; an MJCF or URDF model for ``mjcf``), checked by MuJoCo's inverse dynamics
         (:mod:`baseparams.ident.payload.export`).
+    predictions : str or path, optional
+        With ``validate``: the torques predicted with the payload at every sample of that log
+        (``t, tau_<joint>``; ``.csv`` or ``.tsv``).
     source : str or path, optional
         The model file, when ``model`` is a loaded Robot and an export needs the file.
     options : PayloadOptions, optional
@@ -77,15 +80,27 @@ def identify_payload(model, log, *, link: str, result=None, validate=None, colum
 
     opts = options_from(PayloadOptions, options, keywords)
     file = model if source is None else source
-    _check_outputs(file, save=save, urdf=urdf, mjcf=mjcf)
+    if predictions is not None and validate is None:
+        from .errors import BaseparamsError
+
+        raise BaseparamsError("payload: predictions= are the torques of the validation log: give validate= (nothing "
+                              "was fitted)")
+    _check_outputs(file, save=save, urdf=urdf, mjcf=mjcf, predictions=predictions)
     robot = robot_of(model, "payload")
     inputs = input_files(file, log, result, validate, columns)
-    _no_output_on_input(inputs, save=save, urdf=urdf, mjcf=mjcf)
+    _no_output_on_input(inputs, save=save, urdf=urdf, mjcf=mjcf, predictions=predictions)
     read = _log(log, robot, columns, "log")
     val = None if validate is None else _log(validate, robot, columns, "validate")
     res = _result(result, robot)
     out = core(robot, read, link, opts, result=res, validation=val, progress=progress)
     notes = _write(out, file, inputs, save=save, urdf=urdf, mjcf=mjcf)
+    if predictions is not None:
+        from .tables import write_columns
+
+        tau = out.predict(val)
+        write_columns(predictions, {"t": val.t, **{f"tau_{j}": tau[:, k] for k, j in
+                                                   enumerate(robot.coordinate_names())}}, inputs, "predictions=")
+        notes.append(f"predictions of {val.n_samples} validation samples written to {predictions}")
     return replace(out, notes=out.notes + tuple(notes)) if notes else out
 
 

@@ -63,6 +63,8 @@ def add_parser(sub, model_args) -> None:
     s.add_argument("--prior", metavar="FILE.json",
                    help="hold what the motion does not identify at this payload: {\"mass\": kg, \"com\": [3] m, "
                         "\"inertia_com\": [[3x3]] kg m^2} in LINK's frame (or a saved payload's JSON)")
+    s.add_argument("--predictions", metavar="FILE.csv", help="with --validate: the torques predicted with the payload "
+                                                             "at every sample of that log (t, tau_<joint>)")
     s.add_argument("--save", metavar="FILE.json", help="write the result's JSON")
     s.add_argument("--urdf", metavar="FILE.urdf", help="write the URDF model with the payload as a fixed link")
     s.add_argument("--mjcf", metavar="FILE.xml", help="write the model as MJCF with the payload as a body")
@@ -112,10 +114,11 @@ def cmd_payload(args) -> int:
             "cutoff": args.cutoff, "decimate": args.decimate, "covariance": args.covariance,
             "prior": _prior(args.prior), "seed": args.seed, **({"samples": args.samples} if args.samples else {})}
     out = identify_payload(robot, args.log, link=args.link, result=args.result, validate=args.validate,
-                           columns=args.columns, save=args.save, urdf=args.urdf, mjcf=args.mjcf, source=args.model,
+                           columns=args.columns, save=args.save, urdf=args.urdf, mjcf=args.mjcf,
+                           predictions=args.predictions, source=args.model,
                            progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr), **opts)
     for n in out.notes:
-        if n.startswith(("--urdf", "--mjcf", "result saved")):
+        if n.startswith(("--urdf", "--mjcf", "result saved", "predictions of", "WARNING")):
             print(f"baseparams: {n}", file=sys.stderr)
     emit(args, json.dumps(out.to_json(), indent=2) if args.json else out.summary())
     return EXIT_OK

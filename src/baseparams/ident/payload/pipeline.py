@@ -185,6 +185,7 @@ def _fit_notes(model, f: PayloadFit, opts: PayloadOptions) -> list[str]:
     """The structural decision, the log's gap, the covariance, the estimator and its constraint, in words."""
     st = f.structure
     k = len(st.scale)
+    warn = _rotor_warning(model, f)
     out = [f"structural rank {st.rank + st.weak} of {k} columns (payload 10, drive terms {k - 10}), decided at a gap "
            f"of {st.gap:.3g} at random states of the moving joints"]
     if st.weak:
@@ -206,7 +207,25 @@ def _fit_notes(model, f: PayloadFit, opts: PayloadOptions) -> list[str]:
                        f"{100 * moved:.3g} % to make the payload realizable")
     else:
         out.append("least squares (not constrained to a realizable body)")
-    return out
+    return out + warn
+
+
+#: a rotor inertia the saved identification lacks is "seen" beyond this many standard deviations
+ROTOR_Z = 5.0
+
+
+def _rotor_warning(model, f: PayloadFit) -> list[str]:
+    """A WARNING when a saved identification without rotor inertia meets a log that shows some."""
+    if model.result is None:
+        return []
+    names = model.names
+    seen = [f"{n[1:]} {f.x[k]:.3g} +- {f.std[k]:.2g}" for k, n in enumerate(names)
+            if n.startswith("dIa_") and f.std[k] > 0 and abs(f.x[k]) > ROTOR_Z * f.std[k]]
+    if not seen:
+        return []
+    return [f"WARNING: the saved identification models no rotor inertia and this log shows some ({', '.join(seen)} "
+            f"kg m^2): its base parameters absorbed it on its own motion, so they mispredict this one and bias the "
+            f"payload; identify the robot without the payload again with --rotor"]
 
 
 def scores(payload: Payload, log) -> dict:

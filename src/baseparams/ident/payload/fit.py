@@ -374,9 +374,10 @@ def _constraint_text(n_ls: np.ndarray, lam_ls: np.ndarray, rank: int, active: bo
         c = n_ls[:3, 3] / m
         sig_c = n_ls[:3, :3] - m * np.outer(c, c)  # second moments about the centre of mass
         mom = np.linalg.eigvalsh(np.trace(sig_c) * np.eye(3) - sig_c)
-        why = (f"its principal moments about the centre of mass {', '.join(f'{v:.3g}' for v in mom)} kg m^2 break "
-               f"the triangle inequality" if np.linalg.eigvalsh(sig_c)[0] < 0 else
-               f"its pseudo-inertia has the eigenvalue {lam_ls[0]:.3g}")
+        shown = ", ".join(f"{v:.3g}" for v in mom)
+        why = (f"its principal moments about the centre of mass {shown} kg m^2 are not all positive" if mom[0] < 0
+               else f"its principal moments about the centre of mass {shown} kg m^2 break the triangle inequality"
+               if np.linalg.eigvalsh(sig_c)[0] < 0 else f"its pseudo-inertia has the eigenvalue {lam_ls[0]:.3g}")
     body = BODY_OF_RANK.get(rank, "a solid body")
     return (f"active: the least-squares payload is not a realizable body ({why}); the fit is the nearest realizable "
             f"one in the data's metric, {body} (pseudo-inertia of rank {rank})")

@@ -373,3 +373,21 @@ def test_cli_excite_payload_designs_the_joints_that_carry_the_link(tmp_path, cap
     assert doc["joints"] == ["joint1", "joint2", "joint3"]  # link3 is carried by the first three joints only
     assert any(n.startswith("predicted standard deviations") for n in doc["notes"])
     assert (tmp_path / "e.csv").read_text().startswith("t,q_joint1")
+
+
+def test_front_door_keywords_are_the_cli_flags():
+    """``identify_payload``'s keywords and options are ``baseparams payload``'s flags; ``excite_payload``'s are
+    ``excite``'s (``--payload`` its link)."""
+    import inspect
+    from dataclasses import fields
+
+    from test_api import _cli_names
+
+    params = inspect.signature(bp.identify_payload).parameters
+    keywords = {p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY}
+    keywords |= {f.name for f in fields(PayloadOptions)}
+    assert keywords - {"source", "options", "progress"} <= _cli_names("payload")
+    params = inspect.signature(bp.excite_payload).parameters
+    keywords = {p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY}
+    python_only = {"friction", "nominal", "repeats", "max_iter", "progress", "rotor"}
+    assert keywords - python_only <= _cli_names("excite") and "payload" in _cli_names("excite")

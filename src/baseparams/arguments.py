@@ -101,6 +101,11 @@ RANGES = {
     "memory_mb": Range(0, 1e6, lo_open=True, unit="MB"),
     "gravity": Range(-1e3, 1e3, unit="m/s^2", count=3),
     "acceleration": Range(0, 1e7, lo_open=True, unit="rad/s^2"),
+    # payload (issue 49): a joint's logged range below which it does not move; the default min_speed as a fraction
+    # of each joint's peak speed; the torque noise of a payload design's predicted sigmas
+    "still": Range(0, 10, lo_open=True, unit="rad or m"),
+    "slow_fraction": Range(0, 1, hi_open=True),
+    "payload_noise": Range(0, 1e6, lo_open=True, unit="N m"),
 }
 
 #: the identification's options and their defaults, each written once: :class:`baseparams.ident.options.IdentOptions`

@@ -231,7 +231,7 @@ def _plain(x):
 def excite_payload(model, link: str, *, period: float = 5.0, harmonics: int = 5, rate: float = 1000.0,
                    criterion: str = "logdet", position=None, velocity=None, acceleration=None, keepout=None,
                    margin: float = 0.0, starts: int = 4, grid: int = 200, seed: int = 0, max_iter: int = 150,
-                   friction=("viscous", "coulomb", "offset"), rotor: str = "auto", noise: float = 0.1,
+                   friction=("viscous", "coulomb", "offset"), rotor: str = "auto", payload_noise: float = 0.1,
                    nominal=None, repeats: int = 1, out=None, progress=None):
     """A short excitation that identifies a payload on ``link`` best: ``baseparams excite MODEL --payload LINK``.
 
@@ -258,8 +258,8 @@ def excite_payload(model, link: str, *, period: float = 5.0, harmonics: int = 5,
         The drive terms fitted with the payload (their columns are nuisance parameters).
     rotor : {"auto", "file", "fit"}
         Rotor inertia columns: ``fit``, or ``auto`` when the model file states no armature.
-    noise : float
-        Torque noise [N m per sample] of the predicted standard deviations.
+    payload_noise : float
+        Torque noise [N m per sample] of the predicted standard deviations (``--payload-noise``).
     nominal : dict, optional
         The nominal payload of the predicted sigmas (``{"mass", "com", "inertia_com"}``).
     repeats : int
@@ -291,7 +291,7 @@ def excite_payload(model, link: str, *, period: float = 5.0, harmonics: int = 5,
     from .workflow import input_files, robot_of
 
     check_keywords("excite", period=period, harmonics=harmonics, rate=rate, margin=margin, starts=starts, grid=grid,
-                   seed=seed, max_iter=max_iter, noise=noise)
+                   seed=seed, max_iter=max_iter, payload_noise=payload_noise)
     check_choice("excite", "criterion", criterion, ("cond", "logdet"))
     check_choice("excite", "rotor", rotor, ("auto", "file", "fit"))
     check_keywords("excite", robots=repeats)
@@ -308,7 +308,7 @@ def excite_payload(model, link: str, *, period: float = 5.0, harmonics: int = 5,
     result = design_excitation(dm, harmonics=harmonics, base_frequency=1.0 / period, rate=rate, criterion=criterion,
                                limits=lim, acceleration=acceleration, keepout=keepout, margin=margin, starts=starts,
                                seed=seed, grid=grid, max_iter=max_iter, progress=progress)
-    s = predicted_sigmas(dm, result.q, result.dq, result.ddq, noise, nominal, int(repeats))
+    s = predicted_sigmas(dm, result.q, result.dq, result.ddq, payload_noise, nominal, int(repeats))
     result = replace(result, notes=result.notes + tuple(notes) + (sigma_note(s, result.period, int(repeats)),))
     if out is not None:
         result.save(out, inputs, "out")

@@ -60,6 +60,8 @@ def add_parser(sub, model_args) -> None:
     s.add_argument("--decimate", type=int, metavar="K", help="decimation factor (default from the rate and cutoff)")
     s.add_argument("--covariance", choices=("hac", "white"), default="hac",
                    help="standard deviations: HAC, for correlated residuals (default), or the least-squares formula")
+    s.add_argument("--memory-mb", type=float, default=512.0, metavar="MB",
+                   help="the largest regressor formed at once (default 512; the log is held whole)")
     s.add_argument("--prior", metavar="FILE.json",
                    help="hold what the motion does not identify at this payload: {\"mass\": kg, \"com\": [3] m, "
                         "\"inertia_com\": [[3x3]] kg m^2} in LINK's frame (or a saved payload's JSON)")
@@ -112,7 +114,8 @@ def cmd_payload(args) -> int:
     opts = {"method": args.method, "friction": args.friction, "rotor": args.rotor, "coulomb_width": args.coulomb_width,
             "min_speed": args.min_speed, "slow_fraction": args.slow_fraction, "still": args.still,
             "cutoff": args.cutoff, "decimate": args.decimate, "covariance": args.covariance,
-            "prior": _prior(args.prior), "seed": args.seed, **({"samples": args.samples} if args.samples else {})}
+            "prior": _prior(args.prior), "seed": args.seed, "memory_mb": args.memory_mb,
+            **({"samples": args.samples} if args.samples else {})}
     out = identify_payload(robot, args.log, link=args.link, result=args.result, validate=args.validate,
                            columns=args.columns, save=args.save, urdf=args.urdf, mjcf=args.mjcf,
                            predictions=args.predictions, source=args.model,
@@ -167,7 +170,7 @@ def cmd_excite_payload(args, lim: dict) -> int:
                             criterion=args.criterion or "logdet",
                             position=lim["position"], velocity=lim["velocity"], acceleration=lim["acceleration"],
                             keepout=lim["keepout"], margin=args.margin, starts=args.starts, grid=args.grid,
-                            seed=args.seed, max_iter=150, noise=args.payload_noise, out=args.out,
+                            seed=args.seed, max_iter=150, payload_noise=args.payload_noise, out=args.out,
                             progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
     if args.out:
         print(f"baseparams: trajectory written to {args.out}", file=sys.stderr)

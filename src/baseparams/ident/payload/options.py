@@ -12,7 +12,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ...arguments import Range
+from ...arguments import RANGES, Range
 from ...errors import BaseparamsError
 from ..drives import FRICTION_TERMS, friction_terms
 
@@ -24,15 +24,9 @@ ROTORS = ("auto", "file", "fit")
 #: the standard deviations' covariance (:mod:`baseparams.ident.uncertainty`)
 COVARIANCES = ("hac", "white")
 #: the numeric options and their ranges (the others are choices, flags or the prior)
-NUMBERS = {"still": Range(0, 10, lo_open=True, unit="rad or m"),
-           "min_speed": Range(0, 1e3, unit="rad/s or m/s"),
-           "slow_fraction": Range(0, 1, hi_open=True),
-           "coulomb_width": Range(0, 1e3, lo_open=True, unit="rad/s"),
-           "cutoff": Range(1e-3, 1e6, unit="Hz"),
-           "decimate": Range(1, 1_000_000, integer=True),
-           "samples": Range(20, 100_000, integer=True),
-           "seed": Range(0, 2**63 - 1, integer=True),
-           "memory_mb": Range(1, 1e6, unit="MB")}
+NUMBERS = {**{k: RANGES[k] for k in ("still", "min_speed", "slow_fraction", "coulomb_width", "cutoff", "decimate",
+                                     "seed")},
+           "samples": Range(20, 100_000, integer=True), "memory_mb": Range(1, 1e6, unit="MB")}
 #: the numeric options whose None means "the default"
 OPTIONAL = ("min_speed", "coulomb_width", "cutoff", "decimate")
 

@@ -24,7 +24,7 @@ SRC = str(Path(baseparams.__file__).resolve().parents[1])
 PUBLIC = {"Analysis", "BaseparamsError", "CONVENTIONS", "Inertia", "ModelError", "ModelWarning", "Robot",
           "RobotBuilder", "analyze", "load", "pose", "regressor", "__version__",
           "Excitation", "Identification", "analyze_symbolic", "excite", "identify", "predict", "simulate",
-          "identify_payload", "excite_payload"}
+          "identify_payload"}
 #: what ``import baseparams`` must not import (the functions that need them do)
 HEAVY = ("scipy", "mujoco", "pinocchio", "cvxpy", "clarabel", "sympy", "matplotlib", "dask", "distributed", "numba",
          "pyarrow", "pandas")

@@ -244,7 +244,7 @@ MAX_PARAMETERS = 11
 #: the public front door: one keyword per flag of the command line (``baseparams.identify`` is
 #: ``baseparams.workflow.identify``); nothing else may take more than :data:`MAX_PARAMETERS`
 FRONT_DOOR = {"baseparams.workflow.identify", "baseparams.workflow.excite", "baseparams.workflow.simulate",
-              "baseparams.workflow_payload.identify_payload", "baseparams.workflow_payload.excite_payload"}
+              "baseparams.workflow_payload.identify_payload"}
 
 
 def _compiled(node) -> bool:

@@ -376,8 +376,8 @@ def test_cli_excite_payload_designs_the_joints_that_carry_the_link(tmp_path, cap
 
 
 def test_front_door_keywords_are_the_cli_flags():
-    """``identify_payload``'s keywords and options are ``baseparams payload``'s flags; ``excite_payload``'s are
-    ``excite``'s (``--payload`` its link)."""
+    """``identify_payload``'s keywords and options are ``baseparams payload``'s flags; ``excite``'s ``payload``
+    keywords its ``--payload`` flags."""
     import inspect
     from dataclasses import fields
 
@@ -387,7 +387,11 @@ def test_front_door_keywords_are_the_cli_flags():
     keywords = {p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY}
     keywords |= {f.name for f in fields(PayloadOptions)}
     assert keywords - {"source", "options", "progress"} <= _cli_names("payload")
-    params = inspect.signature(bp.excite_payload).parameters
-    keywords = {p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY}
-    python_only = {"friction", "nominal", "repeats", "max_iter", "progress", "rotor"}
-    assert keywords - python_only <= _cli_names("excite") and "payload" in _cli_names("excite")
+    assert {"payload", "payload_noise"} <= set(inspect.signature(bp.excite).parameters) & _cli_names("excite")
+
+
+def test_excite_payload_refuses_a_robot_designs_options_in_one_line():
+    with pytest.raises(bp.BaseparamsError, match="--drives, --torque do not apply"):
+        bp.excite("puma560", payload="link6", drives=True, torque=True)
+    with pytest.raises(bp.ModelError, match="no link 'hand'"):
+        bp.excite("puma560", payload="hand")

@@ -40,7 +40,7 @@ identify_payload(model, log, *, link, result=None, validate=None, save=None, urd
     What the robot carries on a link: a :class:`Payload` (``.mass``, ``.com``, ``.inertia_com`` in
     the link's frame, ``.sigma()``, ``.identified()``, ``.to_json()``, ``.predict(log)``), the robot
     known from its model file or a saved identification (``baseparams payload``).
-excite_payload(model, link, *, period=5.0, ...)
+excite(model, payload=LINK, ...)
     A short excitation that identifies a payload on a link best (``excite --payload LINK``).
 Robot, RobotBuilder, Inertia, pose
     Build a robot in code (see :class:`RobotBuilder`).
@@ -82,7 +82,7 @@ from .model import CONVENTIONS, Inertia, Robot, RobotBuilder, pose
 # excite and simulate (and the helpers identify and predict share with them) have one
 # implementation, baseparams.workflow: also the CLI's
 from .workflow import excite, identify, predict, simulate
-from .workflow_payload import excite_payload, identify_payload
+from .workflow_payload import identify_payload
 
 __all__ = [
     "CONVENTIONS",
@@ -99,7 +99,6 @@ __all__ = [
     "analyze",
     "analyze_symbolic",
     "excite",
-    "excite_payload",
     "identify",
     "identify_payload",
     "load",

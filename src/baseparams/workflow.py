@@ -85,10 +85,11 @@ def input_files(*items) -> list[str]:
 
 
 def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequency: float | None = None,
-           rate: float = 1000.0, criterion: str = "cond", drives: bool = False, rotor: bool = False,
+           rate: float = 1000.0, criterion: str | None = None, drives: bool = False, rotor: bool = False,
            position=None, velocity=None, acceleration=None, effort=None, torque: bool = False, keepout=None,
            margin: float = 0.0, starts: int = 4, grid: int = 200, seed: int = 0, analysis_samples: int | None = None,
-           limits=None, max_iter: int = 150, out=None, plot=None, progress=None):
+           limits=None, max_iter: int = 150, out=None, plot=None, progress=None, payload: str | None = None,
+           payload_noise: float = 0.1):
     """Design an excitation trajectory: ``baseparams excite`` (:mod:`baseparams.excitation`).
 
     A finite Fourier series per designed coordinate, at rest at both ends, within the model's joint
@@ -101,7 +102,7 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
         The robot (a built-in name or a robot file is loaded; its joint limits are the file's).
     harmonics, rate, criterion, drives, rotor, torque, margin, starts, grid, seed
         As the CLI's flags (:func:`baseparams.excitation.design_excitation`): harmonics per joint,
-        the controller's rate [Hz], ``cond`` or ``logdet``, friction (and rotor) columns, the
+        the controller's rate [Hz], ``cond`` (default) or ``logdet``, friction (and rotor) columns, the
         model's own torques within the effort limits, the fraction of each position range kept
         free, random starts, design-grid samples per period, the starts' seed.
     period, base_frequency : float, optional
@@ -130,6 +131,14 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
         Also plot ``q, dq, ddq`` per joint against the limits there (matplotlib, extra ``plot``).
     progress : callable, optional
         Called with one line of text per start.
+    payload : str, optional
+        Design instead a short motion that identifies a payload on this link best (``--payload``,
+        :func:`baseparams.excitation.payload.excite_payload`): the joints that carry it, the criterion
+        (default ``logdet``) on the payload's columns with the drive terms as nuisance, period 5 s
+        unless given; ``drives``, ``rotor``, ``torque``, ``effort``, ``limits``, ``analysis_samples``
+        and ``plot`` do not apply.
+    payload_noise : float
+        With ``payload``: the torque noise [N m per sample] of the predicted standard deviations.
 
     Returns
     -------
@@ -144,9 +153,6 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
         that cannot be written.
     """
     from .arguments import (
-        ArgumentError,
-        ArgumentTypeError,
-        brief,
         check_flags,
         check_keywords,
         check_path,
@@ -160,10 +166,7 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
                    margin=margin, starts=starts, grid=grid, seed=seed, analysis_samples=analysis_samples,
                    max_iter=max_iter, **ranged)
     check_flags("excite", drives=drives, rotor=rotor, torque=torque)
-    if not isinstance(criterion, str):
-        raise ArgumentTypeError(f"excite: criterion= must be cond or logdet, got {type(criterion).__name__}")
-    if criterion not in ("cond", "logdet"):
-        raise ArgumentError(f"excite: criterion= must be cond or logdet, got {brief(criterion)}")
+    criterion = _criterion(criterion, payload)
     check_path(out, "excite: out=", optional=True)
     _check_suffixes(False, plot=plot)
     check_progress(progress, "excite")
@@ -174,15 +177,22 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
     robot = robot_of(model, "excite")
     inputs = input_files(model)
     _check_outputs(inputs, out=out, plot=plot)
-    target = model if isinstance(model, Analysis) and analysis_samples is None else robot
-    if analysis_samples is not None:
-        target = analyze(robot, samples=analysis_samples, seed=seed)
-    f = 1.0 / period if period is not None else (0.1 if base_frequency is None else base_frequency)
-    result = design_excitation(target, harmonics=harmonics, base_frequency=f, rate=rate, criterion=criterion,
-                               drives=drives, rotor=rotor, limits=given_limits(robot, limits, position, velocity,
-                                                                               effort),
-                               acceleration=acceleration, torque=torque, starts=starts, seed=seed, grid=grid,
-                               max_iter=max_iter, keepout=keepout, margin=margin, progress=progress)
+    common = dict(harmonics=harmonics, rate=rate, criterion=criterion, acceleration=acceleration, keepout=keepout,
+                  margin=margin, starts=starts, seed=seed, grid=grid, max_iter=max_iter, progress=progress)
+    if payload is not None:  # excite --payload LINK (baseparams.excitation.payload)
+        from .excitation.payload import excite_payload
+
+        result = excite_payload(robot, payload, dict(drives=drives, rotor=rotor, torque=torque, effort=effort,
+                                                     limits=limits, analysis_samples=analysis_samples, plot=plot,
+                                                     base_frequency=base_frequency), period=period or 5.0,
+                                position=position, velocity=velocity, payload_noise=payload_noise, **common)
+    else:
+        target = model if isinstance(model, Analysis) and analysis_samples is None else robot
+        if analysis_samples is not None:
+            target = analyze(robot, samples=analysis_samples, seed=seed)
+        f = 1.0 / period if period is not None else (0.1 if base_frequency is None else base_frequency)
+        result = design_excitation(target, base_frequency=f, drives=drives, rotor=rotor, torque=torque,
+                                   limits=given_limits(robot, limits, position, velocity, effort), **common)
     if out is not None:
         result.save(out, inputs, "out")
     if plot is not None:
@@ -192,6 +202,18 @@ def excite(model, *, harmonics: int = 5, period: float | None = None, base_frequ
         with atomic_path(plot, inputs, "plot") as tmp:
             trajectory_plot(result, tmp, robot)
     return result
+
+
+def _criterion(criterion, payload) -> str:
+    """``excite``'s criterion checked: ``cond`` or ``logdet``; None the default (``logdet`` for a payload)."""
+    from .arguments import ArgumentError, ArgumentTypeError, brief
+
+    criterion = ("logdet" if payload is not None else "cond") if criterion is None else criterion
+    if not isinstance(criterion, str):
+        raise ArgumentTypeError(f"excite: criterion= must be cond or logdet, got {type(criterion).__name__}")
+    if criterion not in ("cond", "logdet"):
+        raise ArgumentError(f"excite: criterion= must be cond or logdet, got {brief(criterion)}")
+    return criterion
 
 
 def _check_outputs(inputs: list[str], **outputs) -> None:

@@ -1,9 +1,10 @@
-"""The payload's front door: :func:`identify_payload` (``payload``) and :func:`excite_payload` (``excite --payload``).
+"""The payload's front door: :func:`identify_payload`, ``baseparams payload`` (``excite --payload``: ``bp.excite``).
 
 A module of its own beside :mod:`baseparams.workflow` (the loop's front door, whose helpers it uses:
 a half floor above it, below the CLI): the files are read and checked here (the model, the log, a saved
 identification), every output is checked before the fit and written atomically, never onto an
-input; the work is :mod:`baseparams.ident.payload`'s and :mod:`baseparams.excitation.payload`'s.
+input; the work is :mod:`baseparams.ident.payload`'s (``bp.excite(..., payload=LINK)``:
+:mod:`baseparams.excitation.payload`'s).
 """
 
 from __future__ import annotations
@@ -227,89 +228,3 @@ def _plain(x):
         return float(x) if math.isfinite(x) else None
     return x
 
-
-def excite_payload(model, link: str, *, period: float = 5.0, harmonics: int = 5, rate: float = 1000.0,
-                   criterion: str = "logdet", position=None, velocity=None, acceleration=None, keepout=None,
-                   margin: float = 0.0, starts: int = 4, grid: int = 200, seed: int = 0, max_iter: int = 150,
-                   friction=("viscous", "coulomb", "offset"), rotor: str = "auto", payload_noise: float = 0.1,
-                   nominal=None, repeats: int = 1, out=None, progress=None):
-    """A short excitation that identifies a payload on ``link`` best: ``baseparams excite MODEL --payload LINK``.
-
-    Only the joints that carry the link are designed (the others welded at q = 0); the criterion is
-    taken on the payload's ten columns with the drive terms fitted with it as nuisance parameters
-    (:mod:`baseparams.excitation.payload`), within the position, velocity and acceleration limits and
-    the keep-outs (as :func:`baseparams.excite`). The design's notes carry the standard deviations it
-    predicts.
-
-    Parameters
-    ----------
-    model : Robot, Analysis, str or path
-        The robot without the payload.
-    link : str
-        The payload's link.
-    period : float
-        The period [s] (default 5: a short motion).
-    harmonics, rate, criterion, margin, starts, grid, seed, max_iter
-        As :func:`baseparams.excite` (``criterion`` default ``logdet``: D_s-optimal on the
-        payload's columns; ``cond``: the condition number of their information).
-    position, velocity, acceleration, keepout : optional
-        Limits and keep-outs, as :func:`baseparams.excite` (by joint name, or one per designed joint).
-    friction : str or iterable of str
-        The drive terms fitted with the payload (their columns are nuisance parameters).
-    rotor : {"auto", "file", "fit"}
-        Rotor inertia columns: ``fit``, or ``auto`` when the model file states no armature.
-    payload_noise : float
-        Torque noise [N m per sample] of the predicted standard deviations (``--payload-noise``).
-    nominal : dict, optional
-        The nominal payload of the predicted sigmas (``{"mass", "com", "inertia_com"}``).
-    repeats : int
-        Periods recorded, for the predicted sigmas.
-    out : str or path, optional
-        Also write the trajectory there (``.csv``/``.tsv``: ``t, q_, dq_, ddq_`` of the designed joints).
-    progress : callable, optional
-        Called with one line of text per start.
-
-    Returns
-    -------
-    Excitation
-        The trajectory of the joints that carry the link; ``notes`` end with the predicted
-        standard deviations.
-
-    Raises
-    ------
-    BaseparamsError
-        Bad options, an unknown link, limits that leave no room, a design that does not excite the
-        payload's columns.
-    """
-    from dataclasses import replace
-
-    from .arguments import check_choice, check_keywords, check_path
-    from .excitation import design_excitation
-    from .excitation.limits import given_limits
-    from .excitation.payload import design_model, payload_robot, predicted_sigmas, sigma_note
-    from .ident.drives import friction_terms
-    from .workflow import input_files, robot_of
-
-    check_keywords("excite", period=period, harmonics=harmonics, rate=rate, margin=margin, starts=starts, grid=grid,
-                   seed=seed, max_iter=max_iter, payload_noise=payload_noise)
-    check_choice("excite", "criterion", criterion, ("cond", "logdet"))
-    check_choice("excite", "rotor", rotor, ("auto", "file", "fit"))
-    check_keywords("excite", robots=repeats)
-    check_path(out, "excite: out=", optional=True)
-    robot = robot_of(model, "excite")
-    inputs = input_files(model)
-    if out is not None:
-        from .files import check_output
-
-        check_output(out, inputs, "out=")
-    small, body, notes = payload_robot(robot, link)
-    dm = design_model(small, body, friction_terms(friction), rotor)
-    lim = given_limits(small, None, position, velocity, None)
-    result = design_excitation(dm, harmonics=harmonics, base_frequency=1.0 / period, rate=rate, criterion=criterion,
-                               limits=lim, acceleration=acceleration, keepout=keepout, margin=margin, starts=starts,
-                               seed=seed, grid=grid, max_iter=max_iter, progress=progress)
-    s = predicted_sigmas(dm, result.q, result.dq, result.ddq, payload_noise, nominal, int(repeats))
-    result = replace(result, notes=result.notes + tuple(notes) + (sigma_note(s, result.period, int(repeats)),))
-    if out is not None:
-        result.save(out, inputs, "out")
-    return result

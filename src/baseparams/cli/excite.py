@@ -140,10 +140,6 @@ def cmd_excite(args) -> int:
         Bad input: the model (no actuated coordinate, a singular reference), infeasible limits,
         options, unwritable outputs.
     """
-    if getattr(args, "payload", None):  # excite --payload LINK: the payload's design (cli/payload.py)
-        from .payload import cmd_excite_payload
-
-        return cmd_excite_payload(args, limit_flags(args))
     from ..workflow import excite
 
     try:
@@ -151,9 +147,10 @@ def cmd_excite(args) -> int:
     except NoMovingBodiesError as exc:
         raise BaseparamsError(f"{exc}: no actuated coordinate to excite") from None
     result = excite(robot, harmonics=args.harmonics, period=args.period, base_frequency=args.base_frequency,
-                    rate=args.rate, criterion=args.criterion or "cond", drives=args.drives, rotor=args.rotor,
+                    rate=args.rate, criterion=args.criterion, drives=args.drives, rotor=args.rotor,
                     torque=args.torque, margin=args.margin, starts=args.starts, grid=args.grid, seed=args.seed,
                     analysis_samples=args.samples, out=args.out, plot=args.plot, **limit_flags(args),
+                    payload=args.payload, payload_noise=args.payload_noise,
                     progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
     for path, what in ((args.out, "trajectory"), (args.plot, "plot")):
         if path:

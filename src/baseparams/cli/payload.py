@@ -3,8 +3,8 @@
 The command's parser (:func:`add_parser`, registered by :func:`baseparams.cli.build_parser` in one
 line) and its handler (:func:`cmd_payload`): the flags become :func:`baseparams.identify_payload`'s
 keywords (one per flag), the report (or ``--json``) goes to stdout or ``--output``. ``excite
---payload LINK`` (:func:`excite_flags`, :func:`cmd_excite_payload`) designs the payload's excitation
-with :func:`baseparams.excite_payload`.
+--payload LINK`` (:func:`excite_flags`: its flags, on the ``excite`` parser) is :func:`baseparams.excite`'s
+``payload=``.
 """
 
 from __future__ import annotations
@@ -140,39 +140,5 @@ def excite_flags(s) -> None:
                         "it; default period 5 s, criterion logdet on the payload's columns)")
     s.add_argument("--payload-noise", type=float, default=0.1, metavar="NM",
                    help="with --payload: the torque noise of the predicted standard deviations (default 0.1 N m)")
-    s.set_defaults(criterion=None)  # --criterion's default: cond, or logdet with --payload
+    s.set_defaults(criterion=None)  # --criterion's default: cond, or logdet with --payload (baseparams.excite)
 
-
-def cmd_excite_payload(args, lim: dict) -> int:
-    """``baseparams excite MODEL --payload LINK``: :func:`baseparams.excite_payload` of the flags.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed ``excite`` command line.
-    lim : dict
-        Its limit flags parsed (:func:`baseparams.cli.excite.limit_flags`).
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-    """
-    from ..workflow_payload import excite_payload
-
-    if args.drives or args.rotor or args.torque or args.base_frequency:
-        raise BaseparamsError("--payload designs the payload's columns with the drive terms as nuisance: --drives, "
-                              "--rotor, --torque and --base-frequency do not apply (--period does)")
-    robot = common.load_robot(args)
-    if lim.get("effort") is not None:
-        raise BaseparamsError("--payload: effort limits are not checked by a payload design (--effort)")
-    result = excite_payload(robot, args.payload, period=args.period or 5.0, harmonics=args.harmonics, rate=args.rate,
-                            criterion=args.criterion or "logdet",
-                            position=lim["position"], velocity=lim["velocity"], acceleration=lim["acceleration"],
-                            keepout=lim["keepout"], margin=args.margin, starts=args.starts, grid=args.grid,
-                            seed=args.seed, max_iter=150, payload_noise=args.payload_noise, out=args.out,
-                            progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
-    if args.out:
-        print(f"baseparams: trajectory written to {args.out}", file=sys.stderr)
-    emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
-    return EXIT_OK

@@ -287,3 +287,72 @@ def sigma_note(s: dict, period: float, repeats: int) -> str:
             f"{', '.join(f'{1000 * v:.3g}' for v in s['com'])} mm, inertia about it (diagonal) "
             f"{', '.join(f'{v:.3g}' for v in np.diag(ic))} kg m^2 (correlated noise and the slow samples left out "
             f"widen them){free}")
+
+
+#: the options of a robot's design that a payload's does not take (:func:`excite_payload`), as their flags
+NOT_FOR_PAYLOAD = {"drives": "--drives", "rotor": "--rotor", "torque": "--torque", "effort": "--effort",
+                   "limits": "limits=", "analysis_samples": "--analysis-samples", "plot": "--plot",
+                   "base_frequency": "--base-frequency"}
+
+
+def excite_payload(robot: Robot, link: str, refused: dict, *, period: float = 5.0, payload_noise: float = 0.1,
+                   friction=("viscous", "coulomb", "offset"), nominal=None, repeats: int = 1, position=None,
+                   velocity=None, **design):
+    """A short excitation that identifies a payload on ``link`` best: ``excite --payload LINK`` (module docstring).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot without the payload.
+    link : str
+        The payload's link.
+    refused : dict
+        The robot design's options given (``drives``, ``rotor``, ``torque``, ``effort``, ``limits``,
+        ``analysis_samples``, ``plot``, ``base_frequency``): any set is refused in one line.
+    period : float
+        The period [s] (default 5: a short motion).
+    payload_noise : float
+        Torque noise [N m per sample] of the predicted standard deviations.
+    friction : iterable of str
+        The drive terms fitted with the payload (their columns are nuisance parameters).
+    nominal : dict, optional
+        The nominal payload of the predicted sigmas (``{"mass", "com", "inertia_com"}``).
+    repeats : int
+        Periods recorded, for the predicted sigmas.
+    position, velocity : optional
+        Position and velocity limits (:func:`baseparams.excitation.limits.given_limits`).
+    **design
+        :func:`~baseparams.excitation.design.design_excitation`'s options: ``harmonics``, ``rate``,
+        ``criterion``, ``acceleration``, ``keepout``, ``margin``, ``starts``, ``grid``, ``seed``,
+        ``max_iter``, ``progress``.
+
+    Returns
+    -------
+    Excitation
+        The trajectory of the joints that carry the link; its notes end with the predicted
+        standard deviations (:func:`predicted_sigmas`).
+
+    Raises
+    ------
+    BaseparamsError
+        A robot design's option, an unknown link, limits that leave no room, a design that does not
+        excite the payload's columns.
+    """
+    from dataclasses import replace
+
+    from ..arguments import check_keywords
+    from ..ident.drives import friction_terms
+    from .design import design_excitation
+    from .limits import given_limits
+
+    given = [flag for name, flag in NOT_FOR_PAYLOAD.items() if refused.get(name) not in (None, False)]
+    if given:
+        raise BaseparamsError(f"excite --payload designs the payload's columns with the drive terms as nuisance: "
+                              f"{', '.join(given)} do not apply (--period does)")
+    check_keywords("excite", period=period, payload_noise=payload_noise, robots=repeats)
+    small, body, notes = payload_robot(robot, link)
+    dm = design_model(small, body, friction_terms(friction))
+    result = design_excitation(dm, base_frequency=1.0 / period, limits=given_limits(small, None, position, velocity,
+                                                                                    None), **design)
+    s = predicted_sigmas(dm, result.q, result.dq, result.ddq, payload_noise, nominal, int(repeats))
+    return replace(result, notes=result.notes + tuple(notes) + (sigma_note(s, result.period, int(repeats)),))

@@ -225,7 +225,8 @@ def _rotor_warning(model, f: PayloadFit) -> list[str]:
         return []
     return [f"WARNING: the saved identification models no rotor inertia and this log shows some ({', '.join(seen)} "
             f"kg m^2): its base parameters absorbed it on its own motion, so they mispredict this one and bias the "
-            f"payload; identify the robot without the payload again with --rotor"]
+            f"payload; identify the robot without the payload again with --rotor (or leave --result out: the model "
+            f"file's robot)"]
 
 
 def scores(payload: Payload, log) -> dict:

@@ -161,6 +161,7 @@ def test_last_joint_alone_names_what_it_cannot_identify_and_never_returns_it(pum
     assert "[not identified: from the prior" in held.summary()
 
 
+@pytest.mark.slow
 def test_result_path_is_the_regrouping_of_the_same_columns(puma, tmp_path):
     """A saved identification of the robot without the payload, exact: the payload comes out as with the file."""
     rng = np.random.default_rng(11)

@@ -318,6 +318,38 @@ def test_mujoco_panda_export_is_mujocos_own_payload(panda_sim, tmp_path):
     assert robot.n == 7
 
 
+def test_saved_payload_loads_back_as_it_was_identified(puma, tmp_path):
+    """``save=`` then ``SavedPayload.load``: the same quantities, sigmas and notes; checked for its robot; a prior."""
+    rng = np.random.default_rng(21)
+    payload = box_payload(rng, 1.8)
+    log = sim_log(carrying(puma, 5, payload), rng, seconds=6.0)
+    p = bp.identify_payload(puma, log, link="link6", save=tmp_path / "p.json")
+    back = bp.SavedPayload.load(tmp_path / "p.json", puma)
+    assert back.link == "link6" and back.mass == p.mass and back.com == p.com and back.inertia_com == p.inertia_com
+    assert back.sigma == p.sigma() and back.identified() == p.identified() and len(back.identified()) == 10
+    saved, now = back.to_json()["payload"], json.loads(json.dumps(p.to_json()))["payload"]
+    assert {k: v for k, v in saved.items() if k != "notes"} == {k: v for k, v in now.items() if k != "notes"}
+    assert now["notes"] == saved["notes"] + [f"result saved to {tmp_path / 'p.json'}"]  # the note of the write
+    assert abs(back.mass - 1.8) < 0.05 and "1.8" in repr(back)
+    other = bp.load("four-bar")
+    with pytest.raises(bp.BaseparamsError, match="identified on robot"):
+        bp.SavedPayload.load(tmp_path / "p.json", other)
+    doc = json.loads((tmp_path / "p.json").read_text())
+    for broken, words in ((dict(doc, format="x"), "not a saved payload"), (dict(doc, version=9), "version 9"),
+                          ({**doc, "payload": {**doc["payload"], "mass": -1.0}}, "must be > 0"),
+                          ({**doc, "payload": {**doc["payload"], "com": [0, 0]}}, "payload.com")):
+        (tmp_path / "b.json").write_text(json.dumps(broken))
+        with pytest.raises(bp.BaseparamsError, match=words):
+            bp.SavedPayload.load(tmp_path / "b.json")
+    (tmp_path / "b.json").write_text("{")
+    with pytest.raises(bp.BaseparamsError, match="not JSON"):
+        bp.SavedPayload.load(tmp_path / "b.json")
+    wrist = sim_log(carrying(puma, 5, payload), rng, move=[0, 0, 0, 0, 0, 1], amplitude=1.5)
+    held = bp.identify_payload(puma, wrist, link="link6", prior=tmp_path / "p.json")  # a saved payload as the prior
+    assert held.options.prior[:4] == pytest.approx([back.mass, *back.com])
+    assert len(held.identified()) < 10 and "[not identified: from the prior" in held.summary()
+
+
 def test_export_refused_when_the_motion_leaves_the_payload_free(puma, tmp_path):
     from baseparams.ident.payload.export import payload_urdf
 
@@ -387,12 +419,12 @@ def test_front_door_keywords_are_the_cli_flags():
     params = inspect.signature(bp.identify_payload).parameters
     keywords = {p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY}
     keywords |= {f.name for f in fields(PayloadOptions)}
-    assert keywords - {"source", "options", "progress"} <= _cli_names("payload")
+    assert keywords - {"_source", "progress"} <= _cli_names("payload")
     assert {"payload", "payload_noise"} <= set(inspect.signature(bp.excite).parameters) & _cli_names("excite")
 
 
 def test_excite_payload_refuses_a_robot_designs_options_in_one_line():
-    with pytest.raises(bp.BaseparamsError, match="--drives, --torque do not apply"):
+    with pytest.raises(bp.BaseparamsError, match="drives=, torque= do not apply"):
         bp.excite("puma560", payload="link6", drives=True, torque=True)
     with pytest.raises(bp.ModelError, match="no link 'hand'"):
         bp.excite("puma560", payload="hand")

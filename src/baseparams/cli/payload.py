@@ -1,10 +1,9 @@
-"""``baseparams payload MODEL LOG --link LINK``: what the robot carries on a link; and ``excite --payload LINK``.
+"""``baseparams payload MODEL LOG --link LINK``: its flags parsed into :func:`baseparams.identify_payload`'s keywords.
 
-The command's parser (:func:`add_parser`, registered by :func:`baseparams.cli.build_parser` in one
-line) and its handler (:func:`cmd_payload`): the flags become :func:`baseparams.identify_payload`'s
-keywords (one per flag), the report (or ``--json``) goes to stdout or ``--output``. ``excite
---payload LINK`` (:func:`excite_flags`: its flags, on the ``excite`` parser) is :func:`baseparams.excite`'s
-``payload=``.
+One keyword per flag (:func:`keywords`); the rules are :mod:`baseparams.workflow.payload`'s
+(``check_payload``, which the preflight asks before the model loads); this module prints the
+report (or ``--json``) and the notes of what was written. ``excite --payload LINK`` is
+:mod:`baseparams.cli.excite`'s.
 """
 
 from __future__ import annotations
@@ -12,21 +11,30 @@ from __future__ import annotations
 import json
 import sys
 
-from ..errors import BaseparamsError
+from ..arguments import PAYLOAD, PAYLOAD_CHOICES
 from . import common
 from .common import EXIT_OK, emit
+from .parser import model_args
+
+#: the flags named otherwise than :func:`baseparams.identify_payload`'s keywords
+KEYWORDS = {"samples": "analysis_samples"}
+#: the flags that only say how the result is printed
+CLI_ONLY = frozenset({"json"})
+#: the choices of this command's options (not :data:`baseparams.arguments.CHOICES`: ``--method ls``, ``--rotor fit``)
+CHOICES = PAYLOAD_CHOICES
 
 
-def add_parser(sub, model_args) -> None:
-    """Add the ``payload`` subcommand to the ``baseparams`` parser.
+def _choices(name: str) -> str:
+    return "{" + ",".join(CHOICES[name]) + "}"
+
+
+def add_parser(sub) -> None:
+    """The ``payload`` subcommand.
 
     Parameters
     ----------
     sub : argparse._SubParsersAction
-        The subcommands.
-    model_args : callable
-        Adds the model's arguments (``MODEL``, ``--gravity``, ``--json``, ...) to a subparser (its help:
-        ``baseparams.cli.MODEL_HELP["payload"]``).
+        The command's subparsers.
     """
     s = sub.add_parser("payload", help="identify a payload on a link (mass, centre of mass, inertia) from a log, the "
                                        "robot known from its file or a saved identification")
@@ -35,32 +43,34 @@ def add_parser(sub, model_args) -> None:
                                "(CSV/TSV, NPZ, Parquet, a ROS 2 bag)")
     s.add_argument("--link", required=True, help="the link the payload is fixed to (or its joint's name)")
     s.add_argument("--result", metavar="RESULT.json",
-                   help="a saved identification of the robot without the payload ('identify --save'): the known "
-                        "robot is its prediction (default: the model file's rigid body and armature)")
+                   help="a saved identification of the robot without the payload ('identify --save'; identify with "
+                        "--rotor when the drives have rotor inertia): the known robot is its prediction (default: the "
+                        "model file's rigid body and armature)")
     s.add_argument("--validate", metavar="LOG", help="another log with the payload: every sample predicted, RMS per "
                                                      "joint")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other log layout")
-    s.add_argument("--method", choices=("auto", "physical", "ls"), default="auto",
+    s.add_argument("--method", metavar=_choices("method"), default=PAYLOAD["method"],
                    help="physical: a realizable body (cvxpy, Clarabel: extra 'ident'); ls: least squares; auto "
                         "(default): physical when installed")
-    s.add_argument("--friction", default="viscous,coulomb,offset",
+    s.add_argument("--friction", default=",".join(PAYLOAD["friction"]),
                    help="friction terms fitted per moving joint (default viscous,coulomb,offset; 'none')")
-    s.add_argument("--rotor", choices=("auto", "file", "fit"), default="auto",
+    s.add_argument("--rotor", metavar=_choices("rotor"), default=PAYLOAD["rotor"],
                    help="the moving joints' rotor inertia: the file's (or the identification's), fitted, or auto "
                         "(default: fitted when the file / identification has none)")
     s.add_argument("--coulomb-width", type=float, metavar="RAD_S", help="smooth Coulomb friction tanh(dq / w)")
     s.add_argument("--min-speed", type=float, metavar="RAD_S",
                    help="a joint's samples slower than this are not fitted on its row (default: --slow-fraction of "
                         "its peak speed)")
-    s.add_argument("--slow-fraction", type=float, default=0.1, metavar="F",
+    s.add_argument("--slow-fraction", type=float, default=PAYLOAD["slow_fraction"], metavar="F",
                    help="the default --min-speed as a fraction of each joint's peak speed (default 0.1)")
-    s.add_argument("--still", type=float, default=0.02, metavar="RAD",
+    s.add_argument("--still", type=float, default=PAYLOAD["still"], metavar="RAD",
                    help="a joint whose logged range is below this does not move (default 0.02 rad)")
     s.add_argument("--cutoff", type=float, metavar="HZ", help="low-pass cutoff (default from the log)")
     s.add_argument("--decimate", type=int, metavar="K", help="decimation factor (default from the rate and cutoff)")
-    s.add_argument("--covariance", choices=("hac", "white"), default="hac",
-                   help="standard deviations: HAC, for correlated residuals (default), or the least-squares formula")
-    s.add_argument("--memory-mb", type=float, default=512.0, metavar="MB",
+    s.add_argument("--covariance", metavar=_choices("covariance"), default=PAYLOAD["covariance"],
+                   help="standard deviations: hac, for correlated residuals (default), or white (the least-squares "
+                        "formula)")
+    s.add_argument("--memory-mb", type=float, default=PAYLOAD["memory_mb"], metavar="MB",
                    help="the largest regressor formed at once (default 512; the log is held whole)")
     s.add_argument("--prior", metavar="FILE.json",
                    help="hold what the motion does not identify at this payload: {\"mass\": kg, \"com\": [3] m, "
@@ -71,27 +81,33 @@ def add_parser(sub, model_args) -> None:
     s.add_argument("--urdf", metavar="FILE.urdf", help="write the URDF model with the payload as a fixed link")
     s.add_argument("--mjcf", metavar="FILE.xml", help="write the model as MJCF with the payload as a body")
     s.add_argument("--output", metavar="FILE", help="write the report to FILE")
-    s.set_defaults(func=cmd_payload)
+    s.set_defaults(func=run)
 
 
-def _prior(path: str | None):
-    """``--prior FILE.json``: ``{"mass", "com", "inertia_com"}``, or a saved payload's (its ``payload``)."""
-    if path is None:
-        return None
-    from ..files import read_input_bytes
+def keywords(args) -> dict:
+    """The flags as :func:`baseparams.identify_payload`'s keywords (one per flag).
 
-    try:
-        doc = json.loads(read_input_bytes(path, 1 << 20))
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise BaseparamsError(f"--prior {path}: not JSON ({exc})") from None
-    doc = doc.get("payload", doc) if isinstance(doc, dict) else doc
-    if not isinstance(doc, dict) or any(doc.get(k) is None for k in ("mass", "com", "inertia_com")):
-        raise BaseparamsError(f"--prior {path}: expected an object with mass, com and inertia_com (numbers)")
-    return {k: doc[k] for k in ("mass", "com", "inertia_com")}
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    dict
+        Every keyword but the model and the log.
+    """
+    names = ("link", "result", "validate", "columns", "method", "friction", "rotor", "coulomb_width", "min_speed",
+             "slow_fraction", "still", "cutoff", "decimate", "covariance", "memory_mb", "prior", "seed", "save",
+             "urdf", "mjcf", "predictions")
+    return {**{n: getattr(args, n) for n in names}, "analysis_samples": args.samples}
 
 
-def cmd_payload(args) -> int:
+def run(args) -> int:
     """``baseparams payload MODEL LOG --link LINK``: :func:`baseparams.identify_payload` of the flags.
+
+    Progress lines and the notes of what was written (and WARNINGs) go to stderr; the report (or
+    ``--json``) to stdout or ``--output``.
 
     Parameters
     ----------
@@ -108,37 +124,14 @@ def cmd_payload(args) -> int:
     BaseparamsError
         Bad input (model, log, result, options, outputs).
     """
-    from ..workflow_payload import identify_payload
+    from ..workflow.payload import identify_payload
+    from .parser import flag_message
 
     robot = common.load_robot(args)
-    opts = {"method": args.method, "friction": args.friction, "rotor": args.rotor, "coulomb_width": args.coulomb_width,
-            "min_speed": args.min_speed, "slow_fraction": args.slow_fraction, "still": args.still,
-            "cutoff": args.cutoff, "decimate": args.decimate, "covariance": args.covariance,
-            "prior": _prior(args.prior), "seed": args.seed, "memory_mb": args.memory_mb,
-            **({"samples": args.samples} if args.samples else {})}
-    out = identify_payload(robot, args.log, link=args.link, result=args.result, validate=args.validate,
-                           columns=args.columns, save=args.save, urdf=args.urdf, mjcf=args.mjcf,
-                           predictions=args.predictions, source=args.model,
-                           progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr), **opts)
+    out = identify_payload(robot, args.log, **keywords(args), _source=args.model,
+                           progress=lambda msg: print(f"baseparams: {flag_message(msg, 'payload')}", file=sys.stderr))
     for n in out.notes:
-        if n.startswith(("--urdf", "--mjcf", "result saved", "predictions of", "WARNING")):
-            print(f"baseparams: {n}", file=sys.stderr)
+        if n.startswith(("--urdf", "--mjcf", "urdf=", "mjcf=", "result saved", "predictions of", "WARNING")):
+            print(f"baseparams: {flag_message(n, 'payload')}", file=sys.stderr)
     emit(args, json.dumps(out.to_json(), indent=2) if args.json else out.summary())
     return EXIT_OK
-
-
-def excite_flags(s) -> None:
-    """``excite``'s payload flags: ``--payload LINK`` and the predicted sigmas' noise.
-
-    Parameters
-    ----------
-    s : argparse.ArgumentParser
-        The ``excite`` subparser.
-    """
-    s.add_argument("--payload", metavar="LINK",
-                   help="design a short excitation that identifies a payload on LINK best (the joints that carry "
-                        "it; default period 5 s, criterion logdet on the payload's columns)")
-    s.add_argument("--payload-noise", type=float, default=0.1, metavar="NM",
-                   help="with --payload: the torque noise of the predicted standard deviations (default 0.1 N m)")
-    s.set_defaults(criterion=None)  # --criterion's default: cond, or logdet with --payload (baseparams.excite)
-

@@ -115,8 +115,8 @@ class DesignModel:
         BaseparamsError
             Always.
         """
-        raise BaseparamsError("excite --payload: torque limits (--torque) are not supported; the effort limits are "
-                              "not checked")
+        raise BaseparamsError("excite: payload= with torque=: torque limits are not supported in a payload's "
+                              "design; the effort limits are not checked")
 
 
 def payload_robot(robot: Robot, link: str) -> tuple[Robot, int, list[str]]:
@@ -289,13 +289,7 @@ def sigma_note(s: dict, period: float, repeats: int) -> str:
             f"widen them){free}")
 
 
-#: the options of a robot's design that a payload's does not take (:func:`excite_payload`), as their flags
-NOT_FOR_PAYLOAD = {"drives": "--drives", "rotor": "--rotor", "torque": "--torque", "effort": "--effort",
-                   "limits": "limits=", "analysis_samples": "--analysis-samples", "plot": "--plot",
-                   "base_frequency": "--base-frequency"}
-
-
-def excite_payload(robot: Robot, link: str, refused: dict, *, period: float = 5.0, payload_noise: float = 0.1,
+def excite_payload(robot: Robot, link: str, *, period: float = 5.0, payload_noise: float = 0.1,
                    friction=("viscous", "coulomb", "offset"), nominal=None, repeats: int = 1, position=None,
                    velocity=None, **design):
     """A short excitation that identifies a payload on ``link`` best: ``excite --payload LINK`` (module docstring).
@@ -306,9 +300,6 @@ def excite_payload(robot: Robot, link: str, refused: dict, *, period: float = 5.
         The robot without the payload.
     link : str
         The payload's link.
-    refused : dict
-        The robot design's options given (``drives``, ``rotor``, ``torque``, ``effort``, ``limits``,
-        ``analysis_samples``, ``plot``, ``base_frequency``): any set is refused in one line.
     period : float
         The period [s] (default 5: a short motion).
     payload_noise : float
@@ -335,8 +326,8 @@ def excite_payload(robot: Robot, link: str, refused: dict, *, period: float = 5.
     Raises
     ------
     BaseparamsError
-        A robot design's option, an unknown link, limits that leave no room, a design that does not
-        excite the payload's columns.
+        An unknown link, limits that leave no room, a design that does not excite the payload's
+        columns (a robot design's options are refused by :func:`baseparams.excite` before).
     """
     from dataclasses import replace
 
@@ -345,10 +336,6 @@ def excite_payload(robot: Robot, link: str, refused: dict, *, period: float = 5.
     from .design import design_excitation
     from .limits import given_limits
 
-    given = [flag for name, flag in NOT_FOR_PAYLOAD.items() if refused.get(name) not in (None, False)]
-    if given:
-        raise BaseparamsError(f"excite --payload designs the payload's columns with the drive terms as nuisance: "
-                              f"{', '.join(given)} do not apply (--period does)")
     check_keywords("excite", period=period, payload_noise=payload_noise, robots=repeats)
     small, body, notes = payload_robot(robot, link)
     dm = design_model(small, body, friction_terms(friction))

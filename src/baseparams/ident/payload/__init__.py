@@ -14,7 +14,9 @@ about it in the link's frame, each with a sigma, and names what is not identifie
     Every option, checked once.
 :class:`Payload`
     The result: ``mass``, ``com``, ``inertia_com``, ``sigma()``, ``identified()``, ``to_json()``,
-    ``summary()``, ``predict(log)``.
+    ``summary()``, ``predict(log)``, ``save(path)``.
+:class:`SavedPayload`
+    A saved payload read back (``SavedPayload.load(path, robot)``).
 
 Layer: part of :mod:`baseparams.ident`; the front door is :func:`baseparams.identify_payload`
 (files, exports), the command ``baseparams payload``.
@@ -25,5 +27,6 @@ from __future__ import annotations
 from .options import PayloadOptions
 from .pipeline import identify_payload
 from .result import Payload
+from .saved import SavedPayload
 
-__all__ = ["Payload", "PayloadOptions", "identify_payload"]
+__all__ = ["Payload", "PayloadOptions", "SavedPayload", "identify_payload"]

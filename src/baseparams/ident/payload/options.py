@@ -12,21 +12,22 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ...arguments import RANGES, Range
+from ...arguments import PAYLOAD, PAYLOAD_CHOICES, RANGES, Range
 from ...errors import BaseparamsError
-from ..drives import FRICTION_TERMS, friction_terms
+from ..drives import friction_terms
 
 #: the estimators: physically consistent (cvxpy and Clarabel, the extra ``ident``), least squares, or the
 #: first when installed
-METHODS = ("auto", "physical", "ls")
+METHODS = PAYLOAD_CHOICES["method"]
 #: where the rotor inertia of the fitted joints comes from
-ROTORS = ("auto", "file", "fit")
+ROTORS = PAYLOAD_CHOICES["rotor"]
 #: the standard deviations' covariance (:mod:`baseparams.ident.uncertainty`)
-COVARIANCES = ("hac", "white")
-#: the numeric options and their ranges (the others are choices, flags or the prior)
+COVARIANCES = PAYLOAD_CHOICES["covariance"]
+#: the numeric options and their ranges (the others are choices, flags or the prior); the structural analysis
+#: needs more random states than :data:`~baseparams.arguments.RANGES` allows an analysis
 NUMBERS = {**{k: RANGES[k] for k in ("still", "min_speed", "slow_fraction", "coulomb_width", "cutoff", "decimate",
                                      "seed")},
-           "samples": Range(20, 100_000, integer=True), "memory_mb": Range(1, 1e6, unit="MB")}
+           "analysis_samples": Range(20, 100_000, integer=True), "memory_mb": Range(1, 1e6, unit="MB")}
 #: the numeric options whose None means "the default"
 OPTIONAL = ("min_speed", "coulomb_width", "cutoff", "decimate")
 
@@ -78,7 +79,7 @@ class PayloadOptions:
         :class:`~baseparams.model.inertia.Inertia`; kept as ten numbers ``(mass, com, Ixx, Ixy,
         Ixz, Iyy, Iyz, Izz)``. None (default): what the motion does not identify is not fitted
         and not reported as a number.
-    samples : int
+    analysis_samples : int
         Random states of the structural analysis (which payload parameters the moving joints
         can identify).
     seed : int
@@ -95,20 +96,20 @@ class PayloadOptions:
         An unknown friction term, a prior that is not a physical payload.
     """
 
-    method: str = "auto"
-    friction: tuple = FRICTION_TERMS
-    rotor: str = "auto"
-    coulomb_width: float | None = None
-    min_speed: float | None = None
-    slow_fraction: float = 0.1
-    still: float = 0.02
-    cutoff: float | None = None
-    decimate: int | None = None
-    covariance: str = "hac"
-    prior: object = None
-    samples: int = 200
-    seed: int = 0
-    memory_mb: float = 512.0
+    method: str = PAYLOAD["method"]
+    friction: tuple = PAYLOAD["friction"]
+    rotor: str = PAYLOAD["rotor"]
+    coulomb_width: float | None = PAYLOAD["coulomb_width"]
+    min_speed: float | None = PAYLOAD["min_speed"]
+    slow_fraction: float = PAYLOAD["slow_fraction"]
+    still: float = PAYLOAD["still"]
+    cutoff: float | None = PAYLOAD["cutoff"]
+    decimate: int | None = PAYLOAD["decimate"]
+    covariance: str = PAYLOAD["covariance"]
+    prior: object = PAYLOAD["prior"]
+    analysis_samples: int = PAYLOAD["analysis_samples"]
+    seed: int = PAYLOAD["seed"]
+    memory_mb: float = PAYLOAD["memory_mb"]
 
     def __post_init__(self):
         from ...arguments import check_choice, check_value

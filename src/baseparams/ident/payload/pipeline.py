@@ -89,7 +89,7 @@ def _identify(robot: Robot, log, link: str, opts: PayloadOptions, result, valida
     say(f"payload rows of {', '.join(model.joints)} at {prep.n_samples} samples")
     rows_obj, row_notes = fitted_rows(model, log, prep, cols, opts)
     say("which payload parameters the moving joints identify (structural rank)")
-    st = structural(model, np.asarray(log.q, dtype=float)[:, cols], moving, opts.samples, opts.seed)
+    st = structural(model, np.asarray(log.q, dtype=float)[:, cols], moving, opts.analysis_samples, opts.seed)
     say(f"fitting ({opts.method}, {opts.covariance} covariance)")
     f = _fit(model, rows_obj, st, opts)
     prep_notes = [n for n in prep.notes if not n.startswith("slow samples:")]  # identify's min_speed: not ours

@@ -266,6 +266,43 @@ class Payload:
             "samples": dict(self.samples), "fit_rms": dict(zip(self.model.joints, map(float, f.rms))),
             "covariance": f.covariance, "validation": self.validation, "notes": list(self.notes)}}
 
+    def document(self) -> dict:
+        """The JSON a saved payload holds (:meth:`save`; :meth:`SavedPayload.load <.saved.SavedPayload.load>` reads it).
+
+        Returns
+        -------
+        dict
+            ``{"format": "baseparams-payload", "version": 1, "baseparams", "robot": {"name",
+            "fingerprint"}, "options", "payload": {...}}`` (:meth:`to_json`'s ``payload``);
+            non-finite numbers as None.
+        """
+        from ...version import version
+        from ..saved import plain, robot_fingerprint
+        from .saved import FORMAT, VERSION
+
+        robot = self.model.robot
+        return plain({"format": FORMAT, "version": VERSION, "baseparams": version(),
+                      "robot": {"name": robot.name, "fingerprint": robot_fingerprint(robot)},
+                      "options": self.options.to_json(), **self.to_json()})
+
+    def save(self, path, inputs=(), what: str = "save=") -> None:
+        """Write :meth:`document` to ``path`` as JSON, atomically, never onto an input.
+
+        Parameters
+        ----------
+        path : str or path
+            The file.
+        inputs : iterable of str or path
+            The run's input files.
+        what : str
+            The option, for messages.
+        """
+        import json
+
+        from ...files import write_text
+
+        write_text(path, json.dumps(self.document(), indent=1, allow_nan=False) + "\n", inputs, what)
+
     def summary(self) -> str:
         """A text report: the quantities with their sigmas, what is not identified, the notes.
 

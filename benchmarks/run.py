@@ -47,6 +47,10 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
                     WLS, physical (``benchmarks/cross_recording.py``).
 * ``model_terms``   the Panda's held-out 5 Hz figure per model class: linear, + pre-sliding friction,
                     + tilt, + delay, + scale, and the terms cross-validation keeps.
+* ``payload``       issue 49: a 3.2 kg payload off-axis and rotated on a MuJoCo-simulated Panda (armature,
+                    damping, friction loss, a servo, 1.5 % AR(1) noise), full-arm and wrist-only motions, the
+                    robot known from its URDF, an MJCF, or the project's identification of a payload-free log:
+                    mass, centre-of-mass and inertia errors, 2-sigma coverage, time (``benchmarks/payload.py``).
 * ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the
                     page's own render time in headless Chromium (``data-render-ms``).
 
@@ -1280,7 +1284,15 @@ def bench_scale_logs(out: dict, quick: bool) -> None:
     run(out, quick, log)
 
 
+def bench_payload(out: dict, quick: bool) -> None:
+    """Payload identification (issue 49): the acceptance scenario simulated by MuJoCo (``benchmarks/payload.py``)."""
+    import payload
+
+    out.update(payload.run(quick, log))
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
+    "payload": bench_payload,
     "cross_recording": bench_cross_recording,
     "model_terms": bench_model_terms,
     "files": bench_files,

@@ -68,7 +68,8 @@ def _argv(cmd, opt, nargs, value, tmp_path):
     head = {"analyze": ["analyze", "puma560"], "regressor": ["regressor", "puma560"], "excite": ["excite", "puma560"],
             "identify": ["identify", "puma560", str(tmp_path / "log.csv")],
             "predict": ["predict", "puma560", str(tmp_path / "r.json"), str(tmp_path / "log.csv")],
-            "simulate": ["simulate", "puma560", str(tmp_path / "out.csv")]}[cmd]
+            "simulate": ["simulate", "puma560", str(tmp_path / "out.csv")],
+            "payload": ["payload", "puma560", str(tmp_path / "log.csv"), "--link", "link6"]}[cmd]
     values = [value] if nargs is None else ["0", "0", value]
     return head + [opt, *values]
 

@@ -244,7 +244,7 @@ MAX_PARAMETERS = 11
 #: the public front door: one keyword per flag of the command line (``baseparams.identify`` is
 #: ``baseparams.workflow.identify.identify``); nothing else may take more than :data:`MAX_PARAMETERS`
 FRONT_DOOR = {"baseparams.workflow.identify.identify", "baseparams.workflow.excite.excite",
-              "baseparams.workflow.simulate.simulate"}
+              "baseparams.workflow.simulate.simulate", "baseparams.workflow.payload.identify_payload"}
 
 
 def _compiled(node) -> bool:

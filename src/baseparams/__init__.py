@@ -36,6 +36,13 @@ identify(model, log, *, holdout=None, validate=None, method="auto", friction=...
     ``.predict(log)``, ``.compare_truth(truth)``).
 predict(model, result, log, *, raw_states=False)
     Joint torques ``(S, m)`` of a log from an identification or its saved file.
+identify_payload(model, log, *, link, result=None, validate=None, save=None, urdf=None, mjcf=None, ...)
+    What the robot carries on a link: a :class:`Payload` (``.mass``, ``.com``, ``.inertia_com`` in
+    the link's frame, ``.sigma()``, ``.identified()``, ``.to_json()``, ``.predict(log)``,
+    ``.save(path)``, ``SavedPayload.load(path, robot)``), the robot known from its model file or a
+    saved identification (``baseparams payload``).
+excite(model, payload=LINK, ...)
+    A short excitation that identifies a payload on a link best (``excite --payload LINK``).
 Robot, RobotBuilder, Inertia, pose
     Build a robot in code (see :class:`RobotBuilder`).
 CONVENTIONS
@@ -75,7 +82,7 @@ from .model import CONVENTIONS, Inertia, Robot, RobotBuilder, pose
 
 # excite and simulate (and the helpers identify and predict share with them) have one
 # implementation, baseparams.workflow: also the CLI's
-from .workflow import excite, identify, predict, simulate
+from .workflow import excite, identify, identify_payload, predict, simulate
 
 __all__ = [
     "CONVENTIONS",
@@ -93,6 +100,7 @@ __all__ = [
     "analyze_symbolic",
     "excite",
     "identify",
+    "identify_payload",
     "load",
     "pose",
     "predict",
@@ -172,7 +180,8 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
 
 # ---------------------------------------------------------------- the whole loop: excite, simulate, identify, predict
 #: the classes of the loop's results, imported on first use (``baseparams.Identification``)
-_LAZY = {"Excitation": "excitation.result", "Identification": "ident"}
+_LAZY = {"Excitation": "excitation.result", "Identification": "ident", "Payload": "ident.payload",
+         "PayloadOptions": "ident.payload", "SavedPayload": "ident.payload"}
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):

@@ -3,8 +3,8 @@
 The command line parses and prints: its parser (:mod:`baseparams.cli.parser`) asks each command's
 module (:mod:`~baseparams.cli.robots`, :mod:`~baseparams.cli.analyze`, :mod:`~baseparams.cli.regressor`,
 :mod:`~baseparams.cli.identify`, :mod:`~baseparams.cli.predict`, :mod:`~baseparams.cli.simulate`,
-:mod:`~baseparams.cli.excite`) for its subcommand, its flags' keywords and its ``run``; the
-preflight (:mod:`baseparams.cli.preflight`) asks the library's rules before any work; every
+:mod:`~baseparams.cli.excite`, :mod:`~baseparams.cli.payload`) for its subcommand, its flags' keywords and
+its ``run``; the preflight (:mod:`baseparams.cli.preflight`) asks the library's rules before any work; every
 message names the options by the command's flags (:func:`baseparams.cli.parser.flag_message`).
 
 Exit codes (scripts rely on them): 0 the result is certified (or completed, or unverified on
@@ -37,6 +37,7 @@ from .common import (
 from .excite import run as cmd_excite
 from .identify import run as cmd_identify
 from .parser import build_parser, flag_message
+from .payload import run as cmd_payload
 from .predict import run as cmd_predict
 from .preflight import preflight
 from .regressor import run as cmd_regressor
@@ -44,8 +45,8 @@ from .robots import run as cmd_robots
 from .simulate import run as cmd_simulate
 
 __all__ = ["EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_UNDECIDED", "Progress", "build_parser",
-           "cmd_analyze", "cmd_excite", "cmd_identify", "cmd_predict", "cmd_regressor", "cmd_robots", "cmd_simulate",
-           "floating_hint", "main", "preflight"]
+           "cmd_analyze", "cmd_excite", "cmd_identify", "cmd_payload", "cmd_predict", "cmd_regressor", "cmd_robots",
+           "cmd_simulate", "floating_hint", "main", "preflight"]
 
 
 def _one_line_notes() -> None:

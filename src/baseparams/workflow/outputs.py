@@ -45,6 +45,7 @@ OUTPUTS = MappingProxyType({
     "predict": {"out": "predictions"},
     "simulate": {"out": "log"},
     "excite": {"out": "trajectory", "plot": "plot", "output": "text"},
+    "payload": {"output": "text", "save": "result", "predictions": "predictions", "urdf": "urdf", "mjcf": "mjcf"},
 })
 
 

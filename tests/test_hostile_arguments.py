@@ -274,15 +274,17 @@ def test_a_local_cluster_of_a_thousand_workers_is_refused_before_starting(monkey
 # ---------------------------------------------------------------- a property: junk in every argument of the front door
 JUNK = ["x", object(), {"a": 1}, np.zeros((2, 2)), b"x", (1, "a"), math.nan, [math.inf]]
 #: keywords for which a string is a valid value of its type (a path, a name, a message)
-STRINGS_OK = {"out", "save", "mjcf", "source", "package_path", "path", "validate", "log", "result", "columns"}
+STRINGS_OK = {"out", "save", "mjcf", "source", "package_path", "path", "validate", "log", "result", "columns", "html",
+              "plot", "predictions", "urdf"}
 #: arguments that only label messages (any value is printed as it is)
 LABELS = {"what"}
 
 
 @pytest.mark.slow
-def test_junk_in_every_argument_is_a_typeerror_or_valueerror_naming_it(puma, tmp_path):
+def test_junk_in_every_argument_is_a_typeerror_or_valueerror_naming_it(puma, tmp_path, monkeypatch):
     """Every argument of the front door and of the result objects, eight values of the wrong kind each: a
     TypeError or ValueError (or BaseparamsError) of one line, never another exception, within seconds."""
+    monkeypatch.chdir(tmp_path)  # a string is a path to some keywords: whatever one writes stays in the test's folder
     from baseparams.ident import Identification
     from baseparams.io.logs import read_log, write_log
 

@@ -176,15 +176,26 @@ class IdentModel:
         self._drive_columns(dq[:, sel], ddq[:, sel], out)
         return out
 
-    def _column_map(self) -> np.ndarray:
-        """``(10 n, p)``: the base map on the kept base columns, zero on the drive columns (cached)."""
+    def _column_map(self):
+        """``(10 n, p)``: the base map on the kept base columns, zero on the drive columns (cached).
+
+        Dense for a small model; a ``scipy.sparse`` CSR matrix where the analysis's regrouping is
+        sparse (a large tree: a dense map would take ``80 n p`` bytes).
+        """
         p_map = self.__dict__.get("_pmap")
         if p_map is None:
             nb = len(self.analysis.base_names)
             ind = self.regrouping.independent
-            p_map = np.zeros((10 * self.robot.n, len(ind)))
             base_cols = np.flatnonzero(ind < nb)
-            p_map[:, base_cols] = self.analysis.base_map[:, ind[base_cols]]
+            t = self.analysis.base.T
+            if hasattr(t, "tocsr"):
+                import scipy.sparse as sp
+
+                sub = t.tocsc()[:, self.analysis.base.independent[ind[base_cols]]].tocoo()
+                p_map = sp.csr_matrix((sub.data, (sub.row, base_cols[sub.col])), shape=(10 * self.robot.n, len(ind)))
+            else:
+                p_map = np.zeros((10 * self.robot.n, len(ind)))
+                p_map[:, base_cols] = self.analysis.base_map[:, ind[base_cols]]
             object.__setattr__(self, "_pmap", p_map)
         return p_map
 
@@ -245,14 +256,37 @@ class IdentModel:
         ndarray, shape ``(p, 10 n + nd)``
             ``pi_paper`` in the ``paper`` convention (``robot.parameters("paper")``).
         """
-        base = self.analysis.base
-        t = base.T.toarray() if hasattr(base.T, "toarray") else base.T  # sparse for large trees (recursive form)
-        beta_of_paper = np.asarray(base.E @ np.linalg.inv(t))  # (nb, 10 n): paper -> convention -> base
-        nd = self.drives.n_params
-        blk = np.zeros((beta_of_paper.shape[0] + nd, beta_of_paper.shape[1] + nd))
-        blk[: beta_of_paper.shape[0], : beta_of_paper.shape[1]] = beta_of_paper
-        blk[beta_of_paper.shape[0]:, beta_of_paper.shape[1]:] = np.eye(nd)
-        return self.regrouping.matrix() @ blk
+        g = self.sparse_full_map()
+        return g.toarray() if hasattr(g, "toarray") else g
+
+    def sparse_full_map(self):
+        """:meth:`full_map` as a ``scipy.sparse`` CSR matrix where the regrouping is sparse (a large tree).
+
+        ``G = E_drive [E_base T^-1, 0; 0, I]``: ``T`` (:func:`~baseparams.base.regroup.paper_from`) is
+        block diagonal, inverted body by body; nothing ``(10 n, 10 n)`` is formed dense.
+
+        Returns
+        -------
+        ndarray or scipy.sparse.csr_matrix, shape ``(p, 10 n + nd)``
+            Dense when the analysis's regrouping matrices are.
+        """
+        from ..base.sparse import body_transforms
+
+        base, robot, nd = self.analysis.base, self.robot, self.drives.n_params
+        inv_blocks = np.linalg.inv(body_transforms(robot, base.convention))  # (n, 10, 10): T^-1 body by body
+        if not hasattr(base.E, "tocsr") and not hasattr(base.T, "tocsr"):
+            e = np.asarray(base.E).reshape(base.E.shape[0], robot.n, 10)
+            beta_of_paper = np.einsum("bnk,nkl->bnl", e, inv_blocks).reshape(base.E.shape[0], -1)
+            blk = np.zeros((beta_of_paper.shape[0] + nd, beta_of_paper.shape[1] + nd))
+            blk[: beta_of_paper.shape[0], : beta_of_paper.shape[1]] = beta_of_paper
+            blk[beta_of_paper.shape[0]:, beta_of_paper.shape[1]:] = np.eye(nd)
+            return self.regrouping.matrix() @ blk
+        import scipy.sparse as sp
+
+        inv_t = sp.bsr_matrix((inv_blocks, np.arange(robot.n), np.arange(robot.n + 1)),
+                              shape=(10 * robot.n, 10 * robot.n)).tocsr()
+        blk = sp.block_diag([sp.csr_matrix(base.E) @ inv_t, sp.identity(nd)], format="csr")
+        return (self.regrouping.sparse_matrix() @ blk).tocsr()
 
     def theta(self, pi_paper: np.ndarray, delta: np.ndarray | None = None) -> np.ndarray:
         """Model parameters of full parameters.
@@ -271,7 +305,7 @@ class IdentModel:
         """
         nd = self.drives.n_params
         delta = np.zeros(nd) if delta is None else np.asarray(delta, dtype=float)
-        return self.full_map() @ np.r_[np.asarray(pi_paper, dtype=float), delta]
+        return np.asarray(self.sparse_full_map() @ np.r_[np.asarray(pi_paper, dtype=float), delta]).reshape(-1)
 
 
 def measured_coords(robot: Robot, rows: str) -> np.ndarray:

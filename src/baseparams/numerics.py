@@ -902,21 +902,65 @@ def numerical_nullspace(robot: Robot, samples: int | None = None, seed: int = 0,
 
 
 def available_bytes() -> float | None:
-    """Memory available to this process [bytes] (Linux ``MemAvailable``), or None when unknown.
+    """Memory available to this process [bytes], or None when unknown.
+
+    The least of: Linux ``MemAvailable``, what the process's cgroup (v2 ``memory.max``, v1
+    ``memory.limit_in_bytes``) still allows, and what its address-space limit (``RLIMIT_AS``)
+    leaves beyond its current size: a container or ``ulimit -v`` kills a process long before
+    the machine runs out.
 
     Returns
     -------
     float or None
-        ``MemAvailable`` of ``/proc/meminfo`` in bytes; None where it cannot be read.
+        Bytes; None where none of them can be read.
     """
+    found = [x for x in (_meminfo_available(), _cgroup_room(), _rlimit_room()) if x is not None]
+    return min(found) if found else None
+
+
+def _meminfo_available() -> float | None:
     try:
         with open("/proc/meminfo") as fh:
             for line in fh:
                 if line.startswith("MemAvailable:"):
                     return float(line.split()[1]) * 1024
-    except OSError:
+    except (OSError, ValueError, IndexError):
         return None
     return None
+
+
+def _read_number(path: str) -> float | None:
+    try:
+        with open(path) as fh:
+            text = fh.read().strip()
+        return None if text in ("", "max") else float(text)
+    except (OSError, ValueError):
+        return None
+
+
+def _cgroup_room() -> float | None:
+    """The cgroup's limit minus its usage (v2, then v1); None without a limit."""
+    for limit, used in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                        ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        cap, now = _read_number(limit), _read_number(used)
+        if cap is not None and cap < 2**60 and now is not None:  # v1 writes "no limit" as a huge number
+            return max(cap - now, 0.0)
+    return None
+
+
+def _rlimit_room() -> float | None:
+    """``RLIMIT_AS`` minus the process's virtual size; None without a limit."""
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft == resource.RLIM_INFINITY:
+            return None
+        with open("/proc/self/status") as fh:
+            size = next((float(line.split()[1]) * 1024 for line in fh if line.startswith("VmSize:")), 0.0)
+        return max(float(soft) - size, 0.0)
+    except (ImportError, OSError, ValueError):
+        return None
 
 
 def decision_lines(d: dict | None) -> list[str]:

@@ -13,6 +13,7 @@ stacked factor ``R11`` as ``sigma * ||row_i(R11^-1)||``; ``%sigma = 100 std / |t
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -406,6 +407,33 @@ def motion_factor(model, q, dq, ddq, chunk: int = 4000) -> np.ndarray:
     return qr.r
 
 
+#: floating-point operations a motion's condition number may take (:func:`motion_stride`): ~15 s of QR
+MOTION_FLOPS = 1e11
+
+
+def motion_stride(model, samples: int) -> int:
+    """Every how many samples a long log's motion factor is formed, to stay within :data:`MOTION_FLOPS`.
+
+    A motion's condition number is of the regressor at every sample (:func:`motion_factor`), ``2 S m p^2``
+    flops: a 220-link chain's 20 s log at 500 Hz would take 2e13. Where that exceeds the budget, every
+    k-th sample (the states are smooth: their low-passed motion changes little between neighbours).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The identification model (``m`` measured rows, ``p`` parameters).
+    samples : int
+        Samples of the motion.
+
+    Returns
+    -------
+    int
+        The stride ``k >= 1`` (1 for every model and log of ordinary size).
+    """
+    per = 2.0 * len(model.coords) * float(model.n_params) ** 2
+    return max(1, math.ceil(samples * per / MOTION_FLOPS))
+
+
 def excitation(r11: np.ndarray, names: list[str], weak_ratio: float = 1e-3) -> tuple[float, list[str]]:
     """Condition number of the column-scaled regressor, and its poorly excited parameters.
 
@@ -428,9 +456,12 @@ def excitation(r11: np.ndarray, names: list[str], weak_ratio: float = 1e-3) -> t
     """
     norms = np.linalg.norm(r11, axis=0)
     scaled = r11 / np.where(norms > 0, norms, 1.0)
-    _, s, vt = np.linalg.svd(scaled)
+    s = np.linalg.svd(scaled, compute_uv=False)  # the singular vectors only where some direction is weak
     cond = float(s[0] / s[-1]) if s[-1] > 0 else np.inf
     weak_dirs = [k for k in range(len(s) - 1, -1, -1) if s[k] < weak_ratio * s[0]]
+    if weak_dirs:
+        _, s, vt = np.linalg.svd(scaled)
+        weak_dirs = [k for k in range(len(s) - 1, -1, -1) if s[k] < weak_ratio * s[0]]
     weak = []
     for k in weak_dirs:
         name = names[int(np.argmax(np.abs(vt[k])))]

@@ -350,6 +350,8 @@ PROBE_FLOPS = 2e12
 #: what helps an identification too large for the machine (:func:`check_size`)
 SMALLER = ("identify part of the robot (--joints A,B,...: the others welded), fewer drive terms (--friction none, "
            "no --rotor) or fewer fitted samples (a larger --decimate, a shorter log)")
+#: ... and one whose parameters alone are too many, whatever the log (:func:`model_for`)
+SMALLER_MODEL = "identify part of the robot (--joints A,B,...: the others welded)"
 
 
 def fit_cost(p: int, m: int, rows: int) -> tuple[float, float]:
@@ -403,7 +405,7 @@ def probe_cost(p: int, m: int) -> tuple[float, float]:
 
 
 def check_size(robot: Robot, what: str, cost: tuple[float, float], helps: str = SMALLER,
-               max_flops: float = MAX_FLOPS) -> None:
+               max_flops: float | None = None) -> None:
     """Refuse at once, in one line, work the machine cannot do: more memory than it has, or beyond ``max_flops``.
 
     Parameters
@@ -416,8 +418,8 @@ def check_size(robot: Robot, what: str, cost: tuple[float, float], helps: str = 
         ``(flops, bytes)`` (:func:`fit_cost`, :func:`probe_cost`).
     helps : str
         What would help (default :data:`SMALLER`).
-    max_flops : float
-        The most work allowed (default :data:`MAX_FLOPS`).
+    max_flops : float, optional
+        The most work allowed (default :data:`MAX_FLOPS`, read when called).
 
     Raises
     ------
@@ -428,6 +430,7 @@ def check_size(robot: Robot, what: str, cost: tuple[float, float], helps: str = 
     from ..numerics import available_bytes
 
     flops, need = cost
+    max_flops = MAX_FLOPS if max_flops is None else max_flops
     have = available_bytes()
     if have is not None and need > have:
         raise BaseparamsError(f"robot {robot.name!r}: {what} needs about {need / 1e9:.2g} GB of memory and "
@@ -556,11 +559,14 @@ def checked_values(model: IdentModel, rng: np.random.Generator, samples: int = 4
     if not err <= VALUES_RTOL * scale:
         k = model.analysis.base.K
         big = float(np.abs(k.data if hasattr(k, "tocsr") else np.asarray(k)).max(initial=0.0))
+        convention = model.analysis.convention
+        other = ("--convention khalil (each body's own link frame: no world-frame moments of bodies far from the "
+                 "origin)" if convention == "paper" else
+                 "--convention paper (world frame at q = 0) regroups without the link frames' transforms")
         raise BaseparamsError(
-            f"robot {robot.name!r}: its {model.analysis.convention} base parameters cannot be computed in double "
+            f"robot {robot.name!r}: its {convention} base parameters cannot be computed in double "
             f"precision: the regrouping's coefficients reach {big:.1g}, and its own parameters, regrouped, miss its "
-            f"torques by {err / max(scale, 1e-300):.1g} of their size; --convention paper (world frame at q = 0) "
-            f"regroups without the link frames' transforms")
+            f"torques by {err / max(scale, 1e-300):.1g} of their size; might help: {other}")
     return model
 
 
@@ -606,9 +612,11 @@ def model_for(robot: Robot, options, rows: str | None = None) -> IdentModel:
     analysis = analyze(robot, samples=options.analysis_samples, seed=options.seed, convention=options.convention,
                        rows=log_rows(robot) if rows is None else rows, literal=options.literal)
     coords = measured_coords(robot, analysis.rows)
-    p = len(analysis.base_names) + drives_for(robot, coords, options.rotor, options.friction, options.coulomb_width,
-                                              options.couplings).n_params
-    check_size(robot, f"identifying {p} parameters (at least as many observations)", fit_cost(p, len(coords), p))
+    nd = drives_for(robot, coords, options.rotor, options.friction, options.coulomb_width, options.couplings).n_params
+    p = len(analysis.base_names) + nd
+    helps = SMALLER_MODEL + (", fewer drive terms (--friction none, no --rotor)" if nd else "")
+    check_size(robot, f"identifying {p} parameters (at least as many observations)", fit_cost(p, len(coords), p),
+               helps)  # the fewest rows: only fewer parameters help
     return ident_model(analysis, options.rotor, options.friction, options.coulomb_width, couplings=options.couplings,
                        log_base=robot.floating)
 

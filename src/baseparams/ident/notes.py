@@ -173,6 +173,10 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" or (model.log_base and 3 <= c < 6) for c in coords])
 
     def torques(q, dq, ddq):  # inverse dynamics, O(S n): no (S, dof, 10 n) regressor
+        if robot.has_loops:  # actuated coordinates: the loops closed and projected by the regressor (small robots)
+            from ..analysis import regressor
+
+            return regressor(robot, q, dq, ddq) @ params
         if not model.log_base:
             return generalized_forces(robot, q, dq, ddq, params)
         from ..kinematics.floating import robot_states

@@ -752,9 +752,7 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
         use = _resolve_form(robot, form, columns)
         if use == "recursive" and columns is None:  # a small tree: DRNG's span in compact form
             columns = _recursive_columns(robot, rows, res, cert)
-        if use == "recursive" or (columns is not None and robot.n >= RECURSIVE_MIN_BODIES):
-            # a large tree's expanded form too: its O(sum of depths) terms expanded from the O(n) recursive
-            # regrouping when first read (a 1 000-link chain's 9.5 million, in seconds, not per body and term)
+        if use == "recursive":
             from .base.recursive import recursive_base_parameters
 
             base = recursive_base_parameters(robot, columns, convention)

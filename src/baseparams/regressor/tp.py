@@ -383,6 +383,10 @@ def closed_regressor(robot: Robot, closed, *, out: np.ndarray | None = None, bac
     return out
 
 
+#: columns from which a map's product dominates the numpy path (:func:`projected_regressor`)
+WIDE_MAP = 128
+
+
 def projected_regressor(robot: Robot, q, dq=None, ddq=None, *, P: np.ndarray, rows=None,
                         out: np.ndarray | None = None, backend: str = "auto", chunk: int = 1024) -> np.ndarray:
     """``Y[:, rows] @ P``: the TP regressor mapped to other columns (e.g. base parameters).
@@ -432,8 +436,10 @@ def projected_regressor(robot: Robot, q, dq=None, ddq=None, *, P: np.ndarray, ro
     shape = (s, len(rowsel), P.shape[1])
     out = _checked_out(out, shape)
     # the numpy path's product with P costs about P.shape[1] / 8 regressors (a 60-link chain's 596 columns:
-    # 28 us per sample, row and body, not 0.15): wide maps go compiled sooner
-    if use_compiled(backend, s * len(rowsel) * robot.n * max(1, P.shape[1] // 8)):
+    # 28 us per sample, row and body, not 0.15): wide maps go compiled sooner (not an arm's 54 columns: the
+    # compiler's 100 MB would be most of a short log's identification)
+    wide = P.shape[1] // 8 if P.shape[1] >= WIDE_MAP else 1
+    if use_compiled(backend, s * len(rowsel) * robot.n * wide):
         return compiled.tree_projected(robot, q, dq, ddq, P, rowsel, out=out)
     out = np.empty(shape) if out is None else out
     for k in range(0, s, chunk):

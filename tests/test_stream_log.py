@@ -125,6 +125,20 @@ def test_a_bad_value_names_its_global_line_and_row_as_read_log_does(puma, sim, t
         assert f"line {line} (data row {line - 1})" in str(streamed.value)
 
 
+def test_a_later_blocks_units_warning_reaches_the_streamed_notes(puma, sim, tmp_path):
+    """Issue 51: a streamed run kept the notes of the first block only: with allow_units, an angle beyond
+    4 pi far into the file went on without the WARNING the whole-log reader gives."""
+    csv, _ = sim
+    odd = tmp_path / "odd.csv"
+    _bad_copy(csv, odd, 6001, lambda s: s[:s.index(",") + 1] + "20.0" + s[s.index(",", s.index(",") + 1):])
+    whole = [n for n in read_log(odd, puma, allow_units=True).notes if "WARNING" in n]
+    with pytest.raises(DataError, match="allow-units"):
+        scan(LogStream(odd, puma, block_bytes=1 << 14))
+    streamed = [n for n in scan(LogStream(odd, puma, block_bytes=1 << 14, allow_units=True)).notes if "WARNING" in n]
+    assert len(whole) == 1 and len(streamed) == 1 and "units: WARNING" in streamed[0], (whole, streamed)
+    assert "20" in streamed[0] and "line 6001" in streamed[0], streamed
+
+
 def test_blank_and_comment_lines_keep_line_numbers_global(puma, sim, tmp_path):
     csv, _ = sim
     text = csv.read_text().splitlines(keepends=True)

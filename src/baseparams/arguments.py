@@ -111,9 +111,11 @@ IDENTIFY = MappingProxyType({
     "couplings": (), "holdout": None, "cutoff": None, "decimate": None, "min_speed": None, "prior_weight": None,
     "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
     "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,
+    "effort": "auto", "gain_anchor": None,
 })
 #: the values of the options that name one of a few choices
-CHOICES = MappingProxyType({"method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white")})
+CHOICES = MappingProxyType({"method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white"),
+                            "effort": ("auto", "torque", "current")})
 
 #: the most samples a run holds at once (a simulated log, a designed trajectory) and samples x columns
 MAX_SAMPLES = 2_000_000

@@ -9,11 +9,14 @@ Default layout (tables)
 -----------------------
 A time column ``t`` [s] and per joint of the model ``q_<joint>`` [rad or m], ``tau_<joint>``
 [N m or N], and optionally ``dq_<joint>``, ``ddq_<joint>``, where ``<joint>`` is the model's joint
-name (``robot.joint_names``). Example CSV header for a 2-joint arm::
+name (``robot.joint_names``). An arm without joint-torque sensors logs its motor currents instead
+(or as well): ``cur_<joint>`` [A], the current of the motor named after the joint, identified
+with unknown gains (:mod:`baseparams.ident.fromcurrents`); a joint with a ``cur_`` column needs no
+``tau_``. Example CSV header for a 2-joint arm::
 
     t,q_joint1,q_joint2,dq_joint1,dq_joint2,tau_joint1,tau_joint2
 
-Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a joint of the model; other
+Every column named ``q_``/``dq_``/``ddq_``/``tau_``/``cur_`` + a name must name a joint of the model; other
 columns are ignored, and a note lists them. Every 1-dof (R or P) joint of the model must be in
 the log unless ``allow_subset=True``.
 
@@ -52,13 +55,14 @@ Mapping (any other layout)
     sign = -1                # +1 or -1 (default 1)
     gear_ratio = 100         # motor side -> joint side: q = q_motor / ratio, tau = tau_motor * ratio
     torque_gain = 0.35       # tau column is a current [A]: tau_motor = gain * current [N m/A]
+    cur = "motor_current_1"  # or: the current [A] itself, its gain unknown (identified; sign applied)
     offset = 1.5708          # joint-side zero shift [rad or m], added last (default 0)
 
     [joints.panda_joint2]
     name = "fr3_joint2"      # columns q_fr3_joint2, ... (bags: the name in JointState.name[])
 
 Conversions, per joint: ``q = sign * q_col / gear_ratio + offset``, the same for ``dq`` and ``ddq``
-without the offset, ``tau = sign * torque_gain * gear_ratio * tau_col``. Coupled transmissions
+without the offset, ``tau = sign * torque_gain * gear_ratio * tau_col``, ``cur = sign * cur_col``. Coupled transmissions
 (one motor driving two joints) are not expressible here: convert such logs before reading.
 
 Checks
@@ -103,12 +107,12 @@ TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
 PARQUET_SUFFIXES = (".parquet", ".pq")
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 #: the signals of a joint, in the default layout's column prefixes
-KINDS = ("q", "dq", "ddq", "tau")
+KINDS = ("q", "dq", "ddq", "tau", "cur")
 #: joint types a log can hold (1-dof)
 LOGGABLE = ("R", "P")
 
 _BAG_FIELDS = {"q": "position", "dq": "velocity", "ddq": "acceleration", "tau": "effort"}
-_COLUMN = re.compile(r"^(q|dq|ddq|tau)_(.+)$")
+_COLUMN = re.compile(r"^(q|dq|ddq|tau|cur)_(.+)$")
 
 
 @dataclass
@@ -748,8 +752,8 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
         e = entries[j]
         base = e.get("name", j)
         cols = {k: e.get(k, f"{k}_{base}") for k in KINDS}
-        for k in KINDS:
-            required = k == "q" or (k == "tau" and require_tau)
+        for k in KINDS:  # a joint that logs its motor's current needs no torque
+            required = k == "q" or (k == "tau" and require_tau and cols["cur"] not in table.columns)
             if cols[k] not in table.columns and (required or k in e):
                 need = "required" if required else "named in the mapping"
                 raise DataError(f"{table.source}: no {table.label(cols[k])} for joint {j!r} ({k} is {need})")
@@ -759,7 +763,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
                           float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0))))
     if not out:
         raise DataError(f"{table.source}: no joint of robot {robot.name!r} in the log")
-    for k in ("dq", "ddq") if require_tau else ("dq", "ddq", "tau"):
+    for k in ("dq", "ddq", "cur") if require_tau else ("dq", "ddq", "tau", "cur"):
         have = [x.joint for x in out if x.cols[k] is not None]
         if have and len(have) < len(out):
             lack = [x.joint for x in out if x.cols[k] is None]
@@ -814,6 +818,8 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_tr
         ratio = np.array([x.ratio for x in joints])
         if k == "tau":
             arrays[k] = raw * (sign * ratio * np.array([x.gain for x in joints]))
+        elif k == "cur":  # a current: its gain is what identification finds
+            arrays[k] = raw * sign
         else:
             arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
     _check_plausible(table, joints, arrays["q"], max_angle, max_travel)
@@ -823,7 +829,8 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_tr
         notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"
                      + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))
     return JointLog(t=t, joints=tuple(x.joint for x in joints), q=arrays["q"], tau=arrays["tau"], dq=arrays["dq"],
-                    ddq=arrays["ddq"], source=table.source, removed=dict(table.removed), notes=tuple(notes))
+                    ddq=arrays["ddq"], source=table.source, removed=dict(table.removed), notes=tuple(notes),
+                    cur=arrays["cur"])
 
 
 def _base_columns(table: _Table, robot: Robot) -> list[str]:

@@ -274,3 +274,32 @@ def test_coverage_of_the_gains_std_over_seeds():
     z = np.concatenate(z)
     assert 0.5 < np.sqrt(np.mean(z**2)) < 1.5, z
     assert np.mean(np.abs(z) < 2) > 0.85, z
+
+
+def test_several_anchors_give_the_scale_their_geometric_mean(fitted):
+    """Every catalogue gain as an anchor: the scale their geometric mean, their spread its std; the text report."""
+    from baseparams.ident.report import format_identification
+
+    file, a, _, gains, single = fitted
+    cat = gains * np.array([1.05, 0.95, 1.08, 0.93, 1.02, 1.06])  # a catalogue, 2-8 % off either way
+    res = identify(file, _currents_only(a), gain_anchor=",".join(f"joint{j + 1}={k}" for j, k in enumerate(cat)),
+                   holdout=2.0)
+    g = res.currents
+    s = np.exp(np.mean(np.log(cat / single.currents.gains)))  # the single-anchor fit, rescaled
+    np.testing.assert_allclose(g.gains, single.currents.gains * s, rtol=1e-6)
+    ratios = np.log(cat / (single.currents.gains * s))
+    assert g.scale_std == pytest.approx(np.std(ratios, ddof=1) / np.sqrt(6), rel=1e-6)
+    assert "their geometric mean" in g.scale_note()
+    text = format_identification(res)
+    assert "validation RMS" in text and " A against the raw measured currents" in text and "(anchor)" in text
+
+
+def test_an_anchor_on_a_gain_the_currents_do_not_determine_gives_it(fitted):
+    """The bare Puma wrist: its gains are not determined; an anchor there gives one, the scale stays the others'."""
+    file, a, b, gains = _recordings(4, tool=0.0, file_error=0.0, seconds=10.0)
+    res = identify(file, _currents_only(a), gain_anchor=f"joint2={gains[1]},joint6={gains[5]}")
+    g = res.currents
+    assert "joint6" in g.undetermined and g.gains[5] == pytest.approx(gains[5]) and g.std[5] == 0
+    assert g.gains[1] == pytest.approx(gains[1]) and g.scale_std == 0  # one determined anchor: its scale exactly
+    assert "its gain is the anchor's" in next(x["note"] for x in g.groups if x["members"][0] == "k_joint6")
+    assert np.all(np.isfinite(res.predict_currents(b)))

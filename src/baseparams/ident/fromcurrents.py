@@ -237,12 +237,16 @@ def _gain_fit(model, am, cur, anchors, idx, opts, q):
     from ..numerics import blas_threads
     from .currents import covariance, fit_gains
 
+    if anchors:  # the fit's own anchor: the given one of the largest torque (current spread x gain), best determined
+        first = int(np.argmax([abs(a.gain) * np.std(cur[:, r]) for a, r in zip(anchors, idx)]))
+        anchors, idx = (anchors[first], *anchors[:first], *anchors[first + 1:]), [idx[first], *idx[:first],
+                                                                                      *idx[first + 1:]]
     fixed = (idx[0], 1.0 / anchors[0].gain) if anchors else None
     with blas_threads():
         gf = fit_gains(am, cur, model.names, tuple(model.joints), anchor=fixed, weighted=opts.method != "ols")
         cov, label = covariance(am, cur, gf, opts.covariance)
     if anchors:
-        gf, cov, rel = _anchors_scaled(model, gf, cov, anchors, idx)
+        gf, cov, rel = _anchors_scaled(am, gf, cov, anchors, idx)
     else:
         gf, cov, rel = _file_scaled(model, gf, cov, q)
     if opts.method == "physical":  # at the final scale: the physical fit's prior is the file's inertias
@@ -259,23 +263,33 @@ def _rescaled(gf, cov, s: float):
     return gf, cov * np.outer(d, d)
 
 
-def _anchors_scaled(model, gf, cov, anchors, idx):
-    """Several anchors: the scale their geometric mean, its std their spread over the root of their number."""
-    if len(anchors) == 1:
-        return gf, cov, 0.0
-    left = [a.motor for a, r in zip(anchors, idx) if r in gf.left_out]
-    if left:
-        raise BaseparamsError(f"gain anchor {', '.join(left)}: the currents do not determine its gain against the "
-                              f"others (its rigid-body torque is at its current's noise): anchor joints that carry "
-                              f"a load")
-    ratio = np.array([a.gain * gf.g[r] for a, r in zip(anchors, idx)])  # given / fitted
-    if not np.all(ratio > 0):
-        raise BaseparamsError(f"gain anchors {', '.join(map(str, anchors))}: their signs disagree with the fitted "
-                              f"gains' ({', '.join(f'{a.motor} {1 / gf.g[r]:.4g}' for a, r in zip(anchors, idx))} "
-                              f"at the first's scale)")
-    logs = np.log(ratio)
-    gf, cov = _rescaled(gf, cov, float(np.exp(logs.mean())))
-    return gf, cov, float(np.std(logs, ddof=1) / np.sqrt(len(logs)))
+def _anchors_scaled(am, gf, cov, anchors, idx):
+    """Several anchors: the scale from the determined ones, and the others' gains.
+
+    The scale is the geometric mean of the determined anchors' ratios, its std their spread over the root of
+    their number; an anchor on a motor the currents do not determine gives that motor's gain (its own terms
+    follow).
+    """
+    scale = [(a, r) for a, r in zip(anchors, idx) if r not in gf.left_out]
+    if len(scale) > 1:
+        ratio = np.array([a.gain * gf.g[r] for a, r in scale])  # given / fitted
+        if not np.all(ratio > 0):
+            raise BaseparamsError(f"gain anchors {', '.join(str(a) for a, _ in scale)}: their signs disagree with the "
+                                  f"fitted gains' ({', '.join(f'{a.motor} {1 / gf.g[r]:.4g}' for a, r in scale)} at "
+                                  f"the first's scale)")
+        logs = np.log(ratio)
+        gf, cov = _rescaled(gf, cov, float(np.exp(logs.mean())))
+        rel = float(np.std(logs, ddof=1) / np.sqrt(len(logs)))
+    else:
+        rel = 0.0
+    theta, g = gf.theta.copy(), gf.g.copy()
+    touched = (am != 0).any(axis=0)  # (m, p): the rows each column acts on
+    for a, r in zip(anchors, idx):
+        if r in gf.left_out:  # the current fits g_r times its own terms: given g_r, they follow
+            own = touched[r] & (touched.sum(axis=0) == 1)
+            theta[own] *= g[r] * a.gain
+            g[r] = 1.0 / a.gain
+    return replace(gf, theta=theta, g=g, left_std={r: v for r, v in gf.left_std.items() if r not in idx}), cov, rel
 
 
 def _file_scaled(model, gf, cov, q):
@@ -339,7 +353,8 @@ def _result_parts(model, tx, am, cur, gf, cov, label, anchors, scale_std, method
     sk = np.where(gf.g != 0, sg / np.where(gf.g != 0, gf.g, 1.0) ** 2, np.inf)
     gains = CurrentGains(tx, k, np.abs(sk), ",".join(map(str, anchors)) or "model file", float(scale_std),
                          np.where(gf.weights > 0, 1.0 / np.where(gf.weights > 0, gf.weights, 1.0), np.nan),
-                         tuple(tx.motors[r] for r in gf.left_out), tuple(_groups(model, tx, gf, k)), rotor_split(model))
+                         tuple(tx.motors[r] for r in gf.left_out), tuple(_groups(model, tx, gf, k, anchors)),
+                         rotor_split(model))
     return f, gains
 
 
@@ -373,7 +388,7 @@ def rotor_split(model) -> dict:
     return out
 
 
-def _groups(model, tx, gf, k) -> list[dict]:
+def _groups(model, tx, gf, k, anchors=()) -> list[dict]:
     """What currents cannot separate: the scale, drive terms regrouped, gains not determined, weak directions."""
     reg = model.regrouping
     nb = len(model.analysis.base_names)
@@ -391,14 +406,17 @@ def _groups(model, tx, gf, k) -> list[dict]:
                "file states no armature to take out)")
         out.append({"kind": "regrouped", "members": [term, *into],
                     "note": f"{term} (motor side) is one column with {', '.join(into)}: {how}"})
+    given = {a.motor for a in anchors}
     for r in gf.left_out:
         m = tx.motors[r]
+        how = (f"its gain is the anchor's, {k[r]:.4g} (given)" if m in given else
+               f"its gain, regressed afterwards on the torque the other joints' parameters predict on its row, "
+               f"{k[r]:.4g}, is known only to its std")
         out.append({"kind": "undetermined", "members": [f"k_{m}", f"the terms only {m}'s row has"],
                     "note": f"the currents do not determine the gain of {m} against the others (its rigid-body "
                             f"torque is at its current's noise, or weaker than its rotor and friction terms): its "
-                            f"row is left out of the parameters' fit; its gain regressed afterwards, {k[r]:.4g}, is "
-                            f"not meaningful beyond its std; {m}'s joint-side torque comes from the other joints' "
-                            f"parameters"})
+                            f"row is left out of the parameters' fit; {how}; {m}'s joint-side torque comes from the "
+                            f"other joints' parameters"})
     for grp in gf.groups:
         out.append({"kind": "weak", "members": list(grp["members"]),
                     "note": f"a direction this log does not determine (singular value {grp['singular_value']:.2g} "

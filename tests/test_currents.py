@@ -303,3 +303,45 @@ def test_an_anchor_on_a_gain_the_currents_do_not_determine_gives_it(fitted):
     assert g.gains[1] == pytest.approx(gains[1]) and g.scale_std == 0  # one determined anchor: its scale exactly
     assert "its gain is the anchor's" in next(x["note"] for x in g.groups if x["members"][0] == "k_joint6")
     assert np.all(np.isfinite(res.predict_currents(b)))
+
+
+def test_logs_with_current_columns_read_and_written(tmp_path):
+    """``cur_<joint>`` columns [A] (a joint with one needs no ``tau_``), a ``--columns`` map's ``cur``, written back."""
+    from baseparams.io.logs import read_log, write_log
+
+    file, a, _, _ = _recordings(9, seconds=2.0)
+    path = write_log(tmp_path / "a.csv", _currents_only(a))
+    back = read_log(path, file)
+    assert back.tau is None and np.array_equal(back.cur, a.cur)
+    text = path.read_text().splitlines()
+    header = text[0].replace("cur_joint1", "i1")
+    (tmp_path / "b.csv").write_text("\n".join([header, *text[1:]]) + "\n")
+    mapped = read_log(tmp_path / "b.csv", file, columns={"joints": {"joint1": {"cur": "i1", "sign": -1}}},
+                      allow_subset=True)
+    assert mapped.joints == ("joint1",) and np.array_equal(mapped.cur[:, 0], -a.cur[:, 0])
+
+
+def test_the_command_line_from_currents_to_predictions(tmp_path, capsys):
+    """``identify --gain-anchor`` on a log of currents, ``--save``, ``--predictions``; ``predict --out`` writes both."""
+    import json
+
+    from baseparams.cli import main
+    from baseparams.io.logs import write_log
+
+    puma = baseparams.load("puma560")
+    _, a, b, gains = _recordings(10, robot=puma, file_error=0.0, seconds=10.0)
+    train = write_log(tmp_path / "a.csv", _currents_only(a))
+    other = write_log(tmp_path / "b.csv", b)  # the other recording: currents and joint-torque sensors
+    assert main(["identify", "puma560", str(train), "--gain-anchor", f"joint2={gains[1]}", "--holdout", "2",
+                 "--save", str(tmp_path / "r.json"), "--predictions", str(tmp_path / "p.csv"), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["currents"]["anchor"] == f"joint2={gains[1]:g}" and doc["validation"]["unit"] == "A"
+    header = (tmp_path / "p.csv").read_text().splitlines()[0].split(",")
+    assert header == ["t", *(f"tau_joint{k}" for k in range(1, 7)), *(f"cur_joint{k}" for k in range(1, 7))]
+    assert main(["predict", "puma560", str(tmp_path / "r.json"), str(other), "--out", str(tmp_path / "o.csv"),
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["rms"]["total"] < 0.05 * np.sqrt(np.mean(b.tau**2)) and out["rms_currents"]["total"] < 0.05
+    assert "joint side" in out["torque"]
+    written = np.loadtxt(tmp_path / "o.csv", delimiter=",", skiprows=1)
+    assert written.shape == (b.n_samples, 13)

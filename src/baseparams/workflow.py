@@ -537,7 +537,7 @@ def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["hol
              columns=None, joints=None, weld=None, analysis_samples: int | None = IDENTIFY["analysis_samples"],
              literal: bool = IDENTIFY["literal"], terms=IDENTIFY["terms"], stream: str = Inputs.stream, save=None,
              predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, seed: int = IDENTIFY["seed"],
-             progress=None):
+             effort: str = IDENTIFY["effort"], gain_anchor: str | None = IDENTIFY["gain_anchor"], progress=None):
     """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
 
     One keyword per flag of the command. The identification's options become one
@@ -554,10 +554,11 @@ def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["hol
     log : JointLog, str or path
         The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
     holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, prior_weight, \
-convention, covariance, score_cutoff, allow_units, analysis_samples, literal, terms, seed
+convention, covariance, score_cutoff, allow_units, analysis_samples, literal, terms, seed, effort, gain_anchor
         The identification's options (:class:`~baseparams.ident.options.IdentOptions`: the
         hold-out [s], the estimator, the drive model, the filter, the second validation score's
-        cutoff [Hz], the analysis' random states and seed, the model terms).
+        cutoff [Hz], the analysis' random states and seed, the model terms; torques or motor
+        currents with unknown gains, the gains' anchor ``JOINT=K``).
     validate, columns, joints, weld, stream, truth
         What is read besides the log (:class:`Inputs`).
     save, predictions, urdf, mjcf, html, plot
@@ -585,7 +586,7 @@ convention, covariance, score_cutoff, allow_units, analysis_samples, literal, te
                            couplings=couplings, holdout=holdout, cutoff=cutoff, decimate=decimate, min_speed=min_speed,
                            prior_weight=prior_weight, convention=convention, covariance=covariance,
                            score_cutoff=score_cutoff, allow_units=allow_units, literal=literal, terms=terms,
-                           analysis_samples=analysis_samples, seed=seed)
+                           analysis_samples=analysis_samples, seed=seed, effort=effort, gain_anchor=gain_anchor)
     inputs = Inputs(validate=validate, columns=columns, joints=joints, weld=weld, stream=stream, truth=truth)
     outputs = Outputs(save=save, predictions=predictions, urdf=urdf, mjcf=mjcf, html=html, plot=plot)
     return identify_command(model, log, options, inputs, outputs, Reporter(progress=progress))
@@ -826,6 +827,9 @@ def _write_predictions(result, logs: tuple, holdout, path, run: _Run) -> None:
     tau = result.predict(whole)
     keep = (whole.t >= -float("inf")) if val is not None else whole.t >= whole.t[-1] - holdout
     cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
+    if result.currents is not None:  # from currents: the joint-side torques and the motors' currents
+        cur = result.predict_currents(whole)
+        cols.update({f"cur_{m}": cur[keep, k] for k, m in enumerate(result.currents.motors)})
     write_columns(path, cols, run.inputs, _opt("predictions", run.reporter.cli))
     run.reporter.note(f"predictions of {int(keep.sum())} validation samples written to {path}")
 

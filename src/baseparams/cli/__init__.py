@@ -252,13 +252,15 @@ cmd_excite = lazy_command("excite", "cmd_excite", "baseparams excite MODEL")
 
 def _predict_parser(sub, model_args) -> None:
     """The ``predict`` subcommand's arguments."""
-    s = sub.add_parser("predict", help="predict joint torques of a log from a saved identification (identify --save)")
+    s = sub.add_parser("predict", help="predict joint torques of a log from a saved identification (identify --save); "
+                                       "from currents: the joint-side torques and the motors' currents")
     model_args(s)
     s.add_argument("result", help="the saved identification (RESULT.json from 'identify --save')")
     s.add_argument("log", help="the log or trajectory: t, q_<joint>, [dq_<joint>, ddq_<joint>], [tau_<joint>] "
                                "(CSV/TSV, NPZ, Parquet, a ROS 2 bag); rates it lacks are derived as identify does")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
-    s.add_argument("--out", metavar="FILE", help="write t, tau_<joint> per log sample (.csv, .tsv or .parquet)")
+    s.add_argument("--out", metavar="FILE", help="write t, tau_<joint> per log sample (.csv, .tsv or .parquet); a "
+                                                 "result from currents: also cur_<joint> [A]")
     s.add_argument("--raw-states", action="store_true",
                    help="the model's torques on the states as logged (default: on the states low-passed at the "
                         "identification's cutoff, as it was fitted)")
@@ -535,6 +537,13 @@ def _identify_parser(sub, model_args) -> None:
                    help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "
                         "reaches each JOINT times W; adds Iam_NAME, Fvm_NAME, Fcm_NAME (with --rotor, viscous, "
                         "coulomb); repeatable")
+    s.add_argument("--effort", choices=CHOICES["effort"], default=IDENTIFY["effort"],
+                   help="what the log's effort is: torque (tau_<joint>), current (cur_<joint> [A]: motor currents "
+                        "with unknown gains, identified with the parameters; their common scale from --gain-anchor), "
+                        "or auto (default: currents when the log has them and no torques)")
+    s.add_argument("--gain-anchor", metavar="JOINT=K[,JOINT=K]",
+                   help="currents: the catalogue gain K [N m/A at the joint side] of JOINT's motor, fixing every "
+                        "gain's scale (several: their geometric mean); default the model file's masses")
     s.add_argument("--cutoff", type=float, metavar="HZ", help="low-pass cutoff (default from the sampling rate)")
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")

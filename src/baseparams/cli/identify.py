@@ -104,7 +104,8 @@ def options_of(args):
         couplings=tuple(args.coupling or ()), holdout=args.holdout, cutoff=args.cutoff, decimate=args.decimate,
         min_speed=args.min_speed, prior_weight=args.prior_weight, convention=args.convention,
         covariance=args.covariance, score_cutoff=args.score_cutoff, allow_units=args.allow_units,
-        literal=args.literal, terms=args.terms, analysis_samples=args.samples, seed=args.seed)
+        literal=args.literal, terms=args.terms, analysis_samples=args.samples, seed=args.seed, effort=args.effort,
+        gain_anchor=args.gain_anchor)
     return args.options
 
 
@@ -173,7 +174,7 @@ def cmd_predict(args) -> int:
     """
     from ..ident import Identification
     from ..io.logs import read_log
-    from ..tables import check_table_path, write_columns
+    from ..tables import check_table_path
 
     inputs = input_files(args)
     check_table_path(args.out, inputs, "--out")
@@ -189,10 +190,12 @@ def cmd_predict(args) -> int:
             print(f"baseparams: note: {note}", file=sys.stderr)
     tau = ident.predict(log, smooth=not args.raw_states)
     joints = ident.joints
+    cur = _currents(ident, log, args)  # a result from currents: the motors' currents too
     if args.out:
-        write_columns(args.out, {"t": log.t, **{f"tau_{j}": tau[:, k] for k, j in enumerate(joints)}}, inputs, "--out")
+        _write_out(args.out, log.t, {f"tau_{j}": tau[:, k] for k, j in enumerate(joints)}, ident, cur, inputs)
     out = {"model": robot.name, "result": args.result, "log": args.log, "samples": log.n_samples, "joints": joints,
-           "out": args.out, "prediction": "raw states" if args.raw_states else "smooth", "rms": None}
+           "out": args.out, "prediction": "raw states" if args.raw_states else "smooth", "rms": None,
+           **_current_figures(ident, log, cur)}
     if log.tau is not None:
         from ..ident import validation_scores
 
@@ -226,8 +229,49 @@ def cmd_predict(args) -> int:
         if "rms_lowpassed" in out:
             lines.append(f"RMS vs the measured torques low-passed at {out['score_cutoff']:g} Hz (--score-cutoff): "
                          f"{out['rms_lowpassed']['total']:.4g}")
-    print("\n".join(lines))
+    print("\n".join(lines + (_current_lines(ident, out) if cur is not None else [])))
     return EXIT_OK
+
+
+def _current_lines(ident, out: dict) -> list[str]:
+    """A result from currents: the currents' RMS line, and what the torques are."""
+    lines = []
+    if out.get("rms_currents") is not None:
+        r = out["rms_currents"]
+        lines.append(f"RMS vs the measured currents at every sample: {r['total']:.4g} A (all motors); "
+                     + ", ".join(f"{m} {r[m]:.3g}" for m in ident.currents.motors))
+    regrouped = any(g["kind"] == "regrouped" for g in ident.currents.groups)
+    return lines + ["torques: joint side (the rigid body; motor-side friction and rotor inertia excluded"
+                    + (", the regrouped rotor inertias included: see the result's notes)" if regrouped else ")")]
+
+
+def _write_out(path, t, torques: dict, ident, cur, inputs) -> None:
+    """``--out``: ``t``, ``tau_<joint>`` and, for a result from currents, ``cur_<motor>``."""
+    from ..tables import write_columns
+
+    extra = {} if cur is None else {f"cur_{m}": cur[:, k] for k, m in enumerate(ident.currents.motors)}
+    write_columns(path, {"t": t, **torques, **extra}, inputs, "--out")
+
+
+def _currents(ident, log, args):
+    """A result from currents: the predicted currents ``(S, m)`` [A] (None for a result from torques)."""
+    return None if ident.currents is None else ident.predict_currents(log, smooth=not args.raw_states)
+
+
+def _current_figures(ident, log, cur) -> dict:
+    """A result from currents: what its torques are, and its currents' RMS against the log's [A] (None without)."""
+    if cur is None:
+        return {}
+    out = {"torque": "joint side: the rigid body a joint-torque sensor after the gear reads (no motor-side friction "
+                     "or rotor inertia)", "rms_currents": None}
+    if log.cur is not None:
+        from dataclasses import replace
+
+        from ..ident import validation_scores
+
+        s = validation_scores(replace(log, tau=log.cur), cur, list(ident.currents.motors))
+        out["rms_currents"] = {"total": s["rms_total"], **s["rms"]}
+    return out
 
 
 def _edge_samples(log, cutoff) -> int:

@@ -1033,7 +1033,7 @@ def identify_stream(robot, stream, options=None, /, *, validation=None, predicti
     Raises
     ------
     NotStreamable
-        Non-uniform time stamps, a floating base (read the log whole).
+        Non-uniform time stamps, a floating base, motor currents (read the log whole).
     BaseparamsError
         As :func:`~baseparams.ident.identify`.
     """
@@ -1046,6 +1046,9 @@ def identify_stream(robot, stream, options=None, /, *, validation=None, predicti
                             "over the whole log), not streamed")
     if opts.holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    if opts.effort != "torque" and getattr(stream, "has_currents", False):
+        raise NotStreamable(f"{stream.source}: motor currents (cur_ columns): read whole (identification from "
+                            f"currents holds its fitted rows)")
     kept = None
     if getattr(stream, "kind", None) in ("text", "parquet"):  # parsed once, replayed from a binary copy
         stream = kept = Replay(stream, stream.decoded_mb)

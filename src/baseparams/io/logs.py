@@ -1146,6 +1146,7 @@ class LogStream:
             what = "array" if self.kind == "npz" else "column"
             empty.labels = {n: f"{what} {n!r}" for n in self.names}
         self._joints = _resolve(empty, robot, self.spec, allow_subset, require_tau)
+        self.has_currents = any(x.cols["cur"] is not None for x in self._joints)  # motor currents: read whole
         if self.spec["time"] not in self.names:
             raise DataError(f"{self.source}: no time column {self.spec['time']!r} (columns: "
                             f"{', '.join(self.names[:12])})")

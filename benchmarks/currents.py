@@ -191,7 +191,9 @@ def tx40(shared: Path) -> dict | None:
     mask = t >= t[-1] - hold
     y_torque = np.linalg.solve(rt, torque.predict(log).T).T  # the torque fit's motor torques
     g = ours.currents
-    return {"seconds": seconds, "ratio": (g.gains / n).tolist(), "rel_std": (g.std / np.abs(g.gains)).tolist(),
+    out = [m in g.undetermined for m in g.motors]  # not determined: no ratio, no std claimed
+    return {"seconds": seconds, "ratio": [None if o else float(x) for o, x in zip(out, g.gains / n)],
+            "rel_std": [None if o else float(x) for o, x in zip(out, g.std / np.abs(g.gains))],
             "undetermined": list(g.undetermined),
             "current_rms": [ours.validation["rms"][j] for j in robot.joint_names],
             "torque_fit_current_rms": np.sqrt(np.mean((y_torque - y)[mask] ** 2, axis=0)).tolist()}

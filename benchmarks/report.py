@@ -186,8 +186,12 @@ def currents(d: dict, g) -> str:
         f"{100 * d.get(f'currents_arm_seed{s}_ratio_error', float('nan')):.1f} % | "
         f"{g(f'currents_arm_seed{s}_naive_smallest', '{:.2f}')} | {d.get(f'currents_arm_seed{s}_undetermined', '-')} | "
         f"{g(f'currents_arm_seed{s}_seconds', '{:.1f}')} s |\n" for s in seeds)
+    def pct(k: str) -> str:
+        return "-" if d.get(k) is None else f"{100 * d[k]:.1f} %"
+
     rows_tx = "".join(
-        f"| joint {j} | {g(f'currents_tx40_ratio_j{j}', '{:.3f}')} | {100 * d.get(f'currents_tx40_rel_std_j{j}', float('nan')):.1f} % | "
+        f"| joint {j} | {g(f'currents_tx40_ratio_j{j}', '{:.3f}').replace('n/a', 'not determined')} | "
+        f"{pct(f'currents_tx40_rel_std_j{j}')} | "
         f"{g(f'currents_tx40_current_rms_j{j}', '{:.3f}')} | {g(f'currents_tx40_torque_fit_current_rms_j{j}', '{:.3f}')} |\n"
         for j in range(1, 7))
     return f"""### 10. Identification from motor currents with unknown gains (issue 50)

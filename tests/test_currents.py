@@ -176,6 +176,16 @@ def test_a_joint_whose_torque_is_below_the_noise_is_named_not_fitted():
     groups = [x for x in g.groups if x["kind"] == "undetermined"]
     assert {x["members"][0] for x in groups} == {f"k_{j}" for j in g.undetermined}
     assert "NOT DETERMINED" in next(n for n in res.notes if n.startswith("gains"))
+    assert np.all(np.isnan(g.std[[g.motors.index(j) for j in g.undetermined]]))  # no precision claimed
+
+
+def test_undetermined_gains_survive_the_file(tmp_path):
+    file, a, b, gains = _recordings(4, tool=0.0, file_error=0.0, seconds=10.0)
+    res = identify(file, _currents_only(a), gain_anchor=f"joint2={gains[1]}")
+    back = Identification.load(res.save(tmp_path / "r.json"), file)
+    assert back.currents.undetermined == res.currents.undetermined
+    np.testing.assert_array_equal(back.currents.std, res.currents.std)  # NaN where not determined
+    np.testing.assert_array_equal(back.predict_currents(b), res.predict_currents(b))
 
 
 def test_the_closed_form_start_needs_no_seed():

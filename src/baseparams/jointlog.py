@@ -28,9 +28,9 @@ class JointLog:
         [rad], smooth in time; their ``tau`` columns zero: a base wrench is not measured).
     q : ndarray, shape ``(S, m)``
         Joint positions [rad or m], joint side (after sign and gear ratio).
-    tau : ndarray, shape ``(S, m)``
+    tau : ndarray, shape ``(S, m)``, or None
         Joint generalized forces [N m or N], joint side (after sign, gear ratio and
-        current-to-torque gain).
+        current-to-torque gain); ``None`` for a log of states, or of motor currents alone.
     dq, ddq : ndarray, shape ``(S, m)``, optional
         Measured velocities and accelerations; ``None`` when the log has none (derived from
         ``q`` by the preprocessing).

@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -279,8 +279,6 @@ class GainFit:
         Projected-residual evaluations of the search.
     physical : PhysicalFit, optional
         The physically consistent fit at the gains (``method="physical"``).
-    left_std : dict of int to float
-        The regressed inverse gains' standard deviations of the motors left out.
     """
 
     theta: np.ndarray
@@ -292,7 +290,6 @@ class GainFit:
     cost: float = float("nan")
     evaluations: int = 0
     physical: object = None
-    left_std: dict = field(default_factory=dict)
 
     __repr__ = summary_repr
 
@@ -734,32 +731,28 @@ def fit_gains(a: np.ndarray, cur: np.ndarray, names: list[str], motors: tuple[st
         scanned |= set(loose)
         used[stuck], free[stuck], g[stuck] = False, False, 0.0
         left += stuck
-    theta, g, std = _left_out_rows(a, cur, theta, g, left)
-    return GainFit(theta, g, fitted[2] * used, free, tuple(left), tuple(groups), fitted[3], fitted[5],
-                   left_std=std)
+    theta, g = _left_out_rows(a, cur, theta, g, left)
+    return GainFit(theta, g, fitted[2] * used, free, tuple(left), tuple(groups), fitted[3], fitted[5])
 
 
 def _left_out_rows(a, cur, theta, g, left):
-    """Each left-out motor's gain and own terms regressed on the kept motors' parameters (its std, white)."""
+    """Each left-out motor's current regressed on the kept motors' torque on its row and its own terms.
+
+    What predicts its currents; its gain is not determined (that torque is at the noise, and its
+    errors bias the regression): no standard deviation is claimed for it.
+    """
     theta, g = theta.copy(), g.copy()
-    std = {}
-    shared = np.ones(a.shape[2], dtype=bool)
     touched = (a != 0).any(axis=0)  # (m, p): the rows each column acts on
     for r in left:
         own = touched[r] & (touched.sum(axis=0) == 1)
         x = np.column_stack([a[:, r, ~own] @ theta[~own], a[:, r, own]])
         scale = np.linalg.norm(x, axis=0)
         scale[scale == 0] = 1.0
-        coef, *_ = np.linalg.lstsq(x / scale, cur[:, r], rcond=1e-10)
-        coef = coef / scale
-        e = cur[:, r] - x @ coef
-        cov = np.linalg.pinv((x / scale).T @ (x / scale), rcond=1e-12) * float(e @ e) / max(len(e) - x.shape[1], 1)
+        coef = np.linalg.lstsq(x / scale, cur[:, r], rcond=1e-10)[0] / scale
         g[r] = coef[0]
-        std[r] = float(np.sqrt(max(cov[0, 0], 0.0)) / scale[0])
         if g[r] != 0:
             theta[own] = coef[1:] / g[r]
-    del shared
-    return theta, g, std
+    return theta, g
 
 
 #: the factors a gain is scanned over, each sign, around its closed-form start (:func:`scan_gain`)

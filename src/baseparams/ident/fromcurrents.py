@@ -89,17 +89,13 @@ def anchor_of(text: str | None, tx: Transmission) -> tuple[tuple[GainAnchor, ...
     return anchors, [tx.motors.index(a.motor) for a in anchors]
 
 
-def currents_of(log, model, cols: np.ndarray):
+def currents_of(log):
     """The log with its currents in the torques' place (what the preprocessing filters like torques).
 
     Parameters
     ----------
     log : JointLog
         A log with currents.
-    model : IdentModel
-        The model (its measured rows' log columns, ``cols``).
-    cols : ndarray of int
-        Log column of each state column (:func:`~baseparams.ident.rows.log_columns`).
 
     Returns
     -------
@@ -107,6 +103,24 @@ def currents_of(log, model, cols: np.ndarray):
         ``tau`` = the currents [A], ``cur`` None.
     """
     return replace(log, tau=log.cur, cur=None)
+
+
+def idx_of(anchors, tx: Transmission) -> list[int]:
+    """The motors' indices of anchors (:class:`~baseparams.ident.currents.GainAnchor`).
+
+    Parameters
+    ----------
+    anchors : sequence of GainAnchor
+        The anchors.
+    tx : Transmission
+        The motors.
+
+    Returns
+    -------
+    list of int
+        Each anchor's motor's index.
+    """
+    return [tx.motors.index(a.motor) for a in anchors]
 
 
 def transmission_of(model) -> Transmission:
@@ -213,7 +227,7 @@ def _fitted_rows(model, train, cols, opts):
     from .preprocess import prepare
     from .rows import accumulate_prepared
 
-    ilog = currents_of(train, model, cols)
+    ilog = currents_of(train)
     try:
         prep = prepare(ilog, cutoff=opts.cutoff, decimate=opts.decimate, min_speed=opts.min_speed)
     except DataError as exc:
@@ -259,7 +273,7 @@ def _rescaled(gf, cov, s: float):
     """Every parameter times ``s``, every inverse gain divided by it (the one direction currents leave free)."""
     p = len(gf.theta)
     d = np.r_[np.full(p, s), np.full(cov.shape[0] - p, 1.0 / s)]
-    gf = replace(gf, theta=gf.theta * s, g=gf.g / s, left_std={r: v / abs(s) for r, v in gf.left_std.items()})
+    gf = replace(gf, theta=gf.theta * s, g=gf.g / s)
     return gf, cov * np.outer(d, d)
 
 
@@ -289,7 +303,7 @@ def _anchors_scaled(am, gf, cov, anchors, idx):
             own = touched[r] & (touched.sum(axis=0) == 1)
             theta[own] *= g[r] * a.gain
             g[r] = 1.0 / a.gain
-    return replace(gf, theta=theta, g=g, left_std={r: v for r, v in gf.left_std.items() if r not in idx}), cov, rel
+    return replace(gf, theta=theta, g=g), cov, rel
 
 
 def _file_scaled(model, gf, cov, q):
@@ -348,8 +362,8 @@ def _result_parts(model, tx, am, cur, gf, cov, label, anchors, scale_std, method
     k = np.where(gf.g != 0, 1.0 / np.where(gf.g != 0, gf.g, 1.0), np.inf)
     sg = np.zeros(len(k))
     sg[gf.free] = np.sqrt(np.maximum(np.diag(cov)[p:], 0.0))
-    for r, s in gf.left_std.items():
-        sg[r] = s
+    given = idx_of(anchors, tx)
+    sg[[r for r in gf.left_out if r not in given]] = np.nan  # not determined: no std claimed
     sk = np.where(gf.g != 0, sg / np.where(gf.g != 0, gf.g, 1.0) ** 2, np.inf)
     gains = CurrentGains(tx, k, np.abs(sk), ",".join(map(str, anchors)) or "model file", float(scale_std),
                          np.where(gf.weights > 0, 1.0 / np.where(gf.weights > 0, gf.weights, 1.0), np.nan),
@@ -410,8 +424,9 @@ def _groups(model, tx, gf, k, anchors=()) -> list[dict]:
     for r in gf.left_out:
         m = tx.motors[r]
         how = (f"its gain is the anchor's, {k[r]:.4g} (given)" if m in given else
-               f"its gain, regressed afterwards on the torque the other joints' parameters predict on its row, "
-               f"{k[r]:.4g}, is known only to its std")
+               f"its gain, regressed afterwards on the torque the other joints' parameters predict on its row "
+               f"({k[r]:.4g}: what predicts its currents), is not a measurement (that torque is at the noise, "
+               f"and its errors bias the regression)")
         out.append({"kind": "undetermined", "members": [f"k_{m}", f"the terms only {m}'s row has"],
                     "note": f"the currents do not determine the gain of {m} against the others (its rigid-body "
                             f"torque is at its current's noise, or weaker than its rotor and friction terms): its "

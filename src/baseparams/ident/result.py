@@ -289,8 +289,9 @@ class Identification:
         m = self.model
         held = self.validation is not None
         rms = (self.validation if held else self.train)["rms_total"]
+        unit = m.torque_unit if self.currents is None else "A (currents)"
         return clip(f"<Identification {m.robot.name}: {self.fit.method}, {m.n_base} base + {m.n_drive} drive terms, "
-                    f"{'held-out' if held else 'training'} RMS {format_number(rms, 3)} {m.torque_unit}>")
+                    f"{'held-out' if held else 'training'} RMS {format_number(rms, 3)} {unit}>")
 
     @property
     def names(self) -> np.ndarray:

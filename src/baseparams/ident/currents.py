@@ -89,7 +89,7 @@ class GainAnchor:
     def __post_init__(self):
         g = float(self.gain)
         if not math.isfinite(g) or g == 0 or abs(g) > 1e9:
-            raise BaseparamsError(f"gain anchor {self.motor}={self.gain}: the gain must be finite and non-zero "
+            raise BaseparamsError(f"gain_anchor= {self.motor}={self.gain}: the gain must be finite and non-zero "
                                   f"[N m/A at the joint side], at most 1e9 in size")
         object.__setattr__(self, "gain", g)
 
@@ -114,12 +114,12 @@ class GainAnchor:
         """
         m = _ANCHOR.match(text) if isinstance(text, str) else None
         if m is None:
-            raise BaseparamsError(f"gain anchor {text!r}: expected JOINT=K (a joint whose current is logged and its "
+            raise BaseparamsError(f"gain_anchor= {text!r}: expected JOINT=K (a joint whose current is logged and its "
                                   f"catalogue gain in N m/A at the joint side, e.g. joint2=12.5)")
         try:
             gain = float(m.group(2))
         except ValueError:
-            raise BaseparamsError(f"gain anchor {text!r}: {m.group(2)!r} is not a number") from None
+            raise BaseparamsError(f"gain_anchor= {text!r}: {m.group(2)!r} is not a number") from None
         return cls(m.group(1), gain)
 
     def __str__(self) -> str:
@@ -145,12 +145,12 @@ def parse_anchors(text: str) -> tuple[GainAnchor, ...]:
         A malformed item, or a joint named twice.
     """
     if not isinstance(text, str) or not text.strip():
-        raise BaseparamsError(f"gain anchor {text!r}: expected JOINT=K (a joint whose current is logged and its "
+        raise BaseparamsError(f"gain_anchor= {text!r}: expected JOINT=K (a joint whose current is logged and its "
                               f"catalogue gain in N m/A at the joint side, e.g. joint2=12.5)")
     out = tuple(GainAnchor.parse(item) for item in text.split(","))
     names = [a.motor for a in out]
     if len(set(names)) != len(names):
-        raise BaseparamsError(f"gain anchor {text!r}: a joint is named twice")
+        raise BaseparamsError(f"gain_anchor= {text!r}: a joint is named twice")
     return out
 
 
@@ -238,7 +238,7 @@ def transmission_for(joints, couplings=()) -> Transmission:
     for cp in couplings:
         if cp.name not in cp.joints:
             raise BaseparamsError(f"motor coupling {cp.name!r}: with currents, name a coupling after the joint whose "
-                                  f"current column is its motor's (e.g. --coupling {cp.joints[-1]}:"
+                                  f"current column is its motor's (e.g. couplings={cp.joints[-1]}:"
                                   f"{','.join(f'{j}={w:g}' for j, w in zip(cp.joints, cp.weights))})")
         if cp.name in seen:
             raise BaseparamsError(f"motor couplings: two on the motor of {cp.name!r}")
@@ -510,7 +510,7 @@ def determined_motors(factors: list[np.ndarray], w: np.ndarray, anchor: int | No
             inside[sub == anchor] = -1.0
         drop = int(sub[np.argmax(inside)])
         if drop == anchor:  # pragma: no cover - the anchor is never the only motor left with another
-            raise BaseparamsError(f"gain anchor {motors[anchor]}: the currents do not determine the others' gains")
+            raise BaseparamsError(f"gain_anchor= {motors[anchor]}: the currents do not determine the others' gains")
         used[drop] = False
         left.append(drop)
     k = np.zeros(len(factors))
@@ -922,7 +922,7 @@ def file_scale(tau: np.ndarray, tau_file: np.ndarray) -> tuple[float, float]:
     den = np.einsum("sj,sj->j", tau, tau)
     if not den.sum() > 0 or not np.einsum("sj,sj->", tau_file, tau_file) > 0:
         raise BaseparamsError("the gains' scale: no gravity torque along this motion to compare with the model file's "
-                              "masses; give --gain-anchor JOINT=K")
+                              "masses; give gain_anchor=JOINT=K")
     s = float(num.sum() / den.sum())
     live = den > 0
     sj = num[live] / den[live]

@@ -50,10 +50,10 @@ def parse_effort(effort: str, log) -> str:
         raise BaseparamsError(f"effort {effort!r}: choose {', '.join(EFFORTS)}")
     kind = effort if effort != "auto" else ("current" if log.cur is not None and log.tau is None else "torque")
     if kind == "current" and log.cur is None:
-        raise DataError(f"{log.source}: no motor currents (columns cur_<joint> [A], or cur = ... in a --columns map)")
+        raise DataError(f"{log.source}: no motor currents (columns cur_<joint> [A], or cur = ... in a columns= map)")
     if kind == "torque" and log.tau is None:
         raise DataError(f"{log.source}: no joint torques (columns tau_<joint>)"
-                        + ("; its currents: --effort current" if log.cur is not None else ""))
+                        + ("; its currents: effort=current" if log.cur is not None else ""))
     return kind
 
 
@@ -84,7 +84,7 @@ def anchor_of(text: str | None, tx: Transmission) -> tuple[tuple[GainAnchor, ...
     anchors = parse_anchors(text)
     for anchor in anchors:
         if anchor.motor not in tx.motors:
-            raise BaseparamsError(f"gain anchor {text!r}: {anchor.motor!r} is not a measured joint's motor; the "
+            raise BaseparamsError(f"gain_anchor= {text!r}: {anchor.motor!r} is not a measured joint's motor; the "
                                   f"motors: {', '.join(tx.motors)}")
     return anchors, [tx.motors.index(a.motor) for a in anchors]
 
@@ -147,7 +147,7 @@ def transmission_of(model) -> Transmission:
         what = "closed loops" if r.has_loops else "a floating base"
         raise BaseparamsError(f"robot {r.name!r}: identification from currents is for fixed-base serial and tree "
                               f"arms; {what} is not supported (convert the currents to torques with known gains: "
-                              f"--columns torque_gain)")
+                              f"a columns= map's torque_gain)")
     return transmission_for(model.joints, model.drives.couplings)
 
 
@@ -215,7 +215,7 @@ def _current_options(opts):
         notes.append("rotor inertia: modelled (a motor's current carries its rotor's inertia, Ia ddq, which a "
                      "joint-torque sensor after the gear does not see)")
     if opts.terms not in ("auto", "none"):
-        raise BaseparamsError(f"model terms ({opts.terms}) are not fitted from currents (--terms none)")
+        raise BaseparamsError(f"model terms ({opts.terms}) are not fitted from currents (terms=none)")
     if opts.terms == "auto":
         opts = replace(opts, terms="none")
         notes.append("model terms: not tried from currents (the linear core with the gains)")
@@ -233,14 +233,14 @@ def _fitted_rows(model, train, cols, opts):
     except DataError as exc:
         if opts.holdout is None:
             raise
-        raise DataError(f"{exc}; --holdout {opts.holdout:g} s leaves too little to train on (a shorter "
-                        f"--holdout)") from None
+        raise DataError(f"{exc}; holdout={opts.holdout:g} s leaves too little to train on (a shorter "
+                        f"holdout=)") from None
     kept: list = []
     _, note = accumulate_prepared(model, prep, cols, opts.memory_mb, ilog, opts.min_speed, keep=kept)
     if not kept:
         raise BaseparamsError(f"{train.source}: the fitted rows of this log do not fit in memory_mb "
                               f"{opts.memory_mb:g} MB; identification from currents holds them (a larger "
-                              f"--memory-mb, or a stronger --decimate)")
+                              f"IdentOptions.memory_mb, or a stronger decimate=)")
     a = np.concatenate([x for x, _ in kept])
     cur = np.concatenate([y for _, y in kept])
     return prep, a, cur, note
@@ -288,7 +288,7 @@ def _anchors_scaled(am, gf, cov, anchors, idx):
     if len(scale) > 1:
         ratio = np.array([a.gain * gf.g[r] for a, r in scale])  # given / fitted
         if not np.all(ratio > 0):
-            raise BaseparamsError(f"gain anchors {', '.join(str(a) for a, _ in scale)}: their signs disagree with the "
+            raise BaseparamsError(f"gain_anchor= {', '.join(str(a) for a, _ in scale)}: their signs disagree with the "
                                   f"fitted gains' ({', '.join(f'{a.motor} {1 / gf.g[r]:.4g}' for a, r in scale)} at "
                                   f"the first's scale)")
         logs = np.log(ratio)

@@ -123,7 +123,8 @@ def _current_lines(result, out: dict) -> list[str]:
 
 def _lines(name: str, out: dict, samples: int, joints: list) -> list[str]:
     """The human report of a prediction: what was predicted, its RMS (interior, or every sample)."""
-    lines = [f"{name}: predicted {len(joints)} joint torques at {samples} samples"
+    what = "joint-side torques and motor currents" if "torque" in out else "joint torques"  # "torque": from currents
+    lines = [f"{name}: predicted {len(joints)} {what} at {samples} samples"
              + (f", written to {out['out']}" if out["out"] else "")]
     if out.get("rms_interior") is not None:
         r = out["rms_interior"]

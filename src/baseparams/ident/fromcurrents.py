@@ -204,7 +204,8 @@ def identify_currents(robot, log, opts, validation=None, say=None):
     say("scoring (every sample, against the raw measured currents and any joint torques)")
     train_s, val_s = _scores(f, gains, log, held, opts, float(prep.design.cutoff))
     notes += [*prep.notes, acc_note, *_gain_notes(f, gains, gf), f"standard deviations: {label}"]
-    return _assembled(f, gains, train, prep, opts, (train_s, val_s), notes)
+    series = current_series(f, gains, (prep, cols), held, opts.memory_mb)
+    return _assembled(f, gains, train, prep, opts, (train_s, val_s, series), notes)
 
 
 def _current_options(opts):
@@ -498,4 +499,45 @@ def _assembled(f, gains: CurrentGains, train, prep, opts, scores, notes):
 
     samples = {"read": int(train.n_samples), "used": int(f.estimate.samples), "removed": dict(prep.removed)}
     options = replace(opts, cutoff=float(prep.design.cutoff), decimate=int(prep.factor))
-    return Identification(f, samples, scores[0], scores[1], tuple(notes), None, options, None, currents=gains)
+    return Identification(f, samples, scores[0], scores[1], tuple(notes), scores[2], options, None, currents=gains)
+
+
+def current_series(f, gains: CurrentGains, train: tuple, held, memory_mb: float) -> dict:
+    """The report's series of a fit from currents: measured and predicted currents [A], as compared (filtered).
+
+    Parameters
+    ----------
+    f : Fit
+        The fit (joint-level torques, motor terms included, at the anchor's scale).
+    gains : CurrentGains
+        The motors' gains.
+    train : tuple
+        ``(prep, cols)``: the prepared training currents and the log column of each state column.
+    held : JointLog or None
+        The held-out log (the hold-out's end, or the validation log); its series only when it has
+        currents.
+    memory_mb : float
+        Largest regressor formed at once.
+
+    Returns
+    -------
+    dict
+        ``{"train", "validation"}``, each None or ``{"t" (S',), "tau" (S', m) measured currents,
+        "tau_hat" (S', m) predicted currents, "joints" (m,) the motors, "unit": "A"}``.
+    """
+    from .preprocess import prepare
+    from .rows import log_columns
+    from .validation import report_series
+
+    prep, cols = train
+    motors = list(gains.motors)
+
+    def of(p, c):
+        s = report_series(f.model, p, c, f, motors, memory_mb)
+        return {**s, "tau_hat": gains.currents(s["tau_hat"]), "unit": "A"}
+
+    out = {"train": of(prep, cols), "validation": None}
+    if held is not None and held.cur is not None:
+        vprep = prepare(currents_of(held), cutoff=prep.design.cutoff, decimate=prep.factor)
+        out["validation"] = of(vprep, log_columns(f.model, held))
+    return out

@@ -409,9 +409,8 @@ def _run_identification(robot: Robot, log, run: Run):
     if why is not None:
         from ..ident.stream import NotStreamable
 
-        rep.say(f"streaming {log} block by block ({why}): memory independent of the log's length")
         try:
-            return _streamed(robot, log, run), None
+            return _streamed(robot, log, run, why), None
         except NotStreamable as exc:  # read whole: said as a note when streaming was asked for (stream=on)
             (rep.note if inputs.stream == "on" else rep.say)(f"stream={inputs.stream}: {exc}")
     from ..ident import identify as run_whole
@@ -425,14 +424,16 @@ def _run_identification(robot: Robot, log, run: Run):
     return result, read
 
 
-def _streamed(robot: Robot, log, run: Run):
+def _streamed(robot: Robot, log, run: Run, why: str):
     """The identification streamed from the log's file; the predictions written as they come."""
-    from ..ident.stream import identify_stream
+    from ..ident.stream import check_effort, identify_stream
     from ..io.logs import LogStream
 
     rep, inputs, predictions = run.reporter, run.inputs, run.outputs.predictions
     units = run.options.allow_units
     src = LogStream(log, robot, columns=inputs.columns, allow_units=units)
+    check_effort(src, run.options.effort, run.options.gain_anchor)  # motor currents: read whole
+    rep.say(f"streaming {log} block by block ({why}): memory independent of the log's length")
     other = (LogStream(inputs.validate, robot, columns=inputs.columns, allow_units=units)
              if inputs.validate is not None else None)
     if predictions is None:
@@ -491,7 +492,7 @@ def identify_logs(robot: Robot, files: list[str], keywords: dict, *, per_file: b
 
 #: identify's keywords that apply to one log, not to a fleet of logs
 ONE_LOG = ("validate", "holdout", "joints", "weld", "columns", "save", "truth", "predictions", "urdf", "mjcf", "html",
-           "plot")
+           "plot", "gain_anchor")
 
 
 def check_fleet(keywords: dict):
@@ -510,11 +511,13 @@ def check_fleet(keywords: dict):
     Raises
     ------
     BaseparamsError
-        A keyword of :data:`ONE_LOG` given, or bad options.
+        A keyword of :data:`ONE_LOG` given, ``effort="current"`` (motor currents are identified one
+        log at a time), or bad options.
     """
     from ..ident.options import IdentOptions
 
     given = [k for k in ONE_LOG if keywords.get(k) not in (None, (), [])]
+    given += ["effort"] if keywords.get("effort") == "current" else []  # motor currents: one log at a time
     if given:
         raise BaseparamsError(f"identify: {given[0]}= applies to one log, not to a fleet of logs (per-file or pooled "
                               f"estimates)")

@@ -34,7 +34,8 @@ def run(tmp_path_factory):
     logs = {"a": replace(a, tau=None), "b": b, "bcur": replace(b, tau=None), "btau": replace(b, cur=None)}
     paths = {k: write_log(d / f"{k}.csv", log) for k, log in logs.items()}
     anchor = f"joint2={float(gains[1])!r}"
-    argv = ["identify", "puma560", str(paths["a"]), "--gain-anchor", anchor, "--holdout", "2", "--save",
+    argv = ["identify", "puma560", str(paths["a"]), "--gain-anchor", anchor, "--holdout", "2", "--score-cutoff", "3",
+            "--save",
             str(d / "r.json"), "--html", str(d / "r.html"), "--json"]
     return d, paths, anchor, argv, b
 
@@ -126,6 +127,10 @@ def test_the_saved_result_reads_back_and_a_tampered_one_is_refused(run, saved, t
     puma = baseparams.load("puma560")
     back = Identification.load(saved[1], puma)
     assert back.currents is not None and back.to_json()["currents"] == saved[0]["currents"]
+    from baseparams.ident.report import format_identification
+
+    text = format_identification(back)
+    assert "(anchor)" in text and " A against the measured currents low-passed at 3 Hz (--score-cutoff)" in text
     again = Identification.load(back.save(tmp_path / "again.json"), puma)
     np.testing.assert_array_equal(again.predict_currents(b), back.predict_currents(b))
     doc = json.loads(saved[1].read_text())
@@ -185,3 +190,17 @@ def test_torques_for_some_joints_of_a_log_of_currents_are_refused(run, tmp_path)
         with pytest.raises(DataError, match="tau given for joints joint1 but not for joint2, joint3") as exc:
             read(tmp_path / "mixed.csv", puma)
         assert "\n" not in str(exc.value)
+
+
+def test_a_sub_chain_keeps_the_currents_of_its_joints(run):
+    """``joints=`` on a log of currents alone: the identified joints' currents go along (was: a TypeError on tau)."""
+    from baseparams.ident.subchain import subchain
+
+    *_, b = run
+    q = b.q.copy()
+    q[:, 3:] = 0.1  # the wrist held still
+    log = replace(b, tau=None, q=q, dq=np.where(np.arange(6) < 3, b.dq, 0.0))
+    small, sub, notes = subchain(baseparams.load("puma560"), log, ["joint1", "joint2", "joint3"], {})
+    assert sub.joints == ("joint1", "joint2", "joint3") and sub.tau is None
+    np.testing.assert_array_equal(sub.cur, b.cur[:, :3])
+    np.testing.assert_array_equal(sub.dq, b.dq[:, :3])

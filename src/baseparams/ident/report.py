@@ -162,4 +162,7 @@ def _current_lines(j: dict) -> list[str]:
                          f"at every {what} sample ({s['samples']} samples; per {'motor' if key == 'rms' else 'joint'}: "
                          f"{per})" + ("; the joint-side torque predicted: rigid body, no motor-side friction or "
                                       "rotor inertia" if key != "rms" else ""))
+            if label == "validation" and "score_cutoff" in s:
+                lines.append(f"validation RMS {s['rms_lowpassed_total']:.4g} {unit or s.get('unit', '')} against the "
+                             f"measured {of} low-passed at {s['score_cutoff']:g} Hz (--score-cutoff)")
     return lines

@@ -125,6 +125,9 @@ class GainAnchor:
     def __str__(self) -> str:
         return f"{self.motor}={self.gain:g}"
 
+    def __repr__(self) -> str:
+        return f"GainAnchor({self.motor!r}, {self.gain!r})"
+
 
 def parse_anchors(text: str) -> tuple[GainAnchor, ...]:
     """Anchors from ``JOINT=K[,JOINT=K...]`` (``--gain-anchor``): one gain, or several (their geometric mean).

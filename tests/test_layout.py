@@ -19,7 +19,7 @@ PKG = SRC / "baseparams"
 #: or sideways (another part on the same floor) fails :func:`test_layering`.
 LAYERS = {
     "errors": 0, "enums": 0, "pga": 0, "version": 0,
-    "files": 1, "display": 1, "arguments": 1,
+    "files": 1, "display": 1, "arguments": 1, "interrupts": 1,
     "schema": 2, "tables": 2,
     "model": 3,
     "kinematics": 4,

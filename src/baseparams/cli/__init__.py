@@ -12,7 +12,8 @@ request with ``--no-verify``); 2 bad input, printed as one line (``baseparams: e
 3 certification UNDECIDED (no gap of the spectrum decides the rank: the message lists the clusters,
 the candidate counts and what would help; a gap too small to decide literally is decided by
 practical identifiability, at a gap of the directions' effects, unless ``--literal``);
-4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted.
+4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted (Ctrl-C),
+143 terminated (SIGTERM): either stops the run where it is, and a file being written is removed.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import sys
 import numpy as np
 
 from ..errors import BaseparamsError
+from ..interrupts import EXIT_TERMINATED, Interrupts, Terminated
 from .analyze import run as cmd_analyze
 from .common import (
     EXIT_FAILED,
@@ -88,15 +90,17 @@ def main(argv: list[str] | None = None) -> int:
     -------
     int
         The exit code (module doc): :data:`EXIT_OK`, :data:`EXIT_INPUT`,
-        :data:`EXIT_UNDECIDED`, :data:`EXIT_FAILED` or :data:`EXIT_INTERRUPTED`; 0 on a
+        :data:`EXIT_UNDECIDED`, :data:`EXIT_FAILED`, :data:`EXIT_INTERRUPTED` (Ctrl-C) or
+        :data:`baseparams.interrupts.EXIT_TERMINATED` (SIGTERM); 0 on a
         broken pipe (e.g. piped into ``head``).
     """
     parser = build_parser()
     args = parser.parse_args(argv)
     _one_line_notes()
     try:
-        preflight(args)
-        return args.func(args)
+        with Interrupts():  # SIGTERM unwinds like Ctrl-C: every output's temporary file removed
+            preflight(args)
+            return args.func(args)
     except BaseparamsError as exc:
         print(f"baseparams: error: {flag_message(str(exc), args.command)}", file=sys.stderr)
         return EXIT_INPUT
@@ -109,3 +113,6 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("baseparams: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Terminated:
+        print("baseparams: terminated (SIGTERM)", file=sys.stderr)
+        return EXIT_TERMINATED

@@ -135,6 +135,7 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
     lines = [f"{robot.name}: {len(files)} logs, {len(res.files)} used, {len(skipped)} skipped; "
              f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
     lines += [f"skipped: {s['error']}" for s in res.skipped]
+    lines += [f"{f['path']}: {w}" for f in res.files for w in f.get("warnings", ())]  # --allow-units went on
     if res.spread is not None:
         rel = res.spread["std"] / np.maximum(np.abs(res.spread["mean"]), 1e-300)
         worst = np.argsort(rel)[::-1][:5]

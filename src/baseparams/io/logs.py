@@ -1400,7 +1400,8 @@ class LogStream:
         ------
         JointLog
             Consecutive samples (``t (k,)``, ``q, tau (k, m)``, ``dq``/``ddq`` when logged);
-            ``notes`` of the first block say how the file was read.
+            ``notes`` of the first block say how the file was read; a later block's notes are
+            its WARNING lines only (``allow_units``: positions beyond the plausible bounds).
 
         Raises
         ------
@@ -1418,8 +1419,9 @@ class LogStream:
                 raise DataError(f"{self.source}: {table.label(self.spec['time'])}, {table.row(0)}: time "
                                 f"{log.t[0]:.9g} s {what} the one before ({last_t:.9g} s); time must be strictly "
                                 f"increasing")
-            if count:
-                log = JointLog(log.t, log.joints, log.q, log.tau, log.dq, log.ddq, log.source, cur=log.cur)
+            if count:  # how the file was read is the first block's to say; a later block's warnings are its own
+                log = JointLog(log.t, log.joints, log.q, log.tau, log.dq, log.ddq, log.source,
+                               notes=tuple(n for n in log.notes if "WARNING" in n), cur=log.cur)
             last_t, count = float(log.t[-1]), count + log.n_samples
             yield log
         if not count:

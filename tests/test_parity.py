@@ -52,7 +52,8 @@ def no_work(monkeypatch):
 #: flags whose keyword is the negation of the flag (``--no-verify`` is ``verify=False``)
 INVERTED = {"no_verify", "paper_only"}
 
-#: text options: ``(Python value, command-line tokens)`` per case (a path "{d}" in the test's folder)
+#: text options: ``(Python value, command-line tokens)`` per case (a path "{d}" in the test's folder); keyed by
+#: ``(command, keyword)`` where two commands' keywords of one name differ
 TEXT = {
     "friction": [("viscous,offset", ["viscous,offset"]), ("sticky", ["sticky"]), ("none", ["none"])],
     "terms": [("none", ["none"]), ("wobble", ["wobble"]), ("dahl,tilt", ["dahl,tilt"])],
@@ -68,7 +69,10 @@ TEXT = {
     "package_path": [(["{d}"], ["{d}"])],
     "states": [("{d}/states.csv", ["{d}/states.csv"])],
     "velocity": [(1.5, ["1.5"]), (-1.0, ["-1"]), (math.nan, ["nan"])],
-    "effort": [(20.0, ["20"]), (math.inf, ["inf"])],
+    ("excite", "effort"): [(20.0, ["20"]), (math.inf, ["inf"])],  # identify's effort= is a choice
+    "gain_anchor": [("joint2=12.5", ["joint2=12.5"]), ("joint2=12.5,joint3=8", ["joint2=12.5,joint3=8"]),
+                    ("joint2", ["joint2"]), ("joint2=0", ["joint2=0"]), ("joint2=x", ["joint2=x"]),
+                    ("joint2=1,joint2=2", ["joint2=1,joint2=2"])],
     "position": [((-1.0, 1.0), ["-1:1"]), ((1.0, -1.0), ["1:-1"])],
     "acceleration": [(5.0, ["5"]), (-1.0, ["-1"]), (math.nan, ["nan"])],
     "keepout": [([("link2", 0.1)], ["link2:0.1"]), ([("nolink", 0.1)], ["nolink:0.1"])],
@@ -131,6 +135,8 @@ def _cases():
                 for v in _numbers(key, a.type):
                     tokens = [_text(v)] if a.nargs is None else ["0", "0", _text(v)]
                     out.append((command, key, a.dest, v if a.nargs is None else (0.0, 0.0, v), tokens))
+            elif (command, key) in TEXT:
+                out += [(command, key, a.dest, v, list(t)) for v, t in TEXT[command, key]]
             elif key in choices:
                 out += [(command, key, a.dest, v, [v]) for v in (*choices[key], "nope")]
             elif key in TEXT:
@@ -286,6 +292,8 @@ def test_the_cli_and_python_accept_and_refuse_alike(command, key, dest, value, t
     ("payload", {"link": "link6", "save": "{d}/p.json", "urdf": "{d}/p.json"}, "--urdf"),
     ("excite", {"payload": "link6", "base_frequency": 0.2}, "--base-frequency do not apply (--period does)"),
     ("excite", {"payload_noise": 0.5}, "--payload-noise applies to --payload"),
+    ("identify", {"gain_anchor": "joint2=12.5", "effort": "torque"}, "--gain-anchor applies to motor currents "
+                                                                     "(--effort current), not to torques"),
 ])
 def test_the_issue_s_cases_refused_alike(command, keywords, words, files, no_work, capsys):
     """The issue's examples: two outputs onto one file, ``prior_weight`` without the physical fit (both doors)."""

@@ -119,6 +119,7 @@ IDENTIFY = MappingProxyType({
     "couplings": (), "holdout": None, "cutoff": None, "decimate": None, "min_speed": None, "prior_weight": None,
     "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
     "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,
+    "effort": "auto", "gain_anchor": None,
 })
 #: a payload identification's options and their defaults, each written once:
 #: :class:`baseparams.ident.payload.PayloadOptions` (which checks them), the front door's ``identify_payload``
@@ -137,6 +138,7 @@ CHOICES = MappingProxyType({
     "method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white"), "stream": ("auto", "on", "off"),
     "criterion": ("cond", "logdet"), "form": ("auto", "expanded", "recursive"),
     "convention": tuple(values(Convention)), "mocap_welds": tuple(values(MocapWelds)),
+    "effort": ("auto", "torque", "current"),
 })
 
 #: the most samples a run holds at once (a simulated log, a designed trajectory) and samples x columns

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .display import clip
-from .errors import BaseparamsError
+from .errors import BaseparamsError, DataError
 from .ident import Fit, fit, pulled_covariance
 from .ident.drives import FRICTION_TERMS
 from .ident.model import IdentModel
@@ -70,6 +70,9 @@ def file_factors(path: str, model: IdentModel, options: IdentOptions | None = No
     o = options or IdentOptions()
     with blas_threads():
         log = read_log(path, model.robot, allow_units=o.allow_units)
+        if log.tau is None:  # a log of motor currents alone
+            raise DataError(f"{path}: no joint torques (tau_<joint>): a log of motor currents is identified on its "
+                            f"own, not in a fleet")
         prep = prepare(log, cutoff=o.cutoff, min_speed=o.min_speed)
         acc, _ = accumulate_prepared(model, prep, log_columns(model, log), o.memory_mb, log, o.min_speed)
     return acc, {"path": str(path), "read": int(log.n_samples), "used": int(acc.samples),
@@ -291,6 +294,9 @@ def _meat_task(path: str, model: IdentModel, theta, h_inv, weights, options: Ide
     o = options
     with blas_threads():
         log = read_log(path, model.robot, allow_units=o.allow_units)
+        if log.tau is None:  # a log of motor currents alone
+            raise DataError(f"{path}: no joint torques (tau_<joint>): a log of motor currents is identified on its "
+                            f"own, not in a fleet")
         prep = prepare(log, cutoff=o.cutoff, min_speed=o.min_speed)
         cols = log_columns(model, log)
         kept: list = []

@@ -29,7 +29,7 @@ OWN_OUTPUTS = ("output",)
 IDENTIFY_KEYWORDS = ("validate", "holdout", "method", "friction", "rotor", "coulomb_width", "couplings", "cutoff",
                      "decimate", "min_speed", "prior_weight", "convention", "covariance", "score_cutoff",
                      "allow_units", "columns", "joints", "weld", "analysis_samples", "literal", "terms", "stream",
-                     "save", "predictions", "urdf", "mjcf", "html", "plot", "truth", "seed")
+                     "save", "predictions", "urdf", "mjcf", "html", "plot", "truth", "seed", "effort", "gain_anchor")
 
 
 def keywords(args) -> dict:
@@ -172,8 +172,8 @@ def add_parser(sub) -> None:
     s = sub.add_parser("identify", help="identify base-parameter and drive values from a joint log")
     model_args(s)
     s.add_argument("data", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default layout: "
-                                "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>; a glob pattern for "
-                                "several logs (a fleet, on Dask)")
+                                "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint> (or cur_<joint>: --effort); a "
+                                "glob pattern for several logs (a fleet, on Dask)")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
     s.add_argument("--validate", metavar="DATA2", help="validate on another log")
     s.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS (not with "
@@ -189,6 +189,13 @@ def add_parser(sub) -> None:
                    help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "
                         "reaches each JOINT times W; adds Iam_NAME, Fvm_NAME, Fcm_NAME (with --rotor, viscous, "
                         "coulomb); repeatable")
+    s.add_argument("--effort", metavar=choices("effort"), default=IDENTIFY["effort"],
+                   help="what the log's effort is: torque (tau_<joint>), current (cur_<joint> [A]: motor currents "
+                        "with unknown gains, identified with the parameters; their common scale from --gain-anchor), "
+                        "or auto (default: currents when the log has them and no torques)")
+    s.add_argument("--gain-anchor", metavar="JOINT=K[,JOINT=K]",
+                   help="currents: the catalogue gain K [N m/A at the joint side] of JOINT's motor, fixing every "
+                        "gain's scale (several: their geometric mean); default the model file's masses")
     s.add_argument("--cutoff", type=float, metavar="HZ", help="low-pass cutoff (default from the sampling rate)")
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
@@ -207,8 +214,8 @@ def add_parser(sub) -> None:
                    help="validation: also score against the measured torques low-passed at HZ (zero-phase "
                         "Butterworth order 4); the main figure is against the raw measured torques")
     s.add_argument("--predictions", metavar="FILE",
-                   help="write the predicted torques at every validation sample (t, tau_<joint>; .csv, .tsv or "
-                        ".parquet)")
+                   help="write the predicted torques at every validation sample (t, tau_<joint>; from currents: "
+                        "the joint-side torques and cur_<joint> [A]; .csv, .tsv or .parquet)")
     _log_size_args(s)
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")

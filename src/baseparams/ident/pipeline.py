@@ -87,6 +87,13 @@ def identify(robot: Robot, log, options: IdentOptions | None = None, /, *, valid
     if opts.holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
     log, validation = log.checked(), None if validation is None else validation.checked()  # finite, increasing
+    from .fromcurrents import identify_currents, parse_effort
+
+    if parse_effort(opts.effort, log) == "current":  # motor currents with unknown gains: their own estimator
+        return identify_currents(robot, log, opts, validation, progress)
+    if opts.gain_anchor is not None:
+        raise BaseparamsError("identify: gain_anchor= applies to motor currents; this log is identified from its "
+                              "joint torques (effort=current to use its currents)")
     with blas_threads():
         return _identify(robot, log, opts, validation, progress or (lambda msg: None))
 

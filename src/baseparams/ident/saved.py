@@ -333,6 +333,8 @@ def document(ident) -> dict:
            "term_choices": [{"name": c.name, "kept": c.kept, "why": c.why, "cv_rms": c.cv_rms}
                             for c in ident.fit.term_choices],
            "motion": ident.motion}
+    if ident.currents is not None:  # identified from motor currents: the gains, the anchor, the groups
+        doc["currents"] = ident.currents.to_json()
     return plain(doc)
 
 
@@ -418,8 +420,13 @@ def read(path, robot: Robot) -> dict:
     terms, choices = _terms(doc, model, str(path))
     f = Fit(model, opts.method, theta, _estimate(doc["estimate"], theta), _physical(doc.get("physical")),
             terms=terms, term_choices=choices)
-    return {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
-            "notes": (*doc["notes"], *doc["_notes"]), "series": None, "options": opts, "motion": doc.get("motion")}
+    out = {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
+           "notes": (*doc["notes"], *doc["_notes"]), "series": None, "options": opts, "motion": doc.get("motion")}
+    if doc.get("currents") is not None:
+        from .gains import CurrentGains
+
+        out["currents"] = CurrentGains.from_json(doc["currents"])
+    return out
 
 
 def _estimate(e: dict, theta: np.ndarray):

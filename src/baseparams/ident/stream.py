@@ -1070,6 +1070,40 @@ def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
     return f, note, _series_of(thin, f.theta, names)
 
 
+def check_effort(stream, effort: str, gain_anchor: str | None) -> None:
+    """A log identified from its motor currents is read whole (:class:`NotStreamable`); the rest as the whole log's.
+
+    Currents asked for and none logged, or a gain anchor for a log identified from its torques,
+    are refused as :func:`~baseparams.ident.identify` refuses them.
+
+    Parameters
+    ----------
+    stream : LogStream
+        The log's stream (its ``has_currents`` and ``has_tau``).
+    effort : {"auto", "torque", "current"}
+        The identification's input kind (``IdentOptions.effort``).
+    gain_anchor : str or None
+        ``IdentOptions.gain_anchor``.
+
+    Raises
+    ------
+    NotStreamable
+        The log is identified from its currents: read it whole.
+    BaseparamsError
+        Currents asked for and none logged; a gain anchor for a log identified from its torques.
+    """
+    currents, torques = getattr(stream, "has_currents", False), getattr(stream, "has_tau", True)
+    if effort == "current" and not currents:
+        raise DataError(f"{stream.source}: no motor currents (columns cur_<joint> [A], or cur = ... in a columns= "
+                        f"map)")
+    if effort == "current" or (effort == "auto" and currents and not torques):
+        raise NotStreamable(f"{stream.source}: motor currents (cur_ columns): the log is read whole, not streamed "
+                            f"(identification from currents fits the gains over all its rows)")
+    if gain_anchor is not None:
+        raise BaseparamsError("identify: gain_anchor= applies to motor currents; this log is identified from its "
+                              "joint torques (effort=current to use its currents)")
+
+
 def identify_stream(robot, stream, options=None, /, *, validation=None, predictions=None, progress=None,
                     **keywords):
     """:func:`~baseparams.ident.identify` on a log streamed from its file (module docstring).
@@ -1103,7 +1137,7 @@ def identify_stream(robot, stream, options=None, /, *, validation=None, predicti
     Raises
     ------
     NotStreamable
-        Non-uniform time stamps, a floating base (read the log whole).
+        Non-uniform time stamps, a floating base, motor currents (read the log whole).
     BaseparamsError
         As :func:`~baseparams.ident.identify`.
     """
@@ -1116,6 +1150,7 @@ def identify_stream(robot, stream, options=None, /, *, validation=None, predicti
                             "over the whole log), not streamed")
     if opts.holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    check_effort(stream, opts.effort, opts.gain_anchor)
     kept = None
     if getattr(stream, "kind", None) in ("text", "parquet"):  # parsed once, replayed from a binary copy
         stream = kept = Replay(stream, stream.decoded_mb)

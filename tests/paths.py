@@ -14,6 +14,7 @@ that nothing is skipped silently in CI.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 from pathlib import Path
@@ -45,4 +46,8 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 SHARED_REASON = ("needs the shared test data (../shared beside the repository, or BASEPARAMS_SHARED=DIR "
                  "holding models/ and ident/; see the README's 'Test data')")
+DOCS_TOOLS = ("sphinx", "myst_parser", "numpydoc", "sphinxarg", "furo")
+HAVE_DOCS = all(importlib.util.find_spec(m) is not None for m in DOCS_TOOLS)
+DOCS_REASON = "needs the documentation tools (pip install -e '.[docs]': Sphinx, MyST, numpydoc, sphinx-argparse, furo)"
+
 CHROMIUM_REASON = "needs a system Chromium for the HTML checks (Debian: apt-get install chromium)"

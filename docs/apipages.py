@@ -126,3 +126,37 @@ def write_api_pages(folder: Path) -> dict[str, str]:
     docs = folder.relative_to(folder.parents[2]).as_posix()
     return {name: f"{docs}/{name}" if name in names else f"{docs}/internals/{name}"
             for name in [*names, *rooms(set(names))] if name != "baseparams" and _shadowed(name)}
+
+
+def cli_parser():
+    """``baseparams.cli.build_parser()`` with its help texts made literal for reStructuredText.
+
+    sphinx-argparse reads help texts as reStructuredText, where ``q_<joint>`` would be a link and
+    ``*`` or ``|`` markup: they are escaped, nothing else changes (the CLI reference's source).
+    """
+    import argparse
+    import re
+
+    from baseparams.cli import build_parser
+
+    def escape(text):
+        return re.sub(r"([_*|`\\])", r"\\\1", text) if isinstance(text, str) else text
+
+    seen = set()
+
+    def walk(parser):
+        if id(parser) in seen:
+            return
+        seen.add(id(parser))
+        parser.description, parser.epilog = escape(parser.description), escape(parser.epilog)
+        for action in parser._actions:
+            action.help = escape(action.help)
+            if isinstance(action, argparse._SubParsersAction):
+                for choice in action._choices_actions:
+                    choice.help = escape(choice.help)
+                for sub in action.choices.values():
+                    walk(sub)
+
+    parser = build_parser()
+    walk(parser)
+    return parser

@@ -8,6 +8,7 @@ generated from the numpydoc docstrings (autodoc + autosummary + numpydoc), the C
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -75,11 +76,12 @@ nitpick_ignore_regex = [("py:.*", rf"({'|'.join(_OUTSIDE)})(\..*)?"),
                         ("py:(func|class|obj)", r"(repr|str|int|float|bool|dict|list|tuple|object|Exception)")]
 
 
-def _lookup(path: str):
-    """The Python object a dotted path names, or None.
+def _lookup(path: str) -> str | None:
+    """The canonical dotted name of what a dotted path names in Python, or None when nothing is there.
 
-    An instance attribute (``self.x = ...``, a dataclass field, an annotation, a slot) counts as
-    existing and gives its class.
+    A class or function met on the way is rebased on its own module (``baseparams.Robot.limits``
+    -> ``baseparams.model.robot.Robot.limits``). An instance attribute (a dataclass field, an
+    annotation, a slot, ``self.x = ...``) counts as existing.
     """
     import importlib
     import inspect
@@ -90,34 +92,48 @@ def _lookup(path: str):
             obj = importlib.import_module(".".join(parts[:cut]))
         except ImportError:
             continue
+        name = obj.__name__
         for k, attr in enumerate(parts[cut:]):
-            if hasattr(obj, attr):
-                obj = getattr(obj, attr)
-                continue
-            last = k == len(parts[cut:]) - 1
-            if last and inspect.isclass(obj):
-                declared = {*getattr(obj, "__annotations__", {}), *getattr(obj, "__dataclass_fields__", {}),
-                            *getattr(obj, "__slots__", ())}
-                try:
-                    source = inspect.getsource(obj)
-                except (OSError, TypeError):
-                    source = ""
-                if attr in declared or f"self.{attr} =" in source or f"self.{attr}:" in source:
-                    return obj
-            return None
-        return obj
+            owner = obj
+            if hasattr(owner, attr):
+                obj = getattr(owner, attr)
+            elif k == len(parts[cut:]) - 1 and inspect.isclass(owner) and _declares(owner, attr):
+                obj = None
+            else:
+                return None
+            name = f"{name}.{attr}"
+            if (inspect.isclass(obj) or inspect.isfunction(obj)) and hasattr(obj, "__qualname__"):
+                name = f"{obj.__module__}.{obj.__qualname__}"
+        return name
     return None
+
+
+def _declares(cls, attr: str) -> bool:
+    """Whether a class declares an instance attribute (field, annotation, slot, ``self.attr =``)."""
+    import inspect
+
+    for klass in cls.__mro__:
+        declared = {*getattr(klass, "__annotations__", {}), *getattr(klass, "__slots__", ())}
+        if attr in declared:
+            return True
+        try:
+            source = inspect.getsource(klass)
+        except (OSError, TypeError):
+            continue
+        if f"self.{attr} =" in source or f"self.{attr}:" in source or f'(self, "{attr}"' in source:
+            return True
+    return False
 
 
 def _resolve_short(app, env, node, contnode):
     """A reference Sphinx does not find by itself: a short one, or one to an undocumented name.
 
-    The name is looked up in Python from the referring class and module outwards (as a reader of
-    the source would): when it exists, the link goes to its entry, or to the entry of the same
-    object under another name (a class or function a face re-exports), or else to its nearest
-    documented owner (an instance attribute, a constant without a comment). Otherwise it is looked
-    up by its ending among the documented objects, and linked when the nearest is one object. A
-    name that exists nowhere is left to warn (``-n``: a broken reference fails the build).
+    The name is looked up in Python from the referring class and module outwards, as a reader of
+    the source would: when it exists, the link goes to its entry under its canonical name, or
+    under the name a face documents it by, or else to its nearest documented owner (an instance
+    attribute, a constant without a comment). Otherwise it is looked up by its ending among the
+    documented objects, and linked when those nearest the referring module are one object. A name
+    that exists nowhere is left to warn (``-n``: a broken reference fails the build).
     """
     if node.get("refdomain") != "py":
         return None
@@ -133,37 +149,37 @@ def _resolve_short(app, env, node, contnode):
 
     if node.get("reftype") == "mod" and target in _MODULE_PAGES:  # a module a function's name shadows
         return make_refnode(app.builder, node["refdoc"], _MODULE_PAGES[target], None, contnode, target)
-    scopes = here.split(".") if here else []
-    for cut in range(len(scopes), -1, -1):
-        path = ".".join([*scopes[:cut], target])
-        obj = _lookup(path)
-        if obj is None:
+    canonical = {}  # canonical name -> documented names
+    for name in domain.objects:
+        if name.rsplit(".", 1)[-1] == target.rsplit(".", 1)[-1]:
+            canonical.setdefault(_lookup(name), []).append(name)
+    # where the reference is written: the referring page's module and class, then the object whose
+    # docstring holds it (``...: docstring of baseparams.base.regroup.base_parameters``), canonically
+    places = [here]
+    written = re.search(r"docstring of ([\w.]+)", node.source or "")
+    if written:
+        places.append(written.group(1))
+    roots = []
+    for place in places:
+        for name in dict.fromkeys(filter(None, (place, _lookup(place) if place else None))):
+            parts = name.split(".")
+            roots += [parts[:cut] for cut in range(len(parts), -1, -1)]
+    for root in roots:
+        path = _lookup(".".join([*root, target]))
+        if path is None:
             continue
         if path in domain.objects:
             return link(path)
-        leaf = path.rsplit(".", 1)[-1]
-        same = sorted((n for n in domain.objects if n.rsplit(".", 1)[-1] == leaf and _lookup(n) is obj),
-                      key=lambda n: (domain.objects[n].aliased, len(n)))
-        if same:
-            return link(same[0])
+        if canonical.get(path):
+            return link(min(canonical[path], key=lambda n: (domain.objects[n].aliased, len(n))))
         parts = path.split(".")
         for k in range(len(parts) - 1, 0, -1):
-            if ".".join(parts[:k]) in domain.objects:
-                return link(".".join(parts[:k]))
-
-    def nearness(name: str) -> int:
-        common = 0
-        for a, b in zip(name.split("."), here.split(".")):
-            if a != b:
-                break
-            common += 1
-        return common
-
-    hits = [name for name in domain.objects if name.endswith("." + target)]
-    best = max((nearness(h) for h in hits), default=-1)
-    nearest = sorted((h for h in hits if nearness(h) == best), key=lambda h: domain.objects[h].aliased)
-    if nearest and len({(domain.objects[h].docname, domain.objects[h].node_id) for h in nearest}) == 1:
-        return link(nearest[0])
+            owner = ".".join(parts[:k])
+            if owner in domain.objects:
+                return link(owner)
+            if canonical_owner := [n for n in domain.objects if n.endswith("." + parts[k - 1])
+                                   and _lookup(n) == owner]:
+                return link(min(canonical_owner, key=len))
     return None
 
 

@@ -17,6 +17,7 @@ def _is_page_doctest(item) -> bool:
 
 @pytest.hookimpl(tryfirst=True)  # before ``-m 'not slow'`` deselects
 def pytest_collection_modifyitems(items):
+    """Mark slow the doctests of the pages that say so on their first line."""
     for item in items:
         if _is_page_doctest(item) and item.path.read_text(encoding="utf-8").startswith(SLOW):
             item.add_marker(pytest.mark.slow)

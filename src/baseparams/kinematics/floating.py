@@ -33,7 +33,7 @@ BASE_COORDINATES = ("base_x", "base_y", "base_z", "base_roll", "base_pitch", "ba
 POSE_COLUMNS = ("base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz")
 #: a log's optional base twist columns: linear [m/s], then angular [rad/s] velocity, base frame
 TWIST_COLUMNS = ("base_vx", "base_vy", "base_vz", "base_wx", "base_wy", "base_wz")
-#: largest |pitch| [rad] the Euler chart accepts (85 deg; it is singular at 90)
+#: largest ``|pitch|`` [rad] the Euler chart accepts (85 deg; it is singular at 90)
 MAX_PITCH = np.deg2rad(85.0)
 
 

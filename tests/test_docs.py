@@ -117,7 +117,7 @@ def scheduler():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("where, lines", [pytest.param(w, ls, id=w, marks=[pytest.mark.shared] if _needs_panda(ls) else [])
+@pytest.mark.parametrize("where, lines", [pytest.param(w, ls, id=w, marks=[pytest.mark.shared] * _needs_panda(ls))
                                           for w, ls in SHELL])
 def test_shell_block_runs(where, lines, tmp_path, request):
     subst = {}

@@ -1,7 +1,7 @@
 """A floating base in a log: its pose and twist as written, and the smooth coordinates the pipeline filters.
 
 A log of a floating-base robot (a legged robot, a humanoid) holds the base's pose and, optionally, its
-twist beside the joints (README "Log layout"; :mod:`baseparams.io.logs`):
+twist beside the joints (docs/guides/log-layout.md; :mod:`baseparams.io.logs`):
 
 * ``base_x, base_y, base_z`` [m]: the origin of the base body's frame (the floating joint's frame:
   a URDF's root link), world frame;

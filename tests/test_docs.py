@@ -198,10 +198,9 @@ def site(tmp_path_factory):
 def test_the_cli_reference_is_the_parser(site):
     """Every command and every flag of ``baseparams.cli.build_parser`` is on the CLI page."""
     import argparse
+    import html
 
     from baseparams.cli import build_parser
-
-    import html
 
     page = html.unescape(re.sub(r"<[^>]+>", "", (site / "reference" / "cli.html").read_text(encoding="utf-8")))
     parser = build_parser()

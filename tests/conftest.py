@@ -8,7 +8,6 @@ the run ends with a count per resource. ``BASEPARAMS_REQUIRE_ALL=1`` (set by ``.
 which has them all) turns those skips into failures: nothing is skipped silently in CI.
 """
 
-import os
 import sys
 from pathlib import Path
 
@@ -17,9 +16,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from paths import CHROMIUM, CHROMIUM_REASON, DOCS_REASON, HAVE_DOCS, HAVE_SHARED, SHARED_REASON  # noqa: E402
+from paths import CHROMIUM, CHROMIUM_REASON, DOCS_REASON, HAVE_DOCS, HAVE_SHARED, SHARED_REASON, STRICT  # noqa: E402
 
-STRICT = os.environ.get("BASEPARAMS_REQUIRE_ALL", "") not in ("", "0")
 MISSING = {"shared": (HAVE_SHARED, SHARED_REASON), "chromium": (CHROMIUM is not None, CHROMIUM_REASON),
            "docs": (HAVE_DOCS, DOCS_REASON)}
 _skipped: dict[str, int] = {}

@@ -42,6 +42,9 @@ SHARED = (ROOT if ROOT is not None else REPO.parent / "shared") / "models"
 #: real identification logs recorded by others
 IDENT = SHARED.parent / "ident"
 
+#: ``BASEPARAMS_REQUIRE_ALL=1`` (``.ci/run``): a test that would skip for a missing resource fails instead
+STRICT = os.environ.get("BASEPARAMS_REQUIRE_ALL", "") not in ("", "0")
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 SHARED_REASON = ("needs the shared test data (../shared beside the repository, or BASEPARAMS_SHARED=DIR "

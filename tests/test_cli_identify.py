@@ -68,7 +68,7 @@ def test_identify_physical_writes_urdf_and_plot(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--method", "bogus"], "invalid choice"),
+    (["--method", "bogus"], "--method must be one of auto, ols, wls, physical, got 'bogus'"),
     (["--holdout", "99"], "holdout 99"),
     (["--friction", "sticky"], "unknown friction"),
     (["--urdf", "x.urdf"], "--urdf needs --method physical"),

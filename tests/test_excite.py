@@ -414,8 +414,9 @@ def test_several_links_kept_out_and_limits_from_the_command_line(tmp_path, capsy
     (["--velocity", "fast"], "--velocity: expected a number per item, got 'fast'"),
     (["--position", "1"], "--position: expected LO:HI per item"),
     (["--velocity", "joint1=1,2"], "--velocity: give every item as JOINT=VALUE or none"),
-    (["--velocity", "nope=1"], "velocity limit for 'nope': not a designed joint of 'puma560'"),
-    (["--acceleration", "1,2"], "acceleration limit: expected a number for every joint or one per designed joint (6"),
+    (["--velocity", "nope=1"], "--velocity limit for 'nope': not a designed joint of 'puma560'"),
+    (["--acceleration", "1,2"], "--acceleration limit: expected a number for every joint or one per designed "
+                                "joint (6"),
     (["--keepout", "link6"], "--keepout expects LINK:Z"),
     (["--keepout", "link6:0.1", "--keepout", "link6:0.2"], "a link named twice"),
 ])

@@ -129,7 +129,7 @@ def test_base_columns_bad_input_is_one_line(tmp_path):
     for trajectory in ((log.t, log.q, log.dq, log.dq), tmp_path / "log.csv"):
         with pytest.raises(BaseparamsError, match=r"floating base's motion is not in a trajectory file"):
             bp.simulate(robot, trajectory)
-    with pytest.raises(BaseparamsError, match=r"sub-chains \(--joints\) of a floating base"):
+    with pytest.raises(BaseparamsError, match=r"sub-chains \(joints=\) of a floating base"):
         bp.identify(robot, log, joints="FL_hip_joint")
 
 
@@ -155,3 +155,122 @@ def test_random_floating_robot_simulated_then_identified(rng):
     ident = bp.identify(robot, log, method="ols")
     assert ident.compare_truth(truth)["rel_error"] <= 0.05
     assert ident.predict(log).shape == (log.n_samples, robot.dof - 6)
+
+
+# ---------------------------------------------------------------- one log, every format (issue 51)
+def _floating_log(seed: int, samples: int = 300):
+    """A random floating robot and a log of it: base pose and base-frame twist, joints with dq and tau."""
+    rng = np.random.default_rng(seed)
+    robot = random_robot(rng, int(rng.integers(2, 5)), joint_types="RP", floating=True)
+    t, c, dc, _ = fourier_trajectory(robot.dof, samples / 200.0, 200.0, rng, amplitude=0.6)
+    names = BASE_COORDINATES + tuple(robot.joint_names[1:])
+    tau = np.c_[np.zeros((len(t), 6)), rng.normal(size=(len(t), robot.dof - 6))]
+    return robot, JointLog(t, names, c, tau, dq=dc)
+
+
+def write_floating_bag(path, log, odom_every: int = 1, odom_shift_ns: int = 0, storage: str = "sqlite3"):
+    """A rosbag2 recording: the joints as JointState, the base as nav_msgs/msg/Odometry (pose in the world
+    frame, twist in the base frame: REP 105), every ``odom_every``-th sample, stamps shifted by ``odom_shift_ns``."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from baseparams.io.logs import log_columns_of
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    cols = log_columns_of(log)
+    ns = np.round(log.t * 1e9).astype(np.int64) + 1_700_000_000_000_000_000
+
+    def header(k, shift=0):
+        n = int(ns[k]) + shift
+        return T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=n // 10**9, nanosec=n % 10**9),
+                                         frame_id="odom")
+
+    def vec(kind, a, b, c):
+        return T[f"geometry_msgs/msg/{kind}"](x=float(a), y=float(b), z=float(c))
+
+    plugin = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}[storage]
+    joints = list(log.joints[6:])
+    with Writer(path, version=9, storage_plugin=plugin) as w:
+        js = w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=ts)
+        od = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        for k in range(log.n_samples):
+            msg = T["sensor_msgs/msg/JointState"](header=header(k), name=joints, position=log.q[k, 6:],
+                                                  velocity=log.dq[k, 6:], effort=log.tau[k, 6:])
+            w.write(js, int(ns[k]), ts.serialize_cdr(msg, msg.__msgtype__))
+            if k % odom_every:
+                continue
+            g = {n: cols[n][k] for n in cols}
+            pose = T["geometry_msgs/msg/Pose"](
+                position=vec("Point", g["base_x"], g["base_y"], g["base_z"]),
+                orientation=T["geometry_msgs/msg/Quaternion"](x=g["base_qx"], y=g["base_qy"], z=g["base_qz"],
+                                                             w=g["base_qw"]))
+            twist = T["geometry_msgs/msg/Twist"](linear=vec("Vector3", g["base_vx"], g["base_vy"], g["base_vz"]),
+                                                angular=vec("Vector3", g["base_wx"], g["base_wy"], g["base_wz"]))
+            msg = T["nav_msgs/msg/Odometry"](
+                header=header(k, odom_shift_ns), child_frame_id="base",
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+                twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=np.zeros(36)))
+            w.write(od, int(ns[k]) + odom_shift_ns, ts.serialize_cdr(msg, msg.__msgtype__))
+    return path
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_one_floating_log_reads_the_same_from_every_format(tmp_path, seed):
+    """Property (issue 51: NPZ and Parquet refused a floating log that CSV read): one log of a random floating
+    robot, written as CSV, TSV, NPZ, Parquet and a ROS 2 bag (JointState + Odometry), reads to the same JointLog
+    (the bag's time to its nanosecond stamps)."""
+    pa = pytest.importorskip("pyarrow")
+    pq = pytest.importorskip("pyarrow.parquet")
+    pytest.importorskip("rosbags")
+    from baseparams.io.logs import log_columns_of
+
+    robot, log = _floating_log(seed)
+    files = [write_log(tmp_path / f"log.{ext}", log) for ext in ("csv", "tsv", "npz")]
+    pq.write_table(pa.table(log_columns_of(log)), tmp_path / "log.parquet")
+    storage = ("sqlite3", "mcap")[seed % 2]
+    files += [tmp_path / "log.parquet", write_floating_bag(tmp_path / "bag", log, storage=storage)]
+    ref = read_log(files[0], robot)
+    assert ref.joints == log.joints and ref.floating
+    assert np.allclose(ref.q, log.q, atol=1e-12) and np.allclose(ref.dq, log.dq, atol=1e-9)
+    for f in files[1:]:
+        back = read_log(f, robot)
+        assert back.joints == ref.joints, f
+        if f.name == "bag":
+            np.testing.assert_allclose(back.t, ref.t - ref.t[0], atol=2e-9)
+        else:
+            assert np.array_equal(back.t, ref.t), f
+        for kind in ("q", "dq", "tau"):
+            assert np.array_equal(getattr(back, kind), getattr(ref, kind)), (f, kind)
+        assert back.ddq is None and back.removed == ref.removed, f
+
+
+def test_a_bag_base_between_joint_stamps_is_interpolated_and_outside_it_counted(tmp_path):
+    """Odometry at half the joints' rate: its own stamps read exactly, the others interpolated (noted), the
+    last joint sample after the last odometry removed and counted."""
+    pytest.importorskip("rosbags")
+    robot, log = _floating_log(7, samples=401)
+    ref = read_log(write_log(tmp_path / "log.csv", log), robot)
+    assert read_log(write_floating_bag(tmp_path / "bag", log, odom_every=2), robot).removed == {}  # 401: both ends
+    even = JointLog(log.t[:400], log.joints, log.q[:400], log.tau[:400], dq=log.dq[:400])
+    back = read_log(write_floating_bag(tmp_path / "bag2", even, odom_every=2), robot)
+    assert back.removed == {"JointState messages outside the base odometry's time span (/odom)": 1}
+    assert any("interpolated at 199 JointState stamps" in n for n in back.notes), back.notes
+    np.testing.assert_array_equal(back.q[:, 6:], ref.q[:399, 6:])
+    np.testing.assert_array_equal(back.q[::2, :6], ref.q[:399:2, :6])  # at its own stamps: exactly
+    np.testing.assert_allclose(back.q[1::2, :6], ref.q[1:399:2, :6], atol=1e-4)  # between: a smooth motion
+
+
+def test_a_bag_without_the_base_odometry_is_one_line(tmp_path):
+    pytest.importorskip("rosbags")
+    from test_logs import write_bag
+
+    robot, log = _floating_log(3)
+    joints = JointLog(log.t, log.joints[6:], log.q[:, 6:], log.tau[:, 6:], dq=log.dq[:, 6:])
+    bag = write_bag(tmp_path / "bag", joints)
+    with pytest.raises(DataError, match=r"floating base: the bag needs its pose and twist on a nav_msgs/msg/Odometry"):
+        read_log(bag, robot)
+    with pytest.raises(DataError, match=r"no topic '/base' \(base_topic\)"):
+        read_log(bag, robot, columns={"base_topic": "/base"})
+    with pytest.raises(DataError, match=r"'base_topic' applies to ROS bags only"):
+        read_log(write_log(tmp_path / "log.csv", log), robot, columns={"base_topic": "/odom"})

@@ -338,3 +338,110 @@ def test_a_urdf_mesh_that_is_a_fifo_is_refused_before_mujoco_imports_it(tmp_path
 def test_the_standard_input_is_not_an_output(target, capsys):
     err = one_line_error(["analyze", "puma560", "--output", target], capsys)
     assert "the standard input is not an output" in err
+
+
+# ---------------------------------------------------------------- interrupts of a streamed identification (issue 51)
+_SWALLOW = """
+import os, signal, time
+import baseparams.io.logs as logs
+_parse, _calls = logs._fast_block, []
+def _swallowing(*a, **k):  # what pyarrow importing pandas lazily did with a SIGINT in pass 1's first block
+    _calls.append(1)
+    if len(_calls) == 1:
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.5)
+        except KeyboardInterrupt:
+            pass
+    return _parse(*a, **k)
+logs._fast_block = _swallowing
+"""
+
+
+@pytest.fixture(scope="module")
+def streamed(tmp_path_factory):
+    """A 12 MB CSV log identified with --stream on in a few seconds (several blocks per pass)."""
+    import baseparams
+    from baseparams.ident.simulate import simulate_log
+    from baseparams.io.logs import write_log
+
+    folder = tmp_path_factory.mktemp("streamed")
+    log, _ = simulate_log(baseparams.load("puma560"), duration=60.0, rate=500.0, noise=0.01, seed=3)
+    return write_log(folder / "log.csv", log)
+
+
+_SLOW_AFTER_A_LINE = """
+import time
+import baseparams.cli.common as common
+import baseparams.ident.stream as stream
+_said, _call, _check = [], common.Progress.__call__, stream.Interrupts.check
+def _call_and_mark(self, msg):  # a line printed: the next check waits longer than any signal's delay
+    _said.append(1)
+    return _call(self, msg)
+def _check_slowly(self):
+    if _said:
+        _said.clear()
+        time.sleep(0.6)
+    return _check(self)
+common.Progress.__call__, stream.Interrupts.check = _call_and_mark, _check_slowly
+"""
+
+
+def _interrupted(streamed, tmp_path, marker=None, delay=0.0, sig=None, preamble=""):
+    """``identify --stream on`` with every output in a subprocess, signalled ``delay`` s after the progress line
+    containing ``marker``: ``(exit code, stderr, files left in the output folder, files left in TMPDIR)``."""
+    import signal
+    import time
+
+    out, tmp = tmp_path / "out", tmp_path / "tmp"
+    out.mkdir()
+    tmp.mkdir()
+    argv = ["identify", "puma560", str(streamed), "-v", "--stream", "on", "--holdout", "15", "--save",
+            str(out / "r.json"), "--predictions", str(out / "p.csv"), "--html", str(out / "r.html")]
+    code = preamble + f"\nimport sys\nfrom baseparams.cli import main\nsys.exit(main({argv!r}))\n"
+    env = {**os.environ, "TMPDIR": str(tmp), "OPENBLAS_NUM_THREADS": "1"}
+    p = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True, env=env, cwd=out)
+    seen = []
+    for line in p.stderr:
+        seen.append(line)
+        if marker is not None and marker in line:
+            time.sleep(delay)
+            p.send_signal(sig or signal.SIGINT)
+            break
+    rest = p.stderr.read()
+    rc = p.wait(timeout=120)
+    return rc, "".join(seen) + rest, sorted(os.listdir(out)), sorted(os.listdir(tmp))
+
+
+def test_a_sigint_swallowed_by_a_library_in_the_first_pass_still_stops_the_run(streamed, tmp_path):
+    """Issue 51: SIGINT 0.05 s into the first pass was swallowed (pyarrow's lazy pandas import caught the
+    KeyboardInterrupt) and the run went on to exit 0. The signal is remembered: the next block stops the run."""
+    from baseparams.cli import EXIT_INTERRUPTED
+
+    rc, err, left, tmp = _interrupted(streamed, tmp_path, preamble=_SWALLOW)
+    assert rc == EXIT_INTERRUPTED and "baseparams: interrupted" in err, (rc, err[-500:])
+    assert "pass 2" not in err and left == [] and tmp == [], (left, tmp)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, marker, delay", [
+    *(("SIGINT", m, d) for m, d in [("pass 1", 0.05), ("pass 1", 0.3), ("pass 2", 0.05), ("pass 3", 0.05),
+                                    ("pass 3", 0.5), ("fitting", 0.05), ("pass 5", 0.05), ("pass 5", 0.4)]),
+    ("SIGTERM", "pass 1", 0.05), ("SIGTERM", "pass 3", 0.3), ("SIGTERM", "pass 5", 0.1)])
+def test_an_interrupt_at_any_moment_of_a_streamed_run_leaves_nothing(streamed, tmp_path, marker, delay, name):
+    """SIGINT (or SIGTERM) at several moments of every pass: exit EXIT_INTERRUPTED (or 143), no output written,
+    no temporary file left (the outputs' nor the passes')."""
+    import signal
+
+    from baseparams.cli import EXIT_INTERRUPTED
+    from baseparams.ident.stream import EXIT_TERMINATED
+
+    # every line shown at once (-v) and the step after it slowed (a fast machine finished the run before the signal)
+    rc, err, left, tmp = _interrupted(streamed, tmp_path, marker, delay, getattr(signal, name), _SLOW_AFTER_A_LINE)
+    assert rc == (EXIT_INTERRUPTED if name == "SIGINT" else EXIT_TERMINATED), (rc, err[-800:])
+    assert "Traceback" not in err and left == [] and tmp == [], (left, tmp, err[-500:])
+
+
+def test_an_uninterrupted_streamed_run_writes_every_output(streamed, tmp_path):
+    rc, err, left, tmp = _interrupted(streamed, tmp_path)
+    assert rc == 0 and left == ["p.csv", "r.html", "r.json"] and tmp == [], (rc, left, tmp, err[-500:])

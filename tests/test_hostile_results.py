@@ -352,3 +352,200 @@ def test_a_mutated_column_map_is_refused_or_reads_the_same_log(saved, puma, tmp_
             continue  # a default taken or another valid number: another, valid, mapping
         assert np.array_equal(log.q, base.q) and np.array_equal(log.tau, base.tau), (path, how, value)
     assert refused > 100
+
+
+# ---------------------------------------------------------------- saved model terms (issue 51)
+@pytest.fixture(scope="module")
+def termed(puma, saved):
+    """A saved identification with every model term kept (forced), and the predictions of the untouched file."""
+    log, _ = simulate_log(puma, duration=4.0, rate=100.0, noise=0.02, seed=5)
+    res = identify(puma, log, method="ols", holdout=1.0, terms="dahl,tilt,delay,scale")
+    assert [t.name for t in res.fit.terms] == ["dahl", "tilt", "delay", "scale"]
+    path = res.save(saved["folder"] / "termed.json")
+    return {"ident": res, "path": path, "doc": json.loads(path.read_text()),
+            "pred": Identification.load(path, puma).predict(saved["short"])}
+
+
+def _per_joint_fields():
+    """``(term, field)`` of every saved term field declared as one value per measured joint."""
+    from baseparams.ident.terms.registry import registry
+    from baseparams.schema import Map
+
+    return [(name, f) for name, cls in registry().items() for f, node in cls.FIELDS.items()
+            if isinstance(node, Map) and node.keys == "joints"]
+
+
+def test_every_term_declares_its_joint_keyed_fields():
+    assert {("dahl", "delta"), ("delay", "seconds"), ("scale", "factors")} <= set(_per_joint_fields())
+
+
+@pytest.mark.parametrize("name, field", _per_joint_fields())
+def test_a_joint_the_robot_lacks_or_a_joint_left_out_is_refused(termed, puma, tmp_path, name, field):
+    """Issue 51: a delay keyed by a joint the robot lacks was silently ignored (and a missing one read as 0)."""
+    k = [t["name"] for t in termed["doc"]["terms"]].index(name)
+    f = tmp_path / "r.json"
+    d = copy.deepcopy(termed["doc"])
+    values = d["terms"][k]["values"][field]
+    values["elbow"] = values["joint2"]
+    f.write_text(json.dumps(d))
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: terms[{k}].values.{field}: key 'elbow' is not one of robot.joints (joint1," in msg, msg
+    del values["elbow"], values["joint3"]
+    f.write_text(json.dumps(d))
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: terms[{k}].values.{field}: missing 'joint3'" in msg, msg
+
+
+@pytest.mark.parametrize("where, value, words", [
+    (("values", "angles", 0), 1e300, "terms[1].values.angles[0]: expected a finite number in [-0.174533, 0.174533]"),
+    (("values", "angles", 1), 0.9, "terms[1].values.angles[1]: expected a finite number in [-0.174533, 0.174533]"),
+    (("values", "pi", 19), 1e300, "terms[1].values.pi[19]: expected a finite number in [-1e+24, 1e+24]"),
+    (("values", "degrees"), 1e300, "terms[1].values.degrees: expected a finite number in [0, 14.1421]"),
+    (("values", "degrees"), 3.0, "terms[1].values: degrees 3.0 is not the angles' magnitude"),
+    (("values", "pi"), None, "terms[1].values: a tilt without the standard parameters it acts on"),
+    (("std", "angles"), "x", "terms[1].std.angles: expected an array"),
+    (("values", "seconds"), {"joint1": 0.01}, "terms[1].values: unknown key 'seconds'"),
+])
+def test_tilt_fields_out_of_their_bounds(termed, puma, tmp_path, where, value, words):
+    """Issue 51: a tilt of 1e300 predicted torques of 7e298 N m with exit 0."""
+    f = tmp_path / "r.json"
+    f.write_text(_text(_mutate(termed["doc"], ("terms", 1, *where), "replace", value)))
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: {words}" in msg, msg
+
+
+@pytest.mark.parametrize("k, where, value, words", [
+    (0, ("values", "delta", "joint1"), None, "terms[0].values.delta.joint1: expected a finite number in [1e-08, 0.05]"),
+    (0, ("values", "delta", "joint1"), 1e-300, "terms[0].values.delta.joint1: expected a finite number in [1e-08"),
+    (2, ("values", "seconds", "joint4"), 0.5, "terms[2].values.seconds.joint4: expected a finite number in [-0.05, 0"),
+    (2, ("values",), {}, "terms[2].values.seconds: missing"),
+    (2, ("std", "seconds"), [0.1], "terms[2].std.seconds: expected 6 items"),
+    (3, ("values", "factors", "joint5"), 7.0, "terms[3].values.factors.joint5: expected a finite number in [0.5, 2]"),
+    (3, ("values", "reference"), "wrist", "terms[3].values.reference: expected one of joint1, joint2"),
+    (3, ("values", "reference"), "joint1", "terms[3].values: factors.joint1 is "),
+    (3, ("name",), "shift", "terms[3].name: expected one of 'dahl', 'tilt', 'delay', 'scale', got 'shift'"),
+])
+def test_other_term_fields_out_of_their_bounds(termed, puma, tmp_path, k, where, value, words):
+    f = tmp_path / "r.json"
+    f.write_text(_text(_mutate(termed["doc"], ("terms", k, *where), "replace", value)))
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: {words}" in msg, msg
+
+
+@pytest.mark.parametrize("k", range(4))
+def test_a_term_listed_twice_is_refused(termed, puma, tmp_path, k):
+    """Issue 51: the same term listed twice was accepted and changed the predictions (0.066 -> 0.149 N m)."""
+    f = tmp_path / "r.json"
+    d = copy.deepcopy(termed["doc"])
+    d["terms"].append(copy.deepcopy(d["terms"][k]))
+    f.write_text(json.dumps(d))
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: terms[4].name: '{d['terms'][k]['name']}' appears twice (items {k} and 4)" in msg, msg
+
+
+def test_a_key_twice_in_one_object_is_refused(termed, puma, tmp_path):
+    """JSON readers keep the first or the last of two equal keys: neither is silently chosen."""
+    f = tmp_path / "r.json"
+    text = json.dumps(termed["doc"])
+    at = text.index('"seconds": {') + len('"seconds": {')
+    f.write_text(text[:at] + '"joint1": 0.04, ' + text[at:])
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: not a saved identification: the key 'joint1' appears twice in one object" in msg, msg
+
+
+def test_a_kept_term_its_options_did_not_try_is_refused(termed, puma, tmp_path):
+    f = tmp_path / "r.json"
+    f.write_text(json.dumps(_mutate(termed["doc"], ("options", "terms"), "replace", "delay")))
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: terms[0]: 'dahl' is not among the terms options.terms tried ('delay')" in msg, msg
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_mutated_terms_are_refused_in_one_line_or_predict_the_same(termed, saved, puma, tmp_path, seed):
+    """Random changes inside the saved terms: one line naming the file and the term, or the same predictions
+    (another valid number: finite predictions)."""
+    rng = np.random.default_rng(200 + seed)
+    f = tmp_path / "mutated.json"
+    paths = [("terms", *p) for p in _paths(termed["doc"]["terms"])]
+    refused = 0
+    for _ in range(120):
+        path = paths[rng.integers(len(paths))]
+        how = rng.choice(["replace"] * 6 + ["delete", "add"])
+        value = REPLACEMENTS[rng.integers(len(REPLACEMENTS))]
+        if how == "add" and not isinstance(_get(termed["doc"], path), (dict, list)):
+            how = "delete"
+        f.write_text(_text(_mutate(termed["doc"], path, how, value)))
+        try:
+            back = Identification.load(f, puma)
+        except (BaseparamsError, TypeError, ValueError) as exc:
+            msg = str(exc)
+            assert "\n" not in msg and str(f) in msg and ("terms" in msg or "nested" in msg or "JSON" in msg
+                                                           or "integer" in msg), (path, how, value, msg)
+            refused += 1
+            continue
+        pred = back.predict(saved["short"])
+        assert np.isfinite(pred).all(), (path, how, value)
+        if not _another_number(termed["doc"], path, how, value) and path[-1] not in ("std", "forced"):
+            assert np.array_equal(pred, termed["pred"]), (path, how, value)
+    assert refused > 60, refused
+
+
+def _valid(node, rng):
+    """A random value within a Num node's bounds."""
+    return float(rng.uniform(max(node.lo, -1e3), min(node.hi, 1e3)))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_any_term_value_within_its_declared_bounds_reads_back_bit_for_bit(termed, saved, puma, tmp_path, seed):
+    """Property: delays, scales, distances and angles drawn within the declared bounds are saved, read back
+    and predict the same as the result in memory; one beyond a bound is refused by save (nothing written)."""
+    from dataclasses import replace
+
+    from baseparams.ident.terms.delay import Delay
+    from baseparams.ident.terms.scale import Scale
+    from baseparams.ident.terms.tilt import Tilt
+
+    rng = np.random.default_rng(seed)
+    dahl, tilt, delay, scale = (t.copy() for t in termed["ident"].fit.terms)
+    delay.seconds = np.array([_valid(Delay.FIELDS["seconds"].value, rng) for _ in range(6)])
+    scale.factors = np.array([_valid(Scale.FIELDS["factors"].value, rng) for _ in range(6)])
+    scale.factors[scale.reference] = 1.0
+    tilt.angles = np.array([_valid(Tilt.FIELDS["angles"].item, rng) for _ in range(2)])
+    dahl.delta = np.exp(rng.uniform(np.log(1e-6), np.log(0.05), 6))
+    res = replace(termed["ident"], fit=replace(termed["ident"].fit, terms=(dahl, tilt, delay, scale)))
+    path = res.save(tmp_path / "r.json")
+    back = Identification.load(path, puma)
+    assert np.array_equal(back.predict(saved["short"]), res.predict(saved["short"]))
+    delay.seconds = delay.seconds.copy()
+    delay.seconds[rng.integers(6)] = 0.2
+    msg = api_error(res.save, tmp_path / "beyond.json")
+    assert "beyond.json (not written): terms[2].values.seconds.joint" in msg and "[-0.05, 0.05]" in msg, msg
+    assert not (tmp_path / "beyond.json").exists()
+
+
+def test_cli_predict_refuses_the_issue_files_in_one_line(termed, saved, tmp_path, capsys):
+    for k, change in enumerate([lambda d: d["terms"][2]["values"]["seconds"].update(elbow=0.01),
+                                lambda d: d["terms"][1]["values"]["angles"].__setitem__(0, 1e300),
+                                lambda d: d["terms"].append(copy.deepcopy(d["terms"][1]))]):
+        d = copy.deepcopy(termed["doc"])
+        change(d)
+        f = tmp_path / f"r{k}.json"
+        f.write_text(json.dumps(d))
+        err = one_line_error(["predict", "puma560", f, saved["log"], "--out", tmp_path / f"p{k}.csv"], capsys)
+        assert str(f) in err and "terms[" in err, err
+        assert not (tmp_path / f"p{k}.csv").exists()
+
+
+@pytest.mark.parametrize("change", ["delete a term", "delete its choice", "not kept"])
+def test_a_term_left_out_or_added_against_the_choices_is_refused(termed, puma, tmp_path, change):
+    f = tmp_path / "r.json"
+    d = copy.deepcopy(termed["doc"])
+    if change == "delete a term":
+        del d["terms"][0]
+    elif change == "delete its choice":
+        d["term_choices"] = [c for c in d["term_choices"] if c["name"] != "delay"]
+    else:
+        next(c for c in d["term_choices"] if c["name"] == "scale")["kept"] = False
+    f.write_text(json.dumps(d))
+    msg = api_error(Identification.load, f, puma)
+    assert f"{f}: terms: " in msg and "term_choices says" in msg, msg

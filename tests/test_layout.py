@@ -242,8 +242,9 @@ def test_function_length_check_sees_long_functions(tmp_path):
 MAX_PARAMETERS = 11
 
 #: the public front door: one keyword per flag of the command line (``baseparams.identify`` is
-#: ``baseparams.workflow.identify``); nothing else may take more than :data:`MAX_PARAMETERS`
-FRONT_DOOR = {"baseparams.workflow.identify", "baseparams.workflow.excite", "baseparams.workflow.simulate"}
+#: ``baseparams.workflow.identify.identify``); nothing else may take more than :data:`MAX_PARAMETERS`
+FRONT_DOOR = {"baseparams.workflow.identify.identify", "baseparams.workflow.excite.excite",
+              "baseparams.workflow.simulate.simulate"}
 
 
 def _compiled(node) -> bool:

@@ -400,14 +400,20 @@ def test_prismatic_and_multi_dof_joints(tmp_path):
     cols = {"t": np.arange(n) * 0.01}
     for j in ("b1_joint", "b3_joint", "b4_joint"):
         cols |= {f"q_{j}": np.full(n, 0.1), f"tau_{j}": np.ones(n)}
-    log = read_log(write_csv(tmp_path / "ok.csv", cols), robot)  # the U joints cannot be logged: not required
+    msg = one_line_error(read_log, write_csv(tmp_path / "some.csv", cols), robot)  # a U joint's coordinates: needed
+    assert "joints b0_joint.0, b0_joint.1, b2_joint.0, b2_joint.1 of robot 'random5': no columns" in msg
+    log = read_log(tmp_path / "some.csv", robot, allow_subset=True)
     assert log.joints == ("b1_joint", "b3_joint", "b4_joint")
+    for j in ("b0_joint.0", "b0_joint.1", "b2_joint.0", "b2_joint.1"):  # one column per coordinate
+        cols |= {f"q_{j}": np.full(n, 0.2), f"tau_{j}": np.ones(n)}
+    log = read_log(write_csv(tmp_path / "ok.csv", cols), robot)
+    assert log.joints == tuple(robot.coordinate_names()) and log.q.shape == (n, robot.dof)
     cols["q_b3_joint"] = np.full(n, 250.0)  # mm
     msg = one_line_error(read_log, write_csv(tmp_path / "mm.csv", cols), robot)
     assert "column 'q_b3_joint'" in msg and "line 2 (data row 1)" in msg and "millimetres given as metres?" in msg
-    assert read_log(tmp_path / "mm.csv", robot, max_travel=None).q[0, 1] == 250.0
+    assert read_log(tmp_path / "mm.csv", robot, max_travel=None).q[0, 5] == 250.0
     msg = one_line_error(read_log, write_csv(tmp_path / "u.csv", cols | {"q_b0_joint": np.zeros(n)}), robot)
-    assert "column 'q_b0_joint'" in msg and "a U joint" in msg
+    assert "column 'q_b0_joint'" in msg and "joint 'b0_joint' has 2 coordinates, logged one column each" in msg
 
 
 @seeded(40)

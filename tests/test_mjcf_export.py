@@ -415,9 +415,9 @@ def test_front_door_identify_writes_the_mjcf_like_the_cli(tmp_path, capsys):
     assert np.allclose(a.body_mass, b.body_mass) and np.allclose(a.dof_armature, b.dof_armature)
     assert np.allclose(a.body_inertia, b.body_inertia) and a.dof_armature.min() > 0
     # refused before the fit, nothing written: a least-squares method, a built-in model, another suffix
-    for model, kw, words in ((str(src), {"method": "wls"}, 'mjcf= needs method="physical"'),
+    for model, kw, words in ((str(src), {"method": "wls"}, 'mjcf= needs method=physical'),
                              ("puma560", flags, "needs an MJCF (.xml) or URDF (.urdf) model file"),
-                             (str(src), {**flags, "mjcf": tmp_path / "o.urdf"}, "must end in .xml")):
+                             (str(src), {**flags, "mjcf": tmp_path / "o.urdf"}, "format comes from the suffix: .xml")):
         with pytest.raises(BaseparamsError, match=re.escape(words)):
             bp.identify(model, str(csv), **{"mjcf": tmp_path / "o.xml", **kw})
     assert not (tmp_path / "o.xml").exists() and not (tmp_path / "o.urdf").exists()

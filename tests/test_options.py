@@ -17,9 +17,9 @@ import pytest
 import baseparams
 from baseparams.arguments import IDENTIFY
 from baseparams.cli import build_parser, main
+from baseparams.cli.parser import flag_message
 from baseparams.errors import BaseparamsError
 from baseparams.ident import IdentOptions, MotorCoupling, identify
-from baseparams.ident.options import flag_names
 from baseparams.ident.simulate import simulate_log
 from baseparams.ident.stream import identify_stream
 from baseparams.io.logs import LogStream, write_log
@@ -45,9 +45,10 @@ def test_the_front_door_defaults_are_the_options_defaults():
 
 def test_the_parser_defaults_are_the_options_defaults():
     args = build_parser().parse_args(["identify", "puma560", "log.csv"])
-    from baseparams.cli.identify import options_of
+    from baseparams.cli.identify import keywords
 
-    assert options_of(args) == IdentOptions()
+    names = {f.name for f in fields(IdentOptions)}
+    assert IdentOptions(**{k: v for k, v in keywords(args).items() if k in names}) == IdentOptions()
 
 
 def test_json_round_trip_and_an_older_file():
@@ -90,7 +91,7 @@ def test_the_same_rule_refuses_in_python_and_on_the_command_line(tmp_path, capsy
     assert main(["identify", "puma560", str(tmp_path / "nonexistent.csv"), "--prior-weight", "5"]) == 2
     err = capsys.readouterr().err
     assert "baseparams: error: --prior-weight applies to --method physical, not auto (the default estimate" in err
-    assert flag_names("identify: couplings= and analysis_samples= and method=wls") == \
+    assert flag_message("identify: couplings= and analysis_samples= and method=wls", "identify") == \
         "--coupling and --analysis-samples and --method wls"
 
 

@@ -135,7 +135,7 @@ def test_auto_is_recursive_for_large_trees_only():
 def test_recursive_refused_in_one_line_without_compact_columns():
     with pytest.raises(BaseparamsError, match="form='recursive' needs a tree"):
         bp.analyze(bp.load("four-bar"), form="recursive")
-    with pytest.raises(BaseparamsError, match="unknown form"):
+    with pytest.raises(BaseparamsError, match="form= must be one of auto, expanded, recursive"):
         bp.analyze(bp.load("puma560"), form="short")
 
 

@@ -235,10 +235,10 @@ def test_cli_streams_on_request_and_says_so(sim, tmp_path):
 def test_cli_streams_automatically_above_the_size_and_falls_back_on_odd_time(sim, tmp_path, monkeypatch, capsys):
     """Above STREAM_MIN_MB the log is streamed (said with -v); non-uniform time with a hold-out is read whole."""
     import baseparams.cli as cli
-    import baseparams.workflow as identify_cli
 
     csv, _ = sim
-    monkeypatch.setattr(identify_cli, "STREAM_MIN_MB", 0.5)  # the 1.5 MB test log counts as large
+    # the 1.5 MB test log counts as large
+    monkeypatch.setattr(sys.modules["baseparams.workflow.identify"], "STREAM_MIN_MB", 0.5)
     assert cli.main(["identify", "puma560", str(csv), "--method", "ols", "--rotor", "-v", "--json"]) == 0
     out = capsys.readouterr()
     assert "streaming" in out.err and "MB > 0.5 MB" in out.err

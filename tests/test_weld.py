@@ -1,9 +1,12 @@
 """Sub-chains (``baseparams.model.weld``): welded joints reproduce the full robot's torques."""
 
+import re
+
 import numpy as np
 import pytest
 
 import baseparams
+import baseparams.io.logs
 from baseparams.errors import ModelError
 from baseparams.model.weld import weld
 from baseparams.robots.random import random_robot
@@ -103,5 +106,58 @@ def test_front_door_identifies_the_same_sub_chain_as_the_cli(tmp_path, capsys):
                  "--json"]) == 0
     cli = json.loads(capsys.readouterr().out)
     assert [e["value"] for e in cli["base_parameters"]] == [e["value"] for e in ident.to_json()["base_parameters"]]
-    with pytest.raises(baseparams.BaseparamsError, match="weld applies with joints"):
+    with pytest.raises(baseparams.BaseparamsError, match="weld= applies with joints="):
         baseparams.identify("puma560", path, weld={"joint5": 0.3})
+
+
+def _no_fit(monkeypatch):
+    def boom(*a, **k):
+        raise AssertionError("the fit started")
+
+    monkeypatch.setattr("baseparams.ident.identify", boom)
+
+
+def test_a_weld_on_a_joint_that_moves_in_the_log_is_refused_with_how_far_it_moved(tmp_path, capsys, monkeypatch):
+    """``--weld`` on a joint the log shows moving: refused before the fit, naming the joint and its range, in both
+    doors (was: accepted, the fit made on a robot the log contradicts)."""
+    from baseparams.cli import main
+
+    path, robot = _still_wrist_log(tmp_path, wrist_moves=True)
+    q5 = baseparams.io.logs.read_log(path, robot).q[:, 4]
+    span = f"range {np.ptp(q5):.3g} rad"
+    _no_fit(monkeypatch)
+    arm = ",".join(robot.joint_names[:4])
+    assert main(["identify", "puma560", str(path), "--joints", arm, "--weld", "joint5=0.3", "--weld",
+                 "joint6=0.3"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert f"joint 'joint5' moves in the log ({span}) and is welded at --weld joint5=0.3" in err, err
+    with pytest.raises(baseparams.BaseparamsError, match=rf"joint 'joint5' moves in the log \({span}\) and is "
+                                                           rf"welded at weld= joint5=0.3"):
+        baseparams.identify("puma560", path, joints=arm, weld={"joint5": 0.3, "joint6": 0.3})
+
+
+def test_a_weld_away_from_where_the_log_holds_the_joint_is_said_with_the_figure(tmp_path, capsys):
+    from baseparams.cli import main
+
+    path, robot = _still_wrist_log(tmp_path, wrist_moves=False)  # joints 5 and 6 held at 0.3 rad
+    arm = ",".join(robot.joint_names[:4])
+    assert main(["identify", "puma560", str(path), "--joints", arm, "--weld", "joint5=0.8", "--friction", "none",
+                 "--method", "ols", "--json"]) == 0
+    err = capsys.readouterr().err
+    assert "WARNING: welded where the log does not hold them (--weld over the log's still position): joint5 at " \
+           "0.8, logged still at 0.3" in err, err
+
+
+@pytest.mark.parametrize("weld, words", [({"joint5": "x"}, "weld= 'joint5=?': expected NAME=VALUE"),
+                                         (["joint5"], "weld= 'joint5': expected NAME=VALUE"),
+                                         (["joint5=1e9"], "finite number within [-1e6, 1e6]")])
+def test_bad_welds_are_refused_before_the_model_loads(weld, words, monkeypatch):
+    def boom(*a, **k):
+        raise AssertionError("the model was loaded")
+
+    import sys
+
+    monkeypatch.setattr(sys.modules["baseparams.workflow.identify"], "robot_of", boom)
+    with pytest.raises(baseparams.BaseparamsError, match=re.escape(words)):
+        baseparams.identify("puma560", "log.csv", joints="joint1,joint2", weld=weld)

@@ -82,7 +82,7 @@ from typing import TYPE_CHECKING, TextIO
 
 import numpy as np
 
-from .arguments import ArgumentTypeError
+from .arguments import CHOICES, ArgumentTypeError
 from .display import data_frame, summary_repr, text_table
 from .enums import Source, Status, values
 from .errors import BaseparamsError
@@ -662,26 +662,14 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
     >>> a.expressions()[0]["name"]
     'link1.ZZR'
     """
-    from .arguments import check_keywords, check_progress
+    from .arguments import check_progress
 
     if not isinstance(robot, Robot):
         raise ArgumentTypeError(f"analyze() takes a Robot (baseparams.load(NAME or PATH) makes one), "
                                 f"not {type(robot).__name__}")
-    check_keywords("analyze", samples=samples, seed=seed)
+    check_analyze({"samples": samples, "seed": seed, "verify": verify, "rows": rows, "convention": convention,
+                   "extended": extended, "literal": literal, "form": form})
     check_progress(progress, "analyze", stream=True)
-    if not isinstance(rows, (str, list, tuple)):
-        raise ArgumentTypeError(f"analyze: rows= must be a string (all, joints, ...) or a list of joint names, got "
-                                f"{type(rows).__name__}")
-    for name, flag in (("verify", verify), ("extended", extended), ("literal", literal)):
-        if not isinstance(flag, (bool, np.bool_)):
-            raise ArgumentTypeError(f"analyze: {name}= must be True or False, got {type(flag).__name__}")
-    if not isinstance(convention, str):
-        raise ArgumentTypeError(f"analyze: convention= must be a string (khalil, paper, ...), got "
-                                f"{type(convention).__name__}")
-    if not isinstance(form, str):
-        raise ArgumentTypeError(f"analyze: form= must be a string ({', '.join(FORMS)}), got {type(form).__name__}")
-    if form not in FORMS:
-        raise BaseparamsError(f"analyze: unknown form {form!r}; expected one of {', '.join(FORMS)}")
     _check_samples_memory(robot, samples)
     kw = {"samples": samples, "seed": seed, "verify": verify, "rows": rows, "convention": convention,
           "extended": extended, "progress": progress, "form": form}
@@ -696,7 +684,35 @@ def analyze(robot: Robot, *, samples: int | None = None, seed: int = 0, verify: 
 
 
 #: the forms of the regrouped expressions (:func:`analyze`)
-FORMS = ("auto", "expanded", "recursive")
+FORMS = CHOICES["form"]
+
+
+def check_analyze(keywords: dict) -> None:
+    """Every rule of :func:`analyze`'s keywords that needs no robot (the command line's preflight asks it too).
+
+    Parameters
+    ----------
+    keywords : dict
+        :func:`analyze`'s keywords (``samples``, ``seed``, ``verify``, ``rows``, ``convention``,
+        ``extended``, ``literal``, ``form``); those missing are not checked.
+
+    Raises
+    ------
+    BaseparamsError
+        The first keyword refused, in one line naming it: a number out of its range, a flag that
+        is not a boolean, a convention or form that is none of the choices, rows of another type.
+    """
+    from .arguments import check_choice, check_flags, check_keywords
+
+    check_keywords("analyze", **{k: keywords[k] for k in ("samples", "seed") if k in keywords})
+    rows = keywords.get("rows", "all")
+    if not isinstance(rows, (str, list, tuple)):
+        raise ArgumentTypeError(f"analyze: rows= must be a string (all, joints, ...) or a list of joint names, got "
+                                f"{type(rows).__name__}")
+    check_flags("analyze", **{k: keywords[k] for k in ("verify", "extended", "literal") if k in keywords})
+    for name in ("convention", "form"):
+        if name in keywords:
+            check_choice("analyze", name, keywords[name], CHOICES[name])
 
 #: ``form="auto"``: the recursive form for a tree regrouped body by body with at least this many bodies
 RECURSIVE_MIN_BODIES = 200

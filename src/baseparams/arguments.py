@@ -1,9 +1,11 @@
 """Every number the command line and the front door take, range-checked before any work.
 
 One table (:data:`RANGES`) holds each numeric option's type and bounds, under the keyword the front
-door uses (``base_frequency=``, the CLI's ``--base-frequency``): the CLI checks the parsed flags
-(:func:`check_namespace`, naming ``--base-frequency``) and the Python functions their keywords
-(:func:`check_keywords`, naming ``base_frequency=``), both in one line. The bounds are not a
+door uses (``base_frequency=``, the CLI's ``--base-frequency``), and :data:`CHOICES` the values of
+the options that name one of a few: the Python functions check their keywords
+(:func:`check_keywords`, :func:`check_choice`, naming ``base_frequency=``, in one line) and the
+command line checks its parsed flags with the same functions under the same keywords, naming the
+flags instead (:mod:`baseparams.cli.parser` maps each keyword to its flag). The bounds are not a
 robot's limits: they refuse what no run means (``--starts 1000000``, ``--base-frequency 1e-12``: a
 7 PiB allocation, ``--acceleration nan``: no limit at all, ``--gravity 0 0 1e308``) before it
 allocates or runs for hours. :func:`check_samples` bounds what a run holds at once (samples x
@@ -23,11 +25,12 @@ from types import MappingProxyType
 
 import numpy as np
 
+from .enums import Convention, MocapWelds, values
 from .errors import ArgumentError, ArgumentTypeError, BaseparamsError
 
 __all__ = ["CHOICES", "IDENTIFY", "OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief",
-           "check_array", "check_choice", "check_flags", "check_keywords", "check_namespace", "check_path",
-           "check_progress", "check_samples", "check_total", "check_value", "options_from"]
+           "check_array", "check_choice", "check_flags", "check_keywords", "check_path", "check_progress",
+           "check_samples", "check_total", "check_value", "need", "options_from"]
 
 
 @dataclass(frozen=True)
@@ -112,8 +115,12 @@ IDENTIFY = MappingProxyType({
     "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
     "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,
 })
-#: the values of the options that name one of a few choices
-CHOICES = MappingProxyType({"method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white")})
+#: the values of the options that name one of a few choices (the first: the default, but ``method``'s)
+CHOICES = MappingProxyType({
+    "method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white"), "stream": ("auto", "on", "off"),
+    "criterion": ("cond", "logdet"), "form": ("auto", "expanded", "recursive"),
+    "convention": tuple(values(Convention)), "mocap_welds": tuple(values(MocapWelds)),
+})
 
 #: the most samples a run holds at once (a simulated log, a designed trajectory) and samples x columns
 MAX_SAMPLES = 2_000_000
@@ -147,10 +154,6 @@ def brief(value, most: int = 60) -> str:
     return text if len(text) <= most else text[:most - 3] + "..."
 
 
-def _name(name: str, cli: bool) -> str:
-    return f"--{name.replace('_', '-')}" if cli else f"{name}="
-
-
 def _one(value, name: str, r: Range):
     """One value checked against its range: an int or a float."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
@@ -169,19 +172,16 @@ def _one(value, name: str, r: Range):
     return int(x) if r.integer else x
 
 
-def check_value(value, keyword: str, cli: bool = False, r: Range | None = None):
+def check_value(value, keyword: str, r: Range | None = None):
     """One argument checked against :data:`RANGES`.
 
     Parameters
     ----------
     value : object
         The value (a number, or for ``gravity`` three numbers, for ``acceleration`` one or a
-        sequence); ``None`` passes for the keywords of :data:`OPTIONAL` (and on the command line:
-        a flag not given).
+        sequence); ``None`` passes for the keywords of :data:`OPTIONAL`.
     keyword : str
-        Its keyword (``base_frequency``).
-    cli : bool
-        Name it as a flag (``--base-frequency``) instead of a keyword (``base_frequency=``).
+        Its keyword (``base_frequency``; named ``base_frequency=`` in messages).
     r : Range, optional
         The range (default ``RANGES[keyword]``).
 
@@ -198,9 +198,9 @@ def check_value(value, keyword: str, cli: bool = False, r: Range | None = None):
         Not finite, out of range.
     """
     r = r or RANGES[keyword]
-    name = _name(keyword, cli)
+    name = f"{keyword}="
     if value is None:
-        if cli or keyword in OPTIONAL:
+        if keyword in OPTIONAL:
             return None
         raise ArgumentTypeError(f"{name} must be {r.text()}, got None")
     if r.count is not None or keyword == "acceleration" and not isinstance(value, numbers.Real):
@@ -216,15 +216,13 @@ def check_value(value, keyword: str, cli: bool = False, r: Range | None = None):
     return _one(value, name, r)
 
 
-def check_keywords(where: str, cli: bool = False, **values) -> dict:
+def check_keywords(where: str, **values) -> dict:
     """Check keyword arguments that have a range in :data:`RANGES`; the others are returned as given.
 
     Parameters
     ----------
     where : str
-        The function (for messages: ``excite: base_frequency= must be ...``); '' for the CLI.
-    cli : bool
-        Name the arguments as flags.
+        The function (for messages: ``excite: base_frequency= must be ...``), or ''.
     **values
         The arguments.
 
@@ -242,39 +240,12 @@ def check_keywords(where: str, cli: bool = False, **values) -> dict:
     for k, v in values.items():
         if k in RANGES:
             try:
-                out[k] = check_value(v, k, cli)
+                out[k] = check_value(v, k)
             except BaseparamsError as exc:
                 raise type(exc)(f"{where}: {exc}" if where else str(exc)) from None
         else:
             out[k] = v
     return out
-
-
-def check_namespace(args) -> None:
-    """The CLI's numeric flags (an ``argparse.Namespace``) against :data:`RANGES`, naming each flag.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line. ``samples`` is named ``--analysis-samples`` where that is the flag
-        (``args.samples_flag``, set by the parser), ``--samples`` elsewhere.
-
-    Raises
-    ------
-    ArgumentTypeError, ArgumentError
-        One line naming the flag.
-    """
-    for key, r in RANGES.items():
-        value = getattr(args, key, None)
-        if value is None:
-            continue
-        if key == "acceleration":
-            continue  # a text option, parsed (and checked) by excite's parser
-        flag = getattr(args, "samples_flag", "--samples") if key == "samples" else _name(key, True)
-        try:
-            check_value(value, key, True, r)
-        except BaseparamsError as exc:
-            raise type(exc)(str(exc).replace(_name(key, True), flag, 1)) from None
 
 
 def check_samples(samples: float, columns: int, what: str) -> None:
@@ -400,7 +371,7 @@ def check_flags(where: str, **flags) -> None:
     Parameters
     ----------
     where : str
-        The function, for messages.
+        The function, for messages ('' for none).
     **flags
         The flags.
 
@@ -409,9 +380,10 @@ def check_flags(where: str, **flags) -> None:
     ArgumentTypeError
         A flag that is not True or False.
     """
+    head = f"{where}: " if where else ""
     for name, value in flags.items():
         if not isinstance(value, (bool, np.bool_)):
-            raise ArgumentTypeError(f"{where}: {name}= must be True or False, got {type(value).__name__} "
+            raise ArgumentTypeError(f"{head}{name}= must be True or False, got {type(value).__name__} "
                                     f"{brief(value, 40)}")
 
 
@@ -436,10 +408,11 @@ def check_choice(where: str, name: str, value, choices) -> None:
     ArgumentError
         Not one of ``choices``.
     """
+    head = f"{where}: " if where else ""
     if not isinstance(value, str):
-        raise ArgumentTypeError(f"{where}: {name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
+        raise ArgumentTypeError(f"{head}{name}= must be one of {', '.join(choices)}, got {type(value).__name__}")
     if value not in choices:
-        raise ArgumentError(f"{where}: {name}= must be one of {', '.join(choices)}, got {brief(value)}")
+        raise ArgumentError(f"{head}{name}= must be one of {', '.join(choices)}, got {brief(value)}")
 
 
 def check_progress(value, where: str, stream: bool = False):
@@ -506,3 +479,32 @@ def options_from(kind, options=None, keywords: dict | None = None):
     if options is None:
         return kind(**(keywords or {}))
     return replace(options, **keywords) if keywords else options
+
+
+#: the optional modules a run may need, and the extra that installs each
+EXTRAS = MappingProxyType({"matplotlib": "plot", "cvxpy": "ident", "clarabel": "ident", "pyarrow": "parquet",
+                           "rosbags": "ros", "dask": "fleet", "distributed": "fleet", "sympy": "symbolic",
+                           "xacro": "xacro"})
+
+
+def need(module: str, why: str) -> None:
+    """Refuse in one line, before any work, a run that needs an optional module that is missing.
+
+    Parameters
+    ----------
+    module : str
+        The module (a key of :data:`EXTRAS`), checked by importing it.
+    why : str
+        What needs it, for the message (``plot=``, ``reading Parquet``).
+
+    Raises
+    ------
+    BaseparamsError
+        ``WHY needs MODULE: pip install 'baseparams[EXTRA]'``.
+    """
+    import importlib
+
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        raise BaseparamsError(f"{why} needs {module}: pip install 'baseparams[{EXTRAS[module]}]'") from None

@@ -8,8 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .arguments import ArgumentTypeError, brief
-from .enums import MocapWelds, values
+from .arguments import ArgumentTypeError
 from .errors import BaseparamsError
 from .model.robot import Robot
 from .robots import BUILTINS, get
@@ -57,25 +56,12 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
     """
     import os
 
-    from .arguments import check_keywords
-
     if not isinstance(model, (str, os.PathLike)):
         raise ArgumentTypeError(f"model must be a built-in robot's name or a robot file's path, got "
                                 f"{type(model).__name__}")
     model = os.fspath(model)
-    gravity = check_keywords("", gravity=gravity)["gravity"]
-    if xacro_args is not None and not isinstance(xacro_args, (dict, list, tuple)):
-        raise ArgumentTypeError(f"xacro_args= must be {{'NAME': 'VALUE'}} or ['NAME:=VALUE', ...], got "
-                                f"{type(xacro_args).__name__}")
-    if package_path is not None and not isinstance(package_path, (str, os.PathLike, list, tuple)):
-        raise ArgumentTypeError(f"package_path= must be a folder or a list of folders, got "
-                                f"{type(package_path).__name__}")
-    for name, flag in (("floating", floating), ("strict_inertia", strict_inertia)):
-        if not isinstance(flag, bool):
-            raise ArgumentTypeError(f"{name}= must be True or False, got {type(flag).__name__}")
-    if not isinstance(mocap_welds, str) or mocap_welds not in values(MocapWelds):
-        raise ArgumentTypeError(f"mocap_welds= must be {' or '.join(map(repr, values(MocapWelds)))}, got "
-                                f"{brief(mocap_welds, 40)}")
+    gravity = check_load({"gravity": gravity, "xacro_args": xacro_args, "package_path": package_path,
+                          "floating": floating, "strict_inertia": strict_inertia, "mocap_welds": mocap_welds})
     p = Path(model)
     if model.lower() in BUILTINS and not p.exists():
         if floating:
@@ -89,3 +75,40 @@ def load_model(model: str, floating: bool = False, gravity=None, strict_inertia:
 
     return load_file(p, floating=floating, gravity=gravity, strict_inertia=strict_inertia, xacro_args=xacro_args,
                      package_path=package_path, mocap_welds=mocap_welds)
+
+
+def check_load(keywords: dict):
+    """Every rule of :func:`load_model`'s keywords that needs no file (the command line's preflight asks it too).
+
+    Parameters
+    ----------
+    keywords : dict
+        ``gravity``, ``xacro_args``, ``package_path``, ``floating``, ``strict_inertia``,
+        ``mocap_welds`` (those missing are not checked).
+
+    Returns
+    -------
+    ndarray or None
+        The gravity, checked (three numbers in range, or None).
+
+    Raises
+    ------
+    BaseparamsError
+        The first keyword refused, in one line naming it.
+    """
+    import os
+
+    from .arguments import CHOICES, check_choice, check_flags, check_keywords
+
+    gravity = check_keywords("", gravity=keywords.get("gravity"))["gravity"]
+    xacro_args, package_path = keywords.get("xacro_args"), keywords.get("package_path")
+    if xacro_args is not None and not isinstance(xacro_args, (dict, list, tuple)):
+        raise ArgumentTypeError(f"xacro_args= must be {{'NAME': 'VALUE'}} or ['NAME:=VALUE', ...], got "
+                                f"{type(xacro_args).__name__}")
+    if package_path is not None and not isinstance(package_path, (str, os.PathLike, list, tuple)):
+        raise ArgumentTypeError(f"package_path= must be a folder or a list of folders, got "
+                                f"{type(package_path).__name__}")
+    check_flags("", **{k: keywords[k] for k in ("floating", "strict_inertia") if k in keywords})
+    if "mocap_welds" in keywords:
+        check_choice("", "mocap_welds", keywords["mocap_welds"], CHOICES["mocap_welds"])
+    return gravity

@@ -1,7 +1,8 @@
 """Files baseparams reads back, checked against one declarative schema before any value is used.
 
 Three kinds of file come back in: saved identifications (``identify --save``, read by
-``Identification.load`` and ``baseparams predict``: :data:`RESULT`), the true parameters of a
+``Identification.load`` and ``baseparams predict``: :func:`result`, completed by the model terms'
+own fields in :data:`baseparams.ident.saved.RESULT`), the true parameters of a
 simulation (``simulate``'s ``OUT.truth.json``, read by ``identify --truth`` and
 ``compare_truth``: :data:`TRUTH`) and TOML column maps (``--columns``: :data:`COLUMNS`).
 
@@ -9,16 +10,19 @@ Reading (:func:`read_json`, :func:`read_toml`)
     Regular files only (a FIFO, a device, a folder or a symbolic link to ``/dev/zero`` is refused
     before it is opened), at most ``max_bytes`` read; nesting at most :data:`MAX_DEPTH` deep
     (measured on the bytes before parsing); no ``NaN``/``Infinity`` literals, no number beyond
-    floating point (``1e400``), no integer of more than :data:`MAX_INT_DIGITS` digits. Every
-    failure is one line naming the file.
+    floating point (``1e400``), no integer of more than :data:`MAX_INT_DIGITS` digits, no key twice
+    in one object. Every failure is one line naming the file.
 
 Checking (:func:`check`)
     A schema is a tree of nodes: :class:`Num` (a finite number, never a boolean; bounds),
     :class:`Int`, :class:`Str`, :class:`Bool`, :class:`Enum`, :class:`Opt` (``null`` allowed),
     :class:`Arr` (an array: its items' node, a length or a size symbol, bounds), :class:`Map`
-    (free keys, one node for every value), :class:`Obj` (named fields) and :class:`Any` (any JSON
-    value, kept as read). A size symbol (``Arr(Num(), "p")``) binds to the first array that names
-    it and every later one must match; the caller may bind symbols first (the robot's body count).
+    (free keys, one node for every value), :class:`Obj` (named fields), :class:`Tagged` (one of
+    several objects, by a field naming its kind) and :class:`Any` (any JSON value, kept as read).
+    A size symbol (``Arr(Num(), "p")``) binds to the first array that names it and every later one
+    must match; the caller may bind symbols first (the robot's body count). A names symbol
+    (``Arr(Str(), names="joints")``) binds the strings of an array: a ``Map(..., keys="joints")``
+    must have exactly those keys, a ``Str(among="joints")`` be one of them.
     A problem is one line ``FILE: WHERE: expected ..., got ...`` with ``WHERE`` the path into the
     document (``estimate.R11[3][5]``).
 
@@ -96,6 +100,13 @@ class _Context:
     sizes: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     bound_at: dict = field(default_factory=dict)
+    names: dict = field(default_factory=dict)
+
+    def among(self, symbol: str, where: str) -> list:
+        # the names bound to ``symbol`` (an array with ``names=symbol`` checked before)
+        if symbol not in self.names:
+            raise _Problem(where, f"cannot be checked: {symbol} not given before it")
+        return self.names[symbol]
 
     def size(self, symbol: str, n: int, where: str, what: str = "items") -> None:
         # bind ``symbol`` to ``n``, or check ``n`` against its binding
@@ -106,6 +117,12 @@ class _Context:
         elif bound != n:
             at = self.bound_at.get(symbol)
             raise _Problem(where, f"expected {bound}{' ' + what if what else ''} (as {at or 'given'}), got {n}")
+
+
+def _listed(names, most: int = 8) -> str:
+    """Names for a message: the first ``most``, then how many more."""
+    shown = ", ".join(map(str, names[:most]))
+    return shown + (f" and {len(names) - most} more" if len(names) > most else "")
 
 
 def _node_repr(node) -> str:
@@ -221,6 +238,8 @@ class Str(Node):
         Not ``""``.
     text : str, optional
         How messages name what is expected (``a column name``).
+    among : str, optional
+        A names symbol (:class:`Arr` ``names=``): the string must be one of those names.
     """
 
     __repr__ = _node_repr
@@ -229,6 +248,7 @@ class Str(Node):
     pattern: str | None = None
     nonempty: bool = False
     text: str | None = None
+    among: str | None = None
 
     def _describe(self) -> str:
         return self.text or ("a non-empty string" if self.nonempty else "a string")
@@ -242,6 +262,8 @@ class Str(Node):
             raise _Problem(where, f"expected {self._describe()}, got ''")
         if self.pattern is not None and not re.fullmatch(self.pattern, v):
             raise _Problem(where, f"expected a string of the form {self.pattern}, got {_show(v)}")
+        if self.among is not None and v not in (names := ctx.among(self.among, where)):
+            raise _Problem(where, f"expected one of {_listed(names)} ({ctx.bound_at.get(self.among)}), got {_show(v)}")
         return v
 
 
@@ -338,7 +360,10 @@ class Arr(Node):
     min_len, max_len : int
         Bounds on the number of items.
     unique : str, optional
-        A key of the items (objects) whose values must not repeat (parameter names).
+        A key of the items (objects) whose values must not repeat (parameter names, term names).
+    names : str, optional
+        A names symbol this array of strings binds (the robot's measured joints): a :class:`Map`
+        with ``keys=`` the symbol, or a :class:`Str` with ``among=`` it, checked later against it.
     """
 
     __repr__ = _node_repr
@@ -348,6 +373,7 @@ class Arr(Node):
     min_len: int = 0
     max_len: int = MAX_ITEMS
     unique: str | None = None
+    names: str | None = None
 
     def _describe(self) -> str:
         return f"an array of {self.item._describe()}s"
@@ -366,6 +392,9 @@ class Arr(Node):
         if fast is not None:
             return fast
         out = [self.item._check(x, f"{where}[{k}]", ctx) for k, x in enumerate(v)]
+        if self.names is not None:
+            ctx.names[self.names] = list(out)
+            ctx.bound_at[self.names] = where
         if self.unique is not None:
             seen: dict = {}
             for k, x in enumerate(out):
@@ -410,6 +439,9 @@ class Map(Node):
         Every key's node.
     max_len : int
         The most keys.
+    keys : str, optional
+        A names symbol (:class:`Arr` ``names=``): the keys must be exactly those names (one value
+        per measured joint: a key the robot lacks, or a joint left out, is refused).
     """
 
     __repr__ = _node_repr
@@ -417,6 +449,7 @@ class Map(Node):
     value: Node
     key: Node = Str(max_len=1000)
     max_len: int = MAX_ITEMS
+    keys: str | None = None
 
     def _describe(self) -> str:
         return f"an object of {self.value._describe()}s"
@@ -426,7 +459,47 @@ class Map(Node):
             raise _Problem(where, f"expected {self._describe()}, got {_show(v)}")
         if len(v) > self.max_len:
             raise _Problem(where, f"expected at most {self.max_len} keys, got {len(v)}")
+        if self.keys is not None:
+            names = ctx.among(self.keys, where)
+            at = ctx.bound_at.get(self.keys)
+            if stray := [k for k in v if k not in names]:
+                raise _Problem(where, f"key {_show(stray[0])} is not one of {at} ({_listed(names)})")
+            if missing := [k for k in names if k not in v]:
+                raise _Problem(where, f"missing {_show(missing[0])}: expected one value for each of {at} "
+                                      f"({_listed(names)})")
         return {self.key._check(k, f"{where}", ctx): self.value._check(x, f"{where}.{k}", ctx) for k, x in v.items()}
+
+
+@dataclass(frozen=True)
+class Tagged(Node):
+    """An object whose ``tag`` field says which of several schemas it follows (a model term by name).
+
+    Parameters
+    ----------
+    tag : str
+        The field naming the kind (``name``).
+    kinds : mapping of str to Obj
+        Each kind's schema (it checks ``tag`` too).
+    """
+
+    __repr__ = _node_repr
+
+    tag: str
+    kinds: Mapping[str, Node]
+
+    def _describe(self) -> str:
+        return f"an object with {self.tag} one of {', '.join(self.kinds)}"
+
+    def _check(self, v, where: str, ctx: _Context) -> dict:
+        if not isinstance(v, dict):
+            raise _Problem(where, f"expected an object ({{...}}), got {_show(v)}")
+        kind = v.get(self.tag)
+        here = f"{where}.{self.tag}" if where else self.tag
+        if self.tag not in v:
+            raise _Problem(here, "missing")
+        if not isinstance(kind, str) or kind not in self.kinds:
+            raise _Problem(here, f"expected one of {', '.join(map(repr, self.kinds))}, got {_show(kind)}")
+        return self.kinds[kind]._check(v, where, ctx)
 
 
 #: a field's default when absent: "required" (refused when missing)
@@ -523,7 +596,7 @@ def check(doc, schema: Node, source: str, sizes: dict | None = None, error=Basep
     doc : object
         The parsed document (or a dict given in Python).
     schema : Node
-        Its schema (:data:`RESULT`, :data:`TRUTH`, :data:`COLUMNS`).
+        Its schema (:func:`result`, :data:`TRUTH`, :data:`COLUMNS`).
     source : str
         The file (or the argument's name), for messages.
     sizes : dict, optional
@@ -611,6 +684,16 @@ def _json_constant(s: str):
     raise _Refused(f"{s} is not a number JSON allows (write null)")
 
 
+def _json_object(pairs: list) -> dict:
+    # an object whose keys are unique: JSON readers disagree on which of two values counts
+    out = dict(pairs)
+    if len(out) < len(pairs):
+        seen: set = set()
+        twice = next(k for k, _ in pairs if k in seen or seen.add(k))
+        raise _Refused(f"the key {_show(twice)} appears twice in one object (which value counts is not defined)")
+    return out
+
+
 def parse_json(data: bytes, source: str, what: str, error=BaseparamsError):
     """A JSON document from bytes, bounded (module doc): no NaN/Infinity, no overflow, no huge integers.
 
@@ -640,7 +723,8 @@ def parse_json(data: bytes, source: str, what: str, error=BaseparamsError):
         raise error(f"{source}: not {what}: nested {depth} levels deep (at most {MAX_DEPTH})")
     text = _decode(data, source, what, error)
     try:
-        return json.loads(text, parse_float=_json_float, parse_int=_json_int, parse_constant=_json_constant)
+        return json.loads(text, parse_float=_json_float, parse_int=_json_int, parse_constant=_json_constant,
+                          object_pairs_hook=_json_object)
     except _Refused as exc:
         raise error(f"{source}: not {what}: {exc}") from None
     except (json.JSONDecodeError, RecursionError, ValueError) as exc:
@@ -762,22 +846,6 @@ OPTIONS = Obj({
     "memory_mb": Field(Num(lo=0.0, lo_open=True), ABSENT),
 }, extra="refuse", hint=_NEWER)
 
-#: a kept model term (:mod:`baseparams.ident.terms`): its parameters, which predictions use
-TERM = Obj({
-    "name": Enum(("dahl", "tilt", "delay", "scale")),
-    "forced": Field(Bool(), False),
-    "values": Obj({
-        "delta": Field(Map(Num(lo=0.0, lo_open=True, hi=10.0, null=True)), None),
-        "seconds": Field(Map(Num(lo=-1.0, hi=1.0)), None),
-        "factors": Field(Map(Num(lo=1e-3, hi=1e3)), None),
-        "reference": Field(Str(max_len=1000), None),
-        "angles": Field(Arr(Num(lo=-1.0, hi=1.0), min_len=2, max_len=2), None),
-        "degrees": Field(Num(lo=0.0), None),
-        "pi": Field(Opt(Arr(_FINITE, "npar")), None),
-    }, extra="refuse", hint=_NEWER),
-    "std": Field(Any(), {}),
-}, extra="refuse", hint=_NEWER)
-
 #: the least-squares estimate's statistics (the triangular factor, the covariance)
 ESTIMATE = Obj({
     "method": Str(max_len=100),
@@ -819,32 +887,53 @@ def _counts_rule(s: dict) -> str | None:
     return None
 
 
-#: a saved identification (:meth:`baseparams.ident.Identification.save`, version 1); size
-#: symbols: ``p`` model parameters, ``m`` measured joints, ``n`` bodies, ``npar`` = 10 n
-RESULT = Obj({
-    "format": Str(max_len=200),
-    "version": Int(lo=0, hi=10**6),
-    "baseparams": Field(Str(max_len=200), None),
-    "robot": Obj({"name": Str(max_len=10_000), "fingerprint": Str(pattern=r"sha256:[0-9a-f]{64}"),
-                  "bodies": Int(lo=0, bind="n"), "dof": Int(lo=0, bind="dof"), "parameters": Int(lo=0, bind="npar"),
-                  "joints": Arr(Str(max_len=1000), "m")}, extra="refuse", hint=_NEWER),
-    "options": OPTIONS,
-    "parameters": Obj({"names": Arr(Str(max_len=1000, nonempty=True), "p", min_len=1),
-                       "values": Arr(_VALUE, "p"), "std": Arr(Num(lo=0.0, null=True), "p")},
-                      extra="refuse", hint=_NEWER),
-    "base_parameters": Field(Arr(Any()), []), "drives": Field(Arr(Any()), []), "couplings": Field(Arr(Any()), []),
-    "estimate": ESTIMATE,
-    "physical": Opt(PHYSICAL),
-    "samples": Obj({"read": Int(lo=0), "used": Int(lo=0), "removed": Field(Map(Int(lo=0)), {})},
-                   extra="keep", rule=_counts_rule),
-    "train": Obj({"rms": Map(_RMS), "rms_total": _RMS}, extra="keep"),
-    "validation": Opt(VALIDATION),
-    "notes": Field(Arr(Str()), []),
-    "terms": Field(Arr(TERM, max_len=16), []),
-    "term_choices": Field(Arr(Obj({"name": Str(max_len=100), "kept": Bool(), "why": Str(max_len=10_000),
-                                   "cv_rms": Opt(Num(lo=0.0))}, extra="keep"), max_len=16), []),
-    "motion": Field(Opt(Any()), None),
-}, extra="note")
+def result(term: Node) -> Obj:
+    """The schema of a saved identification (:meth:`baseparams.ident.Identification.save`, version 1).
+
+    Size symbols: ``p`` model parameters, ``m`` measured joints, ``n`` bodies, ``npar`` = 10 n;
+    names symbol ``joints``: the measured joints (``robot.joints``), which every joint-keyed value
+    of a model term must name exactly.
+
+    Parameters
+    ----------
+    term : Node
+        One kept model term's node: each term declares its own fields
+        (:func:`baseparams.ident.terms.registry.term_schema`; this floor does not know the terms).
+
+    Returns
+    -------
+    Obj
+        The schema; ``terms`` is an array of ``term`` nodes, each term at most once.
+    """
+    return Obj({
+        "format": Str(max_len=200),
+        "version": Int(lo=0, hi=10**6),
+        "baseparams": Field(Str(max_len=200), None),
+        "robot": Obj({"name": Str(max_len=10_000), "fingerprint": Str(pattern=r"sha256:[0-9a-f]{64}"),
+                      "bodies": Int(lo=0, bind="n"), "dof": Int(lo=0, bind="dof"),
+                      "parameters": Int(lo=0, bind="npar"),
+                      "joints": Arr(Str(max_len=1000), "m", names="joints")},
+                     extra="refuse", hint=_NEWER),
+        "options": OPTIONS,
+        "parameters": Obj({"names": Arr(Str(max_len=1000, nonempty=True), "p", min_len=1),
+                           "values": Arr(_VALUE, "p"), "std": Arr(Num(lo=0.0, null=True), "p")},
+                          extra="refuse", hint=_NEWER),
+        "base_parameters": Field(Arr(Any()), []), "drives": Field(Arr(Any()), []),
+        "couplings": Field(Arr(Any()), []),
+        "estimate": ESTIMATE,
+        "physical": Opt(PHYSICAL),
+        "samples": Obj({"read": Int(lo=0), "used": Int(lo=0), "removed": Field(Map(Int(lo=0)), {})},
+                       extra="keep", rule=_counts_rule),
+        "train": Obj({"rms": Map(_RMS), "rms_total": _RMS}, extra="keep"),
+        "validation": Opt(VALIDATION),
+        "notes": Field(Arr(Str()), []),
+        "terms": Field(Arr(term, max_len=16, unique="name"), []),
+        "term_choices": Field(Arr(Obj({"name": Str(max_len=100), "kept": Bool(), "why": Str(max_len=10_000),
+                                       "cv_rms": Opt(Num(lo=0.0))}, extra="keep"), max_len=16,
+                                   unique="name"), []),
+        "motion": Field(Opt(Any()), None),
+    }, extra="note")
+
 
 #: the true parameters of a simulation (``simulate``'s ``OUT.truth.json``)
 TRUTH = Obj({
@@ -865,11 +954,12 @@ COLUMN_JOINT = Obj({
     "offset": Field(Num(lo=-1e6, hi=1e6), 0.0),
 }, extra="refuse")
 
-#: a TOML column map (``--columns``; a dict in Python): time, time_scale, topic, joints
+#: a TOML column map (``--columns``; a dict in Python): time, time_scale, topic, base_topic, joints
 COLUMNS = Obj({
     "time": Field(Str(max_len=10_000, nonempty=True, text="a column name"), "t"),
     "time_scale": Field(Num(lo=1e-12, hi=1e6), 1.0),
     "topic": Field(Opt(Str(max_len=10_000)), None),
+    "base_topic": Field(Opt(Str(max_len=10_000)), None),
     "joints": Field(Map(COLUMN_JOINT, max_len=100_000), {}),
 }, extra="refuse")
 

@@ -21,6 +21,11 @@ from .files import atomic_path, check_output
 
 #: suffixes :func:`write_columns` writes
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq", ".npz")
+#: the suffixes of each table the library writes: a joint log, a trajectory, predicted torques
+#: (:data:`baseparams.workflow.outputs.SUFFIXES`, the rule both doors ask, is made of these)
+LOG_SUFFIXES = (".csv", ".tsv", ".npz")
+TRAJECTORY_SUFFIXES = (".csv", ".tsv")
+PREDICTION_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
 
 
 def check_table_path(path, inputs=(), what: str = "--out") -> None:
@@ -47,13 +52,31 @@ def check_table_path(path, inputs=(), what: str = "--out") -> None:
     suffix = p.suffix.lower()
     if suffix not in TABLE_SUFFIXES:
         raise BaseparamsError(f"{what} {p}: write .csv, .tsv, .parquet or .npz, not {p.suffix or 'no suffix'}")
-    if suffix in (".parquet", ".pq"):
+    check_parquet(p, what)
+    check_output_path(p, inputs, what)
+
+
+def check_parquet(path, what: str = "--out") -> None:
+    """A Parquet output (``.parquet``, ``.pq``) needs pyarrow (the extra ``parquet``): said before any work.
+
+    Parameters
+    ----------
+    path : str or path
+        The output.
+    what : str
+        The option, for messages.
+
+    Raises
+    ------
+    BaseparamsError
+        pyarrow missing for a Parquet output.
+    """
+    if Path(path).suffix.lower() in (".parquet", ".pq"):
         try:
             import pyarrow  # noqa: F401
         except ImportError:
-            raise BaseparamsError(f"{what} {p}: writing Parquet needs pyarrow: pip install "
+            raise BaseparamsError(f"{what} {path}: writing Parquet needs pyarrow: pip install "
                                   f"'baseparams[parquet]'") from None
-    check_output_path(p, inputs, what)
 
 
 def check_output_path(path, inputs=(), what: str = "output") -> None:

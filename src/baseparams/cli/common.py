@@ -1,7 +1,7 @@
 """What every ``baseparams`` subcommand needs: exit codes, progress lines, the robot, the outputs.
 
 The modules of the subcommands (:mod:`baseparams.cli.identify`, ...) import from here, never from
-:mod:`baseparams.cli` itself (which imports them when their command runs).
+:mod:`baseparams.cli` itself (which imports them for its parser).
 """
 
 from __future__ import annotations
@@ -313,32 +313,6 @@ def _model_files(model: str, lister, xacro_args, package_path) -> list:
     if key not in _MODEL_FILES:
         _MODEL_FILES[key] = lister(model, xacro_args, package_path)
     return _MODEL_FILES[key]
-
-
-def write_output(path, writer, args, what: str):
-    """Write an output atomically, never onto an input: ``writer(tmp_path)`` (:func:`baseparams.files.atomic_path`).
-
-    Parameters
-    ----------
-    path : str or Path
-        The output file.
-    writer : callable
-        Writes the output to the path it is given.
-    args : argparse.Namespace
-        The parsed command line.
-    what : str
-        The option or argument, for messages.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
-    from ..files import atomic_path
-
-    with atomic_path(path, input_files(args), what) as tmp:
-        writer(tmp)
-    return Path(path)
 
 
 def is_symbolic(model: str) -> bool:

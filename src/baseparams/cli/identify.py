@@ -1,6 +1,8 @@
-"""``baseparams identify`` (one log streamed or read whole, or a fleet of logs) and ``baseparams predict``.
+"""``baseparams identify MODEL DATA``: one log (streamed or read whole) or a fleet of logs.
 
-Imported by :func:`baseparams.cli.main` only when one of these commands runs.
+Its flags are :func:`baseparams.identify`'s keywords (:func:`keywords`; ``--coupling`` is
+``couplings=``, ``--analysis-samples`` ``analysis_samples=``), which the command calls: a glob of
+logs is a fleet (:func:`baseparams.workflow.identify.identify_logs`, on Dask).
 """
 
 from __future__ import annotations
@@ -8,30 +10,69 @@ from __future__ import annotations
 import json
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import BaseparamsError
+from ..arguments import CHOICES, IDENTIFY
 from . import common
-from .common import (
-    EXIT_INPUT,
-    EXIT_OK,
-    Progress,
-    data_files,
-    emit,
-    input_files,
-)
+from .common import EXIT_INPUT, EXIT_OK, Progress, data_files, emit
+from .parser import choices, flag_message, ident_args, model_args
+
+#: the flags named otherwise than :func:`baseparams.identify`'s keywords
+KEYWORDS = {"data": "log", "coupling": "couplings", "samples": "analysis_samples"}
+#: the flags that only say how the result is printed, or how a fleet of logs is run
+CLI_ONLY = frozenset({"json", "verbose", "per_file", "pooled", "strict", "scheduler", "workers"})
+#: the flags of :data:`baseparams.workflow.outputs.OUTPUTS` that the command writes itself (the report)
+OWN_OUTPUTS = ("output",)
+
+#: :func:`baseparams.identify`'s keywords given by flags (the model's and the log excepted)
+IDENTIFY_KEYWORDS = ("validate", "holdout", "method", "friction", "rotor", "coulomb_width", "couplings", "cutoff",
+                     "decimate", "min_speed", "prior_weight", "convention", "covariance", "score_cutoff",
+                     "allow_units", "columns", "joints", "weld", "analysis_samples", "literal", "terms", "stream",
+                     "save", "predictions", "urdf", "mjcf", "html", "plot", "truth", "seed")
 
 
-def cmd_identify(args) -> int:
+def keywords(args) -> dict:
+    """The flags as :func:`baseparams.identify`'s keywords (one keyword per flag).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    dict
+        The keywords of :data:`IDENTIFY_KEYWORDS`.
+    """
+    dest = {v: k for k, v in KEYWORDS.items()}
+    out = {k: getattr(args, dest.get(k, k)) for k in IDENTIFY_KEYWORDS}
+    out["couplings"] = tuple(out["couplings"] or ())
+    return out
+
+
+def is_fleet(args) -> bool:
+    """Several logs (a glob, or ``--per-file`` / ``--pooled``): a fleet on Dask.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    bool
+        Whether the run identifies over several logs.
+    """
+    return len(data_files(args.data)) > 1 or args.per_file or args.pooled
+
+
+def run(args) -> int:
     """``baseparams identify MODEL DATA``: base-parameter and drive values from a joint log.
 
-    Parses nothing itself: the flags become the identification's options (:func:`options_of`,
-    checked by the preflight), its inputs and its outputs (:func:`inputs_of`, :func:`outputs_of`),
-    and :func:`baseparams.workflow.identify_command` checks the inputs and every output before the
-    fit, streams large logs, and writes the outputs; a glob of logs is a fleet
-    (:func:`baseparams.fleet.identify_fleet`).
+    Parses nothing itself: the flags are :func:`baseparams.identify`'s keywords (:func:`keywords`),
+    which checks the inputs and every output before the fit, streams large logs, and writes the
+    outputs; a glob of logs is a fleet (:func:`baseparams.workflow.identify.identify_logs`).
 
     Parameters
     ----------
@@ -49,212 +90,47 @@ def cmd_identify(args) -> int:
         Bad input (model, data, options).
     """
     from ..ident.report import format_identification
-    from ..workflow import Reporter, identify_command
+    from ..workflow.identify import Reporter, identify
 
     robot = common.load_robot(args)
     files = data_files(args.data)
-    if len(files) > 1 or args.per_file or args.pooled:
-        if args.joints:
-            raise BaseparamsError("--joints applies to one log, not to a fleet of logs")
-        if args.save or args.truth:
-            raise BaseparamsError("--save and --truth apply to one log, not to a fleet (--per-file / --pooled)")
+    if is_fleet(args):
         return _identify_fleet(args, robot, files)
     with Progress(args.verbose) as progress:
         t0 = time.perf_counter()
-        result = identify_command(robot, files[0], options_of(args), inputs_of(args), outputs_of(args),
-                                  Reporter(progress=progress, notes=_print_note, cli=True))
+        result = identify(robot, files[0], **keywords(args),
+                          progress=lambda line: progress(flag_message(line, "identify")),
+                          _reporter=Reporter(notes=lambda line: print_note(line, "identify"), source=args.model))
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
     emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
     return EXIT_OK
 
 
-def _print_note(line: str) -> None:
-    """A note of the run on stderr (``baseparams: note: ...``; an output written: ``baseparams: ... written to``)."""
+def print_note(line: str, command: str) -> None:
+    """A note of the run on stderr (``baseparams: note: ...``; an output written: ``baseparams: ... written to``).
+
+    Parameters
+    ----------
+    line : str
+        The note (options named by their keywords: printed as the command's flags).
+    command : str
+        The command, whose flags name the options.
+    """
+    line = flag_message(line, command)
     print(f"baseparams: {'' if ' written to ' in line else 'note: '}{line}", file=sys.stderr)
-
-
-def options_of(args):
-    """The ``identify`` flags that are options of the identification, as one checked object (one field per flag).
-
-    Built once per run (the preflight's, kept on ``args``): its errors name the flags
-    (:meth:`baseparams.ident.options.IdentOptions.from_flags`).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    IdentOptions
-        The options.
-
-    Raises
-    ------
-    BaseparamsError
-        An option the identification refuses (``--prior-weight`` without ``--method physical``,
-        an unknown ``--terms`` or ``--friction`` name, a bad ``--coupling``).
-    """
-    if getattr(args, "options", None) is not None:
-        return args.options
-    from ..ident.options import IdentOptions
-
-    args.options = IdentOptions.from_flags(
-        method=args.method, rotor=args.rotor, friction=args.friction, coulomb_width=args.coulomb_width,
-        couplings=tuple(args.coupling or ()), holdout=args.holdout, cutoff=args.cutoff, decimate=args.decimate,
-        min_speed=args.min_speed, prior_weight=args.prior_weight, convention=args.convention,
-        covariance=args.covariance, score_cutoff=args.score_cutoff, allow_units=args.allow_units,
-        literal=args.literal, terms=args.terms, analysis_samples=args.samples, seed=args.seed)
-    return args.options
-
-
-def inputs_of(args):
-    """The ``identify`` flags of what is read besides the model and the log (one field per flag).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    Inputs
-        :class:`baseparams.workflow.Inputs`.
-    """
-    from ..workflow import Inputs
-
-    return Inputs(validate=args.validate, columns=args.columns, joints=args.joints, weld=args.weld,
-                  stream=args.stream, truth=args.truth, source=args.model)
-
-
-def outputs_of(args):
-    """The ``identify`` flags of the files written (one field per flag).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    Outputs
-        :class:`baseparams.workflow.Outputs`.
-    """
-    from ..workflow import Outputs
-
-    return Outputs(save=args.save, predictions=args.predictions, urdf=args.urdf, mjcf=args.mjcf, html=args.html,
-                   plot=args.plot)
-
-
-def cmd_predict(args) -> int:
-    """``baseparams predict MODEL RESULT LOG --out PRED``: torques of a log from a saved identification.
-
-    Writes ``t, tau_<joint>`` (one row per log sample, the log's time stamps; CSV/TSV, or Parquet
-    by the suffix) and prints the RMS against the log's measured torques when it has them:
-    predicted and measured torques both low-passed with the identification's zero-phase filter
-    (parallel filtering, what identify's train and validation RMS compare; ``rms`` in JSON), and
-    unfiltered (``rms_raw``, which also holds the sensor noise above the cutoff).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line: the model options and ``result``, ``log``, ``columns``, ``out``,
-        ``raw_states``, ``score_cutoff``, ``json``.
-
-    Returns
-    -------
-    int
-        :data:`EXIT_OK`.
-
-    Raises
-    ------
-    BaseparamsError
-        Another robot than the result's, a bad result file, log or output.
-    """
-    from ..ident import Identification
-    from ..io.logs import read_log
-    from ..tables import check_table_path, write_columns
-
-    inputs = input_files(args)
-    check_table_path(args.out, inputs, "--out")
-    if args.out and Path(args.out).suffix.lower() == ".npz":
-        raise BaseparamsError(f"--out {args.out}: predictions are written as .csv, .tsv or .parquet")
-    robot = common.load_robot(args)
-    ident = Identification.load(args.result, robot)
-    log = read_log(args.log, robot, columns=args.columns, allow_subset=True, require_tau=False)
-    from ..ident.plausibility import check_prediction_log
-
-    for note in check_prediction_log(ident.model, log, args.allow_units):  # the states' units (no torque needed)
-        if "WARNING" in note:
-            print(f"baseparams: note: {note}", file=sys.stderr)
-    tau = ident.predict(log, smooth=not args.raw_states)
-    joints = ident.joints
-    if args.out:
-        write_columns(args.out, {"t": log.t, **{f"tau_{j}": tau[:, k] for k, j in enumerate(joints)}}, inputs, "--out")
-    out = {"model": robot.name, "result": args.result, "log": args.log, "samples": log.n_samples, "joints": joints,
-           "out": args.out, "prediction": "raw states" if args.raw_states else "smooth", "rms": None}
-    if log.tau is not None:
-        from ..ident import validation_scores
-
-        s = validation_scores(log, tau, joints, score_cutoff=args.score_cutoff)
-        out["rms"] = {"total": s["rms_total"], **s["rms"]}
-        edge = _edge_samples(log, None if ident.options is None else ident.options.cutoff)
-        if log.n_samples > 2 * edge + 1 and not args.raw_states:
-            inner = np.zeros(log.n_samples, dtype=bool)
-            inner[edge:log.n_samples - edge] = True
-            si = validation_scores(log, tau, joints, inner)
-            out["rms_interior"] = {"total": si["rms_total"], **si["rms"]}
-            out["edge_samples"] = edge
-        if "score_cutoff" in s:
-            out["score_cutoff"] = s["score_cutoff"]
-            out["rms_lowpassed"] = {"total": s["rms_lowpassed_total"], **s["rms_lowpassed"]}
-    if args.json:
-        print(json.dumps(out, indent=2))
-        return EXIT_OK
-    lines = [f"{robot.name}: predicted {len(joints)} joint torques at {log.n_samples} samples"
-             + (f", written to {args.out}" if args.out else "")]
-    if out.get("rms_interior") is not None:
-        r = out["rms_interior"]
-        lines.append(f"RMS vs the raw measured torques: {r['total']:.4g} (all joints) at the "
-                     f"{log.n_samples - 2 * out['edge_samples']} samples away from the log's ends; "
-                     + ", ".join(f"{j} {r[j]:.3g}" for j in joints)
-                     + f" (the first and last {out['edge_samples']} samples carry the low-pass filter's edge "
-                       f"transient: with them, {out['rms']['total']:.4g})")
-    elif out["rms"] is not None:
-        lines.append(f"RMS vs the raw measured torques at every sample: {out['rms']['total']:.4g} (all joints); "
-                     + ", ".join(f"{j} {out['rms'][j]:.3g}" for j in joints))
-        if "rms_lowpassed" in out:
-            lines.append(f"RMS vs the measured torques low-passed at {out['score_cutoff']:g} Hz (--score-cutoff): "
-                         f"{out['rms_lowpassed']['total']:.4g}")
-    print("\n".join(lines))
-    return EXIT_OK
-
-
-def _edge_samples(log, cutoff) -> int:
-    """Samples at each end of a log that carry the smoothing filter's edge transient (2 cutoff periods)."""
-    if not cutoff or log.n_samples < 3:
-        return 0
-    rate = (log.n_samples - 1) / float(log.t[-1] - log.t[0])
-    return int(np.ceil(2.0 * rate / float(cutoff)))
 
 
 def _identify_fleet(args, robot, files: list[str]) -> int:
     """``identify`` over many logs on Dask (``--per-file`` / ``--pooled``)."""
-    from ..fleet import identify_fleet
-    from ..ident.model import model_for
+    from ..workflow.identify import identify_logs
 
-    for opt in ("validate", "holdout", "plot", "urdf", "mjcf", "columns"):
-        if getattr(args, opt):
-            raise BaseparamsError(f"--{opt} applies to one log; with several (a fleet) use --per-file / --pooled")
-    options = options_of(args)
-    model = model_for(robot, options)
-    per_file = args.per_file or not args.pooled
-    res = identify_fleet(model, files, options, per_file=per_file, pooled=args.pooled or len(files) == 1,
-                         scheduler=args.scheduler, workers=args.workers,
-                         progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
+    res = identify_logs(robot, files, keywords(args), per_file=args.per_file or not args.pooled,
+                        pooled=args.pooled or len(files) == 1, scheduler=args.scheduler, workers=args.workers,
+                        progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
     if args.json:
         emit(args, json.dumps(res.to_json(), indent=2))
         return _fleet_exit(args, res, files)
+    model = res.model
     skipped = [s for s in res.skipped if s["stage"] == "read"]
     lines = [f"{robot.name}: {len(files)} logs, {len(res.files)} used, {len(skipped)} skipped; "
              f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
@@ -282,3 +158,104 @@ def _fleet_exit(args, res, files: list[str]) -> int:
               f"(first: {res.skipped[0]['error']})", file=sys.stderr)
         return EXIT_INPUT
     return EXIT_OK
+
+
+def add_parser(sub) -> None:
+    """The ``identify`` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The command's subparsers.
+    """
+    s = sub.add_parser("identify", help="identify base-parameter and drive values from a joint log")
+    model_args(s)
+    s.add_argument("data", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default layout: "
+                                "t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>; a glob pattern for "
+                                "several logs (a fleet, on Dask)")
+    s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
+    s.add_argument("--validate", metavar="DATA2", help="validate on another log")
+    s.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS (not with "
+                                                                     "--validate)")
+    s.add_argument("--method", metavar=choices("method"), default=IDENTIFY["method"],
+                   help="auto (default): least squares with the model file's parameters as a prior (terms the data "
+                        "determine keep their fitted values), the weighting and the prior's weight chosen by blocked "
+                        "cross-validation on the training data; ols, wls (per-joint noise) or physical (physically "
+                        "consistent) least squares")
+    ident_args(s)
+    _model_class_args(s)
+    s.add_argument("--coupling", action="append", metavar="NAME:JOINT=W,JOINT=W",
+                   help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "
+                        "reaches each JOINT times W; adds Iam_NAME, Fvm_NAME, Fcm_NAME (with --rotor, viscous, "
+                        "coulomb); repeatable")
+    s.add_argument("--cutoff", type=float, metavar="HZ", help="low-pass cutoff (default from the sampling rate)")
+    s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
+    s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
+    s.add_argument("--prior-weight", type=float, metavar="W", help="physical: weight of the file's inertias")
+    s.add_argument("--joints", metavar="A,B,...",
+                   help="identify only these joints; every other joint is welded (at its logged position if it "
+                        "does not move, at --weld, or at 0)")
+    s.add_argument("--weld", action="append", metavar="JOINT=VALUE",
+                   help="with --joints: weld JOINT at VALUE (rad or m); repeatable")
+    s.add_argument("--allow-units", action="store_true",
+                   help="go on when the log's units look wrong (deg/s, ms, mN m, absurd samples); refused otherwise")
+    s.add_argument("--covariance", metavar=choices("covariance"), default=IDENTIFY["covariance"],
+                   help="standard deviations: hac (default; Newey-West, true when residuals are correlated) or "
+                        "white (the least-squares formula, residuals taken as uncorrelated)")
+    s.add_argument("--score-cutoff", type=float, metavar="HZ",
+                   help="validation: also score against the measured torques low-passed at HZ (zero-phase "
+                        "Butterworth order 4); the main figure is against the raw measured torques")
+    s.add_argument("--predictions", metavar="FILE",
+                   help="write the predicted torques at every validation sample (t, tau_<joint>; .csv, .tsv or "
+                        ".parquet)")
+    _log_size_args(s)
+    s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
+    s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")
+    _export_args(s)
+    s.add_argument("--save", metavar="RESULT.json", help="save the result (values, std, options, the model's "
+                                                         "fingerprint) for 'baseparams predict'")
+    s.add_argument("--truth", metavar="TRUTH.json", help="compare with the true parameters of 'baseparams simulate' "
+                                                         "(OUT.truth.json): true, estimate, error, z per term")
+    s.add_argument("-v", "--verbose", action="store_true",
+                   help="progress lines on stderr from the start (without -v they show once a run takes over 2 s)")
+    s.add_argument("--output", metavar="FILE", help="write the report to FILE")
+    s.set_defaults(func=run)
+
+
+def _model_class_args(s) -> None:
+    """``identify``'s options of the model class: smooth Coulomb, model terms, the literal geometry."""
+    s.add_argument("--coulomb-width", type=float, metavar="W", help="smooth Coulomb friction tanh(dq / W) [rad/s]")
+    s.add_argument("--terms", default=IDENTIFY["terms"], metavar="TERMS",
+                   help="model terms beyond rigid bodies and linear friction: auto (default: pre-sliding friction "
+                        "'dahl', mounting 'tilt', per-joint 'delay', torque-sensor 'scale', each kept when blocked "
+                        "cross-validation on the training data says so; the report lists every one kept or "
+                        "rejected and why), none (the linear model alone), or names to force (dahl,tilt; add auto "
+                        "to also try the others)")
+    s.add_argument("--literal", action="store_true",
+                   help="the model exactly as the file states it (analyze --literal): by default geometry within "
+                        "1e-3 of a right angle or zero is taken as that value when the directions it adds are not "
+                        "identifiable in practice, and those directions are not fitted")
+
+
+def _log_size_args(s) -> None:
+    """``identify``'s options for long logs (streamed) and many logs (a fleet on Dask)."""
+    s.add_argument("--stream", metavar=choices("stream"), default=CHOICES["stream"][0],
+                   help="read a CSV/TSV/Parquet log block by block, in memory independent of its length, with the "
+                        "same result: auto (default) above 64 MB, on, off (read it whole)")
+    s.add_argument("--per-file", action="store_true",
+                   help="several logs (a glob such as 'logs/robot-*/*.parquet'): one estimate per log and the "
+                        "spread across them, on Dask")
+    s.add_argument("--pooled", action="store_true", help="several logs: one estimate from all of them, on Dask")
+    s.add_argument("--strict", action="store_true",
+                   help="several logs: exit 2 when any log was skipped (default: report it, go on with the rest)")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a Dask scheduler (default DASK_SCHEDULER_ADDRESS, else a local cluster for this run)")
+    s.add_argument("--workers", type=int, metavar="N", help="local cluster size (default: one per core)")
+
+
+def _export_args(s) -> None:
+    """``identify --urdf`` and ``--mjcf``: the model file written back with the identified values."""
+    s.add_argument("--urdf", metavar="FILE", help="physical: write the model with the identified inertias")
+    s.add_argument("--mjcf", metavar="FILE", help="physical: write the MJCF or URDF model as MJCF (through MuJoCo's "
+                                                  "MjSpec) with the identified inertias, armature, damping and "
+                                                  "frictionloss, checked by MuJoCo's inverse dynamics")

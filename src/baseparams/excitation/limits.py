@@ -74,19 +74,29 @@ def joint_values(robot: Robot, value, what: str, pair: bool = False) -> np.ndarr
     if isinstance(value, Mapping):
         for name, v in value.items():
             if name not in names:
-                raise BaseparamsError(f"{what} limit for {name!r}: not a designed joint of {robot.name!r} (joints: "
+                raise BaseparamsError(f"{what}= limit for {name!r}: not a designed joint of {robot.name!r} (joints: "
                                       f"{', '.join(names)})")
-            x = np.asarray(v, dtype=float)
+            x = _floats(v, f"{what}= limit for {name!r}:")
             if x.shape != shape[1:]:
-                raise BaseparamsError(f"{what} limit for {name!r}: expected {one}, got {v!r}")
-            out[names.index(name)] = _valid(x, f"{what} limit for {name!r}", pair)
+                raise BaseparamsError(f"{what}= limit for {name!r}: expected {one}, got {v!r}")
+            out[names.index(name)] = _valid(x, f"{what}= limit for {name!r}:", pair)
         return out
-    x = np.asarray(value, dtype=float)
+    x = _floats(value, f"{what}= limit:")
     if x.shape not in (shape, shape[1:]):
-        raise BaseparamsError(f"{what} limit: expected {one} for every joint or one per designed joint "
+        raise BaseparamsError(f"{what}= limit: expected {one} for every joint or one per designed joint "
                               f"({len(names)}: {', '.join(names)}), got shape {x.shape}")
-    out[:] = _valid(x, f"{what} limit", pair)
+    out[:] = _valid(x, f"{what}= limit:", pair)
     return out
+
+
+def _floats(value, what: str) -> np.ndarray:
+    """A limit's value as floats, or one line naming it."""
+    from ..arguments import ArgumentTypeError, brief
+
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentTypeError(f"{what} must be numbers, got {brief(value)}") from None
 
 
 def _valid(x: np.ndarray, what: str, pair: bool) -> np.ndarray:
@@ -94,11 +104,11 @@ def _valid(x: np.ndarray, what: str, pair: bool) -> np.ndarray:
     from ..arguments import ArgumentError
 
     if not np.all(np.isfinite(x)) or not np.all(np.abs(x) <= 1e9):
-        raise ArgumentError(f"{what}: finite numbers within 1e9 expected, got {x.tolist()}")
+        raise ArgumentError(f"{what} finite numbers within 1e9 expected, got {x.tolist()}")
     if pair and not np.all(x[..., 0] < x[..., 1]):
-        raise ArgumentError(f"{what}: lower < upper expected, got {x.tolist()}")
+        raise ArgumentError(f"{what} lower < upper expected, got {x.tolist()}")
     if not pair and not np.all(x > 0):
-        raise ArgumentError(f"{what}: a limit > 0 expected, got {x.tolist()}")
+        raise ArgumentError(f"{what} a limit > 0 expected, got {x.tolist()}")
     return x
 
 

@@ -278,20 +278,27 @@ def keepout_pairs(keepout) -> list[tuple[str, float]]:
     Raises
     ------
     BaseparamsError
-        Anything else.
+        Anything else, or a height that is not a finite number within 1e6 m.
     """
-    items = [keepout] if isinstance(keepout, tuple) and len(keepout) == 2 and isinstance(keepout[0], str) \
-        else list(keepout)
+    from ..arguments import brief
+
+    try:
+        items = [keepout] if isinstance(keepout, tuple) and len(keepout) == 2 and isinstance(keepout[0], str) \
+            else list(keepout)
+    except TypeError:
+        items = [keepout]
     out = []
     for item in items:
         try:
             link, z_min = item
             out.append((str(link), float(z_min)))
         except (TypeError, ValueError):
-            raise BaseparamsError(f"keepout must be (link name, lowest height in m) or a list of them, got "
-                                  f"{keepout!r}") from None
+            raise BaseparamsError(f"keepout= must be (link name, lowest height in m) or a list of them, got "
+                                  f"{brief(keepout)}") from None
+        if not abs(out[-1][1]) <= 1e6:
+            raise BaseparamsError(f"keepout= {link}:{z_min}: the height must be a finite number in [-1e6, 1e6] m")
     if not out:
-        raise BaseparamsError("keepout: no (link name, lowest height) pair given")
+        raise BaseparamsError("keepout=: no (link name, lowest height) pair given")
     return out
 
 

@@ -166,12 +166,10 @@ class Excitation:
         BaseparamsError
             Another suffix, an output onto an input, a missing folder, a non-regular target.
         """
-        from ..tables import write_table
+        from ..tables import TRAJECTORY_SUFFIXES, write_table
 
-        if Path(path).suffix.lower() not in (".csv", ".tsv"):
-            raise BaseparamsError(f"{what} {path}: a trajectory is written as .csv or .tsv, not "
-                                  f"{Path(path).suffix or 'no suffix'}")
-        return write_table(path, self._columns(), "a trajectory as .csv or .tsv", inputs=inputs, what=what)
+        return write_table(path, self._columns(), "a trajectory as .csv or .tsv", TRAJECTORY_SUFFIXES, inputs=inputs,
+                           what=what)
 
     @property
     def trajectory(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -254,24 +252,18 @@ def read_trajectory(path, robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndar
     Raises
     ------
     BaseparamsError
-        A missing or unreadable file, a missing column, non-numeric values.
+        What :func:`baseparams.io.logs.read_log` refuses in a log (a missing or unreadable file,
+        a missing column, values that are not finite, time that is not strictly increasing, an
+        angle beyond 4 pi or a translation beyond 10 m), a missing rate column.
     """
-    p = check_input(path)
-    delim = "\t" if p.suffix.lower() == ".tsv" else ","
-    try:
-        with open(p) as fh:
-            header = [h.strip() for h in fh.readline().strip().split(delim)]
-            data = np.atleast_2d(np.loadtxt(fh, delimiter=delim, ndmin=2))
-    except (OSError, ValueError) as exc:
-        raise BaseparamsError(f"{p}: cannot read a trajectory ({exc})") from None
+    from ..io.logs import read_log
+
+    check_input(path)  # a file (a folder would read as a ROS bag)
     joints = robot.coordinate_names(design_coordinates(robot))
-    where = {h: k for k, h in enumerate(header)}
-    want = ["t"] + [f"{k}_{j}" for k in ("q", "dq", "ddq") for j in joints]
-    missing = [w for w in want if w not in where]
-    if missing:
-        raise BaseparamsError(f"{p}: no column {missing[0]!r} (a trajectory needs t, q_, dq_ and ddq_ of the "
-                              f"joints {joints})")
-    if data.shape[1] != len(header) or not np.all(np.isfinite(data)):
-        raise BaseparamsError(f"{p}: {data.shape[1]} values per row for {len(header)} columns, or NaN / inf")
-    cols = [data[:, [where[f"{k}_{j}"] for j in joints]] for k in ("q", "dq", "ddq")]
-    return data[:, where["t"]], cols[0], cols[1], cols[2]
+    log = read_log(path, robot, require_tau=False)  # the reader identify reads the simulated log with: its checks
+    lack = [k for k in ("dq", "ddq") if getattr(log, k) is None]
+    if lack:
+        raise BaseparamsError(f"{path}: no {lack[0]}_ columns (a trajectory needs t, q_, dq_ and ddq_ of the joints "
+                              f"{joints})")
+    cols = [log.joints.index(j) for j in joints]
+    return log.t, log.q[:, cols], log.dq[:, cols], log.ddq[:, cols]

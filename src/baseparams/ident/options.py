@@ -5,15 +5,14 @@
 loading the identification) and checks them once, when it is made: numbers against
 :data:`baseparams.arguments.RANGES`, the choices, the flags, friction terms, motor couplings and
 model terms, and the rules across options (``prior_weight`` is the physical fit's). The front door
-(:func:`baseparams.identify`), the command line (:meth:`IdentOptions.from_flags`: its errors name
-the flags) and the fleet build it; every path takes it whole; the result keeps it (the cutoff and
+(:func:`baseparams.identify`, which the command line calls with its flags as keywords) and the fleet
+build it; every path takes it whole; the result keeps it (the cutoff and
 decimation as used) and its file saves it (:meth:`IdentOptions.to_json`, read back by
 :meth:`IdentOptions.from_json`, what :func:`baseparams.predict` filters a log with).
 """
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, fields
 
 from ..arguments import CHOICES, IDENTIFY
@@ -27,8 +26,6 @@ COVARIANCES = CHOICES["covariance"]
 #: the options that are numbers, checked against :data:`baseparams.arguments.RANGES`
 NUMBERS = ("holdout", "coulomb_width", "cutoff", "decimate", "prior_weight", "score_cutoff", "analysis_samples",
            "seed", "memory_mb")
-#: the command line's flag of each option whose flag is not ``--`` and its name with dashes
-FLAGS = {"couplings": "--coupling"}
 
 
 @dataclass(frozen=True)
@@ -116,11 +113,7 @@ class IdentOptions:
         check_flags("identify", rotor=self.rotor, allow_units=self.allow_units, literal=self.literal)
         check_choice("identify", "method", self.method, METHODS)
         check_choice("identify", "covariance", self.covariance, COVARIANCES)
-        if not isinstance(self.convention, str):
-            from ..arguments import ArgumentTypeError
-
-            raise ArgumentTypeError(f"identify: convention= must be a string (khalil, paper, ...), got "
-                                    f"{type(self.convention).__name__}")
+        check_choice("identify", "convention", self.convention, CHOICES["convention"])
         check_keywords("identify", **{k: getattr(self, k) for k in NUMBERS})  # checked, kept as given
         for name, value in (("friction", friction_terms(self.friction)), ("couplings", _couplings(self.couplings)),
                             ("terms", _terms(self.terms)), ("min_speed", _speeds(self.min_speed))):
@@ -133,31 +126,6 @@ class IdentOptions:
         changed = [f"{f.name}={getattr(self, f.name)!r}" for f in fields(self)
                    if getattr(self, f.name) != f.default]
         return f"IdentOptions({', '.join(changed)})"
-
-    @classmethod
-    def from_flags(cls, **values) -> IdentOptions:
-        """The options from the command line's flags: as the constructor, its errors naming the flags.
-
-        Parameters
-        ----------
-        **values
-            The options (the flags' values under the options' names).
-
-        Returns
-        -------
-        IdentOptions
-            The options.
-
-        Raises
-        ------
-        BaseparamsError
-            As the constructor, the options named as flags (``--prior-weight applies to --method
-            physical, ...``).
-        """
-        try:
-            return cls(**values)
-        except BaseparamsError as exc:
-            raise type(exc)(flag_names(str(exc))) from None
 
     def to_json(self) -> dict:
         """The options as JSON types (what a saved result holds under ``options``).
@@ -259,26 +227,3 @@ def _terms(terms) -> str:
 
     parse_terms(terms)
     return terms if isinstance(terms, str) else ",".join(terms)
-
-
-def flag_names(message: str) -> str:
-    """A message of :class:`IdentOptions` with its options named as the command line's flags.
-
-    Parameters
-    ----------
-    message : str
-        E.g. ``identify: prior_weight= applies to method=physical, not auto``.
-
-    Returns
-    -------
-    str
-        E.g. ``--prior-weight applies to --method physical, not auto``: ``name=value`` as
-        ``--name value``, ``name=`` as ``--name`` (:data:`FLAGS`), the ``identify:`` prefix left out.
-    """
-    names = "|".join(f.name for f in fields(IdentOptions))
-
-    def flag(m):
-        name = FLAGS.get(m.group(1), "--" + m.group(1).replace("_", "-"))
-        return name + (f" {m.group(2)}" if m.group(2) else "")
-
-    return re.sub(rf"\b({names})=(\w*)", flag, message.removeprefix("identify: "))

@@ -39,6 +39,8 @@ from .fitting import Fit, fit, pulled_covariance, residual_rms
 from .model import IdentModel, model_for
 from .notes import check_log_units, drive_notes, floating_notes, model_notes, term_note
 from .options import IdentOptions, options_of
+from .plausibility import check_rate
+from .preprocess import excitation_bandwidth
 from .result import Identification
 from .rows import accumulate_prepared, log_columns
 from .validation import position_spectrum, predict_log, report_series, split_log, validation_scores
@@ -176,6 +178,9 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     unit_notes = check_log_units(model, train, cols, opts.allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = _prepare_training(train, opts)
+    band = excitation_bandwidth(train.q[:, cols], prep.design.fs)  # unfiltered: what the low-pass may take off
+    unit_notes += check_rate(train.source, band, float(train.t[-1] - train.t[0]), prep.design.fs,
+                             prep.design.cutoff, opts.cutoff is not None, opts.allow_units)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
     parts: list = []
     kept: list = []

@@ -72,8 +72,13 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
 
     r = model.robot
     coords = r.measured_coords
-    wanted = [BASE_COORDINATES[c] if r.jtype[r.dof_body[c]] == "F" else r.joint_names[r.dof_body[c]] for c in coords]
+    names = r.coordinate_names(coords)
+    wanted = [BASE_COORDINATES[c] if r.jtype[r.dof_body[c]] == "F" else names[k] for k, c in enumerate(coords)]
     where = {j: k for k, j in enumerate(log.joints)}
+    if len(where) < len(log.joints):
+        twice = sorted({j for j in log.joints if log.joints.count(j) > 1})
+        raise BaseparamsError(f"{log.source}: the log names {twice} more than once: one column per coordinate, "
+                              f"named as the robot's (Robot.coordinate_names: {names})")
     missing = [j for j in wanted if j not in where]
     if missing and r.floating and missing[0] == BASE_COORDINATES[0]:
         raise BaseparamsError(f"{log.source}: robot {r.name!r} has a floating base and the log has no base pose "

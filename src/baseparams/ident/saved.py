@@ -34,10 +34,12 @@ import json
 
 import numpy as np
 
+from .. import schema
 from ..arguments import ArgumentTypeError
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..schema import array
+from .terms.registry import term_schema
 
 #: the ``format`` field of a saved identification
 FORMAT = "baseparams-identification"
@@ -45,6 +47,9 @@ FORMAT = "baseparams-identification"
 VERSION = 1
 #: decimals the fingerprint rounds every number to (1e-9 m, 1e-9 rad)
 FINGERPRINT_DIGITS = 9
+#: the schema of a saved identification (:func:`baseparams.schema.result`) with each model term's own
+#: fields (:func:`~baseparams.ident.terms.registry.term_schema`): checked on :func:`save` and on :func:`read`
+RESULT = schema.result(term_schema())
 
 
 def _round(x) -> list[str]:
@@ -127,9 +132,10 @@ def read_document(path) -> dict:
     Returns
     -------
     dict
-        The object (:data:`FORMAT`, version 1), checked against :data:`baseparams.schema.RESULT`
-        (types, shapes, finite values; statistics written ``null`` read as NaN); unknown top-level
-        keys are kept and named in ``doc["_notes"]``.
+        The object (:data:`FORMAT`, version 1), checked against :data:`RESULT` (types, shapes,
+        finite values, each term's fields and bounds, its joints the robot's, no term twice;
+        statistics written ``null`` read as NaN); unknown top-level keys are kept and named in
+        ``doc["_notes"]``.
 
     Raises
     ------
@@ -139,7 +145,6 @@ def read_document(path) -> dict:
         huge integer), another format, a version other than :data:`VERSION`, or a value that does
         not fit the schema (one line naming the file and where: ``estimate.R11[3][5]``).
     """
-    from .. import schema
     from ..arguments import check_path
 
     p = str(check_path(path, "path"))
@@ -153,7 +158,7 @@ def read_document(path) -> dict:
         newer = isinstance(version, int) and not isinstance(version, bool) and version > VERSION
         raise BaseparamsError(f"{p}: identification file version {version!r:.40}; this baseparams reads version "
                               f"{VERSION}" + (" (the file is newer: upgrade baseparams)" if newer else ""))
-    doc, notes = schema.check(doc, schema.RESULT, p)
+    doc, notes = schema.check(doc, RESULT, p)
     doc["_notes"] = notes
     return doc
 
@@ -353,13 +358,16 @@ def save(ident, path, inputs=(), what: str = "output"):
     Raises
     ------
     BaseparamsError
-        An output onto an input, a missing folder, a non-regular target.
+        An output onto an input, a missing folder, a non-regular target; a document that
+        :func:`read` would refuse (checked against :data:`RESULT` first: nothing is written).
     """
     import json
 
     from ..files import write_text
 
-    return write_text(path, json.dumps(document(ident), indent=1, allow_nan=False) + "\n", inputs, what)
+    doc = document(ident)
+    schema.check(doc, RESULT, f"{path} (not written)")
+    return write_text(path, json.dumps(doc, indent=1, allow_nan=False) + "\n", inputs, what)
 
 
 def read(path, robot: Robot) -> dict:
@@ -392,12 +400,13 @@ def read(path, robot: Robot) -> dict:
     from .model import model_for
     from .options import IdentOptions
 
-    doc = read_document(path)  # checked against baseparams.schema.RESULT: types, shapes, finite values
+    doc = read_document(path)  # checked against RESULT: types, shapes, bounds, the terms' joints
     check_robot(doc, robot, str(path))
     try:
         opts = IdentOptions.from_json(doc["options"])
     except BaseparamsError as exc:
         raise type(exc)(f"{path}: options: {exc}") from None
+    _check_terms_allowed(doc, opts, str(path))
     model = model_for(robot, opts, rows=doc["options"]["rows"])
     names = doc["parameters"]["names"]
     if list(model.names) != list(names):
@@ -406,7 +415,7 @@ def read(path, robot: Robot) -> dict:
         raise BaseparamsError(f"{path}: the model rebuilt for {robot.name!r} has other parameters than the "
                               f"saved ones ({diff}); saved by another baseparams version?")
     theta = array(doc["parameters"]["values"])
-    terms, choices = _terms(doc, model)
+    terms, choices = _terms(doc, model, str(path))
     f = Fit(model, opts.method, theta, _estimate(doc["estimate"], theta), _physical(doc.get("physical")),
             terms=terms, term_choices=choices)
     return {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
@@ -438,16 +447,40 @@ def _physical(p: dict | None):
                               tuple(v) if k == "notes" else v) for k, v in p.items()})
 
 
-def _terms(doc: dict, model) -> tuple[tuple, tuple]:
-    """The saved model terms (loaded for ``model``) and every term tried."""
+def _check_terms_allowed(doc: dict, opts, source: str) -> None:
+    """Refuse kept terms that disagree with the options (``options.terms``) or the choices (``term_choices``).
+
+    A term its own options did not try, or one the choices do not say was kept, or a kept one
+    missing: an edited file.
+    """
+    from .terms.fit import parse_terms
+
+    candidates, _ = parse_terms(opts.terms)
+    for k, t in enumerate(doc["terms"]):
+        if t["name"] not in candidates:
+            raise BaseparamsError(f"{source}: terms[{k}]: {t['name']!r} is not among the terms options.terms "
+                                  f"tried ({opts.terms!r}): the file was edited")
+    kept = [c["name"] for c in doc["term_choices"] if c["kept"]]
+    listed = [t["name"] for t in doc["terms"]]
+    if sorted(kept) != sorted(listed):
+        raise BaseparamsError(f"{source}: terms: {', '.join(listed) or 'none'} listed, but term_choices says "
+                              f"{', '.join(kept) or 'none'} kept: the file was edited (a term left out or added "
+                              f"would change the predictions)")
+
+
+def _terms(doc: dict, model, source: str) -> tuple[tuple, tuple]:
+    """The saved model terms (checked against :data:`RESULT`, loaded for ``model``) and every term tried."""
     from .terms.fit import Choice
     from .terms.registry import make_term
 
     terms = []
-    for t in doc.get("terms") or ():
-        term = make_term(t["name"], bool(t.get("forced", False)))
-        term.load(t, model.joints, model)
-        term.std = dict(t.get("std") or {})
+    for k, t in enumerate(doc["terms"]):
+        term = make_term(t["name"], t["forced"])
+        try:
+            term.load(t, model.joints, model)
+        except BaseparamsError as exc:
+            raise type(exc)(f"{source}: terms[{k}]: {exc}") from None
+        term.std = {k: v for k, v in t["std"].items() if v is not None}
         terms.append(term)
     choices = tuple(Choice(c["name"], bool(c["kept"]), str(c["why"]),
                            float("nan") if c.get("cv_rms") is None else float(c["cv_rms"]))

@@ -38,6 +38,11 @@ Non-uniform time stamps are resampled block by block (:class:`Resampled`: the gr
 steps) when every sample trains; with a hold-out or a validation log they are not streamed
 (:class:`NotStreamable`): the validation's states are filtered on the whole log's grid and
 interpolated back to its time stamps.
+
+An interrupt (SIGINT, Ctrl-C; or SIGTERM) stops every pass cleanly (:class:`Interrupts`): a library
+that swallows the ``KeyboardInterrupt`` raised in its code (pyarrow importing pandas lazily in the
+first block of pass 1 did) cannot make the run go on, as the signal is also remembered and raised
+again at the next block or step; outputs being written are removed, temporary files too.
 """
 
 from __future__ import annotations
@@ -51,6 +56,108 @@ from ..errors import BaseparamsError, DataError
 from ..jointlog import JointLog
 from . import chunks
 from . import preprocess as pp
+from .plausibility import check_rate
+
+#: the exit status of a run stopped by SIGTERM (128 + 15, as a shell reports a process it terminated)
+EXIT_TERMINATED = 143
+
+
+class Interrupts:
+    """SIGINT and SIGTERM honoured in every pass of a streamed identification, cleanly.
+
+    Within ``with Interrupts() as guard``, SIGINT raises :class:`KeyboardInterrupt` at once (as
+    Python's own handler does) and SIGTERM ``SystemExit(EXIT_TERMINATED)`` (Python's default
+    would end the process at once, leaving an output's temporary file behind), and either is
+    remembered: :meth:`check`, called at every block of every pass and at every step, raises it
+    again when the first one was caught by code between (a C extension's blanket error handling,
+    a lazy import's fallback), and so does leaving the block. The exception unwinds every open
+    output (their temporary files removed: :func:`baseparams.files.atomic_path`). A handler
+    installed before (``SIG_IGN`` aside: then none is installed for that signal) is called as
+    well; outside the main thread (no signals there) nothing is installed.
+    """
+
+    def __init__(self):
+        self.pending: BaseException | None = None
+        self.previous: dict = {}
+
+    def __enter__(self) -> Interrupts:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                previous = signal.getsignal(sig)
+                if previous is not signal.SIG_IGN:
+                    self.previous[sig] = previous
+                    signal.signal(sig, self._handler)
+        return self
+
+    def _handler(self, signum, frame):
+        import signal
+
+        stop = KeyboardInterrupt() if signum == signal.SIGINT else SystemExit(EXIT_TERMINATED)
+        self.pending = stop
+        previous = self.previous.get(signum)
+        if callable(previous) and previous is not signal.default_int_handler:
+            previous(signum, frame)
+        raise stop
+
+    def check(self) -> None:
+        """Raise the interrupt again if a signal came (and was swallowed since).
+
+        Raises
+        ------
+        KeyboardInterrupt
+            After a SIGINT.
+        SystemExit
+            After a SIGTERM (status :data:`EXIT_TERMINATED`).
+        """
+        if self.pending is not None:
+            raise self.pending
+
+    def __exit__(self, kind, value, tb) -> None:
+        import signal
+
+        for sig, previous in self.previous.items():
+            signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
+        self.previous = {}
+        if kind is None:
+            self.check()
+
+
+class Guarded:
+    """A block source whose every block is preceded and followed by :meth:`Interrupts.check`.
+
+    Parameters
+    ----------
+    stream : block source
+        The log (module docstring); its other attributes are passed through.
+    guard : Interrupts
+        The run's interrupt guard.
+    """
+
+    def __init__(self, stream, guard: Interrupts):
+        self._stream, self._guard = stream, guard
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+    def __repr__(self) -> str:
+        return f"<Guarded {self._stream!r}>"
+
+    def blocks(self):
+        """The wrapped source's blocks, an interrupt checked around each.
+
+        Yields
+        ------
+        JointLog
+            As the wrapped source yields them.
+        """
+        self._guard.check()
+        for blk in self._stream.blocks():
+            self._guard.check()
+            yield blk
+        self._guard.check()
 
 #: training samples up to which the cutoff is chosen from every sample (as in memory)
 SUBSAMPLE_MAX = 1 << 18
@@ -1049,9 +1156,15 @@ def identify_stream(robot, stream, options=None, /, *, validation=None, predicti
     kept = None
     if getattr(stream, "kind", None) in ("text", "parquet"):  # parsed once, replayed from a binary copy
         stream = kept = Replay(stream, stream.decoded_mb)
+    tell = progress or (lambda msg: None)
     try:
-        with blas_threads():
-            return _identify_stream(robot, stream, validation, predictions, progress or (lambda msg: None), opts)
+        with Interrupts() as guard, blas_threads():
+            def say(msg: str) -> None:
+                guard.check()
+                tell(msg)
+
+            return _identify_stream(robot, Guarded(stream, guard),
+                                    None if validation is None else Guarded(validation, guard), predictions, say, opts)
     finally:
         if kept is not None:
             kept.close()
@@ -1085,6 +1198,9 @@ def _passes(robot, stream, o, validating: bool, say):
         sc = Scan(stream.n, sc.t0, sc.t0 + stream.step * (stream.n - 1), sc.head, (*sc.notes, stream.note))
         tr = training(stream, sc, None)
     plan = plan_training(model, stream, sc, tr, o.cutoff, o.decimate, o.min_speed, o.memory_mb)
+    band = pp.excitation_bandwidth(tr.sub.q[:, cols], tr.rate / tr.step)
+    unit_notes = [*unit_notes, *check_rate(stream.source, band, (tr.n - 1) / tr.rate, tr.rate, plan.design.cutoff,
+                                           o.cutoff is not None, o.allow_units)]
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
     parts, kept, slow = accumulate(stream, plan, model, cols, o.memory_mb, spill=o.covariance == "hac")

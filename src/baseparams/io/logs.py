@@ -7,15 +7,19 @@ sniffed, header row required), ``.npz`` (one 1-D array per column), ``.parquet``
 
 Default layout (tables)
 -----------------------
-A time column ``t`` [s] and per joint of the model ``q_<joint>`` [rad or m], ``tau_<joint>``
-[N m or N], and optionally ``dq_<joint>``, ``ddq_<joint>``, where ``<joint>`` is the model's joint
-name (``robot.joint_names``). Example CSV header for a 2-joint arm::
+A time column ``t`` [s] and per coordinate of the model ``q_<joint>`` [rad or m], ``tau_<joint>``
+[N m or N], and optionally ``dq_<joint>``, ``ddq_<joint>``, where ``<joint>`` is the coordinate's
+name (``robot.coordinate_names()``): a 1-dof joint's name; for a joint of several coordinates one
+name each, an MJCF body's own joints (``rootx``, ``rootz``, ``rooty`` of ``rootx+rootz+rooty``) or
+the joint's name and the coordinate's place (``p.0``, ``p.1``, ``p.2`` of a URDF ``planar`` joint
+``p``, in the order of its axes; a ball, a universal joint likewise). Example CSV header for a
+2-joint arm::
 
     t,q_joint1,q_joint2,dq_joint1,dq_joint2,tau_joint1,tau_joint2
 
-Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a joint of the model; other
-columns are ignored, and a note lists them. Every 1-dof (R or P) joint of the model must be in
-the log unless ``allow_subset=True``.
+Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a coordinate of the model;
+other columns are ignored, and a note lists them. Every coordinate of the model (the floating
+base's excepted: below) must be in the log unless ``allow_subset=True``.
 
 Floating base
 -------------
@@ -27,7 +31,11 @@ scalar first), and takes its twist when the joints have ``dq``: ``base_vx, base_
 frame (without them the twist is derived from the pose). Accelerations are derived. The base
 becomes the log's first six coordinates :data:`~baseparams.kinematics.floating.BASE_COORDINATES`
 (position and unwrapped Z-Y-X angles; tau zero, not measured): :mod:`baseparams.kinematics.floating`.
-A pitch beyond 85 deg, or a quaternion far from unit norm, is refused naming the row.
+A pitch beyond 85 deg, or a quaternion far from unit norm, is refused naming the row. The twist is
+checked against the pose (:func:`~baseparams.kinematics.floating.twist_mismatch`): one that follows
+it expressed in the world frame, not the base frame, is refused with both figures; one that follows
+neither gets a note. Every format reads the same columns (:func:`_layout_columns`); a ROS bag
+carries them on a ``nav_msgs/msg/Odometry`` topic (:func:`_bag_base`).
 
 ROS bags
 --------
@@ -35,7 +43,11 @@ ROS bags
 string ``columns`` or the mapping's ``topic`` names it), matched by ``name[]``: ``position[]`` is
 q, ``velocity[]`` dq (when every message has it), ``effort[]`` tau. Time is the header stamp,
 counted from the first message (the bag's record time when every header stamp is zero; a note
-says so). Messages that lack one of the joints read are removed and counted.
+says so). Messages that lack one of the joints read are removed and counted. A floating base's pose
+and twist come from a ``nav_msgs/msg/Odometry`` topic (the mapping's ``base_topic``, default the
+first one): pose in the world frame, twist in the child (base) frame, as REP 105 has it; taken at
+the JointState stamps (interpolated between two of its own: a note), JointState messages outside
+its time span removed and counted.
 
 Mapping (any other layout)
 --------------------------
@@ -44,6 +56,7 @@ Mapping (any other layout)
     time = "stamp_ns"        # time column (default "t")
     time_scale = 1e-9        # seconds per time unit (default 1)
     topic = "/franka/joint_states"   # bags only
+    base_topic = "/odom"     # bags only: a floating base's nav_msgs/msg/Odometry
 
     [joints.panda_joint1]    # a model joint; only the joints listed here are read
     q = "motor_pos_1"        # column names (defaults: q_<joint>, dq_<joint>, ...)
@@ -66,8 +79,9 @@ Checks
 Bad input is one :class:`~baseparams.errors.DataError` line naming the file, the column and the
 row: NaN/inf values, time not strictly increasing (repeated or going back), rows or arrays of
 different lengths, unknown or missing joints, an empty file, and a revolute joint beyond
-``max_angle`` (default 4 pi: "degrees given as radians?") or a prismatic one beyond
-``max_travel`` (10 m: millimetres?). Rows are named as the file counts them: text files by file
+``max_angle`` (default 4 pi: "degrees given as radians?"; not a joint the model declares without
+position limits, a continuous one) or a prismatic one beyond ``max_travel`` (10 m: millimetres?):
+with ``allow_units`` these two are a warning note instead. Rows are named as the file counts them: text files by file
 line (1-based) and data row (1-based, the first row after the header is 1); NPZ and Parquet by
 0-based index; bags by the 1-based message number on the topic.
 
@@ -104,8 +118,10 @@ PARQUET_SUFFIXES = (".parquet", ".pq")
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 #: the signals of a joint, in the default layout's column prefixes
 KINDS = ("q", "dq", "ddq", "tau")
-#: joint types a log can hold (1-dof)
-LOGGABLE = ("R", "P")
+#: joint types whose coordinates are not a log's joint columns (a floating base: its pose columns)
+UNLOGGED = ("F",)
+#: the largest plausible ``|q|`` of a rotation [rad] and of a translation [m] (degrees? millimetres?)
+MAX_ANGLE, MAX_TRAVEL = 4 * np.pi, 10.0
 
 _BAG_FIELDS = {"q": "position", "dq": "velocity", "ddq": "acceleration", "tau": "effort"}
 _COLUMN = re.compile(r"^(q|dq|ddq|tau)_(.+)$")
@@ -126,6 +142,7 @@ class _Table:
     booleans: set = field(default_factory=set)  # columns stored as true/false (refused when used)
     text: dict[str, str] = field(default_factory=dict)  # columns that are not numbers -> the error if one is read
     offset: int = 0  # samples before this table's first (a block of a streamed log: row numbers stay global)
+    stamps: np.ndarray | None = None  # a bag's stamps [ns] of each sample (other topics are aligned to them)
 
     def row(self, i: int) -> str:
         return self.row_fmt.format(int(self.rows[i]), i + 1 + self.offset)
@@ -145,11 +162,12 @@ class _Joint:
     ratio: float = 1.0
     gain: float = 1.0
     offset: float = 0.0
+    unbounded: bool = False  # a revolute joint the model declares without position limits (continuous)
 
 
 def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
-             max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0, require_tau: bool = True,
-             require_time: bool = True) -> JointLog:
+             max_angle: float | None = MAX_ANGLE, max_travel: float | None = MAX_TRAVEL, require_tau: bool = True,
+             require_time: bool = True, allow_units: bool = False) -> JointLog:
     """Read a joint log and map it to the model's joints.
 
     Parameters
@@ -158,18 +176,20 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
         The log: ``.csv``/``.tsv``/``.txt``, ``.npz``, ``.parquet``/``.pq``, a rosbag2 folder
         (with ``metadata.yaml``), ``.mcap``, ``.db3`` or ``.bag``. Formats: the module docstring.
     robot : Robot
-        The model; its ``joint_names`` name the columns, its ``jtype`` says which joints can be
-        logged (R and P) and which plausibility check applies.
+        The model; its coordinates' names name the columns (:meth:`Robot.coordinate_names`), and
+        each coordinate's kind (a rotation or a translation) says which plausibility check applies.
     columns : str, Path or dict, optional
         A mapping (TOML file or dict; see the module docstring) for any other layout, or, for
         a bag, the JointState topic to read. Default: the default layout, the first JointState
         topic.
     allow_subset : bool, optional
-        Accept a log that covers only some of the model's 1-dof joints (default: every R and P
-        joint must be there).
+        Accept a log that covers only some of the model's coordinates (default: every one must
+        be there, a floating base's excepted).
     max_angle : float or None, optional
         Largest plausible ``|q|`` of a revolute joint [rad] (default 4 pi, beyond which the
-        values look like degrees); ``None`` disables the check (continuous joints).
+        values look like degrees); ``None`` disables the check. Not applied to a joint the model
+        declares without position limits (a URDF ``continuous`` joint, an MJCF hinge without
+        ``range``: its ``Robot.limits`` lower and upper NaN): any angle, any number of turns.
     max_travel : float or None, optional
         Largest plausible ``|q|`` of a prismatic joint [m] (default 10, beyond which the values
         look like millimetres); ``None`` disables the check.
@@ -180,6 +200,9 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
     require_time : bool, optional
         The time column must be there (default). ``False``: without one, ``t`` is the sample
         index ``0, 1, ...`` and a note says so.
+    allow_units : bool, optional
+        A position beyond ``max_angle`` or ``max_travel`` (degrees? millimetres?) is a warning
+        note, not a refusal (``--allow-units``: go on anyway).
 
     Returns
     -------
@@ -198,7 +221,8 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
     if not isinstance(robot, Robot):
         raise ArgumentTypeError(f"read_log: robot must be a Robot (baseparams.load(...)), got {type(robot).__name__}")
     check_path(path, "read_log: path")
-    check_flags("read_log", allow_subset=allow_subset, require_tau=require_tau, require_time=require_time)
+    check_flags("read_log", allow_subset=allow_subset, require_tau=require_tau, require_time=require_time,
+                allow_units=allow_units)
     for name, bound in (("max_angle", max_angle), ("max_travel", max_travel)):
         if bound is not None:
             check_value(bound, name, r=Range(0, 1e12, lo_open=True))
@@ -206,22 +230,35 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
     spec = _mapping(columns)
     kind = _kind(p)
     if kind == "bag":
-        table = _read_bag(p, spec)
+        table = _read_bag(p, spec, robot.floating)
     else:
-        if spec["topic"] is not None:
-            raise DataError(f"{spec['label']}: 'topic' applies to ROS bags only, not to {p.name}")
+        for key in ("topic", "base_topic"):
+            if spec[key] is not None:
+                raise DataError(f"{spec['label']}: {key!r} applies to ROS bags only, not to {p.name}")
         if kind == "text":
             table = _read_text(p)
         else:  # the header first (names, rows, declared sizes): only the columns read are loaded, bounded
             header = _npz_header(p) if kind == "npz" else _parquet_header(p)
             joints = _resolve(header.empty(), robot, spec, allow_subset, require_tau)
-            used = [c for c in [spec["time"], *(c for x in joints for c in x.cols.values() if c)] if c in header.names]
+            used = _layout_columns(header.names, spec, joints, robot)
             header.check_size(used)
             table = header.read(used, spec["time"])
     joints = _resolve(table, robot, spec, allow_subset, require_tau)
     base = _base_columns(table, robot)
-    log = _assemble(table, joints, spec, max_angle, max_travel, require_time, base)
+    log = _assemble(table, joints, spec, (max_angle, max_travel, allow_units), require_time, base)
     return _with_base(table, log, base) if base else log
+
+
+def _layout_columns(names: list[str], spec: dict, joints: list[_Joint], robot: Robot) -> list[str]:
+    """The columns of a file the layout reads, of those it has: time, the joints', a floating base's pose and twist.
+
+    One list for every reader that loads columns by name (NPZ, Parquet, streamed), so that each
+    format reads what a text file read whole offers (:func:`_base_columns` then checks them).
+    """
+    base = (*POSE_COLUMNS, *TWIST_COLUMNS) if robot.floating else ()
+    cols = [spec["time"], *(c for x in joints for c in x.cols.values() if c), *base]
+    have = set(names)
+    return [c for c in dict.fromkeys(cols) if c in have]
 
 
 def _kind(p: Path) -> str:
@@ -270,8 +307,9 @@ def _check_mapping(raw: dict, label: str) -> dict:
     spec = schema.check(raw, schema.COLUMNS, label, error=DataError)[0]
     joints = {j: {k: v for k, v in e.items() if v is not None and (k in raw["joints"][j])}
               for j, e in spec["joints"].items()}
-    return {"time": spec["time"], "time_scale": spec["time_scale"], "topic": spec["topic"], "joints": joints,
-            "label": label, "explicit_time": "time" in raw or "time_scale" in raw}
+    return {"time": spec["time"], "time_scale": spec["time_scale"], "topic": spec["topic"],
+            "base_topic": spec["base_topic"], "joints": joints, "label": label,
+            "explicit_time": "time" in raw or "time_scale" in raw}
 
 
 # ---------------------------------------------------------------- text tables
@@ -605,8 +643,12 @@ def _first_line(exc: BaseException) -> str:
 
 
 # ---------------------------------------------------------------- ROS bags
-def _read_bag(path: Path, spec: dict) -> _Table:
-    """JointState messages of one topic: per message name, stamps, position, velocity, effort."""
+def _read_bag(path: Path, spec: dict, floating: bool = False) -> _Table:
+    """JointState messages of one topic: per message name, stamps, position, velocity, effort.
+
+    With ``floating``, a floating base's pose and twist from a ``nav_msgs/msg/Odometry`` topic too
+    (:func:`_bag_base`).
+    """
     try:
         from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_typestore
@@ -615,11 +657,16 @@ def _read_bag(path: Path, spec: dict) -> _Table:
     if spec["explicit_time"]:
         raise DataError(f"{spec['label']}: time and time_scale do not apply to bags (time is the header stamp)")
     notes: list[str] = []
+    odom = None
     try:
         with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
             con = _joint_state_topic(path, reader.connections, spec["topic"], notes)
             msgs = [(stamp, reader.deserialize(raw, c.msgtype))
                     for c, stamp, raw in reader.messages(connections=[con])]
+            ocon = _odometry_topic(path, reader.connections, spec["base_topic"]) if floating else None
+            if ocon is not None:
+                odom = (ocon.topic, [(stamp, reader.deserialize(raw, c.msgtype))
+                                     for c, stamp, raw in reader.messages(connections=[ocon])])
     except DataError:
         raise
     except Exception as exc:  # rosbags' reader and deserialiser errors: one line
@@ -629,6 +676,76 @@ def _read_bag(path: Path, spec: dict) -> _Table:
     wanted = [e.get("name", j) for j, e in spec["joints"].items()] or None
     table = _bag_table(path, con.topic, msgs, wanted)
     table.notes[:0] = notes
+    return _bag_base(path, table, *odom) if odom is not None else table
+
+
+#: the message a bag carries a floating base in: pose in ``header.frame_id`` (the world), twist in
+#: ``child_frame_id`` (the base), as REP 105 and the module docstring's base columns
+ODOMETRY = "nav_msgs/msg/Odometry"
+
+
+def _odometry_topic(path: Path, connections, topic: str | None):
+    """The base's odometry connection: the named topic, else the first Odometry topic, else None."""
+    if topic is not None:
+        named = [c for c in connections if c.topic == topic]
+        if not named:
+            raise DataError(f"{path}: no topic {topic!r} (base_topic); topics: "
+                            f"{', '.join(sorted({c.topic for c in connections}))}")
+        if named[0].msgtype != ODOMETRY:
+            raise DataError(f"{path}: topic {topic!r} (base_topic) carries {named[0].msgtype}, not {ODOMETRY}")
+        return named[0]
+    return next((c for c in connections if c.msgtype == ODOMETRY), None)
+
+
+def _bag_base(path: Path, table: _Table, topic: str, msgs: list) -> _Table:
+    """A floating base's columns (module docstring) from Odometry messages, at the JointState stamps.
+
+    A JointState stamp that is an odometry stamp takes its values exactly; one between two is
+    interpolated (position and twist linearly, the quaternion normalised); JointState messages
+    outside the odometry's span are removed and counted.
+    """
+    if not msgs:
+        raise DataError(f"{path}: topic {topic!r} ({ODOMETRY}, the floating base) has no messages")
+    notes: list[str] = []
+    ns = _bag_stamps(path, msgs, np.arange(len(msgs)), notes)
+    bad = np.diff(ns) <= 0
+    if bad.any():
+        i = int(np.argmax(bad)) + 1
+        raise DataError(f"{path}: header stamp on {topic}, message {i + 1}: {'repeats' if ns[i] == ns[i - 1] else 'is'}"
+                        f"{'' if ns[i] == ns[i - 1] else ' before'} the one before; time must be strictly increasing")
+    pose = [m.pose.pose for _, m in msgs]
+    twist = [m.twist.twist for _, m in msgs]
+    values = np.array([[p.position.x, p.position.y, p.position.z, p.orientation.w, p.orientation.x,
+                        p.orientation.y, p.orientation.z, v.linear.x, v.linear.y, v.linear.z, v.angular.x,
+                        v.angular.y, v.angular.z] for p, v in zip(pose, twist)], dtype=float)
+    at = table.stamps
+    inside = (at >= ns[0]) & (at <= ns[-1])
+    if not inside.any():
+        raise DataError(f"{path}: the base odometry on {topic} and the JointState messages do not overlap in time")
+    if (out := int((~inside).sum())):
+        table.removed[f"JointState messages outside the base odometry's time span ({topic})"] = out
+        table.notes.append(f"{path.name}: {out} JointState messages outside the time span of {topic}: removed")
+        table.columns = {k: v[inside] for k, v in table.columns.items()}
+        table.rows, at = table.rows[inside], at[inside]
+    hi = np.searchsorted(ns, at)
+    exact = ns[np.minimum(hi, len(ns) - 1)] == at
+    lo = np.maximum(hi - 1, 0)
+    w = np.where(exact, 0.0, (at - ns[lo]) / np.maximum(ns[hi.clip(max=len(ns) - 1)] - ns[lo], 1))[:, None]
+    a, b = values[lo], values[np.minimum(hi, len(ns) - 1)]
+    b[:, 3:7] *= np.where(np.sum(a[:, 3:7] * b[:, 3:7], axis=1) < 0, -1.0, 1.0)[:, None]  # the nearer sign
+    mixed = (1 - w) * a + w * b
+    mixed[:, 3:7] /= np.linalg.norm(mixed[:, 3:7], axis=1, keepdims=True)
+    mixed[exact] = values[hi[exact]]
+    names = list(POSE_COLUMNS) + (list(TWIST_COLUMNS) if np.any(values[:, 7:]) else [])
+    fields = ["pose.pose.position." + c for c in "xyz"] + ["pose.pose.orientation." + c for c in "wxyz"] + \
+        ["twist.twist.linear." + c for c in "xyz"] + ["twist.twist.angular." + c for c in "xyz"]
+    for k, n in enumerate(names):
+        table.columns[n] = mixed[:, k]
+        table.labels[n] = f"{fields[k]} on {topic}"
+    table.notes += notes + [f"{path.name}: floating base from {topic} ({ODOMETRY}: pose in the world frame, twist in "
+                            "the base frame)" + ("" if exact.all() else f"; interpolated at {int((~exact).sum())} "
+                                                 "JointState stamps between two of its own")
+                            + ("" if len(names) > len(POSE_COLUMNS) else "; its twist is zero: not read")]
     return table
 
 
@@ -673,7 +790,7 @@ def _bag_table(path: Path, topic: str, msgs: list, wanted: list[str] | None) -> 
     if (dropped := int((~keep).sum())):
         table.removed["JointState messages without every joint read"] = dropped
         table.notes.append(f"{path.name}: {dropped} messages on {topic} lack some of the joints read: removed")
-    table.columns["t"] = _bag_time(path, msgs, sel, table.notes)
+    table.columns["t"], table.stamps = _bag_time(path, msgs, sel, table.notes)
     for kind, fld in (("q", "position"), ("dq", "velocity"), ("tau", "effort")):
         block = _bag_field(path, topic, msgs, fld, groups, gid, sel, names, table.notes)
         for k, n in enumerate(names):
@@ -708,34 +825,59 @@ def _bag_field(path, topic, msgs, fld, groups, gid, sel, names, notes) -> np.nda
     return out
 
 
-def _bag_time(path: Path, msgs: list, sel: np.ndarray, notes: list[str]) -> np.ndarray:
-    """Header stamps [s] from the first; the record time when every stamp is zero."""
+def _bag_stamps(path: Path, msgs: list, sel: np.ndarray, notes: list[str]) -> np.ndarray:
+    """Header stamps [ns] of the selected messages; the record time when every stamp is zero."""
     sec = np.array([msgs[i][1].header.stamp.sec for i in sel], dtype=np.int64)
     nsec = np.array([msgs[i][1].header.stamp.nanosec for i in sel], dtype=np.int64)
     ns = sec * 1_000_000_000 + nsec
     if not ns.any():
         ns = np.array([msgs[i][0] for i in sel], dtype=np.int64)
         notes.append(f"{path.name}: every header stamp is zero: time is the bag's record time")
+    return ns
+
+
+def _bag_time(path: Path, msgs: list, sel: np.ndarray, notes: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Time [s] from the first stamp (:func:`_bag_stamps`), and the stamps [ns]."""
+    ns = _bag_stamps(path, msgs, sel, notes)
     notes.append(f"{path.name}: t = 0 at the first stamp ({ns[0] // 1_000_000_000}.{ns[0] % 1_000_000_000:09d} s)")
-    return (ns - ns[0]) * 1e-9
+    return (ns - ns[0]) * 1e-9, ns
 
 
 # ---------------------------------------------------------------- joints and conversion
+def coordinate_kinds(robot: Robot) -> dict[str, str]:
+    """Each coordinate a log holds, by its column name (:meth:`Robot.coordinate_names`), and its kind.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    dict of str to str
+        ``{name: "R" or "P"}`` in the model's order: a rotation (rad) or a translation (m); a
+        floating base's coordinates are left out (its pose columns, module docstring).
+
+    """
+    names = robot.coordinate_names(np.arange(robot.dof))
+    slide = np.linalg.norm(robot.local_screws[:, :3], axis=1) == 0.0
+    types = np.asarray(robot.jtype)[robot.dof_body]
+    return {n: ("P" if s else "R") for n, s, t in zip(names, slide, types) if t not in UNLOGGED}
+
+
 def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, require_tau: bool = True) -> list[_Joint]:
-    """The joints of the log in the model's order, with their columns, checked against the model."""
-    jtypes = dict(zip(robot.joint_names, robot.jtype))
-    loggable = [j for j, t in jtypes.items() if t in LOGGABLE]
+    """The coordinates of the log in the model's order, with their columns, checked against the model."""
+    jtypes = coordinate_kinds(robot)
+    loggable = list(jtypes)
     entries = spec["joints"] or _detect(table, robot, jtypes, loggable)
     for j in entries:
         if j not in jtypes:
-            raise DataError(f"{spec['label']}: joints.{j}: robot {robot.name!r} has no joint {j!r} (1-dof joints: "
+            raise DataError(f"{spec['label']}: joints.{j}: robot {robot.name!r} has no joint {j!r} (joints: "
                             f"{_names(loggable)})")
-        if jtypes[j] not in LOGGABLE:
-            raise DataError(f"{spec['label']}: joints.{j}: a {jtypes[j]} joint; only 1-dof R and P joints are logged")
     required = loggable
     if robot.has_loops or robot.couplings:  # the measured joints are the independent (actuated) ones
         ind = robot.independent if robot.independent is not None else range(robot.dof)
-        actuated = {robot.joint_names[robot.dof_body[k]] for k in ind}
+        actuated = set(robot.coordinate_names(np.asarray(ind, dtype=int)))
         required = [j for j in loggable if j in actuated]
     missing = [j for j in required if j not in entries]
     if missing and not allow_subset:
@@ -744,7 +886,8 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
         raise DataError(f"{table.source}: joints {_names(missing)} of robot {robot.name!r}: {where}; "
                         "to identify a sub-chain: --joints A,B,... on the command line (allow_subset=True in Python)")
     out = []
-    for j in [j for j in robot.joint_names if j in entries]:
+    unbounded = unbounded_joints(robot)
+    for j in [j for j in loggable if j in entries]:
         e = entries[j]
         base = e.get("name", j)
         cols = {k: e.get(k, f"{k}_{base}") for k in KINDS}
@@ -756,7 +899,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
             if cols[k] not in table.columns:
                 cols[k] = None
         out.append(_Joint(j, jtypes[j], cols, float(e.get("sign", 1)), float(e.get("gear_ratio", 1.0)),
-                          float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0))))
+                          float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0)), j in unbounded))
     if not out:
         raise DataError(f"{table.source}: no joint of robot {robot.name!r} in the log")
     for k in ("dq", "ddq") if require_tau else ("dq", "ddq", "tau"):
@@ -768,8 +911,33 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
     return out
 
 
+def unbounded_joints(robot: Robot) -> set[str]:
+    """Revolute joints the model declares without position limits (``Robot.limits`` lower and upper NaN).
+
+    A URDF ``continuous`` joint, an MJCF hinge without ``range``: any angle and any number of
+    turns is theirs (a wheel, a turntable). A model that says nothing of limits (``limits`` None)
+    declares none.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    set of str
+        The joints' names.
+    """
+    if robot.limits is None:
+        return set()
+    lim = np.asarray(robot.limits, dtype=float)
+    body = robot.dof_body
+    return {robot.joint_names[body[k]] for k in range(robot.dof)
+            if robot.jtype[body[k]] == "R" and np.isnan(lim[k, 0]) and np.isnan(lim[k, 1])}
+
+
 def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> dict[str, dict]:
-    """Joints named by default-layout columns (``q_<joint>`` ...); an unknown joint is an error."""
+    """Coordinates named by default-layout columns (``q_<joint>`` ...); an unknown one is an error."""
     found: dict[str, dict] = {}
     for col in table.columns:
         m = _COLUMN.match(col)
@@ -777,18 +945,28 @@ def _detect(table: _Table, robot: Robot, jtypes: dict, loggable: list[str]) -> d
             continue
         j = m.group(2)
         if j not in jtypes:
-            raise DataError(f"{table.source}: {table.label(col)}: robot {robot.name!r} has no joint {j!r} "
-                            f"(1-dof joints: {_names(loggable)})")
-        if jtypes[j] not in LOGGABLE:
-            raise DataError(f"{table.source}: {table.label(col)}: joint {j!r} is a {jtypes[j]} joint; only 1-dof "
-                            "R and P joints are logged")
+            raise DataError(f"{table.source}: {table.label(col)}: {_unknown(robot, j)} (joints: {_names(loggable)})")
         found[j] = {}
     return found
 
 
-def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_travel,
+def _unknown(robot: Robot, name: str) -> str:
+    """Why a column's joint is not one of the log's: not the robot's, a floating base, or several coordinates."""
+    if name not in robot.joint_names:
+        return f"robot {robot.name!r} has no joint {name!r}"
+    i = robot.joint_names.index(name)
+    if robot.jtype[i] in UNLOGGED:
+        return f"joint {name!r} is the floating base, logged as its pose columns ({', '.join(POSE_COLUMNS)})"
+    coords = robot.coordinate_names(np.flatnonzero(robot.dof_body == i))
+    return f"joint {name!r} has {len(coords)} coordinates, logged one column each ({_names(coords)})"
+
+
+def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
               require_time: bool = True, base: list[str] = ()) -> JointLog:
-    """Check the values (finite, time increasing, plausible) and convert to the joint side."""
+    """Check the values (finite, time increasing, plausible) and convert to the joint side.
+
+    ``bounds``: ``(max_angle, max_travel, allow_units)`` (:func:`read_log`).
+    """
     tcol = spec["time"] if not table.is_bag else "t"
     untimed = tcol not in table.columns and not require_time
     if tcol not in table.columns and not untimed:
@@ -816,9 +994,13 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, max_angle, max_tr
             arrays[k] = raw * (sign * ratio * np.array([x.gain for x in joints]))
         else:
             arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
-    _check_plausible(table, joints, arrays["q"], max_angle, max_travel)
+    implausible = _check_plausible(table, joints, arrays["q"], *bounds[:2])
+    if implausible and not bounds[2]:
+        raise DataError(implausible + "; --allow-units (allow_units=True) to go on anyway")
     unused = [c + (" (text)" if c in table.text else "") for c in table.columns if c not in used]
     notes = list(table.notes) + _conversion_notes(joints, spec)
+    if implausible:
+        notes.append(f"units: WARNING, going on (allow_units): {implausible}")
     if unused:
         notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"
                      + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))
@@ -835,6 +1017,10 @@ def _base_columns(table: _Table, robot: Robot) -> list[str]:
         raise DataError(f"{table.source}: robot {robot.name!r} has a joint named {clash[0]!r}, the name of a floating "
                         f"base coordinate in a log; rename the joint")
     missing = [c for c in POSE_COLUMNS if c not in table.columns]
+    if missing and table.is_bag:
+        raise DataError(f"{table.source}: robot {robot.name!r} has a floating base: the bag needs its pose and twist "
+                        f"on a {ODOMETRY} topic (pose in the world frame, twist in the base frame; base_topic= "
+                        "names it)")
     if missing:
         raise DataError(f"{table.source}: robot {robot.name!r} has a floating base: the log needs its pose, columns "
                         f"{', '.join(POSE_COLUMNS)} (position [m] and unit quaternion, world frame); missing "
@@ -867,7 +1053,9 @@ def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
     notes = list(log.notes)
     rates = None
     if log.dq is not None and len(base) > len(POSE_COLUMNS):
-        rates = chart_rates(chart, np.stack([table.columns[c] for c in TWIST_COLUMNS], axis=1))
+        twist = np.stack([table.columns[c] for c in TWIST_COLUMNS], axis=1)
+        notes += _check_twist_frame(table, log.t, chart, twist)
+        rates = chart_rates(chart, twist)
     elif log.dq is not None:
         rates = np.gradient(chart, log.t, axis=0)
         notes.append("base twist: no columns base_vx..base_wz; derived from the base pose (central differences)")
@@ -884,6 +1072,35 @@ def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
         notes.append("base acceleration: derived from the base twist (central differences)")
     return JointLog(log.t, BASE_COORDINATES + log.joints, cat(chart, log.q), cat(zeros, log.tau), cat(rates, log.dq),
                     cat(ddq, log.ddq), log.source, dict(log.removed), tuple(notes))
+
+
+#: a logged base twist is refused as given in the world frame when, integrated in the world frame, it follows
+#: the pose this many times better than in the base frame, and in the base frame it misses by more than
+#: TWIST_FRAME_MISS (:func:`~baseparams.kinematics.floating.twist_mismatch`)
+TWIST_FRAME_RATIO, TWIST_FRAME_MISS = 0.5, 0.05
+#: a logged base twist that follows the pose worse than this in both frames gets a note
+TWIST_POOR = 0.25
+
+
+def _check_twist_frame(table: _Table, t: np.ndarray, chart: np.ndarray, twist: np.ndarray) -> list[str]:
+    """Refuse a base twist given in the world frame (the pose's derivative says which); note one that fits neither."""
+    from ..kinematics.floating import TWIST_WINDOW, twist_mismatch
+
+    miss = twist_mismatch(t, chart, twist)
+    notes = []
+    for k, (what, cols) in enumerate((("linear velocity", TWIST_COLUMNS[:3]), ("angular velocity", TWIST_COLUMNS[3:]))):
+        body, world = miss[:, k]
+        names = ", ".join(table.label(c) for c in cols)
+        if world < TWIST_FRAME_RATIO * body and body > TWIST_FRAME_MISS:
+            raise DataError(f"{table.source}: {names}: the base's {what} looks expressed in the world frame: "
+                            f"integrated as world-frame it misses the logged pose by {world:.1%}, as base-frame "
+                            f"(the layout's frame) by {body:.1%}; rotate it into the base frame (R^T times the "
+                            "world vector), or leave the twist columns out (then derived from the pose)")
+        if min(body, world) > TWIST_POOR:
+            notes.append(f"base twist: the {what} ({names}) misses the logged pose by {body:.0%} (integrated over "
+                         f"{TWIST_WINDOW:g} s windows; by {world:.0%} read as world-frame): check its units, frame "
+                         "and time stamps")
+    return notes
 
 
 def _conversion_notes(joints: list[_Joint], spec: dict) -> list[str]:
@@ -931,13 +1148,17 @@ def _check_time(table: _Table, tcol: str, t: np.ndarray) -> None:
                         f"before ({t[i - 1]:.9g} s); time must be strictly increasing ({rows})")
 
 
-def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_angle, max_travel) -> None:
-    """A revolute joint beyond ``max_angle`` (degrees?) or a prismatic one beyond ``max_travel`` (mm?)."""
-    limit = np.array([(max_angle if x.jtype == "R" else max_travel) for x in joints], dtype=float)
+def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_angle, max_travel) -> str | None:
+    """A revolute joint beyond ``max_angle`` (degrees?) or a prismatic one beyond ``max_travel`` (mm?): the line.
+
+    A joint the model declares without position limits (:func:`unbounded_joints`) may turn any number of times.
+    """
+    limit = np.array([(np.inf if x.unbounded else max_angle) if x.jtype == "R" else max_travel for x in joints],
+                     dtype=float)
     limit = np.where(np.isnan(limit), np.inf, limit)
     bad = np.abs(q) > limit
     if not bad.any():
-        return
+        return None
     k = int(np.argmax(bad.any(axis=0)))
     i = int(np.argmax(bad[:, k]))
     x = joints[k]
@@ -947,7 +1168,7 @@ def _check_plausible(table: _Table, joints: list[_Joint], q: np.ndarray, max_ang
     else:
         why = (f"|q| = {abs(q[i, k]):.4g} m > {limit[k]:.4g} for prismatic joint {x.joint!r}: millimetres given as "
                "metres?")
-    raise DataError(f"{table.source}: {table.label(x.cols['q'])}, {table.row(i)}: {why}")
+    return f"{table.source}: {table.label(x.cols['q'])}, {table.row(i)}: {why}"
 
 
 def log_columns_of(log: JointLog) -> dict[str, np.ndarray]:
@@ -1010,10 +1231,9 @@ def write_log(path, log: JointLog, inputs=(), what: str = "log") -> Path:
     check_path(path, "write_log: path")
     if not isinstance(log, JointLog):
         raise ArgumentTypeError(f"write_log: log must be a JointLog, got {type(log).__name__}")
-    from ..tables import write_table
+    from ..tables import LOG_SUFFIXES, write_table
 
-    return write_table(path, log_columns_of(log), "a log as .csv, .tsv or .npz", (".csv", ".tsv", ".npz"), inputs,
-                       what)
+    return write_table(path, log_columns_of(log), "a log as .csv, .tsv or .npz", LOG_SUFFIXES, inputs, what)
 
 
 # ---------------------------------------------------------------- streamed logs
@@ -1099,6 +1319,8 @@ class LogStream:
         Every joint read must have a ``tau`` column.
     block_bytes : int
         Bytes of a text file per block (at least one line).
+    allow_units : bool
+        A position beyond the bounds is a warning note of its block, not a refusal (``read_log``'s).
 
     Attributes
     ----------
@@ -1116,8 +1338,8 @@ class LogStream:
     """
 
     def __init__(self, path, robot: Robot, columns=None, *, allow_subset: bool = False,
-                 max_angle: float | None = 4 * np.pi, max_travel: float | None = 10.0, require_tau: bool = True,
-                 block_bytes: int = BLOCK_BYTES):
+                 max_angle: float | None = MAX_ANGLE, max_travel: float | None = MAX_TRAVEL, require_tau: bool = True,
+                 block_bytes: int = BLOCK_BYTES, allow_units: bool = False):
         p = check_input(path, error=DataError)
         if p.suffix.lower() not in STREAM_SUFFIXES:
             raise DataError(f"{p}: not streamed (expected {', '.join(STREAM_SUFFIXES)}); read it with read_log")
@@ -1125,9 +1347,13 @@ class LogStream:
         self.kind = ("parquet" if p.suffix.lower() in PARQUET_SUFFIXES else "npz" if p.suffix.lower() == ".npz"
                      else "text")
         self.spec = _mapping(columns)
-        if self.spec["topic"] is not None:
-            raise DataError(f"{self.spec['label']}: 'topic' applies to ROS bags only, not to {p.name}")
-        self.bounds = (max_angle, max_travel)
+        for key in ("topic", "base_topic"):
+            if self.spec[key] is not None:
+                raise DataError(f"{self.spec['label']}: {key!r} applies to ROS bags only, not to {p.name}")
+        if robot.floating:
+            raise DataError(f"{p}: robot {robot.name!r} has a floating base: its log is read whole (read_log: its "
+                            "pose is unwrapped over the whole log), not streamed")
+        self.bounds = (max_angle, max_travel, bool(allow_units))
         self.block_bytes = max(int(block_bytes), 1)
         if self.kind == "npz":
             self._members, _ = _npz_members(p)
@@ -1139,6 +1365,7 @@ class LogStream:
             what = "array" if self.kind == "npz" else "column"
             empty.labels = {n: f"{what} {n!r}" for n in self.names}
         self._joints = _resolve(empty, robot, self.spec, allow_subset, require_tau)
+        self._robot = robot
         if self.spec["time"] not in self.names:
             raise DataError(f"{self.source}: no time column {self.spec['time']!r} (columns: "
                             f"{', '.join(self.names[:12])})")
@@ -1174,7 +1401,7 @@ class LogStream:
         tables = {"text": self._text_tables, "parquet": self._parquet_tables, "npz": self._npz_tables}[self.kind]()
         last_t, count = None, 0
         for table in tables:
-            log = _assemble(table, self._joints, self.spec, *self.bounds)
+            log = _assemble(table, self._joints, self.spec, self.bounds)
             if last_t is not None and not log.t[0] > last_t:
                 what = "repeats" if log.t[0] == last_t else "is before"
                 raise DataError(f"{self.source}: {table.label(self.spec['time'])}, {table.row(0)}: time "
@@ -1357,9 +1584,8 @@ class LogStream:
         return list(f.schema_arrow.names)
 
     def _used(self) -> list[str]:
-        """The columns the layout reads (time and the joints' columns)."""
-        cols = [self.spec["time"], *(c for x in self._joints for c in x.cols.values() if c)]
-        return [c for c in dict.fromkeys(cols) if c in self.names]
+        """The columns the layout reads (:func:`_layout_columns`)."""
+        return _layout_columns(self.names, self.spec, self._joints, self._robot)
 
     def _parquet_tables(self) -> Iterator[_Table]:
         """One checked table per record batch (0-based global rows)."""

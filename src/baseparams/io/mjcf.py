@@ -397,16 +397,19 @@ def _with_limits(mj, model, robot: Robot, dof_map: dict[int, int]) -> Robot:
 
     Positions: ``range`` of limited joints, relative to ``qpos0`` (our q = 0); efforts: the smallest
     of the joint's ``actuatorfrcrange`` and the force ranges times the gear of the force-limited
-    actuators with a joint transmission on it; velocities: NaN (MJCF has none). Nothing known:
-    ``limits`` stays None.
+    actuators with a joint transmission on it; velocities: NaN (MJCF has none). Nothing known and
+    no hinge without ``range``: ``limits`` stays None (an unlimited hinge's NaN position limits say it
+    has none: any number of turns).
     """
     out = np.full((robot.dof, 4), np.nan)
     hinge, slide = int(mj.mjtJoint.mjJNT_HINGE), int(mj.mjtJoint.mjJNT_SLIDE)
     coord = {}
+    unlimited = False  # a hinge without range: declared without position limits (any number of turns)
     for j in range(model.njnt):
         d = int(model.jnt_dofadr[j])
         if int(model.jnt_type[j]) in (hinge, slide) and d in dof_map:
             coord[j] = k = dof_map[d]
+            unlimited |= int(model.jnt_type[j]) == hinge and not model.jnt_limited[j]
             if model.jnt_limited[j]:
                 out[k, :2] = np.asarray(model.jnt_range[j], dtype=float) - model.qpos0[model.jnt_qposadr[j]]
             if getattr(model, "jnt_actfrclimited", np.zeros(model.njnt))[j]:
@@ -418,7 +421,7 @@ def _with_limits(mj, model, robot: Robot, dof_map: dict[int, int]) -> Robot:
             eff = float(np.abs(model.actuator_forcerange[a]).max() * abs(model.actuator_gear[a, 0]))
             out[coord[j], 3] = np.fmin(out[coord[j], 3], eff)
     out[:, 3] = np.where(out[:, 3] > 0, out[:, 3], np.nan)
-    return replace(robot, limits=out) if np.isfinite(out).any() else robot
+    return replace(robot, limits=out) if np.isfinite(out).any() or unlimited else robot
 
 
 def _gravity(mj, model, path: Path, gravity) -> np.ndarray:

@@ -483,7 +483,7 @@ def mjcf_inverse(path: str | Path, robot: Robot, q, dq, ddq, *, frictionloss: bo
     return out
 
 
-def check_mjcf_request(model, method: str, dest, what: str = "--mjcf") -> None:
+def check_mjcf_request(model, method: str, dest, what: str = "mjcf=") -> None:
     """Refuse, before any fit, an MJCF export that cannot be honoured (the CLI's and ``bp.identify``'s check).
 
     Parameters
@@ -495,7 +495,7 @@ def check_mjcf_request(model, method: str, dest, what: str = "--mjcf") -> None:
     dest : str or Path
         The file to write: it must end in ``.xml``.
     what : str
-        The option's name in messages (``--mjcf`` or ``mjcf=``).
+        The option's name in messages (its keyword, ``mjcf=``; the command line names the flag).
 
     Raises
     ------
@@ -504,8 +504,7 @@ def check_mjcf_request(model, method: str, dest, what: str = "--mjcf") -> None:
         nothing was fitted).
     """
     if method != "physical":
-        flag = "--method physical" if what.startswith("--") else 'method="physical"'
-        raise BaseparamsError(f"{what} needs {flag}: least squares gives base parameters, not bodies "
+        raise BaseparamsError(f"{what} needs method=physical: least squares gives base parameters, not bodies "
                               f"(nothing was fitted)")
     path = Path(os.fspath(model)) if isinstance(model, (str, os.PathLike)) else None
     if path is None or path.suffix.lower() not in (".xml", ".urdf") or not path.is_file():

@@ -599,7 +599,8 @@ def _with_limits(robot: Robot, ix: _Index, path: Path) -> Robot:
     ``lower``/``upper`` (not for continuous joints), ``velocity``, ``effort``; a missing attribute, a
     zero velocity or effort (a placeholder in many files) and any coordinate of another joint type
     are NaN (unknown), and so are position limits with lower > upper (with a warning). No joint with a
-    ``<limit>``: ``limits`` stays None.
+    ``<limit>`` and no continuous joint: ``limits`` stays None (a continuous joint's NaN position limits
+    say it has none: any number of turns).
     """
     from dataclasses import replace
 
@@ -609,6 +610,7 @@ def _with_limits(robot: Robot, ix: _Index, path: Path) -> Robot:
         jt = ix.joints.get(jname)
         lim = None if jt is None or robot.jtype[i] not in ("R", "P") else jt.find("limit")
         if lim is None:
+            found |= jt is not None and jt.get("type") == "continuous"  # declared without position limits
             continue
         found = True
         what = f"{path}: <joint name={jname!r}> <limit"
@@ -797,18 +799,14 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         ``dest`` is an input or cannot be written.
     """
     from ..files import write_text
-    from ..model import inertia as I
-    from ..pga import inverse_transform
     from . import xmledit
 
     source, dest = Path(source), Path(dest)
     root = _parse(source)
-    p = np.asarray(params, dtype=float)
-    if p.size != 10 * robot.n:
-        raise ModelError(f"{dest}: expected {10 * robot.n} parameters (10 per body of {robot.name!r}), got {p.size}")
-    n_body = I.from_convention(p.reshape(robot.n, 10), convention)
-    if convention == "paper":
-        n_body = I.transform(n_body, inverse_transform(robot.M0))
+    try:
+        n_body = robot.with_parameters(params, convention).N_body  # the robot's own conversion to body frames
+    except ModelError as exc:
+        raise ModelError(f"{dest}: {exc}") from None
     links = {ln.get("name"): ln for ln in root.findall("link")}
     parent_link = {}
     for jt in root.findall("joint"):
@@ -829,7 +827,7 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     try:
         text = source.read_bytes().decode("utf-8")
     except UnicodeDecodeError:
-        raise ModelError(f"{source}: not UTF-8 text; --urdf edits UTF-8 files only") from None
+        raise ModelError(f"{source}: not UTF-8 text; urdf= edits UTF-8 files only") from None
     doc = xmledit.parse(text, str(source))
     edit = xmledit.Editor(text)
     nodes = {ln.attrs.get("name"): ln for ln in doc.findall("link")}
@@ -852,7 +850,7 @@ def write_urdf(source: str | Path, dest: str | Path, robot: Robot, params, conve
         if not err <= 1e-9 * max(float(np.abs(n_body[i]).max()), np.finfo(float).tiny):
             raise ModelError(f"{dest}: <link name={name!r}>: the edited file re-reads with error {err:.3g}; "
                              f"not written")  # pragma: no cover - a bug of the editor
-    write_text(dest, out, inputs=[source, *inputs], what="--urdf")
+    write_text(dest, out, inputs=[source, *inputs], what="urdf=")
     return notes
 
 

@@ -35,6 +35,8 @@ POSE_COLUMNS = ("base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "
 TWIST_COLUMNS = ("base_vx", "base_vy", "base_vz", "base_wx", "base_wy", "base_wz")
 #: largest ``|pitch|`` [rad] the Euler chart accepts (85 deg; it is singular at 90)
 MAX_PITCH = np.deg2rad(85.0)
+#: the windows a logged twist is integrated over to be compared with the logged pose [s] (:func:`twist_mismatch`)
+TWIST_WINDOW = 0.1
 
 
 def rotation_zyx(angles) -> np.ndarray:
@@ -185,6 +187,60 @@ def chart_twist(chart, rates) -> np.ndarray:
     r = rotation_zyx(c[:, 3:])
     w = np.einsum("sij,sj->si", euler_rate_matrix(c[:, 3:]), d[:, 3:])
     return np.concatenate([np.einsum("sji,sj->si", r, d[:, :3]), np.einsum("sji,sj->si", r, w)], axis=1)
+
+
+def _windows(t: np.ndarray) -> np.ndarray:
+    """Start indices of consecutive windows of about :data:`TWIST_WINDOW` seconds (at least 4 samples), and the end."""
+    n = len(t)
+    width = max(4, int(round(TWIST_WINDOW / max(float(np.median(np.diff(t))), 1e-12))))
+    starts = np.arange(0, n, width)
+    return starts if starts[-1] == n - 1 else np.append(starts, n - 1)
+
+
+def twist_mismatch(t, chart, twist) -> np.ndarray:
+    """How well a logged twist integrates to the logged pose, read in the base frame and in the world frame.
+
+    Over consecutive windows of about :data:`TWIST_WINDOW` seconds, the change of the base
+    coordinates is compared with the integral (trapezoid rule) of their rates from the twist
+    (:func:`chart_rates`), the twist read as the module docstring says (base frame) and as if it
+    were expressed in the world frame (rotated by ``R^T`` first). Integrating over windows averages
+    the noise of a twist and of a differentiated pose out.
+
+    Parameters
+    ----------
+    t : array_like, shape ``(S,)``
+        Time [s], increasing.
+    chart : array_like, shape ``(S, 6)``
+        ``x, y, z, roll, pitch, yaw`` (:data:`BASE_COORDINATES`, roll and yaw unwrapped).
+    twist : array_like, shape ``(S, 6)``
+        ``vx, vy, vz, wx, wy, wz`` as logged.
+
+    Returns
+    -------
+    ndarray, shape ``(2, 2)``
+        Rows: base frame, world frame; columns: linear, angular part. Each the RMS of
+        ``change - integral`` over the windows relative to the RMS change: 0 for a twist that is
+        the pose's derivative, about 1 or more for an unrelated one; NaN for a part that does not
+        move (or fewer than two windows).
+    """
+    t, c, tw = (np.asarray(x, dtype=float) for x in (t, chart, twist))
+    out = np.full((2, 2), np.nan)
+    if len(t) < 9:
+        return out
+    starts = _windows(t)
+    r = rotation_zyx(c[:, 3:])
+    world = np.concatenate([np.einsum("sji,sj->si", r, tw[:, :3]), np.einsum("sji,sj->si", r, tw[:, 3:])], axis=1)
+    change = c[starts[1:]] - c[starts[:-1]]
+    for row, body_twist in enumerate((tw, world)):
+        rates = chart_rates(c, body_twist)
+        steps = 0.5 * (rates[1:] + rates[:-1]) * np.diff(t)[:, None]
+        integral = np.concatenate([np.zeros((1, 6)), np.cumsum(steps, axis=0)])
+        err = change - (integral[starts[1:]] - integral[starts[:-1]])
+        for col, part in enumerate((slice(0, 3), slice(3, 6))):
+            scale = np.sqrt(np.mean(np.sum(change[:, part] ** 2, axis=1)))
+            if scale > 1e-9:
+                out[row, col] = np.sqrt(np.mean(np.sum(err[:, part] ** 2, axis=1))) / scale
+    return out
 
 
 def native_states(m0, chart, rates, accel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

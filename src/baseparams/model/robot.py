@@ -518,7 +518,13 @@ class Robot:
         return np.asarray(self.actuated, dtype=int) if self.has_loops else np.arange(self.dof)
 
     def coordinate_names(self, coords=None) -> list[str]:
-        """The joint of each coordinate (a joint log's column names).
+        """The name of each coordinate: a joint log's and a trajectory's column names, one per coordinate.
+
+        A 1-dof joint's coordinate is named as the joint. A joint of several coordinates names
+        each one apart: an MJCF body's joints, merged into one compound joint ``rootx+rootz+rooty``,
+        by their own names (``rootx``, ``rootz``, ``rooty``), any other (URDF ``planar``, a ball,
+        a universal joint) by the joint's name and the coordinate's place in it (``p.0``, ``p.1``,
+        ``p.2``, in the order of the joint's axes). Every name differs from every other.
 
         Parameters
         ----------
@@ -528,10 +534,28 @@ class Robot:
         Returns
         -------
         list of str
-            The name of the joint moving each coordinate.
+            The name of each coordinate.
         """
         coords = self.measured_coords if coords is None else coords
-        return [self.joint_names[self.dof_body[c]] for c in coords]
+        names = self._coordinate_labels
+        return [names[c] for c in coords]
+
+    @cached_property
+    def _coordinate_labels(self) -> tuple[str, ...]:
+        """:meth:`coordinate_names` of every coordinate (cached)."""
+        joints = set(self.joint_names)
+        out: list[str] = []
+        for name, d in zip(self.joint_names, self.ndofs):
+            parts = name.split("+")
+            if d == 1:
+                parts = [name]
+            elif len(parts) != d or len(set(parts)) != d or any(not p or p in joints for p in parts):
+                parts = [f"{name}.{k}" for k in range(d)]
+            for p in parts:
+                while p in out or (p in joints and p != name):
+                    p += "_"
+                out.append(p)
+        return tuple(out)
 
     @property
     def only_couplings(self) -> bool:

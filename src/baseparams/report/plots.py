@@ -20,11 +20,11 @@ def _pyplot():
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise BaseparamsError("--plot needs matplotlib: pip install 'baseparams[plot]'") from None
+        raise BaseparamsError("plotting needs matplotlib: pip install 'baseparams[plot]'") from None
     return plt
 
 
-def trajectory_plot(excitation, path, robot=None) -> Path:
+def trajectory_plot(excitation, path, robot=None, inputs=(), what: str = "plot=") -> Path:
     """An excitation trajectory: position, velocity and acceleration per joint, with the limits.
 
     Parameters
@@ -37,6 +37,10 @@ def trajectory_plot(excitation, path, robot=None) -> Path:
         The robot designed for: its joint types give the units (``rad``, ``rad/s``, ``rad/s^2``
         for a revolute joint, ``m``, ``m/s``, ``m/s^2`` for a prismatic one); without it the
         axes read ``rad or m``.
+    inputs : iterable of str or path
+        The run's input files, which the figure must not overwrite.
+    what : str
+        The output's role, for messages (its keyword).
 
     Returns
     -------
@@ -69,24 +73,24 @@ def trajectory_plot(excitation, path, robot=None) -> Path:
     fig.suptitle(f"{e.robot}: {e.harmonics} harmonics, period {e.period:.4g} s, {e.criterion} {e.value:.4g} "
                  f"(condition number {e.condition_number:.4g}); dashed: limits", fontsize=9)
     fig.tight_layout()
-    return _save(plt, fig, Path(path))
+    return _save(plt, fig, Path(path), inputs, what)
 
 
-def _save(plt, fig, path: Path) -> Path:
-    """Save and close the figure, atomically (:func:`baseparams.files.atomic_path`); an unwritable path is one line."""
+def _save(plt, fig, path: Path, inputs=(), what: str = "plot=") -> Path:
+    """Save and close the figure atomically, never onto an input (:func:`baseparams.files.atomic_path`)."""
     from ..files import atomic_path
 
     try:
-        with atomic_path(path, what="--plot") as tmp:
+        with atomic_path(path, inputs, what) as tmp:
             fig.savefig(tmp, format=path.suffix.lstrip(".").lower() or None)
     except OSError as exc:
-        raise BaseparamsError(f"--plot {path}: cannot write ({exc.strerror or exc})") from None
+        raise BaseparamsError(f"{what} {path}: cannot write ({exc.strerror or exc})") from None
     finally:
         plt.close(fig)
     return path
 
 
-def torque_plot(result, path) -> Path:
+def torque_plot(result, path, inputs=(), what: str = "plot=") -> Path:
     """Measured and predicted torques per joint, training and validation, in one figure.
 
     Parameters
@@ -95,6 +99,10 @@ def torque_plot(result, path) -> Path:
         An identification with its series (:attr:`Identification.series`).
     path : str or Path
         Output file; the format from its suffix (``.png``, ``.svg``, ``.pdf``).
+    inputs : iterable of str or path
+        The run's input files, which the figure must not overwrite.
+    what : str
+        The output's role, for messages (its keyword).
 
     Returns
     -------
@@ -129,7 +137,7 @@ def torque_plot(result, path) -> Path:
                  + (f", validation RMS {j['validation']['rms_total']:.3g} {unit}" if j["validation"] else ""),
                  fontsize=9)
     fig.tight_layout()
-    return _save(plt, fig, Path(path))
+    return _save(plt, fig, Path(path), inputs, what)
 
 
 #: the grid's colour of each parameter class (the HTML report's)
@@ -247,7 +255,7 @@ def analysis_figure(result):
     return fig
 
 
-def analysis_plot(result, path) -> Path:
+def analysis_plot(result, path, inputs=(), what: str = "plot=") -> Path:
     """The analysis figure (:func:`analysis_figure`) written to a file.
 
     Parameters
@@ -256,6 +264,10 @@ def analysis_plot(result, path) -> Path:
         The analysis.
     path : str or Path
         Output file; the format from its suffix (``.png``, ``.svg``, ``.pdf``).
+    inputs : iterable of str or path
+        The run's input files, which the figure must not overwrite.
+    what : str
+        The output's role, for messages (its keyword).
 
     Returns
     -------
@@ -268,4 +280,4 @@ def analysis_plot(result, path) -> Path:
         matplotlib missing (names the extra), or an unwritable path.
     """
     fig = analysis_figure(result)
-    return _save(_pyplot(), fig, Path(path))
+    return _save(_pyplot(), fig, Path(path), inputs, what)

@@ -12,6 +12,13 @@ joint ``j``, ``y_j(t) = s_j M_j(t - d_j)`` with ``M = A' theta + sum_k phi_k T_k
 Every term also predicts (:meth:`Term.adjust_model`, :meth:`Term.adjust_measured`), says what it
 found (:meth:`Term.describe`, :meth:`Term.to_json`) and what a model file can carry of it
 (:meth:`Term.export`).
+
+A saved result keeps each term's parameters; every field is declared once, on its term
+(:attr:`Term.FIELDS`, :attr:`Term.STD`, :meth:`Term.rule`): type, shape, physical bounds, and for a
+value per joint, exactly one per measured joint (:func:`per_joint`). :meth:`Term.schema` makes the
+node the saved file is checked against when it is written and when it is read
+(:func:`baseparams.ident.terms.registry.term_schema`); :meth:`Term.load` reads only what it
+accepted.
 """
 
 from __future__ import annotations
@@ -20,7 +27,44 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ... import schema as sc
 from ...display import summary_repr
+
+#: why a saved term with an unknown key is refused
+NEWER = " (written by a newer baseparams, or edited? it would predict without it)"
+
+
+def per_joint(value: sc.Node) -> sc.Map:
+    """A saved value per measured joint: keys exactly the result's ``robot.joints``.
+
+    Parameters
+    ----------
+    value : Node
+        Every joint's value.
+
+    Returns
+    -------
+    Map
+        Keyed by the names symbol ``joints``: a joint the robot lacks, or a measured joint left
+        out, is refused naming it.
+    """
+    return sc.Map(value, keys="joints")
+
+
+def per_row(value: sc.Node) -> sc.Arr:
+    """A saved list with one value per measured joint, in ``robot.joints`` order (standard deviations).
+
+    Parameters
+    ----------
+    value : Node
+        Every item's node.
+
+    Returns
+    -------
+    Arr
+        Of length ``m`` (the size symbol of ``robot.joints``).
+    """
+    return sc.Arr(value, "m")
 
 
 @dataclass(eq=False)
@@ -146,6 +190,41 @@ class Term:
 
     name = "term"
     label = "a model term"
+    #: its saved parameters (``values`` of :meth:`to_json`): field -> schema node, each required
+    FIELDS: dict = {}
+    #: its saved standard deviations (``std``): field -> schema node, each optional
+    STD: dict = {}
+
+    @classmethod
+    def rule(cls, values: dict) -> str | None:
+        """A check across its saved fields (each already within its own bounds).
+
+        Parameters
+        ----------
+        values : dict
+            The checked ``values`` of a saved term.
+
+        Returns
+        -------
+        str or None
+            What is wrong, in one phrase, or None.
+        """
+        return None
+
+    @classmethod
+    def schema(cls) -> sc.Obj:
+        """The node a saved term of this kind is checked against, on save and on load.
+
+        Returns
+        -------
+        Obj
+            ``{"name", "forced", "values": FIELDS (all required, checked by rule), "std": STD}``;
+            unknown keys refused.
+        """
+        return sc.Obj({"name": sc.Enum((cls.name,)), "forced": sc.Field(sc.Bool(), False),
+                       "values": sc.Obj(dict(cls.FIELDS), extra="refuse", rule=cls.rule, hint=NEWER),
+                       "std": sc.Field(sc.Obj({k: sc.Field(v, None) for k, v in cls.STD.items()}, extra="refuse",
+                                              hint=NEWER), {})}, extra="refuse", hint=NEWER)
 
     def __init__(self, forced: bool = False):
         self.forced = bool(forced)
@@ -409,7 +488,8 @@ class Term:
         Parameters
         ----------
         doc : dict
-            The saved term.
+            The saved term, checked against :meth:`schema` (every field present, in bounds,
+            one value per measured joint).
         joints : list of str, shape ``(m,)``
             The measured joints.
         model : IdentModel

@@ -21,7 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Term, TermContext, complete_docs
+from ... import schema as sc
+from .base import Term, TermContext, complete_docs, per_joint
 
 #: candidate pre-sliding distances of revolute joints [rad] (the first: plain Coulomb, in effect)
 DELTAS = (1e-6, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 3e-3, 5e-3, 1e-2, 2e-2, 5e-2)
@@ -85,6 +86,7 @@ class Dahl(Term):
 
     name = "dahl"
     label = "pre-sliding (Dahl) friction"
+    FIELDS = {"delta": per_joint(sc.Num(lo=min(DELTAS_PRISMATIC), hi=max(DELTAS)))}
 
     def __init__(self, forced: bool = False, delta=None):
         super().__init__(forced)
@@ -178,5 +180,5 @@ class Dahl(Term):
 
     def load(self, doc: dict, joints: list[str], model) -> None:
         """The distances of a saved result."""
-        d = doc.get("values", {}).get("delta", {})
-        self.delta = np.array([float(d.get(j, np.nan)) for j in joints])
+        d = doc["values"]["delta"]
+        self.delta = np.array([float(d[j]) for j in joints])

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Term, TermContext, complete_docs
+from ... import schema as sc
+from .base import Term, TermContext, complete_docs, per_joint, per_row
 
 #: the largest delay considered [s]
 MAX_DELAY = 0.05
@@ -35,6 +36,8 @@ class Delay(Term):
 
     name = "delay"
     label = "torque channel delay"
+    FIELDS = {"seconds": per_joint(sc.Num(lo=-MAX_DELAY, hi=MAX_DELAY))}
+    STD = {"seconds": per_row(sc.Num(lo=0.0))}
 
     def __init__(self, forced: bool = False, seconds=None):
         super().__init__(forced)
@@ -94,5 +97,5 @@ class Delay(Term):
 
     def load(self, doc: dict, joints: list[str], model) -> None:
         """The delays of a saved result."""
-        d = doc.get("values", {}).get("seconds", {})
-        self.seconds = np.array([float(d.get(j, 0.0)) for j in joints])
+        d = doc["values"]["seconds"]
+        self.seconds = np.array([float(d[j]) for j in joints])

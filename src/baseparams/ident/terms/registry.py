@@ -1,7 +1,11 @@
-"""The model terms by name: :data:`TERMS` (the order model selection tries them) and :func:`make_term`."""
+"""The model terms by name: :data:`TERMS` (the order model selection tries them), :func:`make_term`.
+
+And :func:`term_schema`: what a saved result holds of each.
+"""
 
 from __future__ import annotations
 
+from ... import schema as sc
 from ...errors import BaseparamsError
 from .base import Term
 from .dahl import Dahl
@@ -49,3 +53,16 @@ def make_term(name: str, forced: bool = False) -> Term:
     if name not in reg:
         raise BaseparamsError(f"unknown model term {name!r}; choose from {', '.join(TERMS)}")
     return reg[name](forced=forced)
+
+
+def term_schema() -> sc.Tagged:
+    """The node of one saved term: by its ``name``, that term's own :meth:`~baseparams.ident.terms.base.Term.schema`.
+
+    Returns
+    -------
+    Tagged
+        Checked when a result is written and when it is read back
+        (:data:`baseparams.ident.saved.RESULT`).
+    """
+    reg = registry()
+    return sc.Tagged("name", {name: reg[name].schema() for name in TERMS})

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Term, TermContext, complete_docs
+from ... import schema as sc
+from .base import Term, TermContext, complete_docs, per_joint, per_row
 
 #: bounds of a scale
 LOWEST, HIGHEST = 0.5, 2.0
@@ -38,6 +39,15 @@ class Scale(Term):
 
     name = "scale"
     label = "torque sensor scale"
+    FIELDS = {"factors": per_joint(sc.Num(lo=LOWEST, hi=HIGHEST)),
+              "reference": sc.Str(max_len=1000, among="joints")}
+    STD = {"factors": per_row(sc.Num(lo=0.0))}
+
+    @classmethod
+    def rule(cls, values: dict) -> str | None:
+        """The reference joint's scale is 1 (the others are relative to it)."""
+        s = values["factors"][values["reference"]]
+        return None if s == 1.0 else f"factors.{values['reference']} is {s!r}, but the reference joint's factor is 1"
 
     def __init__(self, forced: bool = False, factors=None, reference: int = 0):
         super().__init__(forced)
@@ -105,8 +115,6 @@ class Scale(Term):
 
     def load(self, doc: dict, joints: list[str], model) -> None:
         """The scales of a saved result."""
-        v = doc.get("values", {})
-        f = v.get("factors", {})
-        self.factors = np.array([float(f.get(j, 1.0)) for j in joints])
-        ref = v.get("reference")
-        self.reference = joints.index(ref) if ref in joints else 0
+        v = doc["values"]
+        self.factors = np.array([float(v["factors"][j]) for j in joints])
+        self.reference = joints.index(v["reference"])

@@ -21,10 +21,14 @@ from dataclasses import replace
 
 import numpy as np
 
+from ... import schema as sc
 from .base import Term, TermContext, complete_docs
 
 #: the tilt's weak prior: level to within this per angle [rad] (1 degree)
 PRIOR_STD = np.radians(1.0)
+#: the largest tilt per angle [rad] (10 degrees): a mounting tilt, not another gravity (fix the model's
+#: ``gravity`` instead); the fit stays within it and a saved result beyond it is refused
+MAX_ANGLE = np.radians(10.0)
 
 
 def perpendicular_basis(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -198,6 +202,20 @@ class Tilt(Term):
 
     name = "tilt"
     label = "mounting tilt"
+    FIELDS = {"angles": sc.Arr(sc.Num(lo=-MAX_ANGLE, hi=MAX_ANGLE), 2),
+              "degrees": sc.Num(lo=0.0, hi=float(np.degrees(np.sqrt(2.0) * MAX_ANGLE))),
+              "pi": sc.Opt(sc.Arr(sc.Num(lo=-sc.MAX_VALUE, hi=sc.MAX_VALUE), "npar"))}
+    STD = {"angles": sc.Arr(sc.Num(lo=0.0), 2)}
+
+    @classmethod
+    def rule(cls, values: dict) -> str | None:
+        """``degrees`` is the angles' magnitude; a tilt acts through the parameters ``pi`` it was fitted with."""
+        deg = float(np.degrees(np.hypot(*values["angles"])))
+        if abs(values["degrees"] - deg) > 1e-9 * max(1.0, deg):
+            return f"degrees {values['degrees']!r} is not the angles' magnitude ({deg!r})"
+        if values["pi"] is None and any(values["angles"]):
+            return "a tilt without the standard parameters it acts on (pi is null): it would predict nothing"
+        return None
 
     def __init__(self, forced: bool = False, angles=(0.0, 0.0), pi=None):
         super().__init__(forced)
@@ -252,9 +270,10 @@ class Tilt(Term):
         return np.full(2, 1.0 / PRIOR_STD**2), np.zeros(2)
 
     def absorb(self, coefs: np.ndarray, std: np.ndarray | None = None) -> float:
-        """The angles are the coefficients (a total, not a step)."""
-        change = float(np.max(np.abs(coefs - self.angles))) / 1e-3
-        self.angles = np.asarray(coefs, dtype=float)
+        """The angles are the coefficients (a total, not a step), within :data:`MAX_ANGLE`."""
+        new = np.clip(np.asarray(coefs, dtype=float), -MAX_ANGLE, MAX_ANGLE)
+        change = float(np.max(np.abs(new - self.angles))) / 1e-3
+        self.angles = new
         if std is not None:
             self.std = {"angles": [float(s) for s in std]}
         return change
@@ -302,6 +321,8 @@ class Tilt(Term):
         """E.g. ``0.25 degree``."""
         s = self.std.get("angles")
         tail = "" if not s else f" (std {np.degrees(np.linalg.norm(s)):.2g} degree)"
+        if np.any(np.abs(self.angles) >= MAX_ANGLE):
+            tail += f"; at the {np.degrees(MAX_ANGLE):.0f} degree bound: check the model's gravity"
         return f"{self.tilt_degrees():.3g} degree from the file's gravity{tail}"
 
     def export(self) -> dict:
@@ -327,8 +348,14 @@ class Tilt(Term):
         return rotation_vector(self.angles[0] * u1 + self.angles[1] * u2)
 
     def load(self, doc: dict, joints: list[str], model) -> None:
-        """The angles and parameters of a saved result."""
-        v = doc.get("values", {})
-        self.angles = np.asarray(v.get("angles", (0.0, 0.0)), dtype=float)
-        self.pi = None if v.get("pi") is None else np.asarray(v["pi"], dtype=float)
+        """The angles and parameters of a saved result (a tree with gravity: :meth:`available`)."""
+        from ...errors import BaseparamsError
+
+        r = model.robot
+        if r.has_loops or not np.linalg.norm(r.gravity) > 0:
+            raise BaseparamsError(f"a mounting tilt cannot act on robot {r.name!r} "
+                                  f"({'it has loops' if r.has_loops else 'its model has no gravity'})")
+        v = doc["values"]
+        self.angles = np.asarray(v["angles"], dtype=float)
+        self.pi = None if v["pi"] is None else np.asarray(v["pi"], dtype=float)
         self._u = perpendicular_basis(model.robot.gravity)

@@ -51,6 +51,7 @@ SHARED_REASON = ("needs the shared test data (../shared beside the repository, o
                  "holding models/ and ident/; see docs/development/tests-and-data.md)")
 DOCS_TOOLS = ("sphinx", "myst_parser", "numpydoc", "sphinxarg", "furo")
 HAVE_DOCS = all(importlib.util.find_spec(m) is not None for m in DOCS_TOOLS)
-DOCS_REASON = "needs the documentation tools (pip install -e '.[docs]': Sphinx, MyST, numpydoc, sphinx-argparse, furo)"
+DOCS_REASON = ("needs the documentation tools (pip install -e '.[test]', which holds the docs extra: Sphinx, MyST, "
+               "numpydoc, sphinx-argparse, furo)")
 
 CHROMIUM_REASON = "needs a system Chromium for the HTML checks (Debian: apt-get install chromium)"

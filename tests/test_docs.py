@@ -177,6 +177,36 @@ def test_every_page_is_in_the_site_and_every_readme_link_resolves():
     assert links and all((REPO / link).exists() for link in links), [x for x in links if not (REPO / x).exists()]
 
 
+def test_ci_installs_with_the_readme_command_and_builds_the_site_in_its_test_run():
+    """``.ci/run`` installs with the README's second set-up command as written, and that install holds the
+    documentation tools (the ``test`` extra reaches every requirement of the ``docs`` extra), so the run of
+    every test it makes (slow ones too, skips as failures) builds the site strictly."""
+    import tomllib
+
+    ci = (REPO / ".ci" / "run").read_text(encoding="utf-8")
+    install = _blocks(README)[0][2][1].split("&&")[0].strip()
+    assert re.search(rf"^{re.escape(install)}$", ci, re.M), f".ci/run does not run the README's {install!r}"
+    assert re.search(r'^python -m pytest -q -m "slow or not slow"$', ci, re.M)
+    assert re.search(r"^export BASEPARAMS_REQUIRE_ALL=1$", ci, re.M)
+    extras = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["project"]["optional-dependencies"]
+    extra = re.search(r"\[(\w+)\]", install).group(1)
+
+    def reached(name: str, seen=()) -> set[str]:
+        out = set()
+        for req in extras[name]:
+            inner = re.fullmatch(r"baseparams\[([\w,]+)\]", req)
+            if inner:
+                for sub in set(inner.group(1).split(",")) - set(seen):
+                    out |= {sub} | reached(sub, (*seen, name))
+            else:
+                out.add(re.split(r"[<>=\[;]", req)[0].strip().lower())
+        return out
+
+    got = reached(extra)
+    assert {"sphinx", "myst-parser", "numpydoc", "sphinx-argparse", "furo"} <= got, got
+    assert reached("docs") - {"docs"} <= got, reached("docs") - got
+
+
 # ---------------------------------------------------------------- the site builds strictly
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):

@@ -234,9 +234,10 @@ def plan_identify(model, log, keywords: dict, reporter: Reporter | None = None) 
     Raises
     ------
     BaseparamsError
-        The first keyword refused, in one line naming it: an option (:class:`IdentOptions`), an
-        input of the wrong type, an output (suffix, folder, an input, two outputs onto one file),
-        an export that cannot be honoured, validation outputs without validation data.
+        The first keyword refused, in one line naming it: an option
+        (:class:`~baseparams.ident.options.IdentOptions`), an input of the wrong type, an output
+        (suffix, folder, an input, two outputs onto one file), an export that cannot be honoured,
+        validation outputs without validation data.
     """
     from ..arguments import ArgumentTypeError, check_choice, check_keywords, check_progress
     from ..ident.options import IdentOptions

@@ -85,20 +85,54 @@ def _face_page(name: str, seen: set[int]) -> str:
 def _shadowed(name: str) -> bool:
     """A module whose package's attribute of the same name is something else.
 
-    ``baseparams.regressor`` is the front door's function, ``baseparams.nullspace.drng`` the
-    package's: the function keeps the name's entry, the module's page is not indexed.
+    ``baseparams.regressor`` is the front door's function, ``baseparams.workflow.identify`` the
+    package's: the function keeps the name's entry, the module's own entry is not indexed (its
+    members are). The module is imported first: a submodule nothing has imported yet is no
+    attribute of its package, and is not shadowed.
     """
     parent, _, leaf = name.rpartition(".")
     if not parent:
         return False
+    importlib.import_module(name)
     return not isinstance(getattr(importlib.import_module(parent), leaf, None), types.ModuleType)
 
 
+def _members(name: str, skip: set[str]) -> list[tuple[str, str]]:
+    """``(kind, name)`` of what ``automodule`` documents of a module, in source order.
+
+    The classes and functions it defines (private ones too) and its data with a ``#:`` comment or a
+    docstring.
+    """
+    from sphinx.pycode import ModuleAnalyzer
+
+    module = importlib.import_module(name)
+    analyzer = ModuleAnalyzer.for_module(name)
+    documented = {attr for (owner, attr) in analyzer.find_attr_docs() if owner == ""}
+    out = []
+    for attr, obj in vars(module).items():
+        if attr.startswith("__") or attr in skip:
+            continue
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            if getattr(obj, "__module__", None) == name:
+                out.append(("class" if inspect.isclass(obj) else "function", attr))
+        elif attr in documented:
+            out.append(("data", attr))
+    order = analyzer.tagorder
+    return sorted(out, key=lambda m: order.get(m[1], len(order)))
+
+
 def _room_page(name: str, skip: set[str]) -> str:
+    if _shadowed(name):  # the module's entry would collide with the function's: its members one by one
+        text = _title(f"``{name}``") + f".. automodule:: {name}\n   :no-index:\n   :no-members:\n\n"
+        text += f".. currentmodule:: {name}\n\n"
+        for kind, attr in _members(name, skip):
+            text += f".. auto{kind}:: {name}.{attr}\n"
+            if kind == "class":
+                text += "   :members:\n   :undoc-members:\n   :private-members:\n"
+            text += "\n"
+        return text
     text = (_title(f"``{name}``") + f".. automodule:: {name}\n   :members:\n   :undoc-members:\n"
             "   :private-members:\n   :ignore-module-all:\n")
-    if _shadowed(name):
-        text += "   :no-index:\n"
     if skip:
         text += f"   :exclude-members: {', '.join(sorted(skip))}\n"
     return text + "\n"

@@ -251,6 +251,7 @@ def test_the_api_reference_is_the_package(site):
     """The front door's names, each documented subpackage's face and every module behind them have pages."""
     import html
     import importlib
+    import inspect
     import pkgutil
 
     import baseparams
@@ -268,10 +269,20 @@ def test_the_api_reference_is_the_package(site):
     ident = html.unescape(re.sub(r"<[^>]+>", "", (api / "baseparams.ident.html").read_text(encoding="utf-8")))
     for name in importlib.import_module("baseparams.ident").__all__:
         assert f"baseparams.ident.{name}" in ident, name
+    exported = {id(getattr(m, n)) for m in [baseparams, *(getattr(baseparams, f) for f in faces)]
+                for n in getattr(m, "__all__", ())}
     for module in pkgutil.walk_packages(baseparams.__path__, "baseparams."):
         if module.name != "baseparams.__main__":
             name = module.name
             assert (api / f"{name}.html").exists() or (api / "internals" / f"{name}.html").exists(), name
+            page = (api / f"{name}.html") if (api / f"{name}.html").exists() else (api / "internals" / f"{name}.html")
+            text = page.read_text(encoding="utf-8")
+            # what a module defines has its anchor on the module's page (a class a face exports: on the face's),
+            # a module whose name its package gives to a function too (baseparams.workflow.identify)
+            for attr, obj in vars(importlib.import_module(name)).items():
+                if (not attr.startswith("_") and (inspect.isclass(obj) or inspect.isfunction(obj))
+                        and obj.__module__ == name and id(obj) not in exported):
+                    assert f'id="{name}.{attr}"' in text, f"{name}.{attr}: no entry on {page.name}"
 
 
 @pytest.mark.slow

@@ -8,6 +8,7 @@ generated from the numpydoc docstrings (autodoc + autosummary + numpydoc), the C
 
 from __future__ import annotations
 
+import builtins
 import re
 import sys
 from pathlib import Path
@@ -72,8 +73,10 @@ def _generate(app) -> None:
 _OUTSIDE = ("numpy", "np", "scipy", "ast", "os", "enum", "importlib", "tomllib", "typing", "collections", "pathlib",
             "dataclasses", "argparse", "zipfile", "io", "json", "math", "warnings", "dask", "distributed", "cvxpy",
             "clarabel", "sympy", "mujoco", "pinocchio", "pyarrow", "matplotlib", "rosbags", "numba", "xacro", "pandas")
+# Python's own names (KeyboardInterrupt, SystemExit, ValueError, len, ...): the standard library is not linked either
+_BUILTINS = sorted(n for n in dir(builtins) if not n.startswith("_"))
 nitpick_ignore_regex = [("py:.*", rf"({'|'.join(_OUTSIDE)})(\..*)?"),
-                        ("py:(func|class|obj)", r"(repr|str|int|float|bool|dict|list|tuple|object|Exception)")]
+                        ("py:(func|class|obj|exc|meth|data)", rf"(builtins\.)?({'|'.join(_BUILTINS)})(\..*)?")]
 
 
 def _lookup(path: str) -> str | None:

@@ -337,7 +337,7 @@ def test_keywords_are_the_cli_flags(name):
 
 @pytest.fixture(scope="module")
 def loop(tmp_path_factory):
-    """design -> record (simulated) -> identify -> export, as the README's first screen, in a scratch folder."""
+    """design -> record (simulated) -> identify -> export, as docs/tutorials/the-loop.md, in a scratch folder."""
     folder = tmp_path_factory.mktemp("loop")
     robot = baseparams.load("puma560")
     traj = baseparams.excite(robot, period=5, rate=100, harmonics=3, grid=24, starts=1, out=folder / "traj.csv")

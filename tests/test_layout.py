@@ -288,7 +288,7 @@ def test_parameter_count_check_sees_long_signatures(tmp_path):
 
 #: what the repository's root holds (tracked): anything else there is a stray file (a report written by hand,
 #: a log) and belongs in a folder, in .gitignore, or nowhere
-ROOT_ENTRIES = {".ci", ".gitignore", "README.md", "benchmarks", "conftest.py", "docs", "pyproject.toml", "src", "tests"}
+ROOT_ENTRIES = {".ci", ".gitignore", "README.md", "benchmarks", "docs", "pyproject.toml", "src", "tests"}
 #: untracked entries the tools make at the root (.gitignore's, caches): left out when git cannot be asked
 GENERATED = {".git", ".venv", ".venv-ci", "build", "dist", "__pycache__", ".pytest_cache", ".hypothesis", ".ruff_cache",
              "MUJOCO_LOG.TXT"}

@@ -15,26 +15,26 @@ One function per subcommand of the command line, with its flags as keywords (``-
 is ``base_frequency=``, ``--analysis-samples`` is ``analysis_samples=``); a ``model`` is a
 :class:`Robot`, an :class:`Analysis`, a built-in name or a robot file.
 
-load(model, floating=False, gravity=None, strict_inertia=False, mocap_welds='drop')
+``load(model, floating=False, gravity=None, strict_inertia=False, mocap_welds='drop')``
     A :class:`Robot` from a built-in name (``baseparams.robots.BUILTINS``) or a file (URDF,
     URDF+, MJCF); notes about the file are :class:`ModelWarning` warnings.
-analyze(robot, *, samples=None, seed=0, verify=True, rows="all", convention="khalil", ...)
+``analyze(robot, *, samples=None, seed=0, verify=True, rows="all", convention="khalil", ...)``
     DRNG, numerical certification, regrouping: an :class:`Analysis` (``baseparams analyze``).
-analyze_symbolic(table, *, convention="khalil", seed=0, verify=True)
+``analyze_symbolic(table, *, convention="khalil", seed=0, verify=True)``
     Base parameters as formulas in a DH table's symbols (``analyze --symbolic``; SymPy, the
     extra ``symbolic``, imported only then).
-regressor(robot, q, dq, ddq)
+``regressor(robot, q, dq, ddq)``
     The TP regressor ``(S, dof, 10 n)``, ``paper`` convention (``baseparams regressor``).
-excite(model, *, harmonics=5, period=None, rate=1000.0, criterion="cond", drives=False, ..., out=None)
+``excite(model, *, harmonics=5, period=None, rate=1000.0, criterion="cond", drives=False, ..., out=None)``
     Design an excitation trajectory: an :class:`Excitation` (``.trajectory``, ``.save(path)``).
-simulate(model, trajectory=None, *, noise=0.0, seed=0, rotor=False, ..., out=None)
+``simulate(model, trajectory=None, *, noise=0.0, seed=0, rotor=False, ..., out=None)``
     Record without a robot: ``(log, truth)``, a synthetic joint log with the model's own
     parameters as the truth.
-identify(model, log, *, holdout=None, validate=None, method="auto", friction=..., ..., save=None)
+``identify(model, log, *, holdout=None, validate=None, method="auto", friction=..., ..., save=None)``
     Base-parameter and drive values from a joint log: an :class:`Identification`
     (``.values``, ``.std``, ``.save(path)``, ``Identification.load(path, robot)``,
     ``.predict(log)``, ``.compare_truth(truth)``).
-predict(model, result, log, *, raw_states=False)
+``predict(model, result, log, *, raw_states=False)``
     Joint torques ``(S, m)`` of a log from an identification or its saved file.
 identify_payload(model, log, *, link, result=None, validate=None, save=None, urdf=None, mjcf=None, ...)
     What the robot carries on a link: a :class:`Payload` (``.mass``, ``.com``, ``.inertia_com`` in

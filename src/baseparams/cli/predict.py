@@ -14,7 +14,8 @@ from .parser import model_args
 
 #: the flags named otherwise than :func:`baseparams.predict`'s keywords
 KEYWORDS: dict = {}
-#: the flags that only say what is printed (``--score-cutoff``: a second RMS, :meth:`Prediction.scores`)
+#: the flags that only say what is printed (``--score-cutoff``: a second RMS,
+#: :meth:`~baseparams.workflow.identify.Prediction.scores`)
 CLI_ONLY = frozenset({"json", "score_cutoff"})
 
 

@@ -110,7 +110,7 @@ class Identification:
         smooth : bool
             Filtered states (default), or the states as logged.
         columns : str, path or dict, optional
-            A layout mapping for a log file (README "Log layout").
+            A layout mapping for a log file (docs/guides/log-layout.md).
 
         Returns
         -------
@@ -426,7 +426,7 @@ class Identification:
         return entry
 
     def to_json(self) -> dict:
-        """One JSON-able object (schema in the README's identification section).
+        """One JSON-able object (schema: docs/guides/identification.md, "JSON output").
 
         Returns
         -------

@@ -161,7 +161,7 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     """A synthetic joint log, with its true model parameters.
 
     A floating base moves too: its position [m] and Z-Y-X angles [rad] follow Fourier series like
-    the joints (``amplitude`` each); the log holds its pose and twist (README "Log layout") and
+    the joints (``amplitude`` each); the log holds its pose and twist (docs/guides/log-layout.md) and
     the torques of the joints alone (the base wrench that carries it is not measured), the
     truth the base parameters those torques determine.
 

@@ -47,7 +47,7 @@ def _cross(a0, a1, a2, b0, b1, b2):
 
 @njit(cache=CACHE, inline="always")
 def _exp_screw(sw, theta, er, et):
-    """``exp(screw^ theta)``: rotation ``er (3, 3)``, translation ``et (3,)`` (|omega| = 1 or 0).
+    """``exp(screw^ theta)``: rotation ``er (3, 3)``, translation ``et (3,)`` (``|omega|`` = 1 or 0).
 
     Rodrigues: ``R = I + s K + c K^2``, ``t = theta v + c (w x v) + (theta - s) w x (w x v)``
     with ``K = [w]x``, ``K^2 = w w^T - |w|^2 I``, ``s = sin(theta)``, ``c = 1 - cos(theta)``.

@@ -37,7 +37,7 @@ class Inputs:
     validate : JointLog, str or path, optional
         Another log to validate on (exclusive with ``holdout``).
     columns : str, path or dict, optional
-        A layout mapping for log files (TOML; README "Log layout").
+        A layout mapping for log files (TOML; docs/guides/log-layout.md).
     joints : str or sequence of str, optional
         Identify these joints only (``"A,B"``); every other joint is welded
         (:func:`baseparams.ident.subchain.subchain`).
@@ -133,7 +133,7 @@ def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["hol
         The robot the log was recorded on (a floating base's pose in the log; loops closed by the
         actuated joints; a file for ``urdf``/``mjcf``).
     log : JointLog, str or path
-        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout").
+        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; docs/guides/log-layout.md).
     holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, prior_weight, \
 convention, covariance, score_cutoff, allow_units, analysis_samples, literal, terms, seed, effort, gain_anchor
         The identification's options (:class:`~baseparams.ident.options.IdentOptions`: the
@@ -237,9 +237,10 @@ def plan_identify(model, log, keywords: dict, reporter: Reporter | None = None) 
     Raises
     ------
     BaseparamsError
-        The first keyword refused, in one line naming it: an option (:class:`IdentOptions`), an
-        input of the wrong type, an output (suffix, folder, an input, two outputs onto one file),
-        an export that cannot be honoured, validation outputs without validation data.
+        The first keyword refused, in one line naming it: an option
+        (:class:`~baseparams.ident.options.IdentOptions`), an input of the wrong type, an output
+        (suffix, folder, an input, two outputs onto one file), an export that cannot be honoured,
+        validation outputs without validation data.
     """
     from ..arguments import ArgumentTypeError, check_choice, check_keywords, check_progress
     from ..ident.options import IdentOptions

@@ -47,8 +47,16 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
                     WLS, physical (``benchmarks/cross_recording.py``).
 * ``generalization``  issue 48: train on one motion, predict another (simulated recorder-filtered arms, the Panda
                     and TX40 logs, both directions), against an outsider's plain OLS on every sample.
+* ``currents``      issue 50: identification from motor currents with unknown gains: a simulated 7-DoF arm (held-out
+                    joint-side torques against its sensors: one catalogue gain as the anchor, every catalogue gain, OLS
+                    given the catalogue gains, a fit on the sensors) and the TX40's motor-side log
+                    (``benchmarks/currents.py``).
 * ``model_terms``   the Panda's held-out 5 Hz figure per model class: linear, + pre-sliding friction,
                     + tilt, + delay, + scale, and the terms cross-validation keeps.
+* ``payload``       issue 49: a 3.2 kg payload off-axis and rotated on a MuJoCo-simulated Panda (armature,
+                    damping, friction loss, a servo, 1.5 % AR(1) noise), full-arm and wrist-only motions, the
+                    robot known from its URDF, an MJCF, or the project's identification of a payload-free log:
+                    mass, centre-of-mass and inertia errors, 2-sigma coverage, time (``benchmarks/payload.py``).
 * ``report``        the HTML analysis report (Puma560, talos_full_v2): generation time, size, and the
                     page's own render time in headless Chromium (``data-render-ms``).
 
@@ -1293,6 +1301,42 @@ def bench_model_terms(out: dict, quick: bool) -> None:
     out["panda_default_seconds"] = next(r["seconds"] for r in rows if r["label"].startswith("default (terms"))
 
 
+def bench_currents(out: dict, quick: bool) -> None:
+    """Issue 50 (``benchmarks/currents.py``): identification from motor currents with unknown gains, the acceptance's
+    simulated analogue (a 7-DoF arm, held-out joint-side torques against its sensors) and the TX40's motor-side log."""
+    import currents as cu
+
+    result = cu.run(quick)
+    if not result:
+        log("  currents: no ../shared (skipped)")
+        return
+    log("\n" + cu.table(result))
+    arm = result["arm"]
+    for r in arm:
+        for k in ("one_shoulder", "one_median", "one_best", "one_worst", "every", "exact", "ols_catalogue",
+                  "sensor_fit", "ratio_error", "naive_smallest", "seconds"):
+            out[f"currents_arm_seed{r['seed']}_{k}"] = r[k]
+        out[f"currents_arm_seed{r['seed']}_undetermined"] = ", ".join(r["undetermined"]) or "-"
+    for k in ("one_shoulder", "one_median", "every", "exact", "ols_catalogue", "sensor_fit", "seconds"):
+        out[f"currents_arm_median_{k}"] = statistics.median(r[k] for r in arm)
+    z = np.concatenate([r["z"] for r in arm])
+    out["currents_arm_z_rms"] = float(np.sqrt(np.mean(z**2)))
+    out["currents_arm_z_within_2"] = float(np.mean(np.abs(z) < 2))
+    out["currents_arm_z_count"] = int(len(z))
+    out["currents_arm_shoulder_beats_ols"] = sum(r["one_shoulder"] <= r["ols_catalogue"] for r in arm)
+    out["currents_arm_every_beats_ols"] = sum(r["every"] <= r["ols_catalogue"] for r in arm)
+    out["currents_arm_seeds"] = len(arm)
+    tx = result.get("tx40")
+    if tx is not None:
+        for j in range(6):
+            out[f"currents_tx40_ratio_j{j + 1}"] = tx["ratio"][j]
+            out[f"currents_tx40_rel_std_j{j + 1}"] = tx["rel_std"][j]
+            out[f"currents_tx40_current_rms_j{j + 1}"] = tx["current_rms"][j]
+            out[f"currents_tx40_torque_fit_current_rms_j{j + 1}"] = tx["torque_fit_current_rms"][j]
+        out["currents_tx40_undetermined"] = ", ".join(sorted(tx["undetermined"])) or "-"
+        out["currents_tx40_seconds"] = tx["seconds"]
+
+
 def bench_scale_logs(out: dict, quick: bool) -> None:
     """Long logs (issue 41): ``benchmarks/scale_logs.py``'s figures."""
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -1301,9 +1345,18 @@ def bench_scale_logs(out: dict, quick: bool) -> None:
     run(out, quick, log)
 
 
+def bench_payload(out: dict, quick: bool) -> None:
+    """Payload identification (issue 49): the acceptance scenario simulated by MuJoCo (``benchmarks/payload.py``)."""
+    import payload
+
+    out.update(payload.run(quick, log))
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
+    "payload": bench_payload,
     "cross_recording": bench_cross_recording,
     "generalization": bench_generalization,
+    "currents": bench_currents,
     "model_terms": bench_model_terms,
     "files": bench_files,
     "hands": bench_hands,

@@ -1,7 +1,7 @@
 """Where the third-party test data live, found without asking git.
 
 The shared folder holds robot files and real logs written by others (``models/``, ``ident/``;
-see the README's "Test data"). It is never copied into the repository: tests read it where it
+see docs/development/tests-and-data.md). It is never copied into the repository: tests read it where it
 is. In order: ``$BASEPARAMS_SHARED`` (when set, only that folder), ``../shared`` beside the
 repository, then every parent folder of the repository for a ``shared`` folder holding
 ``models/``.
@@ -14,6 +14,7 @@ that nothing is skipped silently in CI.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 from pathlib import Path
@@ -41,8 +42,16 @@ SHARED = (ROOT if ROOT is not None else REPO.parent / "shared") / "models"
 #: real identification logs recorded by others
 IDENT = SHARED.parent / "ident"
 
+#: ``BASEPARAMS_REQUIRE_ALL=1`` (``.ci/run``): a test that would skip for a missing resource fails instead
+STRICT = os.environ.get("BASEPARAMS_REQUIRE_ALL", "") not in ("", "0")
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 SHARED_REASON = ("needs the shared test data (../shared beside the repository, or BASEPARAMS_SHARED=DIR "
-                 "holding models/ and ident/; see the README's 'Test data')")
+                 "holding models/ and ident/; see docs/development/tests-and-data.md)")
+DOCS_TOOLS = ("sphinx", "myst_parser", "numpydoc", "sphinxarg", "furo")
+HAVE_DOCS = all(importlib.util.find_spec(m) is not None for m in DOCS_TOOLS)
+DOCS_REASON = ("needs the documentation tools (pip install -e '.[test]', which holds the docs extra: Sphinx, MyST, "
+               "numpydoc, sphinx-argparse, furo)")
+
 CHROMIUM_REASON = "needs a system Chromium for the HTML checks (Debian: apt-get install chromium)"

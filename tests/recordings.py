@@ -163,3 +163,47 @@ def recorder_motion(robot, seconds: float, rate: float, rng, base_frequency: flo
     e = rng.normal(size=(len(idx), robot.dof))
     e = lfilter([np.sqrt(1 - ar**2)], [1, -ar], e, axis=0)
     return replace(log, t=t[idx], q=q[idx], dq=None, ddq=None, tau=tau[idx] + noise * e)
+
+
+@dataclass
+class Motors:
+    """The motors behind an arm without joint-torque sensors (issue 50).
+
+    ``gains`` [N m/A at the joint side] per motor; ``rotor`` the reflected rotor inertia per joint
+    [kg m^2]; ``matrix`` the transmission ``C`` (joints x motors: ``tau = C diag(k) i``; None: the
+    identity); ``noise`` the current noise as a torque [N m] per motor (AR(1) with ``ar``);
+    ``sensor_noise`` [N m] of the joint-torque sensors after the gears (white).
+    """
+
+    gains: np.ndarray
+    rotor: np.ndarray
+    matrix: np.ndarray | None = None
+    noise: float = 0.05
+    ar: float = 0.0
+    sensor_noise: float = 0.0
+
+
+def record_currents(plant: Plant, motors: Motors, t, q, dq, ddq, rng, name: str = "sim") -> JointLog:
+    """A recording of currents and of joint-torque sensors after the gears, written apart from the estimator.
+
+    The sensor reads the rigid body's torque (the plant's true robot, gravity tilted as the plant
+    says), plus its noise. The motors make it plus what lies before the sensor: each joint's rotor
+    inertia ``Ia ddq`` and the plant's friction (Dahl's pre-sliding when the plant has it); the
+    currents are ``diag(k)^-1 C^-1`` of that, plus AR(1) noise (``motors.noise / |k|`` amperes).
+    """
+    from scipy.spatial.transform import Rotation
+
+    r = plant.robot
+    g = Rotation.from_rotvec(plant.tilt).apply(r.gravity) if np.any(plant.tilt) else r.gravity
+    truth = replace(r, gravity=g)
+    rigid = baseparams.regressor(truth, q, dq, ddq) @ truth.parameters("paper")
+    coul = dahl_ode(q, plant.dahl) if plant.dahl > 0 else np.sign(dq)
+    motor_side = rigid + motors.rotor * ddq + plant.Fv * dq + plant.Fc * coul + plant.Fo
+    c = np.eye(r.dof) if motors.matrix is None else np.asarray(motors.matrix, dtype=float)
+    cur = np.linalg.solve(c, motor_side.T).T / motors.gains
+    e = rng.normal(size=cur.shape)
+    if motors.ar:
+        e = lfilter([np.sqrt(1 - motors.ar**2)], [1, -motors.ar], e, axis=0)
+    cur = cur + e * motors.noise / np.abs(motors.gains)
+    tau = rigid + motors.sensor_noise * rng.normal(size=rigid.shape)
+    return JointLog(t, tuple(r.joint_names), q, tau, dq=dq, source=name, cur=cur)

@@ -23,7 +23,8 @@ from paths import SHARED
 SRC = str(Path(baseparams.__file__).resolve().parents[1])
 PUBLIC = {"Analysis", "BaseparamsError", "CONVENTIONS", "Inertia", "ModelError", "ModelWarning", "Robot",
           "RobotBuilder", "analyze", "load", "pose", "regressor", "__version__",
-          "Excitation", "Identification", "analyze_symbolic", "excite", "identify", "predict", "simulate"}
+          "Excitation", "Identification", "analyze_symbolic", "excite", "identify", "predict", "simulate",
+          "identify_payload"}
 #: what ``import baseparams`` must not import (the functions that need them do)
 HEAVY = ("scipy", "mujoco", "pinocchio", "cvxpy", "clarabel", "sympy", "matplotlib", "dask", "distributed", "numba",
          "pyarrow", "pandas")
@@ -310,7 +311,7 @@ def test_every_subcommand_has_its_function():
     from baseparams.cli import build_parser
 
     sub = next(a for a in build_parser()._actions if a.dest == "command")  # noqa: SLF001
-    assert set(sub.choices) == {"robots", *LOOP}
+    assert set(sub.choices) == {"robots", "payload", *LOOP}  # payload: identify_payload (tests/test_payload.py)
     for name in LOOP:
         assert callable(getattr(baseparams, name)) and name in baseparams.__all__ and name in dir(baseparams)
     assert "puma560" in baseparams.robots.BUILTINS  # ``baseparams robots``
@@ -336,7 +337,7 @@ def test_keywords_are_the_cli_flags(name):
 
 @pytest.fixture(scope="module")
 def loop(tmp_path_factory):
-    """design -> record (simulated) -> identify -> export, as the README's first screen, in a scratch folder."""
+    """design -> record (simulated) -> identify -> export, as docs/tutorials/the-loop.md, in a scratch folder."""
     folder = tmp_path_factory.mktemp("loop")
     robot = baseparams.load("puma560")
     traj = baseparams.excite(robot, period=5, rate=100, harmonics=3, grid=24, starts=1, out=folder / "traj.csv")

@@ -203,3 +203,27 @@ def test_strict_fleet_and_a_fleet_of_only_bad_logs_exit_2(mixed_fleet, capsys, t
     code, _, err = _fleet_cli(tmp_path, capsys)
     errors = [ln for ln in err if "error:" in ln]
     assert code == 2 and len(errors) == 1 and "no usable log: all 3 skipped" in errors[0]
+
+
+@pytest.mark.slow
+def test_a_fleet_log_in_degrees_is_refused_unless_allow_units_and_then_said(tmp_path):
+    """Issue 51: the fleet read its logs without ``allow_units``: a log the single-log path accepts with
+    --allow-units was skipped by the fleet whatever the flag. Now the flag reaches the reader and its
+    WARNING comes back in the file's info."""
+    from baseparams.errors import DataError
+    from baseparams.ident.options import IdentOptions
+
+    robot = baseparams.load("puma560")
+    model = ident_model(baseparams.analyze(robot), rotor=False)
+    path = simulate_fleet(robot, tmp_path, robots=1, duration=4.0, rate=500.0, seed=5)[0]
+    with np.load(path) as z:
+        table = {k: (np.degrees(z[k]) + 30.0 if k.startswith("q_") else z[k]) for k in z.files}  # beyond 4 pi
+    degrees = tmp_path / "degrees.npz"
+    np.savez(degrees, **table)
+    with pytest.raises(DataError, match="allow-units"):
+        file_factors(str(degrees), model)
+    acc, info = file_factors(str(degrees), model, IdentOptions(allow_units=True))
+    assert acc.samples > 0 and info["read"] == len(table["t"])
+    assert len(info["warnings"]) == 1 and "units: WARNING" in info["warnings"][0]
+    _, plain = file_factors(str(path), model)
+    assert plain["warnings"] == []

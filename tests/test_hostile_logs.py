@@ -234,7 +234,7 @@ def _to_world(cols, part):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_a_base_twist_in_the_world_frame_is_refused_with_the_figures(tmp_path, seed):
-    """Property: a random floating robot's log with a noisy base-frame twist (as the README asks) reads without a
+    """Property: a random floating robot's log with a noisy base-frame twist (docs/guides/log-layout.md) reads without a
     word; the same twist expressed in the world frame (linear, angular or both) is refused in one line naming
     the columns, with both figures; a gyro in degree/s (neither frame) gets a note with its figure."""
     robot, cols = _floating_columns(seed)

@@ -374,7 +374,7 @@ _SLOW_AFTER_A_LINE = """
 import time
 import baseparams.cli.common as common
 import baseparams.ident.stream as stream
-_said, _call, _check = [], common.Progress.__call__, stream.Interrupts.check
+_said, _call, _check = [], common.Progress.__call__, stream.Interrupts.check  # the class of baseparams.interrupts
 def _call_and_mark(self, msg):  # a line printed: the next check waits longer than any signal's delay
     _said.append(1)
     return _call(self, msg)
@@ -387,7 +387,18 @@ common.Progress.__call__, stream.Interrupts.check = _call_and_mark, _check_slowl
 """
 
 
-def _interrupted(streamed, tmp_path, marker=None, delay=0.0, sig=None, preamble=""):
+_SLOW_LINES = """
+import time
+import baseparams.cli.common as common
+_call = common.Progress.__call__
+def _call_slowly(self, msg):  # every progress line followed by a pause longer than any signal's delay
+    _call(self, msg)
+    time.sleep(0.6)
+common.Progress.__call__ = _call_slowly
+"""
+
+
+def _interrupted(streamed, tmp_path, marker=None, delay=0.0, sig=None, preamble="", stream="on"):
     """``identify --stream on`` with every output in a subprocess, signalled ``delay`` s after the progress line
     containing ``marker``: ``(exit code, stderr, files left in the output folder, files left in TMPDIR)``."""
     import signal
@@ -396,7 +407,7 @@ def _interrupted(streamed, tmp_path, marker=None, delay=0.0, sig=None, preamble=
     out, tmp = tmp_path / "out", tmp_path / "tmp"
     out.mkdir()
     tmp.mkdir()
-    argv = ["identify", "puma560", str(streamed), "-v", "--stream", "on", "--holdout", "15", "--save",
+    argv = ["identify", "puma560", str(streamed), "-v", "--stream", stream, "--holdout", "15", "--save",
             str(out / "r.json"), "--predictions", str(out / "p.csv"), "--html", str(out / "r.html")]
     code = preamble + f"\nimport sys\nfrom baseparams.cli import main\nsys.exit(main({argv!r}))\n"
     env = {**os.environ, "TMPDIR": str(tmp), "OPENBLAS_NUM_THREADS": "1"}
@@ -434,12 +445,29 @@ def test_an_interrupt_at_any_moment_of_a_streamed_run_leaves_nothing(streamed, t
     import signal
 
     from baseparams.cli import EXIT_INTERRUPTED
-    from baseparams.ident.stream import EXIT_TERMINATED
+    from baseparams.interrupts import EXIT_TERMINATED
 
     # every line shown at once (-v) and the step after it slowed (a fast machine finished the run before the signal)
     rc, err, left, tmp = _interrupted(streamed, tmp_path, marker, delay, getattr(signal, name), _SLOW_AFTER_A_LINE)
     assert rc == (EXIT_INTERRUPTED if name == "SIGINT" else EXIT_TERMINATED), (rc, err[-800:])
     assert "Traceback" not in err and left == [] and tmp == [], (left, tmp, err[-500:])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, marker", [("SIGINT", "validating on"), ("SIGTERM", "reading"),
+                                          ("SIGTERM", "cross-validating tilt")])
+def test_an_interrupt_of_a_run_read_whole_leaves_nothing(streamed, tmp_path, name, marker):
+    """Issue 51: outside a streamed run SIGTERM ended the process at once (exit -15, an output's temporary
+    file left behind, nothing said). The command line's guard: exit 130 (143), one line, no file left."""
+    import signal
+
+    from baseparams.cli import EXIT_INTERRUPTED
+    from baseparams.interrupts import EXIT_TERMINATED
+
+    rc, err, left, tmp = _interrupted(streamed, tmp_path, marker, 0.1, getattr(signal, name), _SLOW_LINES, "off")
+    said = "baseparams: interrupted" if name == "SIGINT" else "baseparams: terminated (SIGTERM)"
+    assert rc == (EXIT_INTERRUPTED if name == "SIGINT" else EXIT_TERMINATED), (rc, err[-800:])
+    assert said in err and "Traceback" not in err and left == [] and tmp == [], (left, tmp, err[-500:])
 
 
 def test_an_uninterrupted_streamed_run_writes_every_output(streamed, tmp_path):

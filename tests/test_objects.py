@@ -18,7 +18,8 @@ from baseparams.display import MAX_REPR, format_number, summary_repr, text_table
 from baseparams.ident import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.robots import BUILTINS
-from conftest import STRICT
+
+from paths import STRICT
 
 PKG = Path(baseparams.__file__).resolve().parent
 NOISE = re.compile(r"9{6,}|0{6,}")

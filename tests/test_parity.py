@@ -45,12 +45,15 @@ def no_work(monkeypatch):
     monkeypatch.setattr(sys.modules["baseparams.workflow.identify"], "_run_identification", _stop)
     monkeypatch.setattr("baseparams.ident.Identification.load", _stop)
     monkeypatch.setattr("baseparams.analysis.regressor", _stop)
+    monkeypatch.setattr(sys.modules["baseparams.workflow.payload"], "_run", _stop)  # payload: after the link's check
+    monkeypatch.setattr("baseparams.excitation.payload.excite_payload", _stop)  # excite payload=
 
 
 #: flags whose keyword is the negation of the flag (``--no-verify`` is ``verify=False``)
 INVERTED = {"no_verify", "paper_only"}
 
-#: text options: ``(Python value, command-line tokens)`` per case (a path "{d}" in the test's folder)
+#: text options: ``(Python value, command-line tokens)`` per case (a path "{d}" in the test's folder); keyed by
+#: ``(command, keyword)`` where two commands' keywords of one name differ
 TEXT = {
     "friction": [("viscous,offset", ["viscous,offset"]), ("sticky", ["sticky"]), ("none", ["none"])],
     "terms": [("none", ["none"]), ("wobble", ["wobble"]), ("dahl,tilt", ["dahl,tilt"])],
@@ -66,13 +69,22 @@ TEXT = {
     "package_path": [(["{d}"], ["{d}"])],
     "states": [("{d}/states.csv", ["{d}/states.csv"])],
     "velocity": [(1.5, ["1.5"]), (-1.0, ["-1"]), (math.nan, ["nan"])],
-    "effort": [(20.0, ["20"]), (math.inf, ["inf"])],
+    ("excite", "effort"): [(20.0, ["20"]), (math.inf, ["inf"])],  # identify's effort= is a choice
+    "gain_anchor": [("joint2=12.5", ["joint2=12.5"]), ("joint2=12.5,joint3=8", ["joint2=12.5,joint3=8"]),
+                    ("joint2", ["joint2"]), ("joint2=0", ["joint2=0"]), ("joint2=x", ["joint2=x"]),
+                    ("joint2=1,joint2=2", ["joint2=1,joint2=2"])],
     "position": [((-1.0, 1.0), ["-1:1"]), ((1.0, -1.0), ["1:-1"])],
     "acceleration": [(5.0, ["5"]), (-1.0, ["-1"]), (math.nan, ["nan"])],
     "keepout": [([("link2", 0.1)], ["link2:0.1"]), ([("nolink", 0.1)], ["nolink:0.1"])],
+    "link": [("link6", ["link6"]), ("joint3", ["joint3"]), ("nolink", ["nolink"])],
+    "payload": [("link3", ["link3"]), ("nolink", ["nolink"])],
+    "result": [("{d}/r.json", ["{d}/r.json"])],
+    "prior": [("{d}/prior.json", ["{d}/prior.json"]), ("{d}/missing.json", ["{d}/missing.json"]),
+              ("{d}/map.toml", ["{d}/map.toml"])],
 }
-#: the other options an option needs to mean anything (``weld`` with ``joints``)
-CONTEXT = {"weld": {"joints": "joint1,joint2"}, "predictions": {"holdout": 1.0}}
+#: the other options an option needs to mean anything (``weld`` with ``joints``), by option or by (command, option)
+CONTEXT = {"weld": {"joints": "joint1,joint2"}, "predictions": {"holdout": 1.0},
+           ("payload", "predictions"): {"validate": "{d}/other.csv"}, ("excite", "payload_noise"): {"payload": "link6"}}
 
 
 def _actions(command: str):
@@ -104,8 +116,10 @@ def _cases():
         module = command_module(command)
         renamed = getattr(module, "KEYWORDS", {})
         outputs = OUTPUTS.get(command, {})
+        choices = {**CHOICES, **getattr(module, "CHOICES", {})}  # a command's own over the shared (payload --method ls)
         for a in _actions(command):
-            if a.help == argparse.SUPPRESS or a.dest in ("help", "model", "data", "result", "log", "func"):
+            if a.help == argparse.SUPPRESS or a.dest in ("help", "func") or not a.option_strings and a.dest in (
+                    "model", "data", "result", "log"):
                 continue
             key = renamed.get(a.dest, a.dest)
             if a.dest in module.CLI_ONLY:
@@ -121,8 +135,10 @@ def _cases():
                 for v in _numbers(key, a.type):
                     tokens = [_text(v)] if a.nargs is None else ["0", "0", _text(v)]
                     out.append((command, key, a.dest, v if a.nargs is None else (0.0, 0.0, v), tokens))
-            elif key in CHOICES:
-                out += [(command, key, a.dest, v, [v]) for v in (*CHOICES[key], "nope")]
+            elif (command, key) in TEXT:
+                out += [(command, key, a.dest, v, list(t)) for v, t in TEXT[command, key]]
+            elif key in choices:
+                out += [(command, key, a.dest, v, [v]) for v in (*choices[key], "nope")]
             elif key in TEXT:
                 out += [(command, key, a.dest, v, list(t)) for v, t in TEXT[key]]
             else:
@@ -145,6 +161,8 @@ def files(tmp_path_factory):
     bp.simulate("puma560", duration=0.5, rate=100.0, out=d / "states.csv")
     bp.excite("puma560", harmonics=2, period=2, rate=50, starts=1, grid=40, out=d / "traj.csv")
     (d / "map.toml").write_text("")
+    (d / "prior.json").write_text('{"mass": 1.0, "com": [0, 0, 0.05], "inertia_com": [[0.01, 0, 0], [0, 0.01, 0], '
+                                  '[0, 0, 0.01]]}')
     return d
 
 
@@ -157,7 +175,7 @@ def _fill(value, d):
 
 
 DOORS = {"analyze": bp.analyze, "identify": bp.identify, "predict": bp.predict, "simulate": bp.simulate,
-         "excite": bp.excite}
+         "excite": bp.excite, "payload": bp.identify_payload}
 
 
 def _python(command: str, keywords: dict, d):
@@ -194,6 +212,8 @@ def _python(command: str, keywords: dict, d):
         return bp.predict("puma560", res, log, **keywords)
     if command == "simulate":
         return bp.simulate("puma560", **{"out": str(d / "sim.csv"), **keywords})
+    if command == "payload":
+        return bp.identify_payload("puma560", log, **{"link": "link6", **keywords})
     return bp.excite("puma560", **keywords)
 
 
@@ -201,13 +221,15 @@ def _argv(command: str, tokens: dict, d) -> list[str]:
     head = {"analyze": ["analyze", "puma560"], "regressor": ["regressor", "puma560"], "excite": ["excite", "puma560"],
             "identify": ["identify", "puma560", str(d / "log.csv")],
             "predict": ["predict", "puma560", str(d / "r.json"), str(d / "log.csv")],
-            "simulate": ["simulate", "puma560"]}[command]
+            "simulate": ["simulate", "puma560"], "payload": ["payload", "puma560", str(d / "log.csv")]}[command]
     flags = keyword_flags(command)
     argv = list(head)
     if command == "simulate":
         argv.append(tokens.pop("out", [str(d / "sim.csv")])[0])
     if command == "regressor" and "states" not in tokens and "out" in tokens:
         tokens["states"] = [str(d / "states.csv")]
+    if command == "payload" and "link" not in tokens:
+        tokens["link"] = ["link6"]
     for key, toks in tokens.items():  # a value starting with '-' after '=' (--position=-1:1)
         argv += [f"{flags[key]}={toks[0]}"] if len(toks) == 1 and toks[0].startswith("-") else [flags[key], *toks]
     return argv
@@ -239,7 +261,7 @@ def _cli_outcome(argv, capsys):
 
 def _tokens(command, key, dest, value, toks, d):
     """The case as Python keywords and command-line tokens, with the options it needs."""
-    context = CONTEXT.get(key, {})
+    context = {k: _fill(v, d) for k, v in CONTEXT.get((command, key), CONTEXT.get(key, {})).items()}
     keywords = {**context, key: _fill(value, d)}
     tokens = {k: [_text(v) if not isinstance(v, str) else v] for k, v in context.items()}
     tokens[key] = _fill(toks, d)
@@ -266,6 +288,12 @@ def test_the_cli_and_python_accept_and_refuse_alike(command, key, dest, value, t
     ("excite", {"out": "{d}/t.csv", "plot": "{d}/t.csv"}, "format comes from the suffix"),
     ("excite", {"period": 5.0, "base_frequency": 0.2}, "give --period or --base-frequency, not both"),
     ("identify", {"holdout": 1.0, "validate": "{d}/other.csv"}, "give --holdout SECONDS or --validate LOG, not both"),
+    ("payload", {"link": "link6", "predictions": "{d}/p.csv"}, "give --validate"),
+    ("payload", {"link": "link6", "save": "{d}/p.json", "urdf": "{d}/p.json"}, "--urdf"),
+    ("excite", {"payload": "link6", "base_frequency": 0.2}, "--base-frequency do not apply (--period does)"),
+    ("excite", {"payload_noise": 0.5}, "--payload-noise applies to --payload"),
+    ("identify", {"gain_anchor": "joint2=12.5", "effort": "torque"}, "--gain-anchor applies to motor currents "
+                                                                     "(--effort current), not to torques"),
 ])
 def test_the_issue_s_cases_refused_alike(command, keywords, words, files, no_work, capsys):
     """The issue's examples: two outputs onto one file, ``prior_weight`` without the physical fit (both doors)."""
@@ -286,7 +314,8 @@ def test_the_defaults_are_one():
         renamed = getattr(command_module(command), "KEYWORDS", {})
         for a in _actions(command):
             key = renamed.get(a.dest, a.dest)
-            if key not in sig or a.dest in INVERTED or not a.option_strings or a.help == argparse.SUPPRESS:
+            if (key not in sig or a.dest in INVERTED or not a.option_strings or a.help == argparse.SUPPRESS
+                    or a.required):
                 continue
             default, cli_default = sig[key].default, a.default
             if key == "friction":  # the flag's text: "viscous,coulomb,offset"

@@ -79,7 +79,9 @@ def test_panda_held_out_prediction(panda):
     ref = _pinocchio_ols(robot, train, test, cutoff, None)
     rms = _filtered_rms(ours, test, cutoff)
     assert rms <= 1.01 * ref  # at most the independent OLS (same data, same filter)
-    assert rms < 0.1  # Nm; the published parameter set gives ~0.30 on these samples
+    # N m; the published parameter set gives ~0.30 on these samples. Every held-out sample counts, the log's
+    # ends too since issue 48 (they were trimmed: 0.099 then), where the independent OLS scores ~0.102 as well
+    assert rms < 0.105
     # the reported validation: every held-out sample, against the raw measured torques
     v = ours.validation
     assert v["samples"] == test.n_samples

@@ -15,27 +15,34 @@ One function per subcommand of the command line, with its flags as keywords (``-
 is ``base_frequency=``, ``--analysis-samples`` is ``analysis_samples=``); a ``model`` is a
 :class:`Robot`, an :class:`Analysis`, a built-in name or a robot file.
 
-load(model, floating=False, gravity=None, strict_inertia=False, mocap_welds='drop')
+``load(model, floating=False, gravity=None, strict_inertia=False, mocap_welds='drop')``
     A :class:`Robot` from a built-in name (``baseparams.robots.BUILTINS``) or a file (URDF,
     URDF+, MJCF); notes about the file are :class:`ModelWarning` warnings.
-analyze(robot, *, samples=None, seed=0, verify=True, rows="all", convention="khalil", ...)
+``analyze(robot, *, samples=None, seed=0, verify=True, rows="all", convention="khalil", ...)``
     DRNG, numerical certification, regrouping: an :class:`Analysis` (``baseparams analyze``).
-analyze_symbolic(table, *, convention="khalil", seed=0, verify=True)
+``analyze_symbolic(table, *, convention="khalil", seed=0, verify=True)``
     Base parameters as formulas in a DH table's symbols (``analyze --symbolic``; SymPy, the
     extra ``symbolic``, imported only then).
-regressor(robot, q, dq, ddq)
+``regressor(robot, q, dq, ddq)``
     The TP regressor ``(S, dof, 10 n)``, ``paper`` convention (``baseparams regressor``).
-excite(model, *, harmonics=5, period=None, rate=1000.0, criterion="cond", drives=False, ..., out=None)
+``excite(model, *, harmonics=5, period=None, rate=1000.0, criterion="cond", drives=False, ..., out=None)``
     Design an excitation trajectory: an :class:`Excitation` (``.trajectory``, ``.save(path)``).
-simulate(model, trajectory=None, *, noise=0.0, seed=0, rotor=False, ..., out=None)
+``simulate(model, trajectory=None, *, noise=0.0, seed=0, rotor=False, ..., out=None)``
     Record without a robot: ``(log, truth)``, a synthetic joint log with the model's own
     parameters as the truth.
-identify(model, log, *, holdout=None, validate=None, method="auto", friction=..., ..., save=None)
+``identify(model, log, *, holdout=None, validate=None, method="auto", friction=..., ..., save=None)``
     Base-parameter and drive values from a joint log: an :class:`Identification`
     (``.values``, ``.std``, ``.save(path)``, ``Identification.load(path, robot)``,
     ``.predict(log)``, ``.compare_truth(truth)``).
-predict(model, result, log, *, raw_states=False)
+``predict(model, result, log, *, raw_states=False)``
     Joint torques ``(S, m)`` of a log from an identification or its saved file.
+identify_payload(model, log, *, link, result=None, validate=None, save=None, urdf=None, mjcf=None, ...)
+    What the robot carries on a link: a :class:`Payload` (``.mass``, ``.com``, ``.inertia_com`` in
+    the link's frame, ``.sigma()``, ``.identified()``, ``.to_json()``, ``.predict(log)``,
+    ``.save(path)``, ``SavedPayload.load(path, robot)``), the robot known from its model file or a
+    saved identification (``baseparams payload``).
+excite(model, payload=LINK, ...)
+    A short excitation that identifies a payload on a link best (``excite --payload LINK``).
 Robot, RobotBuilder, Inertia, pose
     Build a robot in code (see :class:`RobotBuilder`).
 CONVENTIONS
@@ -75,7 +82,7 @@ from .model import CONVENTIONS, Inertia, Robot, RobotBuilder, pose
 
 # excite and simulate (and the helpers identify and predict share with them) have one
 # implementation, baseparams.workflow: also the CLI's
-from .workflow import excite, identify, predict, simulate
+from .workflow import excite, identify, identify_payload, predict, simulate
 
 __all__ = [
     "CONVENTIONS",
@@ -93,6 +100,7 @@ __all__ = [
     "analyze_symbolic",
     "excite",
     "identify",
+    "identify_payload",
     "load",
     "pose",
     "predict",
@@ -172,7 +180,8 @@ def load(model: str | _os.PathLike, floating: bool = False, gravity=None, strict
 
 # ---------------------------------------------------------------- the whole loop: excite, simulate, identify, predict
 #: the classes of the loop's results, imported on first use (``baseparams.Identification``)
-_LAZY = {"Excitation": "excitation.result", "Identification": "ident"}
+_LAZY = {"Excitation": "excitation.result", "Identification": "ident", "Payload": "ident.payload",
+         "PayloadOptions": "ident.payload", "SavedPayload": "ident.payload"}
 
 
 def analyze_symbolic(model, *, convention: str = "khalil", seed: int = 0, verify: bool = True):

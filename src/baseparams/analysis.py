@@ -6,71 +6,71 @@
 
 JSON schema (``baseparams analyze MODEL --json``), one object:
 
-=====================  ===================================================================
-model                  robot name
-n_bodies, n_params     moving bodies, 10 x bodies
-gravity                [gx, gy, gz] m/s^2, world frame
-floating               true for a floating (F) root
-rows                   measured generalized forces: all | joints | base | a set of joints
-                       (joints:NAME,... | base+joints:NAME,... | passive:NAME,...)
-nullity                certified nullspace dimension (DRNG's rank when --no-verify; when the
-                       status is undecided, DRNG's span: a lower bound, no decided count)
-n_base                 number of base parameters = n_params - nullity (undecided: an upper
-                       bound; rank_decision says why no gap decides)
-drng                   {columns, rank, seconds, extended, by_principle{shared points, fixed
-                       points, planar rotations}, by_rule{shared points, fixed points, planar
-                       rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
-                       R-L2 level chains, R-L3 planar loops, R-M coupled joints, numerical},
-                       complete, notes}: rank added
-                       by each source in that order (the paper's principles, the extended
-                       rules, then, when some rows are not measured, unmeasured root,
-                       unmeasured body and passive joint (those present), numerical
-                       completion); complete:
-                       the geometric span equals the certified nullspace (null if unverified);
-                       notes: a rule whose columns failed the check against the regressor
-                       (left out, named), or why the check could not run ([] normally)
-numerical              {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
-                       requested, kept, and for loops not_converged, branch_jumps,
-                       ill_conditioned, max_loop_residual}} or null; for a tree checked
-                       body by body (40 bodies or more): rank proven block by block, sv_gap
-                       the smallest kept block singular value over the worst column residual
-certified              true when the numerics confirm the (completed) nullspace
-status, message        certified | completed | undecided | failed | unverified, and why
-completed              directions added from the numerical nullspace (marked numerical)
-residual               ||W B_drng||_F / ||W||_F with orthonormal B_drng (null if unverified)
-convention             parameter convention of base_parameters (khalil: link frames)
-form                   expanded | recursive: how the expressions are written (expanded: standard
-                       parameters only; recursive: a body's own standard parameters and its
-                       children's regrouped dependent parameters NAMER, defined in
-                       regrouped_parameters; O(n) terms on a tree)
-base_parameters        [{name, expression}] regrouped base parameters
-base_parameters_paper  the same in the paper's spatial convention (world frame at q = 0)
-regrouped_parameters   [{name, expression}] the recursive form's regrouped dependent parameters,
-                       root side first ([] in the expanded form)
-regrouped_parameters_paper  the same in the paper's convention
-unidentifiable         standard parameters that no base parameter sees
-practical              null, or {literal_n_base (null: not decided), counted_out, tolerance, size,
-                       candidates, snaps[{joint, element, what, component, literal, text, special,
-                       new, deviation}], note}: values the file writes to within rounding of a
-                       right angle or zero (each named by its element), taken as that value
-                       because the directions they add are not identifiable in practice
-                       (``literal=True`` / ``--literal``: the file as stated)
-practical_rank         null, or {threshold, decided, rank, nullity, counted_out, largest_out,
-                       smallest_kept, gap, literal_rank, literal_gap, min_gap, length, rate,
-                       samples, borderline, clusters, candidates[{rank, meaning}], note}: the
-                       literal singular-value gap did not decide the rank, which was decided by
-                       each direction's effect on the torques at the model's own scales
-                       (directions below threshold of the torque scale counted out, only where
-                       the threshold lies in a gap of those effects; otherwise undecided, with
-                       the clusters and the candidate counts; :mod:`baseparams.nullspace.practical`);
-                       ``--literal``: the literal decision (``undecided``)
-rank_decision          null (unverified), or {by: literal | practical | structured, decided,
-                       rank, gap, smallest_kept, largest_out, bound, clusters[{first, count, top,
-                       bottom, spread, gap_below}], snapped}: the gap of the spectrum the count
-                       was stated at (a count is stated only at a gap: neighbouring singular
-                       values >= 100x apart and 10x the ratios inside the clusters around them,
-                       :func:`baseparams.numerics.spectrum`), values relative to the largest
-=====================  ===================================================================
+============================  ===================================================================
+model                         robot name
+n_bodies, n_params            moving bodies, 10 x bodies
+gravity                       [gx, gy, gz] m/s^2, world frame
+floating                      true for a floating (F) root
+rows                          measured generalized forces: all | joints | base | a set of joints
+                              (joints:NAME,... | base+joints:NAME,... | passive:NAME,...)
+nullity                       certified nullspace dimension (DRNG's rank when --no-verify; when the
+                              status is undecided, DRNG's span: a lower bound, no decided count)
+n_base                        number of base parameters = n_params - nullity (undecided: an upper
+                              bound; rank_decision says why no gap decides)
+drng                          {columns, rank, seconds, extended, by_principle{shared points, fixed
+                              points, planar rotations}, by_rule{shared points, fixed points, planar
+                              rotations, R-A fixed vectors, R-B sliding points, R-L1 parallelograms,
+                              R-L2 level chains, R-L3 planar loops, R-M coupled joints, numerical},
+                              complete, notes}: rank added
+                              by each source in that order (the paper's principles, the extended
+                              rules, then, when some rows are not measured, unmeasured root,
+                              unmeasured body and passive joint (those present), numerical
+                              completion); complete:
+                              the geometric span equals the certified nullspace (null if unverified);
+                              notes: a rule whose columns failed the check against the regressor
+                              (left out, named), or why the check could not run ([] normally)
+numerical                     {nullity, rank, samples, sv_gap, tolerance, rtol, seconds, sampling{
+                              requested, kept, and for loops not_converged, branch_jumps,
+                              ill_conditioned, max_loop_residual}} or null; for a tree checked
+                              body by body (40 bodies or more): rank proven block by block, sv_gap
+                              the smallest kept block singular value over the worst column residual
+certified                     true when the numerics confirm the (completed) nullspace
+status, message               certified | completed | undecided | failed | unverified, and why
+completed                     directions added from the numerical nullspace (marked numerical)
+residual                      ||W B_drng||_F / ||W||_F with orthonormal B_drng (null if unverified)
+convention                    parameter convention of base_parameters (khalil: link frames)
+form                          expanded | recursive: how the expressions are written (expanded: standard
+                              parameters only; recursive: a body's own standard parameters and its
+                              children's regrouped dependent parameters NAMER, defined in
+                              regrouped_parameters; O(n) terms on a tree)
+base_parameters               [{name, expression}] regrouped base parameters
+base_parameters_paper         the same in the paper's spatial convention (world frame at q = 0)
+regrouped_parameters          [{name, expression}] the recursive form's regrouped dependent parameters,
+                              root side first ([] in the expanded form)
+regrouped_parameters_pa       per  the same in the paper's convention
+unidentifiable                standard parameters that no base parameter sees
+practical                     null, or {literal_n_base (null: not decided), counted_out, tolerance, size,
+                              candidates, snaps[{joint, element, what, component, literal, text, special,
+                              new, deviation}], note}: values the file writes to within rounding of a
+                              right angle or zero (each named by its element), taken as that value
+                              because the directions they add are not identifiable in practice
+                              (``literal=True`` / ``--literal``: the file as stated)
+practical_rank                null, or {threshold, decided, rank, nullity, counted_out, largest_out,
+                              smallest_kept, gap, literal_rank, literal_gap, min_gap, length, rate,
+                              samples, borderline, clusters, candidates[{rank, meaning}], note}: the
+                              literal singular-value gap did not decide the rank, which was decided by
+                              each direction's effect on the torques at the model's own scales
+                              (directions below threshold of the torque scale counted out, only where
+                              the threshold lies in a gap of those effects; otherwise undecided, with
+                              the clusters and the candidate counts; :mod:`baseparams.nullspace.practical`);
+                              ``--literal``: the literal decision (``undecided``)
+rank_decision                 null (unverified), or {by: literal | practical | structured, decided,
+                              rank, gap, smallest_kept, largest_out, bound, clusters[{first, count, top,
+                              bottom, spread, gap_below}], snapped}: the gap of the spectrum the count
+                              was stated at (a count is stated only at a gap: neighbouring singular
+                              values >= 100x apart and 10x the ratios inside the clusters around them,
+                              :func:`baseparams.numerics.spectrum`), values relative to the largest
+============================  ===================================================================
 """
 
 from __future__ import annotations

@@ -28,9 +28,9 @@ import numpy as np
 from .enums import Convention, MocapWelds, values
 from .errors import ArgumentError, ArgumentTypeError, BaseparamsError
 
-__all__ = ["CHOICES", "IDENTIFY", "OPTIONAL", "RANGES", "ArgumentError", "ArgumentTypeError", "Range", "brief",
-           "check_array", "check_choice", "check_flags", "check_keywords", "check_path", "check_progress",
-           "check_samples", "check_total", "check_value", "need", "options_from"]
+__all__ = ["CHOICES", "IDENTIFY", "OPTIONAL", "PAYLOAD", "PAYLOAD_CHOICES", "RANGES", "ArgumentError",
+           "ArgumentTypeError", "Range", "brief", "check_array", "check_choice", "check_flags", "check_keywords",
+           "check_path", "check_progress", "check_samples", "check_total", "check_value", "need", "options_from"]
 
 
 @dataclass(frozen=True)
@@ -104,6 +104,11 @@ RANGES = {
     "memory_mb": Range(0, 1e6, lo_open=True, unit="MB"),
     "gravity": Range(-1e3, 1e3, unit="m/s^2", count=3),
     "acceleration": Range(0, 1e7, lo_open=True, unit="rad/s^2"),
+    # payload (issue 49): a joint's logged range below which it does not move; the default min_speed as a fraction
+    # of each joint's peak speed; the torque noise of a payload design's predicted sigmas
+    "still": Range(0, 10, lo_open=True, unit="rad or m"),
+    "slow_fraction": Range(0, 1, hi_open=True),
+    "payload_noise": Range(0, 1e6, lo_open=True, unit="N m"),
 }
 
 #: the identification's options and their defaults, each written once: :class:`baseparams.ident.options.IdentOptions`
@@ -114,12 +119,26 @@ IDENTIFY = MappingProxyType({
     "couplings": (), "holdout": None, "cutoff": None, "decimate": None, "min_speed": None, "prior_weight": None,
     "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
     "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,
+    "effort": "auto", "gain_anchor": None,
+})
+#: a payload identification's options and their defaults, each written once:
+#: :class:`baseparams.ident.payload.PayloadOptions` (which checks them), the front door's ``identify_payload``
+#: keywords and the CLI's ``payload`` flags read them here
+PAYLOAD = MappingProxyType({
+    "method": "auto", "friction": ("viscous", "coulomb", "offset"), "rotor": "auto", "coulomb_width": None,
+    "min_speed": None, "slow_fraction": 0.1, "still": 0.02, "cutoff": None, "decimate": None, "covariance": "hac",
+    "prior": None, "analysis_samples": 200, "seed": 0, "memory_mb": 512.0,
+})
+#: the choices of ``identify_payload``'s options (``baseparams payload``), where they are not :data:`CHOICES`'
+PAYLOAD_CHOICES = MappingProxyType({
+    "method": ("auto", "physical", "ls"), "rotor": ("auto", "file", "fit"), "covariance": ("hac", "white"),
 })
 #: the values of the options that name one of a few choices (the first: the default, but ``method``'s)
 CHOICES = MappingProxyType({
     "method": ("auto", "ols", "wls", "physical"), "covariance": ("hac", "white"), "stream": ("auto", "on", "off"),
     "criterion": ("cond", "logdet"), "form": ("auto", "expanded", "recursive"),
     "convention": tuple(values(Convention)), "mocap_welds": tuple(values(MocapWelds)),
+    "effort": ("auto", "torque", "current"),
 })
 
 #: the most samples a run holds at once (a simulated log, a designed trajectory) and samples x columns

@@ -85,6 +85,27 @@ def clip(text: str, limit: int = MAX_REPR - 1) -> str:
     return (head[:cut] if cut > 0 else head) + ", ...>"
 
 
+def name_list(names, limit: int = 12) -> str:
+    """Names joined by commas, at most ``limit`` of them and the count of the rest.
+
+    Parameters
+    ----------
+    names : iterable of str
+        The names, most important first.
+    limit : int
+        The most names shown.
+
+    Returns
+    -------
+    str
+        E.g. ``a, b, c`` or ``a, b, c and 397 more``: a message naming hundreds of parameters
+        stays one readable line.
+    """
+    names = [str(n) for n in names]
+    shown = ", ".join(names[:limit])
+    return shown if len(names) <= limit else f"{shown} and {len(names) - limit} more"
+
+
 def brief(value, width: int = 60) -> str:
     """A field's value in a few characters: arrays by shape, numbers at 4 digits, long text cut.
 

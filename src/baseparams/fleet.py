@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .display import clip
-from .errors import BaseparamsError
+from .errors import BaseparamsError, DataError
 from .ident import Fit, fit, pulled_covariance
 from .ident.drives import FRICTION_TERMS
 from .ident.model import IdentModel
@@ -59,7 +59,8 @@ def file_factors(path: str, model: IdentModel, options: IdentOptions | None = No
     acc : RowAccumulator
         The log's row factors.
     info : dict
-        ``{"path", "read", "used", "removed"}``.
+        ``{"path", "read", "used", "removed", "warnings"}``: ``warnings`` the reader's WARNING notes
+        (positions beyond the plausible bounds, gone on with ``options.allow_units``).
     """
     from .ident.preprocess import prepare
     from .ident.rows import accumulate_prepared, log_columns
@@ -68,11 +69,14 @@ def file_factors(path: str, model: IdentModel, options: IdentOptions | None = No
 
     o = options or IdentOptions()
     with blas_threads():
-        log = read_log(path, model.robot)
+        log = read_log(path, model.robot, allow_units=o.allow_units)
+        if log.tau is None:  # a log of motor currents alone
+            raise DataError(f"{path}: no joint torques (tau_<joint>): a log of motor currents is identified on its "
+                            f"own, not in a fleet")
         prep = prepare(log, cutoff=o.cutoff, min_speed=o.min_speed)
         acc, _ = accumulate_prepared(model, prep, log_columns(model, log), o.memory_mb, log, o.min_speed)
     return acc, {"path": str(path), "read": int(log.n_samples), "used": int(acc.samples),
-                 "removed": dict(prep.removed)}
+                 "removed": dict(prep.removed), "warnings": [n for n in log.notes if "WARNING" in n]}
 
 
 def combine_pair(a, b):
@@ -106,7 +110,7 @@ class FleetResult:
     pooled : Fit, optional
         One estimate from all logs (``None`` unless asked).
     files : list of dict
-        Per log used: ``{"path", "read", "used", "removed"}``.
+        Per log used: ``{"path", "read", "used", "removed", "warnings"}`` (:func:`file_factors`).
     spread : dict, optional
         Across the per-file estimates: ``{"mean", "std"}`` per model parameter, ``(p,)`` each.
     skipped : list of dict
@@ -290,7 +294,10 @@ def _meat_task(path: str, model: IdentModel, theta, h_inv, weights, options: Ide
 
     o = options
     with blas_threads():
-        log = read_log(path, model.robot)
+        log = read_log(path, model.robot, allow_units=o.allow_units)
+        if log.tau is None:  # a log of motor currents alone
+            raise DataError(f"{path}: no joint torques (tau_<joint>): a log of motor currents is identified on its "
+                            f"own, not in a fleet")
         prep = prepare(log, cutoff=o.cutoff, min_speed=o.min_speed)
         cols = log_columns(model, log)
         kept: list = []

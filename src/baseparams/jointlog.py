@@ -28,9 +28,9 @@ class JointLog:
         [rad], smooth in time; their ``tau`` columns zero: a base wrench is not measured).
     q : ndarray, shape ``(S, m)``
         Joint positions [rad or m], joint side (after sign and gear ratio).
-    tau : ndarray, shape ``(S, m)``
+    tau : ndarray, shape ``(S, m)``, or None
         Joint generalized forces [N m or N], joint side (after sign, gear ratio and
-        current-to-torque gain).
+        current-to-torque gain); ``None`` for a log of states, or of motor currents alone.
     dq, ddq : ndarray, shape ``(S, m)``, optional
         Measured velocities and accelerations; ``None`` when the log has none (derived from
         ``q`` by the preprocessing).
@@ -40,6 +40,10 @@ class JointLog:
         Samples removed so far and why (reason -> count); nothing is dropped without a count.
     notes : tuple of str
         One line per decision taken on the data (defaults chosen, conversions), for the report.
+    cur : ndarray, shape ``(S, m)``, optional
+        Motor currents [A] (``cur_<joint>`` columns: the current of the motor named after each
+        joint, sign applied, no gain): what an arm without joint-torque sensors logs
+        (:mod:`baseparams.ident.fromcurrents`); ``None`` when the log has none.
     """
 
     t: np.ndarray
@@ -51,6 +55,7 @@ class JointLog:
     source: str = "<memory>"
     removed: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    cur: np.ndarray | None = None
 
     def __post_init__(self):
         from .arguments import ArgumentTypeError, check_array
@@ -62,7 +67,7 @@ class JointLog:
             raise ArgumentTypeError(f"JointLog: joints must be a sequence of joint names, got {self.joints!r:.80}")
         object.__setattr__(self, "joints", tuple(self.joints))
         shape = (len(t), len(self.joints))
-        for name in ("q", "tau", "dq", "ddq"):
+        for name in ("q", "tau", "dq", "ddq", "cur"):
             value = getattr(self, name)
             if value is None and name != "q":
                 continue
@@ -88,7 +93,7 @@ class JointLog:
         """
         from .errors import DataError
 
-        for name in ("t", "q", "tau", "dq", "ddq"):
+        for name in ("t", "q", "tau", "dq", "ddq", "cur"):
             a = getattr(self, name)
             if a is not None and not np.all(np.isfinite(a)):
                 i = int(np.argmax(~np.isfinite(a).reshape(len(a), -1).all(axis=1)))
@@ -123,6 +128,7 @@ class JointLog:
         span = float(self.t[-1] - self.t[0]) if s > 1 else 0.0
         rate = f" ({format_number((s - 1) / span, 4)} Hz)" if span > 0 else ""
         has = [k for k in ("dq", "ddq") if getattr(self, k) is not None]
+        has += ["currents"] if self.cur is not None else []
         base = " and a floating base" if self.floating else ""
         text = (f"<JointLog {self.source}: {s} samples of {self.n_joints} joints{base} over {format_number(span, 4)} s"
                 f"{rate}{', with ' + ' and '.join(has) if has else ''}")

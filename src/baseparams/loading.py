@@ -1,6 +1,6 @@
 """One entry point for a model given by name: a built-in robot or a robot file.
 
-It sits above both :mod:`.io` (the file readers) and :mod:`.robots` (the built-ins, some of
+It sits above both :mod:`.io` (the file readers) and :mod:`baseparams.robots` (the built-ins, some of
 which are read from bundled files), so neither of those imports the other's way back.
 """
 

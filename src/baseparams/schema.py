@@ -844,6 +844,8 @@ OPTIONS = Obj({
     "analysis_samples": Field(Opt(Int(lo=1)), ABSENT),
     "seed": Field(Int(lo=0), ABSENT),
     "memory_mb": Field(Num(lo=0.0, lo_open=True), ABSENT),
+    "effort": Field(Enum(("auto", "torque", "current")), ABSENT),
+    "gain_anchor": Field(Opt(Str(max_len=1000)), ABSENT),
 }, extra="refuse", hint=_NEWER)
 
 #: the least-squares estimate's statistics (the triangular factor, the covariance)
@@ -886,6 +888,29 @@ def _counts_rule(s: dict) -> str | None:
         return f"used {s['used']} samples of {s['read']} read"
     return None
 
+
+def _motors_rule(c: dict) -> str | None:
+    m = c["motors"]
+    if len(c["matrix"]) != len(m) or any(len(row) != len(m) for row in c["matrix"]):
+        return f"matrix must be {len(m)} x {len(m)} (one row per joint, one column per motor)"
+    missing = [k for k in ("gains", "std") if set(c[k]) != set(m)]
+    return f"{', '.join(missing)} must name every motor {m}" if missing else None
+
+
+#: a result identified from motor currents (:class:`baseparams.ident.fromcurrents.CurrentGains`)
+CURRENTS = Obj({
+    "motors": Arr(Str(max_len=1000, nonempty=True), "motors", min_len=1, max_len=100_000),
+    "matrix": _matrix("motors"),
+    "gains": Map(Num(lo=-1e12, hi=1e12, nonzero=True, null=True)),
+    "std": Map(Num(lo=0.0, null=True)),
+    "anchor": Str(max_len=2000),
+    "scale_std": Num(lo=0.0, null=True),
+    "sigma": Field(Opt(Map(Num(lo=0.0, null=True))), None),
+    "undetermined": Field(Arr(Str(max_len=1000)), []),
+    "groups": Field(Arr(Any()), []),
+    "rotor_split": Field(Map(_VALUE), {}),
+    "scale_note": Field(Str(), ""),
+}, extra="refuse", hint=_NEWER, rule=_motors_rule)
 
 def result(term: Node) -> Obj:
     """The schema of a saved identification (:meth:`baseparams.ident.Identification.save`, version 1).
@@ -932,6 +957,7 @@ def result(term: Node) -> Obj:
                                        "cv_rms": Opt(Num(lo=0.0))}, extra="keep"), max_len=16,
                                    unique="name"), []),
         "motion": Field(Opt(Any()), None),
+        "currents": Field(Opt(CURRENTS), None),
     }, extra="note")
 
 
@@ -947,7 +973,7 @@ TRUTH = Obj({
 #: one ``[joints.<name>]`` table of a column map (:mod:`baseparams.io.logs`)
 COLUMN_JOINT = Obj({
     **{k: Field(Str(max_len=10_000, nonempty=True, text="a column name"), None) for k in ("name", "q", "dq", "ddq",
-                                                                                           "tau")},
+                                                                                           "tau", "cur")},
     "sign": Field(Enum((1, -1, 1.0, -1.0), text="+1 or -1"), 1),
     "gear_ratio": Field(Num(lo=-1e6, hi=1e6, nonzero=True), 1.0),
     "torque_gain": Field(Num(lo=-1e6, hi=1e6, nonzero=True), 1.0),

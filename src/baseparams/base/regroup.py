@@ -500,7 +500,7 @@ def base_parameters(robot: Robot, null_basis: np.ndarray, convention: str) -> Ba
         The robot (``n`` bodies).
     null_basis : ndarray, shape ``(10 n, k)``
         Nullspace basis in the paper convention: orthonormal, or any basis of full column rank
-        such as :attr:`Certificate.span`, which is more precise.
+        such as :attr:`~baseparams.nullspace.certify.Certificate.span`, which is more precise.
     convention : str
         The parameter convention to regroup in (:data:`~baseparams.model.inertia.CONVENTIONS`).
 

@@ -3,8 +3,8 @@
 The command line parses and prints: its parser (:mod:`baseparams.cli.parser`) asks each command's
 module (:mod:`~baseparams.cli.robots`, :mod:`~baseparams.cli.analyze`, :mod:`~baseparams.cli.regressor`,
 :mod:`~baseparams.cli.identify`, :mod:`~baseparams.cli.predict`, :mod:`~baseparams.cli.simulate`,
-:mod:`~baseparams.cli.excite`) for its subcommand, its flags' keywords and its ``run``; the
-preflight (:mod:`baseparams.cli.preflight`) asks the library's rules before any work; every
+:mod:`~baseparams.cli.excite`, :mod:`~baseparams.cli.payload`) for its subcommand, its flags' keywords and
+its ``run``; the preflight (:mod:`baseparams.cli.preflight`) asks the library's rules before any work; every
 message names the options by the command's flags (:func:`baseparams.cli.parser.flag_message`).
 
 Exit codes (scripts rely on them): 0 the result is certified (or completed, or unverified on
@@ -12,7 +12,8 @@ request with ``--no-verify``); 2 bad input, printed as one line (``baseparams: e
 3 certification UNDECIDED (no gap of the spectrum decides the rank: the message lists the clusters,
 the candidate counts and what would help; a gap too small to decide literally is decided by
 practical identifiability, at a gap of the directions' effects, unless ``--literal``);
-4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted.
+4 certification FAILED (a DRNG column is not in the numerical nullspace); 130 interrupted (Ctrl-C),
+143 terminated (SIGTERM): either stops the run where it is, and a file being written is removed.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import sys
 import numpy as np
 
 from ..errors import BaseparamsError
+from ..interrupts import EXIT_TERMINATED, Interrupts, Terminated
 from .analyze import run as cmd_analyze
 from .common import (
     EXIT_FAILED,
@@ -35,6 +37,7 @@ from .common import (
 from .excite import run as cmd_excite
 from .identify import run as cmd_identify
 from .parser import build_parser, flag_message
+from .payload import run as cmd_payload
 from .predict import run as cmd_predict
 from .preflight import preflight
 from .regressor import run as cmd_regressor
@@ -42,8 +45,8 @@ from .robots import run as cmd_robots
 from .simulate import run as cmd_simulate
 
 __all__ = ["EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_UNDECIDED", "Progress", "build_parser",
-           "cmd_analyze", "cmd_excite", "cmd_identify", "cmd_predict", "cmd_regressor", "cmd_robots", "cmd_simulate",
-           "floating_hint", "main", "preflight"]
+           "cmd_analyze", "cmd_excite", "cmd_identify", "cmd_payload", "cmd_predict", "cmd_regressor", "cmd_robots",
+           "cmd_simulate", "floating_hint", "main", "preflight"]
 
 
 def _one_line_notes() -> None:
@@ -88,15 +91,17 @@ def main(argv: list[str] | None = None) -> int:
     -------
     int
         The exit code (module doc): :data:`EXIT_OK`, :data:`EXIT_INPUT`,
-        :data:`EXIT_UNDECIDED`, :data:`EXIT_FAILED` or :data:`EXIT_INTERRUPTED`; 0 on a
+        :data:`EXIT_UNDECIDED`, :data:`EXIT_FAILED`, :data:`EXIT_INTERRUPTED` (Ctrl-C) or
+        :data:`baseparams.interrupts.EXIT_TERMINATED` (SIGTERM); 0 on a
         broken pipe (e.g. piped into ``head``).
     """
     parser = build_parser()
     args = parser.parse_args(argv)
     _one_line_notes()
     try:
-        preflight(args)
-        return args.func(args)
+        with Interrupts():  # SIGTERM unwinds like Ctrl-C: every output's temporary file removed
+            preflight(args)
+            return args.func(args)
     except BaseparamsError as exc:
         print(f"baseparams: error: {flag_message(str(exc), args.command)}", file=sys.stderr)
         return EXIT_INPUT
@@ -109,3 +114,6 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("baseparams: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Terminated:
+        print("baseparams: terminated (SIGTERM)", file=sys.stderr)
+        return EXIT_TERMINATED

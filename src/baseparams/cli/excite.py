@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import sys
 
-from ..arguments import CHOICES
 from ..errors import BaseparamsError, NoMovingBodiesError
 from . import common
 from .common import EXIT_OK, emit
@@ -171,7 +170,8 @@ def keywords(args) -> dict:
     return {"harmonics": args.harmonics, "period": args.period, "base_frequency": args.base_frequency,
             "rate": args.rate, "criterion": args.criterion, "drives": args.drives, "rotor": args.rotor,
             "torque": args.torque, "margin": args.margin, "starts": args.starts, "grid": args.grid, "seed": args.seed,
-            "analysis_samples": args.samples, "out": args.out, "plot": args.plot, **limit_flags(args)}
+            "analysis_samples": args.samples, "out": args.out, "plot": args.plot, "payload": args.payload,
+            "payload_noise": args.payload_noise, **limit_flags(args)}
 
 
 def add_parser(sub) -> None:
@@ -188,9 +188,10 @@ def add_parser(sub) -> None:
     s.add_argument("--period", type=float, metavar="SECONDS", help="period of the trajectory (default 10 s)")
     s.add_argument("--base-frequency", type=float, metavar="HZ", help="base frequency (1 / period; not with --period)")
     s.add_argument("--rate", type=float, default=1000.0, help="the controller's sampling rate in Hz (default 1000)")
-    s.add_argument("--criterion", metavar=choices("criterion"), default=CHOICES["criterion"][0],
+    s.add_argument("--criterion", metavar=choices("criterion"),
                    help="minimise the condition number of the column-scaled regressor (default), or maximise "
-                        "log det of the information matrix (D-optimal: smaller standard deviations under noise)")
+                        "log det of the information matrix (D-optimal: smaller standard deviations under noise; the "
+                        "default with --payload)")
     s.add_argument("--drives", action="store_true", help="include the friction columns (viscous, Coulomb, offset)")
     s.add_argument("--rotor", action="store_true", help="with --drives: the rotor inertia columns too")
     lim = s.add_argument_group("limits (each: one value for every joint, one per designed joint in order, or "
@@ -209,6 +210,11 @@ def add_parser(sub) -> None:
                         "range from each limit; default 0)")
     s.add_argument("--starts", type=int, default=4, help="random starts of the optimisation (default 4)")
     s.add_argument("--grid", type=int, default=200, help="samples per period while optimising (default 200)")
+    s.add_argument("--payload", metavar="LINK",
+                   help="design a short excitation that identifies a payload on LINK best (the joints that carry "
+                        "it; default period 5 s, criterion logdet on the payload's columns)")
+    s.add_argument("--payload-noise", type=float, metavar="NM",
+                   help="with --payload: the torque noise of the predicted standard deviations (default 0.1 N m)")
     s.add_argument("--out", metavar="FILE", help="write the trajectory (CSV: t, q_, dq_, ddq_ per joint)")
     s.add_argument("--plot", metavar="FILE", help="plot q, dq, ddq per joint against the limits (PNG/SVG)")
     s.add_argument("--output", metavar="FILE", help="write the summary to FILE")

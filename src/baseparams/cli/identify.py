@@ -31,7 +31,7 @@ OWN_OUTPUTS = ("output",)
 IDENTIFY_KEYWORDS = ("validate", "holdout", "method", "friction", "rotor", "coulomb_width", "couplings", "cutoff",
                      "decimate", "min_speed", "prior_weight", "convention", "covariance", "score_cutoff",
                      "allow_units", "columns", "joints", "weld", "analysis_samples", "literal", "terms", "stream",
-                     "save", "predictions", "urdf", "mjcf", "html", "plot", "truth", "seed")
+                     "save", "predictions", "urdf", "mjcf", "html", "plot", "truth", "seed", "effort", "gain_anchor")
 
 
 def keywords(args) -> dict:
@@ -154,6 +154,7 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
     lines = [f"{robot.name}: {len(files)} logs, {len(res.files)} used, {len(skipped)} skipped; "
              f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
     lines += [f"skipped: {s['error']}" for s in res.skipped]
+    lines += [f"{f['path']}: {w}" for f in res.files for w in f.get("warnings", ())]  # --allow-units went on
     if res.spread is not None:
         rel = res.spread["std"] / np.maximum(np.abs(res.spread["mean"]), 1e-300)
         worst = np.argsort(rel)[::-1][:5]
@@ -190,10 +191,10 @@ def add_parser(sub) -> None:
     s = sub.add_parser("identify", help="identify base-parameter and drive values from a joint log")
     model_args(s)
     s.add_argument("data", nargs="+", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default "
-                                           "layout: t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint>; several "
-                                           "logs or a glob pattern: several recordings of the robot in one "
-                                           "identification, each a cross-validation block (a fleet on Dask with "
-                                           "--per-file / --pooled)")
+                                           "layout: t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint> (or "
+                                           "cur_<joint>: --effort); several logs or a glob pattern: several "
+                                           "recordings of the robot in one identification, each a cross-validation "
+                                           "block (a fleet on Dask with --per-file / --pooled)")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
     s.add_argument("--validate", metavar="DATA2", help="validate on another log")
     s.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS (not with "
@@ -209,6 +210,13 @@ def add_parser(sub) -> None:
                    help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "
                         "reaches each JOINT times W; adds Iam_NAME, Fvm_NAME, Fcm_NAME (with --rotor, viscous, "
                         "coulomb); repeatable")
+    s.add_argument("--effort", metavar=choices("effort"), default=IDENTIFY["effort"],
+                   help="what the log's effort is: torque (tau_<joint>), current (cur_<joint> [A]: motor currents "
+                        "with unknown gains, identified with the parameters; their common scale from --gain-anchor), "
+                        "or auto (default: currents when the log has them and no torques)")
+    s.add_argument("--gain-anchor", metavar="JOINT=K[,JOINT=K]",
+                   help="currents: the catalogue gain K [N m/A at the joint side] of JOINT's motor, fixing every "
+                        "gain's scale (several: their geometric mean); default the model file's masses")
     s.add_argument("--cutoff", type=float, metavar="HZ", help="low-pass cutoff (default from the sampling rate)")
     s.add_argument("--decimate", type=int, metavar="K", help="keep every K-th sample after filtering")
     s.add_argument("--min-speed", type=float, metavar="V", help="drop samples where a joint is slower than V rad/s")
@@ -227,8 +235,8 @@ def add_parser(sub) -> None:
                    help="validation: also score against the measured torques low-passed at HZ (zero-phase "
                         "Butterworth order 4); the main figure is against the raw measured torques")
     s.add_argument("--predictions", metavar="FILE",
-                   help="write the predicted torques at every validation sample (t, tau_<joint>; .csv, .tsv or "
-                        ".parquet)")
+                   help="write the predicted torques at every validation sample (t, tau_<joint>; from currents: "
+                        "the joint-side torques and cur_<joint> [A]; .csv, .tsv or .parquet)")
     _log_size_args(s)
     s.add_argument("--plot", metavar="FILE", help="measured vs predicted torques per joint (PNG/SVG; matplotlib)")
     s.add_argument("--html", metavar="FILE", help="a self-contained HTML report: torques, residuals, values, %%sigma")

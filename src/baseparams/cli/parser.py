@@ -1,7 +1,7 @@
 """The ``baseparams`` command's parser: shared groups of flags, the subcommands, each flag's keyword.
 
 :func:`build_parser` asks each command's module (:mod:`baseparams.cli.robots`, ``analyze``,
-``regressor``, ``identify``, ``predict``, ``simulate``, ``excite``) for its subcommand
+``regressor``, ``identify``, ``predict``, ``simulate``, ``excite``, ``payload``) for its subcommand
 (``add_parser(sub)``); each module also says which front-door keyword each of its flags is
 (``KEYWORDS``, the flags named otherwise; a flag not listed is the keyword of its name, or
 ``CLI_ONLY``: how the result is printed). :func:`keyword_flags` reads that back as one table,
@@ -20,7 +20,7 @@ import re
 from ..arguments import CHOICES, IDENTIFY
 
 #: the commands, in the order of ``baseparams --help``, each the module ``baseparams.cli.<name>``
-COMMANDS = ("robots", "analyze", "regressor", "identify", "predict", "simulate", "excite")
+COMMANDS = ("robots", "analyze", "regressor", "identify", "predict", "simulate", "excite", "payload")
 
 #: the model's flags (every command that takes ``MODEL``): :func:`baseparams.load`'s keywords
 MODEL_KEYWORDS = ("floating", "strict_inertia", "gravity", "mocap_welds", "xacro_args", "package_path")
@@ -36,10 +36,11 @@ MODEL_HELP = {
     "predict": f"{_MODEL_FILES}: the robot the saved identification belongs to (its fingerprint is checked)",
     "simulate": f"{_MODEL_FILES}: the robot simulated (its own inertias are the true parameters)",
     "excite": f"{_MODEL_FILES}: the robot (its joint limits are read from the file)",
+    "payload": f"{_MODEL_FILES}: the robot without the payload (--urdf needs a .urdf file, --mjcf a file)",
 }
 
 #: the subcommands whose ``--samples`` was renamed ``--analysis-samples`` (it reads as log samples there)
-RENAMED_SAMPLES = ("identify", "simulate", "excite")
+RENAMED_SAMPLES = ("identify", "simulate", "excite", "payload")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -76,8 +77,8 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Subcommands ``robots``, ``analyze``, ``regressor``, ``identify``, ``predict``, ``simulate`` and
-        ``excite`` (:data:`COMMANDS`); each sets ``func`` to its module's ``run``.
+        Subcommands ``robots``, ``analyze``, ``regressor``, ``identify``, ``predict``, ``simulate``,
+        ``excite`` and ``payload`` (:data:`COMMANDS`); each sets ``func`` to its module's ``run``.
     """
     p = _Parser(prog="baseparams", description=(
         "Which inertial parameters of a robot are identifiable (base parameters), why, and how "

@@ -6,7 +6,8 @@ message): the numbers' ranges and the choices (:mod:`baseparams.arguments`), the
 (:func:`baseparams.loading.check_load`), each command's own checks (:func:`baseparams.analysis.check_analyze`,
 :func:`~baseparams.workflow.excite.check_excite`, :func:`~baseparams.workflow.simulate.check_simulate`,
 :func:`~baseparams.workflow.identify.plan_identify`, :func:`~baseparams.workflow.identify.check_fleet`,
-:func:`~baseparams.workflow.identify.check_predict`) and every output
+:func:`~baseparams.workflow.identify.check_predict`, :func:`~baseparams.workflow.payload.check_payload`)
+and every output
 (:func:`baseparams.workflow.outputs.check_outputs`); what is not installed (:func:`baseparams.arguments.need`).
 """
 
@@ -95,6 +96,10 @@ def _check_command(args, module) -> None:
         from ..workflow.identify import check_predict
 
         check_predict(args.model, args.result, args.log, module.keywords(args))
+    elif cmd == "payload":
+        from ..workflow.payload import check_payload
+
+        check_payload(args.model, args.log, module.keywords(args))
     elif cmd == "identify" and module.is_fleet(args):
         from ..workflow.identify import check_fleet
 

@@ -1,6 +1,6 @@
 """``baseparams analyze TABLE --symbolic``: the base parameters as formulas (SymPy).
 
-Imported by :func:`baseparams.cli.analyze` only when ``--symbolic`` is given.
+Imported by :func:`baseparams.cli.cmd_analyze` only when ``--symbolic`` is given.
 """
 
 from __future__ import annotations

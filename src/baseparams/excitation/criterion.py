@@ -16,7 +16,7 @@ from .problem import Problem, keepout_height
 STEPS = (1e-6, 1e-6, 1.0)
 
 
-def criterion_terms(a: np.ndarray, criterion: str) -> tuple[float, np.ndarray]:
+def criterion_terms(a: np.ndarray, criterion: str, interest: int | None = None) -> tuple[float, np.ndarray]:
     """The criterion to minimise and its gradient with respect to the information matrix.
 
     Parameters
@@ -26,6 +26,11 @@ def criterion_terms(a: np.ndarray, criterion: str) -> tuple[float, np.ndarray]:
     criterion : {"cond", "logdet"}
         ``cond``: ``log cond`` of the column-scaled stacked regressor; ``logdet``:
         ``-log det(M / S) / p``, ``M = sum_s A_s^T A_s``.
+    interest : int, optional
+        Only the first ``interest`` columns matter (a payload's ten), the others are nuisance
+        parameters fitted with them (drive terms): the criterion is taken on the information left
+        for those columns, the Schur complement ``S = M_11 - M_12 M_22^-1 M_21`` (D_s-optimality
+        for ``logdet``); ``d value / d M = C^T (d value / d S) C`` with ``C = [1, -M_12 M_22^-1]``.
 
     Returns
     -------
@@ -36,8 +41,44 @@ def criterion_terms(a: np.ndarray, criterion: str) -> tuple[float, np.ndarray]:
     """
     p = a.shape[2]
     w = a.reshape(-1, p)
-    mm = w.T @ w
-    d = np.sqrt(np.diag(mm))
+    if interest is not None and interest < p:
+        return _schur_terms(w.T @ w, len(a), criterion, int(interest))
+    return information_terms(w.T @ w, len(a), criterion)
+
+
+def _schur_terms(mm: np.ndarray, samples: int, criterion: str, k: int) -> tuple[float, np.ndarray]:
+    """:func:`information_terms` of the Schur complement of the nuisance block, mapped back to ``M``."""
+    p = len(mm)
+    try:
+        b = np.linalg.solve(mm[k:, k:], mm[k:, :k]).T  # M_12 M_22^-1
+    except np.linalg.LinAlgError:
+        return np.inf, np.zeros((p, p))
+    c = np.hstack([np.eye(k), -b])
+    value, g = information_terms(c @ mm @ c.T, samples, criterion)
+    return value, c.T @ g @ c
+
+
+def information_terms(mm: np.ndarray, samples: int, criterion: str) -> tuple[float, np.ndarray]:
+    """The criterion of an information matrix and its gradient (:func:`criterion_terms`).
+
+    Parameters
+    ----------
+    mm : ndarray, shape ``(p, p)``
+        ``M = sum_s A_s^T A_s``.
+    samples : int
+        ``S`` (``logdet`` is per sample).
+    criterion : {"cond", "logdet"}
+        As :func:`criterion_terms`.
+
+    Returns
+    -------
+    value : float
+        The value (inf when ``M`` is singular).
+    gamma : ndarray, shape ``(p, p)``
+        ``d value / d M``.
+    """
+    p = len(mm)
+    d = np.sqrt(np.maximum(np.diag(mm), 0.0))
     if np.any(d <= 0):
         return np.inf, np.zeros((p, p))
     g = mm / np.outer(d, d)
@@ -46,7 +87,7 @@ def criterion_terms(a: np.ndarray, criterion: str) -> tuple[float, np.ndarray]:
         return np.inf, np.zeros((p, p))
     if criterion == "logdet":
         ginv = (v / lam) @ v.T
-        value = -(np.sum(np.log(lam)) + 2 * np.sum(np.log(d)) - p * np.log(len(a))) / p
+        value = -(np.sum(np.log(lam)) + 2 * np.sum(np.log(d)) - p * np.log(samples)) / p
         return float(value), -ginv / np.outer(d, d) / p
     h = 0.5 * (np.outer(v[:, -1], v[:, -1]) / lam[-1] - np.outer(v[:, 0], v[:, 0]) / lam[0])
     gamma = h / np.outer(d, d) - np.diag(np.sum(h * g, axis=1) / d**2)
@@ -126,7 +167,7 @@ def grid_values(prob: Problem, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -
             return None
         logc = np.log(cs.cond)
     a = prob.model.regressor(q, dq, ddq, closed=cs)
-    value, gamma = criterion_terms(a, prob.criterion)
+    value, gamma = criterion_terms(a, prob.criterion, getattr(prob.model, "interest", None))
     return {"a": a, "value": value, "gamma": gamma, "tau": None if prob.theta is None else a @ prob.theta,
             "logc": logc, "z": None if prob.keepout is None else keepout_height(prob, q)}
 

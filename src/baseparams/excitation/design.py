@@ -132,8 +132,13 @@ def random_excitation(robot_or_analysis, harmonics: int = 5, base_frequency: flo
 
 
 def _model(obj, drives: bool, rotor: bool) -> IdentModel:
-    """The identification model of a robot, an analysis or a model (checked: fixed base, loops regular)."""
-    if isinstance(obj, IdentModel):
+    """The identification model of a robot, an analysis or a model (checked: fixed base, loops regular).
+
+    A payload's design model (:class:`~baseparams.excitation.payload.DesignModel`, ``design_model``
+    set) is taken as an :class:`IdentModel` is: its columns are the criterion's.
+    """
+    given = isinstance(obj, IdentModel) or getattr(obj, "design_model", False)
+    if given:
         robot = obj.robot
     else:
         robot = obj.robot if isinstance(obj, Analysis) else obj
@@ -145,7 +150,7 @@ def _model(obj, drives: bool, rotor: bool) -> IdentModel:
                               f"designer needs a fixed base (every designed coordinate driven by a joint)")
     if robot.loops:
         loop_bound(robot)
-    if isinstance(obj, IdentModel):
+    if given:
         return obj
     analysis = obj if isinstance(obj, Analysis) else analyze(robot)
     friction = FRICTION_TERMS if drives else ()

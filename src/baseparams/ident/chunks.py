@@ -414,13 +414,6 @@ def combine(parts) -> RowAccumulator:
     RowAccumulator
         Their combination: the same estimate as one accumulator fed every chunk's samples.
     """
-    parts = list(parts)
-    out = RowAccumulator(parts[0].nrows, parts[0].nparams)
-    for p in parts:
-        for mine, theirs in zip(out.factors, p.factors):
-            if theirs.rows:
-                mine.add(theirs.r)
-                mine.rows += theirs.rows - theirs.r.shape[0]  # count samples, not factor rows
-        out.samples += p.samples
-    out.oversampling = max([1.0, *(getattr(p, "oversampling", 1.0) for p in parts)])
-    return out
+    from .estimate import RowAccumulator
+
+    return RowAccumulator.combine(parts)

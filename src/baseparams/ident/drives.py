@@ -209,6 +209,30 @@ class Drives:
             out[:, rows, k] = values
         return out
 
+    def torques(self, dq: np.ndarray, ddq: np.ndarray, nrows: int, delta) -> np.ndarray:
+        """The drives' generalized forces ``D delta`` without forming ``D`` (memory ``O(S nrows)``).
+
+        Parameters
+        ----------
+        dq, ddq : ndarray, shape ``(S, nrows)``
+            Velocities and accelerations of the measured rows' coordinates.
+        nrows : int
+            Number of measured rows.
+        delta : array_like, shape ``(nd,)``
+            Drive parameters (:attr:`names` order).
+
+        Returns
+        -------
+        ndarray, shape ``(S, nrows)``
+            ``regressor(dq, ddq, nrows) @ delta`` [N m or N].
+        """
+        delta = np.asarray(delta, dtype=float).reshape(-1)
+        out = np.zeros((dq.shape[0], nrows))
+        for k in np.flatnonzero(delta):
+            rows, values = self.param_column(int(k), dq, ddq)
+            out[:, rows] += values * delta[k]
+        return out
+
     def param_kind(self, k: int) -> str:
         """The kind of drive parameter ``k`` (``"Ia"``, ``"Fv"``, ``"Fc"``, ``"Fo"`` or a coupled ``"Iam"`` ...).
 
@@ -450,6 +474,24 @@ class DriveRegrouping:
         e[np.arange(len(self.independent)), self.independent] = 1.0
         e[:, self.dependent] = self.K
         return e
+
+
+    def sparse_matrix(self):
+        """:meth:`matrix` as a ``scipy.sparse`` CSR matrix (a large model: ``K`` has few columns).
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix, shape ``(p, nb + nd)``
+            Identity on the independent columns, ``K`` on the dependent ones.
+        """
+        import scipy.sparse as sp
+
+        p = len(self.independent)
+        k = np.asarray(self.K, dtype=float).reshape(p, len(self.dependent))
+        rows, cols = np.nonzero(k)
+        return sp.csr_matrix((np.r_[np.ones(p), k[rows, cols]], (np.r_[np.arange(p), rows],
+                                                                  np.r_[self.independent, self.dependent[cols]])),
+                             shape=(p, len(self.names)))
 
 
 def regroup_drives(factor: np.ndarray, base_names: list[str], drives: Drives, rtol: float = 1e-9,

@@ -13,17 +13,26 @@ stacked factor ``R11`` as ``sigma * ||row_i(R11^-1)||``; ``%sigma = 100 std / |t
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..display import summary_repr
+from ..display import name_list, summary_repr
 from ..errors import BaseparamsError
 from ..numerics import StreamingQR
 
 
 class RowAccumulator:
     """Per measured row, the triangular factor of ``[A_r | tau_r]`` over all samples fed.
+
+    An accumulator is either fed samples (:meth:`add`: its own row factors) or the combination
+    of others (:meth:`combine`: e.g. the cross-validation's blocks, the chunks of a long log),
+    which holds no row factors of its own: what the estimators read of it, :meth:`stacked`,
+    :meth:`row_sse` and :meth:`column_norms2`, is composed from its parts' (TSQR: the factor of
+    the parts' stacked factors is the whole's; sums of squares add). A large model's row factors
+    are ``m`` times ``min(S, p + 1) x (p + 1)``: the combinations add nothing to that, and each
+    weighting's stacked factor is computed once per part (cached, :data:`STACK_CACHE` weightings).
 
     Parameters
     ----------
@@ -41,11 +50,54 @@ class RowAccumulator:
         the information the rows hold, which keeping every filtered sample does not multiply.
     """
 
+    #: stacked factors kept per accumulator (the weightings in use: ones, WLS, ...)
+    STACK_CACHE = 3
+
     def __init__(self, nrows: int, nparams: int):
         self.nrows, self.nparams = int(nrows), int(nparams)
-        self.factors = [StreamingQR(self.nparams + 1) for _ in range(self.nrows)]
+        self._factors: list[StreamingQR] | None = None
+        self._parts: list[RowAccumulator] = []
+        self._stacked: dict[bytes, np.ndarray] = {}
         self.samples = 0
         self.oversampling = 1.0
+
+    @classmethod
+    def combine(cls, parts) -> RowAccumulator:
+        """The accumulator of every part's rows, without copying their factors.
+
+        Parameters
+        ----------
+        parts : iterable of RowAccumulator
+            Accumulators of the same rows and parameters (at least one).
+
+        Returns
+        -------
+        RowAccumulator
+            Their combination: the same estimates as one accumulator fed every part's samples.
+        """
+        parts = [p for p in parts]
+        out = cls(parts[0].nrows, parts[0].nparams)
+        for p in parts:
+            if (p.nrows, p.nparams) != (out.nrows, out.nparams):
+                raise BaseparamsError(f"RowAccumulator.combine: parts of {p.nrows} rows x {p.nparams} parameters "
+                                      f"and {out.nrows} x {out.nparams}")
+            out._parts.extend(p._parts if p._parts else [p])  # flat: parts of parts are parts
+            out.samples += p.samples
+        out.oversampling = max([1.0, *(p.oversampling for p in parts)])  # the rows' information per sample
+        return out
+
+    @property
+    def factors(self) -> list[StreamingQR]:
+        """The row factors (a combination's are formed from its parts' when first read)."""
+        if self._factors is None:
+            self._factors = [StreamingQR(self.nparams + 1) for _ in range(self.nrows)]
+            for part in self._parts:
+                for mine, theirs in zip(self._factors, part.factors):
+                    if theirs.rows:
+                        mine.add(theirs.r)
+                        mine.rows += theirs.rows - theirs.r.shape[0]  # count samples, not factor rows
+            self._parts = []
+        return self._factors
 
     def add(self, a: np.ndarray, tau: np.ndarray) -> RowAccumulator:
         """Feed samples.
@@ -73,7 +125,103 @@ class RowAccumulator:
         for r, f in enumerate(self.factors):
             f.add(a[:, r], tau[:, r])
         self.samples += a.shape[0]
+        self._stacked.clear()
         return self
+
+    def stacked(self, weights: np.ndarray) -> np.ndarray:
+        """The triangular factor ``(<= p + 1, p + 1)`` of all rows, row ``r`` scaled by ``weights[r]``.
+
+        Parameters
+        ----------
+        weights : ndarray, shape ``(m,)``
+            Row weights.
+
+        Returns
+        -------
+        ndarray, shape ``(<= p + 1, p + 1)``
+            ``R`` of ``[W^(1/2) A | W^(1/2) tau]`` (read-only: cached per weighting).
+        """
+        w = np.ascontiguousarray(weights, dtype=float).reshape(-1)
+        key = w.tobytes()
+        hit = self._stacked.get(key)
+        if hit is not None:
+            return hit
+        qr = StreamingQR(self.nparams + 1)
+        if self._parts:  # TSQR over the parts (each part's own stacked factor computed once)
+            for part in self._parts:
+                qr.add(part.stacked(w))
+        else:
+            for wr, f in zip(w, self.factors):
+                qr.add(wr * f.r)
+        r = qr.r
+        r.flags.writeable = False
+        if len(self._stacked) >= self.STACK_CACHE:
+            self._stacked.pop(next(iter(self._stacked)))
+        self._stacked[key] = r
+        return r
+
+    def row_sse(self, theta: np.ndarray) -> np.ndarray:
+        """Each row's residual sum of squares at ``theta``.
+
+        Parameters
+        ----------
+        theta : ndarray, shape ``(p,)``
+            The values.
+
+        Returns
+        -------
+        ndarray, shape ``(m,)``
+            ``||A_r theta - tau_r||^2`` over the samples fed.
+        """
+        x = np.r_[np.asarray(theta, dtype=float), -1.0]
+        if self._parts:
+            return np.sum([part.row_sse(theta) for part in self._parts], axis=0)
+        return np.array([float(np.sum((f.r @ x) ** 2)) for f in self.factors])
+
+    def column_norms2(self) -> np.ndarray:
+        """Each row's squared column norms, the torque's last.
+
+        Returns
+        -------
+        ndarray, shape ``(m, p + 1)``
+            ``||A_r[:, k]||^2`` and ``||tau_r||^2`` over the samples fed.
+        """
+        if self._parts:
+            return np.sum([part.column_norms2() for part in self._parts], axis=0)
+        return np.array([np.sum(f.r**2, axis=0) for f in self.factors]).reshape(self.nrows, self.nparams + 1)
+
+    def row_gram(self, row: int, cols) -> np.ndarray:
+        """One row's Gram matrix on some columns.
+
+        Parameters
+        ----------
+        row : int
+            The measured row.
+        cols : array_like of int, shape ``(k,)``
+            Columns of ``[A | tau]``.
+
+        Returns
+        -------
+        ndarray, shape ``(k, k)``
+            ``A_row[:, cols]^T A_row[:, cols]`` over the samples fed.
+        """
+        cols = np.asarray(cols, dtype=int)
+        if self._parts:
+            return np.sum([part.row_gram(row, cols) for part in self._parts], axis=0)
+        x = self.factors[row].r[:, cols]
+        return x.T @ x
+
+    def nbytes(self) -> int:
+        """Bytes held by the row factors (a combination's parts' included).
+
+        Returns
+        -------
+        int
+            The memory of the factors and pending rows.
+        """
+        if self._parts:
+            return sum(part.nbytes() for part in self._parts)
+        return sum(f.nbytes() for f in (self._factors or []))
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,12 +289,9 @@ def stacked_factor(acc: RowAccumulator, weights: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray, shape ``(<= p + 1, p + 1)``
-        ``R`` of ``[W^(1/2) A | W^(1/2) tau]``.
+        ``R`` of ``[W^(1/2) A | W^(1/2) tau]`` (:meth:`RowAccumulator.stacked`, read-only).
     """
-    qr = StreamingQR(acc.nparams + 1)
-    for w, f in zip(weights, acc.factors):
-        qr.add(w * f.r)
-    return qr.r
+    return acc.stacked(weights)
 
 
 def least_squares(acc: RowAccumulator, names: list[str], weights: np.ndarray | None = None,
@@ -186,14 +331,14 @@ def least_squares(acc: RowAccumulator, names: list[str], weights: np.ndarray | N
     cond, weak = excitation(r11, names)
     if not np.isfinite(cond) or cond > 1e12:
         raise BaseparamsError(f"the data do not excite every model parameter (condition number {cond:.3g}); "
-                              f"weakest: {', '.join(weak)}. Use a richer trajectory, or fewer drive terms")
+                              f"weakest: {name_list(weak)}. Use a richer trajectory, or fewer drive terms")
     theta = np.linalg.solve(r11, r12)
     inv = np.linalg.inv(r11)
     sigma = rho / np.sqrt(n_obs - p)
     std = sigma * np.linalg.norm(inv, axis=1)
     with np.errstate(divide="ignore"):
         pct = np.where(theta != 0, 100 * std / np.abs(theta), np.inf)
-    res = np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors])
+    res = np.sqrt(acc.row_sse(theta))
     rms = res / np.sqrt(max(acc.samples, 1))
     return Estimate(method, theta, std, pct, w, rms, float(np.sqrt((res**2).sum() / n_obs)), cond, acc.samples,
                     r11, r12)
@@ -272,6 +417,33 @@ def motion_factor(model, q, dq, ddq, chunk: int = 4000) -> np.ndarray:
     return qr.r
 
 
+#: floating-point operations a motion's condition number may take (:func:`motion_stride`): ~15 s of QR
+MOTION_FLOPS = 1e11
+
+
+def motion_stride(model, samples: int) -> int:
+    """Every how many samples a long log's motion factor is formed, to stay within :data:`MOTION_FLOPS`.
+
+    A motion's condition number is of the regressor at every sample (:func:`motion_factor`), ``2 S m p^2``
+    flops: a 220-link chain's 20 s log at 500 Hz would take 2e13. Where that exceeds the budget, every
+    k-th sample (the states are smooth: their low-passed motion changes little between neighbours).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The identification model (``m`` measured rows, ``p`` parameters).
+    samples : int
+        Samples of the motion.
+
+    Returns
+    -------
+    int
+        The stride ``k >= 1`` (1 for every model and log of ordinary size).
+    """
+    per = 2.0 * len(model.coords) * float(model.n_params) ** 2
+    return max(1, math.ceil(samples * per / MOTION_FLOPS))
+
+
 def excitation(r11: np.ndarray, names: list[str], weak_ratio: float = 1e-3) -> tuple[float, list[str]]:
     """Condition number of the column-scaled regressor, and its poorly excited parameters.
 
@@ -294,9 +466,12 @@ def excitation(r11: np.ndarray, names: list[str], weak_ratio: float = 1e-3) -> t
     """
     norms = np.linalg.norm(r11, axis=0)
     scaled = r11 / np.where(norms > 0, norms, 1.0)
-    _, s, vt = np.linalg.svd(scaled)
+    s = np.linalg.svd(scaled, compute_uv=False)  # the singular vectors only where some direction is weak
     cond = float(s[0] / s[-1]) if s[-1] > 0 else np.inf
     weak_dirs = [k for k in range(len(s) - 1, -1, -1) if s[k] < weak_ratio * s[0]]
+    if weak_dirs:
+        _, s, vt = np.linalg.svd(scaled)
+        weak_dirs = [k for k in range(len(s) - 1, -1, -1) if s[k] < weak_ratio * s[0]]
     weak = []
     for k in weak_dirs:
         name = names[int(np.argmax(np.abs(vt[k])))]

@@ -218,16 +218,16 @@ def _with_drive_prior_rows(model: IdentModel, acc):
     rho2 = float(np.sum((r[:p, :p] @ theta - r[:p, p]) ** 2) + r[p, p] ** 2)
     s2 = rho2 / max(acc.samples * acc.nrows - rank, 1) * acc.oversampling
     prec = np.diag(drive_precision(model, acc))
-    out = RowAccumulator(acc.nrows, p)
-    out.samples = acc.samples
-    for f, g in zip(out.factors, acc.factors):
-        f.add(g.r)
-        ks = [k for k in np.flatnonzero(prec > 0) if np.any(g.r[:, k])]
+    # the prior's rows, each on a row whose factor has the term's column (weighted with that row): one more part
+    col2 = acc.column_norms2()
+    prior = RowAccumulator(acc.nrows, p)
+    for r, f in enumerate(prior.factors):
+        ks = [k for k in np.flatnonzero(prec > 0) if col2[r, k] > 0]
         if ks:
             extra = np.zeros((len(ks), p + 1))
             extra[np.arange(len(ks)), ks] = np.sqrt(s2 * prec[ks])
             f.add(extra)
-    return out
+    return RowAccumulator.combine([acc, prior])
 
 
 def _drive_precision_delta(model: IdentModel, acc, est) -> np.ndarray:
@@ -420,7 +420,7 @@ def residual_rms(acc, theta: np.ndarray) -> np.ndarray:
     ndarray, shape ``(m,)``
         ``||A_j theta - tau_j|| / sqrt(S)`` per row ``j`` over the accumulated samples.
     """
-    return np.array([np.linalg.norm(f.r @ np.r_[theta, -1.0]) for f in acc.factors]) / np.sqrt(max(acc.samples, 1))
+    return np.sqrt(acc.row_sse(theta)) / np.sqrt(max(acc.samples, 1))
 
 
 def pulled_covariance(f: Fit) -> Fit:

@@ -176,15 +176,26 @@ class IdentModel:
         self._drive_columns(dq[:, sel], ddq[:, sel], out)
         return out
 
-    def _column_map(self) -> np.ndarray:
-        """``(10 n, p)``: the base map on the kept base columns, zero on the drive columns (cached)."""
+    def _column_map(self):
+        """``(10 n, p)``: the base map on the kept base columns, zero on the drive columns (cached).
+
+        Dense for a small model; a ``scipy.sparse`` CSR matrix where the analysis's regrouping is
+        sparse (a large tree: a dense map would take ``80 n p`` bytes).
+        """
         p_map = self.__dict__.get("_pmap")
         if p_map is None:
             nb = len(self.analysis.base_names)
             ind = self.regrouping.independent
-            p_map = np.zeros((10 * self.robot.n, len(ind)))
             base_cols = np.flatnonzero(ind < nb)
-            p_map[:, base_cols] = self.analysis.base_map[:, ind[base_cols]]
+            t = self.analysis.base.T
+            if hasattr(t, "tocsr"):
+                import scipy.sparse as sp
+
+                sub = t.tocsc()[:, self.analysis.base.independent[ind[base_cols]]].tocoo()
+                p_map = sp.csr_matrix((sub.data, (sub.row, base_cols[sub.col])), shape=(10 * self.robot.n, len(ind)))
+            else:
+                p_map = np.zeros((10 * self.robot.n, len(ind)))
+                p_map[:, base_cols] = self.analysis.base_map[:, ind[base_cols]]
             object.__setattr__(self, "_pmap", p_map)
         return p_map
 
@@ -245,14 +256,37 @@ class IdentModel:
         ndarray, shape ``(p, 10 n + nd)``
             ``pi_paper`` in the ``paper`` convention (``robot.parameters("paper")``).
         """
-        base = self.analysis.base
-        t = base.T.toarray() if hasattr(base.T, "toarray") else base.T  # sparse for large trees (recursive form)
-        beta_of_paper = np.asarray(base.E @ np.linalg.inv(t))  # (nb, 10 n): paper -> convention -> base
-        nd = self.drives.n_params
-        blk = np.zeros((beta_of_paper.shape[0] + nd, beta_of_paper.shape[1] + nd))
-        blk[: beta_of_paper.shape[0], : beta_of_paper.shape[1]] = beta_of_paper
-        blk[beta_of_paper.shape[0]:, beta_of_paper.shape[1]:] = np.eye(nd)
-        return self.regrouping.matrix() @ blk
+        g = self.sparse_full_map()
+        return g.toarray() if hasattr(g, "toarray") else g
+
+    def sparse_full_map(self):
+        """:meth:`full_map` as a ``scipy.sparse`` CSR matrix where the regrouping is sparse (a large tree).
+
+        ``G = E_drive [E_base T^-1, 0; 0, I]``: ``T`` (:func:`~baseparams.base.regroup.paper_from`) is
+        block diagonal, inverted body by body; nothing ``(10 n, 10 n)`` is formed dense.
+
+        Returns
+        -------
+        ndarray or scipy.sparse.csr_matrix, shape ``(p, 10 n + nd)``
+            Dense when the analysis's regrouping matrices are.
+        """
+        from ..base.sparse import body_transforms
+
+        base, robot, nd = self.analysis.base, self.robot, self.drives.n_params
+        inv_blocks = np.linalg.inv(body_transforms(robot, base.convention))  # (n, 10, 10): T^-1 body by body
+        if not hasattr(base.E, "tocsr") and not hasattr(base.T, "tocsr"):
+            e = np.asarray(base.E).reshape(base.E.shape[0], robot.n, 10)
+            beta_of_paper = np.einsum("bnk,nkl->bnl", e, inv_blocks).reshape(base.E.shape[0], -1)
+            blk = np.zeros((beta_of_paper.shape[0] + nd, beta_of_paper.shape[1] + nd))
+            blk[: beta_of_paper.shape[0], : beta_of_paper.shape[1]] = beta_of_paper
+            blk[beta_of_paper.shape[0]:, beta_of_paper.shape[1]:] = np.eye(nd)
+            return self.regrouping.matrix() @ blk
+        import scipy.sparse as sp
+
+        inv_t = sp.bsr_matrix((inv_blocks, np.arange(robot.n), np.arange(robot.n + 1)),
+                              shape=(10 * robot.n, 10 * robot.n)).tocsr()
+        blk = sp.block_diag([sp.csr_matrix(base.E) @ inv_t, sp.identity(nd)], format="csr")
+        return (self.regrouping.sparse_matrix() @ blk).tocsr()
 
     def theta(self, pi_paper: np.ndarray, delta: np.ndarray | None = None) -> np.ndarray:
         """Model parameters of full parameters.
@@ -267,11 +301,19 @@ class IdentModel:
         Returns
         -------
         ndarray, shape ``(p,)``
-            ``theta = G [pi_paper; delta]``.
+            ``theta = G [pi_paper; delta]``: the base parameters by the analysis's own map
+            (:meth:`~baseparams.Analysis.to_base`, ``O(n)`` in the recursive form), then the drive regrouping.
         """
+        from ..base.sparse import body_transforms
+
         nd = self.drives.n_params
         delta = np.zeros(nd) if delta is None else np.asarray(delta, dtype=float)
-        return self.full_map() @ np.r_[np.asarray(pi_paper, dtype=float), delta]
+        base, n = self.analysis.base, self.robot.n
+        inv_blocks = np.linalg.inv(body_transforms(self.robot, base.convention))  # paper -> convention, per body
+        pi = np.einsum("nkl,nl->nk", inv_blocks, np.asarray(pi_paper, dtype=float).reshape(n, 10)).reshape(-1)
+        phi = np.r_[self.analysis.to_base(pi, base.convention), delta]
+        reg = self.regrouping
+        return phi[reg.independent] + np.asarray(reg.K).reshape(len(reg.independent), -1) @ phi[reg.dependent]
 
 
 def measured_coords(robot: Robot, rows: str) -> np.ndarray:
@@ -296,6 +338,107 @@ def measured_coords(robot: Robot, rows: str) -> np.ndarray:
 
 #: the drive-regrouping probe's regressor above this many bytes takes 3 p rows (fewer states), in pieces
 PROBE_BYTES = 64e6
+
+#: the most floating-point operations an identification's dense least squares may take, counted before any
+#: of it runs (:func:`check_size`): about half an hour at the 5-10 GFLOP/s LAPACK's QR reaches on one core of
+#: the development machine. A 220-link chain's 2 196 parameters on 22 000 rows take about 1.5e12; a 1 000-link
+#: chain's 10 000 parameters 1e14 at the least (its drive probe alone 6e12)
+MAX_FLOPS = 1e13
+#: ... and the drive-regrouping probe (:func:`probe_cost`), which a simulation runs too: a few minutes
+PROBE_FLOPS = 2e12
+
+#: what helps an identification too large for the machine (:func:`check_size`)
+SMALLER = ("identify part of the robot (--joints A,B,...: the others welded), fewer drive terms (--friction none, "
+           "no --rotor) or fewer fitted samples (a larger --decimate, a shorter log)")
+#: ... and one whose parameters alone are too many, whatever the log (:func:`model_for`)
+SMALLER_MODEL = "identify part of the robot (--joints A,B,...: the others welded)"
+
+
+def fit_cost(p: int, m: int, rows: int) -> tuple[float, float]:
+    """What fitting ``p`` parameters on ``rows`` observations costs: floating-point operations and bytes.
+
+    The row factors hold ``min(rows / m, p + 1)`` rows of ``p + 1`` numbers per measured row
+    (:class:`~baseparams.ident.estimate.RowAccumulator`), about twice over (the cross-validation's
+    blocks and the fitted rows kept); each weighting stacks them once (``2 rows p^2`` flops a QR), and
+    the estimators' dense ``p x p`` work (the blocks' complements, inverses, singular values) is
+    about ``100 p^3``.
+
+    Parameters
+    ----------
+    p : int
+        Model parameters.
+    m : int
+        Measured rows per sample.
+    rows : int
+        Observations (samples x ``m``).
+
+    Returns
+    -------
+    flops : float
+        Floating-point operations, roughly.
+    nbytes : float
+        Peak memory [bytes], roughly.
+    """
+    held = min(rows, m * (p + 1))
+    return 4.0 * held * p**2 + 100.0 * float(p) ** 3, 16.0 * held * (p + 1) + 160.0 * (p + 1) ** 2
+
+
+def probe_cost(p: int, m: int) -> tuple[float, float]:
+    """What :func:`ident_model`'s drive-regrouping probe costs: floating-point operations and bytes.
+
+    Parameters
+    ----------
+    p : int
+        Columns of ``[Yb | D]`` (base and drive parameters).
+    m : int
+        Measured rows per sample.
+
+    Returns
+    -------
+    flops : float
+        A QR of about ``3 p`` rows of ``p`` columns.
+    nbytes : float
+        Its factor, one step of rows and the regressor pieces.
+    """
+    rows = max(20, math.ceil(3 * p / max(m, 1))) * m
+    return 2.0 * rows * p**2, 8.0 * 3 * (p + 1) ** 2 + PROBE_BYTES
+
+
+def check_size(robot: Robot, what: str, cost: tuple[float, float], helps: str = SMALLER,
+               max_flops: float | None = None) -> None:
+    """Refuse at once, in one line, work the machine cannot do: more memory than it has, or beyond ``max_flops``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (named in the message).
+    what : str
+        The work, e.g. ``"fitting 2196 parameters on 22000 rows"``.
+    cost : tuple of float
+        ``(flops, bytes)`` (:func:`fit_cost`, :func:`probe_cost`).
+    helps : str
+        What would help (default :data:`SMALLER`).
+    max_flops : float, optional
+        The most work allowed (default :data:`MAX_FLOPS`, read when called).
+
+    Raises
+    ------
+    BaseparamsError
+        The memory needed exceeds what is available (:func:`~baseparams.numerics.available_bytes`), or
+        the work ``max_flops``.
+    """
+    from ..numerics import available_bytes
+
+    flops, need = cost
+    max_flops = MAX_FLOPS if max_flops is None else max_flops
+    have = available_bytes()
+    if have is not None and need > have:
+        raise BaseparamsError(f"robot {robot.name!r}: {what} needs about {need / 1e9:.2g} GB of memory and "
+                              f"{have / 1e9:.2g} GB are available; would help: {helps}")
+    if flops > max_flops:
+        raise BaseparamsError(f"robot {robot.name!r}: {what} needs about {flops:.1g} floating-point operations "
+                              f"(dense least squares: the cost grows with the cube of the parameters), beyond the "
+                              f"{max_flops:.0g} allowed; would help: {helps}")
 
 
 def ident_model(analysis: Analysis, rotor: bool = True, friction=FRICTION_TERMS,
@@ -341,6 +484,9 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=FRICTION_TERMS,
     coords = measured_coords(robot, analysis.rows)
     drives = drives_for(robot, coords, rotor, friction, coulomb_width, couplings)
     rng = np.random.default_rng(seed)
+    if not drives.n_params:  # nothing to regroup: no probe (a large tree's would be a p^3 QR for nothing)
+        return checked_values(IdentModel(analysis, drives, _identity_regrouping(analysis, drives), coords, log_base),
+                              rng)
     if robot.has_loops:  # positions that close the loops; rates of both signs (sign(dq) != 1)
         q = closed_samples(robot, samples, rng).q[:, robot.actuated]
     else:
@@ -348,6 +494,9 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=FRICTION_TERMS,
     dq, ddq = rng.uniform(-1.0, 1.0, (2,) + q.shape)
     probe = IdentModel(analysis, drives, _identity_regrouping(analysis, drives), coords, log_base)
     p = len(analysis.base_names) + drives.n_params
+    check_size(robot, f"deciding which of its {drives.n_params} drive parameters regroup with its "
+                      f"{len(analysis.base_names)} base parameters", probe_cost(p, len(coords)),
+               "fewer drive terms (--friction none and no --rotor: nothing to decide)", PROBE_FLOPS)
     if len(q) * len(coords) * p * 8 > PROBE_BYTES:  # a large tree: 3 p rows are plenty (p unknowns)
         keep = max(20, math.ceil(3 * p / max(len(coords), 1)))
         q, dq, ddq = q[:keep], dq[:keep], ddq[:keep]
@@ -360,7 +509,65 @@ def ident_model(analysis: Analysis, rotor: bool = True, friction=FRICTION_TERMS,
     if not regrouping.decided:
         raise BaseparamsError(f"robot {robot.name!r}: whether the drive parameters regroup is not decided "
                               f"(singular-value gap {regrouping.gap:.3g}); try another seed or more samples")
-    return IdentModel(analysis, drives, regrouping, coords, log_base)
+    return checked_values(IdentModel(analysis, drives, regrouping, coords, log_base), rng)
+
+
+#: the robot's own parameters, regrouped, must give its torques to this relative accuracy (:func:`checked_values`)
+VALUES_RTOL = 1e-4
+
+
+def checked_values(model: IdentModel, rng: np.random.Generator, samples: int = 4) -> IdentModel:
+    """The model, after checking that its parameter values can be computed: ``A theta(pi)`` gives ``Y pi``.
+
+    A base parameter is ``pi_I + K pi_D``; on a long chain in a link-frame convention the regrouping's
+    coefficients can grow with each body (a 220-link chain of random axes: ``K`` to 3e18 in ``khalil``),
+    and the values, computed in double precision, then lose every digit: a simulation's truth, a fit's
+    prior and a saved result would be numbers that do not give the torques. Checked on a few random states
+    of a tree (``O(n)`` each: :func:`~baseparams.regressor.tp.generalized_forces`).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    rng : numpy.random.Generator
+        Source of the states.
+    samples : int
+        States checked.
+
+    Returns
+    -------
+    IdentModel
+        ``model``.
+
+    Raises
+    ------
+    BaseparamsError
+        The robot's own parameters, regrouped, miss its torques by more than :data:`VALUES_RTOL`.
+    """
+    from ..kinematics.floating import robot_states
+    from ..regressor.tp import generalized_forces
+
+    robot = model.robot
+    if robot.has_loops:
+        return model
+    q = sample_states(robot, samples, rng)[0][:, :model.state_columns]
+    dq, ddq = rng.uniform(-1.0, 1.0, (2,) + q.shape)
+    native = robot_states(robot, q, dq, ddq) if model.log_base else (q, dq, ddq)  # as model.regressor reads them
+    tau = generalized_forces(robot, *native, rows=model.coords)
+    err = float(np.abs(model.regressor(q, dq, ddq) @ model.theta(robot.parameters("paper")) - tau).max())
+    scale = float(np.abs(tau).max())
+    if not err <= VALUES_RTOL * scale:
+        k = model.analysis.base.K
+        big = float(np.abs(k.data if hasattr(k, "tocsr") else np.asarray(k)).max(initial=0.0))
+        convention = model.analysis.convention
+        other = ("--convention khalil (each body's own link frame: no world-frame moments of bodies far from the "
+                 "origin)" if convention == "paper" else
+                 "--convention paper (world frame at q = 0) regroups without the link frames' transforms")
+        raise BaseparamsError(
+            f"robot {robot.name!r}: its {convention} base parameters cannot be computed in double "
+            f"precision: the regrouping's coefficients reach {big:.1g}, and its own parameters, regrouped, miss its "
+            f"torques by {err / max(scale, 1e-300):.1g} of their size; might help: {other}")
+    return model
 
 
 def log_rows(robot: Robot) -> str:
@@ -404,6 +611,12 @@ def model_for(robot: Robot, options, rows: str | None = None) -> IdentModel:
     """
     analysis = analyze(robot, samples=options.analysis_samples, seed=options.seed, convention=options.convention,
                        rows=log_rows(robot) if rows is None else rows, literal=options.literal)
+    coords = measured_coords(robot, analysis.rows)
+    nd = drives_for(robot, coords, options.rotor, options.friction, options.coulomb_width, options.couplings).n_params
+    p = len(analysis.base_names) + nd
+    helps = SMALLER_MODEL + (", fewer drive terms (--friction none, no --rotor)" if nd else "")
+    check_size(robot, f"identifying {p} parameters (at least as many observations)", fit_cost(p, len(coords), p),
+               helps)  # the fewest rows: only fewer parameters help
     return ident_model(analysis, options.rotor, options.friction, options.coulomb_width, couplings=options.couplings,
                        log_base=robot.floating)
 

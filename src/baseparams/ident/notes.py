@@ -93,9 +93,12 @@ def drive_notes(f: Fit, acc) -> list[str]:
                      f"plain least squares (--method {f.method}) fits what the log shows (a poorly excited joint or "
                      f"a model error); the default and physical estimates keep them >= 0")
     seen = set()
-    for fr in acc.factors:
-        g = fr.r.T @ fr.r
-        ks = [k for k in drive if g[k, k] > 0]
+    cols = np.array(sorted(drive), dtype=int)
+    col2 = acc.column_norms2()
+    for row in range(acc.nrows):
+        ks = [int(k) for k in cols if col2[row, k] > 0]  # the row's own drive terms
+        gr = acc.row_gram(row, ks)
+        g = {(a, b): gr[i, j] for i, a in enumerate(ks) for j, b in enumerate(ks)}
         for a_i, a in enumerate(ks):
             for b in ks[a_i + 1:]:
                 cos = abs(g[a, b]) / np.sqrt(g[a, a] * g[b, b])
@@ -160,8 +163,8 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     DataError
         Units that look wrong, unless ``allow_units``.
     """
-    from ..analysis import regressor
     from ..errors import DataError
+    from ..regressor.tp import generalized_forces
     from .plausibility import check_units
 
     robot = model.robot
@@ -169,12 +172,16 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     coords = robot.measured_coords
     revolute = np.array([robot.jtype[robot.dof_body[c]] == "R" or (model.log_base and 3 <= c < 6) for c in coords])
 
-    def torques(q, dq, ddq):
-        if not model.log_base:
+    def torques(q, dq, ddq):  # inverse dynamics, O(S n): no (S, dof, 10 n) regressor
+        if robot.has_loops:  # actuated coordinates: the loops closed and projected by the regressor (small robots)
+            from ..analysis import regressor
+
             return regressor(robot, q, dq, ddq) @ params
+        if not model.log_base:
+            return generalized_forces(robot, q, dq, ddq, params)
         from ..kinematics.floating import robot_states
 
-        tau = regressor(robot, *robot_states(robot, q, dq, ddq)) @ params
+        tau = generalized_forces(robot, *robot_states(robot, q, dq, ddq), params)
         tau[:, :6] = 0.0  # the base wrench is not measured (the log's zeros)
         return tau
 

@@ -77,6 +77,14 @@ class IdentOptions:
         Seed of the analysis' random states.
     memory_mb : float
         Largest regressor formed at once [MB] (longer logs: chunks with overlapping filter edges).
+    effort : {"auto", "torque", "current"}
+        What the log's effort is: joint torques, or motor currents with unknown gains
+        (:mod:`baseparams.ident.fromcurrents`); ``auto``: currents when the log has them and no
+        torques.
+    gain_anchor : str, optional
+        Currents only: one motor's gain ``JOINT=K`` [N m/A at the joint side] fixing the gains'
+        common scale, or several (``JOINT=K,JOINT=K``: their geometric mean; their disagreement
+        the scale's std); default the model file's masses.
 
     Raises
     ------
@@ -106,6 +114,8 @@ class IdentOptions:
     analysis_samples: int | None = IDENTIFY["analysis_samples"]
     seed: int = IDENTIFY["seed"]
     memory_mb: float = IDENTIFY["memory_mb"]
+    effort: str = IDENTIFY["effort"]
+    gain_anchor: str | None = IDENTIFY["gain_anchor"]
 
     def __post_init__(self):
         from ..arguments import check_choice, check_flags, check_keywords
@@ -113,6 +123,8 @@ class IdentOptions:
         check_flags("identify", rotor=self.rotor, allow_units=self.allow_units, literal=self.literal)
         check_choice("identify", "method", self.method, METHODS)
         check_choice("identify", "covariance", self.covariance, COVARIANCES)
+        check_choice("identify", "effort", self.effort, CHOICES["effort"])
+        _anchor(self.gain_anchor, self.effort)
         check_choice("identify", "convention", self.convention, CHOICES["convention"])
         check_keywords("identify", **{k: getattr(self, k) for k in NUMBERS})  # checked, kept as given
         for name, value in (("friction", friction_terms(self.friction)), ("couplings", _couplings(self.couplings)),
@@ -185,6 +197,21 @@ def options_of(options: IdentOptions | None = None, keywords: dict | None = None
     from ..arguments import options_from
 
     return options_from(IdentOptions, options, keywords)
+
+
+def _anchor(text, effort: str) -> None:
+    """``gain_anchor``: None or ``JOINT=K`` (:class:`~baseparams.ident.currents.GainAnchor`), not for torques."""
+    if text is None:
+        return
+    if not isinstance(text, str):
+        from ..arguments import ArgumentTypeError
+
+        raise ArgumentTypeError(f"identify: gain_anchor= must be a string JOINT=K, got {type(text).__name__}")
+    from .currents import parse_anchors
+
+    parse_anchors(text)
+    if effort == "torque":
+        raise BaseparamsError("identify: gain_anchor= applies to motor currents (effort=current), not to torques")
 
 
 def _couplings(couplings) -> tuple:

@@ -93,6 +93,17 @@ def identify(robot: Robot, log, options: IdentOptions | None = None, /, *, valid
         raise BaseparamsError("identify: no log given (one JointLog, or a list of them)")
     logs = [x.checked() for x in logs]  # finite, increasing
     validation = None if validation is None else validation.checked()
+    from .fromcurrents import identify_currents, parse_effort
+
+    efforts = {parse_effort(opts.effort, x) for x in logs}
+    if "current" in efforts:  # motor currents with unknown gains: their own estimator
+        if len(logs) > 1:
+            raise BaseparamsError("identify: several recordings of motor currents are not identified together yet; "
+                                  "identify each recording, or convert the currents to joint torques")
+        return identify_currents(robot, logs[0], opts, validation, progress)
+    if opts.gain_anchor is not None:
+        raise BaseparamsError("identify: gain_anchor= applies to motor currents; this log is identified from its "
+                              "joint torques (effort=current to use its currents)")
     with blas_threads():
         if len(logs) > 1:
             return _identify_many(robot, logs, opts, validation, progress or (lambda msg: None))
@@ -177,7 +188,8 @@ def assemble(f: Fit, acc, opts: IdentOptions, account: Account, train: dict, val
 
 def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identification:
     """:func:`identify`'s steps (arguments as there, ``say`` the progress)."""
-    from .estimate import excitation, motion_factor
+    from .estimate import excitation, motion_factor, motion_stride
+    from .model import check_size, fit_cost
 
     train, held = (split_log(log, opts.holdout) if opts.holdout is not None else (log, validation))
     say(f"analysing {robot.name} (base parameters, drive model)")
@@ -186,6 +198,9 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     unit_notes = check_log_units(model, train, cols, opts.allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep = _prepare_training(train, opts)
+    m = len(model.coords)
+    check_size(robot, f"fitting {model.n_params} parameters on {prep.n_samples} samples x {m} rows",
+               fit_cost(model.n_params, m, prep.n_samples * m))
     band = excitation_bandwidth(train.q[:, cols], prep.design.fs)  # unfiltered: what the low-pass may take off
     unit_notes += check_rate(train.source, band, float(train.t[-1] - train.t[0]), prep.design.fs,
                              prep.design.cutoff, opts.cutoff is not None, opts.allow_units)
@@ -204,9 +219,10 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     train_rms, val, series = _scores(f, acc, log, held, prep, cols, raw_q, opts, say)
     series["train"]["spectrum"] = position_spectrum(train, cols[model.row_states], prep.design.fs, prep.design.cutoff,
                                                     prep.full.t)
-    motion = {"condition_number": excitation(motion_factor(model, prep.full.q[:, cols], prep.full.dq[:, cols],
-                                                           prep.full.ddq[:, cols]), model.names)[0],
-              "samples": int(prep.full.n_samples)}
+    k = motion_stride(model, prep.full.n_samples)  # 1 but for a large model's long log
+    f_q, f_dq, f_ddq = (x[::k, cols] for x in (prep.full.q, prep.full.dq, prep.full.ddq))
+    motion = {"condition_number": excitation(motion_factor(model, f_q, f_dq, f_ddq), model.names)[0],
+              "samples": int(len(f_q))}
     account = Account(train.n_samples, dict(prep.removed), float(prep.design.cutoff), int(prep.factor),
                       tuple(prep.notes), acc_note, tuple(term_notes), cov_note, tuple(unit_notes))
     return assemble(f, acc, opts, account, train_rms, val, series, motion)

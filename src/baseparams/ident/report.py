@@ -58,7 +58,7 @@ def format_identification(result: Identification) -> str:
         lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
                      + f"): {cells}")
     lines += _terms_lines(j.get("terms") or [])
-    lines += _rms_lines(j)
+    lines += _rms_lines(j) if "currents" not in j else _current_lines(j)
     if j["physical"] is not None:
         p = j["physical"]
         for body, m in p.get("masses_moved", {}).items():
@@ -135,4 +135,34 @@ def _rms_lines(j: dict) -> list[str]:
             per = ", ".join(f"{k} {v:.4g}" for k, v in part["rms_lowpassed"].items())
             lines.append(f"validation RMS {part['rms_lowpassed_total']:.4g} against the measured torques low-passed "
                          f"at {part['score_cutoff']:g} Hz (--score-cutoff; per joint: {per})")
+    return lines
+
+
+def _current_lines(j: dict) -> list[str]:
+    """A result from motor currents: the gains, and the RMS of the currents [A] and of any logged joint torques."""
+    c = j["currents"]
+    lines = [f"gains [N m/A at the joint side] ({c['scale_note'].split(':')[0]}: {c['anchor']}):"]
+    anchored = [] if c["anchor"] == "model file" else [a.split("=")[0] for a in c["anchor"].split(",")]
+    for m in c["motors"]:
+        how = ("anchor" if m in anchored else "NOT DETERMINED" if m in c["undetermined"] else
+               f"std {c['std'][m]:.3g}")
+        lines.append(f"  {m:<16s} {c['gains'][m]:12.6g}  ({how})")
+    for label in ("train", "validation"):
+        part = j[label]
+        if part is None:
+            lines.append("validation: none (--holdout SECONDS or --validate FILE)")
+            continue
+        what = "training" if label == "train" else "held-out"
+        for key, unit, of in (("rms", part.get("unit", "A"), "currents"), ("joint_torque", None, "torques")):
+            s = part if key == "rms" else part.get("joint_torque")
+            if s is None:
+                continue
+            per = ", ".join(f"{k} {v:.4g}" for k, v in s["rms"].items())
+            lines.append(f"{label} RMS {s['rms_total']:.4g} {unit or s.get('unit', '')} against the raw measured {of} "
+                         f"at every {what} sample ({s['samples']} samples; per {'motor' if key == 'rms' else 'joint'}: "
+                         f"{per})" + ("; the joint-side torque predicted: rigid body, no motor-side friction or "
+                                      "rotor inertia" if key != "rms" else ""))
+            if label == "validation" and "score_cutoff" in s:
+                lines.append(f"validation RMS {s['rms_lowpassed_total']:.4g} {unit or s.get('unit', '')} against the "
+                             f"measured {of} low-passed at {s['score_cutoff']:g} Hz (--score-cutoff)")
     return lines

@@ -71,6 +71,10 @@ class Identification:
     truth : dict, optional
         The comparison with a simulation's true parameters (:meth:`compare_truth`), when
         :func:`baseparams.identify` was given ``truth``; in :meth:`to_json` as ``truth``.
+    currents : CurrentGains, optional
+        Identified from motor currents (:mod:`baseparams.ident.fromcurrents`): the motors' gains,
+        the anchor and what currents cannot separate; :meth:`predict` then gives the joint-side
+        torques and :meth:`predict_currents` the currents. ``None`` for torques.
     """
 
     fit: Fit
@@ -82,6 +86,7 @@ class Identification:
     options: IdentOptions | None = None
     motion: dict | None = None
     truth: dict | None = None
+    currents: object = None
 
     def predict(self, log, smooth: bool = True, columns=None) -> np.ndarray:
         """Predicted joint torques at every sample of a log (its own time stamps).
@@ -105,19 +110,62 @@ class Identification:
         smooth : bool
             Filtered states (default), or the states as logged.
         columns : str, path or dict, optional
-            A layout mapping for a log file (README "Log layout").
+            A layout mapping for a log file (docs/guides/log-layout.md).
 
         Returns
         -------
         ndarray, shape ``(S, m)``
             Predicted torques [N m or N]: columns the measured joints in the model's order
-            (:attr:`joints`), rows the log's samples.
+            (:attr:`joints`), rows the log's samples. Identified from currents: the joint-side
+            torques a joint-torque sensor after the gear reads (no motor-side friction or rotor
+            inertia, :class:`~baseparams.ident.fromcurrents.CurrentGains`).
 
         Raises
         ------
         BaseparamsError
             A log missing a measured joint, too short or too slowly sampled for the cutoff.
         """
+        f = self.fit
+        if self.currents is not None:
+            from .gains import joint_side_fit
+
+            f = joint_side_fit(f, self.currents)
+        return predict_log(f, self._log_of(log, columns, smooth), self._cutoff, smooth)
+
+    def predict_currents(self, log, smooth: bool = True, columns=None) -> np.ndarray:
+        """Predicted motor currents at every sample of a log (a result identified from currents).
+
+        Parameters
+        ----------
+        log : JointLog, str or path
+            As :meth:`predict`.
+        smooth : bool
+            As :meth:`predict`.
+        columns : str, path or dict, optional
+            As :meth:`predict`.
+
+        Returns
+        -------
+        ndarray, shape ``(S, m)``
+            Currents [A], columns the motors (named after the measured joints), with every
+            drive term (rotor inertia, friction) at the identified gains.
+
+        Raises
+        ------
+        BaseparamsError
+            A result identified from torques (no gains), or as :meth:`predict`.
+        """
+        if self.currents is None:
+            raise BaseparamsError("predict_currents: this result was identified from torques; it has no motor gains")
+        tau = predict_log(self.fit, self._log_of(log, columns, smooth), self._cutoff, smooth)
+        return self.currents.currents(tau)
+
+    @property
+    def _cutoff(self) -> float | None:
+        return None if self.options is None else self.options.cutoff
+
+    def _log_of(self, log, columns, smooth):
+        """A log to predict: a JointLog, or a file read for this robot; checked."""
         import os
 
         from ..arguments import ArgumentTypeError, check_flags
@@ -135,7 +183,7 @@ class Identification:
             log = read_log(log, self.model.robot, columns=columns, allow_subset=True, require_tau=False)
         elif not isinstance(log, JointLog):
             raise ArgumentTypeError(f"predict: log must be a log file's path or a JointLog, got {type(log).__name__}")
-        return predict_log(self.fit, log.checked(), None if self.options is None else self.options.cutoff, smooth)
+        return log.checked()
 
     @property
     def joints(self) -> list[str]:
@@ -241,8 +289,9 @@ class Identification:
         m = self.model
         held = self.validation is not None
         rms = (self.validation if held else self.train)["rms_total"]
+        unit = m.torque_unit if self.currents is None else "A (currents)"
         return clip(f"<Identification {m.robot.name}: {self.fit.method}, {m.n_base} base + {m.n_drive} drive terms, "
-                    f"{'held-out' if held else 'training'} RMS {format_number(rms, 3)} {m.torque_unit}>")
+                    f"{'held-out' if held else 'training'} RMS {format_number(rms, 3)} {unit}>")
 
     @property
     def names(self) -> np.ndarray:
@@ -377,7 +426,7 @@ class Identification:
         return entry
 
     def to_json(self) -> dict:
-        """One JSON-able object (schema in the README's identification section).
+        """One JSON-able object (schema: docs/guides/identification.md, "JSON output").
 
         Returns
         -------
@@ -430,7 +479,8 @@ class Identification:
                 "base_parameters": self.base_parameters(), "drives": self.drives(),
                 "couplings": self.couplings(), "train": self.train,
                 "validation": self.validation, "physical": phys, "notes": list(self.notes),
-                "terms": self.terms_json(), **({"truth": self.truth} if self.truth is not None else {})}
+                "terms": self.terms_json(), **({"truth": self.truth} if self.truth is not None else {}),
+                **({"currents": self.currents.to_json()} if self.currents is not None else {})}
 
     def terms_json(self) -> list[dict]:
         """Every model term tried: kept or rejected, why, its cross-validated figure, values and std.

@@ -82,8 +82,8 @@ def log_columns(model: IdentModel, log) -> np.ndarray:
     missing = [j for j in wanted if j not in where]
     if missing and r.floating and missing[0] == BASE_COORDINATES[0]:
         raise BaseparamsError(f"{log.source}: robot {r.name!r} has a floating base and the log has no base pose "
-                              "(columns base_x, base_y, base_z, base_qw, base_qx, base_qy, base_qz: README, "
-                              "Log layout)")
+                              "(columns base_x, base_y, base_z, base_qw, base_qx, base_qy, base_qz: "
+                              "docs/guides/log-layout.md)")
     if missing:
         what = "actuated joints" if r.has_loops else "joints"
         raise BaseparamsError(f"{log.source}: the log has no column for the {what} {missing} of {r.name!r}")

@@ -333,7 +333,9 @@ def document(ident) -> dict:
            "term_choices": [{"name": c.name, "kept": c.kept, "why": c.why, "cv_rms": c.cv_rms}
                             for c in ident.fit.term_choices],
            "motion": ident.motion}
-    return _plain(doc)
+    if ident.currents is not None:  # identified from motor currents: the gains, the anchor, the groups
+        doc["currents"] = ident.currents.to_json()
+    return plain(doc)
 
 
 def save(ident, path, inputs=(), what: str = "output"):
@@ -418,8 +420,13 @@ def read(path, robot: Robot) -> dict:
     terms, choices = _terms(doc, model, str(path))
     f = Fit(model, opts.method, theta, _estimate(doc["estimate"], theta), _physical(doc.get("physical")),
             terms=terms, term_choices=choices)
-    return {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
-            "notes": (*doc["notes"], *doc["_notes"]), "series": None, "options": opts, "motion": doc.get("motion")}
+    out = {"fit": f, "samples": doc["samples"], "train": doc["train"], "validation": doc["validation"],
+           "notes": (*doc["notes"], *doc["_notes"]), "series": None, "options": opts, "motion": doc.get("motion")}
+    if doc.get("currents") is not None:
+        from .gains import CurrentGains
+
+        out["currents"] = CurrentGains.from_json(doc["currents"])
+    return out
 
 
 def _estimate(e: dict, theta: np.ndarray):
@@ -488,12 +495,23 @@ def _terms(doc: dict, model, source: str) -> tuple[tuple, tuple]:
     return tuple(terms), choices
 
 
-def _plain(x):
-    """Numpy scalars and tuples as JSON types; non-finite floats as ``None``."""
+def plain(x):
+    """A document as JSON types: numpy scalars, arrays and tuples as numbers and lists; non-finite floats as ``None``.
+
+    Parameters
+    ----------
+    x : object
+        A dict, list, tuple, array or number (nested).
+
+    Returns
+    -------
+    object
+        The same with JSON types only (what ``json.dumps(..., allow_nan=False)`` writes).
+    """
     if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
+        return {str(k): plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [plain(v) for v in x]
     if isinstance(x, (bool, np.bool_)):
         return bool(x)
     if isinstance(x, (int, np.integer)):

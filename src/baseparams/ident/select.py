@@ -354,11 +354,8 @@ def drive_precision(model, acc: RowAccumulator, weights: np.ndarray | None = Non
     """
     p = model.n_params
     w = np.ones(acc.nrows) if weights is None else np.asarray(weights, dtype=float)
-    col2 = np.zeros((acc.nrows, p))
-    tau2 = np.zeros(acc.nrows)
-    for r, f in enumerate(acc.factors):
-        norms2 = np.sum(f.r**2, axis=0) * w[r] ** 2
-        col2[r], tau2[r] = norms2[:p], norms2[p]
+    norms2 = acc.column_norms2() * (w**2)[:, None]
+    col2, tau2 = norms2[:, :p], norms2[:, p]
     nb = len(model.analysis.base_names)
     out = np.zeros((p, p))
     for k, i in enumerate(model.regrouping.independent):
@@ -541,19 +538,14 @@ def system_of(acc: RowAccumulator, weights: np.ndarray) -> tuple[np.ndarray, np.
 
 def _system(blocks: list[RowAccumulator], weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:
     p = blocks[0].nparams
-    acc = RowAccumulator(blocks[0].nrows, p)
-    for b in blocks:
-        for f, g in zip(acc.factors, b.factors):
-            f.add(g.r)
-        acc.samples += b.samples
-    acc.oversampling = max(b.oversampling for b in blocks)
+    acc = RowAccumulator.combine(blocks)  # each block's stacked factor once per weighting (cached)
     r = stacked_factor(acc, weights)
     r = np.vstack([r, np.zeros((max(p + 1 - r.shape[0], 0), p + 1))])
     return r[:p, :p], r[:p, p], float(r[p, p] ** 2), acc.samples * acc.nrows
 
 
 def _sse(block: RowAccumulator, theta: np.ndarray) -> float:
-    return float(sum(np.linalg.norm(f.r @ np.r_[theta, -1.0]) ** 2 for f in block.factors))
+    return float(np.sum(block.row_sse(theta)))
 
 
 def noise_variance(r11: np.ndarray, rho2: float, n_obs: int) -> float:
@@ -705,13 +697,7 @@ def split_blocks(acc_parts: list[RowAccumulator], folds: int = FOLDS) -> list[Ro
     groups = np.array_split(np.arange(len(acc_parts)), k)
     out = []
     for g in groups:
-        acc = RowAccumulator(acc_parts[0].nrows, acc_parts[0].nparams)
-        for i in g:
-            for f, h in zip(acc.factors, acc_parts[i].factors):
-                f.add(h.r)
-            acc.samples += acc_parts[i].samples
-        acc.oversampling = acc_parts[g[0]].oversampling if len(g) else 1.0
-        out.append(acc)
+        out.append(RowAccumulator.combine([acc_parts[i] for i in g]))
     return out
 
 

@@ -151,8 +151,8 @@ def amplitude_ladder(robot: Robot) -> list[float]:
     return [0.5]
 
 
-#: samples whose regressor is formed at once (its size: samples x joints x 10 bodies x 8 bytes)
-_BLOCK = 20_000
+#: bytes of regressor formed at once for a robot with loops (a tree's torques need none)
+_BLOCK_BYTES = 32e6
 
 
 def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
@@ -161,7 +161,7 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
     """A synthetic joint log, with its true model parameters.
 
     A floating base moves too: its position [m] and Z-Y-X angles [rad] follow Fourier series like
-    the joints (``amplitude`` each); the log holds its pose and twist (README "Log layout") and
+    the joints (``amplitude`` each); the log holds its pose and twist (docs/guides/log-layout.md) and
     the torques of the joints alone (the base wrench that carries it is not measured), the
     truth the base parameters those torques determine.
 
@@ -205,7 +205,7 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
         Loops the trajectory does not close (lower ``amplitude``); a trajectory for a floating base.
     """
     from ..jointlog import JointLog
-    from ..kinematics.floating import BASE_COORDINATES, robot_states
+    from ..kinematics.floating import BASE_COORDINATES
 
     check_trajectory(robot, trajectory)
     rows = "joints" if robot.floating else "all"
@@ -222,20 +222,15 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
             fourier_draws(rng, SIM_HARMONICS, model.state_columns)
             t, q, dq, ddq = (np.asarray(x, dtype=float) for x in trajectory)
         delta = _draw_drives(model, rng)
-        try:  # in blocks: the regressor of a long log at once would take S x m x 10 n numbers
-            rows = slice(None) if robot.has_loops else model.coords
-            rigid = np.concatenate([regressor_of(robot, *robot_states(robot, q[i:i + _BLOCK], dq[i:i + _BLOCK],
-                                                                      ddq[i:i + _BLOCK]))[:, rows]
-                                    @ robot.parameters("paper") for i in range(0, max(len(q), 1), _BLOCK)])
+        try:
+            rigid = rigid_torques(robot, model, q, dq, ddq)
         except BaseparamsError as exc:
             if k + 1 == len(ladder) or "close the loops" not in str(exc):
                 raise
             continue  # the loops do not close that far: a smaller default excursion
         break
     sel = model.row_states
-    tau = rigid + np.concatenate([model.drives.regressor(dq[i:i + _BLOCK, sel], ddq[i:i + _BLOCK, sel],
-                                                          len(model.coords)) @ delta
-                                  for i in range(0, max(len(q), 1), _BLOCK)])
+    tau = rigid + model.drives.torques(dq[:, sel], ddq[:, sel], len(model.coords), delta)
     tau = add_noise(tau, noise, rng) if noise > 0 else tau
     joints = tuple(model.joints)
     if robot.floating:  # the base's coordinates first, its wrench not measured
@@ -247,6 +242,44 @@ def simulate_log(robot: Robot, duration: float = 20.0, rate: float = 500.0, ampl
              "parameters": [{"name": n, "value": float(v)} for n, v in zip(model.names, theta)],
              "drives": dict(zip(model.drives.names, delta.tolist()))}
     return log, truth
+
+
+def rigid_torques(robot: Robot, model: IdentModel, q, dq, ddq) -> np.ndarray:
+    """The rigid bodies' generalized forces of the measured rows, the robot's own parameters.
+
+    A tree's by inverse dynamics (:func:`baseparams.regressor.tp.generalized_forces`: ``O(S n)``
+    work and memory, no regressor); a loop robot's through its closed regressor, a bounded block
+    of samples at a time.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    model : IdentModel
+        Its identification model (the measured rows, a floating base's log coordinates).
+    q, dq, ddq : ndarray, shape ``(S, state_columns)``
+        States (a floating base's six first, in the log's coordinates).
+
+    Returns
+    -------
+    ndarray, shape ``(S, m)``
+        ``Y pi`` on the measured rows [N m or N].
+
+    Raises
+    ------
+    BaseparamsError
+        States that do not close the loops.
+    """
+    from ..kinematics.floating import robot_states
+    from ..regressor.tp import generalized_forces
+
+    pi = robot.parameters("paper")
+    q, dq, ddq = robot_states(robot, q, dq, ddq)
+    if not robot.has_loops:
+        return generalized_forces(robot, q, dq, ddq, pi, rows=model.coords)
+    step = max(1, int(_BLOCK_BYTES // (8 * max(len(model.coords), 1) * 10 * robot.n)))
+    return np.concatenate([regressor_of(robot, q[i:i + step], dq[i:i + step], ddq[i:i + step]) @ pi
+                           for i in range(0, max(len(q), 1), step)])
 
 
 def check_trajectory(robot: Robot, trajectory) -> None:

@@ -53,76 +53,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import BaseparamsError, DataError
+from ..interrupts import Interrupts
 from ..jointlog import JointLog
 from . import chunks
 from . import preprocess as pp
 from .plausibility import check_rate
-
-#: the exit status of a run stopped by SIGTERM (128 + 15, as a shell reports a process it terminated)
-EXIT_TERMINATED = 143
-
-
-class Interrupts:
-    """SIGINT and SIGTERM honoured in every pass of a streamed identification, cleanly.
-
-    Within ``with Interrupts() as guard``, SIGINT raises :class:`KeyboardInterrupt` at once (as
-    Python's own handler does) and SIGTERM ``SystemExit(EXIT_TERMINATED)`` (Python's default
-    would end the process at once, leaving an output's temporary file behind), and either is
-    remembered: :meth:`check`, called at every block of every pass and at every step, raises it
-    again when the first one was caught by code between (a C extension's blanket error handling,
-    a lazy import's fallback), and so does leaving the block. The exception unwinds every open
-    output (their temporary files removed: :func:`baseparams.files.atomic_path`). A handler
-    installed before (``SIG_IGN`` aside: then none is installed for that signal) is called as
-    well; outside the main thread (no signals there) nothing is installed.
-    """
-
-    def __init__(self):
-        self.pending: BaseException | None = None
-        self.previous: dict = {}
-
-    def __enter__(self) -> Interrupts:
-        import signal
-        import threading
-
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                previous = signal.getsignal(sig)
-                if previous is not signal.SIG_IGN:
-                    self.previous[sig] = previous
-                    signal.signal(sig, self._handler)
-        return self
-
-    def _handler(self, signum, frame):
-        import signal
-
-        stop = KeyboardInterrupt() if signum == signal.SIGINT else SystemExit(EXIT_TERMINATED)
-        self.pending = stop
-        previous = self.previous.get(signum)
-        if callable(previous) and previous is not signal.default_int_handler:
-            previous(signum, frame)
-        raise stop
-
-    def check(self) -> None:
-        """Raise the interrupt again if a signal came (and was swallowed since).
-
-        Raises
-        ------
-        KeyboardInterrupt
-            After a SIGINT.
-        SystemExit
-            After a SIGTERM (status :data:`EXIT_TERMINATED`).
-        """
-        if self.pending is not None:
-            raise self.pending
-
-    def __exit__(self, kind, value, tb) -> None:
-        import signal
-
-        for sig, previous in self.previous.items():
-            signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
-        self.previous = {}
-        if kind is None:
-            self.check()
 
 
 class Guarded:
@@ -323,10 +258,12 @@ def scan(stream) -> Scan:
     DataError
         Bad values (the reader's message: file, column, row).
     """
-    n, head, notes, t0, t_end, lo, hi = 0, [], (), None, None, np.inf, -np.inf
+    n, head, notes, t0, t_end, lo, hi = 0, [], [], None, None, np.inf, -np.inf
     for blk in stream.blocks():
         if t0 is None:
-            t0, notes = float(blk.t[0]), blk.notes
+            t0, notes = float(blk.t[0]), list(blk.notes)
+        elif blk.notes and sum("WARNING" in x for x in notes) < MAX_BLOCK_WARNINGS:
+            notes += [x for x in blk.notes if x not in notes]  # a later block's warnings (the first few)
         if n < HEAD_ROWS:
             head.append(copy(rows(blk, 0, HEAD_ROWS - n)))
         d = np.diff(blk.t if t_end is None else np.r_[t_end, blk.t])
@@ -335,6 +272,10 @@ def scan(stream) -> Scan:
         n += blk.n_samples
         t_end = float(blk.t[-1])
     return Scan(n, t0, t_end, concat(head), tuple(notes), (lo, hi))
+
+
+#: warning notes of the log's blocks kept in a streamed run's notes (each block says its own rows)
+MAX_BLOCK_WARNINGS = 5
 
 
 @dataclass(frozen=True, eq=False)
@@ -663,6 +604,28 @@ def fitted(stream, plan: Plan, model, cols: np.ndarray):
             yield np.empty(0), None, None, removed, idx[0]
 
 
+def fold_edges(count: int, folds: int) -> np.ndarray:
+    """The blocked cross-validation's fold boundaries over ``count`` samples, without an array of them.
+
+    The boundaries of ``np.array_split(np.arange(count), folds)`` (the in-memory path's folds: the
+    first ``count % folds`` folds one sample longer), computed from the two integers alone.
+
+    Parameters
+    ----------
+    count : int
+        Samples split.
+    folds : int
+        Number of consecutive folds.
+
+    Returns
+    -------
+    ndarray of int, shape ``(folds + 1,)``
+        ``0``, the end of each fold, ``count`` last.
+    """
+    size, extra = divmod(int(count), int(folds))
+    return np.cumsum([0] + [size + 1] * extra + [size] * (folds - extra))
+
+
 def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, spill: bool = True):
     """Pass 3: the row factors, in the blocked cross-validation's folds, and the fitted rows if they fit.
 
@@ -695,7 +658,7 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, sp
     from .select import FOLDS
 
     count = plan.fitted_count()
-    edges = np.cumsum([0] + [len(x) for x in np.array_split(np.arange(count), FOLDS)])
+    edges = fold_edges(count, FOLDS)  # not np.array_split(np.arange(count)): no array of every fitted sample
     parts = [RowAccumulator(len(model.coords), model.n_params) for _ in range(FOLDS)]
     fitted_mb = count * len(model.coords) * (model.n_params + 1) * 8 / 1e6
     kept = [] if fitted_mb <= memory_mb else Spilled.open(fitted_mb) if spill else None
@@ -1107,6 +1070,40 @@ def covariance_pass(f, acc, covariance, kept, stream, plan, model, cols, say):
     return f, note, _series_of(thin, f.theta, names)
 
 
+def check_effort(stream, effort: str, gain_anchor: str | None) -> None:
+    """A log identified from its motor currents is read whole (:class:`NotStreamable`); the rest as the whole log's.
+
+    Currents asked for and none logged, or a gain anchor for a log identified from its torques,
+    are refused as :func:`~baseparams.ident.identify` refuses them.
+
+    Parameters
+    ----------
+    stream : LogStream
+        The log's stream (its ``has_currents`` and ``has_tau``).
+    effort : {"auto", "torque", "current"}
+        The identification's input kind (``IdentOptions.effort``).
+    gain_anchor : str or None
+        ``IdentOptions.gain_anchor``.
+
+    Raises
+    ------
+    NotStreamable
+        The log is identified from its currents: read it whole.
+    BaseparamsError
+        Currents asked for and none logged; a gain anchor for a log identified from its torques.
+    """
+    currents, torques = getattr(stream, "has_currents", False), getattr(stream, "has_tau", True)
+    if effort == "current" and not currents:
+        raise DataError(f"{stream.source}: no motor currents (columns cur_<joint> [A], or cur = ... in a columns= "
+                        f"map)")
+    if effort == "current" or (effort == "auto" and currents and not torques):
+        raise NotStreamable(f"{stream.source}: motor currents (cur_ columns): the log is read whole, not streamed "
+                            f"(identification from currents fits the gains over all its rows)")
+    if gain_anchor is not None:
+        raise BaseparamsError("identify: gain_anchor= applies to motor currents; this log is identified from its "
+                              "joint torques (effort=current to use its currents)")
+
+
 def identify_stream(robot, stream, options=None, /, *, validation=None, predictions=None, progress=None,
                     **keywords):
     """:func:`~baseparams.ident.identify` on a log streamed from its file (module docstring).
@@ -1140,7 +1137,7 @@ def identify_stream(robot, stream, options=None, /, *, validation=None, predicti
     Raises
     ------
     NotStreamable
-        Non-uniform time stamps, a floating base (read the log whole).
+        Non-uniform time stamps, a floating base, motor currents (read the log whole).
     BaseparamsError
         As :func:`~baseparams.ident.identify`.
     """
@@ -1153,6 +1150,7 @@ def identify_stream(robot, stream, options=None, /, *, validation=None, predicti
                             "over the whole log), not streamed")
     if opts.holdout is not None and validation is not None:
         raise BaseparamsError("give either holdout seconds or a validation log, not both")
+    check_effort(stream, opts.effort, opts.gain_anchor)
     kept = None
     if getattr(stream, "kind", None) in ("text", "parquet"):  # parsed once, replayed from a binary copy
         stream = kept = Replay(stream, stream.decoded_mb)

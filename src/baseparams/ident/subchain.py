@@ -113,9 +113,9 @@ def subchain(robot: Robot, log: JointLog, joints: Sequence[str],
         raise ModelError(f"robot {robot.name!r}: joint(s) {', '.join(other)} can be neither welded (not R or P) nor "
                          "identified (not in joints=)")
     cols = [log.joints.index(j) for j in small.joint_names]
-    sub = JointLog(log.t, tuple(small.joint_names), log.q[:, cols], log.tau[:, cols],
-                   dq=None if log.dq is None else log.dq[:, cols], ddq=None if log.ddq is None else log.ddq[:, cols],
-                   source=log.source, removed=dict(log.removed), notes=log.notes)
+    rest = {k: None if getattr(log, k) is None else getattr(log, k)[:, cols] for k in ("tau", "dq", "ddq", "cur")}
+    sub = JointLog(log.t, tuple(small.joint_names), log.q[:, cols], **rest, source=log.source,
+                   removed=dict(log.removed), notes=log.notes)
     notes = [f"sub-chain: {len(small.joint_names)} joint(s) identified, {len(values)} welded"]
     if held:
         notes.append(f"welded at their logged (still) positions: {', '.join(held)}")

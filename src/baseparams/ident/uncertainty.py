@@ -23,7 +23,12 @@ keeps only the last ``b - 1`` scores (:class:`HacMeat`).
 The bandwidth is Andrews' (1991) AR(1) plug-in for the Bartlett kernel,
 ``b = 1.1447 (alpha(1) N)^(1/3)`` with ``alpha(1)`` from an AR(1) fitted to each score
 component; it is estimated on the first :data:`PILOT` fitted samples (all of them in a shorter
-log), whatever the chunks.
+log; a large model's first :data:`PILOT_BYTES` of rows), whatever the chunks.
+
+A large model's pass stays bounded: its rows are scored a few at a time (:data:`FEED_BYTES`), and
+the projection bias ``Q`` (a ``p x p`` product per window) is summed over every k-th window, scaled
+by k, so that it takes at most :data:`BIAS_FLOPS` (every window of an ordinary model; k = 8 on a
+220-link chain's 100 samples).
 """
 
 from __future__ import annotations
@@ -40,6 +45,13 @@ COVARIANCES = ("hac", "white")
 PILOT = 4096
 #: AR(1) coefficients of the score components are clipped to this before the plug-in
 MAX_RHO = 0.97
+#: the pilot's rows are held until the bandwidth is known: at most this many bytes of them (a large model's
+#: pilot is shorter than :data:`PILOT` samples)
+PILOT_BYTES = 256e6
+#: bytes of weighted rows formed at once while feeding the meat
+FEED_BYTES = 32e6
+#: the most floating-point operations the projection bias ``Q`` takes (:class:`HacMeat`'s window stride)
+BIAS_FLOPS = 2e11
 
 
 def andrews_bandwidth(scores: np.ndarray, total: int) -> int:
@@ -96,11 +108,13 @@ class HacMeat:
         ``b`` (>= 1); ``b = 1`` is the heteroskedasticity-consistent (White) sum.
     h_inv : ndarray, shape ``(p, p)``, optional
         ``H^-1`` (needed for ``Q``).
+    stride : int, optional
+        ``Q`` summed over every ``stride``-th window, scaled by it (at least ``b // 8``).
     """
 
-    def __init__(self, nparams: int, bandwidth: int, h_inv: np.ndarray | None = None):
+    def __init__(self, nparams: int, bandwidth: int, h_inv: np.ndarray | None = None, stride: int | None = None):
         self.p, self.b = int(nparams), max(int(bandwidth), 1)
-        self.stride = max(1, self.b // 8)
+        self.stride = max(1, self.b // 8, int(stride or 1))
         self.h_inv = h_inv
         self.tail = np.zeros((0, self.p))
         self.rows = None
@@ -280,15 +294,19 @@ def hac_meat(blocks, h_inv: np.ndarray, theta: np.ndarray, weights: np.ndarray, 
     p = len(theta)
     w = np.asarray(weights, dtype=float)
     meat, pilot = None, []
+    per_sample = 8.0 * len(w) * p  # bytes of one sample's rows
+    step = max(1, min(512, int(FEED_BYTES // per_sample)))
+    pilot_len = max(1, min(PILOT, int(PILOT_BYTES // per_sample)))
 
     def feed(s, a):
-        for k in range(0, len(s), 512):  # bounded temporaries whatever the block
-            meat.add(s[k:k + 512], a[k:k + 512] * w[None, :, None] if corrected else None)
+        for k in range(0, len(s), step):  # bounded temporaries whatever the block
+            meat.add(s[k:k + step], a[k:k + step] * w[None, :, None] if corrected else None)
 
     def start():
         s = np.concatenate([x for x, _ in pilot])
         b = bandwidth if bandwidth is not None else andrews_bandwidth(s, samples)
-        return HacMeat(p, b, h_inv if corrected else None)
+        window = 2.0 * p * p * b * len(w) + 4.0 * float(p) ** 3  # one window's C H^-1 C
+        return HacMeat(p, b, h_inv if corrected else None, stride=int(np.ceil(samples * window / BIAS_FLOPS)))
 
     for a, tau in blocks:
         s = scores(a, tau, theta, w)
@@ -296,7 +314,7 @@ def hac_meat(blocks, h_inv: np.ndarray, theta: np.ndarray, weights: np.ndarray, 
             feed(s, a)
             continue
         pilot.append((s, a))
-        if sum(len(x) for x, _ in pilot) >= PILOT:  # the same pilot whatever the chunks
+        if sum(len(x) for x, _ in pilot) >= pilot_len:  # the same pilot whatever the chunks
             meat = start()
             for x, y in pilot:
                 feed(x, y)

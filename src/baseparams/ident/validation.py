@@ -45,9 +45,9 @@ def split_log(log, seconds: float):
         raise BaseparamsError(f"{log.source}: holdout {seconds} s must be inside the log's {t[-1] - t[0]:.6g} s")
     cut = int(np.searchsorted(t, t[-1] - seconds))
 
-    def part(sl):
-        rates = {k: None if getattr(log, k) is None else getattr(log, k)[sl] for k in ("dq", "ddq")}
-        return replace(log, t=t[sl], q=log.q[sl], tau=log.tau[sl], **rates)
+    def part(sl):  # every per-sample signal the log has (torques, rates, currents)
+        rest = {k: None if getattr(log, k) is None else getattr(log, k)[sl] for k in ("tau", "dq", "ddq", "cur")}
+        return replace(log, t=t[sl], q=log.q[sl], **rest)
 
     return part(slice(0, cut)), replace(part(slice(cut, None)), source=f"{log.source} (last {seconds:g} s)")
 

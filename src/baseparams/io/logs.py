@@ -12,13 +12,15 @@ A time column ``t`` [s] and per coordinate of the model ``q_<joint>`` [rad or m]
 name (``robot.coordinate_names()``): a 1-dof joint's name; for a joint of several coordinates one
 name each, an MJCF body's own joints (``rootx``, ``rootz``, ``rooty`` of ``rootx+rootz+rooty``) or
 the joint's name and the coordinate's place (``p.0``, ``p.1``, ``p.2`` of a URDF ``planar`` joint
-``p``, in the order of its axes; a ball, a universal joint likewise). Example CSV header for a
-2-joint arm::
+``p``, in the order of its axes; a ball, a universal joint likewise). An arm without joint-torque
+sensors logs its motor currents instead (or as well): ``cur_<joint>`` [A], the current of the
+motor named after the joint, identified with unknown gains (:mod:`baseparams.ident.fromcurrents`);
+a joint with a ``cur_`` column needs no ``tau_``. Example CSV header for a 2-joint arm::
 
     t,q_joint1,q_joint2,dq_joint1,dq_joint2,tau_joint1,tau_joint2
 
-Every column named ``q_``/``dq_``/``ddq_``/``tau_`` + a name must name a coordinate of the model;
-other columns are ignored, and a note lists them. Every coordinate of the model (the floating
+Every column named ``q_``/``dq_``/``ddq_``/``tau_``/``cur_`` + a name must name a coordinate of
+the model; other columns are ignored, and a note lists them. Every coordinate of the model (the floating
 base's excepted: below) must be in the log unless ``allow_subset=True``.
 
 Floating base
@@ -65,14 +67,16 @@ Mapping (any other layout)
     sign = -1                # +1 or -1 (default 1)
     gear_ratio = 100         # motor side -> joint side: q = q_motor / ratio, tau = tau_motor * ratio
     torque_gain = 0.35       # tau column is a current [A]: tau_motor = gain * current [N m/A]
+    cur = "motor_current_1"  # or: the current [A] itself, its gain unknown (identified; sign applied)
     offset = 1.5708          # joint-side zero shift [rad or m], added last (default 0)
 
     [joints.panda_joint2]
     name = "fr3_joint2"      # columns q_fr3_joint2, ... (bags: the name in JointState.name[])
 
 Conversions, per joint: ``q = sign * q_col / gear_ratio + offset``, the same for ``dq`` and ``ddq``
-without the offset, ``tau = sign * torque_gain * gear_ratio * tau_col``. Coupled transmissions
-(one motor driving two joints) are not expressible here: convert such logs before reading.
+without the offset, ``tau = sign * torque_gain * gear_ratio * tau_col``, ``cur = sign * cur_col``.
+Coupled transmissions (one motor driving two joints) are not expressible here: convert such logs
+before reading.
 
 Checks
 ------
@@ -117,14 +121,14 @@ TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
 PARQUET_SUFFIXES = (".parquet", ".pq")
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 #: the signals of a joint, in the default layout's column prefixes
-KINDS = ("q", "dq", "ddq", "tau")
+KINDS = ("q", "dq", "ddq", "tau", "cur")
 #: joint types whose coordinates are not a log's joint columns (a floating base: its pose columns)
 UNLOGGED = ("F",)
 #: the largest plausible ``|q|`` of a rotation [rad] and of a translation [m] (degrees? millimetres?)
 MAX_ANGLE, MAX_TRAVEL = 4 * np.pi, 10.0
 
 _BAG_FIELDS = {"q": "position", "dq": "velocity", "ddq": "acceleration", "tau": "effort"}
-_COLUMN = re.compile(r"^(q|dq|ddq|tau)_(.+)$")
+_COLUMN = re.compile(r"^(q|dq|ddq|tau|cur)_(.+)$")
 
 
 @dataclass
@@ -891,8 +895,8 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
         e = entries[j]
         base = e.get("name", j)
         cols = {k: e.get(k, f"{k}_{base}") for k in KINDS}
-        for k in KINDS:
-            required = k == "q" or (k == "tau" and require_tau)
+        for k in KINDS:  # a joint that logs its motor's current needs no torque
+            required = k == "q" or (k == "tau" and require_tau and cols["cur"] not in table.columns)
             if cols[k] not in table.columns and (required or k in e):
                 need = "required" if required else "named in the mapping"
                 raise DataError(f"{table.source}: no {table.label(cols[k])} for joint {j!r} ({k} is {need})")
@@ -902,7 +906,7 @@ def _resolve(table: _Table, robot: Robot, spec: dict, allow_subset: bool, requir
                           float(e.get("torque_gain", 1.0)), float(e.get("offset", 0.0)), j in unbounded))
     if not out:
         raise DataError(f"{table.source}: no joint of robot {robot.name!r} in the log")
-    for k in ("dq", "ddq") if require_tau else ("dq", "ddq", "tau"):
+    for k in ("dq", "ddq", "tau", "cur"):  # tau too: a joint logging currents need not have it, but then none
         have = [x.joint for x in out if x.cols[k] is not None]
         if have and len(have) < len(out):
             lack = [x.joint for x in out if x.cols[k] is None]
@@ -992,6 +996,8 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
         ratio = np.array([x.ratio for x in joints])
         if k == "tau":
             arrays[k] = raw * (sign * ratio * np.array([x.gain for x in joints]))
+        elif k == "cur":  # a current: its gain is what identification finds
+            arrays[k] = raw * sign
         else:
             arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
     implausible = _check_plausible(table, joints, arrays["q"], *bounds[:2])
@@ -1005,7 +1011,8 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
         notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"
                      + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))
     return JointLog(t=t, joints=tuple(x.joint for x in joints), q=arrays["q"], tau=arrays["tau"], dq=arrays["dq"],
-                    ddq=arrays["ddq"], source=table.source, removed=dict(table.removed), notes=tuple(notes))
+                    ddq=arrays["ddq"], source=table.source, removed=dict(table.removed), notes=tuple(notes),
+                    cur=arrays["cur"])
 
 
 def _base_columns(table: _Table, robot: Robot) -> list[str]:
@@ -1071,7 +1078,7 @@ def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
     if ddq is not None:
         notes.append("base acceleration: derived from the base twist (central differences)")
     return JointLog(log.t, BASE_COORDINATES + log.joints, cat(chart, log.q), cat(zeros, log.tau), cat(rates, log.dq),
-                    cat(ddq, log.ddq), log.source, dict(log.removed), tuple(notes))
+                    cat(ddq, log.ddq), log.source, dict(log.removed), tuple(notes), cat(zeros, log.cur))
 
 
 #: a logged base twist is refused as given in the world frame when, integrated in the world frame, it follows
@@ -1330,6 +1337,8 @@ class LogStream:
         The model's joints read, in the model's order (the columns of every block).
     has_dq, has_ddq : bool
         Whether the blocks carry logged velocities and accelerations.
+    has_tau, has_currents : bool
+        Whether the blocks carry joint torques, motor currents (``cur_<joint>`` [A]).
 
     Raises
     ------
@@ -1372,6 +1381,8 @@ class LogStream:
         self.joints = tuple(x.joint for x in self._joints)
         self.has_dq = self._joints[0].cols["dq"] is not None
         self.has_ddq = self._joints[0].cols["ddq"] is not None
+        self.has_tau = self._joints[0].cols["tau"] is not None
+        self.has_currents = self._joints[0].cols["cur"] is not None  # every joint read has them, or none
 
     def __repr__(self) -> str:
         return f"<LogStream {self.source}: {len(self.joints)} joints, {self.kind}>"
@@ -1389,7 +1400,8 @@ class LogStream:
         ------
         JointLog
             Consecutive samples (``t (k,)``, ``q, tau (k, m)``, ``dq``/``ddq`` when logged);
-            ``notes`` of the first block say how the file was read.
+            ``notes`` of the first block say how the file was read; a later block's notes are
+            its WARNING lines only (``allow_units``: positions beyond the plausible bounds).
 
         Raises
         ------
@@ -1407,8 +1419,9 @@ class LogStream:
                 raise DataError(f"{self.source}: {table.label(self.spec['time'])}, {table.row(0)}: time "
                                 f"{log.t[0]:.9g} s {what} the one before ({last_t:.9g} s); time must be strictly "
                                 f"increasing")
-            if count:
-                log = JointLog(log.t, log.joints, log.q, log.tau, log.dq, log.ddq, log.source)
+            if count:  # how the file was read is the first block's to say; a later block's warnings are its own
+                log = JointLog(log.t, log.joints, log.q, log.tau, log.dq, log.ddq, log.source,
+                               notes=tuple(n for n in log.notes if "WARNING" in n), cur=log.cur)
             last_t, count = float(log.t[-1]), count + log.n_samples
             yield log
         if not count:

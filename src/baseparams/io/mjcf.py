@@ -265,7 +265,8 @@ def load_mjcf(path: str | Path, name: str | None = None, gravity=None, floating:
         The ``weld`` and ``connect`` equalities to a mocap body (a control device the simulation
         moves: Meta-World's and Fetch's hands are welded to one, for actuation): ``drop``
         (default) leaves them out, with a note; ``keep`` reads them as loop joints to the world
-        whose world side may be placed anywhere (:attr:`LoopJoint.anchor_free`), also noted
+        whose world side may be placed anywhere
+        (:attr:`~baseparams.model.robot.LoopJoint.anchor_free`), also noted
         (:class:`~baseparams.enums.MocapWelds`).
     edit : callable, optional
         Called with the parsed ``MjSpec`` before it is compiled (it may change values:

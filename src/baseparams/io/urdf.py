@@ -298,8 +298,9 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
               edit=None) -> Robot:
     """Read a URDF / URDF+ file into a :class:`Robot` (see the module doc).
 
-    Physically infeasible inertias of moving links are warnings (:class:`InertiaWarning`), or
-    errors with ``strict_inertia``; links fixed to the world are never checked.
+    Physically infeasible inertias of moving links are warnings
+    (:class:`~baseparams.model.inertia.InertiaWarning`), or errors with ``strict_inertia``; links
+    fixed to the world are never checked.
 
     Parameters
     ----------

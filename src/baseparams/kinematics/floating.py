@@ -1,7 +1,7 @@
 """A floating base in a log: its pose and twist as written, and the smooth coordinates the pipeline filters.
 
 A log of a floating-base robot (a legged robot, a humanoid) holds the base's pose and, optionally, its
-twist beside the joints (README "Log layout"; :mod:`baseparams.io.logs`):
+twist beside the joints (docs/guides/log-layout.md; :mod:`baseparams.io.logs`):
 
 * ``base_x, base_y, base_z`` [m]: the origin of the base body's frame (the floating joint's frame:
   a URDF's root link), world frame;
@@ -33,7 +33,7 @@ BASE_COORDINATES = ("base_x", "base_y", "base_z", "base_roll", "base_pitch", "ba
 POSE_COLUMNS = ("base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz")
 #: a log's optional base twist columns: linear [m/s], then angular [rad/s] velocity, base frame
 TWIST_COLUMNS = ("base_vx", "base_vy", "base_vz", "base_wx", "base_wy", "base_wz")
-#: largest |pitch| [rad] the Euler chart accepts (85 deg; it is singular at 90)
+#: largest ``|pitch|`` [rad] the Euler chart accepts (85 deg; it is singular at 90)
 MAX_PITCH = np.deg2rad(85.0)
 #: the windows a logged twist is integrated over to be compared with the logged pose [s] (:func:`twist_mismatch`)
 TWIST_WINDOW = 0.1

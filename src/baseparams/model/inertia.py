@@ -46,7 +46,7 @@ _SYMORO = {"m": "M", "hx": "MX", "hy": "MY", "hz": "MZ",
 _MC = {"m": "m", "hx": "mcx", "hy": "mcy", "hz": "mcz",
        **{f"i{ab}": f"I{ab}" for ab in ("xx", "xy", "xz", "yy", "yz", "zz")}}
 _LINK = "link frame (each body's joint frame), inertia about its origin"
-#: the regrouping's within-body candidate order (:func:`baseparams.base.regroup.regroup`):
+#: the regrouping's within-body candidate order (:func:`baseparams.base.regroup.base_parameters`):
 #: mass, first moments z y x, then the second moments backwards
 _BACK = ("m", "hz", "hy", "hx", "izz", "iyz", "iyy", "ixz", "ixy", "ixx")
 

@@ -18,7 +18,7 @@ from ..model.inertia import hat as hat10
 from ..pga.linalg import outer, sym
 
 #: provenance of a column (:class:`~baseparams.enums.Source`, whose labels these are): the
-#: paper's principles, the extended rules (:mod:`.rules`), unmeasured roots, numerics
+#: paper's principles, the extended rules (:mod:`~baseparams.nullspace.rules`), unmeasured roots, numerics
 PAPER = tuple(s.label for s in Source if s.is_paper)
 EXTENDED = tuple(s.label for s in Source if s.is_extended)
 #: columns that come from which generalized forces are measured, not from geometry

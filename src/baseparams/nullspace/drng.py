@@ -1,6 +1,6 @@
 """DRNG: the regressor nullspace from the three principles and the extended rules, ranked.
 
-:mod:`.principles` gives the paper's columns (with its slips fixed), :mod:`.rules` the rules
+:mod:`.principles` gives the paper's columns (with its slips fixed), :mod:`~baseparams.nullspace.rules` the rules
 that close its gaps, :func:`unmeasured_columns` what the measured rows add; :mod:`.rank`
 decides their exact rank. :func:`drng` runs them all and returns a :class:`~.result.DRNGResult`.
 """
@@ -463,7 +463,7 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     """Run DRNG (corrected) on ``robot``: columns with provenance and their exact rank.
 
     The paper's Algorithm "DRNG" with slips E1-E5 fixed (:func:`.principles.drng_columns`), then
-    the extended rules (:func:`.rules.rule_columns`, then
+    the extended rules (:func:`~baseparams.nullspace.rules.rule_columns`, then
     :func:`.coupled.parallelogram_group_columns` for parallelograms and
     :func:`.coupled.coupled_columns` for joint couplings, and :func:`.compound.compound_columns` for
     compound joints, given the columns before), then :func:`unmeasured_columns`; each rule's
@@ -478,7 +478,7 @@ def drng(robot: Robot, tol: float = 1e-9, extended: bool = True, rows: str = "al
     tol : float, default 1e-9
         Geometric tolerance of the principles and rules (parallel axes, zero gravity, ...).
     extended : bool, default True
-        Add the rules that close the paper's gaps (:mod:`.rules`: R-A, R-B, R-L1, R-L2, R-L3;
+        Add the rules that close the paper's gaps (:mod:`~baseparams.nullspace.rules`: R-A, R-B, R-L1, R-L2, R-L3;
         :mod:`.coupled`: R-M; :mod:`.compound`: R-C);
         ``False`` gives the paper's three principles alone.
     rows : str or sequence of str, default "all"

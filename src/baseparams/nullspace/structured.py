@@ -866,7 +866,7 @@ def independent_columns(robot: Robot, result: DRNGResult) -> Columns | None:
     Columns or None
         ``result.rank`` linearly independent columns spanning the same space, each independent
         on its highest body (:func:`.rank.leading_spans` in decision coordinates,
-        :func:`~.drng.decision_columns`): what
+        :func:`~baseparams.nullspace.result.decision_columns`): what
         :func:`baseparams.base.sparse.tree_base_parameters` regroups; ``None`` when the echelon
         form needed eliminations or does not reproduce DRNG's rank.
     """

@@ -484,7 +484,7 @@ def screw_exp(screw: np.ndarray, theta: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     screw : ndarray, shape ``(6,)``
-        A unit screw ``(omega, v)`` (rotation: |omega| = 1; translation: omega = 0, |v| = 1).
+        A unit screw ``(omega, v)`` (rotation: ``|omega| = 1``; translation: ``omega = 0``, ``|v| = 1``).
     theta : array_like, shape ``(S,)``
         Angles (rad) or displacements (m); any shape ``(*)``.
 

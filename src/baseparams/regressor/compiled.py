@@ -302,6 +302,36 @@ def tree_projected(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray,
     return out
 
 
+def tree_forces(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, pi: np.ndarray,
+                rowsel: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``Y[:, rowsel] @ pi`` of a tree without forming ``Y``, compiled: ``O(n)`` work and memory per sample.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (a tree).
+    q, dq, ddq : ndarray, shape ``(S, dof)``
+        Validated states.
+    pi : ndarray, shape ``(10 n,)``
+        Standard parameters, ``paper`` convention.
+    rowsel : ndarray of int, shape ``(rows,)``
+        The coordinates whose generalized forces are returned, in order.
+    out : ndarray, shape ``(S, rows)``, optional
+        A C-contiguous float64 buffer; every entry is set.
+
+    Returns
+    -------
+    ndarray, shape ``(S, rows)``
+        The generalized forces, gravity included.
+    """
+    lay = Layout(robot)
+    rowsel = np.ascontiguousarray(rowsel, dtype=np.int64)
+    out = np.empty((q.shape[0], len(rowsel))) if out is None else out
+    pi = np.ascontiguousarray(np.asarray(pi, dtype=float).reshape(lay.n, 10))
+    _kernel("tree_forces")(*lay.args(), _c(q), _c(dq), _c(ddq), pi, rowsel, out)
+    return out
+
+
 def closed_projected(robot: Robot, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, G: np.ndarray, P: np.ndarray,
                      out: np.ndarray | None = None) -> np.ndarray:
     """``Y_closed @ P`` of a closed-loop robot without forming ``Y_closed``, compiled.

@@ -47,7 +47,7 @@ def _cross(a0, a1, a2, b0, b1, b2):
 
 @njit(cache=CACHE, inline="always")
 def _exp_screw(sw, theta, er, et):
-    """``exp(screw^ theta)``: rotation ``er (3, 3)``, translation ``et (3,)`` (|omega| = 1 or 0).
+    """``exp(screw^ theta)``: rotation ``er (3, 3)``, translation ``et (3,)`` (``|omega|`` = 1 or 0).
 
     Rodrigues: ``R = I + s K + c K^2``, ``t = theta v + c (w x v) + (theta - s) w x (w x v)``
     with ``K = [w]x``, ``K^2 = w w^T - |w|^2 I``, ``s = sin(theta)``, ``c = 1 - cos(theta)``.
@@ -407,6 +407,49 @@ def closed_projected(parent, q_index, ndofs, floating, screws, gravity, anc_ptr,
                             lt[c] += lines[k, c] * gk
                     _emit_projected(out, smp, a, i, lt[0], lt[1], lt[2], lt[3], lt[4], lt[5], -1, xs, y10,
                                     cptr, ccol, cmat)
+
+
+@njit(cache=CACHE, parallel=True)
+def tree_forces(parent, q_index, ndofs, floating, screws, gravity, anc_ptr, anc, pair_m, pair_n, q, dq, ddq,
+                pi, rowsel, out):
+    """``out (S, len(rowsel)) = Y[:, rowsel] @ pi`` without forming ``Y``: ``O(n)`` per sample.
+
+    Each body's wrench line ``W_i = X_i pi_i`` (its ten swapped bar lines weighted by its ten
+    parameters ``pi (n, 10)``), summed up the tree (children after parents, so backwards), then
+    ``tau_j = L_j . W_body(j)`` (a floating root's basis line ``e_c``: component ``c``).
+    """
+    n, dof, s = parent.shape[0], screws.shape[0], q.shape[0]
+    unit = _unit(floating, q_index, dof)
+    body_of = np.empty(dof, dtype=np.int64)
+    for i in range(n):
+        for j in range(q_index[i], q_index[i] + ndofs[i]):
+            body_of[j] = i
+    nblocks = (s + _BLOCK - 1) // _BLOCK
+    for blk in prange(nblocks):
+        rot, pos, vel, acc, lines, xs, er, et, pts, pacc = _scratch(n, dof)
+        w = np.zeros((n + 32, 6))[16:16 + n]  # padded: no cache line shared with another thread
+        for smp in range(blk * _BLOCK, min(s, (blk + 1) * _BLOCK)):
+            for i in range(n):
+                _body(i, smp, parent, q_index, ndofs, floating, screws, q, dq, ddq, rot, pos, vel, acc, lines, er, et)
+                _bar(i, rot, pos, vel, acc, gravity, pair_m, pair_n, pts, pacc, xs)
+                for c in range(6):
+                    v = 0.0
+                    for k in range(10):
+                        v += xs[i, c, k] * pi[i, k]
+                    w[i, c] = v
+            for i in range(n - 1, -1, -1):
+                p = parent[i]
+                if p >= 0:
+                    for c in range(6):
+                        w[p, c] += w[i, c]
+            for r in range(rowsel.shape[0]):
+                j = rowsel[r]
+                b = body_of[j]
+                if unit[j] >= 0:
+                    out[smp, r] = w[b, unit[j]]
+                else:
+                    out[smp, r] = (lines[j, 0] * w[b, 0] + lines[j, 1] * w[b, 1] + lines[j, 2] * w[b, 2]
+                                   + lines[j, 3] * w[b, 3] + lines[j, 4] * w[b, 4] + lines[j, 5] * w[b, 5])
 
 
 #: columns one thread filters at a time (:func:`sosfilt_rows`)

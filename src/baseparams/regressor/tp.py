@@ -279,25 +279,66 @@ def bar(r: np.ndarray) -> np.ndarray:
     return out + np.where(_OFF[:, 0], r[..., _N, _M], 0.0)
 
 
-def generalized_forces(robot: Robot, q, dq, ddq, params=None) -> np.ndarray:
-    """Inverse dynamics through the regressor, ``tau = Y pi``.
+def generalized_forces(robot: Robot, q, dq=None, ddq=None, params=None, *, rows=None, backend: str = "auto",
+                       max_bytes: float = 32e6) -> np.ndarray:
+    """Inverse dynamics ``tau = Y pi`` of a tree without forming the regressor ``Y``.
+
+    Each body's wrench line ``W_i = X_i pi_i`` (its ten swapped bar lines, weighted by its ten
+    parameters), summed up the tree, paired with each coordinate's current line:
+    ``tau_j = L_j . sum_{i moved by j} W_i``, the rows of eq. "basic coeff" contracted with
+    ``pi`` body by body. Work and memory ``O(S n)``, not the regressor's ``O(S dof n)``.
 
     Parameters
     ----------
     robot : Robot
-        The robot (a tree).
-    q, dq, ddq : array_like, shape ``(S, dof)``
-        Joint states.
+        The robot (a tree; loops, if any, cut).
+    q : array_like, shape ``(S, dof)`` or ``(dof,)``
+        Positions (a floating root's six first: its twist coordinates).
+    dq, ddq : array_like, shape ``(S, dof)`` or ``(dof,)``, optional
+        Velocities and accelerations (a floating root's: quasi-velocities); default zero.
     params : array_like, shape ``(10 n,)``, optional
         Parameters in the ``paper`` convention; default the robot's own.
+    rows : array_like of int, optional
+        The coordinates whose generalized forces are returned, in order (default all ``dof``).
+    backend : {"auto", "numpy", "compiled"}
+        As for :func:`regressor` (``auto``: the compiled kernel for large batches).
+    max_bytes : float
+        Largest batch of kinematics formed at once by the numpy path [bytes] (about 1 kB per
+        body and sample).
 
     Returns
     -------
-    tau : ndarray, shape ``(S, dof)``
-        Generalized forces, gravity included.
+    tau : ndarray, shape ``(S, len(rows))``
+        Generalized forces [N m or N], gravity included; equal to ``regressor(...)[:, rows] @ pi``.
+
+    Raises
+    ------
+    BaseparamsError
+        Wrong shapes, NaN or inf in the states or parameters, rows out of range.
     """
-    pi = robot.parameters("paper") if params is None else np.asarray(params, dtype=float)
-    return regressor(robot, q, dq, ddq) @ pi
+    q, dq, ddq = as_states(robot.dof, q, dq, ddq)
+    pi = robot.parameters("paper") if params is None else np.asarray(params, dtype=float).reshape(-1)
+    if pi.shape != (10 * robot.n,) or not np.all(np.isfinite(pi)):
+        raise BaseparamsError(f"params must be {10 * robot.n} finite numbers (paper convention), got {pi.shape}")
+    rowsel = np.arange(robot.dof) if rows is None else np.asarray(rows, dtype=np.int64).reshape(-1)
+    if rowsel.size and (rowsel.min() < 0 or rowsel.max() >= robot.dof):
+        raise BaseparamsError(f"rows must be coordinates 0..{robot.dof - 1}, got {rowsel.tolist()[:10]}")
+    s = q.shape[0]
+    if use_compiled(backend, s * robot.dof * robot.n):
+        return compiled.tree_forces(robot, q, dq, ddq, pi, rowsel)
+    out = np.empty((s, len(rowsel)))
+    step = max(1, int(max_bytes // (1024 * max(robot.n, 1))))
+    p = pi.reshape(robot.n, 10)
+    body = np.asarray(robot.dof_body)[rowsel]
+    for k in range(0, s, step):
+        sl = slice(k, k + step)
+        state = forward_kinematics(robot, q[sl], dq[sl], ddq[sl])
+        w = np.einsum("snkc,nk->snc", _bar_lines_swapped(*point_accelerations(robot, state)), p)  # (S, n, 6)
+        for i in range(robot.n - 1, 0, -1):  # subtree sums: children after parents
+            if robot.parent[i] >= 0:
+                w[:, robot.parent[i]] += w[:, i]
+        out[sl] = np.einsum("sjc,sjc->sj", state.lines[:, rowsel], w[:, body])
+    return out
 
 
 def closed_regressor(robot: Robot, closed, *, out: np.ndarray | None = None, backend: str = "auto") -> np.ndarray:
@@ -340,6 +381,10 @@ def closed_regressor(robot: Robot, closed, *, out: np.ndarray | None = None, bac
     for i in range(n):  # per body: (S, na, 6) @ (S, 6, 10), written in place (a loop over bodies)
         np.matmul(lines[:, :, i, :], xt[:, i], out=y[:, :, i, :])
     return out
+
+
+#: columns from which a map's product dominates the numpy path (:func:`projected_regressor`)
+WIDE_MAP = 128
 
 
 def projected_regressor(robot: Robot, q, dq=None, ddq=None, *, P: np.ndarray, rows=None,
@@ -390,7 +435,11 @@ def projected_regressor(robot: Robot, q, dq=None, ddq=None, *, P: np.ndarray, ro
     s = q.shape[0]
     shape = (s, len(rowsel), P.shape[1])
     out = _checked_out(out, shape)
-    if use_compiled(backend, s * len(rowsel) * robot.n):
+    # the numpy path's product with P costs about P.shape[1] / 8 regressors (a 60-link chain's 596 columns:
+    # 28 us per sample, row and body, not 0.15): wide maps go compiled sooner (not an arm's 54 columns: the
+    # compiler's 100 MB would be most of a short log's identification)
+    wide = P.shape[1] // 8 if P.shape[1] >= WIDE_MAP else 1
+    if use_compiled(backend, s * len(rowsel) * robot.n * wide):
         return compiled.tree_projected(robot, q, dq, ddq, P, rowsel, out=out)
     out = np.empty(shape) if out is None else out
     for k in range(0, s, chunk):

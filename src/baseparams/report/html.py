@@ -669,11 +669,11 @@ def _torque_blocks(ident) -> str:
             continue
         for k, joint in enumerate(s["joints"]):
             e = s["tau"][:, k] - s["tau_hat"][:, k]
-            unit = units[joint]["force"]
-            quantity = "force" if unit == "N" else "torque"
+            unit = s.get("unit") or units[joint]["force"]  # a fit from motor currents: the currents [A]
+            quantity = {"N": "force", "A": "current"}.get(unit, "torque")
             blocks.append(f"<div class='joint' data-part='{part}' data-joint='{html.escape(joint)}'><b>{part}: "
                           f"{html.escape(joint)}</b> (as plotted, both low-passed and decimated: RMS "
-                          f"{_num(np.sqrt(np.mean(e**2)), '.4g')} {unit}; against the raw torques: the table)<br>"
+                          f"{_num(np.sqrt(np.mean(e**2)), '.4g')} {unit}; against the raw {quantity}s: the table)<br>"
                           + _series_svg(s["t"], [s["tau"][:, k], s["tau_hat"][:, k]], f"{part}-{k}",
                                         f"{quantity} [{unit}]") +
                           f"{_histogram(e, unit)}</div>")
@@ -761,14 +761,17 @@ def _drives_table(ident) -> str:
 
 
 def _rms_table(ident, j: dict) -> str:
-    """Residual RMS per joint, training and validation, with units."""
-    units = joint_units(ident)
+    """Residual RMS per joint, training and validation, with units (a fit from motor currents: of its currents)."""
+    units = {n: u["force"] for n, u in joint_units(ident).items()}
+    if ident.currents is not None:
+        units = dict.fromkeys(ident.currents.motors, "A")
     val = j["validation"]
     rows = "".join(f"<tr><td>{html.escape(name)}</td><td>{_num(v, '.4g')}</td>"
-                   f"<td>{_num(val['rms'].get(name), '.4g') if val else '-'}</td><td>{units[name]['force']}</td></tr>"
+                   f"<td>{_num(val['rms'].get(name), '.4g') if val else '-'}</td><td>{units[name]}</td></tr>"
                    for name, v in j["train"]["rms"].items())
     note = "" if val else " (no validation: <code>--holdout SECONDS</code> or <code>--validate FILE</code>)"
-    how = ("predicted minus raw measured torques at every sample" if "samples" in j["train"] else
+    what = "currents" if ident.currents is not None else "torques"
+    how = (f"predicted minus raw measured {what} at every sample" if "samples" in j["train"] else
            "train: the fit's own rows (filtered, decimated); validation: against the raw torques at every sample")
     return (f"<h2>Residual RMS per joint{note}</h2><p>{how}</p><table id='rms'><tr><th>joint</th><th>train RMS</th>"
             f"<th>validation RMS</th><th>unit</th></tr>{rows}</table>")
@@ -805,16 +808,39 @@ def identification_html(ident) -> str:
     """
     j = ident.to_json()
     val = j["validation"]
-    unit = _one([u["force"] for u in joint_units(ident).values()])
+    unit = "A" if ident.currents is not None else _one([u["force"] for u in joint_units(ident).values()])
+    what = "currents" if ident.currents is not None else "torques"
     body = (f"<h1>{html.escape(j['model'])}: identification ({html.escape(j.get('estimator', j['method']))})</h1>"
             f"<p>{j['n_samples']['used']} samples used of {j['n_samples']['read']}; condition number "
             f"{_num(j['condition_number'], '.4g')}; train RMS {_num(j['train']['rms_total'], '.4g')} {unit}"
             + (f"; validation RMS {_num(val['rms_total'], '.4g')} {unit}" if val else "") + "</p>"
-            f"<h2>Measured (grey) and predicted (blue) torques, residual histograms</h2>"
-            f"<div id='torques'>{_torque_blocks(ident)}</div>{_spectrum_section(ident)}"
+            f"<h2>Measured (grey) and predicted (blue) {what}, residual histograms</h2>"
+            f"<div id='torques'>{_torque_blocks(ident)}</div>{_spectrum_section(ident)}{_gains_section(j)}"
             f"{_values_table(j)}{_drives_table(ident)}{_rms_table(ident, j)}{_physical_table(ident, j)}"
             f"{_notes_section(j)}")
     return _page(f"{j['model']}: identification", body, _DONE)
+
+
+def _gains_section(j: dict) -> str:
+    """A fit from motor currents: each motor's gain, its std or why it has none, the anchor, the joint-side RMS."""
+    c = j.get("currents")
+    if c is None:
+        return ""
+    anchored = [] if c["anchor"] == "model file" else [a.split("=")[0].strip() for a in c["anchor"].split(",")]
+
+    def how(m):
+        return ("anchor" if m in anchored else "not determined by the currents" if m in c["undetermined"] else
+                _num(c["std"][m], ".3g"))
+
+    rows = "".join(f"<tr><td>{html.escape(m)}</td><td>{_num(c['gains'][m], '.6g')}</td><td>{how(m)}</td></tr>"
+                   for m in c["motors"])
+    torque = [f"{label} {_num(part['joint_torque']['rms_total'], '.4g')} {part['joint_torque'].get('unit', '')}"
+              for label, part in (("train", j["train"]), ("validation", j["validation"]))
+              if part and part.get("joint_torque")]
+    extra = (f"<p>Joint-side torque RMS against the log's joint torques (rigid body; no motor-side friction or "
+             f"rotor inertia): {html.escape('; '.join(torque))}</p>" if torque else "")
+    return (f"<h2>Motor gains [N m/A at the joint side]</h2><p>{html.escape(c.get('scale_note') or c['anchor'])}</p>"
+            f"<table id='gains'><tr><th>motor</th><th>gain</th><th>std</th></tr>{rows}</table>{extra}")
 
 
 def _notes_section(j: dict) -> str:

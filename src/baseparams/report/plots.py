@@ -93,6 +93,8 @@ def _save(plt, fig, path: Path, inputs=(), what: str = "plot=") -> Path:
 def torque_plot(result, path, inputs=(), what: str = "plot=") -> Path:
     """Measured and predicted torques per joint, training and validation, in one figure.
 
+    A result identified from motor currents (its series' ``unit`` ``A``): the currents per motor.
+
     Parameters
     ----------
     result : baseparams.ident.Identification
@@ -128,11 +130,13 @@ def torque_plot(result, path, inputs=(), what: str = "plot=") -> Path:
                     label=f"measured ({label})")
             ax.plot(s["t"], s["tau_hat"][:, j], lw=0.8, color="C0" if label == "train" else "C1",
                     label=f"predicted ({label})")
-        ax.set_ylabel(f"{joints[j]}\n" + ("force [N]" if kinds.get(joints[j]) == "P" else "torque [N m]"), fontsize=8)
+        quantity = ("current [A]" if parts[0][1].get("unit") == "A" else "force [N]" if kinds.get(joints[j]) == "P"
+                    else "torque [N m]")  # a fit from motor currents: its series are the currents
+        ax.set_ylabel(f"{joints[j]}\n{quantity}", fontsize=8)
     axes[0, 0].legend(fontsize=7, ncol=4, loc="upper right")
     axes[-1, 0].set_xlabel("time [s]")
     j = result.to_json()
-    unit = " or ".join(dict.fromkeys("N" if kinds.get(n) == "P" else "N m" for n in joints))
+    unit = parts[0][1].get("unit") or " or ".join(dict.fromkeys("N" if kinds.get(n) == "P" else "N m" for n in joints))
     fig.suptitle(f"{j['model']}: {j['method']}, train RMS {j['train']['rms_total']:.3g} {unit}"
                  + (f", validation RMS {j['validation']['rms_total']:.3g} {unit}" if j["validation"] else ""),
                  fontsize=9)

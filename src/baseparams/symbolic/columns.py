@@ -8,7 +8,7 @@ numeric code compares with a tolerance (parallel axes, gravity along an axis, a 
 direction) the decision here is exact; a decision that holds only generically (a polynomial that
 is not identically zero) is recorded as a condition under which the result may change.
 Perpendicular pairs ``x, y`` of an axis ``z`` are not normalised (``x = z x e_k``,
-``y = z x x``): the spans are the same. The rules R-A and R-B are in :mod:`.rules`.
+``y = z x x``): the spans are the same. The rules R-A and R-B are in :mod:`~baseparams.symbolic.rules`.
 """
 
 from __future__ import annotations

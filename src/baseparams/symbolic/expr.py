@@ -26,7 +26,7 @@ import sympy as sp
 MAX_CHARS = 200
 #: deepest nesting of operations accepted
 MAX_DEPTH = 24
-#: largest |exponent| of ``**`` accepted (a number)
+#: largest ``|exponent|`` of ``**`` accepted (a number)
 MAX_EXPONENT = 16
 
 _FUNCS = {"sin": sp.sin, "cos": sp.cos, "sqrt": sp.sqrt}

@@ -5,7 +5,7 @@ reference configuration (q = 0) are SymPy matrices in some symbols (link lengths
 Joint axes and rotations must be exact numbers (e.g. DH twists that are multiples of ``pi/2``
 give exact 0 and +-1); positions may be any polynomial in the symbols. Built by
 :class:`SymbolicBuilder` (the :class:`~baseparams.model.builder.RobotBuilder` API, SymPy
-entries) or from a Denavit-Hartenberg table (:func:`from_dh`, :mod:`.tables`).
+entries) or from a Denavit-Hartenberg table (:func:`from_dh`, :mod:`~baseparams.symbolic.tables`).
 
 Frames: every body's frame is its joint frame (as in the numeric model); the parameters of
 the link-frame conventions (``khalil``) are expressed in :attr:`SymbolicRobot.param_frames`

@@ -1,6 +1,6 @@
 """Exact regrouping over the rational functions of the symbols: base parameters as SymPy formulas.
 
-Given DRNG's columns on a symbolic geometry (:mod:`.columns`) in the parameters of a convention
+Given DRNG's columns on a symbolic geometry (:mod:`~baseparams.symbolic.columns`) in the parameters of a convention
 (``A (10 n, c)``, polynomial entries), the regrouping ``beta = pi_I + K pi_D`` is
 ``K = -A_I A_D^-1`` on a basis of the columns (``A_D`` square). Which columns form a basis and
 which parameters are dependent is decided at random rational values of the symbols (exact

@@ -13,6 +13,8 @@ here, and both doors ask it:
   :mod:`~baseparams.workflow.identify` (the streaming decision, a fleet of logs, ``predict``): each
   command's checks that need no model (``check_excite``, ``check_simulate``, ``plan_identify``,
   ``check_predict``, which the command line's preflight calls before the model loads) and its run;
+* :mod:`~baseparams.workflow.payload`: :func:`identify_payload`, what a robot carries on a link
+  (``check_payload``: its keywords' rules that need no model);
 * :mod:`~baseparams.workflow.states`: the regressor of a states file.
 
 Messages name options by their keywords (``holdout=``); the command line names them by their flags
@@ -22,6 +24,7 @@ Messages name options by their keywords (``holdout=``); the command line names t
 
 from .excite import excite
 from .identify import identify, predict
+from .payload import identify_payload
 from .simulate import simulate
 
-__all__ = ["excite", "identify", "predict", "simulate"]
+__all__ = ["excite", "identify", "identify_payload", "predict", "simulate"]

@@ -37,7 +37,7 @@ class Inputs:
     validate : JointLog, str or path, optional
         Another log to validate on (exclusive with ``holdout``).
     columns : str, path or dict, optional
-        A layout mapping for log files (TOML; README "Log layout").
+        A layout mapping for log files (TOML; docs/guides/log-layout.md).
     joints : str or sequence of str, optional
         Identify these joints only (``"A,B"``); every other joint is welded
         (:func:`baseparams.ident.subchain.subchain`).
@@ -117,7 +117,8 @@ def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["hol
              columns=None, joints=None, weld=None, analysis_samples: int | None = IDENTIFY["analysis_samples"],
              literal: bool = IDENTIFY["literal"], terms=IDENTIFY["terms"], stream: str = Inputs.stream, save=None,
              predictions=None, urdf=None, mjcf=None, html=None, plot=None, truth=None, seed: int = IDENTIFY["seed"],
-             progress=None, _reporter: Reporter | None = None):
+             effort: str = IDENTIFY["effort"], gain_anchor: str | None = IDENTIFY["gain_anchor"], progress=None,
+             _reporter: Reporter | None = None):
     """Identify base-parameter and drive values from a joint log: ``baseparams identify``.
 
     One keyword per flag of the command (the command calls this function). The identification's
@@ -132,14 +133,15 @@ def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["hol
         The robot the log was recorded on (a floating base's pose in the log; loops closed by the
         actuated joints; a file for ``urdf``/``mjcf``).
     log : JointLog, str or path, or a list of them
-        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; README "Log layout");
+        The log (:func:`simulate`, or a file: CSV/TSV, NPZ, Parquet, a ROS 2 bag; docs/guides/log-layout.md);
         a list: several recordings of the robot in one identification, each read whole and one
         cross-validation block (validated on ``validate``; ``holdout`` refused).
     holdout, method, friction, rotor, coulomb_width, couplings, cutoff, decimate, min_speed, prior_weight, \
-convention, covariance, score_cutoff, allow_units, analysis_samples, literal, terms, seed
+convention, covariance, score_cutoff, allow_units, analysis_samples, literal, terms, seed, effort, gain_anchor
         The identification's options (:class:`~baseparams.ident.options.IdentOptions`: the
         hold-out [s], the estimator, the drive model, the filter, the second validation score's
-        cutoff [Hz], the analysis' random states and seed, the model terms).
+        cutoff [Hz], the analysis' random states and seed, the model terms; torques or motor
+        currents with unknown gains, the gains' anchor ``JOINT=K``).
     validate, columns, joints, weld, stream, truth
         What is read besides the log (:class:`Inputs`).
     save, predictions, urdf, mjcf, html, plot
@@ -167,7 +169,8 @@ convention, covariance, score_cutoff, allow_units, analysis_samples, literal, te
                 "covariance": covariance, "score_cutoff": score_cutoff, "allow_units": allow_units,
                 "columns": columns, "joints": joints, "weld": weld, "analysis_samples": analysis_samples,
                 "literal": literal, "terms": terms, "stream": stream, "save": save, "predictions": predictions,
-                "urdf": urdf, "mjcf": mjcf, "html": html, "plot": plot, "truth": truth, "seed": seed}
+                "urdf": urdf, "mjcf": mjcf, "html": html, "plot": plot, "truth": truth, "seed": seed,
+                "effort": effort, "gain_anchor": gain_anchor}
     reporter = _reporter or Reporter()
     run = plan_identify(model, log, keywords, reporter if progress is None else replace(reporter, progress=progress))
     robot = robot_of(model, "identify")
@@ -236,9 +239,10 @@ def plan_identify(model, log, keywords: dict, reporter: Reporter | None = None) 
     Raises
     ------
     BaseparamsError
-        The first keyword refused, in one line naming it: an option (:class:`IdentOptions`), an
-        input of the wrong type, an output (suffix, folder, an input, two outputs onto one file),
-        an export that cannot be honoured, validation outputs without validation data.
+        The first keyword refused, in one line naming it: an option
+        (:class:`~baseparams.ident.options.IdentOptions`), an input of the wrong type, an output
+        (suffix, folder, an input, two outputs onto one file), an export that cannot be honoured,
+        validation outputs without validation data.
     """
     from ..arguments import ArgumentTypeError, check_choice, check_keywords, check_progress
     from ..ident.options import IdentOptions
@@ -427,11 +431,10 @@ def _run_identification(robot: Robot, log, run: Run):
     if why is not None:
         from ..ident.stream import NotStreamable
 
-        rep.say(f"streaming {log} block by block ({why}): memory independent of the log's length")
         try:
-            return _streamed(robot, log, run), None
-        except NotStreamable as exc:
-            rep.say(f"{exc}")
+            return _streamed(robot, log, run, why), None
+        except NotStreamable as exc:  # read whole: said as a note when streaming was asked for (stream=on)
+            (rep.note if inputs.stream == "on" else rep.say)(f"stream={inputs.stream}: {exc}")
     from ..ident import identify as run_whole
 
     rep.say(f"reading {log}" if isinstance(log, (str, os.PathLike)) else "checking the log")
@@ -461,14 +464,16 @@ def _run_several(robot: Robot, logs, run: Run):
     return result, reads[0]
 
 
-def _streamed(robot: Robot, log, run: Run):
+def _streamed(robot: Robot, log, run: Run, why: str):
     """The identification streamed from the log's file; the predictions written as they come."""
-    from ..ident.stream import identify_stream
+    from ..ident.stream import check_effort, identify_stream
     from ..io.logs import LogStream
 
     rep, inputs, predictions = run.reporter, run.inputs, run.outputs.predictions
     units = run.options.allow_units
     src = LogStream(log, robot, columns=inputs.columns, allow_units=units)
+    check_effort(src, run.options.effort, run.options.gain_anchor)  # motor currents: read whole
+    rep.say(f"streaming {log} block by block ({why}): memory independent of the log's length")
     other = (LogStream(inputs.validate, robot, columns=inputs.columns, allow_units=units)
              if inputs.validate is not None else None)
     if predictions is None:
@@ -527,7 +532,7 @@ def identify_logs(robot: Robot, files: list[str], keywords: dict, *, per_file: b
 
 #: identify's keywords that apply to one log, not to a fleet of logs
 ONE_LOG = ("validate", "holdout", "joints", "weld", "columns", "save", "truth", "predictions", "urdf", "mjcf", "html",
-           "plot")
+           "plot", "gain_anchor")
 
 
 def check_fleet(keywords: dict):
@@ -546,11 +551,13 @@ def check_fleet(keywords: dict):
     Raises
     ------
     BaseparamsError
-        A keyword of :data:`ONE_LOG` given, or bad options.
+        A keyword of :data:`ONE_LOG` given, ``effort="current"`` (motor currents are identified one
+        log at a time), or bad options.
     """
     from ..ident.options import IdentOptions
 
     given = [k for k in ONE_LOG if keywords.get(k) not in (None, (), [])]
+    given += ["effort"] if keywords.get("effort") == "current" else []  # motor currents: one log at a time
     if given:
         raise BaseparamsError(f"identify: {given[0]}= applies to one log, not to a fleet of logs (per-file or pooled "
                               f"estimates)")
@@ -578,13 +585,15 @@ def predict(model, result, log, *, raw_states: bool = False, columns=None, allow
         otherwise refuses (:func:`baseparams.ident.plausibility.check_states`).
     out : str or path, optional
         Also write ``t, tau_<joint>`` per log sample there (CSV, TSV or Parquet by the suffix;
-        checked before the work, written atomically, never onto an input).
+        checked before the work, written atomically, never onto an input); a result from motor
+        currents: also ``cur_<joint>``, the predicted currents [A].
 
     Returns
     -------
     ndarray, shape ``(S, m)``
         Predicted torques [N m or N] at every log sample; columns the measured joints
-        (``Identification.joints``).
+        (``Identification.joints``). A result from motor currents: the joint-side torques (a
+        joint-torque sensor after the gear; no motor-side friction or rotor inertia).
 
     Raises
     ------
@@ -606,15 +615,20 @@ class Prediction:
     log : JointLog
         The log, as read.
     tau : ndarray, shape ``(S, m)``
-        Predicted torques [N m or N] per log sample, columns ``result.joints``.
+        Predicted torques [N m or N] per log sample, columns ``result.joints``; a result from
+        motor currents: the joint-side torques (what a joint-torque sensor after the gear reads).
     raw_states : bool
         Predicted on the states as logged (not low-passed).
+    cur : ndarray, shape ``(S, m)``, optional
+        A result from motor currents: the predicted currents [A] per log sample, columns its
+        motors (``result.currents.motors``); None for a result from torques.
     """
 
     result: object
     log: object
     tau: object
     raw_states: bool = False
+    cur: object = None
 
     def __repr__(self) -> str:
         return (f"<Prediction of {len(self.result.joints)} joints at {self.log.n_samples} samples"
@@ -636,8 +650,38 @@ class Prediction:
         -------
         dict or None
             ``rms`` ``{"total", joint: value}``, and ``rms_interior``/``edge_samples``,
-            ``score_cutoff``/``rms_lowpassed`` when they apply.
+            ``score_cutoff``/``rms_lowpassed`` when they apply. A result from motor currents
+            (:meth:`current_scores`) also ``torque`` (what its torques are) and ``rms_currents``
+            [A], and is never None.
         """
+        out = self._torque_scores(score_cutoff)
+        return out if self.cur is None else {**(out or {"rms": None}), **self.current_scores()}
+
+    def current_scores(self) -> dict:
+        """A result from motor currents: what its torques are, and the RMS of its currents [A].
+
+        Returns
+        -------
+        dict
+            ``torque`` (the joint-side torque a sensor after the gear reads: the rigid body, no
+            motor-side friction or rotor inertia) and ``rms_currents`` ``{"total", motor: value}``
+            against the log's currents at every sample (None when the log has none, or for a
+            result from torques: then ``{}``).
+        """
+        if self.cur is None:
+            return {}
+        out = {"torque": "joint side: the rigid body a joint-torque sensor after the gear reads (no motor-side "
+                         "friction or rotor inertia)", "rms_currents": None}
+        if self.log.cur is not None:
+            from ..ident import validation_scores
+
+            motors = list(self.result.currents.motors)
+            s = validation_scores(replace(self.log, tau=self.log.cur), self.cur, motors)
+            out["rms_currents"] = {"total": s["rms_total"], **s["rms"]}
+        return out
+
+    def _torque_scores(self, score_cutoff: float | None) -> dict | None:
+        """:meth:`scores` against the log's measured torques (None without them)."""
         import numpy as np
 
         from ..ident import validation_scores
@@ -739,9 +783,12 @@ def prediction(model, result, log, *, raw_states: bool = False, columns=None, al
         if "WARNING" in n:
             reporter.note(n)
     tau = result.predict(log, smooth=not raw_states)
+    cur = None if result.currents is None else result.predict_currents(log, smooth=not raw_states)
     if out is not None:
         from ..tables import write_columns
 
-        write_columns(out, {"t": log.t, **{f"tau_{j}": tau[:, k] for k, j in enumerate(result.joints)}}, inputs,
-                      "out=")
-    return Prediction(result, log, tau, raw_states)
+        cols = {"t": log.t, **{f"tau_{j}": tau[:, k] for k, j in enumerate(result.joints)}}
+        if cur is not None:  # a result from currents: the motors' currents beside the joint-side torques
+            cols.update({f"cur_{m}": cur[:, k] for k, m in enumerate(result.currents.motors)})
+        write_columns(out, cols, inputs, "out=")
+    return Prediction(result, log, tau, raw_states, cur)

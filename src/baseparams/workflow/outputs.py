@@ -45,6 +45,7 @@ OUTPUTS = MappingProxyType({
     "predict": {"out": "predictions"},
     "simulate": {"out": "log"},
     "excite": {"out": "trajectory", "plot": "plot", "output": "text"},
+    "payload": {"output": "text", "save": "result", "predictions": "predictions", "urdf": "urdf", "mjcf": "mjcf"},
 })
 
 
@@ -199,6 +200,9 @@ class Outputs:
 def write_predictions(result, logs: tuple, holdout, path, inputs, note) -> None:
     """Predicted torques at every validation sample, written to ``path`` (``t, tau_<joint>``).
 
+    A result identified from motor currents: ``tau_<joint>`` the joint-side torques, and
+    ``cur_<joint>`` the predicted currents [A] of the motor named after each joint.
+
     Parameters
     ----------
     result : Identification
@@ -221,6 +225,9 @@ def write_predictions(result, logs: tuple, holdout, path, inputs, note) -> None:
     tau = result.predict(whole)
     keep = (whole.t >= -float("inf")) if val is not None else whole.t >= whole.t[-1] - holdout
     cols = {"t": whole.t[keep], **{f"tau_{j}": tau[keep, k] for k, j in enumerate(result.joints)}}
+    if result.currents is not None:  # from currents: the joint-side torques and the motors' currents
+        cur = result.predict_currents(whole)
+        cols.update({f"cur_{m}": cur[keep, k] for k, m in enumerate(result.currents.motors)})
     write_columns(path, cols, inputs, "predictions=")
     note(f"predictions of {int(keep.sum())} validation samples written to {path}")
 

@@ -26,7 +26,7 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     Parameters
     ----------
     model : Robot, Analysis, str or path
-        The robot (a tree, fixed or floating base: README "Log layout"; loops closed by the
+        The robot (a tree, fixed or floating base: docs/guides/log-layout.md; loops closed by the
         actuated joints); its own inertias are the true parameters.
     trajectory : Excitation, str, path or tuple, optional
         The motion: a designed :class:`Excitation`, its file (``excite --out``) or ``(t (S,), q,

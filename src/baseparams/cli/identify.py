@@ -190,11 +190,9 @@ def add_parser(sub) -> None:
     """
     s = sub.add_parser("identify", help="identify base-parameter and drive values from a joint log")
     model_args(s)
-    s.add_argument("data", nargs="+", help="the log: CSV/TSV, NPZ, Parquet or a ROS 2 bag (JointState); default "
-                                           "layout: t, q_<joint>, [dq_<joint>, ddq_<joint>], tau_<joint> (or "
-                                           "cur_<joint>: --effort); several logs or a glob pattern: several "
-                                           "recordings of the robot in one identification, each a cross-validation "
-                                           "block (a fleet on Dask with --per-file / --pooled)")
+    s.add_argument("data", nargs="+", help="the log (CSV/TSV, NPZ, Parquet, ROS 2 bag): t, q_<joint>, [dq_<joint>], "
+                   "tau_<joint> (or cur_<joint>: --effort); several logs or a glob: several recordings in one "
+                   "identification, each a cross-validation block (a Dask fleet with --per-file / --pooled)")
     s.add_argument("--columns", metavar="MAP", help="a TOML mapping file for any other layout (or a bag's topic)")
     s.add_argument("--validate", metavar="DATA2", help="validate on another log")
     s.add_argument("--holdout", type=float, metavar="SECONDS", help="validate on the log's last SECONDS (not with "

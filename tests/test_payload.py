@@ -111,7 +111,8 @@ def test_a_spherical_wrist_alone_identifies_all_but_the_mass(puma):
     held = identify_payload(puma, log, "link6", prior={"mass": payload[0], "com": [0, 0, 0],
                                                          "inertia_com": np.eye(3) * 1e-3})
     dm, dc, di = errors(held, payload)  # the prior's mass (here the true one) makes the rest a body again
-    assert dm < 1e-6 and dc < 0.002 and held.identified() == []
+    # 2e-5 since every sample is fitted (issue 48): the weak prior holds the unidentified mass, the rows leak a little
+    assert dm < 1e-4 and dc < 0.002 and held.identified() == []
 
 
 @pytest.mark.shared

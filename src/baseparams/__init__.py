@@ -36,12 +36,12 @@ is ``base_frequency=``, ``--analysis-samples`` is ``analysis_samples=``); a ``mo
     ``.predict(log)``, ``.compare_truth(truth)``).
 ``predict(model, result, log, *, raw_states=False)``
     Joint torques ``(S, m)`` of a log from an identification or its saved file.
-identify_payload(model, log, *, link, result=None, validate=None, save=None, urdf=None, mjcf=None, ...)
+``identify_payload(model, log, *, link, result=None, validate=None, save=None, urdf=None, mjcf=None, ...)``
     What the robot carries on a link: a :class:`Payload` (``.mass``, ``.com``, ``.inertia_com`` in
     the link's frame, ``.sigma()``, ``.identified()``, ``.to_json()``, ``.predict(log)``,
     ``.save(path)``, ``SavedPayload.load(path, robot)``), the robot known from its model file or a
     saved identification (``baseparams payload``).
-excite(model, payload=LINK, ...)
+``excite(model, payload=LINK, ...)``
     A short excitation that identifies a payload on a link best (``excite --payload LINK``).
 Robot, RobotBuilder, Inertia, pose
     Build a robot in code (see :class:`RobotBuilder`).

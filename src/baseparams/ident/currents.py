@@ -30,7 +30,7 @@ smooth through every value and a gain's sign is the data's.
 (:func:`scipy.optimize.least_squares`), exactly (Golub and Pereyra 1973).
 
 **The scale.** ``theta -> s theta``, ``g -> g / s`` leaves every current unchanged: the one direction
-the currents cannot fix (:func:`scale_null`). An anchor fixes it: a catalogue gain ``k_a``
+the currents cannot fix (the homogeneous system, :func:`homogeneous`). An anchor fixes it: a catalogue gain ``k_a``
 (``--gain-anchor JOINT=K``), or by default the model file's inertial parameters (:func:`file_scale`:
 the common factor that brings the identified base parameters closest to the file's, weighted by
 the file's stated uncertainty and the estimate's). A relative error ``e`` of the anchor scales every
@@ -40,7 +40,7 @@ gain, base parameter, drive term and predicted torque by ``1 + e``.
 value lies below a gap (:func:`baseparams.numerics.spectrum`, column-scaled) is a group this log does
 not determine (:func:`weak_groups`); a gain in such a group (a joint whose rigid-body torque is below
 its current's noise: a symmetric wrist, a link with no load) is held at its value from the model
-file's torques (:func:`regressed_gains`) and named, never fitted as if determined. A drive term the
+file's torques (:func:`determined_motors`) and named, never fitted as if determined. A drive term the
 model regroups into a base parameter (the first joint's rotor inertia with the first link's ``ZZ``)
 stays there: the joint-side torque a sensor after the gear would read is known only up to it.
 """

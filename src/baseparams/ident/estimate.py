@@ -334,7 +334,9 @@ def least_squares(acc: RowAccumulator, names: list[str], weights: np.ndarray | N
                               f"weakest: {name_list(weak)}. Use a richer trajectory, or fewer drive terms")
     theta = np.linalg.solve(r11, r12)
     inv = np.linalg.inv(r11)
-    sigma = rho / np.sqrt(n_obs - p)
+    # the white formula per independent sample: rows kept beyond the low-pass's information (every filtered
+    # sample of a short log, issue 48) are correlated, and counting them as independent shrinks the std
+    sigma = rho / np.sqrt(n_obs - p) * np.sqrt(acc.oversampling)
     std = sigma * np.linalg.norm(inv, axis=1)
     with np.errstate(divide="ignore"):
         pct = np.where(theta != 0, 100 * std / np.abs(theta), np.inf)

@@ -19,7 +19,7 @@ The pipeline (:func:`identify`):
 Parameters keep their conventions: base parameters are named and valued in the analysis's
 convention (``khalil`` by default); full parameter vectors say theirs.
 
-This module holds the order of the steps; each step's work is in its room (:mod:`.rows`,
+This module holds the order of the steps; each step's work is in its room (:mod:`baseparams.ident.rows`,
 :mod:`.fitting`, :mod:`.notes`, :mod:`.validation`, ...). :func:`assemble` makes the result of
 every path (this one, and a log streamed from its file: :mod:`.stream`), from the options it was
 given (:class:`~baseparams.ident.options.IdentOptions`) and an :class:`Account` of what was done

@@ -71,7 +71,7 @@ memory_mb, seed
         Random states of the structural analysis (default 200).
     save : str or path, optional
         Write the result's JSON (``{"format": "baseparams-payload", ..., "payload": {...}}``;
-        :meth:`Payload.load` reads it back).
+        :meth:`baseparams.ident.payload.saved.SavedPayload.load` reads it back).
     urdf, mjcf : str or path, optional
         Write the model file with the payload as a fixed body on ``link`` (a URDF model for
         ``urdf``; an MJCF or URDF model for ``mjcf``), checked by MuJoCo's inverse dynamics

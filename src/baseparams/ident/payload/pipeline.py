@@ -4,11 +4,11 @@
    the link (the fitted rows); the model (:func:`~.model.payload_model`): the payload's columns, the
    fitted drive terms, the known robot (the model file, or a saved identification).
 2. The log prepared as :func:`baseparams.identify` prepares it, the rows filtered in parallel, the
-   slow samples of each row left out (:mod:`.rows`).
+   slow samples of each row left out (:mod:`baseparams.ident.payload.rows`).
 3. What the moving joints identify, structurally (:func:`~.structure.structural`), then at a gap of
    the log's own spectrum.
 4. The estimate on the identified directions, weighted, its covariance (HAC; with a saved
-   identification, its own covariance propagated), physically consistent (:mod:`.fit`).
+   identification, its own covariance propagated), physically consistent (:mod:`baseparams.ident.payload.fit`).
 """
 
 from __future__ import annotations

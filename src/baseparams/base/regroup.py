@@ -83,6 +83,10 @@ ZERO_TOL = 1e-9
 #: coefficients snap to the shortest decimal within this relative distance
 SNAP_RTOL = 1e-13
 
+#: about how many terms :meth:`BaseParameters.iter_expressions` formats at once (the expanded form of a
+#: 1 000-link chain has over ten million: their text is made and let go a block of rows at a time)
+EXPRESSION_CHUNK_TERMS = 200_000
+
 
 def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
     """Snap every entry to the shortest decimal within ``rtol`` relative of it.
@@ -247,9 +251,78 @@ class BaseParameters:
                 raise BaseparamsError("these base parameters have no recursive form (a tree regrouped from compact "
                                       "nullspace columns has one: analyze(..., form='recursive'))")
             return self.recursive.base_expressions(self.base_names())
+        return list(self.iter_expressions(form))
+
+    def iter_expressions(self, form: str = "expanded", max_terms: int = EXPRESSION_CHUNK_TERMS):
+        """:meth:`expressions` one at a time: the expanded form's text made a block of rows at a time.
+
+        The expanded form has ``O(sum of depths)`` terms on a tree (quadratic on a chain): written
+        whole it would hold every term's text at once; here at most about ``max_terms`` terms'.
+
+        Parameters
+        ----------
+        form : {"expanded", "recursive"}
+            As :meth:`expressions`.
+        max_terms : int, optional
+            About how many terms are formatted together (a row is never split).
+
+        Yields
+        ------
+        dict
+            ``{"name", "expression"}``, in :meth:`expressions`' order.
+
+        Raises
+        ------
+        BaseparamsError
+            As :meth:`expressions` (when the first item is asked for).
+        """
+        if form == "recursive":
+            yield from self.expressions("recursive")
+            return
         if form != "expanded":
             raise BaseparamsError(f"unknown form {form!r}; expected 'expanded' or 'recursive'")
-        return self._expressions(*self._terms())
+        indptr, indices, data = self._terms()
+        heads = [self.names[i] for i in self.independent.tolist()]
+        names = self.base_names()
+        terms = [self.names[d] for d in self.dependent.tolist()]
+        start, nb = 0, len(heads)
+        while start < nb:  # rows [start, stop): at least one, about max_terms terms
+            stop = max(start + 1, int(np.searchsorted(indptr, indptr[start] + max_terms, side="right")) - 1)
+            stop = min(stop, nb)
+            lo, hi = indptr[start], indptr[stop]
+            yield from format_rows(heads[start:stop], names[start:stop], indptr[start:stop + 1] - lo,
+                                   indices[lo:hi], data[lo:hi], terms, self.dependent)
+            start = stop
+
+    def n_terms(self, form: str = "expanded") -> int:
+        """How many terms the expressions write beyond each base parameter's own (``K``'s nonzeros, or ``R``'s).
+
+        Parameters
+        ----------
+        form : {"expanded", "recursive"}
+            As :meth:`expressions`.
+
+        Returns
+        -------
+        int
+        """
+        if form == "recursive" and self.recursive is not None:
+            r = self.recursive.R
+            return int(r.nnz if _is_sparse(r) else np.count_nonzero(r))
+        return int(self.K.nnz if _is_sparse(self.K) else np.count_nonzero(self.K))
+
+    def max_coefficient(self) -> float:
+        """The largest magnitude of the expanded regrouping's coefficients (``K``; 0 without one).
+
+        Returns
+        -------
+        float
+            A base parameter ``beta = pi_I + K pi_D`` with coefficients past ``1 / eps`` (about
+            ``4.5e15``) cannot be computed in double precision next to its own parameter.
+        """
+        k = self.K
+        v = k.data if _is_sparse(k) else np.asarray(k)
+        return float(np.abs(v).max()) if v.size else 0.0
 
     def definitions(self) -> list[dict[str, str]]:
         """The regrouped dependent parameters the recursive form's expressions use (``[]`` without one).
@@ -269,11 +342,6 @@ class BaseParameters:
         rows, cols = np.nonzero(self.K)  # row-major: row by row
         indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=self.K.shape[0]))]
         return indptr, cols, self.K[rows, cols]
-
-    def _expressions(self, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> list[dict[str, str]]:
-        """:meth:`expressions` from ``K``'s nonzeros: every term formatted once, rows joined."""
-        return format_rows([self.names[i] for i in self.independent.tolist()], self.base_names(), indptr,
-                           indices, data, [self.names[d] for d in self.dependent.tolist()], self.dependent)
 
     def _check(self, convention: str) -> None:
         _inertia.check_convention(convention)
@@ -342,12 +410,12 @@ class BaseParameters:
 
 
 def _lazy(name: str, doc: str) -> property:
-    """``K`` or ``E``: stored, or expanded from the recursive form when first read (``None`` given)."""
+    """``K`` or ``E``: stored, or made when first read (``None`` given): from the recursive form, ``E`` from ``K``."""
     key = "_" + name
 
     def get(self):
         v = self.__dict__.get(key)
-        if v is None and self.recursive is not None:
+        if v is None and (self.recursive is not None or (key == "_E" and self.__dict__.get("_K") is not None)):
             v = _expand(self, name)
             self.__dict__[key] = v
         return v

@@ -758,16 +758,11 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
         use = _resolve_form(robot, form, columns)
         if use == "recursive" and columns is None:  # a small tree: DRNG's span in compact form
             columns = _recursive_columns(robot, rows, res, cert)
-        if use == "recursive":
+        if use == "recursive" or columns is not None:  # a large tree: O(n), expanded as it is written
             from .base.recursive import recursive_base_parameters
 
             base = recursive_base_parameters(robot, columns, convention)
             base_paper = recursive_base_parameters(robot, columns, "paper")
-        elif columns is not None:  # a large tree: regrouped from compact columns, sparsely
-            from .base.sparse import tree_base_parameters
-
-            base = tree_base_parameters(robot, columns, convention)
-            base_paper = tree_base_parameters(robot, columns, "paper")
         else:
             base, base_paper = _dense_regroup(robot, span, res, cert, convention, base_parameters)
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
@@ -1053,18 +1048,10 @@ def _large_tree_columns(robot: Robot, rows: str, res):
 BYTES_PER_N2 = {True: 25e3, False: 8e3}
 
 
-#: a tree certified body by body and regrouped sparsely (``certify``'s structured path): bytes per
-#: body (the sampled wrench maps, the columns) and per unit of depth summed over the bodies (the
-#: dual vectors, ``K`` and the expressions grow with each body's distance to the root)
-BYTES_PER_BODY, BYTES_PER_DEPTH = 200e3, 2e3
-
-
-def _depth_sum(robot: Robot) -> int:
-    """Sum over the bodies of their number of ancestors (``O(n)``; parents precede children)."""
-    depth = np.zeros(robot.n, dtype=np.int64)
-    for i, p in enumerate(robot.parent):
-        depth[i] = depth[p] + 1 if p >= 0 else 0
-    return int(depth.sum())
+#: a tree certified body by body and regrouped in recursive form (``certify``'s structured path; the
+#: expanded form is written from it a block of rows at a time): bytes per body (the sampled wrench
+#: maps, the columns)
+BYTES_PER_BODY = 200e3
 
 
 #: the most the numerical method's sampled regressor may take [bytes] (samples x rows x 10 n numbers)
@@ -1086,21 +1073,17 @@ def _check_memory(robot: Robot, verify: bool, rows: str = "all", form: str = "au
     """Refuse, before allocating, a model whose analysis needs more memory than is available."""
     from .nullspace.certify import uses_structured
 
-    structured = uses_structured(robot, rows)  # certified body by body (or not), regrouped sparsely
-    recursive = form == "recursive" or (form == "auto" and robot.n >= RECURSIVE_MIN_BODIES)
+    structured = uses_structured(robot, rows)  # certified body by body (or not), regrouped in recursive form
     if structured:
-        # the recursive form is linear; the expanded one grows with each body's depth
-        need = BYTES_PER_BODY * robot.n + (0 if recursive else BYTES_PER_DEPTH * _depth_sum(robot))
+        need = BYTES_PER_BODY * robot.n  # linear in either form: the expanded one is written as it is made
     else:
         need = BYTES_PER_N2[bool(verify)] * robot.n**2
     have = _available_bytes()
     if have is None or need <= have:
         return
     if structured:
-        what = ("" if recursive else " (its expanded expressions grow with each body's depth in the tree; "
-                "--form recursive writes them in linear size)")
         raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the analysis needs about "
-                              f"{need / 1e9:.2g} GB{what} and {have / 1e9:.2g} GB are available")
+                              f"{need / 1e9:.2g} GB and {have / 1e9:.2g} GB are available")
     hint = ("; --no-verify gives DRNG's geometric answer without the numerical certificate "
             f"(about {BYTES_PER_N2[False] * robot.n**2 / 1e9:.2g} GB)" if verify else "")
     raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the {'certified ' if verify else ''}analysis "
@@ -1262,12 +1245,12 @@ def size_notes(a: Analysis) -> list[str]:
     if a.form != "expanded":
         return []
     out = []
-    terms = a.base.n_terms() + a.base_paper.n_terms()
+    terms = a.base.expanded_size()[0] + (a.base_paper.expanded_size()[0] if a.base.convention != "paper" else 0)
     if terms > EXPANDED_NOTE_TERMS:
         out.append(f"note: the expanded form writes {terms / 1e6:.3g} million terms ({a.robot.n} bodies: they grow "
                    f"with each body's depth in the tree); --form recursive writes the same regrouping in linear size")
     pairs = [(a.base.convention, a.base)] + ([("paper", a.base_paper)] if a.base.convention != "paper" else [])
-    big = {name: b.max_coefficient() for name, b in pairs}
+    big = {name: b.expanded_size()[1] for name, b in pairs}
     over = [name for name, v in big.items() if v > COEFFICIENT_NOTE]
     if over:
         worst = max(big[name] for name in over)

@@ -39,6 +39,9 @@ from ..nullspace.columns import Columns
 from .regroup import SNAP_RTOL, ZERO_TOL, BaseParameters, format_rows, parameter_names
 from .sparse import SNAP_ROUNDING, choose_all, csr_or_dense, lower_blocks, scaled_blocks, snap_short
 
+#: :meth:`RecursiveForm.expand_rows`: about the most one dense block of expanded rows takes [bytes]
+EXPAND_BLOCK_BYTES = 16e6
+
 
 @dataclass(frozen=True, eq=False)
 class RecursiveForm:
@@ -177,6 +180,48 @@ class RecursiveForm:
         out.eliminate_zeros()
         out.sort_indices()
         return out
+
+
+    def expand_rows(self, max_bytes: float = EXPAND_BLOCK_BYTES):
+        """:meth:`expand`'s ``K`` a block of rows at a time, never whole (bounded memory).
+
+        Each row is computed with the same operations in the same order as :meth:`expand`'s
+        (the column recursion restricted to the block's rows): the same numbers, except that
+        what cancelled to rounding (at most ``ZERO_TOL`` of the row's largest, or of 1) is zero,
+        as :func:`~.sparse.tree_base_parameters` writes it.
+
+        Parameters
+        ----------
+        max_bytes : float, optional
+            About the most a dense block (rows x ``k``) takes; at least one row.
+
+        Yields
+        ------
+        tuple
+            ``(start, stop, indptr (stop - start + 1,), column indices, values)``: rows
+            ``start:stop`` of ``K`` in CSR form (sorted, no zeros), consecutive blocks covering
+            ``0:nb``.
+        """
+        nb, k = len(self.independent), len(self.dependent)
+        rc = self._csr(self.R)
+        sc = self._csr(self.S).tocsc()
+        step = max(1, int(max_bytes // (8 * max(k, 1))))
+        users = [(sc.indices[sc.indptr[d]:sc.indptr[d + 1]], sc.data[sc.indptr[d]:sc.indptr[d + 1]].tolist())
+                 for d in range(k)]
+        for start in range(0, nb, step):
+            stop = min(nb, start + step)
+            block = rc[start:stop].toarray()  # (m, k): R's rows, then K's, column by column from the leaves
+            for d in range(k - 1, -1, -1):
+                dps, vs = users[d]
+                col = block[:, d]
+                for dp, v in zip(dps.tolist(), vs):
+                    col = col + v * block[:, dp]
+                block[:, d] = col
+            # what cancels to rounding (relative to the row, and to the 1 of pi_I) is zero, as tree_base_parameters
+            block[np.abs(block) <= ZERO_TOL * np.maximum(1.0, np.abs(block).max(axis=1, initial=0.0))[:, None]] = 0.0
+            rows, cols = np.nonzero(block)
+            indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=stop - start))]
+            yield start, stop, indptr, cols, block[rows, cols]
 
 
 def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> BaseParameters:

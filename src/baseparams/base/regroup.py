@@ -281,48 +281,51 @@ class BaseParameters:
             return
         if form != "expanded":
             raise BaseparamsError(f"unknown form {form!r}; expected 'expanded' or 'recursive'")
-        indptr, indices, data = self._terms()
         heads = [self.names[i] for i in self.independent.tolist()]
         names = self.base_names()
         terms = [self.names[d] for d in self.dependent.tolist()]
-        start, nb = 0, len(heads)
+        for start, stop, indptr, indices, data in self._row_blocks(max_terms):
+            yield from format_rows(heads[start:stop], names[start:stop], indptr, indices, data, terms,
+                                   self.dependent)
+
+    def _row_blocks(self, max_terms: int):
+        """``K``'s rows in blocks ``(start, stop, indptr, indices, data)``, at most about ``max_terms`` terms each.
+
+        From ``K``, or from the recursive form when there is one
+        (:meth:`~.recursive.RecursiveForm.expand_rows`: ``K`` is never held whole).
+        """
+        if self.recursive is not None:  # the same text whether K was made or not
+            yield from self.recursive.expand_rows()
+            return
+        indptr, indices, data = self._terms()
+        start, nb = 0, len(self.independent)
         while start < nb:  # rows [start, stop): at least one, about max_terms terms
             stop = max(start + 1, int(np.searchsorted(indptr, indptr[start] + max_terms, side="right")) - 1)
             stop = min(stop, nb)
             lo, hi = indptr[start], indptr[stop]
-            yield from format_rows(heads[start:stop], names[start:stop], indptr[start:stop + 1] - lo,
-                                   indices[lo:hi], data[lo:hi], terms, self.dependent)
+            yield start, stop, indptr[start:stop + 1] - lo, indices[lo:hi], data[lo:hi]
             start = stop
 
-    def n_terms(self, form: str = "expanded") -> int:
-        """How many terms the expressions write beyond each base parameter's own (``K``'s nonzeros, or ``R``'s).
-
-        Parameters
-        ----------
-        form : {"expanded", "recursive"}
-            As :meth:`expressions`.
+    def expanded_size(self) -> tuple[int, float]:
+        """The expanded form's size: ``K``'s nonzeros and largest magnitude (a pass over the rows, not held).
 
         Returns
         -------
-        int
+        terms : int
+            How many terms the expanded expressions write beyond each base parameter's own.
+        largest : float
+            The largest coefficient's magnitude (0 without one): past ``1 / eps`` (about
+            ``4.5e15``) a base parameter ``beta = pi_I + K pi_D`` cannot be computed in double
+            precision next to its own standard parameter.
         """
-        if form == "recursive" and self.recursive is not None:
-            r = self.recursive.R
-            return int(r.nnz if _is_sparse(r) else np.count_nonzero(r))
-        return int(self.K.nnz if _is_sparse(self.K) else np.count_nonzero(self.K))
-
-    def max_coefficient(self) -> float:
-        """The largest magnitude of the expanded regrouping's coefficients (``K``; 0 without one).
-
-        Returns
-        -------
-        float
-            A base parameter ``beta = pi_I + K pi_D`` with coefficients past ``1 / eps`` (about
-            ``4.5e15``) cannot be computed in double precision next to its own parameter.
-        """
-        k = self.K
-        v = k.data if _is_sparse(k) else np.asarray(k)
-        return float(np.abs(v).max()) if v.size else 0.0
+        cached = self.__dict__.get("_size")
+        if cached is None:
+            terms, largest = 0, 0.0
+            for _, _, _, _, data in self._row_blocks(EXPRESSION_CHUNK_TERMS):
+                terms += len(data)
+                largest = max(largest, float(np.abs(data).max()) if len(data) else 0.0)
+            cached = self.__dict__["_size"] = (terms, largest)
+        return cached
 
     def definitions(self) -> list[dict[str, str]]:
         """The regrouped dependent parameters the recursive form's expressions use (``[]`` without one).

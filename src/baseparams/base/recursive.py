@@ -40,7 +40,7 @@ from .regroup import SNAP_RTOL, ZERO_TOL, BaseParameters, format_rows, parameter
 from .sparse import SNAP_ROUNDING, choose_all, csr_or_dense, lower_blocks, scaled_blocks, snap_short
 
 #: :meth:`RecursiveForm.expand_rows`: about the most one dense block of expanded rows takes [bytes]
-EXPAND_BLOCK_BYTES = 16e6
+EXPAND_BLOCK_BYTES = 8e6
 
 
 @dataclass(frozen=True, eq=False)

@@ -294,17 +294,16 @@ class BaseParameters:
         From ``K``, or from the recursive form when there is one
         (:meth:`~.recursive.RecursiveForm.expand_rows`: ``K`` is never held whole).
         """
-        if self.recursive is not None:  # the same text whether K was made or not
-            yield from self.recursive.expand_rows()
-            return
-        indptr, indices, data = self._terms()
-        start, nb = 0, len(self.independent)
-        while start < nb:  # rows [start, stop): at least one, about max_terms terms
-            stop = max(start + 1, int(np.searchsorted(indptr, indptr[start] + max_terms, side="right")) - 1)
-            stop = min(stop, nb)
-            lo, hi = indptr[start], indptr[stop]
-            yield start, stop, indptr[start:stop + 1] - lo, indices[lo:hi], data[lo:hi]
-            start = stop
+        blocks = (self.recursive.expand_rows() if self.recursive is not None  # the same text whether K was made
+                  else [(0, len(self.independent), *self._terms())])
+        for first, last, indptr, indices, data in blocks:
+            start = 0
+            while start < last - first:  # rows [start, stop): at least one, about max_terms terms
+                stop = max(start + 1, int(np.searchsorted(indptr, indptr[start] + max_terms, side="right")) - 1)
+                stop = min(stop, last - first)
+                lo, hi = indptr[start], indptr[stop]
+                yield first + start, first + stop, indptr[start:stop + 1] - lo, indices[lo:hi], data[lo:hi]
+                start = stop
 
     def expanded_size(self) -> tuple[int, float]:
         """The expanded form's size: ``K``'s nonzeros and largest magnitude (a pass over the rows, not held).

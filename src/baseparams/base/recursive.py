@@ -182,7 +182,7 @@ class RecursiveForm:
         return out
 
 
-    def expand_rows(self, max_bytes: float = EXPAND_BLOCK_BYTES):
+    def expand_rows(self, max_bytes: float | None = None):
         """:meth:`expand`'s ``K`` a block of rows at a time, never whole (bounded memory).
 
         Each row is computed with the same operations in the same order as :meth:`expand`'s
@@ -193,7 +193,8 @@ class RecursiveForm:
         Parameters
         ----------
         max_bytes : float, optional
-            About the most a dense block (rows x ``k``) takes; at least one row.
+            About the most a dense block (rows x ``k``) takes; at least one row (default
+            :data:`EXPAND_BLOCK_BYTES`).
 
         Yields
         ------
@@ -205,7 +206,7 @@ class RecursiveForm:
         nb, k = len(self.independent), len(self.dependent)
         rc = self._csr(self.R)
         sc = self._csr(self.S).tocsc()
-        step = max(1, int(max_bytes // (8 * max(k, 1))))
+        step = max(1, int((max_bytes or EXPAND_BLOCK_BYTES) // (8 * max(k, 1))))
         users = [(sc.indices[sc.indptr[d]:sc.indptr[d + 1]], sc.data[sc.indptr[d]:sc.indptr[d + 1]].tolist())
                  for d in range(k)]
         for start in range(0, nb, step):

@@ -253,7 +253,7 @@ class BaseParameters:
             return self.recursive.base_expressions(self.base_names())
         return list(self.iter_expressions(form))
 
-    def iter_expressions(self, form: str = "expanded", max_terms: int = EXPRESSION_CHUNK_TERMS):
+    def iter_expressions(self, form: str = "expanded", max_terms: int | None = None):
         """:meth:`expressions` one at a time: the expanded form's text made a block of rows at a time.
 
         The expanded form has ``O(sum of depths)`` terms on a tree (quadratic on a chain): written
@@ -264,7 +264,8 @@ class BaseParameters:
         form : {"expanded", "recursive"}
             As :meth:`expressions`.
         max_terms : int, optional
-            About how many terms are formatted together (a row is never split).
+            About how many terms are formatted together (a row is never split; default
+            :data:`EXPRESSION_CHUNK_TERMS`).
 
         Yields
         ------
@@ -284,7 +285,7 @@ class BaseParameters:
         heads = [self.names[i] for i in self.independent.tolist()]
         names = self.base_names()
         terms = [self.names[d] for d in self.dependent.tolist()]
-        for start, stop, indptr, indices, data in self._row_blocks(max_terms):
+        for start, stop, indptr, indices, data in self._row_blocks(max_terms or EXPRESSION_CHUNK_TERMS):
             yield from format_rows(heads[start:stop], names[start:stop], indptr, indices, data, terms,
                                    self.dependent)
 

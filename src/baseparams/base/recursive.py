@@ -204,14 +204,12 @@ class RecursiveForm:
             ``0:nb``.
         """
         nb, k = len(self.independent), len(self.dependent)
-        rc = self._csr(self.R)
-        sc = self._csr(self.S).tocsc()
         step = max(1, int((max_bytes or EXPAND_BLOCK_BYTES) // (8 * max(k, 1))))
-        users = [(sc.indices[sc.indptr[d]:sc.indptr[d + 1]], sc.data[sc.indptr[d]:sc.indptr[d + 1]].tolist())
-                 for d in range(k)]
+        users = _column_entries(self.S)
         for start in range(0, nb, step):
             stop = min(nb, start + step)
-            block = rc[start:stop].toarray()  # (m, k): R's rows, then K's, column by column from the leaves
+            r = self.R[start:stop]  # (m, k): R's rows, then K's, column by column from the leaves
+            block = r.toarray() if hasattr(r, "toarray") else np.array(r, dtype=float)
             for d in range(k - 1, -1, -1):
                 dps, vs = users[d]
                 col = block[:, d]
@@ -315,14 +313,24 @@ def _local_terms(cols: Columns, scaled: tuple, order: np.ndarray, bounds: np.nda
     return np.concatenate(tg), np.concatenate(sr), np.concatenate(vals)
 
 
+def _column_entries(a) -> list[tuple[np.ndarray, list[float]]]:
+    """Each column's nonzeros ``(row indices ascending, values)`` of a dense or CSR matrix (no scipy for dense)."""
+    if hasattr(a, "tocsc"):
+        c = a.tocsc()
+        c.sort_indices()
+        return [(c.indices[c.indptr[d]:c.indptr[d + 1]], c.data[c.indptr[d]:c.indptr[d + 1]].tolist())
+                for d in range(c.shape[1])]
+    a = np.asarray(a)
+    return [(np.flatnonzero(a[:, d]), a[np.flatnonzero(a[:, d]), d].tolist()) for d in range(a.shape[1])]
+
+
 def _unseen(form: RecursiveForm, dep: np.ndarray) -> np.ndarray:
     """The dependent parameters no base parameter sees: no path of nonzero coefficients to ``R``, sorted."""
     seen = np.zeros(len(dep), dtype=bool)
-    rseen = np.diff(form._csr(form.R).tocsc().indptr) > 0
-    ssc = form._csr(form.S).tocsc()
+    rseen = np.array([len(rows) > 0 for rows, _ in _column_entries(form.R)], dtype=bool)
+    users = _column_entries(form.S)
     # t_d is seen when it feeds R, or the t of a lower body that is seen (S[d', d] != 0, d' later in
     # this order): root side first
     for d in range(len(dep) - 1, -1, -1):
-        users = ssc.indices[ssc.indptr[d]:ssc.indptr[d + 1]]
-        seen[d] = rseen[d] or bool(np.any(seen[users]))
+        seen[d] = rseen[d] or bool(np.any(seen[users[d][0]]))
     return np.sort(dep[~seen]) if len(dep) else np.zeros(0, dtype=int)

@@ -262,3 +262,129 @@ def test_a_thousand_link_chain_is_refused_at_once_in_one_line(tmp_path, capsys):
                  "--convention", "paper"]) != 0
     err = [line for line in capsys.readouterr().err.splitlines() if "error" in line.lower()]
     assert len(err) == 1 and "cannot be computed in double precision" in err[0] and "--convention khalil" in err[0]
+
+
+def _whole_k(base) -> np.ndarray:
+    """The whole ``K`` (``RecursiveForm.expand``), rounding zeroed relative to its row as the writer does."""
+    from baseparams.base.regroup import ZERO_TOL
+
+    k = base.recursive.expand()
+    k = np.array(k.toarray() if hasattr(k, "toarray") else k, dtype=float)
+    k[np.abs(k) <= ZERO_TOL * np.maximum(1.0, np.abs(k).max(axis=1, initial=0.0))[:, None]] = 0.0
+    return k
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_expanded_form_written_in_blocks_is_the_whole_one(seed, monkeypatch):
+    """Issue 51: the expanded form of a large tree is written a few rows at a time from the recursive form:
+    any block gives the whole ``K``'s rows, any block size the same text, and the streamed JSON and report
+    are the whole ``json.dumps`` and report, in both forms."""
+    import json
+
+    from baseparams.analysis import format_report, json_chunks, report_lines
+    from baseparams.base import recursive, regroup
+
+    rng = np.random.default_rng(seed)
+    robot = random_robot(rng, int(rng.integers(60, 90)), joint_types="RP", branching=0.3 * seed)
+    a = bp.analyze(robot, form="expanded", convention=("khalil", "paper")[seed % 2])
+    assert a.form == "expanded" and a.base.recursive is not None  # a large tree: regrouped in recursive form
+    for b in (a.base, a.base_paper):  # the rows block by block are the whole K's (to its rounding)
+        whole = _whole_k(b)
+        got = np.zeros_like(whole)
+        for start, stop, indptr, indices, data in b.recursive.expand_rows(float(rng.integers(1, 5e4))):
+            got[start + np.repeat(np.arange(stop - start), np.diff(indptr)), indices] = data
+        scale = np.maximum(1.0, np.abs(whole).max(axis=1, keepdims=True))
+        assert np.abs(got - whole).max(initial=0.0) <= 1e-10 * scale.max()
+        assert np.all(np.abs(got - whole) <= 1e-10 * scale)
+    want = [list(b.iter_expressions("expanded")) for b in (a.base, a.base_paper)]
+    whole_json, whole_report = json.dumps(a.to_json(), indent=2), format_report(a)
+    monkeypatch.setattr(recursive, "EXPAND_BLOCK_BYTES", float(rng.integers(1, 5e4)))
+    monkeypatch.setattr(regroup, "EXPRESSION_CHUNK_TERMS", int(rng.integers(1, 500)))
+    assert [list(b.iter_expressions("expanded")) for b in (a.base, a.base_paper)] == want  # any block size
+    assert "".join(json_chunks(a)) == whole_json and "\n".join(report_lines(a)) == whole_report
+    assert json.loads(whole_json)["base_parameters"] == want[0]
+    assert [e["name"] for e in want[0]] == a.base_names and len(want[0]) == a.n_base
+    r = bp.analyze(robot, form="recursive", convention=a.base.convention)
+    assert "".join(json_chunks(r)) == json.dumps(r.to_json(), indent=2)
+    assert np.array_equal(r.base.unidentifiable, a.base.unidentifiable)
+
+
+def test_expanded_form_keeps_what_the_regressor_sees():
+    """A random chain whose expanded coefficients reach 1e10 and more: every parameter the expanded form calls
+    unidentifiable has a zero regressor column (before, terms below 1e-9 of a row's largest were dropped from
+    ``K`` and parameters the torques do see were listed as unidentifiable)."""
+    robot = random_robot(np.random.default_rng(60), 60, "R", branching=0.0)
+    a = bp.analyze(robot, form="expanded")
+    assert a.base.expanded_size()[1] > 1e9
+    rng = np.random.default_rng(0)
+    q, dq, ddq = rng.normal(size=(3, 4, robot.dof))
+    t = a.base.T.toarray() if hasattr(a.base.T, "toarray") else a.base.T
+    y = regressor(robot, q, dq, ddq).reshape(-1, 10 * robot.n) @ t  # columns in the analysis' convention
+    scale = np.abs(y).max()
+    seen = np.abs(y).max(axis=0) > 1e-9 * scale
+    assert not seen[a.base.unidentifiable].any()
+    listed = set(a.base.unidentifiable.tolist())
+    assert all(i in listed for i in np.flatnonzero(~seen))  # and what it does not see is listed
+
+
+def _write_peak(a, path, monkeypatch) -> tuple[int, int]:
+    """Peak traced memory [bytes] while ``analyze --json --output`` writes ``a``, and the file's size."""
+    import tracemalloc
+
+    from baseparams.analysis import json_chunks
+    from baseparams.cli.common import emit
+
+    args = SimpleNamespace(output=str(path), json=True, model="m.urdf")
+    monkeypatch.setattr("baseparams.cli.common.input_files", lambda args: [])
+    tracemalloc.start()
+    try:
+        emit(args, json_chunks(a))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return peak, path.stat().st_size
+
+
+@pytest.mark.slow
+def test_writing_the_expanded_form_holds_a_block_not_the_report(tmp_path, monkeypatch):
+    """Issue 51 (2.5 GB for a 1 000-link chain's expanded form): the text is made and written a block at a
+    time. Doubling the chain quadruples the text; the memory while writing stays a block's, not the text's."""
+    from baseparams.base import recursive, regroup
+
+    monkeypatch.setattr(recursive, "EXPAND_BLOCK_BYTES", 2e5)
+    monkeypatch.setattr(regroup, "EXPRESSION_CHUNK_TERMS", 5000)
+    peaks, sizes = [], []
+    for n in (100, 100, 200):  # the first run warms up (imports, caches)
+        a = bp.analyze(random_robot(np.random.default_rng(n), n, "R", branching=0.0), form="expanded")
+        peak, size = _write_peak(a, tmp_path / f"c{n}.json", monkeypatch)
+        peaks.append(peak)
+        sizes.append(size)
+    peaks, sizes = peaks[1:], sizes[1:]
+    assert sizes[1] > 3 * sizes[0]  # quadratic text (about 12 MB at 200 links)
+    assert peaks[1] < 1.5 * peaks[0] and peaks[1] < sizes[1] / 4  # not: held whole it would be the text's
+
+
+def test_huge_expanded_form_and_coefficients_noted_in_one_line(tmp_path, monkeypatch, capsys):
+    """``analyze --form expanded``: past the thresholds, one line each on stderr (and in the report) before the
+    writing: the number of terms with ``--form recursive`` named, the largest coefficient against 1/eps."""
+    from baseparams import analysis
+    from baseparams.cli import main
+
+    model = tmp_path / "chain.urdf"
+    model.write_text(chain_urdf(80))
+    out = tmp_path / "r.txt"
+    assert main(["analyze", str(model), "--form", "expanded", "--output", str(out)]) == 0
+    assert "note:" not in capsys.readouterr().err  # 80 links of 0.3 m: neither
+    monkeypatch.setattr(analysis, "EXPANDED_NOTE_TERMS", 1000)
+    monkeypatch.setattr(analysis, "COEFFICIENT_NOTE", 0.5)
+    assert main(["analyze", str(model), "--form", "expanded", "--output", str(out)]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "note:" in line]
+    assert len(notes) == 2
+    assert "million terms" in notes[0] and "--form recursive" in notes[0]
+    assert "coefficients up to" in notes[1] and "double precision" in notes[1]
+    text = out.read_text()
+    assert all(line.removeprefix("baseparams: ") in text for line in notes)
+    assert main(["analyze", str(model), "--output", str(out)]) == 0  # auto: recursive (80 < 200: expanded)
+    capsys.readouterr()
+    assert main(["analyze", str(model), "--form", "recursive", "--output", str(out)]) == 0
+    assert "note:" not in capsys.readouterr().err

@@ -228,8 +228,10 @@ def test_deep_chain_is_refused_before_allocating(monkeypatch):
 
     robot = random_robot(np.random.default_rng(1), 60, "R", True, branching=0.0)
     monkeypatch.setattr(analysis, "_available_bytes", lambda: 1e6)
-    with pytest.raises(BaseparamsError, match="depth"):
-        analyze(robot)
+    with pytest.raises(BaseparamsError, match=r"60 bodies: the analysis needs about .* GB and .* available"):
+        analyze(robot)  # linear in the bodies in either form (issue 51: the expanded one is written as it is made)
+    with pytest.raises(BaseparamsError, match=r"60 bodies: the analysis needs about"):
+        analyze(robot, form="expanded")
 
 
 def test_undecided_when_the_dense_check_does_not_fit(monkeypatch):

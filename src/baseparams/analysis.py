@@ -77,6 +77,7 @@ from __future__ import annotations
 
 import importlib
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, TextIO
 
@@ -511,6 +512,10 @@ class Analysis:
             The schema in this module's docstring (what ``baseparams analyze MODEL --json``
             prints).
         """
+        return self._json(True)
+
+    def _json(self, expressions: bool) -> dict:
+        """:meth:`to_json`; without ``expressions`` the four lists of expressions are None (:func:`json_chunks`)."""
         from .nullspace.drng import PAPER
 
         r, c = self.robot, self.certificate
@@ -538,10 +543,11 @@ class Analysis:
             "residual": None if c is None else c.residual,
             "convention": self.base.convention,
             "form": self.form,
-            "base_parameters": self.base.expressions(self.form),
-            "base_parameters_paper": self.base_paper.expressions(self.form),
-            "regrouped_parameters": self.regrouped(),
-            "regrouped_parameters_paper": self.base_paper.definitions() if self.form == "recursive" else [],
+            "base_parameters": self.base.expressions(self.form) if expressions else None,
+            "base_parameters_paper": self.base_paper.expressions(self.form) if expressions else None,
+            "regrouped_parameters": self.regrouped() if expressions else None,
+            "regrouped_parameters_paper": (self.base_paper.definitions() if self.form == "recursive" else [])
+            if expressions else None,
             "unidentifiable": [self.base.names[i] for i in self.base.unidentifiable],
             "practical": None if self.practical is None else self.practical.to_json(self.n_base),
             "practical_rank": None if c is None or c.practical is None else c.practical.to_json(),
@@ -752,16 +758,11 @@ def _analyze(robot: Robot, *, samples: int | None, seed: int, verify: bool, rows
         use = _resolve_form(robot, form, columns)
         if use == "recursive" and columns is None:  # a small tree: DRNG's span in compact form
             columns = _recursive_columns(robot, rows, res, cert)
-        if use == "recursive":
+        if use == "recursive" or columns is not None:  # a large tree: O(n), expanded as it is written
             from .base.recursive import recursive_base_parameters
 
             base = recursive_base_parameters(robot, columns, convention)
             base_paper = recursive_base_parameters(robot, columns, "paper")
-        elif columns is not None:  # a large tree: regrouped from compact columns, sparsely
-            from .base.sparse import tree_base_parameters
-
-            base = tree_base_parameters(robot, columns, convention)
-            base_paper = tree_base_parameters(robot, columns, "paper")
         else:
             base, base_paper = _dense_regroup(robot, span, res, cert, convention, base_parameters)
     return Analysis(robot, rows, res.seconds, res.n_columns, res.rank, by, cert, basis, base, base_paper,
@@ -1047,18 +1048,10 @@ def _large_tree_columns(robot: Robot, rows: str, res):
 BYTES_PER_N2 = {True: 25e3, False: 8e3}
 
 
-#: a tree certified body by body and regrouped sparsely (``certify``'s structured path): bytes per
-#: body (the sampled wrench maps, the columns) and per unit of depth summed over the bodies (the
-#: dual vectors, ``K`` and the expressions grow with each body's distance to the root)
-BYTES_PER_BODY, BYTES_PER_DEPTH = 200e3, 2e3
-
-
-def _depth_sum(robot: Robot) -> int:
-    """Sum over the bodies of their number of ancestors (``O(n)``; parents precede children)."""
-    depth = np.zeros(robot.n, dtype=np.int64)
-    for i, p in enumerate(robot.parent):
-        depth[i] = depth[p] + 1 if p >= 0 else 0
-    return int(depth.sum())
+#: a tree certified body by body and regrouped in recursive form (``certify``'s structured path; the
+#: expanded form is written from it a block of rows at a time): bytes per body (the sampled wrench
+#: maps, the columns)
+BYTES_PER_BODY = 200e3
 
 
 #: the most the numerical method's sampled regressor may take [bytes] (samples x rows x 10 n numbers)
@@ -1080,21 +1073,17 @@ def _check_memory(robot: Robot, verify: bool, rows: str = "all", form: str = "au
     """Refuse, before allocating, a model whose analysis needs more memory than is available."""
     from .nullspace.certify import uses_structured
 
-    structured = uses_structured(robot, rows)  # certified body by body (or not), regrouped sparsely
-    recursive = form == "recursive" or (form == "auto" and robot.n >= RECURSIVE_MIN_BODIES)
+    structured = uses_structured(robot, rows)  # certified body by body (or not), regrouped in recursive form
     if structured:
-        # the recursive form is linear; the expanded one grows with each body's depth
-        need = BYTES_PER_BODY * robot.n + (0 if recursive else BYTES_PER_DEPTH * _depth_sum(robot))
+        need = BYTES_PER_BODY * robot.n  # linear in either form: the expanded one is written as it is made
     else:
         need = BYTES_PER_N2[bool(verify)] * robot.n**2
     have = _available_bytes()
     if have is None or need <= have:
         return
     if structured:
-        what = ("" if recursive else " (its expanded expressions grow with each body's depth in the tree; "
-                "--form recursive writes them in linear size)")
         raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the analysis needs about "
-                              f"{need / 1e9:.2g} GB{what} and {have / 1e9:.2g} GB are available")
+                              f"{need / 1e9:.2g} GB and {have / 1e9:.2g} GB are available")
     hint = ("; --no-verify gives DRNG's geometric answer without the numerical certificate "
             f"(about {BYTES_PER_N2[False] * robot.n**2 / 1e9:.2g} GB)" if verify else "")
     raise BaseparamsError(f"robot {robot.name!r}: {robot.n} bodies: the {'certified ' if verify else ''}analysis "
@@ -1115,7 +1104,23 @@ def format_report(a: Analysis) -> str:
     str
         The text report: base parameters in ``a.convention`` and in ``paper`` (world frame at q = 0).
     """
-    r, c, j = a.robot, a.certificate, a.to_json()
+    return "\n".join(report_lines(a))
+
+
+def report_lines(a: Analysis) -> Iterator[str]:
+    """:func:`format_report` line by line, the expressions made as they are written (bounded memory).
+
+    Parameters
+    ----------
+    a : Analysis
+        The result of :func:`analyze`.
+
+    Yields
+    ------
+    str
+        One line of the report (no newline).
+    """
+    r, c, j = a.robot, a.certificate, a._json(False)
     loops = (f", {len(r.couplings)} coupled joints (linear couplings), {len(r.actuated)} actuated" if r.only_couplings
              else f", {len(r.loops)} loop joints, {len(r.actuated)} actuated" if r.has_loops else "")
     out = [(f"{r.name}: {r.n} bodies, {10 * r.n} standard parameters, {r.dof} dofs{loops}, "
@@ -1157,36 +1162,106 @@ def format_report(a: Analysis) -> str:
             out.extend(f"  loop motion: {line}" for line in sm.get("motion", ()))
         out.append(f"certification: {c.status.upper()} - {c.message}")
         out.append(f"  residual ||W B||/||W|| = {c.residual:.2e}, worst column {c.max_column_residual:.2e}")
-    out.extend(_expressions_section(a, j))
-    out.append(f"\ntotal {a.seconds * 1e3:.1f} ms")
-    return "\n".join(out)
+    yield from out
+    yield from _expressions_section(a, j)
+    yield f"\ntotal {a.seconds * 1e3:.1f} ms"
 
 
-def _expressions_section(a: Analysis, j: dict) -> list[str]:
+def _expressions_section(a: Analysis, j: dict) -> Iterator[str]:
     """The report's lines of base parameters (and the recursive form's regrouped ones), both conventions."""
     from .model import inertia as _inertia
 
-    out: list[str] = []
+    out: list[str] = [*size_notes(a)]
     out.append("")
     rec = a.form == "recursive"
     how = ("; recursive form: each in its body's own standard parameters and its children's regrouped "
            "dependent parameters NAMER, defined after the list (--form expanded writes them out)" if rec
            else "")  # the expanded form: today's header
     out.append(f"base parameters ({_inertia.describe(a.base.convention)}{how}):")
-    for e in j["base_parameters"]:
-        out.append(f"  {e['name']} = {e['expression']}")
+    yield from out
+    yield from (f"  {e['name']} = {e['expression']}" for e in a.base.iter_expressions(a.form))
     if rec:
-        out.append("regrouped dependent parameters (root side first):")
-        for e in j["regrouped_parameters"]:
-            out.append(f"  {e['name']} = {e['expression']}")
+        yield "regrouped dependent parameters (root side first):"
+        yield from (f"  {e['name']} = {e['expression']}" for e in a.regrouped())
     if len(a.base.unidentifiable):
-        out.append("unidentifiable standard parameters: " + ", ".join(j["unidentifiable"]))
-    out.append("")
-    out.append(f"the same in the paper's convention ({_inertia.describe('paper')}{'; recursive form' if rec else ''}):")
-    for e in j["base_parameters_paper"]:
-        out.append(f"  {e['name']} = {e['expression']}")
+        yield "unidentifiable standard parameters: " + ", ".join(j["unidentifiable"])
+    yield ""
+    yield f"the same in the paper's convention ({_inertia.describe('paper')}{'; recursive form' if rec else ''}):"
+    yield from (f"  {e['name']} = {e['expression']}" for e in a.base_paper.iter_expressions(a.form))
     if rec:
-        out.append("regrouped dependent parameters (paper convention):")
-        for e in j["regrouped_parameters_paper"]:
-            out.append(f"  {e['name']} = {e['expression']}")
+        yield "regrouped dependent parameters (paper convention):"
+        yield from (f"  {e['name']} = {e['expression']}" for e in a.base_paper.definitions())
+
+
+def json_chunks(a: Analysis) -> Iterator[str]:
+    """``json.dumps(a.to_json(), indent=2)`` in pieces, the lists of expressions made as they are written.
+
+    Parameters
+    ----------
+    a : Analysis
+        The result of :func:`analyze`.
+
+    Yields
+    ------
+    str
+        Consecutive pieces of the JSON text (joined: exactly ``json.dumps(a.to_json(), indent=2)``).
+    """
+    import json
+
+    lists = {"base_parameters": lambda: a.base.iter_expressions(a.form),
+             "base_parameters_paper": lambda: a.base_paper.iter_expressions(a.form),
+             "regrouped_parameters": a.regrouped,
+             "regrouped_parameters_paper": lambda: a.base_paper.definitions() if a.form == "recursive" else []}
+    head = a._json(False)
+    marks = {key: f"@@{key}@@" for key in lists}
+    text = json.dumps({k: marks.get(k, v) for k, v in head.items()}, indent=2)
+    for key, make in lists.items():
+        before, text = text.split(json.dumps(marks[key]), 1)
+        yield before
+        first = True
+        for item in make():
+            yield ("[" if first else ",") + "\n    " + json.dumps(item, indent=2).replace("\n", "\n    ")
+            first = False
+        yield "[]" if first else "\n  ]"
+    yield text
+
+
+def size_notes(a: Analysis) -> list[str]:
+    """One line each when the expressions are huge or carry coefficients double precision cannot.
+
+    Parameters
+    ----------
+    a : Analysis
+        The result of :func:`analyze`.
+
+    Returns
+    -------
+    list of str
+        ``note: ...`` lines (``[]`` for the usual robot): the expanded form's terms past
+        :data:`EXPANDED_NOTE_TERMS` (with ``--form recursive`` named), and coefficients past
+        ``1 / eps`` (:data:`COEFFICIENT_NOTE`) next to the unit coefficient of each base
+        parameter's own standard parameter.
+    """
+    if a.form != "expanded":
+        return []
+    out = []
+    terms = a.base.expanded_size()[0] + (a.base_paper.expanded_size()[0] if a.base.convention != "paper" else 0)
+    if terms > EXPANDED_NOTE_TERMS:
+        out.append(f"note: the expanded form writes {terms / 1e6:.3g} million terms ({a.robot.n} bodies: they grow "
+                   f"with each body's depth in the tree); --form recursive writes the same regrouping in linear size")
+    pairs = [(a.base.convention, a.base)] + ([("paper", a.base_paper)] if a.base.convention != "paper" else [])
+    big = {name: b.expanded_size()[1] for name, b in pairs}
+    over = [name for name, v in big.items() if v > COEFFICIENT_NOTE]
+    if over:
+        worst = max(big[name] for name in over)
+        which = "both conventions" if len(over) == 2 else f"the {over[0]} convention"
+        out.append(f"note: coefficients up to {worst:.2g} in {which}: past 1/eps = {1 / np.finfo(float).eps:.2g}, "
+                   f"a base parameter's own standard parameter is lost next to them in double precision "
+                   f"(values computed from these expressions carry no digits of it)")
     return out
+
+
+#: the expanded form's terms (both conventions) past which :func:`size_notes` says so
+EXPANDED_NOTE_TERMS = 1_000_000
+#: a regrouping coefficient past this (``1 / eps``) is noted (:func:`size_notes`)
+COEFFICIENT_NOTE = 1.0 / float(np.finfo(float).eps)

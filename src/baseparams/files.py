@@ -406,6 +406,31 @@ def write_text(path, text: str, inputs: Iterable = (), what: str = "output") -> 
     return Path(path)
 
 
+def write_pieces(path, pieces: Iterable[str], inputs: Iterable = (), what: str = "output") -> Path:
+    """Write consecutive pieces of text to ``path`` atomically (:func:`atomic_path`), each as it comes.
+
+    Parameters
+    ----------
+    path : str or path
+        The final file.
+    pieces : iterable of str
+        The content in order (UTF-8), e.g. a report made line by line: never held whole.
+    inputs : iterable of str or path
+        Input files the output must not overwrite.
+    what : str
+        The output's role, for messages.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    with atomic_path(path, inputs, what) as tmp, open(tmp, "w", encoding="utf-8") as f:
+        for piece in pieces:
+            f.write(piece)
+    return Path(path)
+
+
 def write_bytes(path, data: bytes, inputs: Iterable = (), what: str = "output") -> Path:
     """Write to ``path`` atomically (:func:`atomic_path`).
 

@@ -39,6 +39,9 @@ from ..nullspace.columns import Columns
 from .regroup import SNAP_RTOL, ZERO_TOL, BaseParameters, format_rows, parameter_names
 from .sparse import SNAP_ROUNDING, choose_all, csr_or_dense, lower_blocks, scaled_blocks, snap_short
 
+#: :meth:`RecursiveForm.expand_rows`: about the most one dense block of expanded rows takes [bytes]
+EXPAND_BLOCK_BYTES = 8e6
+
 
 @dataclass(frozen=True, eq=False)
 class RecursiveForm:
@@ -179,6 +182,47 @@ class RecursiveForm:
         return out
 
 
+    def expand_rows(self, max_bytes: float | None = None):
+        """:meth:`expand`'s ``K`` a block of rows at a time, never whole (bounded memory).
+
+        Each row is computed with the same operations in the same order as :meth:`expand`'s
+        (the column recursion restricted to the block's rows): the same numbers, except that
+        what cancelled to rounding (at most ``ZERO_TOL`` of the row's largest, or of 1) is zero,
+        as :func:`~.sparse.tree_base_parameters` writes it.
+
+        Parameters
+        ----------
+        max_bytes : float, optional
+            About the most a dense block (rows x ``k``) takes; at least one row (default
+            :data:`EXPAND_BLOCK_BYTES`).
+
+        Yields
+        ------
+        tuple
+            ``(start, stop, indptr (stop - start + 1,), column indices, values)``: rows
+            ``start:stop`` of ``K`` in CSR form (sorted, no zeros), consecutive blocks covering
+            ``0:nb``.
+        """
+        nb, k = len(self.independent), len(self.dependent)
+        step = max(1, int((max_bytes or EXPAND_BLOCK_BYTES) // (8 * max(k, 1))))
+        users = _column_entries(self.S)
+        for start in range(0, nb, step):
+            stop = min(nb, start + step)
+            r = self.R[start:stop]  # (m, k): R's rows, then K's, column by column from the leaves
+            block = r.toarray() if hasattr(r, "toarray") else np.array(r, dtype=float)
+            for d in range(k - 1, -1, -1):
+                dps, vs = users[d]
+                col = block[:, d]
+                for dp, v in zip(dps.tolist(), vs):
+                    col = col + v * block[:, dp]
+                block[:, d] = col
+            # what cancels to rounding (relative to the row, and to the 1 of pi_I) is zero, as tree_base_parameters
+            block[np.abs(block) <= ZERO_TOL * np.maximum(1.0, np.abs(block).max(axis=1, initial=0.0))[:, None]] = 0.0
+            rows, cols = np.nonzero(block)
+            indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=stop - start))]
+            yield start, stop, indptr, cols, block[rows, cols]
+
+
 def recursive_base_parameters(robot: Robot, cols: Columns, convention: str) -> BaseParameters:
     """Regroup into base parameters in recursive form (module doc), ``O(n)`` memory and time.
 
@@ -269,14 +313,24 @@ def _local_terms(cols: Columns, scaled: tuple, order: np.ndarray, bounds: np.nda
     return np.concatenate(tg), np.concatenate(sr), np.concatenate(vals)
 
 
+def _column_entries(a) -> list[tuple[np.ndarray, list[float]]]:
+    """Each column's nonzeros ``(row indices ascending, values)`` of a dense or CSR matrix (no scipy for dense)."""
+    if hasattr(a, "tocsc"):
+        c = a.tocsc()
+        c.sort_indices()
+        return [(c.indices[c.indptr[d]:c.indptr[d + 1]], c.data[c.indptr[d]:c.indptr[d + 1]].tolist())
+                for d in range(c.shape[1])]
+    a = np.asarray(a)
+    return [(np.flatnonzero(a[:, d]), a[np.flatnonzero(a[:, d]), d].tolist()) for d in range(a.shape[1])]
+
+
 def _unseen(form: RecursiveForm, dep: np.ndarray) -> np.ndarray:
     """The dependent parameters no base parameter sees: no path of nonzero coefficients to ``R``, sorted."""
     seen = np.zeros(len(dep), dtype=bool)
-    rseen = np.diff(form._csr(form.R).tocsc().indptr) > 0
-    ssc = form._csr(form.S).tocsc()
+    rseen = np.array([len(rows) > 0 for rows, _ in _column_entries(form.R)], dtype=bool)
+    users = _column_entries(form.S)
     # t_d is seen when it feeds R, or the t of a lower body that is seen (S[d', d] != 0, d' later in
     # this order): root side first
     for d in range(len(dep) - 1, -1, -1):
-        users = ssc.indices[ssc.indptr[d]:ssc.indptr[d + 1]]
-        seen[d] = rseen[d] or bool(np.any(seen[users]))
+        seen[d] = rseen[d] or bool(np.any(seen[users[d][0]]))
     return np.sort(dep[~seen]) if len(dep) else np.zeros(0, dtype=int)

@@ -83,6 +83,10 @@ ZERO_TOL = 1e-9
 #: coefficients snap to the shortest decimal within this relative distance
 SNAP_RTOL = 1e-13
 
+#: about how many terms :meth:`BaseParameters.iter_expressions` formats at once (the expanded form of a
+#: 1 000-link chain has over ten million: their text is made and let go a block of rows at a time)
+EXPRESSION_CHUNK_TERMS = 200_000
+
 
 def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:
     """Snap every entry to the shortest decimal within ``rtol`` relative of it.
@@ -247,9 +251,81 @@ class BaseParameters:
                 raise BaseparamsError("these base parameters have no recursive form (a tree regrouped from compact "
                                       "nullspace columns has one: analyze(..., form='recursive'))")
             return self.recursive.base_expressions(self.base_names())
+        return list(self.iter_expressions(form))
+
+    def iter_expressions(self, form: str = "expanded", max_terms: int | None = None):
+        """:meth:`expressions` one at a time: the expanded form's text made a block of rows at a time.
+
+        The expanded form has ``O(sum of depths)`` terms on a tree (quadratic on a chain): written
+        whole it would hold every term's text at once; here at most about ``max_terms`` terms'.
+
+        Parameters
+        ----------
+        form : {"expanded", "recursive"}
+            As :meth:`expressions`.
+        max_terms : int, optional
+            About how many terms are formatted together (a row is never split; default
+            :data:`EXPRESSION_CHUNK_TERMS`).
+
+        Yields
+        ------
+        dict
+            ``{"name", "expression"}``, in :meth:`expressions`' order.
+
+        Raises
+        ------
+        BaseparamsError
+            As :meth:`expressions` (when the first item is asked for).
+        """
+        if form == "recursive":
+            yield from self.expressions("recursive")
+            return
         if form != "expanded":
             raise BaseparamsError(f"unknown form {form!r}; expected 'expanded' or 'recursive'")
-        return self._expressions(*self._terms())
+        heads = [self.names[i] for i in self.independent.tolist()]
+        names = self.base_names()
+        terms = [self.names[d] for d in self.dependent.tolist()]
+        for start, stop, indptr, indices, data in self._row_blocks(max_terms or EXPRESSION_CHUNK_TERMS):
+            yield from format_rows(heads[start:stop], names[start:stop], indptr, indices, data, terms,
+                                   self.dependent)
+
+    def _row_blocks(self, max_terms: int):
+        """``K``'s rows in blocks ``(start, stop, indptr, indices, data)``, at most about ``max_terms`` terms each.
+
+        From ``K``, or from the recursive form when there is one
+        (:meth:`~.recursive.RecursiveForm.expand_rows`: ``K`` is never held whole).
+        """
+        blocks = (self.recursive.expand_rows() if self.recursive is not None  # the same text whether K was made
+                  else [(0, len(self.independent), *self._terms())])
+        for first, last, indptr, indices, data in blocks:
+            start = 0
+            while start < last - first:  # rows [start, stop): at least one, about max_terms terms
+                stop = max(start + 1, int(np.searchsorted(indptr, indptr[start] + max_terms, side="right")) - 1)
+                stop = min(stop, last - first)
+                lo, hi = indptr[start], indptr[stop]
+                yield first + start, first + stop, indptr[start:stop + 1] - lo, indices[lo:hi], data[lo:hi]
+                start = stop
+
+    def expanded_size(self) -> tuple[int, float]:
+        """The expanded form's size: ``K``'s nonzeros and largest magnitude (a pass over the rows, not held).
+
+        Returns
+        -------
+        terms : int
+            How many terms the expanded expressions write beyond each base parameter's own.
+        largest : float
+            The largest coefficient's magnitude (0 without one): past ``1 / eps`` (about
+            ``4.5e15``) a base parameter ``beta = pi_I + K pi_D`` cannot be computed in double
+            precision next to its own standard parameter.
+        """
+        cached = self.__dict__.get("_size")
+        if cached is None:
+            terms, largest = 0, 0.0
+            for _, _, _, _, data in self._row_blocks(EXPRESSION_CHUNK_TERMS):
+                terms += len(data)
+                largest = max(largest, float(np.abs(data).max()) if len(data) else 0.0)
+            cached = self.__dict__["_size"] = (terms, largest)
+        return cached
 
     def definitions(self) -> list[dict[str, str]]:
         """The regrouped dependent parameters the recursive form's expressions use (``[]`` without one).
@@ -269,11 +345,6 @@ class BaseParameters:
         rows, cols = np.nonzero(self.K)  # row-major: row by row
         indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=self.K.shape[0]))]
         return indptr, cols, self.K[rows, cols]
-
-    def _expressions(self, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> list[dict[str, str]]:
-        """:meth:`expressions` from ``K``'s nonzeros: every term formatted once, rows joined."""
-        return format_rows([self.names[i] for i in self.independent.tolist()], self.base_names(), indptr,
-                           indices, data, [self.names[d] for d in self.dependent.tolist()], self.dependent)
 
     def _check(self, convention: str) -> None:
         _inertia.check_convention(convention)
@@ -342,12 +413,12 @@ class BaseParameters:
 
 
 def _lazy(name: str, doc: str) -> property:
-    """``K`` or ``E``: stored, or expanded from the recursive form when first read (``None`` given)."""
+    """``K`` or ``E``: stored, or made when first read (``None`` given): from the recursive form, ``E`` from ``K``."""
     key = "_" + name
 
     def get(self):
         v = self.__dict__.get(key)
-        if v is None and self.recursive is not None:
+        if v is None and (self.recursive is not None or (key == "_E" and self.__dict__.get("_K") is not None)):
             v = _expand(self, name)
             self.__dict__[key] = v
         return v

@@ -379,8 +379,9 @@ def tree_base_parameters(robot: Robot, cols: Columns, convention: str) -> BasePa
     snap = np.maximum(SNAP_RTOL, np.maximum(rounding[ind[rows] // 10], rounding[dep[cls] // 10]))
     vals = snap_short(vals * length_scale(robot) ** (power[ind][rows] - power[dep][cls]), snap)
     kmat = csr_or_dense(vals, rows, cls, (len(ind), len(dep)))
-    e = csr_or_dense(np.r_[np.ones(len(ind)), vals], np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]],
-                (len(ind), n10))
+    # E = [I | K] doubles K's memory (O(sum of depths) nonzeros): a large tree's is made when first read
+    e = None if not isinstance(kmat, np.ndarray) else csr_or_dense(
+        np.r_[np.ones(len(ind)), vals], np.r_[np.arange(len(ind)), rows], np.r_[ind, dep[cls]], (len(ind), n10))
     if isinstance(kmat, np.ndarray):
         unseen = ~np.any(kmat != 0, axis=0)
     else:

@@ -84,7 +84,8 @@ def run(args) -> int:
     """``baseparams analyze MODEL``: the base-parameter analysis, as a text report or JSON.
 
     Writes the report (:func:`~baseparams.analysis.format_report`, or
-    :meth:`~baseparams.analysis.Analysis.to_json` with ``--json``) to stdout or ``--output``;
+    :meth:`~baseparams.analysis.Analysis.to_json` with ``--json``) to stdout or ``--output``, made
+    as it is written (:func:`~baseparams.analysis.report_lines`, :func:`~baseparams.analysis.json_chunks`);
     an undecided or failed certification is also one line on stderr.
 
     Parameters
@@ -104,7 +105,7 @@ def run(args) -> int:
     BaseparamsError
         Bad input (the model, the options, an unwritable ``--output``).
     """
-    from ..analysis import analyze, format_report
+    from ..analysis import analyze, json_chunks, report_lines, size_notes
 
     if any(ch in args.model for ch in "*?["):
         for opt in ("plot", "html", "symbolic"):
@@ -127,7 +128,8 @@ def run(args) -> int:
         return no_moving_bodies(args, exc)
     with Progress(args.verbose) as progress:
         result = analyze(robot, **keywords(args), progress=progress)
-        text = json.dumps(result.to_json(), indent=2) if args.json else format_report(result)
+        for note in size_notes(result):  # before the writing, which takes the time
+            print(f"baseparams: {note}", file=sys.stderr)
         if args.html:
             from ..report.html import analysis_html
 
@@ -139,11 +141,17 @@ def run(args) -> int:
             progress("drawing the figure")
             analysis_plot(result, args.plot, input_files(args), "plot=")
             print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
-    emit(args, text)
+    emit(args, json_chunks(result) if args.json else _pieces(report_lines(result)))
     status = result.status
     if status in (Status.UNDECIDED, Status.FAILED):
         print(f"baseparams: certification {status.upper()}: {result.certificate.message}", file=sys.stderr)
     return STATUS_EXIT[status]
+
+
+def _pieces(lines):
+    """Lines as consecutive pieces of one text (a newline between lines, none after the last)."""
+    for i, line in enumerate(lines):
+        yield ("\n" if i else "") + line
 
 
 def _analyze_sweep(args) -> int:

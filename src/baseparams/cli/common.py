@@ -6,6 +6,7 @@ The modules of the subcommands (:mod:`baseparams.cli.identify`, ...) import from
 
 from __future__ import annotations
 
+import itertools
 import json
 import sys
 import threading
@@ -195,24 +196,29 @@ def no_moving_bodies(args, exc: NoMovingBodiesError) -> int:
     return EXIT_OK
 
 
-def emit(args, text: str) -> None:
+def emit(args, text) -> None:
     """The report: on stdout, or written to ``--output`` (atomically, never onto an input).
 
     Parameters
     ----------
     args : argparse.Namespace
         The parsed command line.
-    text : str
-        The report.
+    text : str or iterable of str
+        The report, or its consecutive pieces (written as they are made: a large report is
+        never held whole).
     """
+    pieces = (text,) if isinstance(text, str) else text
     out = getattr(args, "output", None)
     if not out:
-        print(text)
+        for piece in pieces:
+            sys.stdout.write(piece)
+        sys.stdout.write("\n")
+        sys.stdout.flush()
         return
-    from ..files import write_text
+    from ..files import write_pieces
 
     try:
-        write_text(out, text + "\n", input_files(args), "--output")
+        write_pieces(out, itertools.chain(pieces, ("\n",)), input_files(args), "--output")
     except OSError as exc:
         raise BaseparamsError(f"--output {out}: cannot write ({exc.strerror or exc})") from None
     if not args.json:

@@ -8,8 +8,8 @@ training rows (each block predicted from the others, every term refitted without
 measured torques' own units. :func:`select_terms` adds the terms one by one in the order of
 :data:`~baseparams.ident.terms.registry.TERMS` and keeps each one whose cross-validated RMS is lower by
 more than :data:`KEEP_GAIN` and in at least :data:`KEEP_FOLDS` of the blocks (or that the user
-forced), then drops again each kept term the others make unnecessary (backward), and fits the kept
-set on every training row.
+forced), tries again each term rejected before a later one was kept, then drops again each kept term
+the others make unnecessary (backward), and fits the kept set on every training row.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from .registry import TERMS, make_term
 #: a term is kept when it lowers the cross-validated RMS by more than this fraction ...
 KEEP_GAIN = 0.01
 #: ... by more than this fraction of the measured torques' RMS (a noise-free log's residual is rounding) ...
-KEEP_FLOOR = 1e-4
+KEEP_FLOOR = 1e-5
 #: ... and lowers the held-out error of at least this fraction of the blocks (a term that helps one
 #: block of a short log and hurts the others is not kept)
 KEEP_FOLDS = 0.6
@@ -483,6 +483,11 @@ def prepare_terms(ctx: TermContext, names) -> dict:
 def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), progress=None) -> TermsFit:
     """Add the terms one by one, keep those the cross-validation asks for, fit the kept ones.
 
+    A forward pass in :data:`TERMS` order; then each term rejected before a later one was kept is tried
+    again beside the kept set (a sensor delay is lost in the residual of an unmodelled scale until the
+    scale is in: rejected first, it is kept once the scale is), until nothing changes; then each kept term
+    the others make unnecessary is dropped (backward).
+
     Parameters
     ----------
     ctx : TermContext
@@ -505,54 +510,79 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
     forced = [n for n in TERMS if n in set(forced)]
     wanted = forced + [n for n in TERMS if n in set(candidates) and n not in forced]
     missing = prepare_terms(ctx, wanted)
-    cache: dict = {}
     folds: list = []
     base = cross_validate(ctx, [], inner, per_fold=folds)
-    current, kept, choices = base, [], []
-    need = int(np.ceil(KEEP_FOLDS * len(folds)))
-    floor = KEEP_FLOOR * float(np.sqrt(np.mean(ctx.tau**2)))  # below this a term changes nothing that matters
+    sel = _Selection(ctx, inner, say, forced, base, folds)
     for name in wanted:
         if name in missing:
-            choices.append(Choice(name, False, f"not available: {missing[name]}"))
-            continue
-        say(f"model terms: cross-validating {'+'.join(kept + [name])}")
-        trial: list = []
-        score = cross_validate(ctx, kept + [name], inner, cache, per_fold=trial)
-        gain = 1.0 - score / current if current > 0 else 0.0
-        better = int(np.sum(np.asarray(trial) < np.asarray(folds)))
-        figures = (f"cross-validated RMS {score:.4g} with it, {current:.4g} without ({100 * gain:+.1f} %; lower in "
-                   f"{better} of {len(folds)} blocks)")
-        if name in forced:
-            kept.append(name)
-            choices.append(Choice(name, True, f"forced; {figures}", score))
-            current, folds = score, trial
-        elif gain > KEEP_GAIN and better >= need and current - score > floor:
-            kept.append(name)
-            choices.append(Choice(name, True, figures, score))
-            current, folds = score, trial
+            sel.choices[name] = Choice(name, False, f"not available: {missing[name]}")
         else:
-            failed = [w for w, ok in ((f"not {100 * KEEP_GAIN:g} % lower", gain > KEEP_GAIN),
-                                      (f"lower in fewer than {need} blocks", better >= need),
-                                      (f"lower by less than {KEEP_FLOOR:g} of the torques' RMS ({floor:.2g})",
-                                       current - score > floor)) if not ok]
-            choices.append(Choice(name, False, f"{figures}: {'; '.join(failed)}", score))
-    # backward: a term kept early may have taken up what a later one models better (a delay standing in
-    # for a scale): drop each kept term whose removal does not raise the cross-validated RMS by KEEP_GAIN
-    for name in [n for n in kept if n not in forced] if len(kept) > 1 else []:
-        rest = [n for n in kept if n != name]
-        say(f"model terms: cross-validating {'+'.join(rest) or 'the core alone'} (without {name})")
-        score = cross_validate(ctx, rest, inner, cache)
-        if score < current * (1.0 + KEEP_GAIN):
-            kept = rest
-            k = next(i for i, c in enumerate(choices) if c.name == name)
-            choices[k] = Choice(name, False, f"dropped: cross-validated RMS {score:.4g} without it once the others are "
-                                f"in, {current:.4g} with it (not more than {100 * KEEP_GAIN:g} % lower)", score)
-            current = min(current, score)
-    terms = [_fresh(ctx, name) for name in kept]
+            sel.try_term(name)
+    changed = True
+    while changed:  # the terms rejected before a later one was kept, beside the kept set
+        stale = [n for n in wanted if n not in missing and n not in sel.kept and sel.tried_with[n] != sel.kept]
+        changed = any([sel.try_term(n, again=True) for n in stale])
+    sel.backward()
+    terms = [_fresh(ctx, name) for name in sel.kept]
     for t in terms:
         t.forced = t.name in forced
     state = fit_terms(ctx, terms, inner, want_cov=True)
-    return TermsFit(state, tuple(choices), base)
+    return TermsFit(state, tuple(sel.choices[n] for n in wanted), base)
+
+
+class _Selection:
+    """The state of :func:`select_terms`: the kept terms, each term's choice and the set it was tried beside."""
+
+    def __init__(self, ctx: TermContext, inner: Inner, say, forced: list, base: float, folds: list):
+        self.ctx, self.inner, self.say, self.forced = ctx, inner, say, forced
+        self.current, self.folds, self.kept = base, folds, []
+        self.choices: dict = {}
+        self.tried_with: dict = {}
+        self.cache: dict = {}
+        self.need = int(np.ceil(KEEP_FOLDS * len(folds)))
+        # below this a term changes nothing that matters
+        self.floor = KEEP_FLOOR * float(np.sqrt(np.mean(ctx.tau**2)))
+
+    def try_term(self, name: str, again: bool = False) -> bool:
+        """Cross-validate the kept terms with ``name`` added; keep it if it passes; whether it was kept."""
+        self.say(f"model terms: cross-validating {'+'.join(self.kept + [name])}")
+        self.tried_with[name] = list(self.kept)
+        trial: list = []
+        score = cross_validate(self.ctx, self.kept + [name], self.inner, self.cache, per_fold=trial)
+        current = self.current
+        gain = 1.0 - score / current if current > 0 else 0.0
+        better = int(np.sum(np.asarray(trial) < np.asarray(self.folds)))
+        beside = f" beside {'+'.join(self.kept)}" if again else ""
+        figures = (f"cross-validated RMS {score:.4g} with it{beside}, {current:.4g} without ({100 * gain:+.1f} %; "
+                   f"lower in {better} of {len(self.folds)} blocks)")
+        passed = gain > KEEP_GAIN and better >= self.need and current - score > self.floor
+        if name in self.forced or passed:
+            self.kept.append(name)
+            self.choices[name] = Choice(name, True, f"forced; {figures}" if name in self.forced else figures, score)
+            self.current, self.folds = score, trial
+            return True
+        failed = [w for w, ok in ((f"not {100 * KEEP_GAIN:g} % lower", gain > KEEP_GAIN),
+                                  (f"lower in fewer than {self.need} blocks", better >= self.need),
+                                  (f"lower by less than {KEEP_FLOOR:g} of the torques' RMS ({self.floor:.2g})",
+                                   current - score > self.floor)) if not ok]
+        self.choices[name] = Choice(name, False, f"{figures}: {'; '.join(failed)}", score)
+        return False
+
+    def backward(self) -> None:
+        """Drop each kept term whose removal does not raise the cross-validated RMS by :data:`KEEP_GAIN`.
+
+        A term kept early may have taken up what a later one models better (a delay standing in for a scale).
+        """
+        for name in [n for n in self.kept if n not in self.forced] if len(self.kept) > 1 else []:
+            rest = [n for n in self.kept if n != name]
+            self.say(f"model terms: cross-validating {'+'.join(rest) or 'the core alone'} (without {name})")
+            score = cross_validate(self.ctx, rest, self.inner, self.cache)
+            if score < self.current * (1.0 + KEEP_GAIN):
+                self.kept = rest
+                self.choices[name] = Choice(name, False, f"dropped: cross-validated RMS {score:.4g} without it once "
+                                            f"the others are in, {self.current:.4g} with it (not more than "
+                                            f"{100 * KEEP_GAIN:g} % lower)", score)
+                self.current = min(self.current, score)
 
 
 def core_rows(ctx: TermContext, state: State) -> tuple[np.ndarray, np.ndarray]:

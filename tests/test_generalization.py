@@ -12,6 +12,7 @@ import pytest
 
 import baseparams
 from baseparams.ident import accumulate_prepared, fit, identify, log_columns, predict_log
+from baseparams.ident.fitting import TRUSTED_WEIGHT
 from baseparams.ident.preprocess import prepare
 from baseparams.io.pinocchio import to_pinocchio
 
@@ -64,7 +65,7 @@ def test_the_rule_that_stops_the_terms_decides_the_estimator_too():
         assert sel["rule"] == "structure" and sel["cv_rms"] == {} and sel["estimator"] == estimator
         positive = [x for x in sel["lambdas"] if x > 0]
         assert min(positive) <= sel["lam"] <= max(positive) and sel["kappa_evidence"] is not None
-        assert (sel["lam"] >= 10) == (estimator == "least squares")
+        assert (sel["lam"] >= TRUSTED_WEIGHT) == (estimator == "least squares")
         text = "\n".join(res.notes)
         assert "rule for short motions, not by cross-validation" in text and "model terms: not tried" in text
         assert "the rule for short motions" in res.to_json()["estimator"]

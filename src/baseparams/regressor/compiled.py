@@ -366,15 +366,18 @@ def edge_extended(flat: np.ndarray, pad: int, curved: bool = True) -> np.ndarray
 
     scipy's odd extension (``2 x[0] - x[k]`` before the start, likewise after the end) keeps a
     signal's value and slope at the end but flips its even-order terms, so the second derivative of
-    the filtered signal is pulled towards zero within a cutoff period of each end. ``curved`` adds
-    ``2 (c2 k^2 + c4 k^4)`` to the ``k``-th extended sample, ``c2, c4`` the even coefficients of the
-    least-squares polynomial of degree :data:`EDGE_DEGREE` through the ``pad // 4 + 1`` samples at
-    that end, over the far half of the extension tapered (a half cosine) to plain odd extension:
-    near the end a quartic is extended exactly (value, slope and curvature continuous). With
+    the filtered signal is pulled towards zero within a cutoff period of each end; and it doubles the
+    end sample into every extended one, so a filtered end carries that one sample's noise (~100 x the
+    interior's variance with a cutoff at a twentieth of the rate). ``curved`` extends oddly about
+    ``c0``, not ``x[0]``, and adds ``2 (c2 k^2 + c4 k^4)`` to the ``k``-th extended sample:
+    ``c0, c2, c4`` the coefficients of the least-squares polynomial of degree :data:`EDGE_DEGREE`
+    through the ``pad // 4 + 1`` samples at that end, the even terms over the far half of the
+    extension tapered (a half cosine) to the odd extension: a quartic is extended exactly (value,
+    slope and curvature continuous) and the end's noise is averaged over a cutoff period. With
     :func:`baseparams.ident.preprocess.zero_phase`'s extension of four cutoff periods, a motion at a
-    tenth of the cutoff keeps its second derivative to ~1 % at the very end, and white noise is no
-    larger there than with the odd extension. The extension is linear in the signal, so a
-    filter through it stays one linear map, the same for the torques and every regressor column.
+    tenth of the cutoff keeps its second derivative to ~1 % at the very end. The extension is linear
+    in the signal, so a filter through it stays one linear map, the same for the torques and every
+    regressor column.
 
     Parameters
     ----------
@@ -409,6 +412,9 @@ def edge_extended(flat: np.ndarray, pad: int, curved: bool = True) -> np.ndarray
         powers = taper[:, None] * k[1:, None] ** even[None, :]  # (pad, even terms)
         ext[:pad] += 2 * (powers @ (fit[even] @ flat[:w]))[::-1]
         ext[pad + s:] += 2 * powers @ (fit[even] @ flat[-1:-(w + 1):-1])
+        # odd about the polynomial's value at the end, not the end sample's (its noise doubled into every extended one)
+        ext[:pad] += 2 * (fit[0] @ flat[:w] - flat[0])
+        ext[pad + s:] += 2 * (fit[0] @ flat[-1:-(w + 1):-1] - flat[-1])
     return ext
 
 

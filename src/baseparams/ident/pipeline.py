@@ -333,7 +333,6 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, 
     from .terms.base import TermContext
     from .terms.fit import parse_terms
 
-    method = opts.method
     candidates, forced = parse_terms(opts.terms)
     if not candidates:
         return f, acc, kept, [], None

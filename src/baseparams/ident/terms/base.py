@@ -452,6 +452,16 @@ class Term:
         """
         return 0.0
 
+    def at_bound(self) -> bool:
+        """Whether a parameter sits at its bound (the last step was cut there: the core's step assumed more).
+
+        Returns
+        -------
+        bool
+            False unless a bounded parameter is at its bound.
+        """
+        return False
+
     def search(self, ctx: TermContext, trial) -> None:
         """A nonlinear search of the term's parameters (none by default).
 

@@ -74,6 +74,10 @@ class Delay(Term):
             self.std = {"seconds": [float(s) for s in std]}
         return change
 
+    def at_bound(self) -> bool:
+        """A delay at its bound (:data:`MAX_DELAY` or the filter's edge)."""
+        return bool(np.any(np.abs(self.seconds) >= self._limit))
+
     def adjust_measured(self, t: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """``M_j(t - d_j)``, linear interpolation at the log's time stamps (held at the ends)."""
         out = tau.copy()

@@ -286,6 +286,10 @@ class Tilt(Term):
             self.std = {"angles": [float(s) for s in std]}
         return change
 
+    def at_bound(self) -> bool:
+        """An angle at :data:`MAX_ANGLE`."""
+        return bool(np.any(np.abs(self.angles) >= MAX_ANGLE))
+
     def gravity(self, robot) -> np.ndarray:
         """The tilted gravity ``R(alpha u1 + beta u2) g``.
 

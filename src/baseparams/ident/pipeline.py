@@ -58,7 +58,7 @@ def identify(robot: Robot, log, options: IdentOptions | None = None, /, *, valid
         The log (:func:`baseparams.io.logs.read_log`): positions and torques of the measured
         joints (every joint of a tree; the actuated joints of a robot with loops). Several
         recordings of the robot: their rows fitted as one system, each recording one block of the
-        default estimate's cross-validation (another motion: :func:`_identify_many`).
+        default estimate's and the model terms' cross-validation (another motion: :func:`_identify_many`).
     options : IdentOptions, optional
         How (:class:`~baseparams.ident.options.IdentOptions`: the estimator, the drive model, the
         filter, the hold-out, the model terms, ...); default its defaults.

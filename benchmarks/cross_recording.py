@@ -366,3 +366,63 @@ def main_generalization() -> list[dict]:
         print(generalization_table(results[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
     print(generalization_table(results))
     return results
+
+
+# ---------------------------------------------------------------- several recordings of one plant: one, two, three -> another
+#: the several-recordings table's columns: label -> identify keywords
+SEVERAL = {"default": {}, "default, no terms": {"terms": "none"}}
+
+
+def several_recordings_cases() -> list[dict]:
+    """Plants recorded four times (different motions): train on the first one, two or three, predict the fourth.
+
+    The four-effect Puma of the cross-recording suite (``puma560 Dahl, tilt, delay, scale``: its recordings A, 20 s,
+    and B, 12 s, then C and D, 12 s each at 500 Hz), the same effects on another draw of the plant (seed 31,
+    four 12 s recordings: ``tests/test_terms.py``), and the clean Puma (no effect). Each recording of several is one
+    cross-validation fold of the estimate and of the model terms.
+    """
+    import baseparams
+
+    from recordings import Plant, friction_of, motion, record
+
+    puma = baseparams.load("puma560")
+    four = dict(dahl=2e-3, tilt=np.radians([0.2, 0.15, 0.0]), delay=np.r_[0, 0.002, 0, 0, 0, 0],
+                scale=np.r_[1, 1, 1.05, 1, 1, 1])
+    out = []
+    for name, seed, seconds, effects in (("puma560 Dahl, tilt, delay, scale", 7, (20.0, 12.0, 12.0, 12.0), four),
+                                         ("puma560 Dahl, tilt, delay, scale (seed 31, 12 s each)", 31, (12.0,) * 4,
+                                          four),
+                                         ("puma560 clean", 1, (20.0, 12.0, 12.0, 12.0), {})):
+        rng = np.random.default_rng(seed)
+        plant = Plant(puma, **friction_of(puma, rng), noise=0.05, ar=0.8, **effects)
+        logs = [record(plant, *motion(puma.dof, s, 500.0, rng), rng, f"{name} {k}") for s, k in zip(seconds, "ABCD")]
+        out.append({"name": name, "robot": puma, "logs": logs[:3], "test": logs[3]})
+    return out
+
+
+def run_several(case: dict, estimators=SEVERAL) -> dict:
+    """Each estimator trained on the first one, two and three recordings: the raw RMS on the held-out one, the terms."""
+    from baseparams.ident import identify
+
+    out = {"name": case["name"], "rms": {}, "terms": {}, "seconds": {}}
+    for n in (1, 2, 3):
+        train = case["logs"][0] if n == 1 else case["logs"][:n]
+        for label, kw in estimators.items():
+            t0 = time.perf_counter()
+            res = identify(case["robot"], train, validation=case["test"], **kw)
+            out["seconds"][(n, label)] = time.perf_counter() - t0
+            out["rms"][(n, label)] = float(res.validation["rms_total"])
+            out["terms"][(n, label)] = [t.name for t in res.fit.terms]
+    return out
+
+
+def several_table(results: list[dict]) -> str:
+    """A Markdown table of :func:`run_several` results."""
+    lines = ["| plant | recordings | default | default, no terms | terms kept (default) | identify (default) |",
+             "|---|---:|---:|---:|---|---:|"]
+    for r in results:
+        for n in (1, 2, 3):
+            lines.append(f"| {r['name']} | {n} | {r['rms'][(n, 'default')]:.4g} | "
+                         f"{r['rms'][(n, 'default, no terms')]:.4g} | {', '.join(r['terms'][(n, 'default')]) or '-'} | "
+                         f"{r['seconds'][(n, 'default')]:.1f} s |")
+    return "\n".join(lines)

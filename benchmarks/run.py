@@ -47,6 +47,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
                     WLS, physical (``benchmarks/cross_recording.py``).
 * ``generalization``  issue 48: train on one motion, predict another (simulated recorder-filtered arms, the Panda
                     and TX40 logs, both directions), against an outsider's plain OLS on every sample.
+* ``several_recordings``  issue 48: a simulated plant's first one, two and three recordings -> its fourth, with and
+                    without the model terms (each recording one cross-validation fold of the estimate and the terms).
 * ``currents``      issue 50: identification from motor currents with unknown gains: a simulated 7-DoF arm (held-out
                     joint-side torques against its sensors: one catalogue gain as the anchor, every catalogue gain, OLS
                     given the catalogue gains, a fit on the sensors) and the TX40's motor-side log
@@ -1262,6 +1264,23 @@ def bench_cross_recording(out: dict, quick: bool) -> None:
     out["cross_recording_cases"] = len(results)
 
 
+def bench_several_recordings(out: dict, quick: bool) -> None:
+    """Issue 48 item 3: a plant's first one, two and three recordings -> its fourth, with and without the model terms
+    (each recording one cross-validation fold of the estimate and of the terms)."""
+    import cross_recording as cr
+
+    results = [cr.run_several(c) for c in cr.several_recordings_cases()[:1 if quick else None]]
+    log("\n" + cr.several_table(results))
+    for i, r in enumerate(results):
+        key = f"several_{i}"
+        out[f"{key}_name"] = r["name"]
+        for (n, label), v in r["rms"].items():
+            out[f"{key}_{n}_rms_{_key(label)}"] = v
+        for n in (1, 2, 3):
+            out[f"{key}_{n}_terms"] = ", ".join(r["terms"][(n, "default")]) or "-"
+        out[f"{key}_2_vs_1_default"] = r["rms"][(2, "default")] / r["rms"][(1, "default")]
+
+
 def bench_generalization(out: dict, quick: bool) -> None:
     """Issue 48: splits that train on one motion and predict another (both directions), scored as an outsider
     would (5 Hz low-passed torques, 1 s trimmed at each end), against an outsider's plain Pinocchio OLS on every
@@ -1356,6 +1375,7 @@ GROUPS: dict[str, Callable[[dict, bool], None]] = {
     "payload": bench_payload,
     "cross_recording": bench_cross_recording,
     "generalization": bench_generalization,
+    "several_recordings": bench_several_recordings,
     "currents": bench_currents,
     "model_terms": bench_model_terms,
     "files": bench_files,

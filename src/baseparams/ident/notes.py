@@ -113,7 +113,7 @@ def drive_notes(f: Fit, acc) -> list[str]:
     return notes
 
 
-def term_note(tf, joints: list[str]) -> str:
+def term_note(tf, joints: list[str], unit: str = "blocks") -> str:
     """One line: every model term tried, kept or rejected, with its cross-validated figure and values.
 
     Parameters
@@ -122,6 +122,8 @@ def term_note(tf, joints: list[str]) -> str:
         :func:`~baseparams.ident.terms.fit.select_terms`'s outcome.
     joints : list of str
         The measured joints.
+    unit : {"blocks", "recordings"}
+        The cross-validation's folds: blocks of one log, or whole recordings (several in one identification).
 
     Returns
     -------
@@ -135,8 +137,9 @@ def term_note(tf, joints: list[str]) -> str:
             parts.append(f"{c.name} KEPT ({c.why}): {kept[c.name].describe(joints)}")
         else:
             parts.append(f"{c.name} rejected ({c.why})")
-    return (f"model terms (blocked cross-validation on the training data, linear core alone {tf.cv_rms:.4g}): "
-            + "; ".join(parts))
+    scope = ("cross-validation with each recording one fold" if unit == "recordings"
+             else "blocked cross-validation on the training data")
+    return f"model terms ({scope}, linear core alone {tf.cv_rms:.4g}): " + "; ".join(parts)
 
 
 def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:

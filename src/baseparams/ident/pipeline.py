@@ -58,7 +58,7 @@ def identify(robot: Robot, log, options: IdentOptions | None = None, /, *, valid
         The log (:func:`baseparams.io.logs.read_log`): positions and torques of the measured
         joints (every joint of a tree; the actuated joints of a robot with loops). Several
         recordings of the robot: their rows fitted as one system, each recording one block of the
-        default estimate's cross-validation (another motion: :func:`_identify_many`).
+        default estimate's and the model terms' cross-validation (another motion: :func:`_identify_many`).
     options : IdentOptions, optional
         How (:class:`~baseparams.ident.options.IdentOptions`: the estimator, the drive model, the
         filter, the hold-out, the model terms, ...); default its defaults.
@@ -329,14 +329,10 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, 
     rows the covariance uses, the notes, and the unfiltered positions on the training grid (None
     without terms).
     """
-    from dataclasses import replace
-
-    from . import chunks
-    from .select import FOLDS, fold_parts
+    from .select import FOLDS
     from .terms.base import TermContext
-    from .terms.fit import core_rows, parse_terms, select_terms
+    from .terms.fit import parse_terms
 
-    method = opts.method
     candidates, forced = parse_terms(opts.terms)
     if not candidates:
         return f, acc, kept, [], None
@@ -363,12 +359,33 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, 
     folds = [np.asarray(i) for i in np.array_split(np.arange(len(a)), FOLDS)]
     ctx = TermContext(model, a, prep, raw_q, cols, folds)
     say(f"model terms: {', '.join(candidates)} by {FOLDS}-fold blocked cross-validation on the training data")
+    f, acc, kept, notes = _select_and_refit(f, acc, kept, ctx, candidates, forced, opts, say)
+    return f, acc, kept, notes, (raw_q if f.terms else None)
+
+
+def _select_and_refit(f: Fit, acc, kept: list, ctx, candidates, forced, opts: IdentOptions, say):
+    """The model terms selected on a context's folds (:func:`~.terms.fit.select_terms`), the core refitted with them.
+
+    One log (its blocks) or several recordings (each one fold, :meth:`~.terms.base.TermContext.stacked`): the
+    kept terms fitted on every row, the core refitted on the rows they transform with the first fit's estimator
+    and rule, its cross-validation blocks the context's folds. Returns the fit, the accumulated rows, the rows
+    kept for the covariance (one piece per recording) and the note.
+    """
+    from dataclasses import replace
+
+    from . import chunks
+    from .estimate import RowAccumulator
+    from .terms.fit import core_rows, select_terms
+
+    method, model = opts.method, f.model
     tf = select_terms(ctx, _inner(f, model, acc, method), candidates, forced, progress=say)
-    notes = [term_note(tf, ctx.joints)]
+    notes = [term_note(tf, ctx.joints, ctx.fold_unit)]
     if not tf.terms:
-        return replace(f, term_choices=tf.choices), acc, kept, notes, None
+        return replace(f, term_choices=tf.choices), acc, kept, notes
     x, y = core_rows(ctx, tf.state)
-    parts = fold_parts(x, y, oversampling=acc.oversampling)
+    parts = [RowAccumulator(x.shape[1], x.shape[2]).add(x[i], y[i]) for i in ctx.folds]
+    for b in parts:
+        b.oversampling = float(acc.oversampling)
     acc2 = chunks.combine(parts)
     say(f"refitting the core ({method}) with the model terms")
     chosen = None if f.selection is None else f.selection.estimator
@@ -376,7 +393,8 @@ def _with_terms(f: Fit, acc, kept: list, prep, train, cols, opts: IdentOptions, 
     f2 = fit(model, acc2, method, opts.prior_weight, blocks=parts, estimator=chosen, rule=rule)
     if f2.selection is not None and f.selection is not None:  # the choice and its figures are the first fit's
         f2 = replace(f2, selection=replace(f2.selection, physical_cv=f.selection.physical_cv))
-    return replace(f2, terms=tuple(tf.terms), term_choices=tf.choices), acc2, [(x, y)], notes, raw_q
+    rows = [(x, y)] if len(ctx.recordings) == 1 else [(x[i], y[i]) for i in ctx.recording_rows]
+    return replace(f2, terms=tuple(tf.terms), term_choices=tf.choices), acc2, rows, notes
 
 
 def _prepare_training(train, opts: IdentOptions):
@@ -414,7 +432,8 @@ def _identify_many(robot: Robot, logs: list, opts: IdentOptions, validation, say
     Each recording is prepared on its own (one common cutoff: the largest of their defaults, within
     every recording's limit) and its rows accumulated; the estimate is chosen by cross-validation with
     each recording one block (rule ``recordings``: a block is another motion, the strongest guard against
-    fitting one motion). Model terms are not tried across recordings (each would need its own states).
+    fitting one motion); the model terms too, each recording filtered, differentiated, shifted and scanned on its
+    own (:func:`_terms_many`).
     """
     from .chunks import combine
 
@@ -437,11 +456,11 @@ def _identify_many(robot: Robot, logs: list, opts: IdentOptions, validation, say
     acc = combine(accs)
     say(f"fitting ({opts.method}; {len(logs)} recordings, each one cross-validation block)")
     f = fit(model, acc, opts.method, opts.prior_weight, blocks=accs, rule="recordings")
-    rows = [r for k in kept for r in k] if all(k is not None for k in kept) else None
+    f, acc, rows, terms, raw_q = _terms_many(f, acc, kept, logs, preps, cols, opts, say)
     f, cov_note = _uncertainty(f, acc, rows or [], preps[0], logs[0], cols[0],
                                opts if rows else replace(opts, covariance="white"), say)
     f = pulled_covariance(f)
-    train_rms, val, series = _scores_many(f, acc, logs, preps, cols, validation, opts, say)
+    train_rms, val, series = _scores_many(f, acc, logs, preps, cols, validation, opts, say, raw_q)
     first = preps[0]
     series["train"]["spectrum"] = position_spectrum(logs[0], cols[0][model.row_states], first.design.fs,
                                                     first.design.cutoff, first.full.t)
@@ -451,12 +470,45 @@ def _identify_many(robot: Robot, logs: list, opts: IdentOptions, validation, say
             removed[k] = removed.get(k, 0) + v
     data = (f"several recordings: {len(logs)} ({', '.join(x.source for x in logs)}), their rows fitted as one "
             f"system (the report's series show the first)", *first.notes)
-    terms = ("model terms: not tried across several recordings (each recording's terms would need its own states; "
-             "the linear core)",) if opts.terms != "none" else ()
     account = Account(sum(x.n_samples for x in logs), removed, float(first.design.cutoff), int(first.factor),
-                      data, "; ".join(notes), terms, cov_note if rows else cov_note + " (white: rows of several "
+                      data, "; ".join(notes), tuple(terms), cov_note if rows else cov_note + " (white: rows of several "
                       "recordings not kept in memory_mb)", tuple(units))
     return assemble(f, acc, opts, account, train_rms, val, series, _motion_many(model, preps, cols))
+
+
+def _terms_many(f: Fit, acc, kept: list, logs: list, preps: list, cols: list, opts: IdentOptions, say):
+    """The model terms of several recordings, each recording one cross-validation fold (:func:`_select_and_refit`).
+
+    Each recording keeps its own context (its filter, full-rate grid, unfiltered positions and columns:
+    :meth:`~.terms.base.TermContext.stacked`); a fold is a whole other motion, so the rule that stops the terms on
+    blocks shorter than a period of one motion (:data:`MIN_BLOCK_PERIODS`) does not apply. ``kept``: each
+    recording's fitted rows (None when they did not fit in ``memory_mb``). Returns the fit, the accumulated rows,
+    the rows kept for the covariance (None: not every recording's), the notes, and the first recording's
+    unfiltered positions (None without terms).
+    """
+    from .preprocess import resample
+    from .terms.base import TermContext
+    from .terms.fit import parse_terms
+
+    rows = [r for k in kept for r in k] if all(k is not None for k in kept) else None
+    candidates, forced = parse_terms(opts.terms)
+    if not candidates:
+        return f, acc, rows, [], None
+    if f.model.robot.floating:
+        return f, acc, rows, ["model terms: not tried for a floating base (not implemented)"], None
+    if rows is None:
+        return f, acc, rows, ["model terms: not considered (the fitted rows of every recording do not fit in "
+                              "memory_mb; the linear core alone)"], None
+    contexts = []
+    for x, prep, c, k in zip(logs, preps, cols, kept):
+        raw_q = resample(x).q[:, c[f.model.row_states]]  # unfiltered positions on the grid prepare() filtered
+        if raw_q.shape[0] != prep.full.n_samples:
+            return f, acc, rows, [f"model terms: not considered ({x.source}'s grid is not the filter's)"], None
+        contexts.append(TermContext(f.model, np.concatenate([a for a, _ in k]), prep, raw_q, c))
+    ctx = TermContext.stacked(contexts)
+    say(f"model terms: {', '.join(candidates)} by cross-validation with each of the {len(logs)} recordings one fold")
+    f, acc, rows, notes = _select_and_refit(f, acc, rows, ctx, candidates, forced, opts, say)
+    return f, acc, rows, notes, (contexts[0].raw_q if f.terms else None)
 
 
 def _prepare_many(logs: list, opts: IdentOptions, say) -> list:
@@ -473,8 +525,11 @@ def _prepare_many(logs: list, opts: IdentOptions, say) -> list:
             for p, x in zip(preps, logs)]
 
 
-def _scores_many(f: Fit, acc, logs, preps, cols, validation, opts: IdentOptions, say):
-    """Training scores over every recording (every sample against the raw torques), validation and series."""
+def _scores_many(f: Fit, acc, logs, preps, cols, validation, opts: IdentOptions, say, raw_q=None):
+    """Training scores over every recording (every sample against the raw torques), validation and series.
+
+    ``raw_q``: the first recording's unfiltered positions on its grid (its series with the model terms).
+    """
     names = f.model.joints
     cutoff = float(preps[0].design.cutoff)
     parts = [validation_scores(x, predict_log(f, x, cutoff), names) for x in logs]
@@ -486,7 +541,7 @@ def _scores_many(f: Fit, acc, logs, preps, cols, validation, opts: IdentOptions,
              "source": " + ".join(p["source"] for p in parts), "recordings": parts,
              "measure": "RMS of predicted minus raw measured torques at every training sample of every recording",
              "fit_rms": dict(zip(names, res.tolist())), "fit_rms_total": float(np.sqrt(np.mean(res**2)))}
-    series = {"train": report_series(f.model, preps[0], cols[0], f, names, opts.memory_mb, None), "validation": None}
+    series = {"train": report_series(f.model, preps[0], cols[0], f, names, opts.memory_mb, raw_q), "validation": None}
     if validation is None:
         return train, None, series
     say(f"validating on {validation.n_samples} held-out samples (every one, against the raw measured torques)")

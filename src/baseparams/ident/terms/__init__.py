@@ -21,8 +21,9 @@ around the linear fit by Gauss-Newton (tilt, delay, scale: each step one weighte
 problem with their linearised columns) and a grid search (Dahl's ``delta``), on the filtered,
 decimated rows the linear fit uses (:mod:`~baseparams.ident.terms.fit`). Which terms are kept is
 decided by blocked cross-validation on the training span only
-(:func:`~baseparams.ident.terms.fit.select_terms`): a term stays when it lowers the held-out error
-of the training blocks by more than
+(:func:`~baseparams.ident.terms.fit.select_terms`; several recordings: each recording one fold, its rows
+from its own filter, grid and positions, :meth:`~baseparams.ident.terms.base.TermContext.stacked`): a term
+stays when it lowers the held-out error of the training blocks by more than
 :data:`~baseparams.ident.terms.fit.KEEP_GAIN`; the report lists every term kept or rejected with
 its cross-validated figure, values and standard deviations.
 """

@@ -67,9 +67,31 @@ def per_row(value: sc.Node) -> sc.Arr:
     return sc.Arr(value, "m")
 
 
+def stack_rows(parts: list) -> np.ndarray:
+    """Per-recording rows stacked in recording order (one recording: its rows themselves).
+
+    Parameters
+    ----------
+    parts : list of ndarray, each shape ``(S'_r, ...)``
+        One array per recording, in the order of :attr:`TermContext.recordings`.
+
+    Returns
+    -------
+    ndarray, shape ``(sum S'_r, ...)``
+        The rows of every recording, in order.
+    """
+    return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=0)
+
+
 @dataclass(eq=False)
 class TermContext:
     """The fitted rows of a log and the full-rate signals terms build their columns from.
+
+    Several recordings of one robot (:meth:`stacked`): each keeps its own context (its filter,
+    full-rate grid and unfiltered positions, :attr:`recordings`); the rows ``a`` and the folds are
+    every recording's, stacked. Whatever runs along a recording's time (a derivative, a delay's
+    interpolation, Dahl's state) runs on each recording's own context and the rows are stacked
+    (:meth:`each`): nothing runs across the boundary between two recordings.
 
     Parameters
     ----------
@@ -87,7 +109,9 @@ class TermContext:
     cols : ndarray of int, shape ``(m,)``
         The log column of each state column.
     folds : list of ndarray of int
-        The fitted rows of each contiguous cross-validation block.
+        The fitted rows of each contiguous cross-validation block (several recordings: of each recording).
+    parts : list of TermContext
+        Several recordings: each one's context (``prep``, ``raw_q`` and ``cols`` then None); empty for one.
     """
 
     __repr__ = summary_repr
@@ -98,6 +122,55 @@ class TermContext:
     raw_q: np.ndarray
     cols: np.ndarray
     folds: list = field(default_factory=list)
+    parts: list = field(default_factory=list)
+
+    @classmethod
+    def stacked(cls, contexts: list[TermContext]) -> TermContext:
+        """One context of several recordings of one robot, each recording one cross-validation fold.
+
+        Parameters
+        ----------
+        contexts : list of TermContext
+            Each recording's context (its rows ``a`` ``(S'_r, m, p)``, its ``prep``, ``raw_q``, ``cols``).
+
+        Returns
+        -------
+        TermContext
+            Rows ``(sum S'_r, m, p)`` in recording order; ``folds`` the rows of each recording.
+        """
+        ends = np.cumsum([0] + [len(c.a) for c in contexts])
+        folds = [np.arange(s, e) for s, e in zip(ends[:-1], ends[1:])]
+        return cls(contexts[0].model, stack_rows([c.a for c in contexts]), None, None, None, folds, list(contexts))
+
+    @property
+    def recordings(self) -> list[TermContext]:
+        """Each recording's own context (one recording: this one)."""
+        return self.parts or [self]
+
+    @property
+    def recording_rows(self) -> list[np.ndarray]:
+        """The fitted rows of each recording, ``(S'_r,)`` each (one recording: every row)."""
+        return self.folds if self.parts else [np.arange(len(self.a))]
+
+    @property
+    def fold_unit(self) -> str:
+        """What a cross-validation fold is, for the notes: ``blocks`` (of one motion) or ``recordings``."""
+        return "recordings" if self.parts else "blocks"
+
+    def each(self, fn) -> np.ndarray:
+        """``fn`` on each recording's own context, the rows stacked (:func:`stack_rows`).
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(ctx)`` of one recording's context: an array ``(S'_r, ...)`` of its fitted rows.
+
+        Returns
+        -------
+        ndarray, shape ``(S', ...)``
+            Every recording's rows, in order.
+        """
+        return stack_rows([fn(c) for c in self.recordings])
 
     @property
     def t(self) -> np.ndarray:
@@ -112,6 +185,8 @@ class TermContext:
     @property
     def tau(self) -> np.ndarray:
         """The measured torques of the fitted rows ``(S', m)`` (filtered), measured-row order."""
+        if self.parts:
+            return self.each(lambda c: c.tau)
         return self.prep.tau[:, self.cols[self.model.row_states]]
 
     @property
@@ -137,6 +212,8 @@ class TermContext:
         ndarray, shape ``(S', ...)``
             :meth:`baseparams.ident.preprocess.Prepared.apply` of ``x``.
         """
+        if self.parts:
+            raise ValueError("apply() of several recordings: filter each one's rows on its own (each())")
         return self.prep.apply(x)
 
 
@@ -374,6 +451,16 @@ class Term:
             The largest change, in units of the term's resolution (below 1: converged).
         """
         return 0.0
+
+    def at_bound(self) -> bool:
+        """Whether a parameter sits at its bound (the last step was cut there: the core's step assumed more).
+
+        Returns
+        -------
+        bool
+            False unless a bounded parameter is at its bound.
+        """
+        return False
 
     def search(self, ctx: TermContext, trial) -> None:
         """A nonlinear search of the term's parameters (none by default).

@@ -113,7 +113,9 @@ class Dahl(Term):
         """Dahl's state at every grid value, filtered and decimated like the fitted rows."""
         grids = self._grids(ctx)
         self._deltas = grids
-        self._grid = np.stack([ctx.apply(dahl_state(ctx.raw_q, grids[g])) for g in range(len(grids))])
+        # each recording's state from its own start (z = 0), along its own positions, through its own filter
+        self._grid = np.stack([ctx.each(lambda c, g=g: c.apply(dahl_state(c.raw_q, grids[g])))
+                               for g in range(len(grids))])
         self._pairs = self._coulomb(ctx)
 
     def reset(self, ctx: TermContext) -> None:

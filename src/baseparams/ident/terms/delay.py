@@ -45,10 +45,9 @@ class Delay(Term):
         self._limit = MAX_DELAY
 
     def reset(self, ctx: TermContext) -> None:
-        """No delay; the bound from the filter's edge."""
+        """No delay; the bound from the filter's edge (the shortest edge of several recordings)."""
         self.seconds = np.zeros(len(ctx.joints))
-        d = ctx.prep.design
-        self._limit = min(MAX_DELAY, 0.25 * d.pad / d.fs)
+        self._limit = min(MAX_DELAY, *(0.25 * c.prep.design.pad / c.prep.design.fs for c in ctx.recordings))
 
     def delays(self, m: int) -> np.ndarray:
         """The delays ``(m,)`` [s]."""
@@ -74,6 +73,10 @@ class Delay(Term):
         if std is not None:
             self.std = {"seconds": [float(s) for s in std]}
         return change
+
+    def at_bound(self) -> bool:
+        """A delay at its bound (:data:`MAX_DELAY` or the filter's edge)."""
+        return bool(np.any(np.abs(self.seconds) >= self._limit))
 
     def adjust_measured(self, t: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """``M_j(t - d_j)``, linear interpolation at the log's time stamps (held at the ends)."""

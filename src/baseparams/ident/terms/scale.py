@@ -96,6 +96,10 @@ class Scale(Term):
             self.std = {"factors": [float(s) for s in full]}
         return change
 
+    def at_bound(self) -> bool:
+        """A scale at :data:`LOWEST` or :data:`HIGHEST`."""
+        return bool(np.any((self.factors <= LOWEST) | (self.factors >= HIGHEST)))
+
     def adjust_measured(self, t: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """``s_j M_j``."""
         return tau * self.factors

@@ -22,7 +22,7 @@ from dataclasses import replace
 import numpy as np
 
 from ... import schema as sc
-from .base import Term, TermContext, complete_docs
+from .base import Term, TermContext, complete_docs, stack_rows
 
 #: the tilt's weak prior: level to within this per angle [rad] (1 degree)
 PRIOR_STD = np.radians(1.0)
@@ -232,19 +232,27 @@ class Tilt(Term):
         return None
 
     def prepare(self, ctx: TermContext) -> None:
-        """The kinematics the gravity torques are computed from (:func:`gravity_torques`), at ``prep.grid``."""
+        """The kinematics the gravity torques are computed from (:func:`gravity_torques`), at ``prep.grid``.
+
+        Several recordings: each on its own grid, through its own filter (:meth:`_each`).
+        """
         from ...kinematics.tree import forward_kinematics
 
         r = ctx.model.robot
         self._u = perpendicular_basis(r.gravity)
-        grid = ctx.prep.grid  # gravity torques are smooth in the filtered q: at the regressor's stride
-        self._fk = forward_kinematics(r, ctx.prep.full.q[grid][:, ctx.cols])
+        # gravity torques are smooth in the filtered q: at the regressor's stride
+        self._fk = [forward_kinematics(r, c.prep.full.q[c.prep.grid][:, c.cols]) for c in ctx.recordings]
         self._cache = (None, None)
         self._basis_cols = None
-        if 8 * r.n * len(ctx.model.coords) * len(grid) <= BASIS_MAX:  # linear in pi: filtered once
-            self._basis_cols = [ctx.prep.apply_strided(gravity_basis(r, ctx.model.coords, np.cross(u, r.gravity),
-                                                                     self._fk)) for u in self._u]
+        points = sum(len(c.prep.grid) for c in ctx.recordings)
+        if 8 * r.n * len(ctx.model.coords) * points <= BASIS_MAX:  # linear in pi: filtered once
+            self._basis_cols = [self._each(ctx, lambda c, fk, u=u: c.prep.apply_strided(
+                gravity_basis(r, ctx.model.coords, np.cross(u, r.gravity), fk))) for u in self._u]
             self._entries = (np.arange(r.n)[:, None] * 10 + np.arange(6, 10)[None, :]).ravel()
+
+    def _each(self, ctx: TermContext, fn) -> np.ndarray:
+        """``fn(recording's context, its kinematics)`` of each recording, the fitted rows stacked."""
+        return stack_rows([fn(c, fk) for c, fk in zip(ctx.recordings, self._fk)])
 
     def reset(self, ctx: TermContext) -> None:
         """A level mounting."""
@@ -259,9 +267,9 @@ class Tilt(Term):
         key, cols = self._cache
         if key is None or not np.array_equal(key, self.pi):
             r = ctx.model.robot
-            full = np.stack([gravity_torques(r, ctx.model.coords, None, np.cross(u, r.gravity), self.pi,
-                                             state=self._fk) for u in self._u], axis=2)
-            cols = ctx.prep.apply_strided(full)
+            cols = self._each(ctx, lambda c, fk: c.prep.apply_strided(np.stack(
+                [gravity_torques(r, ctx.model.coords, None, np.cross(u, r.gravity), self.pi, state=fk)
+                 for u in self._u], axis=2)))
             self._cache = (self.pi.copy(), cols)
         return cols, ["tilt_1", "tilt_2"]
 
@@ -277,6 +285,10 @@ class Tilt(Term):
         if std is not None:
             self.std = {"angles": [float(s) for s in std]}
         return change
+
+    def at_bound(self) -> bool:
+        """An angle at :data:`MAX_ANGLE`."""
+        return bool(np.any(np.abs(self.angles) >= MAX_ANGLE))
 
     def gravity(self, robot) -> np.ndarray:
         """The tilted gravity ``R(alpha u1 + beta u2) g``.

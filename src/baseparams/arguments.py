@@ -115,7 +115,7 @@ RANGES = {
 #: (which checks them), the front door's ``identify`` keywords and the CLI's ``identify`` flags read them here,
 #: where neither ``import baseparams`` nor another command loads the identification
 IDENTIFY = MappingProxyType({
-    "method": "auto", "rotor": False, "friction": ("viscous", "coulomb", "offset"), "coulomb_width": None,
+    "method": "auto", "rotor": "auto", "friction": ("viscous", "coulomb", "offset"), "coulomb_width": None,
     "couplings": (), "holdout": None, "cutoff": None, "decimate": None, "min_speed": None, "prior_weight": None,
     "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
     "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,

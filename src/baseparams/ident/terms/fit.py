@@ -29,6 +29,8 @@ KEEP_FLOOR = 1e-4
 #: ... and lowers the held-out error of at least this fraction of the blocks (a term that helps one
 #: block of a short log and hurts the others is not kept)
 KEEP_FOLDS = 0.6
+#: terms of the linear core kept the same way (their columns are the core's; their values its parameters, no Term)
+CORE_TERMS = ("rotor",)
 #: Gauss-Newton steps at most
 MAX_STEPS = 8
 
@@ -509,7 +511,6 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
     folds: list = []
     base = cross_validate(ctx, [], inner, per_fold=folds)
     current, kept, choices = base, [], []
-    need = int(np.ceil(KEEP_FOLDS * len(folds)))
     floor = KEEP_FLOOR * float(np.sqrt(np.mean(ctx.tau**2)))  # below this a term changes nothing that matters
     for name in wanted:
         if name in missing:
@@ -518,24 +519,13 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
         say(f"model terms: cross-validating {'+'.join(kept + [name])}")
         trial: list = []
         score = cross_validate(ctx, kept + [name], inner, cache, per_fold=trial)
-        gain = 1.0 - score / current if current > 0 else 0.0
-        better = int(np.sum(np.asarray(trial) < np.asarray(folds)))
-        figures = (f"cross-validated RMS {score:.4g} with it, {current:.4g} without ({100 * gain:+.1f} %; lower in "
-                   f"{better} of {len(folds)} blocks)")
-        if name in forced:
+        ok, why = verdict(score, current, trial, folds, floor)
+        if name in forced or ok:
             kept.append(name)
-            choices.append(Choice(name, True, f"forced; {figures}", score))
-            current, folds = score, trial
-        elif gain > KEEP_GAIN and better >= need and current - score > floor:
-            kept.append(name)
-            choices.append(Choice(name, True, figures, score))
+            choices.append(Choice(name, True, f"forced; {why}" if name in forced else why, score))
             current, folds = score, trial
         else:
-            failed = [w for w, ok in ((f"not {100 * KEEP_GAIN:g} % lower", gain > KEEP_GAIN),
-                                      (f"lower in fewer than {need} blocks", better >= need),
-                                      (f"lower by less than {KEEP_FLOOR:g} of the torques' RMS ({floor:.2g})",
-                                       current - score > floor)) if not ok]
-            choices.append(Choice(name, False, f"{figures}: {'; '.join(failed)}", score))
+            choices.append(Choice(name, False, why, score))
     # backward: a term kept early may have taken up what a later one models better (a delay standing in
     # for a scale): drop each kept term whose removal does not raise the cross-validated RMS by KEEP_GAIN
     for name in [n for n in kept if n not in forced] if len(kept) > 1 else []:
@@ -553,6 +543,68 @@ def select_terms(ctx: TermContext, inner: Inner, candidates=TERMS, forced=(), pr
         t.forced = t.name in forced
     state = fit_terms(ctx, terms, inner, want_cov=True)
     return TermsFit(state, tuple(choices), base)
+
+
+def verdict(score: float, current: float, trial, folds, floor: float) -> tuple[bool, str]:
+    """The one rule that keeps a model term: lower cross-validated RMS, in most blocks, by more than rounding.
+
+    Parameters
+    ----------
+    score, current : float
+        Cross-validated RMS with the term and without it (measured units).
+    trial, folds : sequence of float
+        Each block's held-out sum of squared errors with the term and without it.
+    floor : float
+        The smallest lowering that matters (:data:`KEEP_FLOOR` times the torques' RMS).
+
+    Returns
+    -------
+    keep : bool
+        Lower by more than :data:`KEEP_GAIN`, in at least :data:`KEEP_FOLDS` of the blocks and by more
+        than ``floor``.
+    why : str
+        The figures, and what failed when not kept.
+    """
+    gain = 1.0 - score / current if current > 0 else 0.0
+    need = int(np.ceil(KEEP_FOLDS * len(folds)))
+    better = int(np.sum(np.asarray(trial) < np.asarray(folds)))
+    figures = (f"cross-validated RMS {score:.4g} with it, {current:.4g} without ({100 * gain:+.1f} %; lower in "
+               f"{better} of {len(folds)} blocks)")
+    failed = [w for w, ok in ((f"not {100 * KEEP_GAIN:g} % lower", gain > KEEP_GAIN),
+                              (f"lower in fewer than {need} blocks", better >= need),
+                              (f"lower by less than {KEEP_FLOOR:g} of the torques' RMS ({floor:.2g})",
+                               current - score > floor)) if not ok]
+    return not failed, figures if not failed else f"{figures}: {'; '.join(failed)}"
+
+
+def select_columns(name: str, without: TermContext, inner_without: Inner, with_: TermContext,
+                   inner_with: Inner) -> Choice:
+    """Keep a term of the linear core (extra columns, e.g. rotor inertia) by :func:`select_terms`' rule.
+
+    The core with the term's columns and without them, each cross-validated on the same contiguous
+    blocks of the training rows (:func:`cross_validate`, no nonlinear term), kept by :func:`verdict`.
+
+    Parameters
+    ----------
+    name : str
+        The term (:data:`CORE_TERMS`).
+    without, with_ : TermContext
+        The training rows of the core without the term's columns and with them (same rows and blocks).
+    inner_without, inner_with : Inner
+        Their linear estimators.
+
+    Returns
+    -------
+    Choice
+        Kept or rejected, with the figures.
+    """
+    folds: list = []
+    trial: list = []
+    current = cross_validate(without, [], inner_without, per_fold=folds)
+    score = cross_validate(with_, [], inner_with, per_fold=trial)
+    floor = KEEP_FLOOR * float(np.sqrt(np.mean(without.tau**2)))
+    ok, why = verdict(score, current, trial, folds, floor)
+    return Choice(name, ok, why, score)
 
 
 def core_rows(ctx: TermContext, state: State) -> tuple[np.ndarray, np.ndarray]:

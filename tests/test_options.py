@@ -65,7 +65,7 @@ def test_json_round_trip_and_an_older_file():
     old = {"method": "ols", "convention": "khalil", "rows": "all", "rotor": False, "friction": ["viscous"],
            "coulomb_width": None, "couplings": [], "cutoff": 5.0, "decimate": 2, "min_speed": None}
     back = IdentOptions.from_json(check(old, OPTIONS, "old")[0])
-    assert back == IdentOptions(method="ols", friction=("viscous",), cutoff=5.0, decimate=2)
+    assert back == IdentOptions(method="ols", rotor=False, friction=("viscous",), cutoff=5.0, decimate=2)
 
 
 @pytest.mark.parametrize("kw, words", [

@@ -218,10 +218,10 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     rule = "structure" if motion_span[0] < MIN_BLOCK_PERIODS else "blocks"
     say(f"fitting ({opts.method})")
     f = fit(model, acc, opts.method, opts.prior_weight, blocks=parts, rule=rule)
-    f, (acc, parts, kept), rotor = _rotor_choice(f, (acc, parts, kept), (robot, prep, train, cols), opts, say,
-                                                 motion_span)
-    f, acc, kept, term_notes, raw_q = _with_terms(f, acc, kept, prep, train, cols, opts, say, motion_span)
-    if rotor is not None:  # the core's own term first, with the model terms
+    done = _with_terms(f, acc, kept, prep, train, cols, opts, say, motion_span)
+    (f, acc, kept, term_notes, raw_q), rotor = _rotor_choice(f, (acc, parts, kept), done, (robot, prep, train, cols),
+                                                             opts, say, motion_span)
+    if rotor is not None:  # the core's own term, with the model terms
         f = replace(f, term_choices=(rotor, *f.term_choices))
         term_notes = [rotor_note(rotor), *term_notes]
     f, cov_note = _uncertainty(f, acc, kept, prep, train, cols, opts, say)
@@ -414,23 +414,27 @@ def _rotor_why_not(model: IdentModel, kept: list, prep, motion_span) -> str | No
     return None
 
 
-def _rotor_choice(f: Fit, rows: tuple, where: tuple, opts: IdentOptions, say, motion_span):
-    """``rotor="auto"``: each joint's rotor inertia tried, kept by the model terms' rule.
+def _rotor_choice(f: Fit, rows: tuple, done: tuple, where: tuple, opts: IdentOptions, say, motion_span):
+    """``rotor="auto"``: each joint's rotor inertia tried last, with the model terms kept, by their rule.
 
-    The core with the rotor inertia columns (:func:`~baseparams.ident.model.model_for` with
-    ``rotor=True``) and without them are cross-validated on the same contiguous blocks of the
-    training rows (:func:`~baseparams.ident.terms.fit.select_columns`); kept, the core is the one
-    with them, refitted. ``rows`` is ``(acc, parts, kept)`` of ``f``'s model, ``where`` ``(robot,
-    prep, train, cols)``. Returns the fit, its rows and the :class:`~baseparams.ident.terms.fit.Choice`
-    (None when ``rotor`` is not ``"auto"``).
+    ``f`` is the core's fit without rotor inertia, ``rows`` its ``(acc, parts, kept)``, ``done`` what
+    :func:`_with_terms` made of it (the fit with the terms kept, its rows, notes, raw positions) and
+    ``where`` ``(robot, prep, train, cols)``. The core with the rotor inertia columns
+    (:func:`~baseparams.ident.model.model_for` with ``rotor=True``) and the core without them, each with
+    the kept terms, are cross-validated on the same contiguous blocks of the training rows
+    (:func:`~baseparams.ident.terms.fit.select_columns`; tried after the terms, as
+    :func:`~baseparams.ident.terms.fit.select_terms` adds each term given those before it: on the linear
+    core alone, rotor columns stood in for a delay). Kept, the core is the one with them, fitted and its
+    terms selected again. Returns ``done`` or its like with rotor inertia, and the
+    :class:`~baseparams.ident.terms.fit.Choice` (None when ``rotor`` is not ``"auto"``).
     """
     from ..errors import BaseparamsError
     from .select import FOLDS
     from .terms.base import TermContext
-    from .terms.fit import Choice, select_columns
+    from .terms.fit import Choice, prepare_terms, select_columns
 
     if not isinstance(opts.rotor, str):
-        return f, rows, None
+        return done, None
     robot, prep, train, cols = where
     acc, parts, kept = rows
     model = f.model
@@ -440,7 +444,7 @@ def _rotor_choice(f: Fit, rows: tuple, where: tuple, opts: IdentOptions, say, mo
         if not set(model.names) <= set(model_r.names) or len(model_r.names) == len(model.names):
             why = "not tried (every rotor inertia regroups with the base parameters: no column of its own)"
     if why is not None:
-        return f, rows, Choice("rotor", False, why)
+        return done, Choice("rotor", False, why)
     say("rotor inertia: cross-validating the core with and without it on the training data")
     parts_r: list = []
     kept_r: list = []
@@ -448,18 +452,20 @@ def _rotor_choice(f: Fit, rows: tuple, where: tuple, opts: IdentOptions, say, mo
                                    keep=kept_r)
     a0, a_r = (np.concatenate([x for x, _ in k]) for k in (kept, kept_r))
     folds = [np.asarray(i) for i in np.array_split(np.arange(len(a0)), FOLDS)]
-    raw_q = motion_span[3]
-    ctx0, ctx_r = (TermContext(m, a, prep, raw_q, cols, folds) for m, a in ((model, a0), (model_r, a_r)))
+    ctx0, ctx_r = (TermContext(m, a, prep, motion_span[3], cols, folds) for m, a in ((model, a0), (model_r, a_r)))
+    names = [t.name for t in done[0].terms]
     try:
+        for ctx in (ctx0, ctx_r):
+            prepare_terms(ctx, names)
         choice = select_columns("rotor", ctx0, _inner(f, model, acc, opts.method), ctx_r,
-                                _inner(f, model_r, acc_r, opts.method))
+                                _inner(f, model_r, acc_r, opts.method), names)
     except (BaseparamsError, np.linalg.LinAlgError) as exc:
-        return f, rows, Choice("rotor", False, f"not kept: its cross-validation failed ({exc})")
+        return done, Choice("rotor", False, f"not kept: its cross-validation failed ({exc})")
     if not choice.kept:
-        return f, rows, choice
+        return done, choice
     rule = "blocks" if f.selection is None else f.selection.rule
     f_r = fit(model_r, acc_r, opts.method, opts.prior_weight, blocks=parts_r, rule=rule)
-    return f_r, (acc_r, parts_r, kept_r), choice
+    return _with_terms(f_r, acc_r, kept_r, prep, train, cols, opts, say, motion_span), choice
 
 
 def _prepare_training(train, opts: IdentOptions):

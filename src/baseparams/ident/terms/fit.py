@@ -578,11 +578,12 @@ def verdict(score: float, current: float, trial, folds, floor: float) -> tuple[b
 
 
 def select_columns(name: str, without: TermContext, inner_without: Inner, with_: TermContext,
-                   inner_with: Inner) -> Choice:
+                   inner_with: Inner, terms=()) -> Choice:
     """Keep a term of the linear core (extra columns, e.g. rotor inertia) by :func:`select_terms`' rule.
 
-    The core with the term's columns and without them, each cross-validated on the same contiguous
-    blocks of the training rows (:func:`cross_validate`, no nonlinear term), kept by :func:`verdict`.
+    The core with the term's columns and without them, each with the model terms ``terms`` (already
+    kept; prepared on both contexts: :func:`prepare_terms`), cross-validated on the same contiguous
+    blocks of the training rows (:func:`cross_validate`), kept by :func:`verdict`.
 
     Parameters
     ----------
@@ -592,6 +593,8 @@ def select_columns(name: str, without: TermContext, inner_without: Inner, with_:
         The training rows of the core without the term's columns and with them (same rows and blocks).
     inner_without, inner_with : Inner
         Their linear estimators.
+    terms : sequence of str
+        The model terms fitted with either core.
 
     Returns
     -------
@@ -600,8 +603,8 @@ def select_columns(name: str, without: TermContext, inner_without: Inner, with_:
     """
     folds: list = []
     trial: list = []
-    current = cross_validate(without, [], inner_without, per_fold=folds)
-    score = cross_validate(with_, [], inner_with, per_fold=trial)
+    current = cross_validate(without, list(terms), inner_without, per_fold=folds)
+    score = cross_validate(with_, list(terms), inner_with, per_fold=trial)
     floor = KEEP_FLOOR * float(np.sqrt(np.mean(without.tau**2)))
     ok, why = verdict(score, current, trial, folds, floor)
     return Choice(name, ok, why, score)

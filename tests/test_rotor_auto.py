@@ -58,3 +58,20 @@ def test_a_kept_rotor_is_saved_read_back_and_predicts_alike(tmp_path, capsys):
     assert main(["identify", "puma560", str(tmp_path / "log.csv"), "--no-rotor", "--terms", "none", "--json"]) == 0
     out = capsys.readouterr().out
     assert '"Ia_' not in out and '"name": "rotor"' not in out
+
+
+@pytest.mark.slow
+def test_rotor_is_tried_given_the_terms_and_not_kept_for_a_sensor_effect():
+    """No rotor inertia in the plant, a 5 % torque-sensor scale and a 2 ms delay: the rotor columns could stand in
+    for them on the linear core alone; tried after the terms, with those kept, they are not kept."""
+    from recordings import Plant, friction_of, motion, record
+
+    rng = np.random.default_rng(7)
+    plant = Plant(PUMA, **friction_of(PUMA, rng), noise=0.05, ar=0.8, delay=np.r_[0, 0.002, 0, 0, 0, 0],
+                  scale=np.r_[1, 1, 1.05, 1, 1, 1])
+    log = record(plant, *motion(PUMA.dof, 20.0, 500.0, rng), rng, "A")
+    res = bp.identify(PUMA, log)
+    c = _choice(res)
+    assert not c["kept"] and "cross-validated RMS" in c["why"], c
+    assert not any(n.startswith("Ia") for n in res.fit.model.names)
+    assert {t.name for t in res.fit.terms} >= {"scale"}

@@ -221,9 +221,9 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     done = _with_terms(f, acc, kept, prep, train, cols, opts, say, motion_span)
     (f, acc, kept, term_notes, raw_q), rotor = _rotor_choice(f, (acc, parts, kept), done, (robot, prep, train, cols),
                                                              opts, say, motion_span)
-    if rotor is not None:  # the core's own term, with the model terms
-        f = replace(f, term_choices=(rotor, *f.term_choices))
-        term_notes = [rotor_note(rotor), *term_notes]
+    if rotor is not None:  # the core's own term, tried after the model terms
+        f = replace(f, term_choices=(*f.term_choices, rotor))
+        term_notes = [*term_notes, rotor_note(rotor)]
     f, cov_note = _uncertainty(f, acc, kept, prep, train, cols, opts, say)
     f = pulled_covariance(f)
     train_rms, val, series = _scores(f, acc, log, held, prep, cols, raw_q, opts, say)

@@ -54,7 +54,10 @@ def test_a_kept_rotor_is_saved_read_back_and_predicts_alike(tmp_path, capsys):
     back = bp.Identification.load(tmp_path / "r.json", PUMA)
     assert back.fit.model.names == res.fit.model.names
     np.testing.assert_allclose(back.predict(log), res.predict(log), rtol=1e-9, atol=1e-9)
-    # the command line: --no-rotor leaves it out, without a choice
+    # the command line: the report lists it kept with its values; --no-rotor leaves it out, without a choice
+    assert main(["identify", "puma560", str(tmp_path / "log.csv"), "--terms", "none"]) == 0
+    text = capsys.readouterr().out
+    assert any("rotor" in line and "KEPT" in line and "Ia_" in line for line in text.splitlines()), text
     assert main(["identify", "puma560", str(tmp_path / "log.csv"), "--no-rotor", "--terms", "none", "--json"]) == 0
     out = capsys.readouterr().out
     assert '"Ia_' not in out and '"name": "rotor"' not in out

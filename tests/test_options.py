@@ -65,7 +65,7 @@ def test_json_round_trip_and_an_older_file():
     old = {"method": "ols", "convention": "khalil", "rows": "all", "rotor": False, "friction": ["viscous"],
            "coulomb_width": None, "couplings": [], "cutoff": 5.0, "decimate": 2, "min_speed": None}
     back = IdentOptions.from_json(check(old, OPTIONS, "old")[0])
-    assert back == IdentOptions(method="ols", friction=("viscous",), cutoff=5.0, decimate=2)
+    assert back == IdentOptions(method="ols", rotor=False, friction=("viscous",), cutoff=5.0, decimate=2)
 
 
 @pytest.mark.parametrize("kw, words", [
@@ -76,7 +76,7 @@ def test_json_round_trip_and_an_older_file():
     (dict(friction="viscous,sticky"), "unknown friction term(s) ['sticky']"),
     (dict(terms="dahl,wobble"), "unknown model term(s) ['wobble']"),
     (dict(couplings=("m6",)), "expected NAME:JOINT=WEIGHT"),
-    (dict(rotor="yes"), "rotor= must be True or False"),
+    (dict(rotor="yes"), "rotor= must be True, False or 'auto'"),
 ])
 def test_one_check_per_rule(kw, words):
     with pytest.raises(BaseparamsError) as exc:

@@ -49,6 +49,9 @@ def no_work(monkeypatch):
     monkeypatch.setattr("baseparams.excitation.payload.excite_payload", _stop)  # excite payload=
 
 
+#: the token standing for a ``--no-FLAG`` spelling (an ``argparse.BooleanOptionalAction``: ``--no-rotor``)
+NEGATED = "<negated>"
+
 #: flags whose keyword is the negation of the flag (``--no-verify`` is ``verify=False``)
 INVERTED = {"no_verify", "paper_only"}
 
@@ -131,6 +134,8 @@ def _cases():
                 out += [(command, key, a.dest, v, [v]) for v in values]
             elif isinstance(a, argparse._StoreTrueAction):  # noqa: SLF001
                 out.append((command, key, a.dest, a.dest not in INVERTED, []))
+            elif isinstance(a, argparse.BooleanOptionalAction):  # --rotor / --no-rotor: both spellings
+                out += [(command, key, a.dest, True, []), (command, key, a.dest, False, [NEGATED])]
             elif key in RANGES and a.type in (int, float):
                 for v in _numbers(key, a.type):
                     tokens = [_text(v)] if a.nargs is None else ["0", "0", _text(v)]
@@ -231,6 +236,9 @@ def _argv(command: str, tokens: dict, d) -> list[str]:
     if command == "payload" and "link" not in tokens:
         tokens["link"] = ["link6"]
     for key, toks in tokens.items():  # a value starting with '-' after '=' (--position=-1:1)
+        if toks == [NEGATED]:
+            argv.append("--no-" + flags[key].removeprefix("--"))
+            continue
         argv += [f"{flags[key]}={toks[0]}"] if len(toks) == 1 and toks[0].startswith("-") else [flags[key], *toks]
     return argv
 

@@ -173,7 +173,7 @@ def test_identify_save_checked_before_the_fit_and_truth(tmp_path, capsys):
     assert cmp["rel_error"] < 0.01  # errors small
     assert 0.3 < cmp["rms_z"] < 5 and cmp["max_abs_z"] < 10  # |z| reasonable: the std are honest
     # a truth of another model (no rotor) is refused in one line
-    assert main(["identify", "puma560", str(sim), "--truth", str(truth)]) == 2
+    assert main(["identify", "puma560", str(sim), "--no-rotor", "--truth", str(truth)]) == 2
     assert "not the identified model" in capsys.readouterr().err
 
 

@@ -42,7 +42,8 @@ def test_no_term_is_kept_when_no_effect_is_there(seed):
     a, b = recordings(seed)
     res = identify(ROBOT, a, validation=b)
     assert _kept(res) == {}
-    assert {c.name for c in res.fit.term_choices} == {"dahl", "tilt", "delay", "scale"}
+    # rotor inertia (rotor="auto") is tried last by the same rule: the plant has none either
+    assert [c.name for c in res.fit.term_choices] == ["dahl", "tilt", "delay", "scale", "rotor"]
     assert all(not c.kept and "cross-validated RMS" in c.why for c in res.fit.term_choices)
     assert res.validation["rms_total"] < 0.07  # the noise is 0.05
 
@@ -128,7 +129,7 @@ def test_forced_terms_and_none():
     assert _kept(identify(ROBOT, a, terms="none")) == {}
     res = identify(ROBOT, a, terms="delay,scale")
     assert set(_kept(res)) == {"delay", "scale"}
-    assert all(c.kept and c.why.startswith("forced") for c in res.fit.term_choices)
+    assert all(c.kept and c.why.startswith("forced") for c in res.fit.term_choices if c.name != "rotor")
     assert parse_terms("auto,tilt") == (("dahl", "tilt", "delay", "scale"), ("tilt",))
     with pytest.raises(baseparams.BaseparamsError, match="unknown model term"):
         parse_terms("stribeck")
@@ -152,7 +153,7 @@ def test_cli_terms_flag_and_report(tmp_path, capsys):
     path = tmp_path / "a.csv"
     write_log(path, a)
     assert main(["identify", "puma560", str(path), "--terms", "none", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["terms"] == []
+    assert [t["name"] for t in json.loads(capsys.readouterr().out)["terms"]] == ["rotor"]  # the core's own term
     assert main(["identify", "puma560", str(path)]) == 0
     out = capsys.readouterr().out
     assert "model terms (blocked cross-validation on the training data):" in out

@@ -115,7 +115,7 @@ RANGES = {
 #: (which checks them), the front door's ``identify`` keywords and the CLI's ``identify`` flags read them here,
 #: where neither ``import baseparams`` nor another command loads the identification
 IDENTIFY = MappingProxyType({
-    "method": "auto", "rotor": False, "friction": ("viscous", "coulomb", "offset"), "coulomb_width": None,
+    "method": "auto", "rotor": "auto", "friction": ("viscous", "coulomb", "offset"), "coulomb_width": None,
     "couplings": (), "holdout": None, "cutoff": None, "decimate": None, "min_speed": None, "prior_weight": None,
     "convention": "khalil", "covariance": "hac", "score_cutoff": None, "allow_units": False, "literal": False,
     "terms": "auto", "analysis_samples": None, "seed": 0, "memory_mb": 128.0,
@@ -125,13 +125,14 @@ IDENTIFY = MappingProxyType({
 #: :class:`baseparams.ident.payload.PayloadOptions` (which checks them), the front door's ``identify_payload``
 #: keywords and the CLI's ``payload`` flags read them here
 PAYLOAD = MappingProxyType({
-    "method": "auto", "friction": ("viscous", "coulomb", "offset"), "rotor": "auto", "coulomb_width": None,
-    "min_speed": None, "slow_fraction": 0.1, "still": 0.02, "cutoff": None, "decimate": None, "covariance": "hac",
-    "prior": None, "analysis_samples": 200, "seed": 0, "memory_mb": 512.0,
+    "method": "auto", "friction": ("viscous", "coulomb", "offset"), "rotor": "auto", "offsets": "auto",
+    "coulomb_width": None, "min_speed": None, "slow_fraction": 0.1, "still": 0.02, "cutoff": None, "decimate": None,
+    "covariance": "hac", "prior": None, "analysis_samples": 200, "seed": 0, "memory_mb": 512.0,
 })
 #: the choices of ``identify_payload``'s options (``baseparams payload``), where they are not :data:`CHOICES`'
 PAYLOAD_CHOICES = MappingProxyType({
-    "method": ("auto", "physical", "ls"), "rotor": ("auto", "file", "fit"), "covariance": ("hac", "white"),
+    "method": ("auto", "physical", "ls"), "rotor": ("auto", "file", "fit"), "offsets": ("auto", "fit"),
+    "covariance": ("hac", "white"),
 })
 #: the values of the options that name one of a few choices (the first: the default, but ``method``'s)
 CHOICES = MappingProxyType({

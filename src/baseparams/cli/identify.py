@@ -202,7 +202,7 @@ def add_parser(sub) -> None:
                         "determine keep their fitted values), the weighting and the prior's weight chosen by blocked "
                         "cross-validation on the training data; ols, wls (per-joint noise) or physical (physically "
                         "consistent) least squares")
-    ident_args(s)
+    ident_args(s, rotor_auto=True)
     _model_class_args(s)
     s.add_argument("--coupling", action="append", metavar="NAME:JOINT=W,JOINT=W",
                    help="a motor driving several joints (coupled wrist): its velocity is sum W dq_JOINT, its torque "

@@ -186,18 +186,27 @@ def _samples_args(s) -> None:
     s.add_argument("--samples", dest="old_samples", type=int, default=None, help=argparse.SUPPRESS)
 
 
-def ident_args(s) -> None:
+def ident_args(s, rotor_auto: bool = False) -> None:
     """Options shared by ``identify`` and ``simulate``: friction, rotor, convention.
 
     Parameters
     ----------
     s : argparse.ArgumentParser
         A subcommand's parser.
+    rotor_auto : bool
+        ``identify``: ``--rotor`` / ``--no-rotor`` force the rotor inertia in or out, neither leaves it to
+        the training data's cross-validation (``rotor="auto"``); otherwise ``--rotor`` alone.
     """
     s.add_argument("--friction", default=",".join(IDENTIFY["friction"]),
                    help="friction terms per joint: any of viscous, coulomb, offset, comma-separated, or none "
                         "(default all three)")
-    s.add_argument("--rotor", action="store_true", help="model each joint's rotor inertia Ia (MJCF armature)")
+    if rotor_auto:
+        s.add_argument("--rotor", action=argparse.BooleanOptionalAction, default=IDENTIFY["rotor"],
+                       help="model each joint's rotor inertia Ia (MJCF armature): --rotor forces it, --no-rotor "
+                            "leaves it out; default: tried, kept when blocked cross-validation on the training "
+                            "data asks for it (reported with the model terms)")
+    else:
+        s.add_argument("--rotor", action="store_true", help="model each joint's rotor inertia Ia (MJCF armature)")
     s.add_argument("--convention", metavar=choices("convention"), default=IDENTIFY["convention"],
                    help="convention of the base parameters' names and values (default khalil)")
 

@@ -57,6 +57,9 @@ def add_parser(sub) -> None:
     s.add_argument("--rotor", metavar=_choices("rotor"), default=PAYLOAD["rotor"],
                    help="the moving joints' rotor inertia: the file's (or the identification's), fitted, or auto "
                         "(default: fitted when the file / identification has none)")
+    s.add_argument("--offsets", metavar=_choices("offsets"), default=PAYLOAD["offsets"],
+                   help="the moving joints' torque offsets (with offset among --friction): kept when blocked "
+                        "cross-validation on the log says so (auto, default), or always fitted (fit)")
     s.add_argument("--coulomb-width", type=float, metavar="RAD_S", help="smooth Coulomb friction tanh(dq / w)")
     s.add_argument("--min-speed", type=float, metavar="RAD_S",
                    help="a joint's samples slower than this are not fitted on its row (default: --slow-fraction of "
@@ -97,9 +100,9 @@ def keywords(args) -> dict:
     dict
         Every keyword but the model and the log.
     """
-    names = ("link", "result", "validate", "columns", "method", "friction", "rotor", "coulomb_width", "min_speed",
-             "slow_fraction", "still", "cutoff", "decimate", "covariance", "memory_mb", "prior", "seed", "save",
-             "urdf", "mjcf", "predictions")
+    names = ("link", "result", "validate", "columns", "method", "friction", "rotor", "offsets", "coulomb_width",
+             "min_speed", "slow_fraction", "still", "cutoff", "decimate", "covariance", "memory_mb", "prior", "seed",
+             "save", "urdf", "mjcf", "predictions")
     return {**{n: getattr(args, n) for n in names}, "analysis_samples": args.samples}
 
 

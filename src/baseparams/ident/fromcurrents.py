@@ -211,7 +211,7 @@ def identify_currents(robot, log, opts, validation=None, say=None):
 def _current_options(opts):
     """The options as currents use them (rotor inertia on, no model terms), and a note for each change."""
     notes = []
-    if not opts.rotor:
+    if not opts.rotor_columns:
         opts = replace(opts, rotor=True)
         notes.append("rotor inertia: modelled (a motor's current carries its rotor's inertia, Ia ddq, which a "
                      "joint-torque sensor after the gear does not see)")

@@ -595,7 +595,8 @@ def model_for(robot: Robot, options, rows: str | None = None) -> IdentModel:
         The model the log was recorded on.
     options : IdentOptions
         Its ``convention``, ``literal``, ``analysis_samples`` and ``seed`` build the analysis,
-        ``rotor``, ``friction``, ``coulomb_width`` and ``couplings`` the drive model.
+        ``rotor``, ``friction``, ``coulomb_width`` and ``couplings`` the drive model (``rotor="auto"``:
+        without rotor inertia; the pipeline tries it, :func:`baseparams.ident.pipeline.identify`).
     rows : str, optional
         The measured rows (default :func:`log_rows`; a saved result's own).
 
@@ -612,12 +613,13 @@ def model_for(robot: Robot, options, rows: str | None = None) -> IdentModel:
     analysis = analyze(robot, samples=options.analysis_samples, seed=options.seed, convention=options.convention,
                        rows=log_rows(robot) if rows is None else rows, literal=options.literal)
     coords = measured_coords(robot, analysis.rows)
-    nd = drives_for(robot, coords, options.rotor, options.friction, options.coulomb_width, options.couplings).n_params
+    rotor = options.rotor_columns
+    nd = drives_for(robot, coords, rotor, options.friction, options.coulomb_width, options.couplings).n_params
     p = len(analysis.base_names) + nd
     helps = SMALLER_MODEL + (", fewer drive terms (--friction none, no --rotor)" if nd else "")
     check_size(robot, f"identifying {p} parameters (at least as many observations)", fit_cost(p, len(coords), p),
                helps)  # the fewest rows: only fewer parameters help
-    return ident_model(analysis, options.rotor, options.friction, options.coulomb_width, couplings=options.couplings,
+    return ident_model(analysis, rotor, options.friction, options.coulomb_width, couplings=options.couplings,
                        log_base=robot.floating)
 
 

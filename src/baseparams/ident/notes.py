@@ -142,6 +142,24 @@ def term_note(tf, joints: list[str], unit: str = "blocks") -> str:
     return f"model terms ({scope}, linear core alone {tf.cv_rms:.4g}): " + "; ".join(parts)
 
 
+def rotor_note(choice) -> str:
+    """One line: ``rotor="auto"``'s choice of the rotor inertia columns, with its cross-validated figures.
+
+    Parameters
+    ----------
+    choice : Choice
+        :func:`~baseparams.ident.terms.fit.select_columns`' outcome (or why it was not tried).
+
+    Returns
+    -------
+    str
+        The note.
+    """
+    verdict = "KEPT" if choice.kept else "rejected"
+    return (f"rotor inertia (rotor=auto, blocked cross-validation on the training data, the model terms' rule): "
+            f"{verdict} ({choice.why}); --rotor / --no-rotor force it")
+
+
 def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:
     """Units and plausibility of the log before any fit (:func:`~baseparams.ident.plausibility.check_units`).
 

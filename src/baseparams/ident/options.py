@@ -36,8 +36,11 @@ class IdentOptions:
     ----------
     method : {"auto", "ols", "wls", "physical"}
         The estimator (:func:`baseparams.ident.fit`; ``physical`` needs the extra ``ident``).
-    rotor : bool
-        Model each joint's rotor inertia ``Ia``.
+    rotor : bool or "auto"
+        Model each joint's rotor inertia ``Ia``: True forces it, False leaves it out; ``"auto"``
+        (default) tries it and keeps it when blocked cross-validation on the training span asks for
+        it (:func:`baseparams.ident.terms.fit.select_columns`, the model terms' rule; reported with
+        the terms). In a result: True or False, as used.
     friction : str or iterable of str
         Friction terms: ``viscous``, ``coulomb``, ``offset`` (default all three; ``"none"``: none);
         kept as a tuple of names.
@@ -96,7 +99,7 @@ class IdentOptions:
     """
 
     method: str = IDENTIFY["method"]
-    rotor: bool = IDENTIFY["rotor"]
+    rotor: bool | str = IDENTIFY["rotor"]
     friction: tuple = IDENTIFY["friction"]
     coulomb_width: float | None = IDENTIFY["coulomb_width"]
     couplings: tuple = IDENTIFY["couplings"]
@@ -120,7 +123,8 @@ class IdentOptions:
     def __post_init__(self):
         from ..arguments import check_choice, check_flags, check_keywords
 
-        check_flags("identify", rotor=self.rotor, allow_units=self.allow_units, literal=self.literal)
+        _rotor(self.rotor)
+        check_flags("identify", allow_units=self.allow_units, literal=self.literal)
         check_choice("identify", "method", self.method, METHODS)
         check_choice("identify", "covariance", self.covariance, COVARIANCES)
         check_choice("identify", "effort", self.effort, CHOICES["effort"])
@@ -133,6 +137,11 @@ class IdentOptions:
         if self.prior_weight is not None and self.method != "physical":
             raise BaseparamsError(f"identify: prior_weight= applies to method=physical, not {self.method} (the "
                                   f"default estimate chooses its own pull by cross-validation)")
+
+    @property
+    def rotor_columns(self) -> bool:
+        """The model is built with rotor inertia (``rotor=True``; ``"auto"``: the pipeline adds it if kept)."""
+        return not isinstance(self.rotor, str) and bool(self.rotor)
 
     def __repr__(self) -> str:
         changed = [f"{f.name}={getattr(self, f.name)!r}" for f in fields(self)
@@ -254,3 +263,15 @@ def _terms(terms) -> str:
 
     parse_terms(terms)
     return terms if isinstance(terms, str) else ",".join(terms)
+
+
+def _rotor(value) -> None:
+    """``rotor=``: True, False or ``"auto"`` (one line naming it otherwise)."""
+    import numpy as np
+
+    from ..arguments import ArgumentTypeError, brief
+
+    if isinstance(value, (bool, np.bool_)) or (isinstance(value, str) and value == "auto"):
+        return
+    raise ArgumentTypeError(f"identify: rotor= must be True, False or 'auto', got {type(value).__name__} "
+                            f"{brief(value, 40)}")

@@ -489,7 +489,9 @@ class Identification:
         -------
         list of dict
             ``{"name", "kept", "why", "cv_rms", "values", "std", "description"}`` per term tried
-            (``values``, ``std`` and ``description`` for the kept ones), in the order tried.
+            (``values``, ``std`` and ``description`` for the kept ones), in the order tried. A kept
+            term of the linear core (``rotor``): its parameters' values and std (``Ia_<joint>``; a
+            rotor inertia regrouped into a base parameter is in that parameter's value).
         """
         kept = {t.name: t for t in self.fit.terms}
         out = []
@@ -499,5 +501,11 @@ class Identification:
             t = kept.get(c.name)
             if t is not None:
                 entry.update(values=t.values(self.joints), std=t.std, description=t.describe(self.joints))
+            elif c.kept and c.name == "rotor":  # the core's own term: its values are parameters of the core
+                own = [k for k, n in enumerate(self.names) if str(n).startswith("Ia")]
+                entry.update(values={str(self.names[k]): float(self.values[k]) for k in own},
+                             std={str(self.names[k]): float(self.std[k]) for k in own},
+                             description="rotor inertia of the driven joints in the linear core: "
+                                         + ", ".join(f"{self.names[k]} {self.values[k]:.4g}" for k in own))
             out.append(entry)
         return out

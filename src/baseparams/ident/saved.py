@@ -460,14 +460,14 @@ def _check_terms_allowed(doc: dict, opts, source: str) -> None:
     A term its own options did not try, or one the choices do not say was kept, or a kept one
     missing: an edited file.
     """
-    from .terms.fit import parse_terms
+    from .terms.fit import CORE_TERMS, parse_terms
 
     candidates, _ = parse_terms(opts.terms)
     for k, t in enumerate(doc["terms"]):
         if t["name"] not in candidates:
             raise BaseparamsError(f"{source}: terms[{k}]: {t['name']!r} is not among the terms options.terms "
                                   f"tried ({opts.terms!r}): the file was edited")
-    kept = [c["name"] for c in doc["term_choices"] if c["kept"]]
+    kept = [c["name"] for c in doc["term_choices"] if c["kept"] and c["name"] not in CORE_TERMS]  # rotor: the core's
     listed = [t["name"] for t in doc["terms"]]
     if sorted(kept) != sorted(listed):
         raise BaseparamsError(f"{source}: terms: {', '.join(listed) or 'none'} listed, but term_choices says "

@@ -108,7 +108,7 @@ class Reporter:
 
 
 def identify(model, log, *, validate=None, holdout: float | None = IDENTIFY["holdout"],
-             method: str = IDENTIFY["method"], friction=IDENTIFY["friction"], rotor: bool = IDENTIFY["rotor"],
+             method: str = IDENTIFY["method"], friction=IDENTIFY["friction"], rotor: bool | str = IDENTIFY["rotor"],
              coulomb_width: float | None = IDENTIFY["coulomb_width"], couplings=IDENTIFY["couplings"],
              cutoff: float | None = IDENTIFY["cutoff"], decimate: int | None = IDENTIFY["decimate"],
              min_speed: float | None = IDENTIFY["min_speed"], prior_weight: float | None = IDENTIFY["prior_weight"],

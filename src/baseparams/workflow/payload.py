@@ -26,7 +26,7 @@ OPTIONS = tuple(PAYLOAD)
 
 def identify_payload(model, log, *, link: str, result=None, validate=None, columns=None,
                      method: str = PAYLOAD["method"], friction=PAYLOAD["friction"], rotor: str = PAYLOAD["rotor"],
-                     coulomb_width: float | None = PAYLOAD["coulomb_width"],
+                     offsets: str = PAYLOAD["offsets"], coulomb_width: float | None = PAYLOAD["coulomb_width"],
                      min_speed: float | None = PAYLOAD["min_speed"], slow_fraction: float = PAYLOAD["slow_fraction"],
                      still: float = PAYLOAD["still"], cutoff: float | None = PAYLOAD["cutoff"],
                      decimate: int | None = PAYLOAD["decimate"], covariance: str = PAYLOAD["covariance"],
@@ -59,11 +59,12 @@ def identify_payload(model, log, *, link: str, result=None, validate=None, colum
         Another log with the payload: every sample predicted, RMS per joint (``.validation``).
     columns : str, path or dict, optional
         A layout mapping for the log files (README "Log layout").
-    method, friction, rotor, coulomb_width, min_speed, slow_fraction, still, cutoff, decimate, covariance, \
-memory_mb, seed
+    method, friction, rotor, offsets, coulomb_width, min_speed, slow_fraction, still, cutoff, decimate, \
+covariance, memory_mb, seed
         The identification's options (:class:`~baseparams.ident.payload.PayloadOptions`: the
-        estimator, the moving joints' drive terms, the slow and still samples, the filter, the
-        standard deviations, the largest regressor [MB], the structural analysis' seed).
+        estimator, the moving joints' drive terms (their offsets kept by cross-validation), the slow
+        and still samples, the filter, the standard deviations, the largest regressor [MB], the
+        structural analysis' seed).
     prior : dict, Inertia, str or path, optional
         Hold what the motion does not identify at this payload: ``{"mass", "com", "inertia_com"}``
         (LINK's frame), an Inertia, or a JSON file of that object or a saved payload's (``save``).
@@ -98,10 +99,11 @@ memory_mb, seed
         the link moves, an export of a payload the motion does not identify.
     """
     kw = {"link": link, "result": result, "validate": validate, "columns": columns, "method": method,
-          "friction": friction, "rotor": rotor, "coulomb_width": coulomb_width, "min_speed": min_speed,
-          "slow_fraction": slow_fraction, "still": still, "cutoff": cutoff, "decimate": decimate,
-          "covariance": covariance, "memory_mb": memory_mb, "prior": prior, "analysis_samples": analysis_samples,
-          "seed": seed, "save": save, "urdf": urdf, "mjcf": mjcf, "predictions": predictions, "progress": progress}
+          "friction": friction, "rotor": rotor, "offsets": offsets, "coulomb_width": coulomb_width,
+          "min_speed": min_speed, "slow_fraction": slow_fraction, "still": still, "cutoff": cutoff,
+          "decimate": decimate, "covariance": covariance, "memory_mb": memory_mb, "prior": prior,
+          "analysis_samples": analysis_samples, "seed": seed, "save": save, "urdf": urdf, "mjcf": mjcf,
+          "predictions": predictions, "progress": progress}
     file = model if _source is None else _source
     opts, inputs = check_payload(file, log, kw)
     robot = robot_of(model, "payload")

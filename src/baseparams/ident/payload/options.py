@@ -21,6 +21,8 @@ from ..drives import friction_terms
 METHODS = PAYLOAD_CHOICES["method"]
 #: where the rotor inertia of the fitted joints comes from
 ROTORS = PAYLOAD_CHOICES["rotor"]
+#: whether the moving joints' torque offsets are fitted: kept by cross-validation, or always
+OFFSETS = PAYLOAD_CHOICES["offsets"]
 #: the standard deviations' covariance (:mod:`baseparams.ident.uncertainty`)
 COVARIANCES = PAYLOAD_CHOICES["covariance"]
 #: the numeric options and their ranges (the others are choices, flags or the prior); the structural analysis
@@ -54,6 +56,11 @@ class PayloadOptions:
         any, the identification's when it models rotor inertia, else fitted (a motor's inertia on
         its joint does not regroup into the links: a robot known without it mispredicts every
         acceleration).
+    offsets : {"auto", "fit"}
+        With ``offset`` among ``friction``: ``auto`` (default), the moving joints' torque offsets
+        kept when blocked cross-validation on the log says so (:mod:`~baseparams.ident.payload.offsets`:
+        with only the wrist moving an offset takes up much of the mass's information); ``fit``,
+        always fitted.
     coulomb_width : float, optional
         Smooth Coulomb friction ``tanh(dq / w)`` [rad/s] instead of ``sign(dq)``.
     min_speed : float, optional
@@ -99,6 +106,7 @@ class PayloadOptions:
     method: str = PAYLOAD["method"]
     friction: tuple = PAYLOAD["friction"]
     rotor: str = PAYLOAD["rotor"]
+    offsets: str = PAYLOAD["offsets"]
     coulomb_width: float | None = PAYLOAD["coulomb_width"]
     min_speed: float | None = PAYLOAD["min_speed"]
     slow_fraction: float = PAYLOAD["slow_fraction"]
@@ -114,7 +122,8 @@ class PayloadOptions:
     def __post_init__(self):
         from ...arguments import check_choice, check_value
 
-        for name, choices in (("method", METHODS), ("rotor", ROTORS), ("covariance", COVARIANCES)):
+        for name, choices in (("method", METHODS), ("rotor", ROTORS), ("offsets", OFFSETS),
+                              ("covariance", COVARIANCES)):
             check_choice("payload", name, getattr(self, name), choices)
         for name, r in NUMBERS.items():
             value = getattr(self, name)

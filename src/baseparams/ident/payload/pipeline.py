@@ -21,6 +21,7 @@ from ...errors import BaseparamsError
 from ...model.robot import Robot
 from .fit import PayloadFit, covariance, physical_fit, result_covariance, weighted_fit
 from .model import body_of, payload_model
+from .offsets import choose_offsets
 from .options import PayloadOptions
 from .result import Payload
 from .rows import fitted_rows, log_columns, moving_joints
@@ -89,11 +90,16 @@ def _identify(robot: Robot, log, link: str, opts: PayloadOptions, result, valida
     say(f"payload rows of {', '.join(model.joints)} at {prep.n_samples} samples")
     rows_obj, row_notes = fitted_rows(model, log, prep, cols, opts)
     say("which payload parameters the moving joints identify (structural rank)")
-    st = structural(model, np.asarray(log.q, dtype=float)[:, cols], moving, opts.analysis_samples, opts.seed)
+    q_log = np.asarray(log.q, dtype=float)[:, cols]
+    st = structural(model, q_log, moving, opts.analysis_samples, opts.seed)
+    model, rows_obj, st, offsets = choose_offsets(
+        model, rows_obj, st, opts, lambda m: structural(m, q_log, moving, opts.analysis_samples, opts.seed),
+        _block_periods(log, prep, cols[model.rows]))
     say(f"fitting ({opts.method}, {opts.covariance} covariance)")
     f = _fit(model, rows_obj, st, opts)
     prep_notes = [n for n in prep.notes if not n.startswith("slow samples:")]  # identify's min_speed: not ours
-    notes += _joint_notes(robot, body, moving, rows) + row_notes + prep_notes + _fit_notes(model, f, opts)
+    notes += _joint_notes(robot, body, moving, rows) + row_notes + prep_notes + [offsets] * (offsets is not None)
+    notes += _fit_notes(model, f, opts)
     samples = {"read": int(log.n_samples), "kept": int(prep.n_samples), "fitted": int(f.observations)}
     used = replace(opts, cutoff=float(prep.design.cutoff), decimate=int(prep.factor))
     out = Payload(model, f, used, tuple(notes), samples, tuple(robot.coordinate_names(np.flatnonzero(moving))))
@@ -101,6 +107,15 @@ def _identify(robot: Robot, log, link: str, opts: PayloadOptions, result, valida
         say(f"validating on {validation.n_samples} held-out samples")
         out = replace(out, validation=scores(out, validation))
     return out
+
+
+def _block_periods(log, prep, state_cols) -> float:
+    """Periods of the moving joints' motion bandwidth each cross-validation block of the log spans."""
+    from ..preprocess import excitation_bandwidth, resample
+    from ..select import FOLDS
+
+    band = excitation_bandwidth(resample(log).q[:, state_cols], prep.design.fs)
+    return float(prep.full.t[-1] - prep.full.t[0]) / FOLDS * band
 
 
 def _method(opts: PayloadOptions, notes: list) -> PayloadOptions:

@@ -29,6 +29,8 @@ KEEP_FLOOR = 1e-5
 #: ... and lowers the held-out error of at least this fraction of the blocks (a term that helps one
 #: block of a short log and hurts the others is not kept)
 KEEP_FOLDS = 0.6
+#: terms of the linear core kept the same way (their columns are the core's; their values its parameters, no Term)
+CORE_TERMS = ("rotor",)
 #: Gauss-Newton steps at most
 MAX_STEPS = 8
 
@@ -561,33 +563,23 @@ class _Selection:
         self.choices: dict = {}
         self.tried_with: dict = {}
         self.cache: dict = {}
-        self.need = int(np.ceil(KEEP_FOLDS * len(folds)))
         # below this a term changes nothing that matters
         self.floor = KEEP_FLOOR * float(np.sqrt(np.mean(ctx.tau**2)))
 
     def try_term(self, name: str, again: bool = False) -> bool:
-        """Cross-validate the kept terms with ``name`` added; keep it if it passes; whether it was kept."""
+        """Cross-validate the kept terms with ``name`` added, keep it if :func:`verdict` says so; whether kept."""
         self.say(f"model terms: cross-validating {'+'.join(self.kept + [name])}")
         self.tried_with[name] = list(self.kept)
         trial: list = []
         score = cross_validate(self.ctx, self.kept + [name], self.inner, self.cache, per_fold=trial)
-        current = self.current
-        gain = 1.0 - score / current if current > 0 else 0.0
-        better = int(np.sum(np.asarray(trial) < np.asarray(self.folds)))
         beside = f" beside {'+'.join(self.kept)}" if again else ""
-        figures = (f"cross-validated RMS {score:.4g} with it{beside}, {current:.4g} without ({100 * gain:+.1f} %; "
-                   f"lower in {better} of {len(self.folds)} {self.ctx.fold_unit})")
-        passed = gain > KEEP_GAIN and better >= self.need and current - score > self.floor
-        if name in self.forced or passed:
+        ok, why = verdict(score, self.current, trial, self.folds, self.floor, self.ctx.fold_unit, beside)
+        if name in self.forced or ok:
             self.kept.append(name)
-            self.choices[name] = Choice(name, True, f"forced; {figures}" if name in self.forced else figures, score)
+            self.choices[name] = Choice(name, True, f"forced; {why}" if name in self.forced else why, score)
             self.current, self.folds = score, trial
             return True
-        failed = [w for w, ok in ((f"not {100 * KEEP_GAIN:g} % lower", gain > KEEP_GAIN),
-                                  (f"lower in fewer than {self.need} {self.ctx.fold_unit}", better >= self.need),
-                                  (f"lower by less than {KEEP_FLOOR:g} of the torques' RMS ({self.floor:.2g})",
-                                   current - score > self.floor)) if not ok]
-        self.choices[name] = Choice(name, False, f"{figures}: {'; '.join(failed)}", score)
+        self.choices[name] = Choice(name, False, why, score)
         return False
 
     def backward(self) -> None:
@@ -605,6 +597,76 @@ class _Selection:
                                             f"the others are in, {self.current:.4g} with it (not more than "
                                             f"{100 * KEEP_GAIN:g} % lower)", score)
                 self.current = min(self.current, score)
+
+
+def verdict(score: float, current: float, trial, folds, floor: float, unit: str = "blocks",
+            beside: str = "") -> tuple[bool, str]:
+    """The one rule that keeps a model term: lower cross-validated RMS, in most blocks, by more than rounding.
+
+    Parameters
+    ----------
+    score, current : float
+        Cross-validated RMS with the term and without it (measured units).
+    trial, folds : sequence of float
+        Each block's held-out sum of squared errors with the term and without it.
+    floor : float
+        The smallest lowering that matters (:data:`KEEP_FLOOR` times the torques' RMS).
+    unit : str
+        What a block is, for the text (``blocks``, ``recordings``: :attr:`TermContext.fold_unit`).
+    beside : str
+        The terms it was tried beside, for the text (a second look: :func:`select_terms`).
+
+    Returns
+    -------
+    keep : bool
+        Lower by more than :data:`KEEP_GAIN`, in at least :data:`KEEP_FOLDS` of the blocks and by more
+        than ``floor``.
+    why : str
+        The figures, and what failed when not kept.
+    """
+    gain = 1.0 - score / current if current > 0 else 0.0
+    need = int(np.ceil(KEEP_FOLDS * len(folds)))
+    better = int(np.sum(np.asarray(trial) < np.asarray(folds)))
+    figures = (f"cross-validated RMS {score:.4g} with it{beside}, {current:.4g} without ({100 * gain:+.1f} %; lower "
+               f"in {better} of {len(folds)} {unit})")
+    failed = [w for w, ok in ((f"not {100 * KEEP_GAIN:g} % lower", gain > KEEP_GAIN),
+                              (f"lower in fewer than {need} {unit}", better >= need),
+                              (f"lower by less than {KEEP_FLOOR:g} of the torques' RMS ({floor:.2g})",
+                               current - score > floor)) if not ok]
+    return not failed, figures if not failed else f"{figures}: {'; '.join(failed)}"
+
+
+def select_columns(name: str, without: TermContext, inner_without: Inner, with_: TermContext,
+                   inner_with: Inner, terms=()) -> Choice:
+    """Keep a term of the linear core (extra columns, e.g. rotor inertia) by :func:`select_terms`' rule.
+
+    The core with the term's columns and without them, each with the model terms ``terms`` (already
+    kept; prepared on both contexts: :func:`prepare_terms`), cross-validated on the same contiguous
+    blocks of the training rows (:func:`cross_validate`), kept by :func:`verdict`.
+
+    Parameters
+    ----------
+    name : str
+        The term (:data:`CORE_TERMS`).
+    without, with_ : TermContext
+        The training rows of the core without the term's columns and with them (same rows and blocks).
+    inner_without, inner_with : Inner
+        Their linear estimators.
+    terms : sequence of str
+        The model terms fitted with either core.
+
+    Returns
+    -------
+    Choice
+        Kept or rejected, with the figures.
+    """
+    folds: list = []
+    trial: list = []
+    current = cross_validate(without, list(terms), inner_without, per_fold=folds)
+    score = cross_validate(with_, list(terms), inner_with, per_fold=trial)
+    floor = KEEP_FLOOR * float(np.sqrt(np.mean(without.tau**2)))
+    ok, why = verdict(score, current, trial, folds, floor, without.fold_unit)
+    return Choice(name, ok, why, score)
 
 
 def core_rows(ctx: TermContext, state: State) -> tuple[np.ndarray, np.ndarray]:

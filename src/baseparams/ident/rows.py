@@ -175,5 +175,7 @@ def _accumulated(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, lo
         parts_out.extend(fold_parts(np.concatenate([x for x, _ in held]), np.concatenate([y for _, y in held])))
     elif parts_out is not None:
         parts_out.extend(parts)  # blocks at chunk boundaries (the fitted rows do not fit in memory_mb)
+    floor = chunks.floor_note(model, memory_mb, margin, size, prep.stride, full.n_samples)
     return chunks.combine(parts), (f"parallel filtering in {len(parts)} chunks of {size} samples with "
-                                   f"{margin}-sample overlaps (equal to the whole log's to rounding)")
+                                   f"{margin}-sample overlaps (equal to the whole log's to rounding)"
+                                   + (f"; {floor}" if floor else ""))

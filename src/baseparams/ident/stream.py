@@ -543,7 +543,8 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     r, r_note = pp.regressor_stride(k, tr.rate, design)
     margin = chunks.overlap(design)
     size = chunks.window_size(model, memory_mb, margin, r)
-    notes += [design.note, *rate_notes, k_note, r_note, pp.EDGE_NOTE]
+    floor = chunks.floor_note(model, memory_mb, margin, size, r, tr.n)
+    notes += [design.note, *rate_notes, k_note, r_note, pp.EDGE_NOTE, *([floor] if floor else [])]
     return Plan(design, k, chunks.Grid(tr.n, 0, k, design.cutoff, min_speed, stride=r), margin, size,
                 tuple(notes))
 
@@ -1199,6 +1200,9 @@ def _passes(robot, stream, o, validating: bool, say):
     band = pp.excitation_bandwidth(tr.sub.q[:, cols], tr.rate / tr.step)
     unit_notes = [*unit_notes, *check_rate(stream.source, band, (tr.n - 1) / tr.rate, tr.rate, plan.design.cutoff,
                                            o.cutoff is not None, o.allow_units)]
+    for note in plan.notes:
+        if note.startswith("memory: WARNING"):
+            say(note)  # on stderr before the pass that needs it, not only in the report
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
     parts, kept, slow = accumulate(stream, plan, model, cols, o.memory_mb, spill=o.covariance == "hac")

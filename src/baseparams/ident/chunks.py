@@ -522,3 +522,51 @@ def combine(parts) -> RowAccumulator:
     from .estimate import RowAccumulator
 
     return RowAccumulator.combine(parts)
+
+
+def fold_edges(count: int, folds: int) -> np.ndarray:
+    """The blocked cross-validation's fold boundaries over ``count`` samples, without an array of them.
+
+    The boundaries of ``np.array_split(np.arange(count), folds)`` (the in-memory path's folds: the
+    first ``count % folds`` folds one sample longer), computed from the two integers alone.
+
+    Parameters
+    ----------
+    count : int
+        Samples split.
+    folds : int
+        Number of consecutive folds.
+
+    Returns
+    -------
+    ndarray of int, shape ``(folds + 1,)``
+        ``0``, the end of each fold, ``count`` last.
+    """
+    size, extra = divmod(int(count), int(folds))
+    return np.cumsum([0] + [size + 1] * extra + [size] * (folds - extra))
+
+
+def scratch_file(mb: float, prefix: str):
+    """An unnamed temporary file (deleted when closed or at exit), or None when the temporary folder lacks ``2 mb`` MB.
+
+    Parameters
+    ----------
+    mb : float
+        What will be written [MB].
+    prefix : str
+        The file's name prefix.
+
+    Returns
+    -------
+    file object or None
+        Open for binary reading and writing; None when there is no room or it cannot be created.
+    """
+    import shutil
+    import tempfile
+
+    try:
+        if shutil.disk_usage(tempfile.gettempdir()).free < 2 * mb * 1e6:
+            return None
+        return tempfile.TemporaryFile(prefix=prefix)
+    except OSError:
+        return None

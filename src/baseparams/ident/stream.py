@@ -57,6 +57,7 @@ from ..interrupts import Interrupts
 from ..jointlog import JointLog
 from . import chunks
 from . import preprocess as pp
+from .chunks import fold_edges, scratch_file
 from .plausibility import check_rate
 
 
@@ -605,28 +606,6 @@ def fitted(stream, plan: Plan, model, cols: np.ndarray):
             yield np.empty(0), None, None, removed, idx[0]
 
 
-def fold_edges(count: int, folds: int) -> np.ndarray:
-    """The blocked cross-validation's fold boundaries over ``count`` samples, without an array of them.
-
-    The boundaries of ``np.array_split(np.arange(count), folds)`` (the in-memory path's folds: the
-    first ``count % folds`` folds one sample longer), computed from the two integers alone.
-
-    Parameters
-    ----------
-    count : int
-        Samples split.
-    folds : int
-        Number of consecutive folds.
-
-    Returns
-    -------
-    ndarray of int, shape ``(folds + 1,)``
-        ``0``, the end of each fold, ``count`` last.
-    """
-    size, extra = divmod(int(count), int(folds))
-    return np.cumsum([0] + [size + 1] * extra + [size] * (folds - extra))
-
-
 def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, spill: bool = True):
     """Pass 3: the row factors, in the blocked cross-validation's folds, and the fitted rows if they fit.
 
@@ -682,32 +661,6 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, sp
             kept.close()
         raise
     return parts, kept, slow
-
-
-def scratch_file(mb: float, prefix: str):
-    """An unnamed temporary file (deleted when closed or at exit), or None when the temporary folder lacks ``2 mb`` MB.
-
-    Parameters
-    ----------
-    mb : float
-        What will be written [MB].
-    prefix : str
-        The file's name prefix.
-
-    Returns
-    -------
-    file object or None
-        Open for binary reading and writing; None when there is no room or it cannot be created.
-    """
-    import shutil
-    import tempfile
-
-    try:
-        if shutil.disk_usage(tempfile.gettempdir()).free < 2 * mb * 1e6:
-            return None
-        return tempfile.TemporaryFile(prefix=prefix)
-    except OSError:
-        return None
 
 
 def read_floats(fh, shape: tuple, what: str) -> np.ndarray:

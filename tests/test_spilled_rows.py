@@ -35,15 +35,19 @@ def test_a_views_rows_are_the_models_rows(seed):
         int(x) in set(rows.tolist()) for x in model.broadband_entries(q, dq, ddq)[0])
 
 
-def _spilled(blocks, m, p, edges):
-    """``SpilledRows`` of ``blocks`` written sample-major, with children at ``edges``."""
+def _spilled(blocks, m, p, edges, zero=None):
+    """``SpilledRows`` of ``blocks`` written sample-major, with children at ``edges`` (``zero (m, p)``: entries zero
+    in every sample, the layout told)."""
     a = np.concatenate([x for x, _ in blocks])
     tau = np.concatenate([t for _, t in blocks])
+    if zero is not None:
+        a[:, zero] = 0.0
+    used = np.concatenate([np.any(a != 0, axis=0), np.ones((m, 1), dtype=bool)], axis=1)
     fh = tempfile.TemporaryFile()  # noqa: SIM115 - held by the accumulators it returns, as spill() holds it
     fh.write(np.concatenate([a, tau[:, :, None]], axis=2).tobytes())
     fh.flush()
     kids = [spilled.SpilledRows(fh, m, p, lo, hi) for lo, hi in zip(edges[:-1], edges[1:])]
-    return spilled.SpilledRows(fh, m, p, 0, len(a), kids), a, tau
+    return spilled.SpilledRows(fh, m, p, 0, len(a), kids, used), a, tau
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -57,7 +61,11 @@ def test_the_files_readers_are_the_row_factors(seed, monkeypatch):
     monkeypatch.setattr(spilled, "BLOCK_BYTES", float(rng.integers(1, 5) * 8 * m * (p + 1)))
     count = sum(len(a) for a, _ in blocks)
     cut = sorted(rng.integers(0, count + 1, size=3))
-    whole, a, tau = _spilled(blocks, m, p, [0, cut[0], cut[0], *cut[1:], count])
+    # a chain's pattern (row r uses the columns from some start on) or random zeros, or none
+    starts = np.sort(rng.integers(0, p, size=m))
+    zero = [None, np.arange(p)[None, :] < starts[:, None], rng.random((m, p)) < 0.4][seed % 3]
+    monkeypatch.setattr(spilled, "STEP_ROWS", int(rng.integers(1, 8)))  # steps of a few rows, pieces of samples
+    whole, a, tau = _spilled(blocks, m, p, [0, cut[0], cut[0], *cut[1:], count], zero)
     ref = RowAccumulator(m, p).add(a, tau)
     w = rng.uniform(0.5, 2.0, m)
     for acc in (whole, whole.children[-1] if count - cut[-1] else whole):
@@ -65,6 +73,7 @@ def test_the_files_readers_are_the_row_factors(seed, monkeypatch):
         part = RowAccumulator(m, p).add(a[lo:hi], tau[lo:hi])
         rs, rr = acc.stacked(w), part.stacked(w)
         assert np.allclose(rs.T @ rs, rr.T @ rr, atol=1e-9 * max(1.0, np.abs(rr.T @ rr).max()))
+        assert np.allclose(np.tril(rs, -1), 0.0)  # triangular in the parameters' order
     theta = rng.normal(size=p)
     assert np.allclose(whole.row_sse(theta), ref.row_sse(theta))
     assert np.allclose(whole.column_norms2(), ref.column_norms2())

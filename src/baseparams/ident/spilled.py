@@ -431,10 +431,8 @@ class SpilledRows(RowAccumulator):
         cols = np.asarray(cols, dtype=int)
         if self.children:
             return np.sum([c.row_gram(row, cols) for c in self.children], axis=0)
-        out = np.zeros((len(cols), len(cols)))
-        for b in self.blocks():
-            out += b[:, row][:, cols].T @ b[:, row][:, cols]
-        return out
+        x = self._rows(row, row + 1)[:, 0][:, cols]  # that row's samples only, not every row's
+        return x.T @ x
 
     def nbytes(self) -> int:
         """Bytes held in memory: the cached stacked factors and norms (the rows are in the file).

@@ -37,17 +37,16 @@ def test_a_views_rows_are_the_models_rows(seed):
 
 def _spilled(blocks, m, p, edges, zero=None):
     """``SpilledRows`` of ``blocks`` written sample-major, with children at ``edges`` (``zero (m, p)``: entries zero
-    in every sample, the layout told)."""
+    in every sample, as a tree's rows have)."""
     a = np.concatenate([x for x, _ in blocks])
     tau = np.concatenate([t for _, t in blocks])
     if zero is not None:
         a[:, zero] = 0.0
-    used = np.concatenate([np.any(a != 0, axis=0), np.ones((m, 1), dtype=bool)], axis=1)
     fh = tempfile.TemporaryFile()  # noqa: SIM115 - held by the accumulators it returns, as spill() holds it
     fh.write(np.concatenate([a, tau[:, :, None]], axis=2).tobytes())
     fh.flush()
     kids = [spilled.SpilledRows(fh, m, p, lo, hi) for lo, hi in zip(edges[:-1], edges[1:])]
-    return spilled.SpilledRows(fh, m, p, 0, len(a), kids, used), a, tau
+    return spilled.SpilledRows(fh, m, p, 0, len(a), kids), a, tau
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -64,7 +63,6 @@ def test_the_files_readers_are_the_row_factors(seed, monkeypatch):
     # a chain's pattern (row r uses the columns from some start on) or random zeros, or none
     starts = np.sort(rng.integers(0, p, size=m))
     zero = [None, np.arange(p)[None, :] < starts[:, None], rng.random((m, p)) < 0.4][seed % 3]
-    monkeypatch.setattr(spilled, "STEP_ROWS", int(rng.integers(1, 8)))  # steps of a few rows, pieces of samples
     whole, a, tau = _spilled(blocks, m, p, [0, cut[0], cut[0], *cut[1:], count], zero)
     ref = RowAccumulator(m, p).add(a, tau)
     w = rng.uniform(0.5, 2.0, m)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import BaseparamsError
+from ..numerics import StreamingQR
 from .estimate import RowAccumulator
 
 #: row factors [MB] from which a model's fitted rows are spilled to a file (and above ``memory_mb``)
@@ -169,42 +170,6 @@ def group_rows(model, prep, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return prepared_rows(RowsView(model, rows), prep, cols)
 
 
-#: rows gathered per QR step of a stacked factor, at least (each step re-triangularises the suffix's factor)
-STEP_ROWS = 512
-
-
-def _triangle(r: np.ndarray, n: int) -> np.ndarray:
-    """``r`` (``(<= n, n)``, upper triangular) padded with zero rows to ``(n, n)``."""
-    return r if r.shape[0] == n else np.vstack([r, np.zeros((n - r.shape[0], n))])
-
-
-class Layout:
-    """A column order in which each measured row's columns are a suffix: ``perm``, ``starts``, ``inverse``.
-
-    A column is placed by the last measured row that uses it (a chain's body columns by the body, a
-    drive column by its joint), the torque last: row ``r`` uses only columns whose last row is
-    ``>= r``, the suffix from ``starts[r]``. A stacked factor fed the rows in order then touches only
-    each row's suffix (a 220-link chain's rows use 35 % of the columns on average).
-
-    Parameters
-    ----------
-    used : ndarray of bool, shape ``(m, p + 1)``
-        Whether row ``r`` has a non-zero in column ``c`` (the torque's column last).
-    """
-
-    def __init__(self, used: np.ndarray):
-        used = np.asarray(used, dtype=bool)
-        m, p1 = used.shape
-        last = np.where(used.any(axis=0), m - 1 - np.argmax(used[::-1], axis=0), -1)
-        last[-1] = m  # the torque last
-        self.perm = np.argsort(last, kind="stable")
-        self.inverse = np.argsort(self.perm)
-        self.starts = np.searchsorted(last[self.perm], np.arange(m), side="left")
-
-    def __repr__(self) -> str:
-        return f"<Layout {len(self.starts)} rows, {len(self.perm)} columns>"
-
-
 class SpilledRows(RowAccumulator):
     """The fitted samples ``[lo, hi)`` of rows written to a file: what a :class:`RowAccumulator` gives, read back.
 
@@ -222,21 +187,15 @@ class SpilledRows(RowAccumulator):
     lo, hi : int
         The samples read.
     children : list of SpilledRows, optional
-        Consecutive pieces of ``[lo, hi)`` (they take this object's :class:`Layout`).
-    used : ndarray of bool, shape ``(m, p + 1)``, optional
-        Where the rows have non-zeros (default everywhere): their :class:`Layout`.
+        Consecutive pieces of ``[lo, hi)``.
     """
 
-    def __init__(self, fh, nrows: int, nparams: int, lo: int, hi: int, children=None, used=None):
+    def __init__(self, fh, nrows: int, nparams: int, lo: int, hi: int, children=None):
         super().__init__(nrows, nparams)
         self.fh, self.lo, self.hi = fh, int(lo), int(hi)
         self.children = list(children or [])
         self.samples = self.hi - self.lo
         self._norms = None
-        self.layout = Layout(np.ones((nrows, nparams + 1), dtype=bool) if used is None else used)
-        for c in self.children:
-            c.layout = self.layout
-        self._perm: dict[bytes, np.ndarray] = {}
 
     def __repr__(self) -> str:
         return f"<SpilledRows samples {self.lo}-{self.hi} of {self.nrows} rows x {self.nparams} parameters (a file)>"
@@ -295,9 +254,6 @@ class SpilledRows(RowAccumulator):
     def stacked(self, weights):
         """The triangular factor of every row, row ``r`` scaled by ``weights[r]`` (cached per weighting).
 
-        Made in the columns' :class:`Layout` order, where each measured row's columns are a suffix
-        (the zeros before it skipped), then brought back to the parameters' order.
-
         Parameters
         ----------
         weights : ndarray, shape ``(m,)``
@@ -305,65 +261,26 @@ class SpilledRows(RowAccumulator):
 
         Returns
         -------
-        ndarray, shape ``(p + 1, p + 1)``
-            Read-only (rows past the rows' rank zero).
+        ndarray, shape ``(<= p + 1, p + 1)``
+            Read-only.
         """
         w = np.ascontiguousarray(weights, dtype=float).reshape(-1)
         hit = self._stacked.get(w.tobytes())
         if hit is not None:
             return hit
-        r = np.linalg.qr(self.stacked_in_layout(w)[:, self.layout.inverse], mode="r")
+        qr = StreamingQR(self.nparams + 1)
+        if self.children:
+            for c in self.children:
+                qr.add(c.stacked(w))
+        else:
+            for b in self.blocks():
+                qr.add((b * w[None, :, None]).reshape(-1, self.nparams + 1))
+        r = qr.r
         r.flags.writeable = False
         if len(self._stacked) >= self.STACK_CACHE:
             self._stacked.pop(next(iter(self._stacked)))
         self._stacked[w.tobytes()] = r
         return r
-
-    def stacked_in_layout(self, w: np.ndarray) -> np.ndarray:
-        """:meth:`stacked` in the layout's column order (cached per weighting; children's combined by TSQR).
-
-        Parameters
-        ----------
-        w : ndarray, shape ``(m,)``
-            Row weights.
-
-        Returns
-        -------
-        ndarray, shape ``(p + 1, p + 1)``
-            Upper triangular in the layout's columns.
-        """
-        key = w.tobytes()
-        if key not in self._perm:
-            if len(self._perm) >= self.STACK_CACHE:
-                self._perm.pop(next(iter(self._perm)))
-            if self.children:
-                parts = [c.stacked_in_layout(w) for c in self.children]
-                self._perm[key] = _triangle(np.linalg.qr(np.vstack(parts), mode="r"), self.nparams + 1)
-            else:
-                self._perm[key] = self._leaf_in_layout(w)
-        return self._perm[key]
-
-    def _leaf_in_layout(self, w: np.ndarray) -> np.ndarray:
-        """The samples' factor in the layout's order: measured rows fed in order, each step on its suffix only.
-
-        A step gathers at least as many rows as its suffix is wide (``STEP_ROWS`` at least): several
-        measured rows of a short log, or a row's samples a piece at a time in a long one.
-        """
-        p1, k, lay = self.nparams + 1, self.samples, self.layout
-        out = np.zeros((p1, p1))
-        r = 0
-        while r < self.nrows and k:
-            start = int(lay.starts[r])
-            width, step = p1 - start, max(p1 - int(lay.starts[r]), STEP_ROWS)
-            g = max(1, min(self.nrows - r, step // k))  # measured rows gathered (all their samples) ...
-            piece = k if g > 1 else max(1, step)  # ... or one row's samples a piece at a time
-            for s0 in range(0, k, piece):
-                s1 = min(k, s0 + piece)
-                block = self._rows(r, r + g, s0, s1)[:, :, lay.perm[start:]] * w[r:r + g][None, :, None]
-                both = np.vstack([out[start:, start:], block.reshape(-1, width)])
-                out[start:, start:] = _triangle(np.linalg.qr(both, mode="r"), width)
-            r += g
-        return out
 
     def _rows(self, r0: int, r1: int, s0: int = 0, s1: int | None = None) -> np.ndarray:
         """Measured rows ``[r0, r1)`` of samples ``[s0, s1)`` (relative to ``lo``), ``(s1 - s0, r1 - r0, p + 1)``."""
@@ -476,18 +393,16 @@ def spill(model, prep, cols: np.ndarray, memory_mb: float, folds: int):
     full_rate = prep.full.n_samples / max(prep.stride, 1)
     group = max(1, int(memory_mb * 1e6 // (4 * 8 * full_rate * p1)))
     tau = prep.tau[:, cols[model.row_states]]
-    used = np.zeros((m, p1), dtype=bool)
     for g in range(0, m, group):
         rows = np.arange(g, min(g + group, m))
         block = np.concatenate([group_rows(model, prep, cols, rows), tau[:, rows, None]], axis=2)
-        used[rows] = np.any(block != 0, axis=0)
         for s in range(count):  # sample-major: each sample's rows g .. g + group
             fh.seek((s * m + g) * p1 * 8)
             fh.write(np.ascontiguousarray(block[s]).tobytes())
     fh.flush()
     edges = fold_edges(count, folds)
     children = [SpilledRows(fh, m, p1 - 1, a, b) for a, b in zip(edges[:-1], edges[1:])]
-    out = SpilledRows(fh, m, p1 - 1, 0, count, children, used)
+    out = SpilledRows(fh, m, p1 - 1, 0, count, children)
     for x in [out, *children]:
         x.oversampling = prep.oversampling
     return out

@@ -34,6 +34,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``drng_scaling``  DRNG on random chains and trees of N = 10 .. 10000 bodies.
 * ``size_sweep``    ``baseparams analyze FILE --floating --json`` on random floating trees (URDF) of
                     N = 10 .. 10000 links: wall time, peak memory, status, nullity.
+* ``large_inputs``  issue 51: ``identify`` of a 220-link random chain (paper convention, 500 samples) and of a
+                    10^6-sample 100 kHz Puma560 log, fresh processes: wall, peak memory, the log's arrays.
 * ``scale_trees``   issue 41: ``baseparams analyze --floating`` (certified, fresh processes) on chains, random deep
                     trees and wide random trees of N = 100, 1 000, 10 000 bodies: wall, peak RSS, nullity, and
                     the exponent of the curve between 1 000 and 10 000.
@@ -1371,7 +1373,50 @@ def bench_payload(out: dict, quick: bool) -> None:
     out.update(payload.run(quick, log))
 
 
+_CHAIN = """
+import sys, numpy as np, baseparams as bp
+from baseparams.robots import random_robot
+n, log, what = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+robot = random_robot(np.random.default_rng(n), n, "R", branching=0.0)
+if what == "simulate":
+    bp.simulate(robot, duration=5.0, rate=100.0, noise=0.1, convention="paper", out=log)
+else:
+    res = bp.identify(robot, log, convention="paper")
+    print(res.fit.estimate.covariance.split(",")[0], res.model.n_params)
+"""
+
+
+def bench_large_inputs(out: dict, quick: bool) -> None:
+    """Issue 51: ``identify`` of a random chain (``robots.random_robot``, paper convention, 500 samples at 100 Hz;
+    220 links, quick 60) and of a 10^6-sample 100 kHz Puma560 log (quick 10^5 at 10 kHz), each in a fresh process:
+    wall time, peak resident memory and, for the log, its arrays' size."""
+    import subprocess
+    import tempfile
+
+    n = 60 if quick else 220
+    rate, duration = (10000, 10) if quick else (100000, 10)
+    with tempfile.TemporaryDirectory() as tmp:
+        chain = str(Path(tmp) / f"chain{n}.csv")
+        subprocess.run([sys.executable, "-c", _CHAIN, str(n), chain, "simulate"], check=True, capture_output=True)
+        log(f"  identify chain{n} (paper convention, 500 samples) ...")
+        wall, mb, code, text = run_measured([sys.executable, "-c", _CHAIN, str(n), chain, "identify"])
+        key = f"large_chain{n}"
+        out[f"{key}_identify_s"], out[f"{key}_identify_peak_mb"], out[f"{key}_identify_exit"] = wall, mb, code
+        log(f"  chain{n}: {wall:.1f} s, {mb:.0f} MB, exit {code}, {text.strip()}")
+        fast = str(Path(tmp) / "fast.npz")
+        subprocess.run([sys.executable, "-m", "baseparams", "simulate", "puma560", fast, "--duration", str(duration),
+                        "--rate", str(rate), "--noise", "0.05"], check=True, capture_output=True)
+        with np.load(fast) as z:
+            size = sum(z[k].nbytes for k in z.files) / 1e6
+        wall, mb, code, _ = run_measured([sys.executable, "-m", "baseparams", "identify", "puma560", fast, "--json"])
+        key = f"large_log_{rate // 1000}khz"
+        out[f"{key}_s"], out[f"{key}_peak_mb"], out[f"{key}_exit"], out[f"{key}_arrays_mb"] = wall, mb, code, size
+        out[f"{key}_peak_over_arrays"] = mb / size
+        log(f"  {rate // 1000} kHz log ({size:.0f} MB of arrays): {wall:.1f} s, {mb:.0f} MB, exit {code}")
+
+
 GROUPS: dict[str, Callable[[dict, bool], None]] = {
+    "large_inputs": bench_large_inputs,
     "payload": bench_payload,
     "cross_recording": bench_cross_recording,
     "generalization": bench_generalization,

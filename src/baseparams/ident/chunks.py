@@ -66,6 +66,34 @@ class ChunkPlan:
     __repr__ = summary_repr
 
 
+#: owned samples of a window, at least, in overlaps (:func:`overlap`): each sample is then read, filtered and
+#: evaluated at most ``1 + 2 / MIN_OWNED_MARGINS`` times; a window is at least ``MIN_OWNED_MARGINS + 2`` overlaps
+#: long. Was 4 (6 overlaps: a 100 kHz log's 1.2 million-sample windows, 1.35 GB); 1 bounds a window to 3 overlaps
+#: (12 cutoff periods each: a time, whatever the rate) for three times the filtering of the fewest windows
+MIN_OWNED_MARGINS = 1
+
+
+def sample_bytes(model, stride: int = 1) -> float:
+    """Bytes one window sample costs at its peak (the regressor at the stride, the full-rate signals and their copies).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model (``m`` measured rows, ``p`` columns).
+    stride : int
+        The regressor's stride (evaluated at one sample in ``stride``).
+
+    Returns
+    -------
+    float
+        ``8 m p 4 / stride + 8 x 16 m``: the regressor with ~4 copies in the filter, the window's
+        signals, their filtered copies, rates and columns (:func:`window_states`; measured on a
+        100 kHz Panda log's 600 000-sample windows: 0.75 kB per sample with the window itself for
+        ``m = 7``, ``p = 64``, stride 200, where all joints filtered together took 1.2 kB).
+    """
+    return len(model.coords) * model.n_params * 8 * 4 / stride + 8 * 16 * len(model.coords)
+
+
 def window_size(model, memory_mb: float, margin: int, stride: int = 1) -> int:
     """Owned samples per window so that one window's regressor and its filter's copies fit in ``memory_mb``.
 
@@ -83,12 +111,41 @@ def window_size(model, memory_mb: float, margin: int, stride: int = 1) -> int:
     Returns
     -------
     int
-        At least ``4 margin``: the regressor ``8 m p / stride`` bytes per sample with ~4 copies in
-        the filter, the full-rate signals, their filtered copies, rates and columns ``8 x 32 m``
-        (measured on a Puma log: ~2.5 kB per sample for ``m = 6``, ``p = 58``, stride 9).
+        At least ``MIN_OWNED_MARGINS x margin`` (the floor, :func:`floor_note` says when the budget
+        is then exceeded), else as many as :func:`sample_bytes` allows within the budget.
     """
-    per_sample_mb = (len(model.coords) * model.n_params * 8 * 4 / stride + 8 * 32 * len(model.coords)) / 1e6
-    return max(4 * margin, int(memory_mb / per_sample_mb) - 2 * margin)
+    per_sample_mb = sample_bytes(model, stride) / 1e6
+    return max(MIN_OWNED_MARGINS * margin, 1, int(memory_mb / per_sample_mb) - 2 * margin)
+
+
+def floor_note(model, memory_mb: float, margin: int, size: int, stride: int = 1, samples: int | None = None):
+    """A WARNING note when the windows, at their floor, need more than ``memory_mb`` (None when they fit).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+    memory_mb : float
+        The budget [MB] the windows were sized for.
+    margin, size : int
+        The windows' overlap and owned samples (:func:`window_size`).
+    stride : int
+        The regressor's stride.
+    samples : int, optional
+        Samples of the log (a shorter log's one window is its own length).
+
+    Returns
+    -------
+    str or None
+        One line: the floor, the memory a window needs, and what would lower it.
+    """
+    total = size + 2 * margin if samples is None else min(size + 2 * margin, samples)
+    need = total * sample_bytes(model, stride) / 1e6
+    if need <= memory_mb:
+        return None
+    return (f"memory: WARNING, memory_mb {memory_mb:g} MB cannot be met: a window is at least {total} samples (its "
+            f"{margin}-sample filter overlaps, 12 cutoff periods, on both sides of {size} owned), about {need:.0f} MB "
+            f"(memory_mb {math.ceil(need):d} or more to stay within it; a higher cutoff shortens the overlaps)")
 
 
 def plan(n: int, chunk: int, margin: int) -> list[ChunkPlan]:
@@ -283,9 +340,7 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, model, cols: np.ndarray
         if index_out is not None:
             index_out.append(idx + c.lo)
         return None, None, {}
-    prep = prepare(part, cutoff=grid.cutoff, decimate=1)
-    f = prep.full
-    q, dq, ddq = f.q[:, cols], f.dq[:, cols], f.ddq[:, cols]
+    design, q, dq, ddq, tau_full = window_states(part, grid.cutoff, cols)
     r = grid.stride
     removed = {}
     if grid.min_speed is not None:
@@ -293,8 +348,53 @@ def chunk_rows(part: JointLog, c: ChunkPlan, grid: Grid, model, cols: np.ndarray
         idx = idx[keep]
     if index_out is not None:
         index_out.append(idx + c.lo)
-    a = parallel_rows(model, q, dq, ddq, prep.design, idx, r, (grid.pad - c.lo) % r, backend)  # the whole log's phase
-    return a, f.tau[idx][:, cols if rows is None else cols[rows]], removed
+    a = parallel_rows(model, q, dq, ddq, design, idx, r, (grid.pad - c.lo) % r, backend)  # the whole log's phase
+    return a, tau_full[idx][:, slice(None) if rows is None else rows], removed
+
+
+def window_states(part: JointLog, cutoff: float, cols: np.ndarray):
+    """A window's full-rate filtered states, :func:`prepare`'s, a few joints at a time when the window is long.
+
+    :func:`~baseparams.ident.preprocess.prepare` filters and differentiates each column on its own,
+    so preparing a few joints' columns at a time gives its arrays (the same arithmetic per column)
+    with the filter's copies of those joints only: a 100 kHz log's 600 000-sample window filtered
+    its 28 columns together (0.9 GB at the peak).
+
+    Parameters
+    ----------
+    part : JointLog
+        The window's samples (uniform).
+    cutoff : float
+        The low-pass cutoff [Hz].
+    cols : ndarray of int, shape ``(state_columns,)``
+        Log column of each state column.
+
+    Returns
+    -------
+    design : LowPass
+        The full-rate low-pass.
+    q, dq, ddq : ndarray, shape ``(S, state_columns)``
+        Filtered states of the state columns.
+    tau : ndarray, shape ``(S, state_columns)``
+        Filtered torques of the state columns.
+    """
+    cols = np.asarray(cols, dtype=int)
+    group = max(1, FILTER_VALUES // max(part.n_samples, 1))  # joints prepared at once: all of them on a short window
+    if group >= len(part.joints):
+        f = (prep := prepare(part, cutoff=cutoff, decimate=1)).full
+        return prep.design, f.q[:, cols], f.dq[:, cols], f.ddq[:, cols], f.tau[:, cols]
+    out = [np.empty((part.n_samples, len(cols))) for _ in range(4)]
+    design = None
+    for k in range(0, len(cols), group):
+        sub = cols[k:k + group]
+        picked = {x: None if getattr(part, x) is None else getattr(part, x)[:, sub] for x in ("q", "tau", "dq", "ddq")}
+        prep = prepare(replace(part, joints=tuple(part.joints[j] for j in sub), cur=None, **picked), cutoff=cutoff,
+                       decimate=1)
+        design = prep.design
+        for o, x in zip(out, (prep.full.q, prep.full.dq, prep.full.ddq, prep.full.tau)):
+            o[:, k:k + group] = x
+        del prep
+    return (design, *out)
 
 
 def parallel_rows(model, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, design: LowPass, idx: np.ndarray,
@@ -367,6 +467,9 @@ def prepared_rows(model, prep, cols: np.ndarray) -> np.ndarray:
 FILTER_COLUMNS = 64
 #: ... or as many as make this many values
 FILTER_VALUES = 1 << 20
+#: ... but fewer than FILTER_COLUMNS (down to one) when those would make more than this many times FILTER_VALUES
+#: (a long window's full-rate columns: 64 columns of 1.2 million samples were 0.6 GB per copy)
+FILTER_LONG = 8
 
 
 def filtered_rows(x: np.ndarray, design: LowPass, idx: np.ndarray) -> np.ndarray:
@@ -374,8 +477,9 @@ def filtered_rows(x: np.ndarray, design: LowPass, idx: np.ndarray) -> np.ndarray
 
     Each column is filtered on its own, so the result is the whole array's; the filter's padded
     and intermediate copies are those of :data:`FILTER_VALUES` values (at least
-    :data:`FILTER_COLUMNS` columns), not of the whole regressor. A column zero at every sample (a
-    tree's regressor is zero where a joint does not carry a body) filters to zero: not filtered.
+    :data:`FILTER_COLUMNS` columns, but for a long window's, :data:`FILTER_LONG`), not of the whole
+    regressor. A column zero at every sample (a tree's regressor is zero where a joint does not
+    carry a body) filters to zero: not filtered.
 
     Parameters
     ----------
@@ -394,7 +498,8 @@ def filtered_rows(x: np.ndarray, design: LowPass, idx: np.ndarray) -> np.ndarray
     flat = x.reshape(len(x), -1)
     out = np.zeros((len(idx), flat.shape[1]))
     live = np.flatnonzero(np.any(flat != 0, axis=0))  # a column zero at every sample filters to zero
-    step = max(FILTER_COLUMNS, FILTER_VALUES // max(len(flat), 1))
+    per_call = FILTER_VALUES // max(len(flat), 1)  # a long window: fewer columns, down to one at a time
+    step = max(per_call, 1 if len(flat) * FILTER_COLUMNS > FILTER_LONG * FILTER_VALUES else FILTER_COLUMNS)
     for k in range(0, len(live), step):
         c = live[k:k + step]
         out[:, c] = zero_phase(flat[:, c], design)[idx]
@@ -417,3 +522,51 @@ def combine(parts) -> RowAccumulator:
     from .estimate import RowAccumulator
 
     return RowAccumulator.combine(parts)
+
+
+def fold_edges(count: int, folds: int) -> np.ndarray:
+    """The blocked cross-validation's fold boundaries over ``count`` samples, without an array of them.
+
+    The boundaries of ``np.array_split(np.arange(count), folds)`` (the in-memory path's folds: the
+    first ``count % folds`` folds one sample longer), computed from the two integers alone.
+
+    Parameters
+    ----------
+    count : int
+        Samples split.
+    folds : int
+        Number of consecutive folds.
+
+    Returns
+    -------
+    ndarray of int, shape ``(folds + 1,)``
+        ``0``, the end of each fold, ``count`` last.
+    """
+    size, extra = divmod(int(count), int(folds))
+    return np.cumsum([0] + [size + 1] * extra + [size] * (folds - extra))
+
+
+def scratch_file(mb: float, prefix: str):
+    """An unnamed temporary file (deleted when closed or at exit), or None when the temporary folder lacks ``2 mb`` MB.
+
+    Parameters
+    ----------
+    mb : float
+        What will be written [MB].
+    prefix : str
+        The file's name prefix.
+
+    Returns
+    -------
+    file object or None
+        Open for binary reading and writing; None when there is no room or it cannot be created.
+    """
+    import shutil
+    import tempfile
+
+    try:
+        if shutil.disk_usage(tempfile.gettempdir()).free < 2 * mb * 1e6:
+            return None
+        return tempfile.TemporaryFile(prefix=prefix)
+    except OSError:
+        return None

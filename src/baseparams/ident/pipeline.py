@@ -508,7 +508,8 @@ def _uncertainty(f: Fit, acc, kept, prep, train, cols, opts: IdentOptions, say):
 
     if opts.covariance == "hac":
         say("covariance (HAC: a second pass over the fitted rows)")
-    rows = kept if kept else (lambda: fitted_rows(f.model, prep, cols, opts.memory_mb, train, opts.min_speed))
+    rows = kept if kept else getattr(acc, "fitted_blocks", None) or (
+        lambda: fitted_rows(f.model, prep, cols, opts.memory_mb, train, opts.min_speed))
     return apply_covariance(f, acc, rows, opts.covariance, prep.design.fs / prep.factor)
 
 

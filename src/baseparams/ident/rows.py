@@ -138,6 +138,9 @@ def _accumulated(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, lo
     from .estimate import RowAccumulator
 
     full = prep.full
+    spilled = _spilled(model, prep, cols, memory_mb, parts_out)
+    if spilled is not None:
+        return spilled
     size_mb = full.n_samples / prep.stride * len(model.coords) * model.n_params * 8 / 1e6
     if size_mb <= memory_mb or log is None:
         from . import chunks
@@ -175,5 +178,28 @@ def _accumulated(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, lo
         parts_out.extend(fold_parts(np.concatenate([x for x, _ in held]), np.concatenate([y for _, y in held])))
     elif parts_out is not None:
         parts_out.extend(parts)  # blocks at chunk boundaries (the fitted rows do not fit in memory_mb)
+    floor = chunks.floor_note(model, memory_mb, margin, size, prep.stride, full.n_samples)
     return chunks.combine(parts), (f"parallel filtering in {len(parts)} chunks of {size} samples with "
-                                   f"{margin}-sample overlaps (equal to the whole log's to rounding)")
+                                   f"{margin}-sample overlaps (equal to the whole log's to rounding)"
+                                   + (f"; {floor}" if floor else ""))
+
+
+def _spilled(model: IdentModel, prep, cols: np.ndarray, memory_mb: float, parts_out):
+    """A large model's rows written to a temporary file (:mod:`.spilled`), or None: held in memory.
+
+    The whole's accumulator and its note; the cross-validation's folds appended to ``parts_out``.
+    """
+    from . import spilled
+    from .select import FOLDS
+
+    if not spilled.spills(model, prep.n_samples, memory_mb):
+        return None
+    acc = spilled.spill(model, prep, cols, memory_mb, FOLDS)
+    if acc is None:  # no room on the disk: held in memory, as before
+        return None
+    if parts_out is not None:
+        parts_out.extend(acc.children)
+    held = spilled.factor_mb(model, prep.n_samples)
+    return acc, (f"parallel filtering: the regressor's {model.n_params} columns filtered like the torques, a few of "
+                 f"the {len(model.coords)} measured rows at a time; the fitted rows ({held:.0f} MB of row factors, "
+                 f"more than memory_mb) held in a temporary file and read back a block at a time")

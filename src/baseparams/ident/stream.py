@@ -57,6 +57,7 @@ from ..interrupts import Interrupts
 from ..jointlog import JointLog
 from . import chunks
 from . import preprocess as pp
+from .chunks import fold_edges, scratch_file
 from .plausibility import check_rate
 
 
@@ -543,7 +544,8 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
     r, r_note = pp.regressor_stride(k, tr.rate, design)
     margin = chunks.overlap(design)
     size = chunks.window_size(model, memory_mb, margin, r)
-    notes += [design.note, *rate_notes, k_note, r_note, pp.EDGE_NOTE]
+    floor = chunks.floor_note(model, memory_mb, margin, size, r, tr.n)
+    notes += [design.note, *rate_notes, k_note, r_note, pp.EDGE_NOTE, *([floor] if floor else [])]
     return Plan(design, k, chunks.Grid(tr.n, 0, k, design.cutoff, min_speed, stride=r), margin, size,
                 tuple(notes))
 
@@ -604,28 +606,6 @@ def fitted(stream, plan: Plan, model, cols: np.ndarray):
             yield np.empty(0), None, None, removed, idx[0]
 
 
-def fold_edges(count: int, folds: int) -> np.ndarray:
-    """The blocked cross-validation's fold boundaries over ``count`` samples, without an array of them.
-
-    The boundaries of ``np.array_split(np.arange(count), folds)`` (the in-memory path's folds: the
-    first ``count % folds`` folds one sample longer), computed from the two integers alone.
-
-    Parameters
-    ----------
-    count : int
-        Samples split.
-    folds : int
-        Number of consecutive folds.
-
-    Returns
-    -------
-    ndarray of int, shape ``(folds + 1,)``
-        ``0``, the end of each fold, ``count`` last.
-    """
-    size, extra = divmod(int(count), int(folds))
-    return np.cumsum([0] + [size + 1] * extra + [size] * (folds - extra))
-
-
 def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, spill: bool = True):
     """Pass 3: the row factors, in the blocked cross-validation's folds, and the fitted rows if they fit.
 
@@ -681,32 +661,6 @@ def accumulate(stream, plan: Plan, model, cols: np.ndarray, memory_mb: float, sp
             kept.close()
         raise
     return parts, kept, slow
-
-
-def scratch_file(mb: float, prefix: str):
-    """An unnamed temporary file (deleted when closed or at exit), or None when the temporary folder lacks ``2 mb`` MB.
-
-    Parameters
-    ----------
-    mb : float
-        What will be written [MB].
-    prefix : str
-        The file's name prefix.
-
-    Returns
-    -------
-    file object or None
-        Open for binary reading and writing; None when there is no room or it cannot be created.
-    """
-    import shutil
-    import tempfile
-
-    try:
-        if shutil.disk_usage(tempfile.gettempdir()).free < 2 * mb * 1e6:
-            return None
-        return tempfile.TemporaryFile(prefix=prefix)
-    except OSError:
-        return None
 
 
 def read_floats(fh, shape: tuple, what: str) -> np.ndarray:
@@ -1199,6 +1153,9 @@ def _passes(robot, stream, o, validating: bool, say):
     band = pp.excitation_bandwidth(tr.sub.q[:, cols], tr.rate / tr.step)
     unit_notes = [*unit_notes, *check_rate(stream.source, band, (tr.n - 1) / tr.rate, tr.rate, plan.design.cutoff,
                                            o.cutoff is not None, o.allow_units)]
+    for note in plan.notes:
+        if note.startswith("memory: WARNING"):
+            say(note)  # on stderr before the pass that needs it, not only in the report
     say(f"accumulating the regressor of {plan.fitted_count()} samples ({model.n_params} parameters; pass 3, "
         f"windows of {plan.size} + 2 x {plan.margin} samples)")
     parts, kept, slow = accumulate(stream, plan, model, cols, o.memory_mb, spill=o.covariance == "hac")

@@ -137,6 +137,30 @@ def test_identification_beyond_the_memory_is_refused_in_one_line(puma_log, monke
     assert "GB of memory" in line and "GB are available" in line and "--joints" in line
 
 
+@pytest.mark.slow
+def test_the_default_leaves_the_physical_fit_out_of_a_large_model_and_says_so(tmp_path, monkeypatch):
+    """Above PHYSICAL_AUTO_PARAMS the default does not solve the conic program once per block (minutes, gigabytes on a
+    220-link chain): least squares with the file's prior, one line saying why; --method physical still fits it."""
+    from baseparams.ident import fitting, physical
+
+    puma_log = str(tmp_path / "long.csv")  # blocks long enough for cross-validation to weigh the physical fit
+    bp.simulate("puma560", duration=20.0, rate=200.0, noise=0.05, seed=2, out=puma_log)
+
+    calls = []
+    real = physical.physical_fit
+    monkeypatch.setattr(physical, "physical_fit", lambda *a, **k: calls.append(1) or real(*a, **k))
+    before = bp.identify("puma560", puma_log)
+    assert calls and not any("physically consistent fit not tried" in n for n in before.notes)
+    calls.clear()
+    monkeypatch.setattr(fitting, "PHYSICAL_AUTO_PARAMS", before.fit.model.n_params - 1)
+    res = bp.identify("puma560", puma_log)
+    assert not calls and res.fit.physical is None and res.fit.selection.estimator != "physical"
+    line = [n for n in res.notes if "physically consistent fit not tried" in n]
+    assert len(line) == 1 and f"{res.fit.model.n_params} parameters" in line[0] and "--method physical" in line[0]
+    forced = bp.identify("puma560", puma_log, method="physical")
+    assert calls and forced.fit.physical is not None
+
+
 def test_identification_beyond_the_work_allowed_is_refused_in_one_line(puma_log, monkeypatch):
     """Dense work beyond the limit: refused at once; the drive terms named as a help only when there are some."""
     monkeypatch.setattr(ident_model_module, "MAX_FLOPS", 1e3)

@@ -168,6 +168,8 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
         acc = _with_drive_prior_rows(model, acc)
         first = ols(acc, model.names)
     est = first if method == "ols" else wls(acc, model.names, first)
+    if method == "auto" and estimator is None and physical_left_out(model):
+        estimator = "least squares"
     if method == "auto" and rule == "structure":
         return _structural(model, est, acc, prior_weight, estimator)
     if method == "auto":
@@ -185,6 +187,33 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     phys = physical_fit(est.R11, est.r12, model.full_map(), model.robot, model.drives.param_kinds,
                         mass_bounds=mass_bounds, **kwargs)
     return Fit(model, method, phys.theta, est, phys)
+
+
+#: the default (``auto``) does not try the physically consistent fit on models of more parameters than this: its
+#: conic program (cvxpy/Clarabel, a dense ``p x p`` objective) is solved once per cross-validation block and
+#: once more, and costs ~p^3 per iteration (a 220-link chain, 2 196 parameters: ~250 s and ~2 GB of the
+#: identification's 910 s and 2.6 GB; a 60-link chain, 660, ~5 s); ``method="physical"`` still fits it
+PHYSICAL_AUTO_PARAMS = 1200
+
+
+def physical_left_out(model: IdentModel) -> str | None:
+    """Why the default estimate does not try the physically consistent fit on this model (None: it does).
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model.
+
+    Returns
+    -------
+    str or None
+        One line for the report (:data:`PHYSICAL_AUTO_PARAMS`), or None.
+    """
+    if model.n_params <= PHYSICAL_AUTO_PARAMS:
+        return None
+    return (f"default estimate: the physically consistent fit not tried ({model.n_params} parameters, more than "
+            f"{PHYSICAL_AUTO_PARAMS}: its conic program, once per cross-validation block, would take minutes and "
+            f"gigabytes); least squares with the model file's prior instead (--method physical fits it)")
 
 
 def _plain_refusal(model: IdentModel, exc: BaseparamsError, method: str) -> BaseparamsError:

@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..numerics import blas_threads
-from .fitting import Fit, fit, pulled_covariance, residual_rms
+from .fitting import Fit, fit, physical_left_out, pulled_covariance, residual_rms
 from .model import IdentModel, model_for
 from .notes import check_log_units, drive_notes, floating_notes, model_notes, rotor_note, term_note
 from .options import IdentOptions, options_of
@@ -180,7 +180,9 @@ def assemble(f: Fit, acc, opts: IdentOptions, account: Account, train: dict, val
     model = f.model
     notes = (*account.data, account.rows, *model_notes(model), *floating_notes(model.robot), *account.terms,
              *drive_notes(f, acc), *(f.physical.notes if f.physical is not None else ()),
-             *((f.selection.note(),) if f.selection is not None else ()), account.covariance, *account.units,
+             *((f.selection.note(),) if f.selection is not None else ()),
+             *((physical_left_out(model),) if opts.method == "auto" and physical_left_out(model) else ()),
+             account.covariance, *account.units,
              *(("rotor inertia (rotor=auto): not tried on this path (several recordings, or a log streamed from its "
                 "file); --rotor forces it",) if isinstance(opts.rotor, str)
                and not any(c.name == "rotor" for c in f.term_choices) else ()))

@@ -35,7 +35,7 @@ def short_log(puma, tmp_path_factory):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_window_states_are_prepares_arrays_joint_by_joint(puma, seed, monkeypatch):
-    """Preparing a window a few joints at a time gives :func:`prepare`'s full-rate arrays exactly (with measured
+    """Preparing a window a few joints at a time gives :func:`prepare`'s full-rate arrays to rounding (with measured
     rates or without, any grouping of the columns, any order of the state columns)."""
     rng = np.random.default_rng(seed)
     log, _ = simulate_log(puma, duration=float(rng.uniform(3, 8)), rate=float(rng.uniform(150, 400)), noise=0.1,
@@ -49,7 +49,9 @@ def test_window_states_are_prepares_arrays_joint_by_joint(puma, seed, monkeypatc
     design, q, dq, ddq, tau = chunks.window_states(log, cutoff, cols)
     assert design.cutoff == cutoff
     for got, want in ((q, whole.q), (dq, whole.dq), (ddq, whole.ddq), (tau, whole.tau)):
-        assert np.array_equal(got, want[:, cols])
+        # to rounding: the end extension's polynomial is a matrix product whose last bits depend on how many
+        # columns are filtered together (x the derivatives' gain: 1e-11 relative seen on derived accelerations)
+        np.testing.assert_allclose(got, want[:, cols], rtol=1e-8, atol=1e-9 * np.abs(want).max())
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -233,7 +233,8 @@ def compare_truth(names, values, std, truth: dict, source: str = "truth") -> dic
     BaseparamsError
         A truth that does not fit :data:`baseparams.schema.TRUTH` (no ``parameters``, a value
         that is not a finite number, a name given twice), or naming parameters the model does not
-        have (or lacking some it has): another ``--friction``/``--rotor``/``--convention``.
+        have (or lacking some it has): another ``--friction``/``--rotor``/``--convention``. Rotor inertia
+        the truth lacks (``Ia_``, ``Iam_``: a simulation without it) is compared with 0.
     """
     from .. import schema
 
@@ -245,6 +246,9 @@ def compare_truth(names, values, std, truth: dict, source: str = "truth") -> dic
     names = list(names)
     extra = [n for n in true if n not in names]
     missing = [n for n in names if n not in true]
+    for n in [n for n in missing if n.startswith(("Ia_", "Iam_"))]:  # rotor inertia the data kept (rotor="auto")
+        true[n] = 0.0  # a simulation without rotor inertia writes none: its true value is 0
+    missing = [n for n in missing if n not in true]
     if extra or missing:
         what = ", ".join(f"{k} {v[:4]}" + (" ..." if len(v) > 4 else "")
                          for k, v in (("not identified:", extra), ("not in the truth:", missing)) if v)

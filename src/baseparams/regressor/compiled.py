@@ -409,12 +409,11 @@ def edge_extended(flat: np.ndarray, pad: int, curved: bool = True) -> np.ndarray
         j = np.arange(1, pad + 1)
         half = pad // 2
         taper = np.where(j <= half, 1.0, 0.5 * (1.0 + np.cos(np.pi * (j - half) / max(pad - half, 1))))
-        powers = taper[:, None] * k[1:, None] ** even[None, :]  # (pad, even terms)
-        ext[:pad] += 2 * (powers @ (fit[even] @ flat[:w]))[::-1]
-        ext[pad + s:] += 2 * powers @ (fit[even] @ flat[-1:-(w + 1):-1])
-        # odd about the polynomial's value at the end, not the end sample's (its noise doubled into every extended one)
-        ext[:pad] += 2 * (fit[0] @ flat[:w] - flat[0])
-        ext[pad + s:] += 2 * (fit[0] @ flat[-1:-(w + 1):-1] - flat[-1])
+        terms = np.r_[0, even]  # odd about the polynomial's value at the end c0 (not the end sample: its noise
+        # doubled into every extended one), plus the even terms tapered
+        powers = np.column_stack([np.ones(pad), taper[:, None] * k[1:, None] ** even[None, :]])  # (pad, 1 + even)
+        ext[:pad] = 2 * (powers @ (fit[terms] @ flat[:w]))[::-1] - flat[pad:0:-1]
+        ext[pad + s:] = 2 * powers @ (fit[terms] @ flat[-1:-(w + 1):-1]) - flat[-2:-(pad + 2):-1]
     return ext
 
 

@@ -47,9 +47,10 @@ def test_strided_rows_equal_the_full_rate_rows(seed):
     smooth = scale > 0
     smooth[rr, cc] = False
     assert np.max(err[smooth] / scale[smooth]) < 1e-4
-    # stride 1 is the full rate's definition exactly
+    # stride 1 is the full rate's definition, to rounding (the end extension's polynomial is a matrix product whose
+    # last bits depend on how many columns are filtered together)
     one = chunks.prepared_rows(model, replace(prep, stride=1), cols)
-    np.testing.assert_array_equal(one, oracle)
+    np.testing.assert_allclose(one, oracle, rtol=1e-12, atol=1e-13 * np.abs(oracle).max())
 
 
 @pytest.mark.parametrize("seed", range(3))

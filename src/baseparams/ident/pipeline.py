@@ -178,10 +178,11 @@ def assemble(f: Fit, acc, opts: IdentOptions, account: Account, train: dict, val
         The result.
     """
     model = f.model
+    left_out = physical_left_out(model) if opts.method == "auto" else None
     notes = (*account.data, account.rows, *model_notes(model), *floating_notes(model.robot), *account.terms,
              *drive_notes(f, acc), *(f.physical.notes if f.physical is not None else ()),
              *((f.selection.note(),) if f.selection is not None else ()),
-             *((physical_left_out(model),) if opts.method == "auto" and physical_left_out(model) else ()),
+             *((left_out,) if left_out else ()),
              account.covariance, *account.units,
              *(("rotor inertia (rotor=auto): not tried on this path (several recordings, or a log streamed from its "
                 "file); --rotor forces it",) if isinstance(opts.rotor, str)

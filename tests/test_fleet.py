@@ -227,3 +227,40 @@ def test_a_fleet_log_in_degrees_is_refused_unless_allow_units_and_then_said(tmp_
     assert len(info["warnings"]) == 1 and "units: WARNING" in info["warnings"][0]
     _, plain = file_factors(str(path), model)
     assert plain["warnings"] == []
+
+
+@pytest.mark.slow
+def test_a_fleet_says_rotor_inertia_and_terms_are_not_tried_and_rotor_forces_it(client, tmp_path, capsys):
+    """A fleet fits one model to every log from its row factors: ``rotor="auto"`` and ``terms="auto"`` (identify's
+    defaults) are not tried, each said in one note of the text and the JSON; ``--rotor`` fits rotor inertia on every
+    log (no note), a model given with its rotor columns needs no note, and a forced term is refused in one line."""
+    import json
+
+    from baseparams.cli import main
+    from baseparams.errors import BaseparamsError
+    from baseparams.ident.model import model_for
+    from baseparams.ident.options import IdentOptions
+
+    robot = baseparams.load("puma560")
+    paths = simulate_fleet(robot, tmp_path, robots=2, duration=4.0, rate=200.0, seed=6)
+    argv = ["identify", "puma560", str(tmp_path / "*.npz"), "--per-file", "--pooled", "--scheduler",
+            client.scheduler.address]
+    assert main(argv) == 0
+    text = capsys.readouterr().out.splitlines()
+    rotor = [ln for ln in text if ln.startswith("note: rotor inertia (rotor=auto): not tried for a fleet of logs")]
+    terms = [ln for ln in text if ln.startswith("note: model terms (terms=auto): not tried for a fleet of logs")]
+    assert len(rotor) == 1 and "so the model has none; --rotor fits it" in rotor[0] and len(terms) == 1, text
+    assert main([*argv, "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert [f"note: {n}" for n in j["notes"]] == rotor + terms
+    assert not any(n.startswith("Ia") for n in j["names"])
+    assert main([*argv, "--rotor", "--terms", "none", "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["notes"] == [] and sum(n.startswith("Ia") for n in j["names"]) == 4  # joints 1-2 regroup
+    with_rotor = identify_fleet(model_for(robot, IdentOptions(rotor=True)), paths, client=client)  # options: defaults
+    assert len(with_rotor.notes) == 1 and with_rotor.notes[0].startswith("model terms (terms=auto)")
+    with pytest.raises(BaseparamsError, match="terms=dahl applies to one log or several recordings"):
+        identify_fleet(with_rotor.model, paths, client=client, terms="dahl")
+    assert main([*argv, "--terms", "dahl"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("baseparams: error: --terms dahl applies to one log"), err

@@ -49,7 +49,7 @@ def test_the_default_cross_validates_with_each_recording_one_block():
     res = identify(robot, [a, b, c])
     sel = res.to_json()["selection"]
     assert sel["rule"] == "recordings" and sel["folds"] == 3
-    assert any("each recording one block" in n for n in res.notes)
+    assert any("each recording one fold" in n for n in res.notes)
     assert any(n.startswith("several recordings: 3") for n in res.notes)
     # one recording alone: its blocks are pieces of one motion (5 s, too short: the structure rule)
     one = identify(robot, a).to_json()["selection"]
@@ -117,3 +117,27 @@ def test_several_recordings_refused_alike_by_both_doors(tmp_path, capsys):
         baseparams.identify("puma560", [])
     one = baseparams.identify("puma560", paths[:1], method="ols", terms="none")
     assert "recordings" not in one.train and one.samples["read"] == 300
+
+
+@pytest.mark.slow
+def test_the_report_names_the_folds_as_they_were():
+    """Several recordings: the report's heading, the terms' and the default's notes name each recording one fold, and
+    nothing says "blocked cross-validation" (a selection of another method, without the default's rule, too); one
+    log long enough for the terms still says blocked cross-validation (its contiguous blocks)."""
+    from baseparams.ident.report import format_identification
+
+    robot = baseparams.load("puma560")
+    a, b = _logs(robot, [4, 5], seconds=5.0)
+    for method in ("auto", "ols"):  # ols: no default's selection, the terms' folds still the recordings
+        two = identify(robot, [a, b], method=method)
+        text, j = format_identification(two), two.to_json()
+        assert "model terms (cross-validation with each recording one fold):" in text, (method, text)
+        assert "blocked" not in text and not any("blocked" in n for n in j["notes"]), method
+        assert any(n.startswith("model terms (cross-validation with each recording one fold") for n in j["notes"])
+        assert (j["selection"] or {}).get("rule", "recordings") == "recordings"
+        if method == "auto":
+            assert "chosen by 2-fold cross-validation with each recording one fold" in text
+    one = identify(robot, _logs(robot, [6], seconds=14.0)[0], rotor=False)
+    text = format_identification(one)
+    assert one.to_json()["selection"]["rule"] == "blocks" and one.fit.term_choices
+    assert "model terms (blocked cross-validation on the training data):" in text and "each recording" not in text

@@ -78,3 +78,37 @@ def test_rotor_is_tried_given_the_terms_and_not_kept_for_a_sensor_effect():
     assert not c["kept"] and "cross-validated RMS" in c["why"], c
     assert not any(n.startswith("Ia") for n in res.fit.model.names)
     assert {t.name for t in res.fit.terms} >= {"scale"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("run", ["recordings", "stream"])
+def test_a_run_that_does_not_try_rotor_inertia_says_so_and_rotor_forces_it(run, tmp_path, capsys):
+    """Several recordings and a log streamed from its file do not try ``rotor="auto"``: one note in the text and the
+    JSON says which run, that the model has none and which flag fits it; ``--rotor`` fits it (the planted rotor
+    inertia then lowers the training RMS) and ``--no-rotor`` leaves it out, neither with the note."""
+    import json
+
+    paths = [tmp_path / f"r{k}.csv" for k in (1, 2)]
+    for k, p in enumerate(paths):
+        bp.simulate(PUMA, duration=4, rate=200, noise=0.02, seed=k + 1, rotor=True, out=p)
+    logs = [str(p) for p in paths] if run == "recordings" else [str(paths[0]), "--stream", "on"]
+    argv = ["identify", "puma560", *logs, "--terms", "none"]
+    why = {"recordings": "not tried for several recordings in one identification",
+           "stream": "not tried for a log streamed from its file"}[run]
+
+    def notes(lines):
+        return [n for n in lines if "rotor inertia (rotor=auto)" in n]
+
+    assert main(argv) == 0
+    said = notes(capsys.readouterr().out.splitlines())
+    assert len(said) == 1 and said[0].startswith(f"note: rotor inertia (rotor=auto): {why}"), said
+    assert "so the model has none; --rotor fits it" in said[0]
+    runs = {}
+    for flag in ("", "--rotor", "--no-rotor"):
+        assert main([*argv, *([flag] if flag else []), "--json"]) == 0
+        runs[flag] = json.loads(capsys.readouterr().out)
+    assert [n.removeprefix("note: ") for n in said] == notes(runs[""]["notes"])  # the same line in the JSON
+    assert not notes(runs["--rotor"]["notes"]) and not notes(runs["--no-rotor"]["notes"])
+    assert all(d["Ia"] is None for r in ("", "--no-rotor") for d in runs[r]["drives"])
+    assert sum(isinstance(d["Ia"], float) for d in runs["--rotor"]["drives"]) == 4  # joints 1-2 regroup
+    assert runs["--rotor"]["train"]["rms_total"] < runs[""]["train"]["rms_total"]

@@ -117,6 +117,9 @@ class FleetResult:
         Per log skipped: ``{"path", "error", "stage"}``: ``stage`` ``"read"`` (the log is not used at
         all) or ``"fit"`` (read, but not identifiable alone: not in ``per_file``; its rows are in
         the pooled estimate when one is asked for).
+    notes : tuple of str
+        What the options asked for and the fleet did not do, one line each (``rotor="auto"`` and
+        ``terms="auto"``: not tried in a fleet, :func:`fleet_notes`).
     """
 
     model: IdentModel
@@ -125,6 +128,7 @@ class FleetResult:
     files: list[dict]
     spread: dict | None
     skipped: list[dict] = field(default_factory=list)
+    notes: tuple = ()
 
     def __repr__(self) -> str:
         what = [f"{len(self.per_file)} per-file fits"] if self.per_file else []
@@ -157,8 +161,8 @@ class FleetResult:
         -------
         dict
             ``model, names, logs{given, used, skipped}, files, skipped, per_file{path: values},
-            pooled{values, std, covariance, estimate} | null, spread{mean, std} | null``
-            (``estimate``: :meth:`pooled_note`).
+            pooled{values, std, covariance, estimate} | null, spread{mean, std} | null, notes``
+            (``estimate``: :meth:`pooled_note`; ``notes``: :attr:`notes`).
         """
         names = self.model.names
         given = len(self.files) + sum(s["stage"] == "read" for s in self.skipped)
@@ -170,11 +174,55 @@ class FleetResult:
                                                              "std": self.pooled.estimate.std.tolist(),
                                                              "covariance": self.pooled.estimate.covariance,
                                                              "estimate": self.pooled_note()},
-                "spread": None if self.spread is None else {k: v.tolist() for k, v in self.spread.items()}}
+                "spread": None if self.spread is None else {k: v.tolist() for k, v in self.spread.items()},
+                "notes": list(self.notes)}
 
 
 #: the estimator of a fleet when the options are not given (the fleet's own default: per-joint weights)
 FLEET_METHOD = "wls"
+
+
+def fleet_notes(model: IdentModel, options: IdentOptions) -> tuple[str, ...]:
+    """What the options leave to the data that a fleet does not try, one line each; forced model terms refused.
+
+    A fleet fits one model to every log (the per-file estimates, their spread and the pooled estimate
+    have the same parameters) from each log's row factors: ``rotor="auto"`` (identify's default) and
+    ``terms="auto"`` choose per log from its rows, so a fleet fits neither and says so.
+
+    Parameters
+    ----------
+    model : IdentModel
+        The model the fleet fits (with rotor inertia columns or without).
+    options : IdentOptions
+        The fleet's options.
+
+    Returns
+    -------
+    tuple of str
+        The notes (none for rotor inertia when ``rotor`` is True or False or the model has its
+        columns; none for the terms with ``terms="none"``).
+
+    Raises
+    ------
+    BaseparamsError
+        Model terms forced by name (``terms="dahl"``): a fleet cannot fit them.
+    """
+    from .ident.notes import rotor_not_tried
+    from .ident.terms.fit import parse_terms
+
+    candidates, forced = parse_terms(options.terms)
+    if forced:
+        raise BaseparamsError(f"identify: terms={options.terms} applies to one log or several recordings in one "
+                              f"identification, not to a fleet of logs (per-file or pooled estimates: the linear "
+                              f"model alone)")
+    rotor = any(k in ("Ia", "Iam") for k in model.drives.param_kinds)
+    notes = [rotor_not_tried("fleet")] if isinstance(options.rotor, str) and not rotor else []
+    if candidates:
+        notes.append(f"model terms (terms={options.terms}): not tried for a fleet of logs (each log is reduced to "
+                     f"its row factors; the terms' choice needs its rows), so the linear model alone; identify a log "
+                     f"alone, or several recordings in one identification, for them; --terms none leaves them out "
+                     f"without this note")
+    return tuple(notes)
 
 
 def identify_fleet(model: IdentModel, paths, options: IdentOptions | None = None, /, *, per_file: bool = True,
@@ -232,6 +280,7 @@ def identify_fleet(model: IdentModel, paths, options: IdentOptions | None = None
         raise BaseparamsError("no log file to identify")
     if not (per_file or pooled):
         raise BaseparamsError("ask for per_file and/or pooled estimates")
+    notes = fleet_notes(model, opts)
     # workers of an existing cluster run elsewhere: they get absolute paths, reports the ones given
     given = {os.path.abspath(p): p for p in paths}
     with dask_client(client, scheduler, workers) as cl:
@@ -255,7 +304,7 @@ def identify_fleet(model: IdentModel, paths, options: IdentOptions | None = None
             pooled_fit = fit(model, acc, opts.method, opts.prior_weight, blocks=accs if len(accs) > 1 else None,
                              rule="recordings" if len(accs) > 1 else "blocks")
             pooled_fit = pulled_covariance(_pooled_covariance(cl, pooled_fit, acc, files, opts, progress))
-    return FleetResult(model, fits, pooled_fit, files, spread, skipped)
+    return FleetResult(model, fits, pooled_fit, files, spread, skipped, notes)
 
 
 def _pooled_covariance(cl, f, acc, files: list[dict], opts: IdentOptions, progress):

@@ -155,6 +155,7 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
              f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
     lines += [f"skipped: {s['error']}" for s in res.skipped]
     lines += [f"{f['path']}: {w}" for f in res.files for w in f.get("warnings", ())]  # --allow-units went on
+    lines += [f"note: {n}" for n in res.notes]  # what the options leave to the data that a fleet does not try
     if res.spread is not None:
         rel = res.spread["std"] / np.maximum(np.abs(res.spread["mean"]), 1e-300)
         worst = np.argsort(rel)[::-1][:5]

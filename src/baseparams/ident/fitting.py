@@ -16,6 +16,7 @@ import numpy as np
 from ..display import clip, format_number
 from ..errors import BaseparamsError
 from .model import REGRESSOR_BYTES, IdentModel
+from .select import FOLD_SCOPES, fold_scope
 
 #: bytes of regressor :meth:`Fit.predict` forms at once
 PREDICT_BYTES = REGRESSOR_BYTES
@@ -175,8 +176,7 @@ def fit(model: IdentModel, acc, method: str = "ols", prior_weight: float | None 
     if method == "auto":
         fitted = _auto(model, first, est, acc, blocks or [], prior_weight, estimator)
         if fitted.selection is not None and rule != "blocks":
-            fitted = replace(fitted, selection=replace(fitted.selection, rule=rule,
-                                                       scope="cross-validation, each recording one block"))
+            fitted = replace(fitted, selection=replace(fitted.selection, rule=rule, scope=fold_scope(rule)))
         return fitted
     if method != "physical":
         return Fit(model, method, est.theta, est)
@@ -355,8 +355,8 @@ def _auto(model: IdentModel, first, est, acc, blocks: list, prior_weight=None, e
 
 
 #: what chooses the default estimate (:func:`fit`'s ``rule``) -> how the report says it
-RULES = {"blocks": "blocked cross-validation on the training data",
-         "recordings": "cross-validation with each recording one block (another motion)",
+RULES = {"blocks": FOLD_SCOPES["blocks"],
+         "recordings": FOLD_SCOPES["recordings"],
          "structure": "structure: the cross-validation blocks are too short to see beyond the motion"}
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from ..model.robot import Robot
 from .fitting import Fit
 from .model import IdentModel
+from .select import fold_scope
 
 
 def model_notes(model: IdentModel) -> list[str]:
@@ -137,9 +138,7 @@ def term_note(tf, joints: list[str], unit: str = "blocks") -> str:
             parts.append(f"{c.name} KEPT ({c.why}): {kept[c.name].describe(joints)}")
         else:
             parts.append(f"{c.name} rejected ({c.why})")
-    scope = ("cross-validation with each recording one fold" if unit == "recordings"
-             else "blocked cross-validation on the training data")
-    return f"model terms ({scope}, linear core alone {tf.cv_rms:.4g}): " + "; ".join(parts)
+    return f"model terms ({fold_scope(unit)}, linear core alone {tf.cv_rms:.4g}): " + "; ".join(parts)
 
 
 def rotor_note(choice) -> str:
@@ -155,9 +154,40 @@ def rotor_note(choice) -> str:
     str
         The note.
     """
+    if not choice.kept and choice.why.startswith("not tried"):
+        return f"rotor inertia (rotor=auto): {choice.why}"
     verdict = "KEPT" if choice.kept else "rejected"
-    return (f"rotor inertia (rotor=auto, blocked cross-validation on the training data, the model terms' rule): "
+    return (f"rotor inertia (rotor=auto, {fold_scope('blocks')}, the model terms' rule): "
             f"{verdict} ({choice.why}); --rotor / --no-rotor force it")
+
+
+#: why ``rotor="auto"`` leaves the rotor inertia out, by the kind of run that does not try it (one home: the
+#: notes of a log streamed from its file, of several recordings in one identification and of a fleet)
+ROTOR_NOT_TRIED = {
+    "stream": "a log streamed from its file: the choice cross-validates the fitted rows, which a stream does not "
+              "keep (--stream off reads the log whole and tries it)",
+    "recordings": "several recordings in one identification (not implemented: the choice is made on one log's "
+                  "blocks; identifying one recording alone shows its verdict)",
+    "fleet": "a fleet of logs: one model for every log, so the per-file estimates, their spread and the pooled "
+             "estimate have the same parameters (a choice per log would not)",
+}
+
+
+def rotor_not_tried(run: str) -> str:
+    """One line: ``rotor="auto"`` left the rotor inertia out of this run's model without trying it.
+
+    Parameters
+    ----------
+    run : {"stream", "recordings", "fleet"}
+        The kind of run (:data:`ROTOR_NOT_TRIED`).
+
+    Returns
+    -------
+    str
+        The note: the model has no rotor inertia, why, and the flag that fits it.
+    """
+    return (f"rotor inertia (rotor=auto): not tried for {ROTOR_NOT_TRIED.get(run, run)}, so the model has none; "
+            f"--rotor fits it, --no-rotor leaves it out without this note")
 
 
 def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str]:

@@ -37,7 +37,15 @@ from ..model.robot import Robot
 from ..numerics import blas_threads
 from .fitting import Fit, fit, physical_left_out, pulled_covariance, residual_rms
 from .model import IdentModel, model_for
-from .notes import check_log_units, drive_notes, floating_notes, model_notes, rotor_note, term_note
+from .notes import (
+    check_log_units,
+    drive_notes,
+    floating_notes,
+    model_notes,
+    rotor_not_tried,
+    rotor_note,
+    term_note,
+)
 from .options import IdentOptions, options_of
 from .plausibility import check_rate
 from .preprocess import excitation_bandwidth
@@ -134,6 +142,9 @@ class Account:
         How the standard deviations were computed.
     units : tuple of str
         The unit checks' notes.
+    run : {"log", "recordings", "stream"}
+        The kind of run: one log read whole (it tries ``rotor="auto"``'s rotor inertia), several
+        recordings, or a log streamed from its file (they do not: :func:`~.notes.rotor_not_tried`).
     """
 
     read: int
@@ -145,6 +156,7 @@ class Account:
     terms: tuple = ()
     covariance: str = ""
     units: tuple = ()
+    run: str = "log"
 
     def __repr__(self) -> str:
         return f"<Account {self.read} samples read, cutoff {self.cutoff:.4g} Hz, 1 in {self.factor} kept>"
@@ -184,8 +196,7 @@ def assemble(f: Fit, acc, opts: IdentOptions, account: Account, train: dict, val
              *((f.selection.note(),) if f.selection is not None else ()),
              *((left_out,) if left_out else ()),
              account.covariance, *account.units,
-             *(("rotor inertia (rotor=auto): not tried on this path (several recordings, or a log streamed from its "
-                "file); --rotor forces it",) if isinstance(opts.rotor, str)
+             *((rotor_not_tried(account.run),) if isinstance(opts.rotor, str)
                and not any(c.name == "rotor" for c in f.term_choices) else ()))
     samples = {"read": int(account.read), "used": int(acc.samples), "removed": dict(account.removed)}
     rotor = opts.rotor if opts.rotor_columns or not isinstance(opts.rotor, str) else any(
@@ -565,7 +576,7 @@ def _identify_many(robot: Robot, logs: list, opts: IdentOptions, validation, say
             f"system (the report's series show the first)", *first.notes)
     account = Account(sum(x.n_samples for x in logs), removed, float(first.design.cutoff), int(first.factor),
                       data, "; ".join(notes), tuple(terms), cov_note if rows else cov_note + " (white: rows of several "
-                      "recordings not kept in memory_mb)", tuple(units))
+                      "recordings not kept in memory_mb)", tuple(units), run="recordings")
     return assemble(f, acc, opts, account, train_rms, val, series, _motion_many(model, preps, cols))
 
 

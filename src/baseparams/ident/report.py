@@ -57,7 +57,7 @@ def format_identification(result: Identification) -> str:
                           for k in ("Iam", "Fvm", "Fcm"))
         lines.append(f"  coupled motor {c['name']} (" + ", ".join(f"{w:g} {jn}" for jn, w in c["joints"].items())
                      + f"): {cells}")
-    lines += _terms_lines(j.get("terms") or [])
+    lines += _terms_lines(j.get("terms") or [], fold_unit(j))
     lines += _rms_lines(j) if "currents" not in j else _current_lines(j)
     if j["physical"] is not None:
         p = j["physical"]
@@ -96,14 +96,40 @@ def _excitation_line(e: dict) -> str:
                              "(every %sigma at most 100)")
 
 
-def _terms_lines(terms: list[dict]) -> list[str]:
-    """The model terms tried: kept (values) or rejected, with the cross-validated figures."""
+def fold_unit(j: dict) -> str:
+    """What the model terms' cross-validation folds were in a result's JSON: ``blocks`` or ``recordings``.
+
+    Several recordings in one identification (the default's rule ``recordings``, or a training score
+    per recording: a result of another method, or one read back) take each recording as one fold;
+    one log its contiguous blocks.
+
+    Parameters
+    ----------
+    j : dict
+        :meth:`~baseparams.ident.result.Identification.to_json`.
+
+    Returns
+    -------
+    str
+        ``recordings`` or ``blocks`` (:data:`~baseparams.ident.select.FOLD_SCOPES`).
+    """
+    sel = j.get("selection") or {}
+    several = sel.get("rule") == "recordings" or "recordings" in (j.get("train") or {})
+    return "recordings" if several else "blocks"
+
+
+def _terms_lines(terms: list[dict], unit: str = "blocks") -> list[str]:
+    """The model terms tried: kept (values), rejected or not tried, with the cross-validated figures."""
+    from .select import fold_scope
+
     if not terms:
         return []
-    out = ["model terms (blocked cross-validation on the training data):"]
+    out = [f"model terms ({fold_scope(unit)}):"]
     for t in terms:
         if t["kept"]:
             out.append(f"  {t['name']:<8s} KEPT      {t['description']} ({t['why']})")
+        elif t["why"].startswith("not tried"):
+            out.append(f"  {t['name']:<8s} {t['why']}")
         else:
             out.append(f"  {t['name']:<8s} rejected  {t['why']}")
     return out

@@ -45,6 +45,27 @@ LAMBDAS = (0.0, 0.01, 0.1, 1.0, 10.0, 100.0)
 FOLDS = 5
 #: the row weightings tried
 WEIGHTINGS = ("ols", "wls")
+#: what a cross-validation fold is -> how every note and report says it (one home: the default estimate's choice,
+#: the model terms', rotor inertia's and the text report's heading): contiguous blocks of one motion, or whole
+#: recordings (several in one identification, each another motion)
+FOLD_SCOPES = {"blocks": "blocked cross-validation on the training data",
+               "recordings": "cross-validation with each recording one fold"}
+
+
+def fold_scope(unit: str) -> str:
+    """How the notes and reports name a cross-validation whose folds are ``unit``.
+
+    Parameters
+    ----------
+    unit : {"blocks", "recordings"}
+        Contiguous blocks of one log, or whole recordings (several in one identification).
+
+    Returns
+    -------
+    str
+        The words (:data:`FOLD_SCOPES`).
+    """
+    return FOLD_SCOPES[unit]
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,7 +128,7 @@ class Selection:
     prior_cov: np.ndarray | None = field(default=None, repr=False)
     kappa: float | None = None
     no_prior: tuple = ()
-    scope: str = "blocked cross-validation on the training data"
+    scope: str = FOLD_SCOPES["blocks"]
     drive_cov: np.ndarray | None = field(default=None, repr=False)
     physical_cv: float | None = None
     estimator: str = "least squares"

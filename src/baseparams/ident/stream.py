@@ -1225,7 +1225,7 @@ def _account(train, tr: Training, plan: Plan, slow: int, o, notes) -> object:
                  "whole with --stream off for pre-sliding friction, tilt, delays and scales)"]
                 if parse_terms(o.terms)[0] else [])
     return Account(int(getattr(train, "raw_n", tr.n)), removed, float(plan.design.cutoff), int(plan.factor),
-                   (*plan.notes, *slow_note), acc_note, tuple(no_terms), cov_note, tuple(unit_notes))
+                   (*plan.notes, *slow_note), acc_note, tuple(no_terms), cov_note, tuple(unit_notes), run="stream")
 
 
 def _validation(f, sources, passes, names, o, predictions, series, say):

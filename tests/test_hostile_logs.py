@@ -327,6 +327,44 @@ def test_an_mjcf_hinge_without_range_turns_any_number_of_times(tmp_path):
     assert np.abs(back.q[:, 0]).max() > 30
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_a_continuous_joint_logged_modulo_a_turn_is_unwrapped(tmp_path, capsys, seed):
+    """A continuous joint's angle logged modulo a turn (in [-pi, pi) or [0, 2 pi), as drivers often log it) was
+    refused for a motion up to 28 Hz or torques in kN m: its wraps read as jumps. Read back, in memory and streamed
+    in small blocks, it is the turning angle up to a whole number of turns, each wrap counted in a note; the
+    identification is the unwrapped log's. A joint with position limits is never unwrapped."""
+    import json
+
+    from baseparams.cli import main
+    from baseparams.io.logs import LogStream
+    from baseparams.jointlog import JointLog
+
+    rng = np.random.default_rng(seed)
+    urdf = tmp_path / "turntable.urdf"
+    urdf.write_text(TURNTABLE.format(limit=""))
+    robot = baseparams.load(str(urdf))
+    log, truth = _turning(robot, rng.uniform(1, 5))
+    low = rng.choice([-np.pi, 0.0])  # the interval a driver reports the angle in
+    wrapped_q = log.q.copy()
+    wrapped_q[:, 0] = np.mod(wrapped_q[:, 0] - low, 2 * np.pi) + low
+    path = write_log(tmp_path / "wrapped.csv", JointLog(log.t, log.joints, wrapped_q, log.tau, dq=log.dq))
+    back = read_log(path, robot)
+    turns = (back.q[:, 0] - log.q[:, 0]) / (2 * np.pi)
+    assert np.allclose(turns, np.round(turns[0]), atol=1e-9) and np.allclose(back.q[:, 1], log.q[:, 1])
+    wraps = int(np.count_nonzero(np.abs(np.diff(wrapped_q[:, 0])) > np.pi))
+    assert wraps > 0 and any(f"continuous joint 'spin' logged modulo a turn: unwrapped ({wraps} steps" in n
+                             for n in back.notes), back.notes
+    blocks = list(LogStream(path, robot, block_bytes=int(rng.integers(2_000, 20_000))).blocks())
+    assert len(blocks) > 3 and np.allclose(np.concatenate([b.q for b in blocks]), back.q, rtol=0, atol=1e-12)
+    (tmp_path / "truth.json").write_text(json.dumps(truth))
+    assert main(["identify", str(urdf), str(path), "--truth", str(tmp_path / "truth.json"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["truth"]["rel_error"] < 1e-2
+    revolute = tmp_path / "revolute.urdf"  # limits: a step of pi is not a turn; the log's jumps are left as they are
+    revolute.write_text(TURNTABLE.format(limit="").replace('type="continuous"', 'type="revolute"').replace(
+        '<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/><limit lower="-4" upper="7" effort="20" velocity="9"/>'))
+    assert np.array_equal(read_log(path, baseparams.load(str(revolute))).q, wrapped_q)
+
+
 def test_allow_units_lets_positions_in_degrees_through_with_a_warning(tmp_path, capsys):
     """Issue 51: positions in degrees were refused by the reader even with --allow-units, which promises to go
     on anyway (with a warning); identify and predict alike."""

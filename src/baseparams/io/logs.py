@@ -85,9 +85,11 @@ row: NaN/inf values, time not strictly increasing (repeated or going back), rows
 different lengths, unknown or missing joints, an empty file, and a revolute joint beyond
 ``max_angle`` (default 4 pi: "degrees given as radians?"; not a joint the model declares without
 position limits, a continuous one) or a prismatic one beyond ``max_travel`` (10 m: millimetres?):
-with ``allow_units`` these two are a warning note instead. Rows are named as the file counts them: text files by file
-line (1-based) and data row (1-based, the first row after the header is 1); NPZ and Parquet by
-0-based index; bags by the 1-based message number on the topic.
+with ``allow_units`` these two are a warning note instead. A continuous joint logged modulo a turn
+(in [-pi, pi) or [0, 2 pi), as drivers often report it) is unwrapped: a step of more than pi between
+samples is a whole turn, counted in a note (streamed too, across blocks). Rows are named as the
+file counts them: text files by file line (1-based) and data row (1-based, the first row after the
+header is 1); NPZ and Parquet by 0-based index; bags by the 1-based message number on the topic.
 
 Streamed logs
 -------------
@@ -966,10 +968,11 @@ def _unknown(robot: Robot, name: str) -> str:
 
 
 def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
-              require_time: bool = True, base: list[str] = ()) -> JointLog:
+              require_time: bool = True, base: list[str] = (), turns: dict | None = None) -> JointLog:
     """Check the values (finite, time increasing, plausible) and convert to the joint side.
 
-    ``bounds``: ``(max_angle, max_travel, allow_units)`` (:func:`read_log`).
+    ``bounds``: ``(max_angle, max_travel, allow_units)`` (:func:`read_log`); ``turns``: the
+    unwrapping of continuous joints carried from the block before (:func:`_unwrap_turns`).
     """
     tcol = spec["time"] if not table.is_bag else "t"
     untimed = tcol not in table.columns and not require_time
@@ -992,6 +995,8 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
             arrays[k] = None
             continue
         raw = np.stack([table.columns[x.cols[k]] for x in joints], axis=1)
+        if k == "q":
+            raw = _unwrap_turns(table, joints, raw, {} if turns is None else turns)
         sign = np.array([x.sign for x in joints])
         ratio = np.array([x.ratio for x in joints])
         if k == "tau":
@@ -1013,6 +1018,35 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
     return JointLog(t=t, joints=tuple(x.joint for x in joints), q=arrays["q"], tau=arrays["tau"], dq=arrays["dq"],
                     ddq=arrays["ddq"], source=table.source, removed=dict(table.removed), notes=tuple(notes),
                     cur=arrays["cur"])
+
+
+def _unwrap_turns(table: _Table, joints: list[_Joint], raw: np.ndarray, turns: dict) -> np.ndarray:
+    """Positions of continuous joints logged modulo a turn, unwrapped (``raw (S, m)``, a note counting the wraps).
+
+    Every step of more than pi between samples is taken as a wrap of 2 pi (``np.unwrap``). Only joints
+    the model declares without position limits (:func:`unbounded_joints`: a URDF ``continuous`` joint,
+    an MJCF hinge without ``range``), whose angle is the same modulo a turn (a true step of pi or
+    more would be half a turn in one sample: aliased anyway). ``turns``: per joint column, ``(last raw
+    value, its shift)`` of the block before, updated (a streamed log unwraps across its blocks).
+    """
+    out = raw
+    for k, x in enumerate(joints):
+        if not x.unbounded:
+            continue
+        col = raw[:, k]
+        last, shift = turns.get(k, (col[0], 0.0))
+        seq = np.concatenate([[last], col])
+        wraps = int(np.count_nonzero(np.abs(np.diff(seq)) > np.pi))
+        if wraps or shift:
+            if out is raw:
+                out = raw.copy()
+            out[:, k] = np.unwrap(seq)[1:] + shift
+        if wraps:
+            table.notes.append(f"{table.label(x.cols['q'])}: continuous joint {x.joint!r} logged modulo a turn: "
+                               f"unwrapped ({_plural(wraps, 'step')} of more than pi between samples taken as whole "
+                               f"turns, {table.row(0)} to {table.row(len(col) - 1)})")
+        turns[k] = (col[-1], out[-1, k] - col[-1])
+    return out
 
 
 def _base_columns(table: _Table, robot: Robot) -> list[str]:
@@ -1411,9 +1445,9 @@ class LogStream:
             an empty file.
         """
         tables = {"text": self._text_tables, "parquet": self._parquet_tables, "npz": self._npz_tables}[self.kind]()
-        last_t, count = None, 0
+        last_t, count, turns = None, 0, {}
         for table in tables:
-            log = _assemble(table, self._joints, self.spec, self.bounds)
+            log = _assemble(table, self._joints, self.spec, self.bounds, turns=turns)
             if last_t is not None and not log.t[0] > last_t:
                 what = "repeats" if log.t[0] == last_t else "is before"
                 raise DataError(f"{self.source}: {table.label(self.spec['time'])}, {table.row(0)}: time "

@@ -253,6 +253,25 @@ def test_a_base_twist_in_the_world_frame_is_refused_with_the_figures(tmp_path, s
     assert len(notes) == 1 and "the angular velocity" in notes[0] and "check its units" in notes[0], notes
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_a_scalar_last_base_quaternion_with_a_twist_is_refused_naming_the_order(tmp_path, seed):
+    """Property: a random floating robot's noisy log whose quaternion is written x, y, z, w (SciPy's and ROS's order)
+    in the scalar-first columns was refused as 'the linear velocity looks expressed in the world frame' (a wrong
+    cause) or read as another motion; it is refused naming the quaternion's order, with both figures. The log as
+    the layout says reads without a word, and a world-frame twist is still called that."""
+    robot, cols = _floating_columns(seed)
+    names = ("base_qw", "base_qx", "base_qy", "base_qz")
+    last = {**cols, **dict(zip(names, [cols["base_qx"], cols["base_qy"], cols["base_qz"], cols["base_qw"]]))}
+    np.savez(tmp_path / "last.npz", **last)
+    msg = api_error(read_log, tmp_path / "last.npz", robot)
+    assert msg.startswith(f"{tmp_path / 'last.npz'}: columns base_qw, base_qx, base_qy, base_qz: the base's quaternion "
+                          "looks scalar-last (x, y, z, w)") and "write w in base_qw" in msg, msg
+    np.savez(tmp_path / "first.npz", **cols)
+    assert not any(n.startswith("base twist") for n in read_log(tmp_path / "first.npz", robot).notes)
+    np.savez(tmp_path / "world.npz", **_to_world(cols, "w"))
+    assert "looks expressed in the world frame" in api_error(read_log, tmp_path / "world.npz", robot)
+
+
 def test_a_world_twist_of_a_base_that_does_not_turn_is_the_base_frame_twist(tmp_path):
     """Without rotation the two frames agree: nothing to refuse."""
     robot, cols = _floating_columns(5, noise=False)

@@ -1095,7 +1095,7 @@ def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
     rates = None
     if log.dq is not None and len(base) > len(POSE_COLUMNS):
         twist = np.stack([table.columns[c] for c in TWIST_COLUMNS], axis=1)
-        notes += _check_twist_frame(table, log.t, chart, twist)
+        notes += _check_twist_frame(table, log.t, chart, twist, pose[:, 3:])
         rates = chart_rates(chart, twist)
     elif log.dq is not None:
         rates = np.gradient(chart, log.t, axis=0)
@@ -1123,11 +1123,18 @@ TWIST_FRAME_RATIO, TWIST_FRAME_MISS = 0.5, 0.05
 TWIST_POOR = 0.25
 
 
-def _check_twist_frame(table: _Table, t: np.ndarray, chart: np.ndarray, twist: np.ndarray) -> list[str]:
-    """Refuse a base twist given in the world frame (the pose's derivative says which); note one that fits neither."""
+def _check_twist_frame(table: _Table, t: np.ndarray, chart: np.ndarray, twist: np.ndarray,
+                       quat: np.ndarray) -> list[str]:
+    """Refuse a base twist given in the world frame, or a scalar-last quaternion; note a twist that fits neither.
+
+    The pose's derivative says which frame the twist is in; read scalar-last (``quat (S, 4)`` as
+    logged), the pose the twist follows says the quaternion's order (:func:`_check_quaternion_order`).
+    """
     from ..kinematics.floating import TWIST_WINDOW, twist_mismatch
 
     miss = twist_mismatch(t, chart, twist)
+    if np.nan_to_num(miss[0], nan=0.0).max() > TWIST_FRAME_MISS:
+        _check_quaternion_order(table, t, chart, twist, quat, miss[0])
     notes = []
     for k, (what, cols) in enumerate((("linear velocity", TWIST_COLUMNS[:3]), ("angular velocity", TWIST_COLUMNS[3:]))):
         body, world = miss[:, k]
@@ -1142,6 +1149,27 @@ def _check_twist_frame(table: _Table, t: np.ndarray, chart: np.ndarray, twist: n
                          f"{TWIST_WINDOW:g} s windows; by {world:.0%} read as world-frame): check its units, frame "
                          "and time stamps")
     return notes
+
+
+def _check_quaternion_order(table: _Table, t: np.ndarray, chart: np.ndarray, twist: np.ndarray, quat: np.ndarray,
+                            miss: np.ndarray) -> None:
+    """Refuse a base quaternion logged scalar-last (x, y, z, w) in the columns of one scalar-first (w, x, y, z).
+
+    Only with a logged twist, which says which reading the pose's motion follows: the twist
+    misses the pose read as logged (``miss (2,)``, linear and angular: :func:`twist_mismatch`) and
+    follows it within ``TWIST_FRAME_MISS`` read scalar-last. Without a twist nothing tells them
+    apart (both are unit quaternions).
+    """
+    from ..kinematics.floating import quaternion_matrix, twist_mismatch, zyx_of_rotation
+
+    swapped = np.concatenate([chart[:, :3], zyx_of_rotation(quaternion_matrix(quat[:, [3, 0, 1, 2]]))], axis=1)
+    alt = np.nan_to_num(twist_mismatch(t, swapped, twist)[0], nan=0.0)
+    if alt.max() < TWIST_FRAME_MISS:
+        raise DataError(f"{table.source}: columns base_qw, base_qx, base_qy, base_qz: the base's quaternion looks "
+                        f"scalar-last (x, y, z, w): read so, the logged twist follows the pose (misses it by "
+                        f"{alt.max():.1%}), read as the layout's scalar-first w, x, y, z it misses by "
+                        f"{np.nan_to_num(miss, nan=0.0).max():.1%}; write w in base_qw (SciPy's as_quat and ROS "
+                        "give x, y, z, w)")
 
 
 def _conversion_notes(joints: list[_Joint], spec: dict) -> list[str]:

@@ -404,6 +404,7 @@ def test_allow_units_lets_positions_in_degrees_through_with_a_warning(tmp_path, 
     notes = json.loads(capsys.readouterr().out)["notes"]
     assert any(n.startswith("units: WARNING, going on (allow_units)") and "degrees given as radians?" in n
                for n in notes), notes
+    assert not any("to go on anyway" in n for n in notes), notes  # it went on: the refusal's advice is not repeated
     out = tmp_path / "p.csv"
     one_line_error(["predict", urdf, tmp_path / "r.json", deg, "--out", out], capsys)
     assert main(["predict", str(urdf), str(tmp_path / "r.json"), str(deg), "--out", str(out), "--allow-units"]) == 0

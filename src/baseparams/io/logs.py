@@ -258,10 +258,13 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
 def _layout_columns(names: list[str], spec: dict, joints: list[_Joint], robot: Robot) -> list[str]:
     """The columns of a file the layout reads, of those it has: time, the joints', a floating base's pose and twist.
 
+    A fixed robot's log may hold a base pose too: read to check that it does not move
+    (:func:`_check_still_base`).
+
     One list for every reader that loads columns by name (NPZ, Parquet, streamed), so that each
     format reads what a text file read whole offers (:func:`_base_columns` then checks them).
     """
-    base = (*POSE_COLUMNS, *TWIST_COLUMNS) if robot.floating else ()
+    base = (*POSE_COLUMNS, *TWIST_COLUMNS) if robot.floating else POSE_COLUMNS  # fixed: checked to be still
     cols = [spec["time"], *(c for x in joints for c in x.cols.values() if c), *base]
     have = set(names)
     return [c for c in dict.fromkeys(cols) if c in have]
@@ -1052,6 +1055,7 @@ def _unwrap_turns(table: _Table, joints: list[_Joint], raw: np.ndarray, turns: d
 def _base_columns(table: _Table, robot: Robot) -> list[str]:
     """A floating base's pose columns and, when all six are there, its twist columns (else ``[]``)."""
     if not robot.floating:
+        _check_still_base(table, robot)
         return []
     clash = [j for j in robot.joint_names if j in BASE_COORDINATES]
     if clash:
@@ -1071,6 +1075,36 @@ def _base_columns(table: _Table, robot: Robot) -> list[str]:
         raise DataError(f"{table.source}: base twist columns {', '.join(twist)} without "
                         f"{', '.join(c for c in TWIST_COLUMNS if c not in twist)} (give all six, or none)")
     return list(POSE_COLUMNS) + twist
+
+
+#: a fixed robot's log whose base pose moves more than this [m, degree] is refused (mocap noise on a bolted base:
+#: about a millimetre and a tenth of a degree)
+STILL_BASE = (0.01, 1.0)
+
+
+def _check_still_base(table: _Table, robot: Robot, first: np.ndarray | None = None) -> np.ndarray | None:
+    """Refuse a fixed robot's log whose floating-base pose columns move (``--floating`` forgotten).
+
+    The joints alone would be identified as if the base stood still: a wrong model with nothing
+    to show it. ``first``: the pose ``(7,)`` the motion is measured from (a streamed log's first
+    sample), else this table's first; returned (None: no pose columns).
+    """
+    if not all(c in table.columns for c in POSE_COLUMNS):
+        return None
+    pose = np.stack([table.columns[c] for c in POSE_COLUMNS], axis=1)
+    if not np.isfinite(pose).all() or not len(pose):
+        return first  # the joints' checks name bad values; these columns are not read
+    ref = pose[0] if first is None else first
+    moved = float(np.max(np.linalg.norm(pose[:, :3] - ref[:3], axis=1)))
+    quat = pose[:, 3:] / np.maximum(np.linalg.norm(pose[:, 3:], axis=1, keepdims=True), 1e-300)
+    q0 = quat[0] if first is None else ref[3:] / max(float(np.linalg.norm(ref[3:])), 1e-300)
+    turned = float(np.degrees(2 * np.arccos(np.clip(np.abs(quat @ q0), 0.0, 1.0))).max())
+    if moved > STILL_BASE[0] or turned > STILL_BASE[1]:
+        raise DataError(f"{table.source}: columns {', '.join(POSE_COLUMNS)}: a floating base's pose that moves "
+                        f"({moved:.3g} m, {turned:.3g} degree from the first sample), but robot {robot.name!r} has a "
+                        "fixed root: --floating (floating=True) attaches it by a free joint; or leave the columns out "
+                        "if the base is fixed")
+    return ref
 
 
 def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
@@ -1426,11 +1460,7 @@ class LogStream:
                             "pose is unwrapped over the whole log), not streamed")
         self.bounds = (max_angle, max_travel, bool(allow_units))
         self.block_bytes = max(int(block_bytes), 1)
-        if self.kind == "npz":
-            self._members, _ = _npz_members(p)
-            self.names = list(self._members)
-        else:
-            self.names = self._text_header()[0] if self.kind == "text" else self._parquet_names()
+        self.names = self._names()
         empty = _Table(self.source, {n: np.empty(0) for n in self.names}, np.empty(0, int), "")
         if self.kind != "text":
             what = "array" if self.kind == "npz" else "column"
@@ -1448,6 +1478,13 @@ class LogStream:
 
     def __repr__(self) -> str:
         return f"<LogStream {self.source}: {len(self.joints)} joints, {self.kind}>"
+
+    def _names(self) -> list[str]:
+        """The file's column names (an NPZ's members are indexed on the way)."""
+        if self.kind == "npz":
+            self._members, _ = _npz_members(self.path)
+            return list(self._members)
+        return self._text_header()[0] if self.kind == "text" else self._parquet_names()
 
     @functools.cached_property
     def decoded_mb(self) -> float:
@@ -1473,9 +1510,10 @@ class LogStream:
             an empty file.
         """
         tables = {"text": self._text_tables, "parquet": self._parquet_tables, "npz": self._npz_tables}[self.kind]()
-        last_t, count, turns = None, 0, {}
+        last_t, count, turns, still = None, 0, {}, None
         for table in tables:
             log = _assemble(table, self._joints, self.spec, self.bounds, turns=turns)
+            still = _check_still_base(table, self._robot, still)
             if last_t is not None and not log.t[0] > last_t:
                 what = "repeats" if log.t[0] == last_t else "is before"
                 raise DataError(f"{self.source}: {table.label(self.spec['time'])}, {table.row(0)}: time "

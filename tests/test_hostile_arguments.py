@@ -329,3 +329,27 @@ def test_junk_in_every_argument_is_a_typeerror_or_valueerror_naming_it(puma, tmp
                 if time.perf_counter() - t0 > 10:
                     failures.append(f"{name}({kw}={junk!r:.20}): {time.perf_counter() - t0:.0f} s")
     assert count > 500 and not failures, f"{len(failures)} of {count}:\n" + "\n".join(failures[:40])
+
+
+@pytest.mark.parametrize("given", [("duration",), ("rate",), ("amplitude",), ("duration", "rate"),
+                                   ("duration", "rate", "amplitude")])
+def test_options_of_the_random_motion_with_a_given_trajectory_are_refused(given, tmp_path, capsys):
+    """``simulate --trajectory FILE --duration 5 --rate 200`` wrote the trajectory's own 10 s at its own rate with
+    exit 0: the options were dropped without a word. Both doors refuse them in one line naming each; without a
+    trajectory they make the log they say."""
+    robot = bp.load("puma560")
+    log, _ = bp.simulate(robot, duration=1.0, rate=100.0)
+    assert log.n_samples == 100 and log.t[1] - log.t[0] == pytest.approx(0.01)
+    names = [f"{k}_{j}" for k in ("q", "dq", "ddq") for j in log.joints]
+    traj = tmp_path / "traj.csv"
+    np.savetxt(traj, np.c_[log.t, log.q, log.dq, np.gradient(log.dq, log.t, axis=0)], delimiter=",",
+               header=",".join(["t"] + names), comments="")
+    values = {"duration": 5.0, "rate": 200.0, "amplitude": 0.3}
+    msg = api_error(bp.simulate, robot, traj, **{n: values[n] for n in given})
+    names = " and ".join(f"{n}=" for n in given)
+    assert msg.startswith(f"simulate: {names} set") and "not a given trajectory=" in msg, msg
+    argv = ["simulate", "puma560", tmp_path / "out.csv", "--trajectory", traj]
+    err = one_line_error(argv + [x for n in given for x in (f"--{n}", values[n])], capsys)
+    assert " and ".join(f"--{n}" for n in given) + " set" in err and "not a given --trajectory" in err, err
+    assert not (tmp_path / "out.csv").exists()
+    assert bp.simulate(robot, traj)[0].n_samples == 100  # the trajectory's own samples

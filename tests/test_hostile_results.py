@@ -403,7 +403,9 @@ def test_a_joint_the_robot_lacks_or_a_joint_left_out_is_refused(termed, puma, tm
     (("values", "degrees"), 1e300, "terms[1].values.degrees: expected a finite number in [0, 14.1421]"),
     (("values", "degrees"), 3.0, "terms[1].values: degrees 3.0 is not the angles' magnitude"),
     (("values", "pi"), None, "terms[1].values: a tilt without the standard parameters it acts on"),
-    (("std", "angles"), "x", "terms[1].std.angles: expected an array"),
+    (("std", "angles"), "x", "terms[1].std.angles: expected an array (each item a finite number >= 0), got 'x'"),
+    (("values", "pi"), {"a": 1}, "terms[1].values.pi: expected an array (each item a finite number in "
+                                 "[-1e+24, 1e+24]), got an object of 1 key"),
     (("values", "seconds"), {"joint1": 0.01}, "terms[1].values: unknown key 'seconds'"),
 ])
 def test_tilt_fields_out_of_their_bounds(termed, puma, tmp_path, where, value, words):

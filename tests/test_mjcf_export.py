@@ -255,6 +255,30 @@ def test_cli_refusals(flags, model, message, tmp_path, capsys):
     assert not (tmp_path / "o.xml").exists()
 
 
+@pytest.mark.parametrize("joints", ["slide x, slide z, hinge y", "free"])
+def test_a_robot_the_writer_refuses_is_refused_before_the_fit(joints, tmp_path, capsys, monkeypatch):
+    """``identify ROBOT LOG --method physical --urdf out.urdf --mjcf out.xml`` on a body of several joints (an MJCF
+    slide+slide+hinge, a URDF planar joint) fitted, wrote the URDF, then refused the MJCF with exit 2: the robot
+    says it before any fit. Refused in one line, nothing fitted, nothing written."""
+    import sys
+
+    body = ("<joint name='sx' type='slide' axis='1 0 0'/><joint name='sz' type='slide' axis='0 0 1'/>"
+            "<joint name='hy' type='hinge' axis='0 1 0'/>") if joints != "free" else "<freejoint/>"
+    src = tmp_path / "robot.xml"
+    src.write_text(f"<mujoco><worldbody><body name='b'>{body}<geom size='0.1' mass='1'/><body name='c' pos='0.3 0 0'>"
+                   "<joint name='h2' type='hinge' axis='0 1 0'/><geom size='0.05' mass='0.5'/></body></body>"
+                   "</worldbody></mujoco>")
+    csv = tmp_path / "log.csv"
+    assert main(["simulate", str(src), str(csv), "--duration", "4", "--rate", "200"]) == 0
+    monkeypatch.setattr(sys.modules["baseparams.workflow.identify"], "_run_identification",
+                        lambda *a, **k: pytest.fail("fitted before the export's refusal"))
+    capsys.readouterr()
+    code = main(["identify", str(src), str(csv), "--method", "physical", "--mjcf", str(tmp_path / "o.xml")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--mjcf writes" in err[0], err
+    assert not (tmp_path / "o.xml").exists()
+
+
 def test_cli_mjcf_suffix_is_checked_first(tmp_path, capsys):
     src, csv = _cli_log(tmp_path)
     assert main(["identify", str(src), str(csv), "--method", "physical", "--mjcf", str(tmp_path / "o.urdf")]) != 0

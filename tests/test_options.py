@@ -17,7 +17,7 @@ import pytest
 import baseparams
 from baseparams.arguments import IDENTIFY
 from baseparams.cli import build_parser, main
-from baseparams.cli.parser import flag_message
+from baseparams.cli.parser import COMMANDS, flag_message, switch_flags
 from baseparams.errors import BaseparamsError
 from baseparams.ident import IdentOptions, MotorCoupling, identify
 from baseparams.ident.simulate import simulate_log
@@ -93,6 +93,41 @@ def test_the_same_rule_refuses_in_python_and_on_the_command_line(tmp_path, capsy
     assert "baseparams: error: --prior-weight applies to --method physical, not auto (the default estimate" in err
     assert flag_message("identify: couplings= and analysis_samples= and method=wls", "identify") == \
         "--coupling and --analysis-samples and --method wls"
+
+
+def _parsed(command: str, tokens: list[str]):
+    """The command's parsed arguments for ``tokens`` (its required arguments given as placeholders)."""
+    sub = next(a for a in build_parser()._actions if a.dest == "command")  # noqa: SLF001
+    parser = sub.choices[command]
+    places = []
+    for a in parser._actions:  # noqa: SLF001
+        if a.required or (not a.option_strings and a.nargs not in ("?", "*")):
+            places += [a.option_strings[0], "x"] if a.option_strings else ["x"]
+    return parser, parser.parse_args(places + tokens)
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_switch_named_in_a_message_is_the_flag_that_sets_it(command):
+    """A library message's ``name=True`` / ``name=False`` for a switch reads as the flag (or its absence) that gives
+    that value: parsed, the keyword has it (``allow_units=True`` was ``--allow-units True``, not a valid line)."""
+    for key, (on, off) in switch_flags(command).items():
+        for value in (True, False):
+            text = flag_message(f"{command}: {key}={value}", command)
+            flag = text.removeprefix("without ")
+            assert flag in (on, off) and " " not in flag, text
+            parser, ns = _parsed(command, [] if text.startswith("without ") else [flag])
+            action = next(a for a in parser._actions if flag in a.option_strings)  # noqa: SLF001
+            got = getattr(ns, action.dest)
+            assert (got if action.dest == key else not got) is value, (command, key, value, text)
+
+
+def test_a_message_that_spells_an_option_twice_names_the_flag_once():
+    """The CLI's line for a message written for both doors: the flag once, a quoted value unquoted."""
+    assert flag_message("identify: p.csv: 7 Hz; --allow-units (allow_units=True) to go on anyway",
+                        "identify") == "p.csv: 7 Hz; --allow-units to go on anyway"
+    assert flag_message("robot 'r': no motion; leave it out (mocap_welds='drop', --mocap-welds drop)",
+                        "analyze") == "robot 'r': no motion; leave it out (--mocap-welds drop)"
+    assert flag_message('identify: method="ols" and rotor=False', "identify") == "--method ols and --no-rotor"
 
 
 def test_unknown_keywords_and_objects_are_refused():

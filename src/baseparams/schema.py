@@ -81,9 +81,9 @@ def _show(v) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, (dict, Mapping)):
-        return f"an object of {len(v)} keys"
+        return f"an object of {len(v)} key{'' if len(v) == 1 else 's'}"
     if isinstance(v, (list, tuple)):
-        return f"an array of {len(v)} items"
+        return f"an array of {len(v)} item{'' if len(v) == 1 else 's'}"
     if isinstance(v, str):
         return repr(v if len(v) <= 40 else v[:37] + "...")
     if isinstance(v, int) and abs(v) >= 10**12:
@@ -376,7 +376,7 @@ class Arr(Node):
     names: str | None = None
 
     def _describe(self) -> str:
-        return f"an array of {self.item._describe()}s"
+        return f"an array (each item {self.item._describe()})"
 
     def _check(self, v, where: str, ctx: _Context) -> list:
         if not isinstance(v, list):

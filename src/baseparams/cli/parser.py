@@ -243,6 +243,38 @@ def keyword_flags(command: str) -> dict[str, str]:
     return out
 
 
+@functools.cache
+def switch_flags(command: str) -> dict[str, tuple[str | None, str | None]]:
+    """Each front-door keyword of a command given by a switch (a flag without a value) and its two spellings.
+
+    Parameters
+    ----------
+    command : str
+        The command (one of :data:`COMMANDS`).
+
+    Returns
+    -------
+    dict of str to (str or None, str or None)
+        ``{keyword: (on, off)}``: ``{"allow_units": ("--allow-units", None), "rotor": ("--rotor",
+        "--no-rotor"), "verify": (None, "--no-verify")}`` (None: leaving the other flag out).
+    """
+    sub = next(a for a in build_parser()._actions if a.dest == "command")  # noqa: SLF001  (argparse's own)
+    renamed = getattr(command_module(command), "KEYWORDS", {})
+    out = {}
+    for action in sub.choices[command]._actions:  # noqa: SLF001
+        longs = [s for s in action.option_strings if s.startswith("--")]
+        if action.nargs != 0 or not longs or action.dest in _NOT_KEYWORDS or action.help == argparse.SUPPRESS:
+            continue
+        key = renamed.get(action.dest, action.dest)
+        if isinstance(action, argparse.BooleanOptionalAction):
+            out[key] = (longs[0], longs[1])
+        elif longs[0] == "--no-" + key.replace("_", "-") and action.const is True:  # --no-verify: verify=False
+            out[key] = (None, longs[0])
+        elif key == action.dest and (action.const is True or action.const is False):  # store_true, store_false
+            out[key] = (longs[0], None) if action.const else (None, longs[0])
+    return out
+
+
 def flag_message(message: str, command: str | None) -> str:
     """A library message with the command's flags for the keywords it names.
 
@@ -256,9 +288,11 @@ def flag_message(message: str, command: str | None) -> str:
     Returns
     -------
     str
-        E.g. ``--prior-weight applies to --method physical, not auto``: ``name=value`` as
-        ``--name value``, ``name=`` as ``--name`` (:func:`keyword_flags`), the command's own
-        ``identify:`` prefix left out.
+        E.g. ``--prior-weight applies to --method physical, not auto``: ``name=value`` (a value
+        quoted or not) as ``--name value``, ``name=`` as ``--name`` (:func:`keyword_flags`), a
+        switch's ``name=True`` as ``--name`` and ``name=False`` as ``--no-name`` (or ``without
+        --name``: :func:`switch_flags`), the command's own ``identify:`` prefix left out. A message
+        that gives both spellings (``--allow-units (allow_units=True)``) names the flag once.
     """
     if not command or command not in COMMANDS:
         return message
@@ -267,8 +301,15 @@ def flag_message(message: str, command: str | None) -> str:
     if not table:
         return text
     names = "|".join(re.escape(k) for k in sorted(table, key=len, reverse=True))
+    switches = switch_flags(command)
 
     def flag(m):
-        return table[m.group(1)] + (f" {m.group(2)}" if m.group(2) else "")
+        key, value = m.group(1), m.group(2).strip("'\"")
+        if key in switches and value in ("True", "False"):
+            on, off = switches[key]
+            return (on or f"without {off}") if value == "True" else (off or f"without {on}")
+        return table[key] + (f" {value}" if value else "")
 
-    return re.sub(rf"(?<![\w.-])({names})=(\w*)", flag, text)
+    text = re.sub(rf"(?<![\w.-])({names})=('[^'\s]*'|\"[^\"\s]*\"|\w*)", flag, text)
+    one = r"(--[\w-]+(?: [\w.]+)?)"  # a flag and its value, named twice: once
+    return re.sub(rf"\({one}, \1\)", r"(\1)", re.sub(rf"{one} \(\1\)", r"\1", text))

@@ -26,11 +26,11 @@ def add_parser(sub) -> None:
     s = sub.add_parser("simulate", help="write a synthetic joint log with known parameters (tests, demos)")
     model_args(s)
     s.add_argument("out", help="output log (.csv or .npz); the true parameters go to OUT.truth.json")
-    s.add_argument("--duration", type=float, default=20.0, help="seconds (default 20)")
-    s.add_argument("--rate", type=float, default=500.0, help="sampling rate in Hz (default 500)")
+    s.add_argument("--duration", type=float, default=None, help="seconds (default 20; not with --trajectory)")
+    s.add_argument("--rate", type=float, default=None, help="sampling rate in Hz (default 500; not with --trajectory)")
     s.add_argument("--amplitude", type=float, default=None,
                    help="joint excursion in rad (default 0.5; for a robot with loops the largest of 0.8, 0.4, 0.2, "
-                        "0.1 x its sampling box's half-width whose loops close)")
+                        "0.1 x its sampling box's half-width whose loops close; not with --trajectory)")
     s.add_argument("--noise", type=float, default=0.0, help="torque noise standard deviation (default 0)")
     s.add_argument("--robots", type=int, metavar="N",
                    help="a fleet: N logs in the folder OUT, one robot each with its own inertias (10 %% spread)")

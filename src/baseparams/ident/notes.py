@@ -216,7 +216,7 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     """
     from ..errors import DataError
     from ..regressor.tp import generalized_forces
-    from .plausibility import check_units
+    from .plausibility import check_units, going_on
 
     robot = model.robot
     params = robot.parameters("paper")
@@ -242,4 +242,4 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     except DataError as exc:
         if not allow_units:
             raise
-        return [f"units: WARNING, going on (allow_units): {exc}"]
+        return [going_on("units", exc)]

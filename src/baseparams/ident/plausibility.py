@@ -60,6 +60,24 @@ def _go_on() -> str:
     return "; --allow-units (allow_units=True) to go on anyway"
 
 
+def going_on(topic: str, exc: Exception) -> str:
+    """The WARNING note of a refusal ``allow_units`` lets through: its line without "to go on anyway".
+
+    Parameters
+    ----------
+    topic : str
+        What was checked (``units``).
+    exc : Exception
+        The refusal.
+
+    Returns
+    -------
+    str
+        ``units: WARNING, going on (allow_units): ...``.
+    """
+    return f"{topic}: WARNING, going on (allow_units): {str(exc).removesuffix(_go_on())}"
+
+
 def check_units(log, cols, torque_model, revolute, limits=None) -> list[str]:
     """Refuse a log whose units look wrong; else the lines saying what was checked.
 
@@ -166,7 +184,7 @@ def check_prediction_log(model, log, allow_units: bool = False) -> list[str]:
     except DataError as exc:
         if not allow_units:
             raise
-        return [f"units: WARNING, going on (allow_units): {exc}"]
+        return [going_on("units", exc)]
 
 
 def check_rate(source: str, band: float, span: float, fs: float, cutoff: float, given: bool,

@@ -85,9 +85,11 @@ row: NaN/inf values, time not strictly increasing (repeated or going back), rows
 different lengths, unknown or missing joints, an empty file, and a revolute joint beyond
 ``max_angle`` (default 4 pi: "degrees given as radians?"; not a joint the model declares without
 position limits, a continuous one) or a prismatic one beyond ``max_travel`` (10 m: millimetres?):
-with ``allow_units`` these two are a warning note instead. Rows are named as the file counts them: text files by file
-line (1-based) and data row (1-based, the first row after the header is 1); NPZ and Parquet by
-0-based index; bags by the 1-based message number on the topic.
+with ``allow_units`` these two are a warning note instead. A continuous joint logged modulo a turn
+(in [-pi, pi) or [0, 2 pi), as drivers often report it) is unwrapped: a step of more than pi between
+samples is a whole turn, counted in a note (streamed too, across blocks). Rows are named as the
+file counts them: text files by file line (1-based) and data row (1-based, the first row after the
+header is 1); NPZ and Parquet by 0-based index; bags by the 1-based message number on the topic.
 
 Streamed logs
 -------------
@@ -256,10 +258,13 @@ def read_log(path, robot: Robot, columns=None, *, allow_subset: bool = False,
 def _layout_columns(names: list[str], spec: dict, joints: list[_Joint], robot: Robot) -> list[str]:
     """The columns of a file the layout reads, of those it has: time, the joints', a floating base's pose and twist.
 
+    A fixed robot's log may hold a base pose too: read to check that it does not move
+    (:func:`_check_still_base`).
+
     One list for every reader that loads columns by name (NPZ, Parquet, streamed), so that each
     format reads what a text file read whole offers (:func:`_base_columns` then checks them).
     """
-    base = (*POSE_COLUMNS, *TWIST_COLUMNS) if robot.floating else ()
+    base = (*POSE_COLUMNS, *TWIST_COLUMNS) if robot.floating else POSE_COLUMNS  # fixed: checked to be still
     cols = [spec["time"], *(c for x in joints for c in x.cols.values() if c), *base]
     have = set(names)
     return [c for c in dict.fromkeys(cols) if c in have]
@@ -966,10 +971,11 @@ def _unknown(robot: Robot, name: str) -> str:
 
 
 def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
-              require_time: bool = True, base: list[str] = ()) -> JointLog:
+              require_time: bool = True, base: list[str] = (), turns: dict | None = None) -> JointLog:
     """Check the values (finite, time increasing, plausible) and convert to the joint side.
 
-    ``bounds``: ``(max_angle, max_travel, allow_units)`` (:func:`read_log`).
+    ``bounds``: ``(max_angle, max_travel, allow_units)`` (:func:`read_log`); ``turns``: the
+    unwrapping of continuous joints carried from the block before (:func:`_unwrap_turns`).
     """
     tcol = spec["time"] if not table.is_bag else "t"
     untimed = tcol not in table.columns and not require_time
@@ -992,6 +998,8 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
             arrays[k] = None
             continue
         raw = np.stack([table.columns[x.cols[k]] for x in joints], axis=1)
+        if k == "q":
+            raw = _unwrap_turns(table, joints, raw, {} if turns is None else turns)
         sign = np.array([x.sign for x in joints])
         ratio = np.array([x.ratio for x in joints])
         if k == "tau":
@@ -1015,9 +1023,39 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
                     cur=arrays["cur"])
 
 
+def _unwrap_turns(table: _Table, joints: list[_Joint], raw: np.ndarray, turns: dict) -> np.ndarray:
+    """Positions of continuous joints logged modulo a turn, unwrapped (``raw (S, m)``, a note counting the wraps).
+
+    Every step of more than pi between samples is taken as a wrap of 2 pi (``np.unwrap``). Only joints
+    the model declares without position limits (:func:`unbounded_joints`: a URDF ``continuous`` joint,
+    an MJCF hinge without ``range``), whose angle is the same modulo a turn (a true step of pi or
+    more would be half a turn in one sample: aliased anyway). ``turns``: per joint column, ``(last raw
+    value, its shift)`` of the block before, updated (a streamed log unwraps across its blocks).
+    """
+    out = raw
+    for k, x in enumerate(joints):
+        if not x.unbounded:
+            continue
+        col = raw[:, k]
+        last, shift = turns.get(k, (col[0], 0.0))
+        seq = np.concatenate([[last], col])
+        wraps = int(np.count_nonzero(np.abs(np.diff(seq)) > np.pi))
+        if wraps or shift:
+            if out is raw:
+                out = raw.copy()
+            out[:, k] = np.unwrap(seq)[1:] + shift
+        if wraps:
+            table.notes.append(f"{table.label(x.cols['q'])}: continuous joint {x.joint!r} logged modulo a turn: "
+                               f"unwrapped ({_plural(wraps, 'step')} of more than pi between samples taken as whole "
+                               f"turns, {table.row(0)} to {table.row(len(col) - 1)})")
+        turns[k] = (col[-1], out[-1, k] - col[-1])
+    return out
+
+
 def _base_columns(table: _Table, robot: Robot) -> list[str]:
     """A floating base's pose columns and, when all six are there, its twist columns (else ``[]``)."""
     if not robot.floating:
+        _check_still_base(table, robot)
         return []
     clash = [j for j in robot.joint_names if j in BASE_COORDINATES]
     if clash:
@@ -1037,6 +1075,36 @@ def _base_columns(table: _Table, robot: Robot) -> list[str]:
         raise DataError(f"{table.source}: base twist columns {', '.join(twist)} without "
                         f"{', '.join(c for c in TWIST_COLUMNS if c not in twist)} (give all six, or none)")
     return list(POSE_COLUMNS) + twist
+
+
+#: a fixed robot's log whose base pose moves more than this [m, degree] is refused (mocap noise on a bolted base:
+#: about a millimetre and a tenth of a degree)
+STILL_BASE = (0.01, 1.0)
+
+
+def _check_still_base(table: _Table, robot: Robot, first: np.ndarray | None = None) -> np.ndarray | None:
+    """Refuse a fixed robot's log whose floating-base pose columns move (``--floating`` forgotten).
+
+    The joints alone would be identified as if the base stood still: a wrong model with nothing
+    to show it. ``first``: the pose ``(7,)`` the motion is measured from (a streamed log's first
+    sample), else this table's first; returned (None: no pose columns).
+    """
+    if not all(c in table.columns for c in POSE_COLUMNS):
+        return None
+    pose = np.stack([table.columns[c] for c in POSE_COLUMNS], axis=1)
+    if not np.isfinite(pose).all() or not len(pose):
+        return first  # the joints' checks name bad values; these columns are not read
+    ref = pose[0] if first is None else first
+    moved = float(np.max(np.linalg.norm(pose[:, :3] - ref[:3], axis=1)))
+    quat = pose[:, 3:] / np.maximum(np.linalg.norm(pose[:, 3:], axis=1, keepdims=True), 1e-300)
+    q0 = quat[0] if first is None else ref[3:] / max(float(np.linalg.norm(ref[3:])), 1e-300)
+    turned = float(np.degrees(2 * np.arccos(np.clip(np.abs(quat @ q0), 0.0, 1.0))).max())
+    if moved > STILL_BASE[0] or turned > STILL_BASE[1]:
+        raise DataError(f"{table.source}: columns {', '.join(POSE_COLUMNS)}: a floating base's pose that moves "
+                        f"({moved:.3g} m, {turned:.3g} degree from the first sample), but robot {robot.name!r} has a "
+                        "fixed root: --floating (floating=True) attaches it by a free joint; or leave the columns out "
+                        "if the base is fixed")
+    return ref
 
 
 def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
@@ -1061,7 +1129,7 @@ def _with_base(table: _Table, log: JointLog, base: list[str]) -> JointLog:
     rates = None
     if log.dq is not None and len(base) > len(POSE_COLUMNS):
         twist = np.stack([table.columns[c] for c in TWIST_COLUMNS], axis=1)
-        notes += _check_twist_frame(table, log.t, chart, twist)
+        notes += _check_twist_frame(table, log.t, chart, twist, pose[:, 3:])
         rates = chart_rates(chart, twist)
     elif log.dq is not None:
         rates = np.gradient(chart, log.t, axis=0)
@@ -1089,11 +1157,18 @@ TWIST_FRAME_RATIO, TWIST_FRAME_MISS = 0.5, 0.05
 TWIST_POOR = 0.25
 
 
-def _check_twist_frame(table: _Table, t: np.ndarray, chart: np.ndarray, twist: np.ndarray) -> list[str]:
-    """Refuse a base twist given in the world frame (the pose's derivative says which); note one that fits neither."""
+def _check_twist_frame(table: _Table, t: np.ndarray, chart: np.ndarray, twist: np.ndarray,
+                       quat: np.ndarray) -> list[str]:
+    """Refuse a base twist given in the world frame, or a scalar-last quaternion; note a twist that fits neither.
+
+    The pose's derivative says which frame the twist is in; read scalar-last (``quat (S, 4)`` as
+    logged), the pose the twist follows says the quaternion's order (:func:`_check_quaternion_order`).
+    """
     from ..kinematics.floating import TWIST_WINDOW, twist_mismatch
 
     miss = twist_mismatch(t, chart, twist)
+    if np.nan_to_num(miss[0], nan=0.0).max() > TWIST_FRAME_MISS:
+        _check_quaternion_order(table, t, chart, twist, quat, miss[0])
     notes = []
     for k, (what, cols) in enumerate((("linear velocity", TWIST_COLUMNS[:3]), ("angular velocity", TWIST_COLUMNS[3:]))):
         body, world = miss[:, k]
@@ -1108,6 +1183,27 @@ def _check_twist_frame(table: _Table, t: np.ndarray, chart: np.ndarray, twist: n
                          f"{TWIST_WINDOW:g} s windows; by {world:.0%} read as world-frame): check its units, frame "
                          "and time stamps")
     return notes
+
+
+def _check_quaternion_order(table: _Table, t: np.ndarray, chart: np.ndarray, twist: np.ndarray, quat: np.ndarray,
+                            miss: np.ndarray) -> None:
+    """Refuse a base quaternion logged scalar-last (x, y, z, w) in the columns of one scalar-first (w, x, y, z).
+
+    Only with a logged twist, which says which reading the pose's motion follows: the twist
+    misses the pose read as logged (``miss (2,)``, linear and angular: :func:`twist_mismatch`) and
+    follows it within ``TWIST_FRAME_MISS`` read scalar-last. Without a twist nothing tells them
+    apart (both are unit quaternions).
+    """
+    from ..kinematics.floating import quaternion_matrix, twist_mismatch, zyx_of_rotation
+
+    swapped = np.concatenate([chart[:, :3], zyx_of_rotation(quaternion_matrix(quat[:, [3, 0, 1, 2]]))], axis=1)
+    alt = np.nan_to_num(twist_mismatch(t, swapped, twist)[0], nan=0.0)
+    if alt.max() < TWIST_FRAME_MISS:
+        raise DataError(f"{table.source}: columns base_qw, base_qx, base_qy, base_qz: the base's quaternion looks "
+                        f"scalar-last (x, y, z, w): read so, the logged twist follows the pose (misses it by "
+                        f"{alt.max():.1%}), read as the layout's scalar-first w, x, y, z it misses by "
+                        f"{np.nan_to_num(miss, nan=0.0).max():.1%}; write w in base_qw (SciPy's as_quat and ROS "
+                        "give x, y, z, w)")
 
 
 def _conversion_notes(joints: list[_Joint], spec: dict) -> list[str]:
@@ -1364,11 +1460,7 @@ class LogStream:
                             "pose is unwrapped over the whole log), not streamed")
         self.bounds = (max_angle, max_travel, bool(allow_units))
         self.block_bytes = max(int(block_bytes), 1)
-        if self.kind == "npz":
-            self._members, _ = _npz_members(p)
-            self.names = list(self._members)
-        else:
-            self.names = self._text_header()[0] if self.kind == "text" else self._parquet_names()
+        self.names = self._names()
         empty = _Table(self.source, {n: np.empty(0) for n in self.names}, np.empty(0, int), "")
         if self.kind != "text":
             what = "array" if self.kind == "npz" else "column"
@@ -1386,6 +1478,13 @@ class LogStream:
 
     def __repr__(self) -> str:
         return f"<LogStream {self.source}: {len(self.joints)} joints, {self.kind}>"
+
+    def _names(self) -> list[str]:
+        """The file's column names (an NPZ's members are indexed on the way)."""
+        if self.kind == "npz":
+            self._members, _ = _npz_members(self.path)
+            return list(self._members)
+        return self._text_header()[0] if self.kind == "text" else self._parquet_names()
 
     @functools.cached_property
     def decoded_mb(self) -> float:
@@ -1411,9 +1510,10 @@ class LogStream:
             an empty file.
         """
         tables = {"text": self._text_tables, "parquet": self._parquet_tables, "npz": self._npz_tables}[self.kind]()
-        last_t, count = None, 0
+        last_t, count, turns, still = None, 0, {}, None
         for table in tables:
-            log = _assemble(table, self._joints, self.spec, self.bounds)
+            log = _assemble(table, self._joints, self.spec, self.bounds, turns=turns)
+            still = _check_still_base(table, self._robot, still)
             if last_t is not None and not log.t[0] > last_t:
                 what = "repeats" if log.t[0] == last_t else "is before"
                 raise DataError(f"{self.source}: {table.label(self.spec['time'])}, {table.row(0)}: time "

@@ -115,7 +115,7 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     from .sources import check_urdf_meshes, model_files
 
     source, dest = Path(source), Path(dest)
-    _check_robot(robot, source)
+    check_mjcf_robot(robot, source)
     urdf = source.suffix.lower() == ".urdf"
     if urdf:  # MuJoCo's URDF import reads the meshes: never a FIFO or a device
         check_urdf_meshes(source)
@@ -153,8 +153,23 @@ def write_mjcf(source: str | Path, dest: str | Path, robot: Robot, params, conve
     return notes
 
 
-def _check_robot(robot: Robot, source: Path) -> None:
-    """Refuse what the writer does not handle: loops, couplings, a floating base, multi-joint bodies."""
+def check_mjcf_robot(robot: Robot, source) -> None:
+    """Refuse what the writer does not handle: loops, couplings, a floating base, multi-joint bodies.
+
+    Called before any fit too (:func:`baseparams.identify` with ``mjcf=``): the robot says it.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot the model file describes.
+    source : str or Path
+        The model file, for messages.
+
+    Raises
+    ------
+    ModelError
+        One line naming the body or the robot and what the writer does not handle.
+    """
     if robot.has_loops or robot.couplings:
         raise ModelError(f"{source}: --mjcf writes tree robots; robot {robot.name!r} has closed loops or coupled "
                          f"joints (equalities), whose MuJoCo inverse dynamics is not the identified model's")

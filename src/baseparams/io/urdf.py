@@ -69,12 +69,13 @@ def _floats(text: str | None, n: int, what: str, default, kind: str | None = Non
     return v
 
 
-def _parse(path: Path, data: bytes | None = None) -> ET.Element:
+def _parse(path: Path, data: bytes | None = None, notes: list[str] | None = None) -> ET.Element:
     """The file's root element, tolerating what urdfdom, Pinocchio and pybullet tolerate.
 
     That is a UTF-8 byte-order mark, whitespace before ``<?xml``, whitespace and NUL bytes after
     the root element. Anything else malformed is a one-line error naming the file. ``data``: the
-    document already read (an expanded xacro file), else the file is read.
+    document already read (an expanded xacro file), else the file is read. ``notes``: given, the
+    note on namespaced content left out (:func:`_foreign_elements`) is appended to it too.
     """
     if data is None:
         data = read_input_bytes(path, MODEL_MAX_BYTES, error=ModelError)
@@ -94,7 +95,9 @@ def _parse(path: Path, data: bytes | None = None) -> ET.Element:
             raise ModelError(f"{path}: malformed XML ({msg}: line {line + skipped}, column {col})") from None
     declared = {uri.decode(errors="replace"): prefix.decode(errors="replace")
                 for prefix, uri in reversed(_DECLARATION.findall(body))}  # the first declaration of a URI names it
-    _foreign_elements(root, path, undeclared, declared)
+    note = _foreign_elements(root, path, undeclared, declared)
+    if note and notes is not None:
+        notes.append(note)
     return root
 
 
@@ -133,7 +136,7 @@ def _declare_prefixes(body: bytes, exc: ET.ParseError) -> tuple[ET.Element | Non
         return None, []
 
 
-def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str], declared: dict[str, str]) -> None:
+def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str], declared: dict[str, str]) -> str | None:
     """Drake's extensions read as Drake reads them, every other namespaced element or attribute dropped and counted.
 
     Namespaces are honoured as declared: only elements in Drake's namespace (:func:`_is_drake`) are
@@ -142,9 +145,15 @@ def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str], decla
     namespace -- Drake's collision filters, rotor inertia, gear ratio, hydroelastic properties,
     acceleration limits, or anything of another namespace (``<foo:joint>`` is not a URDF joint) --
     is removed, and one warning counts what was left out (and names the prefixes used without a
-    declaration). ``declared``: prefix of each declared namespace URI, for the messages.
+    declaration), the note returned (None: nothing to say). ``declared``: prefix of each declared
+    namespace URI, for the messages.
     """
-    dropped: dict[str, int] = {}
+    dropped: dict[bool, dict[str, int]] = {True: {}, False: {}}  # Drake's, another namespace's: shown name, count
+
+    def drop(tag: str, shown: str) -> None:
+        part = dropped[_is_drake(tag[1:].split("}", 1)[0])]
+        part[shown] = part.get(shown, 0) + 1
+
     stack = [root]
     while stack:  # a dropped element's own children are not counted again
         parent = stack.pop()
@@ -156,28 +165,29 @@ def _foreign_elements(root: ET.Element, path: Path, undeclared: list[str], decla
                     parent.append(_ball_constraint_loop(child, path))
                     continue
                 if not (_is_drake(uri) and local == "joint" and _drake_joint(child, path)):
-                    shown = f"<{_shown_name(child.tag, declared)}>"
-                    dropped[shown] = dropped.get(shown, 0) + 1
+                    drop(child.tag, f"<{_shown_name(child.tag, declared)}>")
                     parent.remove(child)
                     continue
             stack.append(child)
     for elem in root.iter():
         for key in [k for k in elem.attrib if k.startswith("{")]:
-            shown = _shown_name(key, declared)
-            dropped[shown] = dropped.get(shown, 0) + 1
+            drop(key, _shown_name(key, declared))
             del elem.attrib[key]
-    if not dropped and not undeclared:
-        return
-    warnings.warn(f"{path}: {_foreign_note(dropped, undeclared)}", URDFWarning, stacklevel=4)
+    if not dropped[True] and not dropped[False] and not undeclared:
+        return None
+    note = _foreign_note(dropped[True], dropped[False], undeclared)
+    warnings.warn(f"{path}: {note}", URDFWarning, stacklevel=4)
+    return note
 
 
-def _foreign_note(dropped: dict[str, int], undeclared: list[str]) -> str:
-    """The one note on namespaced content: Drake's that describes no rigid body, then other namespaces'."""
+def _foreign_note(drake: dict[str, int], other: dict[str, int], undeclared: list[str]) -> str:
+    """The one note on namespaced content: Drake's that describes no rigid body, then other namespaces'.
+
+    A prefix ``drake`` bound to another namespace is among the others (classed by the namespace).
+    """
     def listed(items: dict[str, int]) -> str:
         return ", ".join(f"{k} x{v}" if v > 1 else k for k, v in sorted(items.items()))
 
-    drake = {k: v for k, v in dropped.items() if k.lstrip("<").startswith("drake:")}
-    other = {k: v for k, v in dropped.items() if k not in drake}
     parts = [f"namespace prefixes {', '.join(repr(p) for p in undeclared)} used without a declaration: read "
              f"leniently (as Drake does)"] if undeclared else []
     if drake:
@@ -343,9 +353,21 @@ def load_urdf(path: str | Path, floating: bool = False, gravity=(0.0, 0.0, -9.81
         Physically infeasible inertias of moving links (without ``strict_inertia``).
     """
     path = Path(path)
-    root = _parse(path, data)
+    foreign: list[str] = []
+    root = _parse(path, data, foreign)
     if edit is not None:
         edit(root)
+    try:
+        return _robot_of(root, path, floating, gravity, name, strict_inertia)
+    except ModelError as exc:  # what was left out may be why: said with the refusal (the warning is lost with it)
+        if not foreign:
+            raise
+        raise type(exc)(f"{exc} (note: {foreign[0]})") from None
+
+
+def _robot_of(root: ET.Element, path: Path, floating: bool, gravity, name: str | None,
+              strict_inertia: bool) -> Robot:
+    """:func:`load_urdf` once the document is parsed: the robot its ``<robot>`` element describes."""
     if root.tag != "robot":
         raise ModelError(f"{path}: root element is <{root.tag}>, expected <robot>")
     links = _index_links(root, path)

@@ -174,6 +174,10 @@ convention, covariance, score_cutoff, allow_units, analysis_samples, literal, te
     reporter = _reporter or Reporter()
     run = plan_identify(model, log, keywords, reporter if progress is None else replace(reporter, progress=progress))
     robot = robot_of(model, "identify")
+    if run.outputs.mjcf is not None:  # what the writer refuses, refused before the fit (the robot says it)
+        from ..io.mjcf_write import check_mjcf_robot
+
+        check_mjcf_robot(robot, run.source)
     result, read = _run_identification(robot, log, run)
     write_results(result, read, run.source, run.outputs, run.files, run.reporter)
     if run.truth is not None:

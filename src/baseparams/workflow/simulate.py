@@ -17,8 +17,12 @@ from .outputs import check_outputs
 #: simulate's numeric keywords (each in :data:`baseparams.arguments.RANGES`)
 NUMBERS = ("duration", "rate", "amplitude", "noise", "seed", "analysis_samples", "robots")
 
+#: the random motion's keywords (None: a given trajectory's own, else these defaults; amplitude's depends on the robot)
+RANDOM_MOTION = {"duration": 20.0, "rate": 500.0, "amplitude": None}
 
-def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 500.0, amplitude: float | None = None,
+
+def simulate(model, trajectory=None, *, duration: float | None = None, rate: float | None = None,
+             amplitude: float | None = None,
              noise: float = 0.0, seed: int = 0, rotor: bool = False, friction=IDENTIFY["friction"],
              convention: str = "khalil", analysis_samples: int | None = None, robots: int | None = None, out=None):
     """A synthetic joint log with known parameters: ``baseparams simulate`` (record, without a robot).
@@ -31,11 +35,12 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
     trajectory : Excitation, str, path or tuple, optional
         The motion: a designed :class:`Excitation`, its file (``excite --out``) or ``(t (S,), q,
         dq, ddq (S, m))``; default a random Fourier series (``duration``, ``rate``, ``amplitude``).
-    duration, rate : float
-        Without ``trajectory``: length [s] and sampling rate [Hz].
+    duration, rate : float, optional
+        Without ``trajectory``: length [s] (default 20) and sampling rate [Hz] (default 500).
     amplitude : float, optional
         Without ``trajectory``: joint excursion [rad or m] (default 0.5, within a loop robot's
-        sampling box).
+        sampling box). These three are refused with a ``trajectory``: its own times and
+        positions say them.
     noise : float
         Standard deviation of the Gaussian torque noise [N m], ``>= 0``.
     seed : int
@@ -78,6 +83,8 @@ def simulate(model, trajectory=None, *, duration: float = 20.0, rate: float = 50
           "friction": friction, "convention": convention, "analysis_samples": analysis_samples, "robots": robots,
           "out": out}
     trajectory, inputs = check_simulate(model, trajectory, kw)
+    duration = RANDOM_MOTION["duration"] if duration is None else duration
+    rate = RANDOM_MOTION["rate"] if rate is None else rate
     robot = robot_of(model, "simulate")
     options = {"duration": duration, "rate": rate, "amplitude": amplitude, "noise": noise, "seed": seed,
                "rotor": rotor, "friction": friction_terms(friction), "convention": convention,
@@ -120,10 +127,17 @@ def check_simulate(model, trajectory, keywords: dict) -> tuple:
     BaseparamsError
         The first keyword refused, in one line naming it.
     """
-    from ..arguments import ArgumentTypeError, check_flags, check_keywords, check_samples, check_total
+    from ..arguments import ArgumentError, ArgumentTypeError, check_flags, check_keywords, check_samples, check_total
     from ..ident.drives import friction_terms
 
-    k = {"duration": 20.0, "rate": 500.0, "robots": None, "out": None, **keywords}
+    given = [n for n in RANDOM_MOTION if keywords.get(n) is not None]
+    if trajectory is not None and given:
+        one = len(given) == 1
+        raise ArgumentError(f"simulate: {' and '.join(n + '=' for n in given)} {'sets' if one else 'set'} the random "
+                            "motion, not a given trajectory= (its own times and positions say them): leave "
+                            f"{'it' if one else 'them'} out, or the trajectory")
+    k = {"robots": None, "out": None, **keywords}
+    k.update({n: v for n, v in RANDOM_MOTION.items() if k.get(n) is None})
     check_keywords("simulate", **{n: k[n] for n in NUMBERS if n in k})
     check_flags("simulate", **{n: k[n] for n in ("rotor",) if n in k})
     if "friction" in k:

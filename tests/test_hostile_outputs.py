@@ -473,3 +473,24 @@ def test_an_interrupt_of_a_run_read_whole_leaves_nothing(streamed, tmp_path, nam
 def test_an_uninterrupted_streamed_run_writes_every_output(streamed, tmp_path):
     rc, err, left, tmp = _interrupted(streamed, tmp_path)
     assert rc == 0 and left == ["p.csv", "r.html", "r.json"] and tmp == [], (rc, left, tmp, err[-500:])
+
+
+@pytest.mark.parametrize("module", ["baseparams", "baseparams.cli"])
+def test_an_interrupt_while_the_package_imports_is_one_line(module, tmp_path):
+    """Ctrl-C in the ~0.2 s the command line spends importing (before its handler exists) was a 40-line traceback:
+    a KeyboardInterrupt raised inside the package's own imports (deterministically: from the import of a submodule
+    the package imports) prints one line and keeps the interrupt's exit status; importing the package as a library
+    leaves the interpreter's hook as it was."""
+    import signal
+
+    hook = tmp_path / "sitecustomize.py"  # interrupts the import of baseparams.model (imported by the package)
+    hook.write_text("import sys\nclass _F:\n    def find_spec(self, name, path=None, target=None):\n"
+                    "        if name == 'baseparams.model':\n            raise KeyboardInterrupt\n        return None\n"
+                    "sys.meta_path.insert(0, _F())\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])}
+    p = subprocess.run([sys.executable, "-c", f"import {module}"], env=env, capture_output=True, text=True, timeout=60)
+    assert p.returncode in (-signal.SIGINT, 130), p.stderr
+    assert p.stderr.strip().splitlines() == ["baseparams: interrupted while starting (nothing was written)"]
+    done = subprocess.run([sys.executable, "-c", "import sys, baseparams; print(sys.excepthook is sys.__excepthook__)"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.stdout.strip() == "True", done.stderr

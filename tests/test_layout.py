@@ -18,7 +18,7 @@ PKG = SRC / "baseparams"
 #: own part or from parts on lower floors. No exception: a part is one floor, and an import that runs back up
 #: or sideways (another part on the same floor) fails :func:`test_layering`.
 LAYERS = {
-    "errors": 0, "enums": 0, "pga": 0, "version": 0,
+    "errors": 0, "enums": 0, "pga": 0, "version": 0, "startup": 0,
     "files": 1, "display": 1, "arguments": 1, "interrupts": 1,
     "schema": 2, "tables": 2,
     "model": 3,

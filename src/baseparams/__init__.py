@@ -74,6 +74,9 @@ import importlib as _importlib
 import os as _os
 import warnings as _warnings
 
+from . import startup as _startup  # first: Ctrl-C while the package imports says one line, not a traceback
+
+# isort: split
 # the subpackage first: importing it later would rebind ``baseparams.regressor`` to the module
 from . import regressor as _regressor_pkg  # noqa: F401  (numpy only)
 from .analysis import Analysis, analyze, regressor
@@ -241,3 +244,6 @@ def __dir__() -> list[str]:
     # the public names and documented subpackages: not the helpers a submodule import binds
     # (``baseparams.display``), nor ``annotations`` or private names
     return sorted(set(__all__) | set(_SUBMODULES) | {n for n in globals() if n.startswith("__")})
+
+
+_startup.done()  # the package imported: interrupts are the caller's again

@@ -20,8 +20,12 @@ from __future__ import annotations
 
 import sys
 
+from . import startup as _cli_startup  # noqa: F401  (first: Ctrl-C during the command line's imports: one line)
+
+# isort: split
 import numpy as np
 
+from .. import startup
 from ..errors import BaseparamsError
 from ..interrupts import EXIT_TERMINATED, Interrupts, Terminated
 from .analyze import run as cmd_analyze
@@ -100,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     _one_line_notes()
     try:
         with Interrupts():  # SIGTERM unwinds like Ctrl-C: every output's temporary file removed
+            startup.done()
             preflight(args)
             return args.func(args)
     except BaseparamsError as exc:

@@ -224,6 +224,11 @@ class SpilledRows(RowAccumulator):
         self.children = list(children or [])
         self.samples = self.hi - self.lo
         self._norms = None
+        self._staircased: dict[bytes, np.ndarray] = {}  # staircase_factor's, per weighting
+        self._order = None  # the staircase (held by the root)
+        self.root = self  # whose staircase order the rows are stacked in (the whole log's, set by spill)
+        for c in self.children:
+            c.root = self
 
     def __repr__(self) -> str:
         return f"<SpilledRows samples {self.lo}-{self.hi} of {self.nrows} rows x {self.nparams} parameters (a file)>"
@@ -292,49 +297,87 @@ class SpilledRows(RowAccumulator):
         ndarray, shape ``(<= p + 1, p + 1)``
             Read-only.
         """
+        from ..numerics import blas_threads
+
         w = np.ascontiguousarray(weights, dtype=float).reshape(-1)
         hit = self._stacked.get(w.tobytes())
         if hit is not None:
             return hit
-        if self.children:
-            qr = StreamingQR(self.nparams + 1)
-            for c in self.children:
-                qr.add(c.stacked(w))
-            r = qr.r
-        else:
-            r = self._staircase(w)
+        perm, _ = self.staircase()
+        with blas_threads():  # back to the columns' own order: one QR of the (p + 1)^2 factor
+            r = np.linalg.qr(self.staircase_factor(w)[:, np.argsort(perm)], mode="r")
         r.flags.writeable = False
         if len(self._stacked) >= self.STACK_CACHE:
             self._stacked.pop(next(iter(self._stacked)))
         self._stacked[w.tobytes()] = r
         return r
 
-    def _staircase(self, w: np.ndarray) -> np.ndarray:
-        """The weighted rows' triangular factor, each measured row's samples added where its columns start.
+    def staircase(self) -> tuple[np.ndarray, np.ndarray]:
+        """The columns' staircase order and each row's start (:func:`staircase_order`), the whole log's.
 
-        A tree's measured row (a joint's torque) has columns only of the bodies it carries: ordered
-        by the last row a column appears in (:func:`staircase_order`), a row's columns lie at or after its
-        first, and folding its samples into ``R`` touches only ``R``'s trailing block from there
+        Returns
+        -------
+        perm : ndarray of int, shape ``(p + 1,)``
+            The order (the torque column last whenever every row has it).
+        starts : ndarray of int, shape ``(m,)``
+            Each row's first column in it.
+        """
+        root = self.root
+        if root._order is None:
+            root._order = staircase_order(root.column_norms2() > 0)
+        return root._order
+
+    def staircase_factor(self, weights) -> np.ndarray:
+        """The weighted rows' triangular factor in the staircase order, each measured row folded in where it starts.
+
+        A tree's measured row (a joint's torque) has columns only of the bodies it carries: in the
+        order of :meth:`staircase`, a row's columns lie at or after its start, and folding its samples
+        into ``R`` touches only ``R``'s trailing block from there
         (:func:`~baseparams.numerics.triangular_update`; a Householder reflection of a column the new
         rows do not have is the identity). A chain's rows then cost ``2 S sum_r (p - start_r)^2``, a
-        third of a dense stacking's ``2 S m p^2`` (a 220-link chain: ~3.5e11 flops a weighting, not 1.1e12).
-        The factor is returned in the columns' own order (one QR of the permuted ``(p + 1)^2`` factor).
-        """
-        from ..numerics import blas_threads, triangular_update
+        third of a dense stacking's ``2 S m p^2`` (a 220-link chain: ~3.5e11 flops a weighting, not
+        1.1e12). The pieces (``children``) are stacked in that order too: one return to the columns'
+        order for the whole (:meth:`stacked`), not one per piece. A piece's is cached per weighting.
 
+        Parameters
+        ----------
+        weights : ndarray, shape ``(m,)``
+            Row weights.
+
+        Returns
+        -------
+        ndarray, shape ``(p + 1, p + 1)``
+            Upper triangular in the staircase order (read-only).
+        """
+        from ..numerics import triangular_update
+
+        w = np.ascontiguousarray(weights, dtype=float).reshape(-1)
+        hit = self._staircased.get(w.tobytes())
+        if hit is not None:
+            return hit
         p1 = self.nparams + 1
-        perm, starts = staircase_order(self.column_norms2() > 0)
-        r = np.zeros((p1, p1))
-        group = max(1, int(BLOCK_BYTES // (8 * max(self.samples, 1) * p1)))
-        for r0 in range(0, self.nrows, group):
-            r1 = min(r0 + group, self.nrows)
-            s = int(starts[r0:r1].min())
-            if s >= p1:  # rows without a column (a measured row nothing moves)
-                continue
-            rows = (self._rows(r0, r1) * w[None, r0:r1, None]).reshape(-1, p1)[:, perm[s:]]
-            r[s:, s:] = triangular_update(r[s:, s:], rows)
-        with blas_threads():
-            return np.linalg.qr(r[:, np.argsort(perm)], mode="r")
+        perm, starts = self.staircase()
+        if self.children:
+            qr = StreamingQR(p1)
+            for c in self.children:
+                qr.add(c.staircase_factor(w))
+            r = np.vstack([qr.r, np.zeros((p1 - qr.r.shape[0], p1))])
+        else:
+            r = np.zeros((p1, p1))
+            group = max(1, int(BLOCK_BYTES // (8 * max(self.samples, 1) * p1)))
+            for r0 in range(0, self.nrows, group):
+                r1 = min(r0 + group, self.nrows)
+                s = int(starts[r0:r1].min())
+                if s >= p1 or self.samples == 0:  # rows without a column (a measured row nothing moves)
+                    continue
+                rows = (self._rows(r0, r1) * w[None, r0:r1, None]).reshape(-1, p1)[:, perm[s:]]
+                r[s:, s:] = triangular_update(r[s:, s:], rows)
+        r.flags.writeable = False
+        if self.root is not self:  # a piece's, for the folds' systems (the whole's own is kept by stacked)
+            if len(self._staircased) >= self.STACK_CACHE:
+                self._staircased.pop(next(iter(self._staircased)))
+            self._staircased[w.tobytes()] = r
+        return r
 
     def _rows(self, r0: int, r1: int, s0: int = 0, s1: int | None = None) -> np.ndarray:
         """Measured rows ``[r0, r1)`` of samples ``[s0, s1)`` (relative to ``lo``), ``(s1 - s0, r1 - r0, p + 1)``."""
@@ -413,7 +456,8 @@ class SpilledRows(RowAccumulator):
         int
             Their size.
         """
-        own = sum(r.nbytes for r in self._stacked.values()) + (0 if self._norms is None else self._norms.nbytes)
+        own = sum(r.nbytes for r in [*self._stacked.values(), *self._staircased.values()])
+        own += 0 if self._norms is None else self._norms.nbytes
         return own + sum(c.nbytes() for c in self.children)
 
 

@@ -114,6 +114,11 @@ def test_a_triangular_update_is_the_qr_of_the_stacked_rows(seed, ncols, k, untou
     assert got.shape == (ncols, ncols) and np.array_equal(np.tril(got, -1), np.zeros_like(got))
     assert np.abs(got.T @ got - want).max() <= 1e-12 * max(np.abs(want).max(), 1.0)
     dense = np.linalg.qr(np.vstack([r, rows]), mode="r")
+    other = np.triu(rng.normal(size=(ncols, ncols)))  # a TSQR's merge of two triangles
+    both = triangular_update(r.copy(), np.array(other, order="F"), triangular=True)
+    assert np.array_equal(np.tril(both, -1), np.zeros_like(both))
+    assert np.abs(both.T @ both - r.T @ r - other.T @ other).max() <= 1e-12 * max(np.abs(want).max(), 1.0,
+                                                                                   np.abs(other).max() ** 2)
     assert np.allclose(np.linalg.svd(got, compute_uv=False), np.linalg.svd(dense, compute_uv=False),
                        rtol=1e-9, atol=1e-12 * max(np.linalg.norm(want) ** 0.5, 1.0))
 

@@ -626,7 +626,7 @@ class StreamingQR:
             self._r = np.linalg.qr(stacked, mode="r")
 
 
-def triangular_update(r: np.ndarray, rows: np.ndarray) -> np.ndarray:
+def triangular_update(r: np.ndarray, rows: np.ndarray, triangular: bool = False) -> np.ndarray:
     """The triangular factor of ``[R; rows]`` for a square upper-triangular ``R`` (LAPACK ``dtpqrt``).
 
     A Householder QR of the stacked matrix that skips ``R``'s zeros: ``2 k n^2`` flops for ``k`` rows
@@ -639,7 +639,10 @@ def triangular_update(r: np.ndarray, rows: np.ndarray) -> np.ndarray:
         Upper triangular, zeros below the diagonal (zero diagonal entries allowed: columns no row has
         touched yet). Overwritten when Fortran-ordered.
     rows : ndarray, shape ``(k, n)``
-        The rows added (overwritten).
+        The rows added (overwritten when Fortran-ordered: pass rows of your own).
+    triangular : bool
+        ``rows`` is itself upper triangular (``k = n``, another factor: a TSQR's merge), which the
+        update skips too (``2/3 n^3`` flops instead of ``2 n^3``).
 
     Returns
     -------
@@ -651,10 +654,12 @@ def triangular_update(r: np.ndarray, rows: np.ndarray) -> np.ndarray:
     n = r.shape[1]
     if rows.shape[0] == 0 or n == 0:
         return r
+    if triangular and rows.shape != (n, n):
+        raise BaseparamsError(f"triangular_update: a triangular block must be {n} x {n}, got {rows.shape}")
     a = np.asfortranarray(r)
     b = np.asfortranarray(rows)
     with blas_threads():
-        a, _, _, info = lapack.dtpqrt(0, max(1, min(64, n)), a, b, overwrite_a=1, overwrite_b=1)
+        a, _, _, info = lapack.dtpqrt(n if triangular else 0, max(1, min(64, n)), a, b, overwrite_a=1, overwrite_b=1)
     if info != 0:
         raise BaseparamsError(f"triangular_update: LAPACK dtpqrt failed (info {info})")
     return a  # LAPACK neither reads nor writes below the diagonal: R's zeros stay

@@ -22,7 +22,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import BaseparamsError
-from ..numerics import StreamingQR
 from .estimate import RowAccumulator
 
 #: row factors [MB] from which a model's fitted rows are spilled to a file (and above ``memory_mb``)
@@ -204,7 +203,8 @@ class SpilledRows(RowAccumulator):
     Holds no row factors: :meth:`stacked` (cached per weighting), :meth:`row_sse`,
     :meth:`column_norms2` (cached) and :meth:`row_gram` read the file a block of samples at a time;
     an object with ``children`` (the cross-validation's folds) composes those from theirs, as a
-    combination does (each fold's stacked factor made once, the whole's their TSQR).
+    combination does (each fold's stacked factor made once, in the staircase order of the rows' columns,
+    :meth:`staircase_factor`; the whole's their TSQR, returned to the columns' order once).
 
     Parameters
     ----------
@@ -357,11 +357,10 @@ class SpilledRows(RowAccumulator):
             return hit
         p1 = self.nparams + 1
         perm, starts = self.staircase()
-        if self.children:
-            qr = StreamingQR(p1)
+        if self.children:  # a TSQR of the pieces' triangles
+            r = np.zeros((p1, p1))
             for c in self.children:
-                qr.add(c.staircase_factor(w))
-            r = np.vstack([qr.r, np.zeros((p1 - qr.r.shape[0], p1))])
+                r = triangular_update(r, np.array(c.staircase_factor(w), order="F"), triangular=True)
         else:
             r = np.zeros((p1, p1))
             group = max(1, int(BLOCK_BYTES // (8 * max(self.samples, 1) * p1)))

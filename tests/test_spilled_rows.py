@@ -122,3 +122,26 @@ def test_only_trees_whose_row_factors_exceed_the_budget_spill(seed):
                                                                                          floating=False)}), s, 0.0)
     assert not spilled.spills(SimpleNamespace(**{**vars(model), "log_base": True,
                                                  "robot": SimpleNamespace(has_loops=False, floating=True)}), s, 0.0)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_staircase_order_puts_every_rows_columns_after_its_start(seed):
+    """``staircase_order``: a permutation; each row's nonzero columns at or after its start; a chain's rows (row ``r``
+    the columns of bodies ``r ..``), shuffled, start where their bodies' columns do; an empty row starts at the end."""
+    rng = np.random.default_rng(seed)
+    m, per = int(rng.integers(1, 9)), int(rng.integers(1, 4))
+    body = np.repeat(np.arange(m), per)  # the body of each column
+    chain = (body[None, :] >= np.arange(m)[:, None]) & (rng.random((m, m * per)) < 0.8)
+    chain |= body[None, :] == np.arange(m)[:, None]  # each row has its own body's columns
+    shuffle = rng.permutation(m * per)
+    support = chain[:, shuffle]
+    if seed % 2:
+        support = np.vstack([support, np.zeros((1, m * per), dtype=bool)])
+    perm, starts = spilled.staircase_order(support)
+    assert np.array_equal(np.sort(perm), np.arange(m * per))
+    placed = support[:, perm]
+    for r in range(len(support)):
+        assert not placed[r, :starts[r]].any()
+    assert np.array_equal(starts[:m], np.arange(m) * per)
+    if seed % 2:
+        assert starts[-1] == m * per

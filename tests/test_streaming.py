@@ -95,3 +95,44 @@ def test_rank_decision_survives_an_svd_that_does_not_converge(monkeypatch):
     monkeypatch.setattr(nm.np.linalg, "svd", real)
     assert got.rank == ref.rank == 6 and got.nullity == 2
     np.testing.assert_allclose(got.singular_values, ref.singular_values, rtol=1e-10, atol=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31), ncols=st.integers(1, 70), k=st.integers(0, 90), untouched=st.integers(0, 5))
+def test_a_triangular_update_is_the_qr_of_the_stacked_rows(seed, ncols, k, untouched):
+    """``triangular_update(R, rows)``: upper triangular, ``R'^T R' = R^T R + rows^T rows`` and the same singular values
+    as a dense QR of ``[R; rows]``, also when ``R`` has zero diagonal entries (columns no row touched yet) and the rows
+    are fewer than the columns."""
+    from baseparams.numerics import triangular_update
+
+    rng = np.random.default_rng(seed)
+    r = np.triu(rng.normal(size=(ncols, ncols)))
+    r[:min(untouched, ncols)] = 0.0
+    rows = rng.normal(size=(k, ncols)) * 10.0 ** rng.uniform(-3, 3, ncols)
+    want = r.T @ r + rows.T @ rows
+    got = triangular_update(r.copy(), rows.copy())
+    assert got.shape == (ncols, ncols) and np.array_equal(np.tril(got, -1), np.zeros_like(got))
+    assert np.abs(got.T @ got - want).max() <= 1e-12 * max(np.abs(want).max(), 1.0)
+    dense = np.linalg.qr(np.vstack([r, rows]), mode="r")
+    other = np.triu(rng.normal(size=(ncols, ncols)))  # a TSQR's merge of two triangles
+    both = triangular_update(r.copy(), np.array(other, order="F"), triangular=True)
+    assert np.array_equal(np.tril(both, -1), np.zeros_like(both))
+    assert np.abs(both.T @ both - r.T @ r - other.T @ other).max() <= 1e-12 * max(np.abs(want).max(), 1.0,
+                                                                                   np.abs(other).max() ** 2)
+    assert np.allclose(np.linalg.svd(got, compute_uv=False), np.linalg.svd(dense, compute_uv=False),
+                       rtol=1e-9, atol=1e-12 * max(np.linalg.norm(want) ** 0.5, 1.0))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_wide_factor_fed_past_its_step_is_the_whole_matrix(seed, monkeypatch):
+    """Steps folded into a full triangle (the triangular update) give the dense factor: ``R^T R = W^T W``."""
+    rng = np.random.default_rng(seed)
+    monkeypatch.setattr(StreamingQR, "STEP", int(rng.integers(1, 30)))
+    monkeypatch.setattr(StreamingQR, "STEP_BYTES", 8.0)
+    ncols = int(rng.integers(1, 25))
+    w = rng.normal(size=(int(rng.integers(ncols, 300)), ncols))
+    qr = StreamingQR(ncols)
+    for part in np.array_split(w, int(rng.integers(1, 20))):
+        qr.add(part)
+    assert np.allclose(np.tril(qr.r, -1), 0.0)
+    assert np.abs(qr.r.T @ qr.r - w.T @ w).max() <= 1e-12 * np.linalg.norm(w) ** 2

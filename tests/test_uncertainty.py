@@ -133,3 +133,28 @@ def test_cli_covariance_option(tmp_path, capsys):
     assert main(["identify", "puma560", str(out)]) == 0
     text = capsys.readouterr().out
     assert "standard deviations: HAC Newey-West (Bartlett), bandwidth" in text
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_projection_bias_is_the_windows_sum_whatever_the_blocks_and_stride(seed):
+    """``HacMeat.bias()`` is ``(1 / b) sum_t stride C_t H^-1 C_t`` over the windows ``[t - b + 1, t]`` ending at every
+    ``stride``-th sample ``t`` up to ``n + b - 2`` (zero rows beyond the log), ``C_t`` their rows' ``A^T A``: by brute
+    force, fed in random blocks."""
+    rng = np.random.default_rng(seed)
+    n, m, p = int(rng.integers(1, 40)), int(rng.integers(1, 4)), int(rng.integers(1, 5))
+    b, stride = int(rng.integers(1, 12)), int(rng.integers(1, 15))
+    a, s = rng.normal(size=(n, m, p)), rng.normal(size=(n, p))
+    h_inv = np.linalg.inv(np.einsum("nmp,nmq->pq", a, a) + np.eye(p))
+    meat, k = HacMeat(p, b, h_inv, stride=stride), 0
+    while k < n:
+        size = int(rng.integers(1, 9))
+        meat.add(s[k:k + size], a[k:k + size])
+        k += size
+    st = meat.stride
+    want = np.zeros((p, p))
+    for t in range(0, n + b - 1, st):
+        g = a[max(t - b + 1, 0):min(t + 1, n)].reshape(-1, p)
+        c = g.T @ g
+        want += st * c @ h_inv @ c
+    assert np.allclose(meat.bias(), want / b, rtol=1e-10, atol=1e-12)
+    assert len(meat.open) <= -(-b // st) + 1  # only the windows still open are held

@@ -115,10 +115,10 @@ def trajectory_criterion(model: IdentModel, q, dq, ddq, chunk: int = 4000) -> tu
     logdet : float
         ``log det(M / S)``, ``M`` the information matrix ``A^T A`` (SI units).
     """
-    from ..ident.estimate import excitation, motion_factor
+    from ..ident.estimate import condition_number, motion_factor
 
     r = motion_factor(model, q, dq, ddq, chunk)
-    cond, _ = excitation(r, model.names)
+    cond = condition_number(r)
     diag = np.abs(np.diag(r))
     logdet = float(2 * np.sum(np.log(diag)) - model.n_params * np.log(len(q))) if np.all(diag > 0) else -np.inf
     return float(cond), logdet

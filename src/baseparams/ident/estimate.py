@@ -328,8 +328,9 @@ def least_squares(acc: RowAccumulator, names: list[str], weights: np.ndarray | N
                               f"record a longer log")
     r = stacked_factor(acc, w)
     r11, r12, rho = r[:p, :p], r[:p, p], abs(r[p, p]) if r.shape[0] > p else 0.0
-    cond, weak = excitation(r11, names)
+    cond = condition_number(r11)
     if not np.isfinite(cond) or cond > 1e12:
+        weak = excitation(r11, names)[1]
         raise BaseparamsError(f"the data do not excite every model parameter (condition number {cond:.3g}); "
                               f"weakest: {name_list(weak)}. Use a richer trajectory, or fewer drive terms")
     theta = np.linalg.solve(r11, r12)
@@ -444,6 +445,25 @@ def motion_stride(model, samples: int) -> int:
     """
     per = 2.0 * len(model.coords) * float(model.n_params) ** 2
     return max(1, math.ceil(samples * per / MOTION_FLOPS))
+
+
+def condition_number(r11: np.ndarray) -> float:
+    """Condition number of the column-scaled regressor (:func:`excitation`'s, without its weak directions).
+
+    Parameters
+    ----------
+    r11 : ndarray, shape ``(p, p)``
+        Triangular factor of the regressor (``||A x|| = ||R11 x||``).
+
+    Returns
+    -------
+    float
+        ``s_max / s_min`` of ``R11`` with unit-norm columns (inf when singular): singular values only,
+        a third of a full SVD's work (a 2 196-parameter model: ~2 s instead of ~6).
+    """
+    norms = np.linalg.norm(r11, axis=0)
+    s = np.linalg.svd(r11 / np.where(norms > 0, norms, 1.0), compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 0 else np.inf
 
 
 def excitation(r11: np.ndarray, names: list[str], weak_ratio: float = 1e-3) -> tuple[float, list[str]]:

@@ -343,7 +343,7 @@ def _physical(model, am, cur, gf, prior_weight):
 def _result_parts(model, tx, am, cur, gf, cov, label, anchors, scale_std, method):
     """The fit (its estimate's statistics in the currents' weighting) and the gains of a result."""
     from .currents import row_factors
-    from .estimate import Estimate, excitation
+    from .estimate import Estimate, condition_number
     from .fitting import Fit
     from .uncertainty import psd
 
@@ -356,7 +356,7 @@ def _result_parts(model, tx, am, cur, gf, cov, label, anchors, scale_std, method
     stack = np.concatenate([f * np.r_[np.full(p, gf.g[k] * gf.weights[k]), gf.weights[k]]
                             for k, f in enumerate(row_factors(am, cur))])
     r = np.linalg.qr(stack, mode="r")
-    cond = excitation(r[:p, :p], model.names)[0]
+    cond = condition_number(r[:p, :p])
     est = Estimate(method, gf.theta, std, pct, gf.weights, rms, float(np.sqrt(np.mean(e**2))), cond, len(cur),
                    r[:p, :p], r[:p, p], psd(cov[:p, :p]), f"{label}; the gains' uncertainty included")
     f = Fit(model, method, gf.theta, est, gf.physical)

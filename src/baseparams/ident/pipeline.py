@@ -207,7 +207,7 @@ def assemble(f: Fit, acc, opts: IdentOptions, account: Account, train: dict, val
 
 def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identification:
     """:func:`identify`'s steps (arguments as there, ``say`` the progress)."""
-    from .estimate import excitation, motion_factor, motion_stride
+    from .estimate import condition_number, motion_factor, motion_stride
     from .model import check_size, fit_cost
 
     train, held = (split_log(log, opts.holdout) if opts.holdout is not None else (log, validation))
@@ -245,7 +245,7 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
                                                     prep.full.t)
     k = motion_stride(model, prep.full.n_samples)  # 1 but for a large model's long log
     f_q, f_dq, f_ddq = (x[::k, cols] for x in (prep.full.q, prep.full.dq, prep.full.ddq))
-    motion = {"condition_number": excitation(motion_factor(model, f_q, f_dq, f_ddq), model.names)[0],
+    motion = {"condition_number": condition_number(motion_factor(model, f_q, f_dq, f_ddq)),
               "samples": int(len(f_q))}
     account = Account(train.n_samples, dict(prep.removed), float(prep.design.cutoff), int(prep.factor),
                       tuple(prep.notes), acc_note, tuple(term_notes), cov_note, tuple(unit_notes))
@@ -655,11 +655,11 @@ def _scores_many(f: Fit, acc, logs, preps, cols, validation, opts: IdentOptions,
 
 def _motion_many(model: IdentModel, preps, cols) -> dict:
     """The condition number of every recording's motion together."""
-    from .estimate import excitation, motion_factor
+    from .estimate import condition_number, motion_factor
 
     def stack(attr):
         return np.concatenate([getattr(p.full, attr)[:, c] for p, c in zip(preps, cols)])
 
     factor = motion_factor(model, stack("q"), stack("dq"), stack("ddq"))
-    return {"condition_number": excitation(factor, model.names)[0], "samples": int(sum(p.full.n_samples
+    return {"condition_number": condition_number(factor), "samples": int(sum(p.full.n_samples
                                                                                      for p in preps))}

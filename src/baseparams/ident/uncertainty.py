@@ -98,7 +98,9 @@ class HacMeat:
     ``stride``-th window, scaled): the residuals' scores are ``B_t - C_t H^-1 B_all`` exactly, so
     when the noise's long-run covariance is locally ``kappa A^T W A`` the expected meat is
     ``kappa (H - Q)`` short of ``kappa H`` by ``kappa Q`` (:func:`hac_covariance` adds it back).
-    Memory ``(b + block) m p`` floats, whatever the number of samples.
+    Each window's ``C_t`` is summed as its rows arrive, so no rows are held: memory ``b p`` floats
+    for the scores and ``ceil(b / stride) p^2`` for the windows still open, whatever the number of
+    samples and rows (a 220-link chain's 52 samples of rows were 200 MB).
 
     Parameters
     ----------
@@ -117,7 +119,7 @@ class HacMeat:
         self.stride = max(1, self.b // 8, int(stride or 1))
         self.h_inv = h_inv
         self.tail = np.zeros((0, self.p))
-        self.rows = None
+        self.open: dict[int, np.ndarray] = {}  # the last sample of each window Q still sums -> its C so far
         self.sum = np.zeros((self.p, self.p))
         self.q = np.zeros((self.p, self.p))
         self.samples = 0
@@ -147,21 +149,28 @@ class HacMeat:
         blocks = c[ends] - c[np.maximum(ends - self.b, 0)]
         self.sum += blocks.T @ blocks
         if rows is not None and self.h_inv is not None:
-            r = rows if self.rows is None else np.concatenate([self.rows, rows])
-            offset = self.samples - (len(r) - len(s))  # global index of r[0]
-            for k in range(len(r) - len(s), len(r)):
-                if (offset + k) % self.stride == 0:
-                    self._window(r[max(k + 1 - self.b, 0):k + 1])
-            self.rows = r[max(len(r) - keep, 0):] if keep else r[:0]
+            self._windows(rows)
         self.tail = x[max(len(x) - keep, 0):] if keep else x[:0]
         self.samples += len(s)
         return self
 
-    def _window(self, rows: np.ndarray) -> None:
-        """Add one window's ``C H^-1 C`` (scaled by the stride) to ``Q``."""
-        g = rows.reshape(-1, self.p)
-        c = g.T @ g
-        self.q += self.stride * (c @ self.h_inv @ c)
+    def _windows(self, rows: np.ndarray) -> None:
+        """Add the rows of samples ``samples ..`` to the windows they fall in; close the windows they complete."""
+        start, b, st = self.samples, self.b, self.stride
+        end = start + len(rows)
+        for t in range(-(-start // st) * st, end + b - 1, st):  # windows [t - b + 1, t] meeting [start, end)
+            lo, hi = max(t - b + 1, start), min(t + 1, end)
+            if lo >= hi:
+                continue
+            g = rows[lo - start:hi - start].reshape(-1, self.p)
+            part = g.T @ g
+            if t in self.open:
+                self.open[t] += part
+            else:
+                self.open[t] = part
+            if t < end:  # its last sample arrived
+                c = self.open.pop(t)
+                self.q += st * (c @ self.h_inv @ c)
 
     def meat(self) -> np.ndarray:
         """``S``: the windows running past the last sample closed (the fed scores unchanged).
@@ -188,13 +197,8 @@ class HacMeat:
             ``(1 / b) sum_t C_t H^-1 C_t`` (zero when no rows were fed).
         """
         q = self.q.copy()
-        if self.rows is not None and self.h_inv is not None:
-            r = self.rows
-            for extra in range(1, self.b):  # window ending at samples + extra - 1
-                if (self.samples + extra - 1) % self.stride == 0:
-                    g = r[max(len(r) - (self.b - extra), 0):].reshape(-1, self.p)
-                    c = g.T @ g
-                    q += self.stride * (c @ self.h_inv @ c)
+        for c in self.open.values():  # windows ending past the last sample: their rows are all in
+            q += self.stride * (c @ self.h_inv @ c)
         return q / self.b
 
 
@@ -227,8 +231,10 @@ def hac_covariance(blocks, r11: np.ndarray, theta: np.ndarray, weights: np.ndarr
 
     Parameters
     ----------
-    blocks : iterable of (ndarray, ndarray)
-        ``(A (n, m, p), tau (n, m))`` of the fitted samples, in time order.
+    blocks : iterable of (ndarray, ndarray), or callable returning one
+        ``(A (n, m, p), tau (n, m))`` of the fitted samples, in time order. A callable or a list is
+        read twice (the plug-in bandwidth's pilot scores first): no rows are held while the pilot
+        is gathered, as a one-pass iterator's must be (up to :data:`PILOT_BYTES`).
     r11 : ndarray, shape ``(p, p)``
         The (weighted) triangular factor of the fit: ``R11^T R11 = A^T W A``.
     theta : ndarray, shape ``(p,)``
@@ -265,8 +271,10 @@ def hac_meat(blocks, h_inv: np.ndarray, theta: np.ndarray, weights: np.ndarray, 
 
     Parameters
     ----------
-    blocks : iterable of (ndarray, ndarray)
-        ``(A (n, m, p), tau (n, m))`` of the fitted samples, in time order.
+    blocks : iterable of (ndarray, ndarray), or callable returning one
+        ``(A (n, m, p), tau (n, m))`` of the fitted samples, in time order. A callable or a list is
+        read twice (the plug-in bandwidth's pilot scores first): no rows are held while the pilot
+        is gathered, as a one-pass iterator's must be (up to :data:`PILOT_BYTES`).
     h_inv : ndarray, shape ``(p, p)``
         ``H^-1 = (A^T W A)^-1`` of the fit.
     theta : ndarray, shape ``(p,)``
@@ -293,35 +301,50 @@ def hac_meat(blocks, h_inv: np.ndarray, theta: np.ndarray, weights: np.ndarray, 
     """
     p = len(theta)
     w = np.asarray(weights, dtype=float)
-    meat, pilot = None, []
     per_sample = 8.0 * len(w) * p  # bytes of one sample's rows
     step = max(1, min(512, int(FEED_BYTES // per_sample)))
     pilot_len = max(1, min(PILOT, int(PILOT_BYTES // per_sample)))
 
-    def feed(s, a):
+    def feed(meat, s, a):
         for k in range(0, len(s), step):  # bounded temporaries whatever the block
             meat.add(s[k:k + step], a[k:k + step] * w[None, :, None] if corrected else None)
+        return meat
 
-    def start():
-        s = np.concatenate([x for x, _ in pilot])
-        b = bandwidth if bandwidth is not None else andrews_bandwidth(s, samples)
+    def start(pilot_scores):
+        b = bandwidth if bandwidth is not None else andrews_bandwidth(pilot_scores, samples)
         window = 2.0 * p * p * b * len(w) + 4.0 * float(p) ** 3  # one window's C H^-1 C
         return HacMeat(p, b, h_inv if corrected else None, stride=int(np.ceil(samples * window / BIAS_FLOPS)))
 
-    for a, tau in blocks:
+    if callable(blocks) or isinstance(blocks, (list, tuple)):  # read twice: the pilot's scores only, then the rows
+        again = blocks if callable(blocks) else (lambda: blocks)
+        pilot, got = [], 0
+        if bandwidth is None:
+            for a, tau in again():
+                pilot.append(scores(a, tau, theta, w))
+                got += len(pilot[-1])
+                if got >= pilot_len:
+                    break
+        meat = start(np.concatenate(pilot) if pilot else np.zeros((0, p)))
+        for a, tau in again():
+            feed(meat, scores(a, tau, theta, w), a)
+        if not meat.samples:
+            raise BaseparamsError("no fitted sample to estimate the covariance from")
+        return meat
+    meat, pilot = None, []
+    for a, tau in blocks:  # one pass: the pilot's rows held until the bandwidth is known
         s = scores(a, tau, theta, w)
         if meat is not None:
-            feed(s, a)
+            feed(meat, s, a)
             continue
         pilot.append((s, a))
         if sum(len(x) for x, _ in pilot) >= pilot_len:  # the same pilot whatever the chunks
-            meat = start()
+            meat = start(np.concatenate([x for x, _ in pilot]))
             for x, y in pilot:
-                feed(x, y)
+                feed(meat, x, y)
     if meat is None and pilot:
-        meat = start()
+        meat = start(np.concatenate([x for x, _ in pilot]))
         for x, y in pilot:
-            feed(x, y)
+            feed(meat, x, y)
     if meat is None:
         raise BaseparamsError("no fitted sample to estimate the covariance from")
     return meat
@@ -491,9 +514,8 @@ def apply_covariance(f, acc, blocks, covariance: str = "hac", rate: float | None
         label = describe("white")
         new = with_covariance(est, f.theta, sigma2 * inv @ inv.T, label)
         return replace(f, estimate=new), f"standard deviations: {label}"
-    rows = blocks() if callable(blocks) else blocks
     n_obs = acc.samples * acc.nrows
-    cov, b = hac_covariance(rows, est.R11, f.theta, est.weights, n_obs, acc.samples)
+    cov, b = hac_covariance(blocks, est.R11, f.theta, est.weights, n_obs, acc.samples)
     label = describe("hac", b, rate)
     w = np.linalg.eigvalsh(0.5 * (cov + cov.T)) if np.all(np.isfinite(cov)) else np.array([-1.0, 1.0])
     if w.min() < -1e-6 * max(float(w.max()), 0.0):  # rounding on an ill-conditioned fit: say so
@@ -525,6 +547,11 @@ def psd(a: np.ndarray) -> np.ndarray:
     a = 0.5 * (a + a.T)
     if not np.all(np.isfinite(a)):
         return a
+    try:  # positive definite: a Cholesky factor exists (p^3 / 3 flops; an eigendecomposition ~9 p^3)
+        np.linalg.cholesky(a)
+        return a
+    except np.linalg.LinAlgError:
+        pass
     w, v = np.linalg.eigh(a)
     if w.min() >= 0:
         return a

@@ -145,3 +145,26 @@ def test_a_staircase_order_puts_every_rows_columns_after_its_start(seed):
     assert np.array_equal(starts[:m], np.arange(m) * per)
     if seed % 2:
         assert starts[-1] == m * per
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_released_factors_are_made_again_the_same(seed):
+    """``release()`` drops every cached factor (the whole's and its pieces', spilled or in memory) and nothing else:
+    the next read is the same factor."""
+    rng = np.random.default_rng(seed)
+    m, p = int(rng.integers(1, 4)), int(rng.integers(2, 9))
+    blocks = [(rng.normal(size=(k, m, p)), rng.normal(size=(k, m))) for k in rng.integers(5, 30, size=3)]
+    count = sum(len(a) for a, _ in blocks)
+    whole, a, tau = _spilled(blocks, m, p, [0, count // 2, count])
+    memory = RowAccumulator.combine([RowAccumulator(m, p).add(a[:9], tau[:9]),
+                                     RowAccumulator(m, p).add(a[9:], tau[9:])])
+    w = rng.uniform(0.5, 2.0, m)
+    for acc, pieces in ((whole, whole.children), (memory, memory._parts)):
+        first = np.array(acc.stacked(w))
+        assert acc.nbytes() > 0 if acc is whole else acc._stacked
+        acc.release()
+        assert not acc._stacked and all(not x._stacked for x in pieces)
+        if acc is whole:
+            assert acc.nbytes() == sum(c._norms.nbytes for c in [whole, *whole.children] if c._norms is not None)
+        again = acc.stacked(w)
+        assert np.allclose(again.T @ again, first.T @ first, rtol=1e-12, atol=1e-12 * np.abs(first).max() ** 2)

@@ -238,6 +238,7 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     if rotor is not None:  # the core's own term, tried after the model terms
         f = replace(f, term_choices=(*f.term_choices, rotor))
         term_notes = [*term_notes, rotor_note(rotor)]
+    acc.release()  # the fitting is done: its cached factors (a large model's: hundreds of MB) before the covariance
     f, cov_note = _uncertainty(f, acc, kept, prep, train, cols, opts, say)
     f = pulled_covariance(f)
     train_rms, val, series = _scores(f, acc, log, held, prep, cols, raw_q, opts, say)

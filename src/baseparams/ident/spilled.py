@@ -312,6 +312,13 @@ class SpilledRows(RowAccumulator):
         self._stacked[w.tobytes()] = r
         return r
 
+    def release(self) -> None:
+        """Drop the cached factors (stacked and staircase), this object's and its pieces'."""
+        self._stacked.clear()
+        self._staircased.clear()
+        for c in self.children:
+            c.release()
+
     def staircase(self) -> tuple[np.ndarray, np.ndarray]:
         """The columns' staircase order and each row's start (:func:`staircase_order`), the whole log's.
 

@@ -132,7 +132,10 @@ def test_a_wide_factor_fed_past_its_step_is_the_whole_matrix(seed, monkeypatch):
     ncols = int(rng.integers(1, 25))
     w = rng.normal(size=(int(rng.integers(ncols, 300)), ncols))
     qr = StreamingQR(ncols)
+    held = []
     for part in np.array_split(w, int(rng.integers(1, 20))):
         qr.add(part)
+        held.append((qr.r, qr.r.copy()))  # a factor read mid-way stays what it was when more rows come
+    assert all(np.array_equal(r, copy) for r, copy in held)
     assert np.allclose(np.tril(qr.r, -1), 0.0)
     assert np.abs(qr.r.T @ qr.r - w.T @ w).max() <= 1e-12 * np.linalg.norm(w) ** 2

@@ -637,7 +637,7 @@ def triangular_update(r: np.ndarray, rows: np.ndarray, triangular: bool = False)
     ----------
     r : ndarray, shape ``(n, n)``
         Upper triangular, zeros below the diagonal (zero diagonal entries allowed: columns no row has
-        touched yet). Overwritten when Fortran-ordered.
+        touched yet). Not modified.
     rows : ndarray, shape ``(k, n)``
         The rows added (overwritten when Fortran-ordered: pass rows of your own).
     triangular : bool
@@ -656,7 +656,7 @@ def triangular_update(r: np.ndarray, rows: np.ndarray, triangular: bool = False)
         return r
     if triangular and rows.shape != (n, n):
         raise BaseparamsError(f"triangular_update: a triangular block must be {n} x {n}, got {rows.shape}")
-    a = np.asfortranarray(r)
+    a = np.array(r, order="F")  # a copy: a caller may hold R (StreamingQR.r) while more rows come
     b = np.asfortranarray(rows)
     with blas_threads():
         a, _, _, info = lapack.dtpqrt(n if triangular else 0, max(1, min(64, n)), a, b, overwrite_a=1, overwrite_b=1)

@@ -129,6 +129,7 @@ def test_a_wide_factor_fed_past_its_step_is_the_whole_matrix(seed, monkeypatch):
     rng = np.random.default_rng(seed)
     monkeypatch.setattr(StreamingQR, "STEP", int(rng.integers(1, 30)))
     monkeypatch.setattr(StreamingQR, "STEP_BYTES", 8.0)
+    monkeypatch.setattr(StreamingQR, "WIDE", int(rng.integers(1, 10)))
     ncols = int(rng.integers(1, 25))
     w = rng.normal(size=(int(rng.integers(ncols, 300)), ncols))
     qr = StreamingQR(ncols)

@@ -522,6 +522,9 @@ class StreamingQR:
     #: rows per Householder step, at least: [R; 512 rows] stays in cache (1.5x faster than
     #: 8000-row steps for 37 columns); wide factors take more (:meth:`step`)
     STEP = 512
+    #: columns from which a full factor takes each step by :func:`triangular_update` (LAPACK through SciPy, which a
+    #: narrower one does not import: ``analyze`` stays numpy-only), not by a dense QR of ``[R; rows]``
+    WIDE = 256
     #: a wide factor's rows gathered per step [bytes], within ``ncols`` and ``4 ncols`` rows: each step's
     #: blocked Householder update (:func:`triangular_update`) works best on at least ``ncols`` rows
     STEP_BYTES = 64e6
@@ -613,7 +616,7 @@ class StreamingQR:
 
     def _flush(self) -> None:
         """Fold the pending rows into ``R`` (one Householder QR of ``[R; pending]``)."""
-        if self._r.shape[0] == self.ncols:  # a full triangle: the QR that keeps its zeros (triangular_update)
+        if self._r.shape[0] == self.ncols >= self.WIDE:  # a wide full triangle: keep its zeros (triangular_update)
             rows = self._pending[0] if len(self._pending) == 1 else np.concatenate(self._pending)
             self._pending, self._npending = [], 0
             self._r = triangular_update(self._r, rows)

@@ -403,8 +403,8 @@ def test_analyze_expanded_needs_the_analysis_memory_not_the_texts(tmp_path):
     """Issue 51: ``analyze --form expanded`` of a 1 000-link chain peaked at 2.5 GB (``K`` regrouped and
     held whole, its 278 MB of text made from it). The command now needs what the analysis itself needs (the
     same command with ``--form recursive``, O(n) text) plus a block of rows and of terms' text: on a 600-link
-    chain, 123 MB of text, less than an eighth of it more (39 MB more with 200 000 terms' text made at once,
-    500 MB more and growing with the square of the links with ``K`` held)."""
+    chain, 117 MB of text, less than an eighth of it more (7 MB measured; 38 MB with 200 000 terms' text made
+    at once, 912 MB, growing with the square of the links, with ``K`` held)."""
     peaks, sizes = {}, {}
     for form in ("recursive", "expanded"):
         out = tmp_path / f"{form}.txt"

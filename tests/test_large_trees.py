@@ -388,6 +388,33 @@ def test_writing_the_expanded_form_holds_a_block_not_the_report(tmp_path, monkey
     assert peaks[1] < 1.5 * peaks[0] and peaks[1] < sizes[1] / 4  # not: held whole it would be the text's
 
 
+_ANALYZE_CHAIN = """
+import numpy as np
+from baseparams.cli import common, main
+from baseparams.robots import random_robot
+robot = random_robot(np.random.default_rng({n}), {n}, "R", branching=0.0)
+common.load_robot = lambda args: robot  # the command as run on the chain's file, without writing the file
+assert main(["analyze", "chain.urdf", "--form", {form!r}, "--output", {out!r}]) == 0
+"""
+
+
+@pytest.mark.slow
+def test_analyze_expanded_needs_the_analysis_memory_not_the_texts(tmp_path):
+    """Issue 51: ``analyze --form expanded`` of a 1 000-link chain peaked at 2.5 GB (``K`` regrouped and
+    held whole, its 278 MB of text made from it). The command now needs what the analysis itself needs (the
+    same command with ``--form recursive``, O(n) text) plus a block of rows and of terms' text: on a 600-link
+    chain, 117 MB of text, less than an eighth of it more (7 MB measured; 38 MB with 200 000 terms' text made
+    at once, 912 MB, growing with the square of the links, with ``K`` held)."""
+    peaks, sizes = {}, {}
+    for form in ("recursive", "expanded"):
+        out = tmp_path / f"{form}.txt"
+        peaks[form], done = _peak_mb(_ANALYZE_CHAIN.format(n=600, form=form, out=str(out)))
+        assert done.returncode == 0, done.stderr[-500:]
+        sizes[form] = out.stat().st_size / 2**20
+    assert sizes["expanded"] > 50 * sizes["recursive"] > 50  # the text quadratic in the links (about 117 MB)
+    assert peaks["expanded"] - peaks["recursive"] < sizes["expanded"] / 8, (peaks, sizes)
+
+
 def test_huge_expanded_form_and_coefficients_noted_in_one_line(tmp_path, monkeypatch, capsys):
     """``analyze --form expanded``: past the thresholds, one line each on stderr (and in the report) before the
     writing: the number of terms with ``--form recursive`` named, the largest coefficient against 1/eps."""

@@ -3,6 +3,7 @@ coefficients printed at the precision they have."""
 
 import ast
 import json
+import math
 import re
 import sys
 import warnings
@@ -244,6 +245,21 @@ def test_printed_coefficient_is_the_decimal_without_noise(m, e, ulps, neg):
     lambda v: abs(v) > 1e-300))
 def test_printed_coefficient_reads_back(x):
     _check_printed(x)
+
+
+@settings(max_examples=500, deadline=None)
+@given(x=st.floats(allow_nan=False, allow_infinity=False).filter(lambda v: v != 0), digits=st.integers(1, 17),
+       near=st.sampled_from([None, 1e-4, 1e6, 1e16, float(np.finfo(float).tiny), float(np.finfo(float).max)]))
+def test_scientific_text_is_numpys_shortest_decimal(x, digits, near):
+    """Past the positional range, ``format_number`` writes the rounded value's text without trailing zeros
+    (a faster path): the shortest decimal that reads back as the rounded float, the one numpy's Dragon4
+    writes, for every float (next to the range's ends, subnormal, near overflow) and 1 to 17 digits."""
+    if near is not None:  # a few ulps from a boundary, either side
+        x = math.copysign(near, x) * (1 + (abs(x) % 64 - 32) * float(np.finfo(float).eps))  # inf past max
+    r = float(f"{x:.{digits - 1}e}")
+    if 1e-4 <= abs(r) < 1e6 or not np.isfinite(r):
+        return
+    assert format_number(x, digits) == np.format_float_scientific(r, unique=True, trim="-", exp_digits=2)
 
 
 def test_puma560_expressions_have_no_float_noise(puma, capsys):

@@ -85,7 +85,7 @@ SNAP_RTOL = 1e-13
 
 #: about how many terms :meth:`BaseParameters.iter_expressions` formats at once (the expanded form of a
 #: 1 000-link chain has over ten million: their text is made and let go a block of rows at a time)
-EXPRESSION_CHUNK_TERMS = 200_000
+EXPRESSION_CHUNK_TERMS = 50_000
 
 
 def clean(x: np.ndarray, rtol: float = SNAP_RTOL) -> np.ndarray:

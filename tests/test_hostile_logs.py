@@ -437,13 +437,18 @@ def test_allow_units_lets_positions_in_degrees_through_with_a_warning(tmp_path, 
     assert "q_lift" in err and "degrees given as radians?" in err and "--allow-units" in err, err
     assert main(["identify", str(urdf), str(deg), "--allow-units", "--json", "--save", str(tmp_path / "r.json")]) == 0
     notes = json.loads(capsys.readouterr().out)["notes"]
-    assert any(n.startswith("units: WARNING, going on (allow_units)") and "degrees given as radians?" in n
-               for n in notes), notes
+    assert any(n.startswith("units: WARNING, going on (allow_units=True)") and "degrees given as radians?" in n
+               for n in notes), notes  # the saved result and --json: the library's keyword
     assert not any("to go on anyway" in n for n in notes), notes  # it went on: the refusal's advice is not repeated
+    assert main(["identify", str(urdf), str(deg), "--allow-units"]) == 0  # the text report: the flag
+    said = capsys.readouterr()
+    assert "note: units: WARNING, going on (--allow-units): " in said.out, said.out
+    assert "(allow_units" not in said.out + said.err, said
     out = tmp_path / "p.csv"
     one_line_error(["predict", urdf, tmp_path / "r.json", deg, "--out", out], capsys)
     assert main(["predict", str(urdf), str(tmp_path / "r.json"), str(deg), "--out", str(out), "--allow-units"]) == 0
-    assert "WARNING" in capsys.readouterr().err and out.exists()
+    err = capsys.readouterr().err
+    assert "WARNING, going on (--allow-units)" in err and "(allow_units" not in err and out.exists(), err
 
 
 @pytest.fixture(scope="module")
@@ -495,4 +500,4 @@ def test_every_rate_is_refused_or_identifies_to_within_two_percent(slow_logs, ca
     assert code == 2 and len(out.err.strip().splitlines()) == 1, out.err
     assert main([*args, "--allow-units"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert any(n.startswith("rate: WARNING, going on (allow_units)") for n in doc["notes"])
+    assert any(n.startswith("rate: WARNING, going on (allow_units=True)") for n in doc["notes"])

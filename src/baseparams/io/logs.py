@@ -112,7 +112,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import GO_ON, DataError, going_on
 from ..files import check_input
 from ..jointlog import JointLog
 from ..kinematics.floating import BASE_COORDINATES, POSE_COLUMNS, TWIST_COLUMNS
@@ -1010,11 +1010,11 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
             arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
     implausible = _check_plausible(table, joints, arrays["q"], *bounds[:2])
     if implausible and not bounds[2]:
-        raise DataError(implausible + "; --allow-units (allow_units=True) to go on anyway")
+        raise DataError(implausible + GO_ON)
     unused = [c + (" (text)" if c in table.text else "") for c in table.columns if c not in used]
     notes = list(table.notes) + _conversion_notes(joints, spec)
     if implausible:
-        notes.append(f"units: WARNING, going on (allow_units): {implausible}")
+        notes.append(going_on("units", implausible))
     if unused:
         notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"
                      + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))

@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from ..arguments import CHOICES, IDENTIFY
+from ..display import counted
 from . import common
 from .common import EXIT_INPUT, EXIT_OK, Progress, data_files, emit, print_note
 from .parser import choices, flag_message, flag_notes, ident_args, model_args
@@ -138,8 +139,9 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
         return _fleet_exit(args, res, files)
     model = res.model
     skipped = [s for s in res.skipped if s["stage"] == "read"]
-    lines = [f"{robot.name}: {len(files)} logs, {len(res.files)} used, {len(skipped)} skipped; "
-             f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
+    lines = [f"{robot.name}: {counted(len(files), 'log')}, {len(res.files)} used, {len(skipped)} skipped; "
+             f"{counted(sum(f['used'] for f in res.files), 'sample')} used ({args.method}); "
+             f"{counted(model.n_params, 'model parameter')}"]
     lines += [f"skipped: {flag_message(s['error'], 'identify')}" for s in res.skipped]
     lines += [f"{f['path']}: {w}" for f in res.files for w in f.get("warnings", ())]  # --allow-units went on
     lines += [f"note: {n}" for n in res.notes]  # what the options leave to the data that a fleet does not try
@@ -162,8 +164,8 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
 def _fleet_exit(args, res, files: list[str]) -> int:
     """``--strict``: a fleet with a skipped log is an error (one line); otherwise the skips are reported only."""
     if args.strict and res.skipped:
-        print(f"baseparams: error: --strict: {len(res.skipped)} of {len(files)} logs skipped "
-              f"(first: {res.skipped[0]['error']})", file=sys.stderr)
+        print(f"baseparams: error: --strict: {len(res.skipped)} of {counted(len(files), 'log')} skipped "
+              f"(first: {flag_message(res.skipped[0]['error'], 'identify')})", file=sys.stderr)
         return EXIT_INPUT
     return EXIT_OK
 

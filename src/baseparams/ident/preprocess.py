@@ -34,7 +34,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import signal
 
-from ..display import summary_repr
+from ..display import counted, summary_repr
 from ..errors import DataError
 from ..jointlog import JointLog
 
@@ -212,7 +212,7 @@ def zero_phase(x, design: LowPass, axis: int = 0) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     n = x.shape[axis]
     if n < 2:
-        raise DataError(f"low-pass: {n} samples; at least 2 are needed")
+        raise DataError(f"low-pass: {counted(n, 'sample')}; at least 2 are needed")
     pad = min(EXTENSION * design.pad, n - 1)
     if axis in (0, -x.ndim) and x.size >= COMPILED_FILTER_MIN and _compiled_loaded():
         from ..regressor.compiled import sosfiltfilt
@@ -653,8 +653,8 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     design = lowpass_design(rate, cutoff, why="given" if given_cutoff else "from the excitation bandwidth")
     n = u.n_samples
     if n <= 2 * design.pad + 1:
-        raise DataError(f"{log.source}: {n} samples at {rate:.6g} Hz; the filter edges alone take 2 x {design.pad} "
-                        f"(a longer log, or a higher cutoff)")
+        raise DataError(f"{log.source}: {counted(n, 'sample')} at {rate:.6g} Hz; the filter edges alone take "
+                        f"2 x {design.pad} (a longer log, or a higher cutoff)")
     qf, tauf, dqf, ddqf = _filtered_together(design, u.q, u.tau, u.dq, u.ddq)
     dq, ddq, rate_notes = filtered_rates(u, qf, rate, design, dqf, ddqf)
     k, k_note = decimation_factor(decimate, rate, design, n)

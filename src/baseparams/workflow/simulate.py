@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 
 from ..arguments import IDENTIFY
+from ..display import counted
 from ..errors import BaseparamsError
 from ..model import Robot
 from .inputs import input_files, robot_of
@@ -174,7 +175,7 @@ def _checked_arrays(trajectory) -> tuple:
 
     if len(trajectory) != 4:
         raise ArgumentTypeError(f"simulate: trajectory= must be an Excitation, its file or (t, q, dq, ddq), got "
-                                f"{len(trajectory)} items")
+                                f"{counted(len(trajectory), 'item')}")
     t = check_array(trajectory[0], "simulate: trajectory t", 1)
     arrays = [check_array(x, f"simulate: trajectory {n}", 2) for n, x in zip(("q", "dq", "ddq"), trajectory[1:])]
     if any(a.shape != arrays[0].shape or len(a) != len(t) for a in arrays):
@@ -214,7 +215,8 @@ def _check_plausible(robot: Robot, q) -> None:
 
     names = robot.coordinate_names(design_coordinates(robot))
     if q.shape[1] != len(names):
-        raise ArgumentError(f"simulate: trajectory= has {q.shape[1]} columns of q for the {len(names)} coordinates "
+        raise ArgumentError(f"simulate: trajectory= has {counted(q.shape[1], 'column')} of q for the "
+                            f"{counted(len(names), 'coordinate')} "
                             f"{names}")
     kinds = coordinate_kinds(robot)
     free = unbounded_joints(robot)  # continuous joints turn any number of times (the reader's rule)

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 import baseparams
 from baseparams.arguments import IDENTIFY
 from baseparams.cli import build_parser, main
-from baseparams.cli.parser import COMMANDS, flag_message, flag_notes, switch_flags
+from baseparams.cli.parser import COMMANDS, flag_message, flag_notes, keyword_flags, switch_flags
 from baseparams.errors import GO_ON, BaseparamsError, going_on
 from baseparams.ident import IdentOptions, MotorCoupling, identify
 from baseparams.ident.simulate import simulate_log
@@ -183,6 +183,28 @@ def test_the_excitation_limits_notes_name_an_option_both_doors_have():
     assert named and named <= set(inspect.signature(baseparams.excite).parameters), notes
     printed = [flag_message(n, "excite") for n in notes]
     assert not any(re.search(r"\w=", n) for n in printed) and any("--position" in n for n in printed), printed
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_positional_argument_is_named_in_a_message_as_the_help_names_it(command):
+    """Issue 51: ``simulate puma560 x.txt`` said "OUT x.txt: ..." where --help and the usage line say ``out``."""
+    parser, _ = _parsed(command, [])
+    usage = parser.format_usage().split()
+    positional = [a for a in parser._actions if not a.option_strings]  # noqa: SLF001
+    assert positional or command == "robots", command  # every command but the list of robots takes MODEL
+    table = keyword_flags(command)
+    for action in positional:
+        key = next(k for k, v in table.items() if v == (action.metavar or action.dest))
+        line = flag_message(f"{command}: {key}='x.csv': no such file", command)
+        name = line.removesuffix(" x.csv: no such file")
+        assert name in usage or f"{name}..." in usage or f"[{name}" in " ".join(usage), (command, line, usage)
+        assert name.lower() == name and name in parser.format_help(), line
+
+
+def test_simulate_names_its_out_argument_as_its_help_does(tmp_path, capsys):
+    assert main(["simulate", "puma560", str(tmp_path / "x.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"baseparams: error: out {tmp_path / 'x.txt'}: the format comes from the suffix"), err
 
 
 def test_a_message_that_spells_an_option_twice_names_the_flag_once():

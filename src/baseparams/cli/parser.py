@@ -227,9 +227,10 @@ def keyword_flags(command: str) -> dict[str, str]:
     Returns
     -------
     dict of str to str
-        ``{keyword: flag}``: ``{"holdout": "--holdout", "couplings": "--coupling", "out": "OUT"}``
+        ``{keyword: flag}``: ``{"holdout": "--holdout", "couplings": "--coupling", "out": "out"}``
         (the command module's ``KEYWORDS`` for flags named otherwise, :data:`MODEL_KEYWORDS`,
-        and the others under their own names).
+        and the others under their own names; a positional argument as ``--help`` and the usage
+        line name it, argparse's metavar or its name: ``simulate``'s ``out``).
     """
     sub = next(a for a in build_parser()._actions if a.dest == "command")  # noqa: SLF001  (argparse's own)
     renamed = getattr(command_module(command), "KEYWORDS", {})
@@ -238,7 +239,7 @@ def keyword_flags(command: str) -> dict[str, str]:
         if action.dest in _NOT_KEYWORDS or action.help == argparse.SUPPRESS:
             continue
         longs = [s for s in action.option_strings if s.startswith("--")]
-        flag = longs[0] if longs else action.dest.upper()
+        flag = longs[0] if longs else action.metavar or action.dest  # a positional: named as its help names it
         out[renamed.get(action.dest, action.dest)] = flag
     return out
 

@@ -13,6 +13,8 @@ import zipfile
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import baseparams
 from baseparams.errors import DataError
@@ -501,3 +503,66 @@ def test_every_rate_is_refused_or_identifies_to_within_two_percent(slow_logs, ca
     assert main([*args, "--allow-units"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert any(n.startswith("rate: WARNING, going on (allow_units=True)") for n in doc["notes"])
+
+
+@settings(max_examples=80, deadline=None)
+@given(rate=st.floats(5.0, 20000.0), samples=st.integers(1, 3000))
+def test_simulate_refuses_exactly_the_random_motions_identify_cannot_filter(rate, samples):
+    """Property (issue 51: ``simulate --duration 0.01`` wrote a 5-sample log without complaint): the random motion is
+    refused iff it makes fewer samples than identify's shortest log at its rate (one rule,
+    :func:`~baseparams.ident.preprocess.shortest_log`); the refusal names that minimum and a duration that passes."""
+    import re
+
+    from baseparams.arguments import ArgumentError
+    from baseparams.ident.preprocess import shortest_log
+    from baseparams.workflow.simulate import check_simulate
+
+    duration = samples / rate
+    n, least = int(round(duration * rate)), shortest_log(rate)
+    try:
+        check_simulate("puma560", None, {"duration": duration, "rate": rate})
+    except ArgumentError as exc:
+        message = str(exc)
+        assert n < least and "\n" not in message, message
+        assert f"makes {n} sample" in message and f"fewer than {least} samples" in message, message
+        suggested = float(re.search(r"; duration=([\d.e+-]+) or more", message).group(1))
+        check_simulate("puma560", None, {"duration": suggested, "rate": rate})  # the advice is enough
+        return
+    assert n >= least, (n, least)
+
+
+@settings(max_examples=40, deadline=None)
+@given(rate=st.floats(20.0, 3000.0))
+def test_the_shortest_log_is_the_one_identify_filters(rate):
+    """:func:`shortest_log` is prepare's own rule: at the highest default cutoff a log of that many samples is
+    filtered and one fewer refused (so simulate's floor is identify's, not a second rule)."""
+    from baseparams.ident.preprocess import CUTOFF_CAP, CUTOFF_DIVISOR, prepare, shortest_log
+    from baseparams.jointlog import JointLog
+
+    least, top = shortest_log(rate), min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)
+
+    def log(n):
+        t = np.arange(n) / rate
+        q = np.sin(2 * np.pi * 0.5 * t)[:, None]
+        return JointLog(t, ("j",), q, np.cos(2 * np.pi * 0.5 * t)[:, None], source="s.csv")
+
+    assert prepare(log(least), cutoff=top).n_samples == least
+    with pytest.raises(DataError, match=f"s.csv: {least - 1} samples at .* the filter edges alone take"):
+        prepare(log(least - 1), cutoff=top)
+    with pytest.raises(DataError, match="the filter edges alone take"):
+        prepare(log(least - 1))  # the default cutoff is never higher
+
+
+def test_a_random_motion_too_short_to_identify_is_refused_and_the_advice_identifies(tmp_path, capsys):
+    """``simulate puma560 x.csv --duration 0.01``: one line naming the minimum and why, nothing written; the duration
+    it advises simulates a log identify takes."""
+    from baseparams.cli import main
+
+    out = tmp_path / "x.csv"
+    err = one_line_error(["simulate", "puma560", out, "--duration", "0.01"], capsys)
+    assert "--duration 0.01 at --rate 500 makes 5 samples, too few to identify" in err, err
+    assert "fewer than 102 samples; --duration 0.204 or more at 500 Hz" in err and "duration=" not in err, err
+    assert not list(tmp_path.iterdir())
+    assert main(["simulate", "puma560", str(out), "--duration", "0.204"]) == 0
+    assert main(["identify", "puma560", str(out), "--terms", "none"]) == 0  # the default: the short-motion rule
+    assert "102 samples used of 102 read" in capsys.readouterr().out

@@ -140,10 +140,49 @@ def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4, why: 
     if not (np.isfinite(cutoff) and 0 < cutoff < fs / 2):
         raise DataError(f"low-pass: cutoff must be between 0 and fs/2 = {fs / 2:.6g} Hz, got {cutoff!r}")
     sos = signal.butter(int(order), cutoff, btype="low", fs=fs, output="sos")
-    pad = math.ceil(EDGE_PERIODS * fs / cutoff - 1e-6)  # not one more for a rounding error
+    pad = edge_samples(fs, cutoff)
     note = (f"low-pass: zero-phase Butterworth order {order} (forward and backward, sosfiltfilt), cutoff "
             f"{cutoff:.4g} Hz ({why}); edges {pad} samples ({EDGE_PERIODS:g} cutoff periods)")
     return LowPass(sos=sos, fs=float(fs), cutoff=float(cutoff), order=int(order), pad=pad, note=note)
+
+
+def edge_samples(fs: float, cutoff: float) -> int:
+    """The low-pass's edge at each end [samples]: :data:`EDGE_PERIODS` periods of its cutoff.
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    cutoff : float
+        Cutoff [Hz].
+
+    Returns
+    -------
+    int
+        ``ceil(EDGE_PERIODS fs / cutoff)`` (not one more for a rounding error).
+    """
+    return math.ceil(EDGE_PERIODS * fs / cutoff - 1e-6)
+
+
+def shortest_log(fs: float, cutoff: float | None = None) -> int:
+    """The fewest samples :func:`prepare` filters: more than the low-pass's two edges (the one rule).
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    cutoff : float, optional
+        The cutoff [Hz]; default the highest :func:`prepare` chooses by itself at ``fs``
+        (``min(fs / 20, 20 Hz)``): below this length every log at ``fs`` is refused, whatever its
+        motion (a slower motion's lower cutoff asks for more).
+
+    Returns
+    -------
+    int
+        ``2 x edge + 2`` (:func:`edge_samples`): 102 at 500 Hz, 82 at 100 Hz and below.
+    """
+    top = min(fs / CUTOFF_DIVISOR, CUTOFF_CAP)
+    return 2 * edge_samples(fs, top if cutoff is None else cutoff) + 2
 
 
 def excitation_bandwidth(q, fs: float, energy: float = 0.995) -> float:
@@ -652,7 +691,7 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         u = replace(u, notes=u.notes + (log_note,))
     design = lowpass_design(rate, cutoff, why="given" if given_cutoff else "from the excitation bandwidth")
     n = u.n_samples
-    if n <= 2 * design.pad + 1:
+    if n < shortest_log(rate, design.cutoff):
         raise DataError(f"{log.source}: {counted(n, 'sample')} at {rate:.6g} Hz; the filter edges alone take "
                         f"2 x {design.pad} (a longer log, or a higher cutoff)")
     qf, tauf, dqf, ddqf = _filtered_together(design, u.q, u.tau, u.dq, u.ddq)

@@ -468,10 +468,12 @@ def slow_logs(tmp_path_factory):
 
 
 @pytest.mark.parametrize("rate, extra, words", [
-    (7, [], "a 7 Hz log of a motion up to 0.483 Hz (99.5 % of its energy): 14.5 samples per period"),
-    (10, [], "low-pass cutoff 0.5 Hz (the default, at most fs/20) is 1 x the motion's bandwidth 0.483 Hz"),
-    (15, [], "low-pass cutoff 0.75 Hz (the default, at most fs/20) is 1.6 x the motion's bandwidth"),
-    (15, ["--cutoff", "0.9"], "low-pass cutoff 0.9 Hz (given) is 1.9 x the motion's bandwidth"),
+    (7, [], "a 7 Hz log of a motion up to 0.483 Hz (the excitation bandwidth 0.517 Hz, 99.5 % of its energy, less "
+            "the 0.033 Hz that 59.9 s of log cannot resolve): 14.5 samples per period"),
+    (10, [], "low-pass cutoff 0.5 Hz (the default, at most fs/20) is 1 x the motion's 0.483 Hz (the excitation "
+             "bandwidth 0.517 Hz"),
+    (15, [], "low-pass cutoff 0.75 Hz (the default, at most fs/20) is 1.6 x the motion's"),
+    (15, ["--cutoff", "0.9"], "low-pass cutoff 0.9 Hz (given) is 1.9 x the motion's"),
 ])
 def test_a_rate_or_cutoff_that_cannot_carry_the_motion_is_refused(slow_logs, capsys, rate, extra, words):
     """Issue 51: a 7 Hz log identified with exit 0 and a relative error of 30.8 (here 18): refused in one line
@@ -566,3 +568,32 @@ def test_a_random_motion_too_short_to_identify_is_refused_and_the_advice_identif
     assert main(["simulate", "puma560", str(out), "--duration", "0.204"]) == 0
     assert main(["identify", "puma560", str(out), "--terms", "none"]) == 0  # the default: the short-motion rule
     assert "102 samples used of 102 read" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("stream", [False, True])
+def test_the_rate_note_and_the_cutoff_note_quote_one_bandwidth(slow_logs, capsys, stream):
+    """Issue 51: the rate note and the cutoff note quoted 0.483 and 0.517 Hz for one motion. One estimate, measured
+    once (on the measured coordinates), is what the cutoff note quotes and what the rate line starts from; the figure
+    the rate is checked against is that estimate less the spectrum's resolution over the log, and the line says so
+    (in memory and streamed from the file alike)."""
+    import re
+
+    from baseparams.cli import main
+
+    folder, json = slow_logs
+    for rate in (7, 30):
+        extra = ["--allow-units"] if rate == 7 else []
+        capsys.readouterr()
+        assert main(["identify", "puma560", str(folder / f"r{rate}.csv"), "--terms", "none", "--rotor", "--json",
+                     *(["--stream", "on"] if stream else []), *extra]) == 0
+        notes = json.loads(capsys.readouterr().out)["notes"]
+        cut = [float(x) for n in notes for x in re.findall(r"^cutoff [\d.]+ Hz: 10 x the excitation bandwidth "
+                                                            r"([\d.]+) Hz", n)]
+        said = [m.groups() for n in notes if n.startswith("rate:") for m in re.finditer(
+            r"motion(?:'s| up to) ([\d.]+) Hz \(the excitation bandwidth ([\d.]+) Hz, 99.5 % of its energy, less "
+            r"the ([\d.]+) Hz that ([\d.]+) s of log cannot resolve\)", n)]
+        assert len(cut) == 1 and len(said) == 1, notes
+        low, band, res, span = map(float, said[0])
+        assert band == cut[0] and abs(res - 2 / span) < 0.05 * res and abs(low - (band - res)) <= 0.0051, said
+        if rate == 7:
+            assert any(n.startswith("rate: WARNING, going on (allow_units=True)") for n in notes), notes

@@ -175,11 +175,14 @@ def check_rate(source: str, band: float, span: float, fs: float, cutoff: float, 
         The log, for messages.
     band : float
         The motion's bandwidth [Hz]: :func:`~baseparams.ident.preprocess.excitation_bandwidth` of
-        the measured coordinates' positions, unfiltered (0: no motion, nothing checked).
+        the measured coordinates' positions, unfiltered (0: no motion, nothing checked) — the
+        estimate the default cutoff is chosen from (:attr:`~baseparams.ident.preprocess.Prepared.band`),
+        quoted as it is.
     span : float
-        The time the bandwidth was estimated over [s]: the estimate is taken ``2 / span`` lower
-        (the Hann window's half main lobe: a short log's spectrum cannot tell its content closer),
-        so that only a rate or cutoff clearly too low is refused.
+        The time the bandwidth was estimated over [s]: the rate and cutoff are checked against the
+        estimate less ``2 / span`` (the Hann window's half main lobe: a short log's spectrum cannot
+        tell its content closer; the lines say so), so that only a rate or cutoff clearly too low
+        is refused.
     fs : float
         The sample rate [Hz].
     cutoff : float
@@ -199,25 +202,30 @@ def check_rate(source: str, band: float, span: float, fs: float, cutoff: float, 
     DataError
         One line: the rate, the bandwidth, what it costs, and what would help; unless ``allow_units``.
     """
-    band = band - 2.0 / span if span > 0 else 0.0
-    if not band > 0:
+    low = band - 2.0 / span if span > 0 else 0.0
+    if not low > 0:
         return []
-    problem = _rate_problem(band, fs, cutoff, given)
+    which = (f"the excitation bandwidth {band:.3g} Hz, 99.5 % of its energy, less the {2.0 / span:.2g} Hz that "
+             f"{span:.3g} s of log cannot resolve")  # the estimate the cutoff note quotes, less the check's margin
+    problem = _rate_problem(low, fs, cutoff, given, which)
     if problem is not None:
         if not allow_units:
             raise DataError(f"{source}: {problem}" + GO_ON)
         return [going_on("rate", f"{source}: {problem}")]
-    return [f"rate: {fs:.4g} Hz, {fs / band:.3g} samples per period of the motion's bandwidth {band:.3g} Hz; cutoff "
-            f"{cutoff:.3g} Hz = {cutoff / band:.2g} x the bandwidth"]
+    return [f"rate: {fs:.4g} Hz, {fs / low:.3g} samples per period of the motion's {low:.3g} Hz ({which}); cutoff "
+            f"{cutoff:.3g} Hz = {cutoff / low:.2g} x that"]
 
 
-def _rate_problem(band: float, fs: float, cutoff: float, given: bool) -> str | None:
-    """What the rate or the cutoff cannot carry of a motion of bandwidth ``band`` (:func:`check_rate`), or None."""
+def _rate_problem(band: float, fs: float, cutoff: float, given: bool, which: str) -> str | None:
+    """What the rate or the cutoff cannot carry of a motion of bandwidth ``band`` (:func:`check_rate`), or None.
+
+    ``which`` says the estimate ``band`` comes from (the excitation bandwidth the cutoff note quotes).
+    """
     per = fs / band
     if per < MIN_SAMPLES_PER_PERIOD:
         off = (np.pi / per) ** 2 / 3
         best = MIN_SAMPLES_PER_PERIOD * PASS_RATIO * band
-        return (f"a {fs:.3g} Hz log of a motion up to {band:.3g} Hz (99.5 % of its energy): {per:.3g} samples per "
+        return (f"a {fs:.3g} Hz log of a motion up to {band:.3g} Hz ({which}): {per:.3g} samples per "
                 f"period of its fastest content, fewer than the {MIN_SAMPLES_PER_PERIOD:g} the accelerations need "
                 f"(by differences {off:.1%} off there, the parameters more); record at {best:.3g} Hz or more (the "
                 f"default cutoff, fs/20, then passes the motion; {MIN_SAMPLES_PER_PERIOD * band:.3g} Hz with "
@@ -225,8 +233,8 @@ def _rate_problem(band: float, fs: float, cutoff: float, given: bool) -> str | N
     if cutoff < PASS_RATIO * band:
         how = "given" if given else "the default, at most fs/20"
         lost = 1 - 1 / (1 + (band / cutoff) ** 8)
-        return (f"low-pass cutoff {cutoff:.3g} Hz ({how}) is {cutoff / band:.2g} x the motion's bandwidth {band:.3g} "
-                f"Hz: the filter takes {lost:.1%} off the motion there and biases every parameter; --cutoff "
+        return (f"low-pass cutoff {cutoff:.3g} Hz ({how}) is {cutoff / band:.2g} x the motion's {band:.3g} Hz "
+                f"({which}): the filter takes {lost:.1%} off the motion there and biases every parameter; --cutoff "
                 f"{PASS_RATIO * band:.3g} or more ({PASS_RATIO:g} x the bandwidth)")
     return None
 

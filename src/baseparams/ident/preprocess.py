@@ -146,6 +146,33 @@ def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4, why: 
     return LowPass(sos=sos, fs=float(fs), cutoff=float(cutoff), order=int(order), pad=pad, note=note)
 
 
+def default_cutoff(band: float, fs: float, sub: str = "") -> tuple[float, str]:
+    """The low-pass cutoff chosen from the motion's bandwidth when none is given, and its note (the one rule).
+
+    Parameters
+    ----------
+    band : float
+        The motion's bandwidth [Hz] (:func:`excitation_bandwidth`).
+    fs : float
+        Sampling rate [Hz].
+    sub : str, optional
+        How the bandwidth was measured, when not on every sample (``; from means of 4 samples``).
+
+    Returns
+    -------
+    cutoff : float
+        :data:`BANDWIDTH_FACTOR` x ``band`` within ``[CUTOFF_FLOOR, min(fs / 20, 20 Hz)]`` [Hz].
+    note : str
+        ``cutoff 3.333 Hz: 10 x the excitation bandwidth 0.333 Hz (...)``.
+    """
+    top = min(fs / CUTOFF_DIVISOR, CUTOFF_CAP)
+    cutoff = float(np.clip(BANDWIDTH_FACTOR * band, CUTOFF_FLOOR, top))  # the top when the floor is above it
+    bounds = (f"within [{CUTOFF_FLOOR:g} Hz, min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz)]" if top >= CUTOFF_FLOOR else
+              f"at most fs/{CUTOFF_DIVISOR:g} = {top:.4g} Hz (the {CUTOFF_FLOOR:g} Hz floor is above it at this rate)")
+    return cutoff, (f"cutoff {cutoff:.4g} Hz: {BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
+                    f"(99.5 % of the motion's energy{sub}), {bounds}")
+
+
 def edge_samples(fs: float, cutoff: float) -> int:
     """The low-pass's edge at each end [samples]: :data:`EDGE_PERIODS` periods of its cutoff.
 
@@ -183,6 +210,28 @@ def shortest_log(fs: float, cutoff: float | None = None) -> int:
     """
     top = min(fs / CUTOFF_DIVISOR, CUTOFF_CAP)
     return 2 * edge_samples(fs, top if cutoff is None else cutoff) + 2
+
+
+def check_length(source: str, n: int, design: LowPass) -> None:
+    """Refuse a log the low-pass cannot filter: fewer than :func:`shortest_log` samples.
+
+    Parameters
+    ----------
+    source : str
+        The log, for the message.
+    n : int
+        Its samples (on the filter's grid).
+    design : LowPass
+        The filter.
+
+    Raises
+    ------
+    DataError
+        One line: the samples, the rate, the edges, what would help.
+    """
+    if n < shortest_log(design.fs, design.cutoff):
+        raise DataError(f"{source}: {counted(n, 'sample')} at {design.fs:.6g} Hz; the filter edges alone take "
+                        f"2 x {design.pad} (a longer log, or a higher cutoff)")
 
 
 def excitation_bandwidth(q, fs: float, energy: float = 0.995) -> float:
@@ -541,6 +590,10 @@ class Prepared:
         kept one (:func:`regressor_stride`; 1: every sample).
     trim : int
         Samples left out at each end of :attr:`full` (0: every sample is fitted).
+    band : float
+        The motion's bandwidth [Hz] (:func:`excitation_bandwidth` of the unfiltered positions of
+        :func:`prepare`'s ``columns``) that chose the default cutoff and that the rate is checked
+        against; NaN when neither asked for it.
     """
 
     t: np.ndarray
@@ -559,6 +612,7 @@ class Prepared:
     notes: tuple[str, ...] = ()
     stride: int = 1
     trim: int = 0
+    band: float = float("nan")
 
     __repr__ = summary_repr
 
@@ -645,7 +699,7 @@ class Prepared:
 
 
 def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None, decimate: int | None = None,
-            min_speed=None) -> Prepared:
+            min_speed=None, columns=None) -> Prepared:
     """Resample, low-pass, differentiate, decimate, drop slow samples (every sample kept otherwise, the ends too).
 
     Parameters
@@ -665,6 +719,10 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     min_speed : float or array_like, shape ``(m,)``, optional
         Remove samples where any joint is slower than this [rad/s or m/s]
         (:func:`remove_slow`); default none removed.
+    columns : array_like of int, optional
+        The columns of ``q`` whose motion is measured (the identified coordinates): their
+        bandwidth sets the default cutoff and is :attr:`Prepared.band`; default every column
+        (measured only for the default cutoff).
 
     Returns
     -------
@@ -682,18 +740,14 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     u = resample(log, fs)
     rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])  # the mean rate: the grid's, or a uniform log's
     given_cutoff = cutoff is not None
+    band = (excitation_bandwidth(u.q if columns is None else u.q[:, columns], rate)
+            if cutoff is None or columns is not None else float("nan"))  # once: the cutoff's and the rate's
     if cutoff is None:  # from the excitation: 10x its bandwidth, within [1 Hz, min(fs/20, 20 Hz)]
-        band = excitation_bandwidth(u.q, rate)
-        cutoff = float(np.clip(BANDWIDTH_FACTOR * band, CUTOFF_FLOOR, min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)))
-        log_note = (f"cutoff {cutoff:.4g} Hz: {BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
-                    f"(99.5 % of the motion's energy), within [{CUTOFF_FLOOR:g} Hz, "
-                    f"min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz)]")
+        cutoff, log_note = default_cutoff(band, rate)
         u = replace(u, notes=u.notes + (log_note,))
     design = lowpass_design(rate, cutoff, why="given" if given_cutoff else "from the excitation bandwidth")
     n = u.n_samples
-    if n < shortest_log(rate, design.cutoff):
-        raise DataError(f"{log.source}: {counted(n, 'sample')} at {rate:.6g} Hz; the filter edges alone take "
-                        f"2 x {design.pad} (a longer log, or a higher cutoff)")
+    check_length(log.source, n, design)
     qf, tauf, dqf, ddqf = _filtered_together(design, u.q, u.tau, u.dq, u.ddq)
     dq, ddq, rate_notes = filtered_rates(u, qf, rate, design, dqf, ddqf)
     k, k_note = decimation_factor(decimate, rate, design, n)
@@ -717,7 +771,7 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         raise DataError(f"{log.source}: no sample left after edges, decimation and slow-sample removal")
     full = replace(u, q=qf, tau=tauf, dq=dq, ddq=ddq, notes=u.notes + tuple(notes))
     return Prepared(t=u.t[index], joints=u.joints, q=qf[index], dq=dq[index], ddq=ddq[index], tau=tauf[index],
-                    fs=rate / k, design=design, factor=k, index=index, full=full, source=log.source,
+                    fs=rate / k, design=design, factor=k, index=index, full=full, source=log.source, band=band,
                     removed=removed, notes=full.notes, stride=r)
 
 
@@ -939,8 +993,7 @@ def log_states(log: JointLog, cutoff: float | None, filtered: bool = False) -> t
     u = resample(log)
     rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])
     if cutoff is None:
-        cutoff = float(np.clip(BANDWIDTH_FACTOR * excitation_bandwidth(u.q, rate), CUTOFF_FLOOR,
-                               min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)))
+        cutoff = default_cutoff(excitation_bandwidth(u.q, rate), rate)[0]
     design = lowpass_design(rate, cutoff)
     same_grid = u.n_samples == len(t) and np.array_equal(u.t, t)
 

@@ -110,9 +110,9 @@ def test_each_subcommand_has_its_own_model_help():
 
 def test_analysis_samples_and_the_deprecated_spelling(tmp_path, capsys):
     out = tmp_path / "log.csv"
-    code, _, err = run(["simulate", "puma560", str(out), "--duration", "0.2", "--samples", "30"], capsys)
+    code, _, err = run(["simulate", "puma560", str(out), "--duration", "0.3", "--samples", "30"], capsys)
     assert code == 0 and "--samples is deprecated" in err and "--analysis-samples" in err
-    code, _, err = run(["simulate", "puma560", str(out), "--duration", "0.2", "--analysis-samples", "30"], capsys)
+    code, _, err = run(["simulate", "puma560", str(out), "--duration", "0.3", "--analysis-samples", "30"], capsys)
     assert code == 0 and "deprecated" not in err
     assert (tmp_path / "log.csv.truth.json").is_file()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary file left

@@ -237,6 +237,7 @@ def test_a_fleet_says_rotor_inertia_and_terms_are_not_tried_and_rotor_forces_it(
     import json
 
     from baseparams.cli import main
+    from baseparams.cli.parser import flag_message
     from baseparams.errors import BaseparamsError
     from baseparams.ident.model import model_for
     from baseparams.ident.options import IdentOptions
@@ -247,12 +248,13 @@ def test_a_fleet_says_rotor_inertia_and_terms_are_not_tried_and_rotor_forces_it(
             client.scheduler.address]
     assert main(argv) == 0
     text = capsys.readouterr().out.splitlines()
-    rotor = [ln for ln in text if ln.startswith("note: rotor inertia (rotor=auto): not tried for a fleet of logs")]
-    terms = [ln for ln in text if ln.startswith("note: model terms (terms=auto): not tried for a fleet of logs")]
+    rotor = [ln for ln in text if ln.startswith("note: rotor inertia (neither --rotor nor --no-rotor): not tried for "
+                                                "a fleet of logs")]
+    terms = [ln for ln in text if ln.startswith("note: model terms (--terms auto): not tried for a fleet of logs")]
     assert len(rotor) == 1 and "so the model has none; --rotor fits it" in rotor[0] and len(terms) == 1, text
     assert main([*argv, "--json"]) == 0
     j = json.loads(capsys.readouterr().out)
-    assert [f"note: {n}" for n in j["notes"]] == rotor + terms
+    assert [f"note: {flag_message(n, 'identify')}" for n in j["notes"]] == rotor + terms  # JSON: the keywords
     assert not any(n.startswith("Ia") for n in j["names"])
     assert main([*argv, "--rotor", "--terms", "none", "--json"]) == 0
     j = json.loads(capsys.readouterr().out)

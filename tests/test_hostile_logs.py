@@ -13,6 +13,8 @@ import zipfile
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import baseparams
 from baseparams.errors import DataError
@@ -437,13 +439,18 @@ def test_allow_units_lets_positions_in_degrees_through_with_a_warning(tmp_path, 
     assert "q_lift" in err and "degrees given as radians?" in err and "--allow-units" in err, err
     assert main(["identify", str(urdf), str(deg), "--allow-units", "--json", "--save", str(tmp_path / "r.json")]) == 0
     notes = json.loads(capsys.readouterr().out)["notes"]
-    assert any(n.startswith("units: WARNING, going on (allow_units)") and "degrees given as radians?" in n
-               for n in notes), notes
+    assert any(n.startswith("units: WARNING, going on (allow_units=True)") and "degrees given as radians?" in n
+               for n in notes), notes  # the saved result and --json: the library's keyword
     assert not any("to go on anyway" in n for n in notes), notes  # it went on: the refusal's advice is not repeated
+    assert main(["identify", str(urdf), str(deg), "--allow-units"]) == 0  # the text report: the flag
+    said = capsys.readouterr()
+    assert "note: units: WARNING, going on (--allow-units): " in said.out, said.out
+    assert "(allow_units" not in said.out + said.err, said
     out = tmp_path / "p.csv"
     one_line_error(["predict", urdf, tmp_path / "r.json", deg, "--out", out], capsys)
     assert main(["predict", str(urdf), str(tmp_path / "r.json"), str(deg), "--out", str(out), "--allow-units"]) == 0
-    assert "WARNING" in capsys.readouterr().err and out.exists()
+    err = capsys.readouterr().err
+    assert "WARNING, going on (--allow-units)" in err and "(allow_units" not in err and out.exists(), err
 
 
 @pytest.fixture(scope="module")
@@ -461,10 +468,12 @@ def slow_logs(tmp_path_factory):
 
 
 @pytest.mark.parametrize("rate, extra, words", [
-    (7, [], "a 7 Hz log of a motion up to 0.483 Hz (99.5 % of its energy): 14.5 samples per period"),
-    (10, [], "low-pass cutoff 0.5 Hz (the default, at most fs/20) is 1 x the motion's bandwidth 0.483 Hz"),
-    (15, [], "low-pass cutoff 0.75 Hz (the default, at most fs/20) is 1.6 x the motion's bandwidth"),
-    (15, ["--cutoff", "0.9"], "low-pass cutoff 0.9 Hz (given) is 1.9 x the motion's bandwidth"),
+    (7, [], "a 7 Hz log of a motion up to 0.483 Hz (the excitation bandwidth 0.517 Hz, 99.5 % of its energy, less "
+            "the 0.033 Hz that 59.9 s of log cannot resolve): 14.5 samples per period"),
+    (10, [], "low-pass cutoff 0.5 Hz (the default, at most fs/20) is 1 x the motion's 0.483 Hz (the excitation "
+             "bandwidth 0.517 Hz"),
+    (15, [], "low-pass cutoff 0.75 Hz (the default, at most fs/20) is 1.6 x the motion's"),
+    (15, ["--cutoff", "0.9"], "low-pass cutoff 0.9 Hz (given) is 1.9 x the motion's"),
 ])
 def test_a_rate_or_cutoff_that_cannot_carry_the_motion_is_refused(slow_logs, capsys, rate, extra, words):
     """Issue 51: a 7 Hz log identified with exit 0 and a relative error of 30.8 (here 18): refused in one line
@@ -495,4 +504,96 @@ def test_every_rate_is_refused_or_identifies_to_within_two_percent(slow_logs, ca
     assert code == 2 and len(out.err.strip().splitlines()) == 1, out.err
     assert main([*args, "--allow-units"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert any(n.startswith("rate: WARNING, going on (allow_units)") for n in doc["notes"])
+    assert any(n.startswith("rate: WARNING, going on (allow_units=True)") for n in doc["notes"])
+
+
+@settings(max_examples=80, deadline=None)
+@given(rate=st.floats(5.0, 20000.0), samples=st.integers(1, 3000))
+def test_simulate_refuses_exactly_the_random_motions_identify_cannot_filter(rate, samples):
+    """Property (issue 51: ``simulate --duration 0.01`` wrote a 5-sample log without complaint): the random motion is
+    refused iff it makes fewer samples than identify's shortest log at its rate (one rule,
+    :func:`~baseparams.ident.preprocess.shortest_log`); the refusal names that minimum and a duration that passes."""
+    import re
+
+    from baseparams.arguments import ArgumentError
+    from baseparams.ident.preprocess import shortest_log
+    from baseparams.workflow.simulate import check_simulate
+
+    duration = samples / rate
+    n, least = int(round(duration * rate)), shortest_log(rate)
+    try:
+        check_simulate("puma560", None, {"duration": duration, "rate": rate})
+    except ArgumentError as exc:
+        message = str(exc)
+        assert n < least and "\n" not in message, message
+        assert f"makes {n} sample" in message and f"fewer than {least} samples" in message, message
+        suggested = float(re.search(r"; duration=([\d.e+-]+) or more", message).group(1))
+        check_simulate("puma560", None, {"duration": suggested, "rate": rate})  # the advice is enough
+        return
+    assert n >= least, (n, least)
+
+
+@settings(max_examples=40, deadline=None)
+@given(rate=st.floats(20.0, 3000.0))
+def test_the_shortest_log_is_the_one_identify_filters(rate):
+    """:func:`shortest_log` is prepare's own rule: at the highest default cutoff a log of that many samples is
+    filtered and one fewer refused (so simulate's floor is identify's, not a second rule)."""
+    from baseparams.ident.preprocess import CUTOFF_CAP, CUTOFF_DIVISOR, prepare, shortest_log
+    from baseparams.jointlog import JointLog
+
+    least, top = shortest_log(rate), min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)
+
+    def log(n):
+        t = np.arange(n) / rate
+        q = np.sin(2 * np.pi * 0.5 * t)[:, None]
+        return JointLog(t, ("j",), q, np.cos(2 * np.pi * 0.5 * t)[:, None], source="s.csv")
+
+    assert prepare(log(least), cutoff=top).n_samples == least
+    with pytest.raises(DataError, match=f"s.csv: {least - 1} samples at .* the filter edges alone take"):
+        prepare(log(least - 1), cutoff=top)
+    with pytest.raises(DataError, match="the filter edges alone take"):
+        prepare(log(least - 1))  # the default cutoff is never higher
+
+
+def test_a_random_motion_too_short_to_identify_is_refused_and_the_advice_identifies(tmp_path, capsys):
+    """``simulate puma560 x.csv --duration 0.01``: one line naming the minimum and why, nothing written; the duration
+    it advises simulates a log identify takes."""
+    from baseparams.cli import main
+
+    out = tmp_path / "x.csv"
+    err = one_line_error(["simulate", "puma560", out, "--duration", "0.01"], capsys)
+    assert "--duration 0.01 at --rate 500 makes 5 samples, too few to identify" in err, err
+    assert "fewer than 102 samples; --duration 0.204 or more at 500 Hz" in err and "duration=" not in err, err
+    assert not list(tmp_path.iterdir())
+    assert main(["simulate", "puma560", str(out), "--duration", "0.204"]) == 0
+    assert main(["identify", "puma560", str(out), "--terms", "none"]) == 0  # the default: the short-motion rule
+    assert "102 samples used of 102 read" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("stream", [False, True])
+def test_the_rate_note_and_the_cutoff_note_quote_one_bandwidth(slow_logs, capsys, stream):
+    """Issue 51: the rate note and the cutoff note quoted 0.483 and 0.517 Hz for one motion. One estimate, measured
+    once (on the measured coordinates), is what the cutoff note quotes and what the rate line starts from; the figure
+    the rate is checked against is that estimate less the spectrum's resolution over the log, and the line says so
+    (in memory and streamed from the file alike)."""
+    import re
+
+    from baseparams.cli import main
+
+    folder, json = slow_logs
+    for rate in (7, 30):
+        extra = ["--allow-units"] if rate == 7 else []
+        capsys.readouterr()
+        assert main(["identify", "puma560", str(folder / f"r{rate}.csv"), "--terms", "none", "--rotor", "--json",
+                     *(["--stream", "on"] if stream else []), *extra]) == 0
+        notes = json.loads(capsys.readouterr().out)["notes"]
+        cut = [float(x) for n in notes for x in re.findall(r"^cutoff [\d.]+ Hz: 10 x the excitation bandwidth "
+                                                            r"([\d.]+) Hz", n)]
+        said = [m.groups() for n in notes if n.startswith("rate:") for m in re.finditer(
+            r"motion(?:'s| up to) ([\d.]+) Hz \(the excitation bandwidth ([\d.]+) Hz, 99.5 % of its energy, less "
+            r"the ([\d.]+) Hz that ([\d.]+) s of log cannot resolve\)", n)]
+        assert len(cut) == 1 and len(said) == 1, notes
+        low, band, res, span = map(float, said[0])
+        assert band == cut[0] and abs(res - 2 / span) < 0.05 * res and abs(low - (band - res)) <= 0.0051, said
+        if rate == 7:
+            assert any(n.startswith("rate: WARNING, going on (allow_units=True)") for n in notes), notes

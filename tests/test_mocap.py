@@ -137,9 +137,10 @@ def test_mocap_welds_are_left_out_by_default_and_kept_on_request(tmp_path, capsy
         assert main(["analyze", str(path), "--json", *flags]) == 0
         out = capsys.readouterr()
         assert f'"n_base": {a.n_base}' in out.out and "left out" in out.err
+        assert "(--mocap-welds keep, keeps it" in out.err and "mocap_welds=" not in out.err, out.err  # the flag once
     assert main(["analyze", str(path), "--json", "--mocap-welds", "keep"]) == 0
     out = capsys.readouterr()
-    assert '"n_base": 2' in out.out and "kept as a loop joint to the world" in out.err
+    assert '"n_base": 2' in out.out and "kept as a loop joint to the world (--mocap-welds keep)" in out.err, out.err
 
 
 def test_mocap_welds_keyword_is_checked(tmp_path, capsys):

@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import baseparams
-from baseparams.display import MAX_REPR, format_number, summary_repr, text_table
+from baseparams.display import MAX_REPR, counted, format_number, summary_repr, text_table
 from baseparams.ident import identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.robots import BUILTINS
@@ -93,6 +93,15 @@ def test_identification_reprs(ident):
         _short(obj)
 
 
+@given(n=st.integers(-3, 10**6), noun=st.sampled_from(["row", "log", "per-file fit", "element"]),
+       plural=st.sampled_from([None, "bodies"]))
+def test_a_count_takes_its_noun_in_its_number(n, noun, plural):
+    """Property: the one plural rule of the messages (issue 51: "1 elements and attributes", "1 logs")."""
+    text = counted(n, noun, plural)
+    assert text.startswith(f"{n} ") and text.removeprefix(f"{n} ") == (noun if n == 1 else plural or noun + "s")
+    assert counted(np.int64(1), "row") == "1 row" and counted(np.float64(2.0), "row") == "2 rows"
+
+
 def test_excitation_and_fleet_reprs(ident):
     from baseparams.excitation import random_excitation
     from baseparams.fleet import FleetResult
@@ -101,7 +110,7 @@ def test_excitation_and_fleet_reprs(ident):
     assert _short(exc).startswith("<Excitation puma560: 6 joints, 5 harmonics of 0.1 Hz, condition number")
     _, res = ident
     fleet = FleetResult(res.model, {"a.csv": res.fit}, res.fit, [{"path": "a.csv"}], None)
-    assert _short(fleet) == "<FleetResult puma560: 1 logs, 58 terms, 1 per-file fits, pooled auto>".replace(
+    assert _short(fleet) == "<FleetResult puma560: 1 log, 58 terms, 1 per-file fit, pooled auto>".replace(
         "58", str(res.model.n_params))
 
 

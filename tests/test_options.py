@@ -13,12 +13,14 @@ from dataclasses import fields, replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import baseparams
 from baseparams.arguments import IDENTIFY
 from baseparams.cli import build_parser, main
-from baseparams.cli.parser import COMMANDS, flag_message, switch_flags
-from baseparams.errors import BaseparamsError
+from baseparams.cli.parser import COMMANDS, flag_message, flag_notes, keyword_flags, switch_flags
+from baseparams.errors import GO_ON, BaseparamsError, going_on
 from baseparams.ident import IdentOptions, MotorCoupling, identify
 from baseparams.ident.simulate import simulate_log
 from baseparams.ident.stream import identify_stream
@@ -121,6 +123,90 @@ def test_a_switch_named_in_a_message_is_the_flag_that_sets_it(command):
             assert (got if action.dest == key else not got) is value, (command, key, value, text)
 
 
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_switch_at_its_third_value_is_neither_flag(command):
+    """``rotor=auto`` (neither forced in nor out) reads as the two flags left out, which parse to that value."""
+    for key, (on, off) in switch_flags(command).items():
+        if on is None or off is None:
+            continue
+        assert flag_message(f"{command}: ({key}=auto, ...)", command) == f"(neither {on} nor {off}, ...)"
+        parser, ns = _parsed(command, [])
+        action = next(a for a in parser._actions if on in a.option_strings)  # noqa: SLF001
+        assert getattr(ns, action.dest) not in (True, False), (command, key)  # the third value: neither flag given
+
+
+#: words of a note without an option in them (no ``=``, no keyword)
+_PLAIN = st.text(st.sampled_from("abc xyz.:;,()0123456789%"), min_size=1, max_size=40)
+
+
+@settings(max_examples=60, deadline=None)
+@given(topic=st.sampled_from(["units", "rate", "positions"]), problem=_PLAIN)
+def test_a_going_on_note_names_the_keyword_in_python_and_the_flag_on_the_command_line(topic, problem):
+    """Issue 51: the CLI printed "going on (allow_units)", the library's keyword. The note says the keyword (what an
+    API user passes); every command that takes the switch prints its flag, once, and nothing else changes."""
+    note = going_on(topic, problem + GO_ON)  # a refusal let through: its advice to go on left out
+    assert note == f"{topic}: WARNING, going on (allow_units=True): {problem}"
+    commands = [c for c in COMMANDS if "allow_units" in switch_flags(c)]
+    assert {"identify", "predict"} <= set(commands)
+    for command in commands:
+        assert flag_message(note, command) == f"{topic}: WARNING, going on (--allow-units): {problem}"
+        assert flag_message(problem + GO_ON, command) == problem + "; --allow-units to go on anyway"
+
+
+@settings(max_examples=60, deadline=None)
+@given(lines=st.lists(st.tuples(st.sampled_from(["", "  ", "x "]), st.sampled_from(["note: ", "", "WARNING "]),
+                                st.sampled_from(["method=ols", "rotor=False", "cutoff=", "plain"]), _PLAIN),
+                      min_size=1, max_size=6))
+def test_a_report_prints_its_notes_with_flags_and_its_other_lines_as_they_are(lines):
+    """:func:`flag_notes`: a note line (``note: ``, indented or not) and a WARNING line through
+    :func:`flag_message`, every other line of the report (a table that may hold ``=``) unchanged."""
+    text = "\n".join(a + b + c + d for a, b, c, d in lines)
+    for line, (a, b, c, d) in zip(flag_notes(text, "identify").split("\n"), lines, strict=True):
+        if b == "note: " and not a.strip():
+            assert line == a + b + flag_message(c + d, "identify")
+        elif "WARNING" in a + b + c + d:
+            assert line == flag_message(a + b + c + d, "identify")
+        else:
+            assert line == a + b + c + d
+    assert flag_notes("note: rotor=False", "identify") == "note: --no-rotor"  # the test's own check: it changes
+
+
+def test_the_excitation_limits_notes_name_an_option_both_doors_have():
+    """The default position range's note named ``limits=``, which ``baseparams excite`` has no flag for: the
+    keyword it names is the front door's and a flag of the command."""
+    import re
+
+    from baseparams.excitation.limits import excitation_limits
+
+    _, notes = excitation_limits(baseparams.load("puma560"))  # no position limits in the file
+    named = {k for n in notes for k in re.findall(r"(\w+)=", n)}
+    assert named and named <= set(inspect.signature(baseparams.excite).parameters), notes
+    printed = [flag_message(n, "excite") for n in notes]
+    assert not any(re.search(r"\w=", n) for n in printed) and any("--position" in n for n in printed), printed
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_positional_argument_is_named_in_a_message_as_the_help_names_it(command):
+    """Issue 51: ``simulate puma560 x.txt`` said "OUT x.txt: ..." where --help and the usage line say ``out``."""
+    parser, _ = _parsed(command, [])
+    usage = parser.format_usage().split()
+    positional = [a for a in parser._actions if not a.option_strings]  # noqa: SLF001
+    assert positional or command == "robots", command  # every command but the list of robots takes MODEL
+    table = keyword_flags(command)
+    for action in positional:
+        key = next(k for k, v in table.items() if v == (action.metavar or action.dest))
+        line = flag_message(f"{command}: {key}='x.csv': no such file", command)
+        name = line.removesuffix(" x.csv: no such file")
+        assert name in usage or f"{name}..." in usage or f"[{name}" in " ".join(usage), (command, line, usage)
+        assert name.lower() == name and name in parser.format_help(), line
+
+
+def test_simulate_names_its_out_argument_as_its_help_does(tmp_path, capsys):
+    assert main(["simulate", "puma560", str(tmp_path / "x.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"baseparams: error: out {tmp_path / 'x.txt'}: the format comes from the suffix"), err
+
+
 def test_a_message_that_spells_an_option_twice_names_the_flag_once():
     """The CLI's line for a message written for both doors: the flag once, a quoted value unquoted."""
     assert flag_message("identify: p.csv: 7 Hz; --allow-units (allow_units=True) to go on anyway",
@@ -128,6 +214,9 @@ def test_a_message_that_spells_an_option_twice_names_the_flag_once():
     assert flag_message("robot 'r': no motion; leave it out (mocap_welds='drop', --mocap-welds drop)",
                         "analyze") == "robot 'r': no motion; leave it out (--mocap-welds drop)"
     assert flag_message('identify: method="ols" and rotor=False', "identify") == "--method ols and --no-rotor"
+    assert flag_message("left out (mocap_welds='keep', --mocap-welds keep, keeps it)", "analyze") == \
+        "left out (--mocap-welds keep, keeps it)"  # the loader's note: the flag once, mid-sentence too
+    assert flag_message("--method ols, --method olsen", "identify") == "--method ols, --method olsen"
 
 
 def test_unknown_keywords_and_objects_are_refused():

@@ -163,7 +163,7 @@ def test_every_option_of_every_command_is_tested_or_declared():
 def files(tmp_path_factory):
     """A states file and a trajectory (real ones: the regressor and simulate read them before the work)."""
     d = tmp_path_factory.mktemp("parity")
-    bp.simulate("puma560", duration=0.5, rate=100.0, out=d / "states.csv")
+    bp.simulate("puma560", duration=0.82, rate=100.0, out=d / "states.csv")  # identify's shortest log
     bp.excite("puma560", harmonics=2, period=2, rate=50, starts=1, grid=40, out=d / "traj.csv")
     (d / "map.toml").write_text("")
     (d / "prior.json").write_text('{"mass": 1.0, "com": [0, 0, 0.05], "inertia_com": [[0.01, 0, 0], [0, 0.01, 0], '

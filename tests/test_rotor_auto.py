@@ -11,6 +11,7 @@ import pytest
 
 import baseparams as bp
 from baseparams.cli import main
+from baseparams.cli.parser import flag_message
 
 PUMA = bp.load("puma560")
 
@@ -96,18 +97,18 @@ def test_a_run_that_does_not_try_rotor_inertia_says_so_and_rotor_forces_it(run, 
     why = {"recordings": "not tried for several recordings in one identification",
            "stream": "not tried for a log streamed from its file"}[run]
 
-    def notes(lines):
-        return [n for n in lines if "rotor inertia (rotor=auto)" in n]
+    def notes(lines, auto="rotor=auto"):
+        return [n for n in lines if f"rotor inertia ({auto})" in n]
 
     assert main(argv) == 0
-    said = notes(capsys.readouterr().out.splitlines())
-    assert len(said) == 1 and said[0].startswith(f"note: rotor inertia (rotor=auto): {why}"), said
+    said = notes(capsys.readouterr().out.splitlines(), "neither --rotor nor --no-rotor")  # the text: the flags
+    assert len(said) == 1 and said[0].startswith(f"note: rotor inertia (neither --rotor nor --no-rotor): {why}"), said
     assert "so the model has none; --rotor fits it" in said[0]
     runs = {}
     for flag in ("", "--rotor", "--no-rotor"):
         assert main([*argv, *([flag] if flag else []), "--json"]) == 0
         runs[flag] = json.loads(capsys.readouterr().out)
-    assert [n.removeprefix("note: ") for n in said] == notes(runs[""]["notes"])  # the same line in the JSON
+    assert [n.removeprefix("note: ") for n in said] == [flag_message(n, "identify") for n in notes(runs[""]["notes"])]
     assert not notes(runs["--rotor"]["notes"]) and not notes(runs["--no-rotor"]["notes"])
     assert all(d["Ia"] is None for r in ("", "--no-rotor") for d in runs[r]["drives"])
     assert sum(isinstance(d["Ia"], float) for d in runs["--rotor"]["drives"]) == 4  # joints 1-2 regroup

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from baseparams.base.regroup import base_parameters
 from baseparams.errors import ModelError
@@ -517,7 +519,7 @@ def test_drake_urdf_is_read_leniently_with_one_note(declared, tmp_path):
     said = [str(w.message) for w in caught if issubclass(w.category, URDFWarning)]
     assert len(said) == 1, said
     assert ("'drake' used without a declaration: read leniently" in said[0]) is not declared
-    assert ("5 namespaced elements and attributes describe no rigid body and were ignored: "
+    assert ("4 namespaced elements and 1 attribute describe no rigid body and were ignored: "
             "<drake:collision_filter_group>, <drake:gear_ratio>, <drake:proximity_properties>, <drake:rotor_inertia>, "
             "drake:acceleration") in said[0]
     assert robot.names == ("l1", "l2") and robot.jtype == ("R", "R")
@@ -614,6 +616,32 @@ def test_drake_joint_of_a_standard_type_is_that_joint(tmp_path):
         assert robot.jtype == ("R", "R") and np.allclose(robot.M0, ref.M0) and np.allclose(robot.screws, ref.screws)
 
 
+@settings(max_examples=80, deadline=None)
+@given(drake=st.dictionaries(st.sampled_from(["<drake:a>", "<drake:b>", "drake:c", "drake:d"]),
+                             st.integers(1, 3), max_size=4),
+       other=st.dictionaries(st.sampled_from(["<foo:joint>", "<bar:x>", "foo:y"]), st.integers(1, 3), max_size=3),
+       undeclared=st.lists(st.sampled_from(["drake", "foo"]), max_size=2, unique=True))
+def test_the_namespace_note_counts_in_the_number_it_counts(drake, other, undeclared):
+    """Property (issue 51: "1 elements and attributes"): the note's counts are its elements (shown ``<tag>``) and
+    attributes, each noun and verb in the number of its count, the listing's multiplicities summing to them."""
+    from baseparams.io.urdf import _foreign_note
+
+    note = _foreign_note(drake, other, undeclared)
+    assert not re.search(r"(?<![\d.])1 (namespaced )?\w+s\b", note), note  # never "1 elements"
+    for items, marker in ((drake, " no rigid body "), (other, " of other namespaces ")):
+        part = [p for p in note.split("; ") if marker in p]
+        assert len(part) == bool(items), note
+        if not items:
+            continue
+        elements = sum(v for k, v in items.items() if k.startswith("<"))
+        want = {w: n for w, n in (("element", elements), ("attribute", sum(items.values()) - elements)) if n}
+        got = re.findall(r"(\d+) (?:namespaced )?(element|attribute)", part[0].split(":")[0])
+        assert {w: int(n) for n, w in got} == want, part
+        one = sum(items.values()) == 1
+        assert (" was ignored" in part[0]) is one and (" were ignored" in part[0]) is not one, part
+    assert ("namespace prefix " in note) is (len(undeclared) == 1) and ("prefixes" in note) is (len(undeclared) > 1)
+
+
 @pytest.mark.parametrize("xmlns, prefix", [(' xmlns:foo="http://example.com/foo"', "foo"), ("", "foo"),
                                             (' xmlns:drake="http://example.com/not-drake"', "drake")])
 def test_elements_of_another_namespace_are_never_urdf(xmlns, prefix, tmp_path):
@@ -640,8 +668,8 @@ def test_elements_of_another_namespace_are_never_urdf(xmlns, prefix, tmp_path):
         with pytest.raises(ModelError, match=r"root links \['world', 'l3'\]: the tree is not connected") as info:
             load_urdf(path)  # l3 hangs on nothing: the foreign joint was not read as a joint
     said = [str(w.message) for w in caught if issubclass(w.category, URDFWarning)]
-    assert len(said) == 1 and f"<{prefix}:joint>" in said[0] and "other namespaces are not URDF" in said[0]
-    other_part = said[0].split("other namespaces are not URDF")[1]
+    assert len(said) == 1 and f"<{prefix}:joint>" in said[0] and "of other namespaces" in said[0]
+    other_part = said[0].split("of other namespaces")[1]
     assert f"<{prefix}:joint>" in other_part, said[0]  # classed by its namespace, not by its prefix's spelling
     # the refusal says what was left out, the likely cause (the note is lost with the refusal on the command line)
     message = str(info.value)

@@ -117,6 +117,27 @@ def name_list(names, limit: int = 12) -> str:
     return shown if len(names) <= limit else f"{shown} and {len(names) - limit} more"
 
 
+def counted(n, noun: str, plural: str | None = None) -> str:
+    """A count and its noun in the number the count takes: the one place messages write ``1 row``, ``2 rows``.
+
+    Parameters
+    ----------
+    n : int
+        The count.
+    noun : str
+        The noun in the singular (``row``).
+    plural : str, optional
+        Its plural when it is not ``noun + "s"`` (``bodies``, ``entries``).
+
+    Returns
+    -------
+    str
+        ``1 row``, ``0 rows``, ``2 rows``.
+    """
+    n = int(n)
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def brief(value, width: int = 60) -> str:
     """A field's value in a few characters: arrays by shape, numbers at 4 digits, long text cut.
 

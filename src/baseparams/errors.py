@@ -45,3 +45,29 @@ class ArgumentError(BaseparamsError, ValueError):
 
 class ArgumentTypeError(BaseparamsError, TypeError):
     """An argument of the wrong type or shape (names the argument and what it should be)."""
+
+
+#: the end of a refusal ``allow_units=True`` lets through (the keyword and the command line's flag: the command
+#: line names the flag alone, :func:`baseparams.cli.parser.flag_message`)
+GO_ON = "; --allow-units (allow_units=True) to go on anyway"
+
+
+def going_on(topic: str, problem: object) -> str:
+    """The WARNING note of a refusal ``allow_units=True`` let through: its line without "to go on anyway".
+
+    The one wording of every such note (units, rate, positions), in the library's keyword (the
+    command line prints ``--allow-units``).
+
+    Parameters
+    ----------
+    topic : str
+        What was checked (``units``, ``rate``).
+    problem : str or Exception
+        The refusal (its :data:`GO_ON` end left out).
+
+    Returns
+    -------
+    str
+        ``units: WARNING, going on (allow_units=True): ...``.
+    """
+    return f"{topic}: WARNING, going on (allow_units=True): {str(problem).removesuffix(GO_ON)}"

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .display import clip
+from .display import clip, counted
 from .errors import BaseparamsError, DataError
 from .ident import Fit, fit, pulled_covariance
 from .ident.drives import FRICTION_TERMS
@@ -131,9 +131,10 @@ class FleetResult:
     notes: tuple = ()
 
     def __repr__(self) -> str:
-        what = [f"{len(self.per_file)} per-file fits"] if self.per_file else []
+        what = [counted(len(self.per_file), "per-file fit")] if self.per_file else []
         what += ["pooled " + self.pooled.method] if self.pooled is not None else []
-        return clip(f"<FleetResult {self.model.robot.name}: {len(self.files)} logs, {self.model.n_params} terms, "
+        return clip(f"<FleetResult {self.model.robot.name}: {counted(len(self.files), 'log')}, "
+                    f"{counted(self.model.n_params, 'term')}, "
                     f"{', '.join(what) or 'no fits'}>")
 
     def pooled_note(self) -> str | None:

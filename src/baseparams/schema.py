@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .display import counted
 from .enums import Convention, values
 from .errors import BaseparamsError
 from .files import read_input_bytes
@@ -813,7 +814,7 @@ def _matrix(symbol: str, item: Node = _FINITE) -> Arr:
 
 def _coupling_rule(c: dict) -> str | None:
     if len(c["joints"]) != len(c["weights"]):
-        return f"{len(c['joints'])} joints but {len(c['weights'])} weights (one weight per joint)"
+        return f"{counted(len(c['joints']), 'joint')} but {counted(len(c['weights']), 'weight')} (one weight per joint)"
     return None
 
 

@@ -23,7 +23,7 @@ from .common import (
     no_moving_bodies,
     write_html,
 )
-from .parser import choices, model_args
+from .parser import choices, flag_message, flag_notes, model_args
 
 #: the flags named otherwise than :func:`baseparams.analyze`'s keywords (both inverted: ``verify=False``)
 KEYWORDS = {"no_verify": "verify", "paper_only": "extended"}
@@ -129,7 +129,7 @@ def run(args) -> int:
     with Progress(args.verbose) as progress:
         result = analyze(robot, **keywords(args), progress=progress)
         for note in size_notes(result):  # before the writing, which takes the time
-            print(f"baseparams: {note}", file=sys.stderr)
+            print(f"baseparams: {flag_message(note, 'analyze')}", file=sys.stderr)
         if args.html:
             from ..report.html import analysis_html
 
@@ -141,10 +141,11 @@ def run(args) -> int:
             progress("drawing the figure")
             analysis_plot(result, args.plot, input_files(args), "plot=")
             print(f"baseparams: plot written to {args.plot}", file=sys.stderr)
-    emit(args, json_chunks(result) if args.json else _pieces(report_lines(result)))
+    emit(args, json_chunks(result) if args.json else _pieces(flag_notes(x, "analyze") for x in report_lines(result)))
     status = result.status
     if status in (Status.UNDECIDED, Status.FAILED):
-        print(f"baseparams: certification {status.upper()}: {result.certificate.message}", file=sys.stderr)
+        why = flag_message(result.certificate.message, "analyze")
+        print(f"baseparams: certification {status.upper()}: {why}", file=sys.stderr)
     return STATUS_EXIT[status]
 
 

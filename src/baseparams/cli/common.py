@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..enums import Status
 from ..errors import BaseparamsError, NoMovingBodiesError
+from .parser import flag_message
 
 #: exit codes (see the module doc)
 EXIT_OK, EXIT_INPUT, EXIT_UNDECIDED, EXIT_FAILED, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
@@ -131,11 +132,25 @@ def load_robot(args) -> Robot:  # noqa: F821
                               package_path=getattr(args, "package_path", None),
                               mocap_welds=getattr(args, "mocap_welds", "drop"))
     for note in notes:
-        print(f"baseparams: note: {note}", file=sys.stderr)
+        print_note(note, args.command)
     hint = floating_hint(robot) if Path(args.model).is_file() and not getattr(args, "floating", False) else ""
     if hint:
-        print(f"baseparams: note: {hint}", file=sys.stderr)
+        print_note(hint, args.command)
     return robot
+
+
+def print_note(line: str, command: str) -> None:
+    """A note of the run on stderr (``baseparams: note: ...``; an output written: ``baseparams: ... written to``).
+
+    Parameters
+    ----------
+    line : str
+        The note (options named by their keywords: printed as the command's flags, :func:`flag_message`).
+    command : str
+        The command, whose flags name the options.
+    """
+    line = flag_message(line, command)
+    print(f"baseparams: {'' if ' written to ' in line else 'note: '}{line}", file=sys.stderr)
 
 
 #: names of joints on a fixed root that suggest the base moves (a leg's hip, a wheel)

@@ -12,7 +12,7 @@ import sys
 from ..errors import BaseparamsError, NoMovingBodiesError
 from . import common
 from .common import EXIT_OK, emit
-from .parser import choices, model_args
+from .parser import choices, flag_message, flag_notes, model_args
 
 #: the flags named otherwise than :func:`baseparams.excite`'s keywords
 KEYWORDS = {"samples": "analysis_samples"}
@@ -146,11 +146,12 @@ def run(args) -> int:
         robot = common.load_robot(args)
     except NoMovingBodiesError as exc:
         raise BaseparamsError(f"{exc}: no actuated coordinate to excite") from None
-    result = excite(robot, **keywords(args), progress=lambda msg: print(f"baseparams: {msg}", file=sys.stderr))
+    result = excite(robot, **keywords(args),
+                    progress=lambda msg: print(f"baseparams: {flag_message(msg, 'excite')}", file=sys.stderr))
     for path, what in ((args.out, "trajectory"), (args.plot, "plot")):
         if path:
             print(f"baseparams: {what} written to {path}", file=sys.stderr)
-    emit(args, json.dumps(result.to_json(), indent=2) if args.json else result.summary())
+    emit(args, json.dumps(result.to_json(), indent=2) if args.json else flag_notes(result.summary(), "excite"))
     return EXIT_OK
 
 

@@ -16,9 +16,10 @@ import time
 import numpy as np
 
 from ..arguments import CHOICES, IDENTIFY
+from ..display import counted
 from . import common
-from .common import EXIT_INPUT, EXIT_OK, Progress, data_files, emit
-from .parser import choices, flag_message, ident_args, model_args
+from .common import EXIT_INPUT, EXIT_OK, Progress, data_files, emit, print_note
+from .parser import choices, flag_message, flag_notes, ident_args, model_args
 
 #: the flags named otherwise than :func:`baseparams.identify`'s keywords
 KEYWORDS = {"data": "log", "coupling": "couplings", "samples": "analysis_samples"}
@@ -121,22 +122,9 @@ def run(args) -> int:
                           progress=lambda line: progress(flag_message(line, "identify")),
                           _reporter=Reporter(notes=lambda line: print_note(line, "identify"), source=args.model))
         progress(f"identified in {time.perf_counter() - t0:.2f} s")
-    emit(args, json.dumps(result.to_json(), indent=2) if args.json else format_identification(result))
+    emit(args, json.dumps(result.to_json(), indent=2) if args.json
+         else flag_notes(format_identification(result), "identify"))
     return EXIT_OK
-
-
-def print_note(line: str, command: str) -> None:
-    """A note of the run on stderr (``baseparams: note: ...``; an output written: ``baseparams: ... written to``).
-
-    Parameters
-    ----------
-    line : str
-        The note (options named by their keywords: printed as the command's flags).
-    command : str
-        The command, whose flags name the options.
-    """
-    line = flag_message(line, command)
-    print(f"baseparams: {'' if ' written to ' in line else 'note: '}{line}", file=sys.stderr)
 
 
 def _identify_fleet(args, robot, files: list[str]) -> int:
@@ -145,15 +133,16 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
 
     res = identify_logs(robot, files, keywords(args), per_file=args.per_file or not args.pooled,
                         pooled=args.pooled or len(files) == 1, scheduler=args.scheduler, workers=args.workers,
-                        progress=lambda line: print(f"baseparams: {line}", file=sys.stderr))
+                        progress=lambda line: print(f"baseparams: {flag_message(line, 'identify')}", file=sys.stderr))
     if args.json:
         emit(args, json.dumps(res.to_json(), indent=2))
         return _fleet_exit(args, res, files)
     model = res.model
     skipped = [s for s in res.skipped if s["stage"] == "read"]
-    lines = [f"{robot.name}: {len(files)} logs, {len(res.files)} used, {len(skipped)} skipped; "
-             f"{sum(f['used'] for f in res.files)} samples used ({args.method}); {model.n_params} model parameters"]
-    lines += [f"skipped: {s['error']}" for s in res.skipped]
+    lines = [f"{robot.name}: {counted(len(files), 'log')}, {len(res.files)} used, {len(skipped)} skipped; "
+             f"{counted(sum(f['used'] for f in res.files), 'sample')} used ({args.method}); "
+             f"{counted(model.n_params, 'model parameter')}"]
+    lines += [f"skipped: {flag_message(s['error'], 'identify')}" for s in res.skipped]
     lines += [f"{f['path']}: {w}" for f in res.files for w in f.get("warnings", ())]  # --allow-units went on
     lines += [f"note: {n}" for n in res.notes]  # what the options leave to the data that a fleet does not try
     if res.spread is not None:
@@ -168,15 +157,15 @@ def _identify_fleet(args, robot, files: list[str]) -> int:
                   f"  {'name':<20s} {'value':>14s} {'std':>11s}"]
         lines += [f"  {n:<20s} {v:14.6g} " + (f"{s:11.3g}" if np.isfinite(s) else f"{'n/a':>11s}") for n, v, s in
                   zip(model.names, res.pooled.theta, res.pooled.estimate.std)]
-    emit(args, "\n".join(lines))
+    emit(args, flag_notes("\n".join(lines), "identify"))
     return _fleet_exit(args, res, files)
 
 
 def _fleet_exit(args, res, files: list[str]) -> int:
     """``--strict``: a fleet with a skipped log is an error (one line); otherwise the skips are reported only."""
     if args.strict and res.skipped:
-        print(f"baseparams: error: --strict: {len(res.skipped)} of {len(files)} logs skipped "
-              f"(first: {res.skipped[0]['error']})", file=sys.stderr)
+        print(f"baseparams: error: --strict: {len(res.skipped)} of {counted(len(files), 'log')} skipped "
+              f"(first: {flag_message(res.skipped[0]['error'], 'identify')})", file=sys.stderr)
         return EXIT_INPUT
     return EXIT_OK
 

@@ -227,9 +227,10 @@ def keyword_flags(command: str) -> dict[str, str]:
     Returns
     -------
     dict of str to str
-        ``{keyword: flag}``: ``{"holdout": "--holdout", "couplings": "--coupling", "out": "OUT"}``
+        ``{keyword: flag}``: ``{"holdout": "--holdout", "couplings": "--coupling", "out": "out"}``
         (the command module's ``KEYWORDS`` for flags named otherwise, :data:`MODEL_KEYWORDS`,
-        and the others under their own names).
+        and the others under their own names; a positional argument as ``--help`` and the usage
+        line name it, argparse's metavar or its name: ``simulate``'s ``out``).
     """
     sub = next(a for a in build_parser()._actions if a.dest == "command")  # noqa: SLF001  (argparse's own)
     renamed = getattr(command_module(command), "KEYWORDS", {})
@@ -238,7 +239,7 @@ def keyword_flags(command: str) -> dict[str, str]:
         if action.dest in _NOT_KEYWORDS or action.help == argparse.SUPPRESS:
             continue
         longs = [s for s in action.option_strings if s.startswith("--")]
-        flag = longs[0] if longs else action.dest.upper()
+        flag = longs[0] if longs else action.metavar or action.dest  # a positional: named as its help names it
         out[renamed.get(action.dest, action.dest)] = flag
     return out
 
@@ -291,8 +292,10 @@ def flag_message(message: str, command: str | None) -> str:
         E.g. ``--prior-weight applies to --method physical, not auto``: ``name=value`` (a value
         quoted or not) as ``--name value``, ``name=`` as ``--name`` (:func:`keyword_flags`), a
         switch's ``name=True`` as ``--name`` and ``name=False`` as ``--no-name`` (or ``without
-        --name``: :func:`switch_flags`), the command's own ``identify:`` prefix left out. A message
-        that gives both spellings (``--allow-units (allow_units=True)``) names the flag once.
+        --name``: :func:`switch_flags`), a switch of both spellings at its third value (``rotor=auto``)
+        as ``neither --rotor nor --no-rotor``, the command's own ``identify:`` prefix left out. A
+        message that gives both spellings (``--allow-units (allow_units=True)``, ``(mocap_welds='keep',
+        --mocap-welds keep, ...)``) names the flag once.
     """
     if not command or command not in COMMANDS:
         return message
@@ -308,8 +311,36 @@ def flag_message(message: str, command: str | None) -> str:
         if key in switches and value in ("True", "False"):
             on, off = switches[key]
             return (on or f"without {off}") if value == "True" else (off or f"without {on}")
+        if key in switches and value and all(switches[key]):  # rotor=auto: the flag left out either way
+            return "neither {} nor {}".format(*switches[key])
         return table[key] + (f" {value}" if value else "")
 
     text = re.sub(rf"(?<![\w.-])({names})=('[^'\s]*'|\"[^\"\s]*\"|\w*)", flag, text)
     one = r"(--[\w-]+(?: [\w.]+)?)"  # a flag and its value, named twice: once
-    return re.sub(rf"\({one}, \1\)", r"(\1)", re.sub(rf"{one} \(\1\)", r"\1", text))
+    return re.sub(rf"{one}, \1(?=[,;)]|$)", r"\1", re.sub(rf"{one} \(\1\)", r"\1", text))
+
+
+def flag_notes(text: str, command: str | None) -> str:
+    """A library's text report as the command prints it: its notes with the command's flags.
+
+    Parameters
+    ----------
+    text : str
+        The report (lines; a note is a line ``note: ...``, indented or not, or one with a
+        ``WARNING``).
+    command : str or None
+        The command run (None: the text as it is).
+
+    Returns
+    -------
+    str
+        The same lines, each note through :func:`flag_message` (the report's other lines, tables
+        of names and numbers, as they are).
+    """
+    def line(x: str) -> str:
+        head, sep, note = x.partition("note: ")
+        if sep and not head.strip():
+            return head + sep + flag_message(note, command)
+        return flag_message(x, command) if "WARNING" in x else x
+
+    return "\n".join(line(x) for x in text.split("\n"))

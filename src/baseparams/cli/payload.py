@@ -128,7 +128,7 @@ def run(args) -> int:
         Bad input (model, log, result, options, outputs).
     """
     from ..workflow.payload import identify_payload
-    from .parser import flag_message
+    from .parser import flag_message, flag_notes
 
     robot = common.load_robot(args)
     out = identify_payload(robot, args.log, **keywords(args), _source=args.model,
@@ -136,5 +136,5 @@ def run(args) -> int:
     for n in out.notes:
         if n.startswith(("--urdf", "--mjcf", "urdf=", "mjcf=", "result saved", "predictions of", "WARNING")):
             print(f"baseparams: {flag_message(n, 'payload')}", file=sys.stderr)
-    emit(args, json.dumps(out.to_json(), indent=2) if args.json else out.summary())
+    emit(args, json.dumps(out.to_json(), indent=2) if args.json else flag_notes(out.summary(), "payload"))
     return EXIT_OK

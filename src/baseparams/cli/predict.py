@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 
 from . import common
-from .common import EXIT_OK
+from .common import EXIT_OK, print_note
 from .parser import model_args
 
 #: the flags named otherwise than :func:`baseparams.predict`'s keywords
@@ -92,7 +92,6 @@ def run(args) -> int:
         Another robot than the result's, a bad result file, log or output.
     """
     from ..workflow.identify import Reporter, prediction
-    from .identify import print_note
 
     robot = common.load_robot(args)
     p = prediction(robot, args.result, args.log, **keywords(args),

@@ -6,14 +6,13 @@ The regressor of a states file is :func:`baseparams.workflow.states.states_regre
 from __future__ import annotations
 
 import json
-import sys
 import time
 
 import numpy as np
 
 from ..errors import BaseparamsError, NoMovingBodiesError
 from . import common
-from .common import EXIT_OK, no_moving_bodies
+from .common import EXIT_OK, no_moving_bodies, print_note
 from .parser import model_args
 
 #: the flags named otherwise than the keywords they give (``states_regressor(model, states, out=)``)
@@ -117,7 +116,7 @@ def _states(args, robot) -> int:
     from ..workflow.states import states_regressor
 
     r = states_regressor(robot, args.states, out=args.out, source=args.model,
-                         notes=lambda n: print(f"baseparams: note: {n}", file=sys.stderr))
+                         notes=lambda n: print_note(n, "regressor"))
     out = {"model": robot.name, "states": args.states, "samples": int(r.y.shape[0]), "shape": list(r.y.shape),
            "seconds": r.seconds, "out": args.out, "convention": "paper (spatial pseudo-inertia at q = 0)"}
     if args.json:

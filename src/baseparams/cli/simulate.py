@@ -5,6 +5,7 @@ The simulation's modules are imported when the command runs.
 
 from __future__ import annotations
 
+from ..display import counted
 from . import common
 from .common import EXIT_OK
 from .parser import ident_args, model_args
@@ -89,7 +90,7 @@ def run(args) -> int:
     robot = common.load_robot(args)
     log, truth = simulate(robot, **keywords(args))
     if args.robots:
-        print(f"{args.out}: {len(log)} logs, one robot each (true parameters beside each log)")
+        print(f"{args.out}: {counted(len(log), 'log')}, one robot each (true parameters beside each log)")
         return EXIT_OK
     why = "within the coupled joints' sampling box" if robot.only_couplings else "whose loops close"
     amp = (f", excursion {truth['amplitude']:.3g} (the largest of the defaults {why})"

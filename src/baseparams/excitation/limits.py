@@ -220,7 +220,7 @@ def _default_positions(robot: Robot, coords: np.ndarray, lim: np.ndarray, names:
     half = np.array([DEFAULT_RANGE.get(robot.jtype[robot.dof_body[c]], 1.0) for c in coords])
     lim[bad, 0], lim[bad, 1] = -half[bad], half[bad]
     return [f"no position limits for {[n for n, b in zip(names, bad) if b]}: +-{DEFAULT_RANGE['R']} rad "
-            f"(+-{DEFAULT_RANGE['P']} m) around q = 0 used; give limits= for the real ones"]
+            f"(+-{DEFAULT_RANGE['P']} m) around q = 0 used; give position= for the real ones"]
 
 
 def _coupled_ranges(robot: Robot, coords: np.ndarray, lim: np.ndarray, names: list[str]) -> list[str]:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..display import clip, format_number
+from ..display import clip, counted, format_number
 from ..errors import BaseparamsError
 from ..files import check_input
 from ..model.robot import Robot
@@ -82,7 +82,7 @@ class Excitation:
 
     def __repr__(self) -> str:
         crit = "" if self.criterion == "cond" else f"{self.criterion} {format_number(self.value, 4)}, "
-        return clip(f"<Excitation {self.robot}: {len(self.joints)} joints, {self.harmonics} harmonics of "
+        return clip(f"<Excitation {self.robot}: {counted(len(self.joints), 'joint')}, {self.harmonics} harmonics of "
                     f"{format_number(self.base_frequency, 4)} Hz, {crit}condition number "
                     f"{format_number(self.condition_number, 4)}, {len(self.t)} samples at "
                     f"{format_number(self.rate, 6)} Hz>")
@@ -214,7 +214,8 @@ class Excitation:
         """
         lines = [f"{self.robot}: excitation, {self.harmonics} harmonics, base frequency {self.base_frequency:.6g} Hz "
                  f"(period {self.period:.6g} s), {len(self.t)} samples at {self.rate:g} Hz; criterion {self.criterion} "
-                 f"{self.value:.6g}, condition number {self.condition_number:.6g} ({len(self.parameters)} parameters)",
+                 f"{self.value:.6g}, condition number {self.condition_number:.6g} "
+                 f"({counted(len(self.parameters), 'parameter')})",
                  f"  {'joint':<20s} {'offset':>8s} {'min':>8s} {'max':>8s} {'lower':>8s} {'upper':>8s} "
                  f"{'|dq|':>7s} {'vmax':>7s} {'|ddq|':>7s} {'amax':>7s}"]
         def lim(x, width, digits):  # a limit, or '-' where none is set

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..display import summary_repr
+from ..display import counted, summary_repr
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 
@@ -92,7 +92,7 @@ class MotorCoupling:
             raise BaseparamsError(f"{what}: the name must be letters, digits, '_', '.' or '-'")
         if not joints or len(joints) != len(weights):
             raise BaseparamsError(f"{what}: give one weight per joint, at least one joint "
-                                  f"(got {len(joints)} joints, {len(weights)} weights)")
+                                  f"(got {counted(len(joints), 'joint')}, {counted(len(weights), 'weight')})")
         if len(set(joints)) != len(joints):
             raise BaseparamsError(f"{what}: a joint is named twice in {list(joints)}")
         if not all(math.isfinite(w) and w != 0 and abs(w) <= 1e6 for w in weights):

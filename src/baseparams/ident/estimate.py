@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..display import name_list, summary_repr
+from ..display import counted, name_list, summary_repr
 from ..errors import BaseparamsError
 from ..numerics import StreamingQR
 
@@ -335,8 +335,8 @@ def least_squares(acc: RowAccumulator, names: list[str], weights: np.ndarray | N
     w = np.ones(m) if weights is None else np.asarray(weights, dtype=float)
     n_obs = acc.samples * m
     if n_obs <= p:
-        raise BaseparamsError(f"{acc.samples} samples x {m} rows = {n_obs} observations for {p} parameters: "
-                              f"record a longer log")
+        raise BaseparamsError(f"{counted(acc.samples, 'sample')} x {counted(m, 'row')} = "
+                              f"{counted(n_obs, 'observation')} for {counted(p, 'parameter')}: record a longer log")
     r = stacked_factor(acc, w)
     r11, r12, rho = r[:p, :p], r[:p, p], abs(r[p, p]) if r.shape[0] > p else 0.0
     cond = condition_number(r11)

@@ -18,6 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..display import counted
 from ..errors import BaseparamsError, DataError
 from .currents import GainAnchor, Transmission, parse_anchors, transmission_for
 from .gains import CurrentGains, joint_side_fit
@@ -197,7 +198,8 @@ def identify_currents(robot, log, opts, validation=None, say=None):
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
     prep, a, cur, acc_note = _fitted_rows(model, train, cols, opts)
     am = tx.motor_rows(a)
-    say(f"fitting {model.n_params} parameters and {len(tx.motors)} gains (errors in the currents)")
+    say(f"fitting {counted(model.n_params, 'parameter')} and {counted(len(tx.motors), 'gain')} "
+        "(errors in the currents)")
     q = prep.q[:, cols][:: max(1, len(cur) // 400)]  # states the file's gravity torques give the scale at
     gf, cov, label, scale_std = _gain_fit(model, am, cur, anchors, idx, opts, q)
     f, gains = _result_parts(model, tx, am, cur, gf, cov, label, anchors, scale_std, opts.method)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..analysis import Analysis, analyze
-from ..display import clip
+from ..display import clip, counted
 from ..errors import BaseparamsError
 from ..model.robot import Robot
 from ..numerics import StreamingQR, closed_samples, row_mask, sample_states
@@ -94,7 +94,7 @@ class IdentModel:
         d = self.drives
         terms = f"{self.n_base} base + {self.n_drive} drive terms"
         if d.kinds:
-            terms += f" ({' '.join(d.kinds)} on {len(d.joints)} joints"
+            terms += f" ({' '.join(d.kinds)} on {counted(len(d.joints), 'joint')}"
             terms += f", {len(self.regrouping.dependent)} regrouped)" if len(self.regrouping.dependent) else ")"
         return clip(f"<IdentModel {self.robot.name}: {terms}, {len(self.coords)} measured rows>")
 

@@ -214,9 +214,9 @@ def check_log_units(model: IdentModel, log, cols, allow_units: bool) -> list[str
     DataError
         Units that look wrong, unless ``allow_units``.
     """
-    from ..errors import DataError
+    from ..errors import DataError, going_on
     from ..regressor.tp import generalized_forces
-    from .plausibility import check_units, going_on
+    from .plausibility import check_units
 
     robot = model.robot
     params = robot.parameters("paper")

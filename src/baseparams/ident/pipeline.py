@@ -216,12 +216,11 @@ def _identify(robot: Robot, log, opts: IdentOptions, validation, say) -> Identif
     cols = log_columns(model, log)
     unit_notes = check_log_units(model, train, cols, opts.allow_units)
     say(f"preprocessing {train.n_samples} training samples (resampling, low-pass, derivatives)")
-    prep = _prepare_training(train, opts)
+    prep = _prepare_training(train, opts, cols)
     m = len(model.coords)
     check_size(robot, f"fitting {model.n_params} parameters on {prep.n_samples} samples x {m} rows",
                fit_cost(model.n_params, m, prep.n_samples * m))
-    band = excitation_bandwidth(train.q[:, cols], prep.design.fs)  # unfiltered: what the low-pass may take off
-    unit_notes += check_rate(train.source, band, float(train.t[-1] - train.t[0]), prep.design.fs,
+    unit_notes += check_rate(train.source, prep.band, float(train.t[-1] - train.t[0]), prep.design.fs,
                              prep.design.cutoff, opts.cutoff is not None, opts.allow_units)
     say(f"accumulating the regressor of {prep.n_samples} samples ({model.n_params} parameters)")
     parts: list = []
@@ -338,7 +337,7 @@ def block_periods(prep, train, state_cols) -> tuple[float, float, float, np.ndar
     raw_q : ndarray, shape ``(S, m)``
         The unfiltered positions on the grid ``prep`` filtered.
     """
-    from .preprocess import excitation_bandwidth, resample
+    from .preprocess import resample
     from .select import FOLDS
 
     raw_q = resample(train).q[:, state_cols]
@@ -501,14 +500,17 @@ def _rotor_choice(f: Fit, rows: tuple, done: tuple, where: tuple, opts: IdentOpt
     return _with_terms(f_r, acc_r, kept_r, prep, train, cols, opts, say, motion_span), choice
 
 
-def _prepare_training(train, opts: IdentOptions):
-    """:func:`~baseparams.ident.preprocess.prepare` of the training part; a too short one names ``--holdout``."""
+def _prepare_training(train, opts: IdentOptions, cols=None):
+    """:func:`~baseparams.ident.preprocess.prepare` of the training part; a too short one names ``--holdout``.
+
+    The bandwidth of its ``cols`` (the measured coordinates) chooses the cutoff and checks the rate.
+    """
     from ..errors import DataError
     from .preprocess import prepare
 
     holdout = opts.holdout
     try:
-        return prepare(train, cutoff=opts.cutoff, decimate=opts.decimate, min_speed=opts.min_speed)
+        return prepare(train, cutoff=opts.cutoff, decimate=opts.decimate, min_speed=opts.min_speed, columns=cols)
     except DataError as exc:
         if holdout is None:
             raise

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import GO_ON, DataError, going_on
 
 DEG = 180.0 / np.pi
 #: rad/s to revolutions per minute
@@ -54,28 +54,6 @@ PASS_RATIO = 2.5
 
 def _near(ratio: float, factor: float) -> bool:
     return np.isfinite(ratio) and ratio > 0 and factor / NEAR <= ratio <= factor * NEAR
-
-
-def _go_on() -> str:
-    return "; --allow-units (allow_units=True) to go on anyway"
-
-
-def going_on(topic: str, exc: Exception) -> str:
-    """The WARNING note of a refusal ``allow_units`` lets through: its line without "to go on anyway".
-
-    Parameters
-    ----------
-    topic : str
-        What was checked (``units``).
-    exc : Exception
-        The refusal.
-
-    Returns
-    -------
-    str
-        ``units: WARNING, going on (allow_units): ...``.
-    """
-    return f"{topic}: WARNING, going on (allow_units): {str(exc).removesuffix(_go_on())}"
 
 
 def check_units(log, cols, torque_model, revolute, limits=None) -> list[str]:
@@ -197,11 +175,14 @@ def check_rate(source: str, band: float, span: float, fs: float, cutoff: float, 
         The log, for messages.
     band : float
         The motion's bandwidth [Hz]: :func:`~baseparams.ident.preprocess.excitation_bandwidth` of
-        the measured coordinates' positions, unfiltered (0: no motion, nothing checked).
+        the measured coordinates' positions, unfiltered (0: no motion, nothing checked) — the
+        estimate the default cutoff is chosen from (:attr:`~baseparams.ident.preprocess.Prepared.band`),
+        quoted as it is.
     span : float
-        The time the bandwidth was estimated over [s]: the estimate is taken ``2 / span`` lower
-        (the Hann window's half main lobe: a short log's spectrum cannot tell its content closer),
-        so that only a rate or cutoff clearly too low is refused.
+        The time the bandwidth was estimated over [s]: the rate and cutoff are checked against the
+        estimate less ``2 / span`` (the Hann window's half main lobe: a short log's spectrum cannot
+        tell its content closer; the lines say so), so that only a rate or cutoff clearly too low
+        is refused.
     fs : float
         The sample rate [Hz].
     cutoff : float
@@ -221,25 +202,30 @@ def check_rate(source: str, band: float, span: float, fs: float, cutoff: float, 
     DataError
         One line: the rate, the bandwidth, what it costs, and what would help; unless ``allow_units``.
     """
-    band = band - 2.0 / span if span > 0 else 0.0
-    if not band > 0:
+    low = band - 2.0 / span if span > 0 else 0.0
+    if not low > 0:
         return []
-    problem = _rate_problem(band, fs, cutoff, given)
+    which = (f"the excitation bandwidth {band:.3g} Hz, 99.5 % of its energy, less the {2.0 / span:.2g} Hz that "
+             f"{span:.3g} s of log cannot resolve")  # the estimate the cutoff note quotes, less the check's margin
+    problem = _rate_problem(low, fs, cutoff, given, which)
     if problem is not None:
         if not allow_units:
-            raise DataError(f"{source}: {problem}" + _go_on())
-        return [f"rate: WARNING, going on (allow_units): {source}: {problem}"]
-    return [f"rate: {fs:.4g} Hz, {fs / band:.3g} samples per period of the motion's bandwidth {band:.3g} Hz; cutoff "
-            f"{cutoff:.3g} Hz = {cutoff / band:.2g} x the bandwidth"]
+            raise DataError(f"{source}: {problem}" + GO_ON)
+        return [going_on("rate", f"{source}: {problem}")]
+    return [f"rate: {fs:.4g} Hz, {fs / low:.3g} samples per period of the motion's {low:.3g} Hz ({which}); cutoff "
+            f"{cutoff:.3g} Hz = {cutoff / low:.2g} x that"]
 
 
-def _rate_problem(band: float, fs: float, cutoff: float, given: bool) -> str | None:
-    """What the rate or the cutoff cannot carry of a motion of bandwidth ``band`` (:func:`check_rate`), or None."""
+def _rate_problem(band: float, fs: float, cutoff: float, given: bool, which: str) -> str | None:
+    """What the rate or the cutoff cannot carry of a motion of bandwidth ``band`` (:func:`check_rate`), or None.
+
+    ``which`` says the estimate ``band`` comes from (the excitation bandwidth the cutoff note quotes).
+    """
     per = fs / band
     if per < MIN_SAMPLES_PER_PERIOD:
         off = (np.pi / per) ** 2 / 3
         best = MIN_SAMPLES_PER_PERIOD * PASS_RATIO * band
-        return (f"a {fs:.3g} Hz log of a motion up to {band:.3g} Hz (99.5 % of its energy): {per:.3g} samples per "
+        return (f"a {fs:.3g} Hz log of a motion up to {band:.3g} Hz ({which}): {per:.3g} samples per "
                 f"period of its fastest content, fewer than the {MIN_SAMPLES_PER_PERIOD:g} the accelerations need "
                 f"(by differences {off:.1%} off there, the parameters more); record at {best:.3g} Hz or more (the "
                 f"default cutoff, fs/20, then passes the motion; {MIN_SAMPLES_PER_PERIOD * band:.3g} Hz with "
@@ -247,8 +233,8 @@ def _rate_problem(band: float, fs: float, cutoff: float, given: bool) -> str | N
     if cutoff < PASS_RATIO * band:
         how = "given" if given else "the default, at most fs/20"
         lost = 1 - 1 / (1 + (band / cutoff) ** 8)
-        return (f"low-pass cutoff {cutoff:.3g} Hz ({how}) is {cutoff / band:.2g} x the motion's bandwidth {band:.3g} "
-                f"Hz: the filter takes {lost:.1%} off the motion there and biases every parameter; --cutoff "
+        return (f"low-pass cutoff {cutoff:.3g} Hz ({how}) is {cutoff / band:.2g} x the motion's {band:.3g} Hz "
+                f"({which}): the filter takes {lost:.1%} off the motion there and biases every parameter; --cutoff "
                 f"{PASS_RATIO * band:.3g} or more ({PASS_RATIO:g} x the bandwidth)")
     return None
 
@@ -267,14 +253,14 @@ def _time_base(src: str, t: np.ndarray, q: np.ndarray | None = None) -> float:
     rate = 1.0 / dt if dt > 0 else np.inf
     if rate > 1e5:
         raise DataError(f"{src}: column t: sample rate {rate:.3g} Hz is not a robot's; time likely in "
-                        f"another unit than seconds (or the column is not time)" + _go_on())
+                        f"another unit than seconds (or the column is not time)" + GO_ON)
     if rate >= 50:
         return rate
     units = [(k, name) for k, name in TIME_UNITS if 10 <= rate / k <= 1e5]
     if not units and rate < 5:
         if rate < 1e-2:  # no unit makes it a robot's rate: not seconds anyway
             raise DataError(f"{src}: column t: steps of {dt:.3g} (a sample rate of {rate:.3g} Hz): not a robot's "
-                            f"time in seconds, nor in ms, us or ns" + _go_on())
+                            f"time in seconds, nor in ms, us or ns" + GO_ON)
         return rate
     if not units:
         return rate
@@ -286,7 +272,7 @@ def _time_base(src: str, t: np.ndarray, q: np.ndarray | None = None) -> float:
     why = (f"; read as {name} the joints move at up to {speed / k:.3g} rad/s, a robot's speed"
            if np.isfinite(speed) and fits else "")
     raise DataError(f"{src}: column t: sample rate {rate:.3g} Hz (steps of {dt:.3g}); time likely in {name} "
-                    f"(x {k:g} to seconds: {rate / k:.4g} Hz){why}" + _go_on())
+                    f"(x {k:g} to seconds: {rate / k:.4g} Hz){why}" + GO_ON)
 
 
 def _velocities(log, cols, joints, q, derived, revolute) -> None:
@@ -314,13 +300,13 @@ def _velocities(log, cols, joints, q, derived, revolute) -> None:
             elif _near(ratio, 1e-3):
                 unit = f"column q_{j}: d/dt of q {1 / ratio:.4g} x the measured velocities: q likely in mm or mrad"
             if unit:
-                raise DataError(f"{src}: {unit}" + _go_on())
+                raise DataError(f"{src}: {unit}" + GO_ON)
     elif np.any(revolute):
         span = np.ptp(q[:, revolute], axis=0)
         if span.size and span.max() > 4 * np.pi * 3:
             k = int(np.flatnonzero(revolute)[np.argmax(span)])
             raise DataError(f"{src}: column q_{joints[k]}: spans {span.max():.4g} (over six turns): positions likely "
-                            f"in degrees" + _go_on())
+                            f"in degrees" + GO_ON)
 
 
 def _smooth(x: np.ndarray, rate: float) -> np.ndarray:
@@ -346,7 +332,7 @@ def _accelerations(log, cols, joints, derived, t, rate, revolute) -> None:
         ratio = float(ddq[:, k] @ dd[:, k]) / den
         if _near(ratio, DEG):
             raise DataError(f"{log.source}: column ddq_{j}: measured accelerations {ratio:.3g} x d/dt of the "
-                            f"velocities: likely deg/s^2 (not rad/s^2)" + _go_on())
+                            f"velocities: likely deg/s^2 (not rad/s^2)" + GO_ON)
 
 
 def _positions(src, joints, q, derived, revolute, limits, has_dq: bool) -> None:
@@ -368,13 +354,13 @@ def _positions(src, joints, q, derived, revolute, limits, has_dq: bool) -> None:
             if far and as_deg:
                 raise DataError(f"{src}: column q_{j}: positions {qmin:.4g} to {qmax:.4g}, outside the model's limits "
                                 f"[{lo:.4g}, {hi:.4g}] rad; as degrees they are within them: q likely in degrees"
-                                + _go_on())
+                                + GO_ON)
         if not has_dq and np.isfinite(vmax) and vmax > 0:
             speed = float(np.percentile(np.abs(derived[:, k]), 99))
             if speed > 3 * vmax and speed / DEG <= 1.5 * vmax:
                 raise DataError(f"{src}: column q_{j}: the positions move at up to {speed:.4g} per second, "
                                 f"{speed / vmax:.3g} x the model's velocity limit {vmax:.4g} rad/s; as degrees "
-                                f"within it: q likely in degrees" + _go_on())
+                                f"within it: q likely in degrees" + GO_ON)
 
 
 def _fit_quality(tau: np.ndarray, model: np.ndarray, dq: np.ndarray) -> np.ndarray:
@@ -415,7 +401,7 @@ def _degrees_by_model(src, joints, tau, q, dq, ddq, torque_model, revolute) -> N
         k = int(np.argmin(np.where(deg_better, as_deg, np.inf)))
         raise DataError(f"{src}: column q_{joints[k]}: the model file's torques explain the measured ones only with "
                         f"the revolute positions read as degrees (relative residual {as_deg[k]:.2g} vs "
-                        f"{given[k]:.2g} as radians): q (and its rates) likely in degrees" + _go_on())
+                        f"{given[k]:.2g} as radians): q (and its rates) likely in degrees" + GO_ON)
 
 
 def _torques(log, cols, joints, q, derived, rate, torque_model, revolute=None, limits=None) -> list[str]:
@@ -435,17 +421,17 @@ def _torques(log, cols, joints, q, derived, rate, torque_model, revolute=None, l
         k = int(np.argmax(peak))
         i = int(np.argmax(np.abs(tau[:, k])))
         raise DataError(f"{src}: column tau_{joints[k]}, sample {i}: {tau[i, k]:.4g} is beyond any plausible "
-                        f"torque of this model (its RMS on this motion: {model_rms:.3g})" + _go_on())
+                        f"torque of this model (its RMS on this motion: {model_rms:.3g})" + GO_ON)
     ratio = float(np.sqrt(np.mean(tau[sel] ** 2))) / model_rms
     per = np.sqrt(np.mean(tau[sel] ** 2, axis=0)) / np.maximum(np.sqrt(np.mean(model**2, axis=0)), 1e-300)
     # the joint that makes the overall ratio: the largest measured torques (above), the lowest ratio (below)
     worst = joints[int(np.argmax(np.mean(tau[sel] ** 2, axis=0)))] if ratio > 1 else joints[int(np.argmin(per))]
     if ratio > 1000 / NEAR / 1.5:
         raise DataError(f"{src}: column tau_{worst}: measured torques {ratio:.4g} x the model file's on the same "
-                        f"motion: likely mN m or N mm (not N m)" + _go_on())
+                        f"motion: likely mN m or N mm (not N m)" + GO_ON)
     if ratio < 1.5 * NEAR / 1000:
         raise DataError(f"{src}: column tau_{worst}: measured torques {ratio:.3g} x the model file's on the same "
-                        f"motion: likely kN m (not N m)" + _go_on())
+                        f"motion: likely kN m (not N m)" + GO_ON)
     _one_joint(src, joints, tau[sel], model)
     _efforts(src, joints, tau, limits)
     if revolute is not None:
@@ -476,7 +462,7 @@ def _one_joint(src, joints, tau: np.ndarray, model: np.ndarray) -> None:
         if r_other > 0 and t_other > 0 and ratio[k] > 1000 / NEAR / 1.5 * r_other and rms[k] > 30 * t_other:
             raise DataError(f"{src}: column tau_{joints[k]}: measured torques {ratio[k]:.3g} x the model file's, the "
                             f"other joints' {r_other:.3g} x (and {rms[k] / t_other:.3g} x their size): likely mN m or "
-                            f"N mm on this joint (not N m)" + _go_on())
+                            f"N mm on this joint (not N m)" + GO_ON)
 
 
 def _efforts(src, joints, tau: np.ndarray, limits) -> None:
@@ -493,4 +479,4 @@ def _efforts(src, joints, tau: np.ndarray, limits) -> None:
         peak = float(np.percentile(np.abs(tau[:, k]), 99.9))
         if peak > 10 * e and peak / 1000 <= 1.5 * e:
             raise DataError(f"{src}: column tau_{j}: measured torques up to {peak:.4g}, {peak / e:.3g} x the model's "
-                            f"effort limit {e:.4g}; / 1000 within it: likely mN m or N mm (not N m)" + _go_on())
+                            f"effort limit {e:.4g}; / 1000 within it: likely mN m or N mm (not N m)" + GO_ON)

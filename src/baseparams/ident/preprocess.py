@@ -34,7 +34,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import signal
 
-from ..display import summary_repr
+from ..display import counted, summary_repr
 from ..errors import DataError
 from ..jointlog import JointLog
 
@@ -140,10 +140,98 @@ def lowpass_design(fs: float, cutoff: float | None = None, order: int = 4, why: 
     if not (np.isfinite(cutoff) and 0 < cutoff < fs / 2):
         raise DataError(f"low-pass: cutoff must be between 0 and fs/2 = {fs / 2:.6g} Hz, got {cutoff!r}")
     sos = signal.butter(int(order), cutoff, btype="low", fs=fs, output="sos")
-    pad = math.ceil(EDGE_PERIODS * fs / cutoff - 1e-6)  # not one more for a rounding error
+    pad = edge_samples(fs, cutoff)
     note = (f"low-pass: zero-phase Butterworth order {order} (forward and backward, sosfiltfilt), cutoff "
             f"{cutoff:.4g} Hz ({why}); edges {pad} samples ({EDGE_PERIODS:g} cutoff periods)")
     return LowPass(sos=sos, fs=float(fs), cutoff=float(cutoff), order=int(order), pad=pad, note=note)
+
+
+def default_cutoff(band: float, fs: float, sub: str = "") -> tuple[float, str]:
+    """The low-pass cutoff chosen from the motion's bandwidth when none is given, and its note (the one rule).
+
+    Parameters
+    ----------
+    band : float
+        The motion's bandwidth [Hz] (:func:`excitation_bandwidth`).
+    fs : float
+        Sampling rate [Hz].
+    sub : str, optional
+        How the bandwidth was measured, when not on every sample (``; from means of 4 samples``).
+
+    Returns
+    -------
+    cutoff : float
+        :data:`BANDWIDTH_FACTOR` x ``band`` within ``[CUTOFF_FLOOR, min(fs / 20, 20 Hz)]`` [Hz].
+    note : str
+        ``cutoff 3.333 Hz: 10 x the excitation bandwidth 0.333 Hz (...)``.
+    """
+    top = min(fs / CUTOFF_DIVISOR, CUTOFF_CAP)
+    cutoff = float(np.clip(BANDWIDTH_FACTOR * band, CUTOFF_FLOOR, top))  # the top when the floor is above it
+    bounds = (f"within [{CUTOFF_FLOOR:g} Hz, min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz)]" if top >= CUTOFF_FLOOR else
+              f"at most fs/{CUTOFF_DIVISOR:g} = {top:.4g} Hz (the {CUTOFF_FLOOR:g} Hz floor is above it at this rate)")
+    return cutoff, (f"cutoff {cutoff:.4g} Hz: {BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
+                    f"(99.5 % of the motion's energy{sub}), {bounds}")
+
+
+def edge_samples(fs: float, cutoff: float) -> int:
+    """The low-pass's edge at each end [samples]: :data:`EDGE_PERIODS` periods of its cutoff.
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    cutoff : float
+        Cutoff [Hz].
+
+    Returns
+    -------
+    int
+        ``ceil(EDGE_PERIODS fs / cutoff)`` (not one more for a rounding error).
+    """
+    return math.ceil(EDGE_PERIODS * fs / cutoff - 1e-6)
+
+
+def shortest_log(fs: float, cutoff: float | None = None) -> int:
+    """The fewest samples :func:`prepare` filters: more than the low-pass's two edges (the one rule).
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    cutoff : float, optional
+        The cutoff [Hz]; default the highest :func:`prepare` chooses by itself at ``fs``
+        (``min(fs / 20, 20 Hz)``): below this length every log at ``fs`` is refused, whatever its
+        motion (a slower motion's lower cutoff asks for more).
+
+    Returns
+    -------
+    int
+        ``2 x edge + 2`` (:func:`edge_samples`): 102 at 500 Hz, 82 at 100 Hz and below.
+    """
+    top = min(fs / CUTOFF_DIVISOR, CUTOFF_CAP)
+    return 2 * edge_samples(fs, top if cutoff is None else cutoff) + 2
+
+
+def check_length(source: str, n: int, design: LowPass) -> None:
+    """Refuse a log the low-pass cannot filter: fewer than :func:`shortest_log` samples.
+
+    Parameters
+    ----------
+    source : str
+        The log, for the message.
+    n : int
+        Its samples (on the filter's grid).
+    design : LowPass
+        The filter.
+
+    Raises
+    ------
+    DataError
+        One line: the samples, the rate, the edges, what would help.
+    """
+    if n < shortest_log(design.fs, design.cutoff):
+        raise DataError(f"{source}: {counted(n, 'sample')} at {design.fs:.6g} Hz; the filter edges alone take "
+                        f"2 x {design.pad} (a longer log, or a higher cutoff)")
 
 
 def excitation_bandwidth(q, fs: float, energy: float = 0.995) -> float:
@@ -212,7 +300,7 @@ def zero_phase(x, design: LowPass, axis: int = 0) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     n = x.shape[axis]
     if n < 2:
-        raise DataError(f"low-pass: {n} samples; at least 2 are needed")
+        raise DataError(f"low-pass: {counted(n, 'sample')}; at least 2 are needed")
     pad = min(EXTENSION * design.pad, n - 1)
     if axis in (0, -x.ndim) and x.size >= COMPILED_FILTER_MIN and _compiled_loaded():
         from ..regressor.compiled import sosfiltfilt
@@ -502,6 +590,10 @@ class Prepared:
         kept one (:func:`regressor_stride`; 1: every sample).
     trim : int
         Samples left out at each end of :attr:`full` (0: every sample is fitted).
+    band : float
+        The motion's bandwidth [Hz] (:func:`excitation_bandwidth` of the unfiltered positions of
+        :func:`prepare`'s ``columns``) that chose the default cutoff and that the rate is checked
+        against; NaN when neither asked for it.
     """
 
     t: np.ndarray
@@ -520,6 +612,7 @@ class Prepared:
     notes: tuple[str, ...] = ()
     stride: int = 1
     trim: int = 0
+    band: float = float("nan")
 
     __repr__ = summary_repr
 
@@ -606,7 +699,7 @@ class Prepared:
 
 
 def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None, decimate: int | None = None,
-            min_speed=None) -> Prepared:
+            min_speed=None, columns=None) -> Prepared:
     """Resample, low-pass, differentiate, decimate, drop slow samples (every sample kept otherwise, the ends too).
 
     Parameters
@@ -626,6 +719,10 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     min_speed : float or array_like, shape ``(m,)``, optional
         Remove samples where any joint is slower than this [rad/s or m/s]
         (:func:`remove_slow`); default none removed.
+    columns : array_like of int, optional
+        The columns of ``q`` whose motion is measured (the identified coordinates): their
+        bandwidth sets the default cutoff and is :attr:`Prepared.band`; default every column
+        (measured only for the default cutoff).
 
     Returns
     -------
@@ -643,18 +740,14 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
     u = resample(log, fs)
     rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])  # the mean rate: the grid's, or a uniform log's
     given_cutoff = cutoff is not None
+    band = (excitation_bandwidth(u.q if columns is None else u.q[:, columns], rate)
+            if cutoff is None or columns is not None else float("nan"))  # once: the cutoff's and the rate's
     if cutoff is None:  # from the excitation: 10x its bandwidth, within [1 Hz, min(fs/20, 20 Hz)]
-        band = excitation_bandwidth(u.q, rate)
-        cutoff = float(np.clip(BANDWIDTH_FACTOR * band, CUTOFF_FLOOR, min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)))
-        log_note = (f"cutoff {cutoff:.4g} Hz: {BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
-                    f"(99.5 % of the motion's energy), within [{CUTOFF_FLOOR:g} Hz, "
-                    f"min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz)]")
+        cutoff, log_note = default_cutoff(band, rate)
         u = replace(u, notes=u.notes + (log_note,))
     design = lowpass_design(rate, cutoff, why="given" if given_cutoff else "from the excitation bandwidth")
     n = u.n_samples
-    if n <= 2 * design.pad + 1:
-        raise DataError(f"{log.source}: {n} samples at {rate:.6g} Hz; the filter edges alone take 2 x {design.pad} "
-                        f"(a longer log, or a higher cutoff)")
+    check_length(log.source, n, design)
     qf, tauf, dqf, ddqf = _filtered_together(design, u.q, u.tau, u.dq, u.ddq)
     dq, ddq, rate_notes = filtered_rates(u, qf, rate, design, dqf, ddqf)
     k, k_note = decimation_factor(decimate, rate, design, n)
@@ -678,7 +771,7 @@ def prepare(log: JointLog, fs: float | None = None, cutoff: float | None = None,
         raise DataError(f"{log.source}: no sample left after edges, decimation and slow-sample removal")
     full = replace(u, q=qf, tau=tauf, dq=dq, ddq=ddq, notes=u.notes + tuple(notes))
     return Prepared(t=u.t[index], joints=u.joints, q=qf[index], dq=dq[index], ddq=ddq[index], tau=tauf[index],
-                    fs=rate / k, design=design, factor=k, index=index, full=full, source=log.source,
+                    fs=rate / k, design=design, factor=k, index=index, full=full, source=log.source, band=band,
                     removed=removed, notes=full.notes, stride=r)
 
 
@@ -900,8 +993,7 @@ def log_states(log: JointLog, cutoff: float | None, filtered: bool = False) -> t
     u = resample(log)
     rate = (u.n_samples - 1) / float(u.t[-1] - u.t[0])
     if cutoff is None:
-        cutoff = float(np.clip(BANDWIDTH_FACTOR * excitation_bandwidth(u.q, rate), CUTOFF_FLOOR,
-                               min(rate / CUTOFF_DIVISOR, CUTOFF_CAP)))
+        cutoff = default_cutoff(excitation_bandwidth(u.q, rate), rate)[0]
     design = lowpass_design(rate, cutoff)
     same_grid = u.n_samples == len(t) and np.array_equal(u.t, t)
 

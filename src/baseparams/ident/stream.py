@@ -485,7 +485,8 @@ class Plan:
         return len(range(self.grid.pad, self.grid.n - self.grid.pad, self.factor))
 
 
-def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_speed, memory_mb: float) -> Plan:
+def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_speed, memory_mb: float,
+                  band: float) -> Plan:
     """The filter, decimation, kept-sample grid and windows of the training part (and their notes).
 
     Parameters
@@ -506,6 +507,9 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
         Slow-sample threshold.
     memory_mb : float
         Largest regressor formed at once (the window's size).
+    band : float
+        The motion's bandwidth [Hz] (of the measured coordinates: the rate is checked against it too),
+        which chooses the cutoff when none is given.
 
     Returns
     -------
@@ -523,17 +527,11 @@ def plan_training(model, stream, sc: Scan, tr: Training, cutoff, decimate, min_s
         notes.append(f"time: uniform (dt {lo * 1e3:.4g}-{hi * 1e3:.4g} ms, median {med * 1e3:.4g} ms), not resampled")
     given_cutoff = cutoff is not None
     if cutoff is None:
-        band = pp.excitation_bandwidth(tr.sub.q, tr.rate / tr.step)
-        cutoff = float(np.clip(pp.BANDWIDTH_FACTOR * band, pp.CUTOFF_FLOOR,
-                               min(tr.rate / pp.CUTOFF_DIVISOR, pp.CUTOFF_CAP)))
         sub = "" if tr.step == 1 else f"; from means of {tr.step} samples (more than {SUBSAMPLE_MAX} samples)"
-        notes.append(f"cutoff {cutoff:.4g} Hz: {pp.BANDWIDTH_FACTOR:g} x the excitation bandwidth {band:.3g} Hz "
-                     f"(99.5 % of the motion's energy{sub}), within [{pp.CUTOFF_FLOOR:g} Hz, "
-                     f"min(fs/{pp.CUTOFF_DIVISOR:g}, {pp.CUTOFF_CAP:g} Hz)]")
+        cutoff, note = pp.default_cutoff(band, tr.rate, sub)
+        notes.append(note)
     design = pp.lowpass_design(tr.rate, cutoff, why="given" if given_cutoff else "from the excitation bandwidth")
-    if tr.n <= 2 * design.pad + 1:
-        raise DataError(f"{stream.source}: {tr.n} samples at {tr.rate:.6g} Hz; the filter edges alone take 2 x "
-                        f"{design.pad} (a longer log, or a higher cutoff)")
+    pp.check_length(stream.source, tr.n, design)
     k, k_note = pp.decimation_factor(decimate, tr.rate, design, tr.n)
     head = rows(sc.head, 0, min(sc.head.n_samples, tr.n))
     rate_notes = (pp.filtered_rates(head, pp.zero_phase(head.q, design), tr.rate, design)[2]
@@ -1149,8 +1147,8 @@ def _passes(robot, stream, o, validating: bool, say):
         say(f"resampling {tr.n} non-uniform samples to {stream.n} block by block (pass 2b: the grid's statistics)")
         sc = Scan(stream.n, sc.t0, sc.t0 + stream.step * (stream.n - 1), sc.head, (*sc.notes, stream.note))
         tr = training(stream, sc, None)
-    plan = plan_training(model, stream, sc, tr, o.cutoff, o.decimate, o.min_speed, o.memory_mb)
-    band = pp.excitation_bandwidth(tr.sub.q[:, cols], tr.rate / tr.step)
+    band = pp.excitation_bandwidth(tr.sub.q[:, cols], tr.rate / tr.step)  # once: the cutoff's and the rate's
+    plan = plan_training(model, stream, sc, tr, o.cutoff, o.decimate, o.min_speed, o.memory_mb, band)
     unit_notes = [*unit_notes, *check_rate(stream.source, band, (tr.n - 1) / tr.rate, tr.rate, plan.design.cutoff,
                                            o.cutoff is not None, o.allow_units)]
     for note in plan.notes:

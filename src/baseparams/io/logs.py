@@ -112,7 +112,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError
+from ..display import counted
+from ..errors import GO_ON, DataError, going_on
 from ..files import check_input
 from ..jointlog import JointLog
 from ..kinematics.floating import BASE_COORDINATES, POSE_COLUMNS, TWIST_COLUMNS
@@ -355,13 +356,13 @@ def _read_text(path: Path) -> _Table:
     if np.any(bad := counts != len(names)):
         i = int(np.argmax(bad))
         raise DataError(f"{path}: line {numbers[i + 1]} (data row {i + 1}): {counts[i]} fields, the header has "
-                        f"{len(names)} (columns of different lengths; {_plural(bad.sum(), 'such row')})")
+                        f"{len(names)} (columns of different lengths; {counted(bad.sum(), 'such row')})")
     values, text_columns = _parse_numbers(path, data, delim, names, numbers[1:])
     table = _Table(str(path), {n: values[:, k] for k, n in enumerate(names)}, numbers[1:],
                    "line {0} (data row {1})", text=text_columns)
     skipped = len(lines) - len(numbers)
-    table.notes.append(f"{path.name}: {len(data)} rows, delimiter {_delim_name(delim)}"
-                       + (f"; {_plural(skipped, 'blank or comment line')} skipped" if skipped else ""))
+    table.notes.append(f"{path.name}: {counted(len(data), 'row')}, delimiter {_delim_name(delim)}"
+                       + (f"; {counted(skipped, 'blank or comment line')} skipped" if skipped else ""))
     return table
 
 
@@ -448,13 +449,13 @@ def _table_of_arrays(path: Path, columns: dict[str, np.ndarray], row_fmt: str, w
     first, n = next((k, len(v)) for k, v in columns.items())
     for k, v in columns.items():
         if len(v) != n:
-            raise DataError(f"{path}: {what} {k!r} has {len(v)} rows, {what} {first!r} has {n} (columns of "
+            raise DataError(f"{path}: {what} {k!r} has {counted(len(v), 'row')}, {what} {first!r} has {n} (columns of "
                             "different lengths)")
     if n == 0:
         raise DataError(f"{path}: no data rows (every {what} is empty)")
     table = _Table(str(path), columns, np.arange(n), row_fmt,
                    labels={k: f"{what} {k!r}" for k in columns})
-    table.notes.append(f"{path.name}: {n} rows, {len(columns)} {what}s")
+    table.notes.append(f"{path.name}: {counted(n, 'row')}, {counted(len(columns), what)}")
     return table
 
 
@@ -634,10 +635,6 @@ def _parquet_header(path: Path) -> _Header:
         return columns, booleans, notes
 
     return _Header(path, names, int(meta.num_rows), "column", read, "row {0} (0-based)")
-
-
-def _plural(n, what: str) -> str:
-    return f"{int(n)} {what}" + ("" if n == 1 else "s")
 
 
 def _names(names: list[str], most: int = 12) -> str:
@@ -1010,11 +1007,11 @@ def _assemble(table: _Table, joints: list[_Joint], spec: dict, bounds: tuple,
             arrays[k] = raw * (sign / ratio) + (np.array([x.offset for x in joints]) if k == "q" else 0.0)
     implausible = _check_plausible(table, joints, arrays["q"], *bounds[:2])
     if implausible and not bounds[2]:
-        raise DataError(implausible + "; --allow-units (allow_units=True) to go on anyway")
+        raise DataError(implausible + GO_ON)
     unused = [c + (" (text)" if c in table.text else "") for c in table.columns if c not in used]
     notes = list(table.notes) + _conversion_notes(joints, spec)
     if implausible:
-        notes.append(f"units: WARNING, going on (allow_units): {implausible}")
+        notes.append(going_on("units", implausible))
     if unused:
         notes.append(f"{Path(table.source).name}: columns not read: {', '.join(unused[:12])}"
                      + (f" and {len(unused) - 12} more" if len(unused) > 12 else ""))
@@ -1046,7 +1043,7 @@ def _unwrap_turns(table: _Table, joints: list[_Joint], raw: np.ndarray, turns: d
             out[:, k] = np.unwrap(seq)[1:] + shift
         if wraps:
             table.notes.append(f"{table.label(x.cols['q'])}: continuous joint {x.joint!r} logged modulo a turn: "
-                               f"unwrapped ({_plural(wraps, 'step')} of more than pi between samples taken as whole "
+                               f"unwrapped ({counted(wraps, 'step')} of more than pi between samples taken as whole "
                                f"turns, {table.row(0)} to {table.row(len(col) - 1)})")
         turns[k] = (col[-1], out[-1, k] - col[-1])
     return out
@@ -1236,7 +1233,7 @@ def _check_finite(table: _Table, used: list[str]) -> None:
     if bad.any():
         i, k = np.unravel_index(int(np.argmax(bad)), bad.shape)
         raise DataError(f"{table.source}: {table.label(used[k])}, {table.row(i)}: {block[i, k]} (not finite; "
-                        f"{_plural(bad.sum(), 'such value')} in the columns read)")
+                        f"{counted(bad.sum(), 'such value')} in the columns read)")
 
 
 def _check_time(table: _Table, tcol: str, t: np.ndarray) -> None:
@@ -1246,7 +1243,7 @@ def _check_time(table: _Table, tcol: str, t: np.ndarray) -> None:
     if bad.any():
         i = int(np.argmax(bad)) + 1
         what = "repeats" if dt[i - 1] == 0 else "is before"
-        rows = _plural(bad.sum(), "such row")
+        rows = counted(bad.sum(), "such row")
         raise DataError(f"{table.source}: {table.label(tcol)}, {table.row(i)}: time {t[i]:.9g} s {what} the one "
                         f"before ({t[i - 1]:.9g} s); time must be strictly increasing ({rows})")
 
@@ -1477,7 +1474,7 @@ class LogStream:
         self.has_currents = self._joints[0].cols["cur"] is not None  # every joint read has them, or none
 
     def __repr__(self) -> str:
-        return f"<LogStream {self.source}: {len(self.joints)} joints, {self.kind}>"
+        return f"<LogStream {self.source}: {counted(len(self.joints), 'joint')}, {self.kind}>"
 
     def _names(self) -> list[str]:
         """The file's column names (an NPZ's members are indexed on the way)."""
@@ -1638,8 +1635,8 @@ class LogStream:
         first_col, n = next(iter(lengths.items()))
         for c, k in lengths.items():
             if k != n:
-                raise DataError(f"{self.source}: array {c!r} has {k} rows, array {first_col!r} has {n} (columns of "
-                                "different lengths)")
+                raise DataError(f"{self.source}: array {c!r} has {counted(k, 'row')}, array {first_col!r} has {n} "
+                                "(columns of different lengths)")
         tcol, first = self.spec["time"], None
         with contextlib.ExitStack() as stack:
             try:

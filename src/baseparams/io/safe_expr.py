@@ -25,6 +25,7 @@ import re
 import time
 from collections.abc import Callable, Iterable
 
+from ..display import counted
 from ..files import MODEL_MAX_BYTES
 
 #: evaluation steps (expression nodes, comprehension items, expanded elements) of one file
@@ -523,7 +524,8 @@ def _bind(target: ast.expr, value, scope: _Scope) -> None:
     elif isinstance(target, ast.Tuple | ast.List):
         values = list(value)
         if len(values) != len(target.elts):
-            raise ExpressionError(f"cannot unpack {len(values)} values into {len(target.elts)} names")
+            raise ExpressionError(f"cannot unpack {counted(len(values), 'value')} into "
+                                  f"{counted(len(target.elts), 'name')}")
         for t, v in zip(target.elts, values):
             _bind(t, v, scope)
     else:

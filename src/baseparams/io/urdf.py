@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..display import counted
 from ..errors import ModelError, NoMovingBodiesError
 from ..files import MODEL_MAX_BYTES, read_input_bytes
 from ..model.bounds import check_magnitude
@@ -61,9 +62,9 @@ def _floats(text: str | None, n: int, what: str, default, kind: str | None = Non
     try:
         v = np.array([float(x) for x in text.split()])
     except ValueError:
-        raise ModelError(f"{what}: expected {n} numbers, got {text!r}{hint}") from None
+        raise ModelError(f"{what}: expected {counted(n, 'number')}, got {text!r}{hint}") from None
     if v.shape != (n,) or not np.isfinite(v).all():  # ndarray methods: thousands of tiny arrays per file
-        raise ModelError(f"{what}: expected {n} finite numbers, got {text!r}")
+        raise ModelError(f"{what}: expected {counted(n, 'finite number')}, got {text!r}")
     if kind is not None:
         check_magnitude(v, kind, what)
     return v
@@ -184,18 +185,28 @@ def _foreign_note(drake: dict[str, int], other: dict[str, int], undeclared: list
     """The one note on namespaced content: Drake's that describes no rigid body, then other namespaces'.
 
     A prefix ``drake`` bound to another namespace is among the others (classed by the namespace).
+    Each count names what it counts, in its number (``1 element``, ``2 elements and 1 attribute``).
     """
     def listed(items: dict[str, int]) -> str:
         return ", ".join(f"{k} x{v}" if v > 1 else k for k, v in sorted(items.items()))
 
-    parts = [f"namespace prefixes {', '.join(repr(p) for p in undeclared)} used without a declaration: read "
+    def count(items: dict[str, int], adjective: str = "") -> tuple[str, bool]:
+        elements = sum(v for k, v in items.items() if k.startswith("<"))  # an element is shown <tag>
+        attributes = sum(items.values()) - elements
+        said = [counted(n, what) for n, what in ((elements, f"{adjective}element"), (attributes, "attribute")) if n]
+        return " and ".join(said), elements + attributes == 1
+
+    prefixes = "namespace prefix" if len(undeclared) == 1 else "namespace prefixes"
+    parts = [f"{prefixes} {', '.join(repr(p) for p in undeclared)} used without a declaration: read "
              f"leniently (as Drake does)"] if undeclared else []
     if drake:
-        parts.append(f"{sum(drake.values())} namespaced elements and attributes describe no rigid body and were "
+        what, one = count(drake, "namespaced ")
+        parts.append(f"{what} {'describes' if one else 'describe'} no rigid body and {'was' if one else 'were'} "
                      f"ignored: {listed(drake)}")
     if other:
-        parts.append(f"{sum(other.values())} elements and attributes of other namespaces are not URDF (nor Drake's) "
-                     f"and were ignored: {listed(other)}")
+        what, one = count(other)
+        parts.append(f"{what} of other namespaces {'is' if one else 'are'} not URDF (nor Drake's) and "
+                     f"{'was' if one else 'were'} ignored: {listed(other)}")
     return "; ".join(parts)
 
 

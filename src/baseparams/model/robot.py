@@ -42,7 +42,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..display import clip, summary_repr
+from ..display import clip, counted, summary_repr
 from ..enums import JointType, values
 from ..errors import ModelError
 from ..pga import adjoint
@@ -366,7 +366,8 @@ class Robot:
             raise ModelError(f"{what}: no bodies")
         for arr, label in ((self.joint_names, "joint_names"), (self.jtype, "jtype"), (self.axes, "axes")):
             if len(arr) != n:
-                raise ModelError(f"{what}: {label} has {len(arr)} entries for {n} bodies")
+                raise ModelError(f"{what}: {label} has {counted(len(arr), 'entry', 'entries')} for "
+                                 f"{counted(n, 'body', 'bodies')}")
         if len(set(self.names)) != n:
             dup = [x for x in self.names if self.names.count(x) > 1][0]
             raise ModelError(f"{what}: duplicate body name {dup!r}")

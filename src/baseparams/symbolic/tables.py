@@ -35,6 +35,7 @@ from pathlib import Path
 
 import sympy as sp
 
+from ..display import counted
 from ..errors import ModelError
 from ..files import MODEL_MAX_BYTES, read_input_bytes
 from .angles import cos_sin
@@ -226,7 +227,8 @@ def read_table(path: str | Path, text: str | None = None) -> SymbolicRobot:
         else:
             cells = line.split()
             if len(cells) != len(header):
-                raise ModelError(f"{where}: {len(cells)} entries for {len(header)} columns")
+                raise ModelError(f"{where}: {counted(len(cells), 'entry', 'entries')} for "
+                                 f"{counted(len(header), 'column')}")
             row = {c: _entry(v, f"{where}, column {c}", c in _ANGLES[meta["convention"]])
                    for c, v in zip(header, cells)}
             for c in ("j", "ant", "sigma"):

@@ -15,6 +15,7 @@ import warnings
 from dataclasses import dataclass, fields, replace
 
 from ..arguments import IDENTIFY
+from ..display import counted
 from ..errors import BaseparamsError, ModelWarning
 from ..model import Robot
 from .inputs import input_files, log_of, robot_of
@@ -635,7 +636,7 @@ class Prediction:
     cur: object = None
 
     def __repr__(self) -> str:
-        return (f"<Prediction of {len(self.result.joints)} joints at {self.log.n_samples} samples"
+        return (f"<Prediction of {counted(len(self.result.joints), 'joint')} at {counted(self.log.n_samples, 'sample')}"
                 f"{' (raw states)' if self.raw_states else ''}>")
 
     def scores(self, score_cutoff: float | None = None) -> dict | None:

@@ -6,9 +6,11 @@ calls it first and the command line's preflight calls it before the model loads.
 
 from __future__ import annotations
 
+import math
 import os
 
 from ..arguments import IDENTIFY
+from ..display import counted
 from ..errors import BaseparamsError
 from ..model import Robot
 from .inputs import input_files, robot_of
@@ -74,8 +76,9 @@ def simulate(model, trajectory=None, *, duration: float | None = None, rate: flo
     Raises
     ------
     BaseparamsError
-        Bad options (a trajectory for a floating base), loops the trajectory does not close, an
-        unwritable output.
+        Bad options (a trajectory for a floating base; a random motion of fewer samples than
+        ``identify`` filters, :func:`~baseparams.ident.preprocess.shortest_log`), loops the
+        trajectory does not close, an unwritable output.
     """
     from ..ident.drives import friction_terms
 
@@ -145,6 +148,7 @@ def check_simulate(model, trajectory, keywords: dict) -> tuple:
     if trajectory is None:
         per_log = k["duration"] * k["rate"]
         check_samples(per_log, 16, "simulate: duration= x rate=")
+        _check_identifiable(k["duration"], k["rate"])
         if k["robots"] is not None:
             check_total(k["robots"] * per_log, "simulate: robots= x duration= x rate=")
     elif isinstance(trajectory, (tuple, list)):
@@ -166,6 +170,28 @@ def check_simulate(model, trajectory, keywords: dict) -> tuple:
     return trajectory, inputs
 
 
+def _check_identifiable(duration: float, rate: float) -> None:
+    """Refuse a random motion too short for ``identify``: its low-pass's own rule.
+
+    :func:`~baseparams.ident.preprocess.shortest_log` at the highest cutoff ``identify`` chooses by
+    itself: a shorter log is refused there whatever its motion (and the random motion, scaled to its
+    excursion over a fraction of its period, is far faster than a robot moves).
+    """
+    from ..arguments import ArgumentError
+    from ..display import counted
+    from ..ident.preprocess import CUTOFF_CAP, CUTOFF_DIVISOR, EDGE_PERIODS, shortest_log
+
+    n, least = int(round(duration * rate)), shortest_log(rate)  # the samples fourier_trajectory makes
+    if n < least:
+        raise ArgumentError(
+            f"simulate: duration={duration:g} at rate={rate:g} makes {counted(n, 'sample')}, too few to identify: "
+            f"identify's low-pass (cutoff at most min(fs/{CUTOFF_DIVISOR:g}, {CUTOFF_CAP:g} Hz) = "
+            f"{min(rate / CUTOFF_DIVISOR, CUTOFF_CAP):g} Hz) takes {EDGE_PERIODS:g} cutoff periods at each end and "
+            f"refuses a log of fewer than {least} samples; duration={math.ceil(1e3 * least / rate) / 1e3:g} or more at "
+            f"{rate:g} Hz "
+            f"(the default: {RANDOM_MOTION['duration']:g} s)")
+
+
 def _checked_arrays(trajectory) -> tuple:
     """``(t (S,), q, dq, ddq (S, m))`` checked: numbers, finite, shapes that agree, time increasing."""
     import numpy as np
@@ -174,7 +200,7 @@ def _checked_arrays(trajectory) -> tuple:
 
     if len(trajectory) != 4:
         raise ArgumentTypeError(f"simulate: trajectory= must be an Excitation, its file or (t, q, dq, ddq), got "
-                                f"{len(trajectory)} items")
+                                f"{counted(len(trajectory), 'item')}")
     t = check_array(trajectory[0], "simulate: trajectory t", 1)
     arrays = [check_array(x, f"simulate: trajectory {n}", 2) for n, x in zip(("q", "dq", "ddq"), trajectory[1:])]
     if any(a.shape != arrays[0].shape or len(a) != len(t) for a in arrays):
@@ -214,7 +240,8 @@ def _check_plausible(robot: Robot, q) -> None:
 
     names = robot.coordinate_names(design_coordinates(robot))
     if q.shape[1] != len(names):
-        raise ArgumentError(f"simulate: trajectory= has {q.shape[1]} columns of q for the {len(names)} coordinates "
+        raise ArgumentError(f"simulate: trajectory= has {counted(q.shape[1], 'column')} of q for the "
+                            f"{counted(len(names), 'coordinate')} "
                             f"{names}")
     kinds = coordinate_kinds(robot)
     free = unbounded_joints(robot)  # continuous joints turn any number of times (the reader's rule)

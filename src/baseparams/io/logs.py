@@ -1187,8 +1187,9 @@ def _check_quaternion_order(table: _Table, t: np.ndarray, chart: np.ndarray, twi
     """Refuse a base quaternion logged scalar-last (x, y, z, w) in the columns of one scalar-first (w, x, y, z).
 
     Only with a logged twist, which says which reading the pose's motion follows: the twist
-    misses the pose read as logged (``miss (2,)``, linear and angular: :func:`~baseparams.kinematics.floating.twist_mismatch`) and
-    follows it within ``TWIST_FRAME_MISS`` read scalar-last. Without a twist nothing tells them
+    misses the pose read as logged (``miss (2,)``, linear and angular:
+    :func:`~baseparams.kinematics.floating.twist_mismatch`) and follows it within ``TWIST_FRAME_MISS``
+    read scalar-last. Without a twist nothing tells them
     apart (both are unit quaternions).
     """
     from ..kinematics.floating import quaternion_matrix, twist_mismatch, zyx_of_rotation

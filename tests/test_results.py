@@ -242,3 +242,30 @@ def test_round_trip_physical_with_coupling_and_smooth_coulomb(puma, tmp_path):
     assert back.options == replace(res.options, couplings=back.options.couplings)  # every option saved
     assert back.fit.physical.feasible and np.array_equal(back.fit.physical.pi, res.fit.physical.pi)
     assert np.array_equal(back.predict(log), res.predict(log)) and back.to_json() == res.to_json()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_predict_refuses_a_log_shorter_than_the_filters_edges_and_predicts_one_just_long_enough(exact, ident, seed):
+    """A log whose every sample lies in the low-pass's edge transient (fewer than ``shortest_log`` samples at the
+    identification's cutoff) was predicted with exit 0 (a 5-sample log 100 % off): refused in one line naming the
+    log, the length needed and the way round it (dq and ddq logged, states as logged); at that length it predicts,
+    and with its rates logged and ``smooth=False`` any length does."""
+    from baseparams.ident.preprocess import shortest_log
+
+    log, ddq, _ = exact
+    rng = np.random.default_rng(seed)
+    need = shortest_log(200.0, ident.options.cutoff)
+    n = int(rng.integers(3, need))
+    start = int(rng.integers(0, len(log.t) - need))
+    short = replace(log, t=log.t[start:start + n], q=log.q[start:start + n], dq=None, ddq=None,
+                    tau=log.tau[start:start + n], source="short.csv")
+    with pytest.raises(BaseparamsError) as err:
+        ident.predict(short)
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith("short.csv:") and f"{need / 200.0:.3g} s" in msg and "--raw-states" in msg
+    enough = replace(log, t=log.t[start:start + need], q=log.q[start:start + need], dq=None, ddq=None,
+                     tau=log.tau[start:start + need])
+    assert ident.predict(enough).shape == (need, log.tau.shape[1])
+    logged = replace(log, t=log.t[start:start + n], q=log.q[start:start + n], dq=log.dq[start:start + n],
+                     ddq=ddq[start:start + n], tau=log.tau[start:start + n])
+    assert np.abs(ident.predict(logged, smooth=False) - logged.tau).max() <= 1e-2 * np.abs(log.tau).max()

@@ -212,7 +212,7 @@ def shortest_log(fs: float, cutoff: float | None = None) -> int:
     return 2 * edge_samples(fs, top if cutoff is None else cutoff) + 2
 
 
-def check_length(source: str, n: int, design: LowPass) -> None:
+def check_length(source: str, n: int, design: LowPass, helps: str = "a longer log, or a higher cutoff") -> None:
     """Refuse a log the low-pass cannot filter: fewer than :func:`shortest_log` samples.
 
     Parameters
@@ -223,6 +223,8 @@ def check_length(source: str, n: int, design: LowPass) -> None:
         Its samples (on the filter's grid).
     design : LowPass
         The filter.
+    helps : str
+        What would help, for the message.
 
     Raises
     ------
@@ -231,7 +233,7 @@ def check_length(source: str, n: int, design: LowPass) -> None:
     """
     if n < shortest_log(design.fs, design.cutoff):
         raise DataError(f"{source}: {counted(n, 'sample')} at {design.fs:.6g} Hz; the filter edges alone take "
-                        f"2 x {design.pad} (a longer log, or a higher cutoff)")
+                        f"2 x {design.pad} ({helps})")
 
 
 def excitation_bandwidth(q, fs: float, energy: float = 0.995) -> float:
@@ -985,7 +987,9 @@ def log_states(log: JointLog, cutoff: float | None, filtered: bool = False) -> t
     Raises
     ------
     DataError
-        Fewer than 3 samples, time not increasing, a cutoff not below the log's Nyquist rate.
+        Fewer than 3 samples, time not increasing, a cutoff not below the log's Nyquist rate, or
+        a log to filter shorter than the filter's two edges (:func:`check_length`: every predicted
+        sample would be the edge transient's, a 5-sample log's torques 100 % off).
     """
     t = np.asarray(log.t, dtype=float)
     if log.dq is not None and log.ddq is not None and not filtered:
@@ -995,6 +999,9 @@ def log_states(log: JointLog, cutoff: float | None, filtered: bool = False) -> t
     if cutoff is None:
         cutoff = default_cutoff(excitation_bandwidth(u.q, rate), rate)[0]
     design = lowpass_design(rate, cutoff)
+    check_length(log.source, u.n_samples, design,  # shorter: every sample in the filter's edge transient
+                 f"at the identification's cutoff {cutoff:.4g} Hz: a log of at least "
+                 f"{shortest_log(rate, cutoff) / rate:.3g} s, or one with dq and ddq logged and --raw-states")
     same_grid = u.n_samples == len(t) and np.array_equal(u.t, t)
 
     def back(x):  # grid -> the log's time stamps

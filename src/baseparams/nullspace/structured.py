@@ -430,14 +430,17 @@ def _ratio(num2: np.ndarray, den2: np.ndarray) -> np.ndarray:
     return np.where(den2 > 0, r, np.where(num2 > 0, np.inf, 0.0))
 
 
-def _walk(parts: dict[int, list], par: np.ndarray, lines: np.ndarray, l2: np.ndarray,
-          dofs: list[np.ndarray], tol: float) -> float:
+def _walk(parts: dict[int, list], lines: np.ndarray, l2: np.ndarray, dofs: list[np.ndarray], tol: float,
+          runs: tuple) -> float:
     """Worst row residual of one column given as ``body -> [wrench (S, 6), magnitude^2 (S,)]``.
 
     Bodies are taken highest first (a parent's index is lower than its children's); each one's
     rows see the sum of the wrenches of the column's bodies in its subtree. Once they have all
-    merged, a total wrench that vanishes relative to its terms clears every row above.
+    merged, a total wrench that vanishes relative to its terms clears every row above; one that
+    does not is checked on every row up to the root (:func:`_climb`, ``runs`` from
+    :func:`_root_runs`).
     """
+    par = runs[0]
     worst = 0.0
     while parts:
         x = max(parts)
@@ -446,6 +449,7 @@ def _walk(parts: dict[int, list], par: np.ndarray, lines: np.ndarray, l2: np.nda
             r = float(_ratio(np.sum(w * w), np.sum(d2)))
             if r <= tol:
                 return max(worst, r)
+            return _climb(w, d2, x, worst, tol, runs)
         for m in dofs[x]:
             num = np.sum(np.einsum("sc,sc->s", lines[m], w) ** 2)
             worst = max(worst, float(_ratio(num, np.sum(l2[m] * d2))))
@@ -457,6 +461,86 @@ def _walk(parts: dict[int, list], par: np.ndarray, lines: np.ndarray, l2: np.nda
                 parts[p] = [parts[p][0] + w, parts[p][1] + d2]
             else:
                 parts[p] = [w, d2]
+    return worst
+
+
+def _root_runs(par: np.ndarray, dofs: list[np.ndarray], lines: np.ndarray, l2: np.ndarray) -> tuple:
+    """The tree's root paths as few runs of consecutive positions, with the rows in that order.
+
+    Bodies are ordered depth first, each body's largest child right after it (a heavy path), so
+    the path from any body to the root crosses ``O(log n)`` runs, each a slice of the reordered
+    rows: the climb of :func:`_climb` reads them without gathering.
+
+    Parameters
+    ----------
+    par : ndarray of int, shape ``(n,)``
+        Parent of each body (-1: a root).
+    dofs : list of ndarray
+        Per body, its measured coordinates.
+    lines : ndarray, shape ``(dof, S, 6)``
+        Joint lines.
+    l2 : ndarray, shape ``(dof, S)``
+        Their squared norms.
+
+    Returns
+    -------
+    tuple
+        ``(par, head, pos, order, ptr, owner, lines_o, l2_o)``: body ``b`` at position ``pos[b]``
+        of ``order``, its run starting at body ``head[b]``; position ``p``'s rows are
+        ``lines_o[ptr[p]:ptr[p + 1]]``, row ``r``'s position ``owner[r]``.
+    """
+    n = len(par)
+    children: list[list[int]] = [[] for _ in range(n)]
+    for i, p in enumerate(par):
+        if p >= 0:
+            children[p].append(i)
+    size = np.ones(n, dtype=int)
+    for i in range(n - 1, -1, -1):  # a parent's index is lower than its children's
+        if par[i] >= 0:
+            size[par[i]] += size[i]
+    head, order = np.arange(n), []
+    stack = [int(r) for r in np.flatnonzero(par < 0)[::-1]]
+    while stack:
+        b = stack.pop()
+        order.append(b)
+        kids = sorted(children[b], key=lambda c: size[c])  # the largest last: popped next
+        if kids:
+            head[kids[-1]] = head[b]
+        stack.extend(kids)
+    order = np.asarray(order, dtype=int)
+    pos = np.empty(n, dtype=int)
+    pos[order] = np.arange(n)
+    counts = np.array([len(dofs[b]) for b in order], dtype=int)
+    ptr = np.r_[0, np.cumsum(counts)]
+    flat = np.concatenate([dofs[b] for b in order]).astype(int) if n else np.zeros(0, dtype=int)
+    owner = np.repeat(np.arange(n), counts)
+    return par, head, pos, order, ptr, owner, lines[flat], l2[flat]
+
+
+def _climb(w: np.ndarray, d2: np.ndarray, x: int, worst: float, tol: float, runs: tuple) -> float:
+    """:func:`_walk` from body ``x`` to the root with one total wrench: the same residuals, run by run.
+
+    Each run's rows are checked in slices of doubling length (a column that fails near ``x``
+    costs little), all rows of a slice at once; the result is the one of the row-by-row walk:
+    the worst residual up to the first body whose rows exceed ``tol`` (all of them if none).
+    ``worst`` (at most ``tol``) is the walk's so far; ``runs`` from :func:`_root_runs`.
+    """
+    par, head, pos, order, ptr, owner, lines, l2 = runs
+    while x >= 0:
+        lo, hi, step = pos[head[x]], pos[x], 1
+        while hi >= lo:
+            a = max(lo, hi - step + 1)
+            r0, r1 = ptr[a], ptr[hi + 1]
+            if r1 > r0:
+                num = np.sum(np.einsum("msc,sc->ms", lines[r0:r1], w) ** 2, axis=1)
+                r = _ratio(num, np.sum(l2[r0:r1] * d2, axis=1))
+                r[np.isnan(r)] = 0.0  # as max(worst, nan) in the row-by-row walk
+                over = np.flatnonzero(r > tol)
+                if len(over):  # the first body met going up: the highest position
+                    return max(worst, float(r[owner[r0:r1] >= owner[r0 + over[-1]]].max()))
+                worst = max(worst, float(r.max()))
+            hi, step = a - 1, step * 2
+        x = int(par[order[lo]])
     return worst
 
 
@@ -530,6 +614,7 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
         r_tot = _ratio(np.sum(wc ** 2, axis=(1, 2)), np.sum(d2, 1))
         out[k] = np.maximum(r_child, r_tot)
         walk[k[r_tot > tol]] = True
+    runs = _root_runs(par, dofs, lines, l2) if walk.any() else (par,)
     for j in np.flatnonzero(walk):
         parts: dict[int, list] = {}
         extra_blocks = zip(cols.more[j][0], np.asarray(cols.more[j][1], dtype=float) / flat_norm[j]) if more[j] else ()
@@ -537,7 +622,7 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
             if body >= 0:
                 w, d2 = x[body] @ blk, x2[body] * float(blk @ blk)
                 parts[int(body)] = [parts[int(body)][0] + w, parts[int(body)][1] + d2] if body in parts else [w, d2]
-        out[j] = _walk(parts, par, lines, l2, dofs, tol)
+        out[j] = _walk(parts, lines, l2, dofs, tol, runs)
     if coupled:
         out = np.maximum(out, _coupled_residuals(cols, flat_norm, x, x2, lines, l2, coupled, par))
     return out

@@ -78,7 +78,7 @@ def test_root_runs_cover_every_path_in_few_runs():
 
 @pytest.mark.parametrize("seed, kinds, branching", [(11, "P", 0.0), (12, "P", 0.4), (13, "RP", 0.0), (14, "PR", 0.4)])
 def test_structured_equals_dense_on_prismatic_trees(seed, kinds, branching):
-    robot = _robot(seed, 20, kinds, branching)
+    robot = _robot(seed, 16, kinds, branching)
     res = drng(robot)
     dense = certify(robot, result=res, method="dense")
     cert = certify(robot, result=res, method="structured")

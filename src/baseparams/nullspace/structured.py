@@ -27,8 +27,10 @@ TP regressor's bar lines). The certificate has two parts, neither using DRNG's r
 column entering a rank decision is divided by the norm it would have without cancellation
 (its magnitude), so a singular value below ``rtol`` is what rounding can produce and one above
 it is not: a full-rank block is full rank for the exact ``W`` of these samples, hence for the
-regressor. Memory and time are linear in the number of bodies (``S x n x 60`` numbers for the
-bodies' wrench maps); no ``(S rows, 10 n)`` matrix is formed.
+regressor. Memory is linear in the number of bodies (``S x n x 60`` numbers for the bodies'
+wrench maps); no ``(S rows, 10 n)`` matrix is formed. So is time, but for (a)'s columns whose
+total wrench no row sees (a slide chain's first moments: a pure moment): each is checked on
+every row to the root, its depth in rows, read as a few contiguous slices (``_climb``).
 
 Coupled coordinates (URDF ``<mimic>``, linear couplings without loop joints): the states are
 drawn in the actuated coordinates (:func:`baseparams.numerics.closed_samples`, as the dense

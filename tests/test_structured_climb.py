@@ -17,8 +17,8 @@ def _robot(seed: int, n: int, kinds: str, branching: float):
 
 
 def _row_by_row(lines, l2, dofs, par):
-    """The climb as the walk did it before it was vectorised: each body's rows in turn, up to the root."""
-    def climb(w, d2, x, worst, tol, runs):
+    """The climb as the walk did it before it was vectorised: each column, each body's rows in turn, up to the root."""
+    def one(w, d2, x, worst, tol):
         while x >= 0:
             for m in dofs[x]:
                 num = np.sum(np.einsum("sc,sc->s", lines[m], w) ** 2)
@@ -27,6 +27,9 @@ def _row_by_row(lines, l2, dofs, par):
                 return worst
             x = int(par[x])
         return worst
+
+    def climb(w, d2, x, worst, tol, runs):
+        return np.array([one(w[j], d2[j], x, float(worst[j]), tol) for j in range(len(w))])
     return climb
 
 

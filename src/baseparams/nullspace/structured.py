@@ -432,17 +432,16 @@ def _ratio(num2: np.ndarray, den2: np.ndarray) -> np.ndarray:
     return np.where(den2 > 0, r, np.where(num2 > 0, np.inf, 0.0))
 
 
-def _walk(parts: dict[int, list], lines: np.ndarray, l2: np.ndarray, dofs: list[np.ndarray], tol: float,
-          runs: tuple) -> float:
+def _walk(parts: dict[int, list], par: np.ndarray, lines: np.ndarray, l2: np.ndarray,
+          dofs: list[np.ndarray], tol: float, climbs: list) -> float:
     """Worst row residual of one column given as ``body -> [wrench (S, 6), magnitude^2 (S,)]``.
 
     Bodies are taken highest first (a parent's index is lower than its children's); each one's
     rows see the sum of the wrenches of the column's bodies in its subtree. Once they have all
     merged, a total wrench that vanishes relative to its terms clears every row above; one that
-    does not is checked on every row up to the root (:func:`_climb`, ``runs`` from
-    :func:`_root_runs`).
+    does not is left to be checked on every row up to the root: ``(wrench, magnitude^2, body,
+    worst so far)`` appended to ``climbs`` (:func:`_climbs`), the worst so far returned.
     """
-    par = runs[0]
     worst = 0.0
     while parts:
         x = max(parts)
@@ -451,7 +450,8 @@ def _walk(parts: dict[int, list], lines: np.ndarray, l2: np.ndarray, dofs: list[
             r = float(_ratio(np.sum(w * w), np.sum(d2)))
             if r <= tol:
                 return max(worst, r)
-            return _climb(w, d2, x, worst, tol, runs)
+            climbs.append((w, d2, x, worst))
+            return worst
         for m in dofs[x]:
             num = np.sum(np.einsum("sc,sc->s", lines[m], w) ** 2)
             worst = max(worst, float(_ratio(num, np.sum(l2[m] * d2))))
@@ -519,28 +519,44 @@ def _root_runs(par: np.ndarray, dofs: list[np.ndarray], lines: np.ndarray, l2: n
     return par, head, pos, order, ptr, owner, lines[flat], l2[flat]
 
 
-def _climb(w: np.ndarray, d2: np.ndarray, x: int, worst: float, tol: float, runs: tuple) -> float:
-    """:func:`_walk` from body ``x`` to the root with one total wrench: the same residuals, run by run.
+def _climbs(climbs: list, tol: float, runs: tuple) -> np.ndarray:
+    """The climbs :func:`_walk` left, those from one body together (:func:`_climb`): each one's worst residual."""
+    out = np.zeros(len(climbs))
+    start = np.array([c[2] for c in climbs], dtype=int)
+    for x in np.unique(start):
+        k = np.flatnonzero(start == x)
+        w = np.stack([climbs[i][0] for i in k])
+        d2 = np.stack([climbs[i][1] for i in k])
+        out[k] = _climb(w, d2, int(x), np.array([climbs[i][3] for i in k], dtype=float), tol, runs)
+    return out
 
-    Each run's rows are checked in slices of doubling length (a column that fails near ``x``
-    costs little), all rows of a slice at once; the result is the one of the row-by-row walk:
-    the worst residual up to the first body whose rows exceed ``tol`` (all of them if none).
-    ``worst`` (at most ``tol``) is the walk's so far; ``runs`` from :func:`_root_runs`.
+
+def _climb(w: np.ndarray, d2: np.ndarray, x: int, worst: np.ndarray, tol: float, runs: tuple) -> np.ndarray:
+    """:func:`_walk` from body ``x`` to the root for ``J`` total wrenches: the same residuals, run by run.
+
+    ``w (J, S, 6)``, ``d2 (J, S)``: wrenches and magnitudes^2; ``worst (J,)``: each walk's so
+    far (at most ``tol``); ``runs`` from :func:`_root_runs`. Each run's rows are checked in
+    slices of doubling length (a column that fails near ``x`` costs little), all rows of a slice
+    and all columns at once; the result is the one of the row-by-row walk: the worst residual up
+    to the first body whose rows exceed ``tol`` (all of them if none).
     """
     par, head, pos, order, ptr, owner, lines, l2 = runs
-    while x >= 0:
-        lo, hi, step = pos[head[x]], pos[x], 1
-        while hi >= lo:
+    worst, live = worst.copy(), np.arange(len(w))
+    while x >= 0 and len(live):
+        lo, hi, step = pos[head[x]], pos[x], 8
+        while hi >= lo and len(live):
             a = max(lo, hi - step + 1)
             r0, r1 = ptr[a], ptr[hi + 1]
             if r1 > r0:
-                num = np.sum(np.einsum("msc,sc->ms", lines[r0:r1], w) ** 2, axis=1)
-                r = _ratio(num, np.sum(l2[r0:r1] * d2, axis=1))
+                num = np.sum(np.einsum("msc,jsc->jms", lines[r0:r1], w[live]) ** 2, axis=2)
+                r = _ratio(num, np.sum(l2[r0:r1] * d2[live][:, None, :], axis=2))  # (live, rows)
                 r[np.isnan(r)] = 0.0  # as max(worst, nan) in the row-by-row walk
-                over = np.flatnonzero(r > tol)
-                if len(over):  # the first body met going up: the highest position
-                    return max(worst, float(r[owner[r0:r1] >= owner[r0 + over[-1]]].max()))
-                worst = max(worst, float(r.max()))
+                over = r > tol
+                hit = over.any(axis=1)
+                last = r1 - r0 - 1 - np.argmax(over[:, ::-1], axis=1)  # the first body met going up: highest
+                upto = owner[r0:r1][None, :] >= np.where(hit, owner[r0 + last], -1)[:, None]
+                worst[live] = np.maximum(worst[live], np.max(np.where(upto, r, 0.0), axis=1))
+                live = live[~hit]
             hi, step = a - 1, step * 2
         x = int(par[order[lo]])
     return worst
@@ -616,7 +632,8 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
         r_tot = _ratio(np.sum(wc ** 2, axis=(1, 2)), np.sum(d2, 1))
         out[k] = np.maximum(r_child, r_tot)
         walk[k[r_tot > tol]] = True
-    runs = _root_runs(par, dofs, lines, l2) if walk.any() else (par,)
+    climbs: list = []
+    climbers = []
     for j in np.flatnonzero(walk):
         parts: dict[int, list] = {}
         extra_blocks = zip(cols.more[j][0], np.asarray(cols.more[j][1], dtype=float) / flat_norm[j]) if more[j] else ()
@@ -624,7 +641,11 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
             if body >= 0:
                 w, d2 = x[body] @ blk, x2[body] * float(blk @ blk)
                 parts[int(body)] = [parts[int(body)][0] + w, parts[int(body)][1] + d2] if body in parts else [w, d2]
-        out[j] = _walk(parts, lines, l2, dofs, tol, runs)
+        before = len(climbs)
+        out[j] = _walk(parts, par, lines, l2, dofs, tol, climbs)
+        climbers.extend([j] * (len(climbs) - before))
+    if climbs:
+        out[climbers] = _climbs(climbs, tol, _root_runs(par, dofs, lines, l2))
     if coupled:
         out = np.maximum(out, _coupled_residuals(cols, flat_norm, x, x2, lines, l2, coupled, par))
     return out

@@ -35,7 +35,8 @@ Figure groups (``--only SUBSTRING`` selects groups whose name contains SUBSTRING
 * ``size_sweep``    ``baseparams analyze FILE --floating --json`` on random floating trees (URDF) of
                     N = 10 .. 10000 links: wall time, peak memory, status, nullity.
 * ``large_inputs``  issue 51: ``identify`` of a 220-link random chain (paper convention, 500 samples) and of a
-                    10^6-sample 100 kHz Puma560 log, fresh processes: wall, peak memory, the log's arrays.
+                    10^6-sample 100 kHz Puma560 log, fresh processes: wall, peak memory, the log's arrays; and
+                    ``analyze`` of 1 000-link prismatic and revolute chains (in process): seconds, their ratio.
 * ``scale_trees``   issue 41: ``baseparams analyze --floating`` (certified, fresh processes) on chains, random deep
                     trees and wide random trees of N = 100, 1 000, 10 000 bodies: wall, peak RSS, nullity, and
                     the exponent of the curve between 1 000 and 10 000.
@@ -1413,6 +1414,24 @@ def bench_large_inputs(out: dict, quick: bool) -> None:
         out[f"{key}_s"], out[f"{key}_peak_mb"], out[f"{key}_exit"], out[f"{key}_arrays_mb"] = wall, mb, code, size
         out[f"{key}_peak_over_arrays"] = mb / size
         log(f"  {rate // 1000} kHz log ({size:.0f} MB of arrays): {wall:.1f} s, {mb:.0f} MB, exit {code}")
+    _analyze_slide_chain(out, quick)
+
+
+def _analyze_slide_chain(out: dict, quick: bool) -> None:
+    """Issue 51: ``analyze`` of an all-prismatic random chain against the revolute one of the same length
+    (1 000 links, quick 300; in process, one run each): seconds and their ratio (the prismatic chain's
+    first moments climb to the root in the certificate's column check; was ~40x the revolute chain)."""
+    from baseparams import analyze
+    from baseparams.robots import random_robot
+
+    n = 300 if quick else 1000
+    for kind in ("P", "R"):
+        robot = random_robot(np.random.default_rng(n), n, kind, branching=0.0)
+        t0 = time.perf_counter()
+        status = analyze(robot).status
+        out[f"large_chain{n}_{kind}_analyze_s"] = time.perf_counter() - t0
+        log(f"  analyze {kind} chain{n}: {out[f'large_chain{n}_{kind}_analyze_s']:.1f} s, {status}")
+    out[f"large_chain{n}_P_over_R"] = out[f"large_chain{n}_P_analyze_s"] / out[f"large_chain{n}_R_analyze_s"]
 
 
 GROUPS: dict[str, Callable[[dict, bool], None]] = {

@@ -27,8 +27,10 @@ TP regressor's bar lines). The certificate has two parts, neither using DRNG's r
 column entering a rank decision is divided by the norm it would have without cancellation
 (its magnitude), so a singular value below ``rtol`` is what rounding can produce and one above
 it is not: a full-rank block is full rank for the exact ``W`` of these samples, hence for the
-regressor. Memory and time are linear in the number of bodies (``S x n x 60`` numbers for the
-bodies' wrench maps); no ``(S rows, 10 n)`` matrix is formed.
+regressor. Memory is linear in the number of bodies (``S x n x 60`` numbers for the bodies'
+wrench maps); no ``(S rows, 10 n)`` matrix is formed. So is time, but for (a)'s columns whose
+total wrench no row sees (a slide chain's first moments: a pure moment): each is checked on
+every row to the root, its depth in rows, read as a few contiguous slices (``_climb``).
 
 Coupled coordinates (URDF ``<mimic>``, linear couplings without loop joints): the states are
 drawn in the actuated coordinates (:func:`baseparams.numerics.closed_samples`, as the dense
@@ -431,12 +433,14 @@ def _ratio(num2: np.ndarray, den2: np.ndarray) -> np.ndarray:
 
 
 def _walk(parts: dict[int, list], par: np.ndarray, lines: np.ndarray, l2: np.ndarray,
-          dofs: list[np.ndarray], tol: float) -> float:
+          dofs: list[np.ndarray], tol: float, climbs: list) -> float:
     """Worst row residual of one column given as ``body -> [wrench (S, 6), magnitude^2 (S,)]``.
 
     Bodies are taken highest first (a parent's index is lower than its children's); each one's
     rows see the sum of the wrenches of the column's bodies in its subtree. Once they have all
-    merged, a total wrench that vanishes relative to its terms clears every row above.
+    merged, a total wrench that vanishes relative to its terms clears every row above; one that
+    does not is left to be checked on every row up to the root: ``(wrench, magnitude^2, body,
+    worst so far)`` appended to ``climbs`` (:func:`_climbs`), the worst so far returned.
     """
     worst = 0.0
     while parts:
@@ -446,6 +450,8 @@ def _walk(parts: dict[int, list], par: np.ndarray, lines: np.ndarray, l2: np.nda
             r = float(_ratio(np.sum(w * w), np.sum(d2)))
             if r <= tol:
                 return max(worst, r)
+            climbs.append((w, d2, x, worst))
+            return worst
         for m in dofs[x]:
             num = np.sum(np.einsum("sc,sc->s", lines[m], w) ** 2)
             worst = max(worst, float(_ratio(num, np.sum(l2[m] * d2))))
@@ -457,6 +463,102 @@ def _walk(parts: dict[int, list], par: np.ndarray, lines: np.ndarray, l2: np.nda
                 parts[p] = [parts[p][0] + w, parts[p][1] + d2]
             else:
                 parts[p] = [w, d2]
+    return worst
+
+
+def _root_runs(par: np.ndarray, dofs: list[np.ndarray], lines: np.ndarray, l2: np.ndarray) -> tuple:
+    """The tree's root paths as few runs of consecutive positions, with the rows in that order.
+
+    Bodies are ordered depth first, each body's largest child right after it (a heavy path), so
+    the path from any body to the root crosses ``O(log n)`` runs, each a slice of the reordered
+    rows: the climb of :func:`_climb` reads them without gathering.
+
+    Parameters
+    ----------
+    par : ndarray of int, shape ``(n,)``
+        Parent of each body (-1: a root).
+    dofs : list of ndarray
+        Per body, its measured coordinates.
+    lines : ndarray, shape ``(dof, S, 6)``
+        Joint lines.
+    l2 : ndarray, shape ``(dof, S)``
+        Their squared norms.
+
+    Returns
+    -------
+    tuple
+        ``(par, head, pos, order, ptr, owner, lines_o, l2_o)``: body ``b`` at position ``pos[b]``
+        of ``order``, its run starting at body ``head[b]``; position ``p``'s rows are
+        ``lines_o[ptr[p]:ptr[p + 1]]``, row ``r``'s position ``owner[r]``.
+    """
+    n = len(par)
+    children: list[list[int]] = [[] for _ in range(n)]
+    for i, p in enumerate(par):
+        if p >= 0:
+            children[p].append(i)
+    size = np.ones(n, dtype=int)
+    for i in range(n - 1, -1, -1):  # a parent's index is lower than its children's
+        if par[i] >= 0:
+            size[par[i]] += size[i]
+    head, order = np.arange(n), []
+    stack = [int(r) for r in np.flatnonzero(par < 0)[::-1]]
+    while stack:
+        b = stack.pop()
+        order.append(b)
+        kids = sorted(children[b], key=lambda c: size[c])  # the largest last: popped next
+        if kids:
+            head[kids[-1]] = head[b]
+        stack.extend(kids)
+    order = np.asarray(order, dtype=int)
+    pos = np.empty(n, dtype=int)
+    pos[order] = np.arange(n)
+    counts = np.array([len(dofs[b]) for b in order], dtype=int)
+    ptr = np.r_[0, np.cumsum(counts)]
+    flat = np.concatenate([dofs[b] for b in order]).astype(int) if n else np.zeros(0, dtype=int)
+    owner = np.repeat(np.arange(n), counts)
+    return par, head, pos, order, ptr, owner, lines[flat], l2[flat]
+
+
+def _climbs(climbs: list, tol: float, runs: tuple) -> np.ndarray:
+    """The climbs :func:`_walk` left, those from one body together (:func:`_climb`): each one's worst residual."""
+    out = np.zeros(len(climbs))
+    start = np.array([c[2] for c in climbs], dtype=int)
+    for x in np.unique(start):
+        k = np.flatnonzero(start == x)
+        w = np.stack([climbs[i][0] for i in k])
+        d2 = np.stack([climbs[i][1] for i in k])
+        out[k] = _climb(w, d2, int(x), np.array([climbs[i][3] for i in k], dtype=float), tol, runs)
+    return out
+
+
+def _climb(w: np.ndarray, d2: np.ndarray, x: int, worst: np.ndarray, tol: float, runs: tuple) -> np.ndarray:
+    """:func:`_walk` from body ``x`` to the root for ``J`` total wrenches: the same residuals, run by run.
+
+    ``w (J, S, 6)``, ``d2 (J, S)``: wrenches and magnitudes^2; ``worst (J,)``: each walk's so
+    far (at most ``tol``); ``runs`` from :func:`_root_runs`. Each run's rows are checked in
+    slices of doubling length (a column that fails near ``x`` costs little), all rows of a slice
+    and all columns at once; the result is the one of the row-by-row walk: the worst residual up
+    to the first body whose rows exceed ``tol`` (all of them if none).
+    """
+    par, head, pos, order, ptr, owner, lines, l2 = runs
+    worst, live = worst.copy(), np.arange(len(w))
+    while x >= 0 and len(live):
+        lo, hi, step = pos[head[x]], pos[x], 8
+        while hi >= lo and len(live):
+            a = max(lo, hi - step + 1)
+            r0, r1 = ptr[a], ptr[hi + 1]
+            if r1 > r0:
+                num = np.sum(np.einsum("msc,jsc->jms", lines[r0:r1], w[live]) ** 2, axis=2)
+                r = _ratio(num, np.sum(l2[r0:r1] * d2[live][:, None, :], axis=2))  # (live, rows)
+                r[np.isnan(r)] = 0.0  # as max(worst, nan) in the row-by-row walk
+                over = r > tol
+                hit = over.any(axis=1)
+                last = r1 - r0 - 1 - np.argmax(over[:, ::-1], axis=1)  # the first body met going up: highest
+                upto = owner[r0:r1][None, :] >= np.where(hit, owner[r0 + last], -1)[:, None]
+                worst[live] = np.maximum(worst[live], np.max(np.where(upto, r, 0.0), axis=1))
+                live = live[~hit]
+            hi, step = a - 1, step * 2
+        x = int(par[order[lo]])
     return worst
 
 
@@ -530,6 +632,8 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
         r_tot = _ratio(np.sum(wc ** 2, axis=(1, 2)), np.sum(d2, 1))
         out[k] = np.maximum(r_child, r_tot)
         walk[k[r_tot > tol]] = True
+    climbs: list = []
+    climbers = []
     for j in np.flatnonzero(walk):
         parts: dict[int, list] = {}
         extra_blocks = zip(cols.more[j][0], np.asarray(cols.more[j][1], dtype=float) / flat_norm[j]) if more[j] else ()
@@ -537,7 +641,11 @@ def column_residuals(cols: Columns, robot: Robot, x: np.ndarray, lines: np.ndarr
             if body >= 0:
                 w, d2 = x[body] @ blk, x2[body] * float(blk @ blk)
                 parts[int(body)] = [parts[int(body)][0] + w, parts[int(body)][1] + d2] if body in parts else [w, d2]
-        out[j] = _walk(parts, par, lines, l2, dofs, tol)
+        before = len(climbs)
+        out[j] = _walk(parts, par, lines, l2, dofs, tol, climbs)
+        climbers.extend([j] * (len(climbs) - before))
+    if climbs:
+        out[climbers] = _climbs(climbs, tol, _root_runs(par, dofs, lines, l2))
     if coupled:
         out = np.maximum(out, _coupled_residuals(cols, flat_norm, x, x2, lines, l2, coupled, par))
     return out

@@ -153,12 +153,30 @@ class RowAccumulator:
         else:
             for wr, f in zip(w, self.factors):
                 qr.add(wr * f.r)
-        r = qr.r
-        r.flags.writeable = False
-        if len(self._stacked) >= self.STACK_CACHE:
-            self._stacked.pop(next(iter(self._stacked)))
-        self._stacked[key] = r
-        return r
+        return self.remember(self._stacked, key, qr.r)
+
+    def remember(self, cache: dict, key: bytes, factor: np.ndarray) -> np.ndarray:
+        """Keep a factor read-only in a per-weighting cache of at most :data:`STACK_CACHE` entries (oldest dropped).
+
+        Parameters
+        ----------
+        cache : dict of bytes to ndarray
+            The cache (e.g. the stacked factors).
+        key : bytes
+            The weighting's bytes.
+        factor : ndarray
+            The factor.
+
+        Returns
+        -------
+        ndarray
+            ``factor``, made read-only.
+        """
+        factor.flags.writeable = False
+        if len(cache) >= self.STACK_CACHE:
+            cache.pop(next(iter(cache)))
+        cache[key] = factor
+        return factor
 
     def release(self) -> None:
         """Drop the cached stacked factors, this accumulator's and its parts': the fitting is done.

@@ -306,11 +306,7 @@ class SpilledRows(RowAccumulator):
         perm, _ = self.staircase()
         with blas_threads():  # back to the columns' own order: one QR of the (p + 1)^2 factor
             r = np.linalg.qr(self.staircase_factor(w)[:, np.argsort(perm)], mode="r")
-        r.flags.writeable = False
-        if len(self._stacked) >= self.STACK_CACHE:
-            self._stacked.pop(next(iter(self._stacked)))
-        self._stacked[w.tobytes()] = r
-        return r
+        return self.remember(self._stacked, w.tobytes(), r)
 
     def release(self) -> None:
         """Drop the cached factors (stacked and staircase), this object's and its pieces'."""
@@ -378,11 +374,9 @@ class SpilledRows(RowAccumulator):
                     continue
                 rows = (self._rows(r0, r1) * w[None, r0:r1, None]).reshape(-1, p1)[:, perm[s:]]
                 r[s:, s:] = triangular_update(r[s:, s:], rows)
-        r.flags.writeable = False
         if self.root is not self:  # a piece's, for the folds' systems (the whole's own is kept by stacked)
-            if len(self._staircased) >= self.STACK_CACHE:
-                self._staircased.pop(next(iter(self._staircased)))
-            self._staircased[w.tobytes()] = r
+            return self.remember(self._staircased, w.tobytes(), r)
+        r.flags.writeable = False
         return r
 
     def _rows(self, r0: int, r1: int, s0: int = 0, s1: int | None = None) -> np.ndarray:
